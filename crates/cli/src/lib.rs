@@ -1,0 +1,1 @@
+//! shadowvol CLI library.

@@ -1,0 +1,115 @@
+//! The scalar reference backend: one thread, one (edge, OV) at a time, exactly the definitions of
+//! [`shadowvol_robust_math::ov_sign`]. Every other backend is checked against it.
+//!
+//! ```
+//! use shadowvol_cpu::CpuBackend;
+//! use shadowvol_silhouette::{corpus, extract_once, Accuracy, invariant};
+//!
+//! let case = &corpus::cases()[0];
+//! let scene = case.scene().unwrap();
+//! let mut cpu = CpuBackend::new();
+//! let (m, _stats) = extract_once(&mut cpu, &scene, &case.lights, Accuracy::Exact).unwrap();
+//! assert_eq!(invariant::open_vertices_scene(&scene, &m, 0), 0);
+//! ```
+
+use shadowvol_robust_math::{ov_sign, Accuracy, Light};
+use shadowvol_silhouette::{
+    object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId,
+    SilhouetteBackend, TopologyScene,
+};
+use std::collections::HashMap;
+use std::time::Instant;
+
+pub mod baselines;
+
+/// The scalar reference backend. Always available.
+#[derive(Debug, Default)]
+pub struct CpuBackend {
+    scenes: HashMap<PreparedId, TopologyScene>,
+    next: u64,
+}
+
+impl CpuBackend {
+    /// Creates the backend (no set-up needed).
+    #[must_use]
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+/// Computes the multiplicities of one object's edges for one object-space light, in `mode`.
+///
+/// This is the reference definition: `m(a, b) = Σ_o ov_sign(mode, a, b, o)`.
+pub fn extract_table(
+    table: &shadowvol_mesh_topology::EdgeTable,
+    light: [f32; 4],
+    mode: Accuracy,
+    out: &mut [i32],
+) {
+    for (e, (&[a, b], m)) in table.edges.iter().zip(out.iter_mut()).enumerate() {
+        *m = table
+            .ovs_of(e)
+            .iter()
+            .map(|&o| i32::from(ov_sign(mode, &table.positions, a, b, o, light)))
+            .sum();
+    }
+}
+
+impl SilhouetteBackend for CpuBackend {
+    fn info(&self) -> BackendInfo {
+        BackendInfo {
+            name: "cpu",
+            device: "host CPU, scalar, 1 thread".to_owned(),
+            modes: Accuracy::ALL.to_vec(),
+            max_lights: None,
+            details: vec![],
+        }
+    }
+
+    fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
+        let id = PreparedId(self.next);
+        self.next += 1;
+        self.scenes.insert(id, scene.clone());
+        Ok(id)
+    }
+
+    fn extract(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        let scene = self
+            .scenes
+            .get(&id)
+            .ok_or(BackendError::UnknownScene { backend: "cpu", id })?;
+        if lights.is_empty() {
+            return Err(BackendError::InvalidInput("no lights given".to_owned()));
+        }
+        let start = Instant::now();
+        let obj_lights = object_lights(scene, lights);
+        let offsets = scene.edge_offsets();
+        out.reset(scene.total_edges(), lights.len());
+        for l in 0..lights.len() {
+            let values = out.values_mut(l);
+            for (i, o) in scene.objects.iter().enumerate() {
+                extract_table(
+                    &o.table,
+                    obj_lights[i][l],
+                    mode,
+                    &mut values[offsets[i]..offsets[i + 1]],
+                );
+            }
+        }
+        out.rebuild_silhouettes();
+        Ok(ExtractStats {
+            compute: start.elapsed(),
+            ..ExtractStats::default()
+        })
+    }
+
+    fn release(&mut self, id: PreparedId) {
+        self.scenes.remove(&id);
+    }
+}

@@ -1,0 +1,1 @@
+//! Placeholder crate: not implemented yet (see the issue list).

@@ -1,0 +1,3 @@
+//! Scene loading, procedural meshes and presets.
+
+pub mod obj;

@@ -1,0 +1,149 @@
+use std::time::Duration;
+
+/// Per-edge multiplicities for every light of one `extract` call.
+///
+/// Values are stored light-major: `value(light, edge)`. Edge indices are *global*: the edges of
+/// all objects of the prepared scene, concatenated in object order (see
+/// [`crate::TopologyScene::edge_offsets`]). The compact silhouette list of a light holds the
+/// global edge indices with `m != 0`, ascending.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Multiplicities {
+    edges: usize,
+    lights: usize,
+    values: Vec<i32>,
+    silhouettes: Vec<Vec<u32>>,
+}
+
+impl Multiplicities {
+    /// All-zero multiplicities for `edges` edges and `lights` lights.
+    #[must_use]
+    pub fn zeroed(edges: usize, lights: usize) -> Self {
+        let mut m = Self::default();
+        m.reset(edges, lights);
+        m
+    }
+
+    /// Resizes to `edges` × `lights` and zeroes everything, keeping allocations.
+    pub fn reset(&mut self, edges: usize, lights: usize) {
+        self.edges = edges;
+        self.lights = lights;
+        self.values.clear();
+        self.values.resize(edges * lights, 0);
+        self.silhouettes.resize_with(lights, Vec::new);
+        for s in &mut self.silhouettes {
+            s.clear();
+        }
+    }
+
+    /// Number of edges per light.
+    #[must_use]
+    pub fn edge_count(&self) -> usize {
+        self.edges
+    }
+
+    /// Number of lights.
+    #[must_use]
+    pub fn light_count(&self) -> usize {
+        self.lights
+    }
+
+    /// The multiplicities of all edges for `light`.
+    ///
+    /// # Panics
+    /// Panics if `light >= self.light_count()`.
+    #[must_use]
+    pub fn values(&self, light: usize) -> &[i32] {
+        &self.values[light * self.edges..(light + 1) * self.edges]
+    }
+
+    /// Mutable multiplicities of all edges for `light`.
+    ///
+    /// # Panics
+    /// Panics if `light >= self.light_count()`.
+    pub fn values_mut(&mut self, light: usize) -> &mut [i32] {
+        &mut self.values[light * self.edges..(light + 1) * self.edges]
+    }
+
+    /// All values, light-major (`light * edge_count + edge`).
+    #[must_use]
+    pub fn all_values(&self) -> &[i32] {
+        &self.values
+    }
+
+    /// All values, mutable, light-major.
+    pub fn all_values_mut(&mut self) -> &mut [i32] {
+        &mut self.values
+    }
+
+    /// The compact silhouette of `light`: global edge indices with `m != 0`, ascending.
+    ///
+    /// # Panics
+    /// Panics if `light >= self.light_count()`.
+    #[must_use]
+    pub fn silhouette(&self, light: usize) -> &[u32] {
+        &self.silhouettes[light]
+    }
+
+    /// Sets the compact silhouette of `light` from a backend-built list (any order; it is sorted).
+    ///
+    /// # Panics
+    /// Panics if `light >= self.light_count()`.
+    pub fn set_silhouette(&mut self, light: usize, mut edges: Vec<u32>) {
+        edges.sort_unstable();
+        self.silhouettes[light] = edges;
+    }
+
+    /// Rebuilds every compact silhouette list from the values.
+    pub fn rebuild_silhouettes(&mut self) {
+        for l in 0..self.lights {
+            let vals = &self.values[l * self.edges..(l + 1) * self.edges];
+            let s = &mut self.silhouettes[l];
+            s.clear();
+            s.extend(
+                vals.iter()
+                    .enumerate()
+                    .filter(|(_, &m)| m != 0)
+                    .map(|(e, _)| e as u32),
+            );
+        }
+    }
+
+    /// Checks that each compact list lists exactly the edges with `m != 0`, ascending.
+    #[must_use]
+    pub fn silhouettes_consistent(&self) -> bool {
+        (0..self.lights).all(|l| {
+            let vals = self.values(l);
+            let expected = vals.iter().filter(|&&m| m != 0).count();
+            let s = &self.silhouettes[l];
+            s.len() == expected
+                && s.windows(2).all(|w| w[0] < w[1])
+                && s.iter().all(|&e| vals.get(e as usize).is_some_and(|&m| m != 0))
+        })
+    }
+}
+
+/// Timings and counters of one `extract` call.
+///
+/// Times are wall-clock. On CPU backends `upload` and `readback` are zero.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ExtractStats {
+    /// Moving per-frame inputs (lights) to the device.
+    pub upload: Duration,
+    /// The computation itself (dispatch to completion).
+    pub compute: Duration,
+    /// Moving results back (multiplicities, compact lists, uncertain records).
+    pub readback: Duration,
+    /// Host time spent deciding uncertain (edge, OV) pairs exactly.
+    pub host_resolve: Duration,
+    /// Number of (edge, OV, light) evaluations the device filter could not certify and the host
+    /// decided with the exact predicate (exact mode only; 0 otherwise).
+    pub uncertain: u64,
+}
+
+impl ExtractStats {
+    /// Total of all times.
+    #[must_use]
+    pub fn total(&self) -> Duration {
+        self.upload + self.compute + self.readback + self.host_resolve
+    }
+}

@@ -1,0 +1,14 @@
+//! The `simd` silhouette backend (work in progress: see its issue).
+
+use shadowvol_silhouette::{BackendError, SilhouetteBackend};
+
+/// Starts the `simd` backend.
+///
+/// # Errors
+/// [`BackendError::Unavailable`] naming what is missing.
+pub fn create_backend() -> Result<Box<dyn SilhouetteBackend>, BackendError> {
+    Err(BackendError::Unavailable {
+        backend: "simd",
+        reason: "not implemented in this build yet".to_owned(),
+    })
+}

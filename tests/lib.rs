@@ -1,0 +1,1 @@
+//! Cross-backend conformance tests live in `tests/`.
