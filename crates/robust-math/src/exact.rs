@@ -17,7 +17,6 @@
 //! 2^-596 below 2^514. All of these, and every error term of the error-free transformations
 //! applied to them, lie in the normal `f64` range (2^-1022 .. 2^1024), so every step is exact.
 
-
 /// Relative error constant of [`orient_filter_f64`]: the computed value differs from the exact
 /// determinant by at most `gamma_8 * P` for the permanent `P`, plus the rounding of `P` itself;
 /// `9u` covers it (`8u (1 + 16u)` suffices), and `1e-15 > 9u`.
@@ -89,17 +88,23 @@ pub fn orient_filter_f64(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> 
 ///
 /// Evaluates the same formula as [`orient_filter_f64`] in `f32`. It returns `None` (uncertain)
 /// when `|det| <= F32_FILTER_EPS * P`, or when a non-zero difference lies outside
-/// `[F32_FILTER_MIN, F32_FILTER_MAX]` (where products could underflow or overflow), or when any
-/// intermediate is not finite.
+/// `[F32_FILTER_MIN, F32_FILTER_MAX]` (where products could underflow or overflow), or when a
+/// product `L.w * A[i]` of non-zero factors is subnormal or zero (underflow), or when any
+/// intermediate is not finite. Shader ports must keep all of these checks; with flush-to-zero
+/// hardware, the underflow check also catches flushed products.
 #[must_use]
 #[inline]
 pub fn orient_filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<i8> {
     let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let v = [
-        l[0] - l[3] * a[0],
-        l[1] - l[3] * a[1],
-        l[2] - l[3] * a[2],
-    ];
+    let wa = [l[3] * a[0], l[3] * a[1], l[3] * a[2]];
+    // `w * A` must not leave the normal range: an underflowed product has an absolute, not a
+    // relative, error, and can make V vanish (then a non-zero determinant would look like 0).
+    for (&x, &p) in a.iter().zip(&wa) {
+        if l[3] != 0.0 && x != 0.0 && p.abs() < f32::MIN_POSITIVE {
+            return None;
+        }
+    }
+    let v = [l[0] - wa[0], l[1] - wa[1], l[2] - wa[2]];
     let d = [o[0] - a[0], o[1] - a[1], o[2] - a[2]];
     for x in e.iter().chain(&v).chain(&d) {
         let m = x.abs();
@@ -165,10 +170,7 @@ struct Expansion {
 
 impl Expansion {
     fn new() -> Self {
-        Self {
-            c: [0.0; 64],
-            n: 0,
-        }
+        Self { c: [0.0; 64], n: 0 }
     }
 
     /// Shewchuk's GROW-EXPANSION with zero elimination: adds one `f64` exactly.

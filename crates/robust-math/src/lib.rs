@@ -48,7 +48,9 @@ pub use light::{Light, LightError};
 use glam::Vec3;
 
 /// How the sign `s(a, b, o)` is evaluated. See the crate documentation for the table.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Accuracy {
     /// Kim et al. 2008 as stated: each (edge, OV) evaluated on its own in `f32`. Can crack.
@@ -251,6 +253,9 @@ mod tests {
         assert!("1,2,x,1".parse::<Light>().is_err());
         assert!("1,2,3,-1".parse::<Light>().is_err());
         assert!("0,0,0,0".parse::<Light>().is_err());
-        assert_eq!("1, 2, 3, 1".parse::<Light>().unwrap().to_array(), [1., 2., 3., 1.]);
+        assert_eq!(
+            "1, 2, 3, 1".parse::<Light>().unwrap().to_array(),
+            [1., 2., 3., 1.]
+        );
     }
 }
