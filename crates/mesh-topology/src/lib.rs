@@ -65,7 +65,9 @@ pub enum MeshError {
         vertices: usize,
     },
     /// The mesh has more vertices or edge entries than `u32` indices can address.
-    #[error("the mesh is too large: {what} is {count}, but at most {limit} can be indexed with u32")]
+    #[error(
+        "the mesh is too large: {what} is {count}, but at most {limit} can be indexed with u32"
+    )]
     TooLarge {
         /// What overflowed (for example "vertices" or "edge entries (3 x triangles)").
         what: &'static str,
@@ -473,7 +475,9 @@ impl EdgeTable {
     /// positions. Used for the measured memory floor.
     #[must_use]
     pub fn streamed_bytes(&self) -> usize {
-        self.edges.len() * 8 + self.ov_offsets.len() * 4 + self.ovs.len() * 4
+        self.edges.len() * 8
+            + self.ov_offsets.len() * 4
+            + self.ovs.len() * 4
             + self.positions.len() * 12
     }
 }
