@@ -1,14 +1,588 @@
-//! The `opencl` silhouette backend (work in progress: see its issue).
+//! The `opencl` silhouette backend: OpenCL C kernels from `kernels/silhouette.cl`, built at run
+//! time for the selected device with `opencl3`.
+//!
+//! * **One enqueue per extraction.** Every object of a prepared scene and every light go into a
+//!   single 2-D NDRange (edges × lights). Each edge carries its object index, and the lights are
+//!   uploaded per (object, light) in object space, computed by
+//!   [`shadowvol_silhouette::object_lights`] so that every backend sees the same `f32` inputs.
+//!   There is no per-object synchronisation.
+//! * **Uploaded once.** Positions, edges, OV lists and offsets are uploaded at `prepare`; an
+//!   `extract` uploads only the lights (and zeroes the counters).
+//! * **Compact output.** The kernel appends `(edge, m)` for each silhouette edge to a per-light
+//!   list with an atomic counter; only those lists are read back and scattered on the host.
+//! * **All four modes.** `original`, `robust` and `ordered` evaluate robust-math's `sign_f32`
+//!   expression exactly as written (`#pragma OPENCL FP_CONTRACT OFF`), with the canonical order
+//!   and parity rules. `exact` runs a certified filter on the device (the `f64` filter of
+//!   `orient_filter_f64` when the device has `cl_khr_fp64`, otherwise the `f32` filter of
+//!   `orient_filter_f32`); the (edge, OV, light) triples it cannot certify are appended to a
+//!   buffer and decided on the host with `orient_exact`, so exact results are bit-identical to the
+//!   `cpu` backend. [`ExtractStats::uncertain`] counts them.
+//! * **A CPU twin.** [`twin`] is the kernel's logic in Rust, loop for loop, run through the same
+//!   layout and host code.
+//!
+//! # Device selection
+//! The first GPU, otherwise the first CPU device, over all platforms in ICD order. The
+//! environment variable [`DEVICE_ENV`] (`SHADOWVOL_OPENCL_DEVICE`) chooses explicitly: `P:D`
+//! (platform and device indices, as `clinfo -l` lists them) or a case-insensitive substring of
+//! `"platform name / device name"`. [`KERNEL_ENV`] (`SHADOWVOL_OPENCL_KERNEL`) loads the kernel
+//! source from a file instead of the built-in copy.
+//!
+//! # Example
+//! ```no_run
+//! use shadowvol_opencl::OpenClBackend;
+//! use shadowvol_silhouette::{corpus, extract_once, Accuracy, SilhouetteBackend};
+//!
+//! let mut cl = OpenClBackend::new()?; // BackendError::Unavailable says what is missing
+//! println!("{}", cl.info().device);
+//! let case = &corpus::cases()[0];
+//! let scene = case.scene().expect("corpus meshes are valid");
+//! let (m, stats) = extract_once(&mut cl, &scene, &case.lights, Accuracy::Exact)?;
+//! println!("{} silhouette edges, {} uncertain", m.silhouette(0).len(), stats.uncertain);
+//! # Ok::<(), shadowvol_silhouette::BackendError>(())
+//! ```
 
-use shadowvol_silhouette::{BackendError, SilhouetteBackend};
+mod device;
+pub mod layout;
+pub mod twin;
 
-/// Starts the `opencl` backend.
+pub use device::{list_devices, select_device, DeviceDesc, DEVICE_ENV};
+
+use layout::{finish, flat_lights, mode_code, FlatScene, KernelOutput};
+use opencl3::command_queue::CommandQueue;
+use opencl3::context::Context;
+use opencl3::device::Device;
+use opencl3::error_codes::ClError;
+use opencl3::kernel::Kernel;
+use opencl3::memory::{Buffer, ClMem, CL_MEM_COPY_HOST_PTR, CL_MEM_READ_ONLY, CL_MEM_READ_WRITE};
+use opencl3::program::Program;
+use opencl3::types::{cl_mem_flags, CL_BLOCKING, CL_NON_BLOCKING};
+use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::{
+    object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId,
+    SilhouetteBackend, TopologyScene,
+};
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::ptr;
+use std::time::{Duration, Instant};
+
+/// The backend's registry name.
+pub const BACKEND: &str = "opencl";
+
+/// The built-in kernel source (`kernels/silhouette.cl`, embedded at compile time).
+pub const KERNEL_SOURCE: &str = include_str!("../../../kernels/silhouette.cl");
+
+/// Name of the kernel entry point in the source.
+pub const KERNEL_NAME: &str = "silhouette";
+
+/// Environment variable: path of a `.cl` file to build instead of [`KERNEL_SOURCE`].
+pub const KERNEL_ENV: &str = "SHADOWVOL_OPENCL_KERNEL";
+
+/// Initial capacity of the uncertain-record buffer (records); it grows when a run needs more.
+const INITIAL_UNCERTAIN_CAPACITY: usize = 4096;
+
+/// Where the kernel source comes from.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum KernelSource {
+    /// [`KERNEL_SOURCE`], embedded at compile time.
+    #[default]
+    Builtin,
+    /// A file read when the backend starts.
+    Path(PathBuf),
+    /// Source text given directly (tests use it to check build-error reporting).
+    Text(String),
+}
+
+/// How to start an [`OpenClBackend`].
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct OpenClOptions {
+    /// Device selector in the [`DEVICE_ENV`] format; `None` picks the first GPU, else the first
+    /// CPU device.
+    pub device: Option<String>,
+    /// The kernel source.
+    pub kernel: KernelSource,
+    /// Use the `f32` filter in exact mode even when the device has `cl_khr_fp64`.
+    pub force_f32_filter: bool,
+}
+
+impl OpenClOptions {
+    /// Options from the environment: [`DEVICE_ENV`] for the device and [`KERNEL_ENV`] for the
+    /// kernel path (both optional).
+    #[must_use]
+    pub fn from_env() -> Self {
+        let non_empty = |v: String| (!v.trim().is_empty()).then_some(v);
+        Self {
+            device: std::env::var(DEVICE_ENV).ok().and_then(non_empty),
+            kernel: std::env::var(KERNEL_ENV)
+                .ok()
+                .and_then(non_empty)
+                .map_or(KernelSource::Builtin, |p| KernelSource::Path(p.into())),
+            force_f32_filter: false,
+        }
+    }
+}
+
+/// Device buffers of one prepared scene.
+struct Prepared {
+    scene: TopologyScene,
+    flat: FlatScene,
+    pos: Buffer<f32>,
+    edges: Buffer<u32>,
+    edge_obj: Buffer<u32>,
+    ov_off: Buffer<u32>,
+    ovs: Buffer<u32>,
+    /// Per-frame buffers, grown on demand: (buffer, capacity in elements).
+    lights: Option<(Buffer<f32>, usize)>,
+    counts: Option<(Buffer<u32>, usize)>,
+    sil: Option<(Buffer<i32>, usize)>,
+    unc: Option<(Buffer<u32>, usize)>,
+    unc_records: usize,
+}
+
+/// The OpenCL backend. See the crate documentation.
+pub struct OpenClBackend {
+    device: DeviceDesc,
+    use_f64: bool,
+    kernel_origin: String,
+    max_alloc: u64,
+    // Drop order: kernel, program, queue before the context.
+    kernel: Kernel,
+    _program: Program,
+    queue: CommandQueue,
+    context: Context,
+    scenes: HashMap<PreparedId, Prepared>,
+    next: u64,
+}
+
+impl std::fmt::Debug for OpenClBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("OpenClBackend")
+            .field("device", &self.device.describe())
+            .field("exact_filter", &if self.use_f64 { "f64" } else { "f32" })
+            .field("kernel", &self.kernel_origin)
+            .field("scenes", &self.scenes.len())
+            .finish_non_exhaustive()
+    }
+}
+
+fn device_error(what: &str, e: ClError) -> BackendError {
+    BackendError::Device {
+        backend: BACKEND,
+        message: format!("{what}: {e} ({})", e.0),
+    }
+}
+
+/// Starts the `opencl` backend with [`OpenClOptions::from_env`].
 ///
 /// # Errors
-/// [`BackendError::Unavailable`] naming what is missing.
+/// [`BackendError::Unavailable`] naming what is missing (the ICD loader `libOpenCL.so.1`, a
+/// platform, a device, or a device matching [`DEVICE_ENV`]); [`BackendError::Build`] with the
+/// compiler's log if the kernel does not build.
 pub fn create_backend() -> Result<Box<dyn SilhouetteBackend>, BackendError> {
-    Err(BackendError::Unavailable {
-        backend: "opencl",
-        reason: "not implemented in this build yet".to_owned(),
-    })
+    Ok(Box::new(OpenClBackend::with_options(
+        OpenClOptions::from_env(),
+    )?))
+}
+
+/// Creates a buffer holding a copy of `data` (at least one element: OpenCL has no empty buffers).
+fn upload<T: Copy + Default>(
+    context: &Context,
+    flags: cl_mem_flags,
+    data: &[T],
+    what: &str,
+) -> Result<Buffer<T>, BackendError> {
+    let one = [T::default()];
+    let data = if data.is_empty() { &one[..] } else { data };
+    // SAFETY: `data` is valid for `data.len()` elements; COPY_HOST_PTR copies it before return.
+    unsafe {
+        Buffer::<T>::create(
+            context,
+            flags | CL_MEM_COPY_HOST_PTR,
+            data.len(),
+            data.as_ptr().cast_mut().cast(),
+        )
+    }
+    .map_err(|e| device_error(&format!("uploading {what} ({} elements)", data.len()), e))
+}
+
+/// Makes sure `slot` holds a read-write buffer of at least `len` elements.
+fn ensure<T>(
+    context: &Context,
+    slot: &mut Option<(Buffer<T>, usize)>,
+    len: usize,
+    what: &str,
+) -> Result<(), BackendError> {
+    let len = len.max(1);
+    if slot.as_ref().is_some_and(|(_, cap)| *cap >= len) {
+        return Ok(());
+    }
+    // SAFETY: no host pointer; the buffer is written by the device or by enqueued writes.
+    let buf = unsafe { Buffer::<T>::create(context, CL_MEM_READ_WRITE, len, ptr::null_mut()) }
+        .map_err(|e| device_error(&format!("allocating {what} ({len} elements)"), e))?;
+    *slot = Some((buf, len));
+    Ok(())
+}
+
+/// Builds `source` for `device` and returns the program, or [`BackendError::Build`] with the
+/// compiler's log.
+fn build_program(
+    context: &Context,
+    device: &DeviceDesc,
+    source: &str,
+    options: &str,
+    origin: &str,
+) -> Result<Program, BackendError> {
+    let mut program = Program::create_from_source(context, source).map_err(|e| {
+        BackendError::Build {
+            backend: BACKEND,
+            what: origin.to_owned(),
+            log: format!("clCreateProgramWithSource failed: {e} ({})", e.0),
+        }
+    })?;
+    if let Err(e) = program.build(&[device.id], options) {
+        let log = program
+            .get_build_log(device.id)
+            .unwrap_or_else(|le| format!("(no build log: {le})"));
+        return Err(BackendError::Build {
+            backend: BACKEND,
+            what: format!("{origin} (options {options:?}, device {})", device.device_name),
+            log: format!("clBuildProgram failed: {e} ({})\n{}", e.0, log.trim_end()),
+        });
+    }
+    Ok(program)
+}
+
+impl OpenClBackend {
+    /// Starts the backend on the default device (first GPU, else first CPU) with the built-in
+    /// kernel, ignoring the environment.
+    ///
+    /// # Errors
+    /// As [`OpenClBackend::with_options`].
+    pub fn new() -> Result<Self, BackendError> {
+        Self::with_options(OpenClOptions::default())
+    }
+
+    /// Starts the backend: finds the device, creates a context and queue, and builds the kernel.
+    ///
+    /// # Errors
+    /// [`BackendError::Unavailable`] when there is no ICD loader, platform or (matching) device,
+    /// or the kernel file cannot be read; [`BackendError::Build`] with the compiler's log when
+    /// the kernel does not build; [`BackendError::Device`] when the driver fails.
+    pub fn with_options(options: OpenClOptions) -> Result<Self, BackendError> {
+        let devices = list_devices()?;
+        let device = select_device(&devices, options.device.as_deref())?;
+        let (source, origin) = match &options.kernel {
+            KernelSource::Builtin => (KERNEL_SOURCE.to_owned(), "kernels/silhouette.cl (built in)".to_owned()),
+            KernelSource::Path(p) => (
+                std::fs::read_to_string(p).map_err(|e| BackendError::Unavailable {
+                    backend: BACKEND,
+                    reason: format!("cannot read kernel source {}: {e}", p.display()),
+                })?,
+                p.display().to_string(),
+            ),
+            KernelSource::Text(t) => (t.clone(), "kernel source text".to_owned()),
+        };
+        let dev = Device::new(device.id);
+        let max_alloc = dev.max_mem_alloc_size().unwrap_or(128 << 20);
+        let context = Context::from_device(&dev)
+            .map_err(|e| device_error(&format!("creating a context on {}", device.describe()), e))?;
+        #[allow(deprecated)] // clCreateCommandQueue: also works on OpenCL 1.2 platforms.
+        let queue = CommandQueue::create_default(&context, 0)
+            .map_err(|e| device_error("creating a command queue", e))?;
+        let use_f64 = device.fp64 && !options.force_f32_filter;
+        let build_options = if use_f64 {
+            "-DSHADOWVOL_EXACT_F64=1"
+        } else {
+            ""
+        };
+        let program = build_program(&context, &device, &source, build_options, &origin)?;
+        let kernel = Kernel::create(&program, KERNEL_NAME).map_err(|e| BackendError::Build {
+            backend: BACKEND,
+            what: origin.clone(),
+            log: format!("the program has no kernel {KERNEL_NAME:?}: {e} ({})", e.0),
+        })?;
+        Ok(Self {
+            device,
+            use_f64,
+            kernel_origin: origin,
+            max_alloc,
+            kernel,
+            _program: program,
+            queue,
+            context,
+            scenes: HashMap::new(),
+            next: 0,
+        })
+    }
+
+    /// The device in use.
+    #[must_use]
+    pub fn device(&self) -> &DeviceDesc {
+        &self.device
+    }
+
+    /// True when exact mode filters in `f64` on the device, false for the `f32` filter.
+    #[must_use]
+    pub fn uses_f64_filter(&self) -> bool {
+        self.use_f64
+    }
+
+    fn check_alloc(&self, what: &str, bytes: usize, hint: &str) -> Result<(), BackendError> {
+        if bytes as u64 > self.max_alloc {
+            return Err(BackendError::Limit {
+                backend: BACKEND,
+                message: format!(
+                    "{what} needs {bytes} bytes, more than the device's largest allocation \
+                     ({} bytes){hint}",
+                    self.max_alloc
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// Writes the lights and zeroed counters, runs the kernel to completion.
+    /// Returns (upload, compute) times.
+    fn run_once(
+        &mut self,
+        id: PreparedId,
+        flat_l: &[f32],
+        num_lights: usize,
+        mode: Accuracy,
+    ) -> Result<(Duration, Duration), BackendError> {
+        let p = self.scenes.get_mut(&id).ok_or(BackendError::UnknownScene {
+            backend: BACKEND,
+            id,
+        })?;
+        let edges = p.flat.edge_count();
+        let t = Instant::now();
+        let zeros = vec![0u32; num_lights + 1];
+        let (lights_buf, _) = p.lights.as_mut().expect("ensured by extract");
+        let (counts_buf, _) = p.counts.as_mut().expect("ensured by extract");
+        // SAFETY: blocking writes from live slices into buffers at least that large.
+        unsafe {
+            self.queue
+                .enqueue_write_buffer(lights_buf, CL_NON_BLOCKING, 0, flat_l, &[])
+                .map_err(|e| device_error("writing lights", e))?;
+            self.queue
+                .enqueue_write_buffer(counts_buf, CL_BLOCKING, 0, &zeros, &[])
+                .map_err(|e| device_error("zeroing counters", e))?;
+        }
+        let upload = t.elapsed();
+        let t = Instant::now();
+        let k = &self.kernel;
+        let set = |i: u32, r: Result<(), ClError>| {
+            r.map_err(|e| device_error(&format!("setting kernel argument {i}"), e))
+        };
+        let (sil_buf, _) = p.sil.as_ref().expect("ensured by extract");
+        let (unc_buf, _) = p.unc.as_ref().expect("ensured by extract");
+        let lights_mem = p.lights.as_ref().expect("ensured").0.get();
+        let counts_mem = p.counts.as_ref().expect("ensured").0.get();
+        let (ne, nl, code, cap) = (
+            edges as u32,
+            num_lights as u32,
+            mode_code(mode),
+            p.unc_records as u32,
+        );
+        // SAFETY: argument types and order match `silhouette` in kernels/silhouette.cl.
+        unsafe {
+            set(0, k.set_arg(0, &p.pos.get()))?;
+            set(1, k.set_arg(1, &p.edges.get()))?;
+            set(2, k.set_arg(2, &p.edge_obj.get()))?;
+            set(3, k.set_arg(3, &p.ov_off.get()))?;
+            set(4, k.set_arg(4, &p.ovs.get()))?;
+            set(5, k.set_arg(5, &lights_mem))?;
+            set(6, k.set_arg(6, &ne))?;
+            set(7, k.set_arg(7, &nl))?;
+            set(8, k.set_arg(8, &code))?;
+            set(9, k.set_arg(9, &counts_mem))?;
+            set(10, k.set_arg(10, &sil_buf.get()))?;
+            set(11, k.set_arg(11, &unc_buf.get()))?;
+            set(12, k.set_arg(12, &cap))?;
+            let global = [edges.div_ceil(64) * 64, num_lights];
+            self.queue
+                .enqueue_nd_range_kernel(k.get(), 2, ptr::null(), global.as_ptr(), ptr::null(), &[])
+                .map_err(|e| device_error("enqueueing the silhouette kernel", e))?;
+        }
+        self.queue
+            .finish()
+            .map_err(|e| device_error("running the silhouette kernel", e))?;
+        Ok((upload, t.elapsed()))
+    }
+}
+
+impl SilhouetteBackend for OpenClBackend {
+    fn info(&self) -> BackendInfo {
+        BackendInfo {
+            name: BACKEND,
+            device: self.device.describe(),
+            modes: Accuracy::ALL.to_vec(),
+            max_lights: None,
+            details: vec![
+                ("platform".to_owned(), self.device.platform_name.clone()),
+                ("platform_version".to_owned(), self.device.platform_version.clone()),
+                ("device_type".to_owned(), self.device.device_type.to_owned()),
+                ("driver".to_owned(), self.device.driver_version.clone()),
+                (
+                    "exact_filter".to_owned(),
+                    if self.use_f64 { "f64 (cl_khr_fp64)" } else { "f32" }.to_owned(),
+                ),
+                ("kernel".to_owned(), self.kernel_origin.clone()),
+            ],
+        }
+    }
+
+    fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
+        let flat = FlatScene::build(scene, BACKEND)?;
+        let hint = "; split the scene";
+        self.check_alloc("the position buffer", flat.positions.len() * 4, hint)?;
+        self.check_alloc("the edge buffer", flat.edges.len() * 4, hint)?;
+        self.check_alloc("the OV buffer", flat.ovs.len() * 4, hint)?;
+        let ro = CL_MEM_READ_ONLY;
+        let prepared = Prepared {
+            pos: upload(&self.context, ro, &flat.positions, "positions")?,
+            edges: upload(&self.context, ro, &flat.edges, "edges")?,
+            edge_obj: upload(&self.context, ro, &flat.edge_obj, "edge objects")?,
+            ov_off: upload(&self.context, ro, &flat.ov_offsets, "OV offsets")?,
+            ovs: upload(&self.context, ro, &flat.ovs, "opposite vertices")?,
+            scene: scene.clone(),
+            flat,
+            lights: None,
+            counts: None,
+            sil: None,
+            unc: None,
+            unc_records: 0,
+        };
+        let id = PreparedId(self.next);
+        self.next += 1;
+        self.scenes.insert(id, prepared);
+        Ok(id)
+    }
+
+    fn extract(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        let p = self.scenes.get(&id).ok_or(BackendError::UnknownScene {
+            backend: BACKEND,
+            id,
+        })?;
+        if lights.is_empty() {
+            return Err(BackendError::InvalidInput("no lights given".to_owned()));
+        }
+        let num_lights = lights.len();
+        let edges = p.flat.edge_count();
+        let objects = p.flat.objects;
+        if edges == 0 {
+            out.reset(0, num_lights);
+            return Ok(ExtractStats::default());
+        }
+        let hint = format!("; pass fewer lights per call ({num_lights} given)");
+        self.check_alloc("the silhouette lists", 2 * edges * num_lights * 4, &hint)?;
+        self.check_alloc("the light buffer", objects * num_lights * 16, &hint)?;
+        if u32::try_from(num_lights).is_err() || u32::try_from(edges * num_lights).is_err() {
+            return Err(BackendError::Limit {
+                backend: BACKEND,
+                message: format!("{num_lights} lights × {edges} edges exceed 32-bit slot indices"),
+            });
+        }
+        let obj_lights = object_lights(&p.scene, lights);
+        let flat_l = flat_lights(&obj_lights);
+        {
+            let ctx = &self.context;
+            let p = self.scenes.get_mut(&id).expect("checked above");
+            ensure(ctx, &mut p.lights, flat_l.len(), "the light buffer")?;
+            ensure(ctx, &mut p.counts, num_lights + 1, "the counters")?;
+            ensure(ctx, &mut p.sil, 2 * edges * num_lights, "the silhouette lists")?;
+            if mode == Accuracy::Exact && p.unc.is_none() {
+                ensure(ctx, &mut p.unc, 3 * INITIAL_UNCERTAIN_CAPACITY, "the uncertain records")?;
+                p.unc_records = INITIAL_UNCERTAIN_CAPACITY;
+            } else if p.unc.is_none() {
+                ensure(ctx, &mut p.unc, 3, "the uncertain records")?;
+                p.unc_records = 1;
+            }
+        }
+        let mut stats = ExtractStats::default();
+        let mut counts = vec![0u32; num_lights + 1];
+        loop {
+            let (up, comp) = self.run_once(id, &flat_l, num_lights, mode)?;
+            stats.upload += up;
+            stats.compute += comp;
+            let t = Instant::now();
+            let p = self.scenes.get(&id).expect("checked above");
+            let (counts_buf, _) = p.counts.as_ref().expect("ensured");
+            // SAFETY: blocking read into a live slice no larger than the buffer.
+            unsafe {
+                self.queue
+                    .enqueue_read_buffer(counts_buf, CL_BLOCKING, 0, &mut counts, &[])
+                    .map_err(|e| device_error("reading counters", e))?;
+            }
+            stats.readback += t.elapsed();
+            let needed = counts[0] as usize;
+            if needed <= p.unc_records {
+                break;
+            }
+            // More uncertain records than the buffer holds: grow it and run again.
+            let records = needed.next_power_of_two();
+            self.check_alloc("the uncertain records", records * 12, "")?;
+            let ctx = &self.context;
+            let p = self.scenes.get_mut(&id).expect("checked above");
+            ensure(ctx, &mut p.unc, 3 * records, "the uncertain records")?;
+            p.unc_records = records;
+        }
+        let t = Instant::now();
+        let p = self.scenes.get(&id).expect("checked above");
+        let mut raw_sil: Vec<Vec<i32>> = counts[1..]
+            .iter()
+            .map(|&c| vec![0i32; 2 * (c as usize).min(edges)])
+            .collect();
+        let mut raw_unc = vec![0u32; 3 * counts[0] as usize];
+        {
+            let (sil_buf, _) = p.sil.as_ref().expect("ensured");
+            let (unc_buf, _) = p.unc.as_ref().expect("ensured");
+            // SAFETY: non-blocking reads into slices that outlive the `finish` below; offsets and
+            // lengths lie inside the buffers (per-light regions of `edges` pairs).
+            unsafe {
+                for (l, dst) in raw_sil.iter_mut().enumerate() {
+                    if !dst.is_empty() {
+                        self.queue
+                            .enqueue_read_buffer(sil_buf, CL_NON_BLOCKING, 2 * l * edges * 4, dst, &[])
+                            .map_err(|e| device_error("reading silhouette lists", e))?;
+                    }
+                }
+                if !raw_unc.is_empty() {
+                    self.queue
+                        .enqueue_read_buffer(unc_buf, CL_NON_BLOCKING, 0, &mut raw_unc, &[])
+                        .map_err(|e| device_error("reading uncertain records", e))?;
+                }
+            }
+            self.queue
+                .finish()
+                .map_err(|e| device_error("reading results", e))?;
+        }
+        stats.readback += t.elapsed();
+        let t = Instant::now();
+        let output = KernelOutput {
+            silhouettes: raw_sil
+                .iter()
+                .map(|r| r.chunks_exact(2).map(|c| (c[0] as u32, c[1])).collect())
+                .collect(),
+            uncertain: raw_unc
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect(),
+            counts,
+        };
+        stats.uncertain = output.uncertain.len() as u64;
+        finish(&p.flat, &obj_lights, num_lights, output, out, BACKEND)?;
+        stats.host_resolve = t.elapsed();
+        Ok(stats)
+    }
+
+    fn release(&mut self, id: PreparedId) {
+        self.scenes.remove(&id);
+    }
 }

@@ -1,0 +1,204 @@
+//! Finding OpenCL platforms and devices, and choosing one.
+
+use crate::BACKEND;
+use opencl3::device::{
+    Device, CL_DEVICE_TYPE_ACCELERATOR, CL_DEVICE_TYPE_ALL, CL_DEVICE_TYPE_CPU,
+    CL_DEVICE_TYPE_GPU,
+};
+use opencl3::error_codes::{ClError, CL_PLATFORM_NOT_FOUND_KHR, DLOPEN_RUNTIME_LOAD_FAILED};
+use opencl3::platform::get_platforms;
+use opencl3::types::cl_device_id;
+use shadowvol_silhouette::BackendError;
+
+/// The environment variable that selects the device explicitly.
+///
+/// Format: `P:D` (platform index `P`, device index `D` within that platform, both 0-based, as
+/// listed by [`list_devices`] and `clinfo -l`), or any other text, matched case-insensitively as a
+/// substring of `"<platform name> / <device name>"` (the first match wins).
+pub const DEVICE_ENV: &str = "SHADOWVOL_OPENCL_DEVICE";
+
+/// One OpenCL device, as found on this machine.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DeviceDesc {
+    /// Platform index (0-based, in ICD loader order).
+    pub platform_index: usize,
+    /// Device index within the platform (0-based).
+    pub device_index: usize,
+    /// Platform name (for example `"Portable Computing Language"`).
+    pub platform_name: String,
+    /// Platform version string (for example `"OpenCL 3.0 PoCL 5.0 ..."`).
+    pub platform_version: String,
+    /// Device name.
+    pub device_name: String,
+    /// `"GPU"`, `"CPU"`, `"accelerator"` or `"other"`.
+    pub device_type: &'static str,
+    /// Driver version string.
+    pub driver_version: String,
+    /// True when the device reports `cl_khr_fp64` (or a non-zero double config).
+    pub fp64: bool,
+    pub(crate) id: cl_device_id,
+}
+
+impl DeviceDesc {
+    /// `"<platform> / <device> (<type>, <platform version>, driver <version>, P:D)"`: the text
+    /// shown by `shadowvol backends`.
+    #[must_use]
+    pub fn describe(&self) -> String {
+        format!(
+            "{} / {} ({}, {}, driver {}, device {}:{})",
+            self.platform_name,
+            self.device_name,
+            self.device_type,
+            self.platform_version,
+            self.driver_version,
+            self.platform_index,
+            self.device_index
+        )
+    }
+}
+
+fn unavailable(reason: String) -> BackendError {
+    BackendError::Unavailable {
+        backend: BACKEND,
+        reason,
+    }
+}
+
+fn cl_err(what: &str, e: ClError) -> BackendError {
+    unavailable(format!("{what} failed: {e} ({})", e.0))
+}
+
+/// Lists every device of every OpenCL platform.
+///
+/// # Errors
+/// [`BackendError::Unavailable`] when the ICD loader (`libOpenCL.so.1`) cannot be loaded, when
+/// no platform is installed, or when no platform has a device; the message says what to install.
+pub fn list_devices() -> Result<Vec<DeviceDesc>, BackendError> {
+    let platforms = match get_platforms() {
+        Ok(p) => p,
+        Err(e) if e.0 == DLOPEN_RUNTIME_LOAD_FAILED => {
+            return Err(unavailable(
+                "no OpenCL ICD loader: libOpenCL.so.1 could not be loaded (install \
+                 ocl-icd-libopencl1 and a driver such as pocl-opencl-icd, or point \
+                 OPENCL_DYLIB_PATH at libOpenCL)"
+                    .to_owned(),
+            ))
+        }
+        Err(e) if e.0 == CL_PLATFORM_NOT_FOUND_KHR => Vec::new(),
+        Err(e) => return Err(cl_err("clGetPlatformIDs", e)),
+    };
+    if platforms.is_empty() {
+        return Err(unavailable(
+            "the OpenCL ICD loader found no platform (no driver registered in \
+             /etc/OpenCL/vendors; install a driver such as pocl-opencl-icd)"
+                .to_owned(),
+        ));
+    }
+    let mut out = Vec::new();
+    for (pi, platform) in platforms.iter().enumerate() {
+        let platform_name = platform.name().unwrap_or_else(|_| "unknown platform".into());
+        let platform_version = platform.version().unwrap_or_default();
+        // A platform without devices answers CL_DEVICE_NOT_FOUND: treat it as empty.
+        let ids = platform.get_devices(CL_DEVICE_TYPE_ALL).unwrap_or_default();
+        for (di, &id) in ids.iter().enumerate() {
+            let dev = Device::new(id);
+            let ty = dev.dev_type().unwrap_or(0);
+            let device_type = if ty & CL_DEVICE_TYPE_GPU != 0 {
+                "GPU"
+            } else if ty & CL_DEVICE_TYPE_CPU != 0 {
+                "CPU"
+            } else if ty & CL_DEVICE_TYPE_ACCELERATOR != 0 {
+                "accelerator"
+            } else {
+                "other"
+            };
+            let extensions = dev.extensions().unwrap_or_default();
+            let fp64 = extensions.split_whitespace().any(|x| x == "cl_khr_fp64")
+                || dev.double_fp_config().unwrap_or(0) != 0;
+            out.push(DeviceDesc {
+                platform_index: pi,
+                device_index: di,
+                platform_name: platform_name.trim().to_owned(),
+                platform_version: platform_version.trim().to_owned(),
+                device_name: dev.name().unwrap_or_else(|_| "unknown device".into()).trim().to_owned(),
+                device_type,
+                driver_version: dev.driver_version().unwrap_or_default().trim().to_owned(),
+                fp64,
+                id,
+            });
+        }
+    }
+    if out.is_empty() {
+        let names: Vec<String> = platforms
+            .iter()
+            .map(|p| p.name().unwrap_or_default())
+            .collect();
+        return Err(unavailable(format!(
+            "OpenCL platform(s) {names:?} found, but none has a device"
+        )));
+    }
+    Ok(out)
+}
+
+/// Chooses a device from `devices`.
+///
+/// With `selector` (see [`DEVICE_ENV`] for the format) the matching device; without, the first
+/// GPU, otherwise the first CPU device.
+///
+/// # Errors
+/// [`BackendError::Unavailable`] when nothing matches, listing the devices there are.
+pub fn select_device(
+    devices: &[DeviceDesc],
+    selector: Option<&str>,
+) -> Result<DeviceDesc, BackendError> {
+    let listing = || {
+        devices
+            .iter()
+            .map(|d| format!("{}:{} {} / {}", d.platform_index, d.device_index, d.platform_name, d.device_name))
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    if let Some(sel) = selector.map(str::trim).filter(|s| !s.is_empty()) {
+        if let Some((p, d)) = sel.split_once(':') {
+            if let (Ok(p), Ok(d)) = (p.trim().parse::<usize>(), d.trim().parse::<usize>()) {
+                return devices
+                    .iter()
+                    .find(|x| x.platform_index == p && x.device_index == d)
+                    .cloned()
+                    .ok_or_else(|| {
+                        unavailable(format!(
+                            "{DEVICE_ENV}={sel:?}: there is no device {p}:{d}; devices: {}",
+                            listing()
+                        ))
+                    });
+            }
+        }
+        let needle = sel.to_lowercase();
+        return devices
+            .iter()
+            .find(|x| {
+                format!("{} / {}", x.platform_name, x.device_name)
+                    .to_lowercase()
+                    .contains(&needle)
+            })
+            .cloned()
+            .ok_or_else(|| {
+                unavailable(format!(
+                    "{DEVICE_ENV}={sel:?} matches no device (expected \"P:D\" indices or a \
+                     substring of \"platform / device\"); devices: {}",
+                    listing()
+                ))
+            });
+    }
+    devices
+        .iter()
+        .find(|d| d.device_type == "GPU")
+        .or_else(|| devices.iter().find(|d| d.device_type == "CPU"))
+        .cloned()
+        .ok_or_else(|| {
+            unavailable(format!(
+                "no OpenCL GPU or CPU device (set {DEVICE_ENV} to choose another); devices: {}",
+                listing()
+            ))
+        })
+}
