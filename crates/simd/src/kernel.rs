@@ -1,0 +1,408 @@
+//! The kernels, generic over the lane [`Level`]. Each is `#[inline(always)]` so that it is
+//! compiled inside the per-level entry points of `dispatch.rs` (one of them a
+//! `#[target_feature(enable = "avx2")]` function), with every lane operation inlined.
+//!
+//! Three kernels:
+//!
+//! * [`tri_signs`]: one sign per canonical triangle and light (`robust`, `ordered`, `exact`).
+//!   Because the canonical triangle of every (edge, OV) pair is the triangle itself, its sign
+//!   times the pair's permutation parity is exactly `ov_sign` of the reference, so each triangle
+//!   is evaluated once instead of once per edge.
+//! * [`edge_sums`]: `m(e) = Σ sign(t) · parity` over the triangles of each edge.
+//! * [`edge_original`]: `original` mode, per (edge, OV), sharing `V`, `A − B`, `N` and `N·A`
+//!   between the two OVs of a manifold edge.
+
+use crate::lanes::{Level, F32V, F64V};
+use crate::layout::{Layout, LANES, ODD};
+use shadowvol_robust_math::{orient_exact, sign_f32, Accuracy, F64_FILTER_EPS};
+use std::ops::Range;
+
+type Xyz = [[f32; LANES]; 3];
+
+/// Gathers the positions of 8 vertex ids from the SoA arrays.
+#[inline(always)]
+fn gather(lay: &Layout, idx: [u32; LANES]) -> Xyz {
+    let mut p = [[0f32; LANES]; 3];
+    for (i, &v) in idx.iter().enumerate() {
+        let v = v as usize;
+        p[0][i] = lay.xs[v];
+        p[1][i] = lay.ys[v];
+        p[2][i] = lay.zs[v];
+    }
+    p
+}
+
+#[inline(always)]
+fn load3<F: F32V>(p: &Xyz) -> [F; 3] {
+    [F::load(p[0]), F::load(p[1]), F::load(p[2])]
+}
+
+#[inline(always)]
+fn splat4<F: F32V>(l: [f32; 4]) -> [F; 4] {
+    [
+        F::splat(l[0]),
+        F::splat(l[1]),
+        F::splat(l[2]),
+        F::splat(l[3]),
+    ]
+}
+
+/// `((A − B) × V)·O − ((A − B) × V)·A` with exactly the operations (and order) of
+/// [`sign_f32`]; its sign is `sign_f32(A, B, L, O)` in every lane.
+#[inline(always)]
+fn plane<F: F32V>(a: &[F; 3], b: &[F; 3], l: &[F; 4], o: &[F; 3]) -> F {
+    let v = [l[0] - l[3] * a[0], l[1] - l[3] * a[1], l[2] - l[3] * a[2]];
+    let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let n = [
+        e[1] * v[2] - e[2] * v[1],
+        e[2] * v[0] - e[0] * v[2],
+        e[0] * v[1] - e[1] * v[0],
+    ];
+    let no = (n[0] * o[0] + n[1] * o[1]) + n[2] * o[2];
+    let na = (n[0] * a[0] + n[1] * a[1]) + n[2] * a[2];
+    no - na
+}
+
+/// The certified `f64` filter of `orient_filter_f64`, four lanes at a time: the same formula,
+/// the same evaluation order and the same constant [`F64_FILTER_EPS`], so each certified lane
+/// carries the proof of the scalar filter. Returns `(positive, negative, uncertain)` bits.
+#[inline(always)]
+fn filter_f64<D: F64V>(a: [D; 3], b: [D; 3], l: [D; 4], o: [D; 3]) -> (u32, u32, u32) {
+    let (ax, ay, az) = (a[0], a[1], a[2]);
+    let lw = l[3];
+    let ex = ax - b[0];
+    let ey = ay - b[1];
+    let ez = az - b[2];
+    let vx = l[0] - lw * ax;
+    let vy = l[1] - lw * ay;
+    let vz = l[2] - lw * az;
+    let dx = o[0] - ax;
+    let dy = o[1] - ay;
+    let dz = o[2] - az;
+    let (p1, q1) = (ey * vz, ez * vy);
+    let (p2, q2) = (ez * vx, ex * vz);
+    let (p3, q3) = (ex * vy, ey * vx);
+    let det = (p1 - q1) * dx + (p2 - q2) * dy + (p3 - q3) * dz;
+    let perm = (p1.abs() + q1.abs()) * dx.abs()
+        + (p2.abs() + q2.abs()) * dy.abs()
+        + (p3.abs() + q3.abs()) * dz.abs();
+    let bound = D::splat(F64_FILTER_EPS) * perm;
+    // |det| > bound with bound >= 0: det > bound (positive) or -det > bound (negative).
+    let pos = det.gt_bits(bound);
+    let neg = (D::splat(0.0) - det).gt_bits(bound);
+    let zero = perm.zero_bits();
+    (pos, neg, !(pos | neg | zero) & 0xF)
+}
+
+/// Byte `i` = 1 where bit `i` of the index is set (sign bytes of positive lanes).
+const POS_BYTES: [u64; 256] = {
+    let mut t = [0u64; 256];
+    let mut i = 0;
+    while i < 256 {
+        let mut b = 0;
+        while b < 8 {
+            if i & (1 << b) != 0 {
+                t[i] |= 1 << (8 * b);
+            }
+            b += 1;
+        }
+        i += 1;
+    }
+    t
+};
+
+/// Per-lane `i8` signs from disjoint positive / negative bit masks.
+#[inline(always)]
+fn sign_bytes(pos: u32, neg: u32) -> [u8; 8] {
+    // Negative lanes become 0xFF (= -1i8) = 0xFF * 1.
+    (POS_BYTES[(pos & 0xFF) as usize] | (POS_BYTES[(neg & 0xFF) as usize] * 0xFF)).to_le_bytes()
+}
+
+/// Signs of the canonical triangles in `blocks` (blocks of 8) for every light.
+///
+/// `out[l]` receives the signs of this range for light `l` (`blocks.len() * 8` bytes; padding
+/// lanes get 0). Returns the number of (triangle, light) evaluations the `f64` filter could not
+/// certify (exact mode), which were decided with the scalar exact predicate.
+#[inline(always)]
+pub(crate) fn tri_signs<Lv: Level>(
+    lay: &Layout,
+    blocks: Range<usize>,
+    lights: &[[f32; 4]],
+    mode: Accuracy,
+    out: &mut [&mut [i8]],
+) -> u64 {
+    let mut uncertain = 0u64;
+    let b0 = blocks.start;
+    for blk in blocks {
+        let t0 = blk * LANES;
+        let valid: u32 = if t0 + LANES <= lay.tri_count {
+            0xFF
+        } else {
+            (1u32 << (lay.tri_count - t0)) - 1
+        };
+        let tris = &lay.tris[t0..t0 + LANES];
+        let p0 = gather(lay, std::array::from_fn(|i| tris[i][0]));
+        let p1 = gather(lay, std::array::from_fn(|i| tris[i][1]));
+        let p2 = gather(lay, std::array::from_fn(|i| tris[i][2]));
+        let dst = (blk - b0) * LANES;
+        match mode {
+            Accuracy::Ordered | Accuracy::Original => {
+                let (a, b, o) = (load3::<Lv::F>(&p0), load3(&p1), load3(&p2));
+                for (l, light) in lights.iter().enumerate() {
+                    let (pos, neg) = plane(&a, &b, &splat4(*light), &o).sign_bits();
+                    write_signs(out, l, dst, pos & valid, neg & valid);
+                }
+            }
+            Accuracy::Robust => {
+                let (a, b, o) = (load3::<Lv::F>(&p0), load3(&p1), load3(&p2));
+                for (l, light) in lights.iter().enumerate() {
+                    let lv = splat4(*light);
+                    let (pa, na) = plane(&a, &b, &lv, &o).sign_bits();
+                    let (pb, nb) = plane(&b, &o, &lv, &a).sign_bits();
+                    let (pc, nc) = plane(&o, &a, &lv, &b).sign_bits();
+                    write_signs(out, l, dst, pa & pb & pc & valid, na & nb & nc & valid);
+                }
+            }
+            Accuracy::Exact => {
+                for (l, light) in lights.iter().enumerate() {
+                    let (mut pos, mut neg, mut unc) = (0u32, 0u32, 0u32);
+                    for h in 0..2 {
+                        let w = |p: &Xyz| -> [Lv::D; 3] {
+                            std::array::from_fn(|c| {
+                                Lv::D::widen(std::array::from_fn(|i| p[c][4 * h + i]))
+                            })
+                        };
+                        let lv = std::array::from_fn(|c| Lv::D::splat(f64::from(light[c])));
+                        let (ph, nh, uh) = filter_f64(w(&p0), w(&p1), lv, w(&p2));
+                        pos |= ph << (4 * h);
+                        neg |= nh << (4 * h);
+                        unc |= uh << (4 * h);
+                    }
+                    unc &= valid;
+                    if unc != 0 {
+                        uncertain += u64::from(unc.count_ones());
+                        let mut bits = unc;
+                        while bits != 0 {
+                            let i = bits.trailing_zeros() as usize;
+                            bits &= bits - 1;
+                            let s = orient_exact(
+                                [p0[0][i], p0[1][i], p0[2][i]],
+                                [p1[0][i], p1[1][i], p1[2][i]],
+                                *light,
+                                [p2[0][i], p2[1][i], p2[2][i]],
+                            );
+                            if s > 0 {
+                                pos |= 1 << i;
+                            } else if s < 0 {
+                                neg |= 1 << i;
+                            }
+                        }
+                    }
+                    write_signs(out, l, dst, pos & valid, neg & valid);
+                }
+            }
+        }
+    }
+    uncertain
+}
+
+#[inline(always)]
+fn write_signs(out: &mut [&mut [i8]], l: usize, dst: usize, pos: u32, neg: u32) {
+    let bytes = sign_bytes(pos, neg);
+    for (d, s) in out[l][dst..dst + LANES].iter_mut().zip(bytes) {
+        *d = s as i8;
+    }
+}
+
+/// `±s` by the parity bit of a triangle reference.
+#[inline(always)]
+fn signed(s: i8, tref: u32) -> i32 {
+    let k = (tref >> 31) as i32; // 1 for odd parity
+    (i32::from(s) ^ -k) + k
+}
+
+/// Multiplicities of the edges in `blocks` from the triangle signs (`robust`, `ordered`,
+/// `exact`). `signs[l]` are light `l`'s signs of this object's triangles; `out[l]` receives this
+/// range's multiplicities; `sil[l]` collects `edge_base + e` for `m != 0`.
+pub(crate) fn edge_sums(
+    lay: &Layout,
+    blocks: Range<usize>,
+    signs: &[&[i8]],
+    out: &mut [&mut [i32]],
+    sil: &mut [Vec<u32>],
+    edge_base: usize,
+) {
+    let e_start = blocks.start * LANES;
+    for blk in blocks {
+        let e0 = blk * LANES;
+        if lay.block_fast[blk] {
+            for e in e0..e0 + LANES {
+                let [t1, t2] = lay.tri2[e];
+                let (i1, i2) = ((t1 & !ODD) as usize, (t2 & !ODD) as usize);
+                for (l, s) in signs.iter().enumerate() {
+                    let m = signed(s[i1], t1) + signed(s[i2], t2);
+                    out[l][e - e_start] = m;
+                    if m != 0 {
+                        sil[l].push((edge_base + e) as u32);
+                    }
+                }
+            }
+        } else {
+            for e in e0..(e0 + LANES).min(lay.edge_count) {
+                let r = lay.ov_offsets[e] as usize..lay.ov_offsets[e + 1] as usize;
+                for (l, s) in signs.iter().enumerate() {
+                    let m: i32 = lay.ov_tri[r.clone()]
+                        .iter()
+                        .map(|&t| signed(s[(t & !ODD) as usize], t))
+                        .sum();
+                    out[l][e - e_start] = m;
+                    if m != 0 {
+                        sil[l].push((edge_base + e) as u32);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// `original` mode for the edges in `blocks`: per (edge, OV) `sign_f32(A, B, L, O)`, 8 edges per
+/// vector in fast blocks. Output as in [`edge_sums`].
+#[inline(always)]
+pub(crate) fn edge_original<Lv: Level>(
+    lay: &Layout,
+    blocks: Range<usize>,
+    lights: &[[f32; 4]],
+    out: &mut [&mut [i32]],
+    sil: &mut [Vec<u32>],
+    edge_base: usize,
+) {
+    let e_start = blocks.start * LANES;
+    for blk in blocks {
+        let e0 = blk * LANES;
+        if lay.block_fast[blk] {
+            let abo = &lay.abo[e0..e0 + LANES];
+            let a = load3::<Lv::F>(&gather(lay, std::array::from_fn(|i| abo[i][0])));
+            let b = load3::<Lv::F>(&gather(lay, std::array::from_fn(|i| abo[i][1])));
+            let o1 = load3::<Lv::F>(&gather(lay, std::array::from_fn(|i| abo[i][2])));
+            let o2 = load3::<Lv::F>(&gather(lay, std::array::from_fn(|i| abo[i][3])));
+            let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+            for (l, light) in lights.iter().enumerate() {
+                let lv = splat4::<Lv::F>(*light);
+                // The operations of `sign_f32`, with V, A - B, N and N·A shared by both OVs.
+                let v = [
+                    lv[0] - lv[3] * a[0],
+                    lv[1] - lv[3] * a[1],
+                    lv[2] - lv[3] * a[2],
+                ];
+                let n = [
+                    e[1] * v[2] - e[2] * v[1],
+                    e[2] * v[0] - e[0] * v[2],
+                    e[0] * v[1] - e[1] * v[0],
+                ];
+                let na = (n[0] * a[0] + n[1] * a[1]) + n[2] * a[2];
+                let d1 = ((n[0] * o1[0] + n[1] * o1[1]) + n[2] * o1[2]) - na;
+                let d2 = ((n[0] * o2[0] + n[1] * o2[1]) + n[2] * o2[2]) - na;
+                let m = (d1.signum0() + d2.signum0()).to_i32();
+                let dst = &mut out[l][e0 - e_start..e0 - e_start + LANES];
+                dst.copy_from_slice(&m);
+                if m != [0; LANES] {
+                    for (i, &mi) in m.iter().enumerate() {
+                        if mi != 0 {
+                            sil[l].push((edge_base + e0 + i) as u32);
+                        }
+                    }
+                }
+            }
+        } else {
+            for e in e0..(e0 + LANES).min(lay.edge_count) {
+                let [a, b] = lay.edges[e];
+                let (pa, pb) = (lay.pos(a), lay.pos(b));
+                let ovs = &lay.ovs[lay.ov_offsets[e] as usize..lay.ov_offsets[e + 1] as usize];
+                for (l, light) in lights.iter().enumerate() {
+                    let m: i32 = ovs
+                        .iter()
+                        .map(|&o| i32::from(sign_f32(pa, pb, *light, lay.pos(o))))
+                        .sum();
+                    out[l][e - e_start] = m;
+                    if m != 0 {
+                        sil[l].push((edge_base + e) as u32);
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lanes::Wide;
+    use shadowvol_robust_math::orient_filter_f64;
+
+    /// The 4-lane filter makes exactly the decisions of the scalar `orient_filter_f64`
+    /// (certified sign, certified zero, or uncertain) on random and on coplanar inputs.
+    #[test]
+    fn vector_filter_mirrors_scalar_filter() {
+        let mut x = 0x9E37_79B9u32;
+        let mut rnd = move || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x
+        };
+        let mut uncertain_seen = 0;
+        for round in 0..4000 {
+            let mut lanes = [([0f32; 3], [0f32; 3], [0f32; 3]); 4];
+            let l: [f32; 4] = if round % 2 == 0 {
+                [0.25, -0.5, 0.75, 1.0]
+            } else {
+                [1.0, -0.5, 0.0, 0.0]
+            };
+            for lane in &mut lanes {
+                let mut p = || {
+                    if round % 3 == 0 {
+                        // Random small lattice points in the plane y = -(x + z) / 2.
+                        let (a, c) = ((rnd() % 9) as f32, (rnd() % 9) as f32);
+                        [a, -(a + c) * 0.5, c]
+                    } else {
+                        let f = |r: u32| (r % 20001) as f32 / 1000.0 - 10.0;
+                        [f(rnd()), f(rnd()), f(rnd())]
+                    }
+                };
+                *lane = (p(), p(), p());
+            }
+            let wd = |f: &dyn Fn(usize) -> f32| <Wide as Level>::D::widen([f(0), f(1), f(2), f(3)]);
+            let a = std::array::from_fn(|c| wd(&|i| lanes[i].0[c]));
+            let b = std::array::from_fn(|c| wd(&|i| lanes[i].1[c]));
+            let o = std::array::from_fn(|c| wd(&|i| lanes[i].2[c]));
+            let lv = std::array::from_fn(|c| <Wide as Level>::D::splat(f64::from(l[c])));
+            let (pos, neg, unc) = filter_f64(a, b, lv, o);
+            for (i, (pa, pb, po)) in lanes.iter().enumerate() {
+                let expect = orient_filter_f64(*pa, *pb, l, *po);
+                let got = if unc >> i & 1 == 1 {
+                    uncertain_seen += 1;
+                    None
+                } else if pos >> i & 1 == 1 {
+                    Some(1)
+                } else if neg >> i & 1 == 1 {
+                    Some(-1)
+                } else {
+                    Some(0)
+                };
+                assert_eq!(got, expect, "lane {i}: {pa:?} {pb:?} {l:?} {po:?}");
+            }
+        }
+        assert!(
+            uncertain_seen > 0,
+            "the coplanar rounds must produce uncertain lanes"
+        );
+    }
+
+    #[test]
+    fn sign_bytes_encode_lanes() {
+        assert_eq!(
+            sign_bytes(0b0000_0101, 0b1000_0010).map(|b| b as i8),
+            [1, -1, 1, 0, 0, 0, 0, -1]
+        );
+    }
+}

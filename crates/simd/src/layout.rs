@@ -1,0 +1,183 @@
+//! The prepared, streaming-friendly layout of one edge table.
+//!
+//! * Positions are stored as three arrays (`xs`, `ys`, `zs`: structure of arrays), indexed by
+//!   compact vertex id.
+//! * Triangles are stored in canonical vertex order (ascending ids) and sorted, so the
+//!   per-triangle pass walks the vertex arrays roughly front to back, in the same order as the
+//!   edges (which [`EdgeTable`] sorts by their smaller vertex).
+//! * Edges keep the table's order (global edge index = output slot) and are processed in blocks
+//!   of [`LANES`]. A block whose edges all have exactly two opposite vertices (the closed-manifold
+//!   case) takes the fast path, which needs no CSR offsets: `abo[e] = [a, b, o1, o2]` for the
+//!   per-edge `original` mode and `tri2[e] = [t1, t2]` (canonical-triangle index with the
+//!   permutation parity in bit 31) for the per-triangle modes. Every other block takes the general
+//!   CSR path (`ov_offsets`, `ovs`, `ov_tri`).
+
+use shadowvol_mesh_topology::EdgeTable;
+
+/// Lanes per `f32` vector and edges / triangles per block.
+pub(crate) const LANES: usize = 8;
+
+/// Bit 31 of a triangle reference: the (edge, OV) pair has odd parity (`a < o < b`).
+pub(crate) const ODD: u32 = 1 << 31;
+
+/// One edge table laid out for the kernels.
+#[derive(Debug)]
+pub(crate) struct Layout {
+    pub xs: Vec<f32>,
+    pub ys: Vec<f32>,
+    pub zs: Vec<f32>,
+    /// Canonical triangles (ascending ids), sorted; padded with `[0, 0, 0]` to a multiple of
+    /// [`LANES`].
+    pub tris: Vec<[u32; 3]>,
+    /// Number of real triangles in `tris`.
+    pub tri_count: usize,
+    /// Number of edges.
+    pub edge_count: usize,
+    /// Per block of [`LANES`] edges: true when the block is full and every edge is manifold.
+    pub block_fast: Vec<bool>,
+    /// Per edge: `[a, b, o1, o2]` (only meaningful in fast blocks).
+    pub abo: Vec<[u32; 4]>,
+    /// Per edge: the two canonical triangles with parity bits (only meaningful in fast blocks).
+    pub tri2: Vec<[u32; 2]>,
+    /// Edge endpoints, for the general path.
+    pub edges: Vec<[u32; 2]>,
+    /// CSR offsets into `ovs` / `ov_tri`.
+    pub ov_offsets: Vec<u32>,
+    /// Opposite vertices.
+    pub ovs: Vec<u32>,
+    /// Canonical-triangle index of each entry of `ovs`, with [`ODD`] for odd parity.
+    pub ov_tri: Vec<u32>,
+}
+
+/// Why a table cannot be laid out.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct LayoutError(pub String);
+
+impl Layout {
+    /// Lays out `table`. Checks every index against the vertex count, so the kernels may rely
+    /// on it.
+    pub(crate) fn build(table: &EdgeTable) -> Result<Self, LayoutError> {
+        let nv = table.positions.len();
+        if nv >= i32::MAX as usize || table.triangles.len() >= (ODD as usize) {
+            return Err(LayoutError(format!(
+                "{nv} vertices / {} triangles exceed the 2^31 limit of the layout",
+                table.triangles.len()
+            )));
+        }
+        if table.ov_offsets.len() != table.edges.len() + 1
+            || table.ov_offsets.last().copied().unwrap_or(0) as usize != table.ovs.len()
+            || table.connectivity.tri_edges.len() != table.triangles.len()
+        {
+            return Err(LayoutError(
+                "edge table is inconsistent (offsets, OVs and connectivity disagree)".to_owned(),
+            ));
+        }
+        let in_range = |v: u32| (v as usize) < nv;
+        if !table.triangles.iter().flatten().all(|&v| in_range(v))
+            || !table.edges.iter().flatten().all(|&v| in_range(v))
+            || !table.ovs.iter().all(|&v| in_range(v))
+        {
+            return Err(LayoutError(format!(
+                "edge table refers to a vertex id >= its {nv} positions"
+            )));
+        }
+        let xs = table.positions.iter().map(|p| p.x).collect();
+        let ys = table.positions.iter().map(|p| p.y).collect();
+        let zs = table.positions.iter().map(|p| p.z).collect();
+
+        // Canonical triangles, sorted for locality; `slot[t]` = position of table triangle t.
+        let mut canon: Vec<([u32; 3], u32)> = table
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(t, tri)| {
+                let mut c = *tri;
+                c.sort_unstable();
+                (c, t as u32)
+            })
+            .collect();
+        canon.sort_unstable();
+        let mut slot = vec![0u32; canon.len()];
+        for (i, &(_, t)) in canon.iter().enumerate() {
+            slot[t as usize] = i as u32;
+        }
+        let tri_count = canon.len();
+        let mut tris: Vec<[u32; 3]> = canon.into_iter().map(|(c, _)| c).collect();
+        tris.resize(tri_count.div_ceil(LANES) * LANES, [0, 0, 0]);
+
+        // For each (edge, OV) entry, its triangle: OVs of an edge are listed in ascending
+        // triangle order, so filling per edge while walking triangles in order reproduces it.
+        let ne = table.edges.len();
+        let mut fill: Vec<u32> = table.ov_offsets[..ne].to_vec();
+        let mut ov_tri = vec![0u32; table.ovs.len()];
+        for (t, (tri, te)) in table
+            .triangles
+            .iter()
+            .zip(&table.connectivity.tri_edges)
+            .enumerate()
+        {
+            for i in 0..3 {
+                let e = te[i] as usize;
+                let o = tri[(i + 2) % 3];
+                let [a, b] = *table.edges.get(e).ok_or_else(|| {
+                    LayoutError(format!("triangle {t} refers to edge {e} out of range"))
+                })?;
+                let k = fill[e] as usize;
+                if k >= table.ov_offsets[e + 1] as usize || table.ovs[k] != o {
+                    return Err(LayoutError(format!(
+                        "edge {e}: opposite vertex list does not match triangle {t}"
+                    )));
+                }
+                fill[e] += 1;
+                let odd = if a < o && o < b { ODD } else { 0 };
+                ov_tri[k] = slot[t] | odd;
+            }
+        }
+
+        let mut block_fast = Vec::with_capacity(ne.div_ceil(LANES));
+        let mut abo = vec![[0u32; 4]; ne];
+        let mut tri2 = vec![[0u32; 2]; ne];
+        for e in 0..ne {
+            let (s, t) = (
+                table.ov_offsets[e] as usize,
+                table.ov_offsets[e + 1] as usize,
+            );
+            if t - s == 2 {
+                let [a, b] = table.edges[e];
+                abo[e] = [a, b, table.ovs[s], table.ovs[s + 1]];
+                tri2[e] = [ov_tri[s], ov_tri[s + 1]];
+            }
+        }
+        for blk in 0..ne.div_ceil(LANES) {
+            let r = blk * LANES..((blk + 1) * LANES).min(ne);
+            let full = r.len() == LANES;
+            block_fast.push(
+                full && r
+                    .into_iter()
+                    .all(|e| table.ov_offsets[e + 1] - table.ov_offsets[e] == 2),
+            );
+        }
+        Ok(Self {
+            xs,
+            ys,
+            zs,
+            tris,
+            tri_count,
+            edge_count: ne,
+            block_fast,
+            abo,
+            tri2,
+            edges: table.edges.clone(),
+            ov_offsets: table.ov_offsets.clone(),
+            ovs: table.ovs.clone(),
+            ov_tri,
+        })
+    }
+
+    /// Position of compact vertex `v` as an array.
+    #[inline(always)]
+    pub(crate) fn pos(&self, v: u32) -> [f32; 3] {
+        let v = v as usize;
+        [self.xs[v], self.ys[v], self.zs[v]]
+    }
+}
