@@ -1,1 +1,288 @@
-//! Placeholder crate: not implemented yet (see the issue list).
+//! Headless stencil shadow volumes (wgpu) from silhouette multiplicities, with a per-frame plan
+//! and a ray-traced reference.
+//!
+//! * [`Renderer`]: a stateful renderer. Each [`Renderer::render`] call does a depth pre-pass with
+//!   ambient light, then per light a stencil pass (two-sided, wrapping increment/decrement,
+//!   volumes extruded to infinity with `w = 0` under an infinite far plane, depth clamp where the
+//!   device has it) and an additive Lambert pass where the stencil is 0.
+//! * [`plan`]: per (light, object) the cheapest correct technique: culled, z-pass (when the
+//!   near-clip volume test proves the camera is outside the object's shadow volume) or z-fail
+//!   with caps (no back cap for directional lights). Silhouettes are reused from the previous
+//!   frame when neither the light nor the object moved.
+//! * [`volume`]: shadow-volume geometry. Sides are `|m|` quads per silhouette edge oriented by
+//!   the sign of `m`; caps use the same per-triangle sign as the accuracy mode
+//!   ([`shadowvol_robust_math::triangle_sign`] on the canonical triangle), so caps and sides
+//!   always meet in the consistent modes.
+//! * [`reference`]: a CPU ray caster with a BVH (rayon-parallel) that decides, from each
+//!   pixel's surface point, whether each light is visible, and the artifact metric.
+//!
+//! ```no_run
+//! use shadowvol_renderer::{Camera, RenderObject, RenderOptions, RenderScene, Renderer, reference};
+//! use shadowvol_mesh_topology::Mesh;
+//! use shadowvol_robust_math::Light;
+//! use glam::{Affine3A, Vec3};
+//! use std::sync::Arc;
+//!
+//! // A floor and a tetrahedron above it, lit from above.
+//! let floor = Mesh::new(
+//!     vec![Vec3::new(-4., 0., -4.), Vec3::new(4., 0., -4.), Vec3::new(4., 0., 4.), Vec3::new(-4., 0., 4.)],
+//!     vec![[0, 2, 1], [0, 3, 2]],
+//! ).unwrap();
+//! let tet = Mesh::new(
+//!     vec![Vec3::ZERO, Vec3::X, Vec3::Z, Vec3::Y],
+//!     vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+//! ).unwrap();
+//! let scene = RenderScene {
+//!     objects: vec![
+//!         RenderObject::new("floor", Arc::new(floor), Affine3A::IDENTITY),
+//!         RenderObject::new("tet", Arc::new(tet), Affine3A::from_translation(Vec3::Y)),
+//!     ],
+//!     lights: vec![Light::point(Vec3::new(0.5, 6.0, 0.5))],
+//!     camera: Camera::look_at(Vec3::new(3., 5., 6.), Vec3::ZERO),
+//!     ambient: 0.15,
+//! };
+//! let backend = Box::new(shadowvol_cpu::CpuBackend::new());
+//! let mut renderer = Renderer::new(backend, RenderOptions::new(128, 128)).unwrap();
+//! let frame = renderer.render(&scene).unwrap();
+//! frame.save_png("out.png").unwrap();
+//! let cmp = reference::compare(&frame);
+//! println!("artifact pixels: {}", cmp.artifact_pixels);
+//! ```
+
+pub mod gpu;
+pub mod plan;
+pub mod reference;
+mod renderer;
+pub mod volume;
+
+pub use plan::{PlanEntry, PlanPolicy, SilhouetteSource, Technique};
+pub use renderer::{Frame, RenderOptions, Renderer, Timings};
+pub use shadowvol_robust_math::{Accuracy, Light};
+
+use glam::{Affine3A, DMat4, DVec3, Mat4, Vec3};
+use shadowvol_mesh_topology::{Mesh, MeshError};
+use shadowvol_silhouette::BackendError;
+use std::sync::Arc;
+
+/// A pinhole camera (right-handed, `y` up by default) with an infinite far plane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Eye position (world units).
+    pub eye: Vec3,
+    /// A point the camera looks at.
+    pub target: Vec3,
+    /// Up direction (need not be orthogonal to the view direction, must not be parallel to it).
+    pub up: Vec3,
+    /// Vertical field of view, radians, in `(0, π)`.
+    pub fov_y: f32,
+    /// Near-plane distance (world units, `> 0`). There is no far plane.
+    pub near: f32,
+}
+
+impl Camera {
+    /// A camera at `eye` looking at `target`, `y` up, 45° vertical field of view, near plane at
+    /// 1/1000 of the eye-target distance.
+    #[must_use]
+    pub fn look_at(eye: Vec3, target: Vec3) -> Self {
+        let d = (target - eye).length().max(1e-6);
+        let up = if (target - eye).normalize_or_zero().abs().y > 0.999 {
+            Vec3::Z
+        } else {
+            Vec3::Y
+        };
+        Self {
+            eye,
+            target,
+            up,
+            fov_y: 45f32.to_radians(),
+            near: d * 1e-3,
+        }
+    }
+
+    /// Checks that the camera is usable.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] naming the bad field.
+    pub fn validate(&self) -> Result<(), RenderError> {
+        let finite = self.eye.is_finite()
+            && self.target.is_finite()
+            && self.up.is_finite()
+            && self.fov_y.is_finite()
+            && self.near.is_finite();
+        if !finite {
+            return Err(RenderError::InvalidInput(format!(
+                "camera has a non-finite component: {self:?}"
+            )));
+        }
+        if self.eye == self.target {
+            return Err(RenderError::InvalidInput(
+                "camera eye equals its target".into(),
+            ));
+        }
+        if (self.target - self.eye).cross(self.up).length_squared() == 0.0 {
+            return Err(RenderError::InvalidInput(
+                "camera up is parallel to the view direction".into(),
+            ));
+        }
+        if !(self.fov_y > 0.0 && self.fov_y < std::f32::consts::PI) {
+            return Err(RenderError::InvalidInput(format!(
+                "camera fov_y is {} rad; it must be in (0, π)",
+                self.fov_y
+            )));
+        }
+        if self.near <= 0.0 {
+            return Err(RenderError::InvalidInput(format!(
+                "camera near is {}; it must be > 0",
+                self.near
+            )));
+        }
+        Ok(())
+    }
+
+    /// View matrix (world → camera), `f32`.
+    #[must_use]
+    pub fn view(&self) -> Mat4 {
+        glam::camera::rh::view::look_at_mat4(self.eye, self.target, self.up)
+    }
+
+    /// Projection with an infinite far plane and depth range `[0, 1]` (points with `w = 0` map
+    /// to depth exactly 1), `f32`.
+    #[must_use]
+    pub fn projection(&self, aspect: f32) -> Mat4 {
+        glam::camera::rh::proj::directx::perspective_infinite(self.fov_y, aspect, self.near)
+    }
+
+    /// `projection * view`, the matrix every pass uses.
+    #[must_use]
+    pub fn view_proj(&self, aspect: f32) -> Mat4 {
+        self.projection(aspect) * self.view()
+    }
+
+    /// The same matrices in `f64` (for the reference and the plan).
+    #[must_use]
+    pub fn view_proj_f64(&self, aspect: f64) -> DMat4 {
+        let v = glam::dcamera::rh::view::look_at_mat4(
+            self.eye.as_dvec3(),
+            self.target.as_dvec3(),
+            self.up.as_dvec3(),
+        );
+        glam::dcamera::rh::proj::directx::perspective_infinite(
+            f64::from(self.fov_y),
+            aspect,
+            f64::from(self.near),
+        ) * v
+    }
+
+    /// The four corners of the near-plane rectangle in world space (`f64`), counter-clockwise
+    /// as seen from the eye: bottom-left, bottom-right, top-right, top-left.
+    #[must_use]
+    pub fn near_corners(&self, aspect: f64) -> [DVec3; 4] {
+        let eye = self.eye.as_dvec3();
+        let f = (self.target.as_dvec3() - eye).normalize();
+        let r = f.cross(self.up.as_dvec3()).normalize();
+        let u = r.cross(f);
+        let n = f64::from(self.near);
+        let h = n * (f64::from(self.fov_y) * 0.5).tan();
+        let w = h * aspect;
+        let c = eye + f * n;
+        [
+            c - r * w - u * h,
+            c + r * w - u * h,
+            c + r * w + u * h,
+            c - r * w + u * h,
+        ]
+    }
+}
+
+/// One object to render: a mesh (object space), where it is, and its colour.
+#[derive(Debug, Clone)]
+pub struct RenderObject {
+    /// Name for the plan and messages.
+    pub name: String,
+    /// Triangles in object space. The renderer welds it and builds its edge table once per
+    /// distinct `Arc` (pointer identity), and caches silhouettes for it.
+    pub mesh: Arc<Mesh>,
+    /// World-from-object transform (must be invertible).
+    pub world_from_object: Affine3A,
+    /// Diffuse colour, linear RGB in `[0, 1]`.
+    pub albedo: [f32; 3],
+}
+
+impl RenderObject {
+    /// An object with a light grey albedo.
+    #[must_use]
+    pub fn new(name: impl Into<String>, mesh: Arc<Mesh>, world_from_object: Affine3A) -> Self {
+        Self {
+            name: name.into(),
+            mesh,
+            world_from_object,
+            albedo: [0.8, 0.8, 0.8],
+        }
+    }
+}
+
+/// Everything one frame needs.
+#[derive(Debug, Clone)]
+pub struct RenderScene {
+    /// Objects; each is a shadow caster and a receiver.
+    pub objects: Vec<RenderObject>,
+    /// Lights in world space (point `w = 1`, directional `w = 0`).
+    pub lights: Vec<Light>,
+    /// The camera.
+    pub camera: Camera,
+    /// Ambient factor in `[0, 1]` applied to the albedo in the pre-pass.
+    pub ambient: f32,
+}
+
+impl RenderScene {
+    /// World-space bounding box of all objects (`f32` transform of every vertex), or `None`
+    /// for an empty scene.
+    #[must_use]
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        let mut any = false;
+        for o in &self.objects {
+            for p in &o.mesh.positions {
+                let w = o.world_from_object.transform_point3(*p);
+                lo = lo.min(w);
+                hi = hi.max(w);
+                any = true;
+            }
+        }
+        any.then_some((lo, hi))
+    }
+}
+
+/// Errors from rendering.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// No usable GPU adapter (install a Vulkan driver, for example Mesa lavapipe).
+    #[error("no GPU adapter: {0}")]
+    NoAdapter(String),
+    /// The device failed (out of memory, validation, lost).
+    #[error("GPU device error: {0}")]
+    Device(String),
+    /// The silhouette backend failed.
+    #[error("silhouette backend: {0}")]
+    Backend(#[from] BackendError),
+    /// An object's mesh is invalid.
+    #[error("object {object:?}: {source}")]
+    Mesh {
+        /// Object name.
+        object: String,
+        /// What is wrong.
+        source: MeshError,
+    },
+    /// Bad parameters (size, camera, light).
+    #[error("invalid input: {0}")]
+    InvalidInput(String),
+    /// Writing an image failed.
+    #[error("image {path}: {message}")]
+    Image {
+        /// The file.
+        path: String,
+        /// What failed.
+        message: String,
+    },
+}

@@ -1,0 +1,731 @@
+//! The wgpu side: device, pipelines, one frame's passes, readback.
+//!
+//! Passes of a frame (one command buffer):
+//! 1. pre-pass: colour = ambient × albedo, ids (object + 1, triangle), depth (less, write);
+//! 2. per light: stencil pass (stencil cleared to 0; two-sided, wrapping; depth test `less`,
+//!    no depth write) over z-pass volumes and z-fail volumes; a copy of the stencil aspect to a
+//!    buffer (the per-pixel shadow state the metric compares); a lit pass (depth `equal`,
+//!    stencil `== 0`, additive Lambert).
+
+use crate::RenderError;
+use bytemuck::{Pod, Zeroable};
+use std::ops::Range;
+
+/// Vertex of the visible surfaces (non-indexed; flat triangle data repeated on its 3 vertices).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct SurfaceVertex {
+    /// World position, `w = 1`.
+    pub pos: [f32; 4],
+    /// Geometric normal of the triangle in canonical order (`w` unused).
+    pub normal: [f32; 4],
+    /// Albedo (`a` unused).
+    pub albedo: [f32; 4],
+    /// `[object + 1, triangle index within the object]`.
+    pub ids: [u32; 2],
+    /// Padding.
+    pub pad: [u32; 2],
+}
+
+/// The draws of one light, as vertex ranges into the frame's volume vertex buffer.
+#[derive(Debug, Clone, Default)]
+pub struct LightDraws {
+    /// World light `(x, y, z, w)`.
+    pub light: [f32; 4],
+    /// Light colour (linear RGB).
+    pub color: [f32; 3],
+    /// Z-pass sides (counter-clockwise front faces).
+    pub zpass: Range<u32>,
+    /// Z-fail sides and back caps and `σ = +1` front caps (counter-clockwise front faces).
+    pub zfail_ccw: Range<u32>,
+    /// Z-fail `σ = −1` front caps (clockwise front faces).
+    pub zfail_cw: Range<u32>,
+}
+
+/// Everything the GPU needs for one frame.
+#[derive(Debug, Clone)]
+pub struct FrameInput<'a> {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Column-major `projection * view`.
+    pub view_proj: [f32; 16],
+    /// Eye position.
+    pub eye: [f32; 3],
+    /// Ambient factor.
+    pub ambient: f32,
+    /// Surface triangles (3 vertices each).
+    pub surface: &'a [SurfaceVertex],
+    /// All volume vertices of all lights.
+    pub volumes: &'a [[f32; 4]],
+    /// Per-light draws.
+    pub lights: &'a [LightDraws],
+}
+
+/// What comes back from the GPU.
+#[derive(Debug, Clone)]
+pub struct FrameOutput {
+    /// RGBA8, row-major, top row first.
+    pub color: Vec<u8>,
+    /// Per pixel `[object + 1, triangle]`; `[0, _]` is background.
+    pub ids: Vec<[u32; 2]>,
+    /// Per light, the stencil value of every pixel after its stencil pass.
+    pub stencil: Vec<Vec<u8>>,
+}
+
+/// A headless wgpu device with the renderer's pipelines.
+pub struct Gpu {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    /// Adapter name and backend, in words.
+    pub adapter: String,
+    /// Depth-stencil format used.
+    pub depth_format: wgpu::TextureFormat,
+    /// True when volumes are drawn with `unclipped_depth` (depth clamp).
+    pub depth_clamp: bool,
+    globals_bgl: wgpu::BindGroupLayout,
+    light_bgl: wgpu::BindGroupLayout,
+    prepass: wgpu::RenderPipeline,
+    lit: wgpu::RenderPipeline,
+    zpass: wgpu::RenderPipeline,
+    zfail_ccw: wgpu::RenderPipeline,
+    zfail_cw: wgpu::RenderPipeline,
+}
+
+impl std::fmt::Debug for Gpu {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Gpu")
+            .field("adapter", &self.adapter)
+            .field("depth_format", &self.depth_format)
+            .field("depth_clamp", &self.depth_clamp)
+            .finish_non_exhaustive()
+    }
+}
+
+const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+const IDS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
+const LIGHT_STRIDE: u64 = 256;
+
+fn stencil_face(
+    pass: wgpu::StencilOperation,
+    depth_fail: wgpu::StencilOperation,
+) -> wgpu::StencilFaceState {
+    wgpu::StencilFaceState {
+        compare: wgpu::CompareFunction::Always,
+        fail_op: wgpu::StencilOperation::Keep,
+        depth_fail_op: depth_fail,
+        pass_op: pass,
+    }
+}
+
+impl Gpu {
+    /// Opens the first adapter wgpu finds (any backend; `WGPU_BACKEND` etc. are honoured) and
+    /// builds the pipelines.
+    ///
+    /// # Errors
+    /// [`RenderError::NoAdapter`] when there is no adapter, [`RenderError::Device`] when the
+    /// device or a pipeline cannot be created.
+    pub fn new() -> Result<Self, RenderError> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+            apply_limit_buckets: false,
+        }))
+        .map_err(|e| {
+            RenderError::NoAdapter(format!(
+                "{e}; install a Vulkan driver (for example Mesa's lavapipe, package mesa-vulkan-drivers)"
+            ))
+        })?;
+        let info = adapter.get_info();
+        let features = adapter.features();
+        let mut required = wgpu::Features::empty();
+        let depth_clamp = features.contains(wgpu::Features::DEPTH_CLIP_CONTROL);
+        if depth_clamp {
+            required |= wgpu::Features::DEPTH_CLIP_CONTROL;
+        }
+        let depth_format = if features.contains(wgpu::Features::DEPTH32FLOAT_STENCIL8) {
+            required |= wgpu::Features::DEPTH32FLOAT_STENCIL8;
+            wgpu::TextureFormat::Depth32FloatStencil8
+        } else {
+            wgpu::TextureFormat::Depth24PlusStencil8
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("shadowvol-renderer"),
+            required_features: required,
+            required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
+            ..Default::default()
+        }))
+        .map_err(|e| RenderError::Device(format!("request_device on {}: {e}", info.name)))?;
+
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("shadowvol-renderer shader.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shader.wgsl").into()),
+        });
+        let uniform_entry = |dynamic: bool| wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: dynamic,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let globals_bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("globals"),
+            entries: &[uniform_entry(false)],
+        });
+        let light_bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("light"),
+            entries: &[uniform_entry(true)],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("renderer"),
+            bind_group_layouts: &[Some(&globals_bgl), Some(&light_bgl)],
+            immediate_size: 0,
+        });
+        let surface_attrs =
+            wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4, 3 => Uint32x2];
+        let surface_layout = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<SurfaceVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &surface_attrs,
+        })];
+        let volume_attrs = wgpu::vertex_attr_array![0 => Float32x4];
+        let volume_layout = [Some(wgpu::VertexBufferLayout {
+            array_stride: 16,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &volume_attrs,
+        })];
+        let no_stencil = wgpu::StencilState {
+            front: wgpu::StencilFaceState::IGNORE,
+            back: wgpu::StencilFaceState::IGNORE,
+            read_mask: 0xff,
+            write_mask: 0,
+        };
+        let prepass = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("prepass"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_surface"),
+                compilation_options: Default::default(),
+                buffers: &surface_layout,
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: depth_format,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: no_stencil.clone(),
+                bias: wgpu::DepthBiasState::default(),
+            }),
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_prepass"),
+                compilation_options: Default::default(),
+                targets: &[
+                    Some(wgpu::ColorTargetState {
+                        format: COLOR_FORMAT,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    }),
+                    Some(wgpu::ColorTargetState {
+                        format: IDS_FORMAT,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    }),
+                ],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let additive = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let lit_face = wgpu::StencilFaceState {
+            compare: wgpu::CompareFunction::Equal,
+            fail_op: wgpu::StencilOperation::Keep,
+            depth_fail_op: wgpu::StencilOperation::Keep,
+            pass_op: wgpu::StencilOperation::Keep,
+        };
+        let lit = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("lit"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_surface"),
+                compilation_options: Default::default(),
+                buffers: &surface_layout,
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: depth_format,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Equal),
+                stencil: wgpu::StencilState {
+                    front: lit_face,
+                    back: lit_face,
+                    read_mask: 0xff,
+                    write_mask: 0,
+                },
+                bias: wgpu::DepthBiasState::default(),
+            }),
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_lit"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: COLOR_FORMAT,
+                    blend: Some(wgpu::BlendState {
+                        color: additive,
+                        alpha: additive,
+                    }),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        use wgpu::StencilOperation::{DecrementWrap as Dec, IncrementWrap as Inc, Keep};
+        let volume_pipeline = |label: &str,
+                               front_face: wgpu::FrontFace,
+                               front: wgpu::StencilFaceState,
+                               back: wgpu::StencilFaceState| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_volume"),
+                    compilation_options: Default::default(),
+                    buffers: &volume_layout,
+                },
+                primitive: wgpu::PrimitiveState {
+                    front_face,
+                    cull_mode: None,
+                    unclipped_depth: depth_clamp,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: depth_format,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: wgpu::StencilState {
+                        front,
+                        back,
+                        read_mask: 0xff,
+                        write_mask: 0xff,
+                    },
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: None,
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        // Z-pass: count the volume faces in front of the surface (front +1, back -1).
+        let zpass = volume_pipeline(
+            "zpass",
+            wgpu::FrontFace::Ccw,
+            stencil_face(Inc, Keep),
+            stencil_face(Dec, Keep),
+        );
+        // Z-fail: count the faces behind the surface (back +1, front -1).
+        let zfail_ccw = volume_pipeline(
+            "zfail-ccw",
+            wgpu::FrontFace::Ccw,
+            stencil_face(Keep, Dec),
+            stencil_face(Keep, Inc),
+        );
+        let zfail_cw = volume_pipeline(
+            "zfail-cw",
+            wgpu::FrontFace::Cw,
+            stencil_face(Keep, Dec),
+            stencil_face(Keep, Inc),
+        );
+        if let Some(err) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Device(format!("pipeline creation: {err}")));
+        }
+        Ok(Self {
+            device,
+            queue,
+            adapter: format!("{} ({:?}, {})", info.name, info.backend, info.driver_info),
+            depth_format,
+            depth_clamp,
+            globals_bgl,
+            light_bgl,
+            prepass,
+            lit,
+            zpass,
+            zfail_ccw,
+            zfail_cw,
+        })
+    }
+
+    /// Renders one frame and reads back colour, ids and per-light stencil.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] for a zero or too large size, [`RenderError::Device`] on
+    /// validation or device errors.
+    pub fn render(&self, input: &FrameInput<'_>) -> Result<FrameOutput, RenderError> {
+        let (w, h) = (input.width, input.height);
+        let max = self.device.limits().max_texture_dimension_2d;
+        if w == 0 || h == 0 || w > max || h > max {
+            return Err(RenderError::InvalidInput(format!(
+                "image size {w}x{h}: each side must be in 1..={max}"
+            )));
+        }
+        let device = &self.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        use wgpu::util::DeviceExt;
+
+        let mut globals = [0f32; 24];
+        globals[..16].copy_from_slice(&input.view_proj);
+        globals[16..19].copy_from_slice(&input.eye);
+        globals[20] = input.ambient;
+        let globals_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("globals"),
+            contents: bytemuck::cast_slice(&globals),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let n_lights = input.lights.len().max(1);
+        let mut light_bytes = vec![0u8; n_lights * LIGHT_STRIDE as usize];
+        for (i, l) in input.lights.iter().enumerate() {
+            let v: [f32; 8] = [
+                l.light[0], l.light[1], l.light[2], l.light[3], l.color[0], l.color[1], l.color[2],
+                1.0,
+            ];
+            let o = i * LIGHT_STRIDE as usize;
+            light_bytes[o..o + 32].copy_from_slice(bytemuck::cast_slice(&v));
+        }
+        let light_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lights"),
+            contents: &light_bytes,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let globals_bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("globals"),
+            layout: &self.globals_bgl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: globals_buf.as_entire_binding(),
+            }],
+        });
+        let light_bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("light"),
+            layout: &self.light_bgl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &light_buf,
+                    offset: 0,
+                    size: std::num::NonZeroU64::new(32),
+                }),
+            }],
+        });
+        let padded_surface;
+        let surface: &[SurfaceVertex] = if input.surface.is_empty() {
+            padded_surface = [SurfaceVertex::zeroed()];
+            &padded_surface
+        } else {
+            input.surface
+        };
+        let surface_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("surface"),
+            contents: bytemuck::cast_slice(surface),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let padded_vol;
+        let volumes: &[[f32; 4]] = if input.volumes.is_empty() {
+            padded_vol = [[0f32; 4]];
+            &padded_vol
+        } else {
+            input.volumes
+        };
+        let volume_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("volumes"),
+            contents: bytemuck::cast_slice(volumes),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+
+        let size = wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        };
+        let tex = |label: &str, format: wgpu::TextureFormat| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let color = tex("color", COLOR_FORMAT);
+        let ids = tex("ids", IDS_FORMAT);
+        let depth = tex("depth-stencil", self.depth_format);
+        let color_view = color.create_view(&Default::default());
+        let ids_view = ids.create_view(&Default::default());
+        let depth_view = depth.create_view(&Default::default());
+
+        let row = |bytes_per_px: u32| (w * bytes_per_px).div_ceil(256) * 256;
+        let readback = |label: &str, bytes_per_px: u32, count: usize| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: u64::from(row(bytes_per_px)) * u64::from(h) * count.max(1) as u64,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            })
+        };
+        let color_rb = readback("color-readback", 4, 1);
+        let ids_rb = readback("ids-readback", 8, 1);
+        let stencil_rb = readback("stencil-readback", 1, input.lights.len());
+
+        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("frame"),
+        });
+        {
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("prepass"),
+                color_attachments: &[
+                    Some(wgpu::RenderPassColorAttachment {
+                        view: &color_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color {
+                                r: 0.02,
+                                g: 0.02,
+                                b: 0.04,
+                                a: 1.0,
+                            }),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    }),
+                    Some(wgpu::RenderPassColorAttachment {
+                        view: &ids_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    }),
+                ],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            if !input.surface.is_empty() {
+                pass.set_pipeline(&self.prepass);
+                pass.set_bind_group(0, &globals_bg, &[]);
+                pass.set_bind_group(1, &light_bg, &[0]);
+                pass.set_vertex_buffer(0, surface_buf.slice(..));
+                pass.draw(0..input.surface.len() as u32, 0..1);
+            }
+        }
+        for (li, l) in input.lights.iter().enumerate() {
+            let offset = (li as u64 * LIGHT_STRIDE) as u32;
+            {
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("stencil"),
+                    color_attachments: &[],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &depth_view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(0),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_bind_group(0, &globals_bg, &[]);
+                pass.set_bind_group(1, &light_bg, &[offset]);
+                pass.set_vertex_buffer(0, volume_buf.slice(..));
+                for (pipe, range) in [
+                    (&self.zpass, &l.zpass),
+                    (&self.zfail_ccw, &l.zfail_ccw),
+                    (&self.zfail_cw, &l.zfail_cw),
+                ] {
+                    if !range.is_empty() {
+                        pass.set_pipeline(pipe);
+                        pass.draw(range.clone(), 0..1);
+                    }
+                }
+            }
+            enc.copy_texture_to_buffer(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &depth,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d::ZERO,
+                    aspect: wgpu::TextureAspect::StencilOnly,
+                },
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &stencil_rb,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: u64::from(row(1)) * u64::from(h) * li as u64,
+                        bytes_per_row: Some(row(1)),
+                        rows_per_image: Some(h),
+                    },
+                },
+                size,
+            );
+            {
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("lit"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &color_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &depth_view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        }),
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                if !input.surface.is_empty() {
+                    pass.set_pipeline(&self.lit);
+                    pass.set_stencil_reference(0);
+                    pass.set_bind_group(0, &globals_bg, &[]);
+                    pass.set_bind_group(1, &light_bg, &[offset]);
+                    pass.set_vertex_buffer(0, surface_buf.slice(..));
+                    pass.draw(0..input.surface.len() as u32, 0..1);
+                }
+            }
+        }
+        for (texture, buffer, bpp) in [(&color, &color_rb, 4), (&ids, &ids_rb, 8)] {
+            enc.copy_texture_to_buffer(
+                wgpu::TexelCopyTextureInfo {
+                    texture,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d::ZERO,
+                    aspect: wgpu::TextureAspect::All,
+                },
+                wgpu::TexelCopyBufferInfo {
+                    buffer,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(row(bpp)),
+                        rows_per_image: Some(h),
+                    },
+                },
+                size,
+            );
+        }
+        self.queue.submit([enc.finish()]);
+        if let Some(e) = pollster::block_on(oom.pop()) {
+            return Err(RenderError::Device(format!("out of memory: {e}")));
+        }
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Device(format!("validation: {e}")));
+        }
+        let color_bytes = self.read(&color_rb, row(4), w * 4, h, 1)?;
+        let ids_bytes = self.read(&ids_rb, row(8), w * 8, h, 1)?;
+        let stencil_bytes = if input.lights.is_empty() {
+            Vec::new()
+        } else {
+            self.read(&stencil_rb, row(1), w, h, input.lights.len())?
+        };
+        let ids: Vec<[u32; 2]> = ids_bytes
+            .chunks_exact(8)
+            .map(|c| {
+                [
+                    u32::from_le_bytes([c[0], c[1], c[2], c[3]]),
+                    u32::from_le_bytes([c[4], c[5], c[6], c[7]]),
+                ]
+            })
+            .collect();
+        let px = (w * h) as usize;
+        let stencil = stencil_bytes
+            .chunks_exact(px.max(1))
+            .map(<[u8]>::to_vec)
+            .collect();
+        Ok(FrameOutput {
+            color: color_bytes,
+            ids,
+            stencil,
+        })
+    }
+
+    /// Maps `buffer`, strips row padding and returns `images` images of `w_bytes` × `h` bytes.
+    fn read(
+        &self,
+        buffer: &wgpu::Buffer,
+        padded_row: u32,
+        w_bytes: u32,
+        h: u32,
+        images: usize,
+    ) -> Result<Vec<u8>, RenderError> {
+        let slice = buffer.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| RenderError::Device(format!("poll: {e}")))?;
+        rx.recv()
+            .map_err(|e| RenderError::Device(format!("map_async: {e}")))?
+            .map_err(|e| RenderError::Device(format!("map_async: {e}")))?;
+        let data = slice
+            .get_mapped_range()
+            .map_err(|e| RenderError::Device(format!("get_mapped_range: {e}")))?;
+        let mut out = Vec::with_capacity((w_bytes * h) as usize * images);
+        for img in 0..images {
+            for y in 0..h as usize {
+                let o = (img * h as usize + y) * padded_row as usize;
+                out.extend_from_slice(&data[o..o + w_bytes as usize]);
+            }
+        }
+        drop(data);
+        buffer.unmap();
+        Ok(out)
+    }
+}

@@ -1,0 +1,340 @@
+//! The frame plan: for each (light, object), the cheapest technique that is still correct.
+//!
+//! * **Culled**: the object's shadow volume lies outside one of the view frustum's planes
+//!   (left, right, bottom, top, near; the far plane is at infinity). The volume is contained in
+//!   the union of the rays from the corners of the object's world box away from the light, so
+//!   if every corner is outside a plane and every corner's extrusion direction does not point
+//!   back inside, nothing of the volume is visible.
+//! * **Z-pass**: the near-clip volume (Kwoon; Lengyel) — the convex hull of the light and the
+//!   near-plane rectangle, or for a directional light the rectangle swept towards the light — does
+//!   not meet the object's box. Then no point of the near plane sees the light through the
+//!   object, the camera's near plane is outside the object's shadow volume, and z-pass counts
+//!   are correct. The test is conservative: an intersection it cannot rule out gives z-fail.
+//! * **Z-fail** with caps otherwise; the back cap is dropped for directional lights (all of its
+//!   vertices are the same point at infinity).
+
+use glam::{DVec3, DVec4};
+use serde::Serialize;
+
+/// How one (light, object) pair is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Technique {
+    /// Not drawn: its shadow volume cannot reach the view.
+    Culled,
+    /// Depth-pass counting, sides only.
+    ZPass,
+    /// Depth-fail counting, sides plus front cap (and back cap for point lights).
+    ZFail,
+}
+
+impl Technique {
+    /// `culled`, `z-pass`, `z-fail`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Technique::Culled => "culled",
+            Technique::ZPass => "z-pass",
+            Technique::ZFail => "z-fail",
+        }
+    }
+}
+
+/// Where a (light, object)'s silhouette came from this frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SilhouetteSource {
+    /// Computed by the backend this frame.
+    Extracted,
+    /// Last frame's, because neither the light nor the object moved (nor mesh or mode changed).
+    Reused,
+    /// Not needed (culled).
+    Skipped,
+}
+
+/// What the planner may choose (tests and comparisons force one technique).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PlanPolicy {
+    /// Cull, then z-pass where proven safe, else z-fail.
+    #[default]
+    Auto,
+    /// Cull, then always z-fail.
+    AlwaysZFail,
+    /// Cull, then always z-pass (wrong when the camera is in a shadow volume; for comparisons).
+    AlwaysZPass,
+}
+
+/// One line of the plan.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PlanEntry {
+    /// Light index.
+    pub light: usize,
+    /// Object index.
+    pub object: usize,
+    /// Object name.
+    pub object_name: String,
+    /// The technique chosen.
+    pub technique: Technique,
+    /// True when a back cap is drawn (z-fail with a point light).
+    pub back_cap: bool,
+    /// Where the silhouette came from.
+    pub silhouette: SilhouetteSource,
+    /// Silhouette edges (m != 0).
+    pub silhouette_edges: usize,
+    /// Side quads drawn (`Σ |m|`; directional lights: triangles).
+    pub side_quads: usize,
+    /// Cap triangles drawn (front plus back).
+    pub cap_triangles: usize,
+    /// Why this technique, in words.
+    pub reason: String,
+}
+
+impl std::fmt::Display for PlanEntry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "light {} x object {} ({}): {}{}; silhouette {}; {} edges, {} side quads, {} cap triangles; {}",
+            self.light,
+            self.object,
+            self.object_name,
+            self.technique.name(),
+            if self.technique == Technique::ZFail {
+                if self.back_cap {
+                    " with front and back caps"
+                } else {
+                    " with front cap only (directional light)"
+                }
+            } else {
+                ""
+            },
+            match self.silhouette {
+                SilhouetteSource::Extracted => "extracted",
+                SilhouetteSource::Reused => "reused from last frame",
+                SilhouetteSource::Skipped => "skipped",
+            },
+            self.silhouette_edges,
+            self.side_quads,
+            self.cap_triangles,
+            self.reason
+        )
+    }
+}
+
+/// A plane `n · x + d >= 0` is inside, as `(n, d)`.
+pub type Plane = DVec4;
+
+fn plane_through(p: DVec3, normal: DVec3, inside: DVec3) -> Option<Plane> {
+    let len = normal.length();
+    if !(len > 0.0) || !len.is_finite() {
+        return None;
+    }
+    let n = normal / len;
+    let mut pl = n.extend(-n.dot(p));
+    if eval(pl, inside) < 0.0 {
+        pl = -pl;
+    }
+    // The reference point must be strictly inside, or the plane is degenerate for it.
+    (eval(pl, inside) > 0.0).then_some(pl)
+}
+
+#[inline]
+fn eval(pl: Plane, p: DVec3) -> f64 {
+    pl.truncate().dot(p) + pl.w
+}
+
+/// The five inward planes of the view frustum (left, right, bottom, top, near).
+#[must_use]
+pub fn frustum_planes(eye: DVec3, near: [DVec3; 4]) -> Vec<Plane> {
+    let centre = (near[0] + near[1] + near[2] + near[3]) / 4.0;
+    let forward = centre - eye;
+    let inside = eye + forward * 2.0;
+    let mut v = Vec::with_capacity(5);
+    for i in 0..4 {
+        let (a, b) = (near[i], near[(i + 1) % 4]);
+        if let Some(p) = plane_through(eye, (a - eye).cross(b - eye), inside) {
+            v.push(p);
+        }
+    }
+    if let Some(p) = plane_through(centre, forward, inside) {
+        v.push(p);
+    }
+    v
+}
+
+/// The 8 corners of a box.
+#[must_use]
+pub fn box_corners(lo: DVec3, hi: DVec3) -> [DVec3; 8] {
+    let mut c = [DVec3::ZERO; 8];
+    for (i, v) in c.iter_mut().enumerate() {
+        *v = DVec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        );
+    }
+    c
+}
+
+/// True when the shadow volume of the box `(lo, hi)` under `light` provably lies outside the
+/// frustum given by its inward `planes` (then the object's shadow cannot be seen).
+#[must_use]
+pub fn shadow_outside_frustum(lo: DVec3, hi: DVec3, light: [f32; 4], planes: &[Plane]) -> bool {
+    let l = DVec4::new(
+        f64::from(light[0]),
+        f64::from(light[1]),
+        f64::from(light[2]),
+        f64::from(light[3]),
+    );
+    let corners = box_corners(lo, hi);
+    let scale = (hi - lo)
+        .length()
+        .max(lo.abs().max_element())
+        .max(hi.abs().max_element())
+        .max(1e-30);
+    let margin = scale * 1e-6;
+    planes.iter().any(|&pl| {
+        corners.iter().all(|&c| {
+            let dir = c * l.w - l.truncate();
+            eval(pl, c) < -margin && pl.truncate().dot(dir) <= 0.0
+        })
+    })
+}
+
+/// The planes of the near-clip volume (convex hull of the light and the near rectangle; for a
+/// directional light the rectangle swept towards the light), inward. `None` when the volume is
+/// degenerate (light in the near plane, direction parallel to it): then z-pass is never proven
+/// safe.
+#[must_use]
+pub fn near_clip_volume(near: [DVec3; 4], light: [f32; 4]) -> Option<Vec<Plane>> {
+    let l = DVec3::new(
+        f64::from(light[0]),
+        f64::from(light[1]),
+        f64::from(light[2]),
+    );
+    let w = f64::from(light[3]);
+    let centre = (near[0] + near[1] + near[2] + near[3]) / 4.0;
+    let rect_n = (near[1] - near[0]).cross(near[3] - near[0]);
+    let mut planes = Vec::with_capacity(5);
+    if w == 0.0 {
+        let d = l;
+        let inside = centre + d.normalize() * (near[1] - near[0]).length();
+        planes.push(plane_through(centre, rect_n, inside)?);
+        for i in 0..4 {
+            let (a, b) = (near[i], near[(i + 1) % 4]);
+            planes.push(plane_through(a, (b - a).cross(d), inside)?);
+        }
+    } else {
+        let lp = l / w;
+        if !lp.is_finite() {
+            return None;
+        }
+        let inside = (centre * 4.0 + lp) / 5.0;
+        planes.push(plane_through(centre, rect_n, inside)?);
+        for i in 0..4 {
+            let (a, b) = (near[i], near[(i + 1) % 4]);
+            planes.push(plane_through(a, (b - a).cross(lp - a), inside)?);
+        }
+    }
+    Some(planes)
+}
+
+/// True when the box `(lo, hi)` provably does not meet the convex volume given by its inward
+/// `planes` (some plane has all 8 corners strictly outside, with a relative margin).
+#[must_use]
+pub fn box_outside(lo: DVec3, hi: DVec3, planes: &[Plane]) -> bool {
+    let corners = box_corners(lo, hi);
+    let scale = (hi - lo)
+        .length()
+        .max(lo.abs().max_element())
+        .max(hi.abs().max_element())
+        .max(1e-30);
+    let margin = scale * 1e-6;
+    planes
+        .iter()
+        .any(|&pl| corners.iter().all(|&c| eval(pl, c) < -margin))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn near_rect() -> [DVec3; 4] {
+        // Camera at the origin looking down -z, near plane at z = -1, 2x2.
+        [
+            DVec3::new(-1.0, -1.0, -1.0),
+            DVec3::new(1.0, -1.0, -1.0),
+            DVec3::new(1.0, 1.0, -1.0),
+            DVec3::new(-1.0, 1.0, -1.0),
+        ]
+    }
+
+    #[test]
+    fn near_clip_volume_separates() {
+        let light = [0.0, 0.0, -10.0, 1.0];
+        let planes = near_clip_volume(near_rect(), light).unwrap();
+        // A box between the near plane and the light: inside the volume.
+        assert!(!box_outside(
+            DVec3::new(-0.1, -0.1, -5.1),
+            DVec3::new(0.1, 0.1, -4.9),
+            &planes
+        ));
+        // A box far to the side: outside.
+        assert!(box_outside(
+            DVec3::new(5.0, 5.0, -5.1),
+            DVec3::new(6.0, 6.0, -4.9),
+            &planes
+        ));
+        // A box behind the light: outside (the volume ends at the light).
+        assert!(box_outside(
+            DVec3::new(-0.1, -0.1, -20.0),
+            DVec3::new(0.1, 0.1, -15.0),
+            &planes
+        ));
+        // Directional light from +y: the slab swept upwards.
+        let planes = near_clip_volume(near_rect(), [0.0, 1.0, 0.0, 0.0]);
+        // Direction parallel to the near plane: degenerate, never proven safe.
+        assert!(planes.is_none());
+        let planes = near_clip_volume(near_rect(), [0.0, 1.0, -1.0, 0.0]).unwrap();
+        assert!(!box_outside(
+            DVec3::new(-0.1, 3.0, -4.1),
+            DVec3::new(0.1, 3.2, -3.9),
+            &planes
+        ));
+        assert!(box_outside(
+            DVec3::new(-0.1, -3.0, -4.1),
+            DVec3::new(0.1, -2.8, -3.9),
+            &planes
+        ));
+    }
+
+    #[test]
+    fn frustum_culls_shadow_behind_the_camera() {
+        let eye = DVec3::ZERO;
+        let planes = frustum_planes(eye, near_rect());
+        assert_eq!(planes.len(), 5);
+        // A box behind the camera with the light in front: the shadow goes further behind.
+        let light = [0.0, 0.0, -5.0, 1.0];
+        assert!(shadow_outside_frustum(
+            DVec3::new(-0.5, -0.5, 3.0),
+            DVec3::new(0.5, 0.5, 4.0),
+            light,
+            &planes
+        ));
+        // The same box with the light behind it: the shadow comes forward into view.
+        let light = [0.0, 0.0, 10.0, 1.0];
+        assert!(!shadow_outside_frustum(
+            DVec3::new(-0.5, -0.5, 3.0),
+            DVec3::new(0.5, 0.5, 4.0),
+            light,
+            &planes
+        ));
+        // A box in view is never culled.
+        assert!(!shadow_outside_frustum(
+            DVec3::new(-0.5, -0.5, -4.0),
+            DVec3::new(0.5, 0.5, -3.0),
+            light,
+            &planes
+        ));
+    }
+}

@@ -1,0 +1,467 @@
+//! The ray-traced reference and the artifact metric.
+//!
+//! For every covered pixel, the rasterized ids name the triangle the pre-pass kept. The surface
+//! point is the intersection of the pixel-centre ray (from the same camera, in `f64`) with that
+//! triangle's plane. From it, a shadow ray goes to each light (a segment to a point light, a ray
+//! towards a directional one) through a BVH over all world triangles (the same `f32` positions
+//! the GPU drew), skipping the triangle itself; any hit means shadowed. Intersection is done in
+//! `f64` and is run in parallel with rayon.
+//!
+//! Per pixel and light the state is background, unlit (the surface faces away from the light or
+//! the light is blocked) or lit. The raster state uses the same surface point and facing and the
+//! stencil (0 = lit). A pixel is an *artifact* when, for some light, the raster state differs
+//! from the reference and the reference state is the same over the pixel's 3×3 neighbourhood
+//! (that is, the pixel is more than one pixel away from a reference shadow boundary).
+//!
+//! Why our own BVH: the `bvh` crate (0.13) needs Rust 1.90 (the workspace's MSRV is 1.89) and
+//! brings in nalgebra; a median-split BVH over `glam` types with an any-hit `f64` traversal is a
+//! hundred lines and keeps the intersection arithmetic in our hands.
+
+use crate::Frame;
+use glam::{DMat4, DVec3, DVec4};
+use rayon::prelude::*;
+
+/// Per-pixel state for one light.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum PixelState {
+    /// No surface.
+    Background = 0,
+    /// Surface facing away from the light or blocked.
+    Unlit = 1,
+    /// Surface lit.
+    Lit = 2,
+}
+
+/// A bounding volume hierarchy over triangles (median split on the longest centroid axis,
+/// leaves of at most 4 triangles).
+#[derive(Debug, Clone, Default)]
+pub struct Bvh {
+    nodes: Vec<Node>,
+    order: Vec<u32>,
+    tris: Vec<[DVec3; 3]>,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    lo: DVec3,
+    hi: DVec3,
+    /// Leaf: first index into `order`; inner: index of the left child (right = left + 1).
+    first: u32,
+    /// Leaf: number of triangles (> 0); inner: 0.
+    count: u32,
+}
+
+const LEAF: usize = 4;
+
+impl Bvh {
+    /// Builds the hierarchy; triangle ids are the indices into `tris`.
+    #[must_use]
+    pub fn build(tris: Vec<[DVec3; 3]>) -> Self {
+        let mut order: Vec<u32> = (0..tris.len() as u32).collect();
+        let centroids: Vec<DVec3> = tris.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
+        let mut nodes = Vec::with_capacity(2 * tris.len() / LEAF + 1);
+        nodes.push(Node {
+            lo: DVec3::ZERO,
+            hi: DVec3::ZERO,
+            first: 0,
+            count: 0,
+        });
+        let mut stack = vec![(0usize, 0usize, tris.len())];
+        while let Some((node, begin, end)) = stack.pop() {
+            let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+            let (mut clo, mut chi) = (lo, hi);
+            for &i in &order[begin..end] {
+                for p in tris[i as usize] {
+                    lo = lo.min(p);
+                    hi = hi.max(p);
+                }
+                clo = clo.min(centroids[i as usize]);
+                chi = chi.max(centroids[i as usize]);
+            }
+            nodes[node].lo = lo;
+            nodes[node].hi = hi;
+            let ext = chi - clo;
+            if end - begin <= LEAF || ext.max_element() <= 0.0 {
+                nodes[node].first = begin as u32;
+                nodes[node].count = (end - begin) as u32;
+                continue;
+            }
+            let axis = if ext.x >= ext.y && ext.x >= ext.z {
+                0
+            } else if ext.y >= ext.z {
+                1
+            } else {
+                2
+            };
+            let mid = begin + (end - begin) / 2;
+            order[begin..end].select_nth_unstable_by(mid - begin, |&a, &b| {
+                centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
+            });
+            let left = nodes.len();
+            nodes.push(nodes[node]);
+            nodes.push(nodes[node]);
+            nodes[node].first = left as u32;
+            nodes[node].count = 0;
+            stack.push((left, begin, mid));
+            stack.push((left + 1, mid, end));
+        }
+        Self { nodes, order, tris }
+    }
+
+    /// True when the segment `origin + t·dir`, `t ∈ (t_min, t_max)`, hits a triangle other than
+    /// `skip`.
+    #[must_use]
+    pub fn occluded(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64, skip: u32) -> bool {
+        if self.tris.is_empty() {
+            return false;
+        }
+        let inv = DVec3::ONE / dir;
+        let mut stack = [0u32; 64];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let n = self.nodes[stack[sp] as usize];
+            if !slab(n.lo, n.hi, origin, inv, t_min, t_max) {
+                continue;
+            }
+            if n.count > 0 {
+                for &i in &self.order[n.first as usize..(n.first + n.count) as usize] {
+                    if i != skip {
+                        if let Some(t) = intersect(&self.tris[i as usize], origin, dir) {
+                            if t > t_min && t < t_max {
+                                return true;
+                            }
+                        }
+                    }
+                }
+            } else if sp + 2 <= stack.len() {
+                stack[sp] = n.first;
+                stack[sp + 1] = n.first + 1;
+                sp += 2;
+            }
+        }
+        false
+    }
+}
+
+fn slab(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, t_min: f64, t_max: f64) -> bool {
+    let t1 = (lo - o) * inv;
+    let t2 = (hi - o) * inv;
+    // NaN (0 * inf) on an axis the ray is parallel to and touching: treat as overlapping.
+    let tn = t1.min(t2);
+    let tf = t1.max(t2);
+    let mut near = t_min;
+    let mut far = t_max;
+    for k in 0..3 {
+        if !tn[k].is_nan() {
+            near = near.max(tn[k]);
+        }
+        if !tf[k].is_nan() {
+            far = far.min(tf[k]);
+        }
+    }
+    near <= far * (1.0 + 1e-12) + 1e-300
+}
+
+/// Möller–Trumbore in `f64`; `None` for a miss or a ray in the triangle's plane.
+fn intersect(t: &[DVec3; 3], o: DVec3, d: DVec3) -> Option<f64> {
+    let e1 = t[1] - t[0];
+    let e2 = t[2] - t[0];
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = o - t[0];
+    let u = s.dot(p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let v = d.dot(q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    Some(e2.dot(q) * inv)
+}
+
+/// The surface point of one pixel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfacePoint {
+    /// World position (`f64`) on the rasterized triangle's plane, under the pixel centre.
+    pub position: DVec3,
+    /// Geometric normal turned towards the camera (unnormalised).
+    pub normal: DVec3,
+    /// Global triangle index (objects concatenated).
+    pub triangle: u32,
+}
+
+/// The surface points of every pixel (`None` for background).
+#[must_use]
+pub fn surface_points(frame: &Frame) -> Vec<Option<SurfacePoint>> {
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let aspect = f64::from(frame.width) / f64::from(frame.height);
+    let inv: DMat4 = frame.camera.view_proj_f64(aspect).inverse();
+    let eye = frame.camera.eye.as_dvec3();
+    let offsets: Vec<u32> = frame
+        .triangles
+        .iter()
+        .scan(0u32, |acc, t| {
+            let o = *acc;
+            *acc += t.len() as u32;
+            Some(o)
+        })
+        .collect();
+    (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let [obj, tri] = frame.ids[i];
+            if obj == 0 {
+                return None;
+            }
+            let t = frame.triangles.get(obj as usize - 1)?.get(tri as usize)?;
+            let t = [t[0].as_dvec3(), t[1].as_dvec3(), t[2].as_dvec3()];
+            let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+            let ndc = DVec4::new(x / w as f64 * 2.0 - 1.0, 1.0 - y / h as f64 * 2.0, 0.5, 1.0);
+            let p = inv * ndc;
+            let dir = p.truncate() / p.w - eye;
+            let mut n = (t[1] - t[0]).cross(t[2] - t[0]);
+            let denom = n.dot(dir);
+            let position = if denom != 0.0 && denom.is_finite() {
+                eye + dir * (n.dot(t[0] - eye) / denom)
+            } else {
+                (t[0] + t[1] + t[2]) / 3.0
+            };
+            if n.dot(eye - position) < 0.0 {
+                n = -n;
+            }
+            Some(SurfacePoint {
+                position,
+                normal: n,
+                triangle: offsets[obj as usize - 1] + tri,
+            })
+        })
+        .collect()
+}
+
+fn light_vec(l: [f32; 4], p: DVec3) -> DVec3 {
+    DVec3::new(f64::from(l[0]), f64::from(l[1]), f64::from(l[2])) - p * f64::from(l[3])
+}
+
+/// The raster's per-light states (light-major), from the stencil and the facing.
+#[must_use]
+pub fn raster_states(frame: &Frame, points: &[Option<SurfacePoint>]) -> Vec<Vec<PixelState>> {
+    frame
+        .lights
+        .iter()
+        .enumerate()
+        .map(|(li, light)| {
+            let l = light.to_array();
+            points
+                .iter()
+                .zip(&frame.stencil[li])
+                .map(|(p, &s)| match p {
+                    None => PixelState::Background,
+                    Some(sp) if sp.normal.dot(light_vec(l, sp.position)) > 0.0 && s == 0 => {
+                        PixelState::Lit
+                    }
+                    Some(_) => PixelState::Unlit,
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The reference's per-light states (light-major), by ray casting.
+#[must_use]
+pub fn reference_states(frame: &Frame, points: &[Option<SurfacePoint>]) -> Vec<Vec<PixelState>> {
+    let tris: Vec<[DVec3; 3]> = frame
+        .triangles
+        .iter()
+        .flatten()
+        .map(|t| [t[0].as_dvec3(), t[1].as_dvec3(), t[2].as_dvec3()])
+        .collect();
+    let scale = tris
+        .iter()
+        .flatten()
+        .fold(0f64, |m, p| m.max(p.abs().max_element()))
+        .max(1e-30);
+    let bvh = Bvh::build(tris);
+    frame
+        .lights
+        .iter()
+        .map(|light| {
+            let l = light.to_array();
+            points
+                .par_iter()
+                .map(|p| match p {
+                    None => PixelState::Background,
+                    Some(sp) => {
+                        let v = light_vec(l, sp.position);
+                        if sp.normal.dot(v) <= 0.0 {
+                            return PixelState::Unlit;
+                        }
+                        let len = v.length();
+                        let eps = scale * 1e-9 / len;
+                        let (t_max, dir) = if l[3] == 0.0 {
+                            (f64::INFINITY, v)
+                        } else {
+                            (1.0 - 1e-12, v)
+                        };
+                        if bvh.occluded(sp.position, dir, eps, t_max, sp.triangle) {
+                            PixelState::Unlit
+                        } else {
+                            PixelState::Lit
+                        }
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The comparison of a frame with the reference.
+#[derive(Debug, Clone)]
+pub struct Comparison {
+    /// Pixels whose state differs from the reference for some light and that lie more than one
+    /// pixel from a reference boundary of that light.
+    pub artifact_pixels: usize,
+    /// Pixels whose state differs for some light (boundaries included).
+    pub differing_pixels: usize,
+    /// Covered pixels the raster shadows (stencil ≠ 0 on a surface facing the light) for some
+    /// light.
+    pub shadow_pixels: usize,
+    /// The same count from the reference.
+    pub reference_shadow_pixels: usize,
+    /// Covered pixels.
+    pub covered_pixels: usize,
+    /// Per pixel: 0 agree, 1 differs near a boundary (not counted), 2 artifact: raster lit where
+    /// the reference is shadowed, 3 artifact: raster shadowed where the reference is lit.
+    pub classes: Vec<u8>,
+}
+
+impl Comparison {
+    /// `artifact_pixels` as a fraction of all pixels.
+    #[must_use]
+    pub fn artifact_fraction(&self, total_pixels: usize) -> f64 {
+        self.artifact_pixels as f64 / total_pixels.max(1) as f64
+    }
+}
+
+/// Counts the raster's shadowed pixels (stencil ≠ 0 on a surface facing the light, any light).
+#[must_use]
+pub fn shadow_pixels(frame: &Frame) -> usize {
+    let points = surface_points(frame);
+    count_shadowed(frame, &points, &raster_states(frame, &points))
+}
+
+fn count_shadowed(
+    frame: &Frame,
+    points: &[Option<SurfacePoint>],
+    states: &[Vec<PixelState>],
+) -> usize {
+    (0..points.len())
+        .filter(|&i| {
+            let Some(sp) = points[i] else { return false };
+            frame.lights.iter().enumerate().any(|(li, light)| {
+                sp.normal.dot(light_vec(light.to_array(), sp.position)) > 0.0
+                    && states[li][i] == PixelState::Unlit
+            })
+        })
+        .count()
+}
+
+/// Renders the reference and compares.
+#[must_use]
+pub fn compare(frame: &Frame) -> Comparison {
+    let points = surface_points(frame);
+    let raster = raster_states(frame, &points);
+    let reference = reference_states(frame, &points);
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let mut classes = vec![0u8; w * h];
+    for (r, f) in raster.iter().zip(&reference) {
+        for i in 0..w * h {
+            if r[i] == f[i] {
+                continue;
+            }
+            let (x, y) = (i % w, i / w);
+            let mut uniform = true;
+            for ny in y.saturating_sub(1)..=(y + 1).min(h - 1) {
+                for nx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
+                    if f[ny * w + nx] != f[i] {
+                        uniform = false;
+                    }
+                }
+            }
+            let class = if !uniform {
+                1
+            } else if r[i] == PixelState::Lit {
+                2
+            } else {
+                3
+            };
+            classes[i] = classes[i].max(class);
+        }
+    }
+    Comparison {
+        artifact_pixels: classes.iter().filter(|&&c| c >= 2).count(),
+        differing_pixels: classes.iter().filter(|&&c| c >= 1).count(),
+        shadow_pixels: count_shadowed(frame, &points, &raster),
+        reference_shadow_pixels: count_shadowed(frame, &points, &reference),
+        covered_pixels: points.iter().filter(|p| p.is_some()).count(),
+        classes,
+    }
+}
+
+/// The disagreement as an image: the frame dimmed to grey, artifacts where the raster is lit
+/// but the reference is shadowed in red, artifacts where the raster is shadowed but the reference
+/// is lit in blue, boundary-only differences in yellow.
+///
+/// # Panics
+/// Panics if `cmp` was not computed from `frame`.
+#[must_use]
+pub fn diff_image(frame: &Frame, cmp: &Comparison) -> image::RgbaImage {
+    let mut img = frame.image();
+    for (i, px) in img.pixels_mut().enumerate() {
+        let g = ((u16::from(px[0]) + u16::from(px[1]) + u16::from(px[2])) / 6) as u8;
+        *px = match cmp.classes[i] {
+            0 => image::Rgba([g, g, g, 255]),
+            1 => image::Rgba([230, 200, 40, 255]),
+            2 => image::Rgba([255, 30, 30, 255]),
+            _ => image::Rgba([40, 90, 255, 255]),
+        };
+    }
+    img
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bvh_matches_brute_force() {
+        // A grid of small triangles; rays from below to above.
+        let mut tris = Vec::new();
+        for i in 0..20 {
+            for j in 0..20 {
+                let o = DVec3::new(f64::from(i), f64::from(j), f64::from((i * 7 + j * 3) % 5));
+                tris.push([o, o + DVec3::X * 0.8, o + DVec3::Y * 0.8]);
+            }
+        }
+        let bvh = Bvh::build(tris.clone());
+        for k in 0..200 {
+            let o = DVec3::new(
+                f64::from(k % 20) + 0.1 + f64::from(k % 7) * 0.05,
+                f64::from(k / 10) * 0.5,
+                -1.0,
+            );
+            let d = DVec3::new(0.01 * f64::from(k % 3), 0.02, 10.0);
+            let brute = tris
+                .iter()
+                .any(|t| intersect(t, o, d).is_some_and(|t| t > 0.0 && t < 1.0));
+            assert_eq!(bvh.occluded(o, d, 0.0, 1.0, u32::MAX), brute, "ray {k}");
+        }
+    }
+}

@@ -1,0 +1,559 @@
+//! The stateful renderer: caches edge tables and silhouettes between frames, plans, draws.
+
+use crate::gpu::{FrameInput, Gpu, LightDraws, SurfaceVertex};
+use crate::plan::{self, PlanEntry, PlanPolicy, SilhouetteSource, Technique};
+use crate::volume::{build_caps, build_sides, canonical_triangle};
+use crate::{Camera, RenderError, RenderScene};
+use glam::{Affine3A, DVec3, Vec3};
+use shadowvol_mesh_topology::{EdgeTable, Mesh};
+use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::{
+    object_lights, Multiplicities, PreparedId, SceneObject, SilhouetteBackend, TopologyScene,
+};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// Image size, accuracy mode and plan policy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RenderOptions {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Accuracy mode of the silhouettes and caps.
+    pub mode: Accuracy,
+    /// What the planner may choose.
+    pub policy: PlanPolicy,
+}
+
+impl RenderOptions {
+    /// `width × height`, [`Accuracy::Exact`], [`PlanPolicy::Auto`].
+    #[must_use]
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            mode: Accuracy::Exact,
+            policy: PlanPolicy::Auto,
+        }
+    }
+}
+
+/// Wall times of one frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct Timings {
+    /// Backend `extract` calls (wall time), milliseconds.
+    pub silhouette_ms: f64,
+    /// Building side quads and caps on the host, milliseconds.
+    pub side_building_ms: f64,
+    /// Surface geometry, upload, all passes, readback, milliseconds.
+    pub raster_ms: f64,
+    /// Edge tables built and uploaded (`prepare`) this frame, milliseconds.
+    pub prepare_ms: f64,
+    /// Whole `render` call, milliseconds.
+    pub total_ms: f64,
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+/// A rendered frame: the image, the per-pixel data the reference needs, and the plan.
+#[derive(Debug, Clone)]
+pub struct Frame {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// RGBA8 pixels, top row first.
+    pub rgba: Vec<u8>,
+    /// Per pixel `[object + 1, triangle]`, `[0, _]` for background.
+    pub ids: Vec<[u32; 2]>,
+    /// Per light, per pixel stencil after the light's stencil pass (0 = lit by the volumes).
+    pub stencil: Vec<Vec<u8>>,
+    /// World-space triangles (the `f32` positions every pass used), per object, canonical order.
+    pub triangles: Vec<Vec<[Vec3; 3]>>,
+    /// The lights.
+    pub lights: Vec<Light>,
+    /// The camera.
+    pub camera: Camera,
+    /// The plan, light-major.
+    pub plan: Vec<PlanEntry>,
+    /// Timings.
+    pub timings: Timings,
+    /// The accuracy mode.
+    pub mode: Accuracy,
+    /// The GPU adapter used.
+    pub adapter: String,
+    /// True when the volumes were drawn with depth clamp.
+    pub depth_clamp: bool,
+}
+
+impl Frame {
+    /// The image as an `image` buffer.
+    ///
+    /// # Panics
+    /// Never for frames produced by [`Renderer::render`].
+    #[must_use]
+    pub fn image(&self) -> image::RgbaImage {
+        image::RgbaImage::from_raw(self.width, self.height, self.rgba.clone())
+            .expect("size matches")
+    }
+
+    /// Writes the image as PNG.
+    ///
+    /// # Errors
+    /// [`RenderError::Image`] when the file cannot be written.
+    pub fn save_png(&self, path: impl AsRef<std::path::Path>) -> Result<(), RenderError> {
+        let p = path.as_ref();
+        self.image()
+            .save_with_format(p, image::ImageFormat::Png)
+            .map_err(|e| RenderError::Image {
+                path: p.display().to_string(),
+                message: e.to_string(),
+            })
+    }
+
+    /// The plan as text, one line per (light, object).
+    #[must_use]
+    pub fn explain(&self) -> String {
+        let mut s = format!(
+            "mode {}; adapter {}; depth clamp {}; infinite far plane\n",
+            self.mode,
+            self.adapter,
+            if self.depth_clamp { "on" } else { "off" }
+        );
+        for e in &self.plan {
+            s.push_str(&e.to_string());
+            s.push('\n');
+        }
+        s
+    }
+}
+
+struct LightCache {
+    light: Light,
+    mode: Accuracy,
+    m: Vec<i32>,
+}
+
+struct ObjectCache {
+    mesh: Arc<Mesh>,
+    table: Arc<EdgeTable>,
+    prepared: PreparedId,
+    transform: Affine3A,
+    world: Vec<Vec3>,
+    lights: Vec<Option<LightCache>>,
+}
+
+/// The renderer: a GPU device, a silhouette backend and the per-(object, light) silhouette cache.
+pub struct Renderer {
+    gpu: Gpu,
+    backend: Box<dyn SilhouetteBackend>,
+    options: RenderOptions,
+    cache: Vec<ObjectCache>,
+}
+
+impl std::fmt::Debug for Renderer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Renderer")
+            .field("gpu", &self.gpu)
+            .field("backend", &self.backend.info().name)
+            .field("options", &self.options)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Renderer {
+    /// Opens a GPU device and takes the silhouette backend.
+    ///
+    /// # Errors
+    /// [`RenderError::NoAdapter`] without a GPU adapter, [`RenderError::Device`] when the device
+    /// or pipelines fail, [`RenderError::InvalidInput`] for a zero image size.
+    pub fn new(
+        backend: Box<dyn SilhouetteBackend>,
+        options: RenderOptions,
+    ) -> Result<Self, RenderError> {
+        if options.width == 0 || options.height == 0 {
+            return Err(RenderError::InvalidInput(format!(
+                "image size {}x{}: both sides must be at least 1",
+                options.width, options.height
+            )));
+        }
+        Ok(Self {
+            gpu: Gpu::new()?,
+            backend,
+            options,
+            cache: Vec::new(),
+        })
+    }
+
+    /// The options in effect.
+    #[must_use]
+    pub fn options(&self) -> RenderOptions {
+        self.options
+    }
+
+    /// Changes size, mode or policy; cached silhouettes of another mode are not reused.
+    pub fn set_options(&mut self, options: RenderOptions) {
+        self.options = options;
+    }
+
+    /// The GPU adapter, in words.
+    #[must_use]
+    pub fn adapter(&self) -> &str {
+        &self.gpu.adapter
+    }
+
+    /// Renders `scene`: plan, silhouettes (reused where nothing moved), volumes, passes.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] for a bad camera or light, [`RenderError::Mesh`] for an
+    /// invalid mesh, [`RenderError::Backend`] when extraction fails, [`RenderError::Device`] on
+    /// GPU failure.
+    pub fn render(&mut self, scene: &RenderScene) -> Result<Frame, RenderError> {
+        let t0 = Instant::now();
+        scene.camera.validate()?;
+        if !(scene.ambient.is_finite() && (0.0..=1.0).contains(&scene.ambient)) {
+            return Err(RenderError::InvalidInput(format!(
+                "ambient is {}; it must be in [0, 1]",
+                scene.ambient
+            )));
+        }
+        let RenderOptions {
+            width,
+            height,
+            mode,
+            policy,
+        } = self.options;
+        let aspect = f64::from(width) / f64::from(height);
+        let n_lights = scene.lights.len();
+
+        // 1. Edge tables, world positions, cache invalidation.
+        let t_prep = Instant::now();
+        self.sync_objects(scene)?;
+        let prepare_time = t_prep.elapsed();
+
+        // 2. Plan.
+        let near = scene.camera.near_corners(aspect);
+        let frustum = plan::frustum_planes(scene.camera.eye.as_dvec3(), near);
+        let mut entries = Vec::with_capacity(n_lights * scene.objects.len());
+        for (li, light) in scene.lights.iter().enumerate() {
+            let l = light.to_array();
+            let ncv = plan::near_clip_volume(near, l);
+            for (oi, obj) in scene.objects.iter().enumerate() {
+                let c = &self.cache[oi];
+                let (lo, hi) = bounds_f64(&c.world);
+                let (technique, reason) = if c.world.is_empty() || c.table.triangles.is_empty() {
+                    (Technique::Culled, "no triangles".to_owned())
+                } else if plan::shadow_outside_frustum(lo, hi, l, &frustum) {
+                    (
+                        Technique::Culled,
+                        "its shadow volume lies outside the view frustum".to_owned(),
+                    )
+                } else {
+                    match policy {
+                        PlanPolicy::AlwaysZFail => (Technique::ZFail, "policy: always z-fail".to_owned()),
+                        PlanPolicy::AlwaysZPass => (Technique::ZPass, "policy: always z-pass".to_owned()),
+                        PlanPolicy::Auto => match &ncv {
+                            Some(planes) if plan::box_outside(lo, hi, planes) => (
+                                Technique::ZPass,
+                                "object outside the near-clip volume: camera outside its shadow volume".to_owned(),
+                            ),
+                            Some(_) => (
+                                Technique::ZFail,
+                                "object meets the near-clip volume: camera may be inside its shadow volume".to_owned(),
+                            ),
+                            None => (
+                                Technique::ZFail,
+                                "near-clip volume degenerate (light in or parallel to the near plane)".to_owned(),
+                            ),
+                        },
+                    }
+                };
+                entries.push(PlanEntry {
+                    light: li,
+                    object: oi,
+                    object_name: obj.name.clone(),
+                    technique,
+                    back_cap: technique == Technique::ZFail && !light.is_directional(),
+                    silhouette: SilhouetteSource::Skipped,
+                    silhouette_edges: 0,
+                    side_quads: 0,
+                    cap_triangles: 0,
+                    reason,
+                });
+            }
+        }
+
+        // 3. Silhouettes: per object, one extract call for the lights whose cache is stale.
+        let mut silhouette_time = Duration::ZERO;
+        let mut m_buf = Multiplicities::default();
+        for (oi, obj) in scene.objects.iter().enumerate() {
+            let needed: Vec<usize> = (0..n_lights)
+                .filter(|&li| entries[li * scene.objects.len() + oi].technique != Technique::Culled)
+                .collect();
+            let stale: Vec<usize> = needed
+                .iter()
+                .copied()
+                .filter(|&li| {
+                    !matches!(&self.cache[oi].lights[li], Some(c) if c.light == scene.lights[li] && c.mode == mode)
+                })
+                .collect();
+            for &li in &needed {
+                entries[li * scene.objects.len() + oi].silhouette = if stale.contains(&li) {
+                    SilhouetteSource::Extracted
+                } else {
+                    SilhouetteSource::Reused
+                };
+            }
+            if stale.is_empty() {
+                continue;
+            }
+            let c = &self.cache[oi];
+            let stale_lights: Vec<Light> = stale.iter().map(|&li| scene.lights[li]).collect();
+            let obj_lights = object_space_lights(&obj.name, &c.table, c.transform, &stale_lights)?;
+            let t = Instant::now();
+            self.backend
+                .extract(c.prepared, &obj_lights, mode, &mut m_buf)?;
+            silhouette_time += t.elapsed();
+            let c = &mut self.cache[oi];
+            for (k, &li) in stale.iter().enumerate() {
+                c.lights[li] = Some(LightCache {
+                    light: scene.lights[li],
+                    mode,
+                    m: m_buf.values(k).to_vec(),
+                });
+            }
+        }
+
+        // 4. Volumes.
+        let t_build = Instant::now();
+        let mut volumes: Vec<[f32; 4]> = Vec::new();
+        let mut draws = Vec::with_capacity(n_lights);
+        for (li, light) in scene.lights.iter().enumerate() {
+            let l = light.to_array();
+            let mut d = LightDraws {
+                light: l,
+                color: [light_intensity(n_lights); 3],
+                ..LightDraws::default()
+            };
+            let mut zfail_objects = Vec::new();
+            // Z-pass sides first, then z-fail sides + back caps + ccw caps, then cw caps.
+            let start = volumes.len() as u32;
+            for (oi, obj) in scene.objects.iter().enumerate() {
+                let e = &mut entries[li * scene.objects.len() + oi];
+                if e.technique == Technique::Culled {
+                    continue;
+                }
+                let c = &self.cache[oi];
+                let m = &c.lights[li].as_ref().expect("extracted above").m;
+                e.silhouette_edges = m.iter().filter(|&&v| v != 0).count();
+                if e.technique == Technique::ZPass {
+                    e.side_quads = build_sides(&c.table.edges, m, &c.world, l, &mut volumes);
+                } else {
+                    zfail_objects.push((oi, obj));
+                }
+            }
+            d.zpass = start..volumes.len() as u32;
+            let start = volumes.len() as u32;
+            let mut cw_caps = Vec::new();
+            for &(oi, obj) in &zfail_objects {
+                let e = &mut entries[li * scene.objects.len() + oi];
+                let c = &self.cache[oi];
+                let m = &c.lights[li].as_ref().expect("extracted above").m;
+                e.side_quads = build_sides(&c.table.edges, m, &c.world, l, &mut volumes);
+                let ol =
+                    object_space_lights(&obj.name, &c.table, c.transform, &[*light])?[0].to_array();
+                let caps = build_caps(&c.table, ol, &c.world, l, mode, e.back_cap);
+                e.cap_triangles =
+                    (caps.front_ccw.len() + caps.front_cw.len() + caps.back.len()) / 3;
+                volumes.extend_from_slice(&caps.back);
+                volumes.extend_from_slice(&caps.front_ccw);
+                cw_caps.extend_from_slice(&caps.front_cw);
+            }
+            d.zfail_ccw = start..volumes.len() as u32;
+            let start = volumes.len() as u32;
+            volumes.extend_from_slice(&cw_caps);
+            d.zfail_cw = start..volumes.len() as u32;
+            draws.push(d);
+        }
+        let build_time = t_build.elapsed();
+
+        // 5. Surfaces and passes.
+        let t_raster = Instant::now();
+        let mut surface = Vec::new();
+        let mut triangles = Vec::with_capacity(scene.objects.len());
+        for (oi, obj) in scene.objects.iter().enumerate() {
+            let c = &self.cache[oi];
+            let mut tris = Vec::with_capacity(c.table.triangles.len());
+            for (ti, t) in c.table.triangles.iter().enumerate() {
+                let k = canonical_triangle(*t);
+                let p = [
+                    c.world[k[0] as usize],
+                    c.world[k[1] as usize],
+                    c.world[k[2] as usize],
+                ];
+                let n = (p[1] - p[0]).cross(p[2] - p[0]);
+                for v in p {
+                    surface.push(SurfaceVertex {
+                        pos: [v.x, v.y, v.z, 1.0],
+                        normal: [n.x, n.y, n.z, 0.0],
+                        albedo: [obj.albedo[0], obj.albedo[1], obj.albedo[2], 1.0],
+                        ids: [oi as u32 + 1, ti as u32],
+                        pad: [0; 2],
+                    });
+                }
+                tris.push(p);
+            }
+            triangles.push(tris);
+        }
+        let out = self.gpu.render(&FrameInput {
+            width,
+            height,
+            view_proj: scene.camera.view_proj(aspect as f32).to_cols_array(),
+            eye: scene.camera.eye.to_array(),
+            ambient: scene.ambient,
+            surface: &surface,
+            volumes: &volumes,
+            lights: &draws,
+        })?;
+        let raster_time = t_raster.elapsed();
+
+        Ok(Frame {
+            width,
+            height,
+            rgba: out.color,
+            ids: out.ids,
+            stencil: out.stencil,
+            triangles,
+            lights: scene.lights.clone(),
+            camera: scene.camera,
+            plan: entries,
+            timings: Timings {
+                silhouette_ms: ms(silhouette_time),
+                side_building_ms: ms(build_time),
+                raster_ms: ms(raster_time),
+                prepare_ms: ms(prepare_time),
+                total_ms: ms(t0.elapsed()),
+            },
+            mode,
+            adapter: self.gpu.adapter.clone(),
+            depth_clamp: self.gpu.depth_clamp,
+        })
+    }
+
+    /// Brings the per-object cache in line with the scene: new meshes get an edge table and a
+    /// prepared backend scene; moved objects get new world positions and lose their silhouettes.
+    fn sync_objects(&mut self, scene: &RenderScene) -> Result<(), RenderError> {
+        let n_lights = scene.lights.len();
+        // Drop objects beyond the scene.
+        while self.cache.len() > scene.objects.len() {
+            let c = self.cache.pop().expect("non-empty");
+            self.backend.release(c.prepared);
+        }
+        for (oi, obj) in scene.objects.iter().enumerate() {
+            if !obj.world_from_object.is_finite()
+                || obj.world_from_object.matrix3.determinant() == 0.0
+            {
+                return Err(RenderError::InvalidInput(format!(
+                    "object {:?}: transform is not finite and invertible",
+                    obj.name
+                )));
+            }
+            let same_mesh = self
+                .cache
+                .get(oi)
+                .is_some_and(|c| Arc::ptr_eq(&c.mesh, &obj.mesh));
+            if !same_mesh {
+                let table =
+                    Arc::new(
+                        EdgeTable::build(&obj.mesh).map_err(|source| RenderError::Mesh {
+                            object: obj.name.clone(),
+                            source,
+                        })?,
+                    );
+                let topo = TopologyScene {
+                    objects: vec![SceneObject {
+                        name: obj.name.clone(),
+                        table: table.clone(),
+                        world_from_object: Affine3A::IDENTITY,
+                    }],
+                };
+                let prepared = self.backend.prepare(&topo)?;
+                let world = world_positions(&table, obj.world_from_object);
+                let entry = ObjectCache {
+                    mesh: obj.mesh.clone(),
+                    table,
+                    prepared,
+                    transform: obj.world_from_object,
+                    world,
+                    lights: Vec::new(),
+                };
+                if oi < self.cache.len() {
+                    let old = std::mem::replace(&mut self.cache[oi], entry);
+                    self.backend.release(old.prepared);
+                } else {
+                    self.cache.push(entry);
+                }
+            }
+            let c = &mut self.cache[oi];
+            if c.transform != obj.world_from_object {
+                c.transform = obj.world_from_object;
+                c.world = world_positions(&c.table, obj.world_from_object);
+                c.lights.clear();
+            }
+            c.lights.resize_with(n_lights, || None);
+        }
+        Ok(())
+    }
+}
+
+fn light_intensity(n: usize) -> f32 {
+    (1.2 / n.max(1) as f32).min(0.85)
+}
+
+/// World positions of the welded vertices: the object transform applied in `f32` once.
+fn world_positions(table: &EdgeTable, t: Affine3A) -> Vec<Vec3> {
+    table
+        .positions
+        .iter()
+        .map(|&p| t.transform_point3(p))
+        .collect()
+}
+
+fn bounds_f64(points: &[Vec3]) -> (DVec3, DVec3) {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for p in points {
+        lo = lo.min(p.as_dvec3());
+        hi = hi.max(p.as_dvec3());
+    }
+    (lo, hi)
+}
+
+/// The object-space lights through [`object_lights`] (the one shared conversion), as `Light`s.
+fn object_space_lights(
+    name: &str,
+    table: &Arc<EdgeTable>,
+    transform: Affine3A,
+    lights: &[Light],
+) -> Result<Vec<Light>, RenderError> {
+    let topo = TopologyScene {
+        objects: vec![SceneObject {
+            name: name.to_owned(),
+            table: table.clone(),
+            world_from_object: transform,
+        }],
+    };
+    object_lights(&topo, lights)[0]
+        .iter()
+        .map(|&l| {
+            Light::try_from(l).map_err(|e| {
+                RenderError::InvalidInput(format!(
+                    "object {name:?}: light in object space {l:?}: {e}"
+                ))
+            })
+        })
+        .collect()
+}

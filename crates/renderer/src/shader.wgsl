@@ -1,0 +1,86 @@
+// shadowvol-renderer: depth pre-pass with ambient, stencil shadow volumes, additive Lambert.
+//
+// Every pass computes the clip position with the same expression `g.view_proj * pos` from a
+// vec4 vertex attribute and marks it @invariant, so a z-fail front cap drawn from the same
+// vertices lands on exactly the depth the pre-pass wrote.
+
+struct Globals {
+    view_proj: mat4x4<f32>,
+    eye: vec4<f32>,
+    ambient: vec4<f32>,
+};
+
+struct LightU {
+    // (x, y, z, w): w = 1 point light, w = 0 directional (towards the light).
+    pos: vec4<f32>,
+    color: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> g: Globals;
+@group(1) @binding(0) var<uniform> lt: LightU;
+
+struct SurfaceIn {
+    @location(0) pos: vec4<f32>,
+    @location(1) normal: vec4<f32>,
+    @location(2) albedo: vec4<f32>,
+    @location(3) ids: vec2<u32>,
+};
+
+struct SurfaceOut {
+    @invariant @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) @interpolate(flat) normal: vec3<f32>,
+    @location(2) @interpolate(flat) albedo: vec3<f32>,
+    @location(3) @interpolate(flat) ids: vec2<u32>,
+};
+
+@vertex
+fn vs_surface(v: SurfaceIn) -> SurfaceOut {
+    var o: SurfaceOut;
+    o.clip = g.view_proj * v.pos;
+    o.world = v.pos.xyz;
+    o.normal = v.normal.xyz;
+    o.albedo = v.albedo.rgb;
+    o.ids = v.ids;
+    return o;
+}
+
+struct VolumeOut {
+    @invariant @builtin(position) clip: vec4<f32>,
+};
+
+// Shadow-volume vertices: w = 1 on the caster, w = 0 extruded to infinity.
+@vertex
+fn vs_volume(@location(0) pos: vec4<f32>) -> VolumeOut {
+    var o: VolumeOut;
+    o.clip = g.view_proj * pos;
+    return o;
+}
+
+struct PrepassOut {
+    @location(0) color: vec4<f32>,
+    @location(1) ids: vec2<u32>,
+};
+
+@fragment
+fn fs_prepass(i: SurfaceOut) -> PrepassOut {
+    var o: PrepassOut;
+    o.color = vec4<f32>(i.albedo * g.ambient.x, 1.0);
+    o.ids = i.ids;
+    return o;
+}
+
+@fragment
+fn fs_lit(i: SurfaceOut) -> @location(0) vec4<f32> {
+    let len = length(i.normal);
+    if (len <= 0.0) {
+        return vec4<f32>(0.0);
+    }
+    var n = i.normal / len;
+    if (dot(n, g.eye.xyz - i.world) < 0.0) {
+        n = -n;
+    }
+    let l = normalize(lt.pos.xyz - lt.pos.w * i.world);
+    let k = max(dot(n, l), 0.0);
+    return vec4<f32>(i.albedo * lt.color.rgb * k, 0.0);
+}

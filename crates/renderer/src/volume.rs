@@ -1,0 +1,228 @@
+//! Shadow-volume geometry from multiplicities (sides) and per-triangle signs (caps).
+//!
+//! # Orientation
+//! With `s(a, b, o)` the contribution of opposite vertex `o` to edge `(a, b)` (see
+//! [`shadowvol_robust_math`]) and a triangle `T` with canonical vertex order `(p0, p1, p2)`
+//! (ascending ids) and sign `σ_T = triangle_sign(mode, p0, p1, p2, L)`, one checks that
+//! `s(a, b, o) · (a → b)` is `σ_T` times the directed boundary edge of `T` in canonical order.
+//! So the silhouette chain `Σ m(a, b) · (a → b)` is the boundary of the cap chain `Σ σ_T · T`, and
+//! `σ_T = sgn(n_T · (L.xyz − L.w p0))` with `n_T = (p1 − p0) × (p2 − p0)`: `σ_T · T` is `T`
+//! turned to face the light. Each triangle so turned is the near cap of a semi-infinite prism
+//! (its shadow); the sides of all prisms cancel on edges whose multiplicity is 0 and remain
+//! `m` times on silhouette edges. The prisms are oriented outwards, so two-sided stencil
+//! counting gives, at a point, the number of prisms containing it.
+//!
+//! For a directed silhouette edge `a → b` (m > 0) the outward side quad is
+//! `(b, a, a∞, b∞)` (counter-clockwise seen from outside); for `m < 0` it is `(a, b, b∞, a∞)`.
+//! `x∞ = (L.w · x − L.xyz, 0)`: the point at infinity away from the light. A directional light
+//! has all `x∞` equal, so sides are triangles and there is no back cap. The back cap of `σ_T · T`
+//! is the extruded triangle with reversed order.
+
+use glam::Vec3;
+use shadowvol_mesh_topology::EdgeTable;
+use shadowvol_robust_math::{triangle_sign, Accuracy};
+
+/// A vertex of shadow-volume geometry: `(x, y, z, w)`, `w = 1` on the caster, `w = 0` at infinity.
+pub type VolumeVertex = [f32; 4];
+
+/// The point at infinity of `p` away from the light `l` (world space).
+#[must_use]
+#[inline]
+pub fn extrude(p: Vec3, l: [f32; 4]) -> VolumeVertex {
+    [p.x * l[3] - l[0], p.y * l[3] - l[1], p.z * l[3] - l[2], 0.0]
+}
+
+#[inline]
+fn fin(p: Vec3) -> VolumeVertex {
+    [p.x, p.y, p.z, 1.0]
+}
+
+/// Appends the side triangles for one object and one light.
+///
+/// `edges` are the object's edges (`[a, b]`, `a < b`, compact ids into `world`), `m` their
+/// multiplicities for this light, `world` the world-space (`f32`) positions, `light` the world
+/// light. Emits `|m|` copies per edge (the stencil can only step by 1). Returns the number of
+/// side quads (directional: side triangles) emitted.
+///
+/// # Panics
+/// Panics if `m.len() != edges.len()` or an id is out of range of `world`.
+pub fn build_sides(
+    edges: &[[u32; 2]],
+    m: &[i32],
+    world: &[Vec3],
+    light: [f32; 4],
+    out: &mut Vec<VolumeVertex>,
+) -> usize {
+    assert_eq!(edges.len(), m.len(), "one multiplicity per edge");
+    let directional = light[3] == 0.0;
+    let mut quads = 0;
+    for (&[a, b], &mult) in edges.iter().zip(m) {
+        if mult == 0 {
+            continue;
+        }
+        let (pa, pb) = (world[a as usize], world[b as usize]);
+        // Outward order: for m > 0 walk b -> a on the caster, else a -> b.
+        let (p, q) = if mult > 0 { (pb, pa) } else { (pa, pb) };
+        let (pi, qi) = (extrude(p, light), extrude(q, light));
+        for _ in 0..mult.unsigned_abs() {
+            if directional {
+                out.extend_from_slice(&[fin(p), fin(q), qi]);
+            } else {
+                out.extend_from_slice(&[fin(p), fin(q), qi, fin(p), qi, pi]);
+            }
+            quads += 1;
+        }
+    }
+    quads
+}
+
+/// Cap geometry of one object for one light, split by how the rasterizer must see it.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Caps {
+    /// Front-cap triangles with `σ = +1`, in canonical vertex order (draw with counter-clockwise
+    /// front faces): exactly the pre-pass vertices, so depths match bit for bit.
+    pub front_ccw: Vec<VolumeVertex>,
+    /// Front-cap triangles with `σ = −1`, in canonical vertex order (draw with clockwise front
+    /// faces, which turns them to face the light without reordering their vertices).
+    pub front_cw: Vec<VolumeVertex>,
+    /// Back-cap triangles at infinity, outward (draw counter-clockwise). Empty for directional
+    /// lights.
+    pub back: Vec<VolumeVertex>,
+    /// Triangles with `σ = 0` (light in their plane, or robust disagreement): no prism.
+    pub zero: usize,
+}
+
+/// Builds the caps of one object for one light.
+///
+/// `table` is the object's edge table (object space), `object_light` the object-space light
+/// from [`shadowvol_silhouette::object_lights`] (the same `f32` input the silhouette backend
+/// saw), `world` the world-space positions, `world_light` the world light. The sign of each
+/// triangle is [`triangle_sign`] on its canonical order in `mode`, which is what the
+/// multiplicities of `robust`, `ordered` and `exact` are made of, so caps and sides meet.
+/// `back_cap` is ignored (treated as false) for directional lights.
+///
+/// # Panics
+/// Panics if `world.len() != table.positions.len()`.
+#[must_use]
+pub fn build_caps(
+    table: &EdgeTable,
+    object_light: [f32; 4],
+    world: &[Vec3],
+    world_light: [f32; 4],
+    mode: Accuracy,
+    back_cap: bool,
+) -> Caps {
+    assert_eq!(
+        world.len(),
+        table.positions.len(),
+        "one world position per vertex"
+    );
+    let back_cap = back_cap && world_light[3] != 0.0;
+    let mut caps = Caps::default();
+    for t in &table.triangles {
+        let c = canonical_triangle(*t);
+        let p = |i: u32| table.positions[i as usize];
+        let sigma = triangle_sign(mode, p(c[0]), p(c[1]), p(c[2]), object_light);
+        let w = [
+            world[c[0] as usize],
+            world[c[1] as usize],
+            world[c[2] as usize],
+        ];
+        let front = [fin(w[0]), fin(w[1]), fin(w[2])];
+        let inf = [
+            extrude(w[0], world_light),
+            extrude(w[1], world_light),
+            extrude(w[2], world_light),
+        ];
+        match sigma {
+            1 => {
+                caps.front_ccw.extend_from_slice(&front);
+                if back_cap {
+                    caps.back.extend_from_slice(&[inf[0], inf[2], inf[1]]);
+                }
+            }
+            -1 => {
+                caps.front_cw.extend_from_slice(&front);
+                if back_cap {
+                    caps.back.extend_from_slice(&inf);
+                }
+            }
+            _ => caps.zero += 1,
+        }
+    }
+    caps
+}
+
+/// A triangle's vertex ids sorted ascending (the canonical order of the sign convention).
+#[must_use]
+#[inline]
+pub fn canonical_triangle(mut t: [u32; 3]) -> [u32; 3] {
+    t.sort_unstable();
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use shadowvol_mesh_topology::Mesh;
+    use shadowvol_robust_math::ov_sign;
+
+    /// The side quad of a single triangle's edge must have its outward normal pointing away
+    /// from the triangle's interior (checked with the prism of one triangle under a light).
+    #[test]
+    fn side_orientation_is_outward() {
+        let mesh = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();
+        let table = EdgeTable::build(&mesh).unwrap();
+        let light = [0.2, 0.2, 5.0, 1.0];
+        let m: Vec<i32> = table
+            .edges
+            .iter()
+            .enumerate()
+            .map(|(e, &[a, b])| {
+                table
+                    .ovs_of(e)
+                    .iter()
+                    .map(|&o| i32::from(ov_sign(Accuracy::Exact, &table.positions, a, b, o, light)))
+                    .sum()
+            })
+            .collect();
+        let mut out = Vec::new();
+        let n = build_sides(&table.edges, &m, &table.positions, light, &mut out);
+        assert_eq!(n, 3);
+        let centroid = Vec3::new(1.0 / 3.0, 1.0 / 3.0, 0.0);
+        assert_eq!(out.len(), 18);
+        for quad in out.chunks(6) {
+            // Quad (p, q, q_inf, p, q_inf, p_inf): replace q_inf by a finite point along it.
+            let v = |i: usize| Vec3::new(quad[i][0], quad[i][1], quad[i][2]);
+            assert_eq!((quad[0][3], quad[1][3], quad[2][3]), (1.0, 1.0, 0.0));
+            let (p, q) = (v(0), v(1));
+            let q_far = q + v(2) * 0.5;
+            let normal = (q - p).cross(q_far - p);
+            // The prism (the triangle's shadow) lies on the inner side of every side face.
+            assert!(
+                normal.dot(centroid - p) < 0.0,
+                "side normal {normal} points inwards"
+            );
+        }
+    }
+
+    #[test]
+    fn caps_split_by_sign_and_skip_back_cap_for_directional() {
+        let mesh = Mesh::new(
+            vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+            vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+        )
+        .unwrap();
+        let table = EdgeTable::build(&mesh).unwrap();
+        let l = [2.0, 3.0, 5.0, 1.0];
+        let caps = build_caps(&table, l, &table.positions, l, Accuracy::Exact, true);
+        assert_eq!(
+            (caps.front_ccw.len() + caps.front_cw.len()) / 3 + caps.zero,
+            4
+        );
+        assert_eq!(caps.back.len(), caps.front_ccw.len() + caps.front_cw.len());
+        let d = [1.0, 2.0, 3.0, 0.0];
+        let caps = build_caps(&table, d, &table.positions, d, Accuracy::Exact, true);
+        assert!(caps.back.is_empty());
+    }
+}

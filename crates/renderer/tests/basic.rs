@@ -1,0 +1,51 @@
+//! Basic rendering against the ray-traced reference.
+mod common;
+
+use glam::Vec3;
+use shadowvol_renderer::{reference, Camera, PlanPolicy, Technique};
+use shadowvol_robust_math::{Accuracy, Light};
+
+#[test]
+fn box_on_floor_matches_reference_zpass_and_zfail() {
+    let Some(mut r) = common::renderer(128, 128, Accuracy::Exact) else {
+        return;
+    };
+    let scene = common::box_on_floor(
+        Light::point(Vec3::new(1.5, 6.0, 1.0)),
+        Camera::look_at(Vec3::new(4.0, 5.0, 7.0), Vec3::new(0.0, 0.5, 0.0)),
+    );
+    for policy in [
+        PlanPolicy::Auto,
+        PlanPolicy::AlwaysZFail,
+        PlanPolicy::AlwaysZPass,
+    ] {
+        let mut o = r.options();
+        o.policy = policy;
+        r.set_options(o);
+        let frame = r.render(&scene).unwrap();
+        let cmp = reference::compare(&frame);
+        println!("{policy:?}: {}", frame.explain());
+        println!(
+            "artifacts {} differing {} shadow {} ref shadow {} covered {}",
+            cmp.artifact_pixels,
+            cmp.differing_pixels,
+            cmp.shadow_pixels,
+            cmp.reference_shadow_pixels,
+            cmp.covered_pixels
+        );
+        frame
+            .save_png(format!("/tmp/sv_box_{policy:?}.png"))
+            .unwrap();
+        reference::diff_image(&frame, &cmp)
+            .save(format!("/tmp/sv_box_{policy:?}_diff.png"))
+            .unwrap();
+        assert!(
+            cmp.reference_shadow_pixels > 200,
+            "the box casts a visible shadow"
+        );
+        assert_eq!(cmp.artifact_pixels, 0, "{policy:?}");
+        if policy == PlanPolicy::Auto {
+            assert!(frame.plan.iter().all(|e| e.technique == Technique::ZPass));
+        }
+    }
+}

@@ -1,0 +1,95 @@
+//! Shared helpers for the renderer's integration tests.
+#![allow(dead_code)]
+
+use glam::{Affine3A, Vec3};
+use shadowvol_mesh_topology::Mesh;
+use shadowvol_renderer::{Camera, RenderError, RenderObject, RenderOptions, RenderScene, Renderer};
+use shadowvol_robust_math::{Accuracy, Light};
+use std::sync::Arc;
+
+/// A renderer on the `cpu` backend, or `None` (visible skip) without a GPU adapter.
+/// Under `CI=true` a missing adapter fails the test.
+pub fn renderer(width: u32, height: u32, mode: Accuracy) -> Option<Renderer> {
+    let mut opts = RenderOptions::new(width, height);
+    opts.mode = mode;
+    match Renderer::new(Box::new(shadowvol_cpu::CpuBackend::new()), opts) {
+        Ok(r) => Some(r),
+        Err(RenderError::NoAdapter(why)) => {
+            assert!(
+                std::env::var("CI").map_or(true, |v| v != "true"),
+                "CI=true but no GPU adapter: {why}"
+            );
+            eprintln!("SKIPPED: no GPU adapter ({why}); install Mesa lavapipe to run this test");
+            None
+        }
+        Err(e) => panic!("renderer failed to start: {e}"),
+    }
+}
+
+/// An axis-aligned box `lo..hi` as 12 triangles (closed, outward winding).
+pub fn cuboid(lo: Vec3, hi: Vec3) -> Mesh {
+    let p = |i: u32| {
+        Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    };
+    let positions = (0..8).map(p).collect();
+    let triangles = vec![
+        [0, 2, 3],
+        [0, 3, 1], // z = lo
+        [4, 5, 7],
+        [4, 7, 6], // z = hi
+        [0, 1, 5],
+        [0, 5, 4], // y = lo
+        [2, 6, 7],
+        [2, 7, 3], // y = hi
+        [0, 4, 6],
+        [0, 6, 2], // x = lo
+        [1, 3, 7],
+        [1, 7, 5], // x = hi
+    ];
+    Mesh::new(positions, triangles).expect("valid cuboid")
+}
+
+/// A square floor at `y = 0`, half-size `s`, split into `n × n` cells.
+pub fn floor(s: f32, n: u32) -> Mesh {
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let x = -s + 2.0 * s * i as f32 / n as f32;
+            let z = -s + 2.0 * s * j as f32 / n as f32;
+            positions.push(Vec3::new(x, 0.0, z));
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i;
+            let b = a + 1;
+            let c = a + n + 1;
+            let d = c + 1;
+            triangles.push([a, c, b]);
+            triangles.push([b, c, d]);
+        }
+    }
+    Mesh::new(positions, triangles).expect("valid floor")
+}
+
+/// A floor and a box standing above it, one light.
+pub fn box_on_floor(light: Light, camera: Camera) -> RenderScene {
+    RenderScene {
+        objects: vec![
+            RenderObject::new("floor", Arc::new(floor(6.0, 4)), Affine3A::IDENTITY),
+            RenderObject::new(
+                "box",
+                Arc::new(cuboid(Vec3::new(-0.5, 0.0, -0.5), Vec3::new(0.5, 1.0, 0.5))),
+                Affine3A::from_translation(Vec3::new(0.0, 0.8, 0.0)),
+            ),
+        ],
+        lights: vec![light],
+        camera,
+        ambient: 0.15,
+    }
+}
