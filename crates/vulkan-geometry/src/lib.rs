@@ -1,14 +1,51 @@
-//! The `vulkan` silhouette backend (work in progress: see its issue).
+//! The `vulkan` silhouette backend: the paper's geometry-shader path on Vulkan (ash), headless.
+//!
+//! * [`VulkanBackend`] implements [`SilhouetteBackend`]: one point per (edge, light) goes through
+//!   `shaders/silhouette_gs.geom`, which reads the edge, its opposite vertices, the positions and
+//!   the object-space light from storage buffers, computes the multiplicity `m` in any
+//!   [`shadowvol_robust_math::Accuracy`] mode, and writes it to a storage buffer. Exact mode uses a
+//!   certified `f64` filter on the device (the `f32` one without `shaderFloat64`) and decides the
+//!   pairs it cannot certify on the host with `orient_exact`; the result is bit-identical to the
+//!   `cpu` backend.
+//! * [`VulkanBackend::render_shadow_mask`] renders a shadow mask: a depth pre-pass of the scene,
+//!   then the same geometry shader emitting `|m|` side quads extruded to infinity (`w = 0`) into
+//!   the stencil buffer (z-pass, two-sided, wrapping), read back as `stencil != 0`.
+//! * [`twin`] is the CPU twin of the shader logic, for pinning down device differences.
+//!
+//! The Vulkan library is loaded at run time (`ash::Entry::load`): the crate builds without it, and
+//! [`create_backend`] returns [`BackendError::Unavailable`] naming what is missing. Set
+//! `SHADOWVOL_VULKAN_VALIDATION=1` to run under `VK_LAYER_KHRONOS_validation`.
+//!
+//! ```no_run
+//! use shadowvol_silhouette::{corpus, extract_once, Accuracy};
+//!
+//! let case = &corpus::cases()[0];
+//! let scene = case.scene()?;
+//! let mut vk = shadowvol_vulkan_geometry::create_backend()?;
+//! let (m, stats) = extract_once(vk.as_mut(), &scene, &case.lights, Accuracy::Exact)?;
+//! println!("{} silhouette edges, {} uncertain pairs", m.silhouette(0).len(), stats.uncertain);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod backend;
+mod context;
+mod pipelines;
+mod render;
+pub mod twin;
+
+pub use backend::VulkanBackend;
+pub use context::{Options, VALIDATION_ENV};
+pub use render::{Camera, RenderStats, ShadowMask};
 
 use shadowvol_silhouette::{BackendError, SilhouetteBackend};
 
-/// Starts the `vulkan` backend.
+/// Starts the `vulkan` backend with [`Options::from_env`] (validation when
+/// `SHADOWVOL_VULKAN_VALIDATION=1`).
 ///
 /// # Errors
-/// [`BackendError::Unavailable`] naming what is missing.
+/// [`BackendError::Unavailable`] naming what is missing (Vulkan loader, device, Vulkan 1.1,
+/// `geometryShader`, `vertexPipelineStoresAndAtomics`, or the validation layer when requested);
+/// [`BackendError::Build`] when a pipeline cannot be built.
 pub fn create_backend() -> Result<Box<dyn SilhouetteBackend>, BackendError> {
-    Err(BackendError::Unavailable {
-        backend: "vulkan",
-        reason: "not implemented in this build yet".to_owned(),
-    })
+    Ok(Box::new(VulkanBackend::new(Options::from_env())?))
 }

@@ -1,0 +1,558 @@
+//! [`VulkanBackend`]: the `SilhouetteBackend` implementation over the geometry shader.
+
+use crate::context::{device_err, Buffer, Context, Options, BACKEND};
+use crate::pipelines::{Pipelines, Push, BINDINGS};
+use crate::twin::{mode_code, mode_code_of, resolve_uncertain, DeviceFilter, DeviceScene};
+use ash::vk;
+use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::{
+    object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId,
+    SilhouetteBackend, TopologyScene,
+};
+use std::collections::HashMap;
+use std::time::Instant;
+
+/// Bytes of the uncertain buffer's header (count, clamped count, two pads).
+const UNCERTAIN_HEADER: usize = 16;
+/// Initial capacity of the uncertain buffer, in records.
+const INITIAL_UNCERTAIN: u32 = 1024;
+
+/// One prepared scene: its device buffers and descriptor set.
+pub(crate) struct Prepared {
+    pub scene: TopologyScene,
+    pub ds: DeviceScene,
+    positions: Buffer,
+    edges: Buffer,
+    ovs: Buffer,
+    edge_object: Buffer,
+    lights: Buffer,
+    models: Buffer,
+    pub mult: Buffer,
+    uncertain: Buffer,
+    vertex_object: Buffer,
+    corners: Buffer,
+    pub uncertain_capacity: u32,
+    pool: vk::DescriptorPool,
+    pub set: vk::DescriptorSet,
+}
+
+impl Prepared {
+    fn buffers(&self) -> [&Buffer; BINDINGS as usize] {
+        [
+            &self.positions,
+            &self.edges,
+            &self.ovs,
+            &self.edge_object,
+            &self.lights,
+            &self.models,
+            &self.mult,
+            &self.uncertain,
+            &self.vertex_object,
+            &self.corners,
+        ]
+    }
+
+    fn write_set(&self, ctx: &Context) {
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = self
+            .buffers()
+            .iter()
+            .map(|b| {
+                [vk::DescriptorBufferInfo::default()
+                    .buffer(b.buffer)
+                    .offset(0)
+                    .range(vk::WHOLE_SIZE)]
+            })
+            .collect();
+        let writes: Vec<_> = infos
+            .iter()
+            .enumerate()
+            .map(|(i, info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(self.set)
+                    .dst_binding(i as u32)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .buffer_info(info)
+            })
+            .collect();
+        // SAFETY: the set is not in use (the device is idle between calls).
+        unsafe { ctx.device.update_descriptor_sets(&writes, &[]) };
+    }
+
+    /// Zeroes the uncertain buffer's counters.
+    pub(crate) fn uncertain_reset(&self) {
+        self.uncertain.write(0, &[0u8; UNCERTAIN_HEADER]);
+    }
+
+    fn destroy(self, ctx: &Context) {
+        // SAFETY: the device is idle; the pool frees the set.
+        unsafe { ctx.device.destroy_descriptor_pool(self.pool, None) };
+        for b in [
+            self.positions,
+            self.edges,
+            self.ovs,
+            self.edge_object,
+            self.lights,
+            self.models,
+            self.mult,
+            self.uncertain,
+            self.vertex_object,
+            self.corners,
+        ] {
+            b.destroy(ctx);
+        }
+    }
+}
+
+/// The `vulkan` backend: the paper's geometry-shader path on a headless Vulkan device.
+///
+/// `extract` draws one point per (edge, light) (`vkCmdDraw(edges, lights)`, the instance index is
+/// the light) through `shaders/silhouette_gs.geom` with rasterisation discarded; the shader writes
+/// the multiplicities to a storage buffer. In exact mode the shader certifies each sign with an
+/// `f64` filter (or the `f32` one on devices without `shaderFloat64`) and appends the pairs it
+/// cannot certify to a buffer that the host decides with `orient_exact`. The compact silhouette
+/// lists are built on the host from the multiplicities.
+///
+/// [`VulkanBackend::render_shadow_mask`] (in `render.rs`) runs the same shader with emission on,
+/// after a depth pre-pass, into a depth/stencil attachment.
+pub struct VulkanBackend {
+    pub(crate) prepared: HashMap<PreparedId, Prepared>,
+    next: u64,
+    pub(crate) pipes: Pipelines,
+    pub(crate) ctx: Context,
+}
+
+impl std::fmt::Debug for VulkanBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("VulkanBackend")
+            .field("device", &self.ctx.caps.device_name)
+            .field("filter", &self.filter())
+            .field("scenes", &self.prepared.len())
+            .finish()
+    }
+}
+
+impl VulkanBackend {
+    /// Starts the backend with `options`.
+    ///
+    /// # Errors
+    /// [`BackendError::Unavailable`] naming what is missing: the Vulkan loader, a device, Vulkan
+    /// 1.1, `geometryShader`, `vertexPipelineStoresAndAtomics`, a depth/stencil format, or the
+    /// validation layer when it was asked for. [`BackendError::Build`] if a shader module or
+    /// pipeline cannot be created.
+    pub fn new(options: Options) -> Result<Self, BackendError> {
+        let ctx = Context::new(options)?;
+        let pipes = Pipelines::new(&ctx)?;
+        Ok(Self {
+            prepared: HashMap::new(),
+            next: 0,
+            pipes,
+            ctx,
+        })
+    }
+
+    /// The exact-mode filter in use: `F64` when the device has `shaderFloat64` (and it was not
+    /// disabled with [`Options::force_f32_filter`]), else `F32`.
+    #[must_use]
+    pub fn filter(&self) -> DeviceFilter {
+        if self.ctx.use_f64 {
+            DeviceFilter::F64
+        } else {
+            DeviceFilter::F32
+        }
+    }
+
+    /// The device name, as the driver reports it.
+    #[must_use]
+    pub fn device_name(&self) -> &str {
+        &self.ctx.caps.device_name
+    }
+
+    /// True when the Khronos validation layer is active.
+    #[must_use]
+    pub fn validation_enabled(&self) -> bool {
+        self.ctx.validation()
+    }
+
+    /// Warnings and errors reported by the validation layer so far (empty without validation).
+    #[must_use]
+    pub fn validation_messages(&self) -> Vec<String> {
+        self.ctx.messages()
+    }
+
+    pub(crate) fn scene(&self, id: PreparedId) -> Result<&Prepared, BackendError> {
+        self.prepared
+            .get(&id)
+            .ok_or(BackendError::UnknownScene { backend: BACKEND, id })
+    }
+
+    /// Makes the light, multiplicity and uncertain buffers large enough and writes the lights.
+    /// Returns the number of (edge, light) slots.
+    pub(crate) fn upload_lights(
+        &mut self,
+        id: PreparedId,
+        obj_lights: &[Vec<[f32; 4]>],
+        light_count: usize,
+    ) -> Result<(), BackendError> {
+        let max_range = self.ctx.caps.max_storage_buffer_range;
+        let ctx = &self.ctx;
+        let p = self
+            .prepared
+            .get_mut(&id)
+            .ok_or(BackendError::UnknownScene { backend: BACKEND, id })?;
+        let edges = p.ds.edges.len();
+        let slots = edges
+            .checked_mul(light_count)
+            .filter(|&s| u32::try_from(s).is_ok() && (s as u64) * 4 <= max_range)
+            .ok_or_else(|| BackendError::Limit {
+                backend: BACKEND,
+                message: format!(
+                    "{edges} edges x {light_count} lights do not fit one result buffer (at most \
+                     {} multiplicities, maxStorageBufferRange {max_range} bytes); pass fewer \
+                     lights per call",
+                    (max_range / 4).min(u64::from(u32::MAX))
+                ),
+            })?;
+        let mut bits: Vec<[u32; 4]> = Vec::with_capacity(obj_lights.len() * light_count);
+        for per_object in obj_lights {
+            bits.extend(per_object.iter().map(|l| l.map(f32::to_bits)));
+        }
+        let light_bytes: &[u8] = bytemuck::cast_slice(&bits);
+        let mut changed = false;
+        if (light_bytes.len() as u64) > p.lights.size {
+            let new = Buffer::new(ctx, light_bytes.len() as u64, vk::BufferUsageFlags::STORAGE_BUFFER)?;
+            std::mem::replace(&mut p.lights, new).destroy(ctx);
+            changed = true;
+        }
+        p.lights.write(0, light_bytes);
+        if (slots as u64) * 4 > p.mult.size {
+            let new = Buffer::new(ctx, slots as u64 * 4, vk::BufferUsageFlags::STORAGE_BUFFER)?;
+            std::mem::replace(&mut p.mult, new).destroy(ctx);
+            changed = true;
+        }
+        if changed {
+            p.write_set(ctx);
+        }
+        p.uncertain.write(0, &[0u8; UNCERTAIN_HEADER]);
+        Ok(())
+    }
+
+    /// Grows the uncertain buffer to hold `records` records (contents are discarded).
+    fn grow_uncertain(&mut self, id: PreparedId, records: u32) -> Result<(), BackendError> {
+        let ctx = &self.ctx;
+        let p = self
+            .prepared
+            .get_mut(&id)
+            .ok_or(BackendError::UnknownScene { backend: BACKEND, id })?;
+        let bytes = UNCERTAIN_HEADER as u64 + 16 * u64::from(records);
+        if bytes > ctx.caps.max_storage_buffer_range {
+            return Err(BackendError::Limit {
+                backend: BACKEND,
+                message: format!(
+                    "{records} uncertain pairs do not fit one storage buffer \
+                     (maxStorageBufferRange {} bytes)",
+                    ctx.caps.max_storage_buffer_range
+                ),
+            });
+        }
+        let new = Buffer::new(ctx, bytes, vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        std::mem::replace(&mut p.uncertain, new).destroy(ctx);
+        p.uncertain_capacity = records;
+        p.write_set(ctx);
+        p.uncertain.write(0, &[0u8; UNCERTAIN_HEADER]);
+        Ok(())
+    }
+
+    /// Reads the uncertain buffer's header: (appended count, clamped-emission count).
+    pub(crate) fn uncertain_header(p: &Prepared) -> (u32, u32) {
+        let mut h = [0u8; 8];
+        p.uncertain.read(0, &mut h);
+        (
+            u32::from_le_bytes([h[0], h[1], h[2], h[3]]),
+            u32::from_le_bytes([h[4], h[5], h[6], h[7]]),
+        )
+    }
+
+    /// Records the extraction draw (rasteriser discard) into `cmd`.
+    fn record_extract(&self, p: &Prepared, cmd: vk::CommandBuffer, push: &Push, lights: u32) {
+        let d = &self.ctx.device;
+        let edges = p.ds.edges.len() as u32;
+        // SAFETY: all handles are live; the command buffer is recording.
+        unsafe {
+            d.cmd_begin_render_pass(
+                cmd,
+                &vk::RenderPassBeginInfo::default()
+                    .render_pass(self.pipes.extract_pass)
+                    .framebuffer(self.pipes.extract_fb)
+                    .render_area(vk::Rect2D {
+                        offset: vk::Offset2D { x: 0, y: 0 },
+                        extent: vk::Extent2D {
+                            width: 1,
+                            height: 1,
+                        },
+                    }),
+                vk::SubpassContents::INLINE,
+            );
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipes.extract);
+            d.cmd_set_viewport(
+                cmd,
+                0,
+                &[vk::Viewport {
+                    x: 0.0,
+                    y: 0.0,
+                    width: 1.0,
+                    height: 1.0,
+                    min_depth: 0.0,
+                    max_depth: 1.0,
+                }],
+            );
+            d.cmd_set_scissor(
+                cmd,
+                0,
+                &[vk::Rect2D {
+                    offset: vk::Offset2D { x: 0, y: 0 },
+                    extent: vk::Extent2D {
+                        width: 1,
+                        height: 1,
+                    },
+                }],
+            );
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.pipes.layout,
+                0,
+                &[p.set],
+                &[],
+            );
+            d.cmd_push_constants(
+                cmd,
+                self.pipes.layout,
+                vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::GEOMETRY,
+                0,
+                bytemuck::bytes_of(push),
+            );
+            d.cmd_draw(cmd, edges, lights, 0, 0);
+            d.cmd_end_render_pass(cmd);
+            host_barrier(d, cmd);
+        }
+    }
+
+    /// Runs the GS over every (edge, light), host-resolves uncertain pairs, and fills `out`.
+    /// The multiplicity buffer on the device is left holding the resolved values when
+    /// `write_back` is set (the render path then emits from it).
+    pub(crate) fn extract_impl(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+        write_back: bool,
+    ) -> Result<ExtractStats, BackendError> {
+        if lights.is_empty() {
+            return Err(BackendError::InvalidInput("no lights given".to_owned()));
+        }
+        let mut stats = ExtractStats::default();
+        let t = Instant::now();
+        let obj_lights = object_lights(&self.scene(id)?.scene, lights);
+        self.upload_lights(id, &obj_lights, lights.len())?;
+        stats.upload = t.elapsed();
+
+        let edges = self.scene(id)?.ds.edges.len();
+        out.reset(edges, lights.len());
+        if edges == 0 {
+            return Ok(stats);
+        }
+        let t = Instant::now();
+        let mut count;
+        loop {
+            let p = self.scene(id)?;
+            let push = Push {
+                view_proj: [0.0; 16],
+                mode: mode_code_of(mode),
+                edge_count: edges as u32,
+                light_count: lights.len() as u32,
+                uncertain_capacity: p.uncertain_capacity,
+                emit: 0,
+            };
+            self.ctx
+                .submit_and_wait(|_, cmd| self.record_extract(p, cmd, &push, lights.len() as u32))?;
+            (count, _) = Self::uncertain_header(p);
+            if count <= p.uncertain_capacity {
+                break;
+            }
+            // Too many uncertain pairs for the buffer: grow it and run again.
+            self.grow_uncertain(id, count.next_power_of_two())?;
+        }
+        stats.compute = t.elapsed();
+
+        let t = Instant::now();
+        let p = self.scene(id)?;
+        p.mult
+            .read(0, bytemuck::cast_slice_mut(out.all_values_mut()));
+        let mut records = vec![[0u32; 4]; count as usize];
+        if count > 0 {
+            p.uncertain
+                .read(UNCERTAIN_HEADER, bytemuck::cast_slice_mut(&mut records));
+        }
+        stats.readback = t.elapsed();
+
+        let t = Instant::now();
+        stats.uncertain = u64::from(count);
+        for [e, k, li, _] in records {
+            let (e, li) = (e as usize, li as usize);
+            let l = obj_lights[p.ds.edge_object[e] as usize][li];
+            out.values_mut(li)[e] += i32::from(resolve_uncertain(&p.ds, e, k, l));
+        }
+        if write_back && count > 0 {
+            p.mult.write(0, bytemuck::cast_slice(out.all_values()));
+        }
+        out.rebuild_silhouettes();
+        stats.host_resolve = t.elapsed();
+        Ok(stats)
+    }
+}
+
+/// Makes shader and transfer writes visible to the host.
+///
+/// # Safety
+/// `cmd` must be recording, outside a render pass.
+pub(crate) unsafe fn host_barrier(d: &ash::Device, cmd: vk::CommandBuffer) {
+    let barrier = vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(vk::AccessFlags::HOST_READ);
+    // SAFETY: guaranteed by the caller.
+    unsafe {
+        d.cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::GEOMETRY_SHADER | vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::HOST,
+            vk::DependencyFlags::empty(),
+            &[barrier],
+            &[],
+            &[],
+        );
+    }
+}
+
+impl SilhouetteBackend for VulkanBackend {
+    fn info(&self) -> BackendInfo {
+        let c = &self.ctx.caps;
+        BackendInfo {
+            name: BACKEND,
+            device: format!("{} ({}), geometry shader", c.device_name, c.driver),
+            modes: Accuracy::ALL.to_vec(),
+            max_lights: None,
+            details: vec![
+                ("exact_filter".to_owned(), self.filter().name().to_owned()),
+                ("shader_float64".to_owned(), c.float64.to_string()),
+                ("depth_clamp".to_owned(), c.depth_clamp.to_string()),
+                ("validation".to_owned(), self.ctx.validation().to_string()),
+                ("stencil".to_owned(), "z-pass, two-sided, wrapping".to_owned()),
+                ("silhouette_list".to_owned(), "host, from m".to_owned()),
+            ],
+        }
+    }
+
+    fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
+        let ds = DeviceScene::build(scene)?;
+        let ctx = &self.ctx;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let positions: Vec<u32> = ds
+            .positions
+            .iter()
+            .flat_map(|p| p.map(f32::to_bits))
+            .collect();
+        let positions = Buffer::with_data(ctx, &positions)?;
+        let edges = Buffer::with_data(ctx, &ds.edges)?;
+        let ovs = Buffer::with_data(ctx, &ds.ovs)?;
+        let edge_object = Buffer::with_data(ctx, &ds.edge_object)?;
+        let lights = Buffer::new(ctx, 16 * scene.objects.len().max(1) as u64, storage)?;
+        let models = Buffer::with_data(ctx, &ds.models)?;
+        let mult = Buffer::new(ctx, 4 * ds.edges.len() as u64, storage)?;
+        let uncertain = Buffer::new(
+            ctx,
+            UNCERTAIN_HEADER as u64 + 16 * u64::from(INITIAL_UNCERTAIN),
+            storage,
+        )?;
+        let vertex_object = Buffer::with_data(ctx, &ds.vertex_object)?;
+        let corners = Buffer::with_data(ctx, &ds.corners)?;
+        let sizes = [vk::DescriptorPoolSize {
+            ty: vk::DescriptorType::STORAGE_BUFFER,
+            descriptor_count: BINDINGS,
+        }];
+        // SAFETY: valid device and infos.
+        let pool = unsafe {
+            ctx.device.create_descriptor_pool(
+                &vk::DescriptorPoolCreateInfo::default()
+                    .max_sets(1)
+                    .pool_sizes(&sizes),
+                None,
+            )
+        }
+        .map_err(|e| device_err("vkCreateDescriptorPool", e))?;
+        let layouts = [self.pipes.set_layout];
+        // SAFETY: the pool has room for one set of this layout.
+        let set = unsafe {
+            ctx.device.allocate_descriptor_sets(
+                &vk::DescriptorSetAllocateInfo::default()
+                    .descriptor_pool(pool)
+                    .set_layouts(&layouts),
+            )
+        }
+        .map_err(|e| device_err("vkAllocateDescriptorSets", e))?[0];
+        let p = Prepared {
+            scene: scene.clone(),
+            ds,
+            positions,
+            edges,
+            ovs,
+            edge_object,
+            lights,
+            models,
+            mult,
+            uncertain,
+            vertex_object,
+            corners,
+            uncertain_capacity: INITIAL_UNCERTAIN,
+            pool,
+            set,
+        };
+        p.write_set(ctx);
+        let id = PreparedId(self.next);
+        self.next += 1;
+        self.prepared.insert(id, p);
+        Ok(id)
+    }
+
+    fn extract(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        self.extract_impl(id, lights, mode, out, false)
+    }
+
+    fn release(&mut self, id: PreparedId) {
+        if let Some(p) = self.prepared.remove(&id) {
+            p.destroy(&self.ctx);
+        }
+    }
+}
+
+impl Drop for VulkanBackend {
+    fn drop(&mut self) {
+        // SAFETY: wait until nothing runs before destroying.
+        unsafe {
+            let _ = self.ctx.device.device_wait_idle();
+        }
+        for (_, p) in self.prepared.drain() {
+            p.destroy(&self.ctx);
+        }
+        self.pipes.destroy(&self.ctx);
+    }
+}
+
+/// The mode code used for the render path's exact emission.
+pub(crate) const PRECOMPUTED: u32 = mode_code::PRECOMPUTED;

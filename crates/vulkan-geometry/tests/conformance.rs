@@ -1,0 +1,92 @@
+//! The whole conformance corpus on the `vulkan` backend, against the `cpu` reference.
+
+mod common;
+
+use shadowvol_cpu::CpuBackend;
+use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy};
+use shadowvol_vulkan_geometry::twin::{extract_twin, DeviceFilter};
+use shadowvol_vulkan_geometry::{Options, VulkanBackend};
+
+fn run_corpus(vk: &mut VulkanBackend, test: &str) {
+    let mut cpu = CpuBackend::new();
+    let cases = corpus::cases();
+    assert!(!cases.is_empty());
+    for case in &cases {
+        let scene = case.scene().unwrap();
+        for mode in Accuracy::ALL {
+            let (want, _) = extract_once(&mut cpu, &scene, &case.lights, mode).unwrap();
+            let (got, stats) = extract_once(vk, &scene, &case.lights, mode)
+                .unwrap_or_else(|e| panic!("{test}: {} {mode}: {e}", case.name));
+            assert!(got.silhouettes_consistent(), "{} {mode}", case.name);
+            for l in 0..case.lights.len() {
+                if mode.is_consistent() {
+                    assert_eq!(
+                        invariant::open_vertices_scene(&scene, &got, l),
+                        0,
+                        "{test}: {} {mode} light {l}: open vertices on vulkan",
+                        case.name
+                    );
+                }
+            }
+            if mode == Accuracy::Exact {
+                assert_eq!(
+                    invariant::first_difference(&got, &want),
+                    None,
+                    "{test}: {} exact: vulkan differs from cpu (light, edge, vulkan, cpu); {} uncertain",
+                    case.name,
+                    stats.uncertain
+                );
+            } else {
+                // The f32 modes run the same expression with `precise`; report (not require)
+                // bit equality, since device denormal handling may legitimately differ.
+                let diff: usize = (0..case.lights.len())
+                    .map(|l| invariant::differing_edges(&got, &want, l))
+                    .sum();
+                if diff != 0 {
+                    eprintln!("{test}: {} {mode}: {diff} edges differ from cpu", case.name);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn corpus_on_vulkan_f64_filter() {
+    let Some(mut vk) = common::backend(Options::default(), "corpus_on_vulkan_f64_filter") else {
+        return;
+    };
+    run_corpus(&mut vk, "default filter");
+}
+
+#[test]
+fn corpus_on_vulkan_f32_filter() {
+    let opts = Options {
+        force_f32_filter: true,
+        ..Options::default()
+    };
+    let Some(mut vk) = common::backend(opts, "corpus_on_vulkan_f32_filter") else {
+        return;
+    };
+    assert_eq!(vk.filter(), DeviceFilter::F32);
+    run_corpus(&mut vk, "f32 filter");
+}
+
+#[test]
+fn twin_matches_cpu_on_corpus() {
+    let mut cpu = CpuBackend::new();
+    for case in corpus::cases() {
+        let scene = case.scene().unwrap();
+        for mode in Accuracy::ALL {
+            let (want, _) = extract_once(&mut cpu, &scene, &case.lights, mode).unwrap();
+            for filter in [DeviceFilter::F64, DeviceFilter::F32] {
+                let (got, _) = extract_twin(&scene, &case.lights, mode, filter).unwrap();
+                assert_eq!(
+                    invariant::first_difference(&got, &want),
+                    None,
+                    "{} {mode} {filter:?}",
+                    case.name
+                );
+            }
+        }
+    }
+}
