@@ -1,14 +1,72 @@
-//! The `wgpu` silhouette backend (work in progress: see its issue).
+//! The `wgpu` silhouette backend: WGSL compute shaders, all objects and many lights per dispatch,
+//! all four accuracy modes, and an exact mode that is bit-identical to the `cpu` backend.
+//!
+//! # How it works
+//! * [`SilhouetteBackend::prepare`] concatenates every object of the scene into one
+//!   [`SceneLayout`] (global vertex ids, an edge record `(a, b, first OV, object)` per edge, CSR
+//!   opposite vertices) and uploads it once.
+//! * [`SilhouetteBackend::extract`] uploads only the object-space lights (from
+//!   [`shadowvol_silhouette::object_lights`], an `objects × lights` table) and runs
+//!   `shaders/silhouette.wgsl` once for all objects and up to
+//!   [`WgpuOptions::max_lights_per_dispatch`] lights. One invocation handles one edge for every
+//!   light; it writes the per-edge multiplicity and appends `(edge, m)` to the light's compact
+//!   silhouette list with an atomic counter. The host reads back the list lengths, then the
+//!   lists (and, with [`WgpuOptions::full_readback`], the whole multiplicity buffer). The device
+//!   buffers stay available through [`WgpuBackend::gpu_results`].
+//! * `original`, `robust`, `ordered` evaluate robust-math's `sign_f32` expression operation for
+//!   operation with the canonical-order and parity rules. WGSL cannot forbid FMA contraction, so
+//!   these modes may differ from the CPU in rare last-bit cases; `robust` and `ordered` stay
+//!   consistent (closed chains) either way, because each triangle is still evaluated once, in
+//!   one order, for all its edges.
+//! * `exact` runs a certified filter on the device: `f64` when the device has `SHADER_F64`
+//!   (bound [`cpu_twin::GPU_F64_FILTER_EPS`] = 8 × robust-math's `F64_FILTER_EPS`, margin for
+//!   contraction), else robust-math's `f32` filter (`F32_FILTER_EPS`, with its range checks) plus
+//!   two device guards ([`cpu_twin::GPU_F32_INPUT_MAX`], [`cpu_twin::GPU_F32_PERM_MIN`]).
+//!   Subnormal inputs are never certified. The `(edge, OV, light)` triples the device cannot
+//!   certify go to an append buffer; the host decides them with `orient_exact`, patches the
+//!   values and lists (on the host and on the device) and counts them in
+//!   [`ExtractStats::uncertain`].
+//! * Timings: [`ExtractStats::upload`] is the light/parameter upload (and any buffer
+//!   (re)allocation), `compute` is submit-to-completion of the dispatch (with the list lengths),
+//!   `readback` the copy and mapping of the lists, `host_resolve` the exact decisions and patch.
+//!
+//! [`cpu_twin`] is a CPU port of the kernel with the same loop structure, for pinning down
+//! failures.
+//!
+//! ```no_run
+//! // Needs a wgpu adapter (for example Mesa lavapipe: `apt install mesa-vulkan-drivers`).
+//! use shadowvol_silhouette::{corpus, extract_once, Accuracy, SilhouetteBackend};
+//!
+//! let mut backend = shadowvol_wgpu_compute::create_backend()?;
+//! println!("{}", backend.info().device);
+//! let case = &corpus::cases()[0];
+//! let scene = case.scene().expect("corpus scenes are valid");
+//! let (m, stats) = extract_once(backend.as_mut(), &scene, &case.lights, Accuracy::Exact)?;
+//! println!("silhouette of light 0: {:?}; uncertain: {}", m.silhouette(0), stats.uncertain);
+//! # Ok::<(), shadowvol_silhouette::BackendError>(())
+//! ```
+
+mod backend;
+pub mod cpu_twin;
+mod layout;
+mod resolve;
+pub mod shaders;
+
+pub use backend::{GpuResults, WgpuBackend, WgpuOptions};
+pub use cpu_twin::ExactFilter;
+pub use layout::SceneLayout;
 
 use shadowvol_silhouette::{BackendError, SilhouetteBackend};
 
-/// Starts the `wgpu` backend.
+/// The registry name of this backend.
+pub const NAME: &str = "wgpu";
+
+/// Starts the `wgpu` backend with default options ([`WgpuBackend::new`]).
 ///
 /// # Errors
-/// [`BackendError::Unavailable`] naming what is missing.
+/// [`BackendError::Unavailable`] naming what is missing (no adapter: install a Vulkan driver such
+/// as Mesa's lavapipe, `mesa-vulkan-drivers`), [`BackendError::Build`] if the shaders do not
+/// compile on the device.
 pub fn create_backend() -> Result<Box<dyn SilhouetteBackend>, BackendError> {
-    Err(BackendError::Unavailable {
-        backend: "wgpu",
-        reason: "not implemented in this build yet".to_owned(),
-    })
+    Ok(Box::new(WgpuBackend::new(WgpuOptions::default())?))
 }

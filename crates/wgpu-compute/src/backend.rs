@@ -1,0 +1,1087 @@
+//! The wgpu backend: device set-up, prepare (static buffers), extract (dispatch, readback,
+//! host resolution).
+
+use crate::cpu_twin::{pack_lights, ExactFilter, UncertainRecord};
+use crate::layout::SceneLayout;
+use crate::resolve::{finish_chunk, ChunkOutput, Patch};
+use crate::{shaders, NAME};
+use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::{
+    object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId,
+    SilhouetteBackend, TopologyScene,
+};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, PoisonError};
+use std::time::{Duration, Instant};
+use wgpu::util::DeviceExt;
+
+/// How long one wait for the device may take before it counts as a device failure.
+const WAIT_LIMIT: Duration = Duration::from_secs(600);
+
+/// Options of [`WgpuBackend`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct WgpuOptions {
+    /// Use the `f64` exact filter when the adapter has `SHADER_F64` (default `true`). `false`
+    /// forces the `f32` filter, for testing both paths on one device.
+    pub allow_f64: bool,
+    /// Read back the whole per-edge multiplicity buffer instead of rebuilding the values from the
+    /// compact lists (default `false`). Same result, more bytes moved; for checking the device
+    /// buffer.
+    pub full_readback: bool,
+    /// Most lights per dispatch (default 64); more lights are processed in several dispatches.
+    /// Buffer limits may lower it further.
+    pub max_lights_per_dispatch: usize,
+    /// Initial capacity of the uncertain-triple buffer (default 4096); it grows (and the
+    /// dispatch is repeated) when a dispatch overflows it.
+    pub initial_uncertain_capacity: u32,
+}
+
+impl Default for WgpuOptions {
+    fn default() -> Self {
+        Self {
+            allow_f64: true,
+            full_readback: false,
+            max_lights_per_dispatch: 64,
+            initial_uncertain_capacity: 4096,
+        }
+    }
+}
+
+/// Errors reported by wgpu outside an error scope, and device loss.
+#[derive(Default)]
+struct Health {
+    errors: Mutex<Vec<String>>,
+    lost: Mutex<Option<String>>,
+}
+
+fn device_error(message: impl Into<String>) -> BackendError {
+    BackendError::Device {
+        backend: NAME,
+        message: message.into(),
+    }
+}
+
+fn limit_error(message: String) -> BackendError {
+    BackendError::Limit {
+        backend: NAME,
+        message,
+    }
+}
+
+/// Buffers uploaded once per prepared scene (cheap to clone: wgpu buffers are shared handles).
+#[derive(Clone)]
+struct StaticBuffers {
+    positions: wgpu::Buffer,
+    edges: wgpu::Buffer,
+    ovs: wgpu::Buffer,
+}
+
+/// Per-frame buffers (lights in, results out), reused between frames while they are big enough.
+struct Frame {
+    light_capacity: usize,
+    uncertain_capacity: u32,
+    params: wgpu::Buffer,
+    lights: wgpu::Buffer,
+    mult: wgpu::Buffer,
+    counters: wgpu::Buffer,
+    counters_staging: wgpu::Buffer,
+    silhouettes: wgpu::Buffer,
+    uncertain: wgpu::Buffer,
+    readback: Option<wgpu::Buffer>,
+    bind_group: wgpu::BindGroup,
+}
+
+struct Prepared {
+    scene: TopologyScene,
+    layout: SceneLayout,
+    gpu: Option<StaticBuffers>,
+    frame: Option<Frame>,
+    /// Lights of the last extract whose results the frame buffers hold: `(first, count)`.
+    last: Option<(usize, usize)>,
+}
+
+/// Device-side results of the last [`SilhouetteBackend::extract`] on a prepared scene, for a
+/// renderer that works on the same [`wgpu::Device`] (see [`WgpuBackend::from_device`]).
+///
+/// Layouts (`E` = [`GpuResults::edge_count`], light `l` counted within
+/// `first_light..first_light + light_count`):
+///
+/// * `multiplicities`: `array<i32>`, `m` at `l * E + edge` (global edge index);
+/// * `counters`: `array<u32>`, the length of light `l`'s compact list at `l`; the entry at
+///   `light_count` is the raw number of uncertain triples of the dispatch;
+/// * `silhouettes`: `array<vec2<u32>>`, light `l`'s compact list at `l * E .. l * E + counters[l]`,
+///   entries `(edge, bitcast<u32>(m))` in unspecified order, only `m != 0`;
+/// * `edges`: `array<vec4<u32>>`, `(a, b, first OV slot, object)` with global vertex ids
+///   (object `i`'s ids start at [`SceneLayout::vertex_offsets`]`[i]`), plus a sentinel;
+/// * `positions`: `array<f32>`, object-space `xyz` per global vertex.
+///
+/// In exact mode the host has already patched `multiplicities`, `silhouettes` and the list
+/// lengths with its exact decisions, so they are final. When the call needed several dispatches
+/// (more lights than one dispatch holds), only the last dispatch's lights are on the device.
+#[derive(Debug, Clone, Copy)]
+pub struct GpuResults<'a> {
+    /// Per-edge multiplicities (`i32`).
+    pub multiplicities: &'a wgpu::Buffer,
+    /// Compact-list lengths (`u32`).
+    pub counters: &'a wgpu::Buffer,
+    /// Compact lists (`vec2<u32>`).
+    pub silhouettes: &'a wgpu::Buffer,
+    /// Edge records (`vec4<u32>`).
+    pub edges: &'a wgpu::Buffer,
+    /// Positions (`f32` × 3).
+    pub positions: &'a wgpu::Buffer,
+    /// Number of edges `E` (the stride between lights).
+    pub edge_count: u32,
+    /// Index (in the `extract` call's light list) of the first light held.
+    pub first_light: usize,
+    /// Number of lights held.
+    pub light_count: usize,
+}
+
+/// The wgpu compute backend. See the crate documentation.
+pub struct WgpuBackend {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    adapter: wgpu::AdapterInfo,
+    filter: ExactFilter,
+    options: WgpuOptions,
+    limits: wgpu::Limits,
+    bind_group_layout: wgpu::BindGroupLayout,
+    pipelines: Vec<wgpu::ComputePipeline>,
+    health: Arc<Health>,
+    scenes: HashMap<PreparedId, Prepared>,
+    next: u64,
+}
+
+impl std::fmt::Debug for WgpuBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("WgpuBackend")
+            .field("adapter", &self.adapter.name)
+            .field("backend", &self.adapter.backend)
+            .field("filter", &self.filter)
+            .field("options", &self.options)
+            .field("scenes", &self.scenes.len())
+            .finish_non_exhaustive()
+    }
+}
+
+fn device_type_rank(t: wgpu::DeviceType) -> u8 {
+    match t {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    }
+}
+
+const INSTALL_HINT: &str = "install a Vulkan driver (on Debian/Ubuntu: `apt install mesa-vulkan-drivers libvulkan1` \
+     for the lavapipe CPU implementation, or your GPU vendor's driver); WGPU_BACKEND=vulkan|gl selects the API";
+
+impl WgpuBackend {
+    /// Finds the best adapter (discrete, integrated, virtual, then CPU; Vulkan first), opens a
+    /// device with the adapter's limits and, when available and allowed, `SHADER_F64`, and builds
+    /// the pipelines. `WGPU_BACKEND` and the other wgpu environment variables are honoured.
+    ///
+    /// # Errors
+    /// [`BackendError::Unavailable`] when no adapter with compute shaders exists (naming what to
+    /// install) or the device cannot be opened; [`BackendError::Build`] if a shader fails to
+    /// compile on the device.
+    pub fn new(options: WgpuOptions) -> Result<Self, BackendError> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+        let mut seen = Vec::new();
+        let mut usable: Vec<wgpu::Adapter> = Vec::new();
+        for a in adapters {
+            let info = a.get_info();
+            let compute = a
+                .get_downlevel_capabilities()
+                .flags
+                .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS);
+            seen.push(format!(
+                "{} ({:?}{})",
+                info.name,
+                info.backend,
+                if compute { "" } else { ", no compute shaders" }
+            ));
+            if compute {
+                usable.push(a);
+            }
+        }
+        usable.sort_by_key(|a| {
+            let info = a.get_info();
+            (
+                device_type_rank(info.device_type),
+                u8::from(info.backend != wgpu::Backend::Vulkan),
+            )
+        });
+        let Some(adapter) = usable.into_iter().next() else {
+            let reason = if seen.is_empty() {
+                format!("no GPU adapter found; {INSTALL_HINT}")
+            } else {
+                format!(
+                    "no adapter with compute shaders (found: {}); {INSTALL_HINT}",
+                    seen.join(", ")
+                )
+            };
+            return Err(BackendError::Unavailable {
+                backend: NAME,
+                reason,
+            });
+        };
+        let mut features = wgpu::Features::empty();
+        if options.allow_f64 && adapter.features().contains(wgpu::Features::SHADER_F64) {
+            features |= wgpu::Features::SHADER_F64;
+        }
+        let info = adapter.get_info();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("shadowvol-wgpu-compute"),
+            required_features: features,
+            required_limits: adapter.limits(),
+            experimental_features: wgpu::ExperimentalFeatures::default(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| BackendError::Unavailable {
+            backend: NAME,
+            reason: format!("cannot open a device on {} ({:?}): {e}", info.name, info.backend),
+        })?;
+        Self::from_device(device, queue, options)
+    }
+
+    /// Builds the backend on an existing device (for example the renderer's), so that
+    /// [`WgpuBackend::gpu_results`] can be used by other pipelines on that device. Exact mode uses
+    /// the `f64` filter when the device was opened with `SHADER_F64` and `options.allow_f64`.
+    ///
+    /// This installs an uncaptured-error handler and a device-lost callback on `device`: wgpu
+    /// errors become [`BackendError::Device`] instead of panics.
+    ///
+    /// # Errors
+    /// [`BackendError::Build`] if a shader fails to compile, [`BackendError::Unavailable`] if the
+    /// device's limits cannot hold the kernel's bindings.
+    pub fn from_device(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        options: WgpuOptions,
+    ) -> Result<Self, BackendError> {
+        let health = Arc::new(Health::default());
+        {
+            let h = Arc::clone(&health);
+            device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+                h.errors
+                    .lock()
+                    .unwrap_or_else(PoisonError::into_inner)
+                    .push(e.to_string());
+            }));
+            let h = Arc::clone(&health);
+            device.set_device_lost_callback(move |reason, message| {
+                *h.lost.lock().unwrap_or_else(PoisonError::into_inner) =
+                    Some(format!("device lost ({reason:?}): {message}"));
+            });
+        }
+        let limits = device.limits();
+        if limits.max_storage_buffers_per_shader_stage < 8
+            || limits.max_compute_invocations_per_workgroup < shaders::WORKGROUP_SIZE
+            || limits.max_compute_workgroup_size_x < shaders::WORKGROUP_SIZE
+        {
+            return Err(BackendError::Unavailable {
+                backend: NAME,
+                reason: format!(
+                    "the device allows {} storage buffers per stage and {} invocations per workgroup; the kernel needs 8 and {}",
+                    limits.max_storage_buffers_per_shader_stage,
+                    limits.max_compute_invocations_per_workgroup,
+                    shaders::WORKGROUP_SIZE
+                ),
+            });
+        }
+        let filter = if options.allow_f64 && device.features().contains(wgpu::Features::SHADER_F64) {
+            ExactFilter::F64
+        } else {
+            ExactFilter::F32
+        };
+        let adapter = device.adapter_info();
+        let source = shaders::module_source(filter);
+        let scope = ErrorScopes::push(&device);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("shaders/silhouette.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+        let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("silhouette bindings"),
+            entries: &bind_group_layout_entries(),
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("silhouette"),
+            bind_group_layouts: &[Some(&bind_group_layout)],
+            immediate_size: 0,
+        });
+        let pipelines = Accuracy::ALL
+            .iter()
+            .map(|&mode| {
+                let constants = [(shaders::MODE_CONSTANT, f64::from(shaders::mode_value(mode)))];
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(mode.name()),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some(shaders::ENTRY_POINT),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        zero_initialize_workgroup_memory: false,
+                    },
+                    cache: None,
+                })
+            })
+            .collect();
+        if let Some(e) = scope.pop() {
+            return Err(BackendError::Build {
+                backend: NAME,
+                what: format!(
+                    "shaders/silhouette.wgsl ({} exact filter)",
+                    filter.name()
+                ),
+                log: e,
+            });
+        }
+        let backend = Self {
+            device,
+            queue,
+            adapter,
+            filter,
+            options,
+            limits,
+            bind_group_layout,
+            pipelines,
+            health,
+            scenes: HashMap::new(),
+            next: 0,
+        };
+        backend.check_health()?;
+        Ok(backend)
+    }
+
+    /// The exact-mode filter this device runs.
+    #[must_use]
+    pub fn exact_filter(&self) -> ExactFilter {
+        self.filter
+    }
+
+    /// The adapter in use.
+    #[must_use]
+    pub fn adapter_info(&self) -> &wgpu::AdapterInfo {
+        &self.adapter
+    }
+
+    /// The device (for sharing results with a renderer).
+    #[must_use]
+    pub fn device(&self) -> &wgpu::Device {
+        &self.device
+    }
+
+    /// The queue of [`WgpuBackend::device`].
+    #[must_use]
+    pub fn queue(&self) -> &wgpu::Queue {
+        &self.queue
+    }
+
+    /// The flat layout of a prepared scene (global vertex ids, edge records), as uploaded.
+    #[must_use]
+    pub fn layout(&self, id: PreparedId) -> Option<&SceneLayout> {
+        self.scenes.get(&id).map(|p| &p.layout)
+    }
+
+    /// The device buffers holding the results of the last `extract` on `id` (see
+    /// [`GpuResults`] for their layouts), or `None` before the first extract, for an unknown id,
+    /// or for a scene without edges.
+    #[must_use]
+    pub fn gpu_results(&self, id: PreparedId) -> Option<GpuResults<'_>> {
+        let p = self.scenes.get(&id)?;
+        let (first_light, light_count) = p.last?;
+        let gpu = p.gpu.as_ref()?;
+        let frame = p.frame.as_ref()?;
+        Some(GpuResults {
+            multiplicities: &frame.mult,
+            counters: &frame.counters,
+            silhouettes: &frame.silhouettes,
+            edges: &gpu.edges,
+            positions: &gpu.positions,
+            edge_count: p.layout.edge_count() as u32,
+            first_light,
+            light_count,
+        })
+    }
+
+    fn check_health(&self) -> Result<(), BackendError> {
+        if let Some(lost) = self
+            .health
+            .lost
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .clone()
+        {
+            return Err(device_error(lost));
+        }
+        let mut errors = self
+            .health
+            .errors
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        if errors.is_empty() {
+            Ok(())
+        } else {
+            let message = errors.join("; ");
+            errors.clear();
+            Err(device_error(message))
+        }
+    }
+
+    fn wait(&self, index: wgpu::SubmissionIndex) -> Result<(), BackendError> {
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(index),
+                timeout: Some(WAIT_LIMIT),
+            })
+            .map_err(|e| device_error(format!("waiting for the device: {e}")))?;
+        self.check_health()
+    }
+
+    /// Maps `buffer[0..size]` for reading and hands the bytes to `f`.
+    fn read_mapped<T>(
+        &self,
+        buffer: &wgpu::Buffer,
+        size: u64,
+        f: impl FnOnce(&[u8]) -> T,
+    ) -> Result<T, BackendError> {
+        let slot = Arc::new(Mutex::new(None));
+        let s = Arc::clone(&slot);
+        buffer.map_async(wgpu::MapMode::Read, 0..size, move |r| {
+            *s.lock().unwrap_or_else(PoisonError::into_inner) = Some(r);
+        });
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: Some(WAIT_LIMIT),
+            })
+            .map_err(|e| device_error(format!("waiting for a buffer mapping: {e}")))?;
+        self.check_health()?;
+        let state = slot.lock().unwrap_or_else(PoisonError::into_inner).take();
+        match state {
+            Some(Ok(())) => {}
+            Some(Err(e)) => return Err(device_error(format!("mapping a readback buffer: {e}"))),
+            None => return Err(device_error("a readback mapping did not complete")),
+        }
+        let result = {
+            let view = buffer
+                .get_mapped_range(0..size)
+                .map_err(|e| device_error(format!("reading a mapped buffer: {e}")))?;
+            f(&view)
+        };
+        buffer.unmap();
+        Ok(result)
+    }
+
+    fn check_buffer(&self, what: &str, bytes: u64, binding: bool) -> Result<(), BackendError> {
+        let max_binding = self.limits.max_storage_buffer_binding_size;
+        let max_buffer = self.limits.max_buffer_size;
+        if bytes > max_buffer || (binding && bytes > max_binding) {
+            return Err(limit_error(format!(
+                "{what} needs {bytes} bytes, but the device allows buffers of {max_buffer} bytes and storage bindings of {max_binding} bytes"
+            )));
+        }
+        Ok(())
+    }
+
+    /// Lights per dispatch for a scene of `edges` edges and `objects` objects.
+    fn lights_per_dispatch(&self, edges: u64, objects: u64, lights: usize) -> Result<usize, BackendError> {
+        let max_binding = self.limits.max_storage_buffer_binding_size;
+        let max_buffer = self.limits.max_buffer_size;
+        let list = edges * 8;
+        let readback = list + if self.options.full_readback { edges * 4 } else { 0 };
+        let by_list = max_binding.min(max_buffer) / list;
+        let by_readback = max_buffer / readback.max(1);
+        let by_lights = max_binding.min(max_buffer) / (objects * 16).max(1);
+        let n = by_list
+            .min(by_readback)
+            .min(by_lights)
+            .min(self.options.max_lights_per_dispatch.max(1) as u64)
+            .min(lights as u64);
+        if n == 0 {
+            return Err(limit_error(format!(
+                "one light needs a {list}-byte compact list for {edges} edges and {} bytes of object-space lights for {objects} objects, but the device allows storage bindings of {max_binding} bytes and buffers of {max_buffer} bytes",
+                objects * 16
+            )));
+        }
+        Ok(n as usize)
+    }
+
+    fn create_frame(
+        &self,
+        gpu: &StaticBuffers,
+        edges: u64,
+        objects: u64,
+        light_capacity: usize,
+        uncertain_capacity: u32,
+    ) -> Result<Frame, BackendError> {
+        let lc = light_capacity as u64;
+        let uncertain_bytes = u64::from(uncertain_capacity.max(1)) * 16;
+        self.check_buffer("the uncertain-triple buffer", uncertain_bytes, true)?;
+        let storage = |label: &str, size: u64, extra: wgpu::BufferUsages| {
+            self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC
+                    | extra,
+                mapped_at_creation: false,
+            })
+        };
+        let params = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("params"),
+            size: 16,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let lights = storage("object lights", objects * lc * 16, wgpu::BufferUsages::empty());
+        let mult = storage("multiplicities", edges * lc * 4, wgpu::BufferUsages::VERTEX);
+        let counters_bytes = (lc + 1) * 4;
+        let counters = storage("counters", counters_bytes, wgpu::BufferUsages::empty());
+        let counters_staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("counters staging"),
+            size: counters_bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let silhouettes = storage("silhouettes", edges * lc * 8, wgpu::BufferUsages::VERTEX);
+        let uncertain = storage("uncertain", uncertain_bytes, wgpu::BufferUsages::empty());
+        let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("silhouette"),
+            layout: &self.bind_group_layout,
+            entries: &[
+                entry(0, &params),
+                entry(1, &gpu.positions),
+                entry(2, &gpu.edges),
+                entry(3, &gpu.ovs),
+                entry(4, &lights),
+                entry(5, &mult),
+                entry(6, &counters),
+                entry(7, &silhouettes),
+                entry(8, &uncertain),
+            ],
+        });
+        Ok(Frame {
+            light_capacity,
+            uncertain_capacity,
+            params,
+            lights,
+            mult,
+            counters,
+            counters_staging,
+            silhouettes,
+            uncertain,
+            readback: None,
+            bind_group,
+        })
+    }
+}
+
+fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: buffer.as_entire_binding(),
+    }
+}
+
+fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 9] {
+    let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    [
+        wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: wgpu::BufferSize::new(16),
+            },
+            count: None,
+        },
+        storage(1, true),
+        storage(2, true),
+        storage(3, true),
+        storage(4, true),
+        storage(5, false),
+        storage(6, false),
+        storage(7, false),
+        storage(8, false),
+    ]
+}
+
+/// Out-of-memory, validation and internal error scopes around a block of wgpu calls.
+struct ErrorScopes {
+    scopes: Vec<wgpu::ErrorScopeGuard>,
+}
+
+impl ErrorScopes {
+    fn push(device: &wgpu::Device) -> Self {
+        Self {
+            scopes: vec![
+                device.push_error_scope(wgpu::ErrorFilter::OutOfMemory),
+                device.push_error_scope(wgpu::ErrorFilter::Validation),
+                device.push_error_scope(wgpu::ErrorFilter::Internal),
+            ],
+        }
+    }
+
+    /// Pops the scopes (innermost first) and returns the captured errors, if any.
+    fn pop(mut self) -> Option<String> {
+        let mut errors = Vec::new();
+        while let Some(scope) = self.scopes.pop() {
+            if let Some(e) = pollster::block_on(scope.pop()) {
+                errors.push(match &e {
+                    wgpu::Error::OutOfMemory { .. } => "out of device memory".to_owned(),
+                    other => other.to_string(),
+                });
+            }
+        }
+        (!errors.is_empty()).then(|| errors.join("; "))
+    }
+}
+
+fn read_u32s(bytes: &[u8]) -> impl Iterator<Item = u32> + '_ {
+    bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+}
+
+impl SilhouetteBackend for WgpuBackend {
+    fn info(&self) -> BackendInfo {
+        BackendInfo {
+            name: NAME,
+            device: format!(
+                "{} ({:?}, {:?}; driver {} {})",
+                self.adapter.name,
+                self.adapter.backend,
+                self.adapter.device_type,
+                self.adapter.driver,
+                self.adapter.driver_info
+            )
+            .replace(" ;", ";")
+            .trim_end()
+            .to_owned(),
+            modes: Accuracy::ALL.to_vec(),
+            max_lights: None,
+            details: vec![
+                ("exact_filter".to_owned(), self.filter.name().to_owned()),
+                (
+                    "shader_f64".to_owned(),
+                    self.device
+                        .features()
+                        .contains(wgpu::Features::SHADER_F64)
+                        .to_string(),
+                ),
+                (
+                    "workgroup_size".to_owned(),
+                    shaders::WORKGROUP_SIZE.to_string(),
+                ),
+                (
+                    "max_lights_per_dispatch".to_owned(),
+                    self.options.max_lights_per_dispatch.to_string(),
+                ),
+                (
+                    "max_storage_buffer_binding_size".to_owned(),
+                    self.limits.max_storage_buffer_binding_size.to_string(),
+                ),
+                (
+                    "readback".to_owned(),
+                    if self.options.full_readback {
+                        "full"
+                    } else {
+                        "compact"
+                    }
+                    .to_owned(),
+                ),
+            ],
+        }
+    }
+
+    fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
+        self.check_health()?;
+        let layout = SceneLayout::build(scene)?;
+        let gpu = if layout.edge_count() == 0 {
+            None
+        } else {
+            let positions = bytemuck::cast_slice::<f32, u8>(&layout.positions);
+            let edges = bytemuck::cast_slice::<[u32; 4], u8>(&layout.edges);
+            let ovs = bytemuck::cast_slice::<u32, u8>(&layout.ovs);
+            self.check_buffer("the positions", positions.len() as u64, true)?;
+            self.check_buffer("the edge records", edges.len() as u64, true)?;
+            self.check_buffer("the opposite vertices", ovs.len() as u64, true)?;
+            let scope = ErrorScopes::push(&self.device);
+            let init = |label: &str, contents: &[u8]| {
+                self.device
+                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some(label),
+                        contents,
+                        usage: wgpu::BufferUsages::STORAGE
+                            | wgpu::BufferUsages::COPY_SRC
+                            | wgpu::BufferUsages::VERTEX,
+                    })
+            };
+            let buffers = StaticBuffers {
+                positions: init("positions", positions),
+                edges: init("edges", edges),
+                ovs: init("opposite vertices", ovs),
+            };
+            if let Some(e) = scope.pop() {
+                return Err(device_error(format!("uploading the scene: {e}")));
+            }
+            Some(buffers)
+        };
+        self.check_health()?;
+        let id = PreparedId(self.next);
+        self.next += 1;
+        self.scenes.insert(
+            id,
+            Prepared {
+                scene: scene.clone(),
+                layout,
+                gpu,
+                frame: None,
+                last: None,
+            },
+        );
+        Ok(id)
+    }
+
+    fn extract(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        self.check_health()?;
+        let Some(mut prepared) = self.scenes.remove(&id) else {
+            return Err(BackendError::UnknownScene { backend: NAME, id });
+        };
+        let result = self.extract_prepared(&mut prepared, lights, mode, out);
+        self.scenes.insert(id, prepared);
+        result
+    }
+
+    fn release(&mut self, id: PreparedId) {
+        self.scenes.remove(&id);
+    }
+}
+
+impl WgpuBackend {
+    fn extract_prepared(
+        &self,
+        p: &mut Prepared,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        if lights.is_empty() {
+            return Err(BackendError::InvalidInput("no lights given".to_owned()));
+        }
+        let mut stats = ExtractStats::default();
+        let edge_count = p.layout.edge_count();
+        out.reset(edge_count, lights.len());
+        p.last = None;
+        let Some(gpu) = p.gpu.clone() else {
+            // No edges: nothing to compute, every list is empty.
+            return Ok(stats);
+        };
+        let t_upload = Instant::now();
+        let obj_lights = object_lights(&p.scene, lights);
+        let edges = edge_count as u64;
+        let objects = p.layout.object_count() as u64;
+        let per_dispatch = self.lights_per_dispatch(edges, objects, lights.len())?;
+        let needs_new_frame = p
+            .frame
+            .as_ref()
+            .is_none_or(|f| f.light_capacity < per_dispatch);
+        if needs_new_frame {
+            let capacity = self.options.initial_uncertain_capacity;
+            let scope = ErrorScopes::push(&self.device);
+            let frame = self.create_frame(&gpu, edges, objects, per_dispatch, capacity);
+            if let Some(e) = scope.pop() {
+                return Err(device_error(format!("allocating frame buffers: {e}")));
+            }
+            p.frame = Some(frame?);
+        }
+        stats.upload += t_upload.elapsed();
+        let pipeline = &self.pipelines[shaders::mode_value(mode) as usize];
+        let mut first = 0;
+        while first < lights.len() {
+            let count = per_dispatch.min(lights.len() - first);
+            let last_chunk = first + count == lights.len();
+            let packed = pack_lights(&obj_lights, first, count);
+            let scope = ErrorScopes::push(&self.device);
+            let r = self.run_chunk(p, &gpu, pipeline, &packed, first, count, last_chunk, out, &mut stats);
+            if let Some(e) = scope.pop() {
+                return Err(device_error(e));
+            }
+            r?;
+            first += count;
+        }
+        let last_count = if lights.len() % per_dispatch == 0 {
+            per_dispatch
+        } else {
+            lights.len() % per_dispatch
+        };
+        p.last = Some((lights.len() - last_count, last_count));
+        Ok(stats)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn run_chunk(
+        &self,
+        p: &mut Prepared,
+        gpu: &StaticBuffers,
+        pipeline: &wgpu::ComputePipeline,
+        packed: &[[f32; 4]],
+        first: usize,
+        count: usize,
+        last_chunk: bool,
+        out: &mut Multiplicities,
+        stats: &mut ExtractStats,
+    ) -> Result<(), BackendError> {
+        let edge_count = p.layout.edge_count();
+        let edges = edge_count as u64;
+        let objects = p.layout.object_count() as u64;
+        // ---- upload: lights and parameters
+        let t = Instant::now();
+        {
+            let frame = p.frame.as_ref().ok_or_else(|| device_error("no frame buffers"))?;
+            self.queue
+                .write_buffer(&frame.lights, 0, bytemuck::cast_slice(packed));
+        }
+        stats.upload += t.elapsed();
+
+        // ---- compute (repeated with a bigger uncertain buffer if it overflowed)
+        let groups = edge_count.div_ceil(shaders::WORKGROUP_SIZE as usize) as u64;
+        let max_dim = u64::from(self.limits.max_compute_workgroups_per_dimension);
+        let gx = groups.min(max_dim);
+        let gy = groups.div_ceil(gx);
+        if gy > max_dim {
+            return Err(limit_error(format!(
+                "{edge_count} edges need {groups} workgroups; the device allows {max_dim} x {max_dim}"
+            )));
+        }
+        let counts: Vec<u32> = loop {
+            let t = Instant::now();
+            let frame = p.frame.as_ref().ok_or_else(|| device_error("no frame buffers"))?;
+            let params = [edge_count as u32, count as u32, frame.uncertain_capacity, 0];
+            self.queue
+                .write_buffer(&frame.params, 0, bytemuck::cast_slice(&params));
+            stats.upload += t.elapsed();
+            let t = Instant::now();
+            let counters_bytes = (count as u64 + 1) * 4;
+            let mut encoder = self
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("extract"),
+                });
+            encoder.clear_buffer(&frame.counters, 0, Some(counters_bytes));
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("silhouette"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, &frame.bind_group, &[]);
+                pass.dispatch_workgroups(gx as u32, gy as u32, 1);
+            }
+            encoder.copy_buffer_to_buffer(
+                &frame.counters,
+                0,
+                &frame.counters_staging,
+                0,
+                counters_bytes,
+            );
+            let index = self.queue.submit([encoder.finish()]);
+            self.wait(index)?;
+            let counts: Vec<u32> =
+                self.read_mapped(&frame.counters_staging, counters_bytes, |b| read_u32s(b).collect())?;
+            stats.compute += t.elapsed();
+            let uncertain = counts[count];
+            if uncertain <= frame.uncertain_capacity {
+                break counts;
+            }
+            // Overflow: grow the uncertain buffer and run the dispatch again.
+            let t = Instant::now();
+            let capacity = uncertain.checked_next_power_of_two().unwrap_or(uncertain);
+            let light_capacity = frame.light_capacity;
+            let frame = self.create_frame(gpu, edges, objects, light_capacity, capacity)?;
+            p.frame = Some(frame);
+            stats.upload += t.elapsed();
+        };
+        let frame = p.frame.as_mut().ok_or_else(|| device_error("no frame buffers"))?;
+        let uncertain_count = counts[count] as usize;
+        stats.uncertain += uncertain_count as u64;
+
+        // ---- readback: compact lists, uncertain records, optionally the full values
+        let t = Instant::now();
+        let list_bytes: Vec<u64> = counts[..count].iter().map(|&c| u64::from(c) * 8).collect();
+        let lists_total: u64 = list_bytes.iter().sum();
+        let uncertain_bytes = uncertain_count as u64 * 16;
+        let mult_bytes = if self.options.full_readback {
+            edges * count as u64 * 4
+        } else {
+            0
+        };
+        let total = lists_total + uncertain_bytes + mult_bytes;
+        let mut chunk = ChunkOutput {
+            mult: None,
+            lists: vec![Vec::new(); count],
+            uncertain: Vec::new(),
+        };
+        if total > 0 {
+            if frame.readback.as_ref().is_none_or(|b| b.size() < total) {
+                self.check_buffer("the readback buffer", total, false)?;
+                frame.readback = Some(self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("readback"),
+                    size: total.next_power_of_two().min(self.limits.max_buffer_size).max(total),
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }));
+            }
+            let readback = frame.readback.as_ref().ok_or_else(|| device_error("no readback buffer"))?;
+            let mut encoder = self
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("readback"),
+                });
+            let mut offset = 0;
+            for (li, &bytes) in list_bytes.iter().enumerate() {
+                if bytes > 0 {
+                    encoder.copy_buffer_to_buffer(
+                        &frame.silhouettes,
+                        li as u64 * edges * 8,
+                        readback,
+                        offset,
+                        bytes,
+                    );
+                    offset += bytes;
+                }
+            }
+            if uncertain_bytes > 0 {
+                encoder.copy_buffer_to_buffer(&frame.uncertain, 0, readback, offset, uncertain_bytes);
+                offset += uncertain_bytes;
+            }
+            if mult_bytes > 0 {
+                encoder.copy_buffer_to_buffer(&frame.mult, 0, readback, offset, mult_bytes);
+            }
+            let index = self.queue.submit([encoder.finish()]);
+            self.wait(index)?;
+            self.read_mapped(readback, total, |bytes| {
+                let mut at = 0usize;
+                for (li, &b) in list_bytes.iter().enumerate() {
+                    let b = b as usize;
+                    let words: Vec<u32> = read_u32s(&bytes[at..at + b]).collect();
+                    chunk.lists[li] = words
+                        .chunks_exact(2)
+                        .map(|w| (w[0], w[1] as i32))
+                        .collect();
+                    at += b;
+                }
+                let words: Vec<u32> = read_u32s(&bytes[at..at + uncertain_bytes as usize]).collect();
+                chunk.uncertain = words
+                    .chunks_exact(4)
+                    .map(|w| UncertainRecord {
+                        edge: w[0],
+                        ov_slot: w[1],
+                        light: w[2],
+                    })
+                    .collect();
+                at += uncertain_bytes as usize;
+                if mult_bytes > 0 {
+                    chunk.mult = Some(
+                        read_u32s(&bytes[at..at + mult_bytes as usize])
+                            .map(|w| w as i32)
+                            .collect(),
+                    );
+                }
+            })?;
+        } else if self.options.full_readback {
+            chunk.mult = Some(vec![0; edge_count * count]);
+        }
+        stats.readback += t.elapsed();
+
+        // ---- host: exact decisions for uncertain triples, then patch the device copy
+        let t = Instant::now();
+        validate_chunk(&chunk, &p.layout, count)?;
+        let patch = finish_chunk(&p.layout, packed, count, first, chunk, out);
+        if last_chunk {
+            self.apply_patch(frame, edges, &patch);
+        }
+        stats.host_resolve += t.elapsed();
+        Ok(())
+    }
+
+    /// Writes the host's exact decisions into the device buffers, so that [`GpuResults`] is final.
+    fn apply_patch(&self, frame: &Frame, edges: u64, patch: &Patch) {
+        if patch.mult.is_empty() && patch.lists.is_empty() {
+            return;
+        }
+        for &(li, e, m) in &patch.mult {
+            self.queue.write_buffer(
+                &frame.mult,
+                (u64::from(li) * edges + u64::from(e)) * 4,
+                bytemuck::bytes_of(&m),
+            );
+        }
+        for (li, list) in &patch.lists {
+            let words: Vec<u32> = list.iter().flat_map(|&(e, m)| [e, m as u32]).collect();
+            if !words.is_empty() {
+                self.queue.write_buffer(
+                    &frame.silhouettes,
+                    u64::from(*li) * edges * 8,
+                    bytemuck::cast_slice(&words),
+                );
+            }
+            let len = list.len() as u32;
+            self.queue
+                .write_buffer(&frame.counters, u64::from(*li) * 4, bytemuck::bytes_of(&len));
+        }
+        // Flush the staged writes.
+        self.queue.submit(std::iter::empty::<wgpu::CommandBuffer>());
+    }
+}
+
+/// Rejects device output that cannot be right (an index out of range), instead of panicking.
+fn validate_chunk(chunk: &ChunkOutput, layout: &SceneLayout, lights: usize) -> Result<(), BackendError> {
+    let edges = layout.edge_count();
+    for (li, list) in chunk.lists.iter().enumerate() {
+        if let Some(&(e, m)) = list.iter().find(|&&(e, m)| e as usize >= edges || m == 0) {
+            return Err(device_error(format!(
+                "the device returned an invalid silhouette entry (edge {e}, m {m}) for light {li}"
+            )));
+        }
+    }
+    if let Some(r) = chunk
+        .uncertain
+        .iter()
+        .find(|r| {
+            r.edge as usize >= edges
+                || !layout.ov_slots(r.edge as usize).contains(&(r.ov_slot as usize))
+                || r.light as usize >= lights
+        })
+    {
+        return Err(device_error(format!(
+            "the device returned an invalid uncertain record {r:?}"
+        )));
+    }
+    Ok(())
+}

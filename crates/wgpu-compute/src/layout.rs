@@ -1,0 +1,111 @@
+//! The flat, all-objects-concatenated buffer layout the kernel reads (built once per prepare).
+
+use shadowvol_silhouette::{BackendError, TopologyScene};
+
+/// The scene as the kernel sees it: every object's tables concatenated, with vertex ids made
+/// global (object `i`'s compact ids plus `vertex_offsets[i]`).
+///
+/// Adding a per-object constant keeps the order of ids within an object, so the canonical
+/// triangle order and its parity (robust and ordered modes) are the same as on the CPU.
+///
+/// | buffer | element | meaning |
+/// |---|---|---|
+/// | [`SceneLayout::positions`] | `f32` ×3 | object-space xyz per global vertex |
+/// | [`SceneLayout::edges`] | `[u32; 4]` | `(a, b, first OV slot, object)`, plus one sentinel whose third value is the OV count |
+/// | [`SceneLayout::ovs`] | `u32` | opposite vertices (global ids), CSR by edge |
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SceneLayout {
+    /// Object-space positions, `3 * vertex_count` values.
+    pub positions: Vec<f32>,
+    /// Edge records `(a, b, ov_begin, object)`, `edge_count + 1` entries (the last is a sentinel
+    /// `(0, 0, ov_count, 0)`, so edge `e`'s OVs are slots `edges[e][2]..edges[e + 1][2]`).
+    pub edges: Vec<[u32; 4]>,
+    /// Opposite vertices (global vertex ids).
+    pub ovs: Vec<u32>,
+    /// First global vertex id of each object; `object_count + 1` entries.
+    pub vertex_offsets: Vec<u32>,
+    /// First global edge of each object; `object_count + 1` entries.
+    pub edge_offsets: Vec<usize>,
+}
+
+fn to_u32(what: &str, n: usize) -> Result<u32, BackendError> {
+    u32::try_from(n).map_err(|_| BackendError::Limit {
+        backend: crate::NAME,
+        message: format!("the scene has {n} {what}; the wgpu kernel indexes them with u32 (at most {})", u32::MAX),
+    })
+}
+
+impl SceneLayout {
+    /// Concatenates the objects of `scene`.
+    ///
+    /// # Errors
+    /// [`BackendError::Limit`] when the scene has more than `u32::MAX - 1` vertices, edges or
+    /// opposite vertices in total.
+    pub fn build(scene: &TopologyScene) -> Result<Self, BackendError> {
+        let vertices = scene.total_vertices();
+        let edges = scene.total_edges();
+        let ovs = scene.total_ovs();
+        to_u32("vertices", vertices)?;
+        to_u32("edges", edges + 1)?;
+        to_u32("opposite vertices", ovs)?;
+        to_u32("objects", scene.objects.len())?;
+        let mut layout = Self {
+            positions: Vec::with_capacity(3 * vertices),
+            edges: Vec::with_capacity(edges + 1),
+            ovs: Vec::with_capacity(ovs),
+            vertex_offsets: Vec::with_capacity(scene.objects.len() + 1),
+            edge_offsets: scene.edge_offsets(),
+        };
+        let mut vbase = 0u32;
+        let mut obase = 0u32;
+        layout.vertex_offsets.push(0);
+        for (object, o) in scene.objects.iter().enumerate() {
+            let t = &o.table;
+            layout
+                .positions
+                .extend(t.positions.iter().flat_map(|p| p.to_array()));
+            for (e, &[a, b]) in t.edges.iter().enumerate() {
+                layout
+                    .edges
+                    .push([a + vbase, b + vbase, t.ov_offsets[e] + obase, object as u32]);
+            }
+            layout.ovs.extend(t.ovs.iter().map(|&v| v + vbase));
+            vbase += t.positions.len() as u32;
+            obase += t.ovs.len() as u32;
+            layout.vertex_offsets.push(vbase);
+        }
+        layout.edges.push([0, 0, obase, 0]);
+        Ok(layout)
+    }
+
+    /// Number of edges (without the sentinel).
+    #[must_use]
+    pub fn edge_count(&self) -> usize {
+        self.edges.len().saturating_sub(1)
+    }
+
+    /// Number of objects.
+    #[must_use]
+    pub fn object_count(&self) -> usize {
+        self.vertex_offsets.len().saturating_sub(1)
+    }
+
+    /// The object-space position of global vertex `id`.
+    ///
+    /// # Panics
+    /// Panics if `id` is out of range.
+    #[must_use]
+    pub fn position(&self, id: u32) -> [f32; 3] {
+        let i = id as usize * 3;
+        [self.positions[i], self.positions[i + 1], self.positions[i + 2]]
+    }
+
+    /// The OV slots of global edge `e` (indices into [`SceneLayout::ovs`]).
+    ///
+    /// # Panics
+    /// Panics if `e >= self.edge_count()`.
+    #[must_use]
+    pub fn ov_slots(&self, e: usize) -> std::ops::Range<usize> {
+        self.edges[e][2] as usize..self.edges[e + 1][2] as usize
+    }
+}

@@ -1,0 +1,92 @@
+//! Host side of a dispatch: fill [`Multiplicities`] from the device's output and decide the
+//! uncertain triples exactly. Shared by the wgpu backend and the CPU twin.
+
+use crate::cpu_twin::UncertainRecord;
+use crate::layout::SceneLayout;
+use shadowvol_robust_math::orient_exact;
+use shadowvol_silhouette::Multiplicities;
+
+/// The device output of one dispatch (a chunk of lights).
+pub(crate) struct ChunkOutput {
+    /// Full per-edge values `[light * edge_count + edge]`, when read back.
+    pub mult: Option<Vec<i32>>,
+    /// Per light, the compact list `(edge, m)`, any order.
+    pub lists: Vec<Vec<(u32, i32)>>,
+    /// Uncertain triples.
+    pub uncertain: Vec<UncertainRecord>,
+}
+
+/// What the host changed: the device buffers must be patched the same way.
+#[derive(Debug, Default)]
+pub(crate) struct Patch {
+    /// `(light within chunk, edge, final m)` for every edge an uncertain triple touched.
+    pub mult: Vec<(u32, u32, i32)>,
+    /// `(light within chunk, final compact list)` for every light whose list changed.
+    pub lists: Vec<(u32, Vec<(u32, i32)>)>,
+}
+
+/// Writes one chunk into `out` (lights `first..first + light_count`), resolves its uncertain
+/// triples with `orient_exact` on the same object-space `f32` inputs, fixes the compact lists and
+/// returns the patch.
+pub(crate) fn finish_chunk(
+    layout: &SceneLayout,
+    packed_lights: &[[f32; 4]],
+    light_count: usize,
+    first: usize,
+    chunk: ChunkOutput,
+    out: &mut Multiplicities,
+) -> Patch {
+    let edge_count = layout.edge_count();
+    let ChunkOutput {
+        mult,
+        mut lists,
+        mut uncertain,
+    } = chunk;
+    for (li, list) in lists.iter().enumerate() {
+        let values = out.values_mut(first + li);
+        match &mult {
+            Some(m) => values.copy_from_slice(&m[li * edge_count..(li + 1) * edge_count]),
+            None => {
+                for &(e, m) in list {
+                    values[e as usize] = m;
+                }
+            }
+        }
+    }
+    let mut patch = Patch::default();
+    if !uncertain.is_empty() {
+        uncertain.sort_unstable_by_key(|r| (r.light, r.edge, r.ov_slot));
+        for r in &uncertain {
+            let [ia, ib, _, object] = layout.edges[r.edge as usize];
+            let io = layout.ovs[r.ov_slot as usize];
+            let l = packed_lights[object as usize * light_count + r.light as usize];
+            let s = orient_exact(layout.position(ia), layout.position(ib), l, layout.position(io));
+            out.values_mut(first + r.light as usize)[r.edge as usize] += i32::from(s);
+        }
+        let mut touched: Vec<(u32, u32)> = uncertain.iter().map(|r| (r.light, r.edge)).collect();
+        touched.dedup();
+        for &(li, e) in &touched {
+            patch
+                .mult
+                .push((li, e, out.values(first + li as usize)[e as usize]));
+        }
+        for group in touched.chunk_by(|x, y| x.0 == y.0) {
+            let li = group[0].0;
+            let list = &mut lists[li as usize];
+            // `group` is sorted by edge: binary search decides membership.
+            list.retain(|(e, _)| group.binary_search(&(li, *e)).is_err());
+            let values = out.values(first + li as usize);
+            list.extend(
+                group
+                    .iter()
+                    .map(|&(_, e)| (e, values[e as usize]))
+                    .filter(|&(_, m)| m != 0),
+            );
+            patch.lists.push((li, list.clone()));
+        }
+    }
+    for (li, list) in lists.into_iter().enumerate() {
+        out.set_silhouette(first + li, list.into_iter().map(|(e, _)| e).collect());
+    }
+    patch
+}

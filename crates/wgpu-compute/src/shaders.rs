@@ -1,0 +1,64 @@
+//! The WGSL sources (from the workspace's `shaders/` folder) and how modules are composed.
+
+use crate::cpu_twin::ExactFilter;
+
+/// `shaders/silhouette.wgsl`: the kernel, complete with the `f32` exact filter.
+pub const SILHOUETTE_WGSL: &str = include_str!("../../../shaders/silhouette.wgsl");
+
+/// `shaders/exact_f64.wgsl`: the `f64` exact filter, appended for devices with `SHADER_F64`.
+pub const EXACT_F64_WGSL: &str = include_str!("../../../shaders/exact_f64.wgsl");
+
+/// Every WGSL file of this crate as `(file name, source)`; each is a valid module on its own.
+pub const FILES: [(&str, &str); 2] = [
+    ("silhouette.wgsl", SILHOUETTE_WGSL),
+    ("exact_f64.wgsl", EXACT_F64_WGSL),
+];
+
+/// The kernel's entry point.
+pub const ENTRY_POINT: &str = "extract";
+
+/// The pipeline-overridable constant that selects the mode (0 original, 1 robust, 2 ordered,
+/// 3 exact).
+pub const MODE_CONSTANT: &str = "MODE";
+
+/// Threads per workgroup (`WORKGROUP_SIZE` in the kernel).
+pub const WORKGROUP_SIZE: u32 = 256;
+
+const F32_CALL: &str = "return filter_f32(a, b, l, o); // @exact-filter";
+const F64_CALL: &str = "return filter_f64(a, b, l, o); // @exact-filter";
+
+/// The module source the backend compiles for `filter`: the kernel as is for
+/// [`ExactFilter::F32`]; for [`ExactFilter::F64`], the kernel with its marked filter call
+/// switched to `filter_f64` and `exact_f64.wgsl` appended.
+///
+/// # Panics
+/// Panics if the marker line is missing from the kernel (a test checks that it is there once).
+#[must_use]
+pub fn module_source(filter: ExactFilter) -> String {
+    match filter {
+        ExactFilter::F32 => SILHOUETTE_WGSL.to_owned(),
+        ExactFilter::F64 => {
+            assert_eq!(
+                SILHOUETTE_WGSL.matches(F32_CALL).count(),
+                1,
+                "shaders/silhouette.wgsl must contain the marked filter call exactly once"
+            );
+            let mut s = SILHOUETTE_WGSL.replace(F32_CALL, F64_CALL);
+            s.push('\n');
+            s.push_str(EXACT_F64_WGSL);
+            s
+        }
+    }
+}
+
+/// The `MODE` value of an accuracy mode.
+#[must_use]
+pub fn mode_value(mode: shadowvol_robust_math::Accuracy) -> u32 {
+    use shadowvol_robust_math::Accuracy;
+    match mode {
+        Accuracy::Original => 0,
+        Accuracy::Robust => 1,
+        Accuracy::Ordered => 2,
+        Accuracy::Exact => 3,
+    }
+}

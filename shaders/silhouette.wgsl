@@ -1,0 +1,252 @@
+// Silhouette multiplicities for every edge of a prepared scene, for many lights, in one dispatch.
+//
+// Part of shadowvol-wgpu-compute (crates/wgpu-compute). The CPU twin of this kernel is
+// `shadowvol_wgpu_compute::cpu_twin`: keep the two in step.
+//
+// One invocation = one global edge (all objects concatenated). It loops over the lights of the
+// dispatch and over the edge's opposite vertices (OVs), sums the signs into m, writes m to
+// `mult[light * edge_count + edge]`, and appends `(edge, m)` to the light's compact silhouette list
+// when m != 0 (atomic append; the list order is unspecified).
+//
+// Sign convention (crates/robust-math): for an edge (a, b), a < b, and an OV o,
+//   V = L.xyz - L.w * A,  s = sgn( ((A - B) x V) . (O - A) ).
+// MODE (pipeline-overridable): 0 original, 1 robust, 2 ordered, 3 exact.
+//
+// Exact mode uses a certified filter (`exact_filter`). (edge, OV, light) triples it cannot certify
+// contribute 0 here and are appended to `uncertain`; the host decides them exactly and patches
+// `mult` and the compact lists. For devices with SHADER_F64 the host builds this module with the
+// call marked `@exact-filter` replaced by `filter_f64` and appends shaders/exact_f64.wgsl.
+//
+// WGSL cannot forbid FMA contraction or reassociation; the f32 modes may therefore differ from
+// the CPU in the last bits (only exact mode is required to be bit-identical), and the filter
+// bounds leave margin for it (see the crate documentation).
+
+override MODE: u32 = 0u;
+
+const WORKGROUP_SIZE: u32 = 256u;
+const UNCERTAIN: i32 = 2;
+
+// robust-math's F32_FILTER_EPS (2^-19), F32_FILTER_MIN (2^-40), F32_FILTER_MAX (2^40).
+const F32_FILTER_EPS: f32 = 0x1p-19f;
+const F32_FILTER_MIN: f32 = 0x1p-40f;
+const F32_FILTER_MAX: f32 = 0x1p40f;
+// GPU-only guards of the f32 filter (see `cpu_twin::filter_f32`): every input magnitude at most
+// 2^39 (so no difference or product can overflow), and a non-zero permanent at least 2^-60 (so
+// flushing a subnormal intermediate to zero moves det by far less than the bound).
+const F32_INPUT_MAX_BITS: u32 = 0x53000000u; // bits of 2^39
+const F32_PERM_MIN: f32 = 0x1p-60f;
+const F32_MIN_NORMAL: f32 = 0x1p-126f;
+
+struct Params {
+    edge_count: u32,
+    light_count: u32,
+    uncertain_capacity: u32,
+    _pad: u32,
+}
+
+// One record per uncertain (edge, OV, light): global edge, global OV slot (index into `ovs`),
+// light index within this dispatch.
+struct Uncertain {
+    edge: u32,
+    ov_slot: u32,
+    light: u32,
+    _pad: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+// Object-space positions of all objects, xyz per global vertex id.
+@group(0) @binding(1) var<storage, read> positions: array<f32>;
+// Per global edge: (a, b, first OV slot, object index), a < b global vertex ids; one extra
+// sentinel record at the end whose z is the total OV count.
+@group(0) @binding(2) var<storage, read> edges: array<vec4<u32>>;
+// Opposite vertices (global vertex ids), CSR.
+@group(0) @binding(3) var<storage, read> ovs: array<u32>;
+// Object-space lights, [object * light_count + light].
+@group(0) @binding(4) var<storage, read> lights: array<vec4<f32>>;
+// Multiplicities, [light * edge_count + edge].
+@group(0) @binding(5) var<storage, read_write> mult: array<i32>;
+// [light]: length of the light's compact list; [light_count]: number of uncertain records.
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
+// Compact lists: light l owns [l * edge_count, (l + 1) * edge_count); entries (edge, bitcast m).
+@group(0) @binding(7) var<storage, read_write> silhouettes: array<vec2<u32>>;
+@group(0) @binding(8) var<storage, read_write> uncertain: array<Uncertain>;
+
+fn position(id: u32) -> vec3<f32> {
+    let i = id * 3u;
+    return vec3<f32>(positions[i], positions[i + 1u], positions[i + 2u]);
+}
+
+fn sgn(x: f32) -> i32 {
+    return select(select(0, -1, x < 0.0), 1, x > 0.0);
+}
+
+// robust-math's `sign_f32`, operation for operation (no cross()/dot(): their order is unspecified).
+fn sign_f32(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>, o: vec3<f32>) -> i32 {
+    let vx = l.x - l.w * a.x;
+    let vy = l.y - l.w * a.y;
+    let vz = l.z - l.w * a.z;
+    let ex = a.x - b.x;
+    let ey = a.y - b.y;
+    let ez = a.z - b.z;
+    let nx = ey * vz - ez * vy;
+    let ny = ez * vx - ex * vz;
+    let nz = ex * vy - ey * vx;
+    let no = (nx * o.x + ny * o.y) + nz * o.z;
+    let na = (nx * a.x + ny * a.y) + nz * a.z;
+    return sgn(no - na);
+}
+
+// Robust and ordered: the canonical triangle (ids ascending) and the permutation parity.
+fn canonical_sign(ia: u32, ib: u32, io: u32, a: vec3<f32>, b: vec3<f32>, o: vec3<f32>, l: vec4<f32>) -> i32 {
+    var p0 = a;
+    var p1 = b;
+    var p2 = o;
+    var parity = 1;
+    if io < ia {
+        p0 = o;
+        p1 = a;
+        p2 = b;
+    } else if io < ib {
+        p0 = a;
+        p1 = o;
+        p2 = b;
+        parity = -1;
+    }
+    let s0 = sign_f32(p0, p1, l, p2);
+    if MODE == 1u {
+        let s1 = sign_f32(p1, p2, l, p0);
+        let s2 = sign_f32(p2, p0, l, p1);
+        if s0 != s1 || s1 != s2 {
+            return 0;
+        }
+    }
+    return s0 * parity;
+}
+
+fn is_subnormal(x: f32) -> bool {
+    let m = bitcast<u32>(x) & 0x7fffffffu;
+    return m != 0u && m < 0x00800000u;
+}
+
+fn any_subnormal3(v: vec3<f32>) -> bool {
+    return is_subnormal(v.x) || is_subnormal(v.y) || is_subnormal(v.z);
+}
+
+fn too_large(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7fffffffu) > F32_INPUT_MAX_BITS;
+}
+
+fn any_too_large3(v: vec3<f32>) -> bool {
+    return too_large(v.x) || too_large(v.y) || too_large(v.z);
+}
+
+fn out_of_range(x: f32) -> bool {
+    let m = abs(x);
+    return m != 0.0 && (m < F32_FILTER_MIN || m > F32_FILTER_MAX);
+}
+
+fn underflows(x: f32, product: f32) -> bool {
+    return x != 0.0 && abs(product) < F32_MIN_NORMAL;
+}
+
+// robust-math's `orient_filter_f32` with the GPU guards above. Returns -1, 0, 1 or UNCERTAIN.
+fn filter_f32(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>, o: vec3<f32>) -> i32 {
+    if any_too_large3(a) || any_too_large3(b) || any_too_large3(o) || any_too_large3(l.xyz) || too_large(l.w) {
+        return UNCERTAIN;
+    }
+    let ex = a.x - b.x;
+    let ey = a.y - b.y;
+    let ez = a.z - b.z;
+    // L.w * A must not underflow (its error would be absolute, and V could vanish); a device that
+    // flushes subnormals to zero is caught by the same test.
+    let wa = l.w * a;
+    if l.w != 0.0 && (underflows(a.x, wa.x) || underflows(a.y, wa.y) || underflows(a.z, wa.z)) {
+        return UNCERTAIN;
+    }
+    let vx = l.x - wa.x;
+    let vy = l.y - wa.y;
+    let vz = l.z - wa.z;
+    let dx = o.x - a.x;
+    let dy = o.y - a.y;
+    let dz = o.z - a.z;
+    if out_of_range(ex) || out_of_range(ey) || out_of_range(ez) || out_of_range(vx) || out_of_range(vy)
+        || out_of_range(vz) || out_of_range(dx) || out_of_range(dy) || out_of_range(dz) {
+        return UNCERTAIN;
+    }
+    let p1 = ey * vz;
+    let q1 = ez * vy;
+    let p2 = ez * vx;
+    let q2 = ex * vz;
+    let p3 = ex * vy;
+    let q3 = ey * vx;
+    let det = ((p1 - q1) * dx + (p2 - q2) * dy) + (p3 - q3) * dz;
+    let perm = ((abs(p1) + abs(q1)) * abs(dx) + (abs(p2) + abs(q2)) * abs(dy)) + (abs(p3) + abs(q3)) * abs(dz);
+    if perm == 0.0 {
+        return 0;
+    }
+    if perm < F32_PERM_MIN {
+        return UNCERTAIN;
+    }
+    if abs(det) > F32_FILTER_EPS * perm {
+        return sgn(det);
+    }
+    return UNCERTAIN;
+}
+
+// The certified sign of det4(A, B, L, O), or UNCERTAIN. Subnormal inputs are never certified:
+// a device may flush them when loading or converting.
+fn exact_filter(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>, o: vec3<f32>) -> i32 {
+    if any_subnormal3(a) || any_subnormal3(b) || any_subnormal3(o) || any_subnormal3(l.xyz) || is_subnormal(l.w) {
+        return UNCERTAIN;
+    }
+    return filter_f32(a, b, l, o); // @exact-filter
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn extract(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let e = (wid.x + wid.y * nwg.x) * WORKGROUP_SIZE + lid;
+    let edge_count = params.edge_count;
+    if e >= edge_count {
+        return;
+    }
+    let rec = edges[e];
+    let ov_begin = rec.z;
+    let ov_end = edges[e + 1u].z;
+    let a = position(rec.x);
+    let b = position(rec.y);
+    let light_count = params.light_count;
+    for (var li = 0u; li < light_count; li++) {
+        let l = lights[rec.w * light_count + li];
+        var m = 0;
+        for (var k = ov_begin; k < ov_end; k++) {
+            let io = ovs[k];
+            let o = position(io);
+            var s = 0;
+            if MODE == 0u {
+                s = sign_f32(a, b, l, o);
+            } else if MODE == 3u {
+                let f = exact_filter(a, b, l, o);
+                if f == UNCERTAIN {
+                    let slot = atomicAdd(&counters[light_count], 1u);
+                    if slot < params.uncertain_capacity {
+                        uncertain[slot] = Uncertain(e, k, li, 0u);
+                    }
+                } else {
+                    s = f;
+                }
+            } else {
+                s = canonical_sign(rec.x, rec.y, io, a, b, o, l);
+            }
+            m += s;
+        }
+        mult[li * edge_count + e] = m;
+        if m != 0 {
+            let slot = atomicAdd(&counters[li], 1u);
+            silhouettes[li * edge_count + slot] = vec2<u32>(e, bitcast<u32>(m));
+        }
+    }
+}
