@@ -1,1 +1,83 @@
-//! shadowvol CLI library.
+//! The library behind the `shadowvol` command line.
+//!
+//! It holds what the subcommands, the conformance tests, the benches and `cargo xtask matrix`
+//! share, so that none of them keeps its own copy:
+//!
+//! * [`backends`]: **the** backend registry. Every tool that iterates over backends uses this list
+//!   and nothing else. Adding a backend means one new crate and one line in
+//!   [`registry`](registry::backends).
+//! * [`load_input`]: the one function that turns a command-line mesh argument into a [`Mesh`]
+//!   (OBJ now; glTF and scene presets are added there).
+//! * [`report`]: the silhouette report that `shadowvol silhouette --format json` prints (the JSON
+//!   contract of DESIGN.md).
+//! * [`CliError`]: errors with their exit codes (2 for usage, 1 for everything else).
+//!
+//! ```
+//! // List the registered backends and try to start the reference one.
+//! let entries = shadowvol::backends();
+//! let names: Vec<_> = entries.iter().map(|e| e.name).collect();
+//! assert_eq!(names, ["cpu", "simd", "wgpu", "opencl", "vulkan"]);
+//! let cpu = entries[0].start().expect("the cpu backend is always available");
+//! assert_eq!(cpu.info().name, "cpu");
+//! ```
+//!
+//! [`Mesh`]: shadowvol_mesh_topology::Mesh
+
+pub mod error;
+pub mod input;
+pub mod registry;
+pub mod report;
+
+pub use error::CliError;
+pub use input::{load_input, Input};
+pub use registry::{backend_names, backends, find_backend, BackendEntry};
+
+use shadowvol_robust_math::Accuracy;
+
+/// Output format of a subcommand.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    /// Human-readable text.
+    #[default]
+    Text,
+    /// JSON on one line, in the shapes of the CLI contract (scripts depend on them).
+    Json,
+}
+
+/// An accuracy mode as given on the command line (`--mode`).
+///
+/// Converts into [`Accuracy`]; kept separate so that the command line can document each value.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum ModeArg {
+    /// Kim et al. 2008 as stated: each (edge, opposite vertex) in f32 on its own; can crack.
+    Original,
+    /// Pečiva et al. 2013: the three sides of each triangle in f32; disagreement counts 0.
+    Robust,
+    /// One f32 evaluation per triangle in canonical vertex order; consistent, 1/3 of robust.
+    Ordered,
+    /// The exact sign of the determinant; consistent, correct, identical on every backend.
+    #[default]
+    Exact,
+}
+
+impl From<ModeArg> for Accuracy {
+    fn from(m: ModeArg) -> Self {
+        match m {
+            ModeArg::Original => Accuracy::Original,
+            ModeArg::Robust => Accuracy::Robust,
+            ModeArg::Ordered => Accuracy::Ordered,
+            ModeArg::Exact => Accuracy::Exact,
+        }
+    }
+}
+
+impl From<Accuracy> for ModeArg {
+    fn from(m: Accuracy) -> Self {
+        match m {
+            Accuracy::Original => ModeArg::Original,
+            Accuracy::Robust => ModeArg::Robust,
+            Accuracy::Ordered => ModeArg::Ordered,
+            Accuracy::Exact => ModeArg::Exact,
+        }
+    }
+}

@@ -1,1 +1,60 @@
-fn main() {}
+//! The `shadowvol` command line.
+//!
+//! Each subcommand lives in its own module `cmd_<name>.rs` with a clap `Args` struct and a
+//! `run(args, out) -> Result<(), CliError>` function. Adding one is three lines here: the `mod`
+//! line, a variant of [`Command`] (its doc comment is the short help, `LONG_ABOUT` of the
+//! module the long one) and a match arm in [`run`].
+
+use clap::{Parser, Subcommand};
+use shadowvol::CliError;
+use std::io::Write;
+use std::process::ExitCode;
+
+mod cmd_backends;
+mod cmd_silhouette;
+
+/// Robust silhouette shadow volumes: silhouette edges with multiplicities on five
+/// interchangeable backends (cpu, simd, wgpu, opencl, vulkan), in four accuracy modes.
+///
+/// Exit codes: 0 success, 1 failure (bad input file, unavailable backend, device error),
+/// 2 usage error (bad arguments).
+#[derive(Debug, Parser)]
+#[command(name = "shadowvol", version, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// List the backends, whether each can start here, its device, or why it can't.
+    #[command(long_about = cmd_backends::LONG_ABOUT)]
+    Backends(cmd_backends::Args),
+    /// Compute the silhouette edges of a mesh, with multiplicities, for one or more lights.
+    #[command(long_about = cmd_silhouette::LONG_ABOUT, after_help = cmd_silhouette::AFTER_HELP)]
+    Silhouette(cmd_silhouette::Args),
+}
+
+fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
+    match command {
+        Command::Backends(args) => cmd_backends::run(&args, out),
+        Command::Silhouette(args) => cmd_silhouette::run(&args, out),
+    }
+}
+
+fn main() -> ExitCode {
+    // Usage errors exit with code 2 inside clap, with its message; --help and --version exit 0.
+    let cli = Cli::parse();
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    let result = run(cli.command, &mut out).and_then(|()| out.flush().map_err(CliError::from));
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is_broken_pipe() => ExitCode::SUCCESS,
+        Err(e) => {
+            // Never panic, even when stderr is closed.
+            let _ = writeln!(std::io::stderr(), "error: {e}");
+            ExitCode::from(e.exit_code())
+        }
+    }
+}

@@ -1,0 +1,153 @@
+//! `shadowvol silhouette`: silhouette edges of a mesh for one or more lights.
+
+use shadowvol::report::{silhouette_report, SilhouetteReport};
+use shadowvol::{find_backend, load_input, CliError, Format, ModeArg};
+use shadowvol_robust_math::{Accuracy, Light};
+use std::io::Write;
+
+/// The long help of the subcommand.
+pub const LONG_ABOUT: &str =
+    "Compute the silhouette edges of MESH for each light, with their multiplicities \
+                  m (the signed number of shadow-volume sides an edge extrudes), and count the \
+                  vertices where the silhouette chain is open (0 for a closed chain).\n\n\
+                  Vertices are welded when their f32 positions are exactly equal; an edge (a, b) \
+                  names its vertices by their smallest 0-based input index, a < b.\n\n\
+                  JSON: {\"backend\", \"mode\", \"mesh\": {\"vertices\", \"welded_vertices\", \
+                  \"triangles\", \"edges\", \"boundary_edges\", \"nonmanifold_edges\", ...}, \
+                  \"lights\": [{\"light\": [x,y,z,w], \"edges\": [[a,b,m], ...], \
+                  \"open_vertices\": N}], \"device\", \"timings\"}; only m != 0 is listed, \
+                  sorted by (a, b).";
+
+/// Examples shown after the help.
+pub const AFTER_HELP: &str =
+    "Examples:\n  shadowvol silhouette assets/bunny.obj --light 0,10,0,1\n  \
+                  shadowvol silhouette mesh.obj --light=-1,2,0.5,0 --mode robust --backend simd \
+                  --format json";
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The mesh: a Wavefront .obj file (v and f statements; polygons are fanned).
+    #[arg(value_name = "MESH")]
+    mesh: String,
+
+    /// A light as homogeneous X,Y,Z,W: W = 1 is a point light at (X,Y,Z), W = 0 a directional
+    /// light pointing from the scene towards (X,Y,Z). Repeat for several lights (one call).
+    #[arg(
+        long = "light",
+        value_name = "X,Y,Z,W",
+        allow_hyphen_values = true,
+        value_parser = parse_light
+    )]
+    lights: Vec<Light>,
+
+    /// Accuracy mode.
+    #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
+    mode: ModeArg,
+
+    /// Backend to run on (see `shadowvol backends`).
+    #[arg(long, default_value = "cpu", value_name = "NAME")]
+    backend: String,
+
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    format: Format,
+
+    /// Text format only: list at most this many edges per light (0 = all).
+    #[arg(long, default_value_t = 40, value_name = "N")]
+    max_edges: usize,
+}
+
+fn parse_light(s: &str) -> Result<Light, String> {
+    s.parse::<Light>().map_err(|e| e.to_string())
+}
+
+pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
+    // Check the arguments before doing any work.
+    let entry = find_backend(&args.backend)?;
+    let input = load_input(&args.mesh)?;
+    let lights = if args.lights.is_empty() {
+        input.lights.clone()
+    } else {
+        args.lights.clone()
+    };
+    if lights.is_empty() {
+        return Err(CliError::Usage(format!(
+            "no light given for {}: add --light X,Y,Z,W (w = 1 point, w = 0 directional)",
+            input.name
+        )));
+    }
+    let mut backend = entry.start()?;
+    let mode = Accuracy::from(args.mode);
+    let report = silhouette_report(backend.as_mut(), &input.mesh, &lights, mode)?;
+    match args.format {
+        Format::Json => {
+            serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
+            writeln!(out)?;
+        }
+        Format::Text => write_text(out, &input.name, &report, args.max_edges)?,
+    }
+    Ok(())
+}
+
+fn write_text(
+    out: &mut dyn Write,
+    name: &str,
+    r: &SilhouetteReport,
+    max_edges: usize,
+) -> std::io::Result<()> {
+    let m = &r.mesh;
+    writeln!(
+        out,
+        "mesh     {name}: {} vertices ({} welded), {} triangles ({} degenerate dropped)",
+        m.vertices, m.welded_vertices, m.triangles, m.degenerate_triangles
+    )?;
+    writeln!(
+        out,
+        "edges    {}: {} boundary, {} manifold, {} non-manifold",
+        m.edges, m.boundary_edges, m.manifold_edges, m.nonmanifold_edges
+    )?;
+    writeln!(out, "backend  {} ({})", r.backend, r.device)?;
+    let t = &r.timings;
+    writeln!(
+        out,
+        "mode     {}: compute {:.3} ms, {} uncertain decided exactly on the host",
+        r.mode, t.compute_ms, t.uncertain
+    )?;
+    for (i, l) in r.lights.iter().enumerate() {
+        let [x, y, z, w] = l.light.to_array();
+        let kind = if w == 0.0 { "directional" } else { "point" };
+        let sum: i64 = l.edges.iter().map(|e| i64::from(e.2.unsigned_abs())).sum();
+        writeln!(
+            out,
+            "\nlight {i}  ({x}, {y}, {z}, {w}) {kind}: {} silhouette edges, {sum} sides (sum of |m|), \
+             open vertices: {}{}",
+            l.edges.len(),
+            l.open_vertices,
+            if l.open_vertices == 0 {
+                " (closed)"
+            } else {
+                " (the chain is open)"
+            }
+        )?;
+        if l.edges.is_empty() {
+            continue;
+        }
+        writeln!(out, "  {:>10} {:>10} {:>4}", "a", "b", "m")?;
+        let shown = if max_edges == 0 {
+            l.edges.len()
+        } else {
+            max_edges.min(l.edges.len())
+        };
+        for &(a, b, mult) in &l.edges[..shown] {
+            writeln!(out, "  {a:>10} {b:>10} {mult:>4}")?;
+        }
+        if shown < l.edges.len() {
+            writeln!(
+                out,
+                "  ... {} more (use --max-edges 0 or --format json to list all)",
+                l.edges.len() - shown
+            )?;
+        }
+    }
+    Ok(())
+}
