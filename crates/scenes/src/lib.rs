@@ -1,3 +1,100 @@
-//! Scene loading, procedural meshes and presets.
+//! Scenes for shadowvol: loaders (glTF 2.0, OBJ), procedural meshes, and the paper's presets.
+//!
+//! * [`Scene`]: objects (a shared [`Mesh`](shadowvol_mesh_topology::Mesh) and a world transform),
+//!   lights, a camera and the [`Effects`] the scene calls for. Load one with [`Scene::load`]
+//!   (`.gltf`, `.glb`, `.obj`), build a preset with [`preset`], or either with
+//!   [`Scene::from_name_or_path`]. [`Scene::topology`] gives the backends'
+//!   [`TopologyScene`](shadowvol_silhouette::TopologyScene) (instances share one edge table);
+//!   [`Scene::baked_mesh`] merges everything into one world-space mesh, transforms applied in
+//!   `f32` on the host.
+//! * [`gltf_load`]: glTF loading with node transforms, shared meshes, cameras and
+//!   `KHR_lights_punctual`, validating accessor contents; [`obj`]: OBJ loading.
+//! * [`export_glb`]: writes any scene as binary glTF that other tools can open.
+//! * [`procedural`]: UV spheres and icospheres with an exact triangle count, Loop subdivision,
+//!   the "town".
+//! * [`presets`]: `bunnies-10-individual`, `bunnies-10-baked`, `spheres-10-individual`,
+//!   `spheres-10-baked`, `sphere-1m`, `sphere-100k`, `spheres-100x10k`, `spheres-100x1k`,
+//!   `town` and `hard-<case>` for every case of the conformance corpus.
+//!
+//! ```
+//! use shadowvol_scenes::{preset, Scene};
+//!
+//! let scene = preset("spheres-100x1k")?;
+//! assert_eq!(scene.objects.len(), 100);
+//! assert_eq!(scene.triangle_count(), 100 * 1_000);
+//! let topology = scene.topology()?; // one shared edge table for the 100 instances
+//! assert_eq!(topology.objects.len(), 100);
+//! assert_eq!(scene.baked_mesh()?.triangles.len(), 100_000);
+//! # Ok::<(), shadowvol_scenes::SceneError>(())
+//! ```
 
+mod glb_write;
+pub mod gltf_load;
 pub mod obj;
+pub mod presets;
+pub mod procedural;
+mod scene;
+
+pub use glb_write::{export_glb, to_glb};
+pub use gltf_load::{load_gltf, load_gltf_mesh, load_gltf_slice};
+pub use presets::{is_preset, preset, preset_names, presets, PresetInfo};
+pub use scene::{apply_f32, mesh_bounds, transformed, Camera, Effects, Object, Scene};
+
+use shadowvol_mesh_topology::MeshError;
+
+/// Errors from loading, building or exporting a scene. Each names the file and what in it is
+/// wrong (node, mesh, primitive, accessor, element; or line for OBJ).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SceneError {
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The path.
+        path: String,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// A glTF file is malformed or unsupported.
+    #[error("{file}: {context}: {message}")]
+    Gltf {
+        /// The file (or source name).
+        file: String,
+        /// Where: `document`, `buffers`, or `node N 'name', mesh M, primitive P, accessor A
+        /// (POSITION)` and so on.
+        context: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// An OBJ file is malformed (the error names the file and line).
+    #[error(transparent)]
+    Obj(#[from] obj::LoadError),
+    /// A mesh is invalid (non-finite position, index out of range, too large).
+    #[error("{what}: {source}")]
+    Mesh {
+        /// Which mesh (object name or what was being built).
+        what: String,
+        /// The mesh error.
+        source: MeshError,
+    },
+    /// A scene name is neither a preset nor a file with a known extension.
+    #[error("unknown scene '{name}': not a .gltf/.glb/.obj file and not a preset (presets: {known})")]
+    UnknownPreset {
+        /// The name given.
+        name: String,
+        /// The preset names, comma separated.
+        known: String,
+    },
+    /// The file extension is not one of `.gltf`, `.glb`, `.obj`.
+    #[error("{path}: unsupported scene format (expected .gltf, .glb or .obj)")]
+    UnsupportedFormat {
+        /// The path given.
+        path: String,
+    },
+    /// The scene cannot be encoded as glTF.
+    #[error("cannot export: {message}")]
+    Export {
+        /// Why.
+        message: String,
+    },
+}

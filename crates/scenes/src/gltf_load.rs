@@ -1,0 +1,620 @@
+//! glTF 2.0 loading (`.gltf` with external or embedded buffers, and `.glb`).
+//!
+//! What is read:
+//!
+//! * **Nodes** of the default scene (else the first scene, else every root node), visited depth
+//!   first in order: a node, then its children in order. Each node with a mesh becomes one
+//!   [`Object`] whose transform is the node's world transform, composed in `f32`
+//!   (`parent * local`, glTF's `matrix` or `T * R * S`). This order is the vertex numbering of
+//!   the CLI contract: depth-first node order, then primitive order, then accessor order.
+//! * **Meshes**: all primitives of a mesh are concatenated, in order, into one [`Mesh`]. Nodes
+//!   that use the same mesh share one `Arc<Mesh>`. Modes `TRIANGLES`, `TRIANGLE_STRIP` and
+//!   `TRIANGLE_FAN` are read (strips and fans are turned into triangle lists); points and lines
+//!   are an error. Only `POSITION` (`VEC3`/`FLOAT`) and the indices (`UNSIGNED_BYTE`, `_SHORT`,
+//!   `_INT`) are read; sparse accessors are applied. Skins and morph targets are ignored.
+//! * **Cameras**: the first node with a perspective camera (depth-first order) becomes the scene
+//!   camera: eye at the node's origin, looking down its `-Z`, up its `+Y`. A `"target"` in the
+//!   node's extras (written by [`crate::export_glb`]) sets the target point exactly.
+//! * **Lights** (`KHR_lights_punctual`): a point light at the node's origin (`w = 1`); a
+//!   directional light towards the node's `+Z` axis (the light shines down `-Z`; `w = 0`, the
+//!   direction is the `f32` third column of the world matrix, not renormalised). A **spot** light
+//!   is treated as a point light at its position: shadow volumes of a spot light are those of a
+//!   point light, the cone only limits what is lit.
+//!
+//! The `gltf` crate checks the JSON structure but not what accessors contain, so this module
+//! validates it: every accessor must be in its buffer view and buffer, have a count above 0 and
+//! the right type; positions must be finite, indices in range, and index counts must make whole
+//! triangles. Every error names the file and the node, mesh, primitive and accessor.
+
+use crate::scene::{file_name, Camera, Effects, Object, Scene};
+use crate::SceneError;
+use glam::{Affine3A, Mat4, Vec3};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::Mode;
+use shadowvol_mesh_topology::Mesh;
+use shadowvol_robust_math::Light;
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+
+/// Loads a `.gltf` or `.glb` file as a [`Scene`] with its objects kept separate.
+///
+/// # Errors
+/// [`SceneError::Io`] if the file cannot be read, [`SceneError::Gltf`] naming the file and the
+/// node/mesh/primitive/accessor for anything malformed (see the module documentation).
+pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
+    let base = path.parent().map(|p| {
+        if p.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            p
+        }
+    });
+    let name = path.display().to_string();
+    let is_glb = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    if is_glb && !bytes.starts_with(b"glTF") {
+        let head = &bytes[..bytes.len().min(4)];
+        return Err(SceneError::Gltf {
+            file: name,
+            context: "document".to_owned(),
+            message: format!(
+                "not a binary glTF file: it starts with {:?}, a .glb starts with \"glTF\"",
+                String::from_utf8_lossy(head)
+            ),
+        });
+    }
+    load_gltf_slice(&bytes, &name, base).map(|mut s| {
+        s.name = file_name(path);
+        s
+    })
+}
+
+/// Loads a `.gltf` or `.glb` file flattened into one world-space mesh: node transforms applied
+/// in `f32`, vertices numbered in depth-first node order, then primitive order, then accessor
+/// order (the CLI contract). Same as `load_gltf(path)?.baked_mesh()`.
+///
+/// # Errors
+/// As [`load_gltf`], plus [`SceneError::Mesh`] if the merged mesh is too large.
+pub fn load_gltf_mesh(path: impl AsRef<Path>) -> Result<Mesh, SceneError> {
+    load_gltf(path)?.baked_mesh()
+}
+
+/// Loads glTF from bytes (JSON text or GLB). `source_name` is used in messages; `base` is the
+/// directory that relative buffer URIs are resolved against (`None`: only embedded buffers).
+///
+/// # Errors
+/// [`SceneError::Gltf`] naming `source_name` and the element at fault.
+pub fn load_gltf_slice(
+    bytes: &[u8],
+    source_name: &str,
+    base: Option<&Path>,
+) -> Result<Scene, SceneError> {
+    let err = |context: &str, message: String| SceneError::Gltf {
+        file: source_name.to_owned(),
+        context: context.to_owned(),
+        message,
+    };
+    if bytes.starts_with(b"glTF") && bytes.len() >= 12 {
+        let declared = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize;
+        if declared != bytes.len() {
+            return Err(err(
+                "document",
+                format!(
+                    "GLB header declares {declared} bytes but the file has {} (truncated or \
+                     corrupted)",
+                    bytes.len()
+                ),
+            ));
+        }
+    }
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
+        .map_err(|e| err("document", e.to_string()))?;
+    validate(&document).map_err(|m| err("document", m))?;
+    let buffers = gltf::import_buffers(&document, base, blob)
+        .map_err(|e| err("buffers", e.to_string()))?;
+    let buffers: Vec<&[u8]> = buffers.iter().map(|b| &b.0[..]).collect();
+
+    let roots: Vec<gltf::Node> = match document.default_scene().or_else(|| document.scenes().next())
+    {
+        Some(s) => s.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; document.nodes().len()];
+            for n in document.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            document.nodes().filter(|n| !is_child[n.index()]).collect()
+        }
+    };
+
+    let mut loader = Loader {
+        source_name,
+        buffers: &buffers,
+        meshes: HashMap::new(),
+        visited: vec![false; document.nodes().len()],
+        scene: Scene {
+            name: source_name.to_owned(),
+            effects: Effects::default(),
+            ..Scene::default()
+        },
+    };
+    // Depth-first, pre-order, with an explicit stack (deep hierarchies must not overflow).
+    let mut stack: Vec<(gltf::Node, Affine3A)> = roots
+        .into_iter()
+        .rev()
+        .map(|n| (n, Affine3A::IDENTITY))
+        .collect();
+    while let Some((node, parent)) = stack.pop() {
+        let world = loader.visit(&node, parent)?;
+        let children: Vec<gltf::Node> = node.children().collect();
+        for c in children.into_iter().rev() {
+            stack.push((c, world));
+        }
+    }
+    Ok(loader.scene)
+}
+
+struct Loader<'a> {
+    source_name: &'a str,
+    buffers: &'a [&'a [u8]],
+    meshes: HashMap<usize, Arc<Mesh>>,
+    visited: Vec<bool>,
+    scene: Scene,
+}
+
+fn node_label(node: &gltf::Node) -> String {
+    match node.name() {
+        Some(n) => format!("node {} '{n}'", node.index()),
+        None => format!("node {}", node.index()),
+    }
+}
+
+impl Loader<'_> {
+    fn err(&self, context: String, message: impl Into<String>) -> SceneError {
+        SceneError::Gltf {
+            file: self.source_name.to_owned(),
+            context,
+            message: message.into(),
+        }
+    }
+
+    /// Handles one node; returns its world transform.
+    fn visit(&mut self, node: &gltf::Node, parent: Affine3A) -> Result<Affine3A, SceneError> {
+        let label = node_label(node);
+        if std::mem::replace(&mut self.visited[node.index()], true) {
+            return Err(self.err(
+                label,
+                "is reached twice from the scene (the node hierarchy must be a forest: no \
+                 cycles, no node with two parents)",
+            ));
+        }
+        let m = Mat4::from_cols_array_2d(&node.transform().matrix());
+        if !m.is_finite() {
+            return Err(self.err(label, "transform has a NaN or infinite entry"));
+        }
+        let row3 = m.row(3);
+        if row3 != glam::Vec4::new(0.0, 0.0, 0.0, 1.0) {
+            return Err(self.err(
+                label,
+                format!("matrix is not affine: its last row is {row3}, expected (0, 0, 0, 1)"),
+            ));
+        }
+        let local = Affine3A::from_mat4(m);
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(self.err(label, "world transform overflows f32"));
+        }
+
+        if let Some(mesh) = node.mesh() {
+            let shared = match self.meshes.get(&mesh.index()) {
+                Some(m) => Arc::clone(m),
+                None => {
+                    let m = Arc::new(self.read_mesh(&label, &mesh)?);
+                    self.meshes.insert(mesh.index(), Arc::clone(&m));
+                    m
+                }
+            };
+            let name = node
+                .name()
+                .or(mesh.name())
+                .map_or_else(|| format!("node{}", node.index()), str::to_owned);
+            self.scene.objects.push(Object {
+                name,
+                mesh: shared,
+                transform: world,
+            });
+        }
+
+        if let Some(light) = node.light() {
+            let l = match light.kind() {
+                gltf::khr_lights_punctual::Kind::Directional => {
+                    let z = world.matrix3.z_axis;
+                    Light::new(z.x, z.y, z.z, 0.0)
+                }
+                gltf::khr_lights_punctual::Kind::Point
+                | gltf::khr_lights_punctual::Kind::Spot { .. } => {
+                    let t = world.translation;
+                    Light::new(t.x, t.y, t.z, 1.0)
+                }
+            }
+            .map_err(|e| {
+                self.err(
+                    format!("{label}, light {}", light.index()),
+                    format!("invalid light: {e}"),
+                )
+            })?;
+            self.scene.lights.push(l);
+        }
+
+        if let (Some(cam), None) = (node.camera(), self.scene.camera) {
+            if let gltf::camera::Projection::Perspective(p) = cam.projection() {
+                let eye = Vec3::from(world.translation);
+                let forward = -Vec3::from(world.matrix3.z_axis);
+                let up = Vec3::from(world.matrix3.y_axis);
+                let target = extras_vec3(node.extras(), "target")
+                    .unwrap_or(eye + forward.normalize_or(Vec3::NEG_Z));
+                let camera = Camera {
+                    eye,
+                    target,
+                    up: up.normalize_or(Vec3::Y),
+                    fov_y: p.yfov(),
+                    near: p.znear(),
+                };
+                let ok = camera.eye.is_finite()
+                    && camera.target.is_finite()
+                    && camera.fov_y.is_finite()
+                    && camera.fov_y > 0.0
+                    && camera.near.is_finite()
+                    && camera.near > 0.0
+                    && camera.target != camera.eye;
+                if !ok {
+                    return Err(self.err(
+                        format!("{label}, camera {}", cam.index()),
+                        "camera is degenerate (needs finite eye and target apart, yfov > 0, \
+                         znear > 0)",
+                    ));
+                }
+                self.scene.camera = Some(camera);
+            }
+        }
+        Ok(world)
+    }
+
+    fn read_mesh(&self, node_label: &str, mesh: &gltf::Mesh) -> Result<Mesh, SceneError> {
+        let mut out = Mesh::default();
+        let mesh_label = match mesh.name() {
+            Some(n) => format!("{node_label}, mesh {} '{n}'", mesh.index()),
+            None => format!("{node_label}, mesh {}", mesh.index()),
+        };
+        for prim in mesh.primitives() {
+            let label = format!("{mesh_label}, primitive {}", prim.index());
+            let mode = prim.mode();
+            if !matches!(
+                mode,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                return Err(self.err(
+                    label,
+                    format!(
+                        "mode {mode:?} is not a triangle mode (TRIANGLES, TRIANGLE_STRIP or \
+                         TRIANGLE_FAN are needed for shadow volumes)"
+                    ),
+                ));
+            }
+            let Some(pos_acc) = prim.get(&gltf::Semantic::Positions) else {
+                return Err(self.err(label, "has no POSITION attribute"));
+            };
+            let positions = self.read_positions(&label, &pos_acc)?;
+            let n = positions.len();
+            let indices: Vec<u32> = match prim.indices() {
+                Some(acc) => self.read_indices(&label, &acc, n)?,
+                None => (0..n as u32).collect(),
+            };
+            let idx_label = prim.indices().map_or_else(
+                || format!("{label} (non-indexed)"),
+                |a| format!("{label}, accessor {} (indices)", a.index()),
+            );
+            let tris = assemble(mode, &indices).map_err(|m| self.err(idx_label, m))?;
+            let base = out.positions.len() as u64;
+            if base + n as u64 >= u64::from(u32::MAX) {
+                return Err(self.err(label, "too many vertices for u32 indexing"));
+            }
+            let base = base as u32;
+            out.positions.extend_from_slice(&positions);
+            out.triangles
+                .extend(tris.iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
+        }
+        out.validate()
+            .map_err(|e| self.err(mesh_label, e.to_string()))?;
+        Ok(out)
+    }
+
+    fn read_positions(
+        &self,
+        label: &str,
+        acc: &gltf::Accessor,
+    ) -> Result<Vec<Vec3>, SceneError> {
+        let alabel = format!("{label}, accessor {} (POSITION)", acc.index());
+        if acc.data_type() != DataType::F32 || acc.dimensions() != Dimensions::Vec3 {
+            return Err(self.err(
+                alabel,
+                format!(
+                    "POSITION must be VEC3 of FLOAT, found {:?} of {:?} (quantized positions are \
+                     not supported)",
+                    acc.dimensions(),
+                    acc.data_type()
+                ),
+            ));
+        }
+        let bytes = self.accessor_bytes(&alabel, acc)?;
+        let mut out = Vec::with_capacity(acc.count());
+        for (i, c) in bytes.chunks_exact(12).enumerate() {
+            let v = [
+                f32::from_le_bytes([c[0], c[1], c[2], c[3]]),
+                f32::from_le_bytes([c[4], c[5], c[6], c[7]]),
+                f32::from_le_bytes([c[8], c[9], c[10], c[11]]),
+            ];
+            for (axis, value) in ['x', 'y', 'z'].into_iter().zip(v) {
+                if !value.is_finite() {
+                    return Err(self.err(
+                        alabel,
+                        format!(
+                            "element {i}: coordinate {axis} is {value}, but positions must be \
+                             finite"
+                        ),
+                    ));
+                }
+            }
+            out.push(Vec3::from_array(v));
+        }
+        Ok(out)
+    }
+
+    fn read_indices(
+        &self,
+        label: &str,
+        acc: &gltf::Accessor,
+        vertices: usize,
+    ) -> Result<Vec<u32>, SceneError> {
+        let alabel = format!("{label}, accessor {} (indices)", acc.index());
+        if acc.dimensions() != Dimensions::Scalar
+            || !matches!(acc.data_type(), DataType::U8 | DataType::U16 | DataType::U32)
+        {
+            return Err(self.err(
+                alabel,
+                format!(
+                    "indices must be SCALAR of UNSIGNED_BYTE/SHORT/INT, found {:?} of {:?}",
+                    acc.dimensions(),
+                    acc.data_type()
+                ),
+            ));
+        }
+        let bytes = self.accessor_bytes(&alabel, acc)?;
+        let values: Vec<u32> = match acc.data_type() {
+            DataType::U8 => bytes.iter().map(|&b| u32::from(b)).collect(),
+            DataType::U16 => bytes
+                .chunks_exact(2)
+                .map(|c| u32::from(u16::from_le_bytes([c[0], c[1]])))
+                .collect(),
+            _ => bytes
+                .chunks_exact(4)
+                .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect(),
+        };
+        if let Some((i, &v)) = values
+            .iter()
+            .enumerate()
+            .find(|(_, &v)| v as usize >= vertices)
+        {
+            return Err(self.err(
+                alabel,
+                format!(
+                    "element {i}: vertex index {v} is out of range (the primitive has {vertices} \
+                     vertices)"
+                ),
+            ));
+        }
+        Ok(values)
+    }
+
+    /// The accessor's elements, tightly packed (`count * size` bytes), with bounds checks and
+    /// sparse substitution.
+    fn accessor_bytes(&self, alabel: &str, acc: &gltf::Accessor) -> Result<Vec<u8>, SceneError> {
+        let count = acc.count();
+        let size = acc.size();
+        if count == 0 {
+            return Err(self.err(alabel.to_owned(), "count is 0 (at least 1 element needed)"));
+        }
+        let total = count.checked_mul(size).ok_or_else(|| {
+            self.err(alabel.to_owned(), format!("count {count} overflows"))
+        })?;
+        let mut out = match acc.view() {
+            None => vec![0u8; total],
+            Some(view) => {
+                let stride = view.stride().unwrap_or(size);
+                if stride < size {
+                    return Err(self.err(
+                        alabel.to_owned(),
+                        format!(
+                            "buffer view {} has byteStride {stride}, smaller than the element \
+                             size {size}",
+                            view.index()
+                        ),
+                    ));
+                }
+                let data = self.view_bytes(alabel, &view)?;
+                let needed = acc
+                    .offset()
+                    .checked_add((count - 1).saturating_mul(stride))
+                    .and_then(|x| x.checked_add(size));
+                match needed {
+                    Some(needed) if needed <= data.len() => {}
+                    _ => {
+                        return Err(self.err(
+                            alabel.to_owned(),
+                            format!(
+                                "{count} elements of {size} bytes (stride {stride}, byteOffset \
+                                 {}) run past the end of buffer view {} ({} bytes)",
+                                acc.offset(),
+                                view.index(),
+                                data.len()
+                            ),
+                        ))
+                    }
+                }
+                let mut v = Vec::with_capacity(total);
+                for i in 0..count {
+                    let s = acc.offset() + i * stride;
+                    v.extend_from_slice(&data[s..s + size]);
+                }
+                v
+            }
+        };
+        if let Some(sparse) = acc.sparse() {
+            let n = sparse.count();
+            let idx = sparse.indices();
+            let isize = match idx.index_type() {
+                gltf::accessor::sparse::IndexType::U8 => 1,
+                gltf::accessor::sparse::IndexType::U16 => 2,
+                gltf::accessor::sparse::IndexType::U32 => 4,
+            };
+            let slabel = format!("{alabel}, sparse");
+            let idata = self.view_bytes(&slabel, &idx.view())?;
+            let vdata = self.view_bytes(&slabel, &sparse.values().view())?;
+            let ioff = idx.offset();
+            let voff = sparse.values().offset();
+            let ifits = n
+                .checked_mul(isize)
+                .and_then(|x| x.checked_add(ioff))
+                .is_some_and(|e| e <= idata.len());
+            let vfits = n
+                .checked_mul(size)
+                .and_then(|x| x.checked_add(voff))
+                .is_some_and(|e| e <= vdata.len());
+            if !ifits || !vfits {
+                return Err(self.err(
+                    slabel,
+                    format!("{n} sparse indices or values run past the end of their buffer views"),
+                ));
+            }
+            for k in 0..n {
+                let c = &idata[ioff + k * isize..ioff + (k + 1) * isize];
+                let target = match isize {
+                    1 => usize::from(c[0]),
+                    2 => usize::from(u16::from_le_bytes([c[0], c[1]])),
+                    _ => u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize,
+                };
+                if target >= count {
+                    return Err(self.err(
+                        slabel,
+                        format!(
+                            "sparse index {k} targets element {target}, but the accessor has \
+                             {count}"
+                        ),
+                    ));
+                }
+                out[target * size..(target + 1) * size]
+                    .copy_from_slice(&vdata[voff + k * size..voff + (k + 1) * size]);
+            }
+        }
+        Ok(out)
+    }
+
+    fn view_bytes(&self, alabel: &str, view: &gltf::buffer::View) -> Result<&[u8], SceneError> {
+        let buf = self.buffers.get(view.buffer().index()).ok_or_else(|| {
+            self.err(
+                alabel.to_owned(),
+                format!("buffer {} is missing", view.buffer().index()),
+            )
+        })?;
+        let end = view.offset().checked_add(view.length());
+        match end {
+            Some(end) if end <= buf.len() => Ok(&buf[view.offset()..end]),
+            _ => Err(self.err(
+                alabel.to_owned(),
+                format!(
+                    "buffer view {} (byteOffset {}, byteLength {}) runs past the end of buffer {} \
+                     ({} bytes)",
+                    view.index(),
+                    view.offset(),
+                    view.length(),
+                    view.buffer().index(),
+                    buf.len()
+                ),
+            )),
+        }
+    }
+}
+
+/// The `gltf` crate's structural validation (every index refers to something that exists, enums
+/// are known, required fields are present), except that a missing `min`/`max` on `POSITION`
+/// accessors is accepted: many exporters omit them and this loader does not use them.
+fn validate(document: &gltf::Document) -> Result<(), String> {
+    use gltf::json::validation::{Error, Validate};
+    let root = document.as_json();
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, error| {
+        let p = path().to_string();
+        let min_max = p.ends_with(".min") || p.ends_with(".max");
+        if !(min_max && matches!(error, Error::Missing)) {
+            errors.push(format!("{p}: {error}"));
+        }
+    });
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(format!("invalid glTF: {}", errors.join("; ")))
+    }
+}
+
+/// Turns an index list of a triangle mode into triangles.
+fn assemble(mode: Mode, idx: &[u32]) -> Result<Vec<[u32; 3]>, String> {
+    match mode {
+        Mode::Triangles => {
+            if idx.len() % 3 != 0 {
+                return Err(format!(
+                    "{} indices do not make whole triangles (TRIANGLES needs a multiple of 3)",
+                    idx.len()
+                ));
+            }
+            Ok(idx.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+        }
+        Mode::TriangleStrip | Mode::TriangleFan => {
+            if idx.len() < 3 {
+                return Err(format!(
+                    "{} indices make no triangle ({mode:?} needs at least 3)",
+                    idx.len()
+                ));
+            }
+            Ok((0..idx.len() - 2)
+                .map(|i| match mode {
+                    Mode::TriangleFan => [idx[0], idx[i + 1], idx[i + 2]],
+                    _ if i % 2 == 0 => [idx[i], idx[i + 1], idx[i + 2]],
+                    _ => [idx[i + 1], idx[i], idx[i + 2]],
+                })
+                .collect())
+        }
+        _ => Err(format!("mode {mode:?} is not a triangle mode")),
+    }
+}
+
+/// Reads `extras[key]` as a finite `[x, y, z]`.
+fn extras_vec3(extras: &gltf::json::Extras, key: &str) -> Option<Vec3> {
+    let raw = extras.as_ref()?;
+    let v: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
+    let a = v.get(key)?.as_array()?;
+    if a.len() != 3 {
+        return None;
+    }
+    let f = |i: usize| a[i].as_f64().map(|x| x as f32);
+    let p = Vec3::new(f(0)?, f(1)?, f(2)?);
+    p.is_finite().then_some(p)
+}

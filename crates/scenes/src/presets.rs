@@ -1,0 +1,263 @@
+//! The paper's scenes as presets (names as in DESIGN.md), generated lazily on request.
+
+use crate::procedural::{icosphere, loop_subdivide_levels, town, TownParams};
+use crate::scene::{Camera, Effects, Object, Scene};
+use crate::SceneError;
+use glam::{Affine3A, Vec3};
+use shadowvol_mesh_topology::Mesh;
+use shadowvol_robust_math::Light;
+use std::sync::Arc;
+
+/// The bundled Stanford bunny (3,674 triangles, closed 2-manifold), as OBJ text.
+pub const BUNNY_OBJ: &str = include_str!("../../../assets/bunny.obj");
+
+/// Loop subdivision levels applied to the bunny in the `bunnies-10-*` presets:
+/// 3,674 · 4² = 58,784 triangles per bunny (587,840 for ten). The paper's ~65k per bunny is not
+/// a power-of-four multiple of 3,674; two levels is the closest (−9.6 %).
+pub const BUNNY_LEVELS: u32 = 2;
+
+/// Triangles per sphere in `spheres-10-*` (10 × 65,000 = 650,000 ≈ the paper's 6.5·10⁵).
+pub const SPHERE_10_TRIANGLES: usize = 65_000;
+
+/// The bundled bunny as a mesh (3,674 triangles).
+///
+/// # Panics
+/// Never in practice: the bundled file is known to parse (a test checks it).
+#[must_use]
+pub fn bunny() -> Mesh {
+    crate::obj::parse_obj(BUNNY_OBJ, "assets/bunny.obj").expect("bundled bunny parses")
+}
+
+/// One preset: its name and what it is.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PresetInfo {
+    /// The name (`shadowvol scenes` lists these; every command accepts them as a scene).
+    pub name: String,
+    /// What it is, in words.
+    pub description: String,
+}
+
+struct Fixed {
+    name: &'static str,
+    description: &'static str,
+}
+
+const FIXED: &[Fixed] = &[
+    Fixed {
+        name: "bunnies-10-individual",
+        description: "10 Loop-subdivided bunnies (58,784 triangles each), 10 objects sharing one mesh",
+    },
+    Fixed {
+        name: "bunnies-10-baked",
+        description: "the 10 bunnies merged into one world-space mesh (587,840 triangles)",
+    },
+    Fixed {
+        name: "spheres-10-individual",
+        description: "10 icospheres of 65,000 triangles, 10 objects sharing one mesh",
+    },
+    Fixed {
+        name: "spheres-10-baked",
+        description: "the 10 spheres merged into one world-space mesh (650,000 triangles)",
+    },
+    Fixed {
+        name: "sphere-1m",
+        description: "one icosphere of 1,000,000 triangles",
+    },
+    Fixed {
+        name: "sphere-100k",
+        description: "one icosphere of 100,000 triangles",
+    },
+    Fixed {
+        name: "spheres-100x10k",
+        description: "10 x 10 grid of icospheres of 10,000 triangles (100 objects, one mesh)",
+    },
+    Fixed {
+        name: "spheres-100x1k",
+        description: "10 x 10 grid of icospheres of 1,000 triangles (100 objects, one mesh)",
+    },
+    Fixed {
+        name: "town",
+        description: "~570k triangles of axis-aligned box buildings; sun exactly along +Y, so every wall is parallel to it",
+    },
+];
+
+/// Every preset: the fixed ones, then `hard-<case>` for each case of
+/// [`shadowvol_silhouette::corpus::cases`].
+#[must_use]
+pub fn presets() -> Vec<PresetInfo> {
+    let mut v: Vec<PresetInfo> = FIXED
+        .iter()
+        .map(|f| PresetInfo {
+            name: f.name.to_owned(),
+            description: f.description.to_owned(),
+        })
+        .collect();
+    for case in shadowvol_silhouette::corpus::cases() {
+        v.push(PresetInfo {
+            name: format!("hard-{}", case.name),
+            description: case.description.to_owned(),
+        });
+    }
+    v
+}
+
+/// The names of all presets, in listing order.
+#[must_use]
+pub fn preset_names() -> Vec<String> {
+    presets().into_iter().map(|p| p.name).collect()
+}
+
+/// True if `name` is a preset.
+#[must_use]
+pub fn is_preset(name: &str) -> bool {
+    if FIXED.iter().any(|p| p.name == name) {
+        return true;
+    }
+    name.strip_prefix("hard-").is_some_and(|case| {
+        shadowvol_silhouette::corpus::cases()
+            .iter()
+            .any(|c| c.name == case)
+    })
+}
+
+/// Builds the preset `name` (generation happens here, on request).
+///
+/// # Errors
+/// [`SceneError::UnknownPreset`] listing the known names.
+pub fn preset(name: &str) -> Result<Scene, SceneError> {
+    let scene = match name {
+        "bunnies-10-individual" => bunnies(name),
+        "bunnies-10-baked" => bunnies(name).baked()?,
+        "spheres-10-individual" => sphere_grid(name, SPHERE_10_TRIANGLES, 5, 2),
+        "spheres-10-baked" => sphere_grid(name, SPHERE_10_TRIANGLES, 5, 2).baked()?,
+        "sphere-1m" => sphere_grid(name, 1_000_000, 1, 1),
+        "sphere-100k" => sphere_grid(name, 100_000, 1, 1),
+        "spheres-100x10k" => sphere_grid(name, 10_000, 10, 10),
+        "spheres-100x1k" => sphere_grid(name, 1_000, 10, 10),
+        "town" => town_scene(),
+        _ => match name.strip_prefix("hard-").and_then(|case| {
+            shadowvol_silhouette::corpus::cases()
+                .into_iter()
+                .find(|c| c.name == case)
+        }) {
+            Some(case) => hard_scene(name, &case),
+            None => {
+                return Err(SceneError::UnknownPreset {
+                    name: name.to_owned(),
+                    known: preset_names().join(", "),
+                })
+            }
+        },
+    };
+    Ok(scene)
+}
+
+/// `cols × rows` instances of `mesh` (footprint `spacing`) on the `XZ` plane, centred at the
+/// origin, translated only (translations are small integers: exact in `f32`).
+fn grid_objects(prefix: &str, mesh: &Arc<Mesh>, cols: u32, rows: u32, spacing: f32) -> Vec<Object> {
+    let mut objects = Vec::with_capacity((cols * rows) as usize);
+    for r in 0..rows {
+        for c in 0..cols {
+            let x = (c as f32 - (cols - 1) as f32 * 0.5) * spacing;
+            let z = (r as f32 - (rows - 1) as f32 * 0.5) * spacing;
+            objects.push(Object {
+                name: format!("{prefix}{}", r * cols + c),
+                mesh: Arc::clone(mesh),
+                transform: Affine3A::from_translation(Vec3::new(x, 0.0, z)),
+            });
+        }
+    }
+    objects
+}
+
+fn framed(mut scene: Scene, lights: Vec<Light>, from: Vec3) -> Scene {
+    scene.lights = lights;
+    if let Some((lo, hi)) = scene.bounds() {
+        scene.camera = Some(Camera::framing(lo, hi, from));
+    }
+    scene
+}
+
+fn bunnies(name: &str) -> Scene {
+    let mesh = Arc::new(loop_subdivide_levels(&bunny(), BUNNY_LEVELS));
+    // The bunny spans about 10 x 9.7 x 7.5 units, standing on y = 0.
+    let scene = Scene {
+        name: name.to_owned(),
+        objects: grid_objects("bunny", &mesh, 5, 2, 12.0),
+        effects: Effects {
+            ground_y: Some(0.0),
+            ..Effects::default()
+        },
+        ..Scene::default()
+    };
+    framed(
+        scene,
+        vec![Light::point(Vec3::new(-20.0, 40.0, 25.0))],
+        Vec3::new(0.4, 0.6, 1.0),
+    )
+}
+
+fn sphere_grid(name: &str, triangles: usize, cols: u32, rows: u32) -> Scene {
+    let mesh = Arc::new(icosphere(triangles, 1.0));
+    // Spheres of radius 1 stand on y = 0 (centre at y = 1), 3 units apart.
+    let objects = grid_objects("sphere", &mesh, cols, rows, 3.0)
+        .into_iter()
+        .map(|mut o| {
+            o.transform.translation.y = 1.0;
+            o
+        })
+        .collect();
+    let extent = 3.0 * cols.max(rows) as f32;
+    let scene = Scene {
+        name: name.to_owned(),
+        objects,
+        effects: Effects {
+            ground_y: Some(0.0),
+            ..Effects::default()
+        },
+        ..Scene::default()
+    };
+    framed(
+        scene,
+        vec![Light::point(Vec3::new(-0.6 * extent, 2.0 * extent + 4.0, 0.5 * extent))],
+        Vec3::new(0.4, 0.7, 1.0),
+    )
+}
+
+fn town_scene() -> Scene {
+    let mesh = Arc::new(town(&TownParams::default()));
+    let scene = Scene {
+        name: "town".to_owned(),
+        objects: vec![Object {
+            name: "town".to_owned(),
+            mesh,
+            transform: Affine3A::IDENTITY,
+        }],
+        effects: Effects {
+            ground_y: Some(0.0),
+            ..Effects::default()
+        },
+        ..Scene::default()
+    };
+    // The sun exactly along +Y: every wall triangle is exactly parallel to the light.
+    framed(scene, vec![Light::directional(Vec3::Y)], Vec3::new(0.5, 0.8, 1.0))
+}
+
+fn hard_scene(name: &str, case: &shadowvol_silhouette::corpus::CorpusCase) -> Scene {
+    let objects = case
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(i, (mesh, t))| Object {
+            name: format!("{}#{i}", case.name),
+            mesh: Arc::new(mesh.clone()),
+            transform: *t,
+        })
+        .collect();
+    let scene = Scene {
+        name: name.to_owned(),
+        objects,
+        ..Scene::default()
+    };
+    framed(scene, case.lights.clone(), Vec3::new(0.6, 0.5, 1.0))
+}

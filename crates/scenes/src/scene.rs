@@ -1,0 +1,329 @@
+//! The scene model: objects (a shared mesh and a transform), lights, a camera and the effects the
+//! scene calls for.
+
+use crate::SceneError;
+use glam::{Affine3A, Vec3};
+use shadowvol_mesh_topology::{EdgeTable, Mesh};
+use shadowvol_robust_math::Light;
+use shadowvol_silhouette::{SceneObject, TopologyScene};
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+
+/// One object: a mesh in its own frame, placed in the world by `transform`.
+///
+/// Several objects may share one mesh (`Arc::ptr_eq`); [`Scene::topology`] then builds its edge
+/// table once.
+#[derive(Debug, Clone)]
+pub struct Object {
+    /// A name for messages and reports (the glTF node name, or a generated one).
+    pub name: String,
+    /// The mesh in object space.
+    pub mesh: Arc<Mesh>,
+    /// World-from-object transform (`f32`, affine, expected to be invertible).
+    pub transform: Affine3A,
+}
+
+/// A perspective camera for the renderer, in world space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Eye position.
+    pub eye: Vec3,
+    /// A point the camera looks at.
+    pub target: Vec3,
+    /// The up direction (need not be exactly orthogonal to the view direction).
+    pub up: Vec3,
+    /// Vertical field of view in radians.
+    pub fov_y: f32,
+    /// Near plane distance (> 0). The far plane is at infinity (shadow volumes need it).
+    pub near: f32,
+}
+
+impl Camera {
+    /// A camera that sees the axis-aligned box `[min, max]` whole, from the direction `from`
+    /// (pointing from the box centre towards the eye), with a 45° vertical field of view.
+    #[must_use]
+    pub fn framing(min: Vec3, max: Vec3, from: Vec3) -> Self {
+        let centre = (min + max) * 0.5;
+        let radius = ((max - min).length() * 0.5).max(1e-3);
+        let fov_y = 45f32.to_radians();
+        let distance = radius / (fov_y * 0.5).sin() * 1.05;
+        let dir = from.try_normalize().unwrap_or(Vec3::new(0.3, 0.5, 1.0).normalize());
+        let up = if dir.cross(Vec3::Y).length_squared() < 1e-6 {
+            Vec3::Z
+        } else {
+            Vec3::Y
+        };
+        Self {
+            eye: centre + dir * distance,
+            target: centre,
+            up,
+            fov_y,
+            near: (distance - radius).max(distance * 1e-3) * 0.5,
+        }
+    }
+}
+
+/// The effects a scene calls for; the renderer plans its passes from these.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Effects {
+    /// Cast stencil shadow volumes from every light (false: lighting only).
+    pub shadows: bool,
+    /// Ambient light level in `[0, 1]` that shadowed pixels keep.
+    pub ambient: f32,
+    /// The objects never move: silhouettes can be cached while the lights stand still.
+    pub static_geometry: bool,
+    /// Height of a horizontal receiver plane (`y = ground_y`, facing `+Y`) the renderer should
+    /// draw under the objects so shadows have somewhere to fall. It is not an object: it casts
+    /// nothing and is not part of silhouette extraction. `None`: no receiver plane.
+    pub ground_y: Option<f32>,
+}
+
+impl Default for Effects {
+    fn default() -> Self {
+        Self {
+            shadows: true,
+            ambient: 0.2,
+            static_geometry: true,
+            ground_y: None,
+        }
+    }
+}
+
+/// A scene: objects, lights, an optional camera and the effects it calls for.
+///
+/// Load one from a file with [`Scene::load`], build a preset with [`crate::preset`], or either
+/// with [`Scene::from_name_or_path`].
+#[derive(Debug, Clone, Default)]
+pub struct Scene {
+    /// A name for reports (the preset name or the file name).
+    pub name: String,
+    /// The objects, in order (glTF: depth-first node order).
+    pub objects: Vec<Object>,
+    /// Lights in world space (homogeneous: `w = 1` point, `w = 0` directional towards the light).
+    pub lights: Vec<Light>,
+    /// The camera, if the scene has one.
+    pub camera: Option<Camera>,
+    /// What the renderer should simulate.
+    pub effects: Effects,
+}
+
+impl Scene {
+    /// Loads a scene file: `.gltf` or `.glb` (objects, lights, camera) or `.obj` (one object,
+    /// identity transform, no lights or camera).
+    ///
+    /// # Errors
+    /// [`SceneError::UnsupportedFormat`] for another extension, otherwise any error of the
+    /// loader, naming the file and what in it is wrong.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, SceneError> {
+        let path = path.as_ref();
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("gltf" | "glb") => crate::gltf_load::load_gltf(path),
+            Some("obj") => {
+                let mesh = crate::obj::load_obj(path)?;
+                let name = file_name(path);
+                Ok(Self {
+                    objects: vec![Object {
+                        name: name.clone(),
+                        mesh: Arc::new(mesh),
+                        transform: Affine3A::IDENTITY,
+                    }],
+                    name,
+                    ..Self::default()
+                })
+            }
+            _ => Err(SceneError::UnsupportedFormat {
+                path: path.display().to_string(),
+            }),
+        }
+    }
+
+    /// A preset if `s` is a preset name (see [`crate::preset_names`]), otherwise a file path
+    /// loaded with [`Scene::load`].
+    ///
+    /// # Errors
+    /// As [`Scene::load`]; for a string that is neither a preset nor has a known extension,
+    /// [`SceneError::UnknownPreset`] listing the preset names.
+    pub fn from_name_or_path(s: &str) -> Result<Self, SceneError> {
+        if crate::presets::is_preset(s) {
+            return crate::preset(s);
+        }
+        let path = Path::new(s);
+        let known_ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .is_some_and(|e| matches!(e.as_str(), "gltf" | "glb" | "obj"));
+        if known_ext {
+            Self::load(path)
+        } else {
+            crate::preset(s)
+        }
+    }
+
+    /// Total number of input triangles over all objects (instances counted each time).
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.objects.iter().map(|o| o.mesh.triangles.len()).sum()
+    }
+
+    /// Total number of input vertices over all objects (instances counted each time).
+    #[must_use]
+    pub fn vertex_count(&self) -> usize {
+        self.objects.iter().map(|o| o.mesh.positions.len()).sum()
+    }
+
+    /// The topology scene backends prepare: one [`SceneObject`] per object, with the object's
+    /// transform. Objects that share a mesh (`Arc::ptr_eq`) share one `Arc<EdgeTable>`.
+    ///
+    /// # Errors
+    /// [`SceneError::Mesh`] naming the object if its mesh is invalid (non-finite position,
+    /// index out of range, too large).
+    pub fn topology(&self) -> Result<TopologyScene, SceneError> {
+        let mut tables: HashMap<*const Mesh, Arc<EdgeTable>> = HashMap::new();
+        let mut objects = Vec::with_capacity(self.objects.len());
+        for (i, o) in self.objects.iter().enumerate() {
+            let key = Arc::as_ptr(&o.mesh);
+            let table = match tables.get(&key) {
+                Some(t) => Arc::clone(t),
+                None => {
+                    let t = Arc::new(EdgeTable::build(&o.mesh).map_err(|source| {
+                        SceneError::Mesh {
+                            what: format!("object {i} '{}'", o.name),
+                            source,
+                        }
+                    })?);
+                    tables.insert(key, Arc::clone(&t));
+                    t
+                }
+            };
+            objects.push(SceneObject {
+                name: o.name.clone(),
+                table,
+                world_from_object: o.transform,
+            });
+        }
+        Ok(TopologyScene { objects })
+    }
+
+    /// All objects merged into one world-space mesh: each object's transform is applied to its
+    /// positions in `f32` on the host (with [`apply_f32`]), and the objects are concatenated in
+    /// order, so vertex `i` of object `k` gets index `(vertices of objects before k) + i`.
+    ///
+    /// # Errors
+    /// [`SceneError::Mesh`] if the result is too large for `u32` indexing or a mesh is invalid.
+    pub fn baked_mesh(&self) -> Result<Mesh, SceneError> {
+        let mut out = Mesh {
+            positions: Vec::with_capacity(self.vertex_count()),
+            triangles: Vec::with_capacity(self.triangle_count()),
+        };
+        for (i, o) in self.objects.iter().enumerate() {
+            let moved = transformed(&o.mesh, &o.transform);
+            out.append(&moved).map_err(|source| SceneError::Mesh {
+                what: format!("baking object {i} '{}'", o.name),
+                source,
+            })?;
+        }
+        out.validate().map_err(|source| SceneError::Mesh {
+            what: format!("baked mesh of scene '{}'", self.name),
+            source,
+        })?;
+        Ok(out)
+    }
+
+    /// This scene with all objects baked into one object (identity transform), keeping lights,
+    /// camera and effects.
+    ///
+    /// # Errors
+    /// As [`Scene::baked_mesh`].
+    pub fn baked(&self) -> Result<Self, SceneError> {
+        Ok(Self {
+            name: self.name.clone(),
+            objects: vec![Object {
+                name: format!("{} (baked)", self.name),
+                mesh: Arc::new(self.baked_mesh()?),
+                transform: Affine3A::IDENTITY,
+            }],
+            lights: self.lights.clone(),
+            camera: self.camera,
+            effects: self.effects,
+        })
+    }
+
+    /// World-space axis-aligned bounds `(min, max)` of all objects' vertices (each object's
+    /// corners transformed), or `None` for a scene without vertices.
+    #[must_use]
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let mut min = Vec3::splat(f32::INFINITY);
+        let mut max = Vec3::splat(f32::NEG_INFINITY);
+        let mut any = false;
+        for o in &self.objects {
+            let Some((lo, hi)) = mesh_bounds(&o.mesh) else {
+                continue;
+            };
+            for k in 0..8 {
+                let c = Vec3::new(
+                    if k & 1 == 0 { lo.x } else { hi.x },
+                    if k & 2 == 0 { lo.y } else { hi.y },
+                    if k & 4 == 0 { lo.z } else { hi.z },
+                );
+                let w = o.transform.transform_point3(c);
+                min = min.min(w);
+                max = max.max(w);
+                any = true;
+            }
+        }
+        any.then_some((min, max))
+    }
+
+    /// The scene's camera, or one framing its bounds (from `+x+y+z`-ish) when it has none.
+    /// `None` only for a scene without vertices and without camera.
+    #[must_use]
+    pub fn camera_or_default(&self) -> Option<Camera> {
+        self.camera.or_else(|| {
+            self.bounds()
+                .map(|(lo, hi)| Camera::framing(lo, hi, Vec3::new(0.6, 0.5, 1.0)))
+        })
+    }
+}
+
+/// Applies a world-from-object transform to one point in `f32`: the one definition used by
+/// [`Scene::baked_mesh`] and the glTF loader, so baked positions are reproducible bit for bit.
+#[inline]
+#[must_use]
+pub fn apply_f32(t: &Affine3A, p: Vec3) -> Vec3 {
+    t.transform_point3(p)
+}
+
+/// `mesh` with `t` applied to every position in `f32` (triangles unchanged). The identity leaves
+/// positions bit-identical.
+#[must_use]
+pub fn transformed(mesh: &Mesh, t: &Affine3A) -> Mesh {
+    if *t == Affine3A::IDENTITY {
+        return mesh.clone();
+    }
+    Mesh {
+        positions: mesh.positions.iter().map(|&p| apply_f32(t, p)).collect(),
+        triangles: mesh.triangles.clone(),
+    }
+}
+
+/// Axis-aligned bounds of a mesh's positions, `None` when it has none.
+#[must_use]
+pub fn mesh_bounds(mesh: &Mesh) -> Option<(Vec3, Vec3)> {
+    let first = *mesh.positions.first()?;
+    Some(
+        mesh.positions
+            .iter()
+            .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))),
+    )
+}
+
+pub(crate) fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned())
+}
