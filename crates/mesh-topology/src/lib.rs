@@ -32,6 +32,7 @@
 
 use glam::Vec3;
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 /// Marker for "no triangle" in [`Connectivity::neighbors`].
 pub const NO_NEIGHBOR: u32 = u32::MAX;
@@ -207,6 +208,39 @@ fn weld_key(p: Vec3) -> [u32; 3] {
     ]
 }
 
+/// A fast non-cryptographic hasher for weld keys (three `u32` bit patterns): multiply-xorshift
+/// mixing per word. Weld keys are not attacker-controlled in a way that matters here, and the
+/// default SipHash dominated edge-table construction on 10^6-triangle meshes.
+#[derive(Default)]
+struct WeldHasher(u64);
+
+impl Hasher for WeldHasher {
+    #[inline]
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(4) {
+            let mut w = [0u8; 4];
+            w[..chunk.len()].copy_from_slice(chunk);
+            self.write_u32(u32::from_le_bytes(w));
+        }
+    }
+
+    #[inline]
+    fn write_u32(&mut self, i: u32) {
+        self.0 = (self.0.rotate_left(23) ^ u64::from(i)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    }
+
+    #[inline]
+    fn write_usize(&mut self, i: usize) {
+        self.write_u32(i as u32);
+    }
+
+    #[inline]
+    fn finish(&self) -> u64 {
+        let x = self.0;
+        x ^ (x >> 29)
+    }
+}
+
 /// Welds vertices whose positions are exactly equal (`-0.0 == +0.0`).
 ///
 /// Each group is named by its smallest input index, and compact ids are numbered in ascending
@@ -215,7 +249,8 @@ fn weld_key(p: Vec3) -> [u32; 3] {
 /// NaN positions are never welded to anything because their bits are kept as they are.
 #[must_use]
 pub fn weld(positions: &[Vec3]) -> Weld {
-    let mut map: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
+    let mut map: HashMap<[u32; 3], u32, BuildHasherDefault<WeldHasher>> =
+        HashMap::with_capacity_and_hasher(positions.len(), BuildHasherDefault::default());
     let mut compact_of_input = Vec::with_capacity(positions.len());
     let mut names = Vec::new();
     let mut out_positions = Vec::new();
