@@ -1,0 +1,529 @@
+//! Integration tests of the `shadowvol` binary: JSON contracts checked against an independent
+//! integer reference, and every kind of bad input checked for its message and exit code.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_shadowvol");
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+}
+
+fn run(args: &[&str]) -> Output {
+    let out = Command::new(BIN)
+        .args(args)
+        .output()
+        .expect("run shadowvol");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !stderr.contains("panicked"),
+        "shadowvol {args:?} panicked:\n{stderr}"
+    );
+    out
+}
+
+fn json_of(args: &[&str]) -> Value {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "shadowvol {args:?} failed ({:?}):\n{}",
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("valid JSON on stdout")
+}
+
+/// Runs a command that must fail; returns (exit code, stderr).
+fn failure(args: &[&str]) -> (i32, String) {
+    let out = run(args);
+    assert!(!out.status.success(), "shadowvol {args:?} should fail");
+    assert!(out.stdout.is_empty(), "nothing on stdout for a failure");
+    (
+        out.status.code().expect("exit code"),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn write_obj(name: &str, positions: &[[i64; 3]], faces: &[Vec<i64>]) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli-tests");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut text = String::new();
+    for p in positions {
+        text.push_str(&format!("v {} {} {}\n", p[0], p[1], p[2]));
+    }
+    for f in faces {
+        text.push('f');
+        for i in f {
+            text.push_str(&format!(" {i}"));
+        }
+        text.push('\n');
+    }
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+// ---------------------------------------------------------------------------------------------
+// Independent reference: integer arithmetic (exact for integer coordinates), its own welding and
+// edge collection, written from DESIGN.md's definitions only.
+
+/// Silhouette `(a, b, m)` sorted, and the open-vertex count, for integer positions and light.
+fn reference(
+    positions: &[[i64; 3]],
+    faces: &[Vec<i64>],
+    light: [i64; 4],
+) -> (Vec<(u64, u64, i64)>, u64) {
+    // Weld: a group is named by its smallest input index.
+    let name: Vec<usize> = (0..positions.len())
+        .map(|i| (0..=i).find(|&j| positions[j] == positions[i]).unwrap())
+        .collect();
+    // Resolve 1-based / negative OBJ indices and fan polygons.
+    let mut triangles = Vec::new();
+    for f in faces {
+        let idx: Vec<usize> = f
+            .iter()
+            .map(|&i| {
+                if i > 0 {
+                    (i - 1) as usize
+                } else {
+                    (positions.len() as i64 + i) as usize
+                }
+            })
+            .collect();
+        for k in 1..idx.len() - 1 {
+            triangles.push([name[idx[0]], name[idx[k]], name[idx[k + 1]]]);
+        }
+    }
+    let mut m = std::collections::BTreeMap::<(usize, usize), i64>::new();
+    for t in triangles {
+        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+            continue;
+        }
+        for i in 0..3 {
+            let (u, v, o) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
+            let (a, b) = (u.min(v), u.max(v));
+            let (pa, pb, po) = (positions[a], positions[b], positions[o]);
+            let vv: Vec<i128> = (0..3)
+                .map(|k| i128::from(light[k]) - i128::from(light[3]) * i128::from(pa[k]))
+                .collect();
+            let e: Vec<i128> = (0..3).map(|k| i128::from(pa[k] - pb[k])).collect();
+            let n = [
+                e[1] * vv[2] - e[2] * vv[1],
+                e[2] * vv[0] - e[0] * vv[2],
+                e[0] * vv[1] - e[1] * vv[0],
+            ];
+            let d: i128 = (0..3).map(|k| n[k] * i128::from(po[k] - pa[k])).sum();
+            *m.entry((a, b)).or_default() += d.signum() as i64;
+        }
+    }
+    let edges: Vec<(u64, u64, i64)> = m
+        .into_iter()
+        .filter(|&(_, v)| v != 0)
+        .map(|((a, b), v)| (a as u64, b as u64, v))
+        .collect();
+    let mut sum = std::collections::BTreeMap::<u64, i64>::new();
+    for &(a, b, v) in &edges {
+        *sum.entry(a).or_default() -= v;
+        *sum.entry(b).or_default() += v;
+    }
+    let open = sum.values().filter(|&&s| s != 0).count() as u64;
+    (edges, open)
+}
+
+fn edges_of(light: &Value) -> Vec<(u64, u64, i64)> {
+    light["edges"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| {
+            let e = e.as_array().unwrap();
+            assert_eq!(e.len(), 3, "edges are [a, b, m]");
+            (
+                e[0].as_u64().unwrap(),
+                e[1].as_u64().unwrap(),
+                e[2].as_i64().unwrap(),
+            )
+        })
+        .collect()
+}
+
+fn available_backends() -> Vec<String> {
+    let v = json_of(&["backends", "--format", "json"]);
+    v.as_array()
+        .unwrap()
+        .iter()
+        .filter(|b| b["available"] == Value::Bool(true))
+        .map(|b| b["name"].as_str().unwrap().to_owned())
+        .collect()
+}
+
+const TET: [[i64; 3]; 4] = [[0, 0, 0], [4, 0, 0], [0, 4, 0], [0, 0, 4]];
+
+fn tet_faces() -> Vec<Vec<i64>> {
+    vec![vec![1, 3, 2], vec![1, 2, 4], vec![2, 3, 4], vec![1, 4, 3]]
+}
+
+const LIGHTS: [[i64; 4]; 5] = [
+    [7, 9, 11, 1],
+    [-3, 1, 2, 1],
+    [1, 2, 3, 0],
+    [0, 0, -1, 0],
+    // In the plane z = 0 of a face: edge-on.
+    [5, 6, 0, 1],
+];
+
+fn light_arg(l: [i64; 4]) -> String {
+    format!("--light={},{},{},{}", l[0], l[1], l[2], l[3])
+}
+
+/// Runs `silhouette` for `path` with all `LIGHTS` and checks every field against the reference.
+fn check_against_reference(
+    path: &Path,
+    positions: &[[i64; 3]],
+    faces: &[Vec<i64>],
+    backend: &str,
+    mode: &str,
+) -> Value {
+    let mut args = vec![
+        "silhouette".to_owned(),
+        path.to_str().unwrap().to_owned(),
+        "--format".to_owned(),
+        "json".to_owned(),
+        "--backend".to_owned(),
+        backend.to_owned(),
+        "--mode".to_owned(),
+        mode.to_owned(),
+    ];
+    args.extend(LIGHTS.iter().map(|&l| light_arg(l)));
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let v = json_of(&args);
+    assert_eq!(v["backend"], backend);
+    assert_eq!(v["mode"], mode);
+    let lights = v["lights"].as_array().unwrap();
+    assert_eq!(lights.len(), LIGHTS.len());
+    for (l, got) in LIGHTS.iter().zip(lights) {
+        let want: Vec<f64> = l.iter().map(|&x| x as f64).collect();
+        let light: Vec<f64> = got["light"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        assert_eq!(light, want);
+        let (edges, open) = reference(positions, faces, *l);
+        assert_eq!(edges_of(got), edges, "{backend} {mode} light {l:?}");
+        assert_eq!(got["open_vertices"], open, "{backend} {mode} light {l:?}");
+    }
+    v
+}
+
+#[test]
+fn tetrahedron_matches_integer_reference_in_every_mode() {
+    let path = write_obj("tet.obj", &TET, &tet_faces());
+    for mode in ["original", "robust", "ordered", "exact"] {
+        // Small integers: every f32 operation is exact, so all four modes equal the reference.
+        let v = check_against_reference(&path, &TET, &tet_faces(), "cpu", mode);
+        let mesh = &v["mesh"];
+        assert_eq!(mesh["vertices"], 4);
+        assert_eq!(mesh["welded_vertices"], 4);
+        assert_eq!(mesh["triangles"], 4);
+        assert_eq!(mesh["edges"], 6);
+        assert_eq!(mesh["boundary_edges"], 0);
+        assert_eq!(mesh["nonmanifold_edges"], 0);
+        for l in v["lights"].as_array().unwrap() {
+            assert_eq!(l["open_vertices"], 0);
+        }
+    }
+    // A closed convex mesh seen from outside has a silhouette.
+    let (edges, _) = reference(&TET, &tet_faces(), LIGHTS[0]);
+    assert!(!edges.is_empty());
+}
+
+#[test]
+fn exact_mode_is_identical_on_every_available_backend() {
+    let path = write_obj("tet_backends.obj", &TET, &tet_faces());
+    let backends = available_backends();
+    assert!(backends.iter().any(|b| b == "cpu"));
+    for b in &backends {
+        check_against_reference(&path, &TET, &tet_faces(), b, "exact");
+    }
+}
+
+#[test]
+fn welded_duplicates_are_named_by_smallest_index() {
+    // Vertex 4 duplicates vertex 1, vertex 5 duplicates vertex 0; faces use the duplicates and
+    // negative indices; a quad is fanned; a triangle made degenerate by welding is dropped.
+    let positions = [
+        [0, 0, 0],
+        [4, 0, 0],
+        [0, 4, 0],
+        [0, 0, 4],
+        [4, 0, 0],
+        [0, 0, 0],
+        [4, 4, 4],
+    ];
+    let faces = vec![
+        vec![6, 3, 5],
+        vec![1, 5, 4],
+        vec![-1, -4, 3, 2], // quad of 0-based vertices 6 3 2 1, fanned into two triangles
+        vec![2, 5, 7],      // degenerate after welding (0-based 1 and 4 are the same point)
+    ];
+    let path = write_obj("welded.obj", &positions, &faces);
+    let v = check_against_reference(&path, &positions, &faces, "cpu", "exact");
+    assert_eq!(v["mesh"]["vertices"], 7);
+    assert_eq!(v["mesh"]["welded_vertices"], 5);
+    assert_eq!(v["mesh"]["triangles"], 5);
+    assert_eq!(v["mesh"]["degenerate_triangles"], 1);
+    for l in v["lights"].as_array().unwrap() {
+        for (a, b, _) in edges_of(l) {
+            assert!(
+                a < b && a != 4 && b != 4 && a != 5 && b != 5,
+                "names are smallest indices"
+            );
+        }
+    }
+}
+
+#[test]
+fn nonmanifold_book_counts_and_closes() {
+    // Three pages on the spine (0, 1).
+    let positions = [[0, 0, 0], [0, 0, 4], [4, 0, 0], [0, 4, 0], [-4, -4, 0]];
+    let faces = vec![vec![1, 2, 3], vec![1, 2, 4], vec![1, 2, 5]];
+    let path = write_obj("book.obj", &positions, &faces);
+    let v = check_against_reference(&path, &positions, &faces, "cpu", "exact");
+    assert_eq!(v["mesh"]["edges"], 7);
+    assert_eq!(v["mesh"]["nonmanifold_edges"], 1);
+    assert_eq!(v["mesh"]["boundary_edges"], 6);
+    for l in v["lights"].as_array().unwrap() {
+        assert_eq!(l["open_vertices"], 0);
+    }
+}
+
+#[test]
+fn text_format_is_readable() {
+    let path = write_obj("tet_text.obj", &TET, &tet_faces());
+    let out = run(&["silhouette", path.to_str().unwrap(), "--light", "7,9,11,1"]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("4 vertices (4 welded), 4 triangles"),
+        "{text}"
+    );
+    assert!(
+        text.contains("6: 0 boundary, 6 manifold, 0 non-manifold"),
+        "{text}"
+    );
+    assert!(text.contains("mode     exact"), "{text}");
+    let (edges, _) = reference(&TET, &tet_faces(), [7, 9, 11, 1]);
+    assert!(
+        text.contains(&format!("{} silhouette edges", edges.len())),
+        "{text}"
+    );
+    assert!(text.contains("open vertices: 0 (closed)"), "{text}");
+}
+
+#[test]
+fn backends_json_follows_the_contract() {
+    let v = json_of(&["backends", "--format", "json"]);
+    let rows = v.as_array().unwrap();
+    let names: Vec<&str> = rows.iter().map(|r| r["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["cpu", "simd", "wgpu", "opencl", "vulkan"]);
+    for r in rows {
+        let keys: Vec<&String> = r.as_object().unwrap().keys().collect();
+        for k in ["name", "available", "device", "reason"] {
+            assert!(keys.iter().any(|x| *x == k), "missing {k} in {r}");
+        }
+        let available = r["available"].as_bool().unwrap();
+        assert_eq!(r["device"].is_string(), available, "{r}");
+        assert_eq!(r["reason"].is_string(), !available, "{r}");
+        if !available {
+            assert!(!r["reason"].as_str().unwrap().is_empty());
+        }
+    }
+    assert_eq!(rows[0]["available"], true, "cpu is always available");
+    let text = run(&["backends"]);
+    assert!(text.status.success());
+    let text = String::from_utf8(text.stdout).unwrap();
+    for n in names {
+        assert!(text.contains(n));
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad input: message names the problem and where; exit code 1 for input, 2 for usage.
+
+fn input_error(file: &str, expected: &[&str]) {
+    let path = data(file);
+    let (code, stderr) = failure(&["silhouette", path.to_str().unwrap(), "--light", "1,2,3,1"]);
+    assert_eq!(code, 1, "{file}: {stderr}");
+    for e in expected {
+        assert!(stderr.contains(e), "{file}: expected {e:?} in:\n{stderr}");
+    }
+}
+
+#[test]
+fn non_finite_coordinates_name_vertex_and_line() {
+    input_error(
+        "nan_coordinate.obj",
+        &["nan_coordinate.obj:4:", "vertex 2", "coordinate y is NaN"],
+    );
+    input_error(
+        "inf_coordinate.obj",
+        &["inf_coordinate.obj:4:", "vertex 3", "coordinate z is -inf"],
+    );
+}
+
+#[test]
+fn malformed_numbers_and_indices_name_the_line() {
+    input_error(
+        "malformed_number.obj",
+        &["malformed_number.obj:3:", "malformed number \"1,5\""],
+    );
+    input_error(
+        "malformed_index.obj",
+        &["malformed_index.obj:4:", "malformed face index \"three\""],
+    );
+    input_error(
+        "short_face.obj",
+        &["short_face.obj:5:", "face has 2 corner(s)"],
+    );
+}
+
+#[test]
+fn out_of_range_indices_name_the_line() {
+    input_error(
+        "index_out_of_range.obj",
+        &[
+            "index_out_of_range.obj:6:",
+            "face index 7 is out of range",
+            "3 vertices",
+        ],
+    );
+    input_error(
+        "zero_index.obj",
+        &["zero_index.obj:4:", "face index 0 is invalid"],
+    );
+    input_error(
+        "relative_off_start.obj",
+        &[
+            "relative_off_start.obj:3:",
+            "relative face index -3 runs off the start",
+        ],
+    );
+    input_error(
+        "index_beyond_u32.obj",
+        &[
+            "index_beyond_u32.obj:4:",
+            "4294967296 is beyond the u32 range",
+        ],
+    );
+}
+
+#[test]
+fn unreadable_and_unknown_files_fail_cleanly() {
+    input_error("does_not_exist.obj", &["cannot read", "does_not_exist.obj"]);
+    // A directory with an .obj name cannot be read either.
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("a_directory.obj");
+    std::fs::create_dir_all(&dir).unwrap();
+    let (code, stderr) = failure(&["silhouette", dir.to_str().unwrap(), "--light", "1,2,3,1"]);
+    assert_eq!(code, 1);
+    assert!(
+        stderr.contains("cannot read") && stderr.contains("a_directory.obj"),
+        "{stderr}"
+    );
+    let (code, stderr) = failure(&["silhouette", "mesh.stl", "--light", "1,2,3,1"]);
+    assert_eq!(code, 1);
+    assert!(stderr.contains("mesh.stl: unknown mesh format"), "{stderr}");
+}
+
+#[test]
+fn the_valid_fixture_loads() {
+    let path = data("ok_triangle.obj");
+    let v = json_of(&[
+        "silhouette",
+        path.to_str().unwrap(),
+        "--light",
+        "1,2,3,1",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(v["mesh"]["triangles"], 1);
+    assert_eq!(v["mesh"]["boundary_edges"], 3);
+}
+
+#[test]
+fn usage_errors_exit_2_and_name_the_argument() {
+    let ok = data("ok_triangle.obj");
+    let ok = ok.to_str().unwrap();
+    for (light, why) in [
+        ("1,2,3", "found 3 component(s)"),
+        ("1,2,x,1", "component 3"),
+        ("1,2,3,nan", "light component w is NaN"),
+        ("1,2,3,inf", "light component w is inf"),
+        ("1,2,3,-1", "must be 0 (directional) or positive"),
+        ("0,0,0,0", "non-zero direction"),
+    ] {
+        let (code, stderr) = failure(&["silhouette", ok, "--light", light]);
+        assert_eq!(code, 2, "{light}: {stderr}");
+        assert!(
+            stderr.contains("--light") && stderr.contains(why),
+            "{light}: {stderr}"
+        );
+    }
+    let (code, stderr) = failure(&["silhouette", ok, "--light", "1,2,3,1", "--mode", "fast"]);
+    assert_eq!(code, 2);
+    assert!(
+        stderr.contains("'fast'") && stderr.contains("--mode"),
+        "{stderr}"
+    );
+    let (code, stderr) = failure(&["silhouette", ok, "--light", "1,2,3,1", "--backend", "metal"]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("unknown backend \"metal\""), "{stderr}");
+    let (code, stderr) = failure(&["silhouette", ok]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("no light given"), "{stderr}");
+    let (code, _) = failure(&["silhouette"]);
+    assert_eq!(code, 2);
+    let (code, _) = failure(&["frobnicate"]);
+    assert_eq!(code, 2);
+}
+
+#[test]
+fn unavailable_backend_exits_1_with_its_reason() {
+    let v = json_of(&["backends", "--format", "json"]);
+    let unavailable: Vec<(String, String)> = v
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|b| b["available"] == Value::Bool(false))
+        .map(|b| {
+            (
+                b["name"].as_str().unwrap().to_owned(),
+                b["reason"].as_str().unwrap().to_owned(),
+            )
+        })
+        .collect();
+    if unavailable.is_empty() {
+        eprintln!("every backend is available here; nothing to check");
+    }
+    let ok = data("ok_triangle.obj");
+    for (name, reason) in unavailable {
+        let (code, stderr) = failure(&[
+            "silhouette",
+            ok.to_str().unwrap(),
+            "--light",
+            "1,2,3,1",
+            "--backend",
+            &name,
+        ]);
+        assert_eq!(code, 1, "{stderr}");
+        assert!(
+            stderr.contains(&name) && stderr.contains(&reason),
+            "{stderr}"
+        );
+    }
+}
