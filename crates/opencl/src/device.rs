@@ -74,6 +74,16 @@ fn cl_err(what: &str, e: ClError) -> BackendError {
 /// [`BackendError::Unavailable`] when the ICD loader (`libOpenCL.so.1`) cannot be loaded, when
 /// no platform is installed, or when no platform has a device; the message says what to install.
 pub fn list_devices() -> Result<Vec<DeviceDesc>, BackendError> {
+    let _guard = INIT_LOCK.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    list_devices_locked()
+}
+
+/// Serialises platform enumeration and backend start-up within the process: some drivers
+/// (PoCL 5) are not thread-safe while they initialise their devices.
+pub(crate) static INIT_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// [`list_devices`] for a caller that holds [`INIT_LOCK`].
+pub(crate) fn list_devices_locked() -> Result<Vec<DeviceDesc>, BackendError> {
     let platforms = match get_platforms() {
         Ok(p) => p,
         Err(e) if e.0 == DLOPEN_RUNTIME_LOAD_FAILED => {

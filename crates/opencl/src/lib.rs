@@ -269,7 +269,9 @@ impl OpenClBackend {
     /// or the kernel file cannot be read; [`BackendError::Build`] with the compiler's log when
     /// the kernel does not build; [`BackendError::Device`] when the driver fails.
     pub fn with_options(options: OpenClOptions) -> Result<Self, BackendError> {
-        let devices = list_devices()?;
+        // Some drivers (PoCL 5) crash when threads enumerate and initialise devices at once.
+        let _guard = device::INIT_LOCK.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let devices = device::list_devices_locked()?;
         let device = select_device(&devices, options.device.as_deref())?;
         let (source, origin) = match &options.kernel {
             KernelSource::Builtin => (KERNEL_SOURCE.to_owned(), "kernels/silhouette.cl (built in)".to_owned()),

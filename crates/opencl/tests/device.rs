@@ -1,0 +1,282 @@
+//! The OpenCL backend on a real OpenCL platform (PoCL in CI), against the `cpu` reference.
+//!
+//! Without a platform these tests print a visible `SKIPPED` line and pass, except under
+//! `CI=true`, where a missing platform fails the run.
+
+mod common;
+
+use common::all_cases;
+use shadowvol_cpu::CpuBackend;
+use shadowvol_opencl::twin::TwinBackend;
+use shadowvol_opencl::{
+    list_devices, select_device, KernelSource, OpenClBackend, OpenClOptions, DEVICE_ENV,
+};
+use shadowvol_silhouette::{
+    extract_once, invariant, Accuracy, BackendError, Light, Multiplicities, PreparedId,
+    SilhouetteBackend,
+};
+
+fn in_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true") || v == "1")
+}
+
+/// Starts the backend with `options`, or skips (visibly) when OpenCL is unavailable here.
+fn start(options: OpenClOptions, test: &str) -> Option<OpenClBackend> {
+    match OpenClBackend::with_options(options) {
+        Ok(b) => Some(b),
+        Err(e @ BackendError::Unavailable { .. }) => {
+            assert!(!in_ci(), "CI=true but OpenCL is unavailable: {e}");
+            eprintln!("SKIPPED {test}: {e}");
+            println!("SKIPPED {test}: {e}");
+            None
+        }
+        Err(e) => panic!("{test}: the OpenCL backend failed to start: {e}"),
+    }
+}
+
+fn options(force_f32_filter: bool) -> OpenClOptions {
+    OpenClOptions {
+        force_f32_filter,
+        ..OpenClOptions::from_env()
+    }
+}
+
+/// Every case, every mode: exact identical to cpu (and the uncertain count equal to the twin's
+/// with the same filter), robust and ordered closed, and (with contraction off) the f32 modes
+/// identical to cpu too.
+fn conformance(force_f32_filter: bool, test: &str) {
+    let Some(mut cl) = start(options(force_f32_filter), test) else {
+        return;
+    };
+    let use_f64 = cl.uses_f64_filter();
+    assert_eq!(use_f64, !force_f32_filter && cl.device().fp64);
+    eprintln!("{test}: {} (f64 filter: {use_f64})", cl.info().device);
+    let mut cpu = CpuBackend::new();
+    let mut twin = TwinBackend::new(use_f64);
+    let mut total_uncertain = 0;
+    for case in all_cases() {
+        for mode in Accuracy::ALL {
+            let (want, _) = extract_once(&mut cpu, &case.scene, &case.lights, mode).unwrap();
+            let (got, stats) = extract_once(&mut cl, &case.scene, &case.lights, mode)
+                .unwrap_or_else(|e| panic!("{} {mode}: {e}", case.name));
+            let (_, twin_stats) = extract_once(&mut twin, &case.scene, &case.lights, mode).unwrap();
+            assert!(got.silhouettes_consistent(), "{} {mode}: compact lists", case.name);
+            assert_eq!(got.light_count(), case.lights.len());
+            assert_eq!(got.edge_count(), case.scene.total_edges());
+            match mode {
+                Accuracy::Exact => {
+                    assert_eq!(
+                        invariant::first_difference(&want, &got),
+                        None,
+                        "{} exact: (light, edge, cpu, opencl)",
+                        case.name
+                    );
+                    assert_eq!(
+                        stats.uncertain, twin_stats.uncertain,
+                        "{} exact: uncertain count of the device filter vs its twin",
+                        case.name
+                    );
+                    total_uncertain += stats.uncertain;
+                }
+                Accuracy::Robust | Accuracy::Ordered => {
+                    for l in 0..case.lights.len() {
+                        assert_eq!(
+                            invariant::open_vertices_scene(&case.scene, &got, l),
+                            0,
+                            "{} {mode} light {l}: open vertices",
+                            case.name
+                        );
+                    }
+                    assert_eq!(stats.uncertain, 0);
+                }
+                Accuracy::Original => assert_eq!(stats.uncertain, 0),
+            }
+            // FP_CONTRACT OFF: the f32 modes evaluate exactly robust-math's expression, so on a
+            // device with IEEE f32 (PoCL) they agree with cpu bit for bit as well.
+            if mode != Accuracy::Exact && cl.device().device_type == "CPU" {
+                assert_eq!(
+                    invariant::first_difference(&want, &got),
+                    None,
+                    "{} {mode}: (light, edge, cpu, opencl)",
+                    case.name
+                );
+            }
+        }
+    }
+    // The extra cases include pairs no filter can certify (light in a face plane).
+    assert!(total_uncertain > 4096, "{total_uncertain} uncertain pairs");
+}
+
+#[test]
+fn conformance_exact_with_device_default_filter() {
+    conformance(false, "conformance_exact_with_device_default_filter");
+}
+
+#[test]
+fn conformance_exact_with_forced_f32_filter() {
+    conformance(true, "conformance_exact_with_forced_f32_filter");
+}
+
+#[test]
+fn pocl_has_fp64_so_both_exact_paths_are_covered() {
+    let Some(cl) = start(options(false), "pocl_has_fp64_so_both_exact_paths_are_covered") else {
+        return;
+    };
+    if cl.device().platform_name.contains("Portable Computing Language") {
+        assert!(cl.uses_f64_filter(), "PoCL reports cl_khr_fp64; the f64 path must be used");
+    } else {
+        eprintln!("not PoCL ({}); f64 filter: {}", cl.info().device, cl.uses_f64_filter());
+    }
+}
+
+#[test]
+fn broken_kernel_reports_the_compiler_log() {
+    let opts = OpenClOptions {
+        kernel: KernelSource::Text(
+            "__kernel void silhouette(__global int* x) { x[0] = undeclared_thing + ; }".into(),
+        ),
+        ..OpenClOptions::from_env()
+    };
+    let Some(err) = (match OpenClBackend::with_options(opts) {
+        Ok(_) => panic!("a broken kernel must not build"),
+        Err(e @ BackendError::Unavailable { .. }) => {
+            assert!(!in_ci(), "CI=true but OpenCL is unavailable: {e}");
+            eprintln!("SKIPPED broken_kernel_reports_the_compiler_log: {e}");
+            None
+        }
+        Err(e) => Some(e),
+    }) else {
+        return;
+    };
+    match &err {
+        BackendError::Build { what, log, .. } => {
+            assert!(what.contains("kernel source text"), "{what}");
+            assert!(log.contains("clBuildProgram failed"), "{log}");
+            assert!(log.contains("undeclared_thing"), "the compiler's log names the error: {log}");
+        }
+        other => panic!("expected BackendError::Build, got {other:?}"),
+    }
+    // The message shown to users carries the log.
+    assert!(err.to_string().contains("undeclared_thing"));
+}
+
+#[test]
+fn kernel_without_entry_point_is_a_build_error() {
+    let opts = OpenClOptions {
+        kernel: KernelSource::Text("__kernel void other(__global int* x) { x[0] = 1; }".into()),
+        ..OpenClOptions::from_env()
+    };
+    match OpenClBackend::with_options(opts) {
+        Err(BackendError::Build { log, .. }) => assert!(log.contains("silhouette"), "{log}"),
+        Err(e @ BackendError::Unavailable { .. }) => {
+            assert!(!in_ci(), "CI=true but OpenCL is unavailable: {e}");
+            eprintln!("SKIPPED kernel_without_entry_point_is_a_build_error: {e}");
+        }
+        other => panic!("expected BackendError::Build, got {other:?}"),
+    }
+}
+
+#[test]
+fn kernel_loads_from_a_path() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../kernels/silhouette.cl");
+    let opts = OpenClOptions {
+        kernel: KernelSource::Path(path.clone()),
+        ..OpenClOptions::from_env()
+    };
+    let Some(mut cl) = start(opts, "kernel_loads_from_a_path") else {
+        return;
+    };
+    assert!(cl.info().details.iter().any(|(_, v)| v.contains("silhouette.cl")));
+    let case = &all_cases()[0];
+    let (got, _) = extract_once(&mut cl, &case.scene, &case.lights, Accuracy::Exact).unwrap();
+    let (want, _) =
+        extract_once(&mut CpuBackend::new(), &case.scene, &case.lights, Accuracy::Exact).unwrap();
+    assert_eq!(got, want);
+    // A missing file is reported with its path.
+    let missing = OpenClOptions {
+        kernel: KernelSource::Path(path.with_file_name("no-such-kernel.cl")),
+        ..OpenClOptions::from_env()
+    };
+    let err = OpenClBackend::with_options(missing).unwrap_err();
+    assert!(err.to_string().contains("no-such-kernel.cl"), "{err}");
+}
+
+#[test]
+fn device_selection_by_index_and_name() {
+    let devices = match list_devices() {
+        Ok(d) => d,
+        Err(e) => {
+            assert!(!in_ci(), "CI=true but OpenCL is unavailable: {e}");
+            eprintln!("SKIPPED device_selection_by_index_and_name: {e}");
+            return;
+        }
+    };
+    let first = &devices[0];
+    let by_index = select_device(&devices, Some(&format!("{}:{}", first.platform_index, first.device_index))).unwrap();
+    assert_eq!(by_index, *first);
+    let by_name = select_device(&devices, Some(&first.device_name.to_uppercase())).unwrap();
+    assert_eq!(by_name.device_name, first.device_name);
+    let default = select_device(&devices, None).unwrap();
+    let expected_type = if devices.iter().any(|d| d.device_type == "GPU") { "GPU" } else { "CPU" };
+    assert_eq!(default.device_type, expected_type);
+    for bad in ["99:0", "0:99", "no-such-device-xyz"] {
+        match select_device(&devices, Some(bad)) {
+            Err(BackendError::Unavailable { reason, .. }) => {
+                assert!(reason.contains(DEVICE_ENV) && reason.contains(bad), "{reason}");
+            }
+            other => panic!("selector {bad:?}: expected Unavailable, got {other:?}"),
+        }
+    }
+    let Some(cl) = start(OpenClOptions { device: Some("0:0".into()), ..OpenClOptions::default() }, "select 0:0") else {
+        return;
+    };
+    let info = cl.info();
+    assert!(info.device.contains(&devices[0].platform_name) && info.device.contains(&devices[0].device_name));
+}
+
+#[test]
+fn bad_calls_are_errors() {
+    let Some(mut cl) = start(options(false), "bad_calls_are_errors") else {
+        return;
+    };
+    let case = &all_cases()[0];
+    let id = cl.prepare(&case.scene).unwrap();
+    let mut out = Multiplicities::default();
+    assert!(matches!(
+        cl.extract(id, &[], Accuracy::Exact, &mut out),
+        Err(BackendError::InvalidInput(_))
+    ));
+    assert!(matches!(
+        cl.extract(PreparedId(999), &case.lights, Accuracy::Exact, &mut out),
+        Err(BackendError::UnknownScene { .. })
+    ));
+    cl.release(id);
+    assert!(matches!(
+        cl.extract(id, &case.lights, Accuracy::Exact, &mut out),
+        Err(BackendError::UnknownScene { .. })
+    ));
+}
+
+#[test]
+fn prepared_scene_is_reused_across_calls_light_counts_and_modes() {
+    let Some(mut cl) = start(options(false), "prepared_scene_is_reused") else {
+        return;
+    };
+    let mut cpu = CpuBackend::new();
+    let cases = all_cases();
+    let case = cases.iter().find(|c| c.name == "twelve-objects-transformed").unwrap();
+    let id = cl.prepare(&case.scene).unwrap();
+    let cid = cpu.prepare(&case.scene).unwrap();
+    let mut out = Multiplicities::default();
+    let mut want = Multiplicities::default();
+    // Growing and shrinking light counts on the same prepared buffers.
+    for n in [1, case.lights.len(), 2, case.lights.len()] {
+        let lights: Vec<Light> = case.lights.iter().copied().cycle().skip(n).take(n).collect();
+        for mode in [Accuracy::Exact, Accuracy::Robust] {
+            let stats = cl.extract(id, &lights, mode, &mut out).unwrap();
+            cpu.extract(cid, &lights, mode, &mut want).unwrap();
+            assert_eq!(out, want, "{n} lights, {mode}");
+            assert!(stats.compute > std::time::Duration::ZERO);
+        }
+    }
+}
