@@ -10,6 +10,7 @@ use shadowvol::CliError;
 use std::io::Write;
 use std::process::ExitCode;
 
+mod cmd_accuracy;
 mod cmd_backends;
 mod cmd_silhouette;
 
@@ -33,12 +34,17 @@ enum Command {
     /// Compute the silhouette edges of a mesh, with multiplicities, for one or more lights.
     #[command(long_about = cmd_silhouette::LONG_ABOUT, after_help = cmd_silhouette::AFTER_HELP)]
     Silhouette(cmd_silhouette::Args),
+    /// Measure what each accuracy mode gets wrong on the hard scenes (open vertices, signs
+    /// that differ from exact).
+    #[command(long_about = cmd_accuracy::LONG_ABOUT)]
+    Accuracy(cmd_accuracy::Args),
 }
 
 fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
     match command {
         Command::Backends(args) => cmd_backends::run(&args, out),
         Command::Silhouette(args) => cmd_silhouette::run(&args, out),
+        Command::Accuracy(args) => cmd_accuracy::run(&args, out),
     }
 }
 
