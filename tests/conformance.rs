@@ -1,0 +1,339 @@
+//! Cross-backend conformance: every registered backend, on every corpus case, in every mode.
+//!
+//! One test per (backend, case, mode), named `conformance::<backend>::<case>::<mode>`:
+//!
+//! * `exact`: bit-identical to the `cpu` reference, and 0 open vertices for every light;
+//! * `robust`, `ordered`: 0 open vertices for every light (the chains close);
+//! * `original`: runs; its open vertices and its differences from the cpu's `original` are
+//!   reported after the run (it is the baseline: no closure is asserted);
+//! * all modes: the result has one value per (edge, light) and compact silhouette lists that list
+//!   exactly the edges with `m != 0`.
+//!
+//! A backend that cannot start is a visible skip (`ignored (<backend> unavailable: reason)`),
+//! except when `CI=true`: then each of its tests fails with the reason. A backend whose cargo
+//! feature is off is always skipped. Tests listed in [`EXPECTED_FAILURES`] show `[xfail]` before
+//! their name; they pass when their check fails and fail when it passes, so the list can't go
+//! stale.
+//!
+//! Backends come only from `shadowvol::backends()`; cases only from
+//! `shadowvol_silhouette::corpus::cases()`.
+
+use libtest_mimic::{Arguments, Completion, Failed, Trial};
+use shadowvol::BackendEntry;
+use shadowvol_cpu::CpuBackend;
+use shadowvol_robust_math::Accuracy;
+use shadowvol_silhouette::{
+    corpus, extract_once, invariant, BackendError, Light, Multiplicities, SilhouetteBackend,
+    TopologyScene,
+};
+use std::collections::HashMap;
+use std::sync::mpsc::{self, Receiver, Sender};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+/// Tests expected to fail, as `(test name, why)`. Empty: every backend must pass everything.
+const EXPECTED_FAILURES: &[(&str, &str)] = &[];
+
+/// How long a backend may take to start before it counts as unavailable.
+const START_TIMEOUT: Duration = Duration::from_secs(180);
+
+/// One corpus case, prepared once and shared by all trials.
+struct Case {
+    name: &'static str,
+    scene: TopologyScene,
+    lights: Vec<Light>,
+}
+
+/// A request to a backend's worker thread.
+struct Job {
+    case: usize,
+    mode: Accuracy,
+    reply: Sender<Result<Multiplicities, String>>,
+}
+
+/// Whether a backend started, as reported by its worker.
+enum Started {
+    Yes { device: String, jobs: Sender<Job> },
+    NotCompiled(String),
+    No(String),
+}
+
+fn is_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true"))
+}
+
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| (*s).to_owned())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".to_owned())
+}
+
+/// Starts `entry` on its own thread (backends need not be `Send`), which then serves jobs: the
+/// scene of each case is prepared once, on first use.
+fn spawn_worker(entry: BackendEntry, cases: Arc<Vec<Case>>) -> Receiver<Started> {
+    let (started_tx, started_rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let mut backend: Box<dyn SilhouetteBackend> = match entry.start() {
+            Ok(b) => b,
+            Err(e) => {
+                let reason = match e {
+                    BackendError::Unavailable { reason, .. } => reason,
+                    other => other.to_string(),
+                };
+                let _ = started_tx.send(if entry.compiled {
+                    Started::No(reason)
+                } else {
+                    Started::NotCompiled(reason)
+                });
+                return;
+            }
+        };
+        let (jobs_tx, jobs_rx) = mpsc::channel::<Job>();
+        let _ = started_tx.send(Started::Yes {
+            device: backend.info().device,
+            jobs: jobs_tx,
+        });
+        let mut prepared = HashMap::new();
+        for job in jobs_rx {
+            let case = &cases[job.case];
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                let id = match prepared.get(&job.case) {
+                    Some(&id) => id,
+                    None => {
+                        let id = backend.prepare(&case.scene)?;
+                        prepared.insert(job.case, id);
+                        id
+                    }
+                };
+                let mut out = Multiplicities::default();
+                backend.extract(id, &case.lights, job.mode, &mut out)?;
+                Ok::<_, BackendError>(out)
+            }));
+            let reply = match result {
+                Ok(Ok(m)) => Ok(m),
+                Ok(Err(e)) => Err(format!("backend error: {e}")),
+                Err(p) => Err(format!("backend panicked: {}", panic_message(p.as_ref()))),
+            };
+            let _ = job.reply.send(reply);
+        }
+    });
+    started_rx
+}
+
+/// Names an edge by its object and input vertex names, for messages.
+fn edge_label(scene: &TopologyScene, global: usize) -> String {
+    let offsets = scene.edge_offsets();
+    let obj = offsets.partition_point(|&o| o <= global) - 1;
+    let (a, b) = scene.objects[obj].table.edge_names(global - offsets[obj]);
+    format!("{} edge ({a}, {b})", scene.objects[obj].name)
+}
+
+/// Observations of non-asserted quantities, printed after the run.
+type Notes = Arc<Mutex<Vec<String>>>;
+
+fn check(
+    backend: &str,
+    case: &Case,
+    mode: Accuracy,
+    got: &Multiplicities,
+    notes: &Notes,
+) -> Result<(), String> {
+    let edges = case.scene.total_edges();
+    if got.edge_count() != edges || got.light_count() != case.lights.len() {
+        return Err(format!(
+            "result has {} edges x {} lights, expected {edges} x {}",
+            got.edge_count(),
+            got.light_count(),
+            case.lights.len()
+        ));
+    }
+    if !got.silhouettes_consistent() {
+        return Err("compact silhouette lists do not list exactly the edges with m != 0".into());
+    }
+    let mut cpu = CpuBackend::new();
+    let (reference, _) = extract_once(&mut cpu, &case.scene, &case.lights, mode)
+        .map_err(|e| format!("cpu reference failed: {e}"))?;
+    let open: Vec<usize> = (0..case.lights.len())
+        .map(|l| invariant::open_vertices_scene(&case.scene, got, l))
+        .collect();
+    let differing: Vec<usize> = (0..case.lights.len())
+        .map(|l| invariant::differing_edges(got, &reference, l))
+        .collect();
+    match mode {
+        Accuracy::Exact => {
+            if let Some((l, e, g, want)) = invariant::first_difference(got, &reference) {
+                return Err(format!(
+                    "exact differs from cpu: light {l} ({}), {}: m = {g}, cpu m = {want}; \
+                     differing edges per light: {differing:?}",
+                    case.lights[l],
+                    edge_label(&case.scene, e)
+                ));
+            }
+            if open.iter().any(|&o| o != 0) {
+                return Err(format!("exact leaves open vertices per light: {open:?}"));
+            }
+        }
+        Accuracy::Robust | Accuracy::Ordered => {
+            if open.iter().any(|&o| o != 0) {
+                return Err(format!("{mode} leaves open vertices per light: {open:?}"));
+            }
+            if differing.iter().any(|&d| d != 0) {
+                notes.lock().unwrap().push(format!(
+                    "{backend:>7} {:<24} {mode:<8} differs from cpu {mode} on edges per light {differing:?} (allowed: f32 evaluation order)",
+                    case.name
+                ));
+            }
+        }
+        Accuracy::Original => {
+            notes.lock().unwrap().push(format!(
+                "{backend:>7} {:<24} original open vertices per light {open:?}, edges differing from cpu original {differing:?}",
+                case.name
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn main() {
+    let args = Arguments::from_args();
+    let ci = is_ci();
+    let cases: Arc<Vec<Case>> = Arc::new(
+        corpus::cases()
+            .into_iter()
+            .map(|c| Case {
+                name: c.name,
+                scene: c
+                    .scene()
+                    .unwrap_or_else(|e| panic!("corpus case {} is invalid: {e}", c.name)),
+                lights: c.lights.clone(),
+            })
+            .collect(),
+    );
+    let notes: Notes = Arc::default();
+
+    // Start every backend in parallel, then wait for each to report.
+    let entries = shadowvol::backends();
+    let starting: Vec<(BackendEntry, Receiver<Started>)> = entries
+        .iter()
+        .map(|&e| (e, spawn_worker(e, Arc::clone(&cases))))
+        .collect();
+    let mut trials = Vec::new();
+    let mut known_names = Vec::new();
+    let mut workers = Vec::new();
+    eprintln!("conformance: {} corpus cases, CI={ci}", cases.len());
+    for (entry, rx) in starting {
+        let started = rx.recv_timeout(START_TIMEOUT).unwrap_or_else(|_| {
+            Started::No(format!(
+                "did not start within {} s",
+                START_TIMEOUT.as_secs()
+            ))
+        });
+        match &started {
+            Started::Yes { device, .. } => eprintln!("  {:>7}: available: {device}", entry.name),
+            Started::NotCompiled(r) | Started::No(r) => {
+                eprintln!("  {:>7}: UNAVAILABLE: {r}", entry.name);
+            }
+        }
+        for (ci_idx, case) in cases.iter().enumerate() {
+            for mode in Accuracy::ALL {
+                let name = format!("conformance::{}::{}::{}", entry.name, case.name, mode);
+                known_names.push(name.clone());
+                let xfail = EXPECTED_FAILURES.iter().find(|(n, _)| *n == name);
+                let trial = match &started {
+                    Started::NotCompiled(reason) => {
+                        let why = format!("{}: {reason}", entry.name);
+                        Trial::ignorable_test(name, move || Ok(Completion::ignored_with(why)))
+                    }
+                    Started::No(reason) if !ci => {
+                        let why = format!("{} unavailable: {reason}", entry.name);
+                        Trial::ignorable_test(name, move || Ok(Completion::ignored_with(why)))
+                    }
+                    Started::No(reason) => {
+                        let why = format!(
+                            "{} unavailable (CI=true, so this fails): {reason}",
+                            entry.name
+                        );
+                        Trial::test(name, move || Err(Failed::from(why)))
+                    }
+                    Started::Yes { jobs, .. } => {
+                        let jobs = jobs.clone();
+                        let cases = Arc::clone(&cases);
+                        let notes = Arc::clone(&notes);
+                        let backend = entry.name;
+                        let xfail_reason = xfail.map(|(_, why)| *why);
+                        Trial::test(name, move || {
+                            let (tx, rx) = mpsc::channel();
+                            jobs.send(Job {
+                                case: ci_idx,
+                                mode,
+                                reply: tx,
+                            })
+                            .map_err(|_| "the backend's worker thread is gone")?;
+                            let outcome = rx
+                                .recv()
+                                .map_err(|_| "the backend's worker thread died".to_owned())
+                                .and_then(|r| r)
+                                .and_then(|m| check(backend, &cases[ci_idx], mode, &m, &notes));
+                            match (outcome, xfail_reason) {
+                                (Ok(()), None) => Ok(()),
+                                (Err(e), None) => Err(e.into()),
+                                (Err(_), Some(_)) => Ok(()),
+                                (Ok(()), Some(why)) => Err(format!(
+                                    "listed in EXPECTED_FAILURES ({why}) but passed: remove it from the list"
+                                )
+                                .into()),
+                            }
+                        })
+                    }
+                };
+                trials.push(if xfail.is_some() {
+                    trial.with_kind("xfail")
+                } else {
+                    trial
+                });
+            }
+        }
+        workers.push(started);
+    }
+    // The expected-failure list must name real tests.
+    let stale: Vec<&str> = EXPECTED_FAILURES
+        .iter()
+        .map(|(n, _)| *n)
+        .filter(|n| !known_names.iter().any(|k| k == n))
+        .collect();
+    trials.push(Trial::test(
+        "conformance::expected_failures_exist",
+        move || {
+            if stale.is_empty() {
+                Ok(())
+            } else {
+                Err(format!("EXPECTED_FAILURES names unknown tests: {stale:?}").into())
+            }
+        },
+    ));
+    let case_count = cases.len();
+    trials.push(Trial::test("conformance::corpus_not_empty", move || {
+        if case_count > 0 {
+            Ok(())
+        } else {
+            Err("the conformance corpus is empty".into())
+        }
+    }));
+
+    let conclusion = libtest_mimic::run(&args, trials);
+    drop(workers); // closes the job channels so the worker threads end
+    let notes = notes.lock().map(|n| n.clone()).unwrap_or_default();
+    if !notes.is_empty() {
+        let mut notes = notes;
+        notes.sort();
+        eprintln!(
+            "\nreported, not asserted (original is the baseline; f32 modes may differ from cpu):"
+        );
+        for n in notes {
+            eprintln!("  {n}");
+        }
+    }
+    conclusion.exit();
+}
