@@ -245,7 +245,10 @@ impl WgpuBackend {
         }))
         .map_err(|e| BackendError::Unavailable {
             backend: NAME,
-            reason: format!("cannot open a device on {} ({:?}): {e}", info.name, info.backend),
+            reason: format!(
+                "cannot open a device on {} ({:?}): {e}",
+                info.name, info.backend
+            ),
         })?;
         Self::from_device(device, queue, options)
     }
@@ -295,7 +298,8 @@ impl WgpuBackend {
                 ),
             });
         }
-        let filter = if options.allow_f64 && device.features().contains(wgpu::Features::SHADER_F64) {
+        let filter = if options.allow_f64 && device.features().contains(wgpu::Features::SHADER_F64)
+        {
             ExactFilter::F64
         } else {
             ExactFilter::F32
@@ -336,10 +340,7 @@ impl WgpuBackend {
         if let Some(e) = scope.pop() {
             return Err(BackendError::Build {
                 backend: NAME,
-                what: format!(
-                    "shaders/silhouette.wgsl ({} exact filter)",
-                    filter.name()
-                ),
+                what: format!("shaders/silhouette.wgsl ({} exact filter)", filter.name()),
                 log: e,
             });
         }
@@ -492,11 +493,21 @@ impl WgpuBackend {
     }
 
     /// Lights per dispatch for a scene of `edges` edges and `objects` objects.
-    fn lights_per_dispatch(&self, edges: u64, objects: u64, lights: usize) -> Result<usize, BackendError> {
+    fn lights_per_dispatch(
+        &self,
+        edges: u64,
+        objects: u64,
+        lights: usize,
+    ) -> Result<usize, BackendError> {
         let max_binding = self.limits.max_storage_buffer_binding_size;
         let max_buffer = self.limits.max_buffer_size;
         let list = edges * 8;
-        let readback = list + if self.options.full_readback { edges * 4 } else { 0 };
+        let readback = list
+            + if self.options.full_readback {
+                edges * 4
+            } else {
+                0
+            };
         let by_list = max_binding.min(max_buffer) / list;
         let by_readback = max_buffer / readback.max(1);
         let by_lights = max_binding.min(max_buffer) / (objects * 16).max(1);
@@ -542,7 +553,11 @@ impl WgpuBackend {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let lights = storage("object lights", objects * lc * 16, wgpu::BufferUsages::empty());
+        let lights = storage(
+            "object lights",
+            objects * lc * 16,
+            wgpu::BufferUsages::empty(),
+        );
         let mult = storage("multiplicities", edges * lc * 4, wgpu::BufferUsages::VERTEX);
         let counters_bytes = (lc + 1) * 4;
         let counters = storage("counters", counters_bytes, wgpu::BufferUsages::empty());
@@ -828,7 +843,9 @@ impl WgpuBackend {
             let last_chunk = first + count == lights.len();
             let packed = pack_lights(&obj_lights, first, count);
             let scope = ErrorScopes::push(&self.device);
-            let r = self.run_chunk(p, &gpu, pipeline, &packed, first, count, last_chunk, out, &mut stats);
+            let r = self.run_chunk(
+                p, &gpu, pipeline, &packed, first, count, last_chunk, out, &mut stats,
+            );
             if let Some(e) = scope.pop() {
                 return Err(device_error(e));
             }
@@ -860,15 +877,6 @@ impl WgpuBackend {
         let edge_count = p.layout.edge_count();
         let edges = edge_count as u64;
         let objects = p.layout.object_count() as u64;
-        // ---- upload: lights and parameters
-        let t = Instant::now();
-        {
-            let frame = p.frame.as_ref().ok_or_else(|| device_error("no frame buffers"))?;
-            self.queue
-                .write_buffer(&frame.lights, 0, bytemuck::cast_slice(packed));
-        }
-        stats.upload += t.elapsed();
-
         // ---- compute (repeated with a bigger uncertain buffer if it overflowed)
         let groups = edge_count.div_ceil(shaders::WORKGROUP_SIZE as usize) as u64;
         let max_dim = u64::from(self.limits.max_compute_workgroups_per_dimension);
@@ -881,8 +889,14 @@ impl WgpuBackend {
         }
         let counts: Vec<u32> = loop {
             let t = Instant::now();
-            let frame = p.frame.as_ref().ok_or_else(|| device_error("no frame buffers"))?;
+            let frame = p
+                .frame
+                .as_ref()
+                .ok_or_else(|| device_error("no frame buffers"))?;
+            // ---- upload: lights and parameters (again after the buffers were regrown)
             let params = [edge_count as u32, count as u32, frame.uncertain_capacity, 0];
+            self.queue
+                .write_buffer(&frame.lights, 0, bytemuck::cast_slice(packed));
             self.queue
                 .write_buffer(&frame.params, 0, bytemuck::cast_slice(&params));
             stats.upload += t.elapsed();
@@ -913,7 +927,9 @@ impl WgpuBackend {
             let index = self.queue.submit([encoder.finish()]);
             self.wait(index)?;
             let counts: Vec<u32> =
-                self.read_mapped(&frame.counters_staging, counters_bytes, |b| read_u32s(b).collect())?;
+                self.read_mapped(&frame.counters_staging, counters_bytes, |b| {
+                    read_u32s(b).collect()
+                })?;
             stats.compute += t.elapsed();
             let uncertain = counts[count];
             if uncertain <= frame.uncertain_capacity {
@@ -927,7 +943,10 @@ impl WgpuBackend {
             p.frame = Some(frame);
             stats.upload += t.elapsed();
         };
-        let frame = p.frame.as_mut().ok_or_else(|| device_error("no frame buffers"))?;
+        let frame = p
+            .frame
+            .as_mut()
+            .ok_or_else(|| device_error("no frame buffers"))?;
         let uncertain_count = counts[count] as usize;
         stats.uncertain += uncertain_count as u64;
 
@@ -950,14 +969,22 @@ impl WgpuBackend {
         if total > 0 {
             if frame.readback.as_ref().is_none_or(|b| b.size() < total) {
                 self.check_buffer("the readback buffer", total, false)?;
-                frame.readback = Some(self.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("readback"),
-                    size: total.next_power_of_two().min(self.limits.max_buffer_size).max(total),
-                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                }));
+                frame.readback = Some(
+                    self.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("readback"),
+                        size: total
+                            .next_power_of_two()
+                            .min(self.limits.max_buffer_size)
+                            .max(total),
+                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    }),
+                );
             }
-            let readback = frame.readback.as_ref().ok_or_else(|| device_error("no readback buffer"))?;
+            let readback = frame
+                .readback
+                .as_ref()
+                .ok_or_else(|| device_error("no readback buffer"))?;
             let mut encoder = self
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -977,7 +1004,13 @@ impl WgpuBackend {
                 }
             }
             if uncertain_bytes > 0 {
-                encoder.copy_buffer_to_buffer(&frame.uncertain, 0, readback, offset, uncertain_bytes);
+                encoder.copy_buffer_to_buffer(
+                    &frame.uncertain,
+                    0,
+                    readback,
+                    offset,
+                    uncertain_bytes,
+                );
                 offset += uncertain_bytes;
             }
             if mult_bytes > 0 {
@@ -990,13 +1023,11 @@ impl WgpuBackend {
                 for (li, &b) in list_bytes.iter().enumerate() {
                     let b = b as usize;
                     let words: Vec<u32> = read_u32s(&bytes[at..at + b]).collect();
-                    chunk.lists[li] = words
-                        .chunks_exact(2)
-                        .map(|w| (w[0], w[1] as i32))
-                        .collect();
+                    chunk.lists[li] = words.chunks_exact(2).map(|w| (w[0], w[1] as i32)).collect();
                     at += b;
                 }
-                let words: Vec<u32> = read_u32s(&bytes[at..at + uncertain_bytes as usize]).collect();
+                let words: Vec<u32> =
+                    read_u32s(&bytes[at..at + uncertain_bytes as usize]).collect();
                 chunk.uncertain = words
                     .chunks_exact(4)
                     .map(|w| UncertainRecord {
@@ -1052,8 +1083,11 @@ impl WgpuBackend {
                 );
             }
             let len = list.len() as u32;
-            self.queue
-                .write_buffer(&frame.counters, u64::from(*li) * 4, bytemuck::bytes_of(&len));
+            self.queue.write_buffer(
+                &frame.counters,
+                u64::from(*li) * 4,
+                bytemuck::bytes_of(&len),
+            );
         }
         // Flush the staged writes.
         self.queue.submit(std::iter::empty::<wgpu::CommandBuffer>());
@@ -1061,7 +1095,11 @@ impl WgpuBackend {
 }
 
 /// Rejects device output that cannot be right (an index out of range), instead of panicking.
-fn validate_chunk(chunk: &ChunkOutput, layout: &SceneLayout, lights: usize) -> Result<(), BackendError> {
+fn validate_chunk(
+    chunk: &ChunkOutput,
+    layout: &SceneLayout,
+    lights: usize,
+) -> Result<(), BackendError> {
     let edges = layout.edge_count();
     for (li, list) in chunk.lists.iter().enumerate() {
         if let Some(&(e, m)) = list.iter().find(|&&(e, m)| e as usize >= edges || m == 0) {
@@ -1070,15 +1108,13 @@ fn validate_chunk(chunk: &ChunkOutput, layout: &SceneLayout, lights: usize) -> R
             )));
         }
     }
-    if let Some(r) = chunk
-        .uncertain
-        .iter()
-        .find(|r| {
-            r.edge as usize >= edges
-                || !layout.ov_slots(r.edge as usize).contains(&(r.ov_slot as usize))
-                || r.light as usize >= lights
-        })
-    {
+    if let Some(r) = chunk.uncertain.iter().find(|r| {
+        r.edge as usize >= edges
+            || !layout
+                .ov_slots(r.edge as usize)
+                .contains(&(r.ov_slot as usize))
+            || r.light as usize >= lights
+    }) {
         return Err(device_error(format!(
             "the device returned an invalid uncertain record {r:?}"
         )));

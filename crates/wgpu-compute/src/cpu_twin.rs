@@ -110,12 +110,19 @@ pub fn filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<
     }
     let (ex, ey, ez) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
     let wa = [l[3] * a[0], l[3] * a[1], l[3] * a[2]];
-    if l[3] != 0.0 && a.iter().zip(&wa).any(|(&x, &p)| x != 0.0 && p.abs() < f32::MIN_POSITIVE) {
+    if l[3] != 0.0
+        && a.iter()
+            .zip(&wa)
+            .any(|(&x, &p)| x != 0.0 && p.abs() < f32::MIN_POSITIVE)
+    {
         return None;
     }
     let (vx, vy, vz) = (l[0] - wa[0], l[1] - wa[1], l[2] - wa[2]);
     let (dx, dy, dz) = (o[0] - a[0], o[1] - a[1], o[2] - a[2]);
-    if [ex, ey, ez, vx, vy, vz, dx, dy, dz].into_iter().any(out_of_range) {
+    if [ex, ey, ez, vx, vy, vz, dx, dy, dz]
+        .into_iter()
+        .any(out_of_range)
+    {
         return None;
     }
     let (p1, q1) = (ey * vz, ez * vy);
@@ -169,8 +176,19 @@ pub fn filter_f64(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<
 /// Twin of WGSL `exact_filter`: inputs with a subnormal component are never certified (a device
 /// may flush them), otherwise the chosen filter decides.
 #[must_use]
-pub fn exact_filter(filter: ExactFilter, a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<i8> {
-    if a.iter().chain(&b).chain(&o).chain(&l).any(|&x| is_subnormal(x)) {
+pub fn exact_filter(
+    filter: ExactFilter,
+    a: [f32; 3],
+    b: [f32; 3],
+    l: [f32; 4],
+    o: [f32; 3],
+) -> Option<i8> {
+    if a.iter()
+        .chain(&b)
+        .chain(&o)
+        .chain(&l)
+        .any(|&x| is_subnormal(x))
+    {
         return None;
     }
     match filter {
@@ -247,7 +265,11 @@ pub fn run_kernel(
     mode: Accuracy,
     filter: ExactFilter,
 ) -> KernelOutput {
-    assert_eq!(lights.len(), layout.object_count() * light_count, "one light per (object, light)");
+    assert_eq!(
+        lights.len(),
+        layout.object_count() * light_count,
+        "one light per (object, light)"
+    );
     let edge_count = layout.edge_count();
     let mut out = KernelOutput {
         mult: vec![0; edge_count * light_count],
@@ -291,7 +313,11 @@ pub fn run_kernel(
 }
 
 /// Object-space lights packed object-major for lights `first..first + count`, as uploaded.
-pub(crate) fn pack_lights(obj_lights: &[Vec<[f32; 4]>], first: usize, count: usize) -> Vec<[f32; 4]> {
+pub(crate) fn pack_lights(
+    obj_lights: &[Vec<[f32; 4]>],
+    first: usize,
+    count: usize,
+) -> Vec<[f32; 4]> {
     obj_lights
         .iter()
         .flat_map(|per_object| per_object[first..first + count].iter().copied())

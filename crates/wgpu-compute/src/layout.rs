@@ -31,7 +31,10 @@ pub struct SceneLayout {
 fn to_u32(what: &str, n: usize) -> Result<u32, BackendError> {
     u32::try_from(n).map_err(|_| BackendError::Limit {
         backend: crate::NAME,
-        message: format!("the scene has {n} {what}; the wgpu kernel indexes them with u32 (at most {})", u32::MAX),
+        message: format!(
+            "the scene has {n} {what}; the wgpu kernel indexes them with u32 (at most {})",
+            u32::MAX
+        ),
     })
 }
 
@@ -97,7 +100,11 @@ impl SceneLayout {
     #[must_use]
     pub fn position(&self, id: u32) -> [f32; 3] {
         let i = id as usize * 3;
-        [self.positions[i], self.positions[i + 1], self.positions[i + 2]]
+        [
+            self.positions[i],
+            self.positions[i + 1],
+            self.positions[i + 2],
+        ]
     }
 
     /// The OV slots of global edge `e` (indices into [`SceneLayout::ovs`]).

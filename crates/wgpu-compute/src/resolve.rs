@@ -60,7 +60,12 @@ pub(crate) fn finish_chunk(
             let [ia, ib, _, object] = layout.edges[r.edge as usize];
             let io = layout.ovs[r.ov_slot as usize];
             let l = packed_lights[object as usize * light_count + r.light as usize];
-            let s = orient_exact(layout.position(ia), layout.position(ib), l, layout.position(io));
+            let s = orient_exact(
+                layout.position(ia),
+                layout.position(ib),
+                l,
+                layout.position(io),
+            );
             out.values_mut(first + r.light as usize)[r.edge as usize] += i32::from(s);
         }
         let mut touched: Vec<(u32, u32)> = uncertain.iter().map(|r| (r.light, r.edge)).collect();

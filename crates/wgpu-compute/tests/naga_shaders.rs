@@ -13,11 +13,20 @@ fn shader_dir() -> PathBuf {
 }
 
 fn validate(name: &str, source: &str, caps: Capabilities) -> Result<naga::Module, String> {
-    let module = naga::front::wgsl::parse_str(source)
-        .map_err(|e| format!("{name}: parse error:\n{}", e.emit_to_string_with_path(source, name)))?;
+    let module = naga::front::wgsl::parse_str(source).map_err(|e| {
+        format!(
+            "{name}: parse error:\n{}",
+            e.emit_to_string_with_path(source, name)
+        )
+    })?;
     Validator::new(ValidationFlags::all(), caps)
         .validate(&module)
-        .map_err(|e| format!("{name}: validation error:\n{}", e.emit_to_string_with_path(source, name)))?;
+        .map_err(|e| {
+            format!(
+                "{name}: validation error:\n{}",
+                e.emit_to_string_with_path(source, name)
+            )
+        })?;
     Ok(module)
 }
 
@@ -50,7 +59,10 @@ fn every_wgsl_file_in_shaders_validates() {
         }
         checked += 1;
     }
-    assert!(checked >= shaders::FILES.len(), "found only {checked} WGSL files");
+    assert!(
+        checked >= shaders::FILES.len(),
+        "found only {checked} WGSL files"
+    );
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
 }
 
@@ -58,7 +70,10 @@ fn every_wgsl_file_in_shaders_validates() {
 fn embedded_sources_are_the_files_on_disk() {
     for (name, embedded) in shaders::FILES {
         let on_disk = std::fs::read_to_string(shader_dir().join(name)).expect("file exists");
-        assert_eq!(on_disk, embedded, "{name} differs from the embedded copy (rebuild the crate)");
+        assert_eq!(
+            on_disk, embedded,
+            "{name} differs from the embedded copy (rebuild the crate)"
+        );
     }
 }
 
@@ -113,11 +128,26 @@ fn literal(module: &naga::Module, name: &str) -> naga::Literal {
 #[test]
 fn wgsl_constants_equal_the_twin_constants() {
     let m = naga::front::wgsl::parse_str(shaders::SILHOUETTE_WGSL).unwrap();
-    assert_eq!(literal(&m, "F32_FILTER_EPS"), naga::Literal::F32(F32_FILTER_EPS));
-    assert_eq!(literal(&m, "F32_FILTER_MIN"), naga::Literal::F32(F32_FILTER_MIN));
-    assert_eq!(literal(&m, "F32_FILTER_MAX"), naga::Literal::F32(F32_FILTER_MAX));
-    assert_eq!(literal(&m, "F32_PERM_MIN"), naga::Literal::F32(GPU_F32_PERM_MIN));
-    assert_eq!(literal(&m, "F32_MIN_NORMAL"), naga::Literal::F32(f32::MIN_POSITIVE));
+    assert_eq!(
+        literal(&m, "F32_FILTER_EPS"),
+        naga::Literal::F32(F32_FILTER_EPS)
+    );
+    assert_eq!(
+        literal(&m, "F32_FILTER_MIN"),
+        naga::Literal::F32(F32_FILTER_MIN)
+    );
+    assert_eq!(
+        literal(&m, "F32_FILTER_MAX"),
+        naga::Literal::F32(F32_FILTER_MAX)
+    );
+    assert_eq!(
+        literal(&m, "F32_PERM_MIN"),
+        naga::Literal::F32(GPU_F32_PERM_MIN)
+    );
+    assert_eq!(
+        literal(&m, "F32_MIN_NORMAL"),
+        naga::Literal::F32(f32::MIN_POSITIVE)
+    );
     assert_eq!(
         literal(&m, "F32_INPUT_MAX_BITS"),
         naga::Literal::U32(GPU_F32_INPUT_MAX.to_bits())
@@ -127,5 +157,8 @@ fn wgsl_constants_equal_the_twin_constants() {
         naga::Literal::U32(shaders::WORKGROUP_SIZE)
     );
     let f = naga::front::wgsl::parse_str(shaders::EXACT_F64_WGSL).unwrap();
-    assert_eq!(literal(&f, "GPU_F64_FILTER_EPS"), naga::Literal::F64(GPU_F64_FILTER_EPS));
+    assert_eq!(
+        literal(&f, "GPU_F64_FILTER_EPS"),
+        naga::Literal::F64(GPU_F64_FILTER_EPS)
+    );
 }

@@ -1,0 +1,243 @@
+//! Shared test inputs: the conformance corpus plus this crate's own hard cases, aimed at the
+//! device filters (exact zeros with a non-zero permanent, tiny/huge/subnormal coordinates,
+//! transformed and shared objects, non-manifold edges).
+
+#![allow(dead_code)]
+
+use glam::{Affine3A, Quat, Vec3};
+use shadowvol_mesh_topology::{EdgeTable, Mesh};
+use shadowvol_silhouette::{corpus, Light, SceneObject, TopologyScene};
+use std::sync::Arc;
+
+/// A named scene with its lights.
+pub struct Case {
+    pub name: String,
+    pub scene: TopologyScene,
+    pub lights: Vec<Light>,
+}
+
+pub fn tetrahedron(scale: f32) -> Mesh {
+    Mesh {
+        positions: vec![
+            Vec3::ZERO,
+            Vec3::X * scale,
+            Vec3::Y * scale,
+            Vec3::Z * scale,
+        ],
+        triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+    }
+}
+
+/// A closed latitude/longitude sphere (poles welded), `rings` x `segments`.
+pub fn sphere(rings: u32, segments: u32, radius: f32) -> Mesh {
+    let mut positions = vec![Vec3::new(0.0, 0.0, radius)];
+    for r in 1..rings {
+        let th = std::f32::consts::PI * r as f32 / rings as f32;
+        for s in 0..segments {
+            let ph = std::f32::consts::TAU * s as f32 / segments as f32;
+            positions.push(radius * Vec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()));
+        }
+    }
+    positions.push(Vec3::new(0.0, 0.0, -radius));
+    let south = positions.len() as u32 - 1;
+    let ring = |r: u32, s: u32| 1 + (r - 1) * segments + s % segments;
+    let mut triangles = Vec::new();
+    for s in 0..segments {
+        triangles.push([0, ring(1, s), ring(1, s + 1)]);
+        triangles.push([south, ring(rings - 1, s + 1), ring(rings - 1, s)]);
+    }
+    for r in 1..rings - 1 {
+        for s in 0..segments {
+            let (a, b, c, d) = (
+                ring(r, s),
+                ring(r, s + 1),
+                ring(r + 1, s),
+                ring(r + 1, s + 1),
+            );
+            triangles.push([a, c, b]);
+            triangles.push([b, c, d]);
+        }
+    }
+    Mesh {
+        positions,
+        triangles,
+    }
+}
+
+/// A flat n x n grid in the slanted plane z = x + 2y (an open surface, exact integer
+/// coordinates), triangulated both ways.
+pub fn grid(n: u32) -> Mesh {
+    let mut positions = Vec::new();
+    for y in 0..=n {
+        for x in 0..=n {
+            positions.push(Vec3::new(x as f32, y as f32, (x + 2 * y) as f32));
+        }
+    }
+    let id = |x: u32, y: u32| y * (n + 1) + x;
+    let mut triangles = Vec::new();
+    for y in 0..n {
+        for x in 0..n {
+            if (x + y) % 2 == 0 {
+                triangles.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
+                triangles.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
+            } else {
+                triangles.push([id(x, y), id(x + 1, y), id(x, y + 1)]);
+                triangles.push([id(x + 1, y), id(x + 1, y + 1), id(x, y + 1)]);
+            }
+        }
+    }
+    Mesh {
+        positions,
+        triangles,
+    }
+}
+
+/// Three triangles on one edge (a non-manifold "book") plus a boundary fan.
+pub fn book() -> Mesh {
+    Mesh {
+        positions: vec![
+            Vec3::ZERO,
+            Vec3::Z,
+            Vec3::X,
+            Vec3::new(-1.0, 0.2, 0.0),
+            Vec3::new(0.1, 1.0, 0.0),
+            Vec3::new(0.5, -1.0, 0.5),
+        ],
+        triangles: vec![[0, 1, 2], [1, 0, 3], [0, 1, 4], [2, 1, 5]],
+    }
+}
+
+fn scene_of(objects: Vec<(Arc<EdgeTable>, Affine3A)>) -> TopologyScene {
+    TopologyScene {
+        objects: objects
+            .into_iter()
+            .enumerate()
+            .map(|(i, (table, t))| SceneObject {
+                name: format!("object{i}"),
+                table,
+                world_from_object: t,
+            })
+            .collect(),
+    }
+}
+
+fn single(mesh: &Mesh) -> TopologyScene {
+    scene_of(vec![(
+        Arc::new(EdgeTable::build(mesh).unwrap()),
+        Affine3A::IDENTITY,
+    )])
+}
+
+fn p(x: f32, y: f32, z: f32) -> Light {
+    Light::new(x, y, z, 1.0).unwrap()
+}
+
+fn d(x: f32, y: f32, z: f32) -> Light {
+    Light::new(x, y, z, 0.0).unwrap()
+}
+
+/// This crate's own hard cases.
+pub fn extra_cases() -> Vec<Case> {
+    let sphere_table = Arc::new(EdgeTable::build(&sphere(12, 16, 1.0)).unwrap());
+    let tet_table = Arc::new(EdgeTable::build(&tetrahedron(1.0)).unwrap());
+    vec![
+        Case {
+            name: "light-in-face-plane".into(),
+            scene: single(&tetrahedron(1.0)),
+            // On the plane x + y + z = 1 of the slanted face (exact zeros with a non-zero
+            // permanent), on the axis plane z = 0 (exact zeros, zero permanent), then generic.
+            lights: vec![
+                p(0.25, 0.25, 0.5),
+                p(1.0, 1.0, -1.0),
+                d(1.0, -1.0, 0.0),
+                p(0.3, 0.3, 0.0),
+                p(2.0, 0.0, 3.0),
+                p(0.2, 0.2, 0.2),
+            ],
+        },
+        Case {
+            name: "flat-grid-grazing".into(),
+            scene: single(&grid(6)),
+            // In the grid's plane (every determinant is exactly 0), then just off it.
+            lights: vec![
+                p(3.5, 2.25, 8.0),
+                d(1.0, 0.5, 2.0),
+                p(3.5, 2.25, 8.000001),
+                d(1.0, 0.5, 2.0000002),
+            ],
+        },
+        Case {
+            name: "sphere-light-at-vertex".into(),
+            scene: single(&sphere(12, 16, 1.0)),
+            lights: vec![
+                p(0.0, 0.0, 1.0),
+                p(0.0, 0.0, 3.0),
+                d(0.3, -1.0, 0.2),
+                p(1.0, 1.0, 1.0),
+            ],
+        },
+        Case {
+            name: "tiny-coordinates".into(),
+            scene: single(&tetrahedron(1e-20)),
+            lights: vec![p(2e-20, 3e-20, 5e-20), d(1.0, 2.0, 3.0)],
+        },
+        Case {
+            name: "subnormal-coordinates".into(),
+            scene: single(&tetrahedron(1e-40)),
+            lights: vec![p(2e-40, 3e-40, 5e-40), d(1.0, 2.0, 3.0), p(1.0, 1.0, 1.0)],
+        },
+        Case {
+            name: "huge-coordinates".into(),
+            scene: single(&tetrahedron(1e30)),
+            lights: vec![p(2e30, 3e30, 5e30), d(1.0, 2.0, 3.0), p(1e30, 0.0, 0.0)],
+        },
+        Case {
+            name: "nonmanifold-book".into(),
+            scene: single(&book()),
+            lights: vec![p(0.3, 0.4, 2.0), p(0.0, 0.0, 0.5), d(-1.0, 0.1, 0.0)],
+        },
+        Case {
+            name: "many-objects-transformed".into(),
+            scene: scene_of(
+                (0..7)
+                    .map(|i| {
+                        let t = Affine3A::from_scale_rotation_translation(
+                            Vec3::splat(0.5 + i as f32 * 0.25),
+                            Quat::from_rotation_y(0.3 * i as f32),
+                            Vec3::new(3.0 * i as f32, (i % 3) as f32, -2.0),
+                        );
+                        let table = if i % 2 == 0 {
+                            &sphere_table
+                        } else {
+                            &tet_table
+                        };
+                        (
+                            Arc::clone(table),
+                            if i == 0 { Affine3A::IDENTITY } else { t },
+                        )
+                    })
+                    .collect(),
+            ),
+            lights: vec![
+                p(5.0, 6.0, 7.0),
+                d(0.2, 1.0, 0.1),
+                p(9.0, 0.5, -2.0),
+                p(0.0, 0.0, 1.0),
+            ],
+        },
+    ]
+}
+
+/// The conformance corpus followed by [`extra_cases`].
+pub fn all_cases() -> Vec<Case> {
+    let mut cases: Vec<Case> = corpus::cases()
+        .into_iter()
+        .map(|c| Case {
+            name: format!("corpus/{}", c.name),
+            scene: c.scene().expect("corpus scenes are valid"),
+            lights: c.lights.clone(),
+        })
+        .collect();
+    cases.extend(extra_cases());
+    cases
+}

@@ -1,0 +1,213 @@
+//! CPU-only: the CPU twin of the WGSL kernel against the scalar `cpu` backend, and the twin's
+//! device filters against the exact predicate.
+
+mod common;
+
+use shadowvol_cpu::CpuBackend;
+use shadowvol_robust_math::{orient_exact, orient_filter_f32, Accuracy};
+use shadowvol_silhouette::{extract_once, invariant, object_lights, Multiplicities};
+use shadowvol_wgpu_compute::cpu_twin::{self, ExactFilter};
+use shadowvol_wgpu_compute::SceneLayout;
+
+#[test]
+fn twin_equals_cpu_in_every_mode_with_both_filters() {
+    let mut cpu = CpuBackend::new();
+    for case in common::all_cases() {
+        for mode in Accuracy::ALL {
+            let (expected, _) = extract_once(&mut cpu, &case.scene, &case.lights, mode).unwrap();
+            for filter in [ExactFilter::F64, ExactFilter::F32] {
+                let mut got = Multiplicities::default();
+                let uncertain =
+                    cpu_twin::extract(&case.scene, &case.lights, mode, filter, &mut got).unwrap();
+                assert_eq!(
+                    invariant::first_difference(&got, &expected),
+                    None,
+                    "{} {mode} {filter:?}: (light, edge, twin, cpu)",
+                    case.name
+                );
+                assert_eq!(
+                    got, expected,
+                    "{} {mode} {filter:?}: compact lists",
+                    case.name
+                );
+                assert!(got.silhouettes_consistent());
+                if mode != Accuracy::Exact {
+                    assert_eq!(uncertain, 0);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn hard_cases_send_triples_to_the_host() {
+    // Exact zeros with a non-zero permanent can never be certified; subnormal inputs never are;
+    // the f32 filter rejects coordinates outside its range. The host path must run on these.
+    for case in common::extra_cases() {
+        let mut m = Multiplicities::default();
+        let u64_ = cpu_twin::extract(
+            &case.scene,
+            &case.lights,
+            Accuracy::Exact,
+            ExactFilter::F64,
+            &mut m,
+        )
+        .unwrap();
+        let u32_ = cpu_twin::extract(
+            &case.scene,
+            &case.lights,
+            Accuracy::Exact,
+            ExactFilter::F32,
+            &mut m,
+        )
+        .unwrap();
+        match case.name.as_str() {
+            "light-in-face-plane" | "flat-grid-grazing" | "subnormal-coordinates" => {
+                assert!(u64_ > 0 && u32_ > 0, "{}: {u64_} / {u32_}", case.name);
+            }
+            "tiny-coordinates" | "huge-coordinates" => {
+                assert!(u32_ > 0, "{}: f32 filter certified everything", case.name);
+            }
+            _ => {}
+        }
+        assert!(
+            u64_ <= u32_ || case.name == "many-objects-transformed",
+            "{}: {u64_} > {u32_}",
+            case.name
+        );
+    }
+}
+
+#[test]
+fn kernel_records_are_well_formed() {
+    for case in common::all_cases() {
+        let layout = SceneLayout::build(&case.scene).unwrap();
+        let obj = object_lights(&case.scene, &case.lights);
+        let n = case.lights.len();
+        let packed: Vec<[f32; 4]> = obj.iter().flat_map(|v| v.iter().copied()).collect();
+        let k = cpu_twin::run_kernel(&layout, &packed, n, Accuracy::Exact, ExactFilter::F32);
+        let e = layout.edge_count();
+        assert_eq!(k.mult.len(), e * n);
+        for (li, list) in k.silhouettes.iter().enumerate() {
+            let nonzero = k.mult[li * e..(li + 1) * e]
+                .iter()
+                .filter(|&&m| m != 0)
+                .count();
+            assert_eq!(list.len(), nonzero);
+            assert!(list
+                .iter()
+                .all(|&(edge, m)| k.mult[li * e + edge as usize] == m));
+        }
+        for r in &k.uncertain {
+            assert!(layout
+                .ov_slots(r.edge as usize)
+                .contains(&(r.ov_slot as usize)));
+            assert!((r.light as usize) < n);
+        }
+    }
+}
+
+/// xorshift64*: deterministic, dependency-free.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    fn unit(&mut self) -> f32 {
+        (self.next() >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+    }
+    fn scaled(&mut self) -> f32 {
+        // Exponents across the whole f32 range, including subnormals and zeros.
+        match self.next() % 8 {
+            0 => 0.0,
+            1 => self.unit() * 1e-40,
+            2 => self.unit() * 1e30,
+            3 => self.unit() * 1e-20,
+            _ => self.unit() * 4.0,
+        }
+    }
+    fn v3(&mut self, f: impl Fn(&mut Self) -> f32) -> [f32; 3] {
+        [f(self), f(self), f(self)]
+    }
+}
+
+fn check(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3], stats: &mut [usize; 3]) {
+    let exact = orient_exact(a, b, l, o);
+    for (i, filter) in [ExactFilter::F64, ExactFilter::F32].into_iter().enumerate() {
+        match cpu_twin::exact_filter(filter, a, b, l, o) {
+            Some(s) => assert_eq!(
+                s, exact,
+                "{filter:?} certified a wrong sign for {a:?} {b:?} {l:?} {o:?}"
+            ),
+            None => stats[i] += 1,
+        }
+    }
+    if let Some(s) = cpu_twin::filter_f32(a, b, l, o) {
+        // The device guards only add uncertainty to robust-math's f32 filter.
+        assert_eq!(
+            orient_filter_f32(a, b, l, o),
+            Some(s),
+            "{a:?} {b:?} {l:?} {o:?}"
+        );
+    }
+    stats[2] += 1;
+}
+
+#[test]
+fn device_filters_certify_only_exact_signs() {
+    let mut rng = Rng(0x5eed_1234_abcd_0001);
+    let mut stats = [0usize; 3];
+    for _ in 0..20_000 {
+        // Random inputs over many exponents.
+        let (a, b, o) = (
+            rng.v3(Rng::scaled),
+            rng.v3(Rng::scaled),
+            rng.v3(Rng::scaled),
+        );
+        let l = [
+            rng.scaled(),
+            rng.scaled(),
+            rng.scaled(),
+            if rng.next() % 2 == 0 { 0.0 } else { 1.0 },
+        ];
+        check(a, b, l, o, &mut stats);
+        // Nearly degenerate: O close to the plane through A, B and the light.
+        let a = rng.v3(Rng::unit);
+        let b = rng.v3(Rng::unit);
+        let lp = rng.v3(Rng::unit);
+        let (s, t) = (rng.unit(), rng.unit());
+        let eps = [0.0, 1e-7, 1e-4][(rng.next() % 3) as usize];
+        let o = [0, 1, 2].map(|i| a[i] + s * (b[i] - a[i]) + t * (lp[i] - a[i]) + eps * rng.unit());
+        check(a, b, [lp[0], lp[1], lp[2], 1.0], o, &mut stats);
+        // Directional light in the plane of the triangle.
+        let dir = [0, 1, 2].map(|i| (b[i] - a[i]) * s + eps * rng.unit());
+        check(a, b, [dir[0], dir[1], dir[2], 0.0], o, &mut stats);
+    }
+    // Exact zeros are frequent here: both filters must leave some triples to the host.
+    assert!(stats[0] > 0 && stats[1] > 0, "{stats:?}");
+}
+
+#[test]
+fn device_filters_certify_generic_input() {
+    // Well-conditioned input (unit-cube coordinates) must almost never need the host.
+    let mut rng = Rng(0x0dd_ba11);
+    let mut uncertain = [0usize; 2];
+    let n = 20_000;
+    for _ in 0..n {
+        let (a, b, o) = (rng.v3(Rng::unit), rng.v3(Rng::unit), rng.v3(Rng::unit));
+        let l = [rng.unit() * 4.0, rng.unit() * 4.0, rng.unit() * 4.0, 1.0];
+        for (i, filter) in [ExactFilter::F64, ExactFilter::F32].into_iter().enumerate() {
+            match cpu_twin::exact_filter(filter, a, b, l, o) {
+                Some(s) => assert_eq!(s, orient_exact(a, b, l, o)),
+                None => uncertain[i] += 1,
+            }
+        }
+    }
+    assert!(
+        uncertain[0] == 0 && uncertain[1] < n / 1000,
+        "{uncertain:?} of {n}"
+    );
+}

@@ -1,0 +1,279 @@
+//! Device tests (Mesa lavapipe in CI, any wgpu adapter elsewhere). Every test is named `gpu_*`.
+//! Without an adapter they print `SKIPPED (no wgpu adapter)` and pass, except under `CI=true`,
+//! where a missing adapter fails the run.
+
+mod common;
+
+use shadowvol_cpu::CpuBackend;
+use shadowvol_robust_math::Accuracy;
+use shadowvol_silhouette::{
+    extract_once, invariant, BackendError, Light, Multiplicities, PreparedId, SilhouetteBackend,
+    TopologyScene,
+};
+use shadowvol_wgpu_compute::{ExactFilter, WgpuBackend, WgpuOptions};
+
+fn backend(test: &str, options: WgpuOptions) -> Option<WgpuBackend> {
+    match WgpuBackend::new(options) {
+        Ok(b) => {
+            eprintln!("{test}: running on {}", b.info().device);
+            Some(b)
+        }
+        Err(e) => {
+            if std::env::var("CI").is_ok_and(|v| v == "true") {
+                panic!("{test}: CI=true, but the wgpu backend is unavailable: {e}");
+            }
+            eprintln!("{test}: SKIPPED (no wgpu adapter): {e}");
+            None
+        }
+    }
+}
+
+fn cpu_result(scene: &TopologyScene, lights: &[Light], mode: Accuracy) -> Multiplicities {
+    extract_once(&mut CpuBackend::new(), scene, lights, mode)
+        .unwrap()
+        .0
+}
+
+/// Exact mode on every case equals `cpu` bit for bit, lists included; returns the total number
+/// of uncertain triples per case.
+fn exact_equals_cpu(b: &mut WgpuBackend) -> Vec<(String, u64)> {
+    let mut counts = Vec::new();
+    for case in common::all_cases() {
+        let expected = cpu_result(&case.scene, &case.lights, Accuracy::Exact);
+        let (got, stats) = extract_once(b, &case.scene, &case.lights, Accuracy::Exact)
+            .unwrap_or_else(|e| panic!("{}: {e}", case.name));
+        assert_eq!(
+            invariant::first_difference(&got, &expected),
+            None,
+            "{}: exact differs from cpu (light, edge, wgpu, cpu)",
+            case.name
+        );
+        assert_eq!(got, expected, "{}: compact lists differ", case.name);
+        counts.push((case.name.clone(), stats.uncertain));
+    }
+    counts
+}
+
+#[test]
+fn gpu_corpus_exact_identical_to_cpu_with_preferred_filter() {
+    let Some(mut b) = backend(
+        "gpu_corpus_exact_identical_to_cpu_with_preferred_filter",
+        WgpuOptions::default(),
+    ) else {
+        return;
+    };
+    // SHADER_F64 is requested whenever the adapter has it.
+    let f64_device = b.device().features().contains(wgpu::Features::SHADER_F64);
+    assert_eq!(b.exact_filter() == ExactFilter::F64, f64_device);
+    let counts = exact_equals_cpu(&mut b);
+    eprintln!(
+        "{:?} filter, uncertain triples per case: {counts:?}",
+        b.exact_filter()
+    );
+    // Exact zeros with a non-zero permanent can't be certified: the host path really ran.
+    for name in [
+        "light-in-face-plane",
+        "flat-grid-grazing",
+        "subnormal-coordinates",
+    ] {
+        let n = counts.iter().find(|(c, _)| c == name).unwrap().1;
+        assert!(n > 0, "{name}: no uncertain triples");
+    }
+}
+
+#[test]
+fn gpu_corpus_exact_identical_to_cpu_with_forced_f32_filter() {
+    let options = WgpuOptions {
+        allow_f64: false,
+        ..WgpuOptions::default()
+    };
+    let Some(mut b) = backend(
+        "gpu_corpus_exact_identical_to_cpu_with_forced_f32_filter",
+        options,
+    ) else {
+        return;
+    };
+    assert_eq!(b.exact_filter(), ExactFilter::F32);
+    assert!(!b.device().features().contains(wgpu::Features::SHADER_F64));
+    let counts = exact_equals_cpu(&mut b);
+    eprintln!("f32 filter, uncertain triples per case: {counts:?}");
+    for name in [
+        "tiny-coordinates",
+        "huge-coordinates",
+        "subnormal-coordinates",
+    ] {
+        let n = counts.iter().find(|(c, _)| c == name).unwrap().1;
+        assert!(n > 0, "{name}: the f32 filter certified out-of-range input");
+    }
+}
+
+#[test]
+fn gpu_corpus_consistent_modes_close_every_chain() {
+    let Some(mut b) = backend(
+        "gpu_corpus_consistent_modes_close_every_chain",
+        WgpuOptions::default(),
+    ) else {
+        return;
+    };
+    for case in common::all_cases() {
+        for mode in Accuracy::ALL {
+            let (got, stats) = extract_once(&mut b, &case.scene, &case.lights, mode).unwrap();
+            assert!(got.silhouettes_consistent(), "{} {mode}", case.name);
+            assert_eq!(got.edge_count(), case.scene.total_edges());
+            if mode != Accuracy::Exact {
+                assert_eq!(stats.uncertain, 0);
+            }
+            let expected = cpu_result(&case.scene, &case.lights, mode);
+            for l in 0..case.lights.len() {
+                let open = invariant::open_vertices_scene(&case.scene, &got, l);
+                if mode.is_consistent() {
+                    assert_eq!(open, 0, "{} {mode} light {l}: open vertices", case.name);
+                }
+                // The f32 modes may differ from cpu only where contraction changes a sign.
+                let diff = invariant::differing_edges(&got, &expected, l);
+                if diff > 0 {
+                    eprintln!(
+                        "{} {mode} light {l}: {diff} edges differ from cpu (FMA contraction)",
+                        case.name
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn gpu_full_readback_chunking_and_device_buffers_agree() {
+    let default = backend(
+        "gpu_full_readback_chunking_and_device_buffers_agree",
+        WgpuOptions::default(),
+    );
+    let Some(mut compact) = default else { return };
+    // Two lights per dispatch and a one-entry uncertain buffer: several dispatches, and the
+    // uncertain buffer must grow (the dispatch is repeated).
+    let mut full = WgpuBackend::new(WgpuOptions {
+        full_readback: true,
+        max_lights_per_dispatch: 2,
+        initial_uncertain_capacity: 1,
+        ..WgpuOptions::default()
+    })
+    .unwrap();
+    for case in common::all_cases() {
+        for mode in Accuracy::ALL {
+            let (a, sa) = extract_once(&mut compact, &case.scene, &case.lights, mode).unwrap();
+            let id = full.prepare(&case.scene).unwrap();
+            let mut b = Multiplicities::default();
+            let sb = full.extract(id, &case.lights, mode, &mut b).unwrap();
+            if mode == Accuracy::Exact {
+                assert_eq!(a, b, "{} {mode}: compact vs full readback", case.name);
+                assert_eq!(sa.uncertain, sb.uncertain, "{} {mode}", case.name);
+            }
+            // The device buffers hold the (patched) results of the last dispatch.
+            let res = full.gpu_results(id).expect("results after extract");
+            assert_eq!(res.first_light + res.light_count, case.lights.len());
+            let (mult, counts, lists) = read_results(&full, &res);
+            let e = res.edge_count as usize;
+            for li in 0..res.light_count {
+                let l = res.first_light + li;
+                assert_eq!(
+                    &mult[li * e..(li + 1) * e],
+                    b.values(l),
+                    "{} {mode} light {l}",
+                    case.name
+                );
+                let mut list: Vec<(u32, i32)> =
+                    lists[li * e..li * e + counts[li] as usize].to_vec();
+                list.sort_unstable();
+                let expected: Vec<(u32, i32)> = b
+                    .silhouette(l)
+                    .iter()
+                    .map(|&x| (x, b.values(l)[x as usize]))
+                    .collect();
+                assert_eq!(
+                    list, expected,
+                    "{} {mode} light {l}: device list",
+                    case.name
+                );
+            }
+            full.release(id);
+            assert!(full.gpu_results(id).is_none());
+        }
+    }
+}
+
+/// Reads the device result buffers back (test helper).
+fn read_results(
+    b: &WgpuBackend,
+    res: &shadowvol_wgpu_compute::GpuResults<'_>,
+) -> (Vec<i32>, Vec<u32>, Vec<(u32, i32)>) {
+    let read = |buf: &wgpu::Buffer| -> Vec<u32> {
+        let staging = b.device().create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size: buf.size(),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = b.device().create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(buf, 0, &staging, 0, buf.size());
+        b.queue().submit([enc.finish()]);
+        staging.map_async(wgpu::MapMode::Read, .., |r| r.unwrap());
+        b.device()
+            .poll(wgpu::PollType::wait_indefinitely())
+            .unwrap();
+        let v = staging.get_mapped_range(..).unwrap();
+        v.chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect()
+    };
+    let mult = read(res.multiplicities)
+        .into_iter()
+        .map(|x| x as i32)
+        .collect();
+    let counts = read(res.counters);
+    let lists = read(res.silhouettes)
+        .chunks_exact(2)
+        .map(|w| (w[0], w[1] as i32))
+        .collect();
+    (mult, counts, lists)
+}
+
+#[test]
+fn gpu_errors_are_reported_not_panics() {
+    let Some(mut b) = backend("gpu_errors_are_reported_not_panics", WgpuOptions::default()) else {
+        return;
+    };
+    let case = &common::all_cases()[0];
+    let mut m = Multiplicities::default();
+    assert!(matches!(
+        b.extract(PreparedId(12345), &case.lights, Accuracy::Exact, &mut m),
+        Err(BackendError::UnknownScene { .. })
+    ));
+    let id = b.prepare(&case.scene).unwrap();
+    assert!(matches!(
+        b.extract(id, &[], Accuracy::Exact, &mut m),
+        Err(BackendError::InvalidInput(_))
+    ));
+    b.release(id);
+    assert!(matches!(
+        b.extract(id, &case.lights, Accuracy::Exact, &mut m),
+        Err(BackendError::UnknownScene { .. })
+    ));
+    // A scene without edges extracts to empty results.
+    let empty = TopologyScene::default();
+    let id = b.prepare(&empty).unwrap();
+    let stats = b
+        .extract(id, &case.lights, Accuracy::Robust, &mut m)
+        .unwrap();
+    assert_eq!(
+        (m.edge_count(), m.light_count(), stats.uncertain),
+        (0, case.lights.len(), 0)
+    );
+    // Info names the device and the filter.
+    let info = b.info();
+    assert_eq!(info.name, "wgpu");
+    assert_eq!(info.modes, Accuracy::ALL.to_vec());
+    assert!(info
+        .details
+        .iter()
+        .any(|(k, v)| k == "exact_filter" && v == b.exact_filter().name()));
+}
