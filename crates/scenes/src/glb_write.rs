@@ -112,14 +112,18 @@ pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, SceneError> {
             let xa = helper.cross(n).normalize();
             let ya = n.cross(xa).normalize();
             let t = Affine3A::from_cols(xa.into(), ya.into(), d.into(), glam::Vec3A::ZERO);
-            lights.push(json!({"name": name, "type": "directional", "color": [1.0, 1.0, 1.0],
-                "intensity": 3.0}));
+            lights.push(
+                json!({"name": name, "type": "directional", "color": [1.0, 1.0, 1.0],
+                "intensity": 3.0}),
+            );
             nodes.push(json!({"name": name, "matrix": matrix(&t),
                 "extensions": {"KHR_lights_punctual": {"light": i}}}));
         } else {
             let p = Vec3::new(x, y, z) / w;
-            lights.push(json!({"name": name, "type": "point", "color": [1.0, 1.0, 1.0],
-                "intensity": 100.0}));
+            lights.push(
+                json!({"name": name, "type": "point", "color": [1.0, 1.0, 1.0],
+                "intensity": 100.0}),
+            );
             nodes.push(json!({"name": name, "translation": v3(p),
                 "extensions": {"KHR_lights_punctual": {"light": i}}}));
         }
@@ -137,7 +141,7 @@ pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, SceneError> {
             "extras": {"target": v3(c.target)}}));
     }
 
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let mut doc = json!({
@@ -162,7 +166,7 @@ pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, SceneError> {
     let mut json_bytes = serde_json::to_vec(&doc).map_err(|e| SceneError::Export {
         message: format!("JSON encoding failed: {e}"),
     })?;
-    while json_bytes.len() % 4 != 0 {
+    while !json_bytes.len().is_multiple_of(4) {
         json_bytes.push(b' ');
     }
     let has_bin = !bin.is_empty();

@@ -117,11 +117,13 @@ pub fn load_gltf_slice(
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| err("document", e.to_string()))?;
     validate(&document).map_err(|m| err("document", m))?;
-    let buffers = gltf::import_buffers(&document, base, blob)
-        .map_err(|e| err("buffers", e.to_string()))?;
+    let buffers =
+        gltf::import_buffers(&document, base, blob).map_err(|e| err("buffers", e.to_string()))?;
     let buffers: Vec<&[u8]> = buffers.iter().map(|b| &b.0[..]).collect();
 
-    let roots: Vec<gltf::Node> = match document.default_scene().or_else(|| document.scenes().next())
+    let roots: Vec<gltf::Node> = match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
     {
         Some(s) => s.nodes().collect(),
         None => {
@@ -337,11 +339,7 @@ impl Loader<'_> {
         Ok(out)
     }
 
-    fn read_positions(
-        &self,
-        label: &str,
-        acc: &gltf::Accessor,
-    ) -> Result<Vec<Vec3>, SceneError> {
+    fn read_positions(&self, label: &str, acc: &gltf::Accessor) -> Result<Vec<Vec3>, SceneError> {
         let alabel = format!("{label}, accessor {} (POSITION)", acc.index());
         if acc.data_type() != DataType::F32 || acc.dimensions() != Dimensions::Vec3 {
             return Err(self.err(
@@ -386,7 +384,10 @@ impl Loader<'_> {
     ) -> Result<Vec<u32>, SceneError> {
         let alabel = format!("{label}, accessor {} (indices)", acc.index());
         if acc.dimensions() != Dimensions::Scalar
-            || !matches!(acc.data_type(), DataType::U8 | DataType::U16 | DataType::U32)
+            || !matches!(
+                acc.data_type(),
+                DataType::U8 | DataType::U16 | DataType::U32
+            )
         {
             return Err(self.err(
                 alabel,
@@ -433,9 +434,9 @@ impl Loader<'_> {
         if count == 0 {
             return Err(self.err(alabel.to_owned(), "count is 0 (at least 1 element needed)"));
         }
-        let total = count.checked_mul(size).ok_or_else(|| {
-            self.err(alabel.to_owned(), format!("count {count} overflows"))
-        })?;
+        let total = count
+            .checked_mul(size)
+            .ok_or_else(|| self.err(alabel.to_owned(), format!("count {count} overflows")))?;
         let mut out = match acc.view() {
             None => vec![0u8; total],
             Some(view) => {
@@ -579,7 +580,7 @@ fn validate(document: &gltf::Document) -> Result<(), String> {
 fn assemble(mode: Mode, idx: &[u32]) -> Result<Vec<[u32; 3]>, String> {
     match mode {
         Mode::Triangles => {
-            if idx.len() % 3 != 0 {
+            if !idx.len().is_multiple_of(3) {
                 return Err(format!(
                     "{} indices do not make whole triangles (TRIANGLES needs a multiple of 3)",
                     idx.len()

@@ -78,7 +78,9 @@ pub enum SceneError {
         source: MeshError,
     },
     /// A scene name is neither a preset nor a file with a known extension.
-    #[error("unknown scene '{name}': not a .gltf/.glb/.obj file and not a preset (presets: {known})")]
+    #[error(
+        "unknown scene '{name}': not a .gltf/.glb/.obj file and not a preset (presets: {known})"
+    )]
     UnknownPreset {
         /// The name given.
         name: String,

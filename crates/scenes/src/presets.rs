@@ -219,7 +219,11 @@ fn sphere_grid(name: &str, triangles: usize, cols: u32, rows: u32) -> Scene {
     };
     framed(
         scene,
-        vec![Light::point(Vec3::new(-0.6 * extent, 2.0 * extent + 4.0, 0.5 * extent))],
+        vec![Light::point(Vec3::new(
+            -0.6 * extent,
+            2.0 * extent + 4.0,
+            0.5 * extent,
+        ))],
         Vec3::new(0.4, 0.7, 1.0),
     )
 }
@@ -240,7 +244,11 @@ fn town_scene() -> Scene {
         ..Scene::default()
     };
     // The sun exactly along +Y: every wall triangle is exactly parallel to the light.
-    framed(scene, vec![Light::directional(Vec3::Y)], Vec3::new(0.5, 0.8, 1.0))
+    framed(
+        scene,
+        vec![Light::directional(Vec3::Y)],
+        Vec3::new(0.5, 0.8, 1.0),
+    )
 }
 
 fn hard_scene(name: &str, case: &shadowvol_silhouette::corpus::CorpusCase) -> Scene {

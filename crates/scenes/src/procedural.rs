@@ -16,8 +16,8 @@ fn even_target(target: usize, min: usize) -> usize {
 }
 
 /// A UV sphere (latitude/longitude grid) of radius `radius` centred at the origin, with
-/// **exactly** `target` triangles when `target` is even and at least 8 (an odd `target` is
-/// rounded up to the next even number, smaller ones to 8).
+/// **exactly** `target` triangles when `target` is even and at least 12 (an odd `target` is
+/// rounded up to the next even number, smaller ones to 12, the smallest UV sphere).
 ///
 /// The grid has `slices` segments around the `Y` axis and `stacks` bands from pole to pole
 /// (triangle fans at the poles): `2 · slices · (stacks − 1)` triangles. The grid closest to the
@@ -27,14 +27,18 @@ fn even_target(target: usize, min: usize) -> usize {
 /// The result is a closed 2-manifold.
 #[must_use]
 pub fn uv_sphere(target: usize, radius: f32) -> Mesh {
-    let t = even_target(target, 8);
+    let t = even_target(target, 12);
     let half = t / 2; // = slices * (stacks - 1) + splits
-    // m = stacks - 1 (>= 2 so that there is at least one quad band), slices >= 3.
+                      // m = stacks - 1 (>= 2 so that there is at least one quad band), slices >= 3.
     let ideal = ((half as f64) / 2.0).sqrt().max(2.0);
     let mut best: Option<(usize, usize, f64)> = None; // (slices, m, score)
     let lo = ((ideal * 0.7).floor() as usize).max(2);
     let hi = ((ideal * 1.4).ceil() as usize).max(lo);
-    for m in lo..=hi {
+    // The preferred aspect range first, then every grid (only matters for tiny targets).
+    for m in (lo..=hi).chain(2..=(half / 3).max(2)) {
+        if best.is_some() && !(lo..=hi).contains(&m) {
+            break;
+        }
         let slices = half / m;
         if slices < 3 {
             continue;
@@ -50,7 +54,7 @@ pub fn uv_sphere(target: usize, radius: f32) -> Mesh {
             best = Some((slices, m, score));
         }
     }
-    let (slices, m) = best.map_or((4, 2), |b| (b.0, b.1));
+    let (slices, m) = best.map_or((3, 2), |b| (b.0, b.1));
     let splits = half - slices * m;
     let stacks = m + 1;
     let r = f64::from(radius);
@@ -85,7 +89,12 @@ pub fn uv_sphere(target: usize, radius: f32) -> Mesh {
     let mut q = 0;
     for k in 1..m {
         for s in 0..slices {
-            let (a, b, c, d) = (ring(k, s), ring(k + 1, s), ring(k + 1, s + 1), ring(k, s + 1));
+            let (a, b, c, d) = (
+                ring(k, s),
+                ring(k + 1, s),
+                ring(k + 1, s + 1),
+                ring(k, s + 1),
+            );
             if split_at[q] {
                 let mid = (positions[a as usize].as_dvec3() + positions[c as usize].as_dvec3())
                     .normalize()
@@ -152,7 +161,7 @@ fn icosahedron() -> ([DVec3; 12], [[usize; 3]; 20]) {
 }
 
 /// A geodesic icosphere of radius `radius` with **exactly** `target` triangles when `target` is
-/// even and at least 500 (smaller targets get the closest count reachable, at least 20).
+/// even and at least 320 (smaller targets get the closest count reachable, at least 20).
 ///
 /// Each icosahedron face is divided with frequency `n` (`20 n²` triangles, the largest not above
 /// the target); grid points are computed from their barycentric weights in a canonical order, so

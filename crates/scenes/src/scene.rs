@@ -48,7 +48,9 @@ impl Camera {
         let radius = ((max - min).length() * 0.5).max(1e-3);
         let fov_y = 45f32.to_radians();
         let distance = radius / (fov_y * 0.5).sin() * 1.05;
-        let dir = from.try_normalize().unwrap_or(Vec3::new(0.3, 0.5, 1.0).normalize());
+        let dir = from
+            .try_normalize()
+            .unwrap_or(Vec3::new(0.3, 0.5, 1.0).normalize());
         let up = if dir.cross(Vec3::Y).length_squared() < 1e-6 {
             Vec3::Z
         } else {
@@ -191,12 +193,13 @@ impl Scene {
             let table = match tables.get(&key) {
                 Some(t) => Arc::clone(t),
                 None => {
-                    let t = Arc::new(EdgeTable::build(&o.mesh).map_err(|source| {
-                        SceneError::Mesh {
-                            what: format!("object {i} '{}'", o.name),
-                            source,
-                        }
-                    })?);
+                    let t =
+                        Arc::new(
+                            EdgeTable::build(&o.mesh).map_err(|source| SceneError::Mesh {
+                                what: format!("object {i} '{}'", o.name),
+                                source,
+                            })?,
+                        );
                     tables.insert(key, Arc::clone(&t));
                     t
                 }
@@ -324,6 +327,8 @@ pub fn mesh_bounds(mesh: &Mesh) -> Option<(Vec3, Vec3)> {
 }
 
 pub(crate) fn file_name(path: &Path) -> String {
-    path.file_name()
-        .map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned())
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
 }

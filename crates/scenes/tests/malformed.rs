@@ -12,12 +12,18 @@ fn data(name: &str) -> PathBuf {
 /// Loads a fixture, expects an error, returns its message (and checks it names the file).
 fn message(name: &str) -> String {
     let err = match Scene::load(data(name)) {
-        Ok(s) => panic!("{name} loaded ({} objects) but should fail", s.objects.len()),
+        Ok(s) => panic!(
+            "{name} loaded ({} objects) but should fail",
+            s.objects.len()
+        ),
         Err(e) => e,
     };
     let msg = err.to_string();
     eprintln!("{name}: {msg}");
-    assert!(msg.contains(name), "message for {name} does not name the file: {msg}");
+    assert!(
+        msg.contains(name),
+        "message for {name} does not name the file: {msg}"
+    );
     msg
 }
 
@@ -47,9 +53,15 @@ fn index_out_of_range_names_accessor_and_element() {
 #[test]
 fn non_finite_positions_name_accessor_element_and_axis() {
     let m = message("nan_position.gltf");
-    assert_has(&m, &["accessor 0 (POSITION)", "element 1", "coordinate y is NaN"]);
+    assert_has(
+        &m,
+        &["accessor 0 (POSITION)", "element 1", "coordinate y is NaN"],
+    );
     let m = message("inf_position.gltf");
-    assert_has(&m, &["accessor 0 (POSITION)", "element 2", "coordinate z is inf"]);
+    assert_has(
+        &m,
+        &["accessor 0 (POSITION)", "element 2", "coordinate z is inf"],
+    );
 }
 
 #[test]
@@ -64,13 +76,22 @@ fn non_triangle_modes_and_partial_triangles_are_rejected() {
     let m = message("lines_mode.gltf");
     assert_has(&m, &["primitive 0", "Lines", "not a triangle mode"]);
     let m = message("partial_triangle.gltf");
-    assert_has(&m, &["accessor 1 (indices)", "4 indices do not make whole triangles"]);
+    assert_has(
+        &m,
+        &[
+            "accessor 1 (indices)",
+            "4 indices do not make whole triangles",
+        ],
+    );
 }
 
 #[test]
 fn accessor_past_its_view_is_rejected() {
     let m = message("past_view.gltf");
-    assert_has(&m, &["accessor 0 (POSITION)", "run past the end of buffer view 0"]);
+    assert_has(
+        &m,
+        &["accessor 0 (POSITION)", "run past the end of buffer view 0"],
+    );
 }
 
 #[test]
@@ -122,7 +143,13 @@ fn missing_files_and_unknown_formats_are_clear() {
     assert!(matches!(err, SceneError::Io { .. }), "{err}");
     assert!(err.to_string().contains("does_not_exist.glb"));
     let err = Scene::load(data("make_fixtures.py")).unwrap_err();
-    assert!(err.to_string().contains("unsupported scene format"), "{err}");
+    assert!(
+        err.to_string().contains("unsupported scene format"),
+        "{err}"
+    );
     let err = Scene::from_name_or_path("no-such-preset").unwrap_err();
-    assert_has(&err.to_string(), &["unknown scene 'no-such-preset'", "sphere-1m", "town"]);
+    assert_has(
+        &err.to_string(),
+        &["unknown scene 'no-such-preset'", "sphere-1m", "town"],
+    );
 }

@@ -1,0 +1,385 @@
+//! glTF loading and GLB export: round trips and node transforms against hand-flattened meshes.
+
+use glam::Vec3;
+use serde_json::json;
+use shadowvol_cpu::CpuBackend;
+use shadowvol_mesh_topology::{EdgeTable, Mesh};
+use shadowvol_scenes::{load_gltf, load_gltf_slice, preset, to_glb, Scene};
+use shadowvol_silhouette::{
+    extract_once, invariant, Accuracy, Light, Multiplicities, TopologyScene,
+};
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+fn silhouettes(scene: &TopologyScene, lights: &[Light], mode: Accuracy) -> Multiplicities {
+    extract_once(&mut CpuBackend::new(), scene, lights, mode)
+        .unwrap()
+        .0
+}
+
+/// Exports `scene` to a temporary .glb, loads it back, and checks that everything that matters
+/// for silhouettes is identical: objects, meshes, transforms, sharing, lights, topology
+/// statistics, and the multiplicities of every edge in every mode (cpu backend).
+fn round_trip(name: &str) {
+    let original = preset(name).unwrap();
+    let path = std::env::temp_dir().join(format!(
+        "shadowvol-roundtrip-{}-{name}.glb",
+        std::process::id()
+    ));
+    shadowvol_scenes::export_glb(&original, &path).unwrap();
+    let loaded = load_gltf(&path).unwrap();
+    std::fs::remove_file(&path).ok();
+
+    assert_eq!(loaded.objects.len(), original.objects.len(), "{name}");
+    for (a, b) in original.objects.iter().zip(&loaded.objects) {
+        assert_eq!(a.name, b.name);
+        assert_eq!(a.transform, b.transform, "{name}: {}", a.name);
+        assert_eq!(*a.mesh, *b.mesh, "{name}: mesh of {}", a.name);
+    }
+    // Instances that shared a mesh still share one (and only those).
+    for (i, a) in original.objects.iter().enumerate() {
+        for (j, b) in original.objects.iter().enumerate().skip(i + 1) {
+            assert_eq!(
+                Arc::ptr_eq(&a.mesh, &b.mesh),
+                Arc::ptr_eq(&loaded.objects[i].mesh, &loaded.objects[j].mesh),
+                "{name}: sharing of objects {i} and {j}"
+            );
+        }
+    }
+    assert_eq!(loaded.lights, original.lights, "{name}: lights");
+    let (c0, c1) = (original.camera.unwrap(), loaded.camera.unwrap());
+    assert_eq!(c0.target, c1.target);
+    assert!((c0.eye - c1.eye).length() <= 1e-4 * c0.eye.length().max(1.0));
+    assert_eq!(c0.fov_y, c1.fov_y);
+    assert_eq!(c0.near, c1.near);
+
+    let (t0, t1) = (original.topology().unwrap(), loaded.topology().unwrap());
+    for (a, b) in t0.objects.iter().zip(&t1.objects) {
+        assert_eq!(a.table.stats, b.table.stats, "{name}: stats of {}", a.name);
+    }
+    let mut lights = original.lights.clone();
+    lights.push(Light::point(Vec3::new(0.25, 30.0, -0.5)));
+    for mode in [Accuracy::Exact, Accuracy::Original] {
+        let (m0, m1) = (
+            silhouettes(&t0, &lights, mode),
+            silhouettes(&t1, &lights, mode),
+        );
+        assert_eq!(m0.all_values(), m1.all_values(), "{name}: {mode:?}");
+        for l in 0..lights.len() {
+            assert_eq!(m0.silhouette(l), m1.silhouette(l));
+            if mode == Accuracy::Exact {
+                assert_eq!(invariant::open_vertices_scene(&t1, &m1, l), 0, "{name}");
+            }
+        }
+    }
+    // The flattened (baked) meshes agree too.
+    let (b0, b1) = (original.baked_mesh().unwrap(), loaded.baked_mesh().unwrap());
+    assert_eq!(b0, b1);
+}
+
+#[test]
+fn round_trip_sphere_grid() {
+    round_trip("spheres-100x1k");
+}
+
+#[test]
+fn round_trip_bunnies() {
+    round_trip("bunnies-10-individual");
+}
+
+#[test]
+fn round_trip_every_hard_case() {
+    let names = shadowvol_scenes::preset_names();
+    let hard: Vec<_> = names.iter().filter(|n| n.starts_with("hard-")).collect();
+    assert!(hard.len() >= 3);
+    for name in hard {
+        round_trip(name);
+    }
+}
+
+#[test]
+fn glb_is_well_formed() {
+    let scene = preset("hard-multi-object-transforms").unwrap();
+    let glb = to_glb(&scene).unwrap();
+    assert_eq!(&glb[0..4], b"glTF");
+    assert_eq!(u32::from_le_bytes(glb[4..8].try_into().unwrap()), 2);
+    assert_eq!(
+        u32::from_le_bytes(glb[8..12].try_into().unwrap()) as usize,
+        glb.len()
+    );
+    let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    assert_eq!(&glb[16..20], b"JSON");
+    assert_eq!(json_len % 4, 0);
+    let doc: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    assert_eq!(doc["asset"]["version"], "2.0");
+    assert_eq!(doc["extensionsUsed"][0], "KHR_lights_punctual");
+    let bin = &glb[20 + json_len..];
+    assert_eq!(&bin[4..8], b"BIN\0");
+    assert_eq!(
+        u32::from_le_bytes(bin[0..4].try_into().unwrap()) as u64,
+        doc["buffers"][0]["byteLength"].as_u64().unwrap()
+    );
+    // And the gltf crate, with its full validation (POSITION min/max included), accepts it.
+    let gltf = gltf::Gltf::from_slice(&glb).unwrap();
+    assert_eq!(gltf.meshes().count(), scene.objects.len());
+}
+
+/// Builds a GLB from a JSON document and a binary chunk.
+fn glb(doc: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut js = serde_json::to_vec(doc).unwrap();
+    while !js.len().is_multiple_of(4) {
+        js.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let mut out = Vec::new();
+    for w in [
+        0x4654_6C67u32,
+        2,
+        (28 + js.len() + bin.len()) as u32,
+        js.len() as u32,
+        0x4E4F_534A,
+    ] {
+        out.extend_from_slice(&w.to_le_bytes());
+    }
+    out.extend_from_slice(&js);
+    for w in [bin.len() as u32, 0x004E_4942] {
+        out.extend_from_slice(&w.to_le_bytes());
+    }
+    out.extend_from_slice(&bin);
+    out
+}
+
+struct Bin {
+    data: Vec<u8>,
+    views: Vec<serde_json::Value>,
+    accessors: Vec<serde_json::Value>,
+}
+
+impl Bin {
+    fn add(&mut self, bytes: &[u8], component: u32, ty: &str, count: usize) -> usize {
+        while !self.data.len().is_multiple_of(4) {
+            self.data.push(0);
+        }
+        self.views
+            .push(json!({"buffer": 0, "byteOffset": self.data.len(), "byteLength": bytes.len()}));
+        self.data.extend_from_slice(bytes);
+        self.accessors.push(
+            json!({"bufferView": self.views.len() - 1, "componentType": component,
+            "type": ty, "count": count}),
+        );
+        self.accessors.len() - 1
+    }
+    fn positions(&mut self, p: &[[f32; 3]]) -> usize {
+        self.add(bytemuck::cast_slice(p), 5126, "VEC3", p.len())
+    }
+}
+
+const TETRA: [[f32; 3]; 4] = [
+    [0.0, 0.0, 0.0],
+    [1.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [0.0, 0.0, 1.0],
+];
+const TETRA_IDX: [u16; 12] = [0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2];
+const QUAD: [[f32; 3]; 6] = [
+    [2.0, 0.0, 0.0],
+    [3.0, 0.0, 0.0],
+    [2.0, 1.0, 0.0],
+    [3.0, 0.0, 0.0],
+    [3.0, 1.0, 0.0],
+    [2.0, 1.0, 0.0],
+];
+const STRIP: [[f32; 3]; 4] = [
+    [0.0, 0.0, 0.0],
+    [1.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [1.0, 1.0, 0.0],
+];
+
+/// A glTF with nested node transforms (TRS and matrix), a mesh of two primitives (indexed u16 and
+/// non-indexed) shared by two nodes, a triangle strip with u8 indices, a point light under a
+/// scaled parent, a directional light and a camera.
+fn nested_glb() -> Vec<u8> {
+    let mut b = Bin {
+        data: vec![],
+        views: vec![],
+        accessors: vec![],
+    };
+    let p0 = b.positions(&TETRA);
+    let i0 = b.add(bytemuck::cast_slice(&TETRA_IDX), 5123, "SCALAR", 12);
+    let p1 = b.positions(&QUAD);
+    let p2 = b.positions(&STRIP);
+    let i2 = b.add(&[0u8, 1, 2, 3], 5121, "SCALAR", 4);
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 4, 6, 7]}],
+        "nodes": [
+            {"name": "root", "translation": [10.0, 0.0, 0.0], "scale": [2.0, 2.0, 2.0], "children": [1, 2, 5]},
+            {"name": "a", "mesh": 0, "translation": [0.0, 3.0, 0.0]},
+            // 90° about Z (x -> y, y -> -x), then up 5 in z.
+            {"name": "b", "matrix": [0.0, 1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 5.0, 1.0],
+             "children": [3]},
+            {"name": "c", "mesh": 0, "translation": [1.0, 1.0, 1.0]},
+            {"name": "d", "mesh": 1, "translation": [-4.0, 0.0, 0.0]},
+            {"name": "lamp", "translation": [3.0, 20.0, 7.0], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+            // Shines down -Z of a frame whose Z column is world +Y: towards the light is +Y.
+            {"name": "sun", "matrix": [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+             "extensions": {"KHR_lights_punctual": {"light": 1}}},
+            {"name": "eye", "camera": 0, "translation": [0.0, 5.0, 30.0]}
+        ],
+        "meshes": [
+            {"name": "pair", "primitives": [
+                {"attributes": {"POSITION": p0}, "indices": i0},
+                {"attributes": {"POSITION": p1}, "mode": 4}]},
+            {"name": "strip", "primitives": [{"attributes": {"POSITION": p2}, "indices": i2, "mode": 5}]}
+        ],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}],
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"type": "spot", "spot": {}}, {"type": "directional"}]}},
+        "buffers": [{"byteLength": b.data.len()}],
+        "bufferViews": b.views,
+        "accessors": b.accessors,
+    });
+    glb(&doc, &b.data)
+}
+
+/// The same scene flattened by hand (integer arithmetic, exact in f32).
+fn hand_flattened() -> Mesh {
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    let pair: Vec<[f32; 3]> = TETRA.iter().chain(QUAD.iter()).copied().collect();
+    let mut pair_tris: Vec<[u32; 3]> = TETRA_IDX
+        .chunks(3)
+        .map(|c| [c[0].into(), c[1].into(), c[2].into()])
+        .collect();
+    pair_tris.extend([[4, 5, 6], [7, 8, 9]]);
+    // a: root(T(10,0,0) S2) * T(0,3,0)
+    let a = |[x, y, z]: [f32; 3]| Vec3::new(10.0 + 2.0 * x, 2.0 * (y + 3.0), 2.0 * z);
+    // c: root * b(R_z(90°), T(0,0,5)) * T(1,1,1)
+    let c = |[x, y, z]: [f32; 3]| {
+        Vec3::new(
+            10.0 - 2.0 * (y + 1.0),
+            2.0 * (x + 1.0),
+            2.0 * (z + 1.0 + 5.0),
+        )
+    };
+    for f in [&a as &dyn Fn([f32; 3]) -> Vec3, &c] {
+        let base = positions.len() as u32;
+        positions.extend(pair.iter().map(|&p| f(p)));
+        triangles.extend(pair_tris.iter().map(|t| t.map(|i| i + base)));
+    }
+    let base = positions.len() as u32;
+    positions.extend(STRIP.iter().map(|&[x, y, z]| Vec3::new(x - 4.0, y, z)));
+    triangles.extend([[base, base + 1, base + 2], [base + 2, base + 1, base + 3]]);
+    Mesh::new(positions, triangles).unwrap()
+}
+
+/// Global edges `(name_a, name_b) -> m` of a scene whose objects are concatenated in order
+/// (the numbering of the baked mesh), for light `l`.
+fn edge_map(scene: &TopologyScene, m: &Multiplicities, l: usize) -> BTreeMap<(u32, u32), i32> {
+    let offsets = scene.edge_offsets();
+    let mut out = BTreeMap::new();
+    let mut vertex_base = 0u32;
+    for (i, o) in scene.objects.iter().enumerate() {
+        for (e, &[a, b]) in o.table.edges.iter().enumerate() {
+            let v = m.values(l)[offsets[i] + e];
+            if v != 0 {
+                let key = (
+                    o.table.vertex_names[a as usize] + vertex_base,
+                    o.table.vertex_names[b as usize] + vertex_base,
+                );
+                out.insert(key, v);
+            }
+        }
+        vertex_base += o.table.stats.vertices as u32;
+    }
+    out
+}
+
+#[test]
+fn nested_transforms_match_the_hand_flattened_mesh() {
+    let scene = load_gltf_slice(&nested_glb(), "nested.glb", None).unwrap();
+    let names: Vec<_> = scene.objects.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(names, ["a", "c", "d"], "depth-first node order");
+    assert!(
+        Arc::ptr_eq(&scene.objects[0].mesh, &scene.objects[1].mesh),
+        "mesh 0 is shared"
+    );
+    assert_eq!(
+        scene.lights,
+        vec![
+            Light::point(Vec3::new(16.0, 40.0, 14.0)),
+            Light::directional(Vec3::Y)
+        ],
+        "spot read as a point light under the scaled parent; directional along +Y"
+    );
+    let cam = scene.camera.unwrap();
+    assert_eq!(
+        (cam.eye, cam.target, cam.fov_y, cam.near),
+        (
+            Vec3::new(0.0, 5.0, 30.0),
+            Vec3::new(0.0, 5.0, 29.0),
+            0.8,
+            0.1
+        )
+    );
+
+    let flat = hand_flattened();
+    let baked = scene.baked_mesh().unwrap();
+    assert_eq!(
+        baked, flat,
+        "numbering and f32 positions follow the CLI contract"
+    );
+
+    // Exact silhouettes: the flattened mesh, the loaded scene baked, and the loaded scene with
+    // its objects kept separate (lights brought into object space) all agree.
+    let flat_scene = TopologyScene::single(EdgeTable::build(&flat).unwrap());
+    let baked_scene = TopologyScene::single(EdgeTable::build(&baked).unwrap());
+    let objects = scene.topology().unwrap();
+    let mut lights = scene.lights.clone();
+    lights.extend([
+        Light::point(Vec3::new(12.0, 6.0, 0.0)), // at a vertex of object a
+        Light::point(Vec3::new(15.0, 6.0, 0.0)), // in the plane of a's quad, on an edge line
+        Light::point(Vec3::new(-3.5, 0.5, 0.0)), // in the plane of the strip
+        Light::directional(Vec3::new(1.0, 0.0, 0.0)), // parallel to the quad and the strip
+    ]);
+    let mf = silhouettes(&flat_scene, &lights, Accuracy::Exact);
+    let mb = silhouettes(&baked_scene, &lights, Accuracy::Exact);
+    let mo = silhouettes(&objects, &lights, Accuracy::Exact);
+    assert_eq!(mf.all_values(), mb.all_values());
+    for l in 0..lights.len() {
+        let fm = edge_map(&flat_scene, &mf, l);
+        assert!(!fm.is_empty(), "light {l} has a silhouette");
+        assert_eq!(
+            fm,
+            edge_map(&objects, &mo, l),
+            "light {l}: per-object vs flattened"
+        );
+        assert_eq!(invariant::open_vertices_scene(&objects, &mo, l), 0);
+    }
+}
+
+#[test]
+fn gltf_text_with_external_buffer_loads_like_the_glb() {
+    // The same document as .gltf + .bin next to it.
+    let bytes = nested_glb();
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let mut doc: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+    let bin = &bytes[20 + json_len + 8..];
+    let dir = std::env::temp_dir().join(format!("shadowvol-gltf-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("nested.bin"), bin).unwrap();
+    doc["buffers"][0]["uri"] = json!("nested.bin");
+    let path = dir.join("nested.gltf");
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let a = Scene::load(&path).unwrap();
+    let b = load_gltf_slice(&bytes, "nested.glb", None).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(a.baked_mesh().unwrap(), b.baked_mesh().unwrap());
+    assert_eq!(a.lights, b.lights);
+    assert_eq!(a.name, "nested.gltf");
+}
