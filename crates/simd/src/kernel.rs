@@ -17,25 +17,29 @@ use crate::layout::{Layout, LANES, ODD};
 use shadowvol_robust_math::{orient_exact, sign_f32, Accuracy, F64_FILTER_EPS};
 use std::ops::Range;
 
-type Xyz = [[f32; LANES]; 3];
-
-/// Gathers the positions of 8 vertex ids from the SoA arrays.
+/// Gathers the positions of the 8 vertex ids `idx[..8]` from the SoA arrays.
+///
+/// # Safety
+/// `idx.len() >= 8` and every id is a vertex of `lay` (guaranteed for the layout's own index
+/// arrays by `Layout::build`).
 #[inline(always)]
-fn gather(lay: &Layout, idx: [u32; LANES]) -> Xyz {
-    let mut p = [[0f32; LANES]; 3];
-    for (i, &v) in idx.iter().enumerate() {
-        let v = v as usize;
-        p[0][i] = lay.xs[v];
-        p[1][i] = lay.ys[v];
-        p[2][i] = lay.zs[v];
+unsafe fn gather<Lv: Level>(lay: &Layout, idx: &[u32]) -> [Lv::F; 3] {
+    // SAFETY: forwarded from the caller; the position arrays have the vertex count as length.
+    unsafe {
+        if USE_SOA_GATHER {
+            [
+                Lv::F::gather(&lay.xs, idx),
+                Lv::F::gather(&lay.ys, idx),
+                Lv::F::gather(&lay.zs, idx),
+            ]
+        } else {
+            Lv::gather_xyz(&lay.xyz, idx)
+        }
     }
-    p
 }
 
-#[inline(always)]
-fn load3<F: F32V>(p: &Xyz) -> [F; 3] {
-    [F::load(p[0]), F::load(p[1]), F::load(p[2])]
-}
+/// Gather from the three SoA arrays (`true`) or load 16-byte records and transpose (`false`).
+const USE_SOA_GATHER: bool = false;
 
 #[inline(always)]
 fn splat4<F: F32V>(l: [f32; 4]) -> [F; 4] {
@@ -133,28 +137,33 @@ pub(crate) fn tri_signs<Lv: Level>(
 ) -> u64 {
     let mut uncertain = 0u64;
     let b0 = blocks.start;
+    assert!(
+        blocks.end * LANES <= lay.t0.len() && out.iter().all(|o| o.len() == blocks.len() * LANES)
+    );
     for blk in blocks {
-        let t0 = blk * LANES;
-        let valid: u32 = if t0 + LANES <= lay.tri_count {
+        let t = blk * LANES;
+        let valid: u32 = if t + LANES <= lay.tri_count {
             0xFF
         } else {
-            (1u32 << (lay.tri_count - t0)) - 1
+            (1u32 << (lay.tri_count - t)) - 1
         };
-        let tris = &lay.tris[t0..t0 + LANES];
-        let p0 = gather(lay, std::array::from_fn(|i| tris[i][0]));
-        let p1 = gather(lay, std::array::from_fn(|i| tris[i][1]));
-        let p2 = gather(lay, std::array::from_fn(|i| tris[i][2]));
+        // SAFETY: `t + 8 <= t0.len()` (asserted above), and the layout's ids are in range.
+        let (a, b, o) = unsafe {
+            (
+                gather::<Lv>(lay, &lay.t0[t..]),
+                gather::<Lv>(lay, &lay.t1[t..]),
+                gather::<Lv>(lay, &lay.t2[t..]),
+            )
+        };
         let dst = (blk - b0) * LANES;
         match mode {
             Accuracy::Ordered | Accuracy::Original => {
-                let (a, b, o) = (load3::<Lv::F>(&p0), load3(&p1), load3(&p2));
                 for (l, light) in lights.iter().enumerate() {
                     let (pos, neg) = plane(&a, &b, &splat4(*light), &o).sign_bits();
                     write_signs(out, l, dst, pos & valid, neg & valid);
                 }
             }
             Accuracy::Robust => {
-                let (a, b, o) = (load3::<Lv::F>(&p0), load3(&p1), load3(&p2));
                 for (l, light) in lights.iter().enumerate() {
                     let lv = splat4(*light);
                     let (pa, na) = plane(&a, &b, &lv, &o).sign_bits();
@@ -164,21 +173,13 @@ pub(crate) fn tri_signs<Lv: Level>(
                 }
             }
             Accuracy::Exact => {
+                let (a, b, o) = (widen3::<Lv>(&a), widen3::<Lv>(&b), widen3::<Lv>(&o));
                 for (l, light) in lights.iter().enumerate() {
-                    let (mut pos, mut neg, mut unc) = (0u32, 0u32, 0u32);
-                    for h in 0..2 {
-                        let w = |p: &Xyz| -> [Lv::D; 3] {
-                            std::array::from_fn(|c| {
-                                Lv::D::widen(std::array::from_fn(|i| p[c][4 * h + i]))
-                            })
-                        };
-                        let lv = std::array::from_fn(|c| Lv::D::splat(f64::from(light[c])));
-                        let (ph, nh, uh) = filter_f64(w(&p0), w(&p1), lv, w(&p2));
-                        pos |= ph << (4 * h);
-                        neg |= nh << (4 * h);
-                        unc |= uh << (4 * h);
-                    }
-                    unc &= valid;
+                    let lv: [Lv::D; 4] = std::array::from_fn(|c| Lv::D::splat(f64::from(light[c])));
+                    let (p_lo, n_lo, u_lo) = filter_f64(a.0, b.0, lv, o.0);
+                    let (p_hi, n_hi, u_hi) = filter_f64(a.1, b.1, lv, o.1);
+                    let (mut pos, mut neg) = (p_lo | p_hi << 4, n_lo | n_hi << 4);
+                    let unc = (u_lo | u_hi << 4) & valid;
                     if unc != 0 {
                         uncertain += u64::from(unc.count_ones());
                         let mut bits = unc;
@@ -186,10 +187,10 @@ pub(crate) fn tri_signs<Lv: Level>(
                             let i = bits.trailing_zeros() as usize;
                             bits &= bits - 1;
                             let s = orient_exact(
-                                [p0[0][i], p0[1][i], p0[2][i]],
-                                [p1[0][i], p1[1][i], p1[2][i]],
+                                lay.pos(lay.t0[t + i]),
+                                lay.pos(lay.t1[t + i]),
                                 *light,
-                                [p2[0][i], p2[1][i], p2[2][i]],
+                                lay.pos(lay.t2[t + i]),
                             );
                             if s > 0 {
                                 pos |= 1 << i;
@@ -204,6 +205,14 @@ pub(crate) fn tri_signs<Lv: Level>(
         }
     }
     uncertain
+}
+
+/// Lanes 0..4 and 4..8 of a point vector, widened to `f64`. (A function, not a closure: closures
+/// are not `#[inline(always)]`, and an intrinsic left in a non-inlined closure is not inlined.)
+#[inline(always)]
+fn widen3<Lv: Level>(p: &[Lv::F; 3]) -> ([Lv::D; 3], [Lv::D; 3]) {
+    let (x, y, z) = (Lv::widen(p[0]), Lv::widen(p[1]), Lv::widen(p[2]));
+    ([x.0, y.0, z.0], [x.1, y.1, z.1])
 }
 
 #[inline(always)]
@@ -221,9 +230,24 @@ fn signed(s: i8, tref: u32) -> i32 {
     (i32::from(s) ^ -k) + k
 }
 
+/// Pushes `base + i` for the non-zero lanes of `m`.
+#[inline(always)]
+fn push_nonzero(sil: &mut Vec<u32>, m: &[i32; LANES], base: usize) {
+    if *m != [0; LANES] {
+        for (i, &mi) in m.iter().enumerate() {
+            if mi != 0 {
+                sil.push((base + i) as u32);
+            }
+        }
+    }
+}
+
 /// Multiplicities of the edges in `blocks` from the triangle signs (`robust`, `ordered`,
-/// `exact`). `signs[l]` are light `l`'s signs of this object's triangles; `out[l]` receives this
-/// range's multiplicities; `sil[l]` collects `edge_base + e` for `m != 0`.
+/// `exact`). `signs[l]` are light `l`'s signs of this object's triangle slots; `out[l]` receives
+/// this range's multiplicities; `sil[l]` collects `edge_base + e` for `m != 0`.
+///
+/// # Panics
+/// If a slice is shorter than described.
 pub(crate) fn edge_sums(
     lay: &Layout,
     blocks: Range<usize>,
@@ -233,29 +257,39 @@ pub(crate) fn edge_sums(
     edge_base: usize,
 ) {
     let e_start = blocks.start * LANES;
-    for blk in blocks {
-        let e0 = blk * LANES;
-        if lay.block_fast[blk] {
-            for e in e0..e0 + LANES {
-                let [t1, t2] = lay.tri2[e];
-                let (i1, i2) = ((t1 & !ODD) as usize, (t2 & !ODD) as usize);
-                for (l, s) in signs.iter().enumerate() {
-                    let m = signed(s[i1], t1) + signed(s[i2], t2);
-                    out[l][e - e_start] = m;
-                    if m != 0 {
-                        sil[l].push((edge_base + e) as u32);
+    for (l, (s, out)) in signs.iter().zip(out.iter_mut()).enumerate() {
+        // Every triangle reference of the layout is < tri_count.
+        let s = &s[..lay.tri_count];
+        for blk in blocks.clone() {
+            let e0 = blk * LANES;
+            if lay.block_fast[blk] {
+                let tri2 = &lay.tri2[e0..e0 + LANES];
+                let dst = &mut out[e0 - e_start..e0 - e_start + LANES];
+                let mut any = 0;
+                for (d, &[t1, t2]) in dst.iter_mut().zip(tri2) {
+                    let (i1, i2) = ((t1 & !ODD) as usize, (t2 & !ODD) as usize);
+                    debug_assert!(i1 < s.len() && i2 < s.len());
+                    // SAFETY: `Layout::build` stores only triangle slots < tri_count = s.len().
+                    let (s1, s2) = unsafe { (*s.get_unchecked(i1), *s.get_unchecked(i2)) };
+                    let m = signed(s1, t1) + signed(s2, t2);
+                    *d = m;
+                    any |= m;
+                }
+                if any != 0 {
+                    for (i, &m) in dst.iter().enumerate() {
+                        if m != 0 {
+                            sil[l].push((edge_base + e0 + i) as u32);
+                        }
                     }
                 }
-            }
-        } else {
-            for e in e0..(e0 + LANES).min(lay.edge_count) {
-                let r = lay.ov_offsets[e] as usize..lay.ov_offsets[e + 1] as usize;
-                for (l, s) in signs.iter().enumerate() {
-                    let m: i32 = lay.ov_tri[r.clone()]
+            } else {
+                for e in e0..(e0 + LANES).min(lay.edge_count) {
+                    let r = lay.ov_offsets[e] as usize..lay.ov_offsets[e + 1] as usize;
+                    let m: i32 = lay.ov_tri[r]
                         .iter()
                         .map(|&t| signed(s[(t & !ODD) as usize], t))
                         .sum();
-                    out[l][e - e_start] = m;
+                    out[e - e_start] = m;
                     if m != 0 {
                         sil[l].push((edge_base + e) as u32);
                     }
@@ -280,11 +314,19 @@ pub(crate) fn edge_original<Lv: Level>(
     for blk in blocks {
         let e0 = blk * LANES;
         if lay.block_fast[blk] {
-            let abo = &lay.abo[e0..e0 + LANES];
-            let a = load3::<Lv::F>(&gather(lay, std::array::from_fn(|i| abo[i][0])));
-            let b = load3::<Lv::F>(&gather(lay, std::array::from_fn(|i| abo[i][1])));
-            let o1 = load3::<Lv::F>(&gather(lay, std::array::from_fn(|i| abo[i][2])));
-            let o2 = load3::<Lv::F>(&gather(lay, std::array::from_fn(|i| abo[i][3])));
+            // Fast blocks are full: e0 + 8 <= edge_count = ea.len() (and eb, eo1, eo2).
+            let idx =
+                |v: &[u32]| -> [u32; LANES] { v[e0..e0 + LANES].try_into().unwrap_or([0; LANES]) };
+            let (ia, ib, i1, i2) = (idx(&lay.ea), idx(&lay.eb), idx(&lay.eo1), idx(&lay.eo2));
+            // SAFETY: 8 ids each, all vertices of the layout (`Layout::build`).
+            let (a, b, o1, o2) = unsafe {
+                (
+                    gather::<Lv>(lay, &ia),
+                    gather::<Lv>(lay, &ib),
+                    gather::<Lv>(lay, &i1),
+                    gather::<Lv>(lay, &i2),
+                )
+            };
             let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
             for (l, light) in lights.iter().enumerate() {
                 let lv = splat4::<Lv::F>(*light);
@@ -303,15 +345,8 @@ pub(crate) fn edge_original<Lv: Level>(
                 let d1 = ((n[0] * o1[0] + n[1] * o1[1]) + n[2] * o1[2]) - na;
                 let d2 = ((n[0] * o2[0] + n[1] * o2[1]) + n[2] * o2[2]) - na;
                 let m = (d1.signum0() + d2.signum0()).to_i32();
-                let dst = &mut out[l][e0 - e_start..e0 - e_start + LANES];
-                dst.copy_from_slice(&m);
-                if m != [0; LANES] {
-                    for (i, &mi) in m.iter().enumerate() {
-                        if mi != 0 {
-                            sil[l].push((edge_base + e0 + i) as u32);
-                        }
-                    }
-                }
+                out[l][e0 - e_start..e0 - e_start + LANES].copy_from_slice(&m);
+                push_nonzero(&mut sil[l], &m, edge_base + e0);
             }
         } else {
             for e in e0..(e0 + LANES).min(lay.edge_count) {
@@ -371,7 +406,8 @@ mod tests {
                 };
                 *lane = (p(), p(), p());
             }
-            let wd = |f: &dyn Fn(usize) -> f32| <Wide as Level>::D::widen([f(0), f(1), f(2), f(3)]);
+            let wd =
+                |f: &dyn Fn(usize) -> f32| <Wide as Level>::D::from_f32([f(0), f(1), f(2), f(3)]);
             let a = std::array::from_fn(|c| wd(&|i| lanes[i].0[c]));
             let b = std::array::from_fn(|c| wd(&|i| lanes[i].1[c]));
             let o = std::array::from_fn(|c| wd(&|i| lanes[i].2[c]));

@@ -21,8 +21,11 @@ pub(crate) trait F32V:
 {
     /// All lanes `x`.
     fn splat(x: f32) -> Self;
-    /// Lanes from an array.
-    fn load(a: [f32; 8]) -> Self;
+    /// Lane `i` = `base[idx[i]]`.
+    ///
+    /// # Safety
+    /// `idx` has at least 8 entries, each `< base.len()`, and `base.len() <= i32::MAX`.
+    unsafe fn gather(base: &[f32], idx: &[u32]) -> Self;
     /// `(positive, negative)`: bit `i` set when lane `i` is `> 0` / `< 0`.
     fn sign_bits(self) -> (u32, u32);
     /// Per lane `+1.0`, `-1.0` or `0.0` for positive, negative and zero (or NaN) lanes.
@@ -38,7 +41,7 @@ pub(crate) trait F64V:
     /// All lanes `x`.
     fn splat(x: f64) -> Self;
     /// Four `f32` values widened exactly to `f64`.
-    fn widen(a: [f32; 4]) -> Self;
+    fn from_f32(a: [f32; 4]) -> Self;
     /// Lane-wise absolute value.
     fn abs(self) -> Self;
     /// Bit `i` set when `self[i] > other[i]`.
@@ -53,6 +56,13 @@ pub(crate) trait Level {
     type F: F32V;
     /// Four `f64` lanes.
     type D: F64V;
+    /// Lanes 0..4 and 4..8 of `f`, widened exactly to `f64`.
+    fn widen(f: Self::F) -> (Self::D, Self::D);
+    /// `(x, y, z)` lanes of the points `pos[idx[i]]` (`[x, y, z, pad]` records).
+    ///
+    /// # Safety
+    /// `idx` has at least 8 entries, each `< pos.len()`.
+    unsafe fn gather_xyz(pos: &[[f32; 4]], idx: &[u32]) -> [Self::F; 3];
 }
 
 /// The `wide` crate at the compile-time target level.
@@ -61,6 +71,22 @@ pub(crate) struct Wide;
 impl Level for Wide {
     type F = wide::f32x8;
     type D = wide::f64x4;
+    #[inline(always)]
+    fn widen(f: wide::f32x8) -> (wide::f64x4, wide::f64x4) {
+        let a = f.to_array();
+        (
+            F64V::from_f32([a[0], a[1], a[2], a[3]]),
+            F64V::from_f32([a[4], a[5], a[6], a[7]]),
+        )
+    }
+    #[inline(always)]
+    unsafe fn gather_xyz(pos: &[[f32; 4]], idx: &[u32]) -> [wide::f32x8; 3] {
+        debug_assert!(idx.len() >= 8 && idx[..8].iter().all(|&i| (i as usize) < pos.len()));
+        // SAFETY: the caller guarantees 8 indices, all in range.
+        let p: [[f32; 4]; 8] =
+            std::array::from_fn(|i| unsafe { *pos.get_unchecked(*idx.get_unchecked(i) as usize) });
+        [0, 1, 2].map(|c| wide::f32x8::new(std::array::from_fn(|i| p[i][c])))
+    }
 }
 
 impl F32V for wide::f32x8 {
@@ -69,8 +95,12 @@ impl F32V for wide::f32x8 {
         wide::f32x8::splat(x)
     }
     #[inline(always)]
-    fn load(a: [f32; 8]) -> Self {
-        wide::f32x8::new(a)
+    unsafe fn gather(base: &[f32], idx: &[u32]) -> Self {
+        debug_assert!(idx.len() >= 8 && idx[..8].iter().all(|&i| (i as usize) < base.len()));
+        // SAFETY: the caller guarantees 8 indices, all in range.
+        wide::f32x8::new(std::array::from_fn(|i| unsafe {
+            *base.get_unchecked(*idx.get_unchecked(i) as usize)
+        }))
     }
     #[inline(always)]
     fn sign_bits(self) -> (u32, u32) {
@@ -95,7 +125,7 @@ impl F64V for wide::f64x4 {
         wide::f64x4::splat(x)
     }
     #[inline(always)]
-    fn widen(a: [f32; 4]) -> Self {
+    fn from_f32(a: [f32; 4]) -> Self {
         wide::f64x4::new([
             f64::from(a[0]),
             f64::from(a[1]),
@@ -139,6 +169,44 @@ mod avx2 {
     impl Level for Avx2 {
         type F = F8;
         type D = D4;
+        #[inline(always)]
+        fn widen(f: F8) -> (D4, D4) {
+            // SAFETY: see the module documentation. f32 -> f64 is exact.
+            unsafe {
+                (
+                    D4(_mm256_cvtps_pd(_mm256_castps256_ps128(f.0))),
+                    D4(_mm256_cvtps_pd(_mm256_extractf128_ps::<1>(f.0))),
+                )
+            }
+        }
+        #[inline(always)]
+        unsafe fn gather_xyz(pos: &[[f32; 4]], idx: &[u32]) -> [F8; 3] {
+            debug_assert!(idx.len() >= 8 && idx[..8].iter().all(|&i| (i as usize) < pos.len()));
+            // SAFETY: 8 readable indices, each in range of `pos` (caller); each record is 16
+            // readable bytes; AVX2 present (module docs).
+            unsafe {
+                let p = |i: usize| {
+                    _mm_loadu_ps(
+                        pos.as_ptr()
+                            .add(*idx.get_unchecked(i) as usize)
+                            .cast::<f32>(),
+                    )
+                };
+                let pair =
+                    |i: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(p(i)), p(i + 4));
+                // Rows [x y z w] of points i and i+4 in the two 128-bit halves; 4x4 transpose.
+                let (r0, r1, r2, r3) = (pair(0), pair(1), pair(2), pair(3));
+                let t0 = _mm256_unpacklo_ps(r0, r1); // x0 x1 y0 y1
+                let t1 = _mm256_unpacklo_ps(r2, r3); // x2 x3 y2 y3
+                let t2 = _mm256_unpackhi_ps(r0, r1); // z0 z1 w0 w1
+                let t3 = _mm256_unpackhi_ps(r2, r3); // z2 z3 w2 w3
+                [
+                    F8(_mm256_shuffle_ps::<0x44>(t0, t1)),
+                    F8(_mm256_shuffle_ps::<0xEE>(t0, t1)),
+                    F8(_mm256_shuffle_ps::<0x44>(t2, t3)),
+                ]
+            }
+        }
     }
 
     #[derive(Clone, Copy)]
@@ -173,9 +241,14 @@ mod avx2 {
             F8(unsafe { _mm256_set1_ps(x) })
         }
         #[inline(always)]
-        fn load(a: [f32; 8]) -> Self {
-            // SAFETY: `a` is 8 readable f32; unaligned load; AVX present (module docs).
-            F8(unsafe { _mm256_loadu_ps(a.as_ptr()) })
+        unsafe fn gather(base: &[f32], idx: &[u32]) -> Self {
+            debug_assert!(idx.len() >= 8 && idx[..8].iter().all(|&i| (i as usize) < base.len()));
+            // SAFETY: 8 readable indices, each in range of `base` and below 2^31 (caller);
+            // AVX2 present (module docs).
+            unsafe {
+                let vi = _mm256_loadu_si256(idx.as_ptr().cast::<__m256i>());
+                F8(_mm256_i32gather_ps::<4>(base.as_ptr(), vi))
+            }
         }
         #[inline(always)]
         fn sign_bits(self) -> (u32, u32) {
@@ -219,7 +292,7 @@ mod avx2 {
             D4(unsafe { _mm256_set1_pd(x) })
         }
         #[inline(always)]
-        fn widen(a: [f32; 4]) -> Self {
+        fn from_f32(a: [f32; 4]) -> Self {
             // SAFETY: `a` is 4 readable f32; AVX present (module docs). f32 -> f64 is exact.
             D4(unsafe { _mm256_cvtps_pd(_mm_loadu_ps(a.as_ptr())) })
         }

@@ -26,17 +26,29 @@ pub(crate) struct Layout {
     pub xs: Vec<f32>,
     pub ys: Vec<f32>,
     pub zs: Vec<f32>,
-    /// Canonical triangles (ascending ids), sorted; padded with `[0, 0, 0]` to a multiple of
-    /// [`LANES`].
-    pub tris: Vec<[u32; 3]>,
+    /// Positions as 16-byte records `[x, y, z, 0]` (one aligned load per vertex).
+    pub xyz: Vec<[f32; 4]>,
+    /// Canonical triangles (ascending ids `t0 < t1 < t2`), sorted, as three arrays; padded with
+    /// vertex 0 to a multiple of [`LANES`].
+    pub t0: Vec<u32>,
+    /// Second vertex of each canonical triangle.
+    pub t1: Vec<u32>,
+    /// Third vertex of each canonical triangle.
+    pub t2: Vec<u32>,
     /// Number of real triangles in `tris`.
     pub tri_count: usize,
     /// Number of edges.
     pub edge_count: usize,
     /// Per block of [`LANES`] edges: true when the block is full and every edge is manifold.
     pub block_fast: Vec<bool>,
-    /// Per edge: `[a, b, o1, o2]` (only meaningful in fast blocks).
-    pub abo: Vec<[u32; 4]>,
+    /// Per edge `a`, `b` and the two OVs (only meaningful in fast blocks; 0 elsewhere).
+    pub ea: Vec<u32>,
+    /// See `ea`.
+    pub eb: Vec<u32>,
+    /// See `ea`.
+    pub eo1: Vec<u32>,
+    /// See `ea`.
+    pub eo2: Vec<u32>,
     /// Per edge: the two canonical triangles with parity bits (only meaningful in fast blocks).
     pub tri2: Vec<[u32; 2]>,
     /// Edge endpoints, for the general path.
@@ -58,7 +70,7 @@ impl Layout {
     /// on it.
     pub(crate) fn build(table: &EdgeTable) -> Result<Self, LayoutError> {
         let nv = table.positions.len();
-        if nv >= i32::MAX as usize || table.triangles.len() >= (ODD as usize) {
+        if nv >= i32::MAX as usize || table.triangles.len() >= (ODD as usize) - LANES {
             return Err(LayoutError(format!(
                 "{nv} vertices / {} triangles exceed the 2^31 limit of the layout",
                 table.triangles.len()
@@ -84,6 +96,11 @@ impl Layout {
         let xs = table.positions.iter().map(|p| p.x).collect();
         let ys = table.positions.iter().map(|p| p.y).collect();
         let zs = table.positions.iter().map(|p| p.z).collect();
+        let xyz = table
+            .positions
+            .iter()
+            .map(|p| [p.x, p.y, p.z, 0.0])
+            .collect();
 
         // Canonical triangles, sorted for locality; `slot[t]` = position of table triangle t.
         let mut canon: Vec<([u32; 3], u32)> = table
@@ -102,8 +119,13 @@ impl Layout {
             slot[t as usize] = i as u32;
         }
         let tri_count = canon.len();
-        let mut tris: Vec<[u32; 3]> = canon.into_iter().map(|(c, _)| c).collect();
-        tris.resize(tri_count.div_ceil(LANES) * LANES, [0, 0, 0]);
+        let padded = tri_count.div_ceil(LANES) * LANES;
+        let column = |k: usize| -> Vec<u32> {
+            let mut v: Vec<u32> = canon.iter().map(|(c, _)| c[k]).collect();
+            v.resize(padded, 0);
+            v
+        };
+        let (t0, t1, t2) = (column(0), column(1), column(2));
 
         // For each (edge, OV) entry, its triangle: OVs of an edge are listed in ascending
         // triangle order, so filling per edge while walking triangles in order reproduces it.
@@ -135,7 +157,8 @@ impl Layout {
         }
 
         let mut block_fast = Vec::with_capacity(ne.div_ceil(LANES));
-        let mut abo = vec![[0u32; 4]; ne];
+        let (mut ea, mut eb) = (vec![0u32; ne], vec![0u32; ne]);
+        let (mut eo1, mut eo2) = (vec![0u32; ne], vec![0u32; ne]);
         let mut tri2 = vec![[0u32; 2]; ne];
         for e in 0..ne {
             let (s, t) = (
@@ -144,7 +167,8 @@ impl Layout {
             );
             if t - s == 2 {
                 let [a, b] = table.edges[e];
-                abo[e] = [a, b, table.ovs[s], table.ovs[s + 1]];
+                (ea[e], eb[e]) = (a, b);
+                (eo1[e], eo2[e]) = (table.ovs[s], table.ovs[s + 1]);
                 tri2[e] = [ov_tri[s], ov_tri[s + 1]];
             }
         }
@@ -161,11 +185,17 @@ impl Layout {
             xs,
             ys,
             zs,
-            tris,
+            xyz,
+            t0,
+            t1,
+            t2,
             tri_count,
             edge_count: ne,
             block_fast,
-            abo,
+            ea,
+            eb,
+            eo1,
+            eo2,
             tri2,
             edges: table.edges.clone(),
             ov_offsets: table.ov_offsets.clone(),

@@ -34,9 +34,12 @@
 //! assert_eq!(stats.uncertain, 0);
 //! ```
 
+pub mod floor;
 mod kernel;
 mod lanes;
 mod layout;
+
+pub use floor::MemoryFloor;
 
 use layout::{Layout, LANES};
 use rayon::prelude::*;
@@ -365,7 +368,7 @@ impl Prepared {
                     l
                 }
             };
-            let (ne, nt) = (layout.edge_count, layout.tris.len());
+            let (ne, nt) = (layout.edge_count, layout.t0.len());
             objects.push(PreparedObject {
                 layout,
                 edge_base,
@@ -467,7 +470,7 @@ fn run_extract(
             } else {
                 let per_light: Vec<&[i8]> = (0..nl)
                     .map(|l| {
-                        &signs[l * slots + o.tri_base..l * slots + o.tri_base + o.layout.tris.len()]
+                        &signs[l * slots + o.tri_base..l * slots + o.tri_base + o.layout.t0.len()]
                     })
                     .collect();
                 kernel::edge_sums(
