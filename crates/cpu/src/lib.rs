@@ -91,15 +91,10 @@ impl SilhouetteBackend for CpuBackend {
         let obj_lights = object_lights(scene, lights);
         let offsets = scene.edge_offsets();
         out.reset(scene.total_edges(), lights.len());
-        for l in 0..lights.len() {
-            let values = out.values_mut(l);
-            for (i, o) in scene.objects.iter().enumerate() {
-                extract_table(
-                    &o.table,
-                    obj_lights[i][l],
-                    mode,
-                    &mut values[offsets[i]..offsets[i + 1]],
-                );
+        for (i, (o, per_light)) in scene.objects.iter().zip(&obj_lights).enumerate() {
+            for (l, &light) in per_light.iter().enumerate() {
+                let values = &mut out.values_mut(l)[offsets[i]..offsets[i + 1]];
+                extract_table(&o.table, light, mode, values);
             }
         }
         out.rebuild_silhouettes();

@@ -70,7 +70,10 @@ pub fn differing_signs(a: &Multiplicities, b: &Multiplicities, light: usize) -> 
 /// The first difference between two results, as `(light, global edge, a, b)`, or `None` when
 /// they are identical. For test messages.
 #[must_use]
-pub fn first_difference(a: &Multiplicities, b: &Multiplicities) -> Option<(usize, usize, i32, i32)> {
+pub fn first_difference(
+    a: &Multiplicities,
+    b: &Multiplicities,
+) -> Option<(usize, usize, i32, i32)> {
     if a.edge_count() != b.edge_count() || a.light_count() != b.light_count() {
         return Some((usize::MAX, usize::MAX, 0, 0));
     }

@@ -27,6 +27,7 @@ pub mod corpus;
 pub mod invariant;
 mod multiplicities;
 mod scene;
+mod shapes;
 
 pub use multiplicities::{ExtractStats, Multiplicities};
 pub use scene::{object_lights, SceneObject, TopologyScene};

@@ -117,7 +117,8 @@ impl Multiplicities {
             let s = &self.silhouettes[l];
             s.len() == expected
                 && s.windows(2).all(|w| w[0] < w[1])
-                && s.iter().all(|&e| vals.get(e as usize).is_some_and(|&m| m != 0))
+                && s.iter()
+                    .all(|&e| vals.get(e as usize).is_some_and(|&m| m != 0))
         })
     }
 }
