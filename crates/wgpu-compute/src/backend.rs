@@ -850,14 +850,11 @@ impl WgpuBackend {
                 return Err(device_error(e));
             }
             r?;
+            if last_chunk {
+                p.last = Some((first, count));
+            }
             first += count;
         }
-        let last_count = if lights.len() % per_dispatch == 0 {
-            per_dispatch
-        } else {
-            lights.len() % per_dispatch
-        };
-        p.last = Some((lights.len() - last_count, last_count));
         Ok(stats)
     }
 

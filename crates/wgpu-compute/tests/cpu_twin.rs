@@ -171,7 +171,11 @@ fn device_filters_certify_only_exact_signs() {
             rng.scaled(),
             rng.scaled(),
             rng.scaled(),
-            if rng.next() % 2 == 0 { 0.0 } else { 1.0 },
+            if rng.next().is_multiple_of(2) {
+                0.0
+            } else {
+                1.0
+            },
         ];
         check(a, b, l, o, &mut stats);
         // Nearly degenerate: O close to the plane through A, B and the light.
