@@ -1,1 +1,91 @@
-fn main() {}
+//! `cargo xtask`: project automation (the alias lives in `.cargo/config.toml`).
+//!
+//! Each subcommand is a module with `pub fn run(args: &[String]) -> Result<(), String>` and one
+//! line in [`COMMANDS`]. Shared helpers for the modules: [`project_root`] and [`cargo`].
+//!
+//! ```text
+//! cargo xtask test            drivers check/install, fmt, clippy, workspace tests, SPIR-V check
+//! cargo xtask matrix          the paper's experiment matrix on every available backend
+//! cargo xtask shaders         regenerate the committed SPIR-V (--check: verify it)
+//! ```
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+mod matrix;
+mod plots;
+mod shaders;
+mod test;
+
+/// A subcommand's entry point: its arguments (after the subcommand name) to a result whose error
+/// is printed as `error: ...`.
+type RunFn = fn(&[String]) -> Result<(), String>;
+
+/// The subcommands: name, one-line help, entry point. Add a module and a line here.
+const COMMANDS: &[(&str, &str, RunFn)] = &[
+    (
+        "test",
+        "drivers check/install, fmt, clippy, workspace tests, SPIR-V check; summary",
+        test::run,
+    ),
+    (
+        "matrix",
+        "run the paper's experiment matrix on every available backend (tables, CSV, JSON, plots)",
+        matrix::run,
+    ),
+    (
+        "shaders",
+        "regenerate shaders/*.spv with glslangValidator (--check: fail when stale or missing)",
+        shaders::run,
+    ),
+];
+
+/// The workspace root (the parent of `xtask/`).
+#[must_use]
+pub fn project_root() -> PathBuf {
+    let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    manifest
+        .parent()
+        .map_or_else(|| manifest.clone(), std::path::Path::to_path_buf)
+}
+
+/// The cargo that runs us (`$CARGO`), or `cargo` from `PATH`.
+#[must_use]
+pub fn cargo() -> String {
+    std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned())
+}
+
+fn usage() -> String {
+    let mut s = String::from(
+        "cargo xtask <COMMAND> [ARGS...]\n\nProject automation for shadowvol.\n\nCommands:\n",
+    );
+    let width = COMMANDS.iter().map(|c| c.0.len()).max().unwrap_or(0);
+    for (name, help, _) in COMMANDS {
+        s.push_str(&format!("  {name:width$}  {help}\n"));
+    }
+    s.push_str("\n`cargo xtask <COMMAND> --help` shows a command's options.\n");
+    s
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let Some(name) = args.first() else {
+        eprint!("{}", usage());
+        return ExitCode::from(2);
+    };
+    if matches!(name.as_str(), "-h" | "--help" | "help") {
+        print!("{}", usage());
+        return ExitCode::SUCCESS;
+    }
+    let Some((_, _, run)) = COMMANDS.iter().find(|c| c.0 == name) else {
+        eprintln!("error: unknown xtask command {name:?}\n\n{}", usage());
+        return ExitCode::from(2);
+    };
+    match run(&args[1..]) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,334 @@
+//! `cargo xtask test`: everything CI checks, in one command, with a summary.
+//!
+//! Steps (all run, even after a failure, so one run shows every problem):
+//!
+//! 1. **drivers**: the Vulkan loader and Mesa's lavapipe ICD, the OpenCL ICD loader and PoCL, and
+//!    `glslangValidator`. When one is missing and we are root, they are installed with apt-get;
+//!    when we are not root, the exact command is printed and the run goes on (the GPU backends
+//!    then skip visibly), unless `CI=true`, where a missing driver is a failure.
+//! 2. **fmt**: `cargo fmt --all -- --check`.
+//! 3. **clippy**: `cargo clippy --workspace --all-targets -- -D warnings`.
+//! 4. **test**: `cargo test --workspace` (with `CI=true`, the conformance tests fail for a backend
+//!    that cannot start instead of skipping it).
+//! 5. **shaders**: `cargo xtask shaders --check` (the committed SPIR-V matches the GLSL).
+
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+/// The apt packages that provide the drivers the backends load at run time.
+const APT_PACKAGES: &[&str] = &[
+    "mesa-vulkan-drivers",
+    "libvulkan1",
+    "pocl-opencl-icd",
+    "ocl-icd-libopencl1",
+    "glslang-tools",
+];
+
+const USAGE: &str = "cargo xtask test [--no-drivers] [--skip STEP]... [-- CARGO_TEST_ARGS...]
+
+Runs, in order, and prints a summary:
+  drivers  check Vulkan loader + lavapipe, OpenCL loader + PoCL, glslangValidator;
+           install them with apt-get when missing and running as root
+  fmt      cargo fmt --all -- --check
+  clippy   cargo clippy --workspace --all-targets -- -D warnings
+  test     cargo test --workspace [CARGO_TEST_ARGS]
+  shaders  cargo xtask shaders --check
+
+Options:
+  --no-drivers   same as --skip drivers
+  --skip STEP    skip a step (drivers, fmt, clippy, test, shaders); repeatable
+
+Environment:
+  CI=true        a missing driver, and a backend that cannot start, fail instead of skipping
+";
+
+/// Outcome of one step.
+enum Outcome {
+    Passed,
+    Warned(String),
+    Failed(String),
+    Skipped,
+}
+
+struct Step {
+    name: &'static str,
+    outcome: Outcome,
+    time: Duration,
+}
+
+fn is_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true"))
+}
+
+/// Runs `cargo xtask test`.
+///
+/// # Errors
+/// When an argument is unknown or any step failed (after all steps ran).
+pub fn run(args: &[String]) -> Result<(), String> {
+    let mut skip: Vec<String> = Vec::new();
+    let mut test_args: Vec<String> = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "-h" | "--help" => {
+                print!("{USAGE}");
+                return Ok(());
+            }
+            "--no-drivers" => skip.push("drivers".into()),
+            "--skip" => {
+                let step = it.next().ok_or("--skip needs a step name")?;
+                if !["drivers", "fmt", "clippy", "test", "shaders"].contains(&step.as_str()) {
+                    return Err(format!("unknown step {step:?} for --skip\n\n{USAGE}"));
+                }
+                skip.push(step.clone());
+            }
+            "--" => {
+                test_args.extend(it.by_ref().cloned());
+            }
+            other => return Err(format!("unknown argument {other:?}\n\n{USAGE}")),
+        }
+    }
+    let root = crate::project_root();
+    let ci = is_ci();
+    println!("xtask test: workspace {}, CI={ci}", root.display());
+
+    let mut steps = Vec::new();
+    let mut step = |name: &'static str, f: &mut dyn FnMut() -> Outcome| {
+        if skip.iter().any(|s| s == name) {
+            steps.push(Step {
+                name,
+                outcome: Outcome::Skipped,
+                time: Duration::ZERO,
+            });
+            return;
+        }
+        println!("\n==> {name}");
+        let start = Instant::now();
+        let outcome = f();
+        steps.push(Step {
+            name,
+            outcome,
+            time: start.elapsed(),
+        });
+    };
+
+    step("drivers", &mut || drivers(ci));
+    step("fmt", &mut || {
+        cargo_step(&root, &["fmt", "--all", "--", "--check"], &[])
+    });
+    step("clippy", &mut || {
+        cargo_step(
+            &root,
+            &[
+                "clippy",
+                "--workspace",
+                "--all-targets",
+                "--",
+                "-D",
+                "warnings",
+            ],
+            &[],
+        )
+    });
+    step("test", &mut || {
+        let mut a = vec!["test", "--workspace"];
+        if !test_args.is_empty() {
+            a.push("--");
+            a.extend(test_args.iter().map(String::as_str));
+        }
+        cargo_step(&root, &a, &[])
+    });
+    step(
+        "shaders",
+        &mut || match crate::shaders::run(&["--check".to_owned()]) {
+            Ok(()) => Outcome::Passed,
+            Err(e) => Outcome::Failed(e),
+        },
+    );
+
+    println!("\n==> summary");
+    let mut failed = 0;
+    for s in &steps {
+        let (word, detail) = match &s.outcome {
+            Outcome::Passed => ("ok", String::new()),
+            Outcome::Warned(w) => ("WARN", w.clone()),
+            Outcome::Failed(e) => {
+                failed += 1;
+                ("FAILED", e.clone())
+            }
+            Outcome::Skipped => ("skipped", String::new()),
+        };
+        let first_line = detail.lines().next().unwrap_or("");
+        println!(
+            "  {:8} {:8} {:>8.1} s  {first_line}",
+            s.name,
+            word,
+            s.time.as_secs_f64()
+        );
+    }
+    let passed = steps
+        .iter()
+        .filter(|s| matches!(s.outcome, Outcome::Passed | Outcome::Warned(_)))
+        .count();
+    let skipped = steps
+        .iter()
+        .filter(|s| matches!(s.outcome, Outcome::Skipped))
+        .count();
+    println!("xtask: {passed} passed, {failed} failed, {skipped} skipped");
+    if failed == 0 {
+        Ok(())
+    } else {
+        Err(format!("{failed} step(s) failed"))
+    }
+}
+
+/// Runs `cargo ARGS` in the workspace root, streaming its output.
+fn cargo_step(root: &Path, args: &[&str], env: &[(&str, &str)]) -> Outcome {
+    let line = format!("cargo {}", args.join(" "));
+    println!("$ {line}");
+    let mut cmd = Command::new(crate::cargo());
+    cmd.current_dir(root).args(args);
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    match cmd.status() {
+        Ok(s) if s.success() => Outcome::Passed,
+        Ok(s) => Outcome::Failed(format!("`{line}` failed ({s})")),
+        Err(e) => Outcome::Failed(format!("cannot run `{line}`: {e}")),
+    }
+}
+
+/// One driver requirement: a name and whether it is present.
+struct Requirement {
+    what: &'static str,
+    present: bool,
+}
+
+fn any_file(dirs: &[&str], pred: &dyn Fn(&str) -> bool) -> bool {
+    dirs.iter().any(|d| {
+        std::fs::read_dir(d).is_ok_and(|entries| {
+            entries
+                .flatten()
+                .any(|e| e.file_name().to_str().is_some_and(pred))
+        })
+    })
+}
+
+/// Folders where shared libraries live on Debian-like and other Linux systems.
+fn lib_dirs() -> Vec<String> {
+    let mut dirs: Vec<String> = ["/usr/lib", "/usr/lib64", "/lib", "/lib64", "/usr/local/lib"]
+        .iter()
+        .map(|s| (*s).to_owned())
+        .collect();
+    for base in ["/usr/lib", "/lib"] {
+        if let Ok(entries) = std::fs::read_dir(base) {
+            for e in entries.flatten() {
+                let name = e.file_name();
+                if name.to_str().is_some_and(|n| n.ends_with("-linux-gnu")) {
+                    dirs.push(e.path().display().to_string());
+                }
+            }
+        }
+    }
+    dirs
+}
+
+fn in_path(program: &str) -> bool {
+    std::env::var_os("PATH")
+        .is_some_and(|p| std::env::split_paths(&p).any(|d| d.join(program).is_file()))
+}
+
+fn requirements() -> Vec<Requirement> {
+    let libs = lib_dirs();
+    let libs: Vec<&str> = libs.iter().map(String::as_str).collect();
+    vec![
+        Requirement {
+            what: "Vulkan loader (libvulkan.so.1)",
+            present: any_file(&libs, &|n| n.starts_with("libvulkan.so")),
+        },
+        Requirement {
+            what: "Mesa lavapipe Vulkan ICD (/usr/share/vulkan/icd.d/lvp_icd*.json)",
+            present: any_file(&["/usr/share/vulkan/icd.d"], &|n| {
+                n.starts_with("lvp_icd") && n.ends_with(".json")
+            }),
+        },
+        Requirement {
+            what: "OpenCL ICD loader (libOpenCL.so.1)",
+            present: any_file(&libs, &|n| n.starts_with("libOpenCL.so")),
+        },
+        Requirement {
+            what: "PoCL OpenCL platform (/etc/OpenCL/vendors/pocl.icd)",
+            present: Path::new("/etc/OpenCL/vendors/pocl.icd").is_file(),
+        },
+        Requirement {
+            what: "glslangValidator",
+            present: in_path("glslangValidator"),
+        },
+    ]
+}
+
+fn is_root() -> bool {
+    Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+}
+
+fn install_command() -> String {
+    format!(
+        "apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y {}",
+        APT_PACKAGES.join(" ")
+    )
+}
+
+fn drivers(ci: bool) -> Outcome {
+    let missing = |reqs: &[Requirement]| -> Vec<&'static str> {
+        reqs.iter().filter(|r| !r.present).map(|r| r.what).collect()
+    };
+    let reqs = requirements();
+    for r in &reqs {
+        println!(
+            "  {:8} {}",
+            if r.present { "found" } else { "MISSING" },
+            r.what
+        );
+    }
+    let mut absent = missing(&reqs);
+    if absent.is_empty() {
+        return Outcome::Passed;
+    }
+    if is_root() {
+        println!("  installing as root: {}", install_command());
+        let ok = Command::new("apt-get")
+            .arg("update")
+            .env("DEBIAN_FRONTEND", "noninteractive")
+            .status()
+            .is_ok_and(|s| s.success())
+            && Command::new("apt-get")
+                .args(["install", "-y", "--no-install-recommends"])
+                .args(APT_PACKAGES)
+                .env("DEBIAN_FRONTEND", "noninteractive")
+                .status()
+                .is_ok_and(|s| s.success());
+        if !ok {
+            println!("  apt-get failed");
+        }
+        absent = missing(&requirements());
+        if absent.is_empty() {
+            return Outcome::Passed;
+        }
+    } else {
+        println!(
+            "  not root: install the drivers with\n    sudo sh -c '{}'",
+            install_command()
+        );
+    }
+    let msg = format!("missing: {}", absent.join("; "));
+    if ci {
+        Outcome::Failed(format!("{msg} (CI=true: the GPU backends must run)"))
+    } else {
+        println!("  continuing: backends that need them will be skipped visibly");
+        Outcome::Warned(msg)
+    }
+}
