@@ -216,6 +216,17 @@ impl Loader<'_> {
         }
 
         if let Some(mesh) = node.mesh() {
+            let det = world.matrix3.determinant();
+            if !det.is_normal() {
+                return Err(self.err(
+                    label,
+                    format!(
+                        "world transform of the mesh is singular or degenerate (determinant \
+                         {det:e}): a zero scale flattens the object, and lights cannot be \
+                         brought into its frame"
+                    ),
+                ));
+            }
             let shared = match self.meshes.get(&mesh.index()) {
                 Some(m) => Arc::clone(m),
                 None => {

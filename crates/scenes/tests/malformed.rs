@@ -110,6 +110,12 @@ fn node_cycles_are_rejected() {
 }
 
 #[test]
+fn singular_transforms_are_rejected() {
+    let m = message("zero_scale.gltf");
+    assert_has(&m, &["node 1 'leaf'", "singular"]);
+}
+
+#[test]
 fn broken_documents_and_buffers_are_rejected() {
     let m = message("not_json.gltf");
     assert_has(&m, &["document"]);

@@ -50,6 +50,8 @@ write("integer_positions.gltf", gltf([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [0, 1, 2
 write("missing_position.gltf", gltf(TRI, [0, 1, 2], drop_position=True))
 write("node_cycle.gltf", gltf(TRI, [0, 1, 2], nodes=[{"name": "a", "mesh": 0, "children": [1]},
                                                      {"name": "b", "children": [0]}]))
+write("zero_scale.gltf", gltf(TRI, [0, 1, 2], nodes=[{"name": "flat", "children": [1], "scale": [1, 0, 1]},
+                                                      {"name": "leaf", "mesh": 0}]))
 doc = gltf(TRI, [0, 1, 2])
 doc["buffers"][0]["uri"] = "missing.bin"
 write("missing_buffer.gltf", doc)
