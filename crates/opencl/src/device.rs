@@ -2,8 +2,7 @@
 
 use crate::BACKEND;
 use opencl3::device::{
-    Device, CL_DEVICE_TYPE_ACCELERATOR, CL_DEVICE_TYPE_ALL, CL_DEVICE_TYPE_CPU,
-    CL_DEVICE_TYPE_GPU,
+    Device, CL_DEVICE_TYPE_ACCELERATOR, CL_DEVICE_TYPE_ALL, CL_DEVICE_TYPE_CPU, CL_DEVICE_TYPE_GPU,
 };
 use opencl3::error_codes::{ClError, CL_PLATFORM_NOT_FOUND_KHR, DLOPEN_RUNTIME_LOAD_FAILED};
 use opencl3::platform::get_platforms;
@@ -26,7 +25,7 @@ pub struct DeviceDesc {
     pub device_index: usize,
     /// Platform name (for example `"Portable Computing Language"`).
     pub platform_name: String,
-    /// Platform version string (for example `"OpenCL 3.0 PoCL 5.0 ..."`).
+    /// Platform version string (for example `"OpenCL 3.0 PoCL 3.1.0 ..."`).
     pub platform_version: String,
     /// Device name.
     pub device_name: String,
@@ -74,12 +73,14 @@ fn cl_err(what: &str, e: ClError) -> BackendError {
 /// [`BackendError::Unavailable`] when the ICD loader (`libOpenCL.so.1`) cannot be loaded, when
 /// no platform is installed, or when no platform has a device; the message says what to install.
 pub fn list_devices() -> Result<Vec<DeviceDesc>, BackendError> {
-    let _guard = INIT_LOCK.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let _guard = INIT_LOCK
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     list_devices_locked()
 }
 
 /// Serialises platform enumeration and backend start-up within the process: some drivers
-/// (PoCL 5) are not thread-safe while they initialise their devices.
+/// (PoCL 3.1) are not thread-safe while they initialise their devices.
 pub(crate) static INIT_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 /// [`list_devices`] for a caller that holds [`INIT_LOCK`].
@@ -106,7 +107,9 @@ pub(crate) fn list_devices_locked() -> Result<Vec<DeviceDesc>, BackendError> {
     }
     let mut out = Vec::new();
     for (pi, platform) in platforms.iter().enumerate() {
-        let platform_name = platform.name().unwrap_or_else(|_| "unknown platform".into());
+        let platform_name = platform
+            .name()
+            .unwrap_or_else(|_| "unknown platform".into());
         let platform_version = platform.version().unwrap_or_default();
         // A platform without devices answers CL_DEVICE_NOT_FOUND: treat it as empty.
         let ids = platform.get_devices(CL_DEVICE_TYPE_ALL).unwrap_or_default();
@@ -130,7 +133,11 @@ pub(crate) fn list_devices_locked() -> Result<Vec<DeviceDesc>, BackendError> {
                 device_index: di,
                 platform_name: platform_name.trim().to_owned(),
                 platform_version: platform_version.trim().to_owned(),
-                device_name: dev.name().unwrap_or_else(|_| "unknown device".into()).trim().to_owned(),
+                device_name: dev
+                    .name()
+                    .unwrap_or_else(|_| "unknown device".into())
+                    .trim()
+                    .to_owned(),
                 device_type,
                 driver_version: dev.driver_version().unwrap_or_default().trim().to_owned(),
                 fp64,
@@ -164,7 +171,12 @@ pub fn select_device(
     let listing = || {
         devices
             .iter()
-            .map(|d| format!("{}:{} {} / {}", d.platform_index, d.device_index, d.platform_name, d.device_name))
+            .map(|d| {
+                format!(
+                    "{}:{} {} / {}",
+                    d.platform_index, d.device_index, d.platform_name, d.device_name
+                )
+            })
             .collect::<Vec<_>>()
             .join("; ")
     };

@@ -185,9 +185,11 @@ pub fn finish(
     for (l, list) in silhouettes.iter().enumerate().take(lights) {
         let values = out.values_mut(l);
         for &(e, m) in list {
-            let slot = values
-                .get_mut(e as usize)
-                .ok_or_else(|| bad(format!("edge {e} of light {l} out of range ({edges} edges)")))?;
+            let slot = values.get_mut(e as usize).ok_or_else(|| {
+                bad(format!(
+                    "edge {e} of light {l} out of range ({edges} edges)"
+                ))
+            })?;
             if *slot != 0 {
                 return Err(bad(format!("edge {e} of light {l} listed twice")));
             }
@@ -203,7 +205,9 @@ pub fn finish(
     for &[e, k, l] in &uncertain {
         let (ei, ki, li) = (e as usize, k as usize, l as usize);
         if ei >= edges || li >= lights {
-            return Err(bad(format!("uncertain record ({e}, {k}, {l}) out of range")));
+            return Err(bad(format!(
+                "uncertain record ({e}, {k}, {l}) out of range"
+            )));
         }
         if ki < flat.ov_offsets[ei] as usize || ki >= flat.ov_offsets[ei + 1] as usize {
             return Err(bad(format!(

@@ -232,20 +232,22 @@ fn build_program(
     options: &str,
     origin: &str,
 ) -> Result<Program, BackendError> {
-    let mut program = Program::create_from_source(context, source).map_err(|e| {
-        BackendError::Build {
+    let mut program =
+        Program::create_from_source(context, source).map_err(|e| BackendError::Build {
             backend: BACKEND,
             what: origin.to_owned(),
             log: format!("clCreateProgramWithSource failed: {e} ({})", e.0),
-        }
-    })?;
+        })?;
     if let Err(e) = program.build(&[device.id], options) {
         let log = program
             .get_build_log(device.id)
             .unwrap_or_else(|le| format!("(no build log: {le})"));
         return Err(BackendError::Build {
             backend: BACKEND,
-            what: format!("{origin} (options {options:?}, device {})", device.device_name),
+            what: format!(
+                "{origin} (options {options:?}, device {})",
+                device.device_name
+            ),
             log: format!("clBuildProgram failed: {e} ({})\n{}", e.0, log.trim_end()),
         });
     }
@@ -269,12 +271,17 @@ impl OpenClBackend {
     /// or the kernel file cannot be read; [`BackendError::Build`] with the compiler's log when
     /// the kernel does not build; [`BackendError::Device`] when the driver fails.
     pub fn with_options(options: OpenClOptions) -> Result<Self, BackendError> {
-        // Some drivers (PoCL 5) crash when threads enumerate and initialise devices at once.
-        let _guard = device::INIT_LOCK.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        // Some drivers (PoCL 3.1) crash when threads enumerate and initialise devices at once.
+        let _guard = device::INIT_LOCK
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         let devices = device::list_devices_locked()?;
         let device = select_device(&devices, options.device.as_deref())?;
         let (source, origin) = match &options.kernel {
-            KernelSource::Builtin => (KERNEL_SOURCE.to_owned(), "kernels/silhouette.cl (built in)".to_owned()),
+            KernelSource::Builtin => (
+                KERNEL_SOURCE.to_owned(),
+                "kernels/silhouette.cl (built in)".to_owned(),
+            ),
             KernelSource::Path(p) => (
                 std::fs::read_to_string(p).map_err(|e| BackendError::Unavailable {
                     backend: BACKEND,
@@ -286,8 +293,9 @@ impl OpenClBackend {
         };
         let dev = Device::new(device.id);
         let max_alloc = dev.max_mem_alloc_size().unwrap_or(128 << 20);
-        let context = Context::from_device(&dev)
-            .map_err(|e| device_error(&format!("creating a context on {}", device.describe()), e))?;
+        let context = Context::from_device(&dev).map_err(|e| {
+            device_error(&format!("creating a context on {}", device.describe()), e)
+        })?;
         #[allow(deprecated)] // clCreateCommandQueue: also works on OpenCL 1.2 platforms.
         let queue = CommandQueue::create_default(&context, 0)
             .map_err(|e| device_error("creating a command queue", e))?;
@@ -422,12 +430,20 @@ impl SilhouetteBackend for OpenClBackend {
             max_lights: None,
             details: vec![
                 ("platform".to_owned(), self.device.platform_name.clone()),
-                ("platform_version".to_owned(), self.device.platform_version.clone()),
+                (
+                    "platform_version".to_owned(),
+                    self.device.platform_version.clone(),
+                ),
                 ("device_type".to_owned(), self.device.device_type.to_owned()),
                 ("driver".to_owned(), self.device.driver_version.clone()),
                 (
                     "exact_filter".to_owned(),
-                    if self.use_f64 { "f64 (cl_khr_fp64)" } else { "f32" }.to_owned(),
+                    if self.use_f64 {
+                        "f64 (cl_khr_fp64)"
+                    } else {
+                        "f32"
+                    }
+                    .to_owned(),
                 ),
                 ("kernel".to_owned(), self.kernel_origin.clone()),
             ],
@@ -498,9 +514,19 @@ impl SilhouetteBackend for OpenClBackend {
             let p = self.scenes.get_mut(&id).expect("checked above");
             ensure(ctx, &mut p.lights, flat_l.len(), "the light buffer")?;
             ensure(ctx, &mut p.counts, num_lights + 1, "the counters")?;
-            ensure(ctx, &mut p.sil, 2 * edges * num_lights, "the silhouette lists")?;
+            ensure(
+                ctx,
+                &mut p.sil,
+                2 * edges * num_lights,
+                "the silhouette lists",
+            )?;
             if mode == Accuracy::Exact && p.unc.is_none() {
-                ensure(ctx, &mut p.unc, 3 * INITIAL_UNCERTAIN_CAPACITY, "the uncertain records")?;
+                ensure(
+                    ctx,
+                    &mut p.unc,
+                    3 * INITIAL_UNCERTAIN_CAPACITY,
+                    "the uncertain records",
+                )?;
                 p.unc_records = INITIAL_UNCERTAIN_CAPACITY;
             } else if p.unc.is_none() {
                 ensure(ctx, &mut p.unc, 3, "the uncertain records")?;
@@ -551,7 +577,13 @@ impl SilhouetteBackend for OpenClBackend {
                 for (l, dst) in raw_sil.iter_mut().enumerate() {
                     if !dst.is_empty() {
                         self.queue
-                            .enqueue_read_buffer(sil_buf, CL_NON_BLOCKING, 2 * l * edges * 4, dst, &[])
+                            .enqueue_read_buffer(
+                                sil_buf,
+                                CL_NON_BLOCKING,
+                                2 * l * edges * 4,
+                                dst,
+                                &[],
+                            )
                             .map_err(|e| device_error("reading silhouette lists", e))?;
                     }
                 }
@@ -588,3 +620,8 @@ impl SilhouetteBackend for OpenClBackend {
         self.scenes.remove(&id);
     }
 }
+
+/// Compiles the README's example as a doctest.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -7,8 +7,7 @@
 //! ([`FlatScene`]) and host finishing ([`finish`]) as the device path.
 
 use crate::layout::{
-    finish, flat_lights, mode_code, FlatScene, KernelOutput, MODE_EXACT, MODE_ORIGINAL,
-    MODE_ROBUST,
+    finish, flat_lights, mode_code, FlatScene, KernelOutput, MODE_EXACT, MODE_ORIGINAL, MODE_ROBUST,
 };
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
@@ -270,7 +269,17 @@ pub fn run_kernel(
     let code = mode_code(mode);
     for l in 0..num_lights {
         for e in 0..flat.edge_count() {
-            work_item(flat, lights, num_lights, code, use_f64, e, l, usize::MAX, &mut out);
+            work_item(
+                flat,
+                lights,
+                num_lights,
+                code,
+                use_f64,
+                e,
+                l,
+                usize::MAX,
+                &mut out,
+            );
         }
     }
     out

@@ -60,7 +60,11 @@ fn conformance(force_f32_filter: bool, test: &str) {
             let (got, stats) = extract_once(&mut cl, &case.scene, &case.lights, mode)
                 .unwrap_or_else(|e| panic!("{} {mode}: {e}", case.name));
             let (_, twin_stats) = extract_once(&mut twin, &case.scene, &case.lights, mode).unwrap();
-            assert!(got.silhouettes_consistent(), "{} {mode}: compact lists", case.name);
+            assert!(
+                got.silhouettes_consistent(),
+                "{} {mode}: compact lists",
+                case.name
+            );
             assert_eq!(got.light_count(), case.lights.len());
             assert_eq!(got.edge_count(), case.scene.total_edges());
             match mode {
@@ -119,13 +123,27 @@ fn conformance_exact_with_forced_f32_filter() {
 
 #[test]
 fn pocl_has_fp64_so_both_exact_paths_are_covered() {
-    let Some(cl) = start(options(false), "pocl_has_fp64_so_both_exact_paths_are_covered") else {
+    let Some(cl) = start(
+        options(false),
+        "pocl_has_fp64_so_both_exact_paths_are_covered",
+    ) else {
         return;
     };
-    if cl.device().platform_name.contains("Portable Computing Language") {
-        assert!(cl.uses_f64_filter(), "PoCL reports cl_khr_fp64; the f64 path must be used");
+    if cl
+        .device()
+        .platform_name
+        .contains("Portable Computing Language")
+    {
+        assert!(
+            cl.uses_f64_filter(),
+            "PoCL reports cl_khr_fp64; the f64 path must be used"
+        );
     } else {
-        eprintln!("not PoCL ({}); f64 filter: {}", cl.info().device, cl.uses_f64_filter());
+        eprintln!(
+            "not PoCL ({}); f64 filter: {}",
+            cl.info().device,
+            cl.uses_f64_filter()
+        );
     }
 }
 
@@ -152,7 +170,10 @@ fn broken_kernel_reports_the_compiler_log() {
         BackendError::Build { what, log, .. } => {
             assert!(what.contains("kernel source text"), "{what}");
             assert!(log.contains("clBuildProgram failed"), "{log}");
-            assert!(log.contains("undeclared_thing"), "the compiler's log names the error: {log}");
+            assert!(
+                log.contains("undeclared_thing"),
+                "the compiler's log names the error: {log}"
+            );
         }
         other => panic!("expected BackendError::Build, got {other:?}"),
     }
@@ -186,11 +207,20 @@ fn kernel_loads_from_a_path() {
     let Some(mut cl) = start(opts, "kernel_loads_from_a_path") else {
         return;
     };
-    assert!(cl.info().details.iter().any(|(_, v)| v.contains("silhouette.cl")));
+    assert!(cl
+        .info()
+        .details
+        .iter()
+        .any(|(_, v)| v.contains("silhouette.cl")));
     let case = &all_cases()[0];
     let (got, _) = extract_once(&mut cl, &case.scene, &case.lights, Accuracy::Exact).unwrap();
-    let (want, _) =
-        extract_once(&mut CpuBackend::new(), &case.scene, &case.lights, Accuracy::Exact).unwrap();
+    let (want, _) = extract_once(
+        &mut CpuBackend::new(),
+        &case.scene,
+        &case.lights,
+        Accuracy::Exact,
+    )
+    .unwrap();
     assert_eq!(got, want);
     // A missing file is reported with its path.
     let missing = OpenClOptions {
@@ -212,26 +242,46 @@ fn device_selection_by_index_and_name() {
         }
     };
     let first = &devices[0];
-    let by_index = select_device(&devices, Some(&format!("{}:{}", first.platform_index, first.device_index))).unwrap();
+    let by_index = select_device(
+        &devices,
+        Some(&format!("{}:{}", first.platform_index, first.device_index)),
+    )
+    .unwrap();
     assert_eq!(by_index, *first);
     let by_name = select_device(&devices, Some(&first.device_name.to_uppercase())).unwrap();
     assert_eq!(by_name.device_name, first.device_name);
     let default = select_device(&devices, None).unwrap();
-    let expected_type = if devices.iter().any(|d| d.device_type == "GPU") { "GPU" } else { "CPU" };
+    let expected_type = if devices.iter().any(|d| d.device_type == "GPU") {
+        "GPU"
+    } else {
+        "CPU"
+    };
     assert_eq!(default.device_type, expected_type);
     for bad in ["99:0", "0:99", "no-such-device-xyz"] {
         match select_device(&devices, Some(bad)) {
             Err(BackendError::Unavailable { reason, .. }) => {
-                assert!(reason.contains(DEVICE_ENV) && reason.contains(bad), "{reason}");
+                assert!(
+                    reason.contains(DEVICE_ENV) && reason.contains(bad),
+                    "{reason}"
+                );
             }
             other => panic!("selector {bad:?}: expected Unavailable, got {other:?}"),
         }
     }
-    let Some(cl) = start(OpenClOptions { device: Some("0:0".into()), ..OpenClOptions::default() }, "select 0:0") else {
+    let Some(cl) = start(
+        OpenClOptions {
+            device: Some("0:0".into()),
+            ..OpenClOptions::default()
+        },
+        "select 0:0",
+    ) else {
         return;
     };
     let info = cl.info();
-    assert!(info.device.contains(&devices[0].platform_name) && info.device.contains(&devices[0].device_name));
+    assert!(
+        info.device.contains(&devices[0].platform_name)
+            && info.device.contains(&devices[0].device_name)
+    );
 }
 
 #[test]
@@ -264,14 +314,24 @@ fn prepared_scene_is_reused_across_calls_light_counts_and_modes() {
     };
     let mut cpu = CpuBackend::new();
     let cases = all_cases();
-    let case = cases.iter().find(|c| c.name == "twelve-objects-transformed").unwrap();
+    let case = cases
+        .iter()
+        .find(|c| c.name == "twelve-objects-transformed")
+        .unwrap();
     let id = cl.prepare(&case.scene).unwrap();
     let cid = cpu.prepare(&case.scene).unwrap();
     let mut out = Multiplicities::default();
     let mut want = Multiplicities::default();
     // Growing and shrinking light counts on the same prepared buffers.
     for n in [1, case.lights.len(), 2, case.lights.len()] {
-        let lights: Vec<Light> = case.lights.iter().copied().cycle().skip(n).take(n).collect();
+        let lights: Vec<Light> = case
+            .lights
+            .iter()
+            .copied()
+            .cycle()
+            .skip(n)
+            .take(n)
+            .collect();
         for mode in [Accuracy::Exact, Accuracy::Robust] {
             let stats = cl.extract(id, &lights, mode, &mut out).unwrap();
             cpu.extract(cid, &lights, mode, &mut want).unwrap();

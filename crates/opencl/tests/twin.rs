@@ -82,7 +82,12 @@ fn twin_filters_certify_only_correct_signs_and_match_robust_math() {
             hard_quad(&mut rng)
         } else {
             let lp = random_point(&mut rng, 10.0);
-            (random_point(&mut rng, 2.0), random_point(&mut rng, 2.0), [lp[0], lp[1], lp[2], 1.0], random_point(&mut rng, 2.0))
+            (
+                random_point(&mut rng, 2.0),
+                random_point(&mut rng, 2.0),
+                [lp[0], lp[1], lp[2], 1.0],
+                random_point(&mut rng, 2.0),
+            )
         };
         if l[3] == 0.0 && l[..3].iter().all(|&x| x == 0.0) {
             continue;
@@ -109,7 +114,10 @@ fn twin_filters_certify_only_correct_signs_and_match_robust_math() {
     }
     // The filters are not vacuous: they certify the vast majority.
     assert!(f32_certified > 100_000, "{f32_certified}");
-    assert!(f64_certified > f32_certified, "{f64_certified} <= {f32_certified}");
+    assert!(
+        f64_certified > f32_certified,
+        "{f64_certified} <= {f32_certified}"
+    );
 }
 
 #[test]
@@ -142,11 +150,19 @@ fn twin_guards_subnormal_and_underflowing_inputs() {
     let scene = shadowvol_silhouette::TopologyScene::single(
         shadowvol_mesh_topology::EdgeTable::build(&mesh).unwrap(),
     );
-    let lights = [shadowvol_silhouette::Light::point(glam::Vec3::new(0.3, 0.2, 0.0))];
+    let lights = [shadowvol_silhouette::Light::point(glam::Vec3::new(
+        0.3, 0.2, 0.0,
+    ))];
     for use_f64 in [true, false] {
-        let (got, stats) =
-            extract_once(&mut TwinBackend::new(use_f64), &scene, &lights, Accuracy::Exact).unwrap();
-        let (want, _) = extract_once(&mut CpuBackend::new(), &scene, &lights, Accuracy::Exact).unwrap();
+        let (got, stats) = extract_once(
+            &mut TwinBackend::new(use_f64),
+            &scene,
+            &lights,
+            Accuracy::Exact,
+        )
+        .unwrap();
+        let (want, _) =
+            extract_once(&mut CpuBackend::new(), &scene, &lights, Accuracy::Exact).unwrap();
         assert!(stats.uncertain > 0);
         assert_eq!(got, want);
     }

@@ -54,7 +54,11 @@ pub fn height_field(n: u32, amp: f32, rng: &mut Lcg) -> Mesh {
     let mut positions = Vec::new();
     for j in 0..=n {
         for i in 0..=n {
-            let z = if amp == 0.0 { 0.0 } else { (rng.next_f32() - 0.5) * amp };
+            let z = if amp == 0.0 {
+                0.0
+            } else {
+                (rng.next_f32() - 0.5) * amp
+            };
             positions.push(Vec3::new(i as f32 / n as f32, j as f32 / n as f32, z));
         }
     }
@@ -66,7 +70,10 @@ pub fn height_field(n: u32, amp: f32, rng: &mut Lcg) -> Mesh {
             triangles.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
         }
     }
-    Mesh { positions, triangles }
+    Mesh {
+        positions,
+        triangles,
+    }
 }
 
 /// An `n` × `n` grid on the plane z = x (coplanar exactly: z takes x's f32 value).
@@ -102,7 +109,10 @@ pub fn sphere(rings: u32, segments: u32, r: f32) -> Mesh {
             triangles.push([ring(k, s), ring(k + 1, s + 1), ring(k, s + 1)]);
         }
     }
-    Mesh { positions, triangles }
+    Mesh {
+        positions,
+        triangles,
+    }
 }
 
 /// Four triangles sharing the edge (0, 1): a non-manifold "book", plus a triangle soup
@@ -170,7 +180,13 @@ pub fn all_cases() -> Vec<Case> {
     // Many objects, each with its own transform (rotation, scale, translation), many lights.
     let mut objects = Vec::new();
     for i in 0..12 {
-        let mesh = if i % 3 == 0 { sphere(5, 7, 0.4) } else if i % 3 == 1 { tetrahedron() } else { book() };
+        let mesh = if i % 3 == 0 {
+            sphere(5, 7, 0.4)
+        } else if i % 3 == 1 {
+            tetrahedron()
+        } else {
+            book()
+        };
         let t = Affine3A::from_scale_rotation_translation(
             Vec3::splat(0.5 + 0.25 * (i % 4) as f32),
             Quat::from_rotation_y(0.3 * i as f32) * Quat::from_rotation_x(0.1 * i as f32),
@@ -206,13 +222,16 @@ pub fn all_cases() -> Vec<Case> {
     // A sphere of far-from-origin vertices (large offset, tiny features relative to it).
     out.push(Case {
         name: "sphere-offset-1e4".into(),
-        scene: scene_of(vec![({
-            let mut m = sphere(9, 13, 0.01);
-            for p in &mut m.positions {
-                *p += Vec3::new(1.0e4, -1.0e4, 5.0e3);
-            }
-            m
-        }, Affine3A::IDENTITY)]),
+        scene: scene_of(vec![(
+            {
+                let mut m = sphere(9, 13, 0.01);
+                for p in &mut m.positions {
+                    *p += Vec3::new(1.0e4, -1.0e4, 5.0e3);
+                }
+                m
+            },
+            Affine3A::IDENTITY,
+        )]),
         lights: vec![
             Light::point(Vec3::new(1.0e4 + 1.0, -1.0e4, 5.0e3)),
             Light::directional(Vec3::new(0.0, 0.0, 1.0)),
