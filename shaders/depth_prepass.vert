@@ -1,16 +1,19 @@
 #version 460
 // shadowvol: depth-only pre-pass of every scene triangle (no fragment shader).
 // Triangle corners are read from a storage buffer of global vertex ids; each vertex knows its
-// object, whose world-from-object matrix places it in the world.
+// object, whose anchor-relative clip transform places it on screen.
 // Regenerate the SPIR-V with `cargo xtask shaders`.
 
 layout(std430, set = 0, binding = 0) readonly buffer Positions { float pos[]; };
-layout(std430, set = 0, binding = 5) readonly buffer Models { mat4 models[]; };
+struct ObjectXform {
+    mat4 clip_from_anchor;
+    vec4 anchor;
+};
+layout(std430, set = 0, binding = 5) readonly buffer Xforms { ObjectXform xf[]; };
 layout(std430, set = 0, binding = 8) readonly buffer VertexObject { uint vertex_obj[]; };
 layout(std430, set = 0, binding = 9) readonly buffer TriangleCorners { uint corners[]; };
 
 layout(push_constant) uniform Push {
-    mat4 view_proj;
     uint mode;
     uint edge_count;
     uint light_count;
@@ -20,6 +23,9 @@ layout(push_constant) uniform Push {
 
 void main() {
     uint v = corners[gl_VertexIndex];
-    vec3 p = vec3(pos[3u * v], pos[3u * v + 1u], pos[3u * v + 2u]);
-    gl_Position = pc.view_proj * (models[vertex_obj[v]] * vec4(p, 1.0));
+    uint o = vertex_obj[v];
+    // Exactly the operations of silhouette_gs.geom's emit_quads, so shared vertices coincide.
+    precise vec3 r = vec3(pos[3u * v], pos[3u * v + 1u], pos[3u * v + 2u]) - xf[o].anchor.xyz;
+    precise vec4 clip = xf[o].clip_from_anchor * vec4(r, 1.0);
+    gl_Position = clip;
 }

@@ -34,7 +34,14 @@ layout(std430, set = 0, binding = 2) readonly buffer Ovs { uint ovs[]; };
 layout(std430, set = 0, binding = 3) readonly buffer EdgeObject { uint edge_obj[]; };
 // Object-space lights (bits of x, y, z, w), index object * light_count + light.
 layout(std430, set = 0, binding = 4) readonly buffer Lights { uvec4 light_bits[]; };
-layout(std430, set = 0, binding = 5) readonly buffer Models { mat4 models[]; };
+// Per object: clip_from_anchor = view_proj * world_from_object * translate(anchor), composed in
+// f64 on the host and rounded once; object-space positions are taken relative to the anchor
+// (near the object) before the transform, so large coordinates (1e4 offsets) keep their precision.
+struct ObjectXform {
+    mat4 clip_from_anchor;
+    vec4 anchor;
+};
+layout(std430, set = 0, binding = 5) readonly buffer Xforms { ObjectXform xf[]; };
 // Multiplicities, index light * edge_count + edge.
 layout(std430, set = 0, binding = 6) buffer Mult { int m_out[]; };
 layout(std430, set = 0, binding = 7) buffer Uncertain {
@@ -46,7 +53,6 @@ layout(std430, set = 0, binding = 7) buffer Uncertain {
 };
 
 layout(push_constant) uniform Push {
-    mat4 view_proj;
     uint mode;
     uint edge_count;
     uint light_count;
@@ -185,9 +191,15 @@ int orient_filter(uvec3 a_bits, uvec3 b_bits, uvec4 l_bits, uvec3 o_bits) {
         || !diff_ok(o.x, a.x, dx) || !diff_ok(o.y, a.y, dy) || !diff_ok(o.z, a.z, dz)) {
         return UNCERTAIN;
     }
-    // l.w * a could itself underflow or overflow: leave such inputs to the host.
-    if ((lax == 0.0 && l.w != 0.0 && a.x != 0.0) || (lay == 0.0 && l.w != 0.0 && a.y != 0.0)
-        || (laz == 0.0 && l.w != 0.0 && a.z != 0.0) || isinf(lax) || isinf(lay) || isinf(laz)) {
+    // l.w * a must stay in the normal range (an underflowed or flushed product has an absolute,
+    // not a relative, error): leave such inputs to the host, as orient_filter_f32 does.
+    const float FLT_MIN_NORMAL = 1.17549435e-38;
+    if (l.w != 0.0 && ((a.x != 0.0 && abs(lax) < FLT_MIN_NORMAL)
+                       || (a.y != 0.0 && abs(lay) < FLT_MIN_NORMAL)
+                       || (a.z != 0.0 && abs(laz) < FLT_MIN_NORMAL))) {
+        return UNCERTAIN;
+    }
+    if (isinf(lax) || isinf(lay) || isinf(laz)) {
         return UNCERTAIN;
     }
     precise float p1 = ey * vz;
@@ -214,14 +226,17 @@ int orient_filter(uvec3 a_bits, uvec3 b_bits, uvec4 l_bits, uvec3 o_bits) {
 #endif
 
 void emit_quads(uint obj, uint a, uint b, vec4 l, int m) {
-    mat4 mvp = pc.view_proj * models[obj];
-    vec3 pa = position(a);
-    vec3 pb = position(b);
-    vec4 ca = mvp * vec4(pa, 1.0);
-    vec4 cb = mvp * vec4(pb, 1.0);
+    mat4 clip = xf[obj].clip_from_anchor;
+    vec3 c = xf[obj].anchor.xyz;
+    precise vec3 ra = position(a) - c;
+    precise vec3 rb = position(b) - c;
+    // The light relative to the anchor: L.xyz - c * L.w.
+    precise vec3 lr = l.xyz - c * l.w;
+    precise vec4 ca = clip * vec4(ra, 1.0);
+    precise vec4 cb = clip * vec4(rb, 1.0);
     // Points at infinity away from the light: X * w - L.xyz, homogeneous w = 0.
-    vec4 ia = mvp * vec4(pa * l.w - l.xyz, 0.0);
-    vec4 ib = mvp * vec4(pb * l.w - l.xyz, 0.0);
+    precise vec4 ia = clip * vec4(ra * l.w - lr, 0.0);
+    precise vec4 ib = clip * vec4(rb * l.w - lr, 0.0);
     int n = abs(m);
     if (n > MAX_QUADS) {
         atomicAdd(clamped_count, 1u);

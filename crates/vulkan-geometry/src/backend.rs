@@ -14,6 +14,8 @@ use std::time::Instant;
 
 /// Bytes of the uncertain buffer's header (count, clamped count, two pads).
 const UNCERTAIN_HEADER: usize = 16;
+/// Bytes of one object's transform record (`mat4 clip_from_anchor; vec4 anchor;`).
+pub(crate) const XFORM_BYTES: u64 = 80;
 /// Initial capacity of the uncertain buffer, in records.
 const INITIAL_UNCERTAIN: u32 = 1024;
 
@@ -26,7 +28,7 @@ pub(crate) struct Prepared {
     ovs: Buffer,
     edge_object: Buffer,
     lights: Buffer,
-    models: Buffer,
+    pub models: Buffer,
     pub mult: Buffer,
     uncertain: Buffer,
     vertex_object: Buffer,
@@ -367,7 +369,6 @@ impl VulkanBackend {
         loop {
             let p = self.scene(id)?;
             let push = Push {
-                view_proj: [0.0; 16],
                 mode: mode_code_of(mode),
                 edge_count: edges as u32,
                 light_count: lights.len() as u32,
@@ -467,7 +468,8 @@ impl SilhouetteBackend for VulkanBackend {
         let ovs = Buffer::with_data(ctx, &ds.ovs)?;
         let edge_object = Buffer::with_data(ctx, &ds.edge_object)?;
         let lights = Buffer::new(ctx, 16 * scene.objects.len().max(1) as u64, storage)?;
-        let models = Buffer::with_data(ctx, &ds.models)?;
+        // Per-object clip transforms (written by the render path), 80 bytes each.
+        let models = Buffer::new(ctx, XFORM_BYTES * ds.models.len().max(1) as u64, storage)?;
         let mult = Buffer::new(ctx, 4 * ds.edges.len() as u64, storage)?;
         let uncertain = Buffer::new(
             ctx,

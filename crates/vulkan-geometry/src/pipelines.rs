@@ -15,11 +15,10 @@ pub(crate) const SILHOUETTE_GS_F32: &[u8] =
 /// Number of storage-buffer bindings in set 0 (see the shaders).
 pub(crate) const BINDINGS: u32 = 10;
 
-/// The push constants shared by every stage (84 bytes).
+/// The push constants shared by every stage (20 bytes).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct Push {
-    pub view_proj: [f32; 16],
     pub mode: u32,
     pub edge_count: u32,
     pub light_count: u32,
@@ -114,7 +113,7 @@ impl Pipelines {
         let ranges = [vk::PushConstantRange::default()
             .stage_flags(stages)
             .offset(0)
-            .size(std::mem::size_of::<Push>() as u32)];
+            .size(std::mem::size_of::<Push>().next_multiple_of(4) as u32)];
         // SAFETY: valid device; every created handle is stored in `self` and destroyed by
         // `destroy` (also on the error paths).
         unsafe {

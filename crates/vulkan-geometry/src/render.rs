@@ -18,19 +18,20 @@ use crate::context::{device_err, Buffer, Context};
 use crate::pipelines::Push;
 use crate::twin::mode_code_of;
 use ash::vk;
-use glam::{DMat4, DVec3, DVec4, Mat4, Vec3, Vec4};
+use glam::{DMat4, DVec3, DVec4, Vec3};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
     object_lights, BackendError, ExtractStats, Multiplicities, PreparedId,
 };
 use std::time::{Duration, Instant};
 
-/// A pinhole camera: the world-to-clip matrix (Vulkan clip space: depth in `[0, 1]`, `y` down in
-/// framebuffer rows).
+/// A pinhole camera: the clip-from-world matrix in `f64` (Vulkan clip space: depth in `[0, 1]`,
+/// `y` down in framebuffer rows). The render path composes it with each object's transform in
+/// `f64` and rounds once.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Camera {
     /// Clip-from-world matrix.
-    pub view_proj: Mat4,
+    pub view_proj: DMat4,
 }
 
 impl Camera {
@@ -41,22 +42,24 @@ impl Camera {
     /// parallel to `target - eye`.
     #[must_use]
     pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, fov_y: f32, aspect: f32, near: f32) -> Self {
+        let (eye, target, up) = (eye.as_dvec3(), target.as_dvec3(), up.as_dvec3());
         let f = (target - eye).normalize();
         let s = f.cross(up).normalize();
         let u = s.cross(f);
-        let view = Mat4::from_cols(
-            Vec4::new(s.x, u.x, -f.x, 0.0),
-            Vec4::new(s.y, u.y, -f.y, 0.0),
-            Vec4::new(s.z, u.z, -f.z, 0.0),
-            Vec4::new(-s.dot(eye), -u.dot(eye), f.dot(eye), 1.0),
+        let view = DMat4::from_cols(
+            DVec4::new(s.x, u.x, -f.x, 0.0),
+            DVec4::new(s.y, u.y, -f.y, 0.0),
+            DVec4::new(s.z, u.z, -f.z, 0.0),
+            DVec4::new(-s.dot(eye), -u.dot(eye), f.dot(eye), 1.0),
         );
-        let g = 1.0 / (0.5 * fov_y).tan();
+        let g = 1.0 / (0.5 * f64::from(fov_y)).tan();
+        let (aspect, near) = (f64::from(aspect), f64::from(near));
         // Vulkan clip space: y down, z_clip = -z_eye - near, w_clip = -z_eye.
-        let proj = Mat4::from_cols(
-            Vec4::new(g / aspect, 0.0, 0.0, 0.0),
-            Vec4::new(0.0, -g, 0.0, 0.0),
-            Vec4::new(0.0, 0.0, -1.0, -1.0),
-            Vec4::new(0.0, 0.0, -near, 0.0),
+        let proj = DMat4::from_cols(
+            DVec4::new(g / aspect, 0.0, 0.0, 0.0),
+            DVec4::new(0.0, -g, 0.0, 0.0),
+            DVec4::new(0.0, 0.0, -1.0, -1.0),
+            DVec4::new(0.0, 0.0, -near, 0.0),
         );
         Self {
             view_proj: proj * view,
@@ -68,7 +71,7 @@ impl Camera {
     /// top row), as in the read-back mask.
     #[must_use]
     pub fn pixel_ray(&self, x: u32, y: u32, width: u32, height: u32) -> (DVec3, DVec3) {
-        let inv = DMat4::from_cols_array(&self.view_proj.to_cols_array().map(f64::from)).inverse();
+        let inv = self.view_proj.inverse();
         let nx = (f64::from(x) + 0.5) / f64::from(width) * 2.0 - 1.0;
         let ny = (f64::from(y) + 0.5) / f64::from(height) * 2.0 - 1.0;
         let unproject = |z: f64| {
@@ -351,8 +354,19 @@ impl VulkanBackend {
         mode_code: u32,
     ) -> Result<(), BackendError> {
         let p = self.scene(id)?;
+        // Per object: clip_from_anchor = view_proj * world_from_object * translate(anchor), in f64.
+        let mut xforms: Vec<f32> = Vec::with_capacity(20 * p.ds.models.len());
+        for (model, anchor) in p.ds.models.iter().zip(&p.ds.anchors) {
+            let model = DMat4::from_cols_array(&model.map(f64::from));
+            let c = Vec3::from_array(*anchor).as_dvec3();
+            let m = camera.view_proj * model * DMat4::from_translation(c);
+            xforms.extend(m.to_cols_array().map(|x| x as f32));
+            xforms.extend([anchor[0], anchor[1], anchor[2], 0.0]);
+        }
+        if !xforms.is_empty() {
+            p.models.write(0, bytemuck::cast_slice(&xforms));
+        }
         let push = Push {
-            view_proj: camera.view_proj.to_cols_array(),
             mode: mode_code,
             edge_count: p.ds.edges.len() as u32,
             light_count: 1,

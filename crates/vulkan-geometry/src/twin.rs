@@ -87,6 +87,10 @@ pub struct DeviceScene {
     pub corners: Vec<u32>,
     /// World-from-object matrices, column-major.
     pub models: Vec<[f32; 16]>,
+    /// Per object, a point near its vertices (the centre of their bounding box, rounded to
+    /// `f32`): the render path transforms `position - anchor`, which keeps precision for objects
+    /// far from the origin.
+    pub anchors: Vec<[f32; 3]>,
     /// First global vertex id of each object.
     pub vertex_base: Vec<u32>,
 }
@@ -142,6 +146,16 @@ impl DeviceScene {
                 .extend(t.triangles.iter().flat_map(|tri| tri.map(|v| v + base)));
             ds.models
                 .push(Mat4::from(o.world_from_object).to_cols_array());
+            let (lo, hi) = t.positions.iter().fold(
+                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                |(lo, hi), &p| (lo.min(p), hi.max(p)),
+            );
+            let anchor = if t.positions.is_empty() {
+                Vec3::ZERO
+            } else {
+                (lo.as_dvec3() * 0.5 + hi.as_dvec3() * 0.5).as_vec3()
+            };
+            ds.anchors.push(anchor.to_array());
         }
         Ok(ds)
     }
@@ -184,7 +198,9 @@ pub fn device_filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> 
         {
             return None;
         }
-        if (la[i] == 0.0 && l[3] != 0.0 && a[i] != 0.0) || la[i].is_infinite() {
+        // `L.w * A` must stay normal: an underflowed (or flushed) product has an absolute error.
+        if (l[3] != 0.0 && a[i] != 0.0 && la[i].abs() < f32::MIN_POSITIVE) || la[i].is_infinite()
+        {
             return None;
         }
     }

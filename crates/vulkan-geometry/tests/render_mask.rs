@@ -1,0 +1,315 @@
+//! The GS stencil path as a renderer: its shadow mask against the renderer crate's ray-traced
+//! reference (BVH shadow rays from each pixel's surface point), with the renderer's artifact
+//! metric (differing pixels more than one pixel from a reference shadow boundary).
+
+mod common;
+
+use glam::{DVec3, Vec3};
+use shadowvol_mesh_topology::{EdgeTable, Mesh};
+use shadowvol_renderer::reference::compare;
+use shadowvol_renderer::{Frame, Timings};
+use shadowvol_renderer::{plan, Camera as RefCamera};
+use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_cpu::CpuBackend;
+use shadowvol_silhouette::{extract_once, invariant, SceneObject, SilhouetteBackend, TopologyScene};
+use shadowvol_vulkan_geometry::{Camera, Options, ShadowMask};
+use std::sync::Arc;
+
+const W: u32 = 128;
+const H: u32 = 128;
+/// The acceptance bound: at most 0.05% artifact pixels.
+const MAX_ARTIFACT_FRACTION: f64 = 0.0005;
+
+struct Case {
+    name: String,
+    scene: TopologyScene,
+    lights: Vec<Light>,
+    camera: RefCamera,
+}
+
+impl Case {
+    fn new(name: String, objects: Vec<(Mesh, glam::Affine3A)>, lights: Vec<Light>, camera: RefCamera) -> Self {
+        let scene = TopologyScene {
+            objects: objects
+                .into_iter()
+                .enumerate()
+                .map(|(i, (mesh, t))| SceneObject {
+                    name: format!("{name}#{i}"),
+                    table: Arc::new(EdgeTable::build(&mesh).unwrap()),
+                    world_from_object: t,
+                })
+                .collect(),
+        };
+        Self {
+            name,
+            scene,
+            lights,
+            camera,
+        }
+    }
+
+    /// World-space triangles per object (welded, degenerate triangles dropped: what the depth
+    /// pre-pass draws).
+    fn world_triangles(&self) -> Vec<Vec<[Vec3; 3]>> {
+        self.scene
+            .objects
+            .iter()
+            .map(|o| {
+                let t = &o.table;
+                t.triangles
+                    .iter()
+                    .map(|tri| tri.map(|v| o.world_from_object.transform_point3(t.positions[v as usize])))
+                    .collect()
+            })
+            .collect()
+    }
+
+    fn vk_camera(&self) -> Camera {
+        let c = self.camera;
+        Camera::look_at(c.eye, c.target, c.up, c.fov_y, W as f32 / H as f32, c.near)
+    }
+
+    /// z-pass is only valid when the near-clip volume (near rectangle + light) meets no caster.
+    fn zpass_safe(&self, light: Light) -> bool {
+        let near = self.camera.near_corners(f64::from(W) / f64::from(H));
+        let Some(planes) = plan::near_clip_volume(near, light.to_array()) else {
+            return false;
+        };
+        self.world_triangles().iter().flatten().all(|t| {
+            let lo = t[0].min(t[1]).min(t[2]).as_dvec3();
+            let hi = t[0].max(t[1]).max(t[2]).as_dvec3();
+            plan::box_outside(lo, hi, &planes)
+        })
+    }
+}
+
+fn intersect(t: &[DVec3; 3], o: DVec3, d: DVec3) -> Option<f64> {
+    let e1 = t[1] - t[0];
+    let e2 = t[2] - t[0];
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let s = o - t[0];
+    let u = s.dot(p) / det;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let v = d.dot(q) / det;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    Some(e2.dot(q) / det)
+}
+
+/// Per pixel `[object + 1, triangle]` of the closest triangle along the pixel-centre ray.
+fn pixel_ids(cam: &Camera, tris: &[Vec<[Vec3; 3]>]) -> Vec<[u32; 2]> {
+    let dt: Vec<Vec<[DVec3; 3]>> = tris
+        .iter()
+        .map(|o| o.iter().map(|t| t.map(|p| p.as_dvec3())).collect())
+        .collect();
+    let mut ids = vec![[0u32; 2]; (W * H) as usize];
+    for y in 0..H {
+        for x in 0..W {
+            let (o, d) = cam.pixel_ray(x, y, W, H);
+            let mut best = (f64::INFINITY, [0u32; 2]);
+            for (oi, obj) in dt.iter().enumerate() {
+                for (ti, t) in obj.iter().enumerate() {
+                    if let Some(t) = intersect(t, o, d) {
+                        if t > 0.0 && t < best.0 {
+                            best = (t, [oi as u32 + 1, ti as u32]);
+                        }
+                    }
+                }
+            }
+            ids[(y * W + x) as usize] = best.1;
+        }
+    }
+    ids
+}
+
+/// The renderer's comparison of our mask with its reference for one light.
+fn artifacts(case: &Case, ids: &[[u32; 2]], mask: &ShadowMask, light: Light, mode: Accuracy) -> (usize, usize) {
+    let frame = Frame {
+        width: W,
+        height: H,
+        rgba: vec![0; (W * H * 4) as usize],
+        ids: ids.to_vec(),
+        stencil: vec![mask.stencil.clone()],
+        triangles: case.world_triangles(),
+        casts_shadows: vec![true; case.scene.objects.len()],
+        lights: vec![light],
+        camera: case.camera,
+        plan: Vec::new(),
+        timings: Timings::default(),
+        mode,
+        adapter: "vulkan geometry shader".to_owned(),
+        depth_clamp: true,
+    };
+    let c = compare(&frame);
+    (c.artifact_pixels, c.reference_shadow_pixels)
+}
+
+/// The corpus's hard-* scenes (from the scenes crate, with their framing cameras), plus a
+/// tetrahedron casting onto a ground quad so that cast shadows are measured too.
+fn cases() -> Vec<Case> {
+    let mut v = Vec::new();
+    for name in shadowvol_scenes::preset_names() {
+        if !name.starts_with("hard-") {
+            continue;
+        }
+        let s = shadowvol_scenes::preset(&name).unwrap();
+        let Some(c) = s.camera else { continue };
+        let camera = RefCamera {
+            eye: c.eye,
+            target: c.target,
+            up: c.up,
+            fov_y: c.fov_y,
+            near: c.near,
+        };
+        let objects = s
+            .objects
+            .iter()
+            .map(|o| ((*o.mesh).clone(), o.transform))
+            .collect();
+        v.push(Case::new(name, objects, s.lights.clone(), camera));
+    }
+    let tetra = Mesh::new(
+        vec![
+            Vec3::new(-0.5, 0.5, -0.5),
+            Vec3::new(0.5, 0.5, -0.5),
+            Vec3::new(0.0, 0.5, 0.5),
+            Vec3::new(0.0, 1.3, 0.0),
+        ],
+        vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+    )
+    .unwrap();
+    let ground = Mesh::new(
+        vec![
+            Vec3::new(-4.0, 0.0, -4.0),
+            Vec3::new(4.0, 0.0, -4.0),
+            Vec3::new(4.0, 0.0, 4.0),
+            Vec3::new(-4.0, 0.0, 4.0),
+        ],
+        vec![[0, 2, 1], [0, 3, 2]],
+    )
+    .unwrap();
+    v.push(Case::new(
+        "tetra-on-ground".to_owned(),
+        vec![
+            (tetra, glam::Affine3A::from_translation(Vec3::new(0.25, 0.0, 0.0))),
+            (ground, glam::Affine3A::IDENTITY),
+        ],
+        // Lights behind the tetrahedron, so its shadow falls towards the camera.
+        vec![
+            Light::point(Vec3::new(-1.0, 2.5, -2.5)),
+            Light::directional(Vec3::new(0.6, 1.0, -0.9)),
+        ],
+        RefCamera {
+            eye: Vec3::new(0.5, 5.0, 6.0),
+            target: Vec3::new(0.0, 0.0, 0.0),
+            up: Vec3::Y,
+            fov_y: 0.8,
+            near: 0.01,
+        },
+    ));
+    v
+}
+
+#[test]
+fn gs_shadow_mask_matches_ray_traced_reference() {
+    let Some(mut vk) = common::backend(Options::from_env(), "gs_shadow_mask_matches_ray_traced_reference") else {
+        return;
+    };
+    let cases = cases();
+    assert!(cases.len() >= 2, "no hard-* scenes found");
+    let (mut checked, mut skipped, mut shadowed_somewhere) = (0, 0, false);
+    let mut failures = Vec::new();
+    let mut mode_limited = 0;
+    let mut cpu = CpuBackend::new();
+    for case in &cases {
+        let cam = case.vk_camera();
+        let ids = pixel_ids(&cam, &case.world_triangles());
+        let id = vk.prepare(&case.scene).unwrap();
+        for (li, &light) in case.lights.iter().enumerate() {
+            if !case.zpass_safe(light) {
+                // This path is z-pass only; the renderer's plan would use z-fail here.
+                eprintln!("SKIPPED {} light {li}: camera inside the near-clip volume (z-pass unsafe)", case.name);
+                skipped += 1;
+                continue;
+            }
+            for mode in Accuracy::ALL {
+                let mask = vk.render_shadow_mask(id, light, &cam, W, H, mode).unwrap();
+                assert_eq!(mask.stats.clamped_edges, 0, "{} {mode}", case.name);
+                let (bad, reference_shadow) = artifacts(case, &ids, &mask, light, mode);
+                shadowed_somewhere |= reference_shadow > 0;
+                let fraction = bad as f64 / f64::from(W * H);
+                eprintln!(
+                    "{} light {li} {mode}: {bad} artifact pixels ({:.4}%), shadow pixels: reference {reference_shadow}, mask {}",
+                    case.name,
+                    100.0 * fraction,
+                    mask.shadowed.iter().filter(|&&s| s).count()
+                );
+                if mode.is_consistent() && fraction > MAX_ARTIFACT_FRACTION {
+                    // Where robust/ordered's f32 signs differ from the exact ones (cpu reference),
+                    // the volumes are wrong by design of the mode, whatever the renderer does:
+                    // such a mask is reported, not failed. Exact mode is always held.
+                    let mode_errors = if mode == Accuracy::Exact {
+                        0
+                    } else {
+                        let (m, _) = extract_once(&mut cpu, &case.scene, &[light], mode).unwrap();
+                        let (x, _) =
+                            extract_once(&mut cpu, &case.scene, &[light], Accuracy::Exact).unwrap();
+                        invariant::differing_edges(&m, &x, 0)
+                    };
+                    let what = format!(
+                        "{} light {li} {mode}: {bad} artifact pixels ({:.4}% > 0.05%)",
+                        case.name,
+                        100.0 * fraction
+                    );
+                    if mode_errors > 0 {
+                        eprintln!(
+                            "MODE-LIMITED {what}: {mode_errors} edges' multiplicities differ from exact in this mode"
+                        );
+                        mode_limited += 1;
+                    } else {
+                        failures.push(what);
+                    }
+                }
+                if mode.is_consistent() {
+                    checked += 1;
+                }
+            }
+        }
+        vk.release(id);
+    }
+    eprintln!(
+        "checked {checked} (scene, light, mode) masks; {mode_limited} robust/ordered masks whose \
+         multiplicities differ from exact not held to the bound; {skipped} (scene, light) pairs z-pass-unsafe"
+    );
+    assert!(failures.is_empty(), "artifacts above 0.05%:\n{}", failures.join("\n"));
+    assert!(checked >= 6, "too few masks checked: {checked}");
+    assert!(shadowed_somewhere, "no reference shadow anywhere: the comparison would be vacuous");
+}
+
+/// The metric is not vacuous: a mask rendered for the wrong light is caught.
+#[test]
+fn wrong_light_mask_is_detected() {
+    let Some(mut vk) = common::backend(Options::from_env(), "wrong_light_mask_is_detected") else {
+        return;
+    };
+    let case = cases().pop().unwrap();
+    let cam = case.vk_camera();
+    let ids = pixel_ids(&cam, &case.world_triangles());
+    let id = vk.prepare(&case.scene).unwrap();
+    let mask = vk
+        .render_shadow_mask(id, case.lights[1], &cam, W, H, Accuracy::Exact)
+        .unwrap();
+    let (bad, _) = artifacts(&case, &ids, &mask, case.lights[0], Accuracy::Exact);
+    assert!(
+        bad as f64 / f64::from(W * H) > MAX_ARTIFACT_FRACTION,
+        "a mask for another light passed the check ({bad} artifact pixels)"
+    );
+}
