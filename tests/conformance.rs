@@ -186,6 +186,8 @@ fn check(
                 ));
             }
         }
+        Accuracy::Original if open.iter().all(|&o| o == 0) && differing.iter().all(|&d| d == 0) => {
+        }
         Accuracy::Original => {
             notes.lock().unwrap().push(format!(
                 "{backend:>7} {:<24} original open vertices per light {open:?}, edges differing from cpu original {differing:?}",
@@ -311,6 +313,49 @@ fn main() {
             } else {
                 Err(format!("EXPECTED_FAILURES names unknown tests: {stale:?}").into())
             }
+        },
+    ));
+    // The checks must be able to fail: corrupt a correct result in each checked way.
+    let self_test_cases = Arc::clone(&cases);
+    trials.push(Trial::test(
+        "conformance::checks_detect_corruption",
+        move || {
+            let case = self_test_cases
+                .iter()
+                .find(|c| c.scene.total_edges() > 0)
+                .ok_or("no case with edges")?;
+            let notes: Notes = Arc::default();
+            let mut cpu = CpuBackend::new();
+            for mode in [Accuracy::Exact, Accuracy::Robust] {
+                let (good, _) = extract_once(&mut cpu, &case.scene, &case.lights, mode)
+                    .map_err(|e| e.to_string())?;
+                check("self-test", case, mode, &good, &notes)?;
+                // A changed multiplicity (with its list kept consistent): exact must see the
+                // difference, robust the open chain.
+                let mut bad = good.clone();
+                bad.values_mut(0)[0] += 1;
+                bad.rebuild_silhouettes();
+                if check("self-test", case, mode, &bad, &notes).is_ok() {
+                    return Err(format!("{mode}: a changed multiplicity went unnoticed").into());
+                }
+                // A compact list that does not match the values.
+                let mut bad = good.clone();
+                bad.set_silhouette(0, vec![]);
+                if good.silhouette(0).is_empty() {
+                    bad.set_silhouette(0, vec![0]);
+                }
+                if check("self-test", case, mode, &bad, &notes).is_ok() {
+                    return Err(
+                        format!("{mode}: an inconsistent compact list went unnoticed").into(),
+                    );
+                }
+                // A result of the wrong shape.
+                let bad = Multiplicities::zeroed(case.scene.total_edges() + 1, case.lights.len());
+                if check("self-test", case, mode, &bad, &notes).is_ok() {
+                    return Err(format!("{mode}: a wrongly sized result went unnoticed").into());
+                }
+            }
+            Ok(())
         },
     ));
     let case_count = cases.len();
