@@ -383,3 +383,64 @@ fn gltf_text_with_external_buffer_loads_like_the_glb() {
     assert_eq!(a.lights, b.lights);
     assert_eq!(a.name, "nested.gltf");
 }
+
+#[test]
+fn sparse_strided_and_fan_accessors_are_read() {
+    // Positions interleaved with a padding float (byteStride 16); a sparse accessor without a
+    // buffer view (zeros, then 3 substituted elements); a triangle fan with u16 indices.
+    let mut data: Vec<u8> = Vec::new();
+    let interleaved: [[f32; 4]; 4] = [
+        [0.0, 0.0, 0.0, 9.0],
+        [1.0, 0.0, 0.0, 9.0],
+        [1.0, 1.0, 0.0, 9.0],
+        [0.0, 1.0, 0.0, 9.0],
+    ];
+    data.extend_from_slice(bytemuck::cast_slice(&interleaved)); // view 0: 64 bytes
+    data.extend_from_slice(bytemuck::cast_slice(&[0u16, 1, 2, 3])); // view 1: 8 bytes at 64
+    data.extend_from_slice(bytemuck::cast_slice(&[1u32, 2, 3])); // view 2: sparse indices at 72
+    let sparse_values: [[f32; 3]; 3] = [[5.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 5.0]];
+    data.extend_from_slice(bytemuck::cast_slice(&sparse_values)); // view 3: at 84
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "nodes": [{"name": "fan", "mesh": 0}, {"name": "tet", "mesh": 1, "translation": [0.0, 0.0, 10.0]}],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "mode": 6}]},
+            {"primitives": [{"attributes": {"POSITION": 2}, "indices": 3}]}
+        ],
+        "buffers": [{"byteLength": data.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 64, "byteStride": 16},
+            {"buffer": 0, "byteOffset": 64, "byteLength": 8},
+            {"buffer": 0, "byteOffset": 72, "byteLength": 12},
+            {"buffer": 0, "byteOffset": 84, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 64, "byteLength": 8}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": 4},
+            {"bufferView": 1, "componentType": 5123, "type": "SCALAR", "count": 4},
+            {"componentType": 5126, "type": "VEC3", "count": 4,
+             "sparse": {"count": 3, "indices": {"bufferView": 2, "componentType": 5125},
+                        "values": {"bufferView": 3}}},
+            // The first three of the same u16 indices: one triangle of the sparse mesh.
+            {"bufferView": 4, "componentType": 5123, "type": "SCALAR", "count": 3}
+        ],
+    });
+    // No "scenes": every root node is visited in index order.
+    let scene = load_gltf_slice(&glb(&doc, &data), "sparse.glb", None).unwrap();
+    let mesh = scene.baked_mesh().unwrap();
+    assert_eq!(
+        mesh.positions,
+        [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 10.0],
+            [5.0, 0.0, 10.0],
+            [0.0, 5.0, 10.0],
+            [0.0, 0.0, 15.0],
+        ]
+        .map(Vec3::from_array)
+    );
+    assert_eq!(mesh.triangles, [[0, 1, 2], [0, 2, 3], [4, 5, 6]]);
+}
