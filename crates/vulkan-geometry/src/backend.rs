@@ -181,6 +181,28 @@ impl VulkanBackend {
         self.ctx.messages()
     }
 
+    /// Makes one deliberately invalid but harmless call (a buffer with no usage flags) so that
+    /// tests can check the validation layer is really listening. Returns false without
+    /// validation.
+    #[doc(hidden)]
+    #[must_use]
+    pub fn provoke_validation_error_for_tests(&self) -> bool {
+        if !self.ctx.validation() {
+            return false;
+        }
+        let info = vk::BufferCreateInfo::default()
+            .size(16)
+            .usage(vk::BufferUsageFlags::empty())
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: lavapipe and other drivers accept the call; the layer flags the missing usage.
+        unsafe {
+            if let Ok(b) = self.ctx.device.create_buffer(&info, None) {
+                self.ctx.device.destroy_buffer(b, None);
+            }
+        }
+        true
+    }
+
     pub(crate) fn scene(&self, id: PreparedId) -> Result<&Prepared, BackendError> {
         self.prepared
             .get(&id)

@@ -170,8 +170,21 @@ impl Context {
             .enabled_layer_names(&layers)
             .enabled_extension_names(&extensions);
         // SAFETY: the create info and everything it points to outlive the call.
-        let instance = unsafe { entry.create_instance(&create, None) }
-            .map_err(|e| device_err("vkCreateInstance", e))?;
+        let instance = unsafe { entry.create_instance(&create, None) }.map_err(|e| match e {
+            vk::Result::ERROR_INCOMPATIBLE_DRIVER | vk::Result::ERROR_INITIALIZATION_FAILED => {
+                unavailable(format!(
+                    "no Vulkan device: the loader found no usable driver ({e}); install one, for \
+                     example Mesa's lavapipe: apt-get install mesa-vulkan-drivers"
+                ))
+            }
+            vk::Result::ERROR_LAYER_NOT_PRESENT | vk::Result::ERROR_EXTENSION_NOT_PRESENT => {
+                unavailable(format!(
+                    "the Vulkan instance lacks a requested layer or extension ({e}); validation \
+                     needs VK_LAYER_KHRONOS_validation and VK_EXT_debug_utils"
+                ))
+            }
+            e => device_err("vkCreateInstance", e),
+        })?;
         let debug = if options.validation {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
             let info = vk::DebugUtilsMessengerCreateInfoEXT::default()

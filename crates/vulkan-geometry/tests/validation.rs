@@ -1,0 +1,68 @@
+//! The corpus and a render under `VK_LAYER_KHRONOS_validation`: no validation message allowed.
+//!
+//! Needs the layer (Debian/Ubuntu: `apt-get install vulkan-validationlayers`). Without it the
+//! test fails under `CI=true` and prints a visible SKIPPED line otherwise.
+
+mod common;
+
+use glam::Vec3;
+use shadowvol_cpu::CpuBackend;
+use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy, SilhouetteBackend};
+use shadowvol_vulkan_geometry::{Camera, Options};
+
+#[test]
+fn corpus_and_render_under_validation_layers() {
+    let opts = Options {
+        validation: true,
+        ..Options::default()
+    };
+    let Some(mut vk) = common::backend(opts, "corpus_and_render_under_validation_layers") else {
+        return;
+    };
+    assert!(vk.validation_enabled());
+    let mut cpu = CpuBackend::new();
+    let cases = corpus::cases();
+    for case in &cases {
+        let scene = case.scene().unwrap();
+        for mode in Accuracy::ALL {
+            let (got, _) = extract_once(&mut vk, &scene, &case.lights, mode).unwrap();
+            if mode == Accuracy::Exact {
+                let (want, _) = extract_once(&mut cpu, &scene, &case.lights, mode).unwrap();
+                assert_eq!(invariant::first_difference(&got, &want), None, "{}", case.name);
+            }
+        }
+    }
+    // One render per mode (depth pre-pass, GS stencil pass, image copies).
+    let case = &cases[0];
+    let scene = case.scene().unwrap();
+    let id = vk.prepare(&scene).unwrap();
+    let cam = Camera::look_at(Vec3::new(3.0, 2.5, 4.0), Vec3::splat(0.3), Vec3::Y, 0.8, 1.0, 0.01);
+    for mode in Accuracy::ALL {
+        let mask = vk
+            .render_shadow_mask(id, case.lights[0], &cam, 32, 32, mode)
+            .unwrap();
+        assert!(mask.covered.iter().any(|&c| c), "the object is in view");
+    }
+    vk.release(id);
+    let messages = vk.validation_messages();
+    assert!(
+        messages.is_empty(),
+        "validation messages:\n{}",
+        messages.join("\n")
+    );
+}
+
+/// The layer reports real misuse: a deliberately wrong call produces a message, so an empty log
+/// above means something.
+#[test]
+fn validation_layer_reports_misuse() {
+    let opts = Options {
+        validation: true,
+        ..Options::default()
+    };
+    let Some(vk) = common::backend(opts, "validation_layer_reports_misuse") else {
+        return;
+    };
+    assert!(vk.provoke_validation_error_for_tests());
+    assert!(!vk.validation_messages().is_empty());
+}
