@@ -43,12 +43,15 @@ impl DeviceDesc {
     /// shown by `shadowvol backends`.
     #[must_use]
     pub fn describe(&self) -> String {
+        // Platform versions can be long ("OpenCL 3.0 PoCL 3.1+debian  Linux, None+Asserts, ...");
+        // keep the part before the first comma.
+        let version = self.platform_version.split(',').next().unwrap_or_default();
         format!(
             "{} / {} ({}, {}, driver {}, device {}:{})",
             self.platform_name,
             self.device_name,
             self.device_type,
-            self.platform_version,
+            version.split_whitespace().collect::<Vec<_>>().join(" "),
             self.driver_version,
             self.platform_index,
             self.device_index

@@ -520,7 +520,7 @@ impl SilhouetteBackend for OpenClBackend {
                 2 * edges * num_lights,
                 "the silhouette lists",
             )?;
-            if mode == Accuracy::Exact && p.unc.is_none() {
+            if mode == Accuracy::Exact && p.unc_records < INITIAL_UNCERTAIN_CAPACITY {
                 ensure(
                     ctx,
                     &mut p.unc,
