@@ -50,6 +50,7 @@
 //! ```
 
 pub mod gpu;
+pub mod hard;
 pub mod plan;
 pub mod reference;
 mod renderer;
@@ -206,6 +207,9 @@ pub struct RenderObject {
     pub world_from_object: Affine3A,
     /// Diffuse colour, linear RGB in `[0, 1]`.
     pub albedo: [f32; 3],
+    /// False for a receiver only (a ground plane): drawn and lit, but it casts no shadow, has no
+    /// silhouette and is not in the reference's occluders.
+    pub casts_shadows: bool,
 }
 
 impl RenderObject {
@@ -217,6 +221,34 @@ impl RenderObject {
             mesh,
             world_from_object,
             albedo: [0.8, 0.8, 0.8],
+            casts_shadows: true,
+        }
+    }
+
+    /// A receiver-only square (two triangles) centred at `centre` with unit normal-ish `normal`
+    /// and half-size `half`: it is drawn and lit but casts no shadow.
+    #[must_use]
+    pub fn receiver_plane(name: impl Into<String>, centre: Vec3, normal: Vec3, half: f32) -> Self {
+        let n = normal.normalize_or(Vec3::Y);
+        let helper = if n.y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
+        let u = n.cross(helper).normalize() * half;
+        let v = n.cross(u);
+        let positions = vec![
+            centre - u - v,
+            centre + u - v,
+            centre + u + v,
+            centre - u + v,
+        ];
+        let mesh = Mesh {
+            positions,
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        };
+        Self {
+            name: name.into(),
+            mesh: Arc::new(mesh),
+            world_from_object: Affine3A::IDENTITY,
+            albedo: [0.75, 0.72, 0.65],
+            casts_shadows: false,
         }
     }
 }
@@ -235,6 +267,75 @@ pub struct RenderScene {
 }
 
 impl RenderScene {
+    /// Converts a [`shadowvol_scenes::Scene`]: its objects, lights, camera (or a framing
+    /// default), ambient, and its ground plane (`effects.ground_y`) as a receiver-only object.
+    /// With `effects.shadows == false` every object becomes receiver-only.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] for a scene without objects.
+    pub fn from_scene(scene: &shadowvol_scenes::Scene) -> Result<Self, RenderError> {
+        let cam = scene.camera_or_default().ok_or_else(|| {
+            RenderError::InvalidInput(format!("scene {:?} has no objects to render", scene.name))
+        })?;
+        let mut objects: Vec<RenderObject> = scene
+            .objects
+            .iter()
+            .map(|o| {
+                let mut r = RenderObject::new(o.name.clone(), o.mesh.clone(), o.transform);
+                r.casts_shadows = scene.effects.shadows;
+                r
+            })
+            .collect();
+        let mut out = Self {
+            objects: Vec::new(),
+            lights: scene.lights.clone(),
+            camera: Camera {
+                eye: cam.eye,
+                target: cam.target,
+                up: cam.up,
+                fov_y: cam.fov_y,
+                near: cam.near,
+            },
+            ambient: scene.effects.ambient.clamp(0.0, 1.0),
+        };
+        out.objects.append(&mut objects);
+        if let (Some(y), Some((lo, hi))) = (scene.effects.ground_y, out.bounds()) {
+            let c = (lo + hi) * 0.5;
+            let half = (hi - lo).length().max(1e-3) * 3.0;
+            out.objects.push(RenderObject::receiver_plane(
+                "ground",
+                Vec3::new(c.x, y, c.z),
+                Vec3::Y,
+                half,
+            ));
+        }
+        Ok(out)
+    }
+
+    /// Adds a receiver-only backdrop behind the scene as seen from the first light, so that
+    /// shadows have somewhere to fall (used for the `hard-*` scenes, which have no ground).
+    /// Does nothing without lights or objects.
+    pub fn add_backdrop(&mut self) {
+        let (Some(light), Some((lo, hi))) = (self.lights.first(), self.bounds()) else {
+            return;
+        };
+        let c = (lo + hi) * 0.5;
+        let r = ((hi - lo).length() * 0.5).max(1e-3);
+        let l = light.to_array();
+        let away = if l[3] == 0.0 {
+            -Vec3::new(l[0], l[1], l[2])
+        } else {
+            c - Vec3::new(l[0], l[1], l[2]) / l[3]
+        };
+        let away = away.normalize_or(Vec3::NEG_Y);
+        self.objects.push(RenderObject::receiver_plane(
+            "backdrop",
+            c + away * (r * 1.5),
+            -away,
+            r * 6.0,
+        ));
+    }
+
     /// World-space bounding box of all objects (`f32` transform of every vertex), or `None`
     /// for an empty scene.
     #[must_use]

@@ -31,6 +31,10 @@ pub enum PixelState {
     Unlit = 1,
     /// Surface lit.
     Lit = 2,
+    /// Reference only: the answer hangs on the last bit. The shadow ray meets a surface within
+    /// `10⁻⁶ ×` the scene's coordinate scale of the light (a light lying on a surface) or of the
+    /// surface point itself (contact). Never counted as an artifact.
+    Uncertain = 3,
 }
 
 /// A bounding volume hierarchy over triangles (median split on the longest centroid axis,
@@ -40,6 +44,7 @@ pub struct Bvh {
     nodes: Vec<Node>,
     order: Vec<u32>,
     tris: Vec<[DVec3; 3]>,
+    ids: Vec<u32>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -58,6 +63,17 @@ impl Bvh {
     /// Builds the hierarchy; triangle ids are the indices into `tris`.
     #[must_use]
     pub fn build(tris: Vec<[DVec3; 3]>) -> Self {
+        let ids = (0..tris.len() as u32).collect();
+        Self::build_with_ids(tris, ids)
+    }
+
+    /// Builds the hierarchy with a caller's id per triangle (what `skip` refers to).
+    ///
+    /// # Panics
+    /// Panics if `ids.len() != tris.len()`.
+    #[must_use]
+    pub fn build_with_ids(tris: Vec<[DVec3; 3]>, ids: Vec<u32>) -> Self {
+        assert_eq!(tris.len(), ids.len(), "one id per triangle");
         let mut order: Vec<u32> = (0..tris.len() as u32).collect();
         let centroids: Vec<DVec3> = tris.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
         let mut nodes = Vec::with_capacity(2 * tris.len() / LEAF + 1);
@@ -106,13 +122,32 @@ impl Bvh {
             stack.push((left, begin, mid));
             stack.push((left + 1, mid, end));
         }
-        Self { nodes, order, tris }
+        Self {
+            nodes,
+            order,
+            tris,
+            ids,
+        }
     }
 
     /// True when the segment `origin + t·dir`, `t ∈ (t_min, t_max)`, hits a triangle other than
     /// `skip`.
     #[must_use]
     pub fn occluded(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64, skip: u32) -> bool {
+        self.occluded_by(origin, dir, t_min, t_max, |id| id != skip)
+    }
+
+    /// True when the segment `origin + t·dir`, `t ∈ (t_min, t_max)`, hits a triangle whose id
+    /// passes `accept`.
+    #[must_use]
+    pub fn occluded_by(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        t_min: f64,
+        t_max: f64,
+        accept: impl Fn(u32) -> bool,
+    ) -> bool {
         if self.tris.is_empty() {
             return false;
         }
@@ -127,7 +162,7 @@ impl Bvh {
             }
             if n.count > 0 {
                 for &i in &self.order[n.first as usize..(n.first + n.count) as usize] {
-                    if i != skip {
+                    if accept(self.ids[i as usize]) {
                         if let Some(t) = intersect(&self.tris[i as usize], origin, dir) {
                             if t > t_min && t < t_max {
                                 return true;
@@ -196,6 +231,8 @@ pub struct SurfacePoint {
     pub normal: DVec3,
     /// Global triangle index (objects concatenated).
     pub triangle: u32,
+    /// Largest albedo channel of the pixel's object (how much a light can change the pixel).
+    pub albedo: f32,
 }
 
 /// The surface points of every pixel (`None` for background).
@@ -241,6 +278,10 @@ pub fn surface_points(frame: &Frame) -> Vec<Option<SurfacePoint>> {
                 position,
                 normal: n,
                 triangle: offsets[obj as usize - 1] + tri,
+                albedo: frame
+                    .albedo
+                    .get(obj as usize - 1)
+                    .map_or(1.0, |a| a[0].max(a[1]).max(a[2])),
             })
         })
         .collect()
@@ -250,6 +291,19 @@ fn light_vec(l: [f32; 4], p: DVec3) -> DVec3 {
     DVec3::new(f64::from(l[0]), f64::from(l[1]), f64::from(l[2])) - p * f64::from(l[3])
 }
 
+/// True when light `li` of `frame` visibly lights the surface point: the Lambert term
+/// `albedo × intensity × cos θ` is at least one 8-bit step (1/255). Below that, lit and shadowed
+/// give the same 8-bit pixel, so the state is invisible (and, for faces edge-on to the light,
+/// ill-posed for the raster and the ray caster alike); such pixels count as unlit on both sides.
+#[must_use]
+pub fn faces_light(frame: &Frame, sp: &SurfacePoint, li: usize) -> bool {
+    let l = frame.lights[li].to_array();
+    let v = light_vec(l, sp.position);
+    let d = sp.normal.dot(v);
+    let gain = f64::from(sp.albedo) * f64::from(frame.light_intensity[li]);
+    d > 0.0 && gain > 0.0 && d * gain * 255.0 >= sp.normal.length() * v.length()
+}
+
 /// The raster's per-light states (light-major), from the stencil and the facing.
 #[must_use]
 pub fn raster_states(frame: &Frame, points: &[Option<SurfacePoint>]) -> Vec<Vec<PixelState>> {
@@ -257,16 +311,13 @@ pub fn raster_states(frame: &Frame, points: &[Option<SurfacePoint>]) -> Vec<Vec<
         .lights
         .iter()
         .enumerate()
-        .map(|(li, light)| {
-            let l = light.to_array();
+        .map(|(li, _)| {
             points
                 .iter()
                 .zip(&frame.stencil[li])
                 .map(|(p, &s)| match p {
                     None => PixelState::Background,
-                    Some(sp) if sp.normal.dot(light_vec(l, sp.position)) > 0.0 && s == 0 => {
-                        PixelState::Lit
-                    }
+                    Some(sp) if s == 0 && faces_light(frame, sp, li) => PixelState::Lit,
                     Some(_) => PixelState::Unlit,
                 })
                 .collect()
@@ -277,41 +328,76 @@ pub fn raster_states(frame: &Frame, points: &[Option<SurfacePoint>]) -> Vec<Vec<
 /// The reference's per-light states (light-major), by ray casting.
 #[must_use]
 pub fn reference_states(frame: &Frame, points: &[Option<SurfacePoint>]) -> Vec<Vec<PixelState>> {
-    let tris: Vec<[DVec3; 3]> = frame
-        .triangles
-        .iter()
-        .flatten()
-        .map(|t| [t[0].as_dvec3(), t[1].as_dvec3(), t[2].as_dvec3()])
-        .collect();
+    let mut tris: Vec<[DVec3; 3]> = Vec::new();
+    let mut ids = Vec::new();
+    let mut next = 0u32;
+    for (oi, obj) in frame.triangles.iter().enumerate() {
+        for t in obj {
+            if frame.casts_shadows[oi] {
+                tris.push([t[0].as_dvec3(), t[1].as_dvec3(), t[2].as_dvec3()]);
+                ids.push(next);
+            }
+            next += 1;
+        }
+    }
     let scale = tris
         .iter()
         .flatten()
         .fold(0f64, |m, p| m.max(p.abs().max_element()))
         .max(1e-30);
-    let bvh = Bvh::build(tris);
+    let bvh = Bvh::build_with_ids(tris, ids);
     frame
         .lights
         .iter()
-        .map(|light| {
+        .enumerate()
+        .map(|(li, light)| {
             let l = light.to_array();
+            // Triangles with a vertex exactly at a point light cast no shadow (their shadow has no
+            // volume); the renderer draws them without a volume too.
+            let touching: Vec<bool> = if l[3] == 0.0 {
+                Vec::new()
+            } else {
+                frame
+                    .triangles
+                    .iter()
+                    .flatten()
+                    .map(|t| {
+                        t.iter()
+                            .any(|p| p.x * l[3] == l[0] && p.y * l[3] == l[1] && p.z * l[3] == l[2])
+                    })
+                    .collect()
+            };
             points
                 .par_iter()
                 .map(|p| match p {
                     None => PixelState::Background,
                     Some(sp) => {
-                        let v = light_vec(l, sp.position);
-                        if sp.normal.dot(v) <= 0.0 {
+                        if !faces_light(frame, sp, li) {
                             return PixelState::Unlit;
                         }
+                        let v = light_vec(l, sp.position);
                         let len = v.length();
                         let eps = scale * 1e-9 / len;
-                        let (t_max, dir) = if l[3] == 0.0 {
-                            (f64::INFINITY, v)
-                        } else {
-                            (1.0 - 1e-12, v)
+                        let delta = scale * 1e-6 / len;
+                        let own = sp.triangle;
+                        let skip = |id: u32| {
+                            id != own && !touching.get(id as usize).copied().unwrap_or(false)
                         };
-                        if bvh.occluded(sp.position, dir, eps, t_max, sp.triangle) {
+                        let o = sp.position;
+                        if l[3] == 0.0 {
+                            if bvh.occluded_by(o, v, delta, f64::INFINITY, skip) {
+                                PixelState::Unlit
+                            } else if bvh.occluded_by(o, v, eps, delta, skip) {
+                                PixelState::Uncertain
+                            } else {
+                                PixelState::Lit
+                            }
+                        } else if bvh.occluded_by(o, v, delta, 1.0 - delta, skip) {
                             PixelState::Unlit
+                        } else if bvh.occluded_by(o, v, eps, delta, skip)
+                            || bvh.occluded_by(o, v, 1.0 - delta, 1.0 + delta, skip)
+                        {
+                            PixelState::Uncertain
                         } else {
                             PixelState::Lit
                         }
@@ -328,7 +414,8 @@ pub struct Comparison {
     /// Pixels whose state differs from the reference for some light and that lie more than one
     /// pixel from a reference boundary of that light.
     pub artifact_pixels: usize,
-    /// Pixels whose state differs for some light (boundaries included).
+    /// Pixels whose state differs for some light (boundaries included), or where the reference
+    /// is [`PixelState::Uncertain`].
     pub differing_pixels: usize,
     /// Covered pixels the raster shadows (stencil ≠ 0 on a surface facing the light) for some
     /// light.
@@ -337,7 +424,8 @@ pub struct Comparison {
     pub reference_shadow_pixels: usize,
     /// Covered pixels.
     pub covered_pixels: usize,
-    /// Per pixel: 0 agree, 1 differs near a boundary (not counted), 2 artifact: raster lit where
+    /// Per pixel: 0 agree, 1 differs near a boundary or the reference is uncertain (not
+    /// counted), 2 artifact: raster lit where
     /// the reference is shadowed, 3 artifact: raster shadowed where the reference is lit.
     pub classes: Vec<u8>,
 }
@@ -365,10 +453,8 @@ fn count_shadowed(
     (0..points.len())
         .filter(|&i| {
             let Some(sp) = points[i] else { return false };
-            frame.lights.iter().enumerate().any(|(li, light)| {
-                sp.normal.dot(light_vec(light.to_array(), sp.position)) > 0.0
-                    && states[li][i] == PixelState::Unlit
-            })
+            (0..frame.lights.len())
+                .any(|li| faces_light(frame, &sp, li) && states[li][i] == PixelState::Unlit)
         })
         .count()
 }
@@ -383,6 +469,10 @@ pub fn compare(frame: &Frame) -> Comparison {
     let mut classes = vec![0u8; w * h];
     for (r, f) in raster.iter().zip(&reference) {
         for i in 0..w * h {
+            if f[i] == PixelState::Uncertain {
+                classes[i] = classes[i].max(1);
+                continue;
+            }
             if r[i] == f[i] {
                 continue;
             }
@@ -434,6 +524,24 @@ pub fn diff_image(frame: &Frame, cmp: &Comparison) -> image::RgbaImage {
         };
     }
     img
+}
+
+/// Writes [`diff_image`] as a PNG.
+///
+/// # Errors
+/// [`crate::RenderError::Image`] when the file cannot be written.
+pub fn save_diff(
+    frame: &Frame,
+    cmp: &Comparison,
+    path: impl AsRef<std::path::Path>,
+) -> Result<(), crate::RenderError> {
+    let p = path.as_ref();
+    diff_image(frame, cmp)
+        .save_with_format(p, image::ImageFormat::Png)
+        .map_err(|e| crate::RenderError::Image {
+            path: p.display().to_string(),
+            message: e.to_string(),
+        })
 }
 
 #[cfg(test)]

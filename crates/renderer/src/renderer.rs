@@ -2,7 +2,9 @@
 
 use crate::gpu::{FrameInput, Gpu, LightDraws, SurfaceVertex};
 use crate::plan::{self, PlanEntry, PlanPolicy, SilhouetteSource, Technique};
-use crate::volume::{build_caps, build_sides, canonical_triangle};
+use crate::volume::{
+    build_caps, build_sides, canonical_triangle, remove_triangles, touching_triangles,
+};
 use crate::{Camera, RenderError, RenderScene};
 use glam::{Affine3A, DVec3, Vec3};
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
@@ -73,6 +75,12 @@ pub struct Frame {
     pub stencil: Vec<Vec<u8>>,
     /// World-space triangles (the `f32` positions every pass used), per object, canonical order.
     pub triangles: Vec<Vec<[Vec3; 3]>>,
+    /// Per object: does it cast shadows (false for receiver-only objects).
+    pub casts_shadows: Vec<bool>,
+    /// Per object: its albedo.
+    pub albedo: Vec<[f32; 3]>,
+    /// Per light: its intensity (the lit pass adds `albedo × intensity × cos θ`).
+    pub light_intensity: Vec<f32>,
     /// The lights.
     pub lights: Vec<Light>,
     /// The camera.
@@ -244,7 +252,12 @@ impl Renderer {
             for (oi, obj) in scene.objects.iter().enumerate() {
                 let c = &self.cache[oi];
                 let (lo, hi) = bounds_f64(&c.world);
-                let (technique, reason) = if c.world.is_empty() || c.table.triangles.is_empty() {
+                let (technique, reason) = if !obj.casts_shadows {
+                    (
+                        Technique::Culled,
+                        "receiver only: casts no shadow".to_owned(),
+                    )
+                } else if c.world.is_empty() || c.table.triangles.is_empty() {
                     (Technique::Culled, "no triangles".to_owned())
                 } else if plan::shadow_outside_frustum(lo, hi, l, &frustum) {
                     (
@@ -349,23 +362,29 @@ impl Renderer {
                 let c = &self.cache[oi];
                 let m = &c.lights[li].as_ref().expect("extracted above").m;
                 e.silhouette_edges = m.iter().filter(|&&v| v != 0).count();
+                let ol =
+                    object_space_lights(&obj.name, &c.table, c.transform, &[*light])?[0].to_array();
+                let touching = touching_triangles(&c.table, ol);
+                let mut m = m.clone();
+                if !touching.is_empty() {
+                    remove_triangles(&c.table, ol, mode, &touching, &mut m);
+                    e.reason
+                        .push_str("; triangles touching the light are drawn without a volume");
+                }
                 if e.technique == Technique::ZPass {
-                    e.side_quads = build_sides(&c.table.edges, m, &c.world, l, &mut volumes);
+                    e.side_quads = build_sides(&c.table.edges, &m, &c.world, l, &mut volumes);
                 } else {
-                    zfail_objects.push((oi, obj));
+                    zfail_objects.push((oi, ol, touching, m));
                 }
             }
             d.zpass = start..volumes.len() as u32;
             let start = volumes.len() as u32;
             let mut cw_caps = Vec::new();
-            for &(oi, obj) in &zfail_objects {
-                let e = &mut entries[li * scene.objects.len() + oi];
-                let c = &self.cache[oi];
-                let m = &c.lights[li].as_ref().expect("extracted above").m;
+            for (oi, ol, touching, m) in &zfail_objects {
+                let e = &mut entries[li * scene.objects.len() + *oi];
+                let c = &self.cache[*oi];
                 e.side_quads = build_sides(&c.table.edges, m, &c.world, l, &mut volumes);
-                let ol =
-                    object_space_lights(&obj.name, &c.table, c.transform, &[*light])?[0].to_array();
-                let caps = build_caps(&c.table, ol, &c.world, l, mode, e.back_cap);
+                let caps = build_caps(&c.table, *ol, &c.world, l, mode, e.back_cap, touching);
                 e.cap_triangles =
                     (caps.front_ccw.len() + caps.front_cw.len() + caps.back.len()) / 3;
                 volumes.extend_from_slice(&caps.back);
@@ -377,6 +396,24 @@ impl Renderer {
             volumes.extend_from_slice(&cw_caps);
             d.zfail_cw = start..volumes.len() as u32;
             draws.push(d);
+        }
+        // Camera-relative coordinates for the GPU: every finite vertex (surface and volume) is
+        // shifted by the same f32 subtraction, so shared vertices stay bit-identical and depth
+        // precision no longer suffers from large world coordinates (the 1e4-offset scenes).
+        // Extrusion directions (w = 0) do not depend on the origin.
+        let origin = scene.camera.eye;
+        for v in &mut volumes {
+            if v[3] != 0.0 {
+                v[0] -= origin.x;
+                v[1] -= origin.y;
+                v[2] -= origin.z;
+            }
+        }
+        for d in &mut draws {
+            let w = d.light[3];
+            d.light[0] -= origin.x * w;
+            d.light[1] -= origin.y * w;
+            d.light[2] -= origin.z * w;
         }
         let build_time = t_build.elapsed();
 
@@ -396,6 +433,7 @@ impl Renderer {
                 ];
                 let n = (p[1] - p[0]).cross(p[2] - p[0]);
                 for v in p {
+                    let v = v - origin;
                     surface.push(SurfaceVertex {
                         pos: [v.x, v.y, v.z, 1.0],
                         normal: [n.x, n.y, n.z, 0.0],
@@ -411,8 +449,14 @@ impl Renderer {
         let out = self.gpu.render(&FrameInput {
             width,
             height,
-            view_proj: scene.camera.view_proj(aspect as f32).to_cols_array(),
-            eye: scene.camera.eye.to_array(),
+            view_proj: Camera {
+                eye: Vec3::ZERO,
+                target: scene.camera.target - origin,
+                ..scene.camera
+            }
+            .view_proj(aspect as f32)
+            .to_cols_array(),
+            eye: [0.0; 3],
             ambient: scene.ambient,
             surface: &surface,
             volumes: &volumes,
@@ -427,6 +471,9 @@ impl Renderer {
             ids: out.ids,
             stencil: out.stencil,
             triangles,
+            casts_shadows: scene.objects.iter().map(|o| o.casts_shadows).collect(),
+            albedo: scene.objects.iter().map(|o| o.albedo).collect(),
+            light_intensity: vec![light_intensity(n_lights); n_lights],
             lights: scene.lights.clone(),
             camera: scene.camera,
             plan: entries,

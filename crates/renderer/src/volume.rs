@@ -20,7 +20,7 @@
 
 use glam::Vec3;
 use shadowvol_mesh_topology::EdgeTable;
-use shadowvol_robust_math::{triangle_sign, Accuracy};
+use shadowvol_robust_math::{ov_sign, triangle_sign, Accuracy};
 
 /// A vertex of shadow-volume geometry: `(x, y, z, w)`, `w = 1` on the caster, `w = 0` at infinity.
 pub type VolumeVertex = [f32; 4];
@@ -99,7 +99,8 @@ pub struct Caps {
 /// saw), `world` the world-space positions, `world_light` the world light. The sign of each
 /// triangle is [`triangle_sign`] on its canonical order in `mode`, which is what the
 /// multiplicities of `robust`, `ordered` and `exact` are made of, so caps and sides meet.
-/// `back_cap` is ignored (treated as false) for directional lights.
+/// `back_cap` is ignored (treated as false) for directional lights. Triangles with
+/// `skip[t] == true` (see [`touching_triangles`]) get no cap.
 ///
 /// # Panics
 /// Panics if `world.len() != table.positions.len()`.
@@ -111,6 +112,7 @@ pub fn build_caps(
     world_light: [f32; 4],
     mode: Accuracy,
     back_cap: bool,
+    skip: &[bool],
 ) -> Caps {
     assert_eq!(
         world.len(),
@@ -119,7 +121,11 @@ pub fn build_caps(
     );
     let back_cap = back_cap && world_light[3] != 0.0;
     let mut caps = Caps::default();
-    for t in &table.triangles {
+    for (ti, t) in table.triangles.iter().enumerate() {
+        if skip.get(ti).copied().unwrap_or(false) {
+            caps.zero += 1;
+            continue;
+        }
         let c = canonical_triangle(*t);
         let p = |i: u32| table.positions[i as usize];
         let sigma = triangle_sign(mode, p(c[0]), p(c[1]), p(c[2]), object_light);
@@ -153,6 +159,63 @@ pub fn build_caps(
     caps
 }
 
+/// The triangles that have a vertex exactly at a point light (object space: `p · w == L.xyz`
+/// in `f32`), as a per-triangle flag; empty when there are none (always for directional lights).
+///
+/// Such a triangle's shadow has no volume (every ray from the light through it lies in its
+/// plane), but the extrusion of its vertex at the light is undefined (`(0, 0, 0, 0)`), and a
+/// mode that gives it a non-zero sign (`ordered`, `original`) would draw a flat prism that
+/// z-fail counting does not cancel. The renderer draws no part of it: no cap, and its
+/// contributions are taken out of the multiplicities with [`remove_triangles`].
+#[must_use]
+pub fn touching_triangles(table: &EdgeTable, object_light: [f32; 4]) -> Vec<bool> {
+    let w = object_light[3];
+    if w == 0.0 {
+        return Vec::new();
+    }
+    let at_light: Vec<bool> = table
+        .positions
+        .iter()
+        .map(|p| {
+            p.x * w == object_light[0] && p.y * w == object_light[1] && p.z * w == object_light[2]
+        })
+        .collect();
+    if !at_light.contains(&true) {
+        return Vec::new();
+    }
+    table
+        .triangles
+        .iter()
+        .map(|t| t.iter().any(|&v| at_light[v as usize]))
+        .collect()
+}
+
+/// Subtracts, from the multiplicities `m` of one object for one light, the contributions
+/// `ov_sign(mode, a, b, o)` of the flagged triangles, so that sides and caps keep bounding the
+/// same prisms.
+///
+/// # Panics
+/// Panics if `m` or `flags` do not match the table.
+pub fn remove_triangles(
+    table: &EdgeTable,
+    object_light: [f32; 4],
+    mode: Accuracy,
+    flags: &[bool],
+    m: &mut [i32],
+) {
+    for (ti, t) in table.triangles.iter().enumerate() {
+        if !flags[ti] {
+            continue;
+        }
+        for i in 0..3 {
+            let (u, v, o) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
+            let (a, b) = if u < v { (u, v) } else { (v, u) };
+            let e = table.connectivity.tri_edges[ti][i] as usize;
+            m[e] -= i32::from(ov_sign(mode, &table.positions, a, b, o, object_light));
+        }
+    }
+}
+
 /// A triangle's vertex ids sorted ascending (the canonical order of the sign convention).
 #[must_use]
 #[inline]
@@ -165,7 +228,6 @@ pub fn canonical_triangle(mut t: [u32; 3]) -> [u32; 3] {
 mod tests {
     use super::*;
     use shadowvol_mesh_topology::Mesh;
-    use shadowvol_robust_math::ov_sign;
 
     /// The side quad of a single triangle's edge must have its outward normal pointing away
     /// from the triangle's interior (checked with the prism of one triangle under a light).
@@ -207,6 +269,47 @@ mod tests {
     }
 
     #[test]
+    fn touching_triangles_leave_no_light_vertex_in_sides() {
+        // A tetrahedron with the light exactly at vertex 3, every mode.
+        let mesh = Mesh::new(
+            vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.1, 0.2, 1.0)],
+            vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+        )
+        .unwrap();
+        let table = EdgeTable::build(&mesh).unwrap();
+        let l = [0.1, 0.2, 1.0, 1.0];
+        let flags = touching_triangles(&table, l);
+        assert_eq!(flags.iter().filter(|&&f| f).count(), 3);
+        for mode in Accuracy::ALL {
+            let mut m: Vec<i32> = table
+                .edges
+                .iter()
+                .enumerate()
+                .map(|(e, &[a, b])| {
+                    table
+                        .ovs_of(e)
+                        .iter()
+                        .map(|&o| i32::from(ov_sign(mode, &table.positions, a, b, o, l)))
+                        .sum()
+                })
+                .collect();
+            remove_triangles(&table, l, mode, &flags, &mut m);
+            let mut out = Vec::new();
+            build_sides(&table.edges, &m, &table.positions, l, &mut out);
+            assert!(
+                out.iter().all(|v| v != &[0.0; 4]),
+                "{mode}: a side vertex at the light"
+            );
+            // What is left is the base triangle's own boundary (or nothing).
+            let caps = build_caps(&table, l, &table.positions, l, mode, true, &flags);
+            assert_eq!(
+                caps.zero,
+                3 + usize::from(caps.front_ccw.len() + caps.front_cw.len() == 0)
+            );
+        }
+    }
+
+    #[test]
     fn caps_split_by_sign_and_skip_back_cap_for_directional() {
         let mesh = Mesh::new(
             vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
@@ -215,14 +318,14 @@ mod tests {
         .unwrap();
         let table = EdgeTable::build(&mesh).unwrap();
         let l = [2.0, 3.0, 5.0, 1.0];
-        let caps = build_caps(&table, l, &table.positions, l, Accuracy::Exact, true);
+        let caps = build_caps(&table, l, &table.positions, l, Accuracy::Exact, true, &[]);
         assert_eq!(
             (caps.front_ccw.len() + caps.front_cw.len()) / 3 + caps.zero,
             4
         );
         assert_eq!(caps.back.len(), caps.front_ccw.len() + caps.front_cw.len());
         let d = [1.0, 2.0, 3.0, 0.0];
-        let caps = build_caps(&table, d, &table.positions, d, Accuracy::Exact, true);
+        let caps = build_caps(&table, d, &table.positions, d, Accuracy::Exact, true, &[]);
         assert!(caps.back.is_empty());
     }
 }
