@@ -12,7 +12,7 @@
 //! * [`export_glb`]: writes any scene as binary glTF that other tools can open.
 //! * [`procedural`]: UV spheres and icospheres with an exact triangle count, Loop subdivision,
 //!   the "town".
-//! * [`presets`]: `bunnies-10-individual`, `bunnies-10-baked`, `spheres-10-individual`,
+//! * [`presets`](mod@presets): `bunnies-10-individual`, `bunnies-10-baked`, `spheres-10-individual`,
 //!   `spheres-10-baked`, `sphere-1m`, `sphere-100k`, `spheres-100x10k`, `spheres-100x1k`,
 //!   `town` and `hard-<case>` for every case of the conformance corpus.
 //!
