@@ -12,6 +12,7 @@ use std::process::ExitCode;
 
 mod cmd_accuracy;
 mod cmd_backends;
+mod cmd_bench;
 mod cmd_silhouette;
 
 /// Robust silhouette shadow volumes: silhouette edges with multiplicities on five
@@ -38,6 +39,10 @@ enum Command {
     /// that differ from exact).
     #[command(long_about = cmd_accuracy::LONG_ABOUT)]
     Accuracy(cmd_accuracy::Args),
+    /// Time silhouette extraction per backend and mode on a scene, next to the measured memory
+    /// floor (median, p10, p90).
+    #[command(long_about = cmd_bench::LONG_ABOUT)]
+    Bench(cmd_bench::Args),
 }
 
 fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
@@ -45,6 +50,7 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Backends(args) => cmd_backends::run(&args, out),
         Command::Silhouette(args) => cmd_silhouette::run(&args, out),
         Command::Accuracy(args) => cmd_accuracy::run(&args, out),
+        Command::Bench(args) => cmd_bench::run(&args, out),
     }
 }
 
