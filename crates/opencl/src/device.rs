@@ -13,7 +13,8 @@ use shadowvol_silhouette::BackendError;
 ///
 /// Format: `P:D` (platform index `P`, device index `D` within that platform, both 0-based, as
 /// listed by [`list_devices`] and `clinfo -l`), or any other text, matched case-insensitively as a
-/// substring of `"<platform name> / <device name>"` (the first match wins).
+/// substring of [`DeviceDesc::match_text`], `"<platform name> / <device name> <type> <platform
+/// version>"` (the first match wins), so `pocl`, `cuda`, `H100` or `gpu` all work.
 pub const DEVICE_ENV: &str = "SHADOWVOL_OPENCL_DEVICE";
 
 /// One OpenCL device, as found on this machine.
@@ -39,6 +40,16 @@ pub struct DeviceDesc {
 }
 
 impl DeviceDesc {
+    /// The text a name selector is matched against:
+    /// `"<platform name> / <device name> <type> <platform version>"`.
+    #[must_use]
+    pub fn match_text(&self) -> String {
+        format!(
+            "{} / {} {} {}",
+            self.platform_name, self.device_name, self.device_type, self.platform_version
+        )
+    }
+
     /// `"<platform> / <device> (<type>, <platform version>, driver <version>, P:D)"`: the text
     /// shown by `shadowvol backends`.
     #[must_use]
@@ -201,16 +212,12 @@ pub fn select_device(
         let needle = sel.to_lowercase();
         return devices
             .iter()
-            .find(|x| {
-                format!("{} / {}", x.platform_name, x.device_name)
-                    .to_lowercase()
-                    .contains(&needle)
-            })
+            .find(|x| x.match_text().to_lowercase().contains(&needle))
             .cloned()
             .ok_or_else(|| {
                 unavailable(format!(
                     "{DEVICE_ENV}={sel:?} matches no device (expected \"P:D\" indices or a \
-                     substring of \"platform / device\"); devices: {}",
+                     substring of \"platform / device type version\"); devices: {}",
                     listing()
                 ))
             });
@@ -226,4 +233,114 @@ pub fn select_device(
                 listing()
             ))
         })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dev(p: usize, d: usize, platform: &str, name: &str, ty: &'static str) -> DeviceDesc {
+        DeviceDesc {
+            platform_index: p,
+            device_index: d,
+            platform_name: platform.to_owned(),
+            platform_version: "OpenCL 3.0 test, extra".to_owned(),
+            device_name: name.to_owned(),
+            device_type: ty,
+            driver_version: "1".to_owned(),
+            fp64: true,
+            id: ptr::null_mut(),
+        }
+    }
+
+    use std::ptr;
+
+    fn devices() -> Vec<DeviceDesc> {
+        vec![
+            dev(0, 0, "Portable Computing Language", "pthread-cpu", "CPU"),
+            dev(1, 0, "Accel Platform", "fpga", "accelerator"),
+            dev(1, 1, "NVIDIA CUDA", "NVIDIA H100", "GPU"),
+            dev(2, 0, "Intel", "Arc GPU", "GPU"),
+        ]
+    }
+
+    #[test]
+    fn default_prefers_the_first_gpu_then_the_first_cpu() {
+        let d = devices();
+        assert_eq!(select_device(&d, None).unwrap().device_name, "NVIDIA H100");
+        assert_eq!(
+            select_device(&d, Some("  ")).unwrap().device_name,
+            "NVIDIA H100"
+        );
+        let cpu_only: Vec<_> = d
+            .iter()
+            .filter(|x| x.device_type != "GPU")
+            .cloned()
+            .collect();
+        assert_eq!(
+            select_device(&cpu_only, None).unwrap().device_name,
+            "pthread-cpu"
+        );
+        let accel_only: Vec<_> = d
+            .iter()
+            .filter(|x| x.device_type == "accelerator")
+            .cloned()
+            .collect();
+        let err = select_device(&accel_only, None).unwrap_err().to_string();
+        assert!(
+            err.contains("no OpenCL GPU or CPU device")
+                && err.contains("1:0 Accel Platform / fpga"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn selector_by_indices_or_name_substring() {
+        let d = devices();
+        assert_eq!(
+            select_device(&d, Some("0:0")).unwrap().device_name,
+            "pthread-cpu"
+        );
+        assert_eq!(
+            select_device(&d, Some(" 2 : 0 ")).unwrap().device_name,
+            "Arc GPU"
+        );
+        assert!(select_device(&d, Some("pocl")).is_err());
+        assert_eq!(
+            select_device(&d, Some("gpu")).unwrap().device_name,
+            "NVIDIA H100"
+        );
+        assert_eq!(
+            select_device(&d, Some("portable")).unwrap().device_name,
+            "pthread-cpu"
+        );
+        assert_eq!(
+            select_device(&d, Some("cuda / nvidia"))
+                .unwrap()
+                .device_name,
+            "NVIDIA H100"
+        );
+        assert_eq!(
+            select_device(&d, Some("FPGA")).unwrap().device_type,
+            "accelerator"
+        );
+        for bad in ["3:0", "0:1", "nothing-like-this"] {
+            let err = select_device(&d, Some(bad)).unwrap_err().to_string();
+            assert!(
+                err.contains(DEVICE_ENV)
+                    && err.contains(bad)
+                    && err.contains("2:0 Intel / Arc GPU"),
+                "{err}"
+            );
+        }
+    }
+
+    #[test]
+    fn description_names_platform_device_and_indices() {
+        let s = dev(1, 1, "NVIDIA CUDA", "NVIDIA H100", "GPU").describe();
+        assert_eq!(
+            s,
+            "NVIDIA CUDA / NVIDIA H100 (GPU, OpenCL 3.0 test, driver 1, device 1:1)"
+        );
+    }
 }

@@ -24,8 +24,9 @@
 //! The first GPU, otherwise the first CPU device, over all platforms in ICD order. The
 //! environment variable [`DEVICE_ENV`] (`SHADOWVOL_OPENCL_DEVICE`) chooses explicitly: `P:D`
 //! (platform and device indices, as `clinfo -l` lists them) or a case-insensitive substring of
-//! `"platform name / device name"`. [`KERNEL_ENV`] (`SHADOWVOL_OPENCL_KERNEL`) loads the kernel
-//! source from a file instead of the built-in copy.
+//! `"platform name / device name type platform-version"` (so `pocl`, `cuda`, `gpu` work).
+//! [`KERNEL_ENV`] (`SHADOWVOL_OPENCL_KERNEL`) loads the kernel source from a file instead of the
+//! built-in copy.
 //!
 //! # Example
 //! ```no_run
