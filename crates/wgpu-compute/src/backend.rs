@@ -811,7 +811,11 @@ impl WgpuBackend {
         }
         let mut stats = ExtractStats::default();
         let edge_count = p.layout.edge_count();
+        // Zeroing the host result is part of bringing results back (the device sends only the
+        // non-zero entries).
+        let t_reset = Instant::now();
         out.reset(edge_count, lights.len());
+        stats.readback += t_reset.elapsed();
         p.last = None;
         let Some(gpu) = p.gpu.clone() else {
             // No edges: nothing to compute, every list is empty.

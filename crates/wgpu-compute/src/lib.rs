@@ -70,3 +70,8 @@ pub const NAME: &str = "wgpu";
 pub fn create_backend() -> Result<Box<dyn SilhouetteBackend>, BackendError> {
     Ok(Box::new(WgpuBackend::new(WgpuOptions::default())?))
 }
+
+/// Compiles the README's examples as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
