@@ -198,21 +198,44 @@ fn check(
     Ok(())
 }
 
+/// A real mesh of moderate size next to the small hard cases: the bundled bunny (about 3.7k
+/// triangles, loaded through the CLI's `load_input`), with lights outside, inside, directional
+/// and several per call, so that size- and light-count-dependent bugs (dispatch limits, buffer
+/// strides) show up.
+fn bunny_case() -> Case {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/bunny.obj");
+    let input = shadowvol::load_input(path).unwrap_or_else(|e| panic!("{e}"));
+    let table = shadowvol_mesh_topology::EdgeTable::build(&input.mesh)
+        .unwrap_or_else(|e| panic!("{path}: {e}"));
+    let light = |x, y, z, w| Light::new(x, y, z, w).expect("finite light");
+    Case {
+        name: "asset-bunny",
+        scene: TopologyScene::single(table),
+        lights: vec![
+            light(0.0, 0.3, 0.5, 1.0),
+            light(1.0, 1.0, 1.0, 0.0),
+            light(0.05, 0.1, 0.0, 1.0),
+            light(-0.2, 0.1, 0.0, 1.0),
+            light(0.0, -1.0, 0.0, 0.0),
+        ],
+    }
+}
+
 fn main() {
     let args = Arguments::from_args();
     let ci = is_ci();
-    let cases: Arc<Vec<Case>> = Arc::new(
-        corpus::cases()
-            .into_iter()
-            .map(|c| Case {
-                name: c.name,
-                scene: c
-                    .scene()
-                    .unwrap_or_else(|e| panic!("corpus case {} is invalid: {e}", c.name)),
-                lights: c.lights.clone(),
-            })
-            .collect(),
-    );
+    let mut cases: Vec<Case> = corpus::cases()
+        .into_iter()
+        .map(|c| Case {
+            name: c.name,
+            scene: c
+                .scene()
+                .unwrap_or_else(|e| panic!("corpus case {} is invalid: {e}", c.name)),
+            lights: c.lights.clone(),
+        })
+        .collect();
+    cases.push(bunny_case());
+    let cases = Arc::new(cases);
     let notes: Notes = Arc::default();
 
     // Start every backend in parallel, then wait for each to report.
