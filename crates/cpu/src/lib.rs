@@ -11,6 +11,8 @@
 //! let (m, _stats) = extract_once(&mut cpu, &scene, &case.lights, Accuracy::Exact).unwrap();
 //! assert_eq!(invariant::open_vertices_scene(&scene, &m, 0), 0);
 //! ```
+//!
+//! See the README (its example runs as a doctest) for the edge-on case.
 
 use shadowvol_robust_math::{ov_sign, Accuracy, Light};
 use shadowvol_silhouette::{
@@ -37,15 +39,34 @@ impl CpuBackend {
     }
 }
 
+/// Creates the CPU backend, boxed like every backend crate's `create_backend`.
+///
+/// # Errors
+/// Never: the CPU backend is always available. The `Result` keeps the signature of the other
+/// backend crates.
+pub fn create_backend() -> Result<Box<dyn SilhouetteBackend>, BackendError> {
+    Ok(Box::new(CpuBackend::new()))
+}
+
 /// Computes the multiplicities of one object's edges for one object-space light, in `mode`.
 ///
-/// This is the reference definition: `m(a, b) = Σ_o ov_sign(mode, a, b, o)`.
+/// This is the reference definition: `m(a, b) = Σ_o ov_sign(mode, a, b, o)`. `light` is
+/// `[x, y, z, w]` in the table's own (object) space, as [`object_lights`] produces it; `out[e]`
+/// receives the multiplicity of `table.edges[e]`.
+///
+/// # Panics
+/// Panics if `out.len() != table.edges.len()`.
 pub fn extract_table(
     table: &shadowvol_mesh_topology::EdgeTable,
     light: [f32; 4],
     mode: Accuracy,
     out: &mut [i32],
 ) {
+    assert_eq!(
+        out.len(),
+        table.edges.len(),
+        "extract_table: one output slot per edge"
+    );
     for (e, (&[a, b], m)) in table.edges.iter().zip(out.iter_mut()).enumerate() {
         *m = table
             .ovs_of(e)
@@ -108,3 +129,8 @@ impl SilhouetteBackend for CpuBackend {
         self.scenes.remove(&id);
     }
 }
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -210,7 +210,7 @@ fn weld_key(p: Vec3) -> [u32; 3] {
 
 /// A fast non-cryptographic hasher for weld keys (three `u32` bit patterns): multiply-xorshift
 /// mixing per word. Weld keys are not attacker-controlled in a way that matters here, and the
-/// default SipHash dominated edge-table construction on 10^6-triangle meshes.
+/// default `SipHash` dominated edge-table construction on 10^6-triangle meshes.
 #[derive(Default)]
 struct WeldHasher(u64);
 
@@ -577,3 +577,8 @@ mod tests {
         assert!(e.to_string().contains("vertex 0: coordinate y"));
     }
 }
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
