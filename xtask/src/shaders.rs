@@ -149,7 +149,11 @@ pub fn run(args: &[String]) -> Result<(), String> {
     if !check {
         for job in &jobs {
             compile(job, &job.output)?;
-            println!("compiled {} -> {}", job.source.display(), job.output.display());
+            println!(
+                "compiled {} -> {}",
+                job.source.display(),
+                job.output.display()
+            );
         }
         return Ok(());
     }

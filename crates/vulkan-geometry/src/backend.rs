@@ -204,9 +204,10 @@ impl VulkanBackend {
     }
 
     pub(crate) fn scene(&self, id: PreparedId) -> Result<&Prepared, BackendError> {
-        self.prepared
-            .get(&id)
-            .ok_or(BackendError::UnknownScene { backend: BACKEND, id })
+        self.prepared.get(&id).ok_or(BackendError::UnknownScene {
+            backend: BACKEND,
+            id,
+        })
     }
 
     /// Makes the light, multiplicity and uncertain buffers large enough and writes the lights.
@@ -222,7 +223,10 @@ impl VulkanBackend {
         let p = self
             .prepared
             .get_mut(&id)
-            .ok_or(BackendError::UnknownScene { backend: BACKEND, id })?;
+            .ok_or(BackendError::UnknownScene {
+                backend: BACKEND,
+                id,
+            })?;
         let edges = p.ds.edges.len();
         let slots = edges
             .checked_mul(light_count)
@@ -243,7 +247,11 @@ impl VulkanBackend {
         let light_bytes: &[u8] = bytemuck::cast_slice(&bits);
         let mut changed = false;
         if (light_bytes.len() as u64) > p.lights.size {
-            let new = Buffer::new(ctx, light_bytes.len() as u64, vk::BufferUsageFlags::STORAGE_BUFFER)?;
+            let new = Buffer::new(
+                ctx,
+                light_bytes.len() as u64,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+            )?;
             std::mem::replace(&mut p.lights, new).destroy(ctx);
             changed = true;
         }
@@ -266,7 +274,10 @@ impl VulkanBackend {
         let p = self
             .prepared
             .get_mut(&id)
-            .ok_or(BackendError::UnknownScene { backend: BACKEND, id })?;
+            .ok_or(BackendError::UnknownScene {
+                backend: BACKEND,
+                id,
+            })?;
         let bytes = UNCERTAIN_HEADER as u64 + 16 * u64::from(records);
         if bytes > ctx.caps.max_storage_buffer_range {
             return Err(BackendError::Limit {
@@ -397,8 +408,9 @@ impl VulkanBackend {
                 uncertain_capacity: p.uncertain_capacity,
                 emit: 0,
             };
-            self.ctx
-                .submit_and_wait(|_, cmd| self.record_extract(p, cmd, &push, lights.len() as u32))?;
+            self.ctx.submit_and_wait(|_, cmd| {
+                self.record_extract(p, cmd, &push, lights.len() as u32)
+            })?;
             (count, _) = Self::uncertain_header(p);
             if count <= p.uncertain_capacity {
                 break;
@@ -470,7 +482,10 @@ impl SilhouetteBackend for VulkanBackend {
                 ("shader_float64".to_owned(), c.float64.to_string()),
                 ("depth_clamp".to_owned(), c.depth_clamp.to_string()),
                 ("validation".to_owned(), self.ctx.validation().to_string()),
-                ("stencil".to_owned(), "z-pass, two-sided, wrapping".to_owned()),
+                (
+                    "stencil".to_owned(),
+                    "z-pass, two-sided, wrapping".to_owned(),
+                ),
                 ("silhouette_list".to_owned(), "host, from m".to_owned()),
             ],
         }

@@ -462,7 +462,11 @@ pub(crate) struct Buffer {
 
 impl Buffer {
     /// Creates a buffer of at least `size` bytes (16 at least).
-    pub fn new(ctx: &Context, size: u64, usage: vk::BufferUsageFlags) -> Result<Self, BackendError> {
+    pub fn new(
+        ctx: &Context,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+    ) -> Result<Self, BackendError> {
         let size = size.max(16).next_multiple_of(16);
         let d = &ctx.device;
         let info = vk::BufferCreateInfo::default()
@@ -475,9 +479,13 @@ impl Buffer {
                 .create_buffer(&info, None)
                 .map_err(|e| device_err("vkCreateBuffer", e))?;
             let req = d.get_buffer_memory_requirements(buffer);
-            let host = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+            let host =
+                vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
             let Some(ty) = ctx
-                .memory_type(req.memory_type_bits, host | vk::MemoryPropertyFlags::DEVICE_LOCAL)
+                .memory_type(
+                    req.memory_type_bits,
+                    host | vk::MemoryPropertyFlags::DEVICE_LOCAL,
+                )
                 .or_else(|| ctx.memory_type(req.memory_type_bits, host))
             else {
                 d.destroy_buffer(buffer, None);
@@ -521,7 +529,11 @@ impl Buffer {
     /// A storage buffer holding `data`.
     pub fn with_data<T: bytemuck::Pod>(ctx: &Context, data: &[T]) -> Result<Self, BackendError> {
         let bytes: &[u8] = bytemuck::cast_slice(data);
-        let b = Self::new(ctx, bytes.len() as u64, vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        let b = Self::new(
+            ctx,
+            bytes.len() as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
         b.write(0, bytes);
         Ok(b)
     }
@@ -531,7 +543,10 @@ impl Buffer {
     /// # Panics
     /// If the range exceeds the buffer.
     pub fn write(&self, offset: usize, bytes: &[u8]) {
-        assert!(offset + bytes.len() <= self.size as usize, "buffer write out of range");
+        assert!(
+            offset + bytes.len() <= self.size as usize,
+            "buffer write out of range"
+        );
         // SAFETY: the mapping covers `size` bytes; the range was checked; the device is idle
         // whenever the host touches a buffer (we wait for every submission).
         unsafe {
@@ -544,7 +559,10 @@ impl Buffer {
     /// # Panics
     /// If the range exceeds the buffer.
     pub fn read(&self, offset: usize, out: &mut [u8]) {
-        assert!(offset + out.len() <= self.size as usize, "buffer read out of range");
+        assert!(
+            offset + out.len() <= self.size as usize,
+            "buffer read out of range"
+        );
         // SAFETY: as in `write`.
         unsafe {
             std::ptr::copy_nonoverlapping(self.ptr.add(offset), out.as_mut_ptr(), out.len());

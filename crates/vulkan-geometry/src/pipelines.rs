@@ -40,13 +40,12 @@ pub(crate) struct Pipelines {
 }
 
 fn module(ctx: &Context, name: &str, bytes: &[u8]) -> Result<vk::ShaderModule, BackendError> {
-    let words = ash::util::read_spv(&mut std::io::Cursor::new(bytes)).map_err(|e| {
-        BackendError::Build {
+    let words =
+        ash::util::read_spv(&mut std::io::Cursor::new(bytes)).map_err(|e| BackendError::Build {
             backend: "vulkan",
             what: name.to_owned(),
             log: format!("invalid SPIR-V: {e} (run `cargo xtask shaders`)"),
-        }
-    })?;
+        })?;
     let info = vk::ShaderModuleCreateInfo::default().code(&words);
     // SAFETY: valid SPIR-V words and device.
     unsafe { ctx.device.create_shader_module(&info, None) }.map_err(|e| BackendError::Build {
@@ -57,8 +56,12 @@ fn module(ctx: &Context, name: &str, bytes: &[u8]) -> Result<vk::ShaderModule, B
 }
 
 fn pick_depth_format(ctx: &Context) -> Result<vk::Format, BackendError> {
-    let need = vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT | vk::FormatFeatureFlags::TRANSFER_SRC;
-    for f in [vk::Format::D32_SFLOAT_S8_UINT, vk::Format::D24_UNORM_S8_UINT] {
+    let need =
+        vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT | vk::FormatFeatureFlags::TRANSFER_SRC;
+    for f in [
+        vk::Format::D32_SFLOAT_S8_UINT,
+        vk::Format::D24_UNORM_S8_UINT,
+    ] {
         // SAFETY: plain query.
         let props = unsafe {
             ctx.instance
@@ -145,8 +148,9 @@ impl Pipelines {
         self.modules.push(gs);
 
         // Render passes.
-        let subpass_empty = [vk::SubpassDescription::default()
-            .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)];
+        let subpass_empty =
+            [vk::SubpassDescription::default()
+                .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)];
         let ds_attachment = [vk::AttachmentDescription::default()
             .format(self.depth_format)
             .samples(vk::SampleCountFlags::TYPE_1)

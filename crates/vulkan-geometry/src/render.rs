@@ -20,9 +20,7 @@ use crate::twin::mode_code_of;
 use ash::vk;
 use glam::{DMat4, DVec3, DVec4, Vec3};
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::{
-    object_lights, BackendError, ExtractStats, Multiplicities, PreparedId,
-};
+use shadowvol_silhouette::{object_lights, BackendError, ExtractStats, Multiplicities, PreparedId};
 use std::time::{Duration, Instant};
 
 /// A pinhole camera: the clip-from-world matrix in `f64` (Vulkan clip space: depth in `[0, 1]`,
@@ -168,7 +166,9 @@ impl Target {
                 let req = d.get_image_memory_requirements(t.image);
                 let ty = ctx
                     .memory_type(req.memory_type_bits, vk::MemoryPropertyFlags::DEVICE_LOCAL)
-                    .or_else(|| ctx.memory_type(req.memory_type_bits, vk::MemoryPropertyFlags::empty()))
+                    .or_else(|| {
+                        ctx.memory_type(req.memory_type_bits, vk::MemoryPropertyFlags::empty())
+                    })
                     .ok_or_else(|| device_err("finding image memory", vk::Result::ERROR_UNKNOWN))?;
                 t.memory = d
                     .allocate_memory(
@@ -283,8 +283,12 @@ impl VulkanBackend {
         )?;
         let bufs = Buffer::new(&self.ctx, pixels as u64, vk::BufferUsageFlags::TRANSFER_DST)
             .and_then(|s| {
-                Buffer::new(&self.ctx, 4 * pixels as u64, vk::BufferUsageFlags::TRANSFER_DST)
-                    .map(|d| (s, d))
+                Buffer::new(
+                    &self.ctx,
+                    4 * pixels as u64,
+                    vk::BufferUsageFlags::TRANSFER_DST,
+                )
+                .map(|d| (s, d))
             });
         let (stencil_buf, depth_buf) = match bufs {
             Ok(b) => b,

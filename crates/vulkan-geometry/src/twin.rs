@@ -117,7 +117,10 @@ impl DeviceScene {
             ("the number of vertices", vertices),
             ("the number of edges", edges),
             ("the number of opposite vertices", ovs),
-            ("the number of triangle corners", 3 * scene.total_triangles()),
+            (
+                "the number of triangle corners",
+                3 * scene.total_triangles(),
+            ),
         ] {
             if u32::try_from(n).is_err() {
                 return Err(too_large(what, n));
@@ -129,7 +132,8 @@ impl DeviceScene {
             let base = ds.positions.len() as u32;
             let ov_base = ds.ovs.len() as u32;
             ds.vertex_base.push(base);
-            ds.positions.extend(t.positions.iter().map(|p| p.to_array()));
+            ds.positions
+                .extend(t.positions.iter().map(|p| p.to_array()));
             ds.vertex_object
                 .extend(std::iter::repeat_n(i as u32, t.positions.len()));
             ds.ovs.extend(t.ovs.iter().map(|&v| v + base));
@@ -186,7 +190,12 @@ fn diff_ok(x: f32, y: f32, d: f32) -> bool {
 /// Returns `Some(sign)` only when the sign equals the exact sign.
 #[must_use]
 pub fn device_filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<i8> {
-    if a.iter().chain(&b).chain(&o).chain(&l).any(|&x| subnormal(x)) {
+    if a.iter()
+        .chain(&b)
+        .chain(&o)
+        .chain(&l)
+        .any(|&x| subnormal(x))
+    {
         return None;
     }
     let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
@@ -194,13 +203,11 @@ pub fn device_filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> 
     let v = [l[0] - la[0], l[1] - la[1], l[2] - la[2]];
     let d = [o[0] - a[0], o[1] - a[1], o[2] - a[2]];
     for i in 0..3 {
-        if !diff_ok(a[i], b[i], e[i]) || !diff_ok(l[i], la[i], v[i]) || !diff_ok(o[i], a[i], d[i])
-        {
+        if !diff_ok(a[i], b[i], e[i]) || !diff_ok(l[i], la[i], v[i]) || !diff_ok(o[i], a[i], d[i]) {
             return None;
         }
         // `L.w * A` must stay normal: an underflowed (or flushed) product has an absolute error.
-        if (l[3] != 0.0 && a[i] != 0.0 && la[i].abs() < f32::MIN_POSITIVE) || la[i].is_infinite()
-        {
+        if (l[3] != 0.0 && a[i] != 0.0 && la[i].abs() < f32::MIN_POSITIVE) || la[i].is_infinite() {
             return None;
         }
     }
@@ -348,7 +355,11 @@ pub fn extract_twin(
     for li in 0..lights.len() {
         let values = out.values_mut(li);
         for (e, v) in values.iter_mut().enumerate() {
-            let l = obj_lights[ds.edge_object[e] as usize][li];
+            let l = obj_lights
+                .get(ds.edge_object[e] as usize)
+                .and_then(|per_light| per_light.get(li))
+                .copied()
+                .unwrap_or([0.0; 4]);
             let r = gs_edge(&ds, e, l, mode, filter);
             *v = r.m;
             for k in r.uncertain {

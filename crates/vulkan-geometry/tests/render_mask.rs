@@ -5,13 +5,15 @@
 mod common;
 
 use glam::{DVec3, Vec3};
+use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use shadowvol_renderer::reference::compare;
-use shadowvol_renderer::{Frame, Timings};
 use shadowvol_renderer::{plan, Camera as RefCamera};
+use shadowvol_renderer::{Frame, Timings};
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_cpu::CpuBackend;
-use shadowvol_silhouette::{extract_once, invariant, SceneObject, SilhouetteBackend, TopologyScene};
+use shadowvol_silhouette::{
+    extract_once, invariant, SceneObject, SilhouetteBackend, TopologyScene,
+};
 use shadowvol_vulkan_geometry::{Camera, Options, ShadowMask};
 use std::sync::Arc;
 
@@ -28,7 +30,12 @@ struct Case {
 }
 
 impl Case {
-    fn new(name: String, objects: Vec<(Mesh, glam::Affine3A)>, lights: Vec<Light>, camera: RefCamera) -> Self {
+    fn new(
+        name: String,
+        objects: Vec<(Mesh, glam::Affine3A)>,
+        lights: Vec<Light>,
+        camera: RefCamera,
+    ) -> Self {
         let scene = TopologyScene {
             objects: objects
                 .into_iter()
@@ -58,7 +65,12 @@ impl Case {
                 let t = &o.table;
                 t.triangles
                     .iter()
-                    .map(|tri| tri.map(|v| o.world_from_object.transform_point3(t.positions[v as usize])))
+                    .map(|tri| {
+                        tri.map(|v| {
+                            o.world_from_object
+                                .transform_point3(t.positions[v as usize])
+                        })
+                    })
                     .collect()
             })
             .collect()
@@ -131,7 +143,13 @@ fn pixel_ids(cam: &Camera, tris: &[Vec<[Vec3; 3]>]) -> Vec<[u32; 2]> {
 }
 
 /// The renderer's comparison of our mask with its reference for one light.
-fn artifacts(case: &Case, ids: &[[u32; 2]], mask: &ShadowMask, light: Light, mode: Accuracy) -> (usize, usize) {
+fn artifacts(
+    case: &Case,
+    ids: &[[u32; 2]],
+    mask: &ShadowMask,
+    light: Light,
+    mode: Accuracy,
+) -> (usize, usize) {
     let frame = Frame {
         width: W,
         height: H,
@@ -199,7 +217,10 @@ fn cases() -> Vec<Case> {
     v.push(Case::new(
         "tetra-on-ground".to_owned(),
         vec![
-            (tetra, glam::Affine3A::from_translation(Vec3::new(0.25, 0.0, 0.0))),
+            (
+                tetra,
+                glam::Affine3A::from_translation(Vec3::new(0.25, 0.0, 0.0)),
+            ),
             (ground, glam::Affine3A::IDENTITY),
         ],
         // Lights behind the tetrahedron, so its shadow falls towards the camera.
@@ -220,7 +241,10 @@ fn cases() -> Vec<Case> {
 
 #[test]
 fn gs_shadow_mask_matches_ray_traced_reference() {
-    let Some(mut vk) = common::backend(Options::from_env(), "gs_shadow_mask_matches_ray_traced_reference") else {
+    let Some(mut vk) = common::backend(
+        Options::from_env(),
+        "gs_shadow_mask_matches_ray_traced_reference",
+    ) else {
         return;
     };
     let cases = cases();
@@ -236,7 +260,10 @@ fn gs_shadow_mask_matches_ray_traced_reference() {
         for (li, &light) in case.lights.iter().enumerate() {
             if !case.zpass_safe(light) {
                 // This path is z-pass only; the renderer's plan would use z-fail here.
-                eprintln!("SKIPPED {} light {li}: camera inside the near-clip volume (z-pass unsafe)", case.name);
+                eprintln!(
+                    "SKIPPED {} light {li}: camera inside the near-clip volume (z-pass unsafe)",
+                    case.name
+                );
                 skipped += 1;
                 continue;
             }
@@ -289,9 +316,16 @@ fn gs_shadow_mask_matches_ray_traced_reference() {
         "checked {checked} (scene, light, mode) masks; {mode_limited} robust/ordered masks whose \
          multiplicities differ from exact not held to the bound; {skipped} (scene, light) pairs z-pass-unsafe"
     );
-    assert!(failures.is_empty(), "artifacts above 0.05%:\n{}", failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "artifacts above 0.05%:\n{}",
+        failures.join("\n")
+    );
     assert!(checked >= 6, "too few masks checked: {checked}");
-    assert!(shadowed_somewhere, "no reference shadow anywhere: the comparison would be vacuous");
+    assert!(
+        shadowed_somewhere,
+        "no reference shadow anywhere: the comparison would be vacuous"
+    );
 }
 
 /// The metric is not vacuous: a mask rendered for the wrong light is caught.

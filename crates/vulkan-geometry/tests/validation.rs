@@ -28,7 +28,12 @@ fn corpus_and_render_under_validation_layers() {
             let (got, _) = extract_once(&mut vk, &scene, &case.lights, mode).unwrap();
             if mode == Accuracy::Exact {
                 let (want, _) = extract_once(&mut cpu, &scene, &case.lights, mode).unwrap();
-                assert_eq!(invariant::first_difference(&got, &want), None, "{}", case.name);
+                assert_eq!(
+                    invariant::first_difference(&got, &want),
+                    None,
+                    "{}",
+                    case.name
+                );
             }
         }
     }
@@ -36,7 +41,14 @@ fn corpus_and_render_under_validation_layers() {
     let case = &cases[0];
     let scene = case.scene().unwrap();
     let id = vk.prepare(&scene).unwrap();
-    let cam = Camera::look_at(Vec3::new(3.0, 2.5, 4.0), Vec3::splat(0.3), Vec3::Y, 0.8, 1.0, 0.01);
+    let cam = Camera::look_at(
+        Vec3::new(3.0, 2.5, 4.0),
+        Vec3::splat(0.3),
+        Vec3::Y,
+        0.8,
+        1.0,
+        0.01,
+    );
     for mode in Accuracy::ALL {
         let mask = vk
             .render_shadow_mask(id, case.lights[0], &cam, 32, 32, mode)

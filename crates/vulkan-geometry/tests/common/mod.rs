@@ -16,7 +16,10 @@ pub fn backend(options: Options, test: &str) -> Option<VulkanBackend> {
     match VulkanBackend::new(options) {
         Ok(b) => Some(b),
         Err(e @ BackendError::Unavailable { .. }) => {
-            assert!(!in_ci(), "{test}: the vulkan backend must run in CI, but: {e}");
+            assert!(
+                !in_ci(),
+                "{test}: the vulkan backend must run in CI, but: {e}"
+            );
             eprintln!("SKIPPED {test}: {e}");
             None
         }
