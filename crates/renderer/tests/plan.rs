@@ -1,0 +1,342 @@
+//! The frame plan: z-fail inside a shadow volume, z-pass outside, culling, silhouette reuse.
+//! Every image is checked against the ray-traced reference.
+mod common;
+
+use glam::{Affine3A, Vec3};
+use shadowvol_cpu::CpuBackend;
+use shadowvol_renderer::{
+    reference, Camera, PlanPolicy, RenderObject, RenderOptions, RenderScene, Renderer,
+    SilhouetteSource, Technique,
+};
+use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::{
+    BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId, SilhouetteBackend,
+    TopologyScene,
+};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
+
+fn entry<'a>(
+    frame: &'a shadowvol_renderer::Frame,
+    light: usize,
+    name: &str,
+) -> &'a shadowvol_renderer::PlanEntry {
+    frame
+        .plan
+        .iter()
+        .find(|e| e.light == light && e.object_name == name)
+        .unwrap_or_else(|| panic!("no plan entry for light {light}, {name}"))
+}
+
+fn with_policy(r: &mut Renderer, policy: PlanPolicy) {
+    let mut o = r.options();
+    o.policy = policy;
+    r.set_options(o);
+}
+
+/// A camera standing on the floor under the box, in its shadow, looking out sideways.
+fn camera_in_shadow() -> Camera {
+    let mut c = Camera::look_at(Vec3::new(0.0, 0.35, 0.0), Vec3::new(3.0, 0.0, 1.0));
+    c.fov_y = 70f32.to_radians();
+    c
+}
+
+#[test]
+fn camera_inside_a_shadow_volume_gets_zfail_and_a_correct_image() {
+    let Some(mut r) = common::renderer(128, 128, Accuracy::Exact) else {
+        return;
+    };
+    let scene = common::box_on_floor(Light::point(Vec3::new(0.0, 6.0, 0.0)), camera_in_shadow());
+    let frame = r.render(&scene).unwrap();
+    assert_eq!(
+        entry(&frame, 0, "box").technique,
+        Technique::ZFail,
+        "{}",
+        frame.explain()
+    );
+    assert!(entry(&frame, 0, "box").back_cap);
+    assert!(entry(&frame, 0, "box").cap_triangles > 0);
+    let cmp = reference::compare(&frame);
+    assert!(
+        cmp.reference_shadow_pixels > 500,
+        "the camera sees shadow: {}",
+        cmp.reference_shadow_pixels
+    );
+    assert!(
+        cmp.covered_pixels - cmp.reference_shadow_pixels > 500,
+        "and lit floor"
+    );
+    assert_eq!(cmp.artifact_pixels, 0, "{}", frame.explain());
+
+    // The same view forced to z-pass is wrong: the test can tell.
+    with_policy(&mut r, PlanPolicy::AlwaysZPass);
+    let wrong = reference::compare(&r.render(&scene).unwrap());
+    assert!(
+        wrong.artifact_pixels > 1000,
+        "z-pass inside the volume: {} artifacts",
+        wrong.artifact_pixels
+    );
+}
+
+#[test]
+fn camera_outside_gets_zpass() {
+    let Some(mut r) = common::renderer(128, 128, Accuracy::Exact) else {
+        return;
+    };
+    let scene = common::box_on_floor(
+        Light::point(Vec3::new(1.5, 6.0, 1.0)),
+        Camera::look_at(Vec3::new(4.0, 5.0, 7.0), Vec3::new(0.0, 0.5, 0.0)),
+    );
+    let frame = r.render(&scene).unwrap();
+    assert!(
+        frame.plan.iter().all(|e| e.technique == Technique::ZPass),
+        "{}",
+        frame.explain()
+    );
+    let cmp = reference::compare(&frame);
+    assert!(cmp.reference_shadow_pixels > 200);
+    assert_eq!(cmp.artifact_pixels, 0);
+    // z-fail everywhere gives the same shadow.
+    with_policy(&mut r, PlanPolicy::AlwaysZFail);
+    let zfail = r.render(&scene).unwrap();
+    let a: Vec<bool> = frame.stencil[0].iter().map(|&s| s != 0).collect();
+    let b: Vec<bool> = zfail.stencil[0].iter().map(|&s| s != 0).collect();
+    let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+    assert!(
+        differ <= 2,
+        "z-pass and z-fail shadow masks differ in {differ} pixels"
+    );
+}
+
+#[test]
+fn directional_light_has_no_back_cap() {
+    let Some(mut r) = common::renderer(128, 128, Accuracy::Exact) else {
+        return;
+    };
+    let scene = common::box_on_floor(
+        Light::directional(Vec3::new(-0.3, 1.0, -0.1)),
+        camera_in_shadow(),
+    );
+    let frame = r.render(&scene).unwrap();
+    let e = entry(&frame, 0, "box");
+    assert_eq!(e.technique, Technique::ZFail, "{}", frame.explain());
+    assert!(!e.back_cap);
+    let cmp = reference::compare(&frame);
+    assert!(cmp.reference_shadow_pixels > 300);
+    assert_eq!(cmp.artifact_pixels, 0);
+}
+
+#[test]
+fn off_screen_caster_is_culled_unless_its_shadow_reaches_the_view() {
+    let Some(mut r) = common::renderer(128, 128, Accuracy::Exact) else {
+        return;
+    };
+    let light = Light::point(Vec3::new(0.0, 6.0, 0.0));
+    let camera = Camera::look_at(Vec3::new(0.0, 4.0, 6.0), Vec3::new(0.0, 0.0, 0.0));
+    let mut scene = common::box_on_floor(light, camera);
+    // Far behind the camera, with the light in front of it: its shadow goes further away.
+    scene.objects.push(RenderObject::new(
+        "behind",
+        Arc::new(common::cuboid(Vec3::splat(-0.5), Vec3::splat(0.5))),
+        Affine3A::from_translation(Vec3::new(0.0, 3.0, 14.0)),
+    ));
+    // Off to the side and out of view, but its shadow falls on the visible floor.
+    scene.objects.push(RenderObject::new(
+        "side",
+        Arc::new(common::cuboid(Vec3::splat(-0.3), Vec3::splat(0.3))),
+        Affine3A::from_translation(Vec3::new(-0.6, 4.5, 0.3)),
+    ));
+    let frame = r.render(&scene).unwrap();
+    let behind = entry(&frame, 0, "behind");
+    assert_eq!(behind.technique, Technique::Culled, "{}", frame.explain());
+    assert_eq!(behind.silhouette, SilhouetteSource::Skipped);
+    assert_ne!(
+        entry(&frame, 0, "side").technique,
+        Technique::Culled,
+        "{}",
+        frame.explain()
+    );
+    assert_ne!(entry(&frame, 0, "box").technique, Technique::Culled);
+    let cmp = reference::compare(&frame);
+    assert_eq!(cmp.artifact_pixels, 0, "{}", frame.explain());
+    // The side caster really is off-screen and its shadow really is visible: without it the
+    // shadowed area shrinks.
+    let side_ids = frame.ids.iter().filter(|id| id[0] == 4).count();
+    assert_eq!(side_ids, 0, "the side caster must be off-screen");
+    scene.objects.pop();
+    let without = reference::compare(&r.render(&scene).unwrap());
+    assert!(cmp.reference_shadow_pixels > without.reference_shadow_pixels + 20);
+}
+
+/// A real backend (the scalar CPU one) that counts its `extract` calls.
+struct Counting {
+    inner: CpuBackend,
+    extracts: Arc<AtomicUsize>,
+    lights: Arc<AtomicUsize>,
+}
+
+impl SilhouetteBackend for Counting {
+    fn info(&self) -> BackendInfo {
+        self.inner.info()
+    }
+    fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
+        self.inner.prepare(scene)
+    }
+    fn extract(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        self.extracts.fetch_add(1, Ordering::SeqCst);
+        self.lights.fetch_add(lights.len(), Ordering::SeqCst);
+        self.inner.extract(id, lights, mode, out)
+    }
+    fn release(&mut self, id: PreparedId) {
+        self.inner.release(id);
+    }
+}
+
+#[test]
+fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() {
+    let extracts = Arc::new(AtomicUsize::new(0));
+    let lights = Arc::new(AtomicUsize::new(0));
+    let backend = Counting {
+        inner: CpuBackend::new(),
+        extracts: extracts.clone(),
+        lights: lights.clone(),
+    };
+    let mut r = match Renderer::new(Box::new(backend), RenderOptions::new(96, 96)) {
+        Ok(r) => r,
+        Err(e) => {
+            // Same policy as common::renderer.
+            assert!(
+                std::env::var("CI").map_or(true, |v| v != "true"),
+                "CI=true but: {e}"
+            );
+            eprintln!("SKIPPED: {e}");
+            return;
+        }
+    };
+    let camera = Camera::look_at(Vec3::new(4.0, 5.0, 7.0), Vec3::new(0.0, 0.5, 0.0));
+    let mut scene = common::box_on_floor(Light::point(Vec3::new(1.5, 6.0, 1.0)), camera);
+    scene
+        .lights
+        .push(Light::directional(Vec3::new(-0.5, 1.0, 0.3)));
+    let first = r.render(&scene).unwrap();
+    assert!(first
+        .plan
+        .iter()
+        .all(|e| e.silhouette == SilhouetteSource::Extracted));
+    let (calls, n) = (
+        extracts.load(Ordering::SeqCst),
+        lights.load(Ordering::SeqCst),
+    );
+    assert_eq!((calls, n), (2, 4), "one call per object, both lights");
+
+    // Nothing moved: everything is reused, the backend is not called, the image is the same.
+    let second = r.render(&scene).unwrap();
+    assert!(
+        second
+            .plan
+            .iter()
+            .all(|e| e.silhouette == SilhouetteSource::Reused),
+        "{}",
+        second.explain()
+    );
+    assert_eq!(extracts.load(Ordering::SeqCst), 2);
+    assert_eq!(second.rgba, first.rgba);
+
+    // Light 0 moves: only light 0 is re-extracted, for both objects.
+    scene.lights[0] = Light::point(Vec3::new(-1.0, 6.0, 1.5));
+    let third = r.render(&scene).unwrap();
+    for e in &third.plan {
+        let expected = if e.light == 0 {
+            SilhouetteSource::Extracted
+        } else {
+            SilhouetteSource::Reused
+        };
+        assert_eq!(e.silhouette, expected, "{e}");
+    }
+    assert_eq!(lights.load(Ordering::SeqCst), 6);
+    assert_eq!(reference::compare(&third).artifact_pixels, 0);
+
+    // The box moves: only the box is re-extracted, for both lights.
+    scene.objects[1].world_from_object = Affine3A::from_translation(Vec3::new(0.7, 0.8, 0.0));
+    let fourth = r.render(&scene).unwrap();
+    for e in &fourth.plan {
+        let expected = if e.object_name == "box" {
+            SilhouetteSource::Extracted
+        } else {
+            SilhouetteSource::Reused
+        };
+        assert_eq!(e.silhouette, expected, "{e}");
+    }
+    assert_eq!(lights.load(Ordering::SeqCst), 8);
+    assert_eq!(reference::compare(&fourth).artifact_pixels, 0);
+
+    // Switching the mode invalidates everything.
+    let mut o = r.options();
+    o.mode = Accuracy::Robust;
+    r.set_options(o);
+    let fifth = r.render(&scene).unwrap();
+    assert!(fifth
+        .plan
+        .iter()
+        .all(|e| e.silhouette == SilhouetteSource::Extracted));
+}
+
+#[test]
+fn many_objects_several_lights_match_the_reference() {
+    let Some(mut r) = common::renderer(128, 128, Accuracy::Exact) else {
+        return;
+    };
+    let mut scene = RenderScene {
+        objects: vec![RenderObject::new(
+            "floor",
+            Arc::new(common::floor(6.0, 6)),
+            Affine3A::IDENTITY,
+        )],
+        lights: vec![
+            Light::point(Vec3::new(2.0, 7.0, 1.0)),
+            Light::point(Vec3::new(-3.0, 5.0, -1.0)),
+            Light::directional(Vec3::new(0.4, 1.0, -0.3)),
+        ],
+        camera: Camera::look_at(Vec3::new(5.0, 7.0, 8.0), Vec3::ZERO),
+        ambient: 0.1,
+    };
+    let cube = Arc::new(common::cuboid(Vec3::splat(-0.35), Vec3::splat(0.35)));
+    for i in 0..3 {
+        for j in 0..3 {
+            scene.objects.push(RenderObject::new(
+                format!("cube{i}{j}"),
+                cube.clone(),
+                Affine3A::from_rotation_translation(
+                    glam::Quat::from_rotation_y(0.3 * (i + j) as f32),
+                    Vec3::new(
+                        i as f32 * 1.6 - 1.6,
+                        0.6 + 0.3 * j as f32,
+                        j as f32 * 1.6 - 1.6,
+                    ),
+                ),
+            ));
+        }
+    }
+    for policy in [PlanPolicy::Auto, PlanPolicy::AlwaysZFail] {
+        with_policy(&mut r, policy);
+        let frame = r.render(&scene).unwrap();
+        assert_eq!(frame.plan.len(), 3 * 10);
+        let cmp = reference::compare(&frame);
+        assert!(
+            cmp.reference_shadow_pixels > 1000,
+            "{}",
+            cmp.reference_shadow_pixels
+        );
+        assert!(
+            cmp.artifact_pixels <= 2,
+            "{policy:?}: {} artifacts",
+            cmp.artifact_pixels
+        );
+    }
+}
