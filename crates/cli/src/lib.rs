@@ -34,6 +34,11 @@ pub use registry::{backend_names, backends, find_backend, BackendEntry};
 
 use shadowvol_robust_math::Accuracy;
 
+/// The README's example, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 /// Output format of a subcommand.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Format {
