@@ -34,6 +34,11 @@ mod render;
 pub mod twin;
 
 pub use backend::VulkanBackend;
+
+/// The crate README, compiled and run as a doctest.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
 pub use context::{Options, VALIDATION_ENV};
 pub use render::{Camera, RenderStats, ShadowMask};
 
