@@ -34,6 +34,10 @@ pub struct WgpuOptions {
     /// Initial capacity of the uncertain-triple buffer (default 4096); it grows (and the
     /// dispatch is repeated) when a dispatch overflows it.
     pub initial_uncertain_capacity: u32,
+    /// A cap, in bytes, on every buffer and storage binding, below the device's own limits (a
+    /// memory budget; default `None`). Scenes whose static buffers exceed it are refused with
+    /// [`BackendError::Limit`]; per-frame buffers shrink by running fewer lights per dispatch.
+    pub max_buffer_bytes: Option<u64>,
 }
 
 impl Default for WgpuOptions {
@@ -43,6 +47,7 @@ impl Default for WgpuOptions {
             full_readback: false,
             max_lights_per_dispatch: 64,
             initial_uncertain_capacity: 4096,
+            max_buffer_bytes: None,
         }
     }
 }
@@ -283,7 +288,12 @@ impl WgpuBackend {
                     Some(format!("device lost ({reason:?}): {message}"));
             });
         }
-        let limits = device.limits();
+        let mut limits = device.limits();
+        if let Some(cap) = options.max_buffer_bytes {
+            limits.max_buffer_size = limits.max_buffer_size.min(cap);
+            limits.max_storage_buffer_binding_size =
+                limits.max_storage_buffer_binding_size.min(cap);
+        }
         if limits.max_storage_buffers_per_shader_stage < 8
             || limits.max_compute_invocations_per_workgroup < shaders::WORKGROUP_SIZE
             || limits.max_compute_workgroup_size_x < shaders::WORKGROUP_SIZE
@@ -534,7 +544,15 @@ impl WgpuBackend {
         uncertain_capacity: u32,
     ) -> Result<Frame, BackendError> {
         let lc = light_capacity as u64;
-        let uncertain_bytes = u64::from(uncertain_capacity.max(1)) * 16;
+        // As many records as the limits allow, at most the capacity asked for.
+        let max_records = (self
+            .limits
+            .max_storage_buffer_binding_size
+            .min(self.limits.max_buffer_size)
+            / 16)
+            .min(u64::from(u32::MAX)) as u32;
+        let uncertain_capacity = uncertain_capacity.min(max_records).max(1);
+        let uncertain_bytes = u64::from(uncertain_capacity) * 16;
         self.check_buffer("the uncertain-triple buffer", uncertain_bytes, true)?;
         let storage = |label: &str, size: u64, extra: wgpu::BufferUsages| {
             self.device.create_buffer(&wgpu::BufferDescriptor {
@@ -681,17 +699,17 @@ impl SilhouetteBackend for WgpuBackend {
     fn info(&self) -> BackendInfo {
         BackendInfo {
             name: NAME,
-            device: format!(
-                "{} ({:?}, {:?}; driver {} {})",
-                self.adapter.name,
-                self.adapter.backend,
-                self.adapter.device_type,
-                self.adapter.driver,
-                self.adapter.driver_info
-            )
-            .replace(" ;", ";")
-            .trim_end()
-            .to_owned(),
+            device: {
+                let driver = [self.adapter.driver.trim(), self.adapter.driver_info.trim()]
+                    .into_iter()
+                    .filter(|s| !s.is_empty())
+                    .collect::<Vec<_>>()
+                    .join(" ");
+                format!(
+                    "{} ({:?}, {:?}; driver {})",
+                    self.adapter.name, self.adapter.backend, self.adapter.device_type, driver
+                )
+            },
             modes: Accuracy::ALL.to_vec(),
             max_lights: None,
             details: vec![
@@ -941,6 +959,13 @@ impl WgpuBackend {
             let capacity = uncertain.checked_next_power_of_two().unwrap_or(uncertain);
             let light_capacity = frame.light_capacity;
             let frame = self.create_frame(gpu, edges, objects, light_capacity, capacity)?;
+            if frame.uncertain_capacity < uncertain {
+                return Err(limit_error(format!(
+                    "{uncertain} uncertain (edge, OV, light) triples need {} bytes, but the device allows storage bindings of {} bytes; pass fewer lights per call",
+                    u64::from(uncertain) * 16,
+                    self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size)
+                )));
+            }
             p.frame = Some(frame);
             stats.upload += t.elapsed();
         };

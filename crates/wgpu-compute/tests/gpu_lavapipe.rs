@@ -277,3 +277,54 @@ fn gpu_errors_are_reported_not_panics() {
         .iter()
         .any(|(k, v)| k == "exact_filter" && v == b.exact_filter().name()));
 }
+
+#[test]
+fn gpu_buffer_limits_chunk_lights_or_refuse_with_numbers() {
+    let Some(mut unlimited) = backend(
+        "gpu_buffer_limits_chunk_lights_or_refuse_with_numbers",
+        WgpuOptions::default(),
+    ) else {
+        return;
+    };
+    let case = common::all_cases()
+        .into_iter()
+        .find(|c| c.name == "many-objects-transformed")
+        .unwrap();
+    let edges = case.scene.total_edges() as u64;
+    // The edge records ((E + 1) x 16 bytes) are the largest static buffer: a cap below them
+    // refuses the scene, naming the sizes.
+    let mut small = WgpuBackend::new(WgpuOptions {
+        max_buffer_bytes: Some((edges + 1) * 16 - 4),
+        ..WgpuOptions::default()
+    })
+    .unwrap();
+    match small.prepare(&case.scene) {
+        Err(BackendError::Limit { message, .. }) => {
+            assert!(
+                message.contains(&format!("{}", (edges + 1) * 16)),
+                "{message}"
+            );
+        }
+        other => panic!("expected a limit error, got {other:?}"),
+    }
+    // A cap that holds the scene but only two lights' compact lists (8 bytes per edge each):
+    // the lights run two per dispatch, with the same result.
+    let mut capped = WgpuBackend::new(WgpuOptions {
+        max_buffer_bytes: Some((edges + 1) * 16),
+        ..WgpuOptions::default()
+    })
+    .unwrap();
+    let id = capped.prepare(&case.scene).unwrap();
+    let mut lights = case.lights.clone();
+    lights.extend(case.lights.iter().copied());
+    assert!(lights.len() > 2);
+    for mode in Accuracy::ALL {
+        let mut got = Multiplicities::default();
+        capped.extract(id, &lights, mode, &mut got).unwrap();
+        let (expected, _) = extract_once(&mut unlimited, &case.scene, &lights, mode).unwrap();
+        assert_eq!(got, expected, "{mode}");
+        let res = capped.gpu_results(id).unwrap();
+        assert_eq!(res.light_count, 2 - lights.len() % 2);
+        assert_eq!(res.first_light + res.light_count, lights.len());
+    }
+}
