@@ -87,23 +87,31 @@ pub fn orient_filter_f64(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> 
 /// without `f64`.
 ///
 /// Evaluates the same formula as [`orient_filter_f64`] in `f32`. It returns `None` (uncertain)
-/// when `|det| <= F32_FILTER_EPS * P`, or when a non-zero difference lies outside
-/// `[F32_FILTER_MIN, F32_FILTER_MAX]` (where products could underflow or overflow), or when a
-/// product `L.w * A[i]` of non-zero factors is subnormal or zero (underflow), or when any
-/// intermediate is not finite. Shader ports must keep all of these checks; with flush-to-zero
-/// hardware, the underflow check also catches flushed products.
+/// when
+/// * the light's `w` is neither 0 nor 1 (only then is `w * A` exact in `f32`; otherwise its
+///   rounding is not bounded relative to `V = L.xyz - w A`, which may cancel to 0),
+/// * a non-zero difference (`A - B`, `V`, `O - A`) lies outside
+///   `[F32_FILTER_MIN, F32_FILTER_MAX]` (where products could underflow or overflow),
+/// * any intermediate is not finite,
+/// * or `|det| <= F32_FILTER_EPS * P` for the permanent `P` of the same terms.
+///
+/// Shader ports must keep every one of these checks (the `w` check included). On
+/// flush-to-zero hardware, subnormal inputs are flushed before this function would see them;
+/// the range check on the differences then still holds for the flushed values, but the
+/// certified sign is about the flushed inputs, so such devices must route subnormal inputs to
+/// the host.
 #[must_use]
 #[inline]
 pub fn orient_filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<i8> {
     let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let wa = [l[3] * a[0], l[3] * a[1], l[3] * a[2]];
-    // `w * A` must not leave the normal range: an underflowed product has an absolute, not a
-    // relative, error, and can make V vanish (then a non-zero determinant would look like 0).
-    for (&x, &p) in a.iter().zip(&wa) {
-        if l[3] != 0.0 && x != 0.0 && p.abs() < f32::MIN_POSITIVE {
-            return None;
-        }
+    // Only w = 0 and w = 1 make `w * A` exact in f32. For any other w the rounding of `w * A`
+    // is relative to |w A|, not to |V|: when `L.xyz` and `w A` cancel, the computed V can be 0
+    // (or have the wrong sign) while the exact one is not, and no bound on the computed terms
+    // covers that. (A tiny w also makes `w * A` underflow.) Leave those inputs to the host.
+    if l[3] != 0.0 && l[3] != 1.0 {
+        return None;
     }
+    let wa = [l[3] * a[0], l[3] * a[1], l[3] * a[2]];
     let v = [l[0] - wa[0], l[1] - wa[1], l[2] - wa[2]];
     let d = [o[0] - a[0], o[1] - a[1], o[2] - a[2]];
     for x in e.iter().chain(&v).chain(&d) {

@@ -370,6 +370,36 @@ fn f32_filter_never_certifies_a_wrong_zero_when_w_a_underflows() {
     assert_ne!(orient_filter_f32(a, b, l, o), Some(0));
 }
 
+#[test]
+fn f32_filter_is_sound_for_general_w() {
+    // Regression: for w not in {0, 1}, fl(w * A) can round to exactly L.xyz, so the computed
+    // V = L.xyz - w A is 0 while the exact one is not; its error is relative to |w A|, not to
+    // |V|, and the filter certified a wrong 0.
+    let w = 1.1f32;
+    let a = [1.3f32, 0.0, 0.0];
+    let b = [1.3f32, -1.0, -2.0];
+    let o = [1.3f32, 3.0, 1.0];
+    let l = [w * a[0], 0.0, 0.0, w];
+    let want = oracle::sign_exact(a, b, l, o);
+    assert_ne!(
+        want, 0,
+        "w * A is inexact in f32, so V.x != 0 and det = 5 V.x"
+    );
+    assert_eq!(check(a, b, l, o), want);
+    // Many general-w lights near such cancellations.
+    let mut rng = Rng(77);
+    for _ in 0..20_000 {
+        let w = 1.0 + rng.unit().abs() * 3.0;
+        let a = [rng.unit() * 4.0, rng.unit() * 4.0, rng.unit() * 4.0];
+        let b = [a[0], a[1] + rng.unit(), a[2] + rng.unit()];
+        let o = [a[0], a[1] + rng.unit(), a[2] + rng.unit()];
+        let mut l = [w * a[0], w * a[1], w * a[2], w];
+        let c = rng.below(3) as usize;
+        l[c] = ulps(l[c], rng.below(3) as i32 - 1);
+        check(a, b, l, o);
+    }
+}
+
 // ---- proptests --------------------------------------------------------------------------------
 
 fn finite_f32() -> impl Strategy<Value = f32> {
