@@ -38,6 +38,10 @@ pub struct WgpuOptions {
     /// memory budget; default `None`). Scenes whose static buffers exceed it are refused with
     /// [`BackendError::Limit`]; per-frame buffers shrink by running fewer lights per dispatch.
     pub max_buffer_bytes: Option<u64>,
+    /// A cap on workgroups per dispatch dimension, below the device's limit (default `None`).
+    /// Scenes with more workgroups than one dimension holds fold them into a 2-D grid; a small
+    /// cap exercises that path on small scenes.
+    pub max_workgroups_per_dimension: Option<u32>,
 }
 
 impl Default for WgpuOptions {
@@ -48,6 +52,7 @@ impl Default for WgpuOptions {
             max_lights_per_dispatch: 64,
             initial_uncertain_capacity: 4096,
             max_buffer_bytes: None,
+            max_workgroups_per_dimension: None,
         }
     }
 }
@@ -293,6 +298,10 @@ impl WgpuBackend {
             limits.max_buffer_size = limits.max_buffer_size.min(cap);
             limits.max_storage_buffer_binding_size =
                 limits.max_storage_buffer_binding_size.min(cap);
+        }
+        if let Some(cap) = options.max_workgroups_per_dimension {
+            limits.max_compute_workgroups_per_dimension =
+                limits.max_compute_workgroups_per_dimension.min(cap.max(1));
         }
         if limits.max_storage_buffers_per_shader_stage < 8
             || limits.max_compute_invocations_per_workgroup < shaders::WORKGROUP_SIZE
