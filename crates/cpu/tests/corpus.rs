@@ -192,3 +192,41 @@ fn backend_errors() {
     assert_eq!(info.name, "cpu");
     assert_eq!(info.modes, Accuracy::ALL.to_vec());
 }
+
+#[test]
+fn corpus_reaches_the_exact_fallback_and_exact_zeros() {
+    // The corpus must exercise what makes exact mode hard: (edge, OV, light) triples that the
+    // certified f64 filter cannot decide, and determinants that are exactly zero.
+    use shadowvol_robust_math::{orient_exact, orient_filter_f64};
+    use shadowvol_silhouette::object_lights;
+    let (mut uncertain, mut zeros, mut total) = (0usize, 0usize, 0usize);
+    for case in corpus::cases() {
+        let scene = case.scene().unwrap();
+        let lights = object_lights(&scene, &case.lights);
+        for (object, per_light) in scene.objects.iter().zip(&lights) {
+            let t = &object.table;
+            for &l in per_light {
+                for (e, &[a, b]) in t.edges.iter().enumerate() {
+                    for &o in t.ovs_of(e) {
+                        let p = |i: u32| t.positions[i as usize].to_array();
+                        total += 1;
+                        if orient_filter_f64(p(a), p(b), l, p(o)).is_none() {
+                            uncertain += 1;
+                        }
+                        if orient_exact(p(a), p(b), l, p(o)) == 0 {
+                            zeros += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        uncertain >= 200,
+        "only {uncertain} of {total} needed the exact fallback"
+    );
+    assert!(
+        zeros >= 2000,
+        "only {zeros} of {total} were exactly degenerate"
+    );
+}
