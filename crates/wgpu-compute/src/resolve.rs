@@ -91,7 +91,71 @@ pub(crate) fn finish_chunk(
         }
     }
     for (li, list) in lists.into_iter().enumerate() {
-        out.set_silhouette(first + li, list.into_iter().map(|(e, _)| e).collect());
+        let mut edges: Vec<u32> = list.into_iter().map(|(e, _)| e).collect();
+        radix_sort(&mut edges);
+        // Already sorted: `set_silhouette`'s own sort only confirms it (linear).
+        out.set_silhouette(first + li, edges);
     }
     patch
+}
+
+/// Sorts distinct-or-not `u32` keys ascending with an LSD radix sort (11-bit digits, passes
+/// whose digit is the same for every key skipped). The device appends silhouette edges in
+/// atomic order; this keeps the host's ordering cost linear in the silhouette size.
+pub(crate) fn radix_sort(keys: &mut Vec<u32>) {
+    const BITS: u32 = 11;
+    const BUCKETS: usize = 1 << BITS;
+    if keys.len() < 256 {
+        keys.sort_unstable();
+        return;
+    }
+    let max = keys.iter().copied().max().unwrap_or(0);
+    let mut tmp = vec![0u32; keys.len()];
+    let mut shift = 0;
+    while shift < 32 && (max >> shift) != 0 {
+        let digit = |k: u32| ((k >> shift) as usize) & (BUCKETS - 1);
+        let mut count = [0usize; BUCKETS];
+        for &k in keys.iter() {
+            count[digit(k)] += 1;
+        }
+        let mut sum = 0;
+        for c in &mut count {
+            let n = *c;
+            *c = sum;
+            sum += n;
+        }
+        for &k in keys.iter() {
+            let d = digit(k);
+            tmp[count[d]] = k;
+            count[d] += 1;
+        }
+        std::mem::swap(keys, &mut tmp);
+        shift += BITS;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::radix_sort;
+
+    #[test]
+    fn radix_sort_sorts_like_the_standard_sort() {
+        let mut state = 0x1234_5678_9abc_def0u64;
+        for len in [0usize, 1, 255, 256, 257, 5000, 70_000] {
+            for max_bits in [1u32, 11, 12, 22, 23, 32] {
+                let mut keys: Vec<u32> = (0..len)
+                    .map(|_| {
+                        state ^= state << 13;
+                        state ^= state >> 7;
+                        state ^= state << 17;
+                        (state >> 32) as u32 >> (32 - max_bits)
+                    })
+                    .collect();
+                let mut expected = keys.clone();
+                expected.sort_unstable();
+                radix_sort(&mut keys);
+                assert_eq!(keys, expected, "len {len}, bits {max_bits}");
+            }
+        }
+    }
 }
