@@ -27,46 +27,51 @@ struct Summary {
     parts: [f64; 4],
 }
 
+/// Extracts `frames` times from each prepared scene, interleaved frame by frame (so that drift in
+/// machine load affects both alike), after 3 warm-up frames each.
 fn measure(
     cl: &mut OpenClBackend,
-    scene: &TopologyScene,
+    scenes: [&TopologyScene; 2],
     lights: &[shadowvol_silhouette::Light],
     mode: Accuracy,
     frames: usize,
-) -> Result<(Summary, Multiplicities), Box<dyn std::error::Error>> {
-    let id = cl.prepare(scene)?;
-    let mut out = Multiplicities::default();
-    for _ in 0..3 {
-        cl.extract(id, lights, mode, &mut out)?; // warm-up
+) -> Result<([Summary; 2], Multiplicities), Box<dyn std::error::Error>> {
+    let ids = [cl.prepare(scenes[0])?, cl.prepare(scenes[1])?];
+    let mut outs = [Multiplicities::default(), Multiplicities::default()];
+    let mut stats: [Vec<ExtractStats>; 2] = [Vec::new(), Vec::new()];
+    for frame in 0..frames + 3 {
+        for k in 0..2 {
+            let s = cl.extract(ids[k], lights, mode, &mut outs[k])?;
+            if frame >= 3 {
+                stats[k].push(s);
+            }
+        }
     }
-    let mut totals = Vec::with_capacity(frames);
-    let mut stats: Vec<ExtractStats> = Vec::with_capacity(frames);
-    for _ in 0..frames {
-        let s = cl.extract(id, lights, mode, &mut out)?;
-        totals.push(s.total());
-        stats.push(s);
+    for id in ids {
+        cl.release(id);
     }
-    cl.release(id);
-    totals.sort();
-    let med = |f: fn(&ExtractStats) -> Duration| {
-        let mut v: Vec<Duration> = stats.iter().map(f).collect();
-        v.sort();
-        percentile(&v, 0.5)
-    };
-    Ok((
+    let summary = |stats: &[ExtractStats]| {
+        let med = |f: &dyn Fn(&ExtractStats) -> Duration| {
+            let mut v: Vec<Duration> = stats.iter().map(f).collect();
+            v.sort();
+            percentile(&v, 0.5)
+        };
+        let mut totals: Vec<Duration> = stats.iter().map(ExtractStats::total).collect();
+        totals.sort();
         Summary {
             median: percentile(&totals, 0.5),
             p10: percentile(&totals, 0.1),
             p90: percentile(&totals, 0.9),
             parts: [
-                med(|s| s.upload),
-                med(|s| s.compute),
-                med(|s| s.readback),
-                med(|s| s.host_resolve),
+                med(&|s| s.upload),
+                med(&|s| s.compute),
+                med(&|s| s.readback),
+                med(&|s| s.host_resolve),
             ],
-        },
-        out,
-    ))
+        }
+    };
+    let [first, _] = outs;
+    Ok(([summary(&stats[0]), summary(&stats[1])], first))
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -88,8 +93,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     println!("mode      layout      median_ms  p10_ms  p90_ms | upload compute readback host (median ms)");
     for mode in Accuracy::ALL {
-        let (ind, m_ind) = measure(&mut cl, &individual, &lights, mode, frames)?;
-        let (bak, _) = measure(&mut cl, &baked, &lights, mode, frames)?;
+        let ([ind, bak], m_ind) = measure(&mut cl, [&individual, &baked], &lights, mode, frames)?;
         for (layout, s) in [("individual", &ind), ("baked", &bak)] {
             println!(
                 "{:<9} {layout:<11} {:>9.3} {:>7.3} {:>7.3} | {:>6.3} {:>7.3} {:>8.3} {:>5.3}",
