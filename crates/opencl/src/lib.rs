@@ -370,10 +370,11 @@ impl OpenClBackend {
         let zeros = vec![0u32; num_lights + 1];
         let (lights_buf, _) = p.lights.as_mut().expect("ensured by extract");
         let (counts_buf, _) = p.counts.as_mut().expect("ensured by extract");
-        // SAFETY: blocking writes from live slices into buffers at least that large.
+        // SAFETY: blocking writes (they return once the slices have been read) from live slices
+        // into buffers at least that large.
         unsafe {
             self.queue
-                .enqueue_write_buffer(lights_buf, CL_NON_BLOCKING, 0, flat_l, &[])
+                .enqueue_write_buffer(lights_buf, CL_BLOCKING, 0, flat_l, &[])
                 .map_err(|e| device_error("writing lights", e))?;
             self.queue
                 .enqueue_write_buffer(counts_buf, CL_BLOCKING, 0, &zeros, &[])
@@ -572,12 +573,15 @@ impl SilhouetteBackend for OpenClBackend {
         {
             let (sil_buf, _) = p.sil.as_ref().expect("ensured");
             let (unc_buf, _) = p.unc.as_ref().expect("ensured");
-            // SAFETY: non-blocking reads into slices that outlive the `finish` below; offsets and
-            // lengths lie inside the buffers (per-light regions of `edges` pairs).
+            // SAFETY: non-blocking reads into slices that outlive the `finish` below, which runs
+            // on every path (also after a failed enqueue), so no read is pending when they drop;
+            // offsets and lengths lie inside the buffers (per-light regions of `edges` pairs).
+            let mut enqueued = Ok(());
             unsafe {
                 for (l, dst) in raw_sil.iter_mut().enumerate() {
-                    if !dst.is_empty() {
-                        self.queue
+                    if !dst.is_empty() && enqueued.is_ok() {
+                        enqueued = self
+                            .queue
                             .enqueue_read_buffer(
                                 sil_buf,
                                 CL_NON_BLOCKING,
@@ -585,18 +589,24 @@ impl SilhouetteBackend for OpenClBackend {
                                 dst,
                                 &[],
                             )
-                            .map_err(|e| device_error("reading silhouette lists", e))?;
+                            .map(drop)
+                            .map_err(|e| device_error("reading silhouette lists", e));
                     }
                 }
-                if !raw_unc.is_empty() {
-                    self.queue
+                if !raw_unc.is_empty() && enqueued.is_ok() {
+                    enqueued = self
+                        .queue
                         .enqueue_read_buffer(unc_buf, CL_NON_BLOCKING, 0, &mut raw_unc, &[])
-                        .map_err(|e| device_error("reading uncertain records", e))?;
+                        .map(drop)
+                        .map_err(|e| device_error("reading uncertain records", e));
                 }
             }
-            self.queue
+            let finished = self
+                .queue
                 .finish()
-                .map_err(|e| device_error("reading results", e))?;
+                .map_err(|e| device_error("reading results", e));
+            enqueued?;
+            finished?;
         }
         stats.readback += t.elapsed();
         let t = Instant::now();
