@@ -105,7 +105,7 @@ pub fn bunny_offset(offset: f32) -> Result<RenderScene, RenderError> {
             Arc::new(mesh),
             Affine3A::IDENTITY,
         )],
-        lights: vec![Light::point(c + Vec3::new(-0.6, 1.6, 0.4) * size)],
+        lights: vec![Light::point(c + Vec3::new(-1.2, 0.9, 0.3) * size)],
         camera: Camera::look_at(
             c + Vec3::new(0.5, 0.55, 1.0) * size * 1.3,
             c - Vec3::Y * size * 0.1,
@@ -117,7 +117,8 @@ pub fn bunny_offset(offset: f32) -> Result<RenderScene, RenderError> {
 }
 
 /// A UV sphere of about `triangles` triangles, radius 1, with a point light on its axis above the
-/// north pole, exactly (to `f32`) where the planes of the second band of quads meet the axis.
+/// north pole, exactly (to `f32`) where the planes of one band of quads (a third of the way to
+/// the equator) meet the axis: that whole band is edge-on to the light.
 #[must_use]
 pub fn uv_sphere_pole(triangles: usize) -> RenderScene {
     let mesh = shadowvol_scenes::procedural::uv_sphere(triangles, 1.0);
@@ -126,10 +127,11 @@ pub fn uv_sphere_pole(triangles: usize) -> RenderScene {
     ys.sort_by(|a, b| b.total_cmp(a));
     ys.dedup();
     let light_y = if ys.len() >= 4 {
-        // Ring heights y1 > y2 (below the pole y0): the quad band between rings 1 and 2 is a
-        // cone whose apex is where its planes meet the axis.
+        // Ring heights from the pole down: the quad band between rings k and k + 1 (k about a
+        // third of the way to the equator) is a cone whose apex is where its planes meet the axis.
+        let k = (ys.len() / 6).max(1);
         let r = |y: f32| (1.0 - y * y).max(0.0).sqrt();
-        let (y1, y2) = (ys[1], ys[2]);
+        let (y1, y2) = (ys[k], ys[k + 1]);
         let (r1, r2) = (r(y1), r(y2));
         // Line through (r1, y1) and (r2, y2) at radius 0. (The faces are planar trapezoids, so
         // the apex of their planes lies a little off this cone line; rounding makes it hard.)

@@ -49,6 +49,11 @@
 //! println!("artifact pixels: {}", cmp.artifact_pixels);
 //! ```
 
+/// The README's code, compiled as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 pub mod gpu;
 pub mod hard;
 pub mod plan;

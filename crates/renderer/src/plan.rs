@@ -126,7 +126,7 @@ pub type Plane = DVec4;
 
 fn plane_through(p: DVec3, normal: DVec3, inside: DVec3) -> Option<Plane> {
     let len = normal.length();
-    if !(len > 0.0) || !len.is_finite() {
+    if len.is_nan() || len <= 0.0 || !len.is_finite() {
         return None;
     }
     let n = normal / len;

@@ -43,3 +43,47 @@ fn explore() {
         }
     }
 }
+
+#[test]
+#[ignore]
+fn explore_sphere_open_vertices() {
+    use shadowvol_silhouette::{extract_once, invariant, SceneObject, TopologyScene};
+    for tris in [2000usize, 8000, 20000] {
+        let s = hard::uv_sphere_pole(tris);
+        let table = shadowvol_mesh_topology::EdgeTable::build(&s.objects[0].mesh).unwrap();
+        let scene = TopologyScene {
+            objects: vec![SceneObject {
+                name: "s".into(),
+                table: std::sync::Arc::new(table),
+                world_from_object: glam::Affine3A::IDENTITY,
+            }],
+        };
+        for mode in Accuracy::ALL {
+            let mut cpu = shadowvol_cpu::CpuBackend::new();
+            let (m, _) = extract_once(&mut cpu, &scene, &s.lights, mode).unwrap();
+            let open = invariant::open_vertices_scene(&scene, &m, 0);
+            let sil = m.silhouette(0).len();
+            println!(
+                "sphere {tris} light {:?} {mode}: open {open}, silhouette edges {sil}",
+                s.lights[0]
+            );
+        }
+    }
+    let s = hard::bunny_offset(1e4).unwrap();
+    let table = shadowvol_mesh_topology::EdgeTable::build(&s.objects[0].mesh).unwrap();
+    let scene = TopologyScene {
+        objects: vec![SceneObject {
+            name: "s".into(),
+            table: std::sync::Arc::new(table),
+            world_from_object: glam::Affine3A::IDENTITY,
+        }],
+    };
+    for mode in Accuracy::ALL {
+        let mut cpu = shadowvol_cpu::CpuBackend::new();
+        let (m, _) = extract_once(&mut cpu, &scene, &s.lights, mode).unwrap();
+        println!(
+            "bunny {mode}: open {}",
+            invariant::open_vertices_scene(&scene, &m, 0)
+        );
+    }
+}
