@@ -26,12 +26,15 @@ pub const AFTER_HELP: &str =
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The mesh: a Wavefront .obj file (v and f statements; polygons are fanned).
+    /// The mesh: a .obj file (v and f statements; polygons are fanned), a .gltf/.glb file (node
+    /// transforms applied in f32; all objects merged into one mesh) or a scene preset name
+    /// (`shadowvol scenes`).
     #[arg(value_name = "MESH")]
     mesh: String,
 
     /// A light as homogeneous X,Y,Z,W: W = 1 is a point light at (X,Y,Z), W = 0 a directional
     /// light pointing from the scene towards (X,Y,Z). Repeat for several lights (one call).
+    /// Without --light, the lights of the glTF file or preset are used.
     #[arg(
         long = "light",
         value_name = "X,Y,Z,W",

@@ -1,6 +1,7 @@
 //! Errors of the command line and their exit codes.
 
 use shadowvol_scenes::obj::LoadError;
+use shadowvol_scenes::SceneError;
 use shadowvol_silhouette::BackendError;
 
 /// Exit code for a usage error (bad arguments), as clap uses.
@@ -14,9 +15,13 @@ pub enum CliError {
     /// The arguments are wrong (unknown backend, no light, ...). Exit code 2.
     #[error("{0}")]
     Usage(String),
-    /// The input could not be loaded (unreadable file, malformed content). Exit code 1.
+    /// An OBJ file could not be loaded (unreadable file, malformed content). Exit code 1.
     #[error(transparent)]
     Load(#[from] LoadError),
+    /// A scene (glTF, OBJ or preset) could not be loaded: unreadable or malformed file,
+    /// unsupported extension, unknown preset. Exit code 1.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
     /// A backend failed to start or to run. Exit code 1.
     #[error(transparent)]
     Backend(#[from] BackendError),

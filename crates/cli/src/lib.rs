@@ -6,8 +6,8 @@
 //! * [`backends`]: **the** backend registry. Every tool that iterates over backends uses this list
 //!   and nothing else. Adding a backend means one new crate and one line in
 //!   [`registry`](registry::backends).
-//! * [`load_input`]: the one function that turns a command-line mesh argument into a [`Mesh`]
-//!   (OBJ now; glTF and scene presets are added there).
+//! * [`load_input`]: the one function that turns a command-line mesh argument (`.obj`, `.gltf`,
+//!   `.glb` or a preset name) into one world-space [`Mesh`] and the input's own lights.
 //! * [`report`]: the silhouette report that `shadowvol silhouette --format json` prints (the JSON
 //!   contract of DESIGN.md).
 //! * [`CliError`]: errors with their exit codes (2 for usage, 1 for everything else).

@@ -100,8 +100,9 @@ pub struct SilhouetteReport {
     pub timings: Timings,
 }
 
+/// Milliseconds, from whole nanoseconds (one rounding, so JSON shows e.g. `0.007955`).
 fn ms(d: Duration) -> f64 {
-    d.as_secs_f64() * 1e3
+    d.as_nanos() as f64 / 1e6
 }
 
 /// Builds the edge table of `mesh`, runs `backend` once for all `lights` in `mode`, checks the

@@ -437,7 +437,7 @@ fn unreadable_and_unknown_files_fail_cleanly() {
     );
     let (code, stderr) = failure(&["silhouette", "mesh.stl", "--light", "1,2,3,1"]);
     assert_eq!(code, 1);
-    assert!(stderr.contains("mesh.stl: unknown mesh format"), "{stderr}");
+    assert!(stderr.contains("unknown scene 'mesh.stl'"), "{stderr}");
 }
 
 #[test]
@@ -526,4 +526,42 @@ fn unavailable_backend_exits_1_with_its_reason() {
             "{stderr}"
         );
     }
+}
+
+#[test]
+fn presets_load_with_their_own_lights() {
+    // `hard-<case>` presets carry the corpus case's lights; without --light they are used.
+    let case = shadowvol_silhouette::corpus::case("tetrahedron").expect("corpus case");
+    let scene = case.scene().unwrap();
+    let v = json_of(&["silhouette", "hard-tetrahedron", "--format", "json"]);
+    let lights = v["lights"].as_array().unwrap();
+    assert_eq!(lights.len(), case.lights.len());
+    let mut cpu = shadowvol_cpu::CpuBackend::new();
+    let (reference, _) = shadowvol_silhouette::extract_once(
+        &mut cpu,
+        &scene,
+        &case.lights,
+        shadowvol_silhouette::Accuracy::Exact,
+    )
+    .unwrap();
+    let table = &scene.objects[0].table;
+    for (l, got) in lights.iter().enumerate() {
+        let want: Vec<(u64, u64, i64)> = reference
+            .values(l)
+            .iter()
+            .enumerate()
+            .filter(|(_, &m)| m != 0)
+            .map(|(e, &m)| {
+                let (a, b) = table.edge_names(e);
+                (u64::from(a), u64::from(b), i64::from(m))
+            })
+            .collect();
+        assert_eq!(edges_of(got), want, "light {l}");
+    }
+    let (code, stderr) = failure(&["silhouette", "no-such-preset", "--light", "1,2,3,1"]);
+    assert_eq!(code, 1);
+    assert!(
+        stderr.contains("unknown scene 'no-such-preset'"),
+        "{stderr}"
+    );
 }
