@@ -19,6 +19,7 @@ layout(push_constant) uniform Push {
     uint light_count;
     uint uncertain_capacity;
     uint emit;
+    uint pass;
 } pc;
 
 void main() {

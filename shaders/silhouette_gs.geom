@@ -12,6 +12,10 @@
 // (or the f32 filter when compiled with SHADOWVOL_NO_F64 for devices without shaderFloat64);
 // pairs it cannot certify count 0 here and are appended to the uncertain buffer for the host.
 //
+// With pass = PASS_CAPS the point is a triangle instead (z-fail): the shader computes the
+// triangle's sign in the mode (canonical order) and emits its front cap (the triangle) and, for
+// point lights, its back cap at infinity, oriented to close the prisms the side quads bound.
+//
 // Regenerate the SPIR-V with `cargo xtask shaders` (two outputs: silhouette_gs.geom.spv with f64,
 // silhouette_gs.f32.geom.spv compiled with -DSHADOWVOL_NO_F64).
 
@@ -52,13 +56,22 @@ layout(std430, set = 0, binding = 7) buffer Uncertain {
     uvec4 uncertain[]; // (edge, global OV index, light, 0)
 };
 
+layout(std430, set = 0, binding = 8) readonly buffer VertexObject { uint vertex_obj[]; };
+layout(std430, set = 0, binding = 9) readonly buffer TriangleCorners { uint corners[]; };
+// Exact triangle signs for one light (host-computed; exact-mode caps only).
+layout(std430, set = 0, binding = 10) readonly buffer TriangleSigns { int tri_sign[]; };
+
 layout(push_constant) uniform Push {
     uint mode;
-    uint edge_count;
+    uint edge_count; // primitives of this draw: edges (sides pass) or triangles (caps pass)
     uint light_count;
     uint uncertain_capacity;
     uint emit;
+    uint pass;
 } pc;
+
+const uint PASS_SIDES = 0u;
+const uint PASS_CAPS = 1u;
 
 const uint MODE_ORIGINAL = 0u;
 const uint MODE_ROBUST = 1u;
@@ -258,7 +271,70 @@ void emit_quads(uint obj, uint a, uint b, vec4 l, int m) {
     }
 }
 
+// z-fail caps of triangle t (global index) for light li.
+void emit_caps(uint t, uint li) {
+    uint g0 = corners[3u * t];
+    uint g1 = corners[3u * t + 1u];
+    uint g2 = corners[3u * t + 2u];
+    uint obj = vertex_obj[g0];
+    vec4 l = uintBitsToFloat(light_bits[obj * pc.light_count + li]);
+    // Canonical order i0 < i1 < i2.
+    uint i0 = min(g0, min(g1, g2));
+    uint i2 = max(g0, max(g1, g2));
+    uint i1 = g0 + g1 + g2 - i0 - i2;
+    vec3 p0 = position(i0);
+    vec3 p1 = position(i1);
+    vec3 p2 = position(i2);
+    int s;
+    if (pc.mode == MODE_EXACT || pc.mode == MODE_PRECOMPUTED) {
+        s = tri_sign[t];
+    } else {
+        // Original has no triangle sign of its own: its caps use ordered's.
+        s = sign_f32(p0, p1, l, p2);
+        if (pc.mode == MODE_ROBUST) {
+            int s1 = sign_f32(p1, p2, l, p0);
+            int s2 = sign_f32(p2, p0, l, p1);
+            if (s != s1 || s1 != s2) {
+                s = 0;
+            }
+        }
+    }
+    if (s == 0) {
+        return;
+    }
+    mat4 clip = xf[obj].clip_from_anchor;
+    vec3 c = xf[obj].anchor.xyz;
+    precise vec3 r0 = p0 - c;
+    precise vec3 r1 = p1 - c;
+    precise vec3 r2 = p2 - c;
+    precise vec4 c0 = clip * vec4(r0, 1.0);
+    precise vec4 c1 = clip * vec4(r1, 1.0);
+    precise vec4 c2 = clip * vec4(r2, 1.0);
+    // The sides of a triangle with sign s > 0 run i0 -> i1 -> i2 along it and back at infinity;
+    // the caps run the other way: front (i0, i2, i1), back (i0∞, i1∞, i2∞). Reversed for s < 0.
+    gl_Position = c0; EmitVertex();
+    gl_Position = s > 0 ? c2 : c1; EmitVertex();
+    gl_Position = s > 0 ? c1 : c2; EmitVertex();
+    EndPrimitive();
+    if (l.w != 0.0) {
+        precise vec3 lr = l.xyz - c * l.w;
+        precise vec4 j0 = clip * vec4(r0 * l.w - lr, 0.0);
+        precise vec4 j1 = clip * vec4(r1 * l.w - lr, 0.0);
+        precise vec4 j2 = clip * vec4(r2 * l.w - lr, 0.0);
+        gl_Position = j0; EmitVertex();
+        gl_Position = s > 0 ? j1 : j2; EmitVertex();
+        gl_Position = s > 0 ? j2 : j1; EmitVertex();
+        EndPrimitive();
+    }
+}
+
 void main() {
+    if (pc.pass == PASS_CAPS) {
+        if (v_edge[0] < pc.edge_count && v_light[0] < pc.light_count) {
+            emit_caps(v_edge[0], v_light[0]);
+        }
+        return;
+    }
     uint e = v_edge[0];
     uint li = v_light[0];
     if (e >= pc.edge_count || li >= pc.light_count) {

@@ -33,6 +33,8 @@ pub(crate) struct Prepared {
     uncertain: Buffer,
     vertex_object: Buffer,
     corners: Buffer,
+    /// Exact triangle signs for one light (z-fail caps in exact mode).
+    pub tri_sign: Buffer,
     pub uncertain_capacity: u32,
     pool: vk::DescriptorPool,
     pub set: vk::DescriptorSet,
@@ -51,6 +53,7 @@ impl Prepared {
             &self.uncertain,
             &self.vertex_object,
             &self.corners,
+            &self.tri_sign,
         ]
     }
 
@@ -99,6 +102,7 @@ impl Prepared {
             self.uncertain,
             self.vertex_object,
             self.corners,
+            self.tri_sign,
         ] {
             b.destroy(ctx);
         }
@@ -407,6 +411,7 @@ impl VulkanBackend {
                 light_count: lights.len() as u32,
                 uncertain_capacity: p.uncertain_capacity,
                 emit: 0,
+                pass: 0,
             };
             self.ctx.submit_and_wait(|_, cmd| {
                 self.record_extract(p, cmd, &push, lights.len() as u32)
@@ -515,6 +520,7 @@ impl SilhouetteBackend for VulkanBackend {
         )?;
         let vertex_object = Buffer::with_data(ctx, &ds.vertex_object)?;
         let corners = Buffer::with_data(ctx, &ds.corners)?;
+        let tri_sign = Buffer::new(ctx, 4 * (ds.corners.len() / 3) as u64, storage)?;
         let sizes = [vk::DescriptorPoolSize {
             ty: vk::DescriptorType::STORAGE_BUFFER,
             descriptor_count: BINDINGS,
@@ -552,6 +558,7 @@ impl SilhouetteBackend for VulkanBackend {
             uncertain,
             vertex_object,
             corners,
+            tri_sign,
             uncertain_capacity: INITIAL_UNCERTAIN,
             pool,
             set,

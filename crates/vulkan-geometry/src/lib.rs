@@ -40,7 +40,7 @@ pub use backend::VulkanBackend;
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
 pub use context::{Options, VALIDATION_ENV};
-pub use render::{Camera, RenderStats, ShadowMask};
+pub use render::{Camera, RenderStats, ShadowMask, StencilTechnique};
 
 use shadowvol_silhouette::{BackendError, SilhouetteBackend};
 

@@ -13,9 +13,9 @@ pub(crate) const SILHOUETTE_GS_F32: &[u8] =
     include_bytes!("../../../shaders/silhouette_gs.f32.geom.spv");
 
 /// Number of storage-buffer bindings in set 0 (see the shaders).
-pub(crate) const BINDINGS: u32 = 10;
+pub(crate) const BINDINGS: u32 = 11;
 
-/// The push constants shared by every stage (20 bytes).
+/// The push constants shared by every stage (24 bytes).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct Push {
@@ -24,6 +24,8 @@ pub(crate) struct Push {
     pub light_count: u32,
     pub uncertain_capacity: u32,
     pub emit: u32,
+    /// 0: side quads of edges; 1: caps of triangles (z-fail).
+    pub pass: u32,
 }
 
 pub(crate) struct Pipelines {
@@ -35,7 +37,12 @@ pub(crate) struct Pipelines {
     pub extract: vk::Pipeline,
     pub render_pass: vk::RenderPass,
     pub depth: vk::Pipeline,
+    /// Sides, z-pass stencil ops.
     pub stencil: vk::Pipeline,
+    /// Sides, z-fail stencil ops.
+    pub stencil_zfail: vk::Pipeline,
+    /// Caps, z-fail stencil ops, depth-biased away from the camera.
+    pub caps_zfail: vk::Pipeline,
     pub depth_format: vk::Format,
 }
 
@@ -89,6 +96,8 @@ impl Pipelines {
             render_pass: vk::RenderPass::null(),
             depth: vk::Pipeline::null(),
             stencil: vk::Pipeline::null(),
+            stencil_zfail: vk::Pipeline::null(),
+            caps_zfail: vk::Pipeline::null(),
             depth_format: vk::Format::UNDEFINED,
         };
         match p.build(ctx) {
@@ -253,6 +262,12 @@ impl Pipelines {
             .cull_mode(vk::CullModeFlags::NONE)
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .line_width(1.0);
+        // Front caps lie on their own triangle: bias them away so they always fail the depth test
+        // there (they can only be at or behind the visible surface).
+        let raster_caps = raster
+            .depth_bias_enable(true)
+            .depth_bias_constant_factor(16.0)
+            .depth_bias_slope_factor(2.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
         let blend = vk::PipelineColorBlendStateCreateInfo::default();
@@ -260,11 +275,11 @@ impl Pipelines {
             .depth_test_enable(true)
             .depth_write_enable(true)
             .depth_compare_op(vk::CompareOp::LESS);
-        let stencil_op = |pass| {
+        let stencil_op = |pass, depth_fail| {
             vk::StencilOpState::default()
                 .fail_op(vk::StencilOp::KEEP)
                 .pass_op(pass)
-                .depth_fail_op(vk::StencilOp::KEEP)
+                .depth_fail_op(depth_fail)
                 .compare_op(vk::CompareOp::ALWAYS)
                 .compare_mask(0xff)
                 .write_mask(0xff)
@@ -276,8 +291,28 @@ impl Pipelines {
             .depth_write_enable(false)
             .depth_compare_op(vk::CompareOp::LESS)
             .stencil_test_enable(true)
-            .front(stencil_op(vk::StencilOp::INCREMENT_AND_WRAP))
-            .back(stencil_op(vk::StencilOp::DECREMENT_AND_WRAP));
+            .front(stencil_op(
+                vk::StencilOp::INCREMENT_AND_WRAP,
+                vk::StencilOp::KEEP,
+            ))
+            .back(stencil_op(
+                vk::StencilOp::DECREMENT_AND_WRAP,
+                vk::StencilOp::KEEP,
+            ));
+        // z-fail (Carmack's reverse): count the faces behind the visible surface.
+        let zfail_state = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(false)
+            .depth_compare_op(vk::CompareOp::LESS)
+            .stencil_test_enable(true)
+            .front(stencil_op(
+                vk::StencilOp::KEEP,
+                vk::StencilOp::DECREMENT_AND_WRAP,
+            ))
+            .back(stencil_op(
+                vk::StencilOp::KEEP,
+                vk::StencilOp::INCREMENT_AND_WRAP,
+            ));
         let infos = [
             vk::GraphicsPipelineCreateInfo::default()
                 .stages(&gs_stages)
@@ -317,6 +352,32 @@ impl Pipelines {
                 .layout(self.layout)
                 .render_pass(self.render_pass)
                 .subpass(0),
+            vk::GraphicsPipelineCreateInfo::default()
+                .stages(&gs_stages)
+                .vertex_input_state(&vertex_input)
+                .input_assembly_state(&points)
+                .viewport_state(&viewport_state)
+                .rasterization_state(&raster)
+                .multisample_state(&multisample)
+                .depth_stencil_state(&zfail_state)
+                .color_blend_state(&blend)
+                .dynamic_state(&dynamic)
+                .layout(self.layout)
+                .render_pass(self.render_pass)
+                .subpass(0),
+            vk::GraphicsPipelineCreateInfo::default()
+                .stages(&gs_stages)
+                .vertex_input_state(&vertex_input)
+                .input_assembly_state(&points)
+                .viewport_state(&viewport_state)
+                .rasterization_state(&raster_caps)
+                .multisample_state(&multisample)
+                .depth_stencil_state(&zfail_state)
+                .color_blend_state(&blend)
+                .dynamic_state(&dynamic)
+                .layout(self.layout)
+                .render_pass(self.render_pass)
+                .subpass(0),
         ];
         // SAFETY: every pointer in `infos` refers to locals that outlive the call.
         let created =
@@ -326,6 +387,8 @@ impl Pipelines {
                 self.extract = p[0];
                 self.depth = p[1];
                 self.stencil = p[2];
+                self.stencil_zfail = p[3];
+                self.caps_zfail = p[4];
                 Ok(())
             }
             Err((p, e)) => {
@@ -349,7 +412,13 @@ impl Pipelines {
         let d = &ctx.device;
         // SAFETY: the device is idle; null handles are ignored by Vulkan.
         unsafe {
-            for p in [self.extract, self.depth, self.stencil] {
+            for p in [
+                self.extract,
+                self.depth,
+                self.stencil,
+                self.stencil_zfail,
+                self.caps_zfail,
+            ] {
                 d.destroy_pipeline(p, None);
             }
             d.destroy_framebuffer(self.extract_fb, None);
@@ -364,6 +433,8 @@ impl Pipelines {
         self.extract = vk::Pipeline::null();
         self.depth = vk::Pipeline::null();
         self.stencil = vk::Pipeline::null();
+        self.stencil_zfail = vk::Pipeline::null();
+        self.caps_zfail = vk::Pipeline::null();
         self.extract_fb = vk::Framebuffer::null();
         self.extract_pass = vk::RenderPass::null();
         self.render_pass = vk::RenderPass::null();

@@ -1,12 +1,19 @@
 //! The render path: depth pre-pass, then the geometry shader's stencil pass, read back as a
 //! shadow mask.
 //!
-//! # Technique: z-pass
-//! The stencil pass counts, per pixel, the shadow-volume sides in front of the visible surface:
-//! `+1` for front-facing and `-1` for back-facing sides (two-sided stencil, wrapping arithmetic),
-//! with the depth test `LESS` against the pre-pass depth and no depth writes. No caps are drawn.
-//! z-pass is correct when the camera (its near-plane rectangle) is outside every shadow volume;
-//! the caller must ensure that (the renderer crate's planner decides between z-pass and z-fail).
+//! # Techniques ([`StencilTechnique`])
+//! **z-pass** (the default): the stencil pass counts, per pixel, the shadow-volume sides in front
+//! of the visible surface: `+1` for front-facing and `-1` for back-facing sides (two-sided
+//! stencil, wrapping arithmetic), with the depth test `LESS` against the pre-pass depth and no
+//! depth writes. No caps are drawn. z-pass is correct when the near-clip volume (near rectangle +
+//! light) meets no caster; the caller must ensure that (the renderer crate's planner decides).
+//!
+//! **z-fail**: the faces behind the visible surface are counted (`-1` front, `+1` back on depth
+//! fail), and a second geometry-shader draw, one point per triangle, emits the caps: the triangle
+//! itself (front cap, depth-biased away from the camera so it always fails on its own surface)
+//! and, for point lights, the triangle projected to infinity (back cap). Each cap is oriented by
+//! the triangle's sign in the mode (robust: 0 when its three evaluations disagree, exactly like
+//! its sides; original uses ordered's sign), so sides and caps close every prism.
 //! Sides are extruded to infinity (`w = 0`) and drawn with depth clamp where the device has it,
 //! and the projection of [`Camera::look_at`] has an infinite far plane, so no side is clipped.
 //!
@@ -19,7 +26,7 @@ use crate::pipelines::Push;
 use crate::twin::mode_code_of;
 use ash::vk;
 use glam::{DMat4, DVec3, DVec4, Vec3};
-use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_robust_math::{orient_exact, Accuracy, Light};
 use shadowvol_silhouette::{object_lights, BackendError, ExtractStats, Multiplicities, PreparedId};
 use std::time::{Duration, Instant};
 
@@ -233,21 +240,29 @@ impl Target {
     }
 }
 
+/// How the stencil pass counts volume faces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum StencilTechnique {
+    /// Count the sides in front of the visible surface; no caps. Valid when the near-clip volume
+    /// (near rectangle + light) meets no caster.
+    #[default]
+    ZPass,
+    /// Count the sides and caps behind the visible surface (Carmack's reverse): the triangles'
+    /// front caps (depth-biased away so they fail on their own surface) and, for point lights,
+    /// back caps at infinity. Valid wherever the camera is.
+    ZFail,
+}
+
 /// Largest mask side accepted (pixels).
 pub const MAX_MASK_SIDE: u32 = 8192;
 
 impl VulkanBackend {
-    /// Renders the shadow mask of `light` over the prepared scene `id` as seen by `camera`.
-    ///
-    /// Depth pre-pass of every triangle, then one point per edge through the geometry shader,
-    /// which computes `m` in `mode` and emits `|m|` side quads into the stencil buffer (z-pass; see
-    /// the module documentation). In [`Accuracy::Exact`] the multiplicities are first extracted
-    /// and host-resolved (as in `extract`), and the shader emits from the resolved buffer, so the
-    /// volumes follow the exact result. Pixels are shadowed where the stencil is non-zero.
+    /// Renders the shadow mask of `light` over the prepared scene `id` as seen by `camera`, with
+    /// the z-pass technique: [`VulkanBackend::render_shadow_mask_with`] with
+    /// [`StencilTechnique::ZPass`].
     ///
     /// # Errors
-    /// [`BackendError::InvalidInput`] for a zero or oversized image,
-    /// [`BackendError::UnknownScene`], [`BackendError::Device`] on driver failures.
+    /// As [`VulkanBackend::render_shadow_mask_with`].
     pub fn render_shadow_mask(
         &mut self,
         id: PreparedId,
@@ -256,6 +271,39 @@ impl VulkanBackend {
         width: u32,
         height: u32,
         mode: Accuracy,
+    ) -> Result<ShadowMask, BackendError> {
+        self.render_shadow_mask_with(
+            id,
+            light,
+            camera,
+            (width, height),
+            mode,
+            StencilTechnique::ZPass,
+        )
+    }
+
+    /// Renders the shadow mask of `light` over the prepared scene `id` as seen by `camera`, in a
+    /// `size = (width, height)` image.
+    ///
+    /// Depth pre-pass of every triangle, then one point per edge through the geometry shader,
+    /// which computes `m` in `mode` and emits `|m|` side quads into the stencil buffer; with
+    /// [`StencilTechnique::ZFail`] a second geometry-shader draw over the triangles adds the caps
+    /// (see the module documentation). In [`Accuracy::Exact`] the multiplicities are first
+    /// extracted and host-resolved (as in `extract`) and the shader emits from the resolved
+    /// buffer; exact cap signs are computed on the host with `orient_exact`. Pixels are shadowed
+    /// where the stencil is non-zero.
+    ///
+    /// # Errors
+    /// [`BackendError::InvalidInput`] for a zero or oversized image,
+    /// [`BackendError::UnknownScene`], [`BackendError::Device`] on driver failures.
+    pub fn render_shadow_mask_with(
+        &mut self,
+        id: PreparedId,
+        light: Light,
+        camera: &Camera,
+        (width, height): (u32, u32),
+        mode: Accuracy,
+        technique: StencilTechnique,
     ) -> Result<ShadowMask, BackendError> {
         if width == 0 || height == 0 || width > MAX_MASK_SIDE || height > MAX_MASK_SIDE {
             return Err(BackendError::InvalidInput(format!(
@@ -266,6 +314,25 @@ impl VulkanBackend {
         let mode_code = if mode == Accuracy::Exact {
             let mut m = Multiplicities::default();
             stats.extract = Some(self.extract_impl(id, &[light], mode, &mut m, true)?);
+            if technique == StencilTechnique::ZFail {
+                let p = self.scene(id)?;
+                let l = object_lights(&p.scene, &[light]);
+                let ds = &p.ds;
+                let signs: Vec<i32> = ds
+                    .corners
+                    .chunks_exact(3)
+                    .map(|t| {
+                        let mut c = [t[0], t[1], t[2]];
+                        c.sort_unstable();
+                        let obj = ds.vertex_object[c[0] as usize] as usize;
+                        let pos = |v: u32| ds.positions[v as usize];
+                        i32::from(orient_exact(pos(c[0]), pos(c[1]), l[obj][0], pos(c[2])))
+                    })
+                    .collect();
+                if !signs.is_empty() {
+                    p.tri_sign.write(0, bytemuck::cast_slice(&signs));
+                }
+            }
             PRECOMPUTED
         } else {
             let obj_lights = object_lights(&self.scene(id)?.scene, &[light]);
@@ -303,7 +370,7 @@ impl VulkanBackend {
             (&stencil_buf, &depth_buf),
             camera,
             (width, height),
-            mode_code,
+            (mode_code, technique),
         );
         stats.render = t.elapsed();
         let t = Instant::now();
@@ -355,7 +422,7 @@ impl VulkanBackend {
         (stencil_buf, depth_buf): (&Buffer, &Buffer),
         camera: &Camera,
         (width, height): (u32, u32),
-        mode_code: u32,
+        (mode_code, technique): (u32, StencilTechnique),
     ) -> Result<(), BackendError> {
         let p = self.scene(id)?;
         // Per object: clip_from_anchor = view_proj * world_from_object * translate(anchor), in f64.
@@ -376,7 +443,14 @@ impl VulkanBackend {
             light_count: 1,
             uncertain_capacity: p.uncertain_capacity,
             emit: 1,
+            pass: 0,
         };
+        let caps_push = Push {
+            edge_count: (p.ds.corners.len() / 3) as u32,
+            pass: 1,
+            ..push
+        };
+        let triangles = caps_push.edge_count;
         // Reset the counters (uncertain appends do not happen here; clamped emissions do).
         p.uncertain_reset();
         let corners = p.ds.corners.len() as u32;
@@ -437,9 +511,26 @@ impl VulkanBackend {
                     d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipes.depth);
                     d.cmd_draw(cmd, corners, 1, 0, 0);
                 }
+                let (sides, caps) = match technique {
+                    StencilTechnique::ZPass => (self.pipes.stencil, None),
+                    StencilTechnique::ZFail => {
+                        (self.pipes.stencil_zfail, Some(self.pipes.caps_zfail))
+                    }
+                };
                 if edges > 0 {
-                    d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipes.stencil);
+                    d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, sides);
                     d.cmd_draw(cmd, edges, 1, 0, 0);
+                }
+                if let Some(caps) = caps.filter(|_| triangles > 0) {
+                    d.cmd_push_constants(
+                        cmd,
+                        self.pipes.layout,
+                        stages,
+                        0,
+                        bytemuck::bytes_of(&caps_push),
+                    );
+                    d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, caps);
+                    d.cmd_draw(cmd, triangles, 1, 0, 0);
                 }
                 d.cmd_end_render_pass(cmd);
                 let region = |aspect, buffer_offset| vk::BufferImageCopy {

@@ -8,7 +8,7 @@ mod common;
 use glam::Vec3;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy, SilhouetteBackend};
-use shadowvol_vulkan_geometry::{Camera, Options};
+use shadowvol_vulkan_geometry::{Camera, Options, StencilTechnique};
 
 #[test]
 fn corpus_and_render_under_validation_layers() {
@@ -37,7 +37,7 @@ fn corpus_and_render_under_validation_layers() {
             }
         }
     }
-    // One render per mode (depth pre-pass, GS stencil pass, image copies).
+    // One render per mode and technique (depth pre-pass, GS stencil pass, caps, image copies).
     let case = &cases[0];
     let scene = case.scene().unwrap();
     let id = vk.prepare(&scene).unwrap();
@@ -49,11 +49,13 @@ fn corpus_and_render_under_validation_layers() {
         1.0,
         0.01,
     );
-    for mode in Accuracy::ALL {
-        let mask = vk
-            .render_shadow_mask(id, case.lights[0], &cam, 32, 32, mode)
-            .unwrap();
-        assert!(mask.covered.iter().any(|&c| c), "the object is in view");
+    for technique in [StencilTechnique::ZPass, StencilTechnique::ZFail] {
+        for mode in Accuracy::ALL {
+            let mask = vk
+                .render_shadow_mask_with(id, case.lights[0], &cam, (32, 32), mode, technique)
+                .unwrap();
+            assert!(mask.covered.iter().any(|&c| c), "the object is in view");
+        }
     }
     vk.release(id);
     let messages = vk.validation_messages();
