@@ -82,7 +82,7 @@ pub struct Gpu {
     pub adapter: String,
     /// Depth-stencil format used.
     pub depth_format: wgpu::TextureFormat,
-    /// True when volumes are drawn with `unclipped_depth` (depth clamp).
+    /// True when z-fail volumes are drawn with `unclipped_depth` (depth clamp).
     pub depth_clamp: bool,
     globals_bgl: wgpu::BindGroupLayout,
     light_bgl: wgpu::BindGroupLayout,
@@ -298,6 +298,7 @@ impl Gpu {
         });
         use wgpu::StencilOperation::{DecrementWrap as Dec, IncrementWrap as Inc, Keep};
         let volume_pipeline = |label: &str,
+                               unclipped_depth: bool,
                                front_face: wgpu::FrontFace,
                                front: wgpu::StencilFaceState,
                                back: wgpu::StencilFaceState| {
@@ -313,7 +314,7 @@ impl Gpu {
                 primitive: wgpu::PrimitiveState {
                     front_face,
                     cull_mode: None,
-                    unclipped_depth: depth_clamp,
+                    unclipped_depth,
                     ..Default::default()
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {
@@ -334,22 +335,29 @@ impl Gpu {
                 cache: None,
             })
         };
-        // Z-pass: count the volume faces in front of the surface (front +1, back -1).
+        // Z-pass: count the volume faces in front of the surface (front +1, back -1). Near
+        // clipping stays on: the count then starts at the near plane, which is exactly what the
+        // near-clip volume test proves to be outside the volume (with depth clamp the count
+        // would start at the eye instead).
         let zpass = volume_pipeline(
             "zpass",
+            false,
             wgpu::FrontFace::Ccw,
             stencil_face(Inc, Keep),
             stencil_face(Dec, Keep),
         );
-        // Z-fail: count the faces behind the surface (back +1, front -1).
+        // Z-fail: count the faces behind the surface (back +1, front -1); depth clamp where the
+        // device has it, so no part of a volume is lost to clipping.
         let zfail_ccw = volume_pipeline(
             "zfail-ccw",
+            depth_clamp,
             wgpu::FrontFace::Ccw,
             stencil_face(Keep, Dec),
             stencil_face(Keep, Inc),
         );
         let zfail_cw = volume_pipeline(
             "zfail-cw",
+            depth_clamp,
             wgpu::FrontFace::Cw,
             stencil_face(Keep, Dec),
             stencil_face(Keep, Inc),
