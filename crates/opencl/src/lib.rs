@@ -509,6 +509,8 @@ impl SilhouetteBackend for OpenClBackend {
                 message: format!("{num_lights} lights × {edges} edges exceed 32-bit slot indices"),
             });
         }
+        // Per-frame host preparation (object-space lights) counts as upload.
+        let prep_start = Instant::now();
         let obj_lights = object_lights(&p.scene, lights);
         let flat_l = flat_lights(&obj_lights);
         {
@@ -535,7 +537,10 @@ impl SilhouetteBackend for OpenClBackend {
                 p.unc_records = 1;
             }
         }
-        let mut stats = ExtractStats::default();
+        let mut stats = ExtractStats {
+            upload: prep_start.elapsed(),
+            ..ExtractStats::default()
+        };
         let mut counts = vec![0u32; num_lights + 1];
         loop {
             let (up, comp) = self.run_once(id, &flat_l, num_lights, mode)?;
