@@ -131,13 +131,14 @@ pub fn run(args: &[String]) -> Result<(), String> {
             &[],
         )
     });
+    let mut counts = TestCounts::default();
     step("test", &mut || {
         let mut a = vec!["test", "--workspace"];
         if !test_args.is_empty() {
             a.push("--");
             a.extend(test_args.iter().map(String::as_str));
         }
-        cargo_step(&root, &a, &[])
+        cargo_test_step(&root, &a, &mut counts)
     });
     step(
         "shaders",
@@ -175,7 +176,17 @@ pub fn run(args: &[String]) -> Result<(), String> {
         .iter()
         .filter(|s| matches!(s.outcome, Outcome::Skipped))
         .count();
-    println!("xtask: {passed} passed, {failed} failed, {skipped} skipped");
+    println!("xtask steps: {passed} passed, {failed} failed, {skipped} skipped");
+    if counts.binaries > 0 {
+        println!(
+            "({} test binaries; ignored tests are visible skips, listed above with their reason)",
+            counts.binaries
+        );
+        println!(
+            "tests: {} passed, {} failed, {} skipped",
+            counts.passed, counts.failed, counts.ignored
+        );
+    }
     if failed == 0 {
         Ok(())
     } else {
@@ -196,6 +207,65 @@ fn cargo_step(root: &Path, args: &[&str], env: &[(&str, &str)]) -> Outcome {
         Ok(s) if s.success() => Outcome::Passed,
         Ok(s) => Outcome::Failed(format!("`{line}` failed ({s})")),
         Err(e) => Outcome::Failed(format!("cannot run `{line}`: {e}")),
+    }
+}
+
+/// Totals of the `test result:` lines of every test binary.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+struct TestCounts {
+    binaries: u64,
+    passed: u64,
+    failed: u64,
+    ignored: u64,
+}
+
+impl TestCounts {
+    /// Adds one libtest summary line (`test result: ok. 3 passed; 0 failed; 1 ignored; ...`).
+    fn add_line(&mut self, line: &str) {
+        let Some(rest) = line.trim().strip_prefix("test result: ") else {
+            return;
+        };
+        self.binaries += 1;
+        for part in rest.split(';') {
+            let mut words = part.split_whitespace().rev();
+            let (Some(what), Some(n)) = (words.next(), words.next()) else {
+                continue;
+            };
+            let Ok(n) = n.parse::<u64>() else { continue };
+            match what {
+                "passed" => self.passed += n,
+                "failed" => self.failed += n,
+                "ignored" => self.ignored += n,
+                _ => {}
+            }
+        }
+    }
+}
+
+/// Runs `cargo test ...`, streaming its output and adding up the `test result:` lines.
+fn cargo_test_step(root: &Path, args: &[&str], counts: &mut TestCounts) -> Outcome {
+    use std::io::BufRead;
+    let line = format!("cargo {}", args.join(" "));
+    println!("$ {line}");
+    let child = Command::new(crate::cargo())
+        .current_dir(root)
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .spawn();
+    let mut child = match child {
+        Ok(c) => c,
+        Err(e) => return Outcome::Failed(format!("cannot run `{line}`: {e}")),
+    };
+    if let Some(out) = child.stdout.take() {
+        for l in std::io::BufReader::new(out).lines().map_while(Result::ok) {
+            println!("{l}");
+            counts.add_line(&l);
+        }
+    }
+    match child.wait() {
+        Ok(s) if s.success() => Outcome::Passed,
+        Ok(s) => Outcome::Failed(format!("`{line}` failed ({s})")),
+        Err(e) => Outcome::Failed(format!("cannot wait for `{line}`: {e}")),
     }
 }
 
@@ -330,5 +400,29 @@ fn drivers(ci: bool) -> Outcome {
     } else {
         println!("  continuing: backends that need them will be skipped visibly");
         Outcome::Warned(msg)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::TestCounts;
+
+    #[test]
+    fn libtest_summaries_are_added_up() {
+        let mut c = TestCounts::default();
+        c.add_line("test result: ok. 74 passed; 0 failed; 288 ignored; 0 measured; 0 filtered out; finished in 0.01s");
+        c.add_line("running 3 tests");
+        c.add_line(
+            "test result: FAILED. 1 passed; 2 failed; 0 ignored; 0 measured; 0 filtered out",
+        );
+        assert_eq!(
+            c,
+            TestCounts {
+                binaries: 2,
+                passed: 75,
+                failed: 2,
+                ignored: 288
+            }
+        );
     }
 }
