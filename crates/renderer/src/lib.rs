@@ -13,7 +13,7 @@
 //!   the sign of `m`; caps use the same per-triangle sign as the accuracy mode
 //!   ([`shadowvol_robust_math::triangle_sign`] on the canonical triangle), so caps and sides
 //!   always meet in the consistent modes.
-//! * [`reference`]: a CPU ray caster with a BVH (rayon-parallel) that decides, from each
+//! * [`reference`](mod@reference): a CPU ray caster with a BVH (rayon-parallel) that decides, from each
 //!   pixel's surface point, whether each light is visible, and the artifact metric.
 //!
 //! ```no_run
