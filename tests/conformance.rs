@@ -221,6 +221,35 @@ fn bunny_case() -> Case {
     }
 }
 
+/// Scenes with no edges at all: no triangles, and only triangles that welding makes degenerate.
+/// Backends must return an empty, well-shaped result (zero-sized buffers are a classic GPU
+/// failure).
+fn empty_cases() -> Vec<Case> {
+    use glam::Vec3;
+    use shadowvol_mesh_topology::{EdgeTable, Mesh};
+    let lights = vec![
+        Light::new(1.0, 2.0, 3.0, 1.0).expect("finite light"),
+        Light::new(0.0, 1.0, 0.0, 0.0).expect("finite light"),
+    ];
+    let no_triangles = Mesh::new(vec![Vec3::ZERO, Vec3::X], vec![]).expect("valid mesh");
+    let degenerate_only = Mesh::new(
+        vec![Vec3::ZERO, Vec3::X, Vec3::X, Vec3::Y],
+        vec![[0, 1, 2], [3, 3, 0]],
+    )
+    .expect("valid mesh");
+    [
+        ("no-triangles", no_triangles),
+        ("degenerate-only", degenerate_only),
+    ]
+    .into_iter()
+    .map(|(name, mesh)| Case {
+        name,
+        scene: TopologyScene::single(EdgeTable::build(&mesh).expect("valid mesh")),
+        lights: lights.clone(),
+    })
+    .collect()
+}
+
 fn main() {
     let args = Arguments::from_args();
     let ci = is_ci();
@@ -235,6 +264,7 @@ fn main() {
         })
         .collect();
     cases.push(bunny_case());
+    cases.extend(empty_cases());
     let cases = Arc::new(cases);
     let notes: Notes = Arc::default();
 
