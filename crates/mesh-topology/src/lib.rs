@@ -31,8 +31,6 @@
 //! ```
 
 use glam::Vec3;
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 
 /// Marker for "no triangle" in [`Connectivity::neighbors`].
 pub const NO_NEIGHBOR: u32 = u32::MAX;
@@ -208,59 +206,55 @@ fn weld_key(p: Vec3) -> [u32; 3] {
     ]
 }
 
-/// A fast non-cryptographic hasher for weld keys (three `u32` bit patterns): multiply-xorshift
-/// mixing per word. Weld keys are not attacker-controlled in a way that matters here, and the
-/// default `SipHash` dominated edge-table construction on 10^6-triangle meshes.
-#[derive(Default)]
-struct WeldHasher(u64);
-
-impl Hasher for WeldHasher {
-    #[inline]
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(4) {
-            let mut w = [0u8; 4];
-            w[..chunk.len()].copy_from_slice(chunk);
-            self.write_u32(u32::from_le_bytes(w));
-        }
-    }
-
-    #[inline]
-    fn write_u32(&mut self, i: u32) {
-        self.0 = (self.0.rotate_left(23) ^ u64::from(i)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    }
-
-    #[inline]
-    fn write_usize(&mut self, i: usize) {
-        self.write_u32(i as u32);
-    }
-
-    #[inline]
-    fn finish(&self) -> u64 {
-        let x = self.0;
-        x ^ (x >> 29)
-    }
+/// Hash of a weld key: the top `bits` bits of a multiplicative mix of the three words.
+#[inline]
+fn weld_hash(k: [u32; 3], bits: u32) -> usize {
+    let lo = u64::from(k[0]) | (u64::from(k[1]) << 32);
+    let mut h = lo.wrapping_mul(0x9e37_79b9_7f4a_7c15)
+        ^ u64::from(k[2]).wrapping_mul(0xc2b2_ae3d_27d4_eb4f);
+    h ^= h >> 29;
+    h = h.wrapping_mul(0x1656_67b1_9e37_79f9);
+    (h >> (64 - bits)) as usize
 }
 
 /// Welds vertices whose positions are exactly equal (`-0.0 == +0.0`).
 ///
 /// Each group is named by its smallest input index, and compact ids are numbered in ascending
 /// order of names. The position of a group is the position of its named (first) vertex. Runs in
-/// expected linear time (hashing). Positions are expected to be finite (see [`Mesh::validate`]);
-/// NaN positions are never welded to anything because their bits are kept as they are.
+/// expected linear time (hashing with open addressing). Positions are expected to be finite (see [`Mesh::validate`]);
+/// NaN positions weld only with NaNs of the identical bit pattern (their bits are kept).
 #[must_use]
 pub fn weld(positions: &[Vec3]) -> Weld {
-    let mut map: HashMap<[u32; 3], u32, BuildHasherDefault<WeldHasher>> =
-        HashMap::with_capacity_and_hasher(positions.len(), BuildHasherDefault::default());
+    // Open addressing with linear probing in a table of at least twice the vertex count; a
+    // slot holds a compact id (4 bytes), the key is compared against that group's key. This is
+    // about half the memory traffic of a general hash map on 10^6-triangle meshes.
+    let bits = (positions.len().max(8) * 2)
+        .next_power_of_two()
+        .trailing_zeros();
+    let mask = (1usize << bits) - 1;
+    let mut slots = vec![u32::MAX; 1 << bits];
+    let mut keys: Vec<[u32; 3]> = Vec::new();
     let mut compact_of_input = Vec::with_capacity(positions.len());
     let mut names = Vec::new();
     let mut out_positions = Vec::new();
     for (i, &p) in positions.iter().enumerate() {
-        let next = names.len() as u32;
-        let id = *map.entry(weld_key(p)).or_insert(next);
-        if id == next {
-            names.push(i as u32);
-            out_positions.push(p);
-        }
+        let key = weld_key(p);
+        let mut h = weld_hash(key, bits);
+        let id = loop {
+            let s = slots[h];
+            if s == u32::MAX {
+                let id = names.len() as u32;
+                slots[h] = id;
+                keys.push(key);
+                names.push(i as u32);
+                out_positions.push(p);
+                break id;
+            }
+            if keys[s as usize] == key {
+                break s;
+            }
+            h = (h + 1) & mask;
+        };
         compact_of_input.push(id);
     }
     Weld {
