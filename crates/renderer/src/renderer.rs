@@ -246,12 +246,13 @@ impl Renderer {
         let near = scene.camera.near_corners(aspect);
         let frustum = plan::frustum_planes(scene.camera.eye.as_dvec3(), near);
         let mut entries = Vec::with_capacity(n_lights * scene.objects.len());
+        let bounds: Vec<(DVec3, DVec3)> = self.cache.iter().map(|c| bounds_f64(&c.world)).collect();
         for (li, light) in scene.lights.iter().enumerate() {
             let l = light.to_array();
             let ncv = plan::near_clip_volume(near, l);
             for (oi, obj) in scene.objects.iter().enumerate() {
                 let c = &self.cache[oi];
-                let (lo, hi) = bounds_f64(&c.world);
+                let (lo, hi) = bounds[oi];
                 let (technique, reason) = if !obj.casts_shadows {
                     (
                         Technique::Culled,
