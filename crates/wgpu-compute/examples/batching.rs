@@ -35,7 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let info = backend.info();
     println!("device: {}", info.device);
     println!("details: {:?}", info.details);
-    println!("scene,mode,objects,triangles,edges,lights,median_ms,p10_ms,p90_ms,upload_ms,compute_ms,readback_ms,host_ms,uncertain");
+    println!("scene,mode,objects,triangles,edges,lights,silhouette_edges,median_ms,p10_ms,p90_ms,upload_ms,compute_ms,readback_ms,host_ms,uncertain");
     for name in &names {
         let (preset, baked) = match name.strip_suffix("@baked") {
             Some(p) => (p, true),
@@ -68,11 +68,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             times.sort_by(f64::total_cmp);
             let n = frames as f64;
             println!(
-                "{name},{mode},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{}",
+                "{name},{mode},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{}",
                 topo.objects.len(),
                 topo.total_triangles(),
                 topo.total_edges(),
                 lights.len(),
+                (0..lights.len())
+                    .map(|l| out.silhouette(l).len())
+                    .sum::<usize>(),
                 percentile(&times, 0.5),
                 percentile(&times, 0.1),
                 percentile(&times, 0.9),
