@@ -8,7 +8,7 @@
 //! * Edges keep the table's order (global edge index = output slot) and are processed in blocks
 //!   of [`LANES`]. A block whose edges all have exactly two opposite vertices (the closed-manifold
 //!   case) takes the fast path, which needs no CSR offsets: `abo[e] = [a, b, o1, o2]` for the
-//!   per-edge `original` mode and `tri2[e] = [t1, t2]` (canonical-triangle index with the
+//!   per-edge `original` mode and `tri_a[e]`, `tri_b[e]` (canonical-triangle index with the
 //!   permutation parity in bit 31) for the per-triangle modes. Every other block takes the general
 //!   CSR path (`ov_offsets`, `ovs`, `ov_tri`).
 
@@ -50,7 +50,9 @@ pub(crate) struct Layout {
     /// See `ea`.
     pub eo2: Vec<u32>,
     /// Per edge: the two canonical triangles with parity bits (only meaningful in fast blocks).
-    pub tri2: Vec<[u32; 2]>,
+    pub tri_a: Vec<u32>,
+    /// Second triangle reference of each edge (see `tri_a`).
+    pub tri_b: Vec<u32>,
     /// Edge endpoints, for the general path.
     pub edges: Vec<[u32; 2]>,
     /// CSR offsets into `ovs` / `ov_tri`.
@@ -159,7 +161,7 @@ impl Layout {
         let mut block_fast = Vec::with_capacity(ne.div_ceil(LANES));
         let (mut ea, mut eb) = (vec![0u32; ne], vec![0u32; ne]);
         let (mut eo1, mut eo2) = (vec![0u32; ne], vec![0u32; ne]);
-        let mut tri2 = vec![[0u32; 2]; ne];
+        let (mut tri_a, mut tri_b) = (vec![0u32; ne], vec![0u32; ne]);
         for e in 0..ne {
             let (s, t) = (
                 table.ov_offsets[e] as usize,
@@ -169,7 +171,7 @@ impl Layout {
                 let [a, b] = table.edges[e];
                 (ea[e], eb[e]) = (a, b);
                 (eo1[e], eo2[e]) = (table.ovs[s], table.ovs[s + 1]);
-                tri2[e] = [ov_tri[s], ov_tri[s + 1]];
+                (tri_a[e], tri_b[e]) = (ov_tri[s], ov_tri[s + 1]);
             }
         }
         for blk in 0..ne.div_ceil(LANES) {
@@ -196,7 +198,8 @@ impl Layout {
             eb,
             eo1,
             eo2,
-            tri2,
+            tri_a,
+            tri_b,
             edges: table.edges.clone(),
             ov_offsets: table.ov_offsets.clone(),
             ovs: table.ovs.clone(),

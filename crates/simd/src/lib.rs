@@ -60,6 +60,9 @@ pub const LEVEL_ENV: &str = "SHADOWVOL_SIMD_LEVEL";
 /// threads, large enough that scheduling costs nothing.
 const BLOCKS_PER_ITEM: usize = 256;
 
+/// Bytes after the triangle signs (the AVX2 edge pass reads 4 bytes at each sign).
+const SIGN_PADDING: usize = 4;
+
 /// The instruction-set level the kernels run at.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum SimdLevel {
@@ -335,6 +338,31 @@ mod dispatch {
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn edge_sums(
+        level: SimdLevel,
+        lay: &Layout,
+        blocks: Range<usize>,
+        signs: &[i8],
+        bases: &[usize],
+        out: &mut [&mut [i32]],
+        sil: &mut [Vec<u32>],
+        edge_base: usize,
+    ) {
+        match level {
+            #[cfg(target_arch = "x86_64")]
+            SimdLevel::Avx2
+                if signs.len() < i32::MAX as usize
+                    && bases.iter().all(|&b| b + lay.tri_count + 3 <= signs.len()) =>
+            {
+                // SAFETY: AVX2 as in `tri_signs`; the padding and size conditions are checked
+                // by the guard above.
+                unsafe { kernel::edge_sums_avx2(lay, blocks, signs, bases, out, sil, edge_base) }
+            }
+            _ => kernel::edge_sums(lay, blocks, signs, bases, out, sil, edge_base),
+        }
+    }
+
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn edge_original_avx2(
@@ -427,8 +455,9 @@ fn run_extract(
         // Phase 1: one sign per (canonical triangle, light).
         let slots = p.total_tri_slots;
         signs.clear();
-        signs.resize(slots * nl, 0);
-        let parts = split_items(signs, slots, &p.tri_bounds());
+        // 4 bytes of padding: the AVX2 edge pass gathers 4 bytes at each sign.
+        signs.resize(slots * nl + SIGN_PADDING, 0);
+        let parts = split_items(&mut signs[..slots * nl], slots, &p.tri_bounds());
         uncertain = p
             .tri_items
             .par_iter()
@@ -468,15 +497,13 @@ fn run_extract(
                     o.edge_base,
                 );
             } else {
-                let per_light: Vec<&[i8]> = (0..nl)
-                    .map(|l| {
-                        &signs[l * slots + o.tri_base..l * slots + o.tri_base + o.layout.t0.len()]
-                    })
-                    .collect();
-                kernel::edge_sums(
+                let bases: Vec<usize> = (0..nl).map(|l| l * slots + o.tri_base).collect();
+                dispatch::edge_sums(
+                    level,
                     &o.layout,
                     it.blocks.clone(),
-                    &per_light,
+                    signs,
+                    &bases,
                     &mut dst,
                     &mut sil,
                     o.edge_base,
