@@ -22,9 +22,14 @@
 /// `9u` covers it (`8u (1 + 16u)` suffices), and `1e-15 > 9u`.
 pub const F64_FILTER_EPS: f64 = 1.0e-15;
 
-/// Relative error constant of [`orient_filter_f32`]: 9 roundings in `f32` give `gamma_9`
-/// (about `9 * 2^-24`); we use `32 * 2^-24 = 2^-19`, a safety factor above 3 that also absorbs FMA
-/// contraction and reassociation on GPUs (neither adds roundings along any path).
+/// Relative error constant of [`orient_filter_f32`]: with `w` in `{0, 1}` (`w * A` exact), every
+/// term passes through at most 8 roundings in `f32` (the three differences, the product, the
+/// 2x2 minor, the product with `O - A`, two sums), so the error is below `gamma_8 * P` (about
+/// `8 * 2^-24` times the permanent `P`), plus the roundings of `P`; we use `32 * 2^-24 = 2^-19`,
+/// a safety factor of about 4 that also absorbs FMA contraction and reassociation on GPUs
+/// (neither adds roundings along any path). Underflow cannot hurt: the range checks keep every
+/// non-zero product of two differences at or above 2^-80 and the permanent, when non-zero, at or
+/// above 2^-120, far above the absolute error (a few 2^-150) of a subnormal last product.
 pub const F32_FILTER_EPS: f32 = 1.0 / 524_288.0;
 
 /// Smallest magnitude (other than zero) the `f32` filter accepts for differences; below it,

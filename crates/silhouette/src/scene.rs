@@ -10,7 +10,9 @@ pub struct SceneObject {
     pub name: String,
     /// Edge table in object space. Shared between instances of the same mesh.
     pub table: Arc<EdgeTable>,
-    /// World-from-object transform. Must be invertible.
+    /// World-from-object transform (object-space points to world space). Must be invertible:
+    /// [`object_lights`] brings the lights into object space with its inverse, and a singular
+    /// transform gives non-finite object-space lights, so meaningless multiplicities.
     pub world_from_object: Affine3A,
 }
 
