@@ -13,6 +13,7 @@ use std::process::ExitCode;
 mod cmd_accuracy;
 mod cmd_backends;
 mod cmd_bench;
+mod cmd_scenes;
 mod cmd_silhouette;
 
 /// Robust silhouette shadow volumes: silhouette edges with multiplicities on five
@@ -43,6 +44,12 @@ enum Command {
     /// floor (median, p10, p90).
     #[command(long_about = cmd_bench::LONG_ABOUT)]
     Bench(cmd_bench::Args),
+    /// List the scene presets with their objects, triangles and lights.
+    #[command(long_about = cmd_scenes::LONG_ABOUT)]
+    Scenes(cmd_scenes::Args),
+    /// Work with one scene: `scene export NAME OUT.glb` writes it as binary glTF.
+    #[command(long_about = cmd_scenes::SCENE_LONG_ABOUT)]
+    Scene(cmd_scenes::SceneArgs),
 }
 
 fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
@@ -51,6 +58,8 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Silhouette(args) => cmd_silhouette::run(&args, out),
         Command::Accuracy(args) => cmd_accuracy::run(&args, out),
         Command::Bench(args) => cmd_bench::run(&args, out),
+        Command::Scenes(args) => cmd_scenes::run(&args, out),
+        Command::Scene(args) => cmd_scenes::run_scene(&args, out),
     }
 }
 
