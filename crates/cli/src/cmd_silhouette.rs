@@ -111,11 +111,16 @@ fn write_text(
     )?;
     writeln!(out, "backend  {} ({})", r.backend, r.device)?;
     let t = &r.timings;
-    writeln!(
-        out,
-        "mode     {}: compute {:.3} ms, {} uncertain decided exactly on the host",
-        r.mode, t.compute_ms, t.uncertain
-    )?;
+    if r.mode == Accuracy::Exact {
+        writeln!(
+            out,
+            "mode     exact: compute {:.3} ms, {} uncertain (edge, vertex, light) decided exactly \
+             on the host",
+            t.compute_ms, t.uncertain
+        )?;
+    } else {
+        writeln!(out, "mode     {}: compute {:.3} ms", r.mode, t.compute_ms)?;
+    }
     for (i, l) in r.lights.iter().enumerate() {
         let [x, y, z, w] = l.light.to_array();
         let kind = if w == 0.0 { "directional" } else { "point" };

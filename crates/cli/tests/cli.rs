@@ -565,3 +565,33 @@ fn presets_load_with_their_own_lights() {
         "{stderr}"
     );
 }
+
+#[test]
+fn help_describes_commands_and_contract() {
+    for args in [
+        vec!["--help"],
+        vec!["silhouette", "--help"],
+        vec!["backends", "--help"],
+    ] {
+        let out = run(&args);
+        assert!(out.status.success(), "{args:?}");
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert!(!text.is_empty());
+        if args[0] == "silhouette" {
+            for word in [
+                "--light",
+                "--mode",
+                "--backend",
+                "--format",
+                "open_vertices",
+                "welded_vertices",
+            ] {
+                assert!(text.contains(word), "silhouette --help lacks {word}");
+            }
+        }
+        if args[0] == "--help" {
+            assert!(text.contains("backends") && text.contains("silhouette"));
+            assert!(text.contains("Exit codes"));
+        }
+    }
+}
