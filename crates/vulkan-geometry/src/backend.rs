@@ -455,6 +455,23 @@ impl VulkanBackend {
     }
 }
 
+/// Frees the buffers and descriptor pool of a half-prepared scene on an early return.
+struct BufferGuard<'a> {
+    ctx: &'a Context,
+    bufs: Vec<Buffer>,
+    pool: vk::DescriptorPool,
+}
+
+impl Drop for BufferGuard<'_> {
+    fn drop(&mut self) {
+        for b in self.bufs.drain(..) {
+            b.destroy(self.ctx);
+        }
+        // SAFETY: the pool (null when none was made or it was handed over) is unused.
+        unsafe { self.ctx.device.destroy_descriptor_pool(self.pool, None) };
+    }
+}
+
 /// Makes shader and transfer writes visible to the host.
 ///
 /// # Safety
@@ -508,28 +525,48 @@ impl SilhouetteBackend for VulkanBackend {
             .iter()
             .flat_map(|p| p.map(f32::to_bits))
             .collect();
-        let positions = Buffer::with_data(ctx, &positions)?;
-        let edges = Buffer::with_data(ctx, &ds.edges)?;
-        let ovs = Buffer::with_data(ctx, &ds.ovs)?;
-        let edge_object = Buffer::with_data(ctx, &ds.edge_object)?;
-        let lights = Buffer::new(ctx, 16 * scene.objects.len().max(1) as u64, storage)?;
+        // Everything created so far is freed if a later step fails.
+        let mut guard = BufferGuard {
+            ctx,
+            bufs: Vec::with_capacity(BINDINGS as usize),
+            pool: vk::DescriptorPool::null(),
+        };
+        guard.bufs.push(Buffer::with_data(ctx, &positions)?);
+        guard.bufs.push(Buffer::with_data(ctx, &ds.edges)?);
+        guard.bufs.push(Buffer::with_data(ctx, &ds.ovs)?);
+        guard.bufs.push(Buffer::with_data(ctx, &ds.edge_object)?);
+        guard.bufs.push(Buffer::new(
+            ctx,
+            16 * scene.objects.len().max(1) as u64,
+            storage,
+        )?);
         // Per-object clip transforms (written by the render path), 80 bytes each.
-        let models = Buffer::new(ctx, XFORM_BYTES * ds.models.len().max(1) as u64, storage)?;
-        let mult = Buffer::new(ctx, 4 * ds.edges.len() as u64, storage)?;
-        let uncertain = Buffer::new(
+        guard.bufs.push(Buffer::new(
+            ctx,
+            XFORM_BYTES * ds.models.len().max(1) as u64,
+            storage,
+        )?);
+        guard
+            .bufs
+            .push(Buffer::new(ctx, 4 * ds.edges.len() as u64, storage)?);
+        guard.bufs.push(Buffer::new(
             ctx,
             UNCERTAIN_HEADER as u64 + 16 * u64::from(INITIAL_UNCERTAIN),
             storage,
-        )?;
-        let vertex_object = Buffer::with_data(ctx, &ds.vertex_object)?;
-        let corners = Buffer::with_data(ctx, &ds.corners)?;
-        let tri_sign = Buffer::new(ctx, 4 * (ds.corners.len() / 3) as u64, storage)?;
+        )?);
+        guard.bufs.push(Buffer::with_data(ctx, &ds.vertex_object)?);
+        guard.bufs.push(Buffer::with_data(ctx, &ds.corners)?);
+        guard.bufs.push(Buffer::new(
+            ctx,
+            4 * (ds.corners.len() / 3) as u64,
+            storage,
+        )?);
         let sizes = [vk::DescriptorPoolSize {
             ty: vk::DescriptorType::STORAGE_BUFFER,
             descriptor_count: BINDINGS,
         }];
         // SAFETY: valid device and infos.
-        let pool = unsafe {
+        guard.pool = unsafe {
             ctx.device.create_descriptor_pool(
                 &vk::DescriptorPoolCreateInfo::default()
                     .max_sets(1)
@@ -543,11 +580,23 @@ impl SilhouetteBackend for VulkanBackend {
         let set = unsafe {
             ctx.device.allocate_descriptor_sets(
                 &vk::DescriptorSetAllocateInfo::default()
-                    .descriptor_pool(pool)
+                    .descriptor_pool(guard.pool)
                     .set_layouts(&layouts),
             )
         }
         .map_err(|e| device_err("vkAllocateDescriptorSets", e))?[0];
+        let pool = std::mem::replace(&mut guard.pool, vk::DescriptorPool::null());
+        let bufs = std::mem::take(&mut guard.bufs);
+        let Ok::<[Buffer; BINDINGS as usize], _>(
+            [positions, edges, ovs, edge_object, lights, models, mult, uncertain, vertex_object, corners, tri_sign],
+        ) = bufs.try_into()
+        else {
+            // Unreachable: exactly BINDINGS buffers were pushed above.
+            return Err(device_err(
+                "preparing the scene's buffers",
+                vk::Result::ERROR_UNKNOWN,
+            ));
+        };
         let p = Prepared {
             scene: scene.clone(),
             ds,
