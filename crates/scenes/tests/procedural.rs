@@ -77,13 +77,25 @@ fn icospheres_have_exactly_the_requested_count() {
             assert!((p.length() - 1.0).abs() < 1e-6);
         }
     }
-    // Small targets: the closest reachable, still within 2 % from 180 up.
-    for target in [20, 80, 180, 200, 250, 300] {
+    // Small targets: never above the target, at least the icosahedron.
+    for target in [20, 80, 180, 200, 250, 300, 310] {
         let n = icosphere(target, 1.0).triangles.len();
-        assert!(
-            n <= target && (target >= 180) <= (n as f64 >= 0.98 * target as f64 - 2.0),
-            "icosphere({target}) = {n}"
-        );
+        assert!((20..=target).contains(&n), "icosphere({target}) = {n}");
+    }
+}
+
+#[test]
+fn every_even_count_in_a_range_is_hit_exactly() {
+    for target in (12..=800).step_by(2) {
+        assert_eq!(uv_sphere(target, 1.0).triangles.len(), target, "uv_sphere");
+    }
+    for target in (320..=1_600).step_by(2) {
+        assert_eq!(icosphere(target, 1.0).triangles.len(), target, "icosphere");
+    }
+    // Closed and manifold with edge splits at various remainders.
+    for target in [322, 358, 502, 776, 1_178] {
+        assert_closed_sphere(&icosphere(target, 1.0), &format!("icosphere({target})"));
+        assert_closed_sphere(&uv_sphere(target, 1.0), &format!("uv_sphere({target})"));
     }
 }
 
