@@ -25,7 +25,8 @@ const APT_PACKAGES: &[&str] = &[
     "glslang-tools",
 ];
 
-const USAGE: &str = "cargo xtask test [--no-drivers] [--skip STEP]... [-- CARGO_TEST_ARGS...]
+const USAGE: &str =
+    "cargo xtask test [--no-drivers] [--skip STEP]... [-p PACKAGE]... [-- CARGO_TEST_ARGS...]
 
 Runs, in order, and prints a summary:
   drivers  check Vulkan loader + lavapipe, OpenCL loader + PoCL, glslangValidator;
@@ -38,6 +39,7 @@ Runs, in order, and prints a summary:
 Options:
   --no-drivers   same as --skip drivers
   --skip STEP    skip a step (drivers, fmt, clippy, test, shaders); repeatable
+  -p PACKAGE     clippy and test only PACKAGE instead of --workspace; repeatable
 
 Environment:
   CI=true        a missing driver, and a backend that cannot start, fail instead of skipping
@@ -68,6 +70,7 @@ fn is_ci() -> bool {
 pub fn run(args: &[String]) -> Result<(), String> {
     let mut skip: Vec<String> = Vec::new();
     let mut test_args: Vec<String> = Vec::new();
+    let mut packages: Vec<String> = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -83,6 +86,9 @@ pub fn run(args: &[String]) -> Result<(), String> {
                 }
                 skip.push(step.clone());
             }
+            "-p" | "--package" => {
+                packages.push(it.next().ok_or("-p needs a package name")?.clone());
+            }
             "--" => {
                 test_args.extend(it.by_ref().cloned());
             }
@@ -93,6 +99,16 @@ pub fn run(args: &[String]) -> Result<(), String> {
     let ci = is_ci();
     println!("xtask test: workspace {}, CI={ci}", root.display());
 
+    // `--workspace`, or `-p A -p B` when packages were named.
+    let scope: Vec<String> = if packages.is_empty() {
+        vec!["--workspace".to_owned()]
+    } else {
+        packages
+            .iter()
+            .flat_map(|p| ["-p".to_owned(), p.clone()])
+            .collect()
+    };
+    let scope: Vec<&str> = scope.iter().map(String::as_str).collect();
     let mut steps = Vec::new();
     let mut step = |name: &'static str, f: &mut dyn FnMut() -> Outcome| {
         if skip.iter().any(|s| s == name) {
@@ -118,22 +134,15 @@ pub fn run(args: &[String]) -> Result<(), String> {
         cargo_step(&root, &["fmt", "--all", "--", "--check"], &[])
     });
     step("clippy", &mut || {
-        cargo_step(
-            &root,
-            &[
-                "clippy",
-                "--workspace",
-                "--all-targets",
-                "--",
-                "-D",
-                "warnings",
-            ],
-            &[],
-        )
+        let mut a = vec!["clippy"];
+        a.extend(&scope);
+        a.extend(["--all-targets", "--", "-D", "warnings"]);
+        cargo_step(&root, &a, &[])
     });
     let mut counts = TestCounts::default();
     step("test", &mut || {
-        let mut a = vec!["test", "--workspace"];
+        let mut a = vec!["test"];
+        a.extend(&scope);
         if !test_args.is_empty() {
             a.push("--");
             a.extend(test_args.iter().map(String::as_str));
