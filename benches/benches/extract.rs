@@ -1,0 +1,140 @@
+//! Silhouette extraction kernels at 10^3 .. 10^6 triangles (icospheres from
+//! `shadowvol_scenes::procedural`): the scalar `cpu` reference, the `simd` backend in every
+//! mode (at its detected level, and at the `wide` compile-time level), the seeds' baselines, and
+//! the memory floor for the same scene.
+//!
+//! ```text
+//! cargo bench -p shadowvol-benches --bench extract
+//! cargo bench -p shadowvol-benches --bench extract -- 'simd/ordered'   # a filter
+//! ```
+//!
+//! Criterion reports absolute times; `docs/PERFORMANCE.md` uses `shadowvol bench` for the ratios.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use glam::Vec3;
+use shadowvol_cpu::baselines::{Baseline, ClosedMesh};
+use shadowvol_cpu::CpuBackend;
+use shadowvol_mesh_topology::EdgeTable;
+use shadowvol_silhouette::{Accuracy, Light, Multiplicities, SilhouetteBackend, TopologyScene};
+use shadowvol_simd::{MemoryFloor, SimdBackend, SimdLevel};
+use std::hint::black_box;
+use std::time::Duration;
+
+const SIZES: [usize; 4] = [1_000, 10_000, 100_000, 1_000_000];
+
+fn scene(triangles: usize) -> TopologyScene {
+    let mesh = shadowvol_scenes::procedural::icosphere(triangles, 1.0);
+    TopologyScene::single(EdgeTable::build(&mesh).expect("icosphere is valid"))
+}
+
+fn light() -> Light {
+    Light::point(Vec3::new(2.3, 3.1, -1.7))
+}
+
+fn bench_backend(
+    c: &mut Criterion,
+    group_name: &str,
+    make: &dyn Fn() -> Box<dyn SilhouetteBackend>,
+    modes: &[Accuracy],
+) {
+    for &mode in modes {
+        let mut group = c.benchmark_group(format!("{group_name}/{mode}"));
+        group
+            .sample_size(10)
+            .warm_up_time(Duration::from_millis(300))
+            .measurement_time(Duration::from_secs(2));
+        for n in SIZES {
+            let s = scene(n);
+            let mut backend = make();
+            let id = backend.prepare(&s).expect("prepare");
+            let mut out = Multiplicities::default();
+            group.throughput(Throughput::Elements(s.total_triangles() as u64));
+            group.bench_function(BenchmarkId::from_parameter(n), |b| {
+                b.iter(|| {
+                    backend
+                        .extract(id, &[light()], mode, &mut out)
+                        .expect("extract");
+                    black_box(out.silhouette(0).len())
+                });
+            });
+        }
+        group.finish();
+    }
+}
+
+fn extract(c: &mut Criterion) {
+    bench_backend(
+        c,
+        "cpu",
+        &|| Box::new(CpuBackend::new()),
+        &[Accuracy::Original, Accuracy::Exact],
+    );
+    let detected = SimdLevel::detect();
+    bench_backend(
+        c,
+        "simd",
+        &|| Box::new(SimdBackend::with_level(detected, None).expect("simd")),
+        &Accuracy::ALL,
+    );
+    if detected != SimdLevel::Wide {
+        bench_backend(
+            c,
+            "simd-wide",
+            &|| Box::new(SimdBackend::with_level(SimdLevel::Wide, None).expect("simd")),
+            &[Accuracy::Original, Accuracy::Exact],
+        );
+    }
+}
+
+fn floor(c: &mut Criterion) {
+    let mut group = c.benchmark_group("floor");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(2));
+    for n in SIZES {
+        let s = scene(n);
+        let mut f = MemoryFloor::new(&s, 1);
+        group.throughput(Throughput::Bytes((f.bytes_read() + f.bytes_written()) as u64));
+        group.bench_function(BenchmarkId::from_parameter(n), |b| {
+            b.iter(|| black_box(f.run_once()));
+        });
+    }
+    group.finish();
+}
+
+fn baselines(c: &mut Criterion) {
+    for which in [
+        Baseline::TwoStep,
+        Baseline::Connectivity,
+        Baseline::FastHash { columns: 64 },
+        Baseline::FastHash { columns: 8 },
+        Baseline::Classic,
+    ] {
+        let mut group = c.benchmark_group(format!("baseline/{}", which.name()));
+        group
+            .sample_size(10)
+            .warm_up_time(Duration::from_millis(300))
+            .measurement_time(Duration::from_secs(2));
+        for n in SIZES {
+            // The classic list is quadratic in the silhouette length: stop at 10^5.
+            if which == Baseline::Classic && n > 100_000 {
+                continue;
+            }
+            let s = scene(n);
+            let closed = ClosedMesh::new(&s.objects[0].table).expect("closed icosphere");
+            // Icosphere valence is at most 6: 8 columns always suffice.
+            if closed.run(which, light().to_array()).is_err() {
+                continue;
+            }
+            group.throughput(Throughput::Elements(s.total_triangles() as u64));
+            group.bench_function(BenchmarkId::from_parameter(n), |b| {
+                b.iter(|| black_box(closed.run(which, light().to_array())));
+            });
+        }
+        group.finish();
+    }
+}
+
+criterion_group!(benches, extract, floor, baselines);
+criterion_main!(benches);
