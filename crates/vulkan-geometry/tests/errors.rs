@@ -1,0 +1,105 @@
+//! Bad input gets an error that names the problem, never a panic.
+
+mod common;
+
+use glam::Vec3;
+use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::{
+    corpus, BackendError, Multiplicities, PreparedId, SilhouetteBackend, TopologyScene,
+};
+use shadowvol_vulkan_geometry::{Camera, Options};
+
+#[test]
+fn bad_input_is_an_error() {
+    let Some(mut vk) = common::backend(Options::default(), "bad_input_is_an_error") else {
+        return;
+    };
+    let case = &corpus::cases()[0];
+    let scene = case.scene().unwrap();
+    let id = vk.prepare(&scene).unwrap();
+    let mut out = Multiplicities::default();
+
+    let e = vk.extract(id, &[], Accuracy::Exact, &mut out).unwrap_err();
+    assert!(
+        matches!(e, BackendError::InvalidInput(ref m) if m.contains("no lights")),
+        "{e}"
+    );
+
+    let bogus = PreparedId(9_999);
+    let e = vk
+        .extract(bogus, &case.lights, Accuracy::Exact, &mut out)
+        .unwrap_err();
+    assert!(
+        matches!(e, BackendError::UnknownScene { id, .. } if id == bogus),
+        "{e}"
+    );
+
+    let cam = Camera::look_at(
+        Vec3::new(3.0, 2.0, 4.0),
+        Vec3::ZERO,
+        Vec3::Y,
+        0.8,
+        1.0,
+        0.01,
+    );
+    for (w, h) in [(0, 16), (16, 0), (100_000, 16)] {
+        let e = vk
+            .render_shadow_mask(id, case.lights[0], &cam, w, h, Accuracy::Robust)
+            .unwrap_err();
+        assert!(
+            matches!(e, BackendError::InvalidInput(ref m) if m.contains("size")),
+            "{e}"
+        );
+    }
+    let e = vk
+        .render_shadow_mask(bogus, case.lights[0], &cam, 8, 8, Accuracy::Robust)
+        .unwrap_err();
+    assert!(matches!(e, BackendError::UnknownScene { .. }), "{e}");
+
+    // Released scenes are unknown afterwards; the backend keeps working.
+    vk.release(id);
+    assert!(vk
+        .extract(id, &case.lights, Accuracy::Exact, &mut out)
+        .is_err());
+    let id2 = vk.prepare(&scene).unwrap();
+    vk.extract(id2, &case.lights, Accuracy::Exact, &mut out)
+        .unwrap();
+    assert!(out.silhouettes_consistent());
+
+    // An empty scene is fine: zero edges, nothing drawn.
+    let empty = vk.prepare(&TopologyScene::default()).unwrap();
+    let stats = vk
+        .extract(empty, &[Light::point(Vec3::ONE)], Accuracy::Exact, &mut out)
+        .unwrap();
+    assert_eq!((out.edge_count(), stats.uncertain), (0, 0));
+    let mask = vk
+        .render_shadow_mask(empty, Light::point(Vec3::ONE), &cam, 8, 8, Accuracy::Exact)
+        .unwrap();
+    assert!(mask.shadowed.iter().all(|&s| !s));
+}
+
+#[test]
+fn many_lights_in_one_call_match_one_light_at_a_time() {
+    let Some(mut vk) = common::backend(Options::default(), "many_lights_in_one_call") else {
+        return;
+    };
+    for case in corpus::cases() {
+        let scene = case.scene().unwrap();
+        let id = vk.prepare(&scene).unwrap();
+        let mut all = Multiplicities::default();
+        vk.extract(id, &case.lights, Accuracy::Exact, &mut all)
+            .unwrap();
+        for (li, &light) in case.lights.iter().enumerate() {
+            let mut one = Multiplicities::default();
+            vk.extract(id, &[light], Accuracy::Exact, &mut one).unwrap();
+            assert_eq!(one.values(0), all.values(li), "{} light {li}", case.name);
+            assert_eq!(
+                one.silhouette(0),
+                all.silhouette(li),
+                "{} light {li}",
+                case.name
+            );
+        }
+        vk.release(id);
+    }
+}
