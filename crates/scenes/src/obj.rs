@@ -424,6 +424,64 @@ mod tests {
             .starts_with("cannot read /definitely/not/here.obj: "));
     }
 
+    /// Triangles as coordinate triples, so that two loaders that number vertices differently
+    /// can be compared.
+    fn corner_positions(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<[[f32; 3]; 3]> {
+        triangles
+            .iter()
+            .map(|t| t.map(|i| positions[i as usize]))
+            .collect()
+    }
+
+    /// Differential check on valid input against an independent parser (`tobj`, with fan
+    /// triangulation): same triangles with the same corner coordinates, in the same order.
+    #[test]
+    fn agrees_with_tobj_on_valid_files() {
+        let texts = [
+            TRI.to_owned() + "f 1 2 3\n",
+            "# quad, pentagon, slashes, negative indices\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n\
+             vt 0 0\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1 4/1/1\nv 0.5 2 0.25\nf -5 -4 -3 -2 -1\n\
+             f 1//1 3//1 5//1\n"
+                .to_owned(),
+            "v 1e4 1e-4 -0\nv 10000.001 0 0\nv 1e4 1 3.5e-38\nv -1 -2 -3\nf 1 2 3\nf 2 3 4\n"
+                .to_owned(),
+        ];
+        for text in &texts {
+            let ours = parse(text).unwrap();
+            let ours_pos: Vec<[f32; 3]> = ours.positions.iter().map(|p| p.to_array()).collect();
+            let (models, _) = tobj::load_obj_buf(
+                &mut text.as_bytes(),
+                &tobj::LoadOptions {
+                    triangulate: true,
+                    ..tobj::LoadOptions::default()
+                },
+                |_| Err(tobj::LoadError::OpenFileFailed),
+            )
+            .unwrap();
+            let mut theirs = Vec::new();
+            for m in &models {
+                let pos: Vec<[f32; 3]> = m
+                    .mesh
+                    .positions
+                    .chunks(3)
+                    .map(|c| [c[0], c[1], c[2]])
+                    .collect();
+                let tris: Vec<[u32; 3]> = m
+                    .mesh
+                    .indices
+                    .chunks(3)
+                    .map(|c| [c[0], c[1], c[2]])
+                    .collect();
+                theirs.extend(corner_positions(&pos, &tris));
+            }
+            assert_eq!(
+                corner_positions(&ours_pos, &ours.triangles),
+                theirs,
+                "{text}"
+            );
+        }
+    }
+
     #[test]
     fn empty_text_is_an_empty_mesh() {
         let m = parse("").unwrap();
