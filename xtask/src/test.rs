@@ -23,6 +23,7 @@ const APT_PACKAGES: &[&str] = &[
     "pocl-opencl-icd",
     "ocl-icd-libopencl1",
     "glslang-tools",
+    "vulkan-validationlayers",
 ];
 
 const USAGE: &str =
@@ -343,6 +344,12 @@ fn requirements() -> Vec<Requirement> {
         Requirement {
             what: "glslangValidator",
             present: in_path("glslangValidator"),
+        },
+        Requirement {
+            what: "Vulkan validation layer (VK_LAYER_KHRONOS_validation)",
+            present: any_file(&["/usr/share/vulkan/explicit_layer.d"], &|n| {
+                n.eq_ignore_ascii_case("VkLayer_khronos_validation.json")
+            }),
         },
     ]
 }
