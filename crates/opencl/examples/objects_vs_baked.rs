@@ -5,7 +5,8 @@
 //! cargo run --release -p shadowvol-opencl --example objects_vs_baked -- [PRESET] [FRAMES]
 //! ```
 //!
-//! Defaults: `spheres-100x1k`, 50 frames. Prints, per mode, the median / p10 / p90 of the total
+//! Defaults: `spheres-100x1k`, 50 frames. With `EXPORT_BAKED=FILE.glb` it only writes the
+//! baked scene (for `shadowvol bench --scene FILE.glb`). Prints, per mode, the median / p10 / p90 of the total
 //! extraction time and its upload / compute / readback / host split, and the individual/baked
 //! ratio. Also checks that exact results equal the `cpu` backend's.
 
@@ -79,6 +80,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let name = args.next().unwrap_or_else(|| "spheres-100x1k".to_owned());
     let frames: usize = args.next().map_or(Ok(50), |s| s.parse())?;
     let scene = shadowvol_scenes::preset(&name)?;
+    if let Ok(path) = std::env::var("EXPORT_BAKED") {
+        // For `shadowvol bench --scene FILE.glb`: the same scene baked into one mesh.
+        shadowvol_scenes::export_glb(&scene.baked()?, &path)?;
+        println!("wrote the baked scene to {path}");
+        return Ok(());
+    }
     let individual = scene.topology()?;
     let baked = scene.baked()?.topology()?;
     let lights = scene.lights.clone();

@@ -79,6 +79,9 @@ pub const KERNEL_NAME: &str = "silhouette";
 /// Environment variable: path of a `.cl` file to build instead of [`KERNEL_SOURCE`].
 pub const KERNEL_ENV: &str = "SHADOWVOL_OPENCL_KERNEL";
 
+/// Work-group width along the edge dimension (edges are padded to a multiple of it).
+const GROUP: usize = 64;
+
 /// Initial capacity of the uncertain-record buffer (records); it grows when a run needs more.
 const INITIAL_UNCERTAIN_CAPACITY: usize = 4096;
 
@@ -146,6 +149,8 @@ pub struct OpenClBackend {
     use_f64: bool,
     kernel_origin: String,
     max_alloc: u64,
+    /// Launch with a fixed work-group size of [`GROUP`] × 1.
+    fixed_group: bool,
     // Drop order: kernel, program, queue before the context.
     kernel: Kernel,
     _program: Program,
@@ -312,18 +317,82 @@ impl OpenClBackend {
             what: origin.clone(),
             log: format!("the program has no kernel {KERNEL_NAME:?}: {e} ({})", e.0),
         })?;
-        Ok(Self {
+        // A fixed work-group size where the kernel allows it, so that the warm-up below compiles
+        // the same variant that later runs use (PoCL compiles per work-group size at the first
+        // enqueue; without the warm-up the first extract would report that as compute time).
+        let fixed_group = Device::new(device.id)
+            .max_work_group_size()
+            .is_ok_and(|n| n >= GROUP)
+            && kernel
+                .get_work_group_size(device.id)
+                .is_ok_and(|n| n >= GROUP);
+        let mut backend = Self {
             device,
             use_f64,
             kernel_origin: origin,
             max_alloc,
+            fixed_group,
             kernel,
             _program: program,
             queue,
             context,
             scenes: HashMap::new(),
             next: 0,
-        })
+        };
+        backend.warm_up()?;
+        Ok(backend)
+    }
+
+    /// Runs the kernel once on a tetrahedron in exact mode and checks the result against the
+    /// scalar definition: compiles the driver's work-group variant and proves the device works.
+    fn warm_up(&mut self) -> Result<(), BackendError> {
+        let mesh = shadowvol_mesh_topology::Mesh {
+            positions: vec![
+                glam::Vec3::ZERO,
+                glam::Vec3::X,
+                glam::Vec3::Y,
+                glam::Vec3::Z,
+            ],
+            triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+        };
+        let table = shadowvol_mesh_topology::EdgeTable::build(&mesh)
+            .map_err(|e| BackendError::InvalidInput(format!("warm-up mesh: {e}")))?;
+        let light = Light::point(glam::Vec3::new(2.0, 3.0, 5.0));
+        let mut want = vec![0i32; table.edges.len()];
+        for (e, w) in want.iter_mut().enumerate() {
+            let [a, b] = table.edges[e];
+            *w = table
+                .ovs_of(e)
+                .iter()
+                .map(|&o| {
+                    i32::from(shadowvol_robust_math::ov_sign(
+                        Accuracy::Exact,
+                        &table.positions,
+                        a,
+                        b,
+                        o,
+                        light.to_array(),
+                    ))
+                })
+                .sum();
+        }
+        let scene = TopologyScene::single(table);
+        let id = self.prepare(&scene)?;
+        let mut out = Multiplicities::default();
+        let result = self.extract(id, &[light], Accuracy::Exact, &mut out);
+        self.release(id);
+        result?;
+        if out.values(0) != want.as_slice() {
+            return Err(BackendError::Device {
+                backend: BACKEND,
+                message: format!(
+                    "self-test failed on {}: the kernel gave {:?} for a tetrahedron, expected {want:?}",
+                    self.device.describe(),
+                    out.values(0)
+                ),
+            });
+        }
+        Ok(())
     }
 
     /// The device in use.
@@ -411,9 +480,15 @@ impl OpenClBackend {
             set(10, k.set_arg(10, &sil_buf.get()))?;
             set(11, k.set_arg(11, &unc_buf.get()))?;
             set(12, k.set_arg(12, &cap))?;
-            let global = [edges.div_ceil(64) * 64, num_lights];
+            let global = [edges.div_ceil(GROUP) * GROUP, num_lights];
+            let local = [GROUP, 1];
+            let local_ptr = if self.fixed_group {
+                local.as_ptr()
+            } else {
+                ptr::null()
+            };
             self.queue
-                .enqueue_nd_range_kernel(k.get(), 2, ptr::null(), global.as_ptr(), ptr::null(), &[])
+                .enqueue_nd_range_kernel(k.get(), 2, ptr::null(), global.as_ptr(), local_ptr, &[])
                 .map_err(|e| device_error("enqueueing the silhouette kernel", e))?;
         }
         self.queue
