@@ -4,6 +4,8 @@ use serde::Serialize;
 use shadowvol::{backends, CliError, Format};
 use shadowvol_silhouette::BackendError;
 use std::io::Write;
+use std::sync::mpsc;
+use std::time::Duration;
 
 /// The long help of the subcommand.
 pub const LONG_ABOUT: &str =
@@ -29,25 +31,49 @@ struct Row {
     reason: Option<String>,
 }
 
+/// How long one backend may take to start before it is reported as unavailable.
+const START_TIMEOUT: Duration = Duration::from_secs(60);
+
+/// Starts every backend on its own thread (in parallel; a backend that hangs in its driver
+/// cannot hang the command) and reports each in registry order.
 fn rows() -> Vec<Row> {
-    backends()
-        .iter()
-        .map(|entry| match entry.start() {
-            Ok(b) => Row {
-                name: entry.name,
-                available: true,
-                device: Some(b.info().device),
-                reason: None,
-            },
-            Err(e) => Row {
-                name: entry.name,
-                available: false,
-                device: None,
-                reason: Some(match e {
-                    BackendError::Unavailable { reason, .. } => reason,
-                    other => other.to_string(),
-                }),
-            },
+    let pending: Vec<_> = backends()
+        .into_iter()
+        .map(|entry| {
+            let (tx, rx) = mpsc::channel();
+            std::thread::spawn(move || {
+                let result = entry.start().map(|b| b.info().device);
+                let _ = tx.send(result);
+            });
+            (entry.name, rx)
+        })
+        .collect();
+    pending
+        .into_iter()
+        .map(|(name, rx)| {
+            let result = rx.recv_timeout(START_TIMEOUT).unwrap_or_else(|_| {
+                Err(BackendError::Unavailable {
+                    backend: name,
+                    reason: format!("did not start within {} s", START_TIMEOUT.as_secs()),
+                })
+            });
+            match result {
+                Ok(device) => Row {
+                    name,
+                    available: true,
+                    device: Some(device),
+                    reason: None,
+                },
+                Err(e) => Row {
+                    name,
+                    available: false,
+                    device: None,
+                    reason: Some(match e {
+                        BackendError::Unavailable { reason, .. } => reason,
+                        other => other.to_string(),
+                    }),
+                },
+            }
         })
         .collect()
 }
