@@ -35,7 +35,6 @@ const F32_FILTER_MAX: f32 = 0x1p40f;
 // flushing a subnormal intermediate to zero moves det by far less than the bound).
 const F32_INPUT_MAX_BITS: u32 = 0x53000000u; // bits of 2^39
 const F32_PERM_MIN: f32 = 0x1p-60f;
-const F32_MIN_NORMAL: f32 = 0x1p-126f;
 
 struct Params {
     edge_count: u32,
@@ -145,10 +144,6 @@ fn out_of_range(x: f32) -> bool {
     return m != 0.0 && (m < F32_FILTER_MIN || m > F32_FILTER_MAX);
 }
 
-fn underflows(x: f32, product: f32) -> bool {
-    return x != 0.0 && abs(product) < F32_MIN_NORMAL;
-}
-
 // robust-math's `orient_filter_f32` with the GPU guards above. Returns -1, 0, 1 or UNCERTAIN.
 fn filter_f32(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>, o: vec3<f32>) -> i32 {
     if any_too_large3(a) || any_too_large3(b) || any_too_large3(o) || any_too_large3(l.xyz) || too_large(l.w) {
@@ -157,15 +152,14 @@ fn filter_f32(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>, o: vec3<f32>) -> i32 {
     let ex = a.x - b.x;
     let ey = a.y - b.y;
     let ez = a.z - b.z;
-    // L.w * A must not underflow (its error would be absolute, and V could vanish); a device that
-    // flushes subnormals to zero is caught by the same test.
-    let wa = l.w * a;
-    if l.w != 0.0 && (underflows(a.x, wa.x) || underflows(a.y, wa.y) || underflows(a.z, wa.z)) {
+    // Only w = 0 and w = 1 make L.w * A exact in f32; for any other w its rounding is relative
+    // to |w A|, not to |V|, and V = L.xyz - w A may cancel (robust-math's rule).
+    if l.w != 0.0 && l.w != 1.0 {
         return UNCERTAIN;
     }
-    let vx = l.x - wa.x;
-    let vy = l.y - wa.y;
-    let vz = l.z - wa.z;
+    let vx = l.x - l.w * a.x;
+    let vy = l.y - l.w * a.y;
+    let vz = l.z - l.w * a.z;
     let dx = o.x - a.x;
     let dy = o.y - a.y;
     let dz = o.z - a.z;

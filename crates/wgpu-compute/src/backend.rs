@@ -42,6 +42,11 @@ pub struct WgpuOptions {
     /// Scenes with more workgroups than one dimension holds fold them into a 2-D grid; a small
     /// cap exercises that path on small scenes.
     pub max_workgroups_per_dimension: Option<u32>,
+    /// Smallest number of compact-list entries per light (and of uncertain records) copied
+    /// together with the list lengths right after the dispatch (default 256). Lists that fit are
+    /// read in that one round trip; longer ones need a second. The prefix adapts to the last
+    /// frame's sizes (1.25 x, rounded up to a power of two); 0 starts with no prefix.
+    pub min_list_prefix: u32,
 }
 
 impl Default for WgpuOptions {
@@ -53,6 +58,7 @@ impl Default for WgpuOptions {
             initial_uncertain_capacity: 4096,
             max_buffer_bytes: None,
             max_workgroups_per_dimension: None,
+            min_list_prefix: 256,
         }
     }
 }
@@ -94,7 +100,8 @@ struct Frame {
     lights: wgpu::Buffer,
     mult: wgpu::Buffer,
     counters: wgpu::Buffer,
-    counters_staging: wgpu::Buffer,
+    /// Counts and list prefixes, mapped right after the dispatch.
+    staging: Option<wgpu::Buffer>,
     silhouettes: wgpu::Buffer,
     uncertain: wgpu::Buffer,
     readback: Option<wgpu::Buffer>,
@@ -108,6 +115,10 @@ struct Prepared {
     frame: Option<Frame>,
     /// Lights of the last extract whose results the frame buffers hold: `(first, count)`.
     last: Option<(usize, usize)>,
+    /// Compact-list entries per light copied with the counts (adapted per frame).
+    list_prefix: u64,
+    /// Uncertain records copied with the counts (adapted per frame).
+    uncertain_prefix: u64,
 }
 
 /// Device-side results of the last [`SilhouetteBackend::extract`] on a prepared scene, for a
@@ -588,12 +599,6 @@ impl WgpuBackend {
         let mult = storage("multiplicities", edges * lc * 4, wgpu::BufferUsages::VERTEX);
         let counters_bytes = (lc + 1) * 4;
         let counters = storage("counters", counters_bytes, wgpu::BufferUsages::empty());
-        let counters_staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("counters staging"),
-            size: counters_bytes,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
         let silhouettes = storage("silhouettes", edges * lc * 8, wgpu::BufferUsages::VERTEX);
         let uncertain = storage("uncertain", uncertain_bytes, wgpu::BufferUsages::empty());
         let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -618,7 +623,7 @@ impl WgpuBackend {
             lights,
             mult,
             counters,
-            counters_staging,
+            staging: None,
             silhouettes,
             uncertain,
             readback: None,
@@ -696,6 +701,25 @@ impl ErrorScopes {
         }
         (!errors.is_empty()).then(|| errors.join("; "))
     }
+}
+
+/// Compact-list entries `(edge, m)` from little-endian `u32` pairs.
+fn read_pairs(bytes: &[u8]) -> Vec<(u32, i32)> {
+    let words: Vec<u32> = read_u32s(bytes).collect();
+    words.chunks_exact(2).map(|w| (w[0], w[1] as i32)).collect()
+}
+
+/// Uncertain records from little-endian `u32` quadruples.
+fn read_records(bytes: &[u8]) -> Vec<UncertainRecord> {
+    let words: Vec<u32> = read_u32s(bytes).collect();
+    words
+        .chunks_exact(4)
+        .map(|w| UncertainRecord {
+            edge: w[0],
+            ov_slot: w[1],
+            light: w[2],
+        })
+        .collect()
 }
 
 fn read_u32s(bytes: &[u8]) -> impl Iterator<Item = u32> + '_ {
@@ -799,6 +823,8 @@ impl SilhouetteBackend for WgpuBackend {
                 gpu,
                 frame: None,
                 last: None,
+                list_prefix: u64::from(self.options.min_list_prefix),
+                uncertain_prefix: u64::from(self.options.min_list_prefix),
             },
         );
         Ok(id)
@@ -875,7 +901,16 @@ impl WgpuBackend {
             let packed = pack_lights(&obj_lights, first, count);
             let scope = ErrorScopes::push(&self.device);
             let r = self.run_chunk(
-                p, &gpu, pipeline, &packed, first, count, last_chunk, out, &mut stats,
+                p,
+                &gpu,
+                pipeline,
+                &packed,
+                first,
+                count,
+                last_chunk,
+                mode == Accuracy::Exact,
+                out,
+                &mut stats,
             );
             if let Some(e) = scope.pop() {
                 return Err(device_error(e));
@@ -899,6 +934,7 @@ impl WgpuBackend {
         first: usize,
         count: usize,
         last_chunk: bool,
+        exact: bool,
         out: &mut Multiplicities,
         stats: &mut ExtractStats,
     ) -> Result<(), BackendError> {
@@ -915,11 +951,13 @@ impl WgpuBackend {
                 "{edge_count} edges need {groups} workgroups; the device allows {max_dim} x {max_dim}"
             )));
         }
-        let counts: Vec<u32> = loop {
+        // The first round trip brings the counts and the first `k` entries of every list (and
+        // `ku` uncertain records); the second, if needed, the rest.
+        let (counts, mut chunk, k, ku) = loop {
             let t = Instant::now();
             let frame = p
                 .frame
-                .as_ref()
+                .as_mut()
                 .ok_or_else(|| device_error("no frame buffers"))?;
             // ---- upload: lights and parameters (again after the buffers were regrown)
             let params = [edge_count as u32, count as u32, frame.uncertain_capacity, 0];
@@ -927,9 +965,41 @@ impl WgpuBackend {
                 .write_buffer(&frame.lights, 0, bytemuck::cast_slice(packed));
             self.queue
                 .write_buffer(&frame.params, 0, bytemuck::cast_slice(&params));
-            stats.upload += t.elapsed();
-            let t = Instant::now();
+            let k = p.list_prefix.min(edges);
+            let ku = if exact {
+                p.uncertain_prefix.min(u64::from(frame.uncertain_capacity))
+            } else {
+                0
+            };
             let counters_bytes = (count as u64 + 1) * 4;
+            let lists_at = counters_bytes.next_multiple_of(8);
+            let uncertain_at = lists_at + count as u64 * k * 8;
+            let staging_bytes = uncertain_at + ku * 16;
+            if frame
+                .staging
+                .as_ref()
+                .is_none_or(|b| b.size() < staging_bytes)
+            {
+                self.check_buffer("the staging buffer", staging_bytes, false)?;
+                frame.staging = Some(
+                    self.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("counts and list prefixes"),
+                        size: staging_bytes
+                            .next_power_of_two()
+                            .min(self.limits.max_buffer_size)
+                            .max(staging_bytes),
+                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    }),
+                );
+            }
+            let staging = frame
+                .staging
+                .as_ref()
+                .ok_or_else(|| device_error("no staging buffer"))?;
+            stats.upload += t.elapsed();
+            // ---- compute
+            let t = Instant::now();
             let mut encoder = self
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -945,29 +1015,58 @@ impl WgpuBackend {
                 pass.set_bind_group(0, &frame.bind_group, &[]);
                 pass.dispatch_workgroups(gx as u32, gy as u32, 1);
             }
-            encoder.copy_buffer_to_buffer(
-                &frame.counters,
-                0,
-                &frame.counters_staging,
-                0,
-                counters_bytes,
-            );
+            encoder.copy_buffer_to_buffer(&frame.counters, 0, staging, 0, counters_bytes);
+            if k > 0 {
+                for li in 0..count as u64 {
+                    encoder.copy_buffer_to_buffer(
+                        &frame.silhouettes,
+                        li * edges * 8,
+                        staging,
+                        lists_at + li * k * 8,
+                        k * 8,
+                    );
+                }
+            }
+            if ku > 0 {
+                encoder.copy_buffer_to_buffer(&frame.uncertain, 0, staging, uncertain_at, ku * 16);
+            }
             let index = self.queue.submit([encoder.finish()]);
             self.wait(index)?;
-            let counts: Vec<u32> =
-                self.read_mapped(&frame.counters_staging, counters_bytes, |b| {
-                    read_u32s(b).collect()
-                })?;
             stats.compute += t.elapsed();
+            // ---- readback, first round trip
+            let t = Instant::now();
+            let (counts, chunk) = self.read_mapped(staging, staging_bytes, |b| {
+                let counts: Vec<u32> = read_u32s(&b[..counters_bytes as usize]).collect();
+                let lists = (0..count)
+                    .map(|li| {
+                        let n = u64::from(counts[li]).min(k) as usize;
+                        let at = (lists_at + li as u64 * k * 8) as usize;
+                        read_pairs(&b[at..at + n * 8])
+                    })
+                    .collect();
+                let n = u64::from(counts[count]).min(ku) as usize;
+                let at = uncertain_at as usize;
+                let uncertain = read_records(&b[at..at + n * 16]);
+                (
+                    counts,
+                    ChunkOutput {
+                        mult: None,
+                        lists,
+                        uncertain,
+                    },
+                )
+            })?;
+            stats.readback += t.elapsed();
             let uncertain = counts[count];
             if uncertain <= frame.uncertain_capacity {
-                break counts;
+                break (counts, chunk, k, ku);
             }
             // Overflow: grow the uncertain buffer and run the dispatch again.
             let t = Instant::now();
             let capacity = uncertain.checked_next_power_of_two().unwrap_or(uncertain);
             let light_capacity = frame.light_capacity;
-            let frame = self.create_frame(gpu, edges, objects, light_capacity, capacity)?;
+            let staging = frame.staging.take();
+            let mut frame = self.create_frame(gpu, edges, objects, light_capacity, capacity)?;
             if frame.uncertain_capacity < uncertain {
                 return Err(limit_error(format!(
                     "{uncertain} uncertain (edge, OV, light) triples need {} bytes, but the device allows storage bindings of {} bytes; pass fewer lights per call",
@@ -975,6 +1074,7 @@ impl WgpuBackend {
                     self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size)
                 )));
             }
+            frame.staging = staging;
             p.frame = Some(frame);
             stats.upload += t.elapsed();
         };
@@ -982,25 +1082,32 @@ impl WgpuBackend {
             .frame
             .as_mut()
             .ok_or_else(|| device_error("no frame buffers"))?;
-        let uncertain_count = counts[count] as usize;
-        stats.uncertain += uncertain_count as u64;
+        let uncertain_count = u64::from(counts[count]);
+        stats.uncertain += uncertain_count;
+        // Adapt the prefixes to this frame's sizes.
+        let grow = |n: u64| (n + n / 4).max(1).next_power_of_two();
+        let longest = counts[..count].iter().copied().max().unwrap_or(0);
+        p.list_prefix = grow(u64::from(longest)).max(u64::from(self.options.min_list_prefix));
+        p.uncertain_prefix = grow(uncertain_count).max(u64::from(self.options.min_list_prefix));
 
-        // ---- readback: compact lists, uncertain records, optionally the full values
+        // ---- readback, second round trip: the rest of long lists and of the uncertain
+        // records, and with `full_readback` the whole multiplicity buffer
         let t = Instant::now();
-        let list_bytes: Vec<u64> = counts[..count].iter().map(|&c| u64::from(c) * 8).collect();
-        let lists_total: u64 = list_bytes.iter().sum();
-        let uncertain_bytes = uncertain_count as u64 * 16;
+        let rest: Vec<(usize, u64, u64)> = counts[..count]
+            .iter()
+            .enumerate()
+            .filter(|&(_, &c)| u64::from(c) > k)
+            .map(|(li, &c)| (li, k, u64::from(c) - k))
+            .collect();
+        let rest_bytes: u64 = rest.iter().map(|r| r.2 * 8).sum();
+        let uncertain_rest = uncertain_count.saturating_sub(ku);
+        let uncertain_bytes = uncertain_rest * 16;
         let mult_bytes = if self.options.full_readback {
             edges * count as u64 * 4
         } else {
             0
         };
-        let total = lists_total + uncertain_bytes + mult_bytes;
-        let mut chunk = ChunkOutput {
-            mult: None,
-            lists: vec![Vec::new(); count],
-            uncertain: Vec::new(),
-        };
+        let total = rest_bytes + uncertain_bytes + mult_bytes;
         if total > 0 {
             if frame.readback.as_ref().is_none_or(|b| b.size() < total) {
                 self.check_buffer("the readback buffer", total, false)?;
@@ -1026,22 +1133,20 @@ impl WgpuBackend {
                     label: Some("readback"),
                 });
             let mut offset = 0;
-            for (li, &bytes) in list_bytes.iter().enumerate() {
-                if bytes > 0 {
-                    encoder.copy_buffer_to_buffer(
-                        &frame.silhouettes,
-                        li as u64 * edges * 8,
-                        readback,
-                        offset,
-                        bytes,
-                    );
-                    offset += bytes;
-                }
+            for &(li, from, n) in &rest {
+                encoder.copy_buffer_to_buffer(
+                    &frame.silhouettes,
+                    (li as u64 * edges + from) * 8,
+                    readback,
+                    offset,
+                    n * 8,
+                );
+                offset += n * 8;
             }
             if uncertain_bytes > 0 {
                 encoder.copy_buffer_to_buffer(
                     &frame.uncertain,
-                    0,
+                    ku * 16,
                     readback,
                     offset,
                     uncertain_bytes,
@@ -1055,23 +1160,14 @@ impl WgpuBackend {
             self.wait(index)?;
             self.read_mapped(readback, total, |bytes| {
                 let mut at = 0usize;
-                for (li, &b) in list_bytes.iter().enumerate() {
-                    let b = b as usize;
-                    let words: Vec<u32> = read_u32s(&bytes[at..at + b]).collect();
-                    chunk.lists[li] = words.chunks_exact(2).map(|w| (w[0], w[1] as i32)).collect();
+                for &(li, _, n) in &rest {
+                    let b = n as usize * 8;
+                    chunk.lists[li].extend(read_pairs(&bytes[at..at + b]));
                     at += b;
                 }
-                let words: Vec<u32> =
-                    read_u32s(&bytes[at..at + uncertain_bytes as usize]).collect();
-                chunk.uncertain = words
-                    .chunks_exact(4)
-                    .map(|w| UncertainRecord {
-                        edge: w[0],
-                        ov_slot: w[1],
-                        light: w[2],
-                    })
-                    .collect();
-                at += uncertain_bytes as usize;
+                let b = uncertain_bytes as usize;
+                chunk.uncertain.extend(read_records(&bytes[at..at + b]));
+                at += b;
                 if mult_bytes > 0 {
                     chunk.mult = Some(
                         read_u32s(&bytes[at..at + mult_bytes as usize])

@@ -93,7 +93,7 @@ fn out_of_range(x: f32) -> bool {
 }
 
 /// Twin of WGSL `filter_f32`: robust-math's `orient_filter_f32` (same formula, same
-/// [`F32_FILTER_EPS`], range checks and `L.w * A` underflow check) plus the two device guards [`GPU_F32_INPUT_MAX`] and
+/// [`F32_FILTER_EPS`], range checks, and only `w` in {0, 1} certified) plus the two device guards [`GPU_F32_INPUT_MAX`] and
 /// [`GPU_F32_PERM_MIN`]. `Some(sign)` is certified, `None` is uncertain.
 ///
 /// Whenever it certifies, `orient_filter_f32` certifies the same sign (the guards only add
@@ -109,15 +109,10 @@ pub fn filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<
         return None;
     }
     let (ex, ey, ez) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
-    let wa = [l[3] * a[0], l[3] * a[1], l[3] * a[2]];
-    if l[3] != 0.0
-        && a.iter()
-            .zip(&wa)
-            .any(|(&x, &p)| x != 0.0 && p.abs() < f32::MIN_POSITIVE)
-    {
+    if l[3] != 0.0 && l[3] != 1.0 {
         return None;
     }
-    let (vx, vy, vz) = (l[0] - wa[0], l[1] - wa[1], l[2] - wa[2]);
+    let (vx, vy, vz) = (l[0] - l[3] * a[0], l[1] - l[3] * a[1], l[2] - l[3] * a[2]);
     let (dx, dy, dz) = (o[0] - a[0], o[1] - a[1], o[2] - a[2]);
     if [ex, ey, ez, vx, vy, vz, dx, dy, dz]
         .into_iter()

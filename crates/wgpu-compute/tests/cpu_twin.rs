@@ -167,17 +167,15 @@ fn device_filters_certify_only_exact_signs() {
             rng.v3(Rng::scaled),
             rng.v3(Rng::scaled),
         );
-        let l = [
-            rng.scaled(),
-            rng.scaled(),
-            rng.scaled(),
-            if rng.next().is_multiple_of(2) {
-                0.0
-            } else {
-                1.0
-            },
-        ];
+        // w = 0, 1, and others (which the f32 filter must leave to the host).
+        let w = [0.0, 1.0, 0.5, 3.0, 1e-30][(rng.next() % 5) as usize];
+        let l = [rng.scaled(), rng.scaled(), rng.scaled(), w];
         check(a, b, l, o, &mut stats);
+        // Point lights with w != 1 whose V = L.xyz - w A nearly cancels.
+        let w = [0.1f32, 0.3, 3.0, 7.0][(rng.next() % 4) as usize];
+        let a2 = rng.v3(Rng::unit);
+        let l2 = [a2[0] * w, a2[1] * w + 1e-6 * rng.unit(), a2[2] * w, w];
+        check(a2, rng.v3(Rng::unit), l2, rng.v3(Rng::unit), &mut stats);
         // Nearly degenerate: O close to the plane through A, B and the light.
         let a = rng.v3(Rng::unit);
         let b = rng.v3(Rng::unit);
