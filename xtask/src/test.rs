@@ -3,7 +3,8 @@
 //! Steps (all run, even after a failure, so one run shows every problem):
 //!
 //! 1. **drivers**: the Vulkan loader and Mesa's lavapipe ICD, the OpenCL ICD loader and PoCL, and
-//!    `glslangValidator`. When one is missing and we are root, they are installed with apt-get;
+//!    `glslangValidator`, the Khronos Vulkan validation layer (the vulkan backend's validation
+//!    test runs with it). When one is missing and we are root, they are installed with apt-get;
 //!    when we are not root, the exact command is printed and the run goes on (the GPU backends
 //!    then skip visibly), unless `CI=true`, where a missing driver is a failure.
 //! 2. **fmt**: `cargo fmt --all -- --check`.
