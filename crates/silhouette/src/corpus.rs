@@ -610,6 +610,38 @@ fn multi_object_transforms() -> CorpusCase {
     )
 }
 
+fn homogeneous_w() -> CorpusCase {
+    // Point lights with w != 1 (the point xyz / w): at a vertex and in the plane of faces, each
+    // written as (fl(w * P), w). Then `L.xyz - w * A` cancels to (almost) 0 in f32 for the vertex
+    // A = P, although w * A is not exact: the case that an f32 filter must not certify.
+    let mesh = merge(
+        plane_grid(
+            tilted(0.0, 0.0),
+            TILT_U * 0.25,
+            TILT_V * 0.25,
+            8,
+            8,
+            |_, _| 0.0,
+        ),
+        &uv_sphere(DVec3::new(3.0, -2.0, 1.0), 1.0, 8, 12),
+    );
+    let scaled = |p: Vec3, w: f32| Light::new(w * p.x, w * p.y, w * p.z, w).expect("finite, w > 0");
+    let lights = vec![
+        scaled(mesh.positions[10], 1.1),
+        scaled(mesh.positions[40], 0.75),
+        scaled(f32v(tilted(3.3, -1.7)), 3.0),
+        scaled(mesh.positions[81 + 2 + 12 * 3 + 4], 1.3),
+        scaled(Vec3::new(0.5, 0.25, 4.0), 1e-3),
+    ];
+    single(
+        "homogeneous-w",
+        "a tilted grid and a sphere with point lights given with w != 1 (xyz = w * P): at vertices and in the plane",
+        mesh,
+        lights,
+        false,
+    )
+}
+
 /// All cases of the corpus, in a fixed order.
 #[must_use]
 pub fn cases() -> Vec<CorpusCase> {
@@ -641,6 +673,7 @@ pub fn cases() -> Vec<CorpusCase> {
         uv_sphere_poles(),
         directional_parallel(),
         multi_object_transforms(),
+        homogeneous_w(),
     ]
 }
 
