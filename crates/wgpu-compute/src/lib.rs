@@ -10,8 +10,9 @@
 //!   `shaders/silhouette.wgsl` once for all objects and up to
 //!   [`WgpuOptions::max_lights_per_dispatch`] lights. One invocation handles one edge for every
 //!   light; it writes the per-edge multiplicity and appends `(edge, m)` to the light's compact
-//!   silhouette list with an atomic counter. The host reads back the list lengths, then the
-//!   lists (and, with [`WgpuOptions::full_readback`], the whole multiplicity buffer). The device
+//!   silhouette list with an atomic counter. The list lengths and an adaptive prefix of every
+//!   list come back in the same submission (one round trip); longer lists, and with
+//!   [`WgpuOptions::full_readback`] the whole multiplicity buffer, in a second. The device
 //!   buffers stay available through [`WgpuBackend::gpu_results`].
 //! * `original`, `robust`, `ordered` evaluate robust-math's `sign_f32` expression operation for
 //!   operation with the canonical-order and parity rules. WGSL cannot forbid FMA contraction, so
@@ -20,15 +21,17 @@
 //!   one order, for all its edges.
 //! * `exact` runs a certified filter on the device: `f64` when the device has `SHADER_F64`
 //!   (bound [`cpu_twin::GPU_F64_FILTER_EPS`] = 8 × robust-math's `F64_FILTER_EPS`, margin for
-//!   contraction), else robust-math's `f32` filter (`F32_FILTER_EPS`, with its range checks) plus
+//!   contraction), else robust-math's `f32` filter (`F32_FILTER_EPS`, its range checks, `w` in
+//!   {0, 1} only) plus
 //!   two device guards ([`cpu_twin::GPU_F32_INPUT_MAX`], [`cpu_twin::GPU_F32_PERM_MIN`]).
 //!   Subnormal inputs are never certified. The `(edge, OV, light)` triples the device cannot
 //!   certify go to an append buffer; the host decides them with `orient_exact`, patches the
 //!   values and lists (on the host and on the device) and counts them in
 //!   [`ExtractStats::uncertain`].
 //! * Timings: [`ExtractStats::upload`] is the light/parameter upload (and any buffer
-//!   (re)allocation), `compute` is submit-to-completion of the dispatch (with the list lengths),
-//!   `readback` the copy and mapping of the lists, `host_resolve` the exact decisions and patch.
+//!   (re)allocation), `compute` is submit-to-completion of the dispatch (with the copies of the
+//!   counts and list prefixes), `readback` zeroing the host result, mapping and any second round
+//!   trip, `host_resolve` the exact decisions, list sorting and the device patch.
 //!
 //! [`cpu_twin`] is a CPU port of the kernel with the same loop structure, for pinning down
 //! failures.
