@@ -27,8 +27,8 @@
 //!   Subnormal inputs are never certified. The `(edge, OV, light)` triples the device cannot
 //!   certify go to an append buffer; the host decides them with `orient_exact`, patches the
 //!   values and lists (on the host and on the device) and counts them in
-//!   [`ExtractStats::uncertain`].
-//! * Timings: [`ExtractStats::upload`] is the light/parameter upload (and any buffer
+//!   [`ExtractStats::uncertain`](shadowvol_silhouette::ExtractStats::uncertain).
+//! * Timings: [`ExtractStats::upload`](shadowvol_silhouette::ExtractStats::upload) is the light/parameter upload (and any buffer
 //!   (re)allocation), `compute` is submit-to-completion of the dispatch (with the copies of the
 //!   counts and list prefixes), `readback` zeroing the host result, mapping and any second round
 //!   trip, `host_resolve` the exact decisions, list sorting and the device patch.
