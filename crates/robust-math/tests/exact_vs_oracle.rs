@@ -6,7 +6,8 @@ mod oracle;
 
 use proptest::prelude::*;
 use shadowvol_robust_math::{
-    orient_exact, orient_exact_expansion, orient_filter_f32, orient_filter_f64, sign_f32,
+    orient_exact, orient_exact_expansion, orient_filter_f32, orient_filter_f64, ov_sign, sign_f32,
+    Accuracy,
 };
 
 type P3 = [f32; 3];
@@ -482,5 +483,23 @@ proptest! {
     #[test]
     fn prop_oracle_self_consistent_near_degenerate((a, b, l, o) in near_degenerate()) {
         prop_assert_eq!(oracle::sign_exact(a, b, l, o), oracle::det4_leibniz(a, b, l, o));
+    }
+
+    /// The local form of the closed-chain invariant: in every consistent mode, the three edges
+    /// of one triangle (ids 0 < 1 < 2) get s(0,1,2) = s(1,2,0) = -s(0,2,1); in exact mode that
+    /// common value is the oracle's sign.
+    #[test]
+    fn prop_consistent_modes_agree_on_a_triangle((a, b, l, o) in near_degenerate()) {
+        let p = [glam::Vec3::from(a), glam::Vec3::from(b), glam::Vec3::from(o)];
+        for mode in [Accuracy::Robust, Accuracy::Ordered, Accuracy::Exact] {
+            let s01 = ov_sign(mode, &p, 0, 1, 2, l);
+            let s12 = ov_sign(mode, &p, 1, 2, 0, l);
+            let s02 = ov_sign(mode, &p, 0, 2, 1, l);
+            prop_assert_eq!(s01, s12, "mode {}", mode);
+            prop_assert_eq!(s01, -s02, "mode {}", mode);
+            if mode == Accuracy::Exact {
+                prop_assert_eq!(s01, oracle::sign_exact(a, b, l, o));
+            }
+        }
     }
 }
