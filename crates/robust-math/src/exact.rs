@@ -265,7 +265,10 @@ pub fn orient_exact_expansion(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]
 
 /// Exact sign of `det4(A, B, L, O)`: the `f64` filter, then the expansion fallback.
 ///
-/// Correct for every finite `f32` input, directional lights and subnormals included.
+/// Correct for every finite `f32` input, any `w` (directional lights, `w = 1` and general
+/// homogeneous `w`), subnormals and values up to `f32::MAX` included. Never panics; for NaN or
+/// infinite inputs (which [`crate::Light`] and a validated mesh exclude) the result is
+/// unspecified.
 #[must_use]
 #[inline]
 pub fn orient_exact(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> i8 {
