@@ -268,12 +268,8 @@ impl Cli {
                 last.into_iter().rev().collect::<Vec<_>>().join(" | ")
             ));
         }
-        serde_json::from_slice(&out.stdout).map_err(|e| {
-            format!(
-                "`shadowvol {}` printed invalid JSON: {e}",
-                args.join(" ")
-            )
-        })
+        serde_json::from_slice(&out.stdout)
+            .map_err(|e| format!("`shadowvol {}` printed invalid JSON: {e}", args.join(" ")))
     }
 }
 
@@ -303,7 +299,12 @@ fn host_info(root: &Path) -> Map<String, Value> {
         .unwrap_or_else(|| std::env::consts::ARCH.to_owned());
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut rev = command_line("git", &["rev-parse", "--short=12", "HEAD"], root);
-    if !command_line("git", &["status", "--porcelain", "--untracked-files=no"], root).is_empty()
+    if !command_line(
+        "git",
+        &["status", "--porcelain", "--untracked-files=no"],
+        root,
+    )
+    .is_empty()
         && rev != "unknown"
     {
         rev.push_str("-dirty");
@@ -334,7 +335,12 @@ const T2_SCENES: [&str; 4] = [
     "spheres-10-individual",
     "spheres-10-baked",
 ];
-const T3_SCENES: [&str; 4] = ["sphere-1m", "sphere-100k", "spheres-100x10k", "spheres-100x1k"];
+const T3_SCENES: [&str; 4] = [
+    "sphere-1m",
+    "sphere-100k",
+    "spheres-100x10k",
+    "spheres-100x1k",
+];
 /// Scenes for time against triangles (10^3 .. 10^6).
 const TRI_SCENES: [&str; 4] = ["sphere-1k", "sphere-10k", "sphere-100k", "sphere-1m"];
 /// Scene for time against lights.
@@ -475,15 +481,33 @@ impl Matrix {
     }
 
     /// `shadowvol bench` for one scene and backend, all given modes; records each result.
-    fn bench(&mut self, experiment: &str, scene: &str, backend: &str, modes: &[String], lights: u32) {
+    fn bench(
+        &mut self,
+        experiment: &str,
+        scene: &str,
+        backend: &str,
+        modes: &[String],
+        lights: u32,
+    ) {
         self.progress
             .step(&format!("{experiment}: {scene} {backend} x{lights}"));
         let modes_s = modes.join(",");
         let frames = self.frames();
         let lights_s = lights.to_string();
         let args = [
-            "bench", "--scene", scene, "--backend", backend, "--mode", &modes_s, "--frames",
-            &frames, "--lights", &lights_s, "--format", "json",
+            "bench",
+            "--scene",
+            scene,
+            "--backend",
+            backend,
+            "--mode",
+            &modes_s,
+            "--frames",
+            &frames,
+            "--lights",
+            &lights_s,
+            "--format",
+            "json",
         ];
         match self.cli.json(&args) {
             Ok(v) => {
@@ -531,10 +555,15 @@ impl Matrix {
         for b in &plan.backends {
             self.progress.step(&format!("accuracy: {b}"));
             let modes_s = modes.join(",");
-            match self
-                .cli
-                .json(&["accuracy", "--backend", b, "--mode", &modes_s, "--format", "json"])
-            {
+            match self.cli.json(&[
+                "accuracy",
+                "--backend",
+                b,
+                "--mode",
+                &modes_s,
+                "--format",
+                "json",
+            ]) {
                 Ok(v) => {
                     for r in v["records"].as_array().cloned().unwrap_or_default() {
                         self.push("accuracy", r.as_object().cloned().unwrap_or_default());
@@ -554,8 +583,18 @@ impl Matrix {
             self.progress.step(&format!("toywars: {s}"));
             let frames = self.frames();
             match self.cli.json(&[
-                "bench", "--scene", s, "--baselines", "--backend", "cpu,simd", "--mode",
-                "original,robust,ordered,exact", "--frames", &frames, "--format", "json",
+                "bench",
+                "--scene",
+                s,
+                "--baselines",
+                "--backend",
+                "cpu,simd",
+                "--mode",
+                "original,robust,ordered,exact",
+                "--frames",
+                &frames,
+                "--format",
+                "json",
             ]) {
                 Ok(v) => {
                     let floor = v["floor_ms"].clone();
@@ -570,7 +609,15 @@ impl Matrix {
         }
     }
 
-    fn render(&mut self, experiment: &str, scene: &str, backend: &str, mode: &str, reference: bool, size: &str) {
+    fn render(
+        &mut self,
+        experiment: &str,
+        scene: &str,
+        backend: &str,
+        mode: &str,
+        reference: bool,
+        size: &str,
+    ) {
         self.progress
             .step(&format!("{experiment}: {scene} {backend} {mode}"));
         let png = self
@@ -580,8 +627,18 @@ impl Matrix {
             .join(format!("{experiment}-{scene}-{backend}-{mode}.png"));
         let png_s = png.to_string_lossy().to_string();
         let mut args = vec![
-            "render", scene, "--out", &png_s, "--size", size, "--mode", mode, "--backend",
-            backend, "--format", "json",
+            "render",
+            scene,
+            "--out",
+            &png_s,
+            "--size",
+            size,
+            "--mode",
+            mode,
+            "--backend",
+            backend,
+            "--format",
+            "json",
         ];
         if reference {
             args.push("--reference");
@@ -644,7 +701,14 @@ impl Matrix {
         Ok(())
     }
 
-    fn find(&self, experiment: &str, scene: &str, backend: &str, mode: &str, lights: Option<u64>) -> Option<&Value> {
+    fn find(
+        &self,
+        experiment: &str,
+        scene: &str,
+        backend: &str,
+        mode: &str,
+        lights: Option<u64>,
+    ) -> Option<&Value> {
         self.records.iter().find(|r| {
             r["experiment"] == experiment
                 && r["scene"] == scene
@@ -659,7 +723,12 @@ impl Matrix {
             .and_then(|r| r["median_ms"].as_f64())
     }
 
-    fn tables(&self, available: &[String], unavailable: &[(String, String)], elapsed: f64) -> String {
+    fn tables(
+        &self,
+        available: &[String],
+        unavailable: &[(String, String)],
+        elapsed: f64,
+    ) -> String {
         let mut s = String::new();
         let h = &self.host;
         let get = |k: &str| h.get(k).and_then(Value::as_str).unwrap_or("?").to_owned();
@@ -681,15 +750,23 @@ impl Matrix {
         );
         s += "| backend | device |\n|---|---|\n";
         for b in available {
-            s += &format!("| {b} | {} |\n", self.devices.get(b).map_or("", String::as_str));
+            s += &format!(
+                "| {b} | {} |\n",
+                self.devices.get(b).map_or("", String::as_str)
+            );
         }
         for (b, r) in unavailable {
             s += &format!("| {b} | unavailable: {r} |\n");
         }
-        if let Some(level) = self.records.iter().find_map(|r| r.get("simd_level").and_then(Value::as_str)) {
+        if let Some(level) = self
+            .records
+            .iter()
+            .find_map(|r| r.get("simd_level").and_then(Value::as_str))
+        {
             s += &format!("\nSIMD level used by `simd`: {level}.\n");
         }
-        s += "\nTimes are medians over the timed frames after warm-up, in milliseconds (p10-p90 in \
+        s +=
+            "\nTimes are medians over the timed frames after warm-up, in milliseconds (p10-p90 in \
               results.json). `floor` is the time to stream the bytes the extraction must touch, \
               measured in the same run. Absolute times of GPU backends only mean something on a \
               real GPU; on lavapipe/PoCL they run on this CPU.\n\n";
@@ -759,22 +836,37 @@ impl Matrix {
                 let acc: Vec<&Value> = self
                     .records
                     .iter()
-                    .filter(|r| r["experiment"] == "accuracy" && r["backend"] == b.as_str() && r["mode"] == m.as_str())
+                    .filter(|r| {
+                        r["experiment"] == "accuracy"
+                            && r["backend"] == b.as_str()
+                            && r["mode"] == m.as_str()
+                    })
                     .collect();
                 let sum = |k: &str| -> String {
                     if acc.is_empty() {
                         "n/a".into()
                     } else {
-                        acc.iter().map(|r| r[k].as_u64().unwrap_or(0)).sum::<u64>().to_string()
+                        acc.iter()
+                            .map(|r| r[k].as_u64().unwrap_or(0))
+                            .sum::<u64>()
+                            .to_string()
                     }
                 };
                 let art: Vec<u64> = self
                     .records
                     .iter()
-                    .filter(|r| r["experiment"] == "artifacts" && r["backend"] == b.as_str() && r["mode"] == m.as_str())
+                    .filter(|r| {
+                        r["experiment"] == "artifacts"
+                            && r["backend"] == b.as_str()
+                            && r["mode"] == m.as_str()
+                    })
                     .filter_map(|r| r["artifact_pixels"].as_u64())
                     .collect();
-                let art = if art.is_empty() { "n/a".into() } else { art.iter().sum::<u64>().to_string() };
+                let art = if art.is_empty() {
+                    "n/a".into()
+                } else {
+                    art.iter().sum::<u64>().to_string()
+                };
                 s += &format!(
                     "| {b} | {m} | {ratio} | {} | {} | {art} | {} |\n",
                     sum("open_vertices"),
@@ -784,7 +876,11 @@ impl Matrix {
             }
         }
         s += "\nArtifact pixels per rendered scene:\n\n| scene | backend | mode | artifact pixels | shadow pixels |\n|---|---|---|---|---|\n";
-        for r in self.records.iter().filter(|r| r["experiment"] == "artifacts") {
+        for r in self
+            .records
+            .iter()
+            .filter(|r| r["experiment"] == "artifacts")
+        {
             s += &format!(
                 "| {} | {} | {} | {} | {} |\n",
                 r["scene"].as_str().unwrap_or("?"),

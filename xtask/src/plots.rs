@@ -207,7 +207,12 @@ fn accuracy_cost(path: &Path, records: &[Value]) -> PlotResult {
     let mut keys: Vec<(String, String)> = records
         .iter()
         .filter(|r| r["experiment"] == "table1")
-        .filter_map(|r| Some((r["backend"].as_str()?.to_owned(), r["mode"].as_str()?.to_owned())))
+        .filter_map(|r| {
+            Some((
+                r["backend"].as_str()?.to_owned(),
+                r["mode"].as_str()?.to_owned(),
+            ))
+        })
         .collect();
     keys.sort();
     keys.dedup();

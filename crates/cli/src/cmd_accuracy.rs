@@ -141,7 +141,15 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
             writeln!(
                 out,
                 "{:<28} {:<8} {:<9} {:>6} {:>8} {:>6} {:>9} {:>9} {:>9}",
-                "scene", "backend", "mode", "lights", "edges", "open", "sign≠ex", "≠cpu", "uncertain"
+                "scene",
+                "backend",
+                "mode",
+                "lights",
+                "edges",
+                "open",
+                "sign≠ex",
+                "≠cpu",
+                "uncertain"
             )?;
             for r in &records {
                 writeln!(
