@@ -124,8 +124,8 @@ fn sign_bytes(pos: u32, neg: u32) -> [u8; 8] {
 
 /// Signs of the canonical triangles in `blocks` (blocks of 8) for every light.
 ///
-/// `out[l]` receives the signs of this range for light `l` (`blocks.len() * 8` bytes; padding
-/// lanes get 0). Returns the number of (triangle, light) evaluations the `f64` filter could not
+/// `out[l / PACK]` receives the signs of this range for light `l` (`blocks.len() * 8` records of
+/// [`PACK`] bytes; padding lanes get 0). Returns the number of (triangle, light) evaluations the `f64` filter could not
 /// certify (exact mode), which were decided with the scalar exact predicate.
 #[inline(always)]
 pub(crate) fn tri_signs<Lv: Level>(
@@ -138,7 +138,9 @@ pub(crate) fn tri_signs<Lv: Level>(
     let mut uncertain = 0u64;
     let b0 = blocks.start;
     assert!(
-        blocks.end * LANES <= lay.t0.len() && out.iter().all(|o| o.len() == blocks.len() * LANES)
+        blocks.end * LANES <= lay.t0.len()
+            && out.len() == lights.len().div_ceil(PACK)
+            && out.iter().all(|o| o.len() == blocks.len() * LANES * PACK)
     );
     for blk in blocks {
         let t = blk * LANES;
@@ -218,10 +220,15 @@ fn widen3<Lv: Level>(p: &[Lv::F; 3]) -> ([Lv::D; 3], [Lv::D; 3]) {
 #[inline(always)]
 fn write_signs(out: &mut [&mut [i8]], l: usize, dst: usize, pos: u32, neg: u32) {
     let bytes = sign_bytes(pos, neg);
-    for (d, s) in out[l][dst..dst + LANES].iter_mut().zip(bytes) {
-        *d = s as i8;
+    let pack = &mut out[l / PACK][dst * PACK..(dst + LANES) * PACK];
+    for (i, b) in bytes.into_iter().enumerate() {
+        pack[i * PACK + l % PACK] = b as i8;
     }
 }
+
+/// Lights per sign pack: the sign of triangle slot `t` for light `l` is byte `l % 4` of the
+/// 4-byte record `t` in pack `l / 4`, so one 32-bit load (or gather) serves four lights.
+pub(crate) const PACK: usize = 4;
 
 /// `±s` by the parity bit of a triangle reference.
 #[inline(always)]
@@ -244,8 +251,8 @@ fn push_nonzero(sil: &mut Vec<u32>, m: &[i32; LANES], base: usize) {
 
 /// Multiplicities of the edges in `blocks` from the triangle signs (`robust`, `ordered`,
 /// `exact`), scalar. Light `l`'s sign of this object's triangle slot `t` is
-/// `signs[bases[l] + t]`; `out[l]` receives this range's multiplicities; `sil[l]` collects
-/// `edge_base + e` for `m != 0`.
+/// `signs[bases[l / PACK] + t * PACK + l % PACK]`; `out[l]` receives this range's
+/// multiplicities; `sil[l]` collects `edge_base + e` for `m != 0`.
 ///
 /// # Panics
 /// If a slice is shorter than described.
@@ -260,20 +267,25 @@ pub(crate) fn edge_sums(
 ) {
     let e_start = blocks.start * LANES;
     // Every triangle reference of the layout is < tri_count.
-    assert!(bases.iter().all(|&b| b + lay.tri_count <= signs.len()));
+    assert!(bases
+        .iter()
+        .all(|&b| b + lay.tri_count * PACK <= signs.len()));
+    assert!(bases.len() == out.len().div_ceil(PACK));
     for blk in blocks {
         let e0 = blk * LANES;
         if lay.block_fast[blk] {
             // Block-outer, light-inner: the block's triangle references are read once.
             let (ta, tb) = (&lay.tri_a[e0..e0 + LANES], &lay.tri_b[e0..e0 + LANES]);
-            for (l, (&base, out)) in bases.iter().zip(out.iter_mut()).enumerate() {
-                let s = &signs[base..base + lay.tri_count];
+            for (l, out) in out.iter_mut().enumerate() {
+                let base = bases[l / PACK] + l % PACK;
+                let s = &signs[base..base + (lay.tri_count - 1) * PACK + 1];
                 let dst = &mut out[e0 - e_start..e0 - e_start + LANES];
                 let mut any = 0;
                 for ((d, &t1), &t2) in dst.iter_mut().zip(ta).zip(tb) {
-                    let (i1, i2) = ((t1 & !ODD) as usize, (t2 & !ODD) as usize);
-                    debug_assert!(i1 < lay.tri_count && i2 < lay.tri_count);
-                    // SAFETY: `Layout::build` stores only triangle slots < tri_count = s.len().
+                    let (i1, i2) = ((t1 & !ODD) as usize * PACK, (t2 & !ODD) as usize * PACK);
+                    debug_assert!(i1 < s.len() && i2 < s.len());
+                    // SAFETY: `Layout::build` stores only triangle slots < tri_count, and
+                    // `s` covers slot tri_count - 1 (asserted above).
                     let (s1, s2) = unsafe { (*s.get_unchecked(i1), *s.get_unchecked(i2)) };
                     let m = signed(s1, t1) + signed(s2, t2);
                     *d = m;
@@ -308,10 +320,11 @@ pub(crate) fn edge_sums_general(
 ) {
     for e in e0..(e0 + LANES).min(lay.edge_count) {
         let r = lay.ov_offsets[e] as usize..lay.ov_offsets[e + 1] as usize;
-        for (l, (&base, out)) in bases.iter().zip(out.iter_mut()).enumerate() {
+        for (l, out) in out.iter_mut().enumerate() {
+            let base = bases[l / PACK] + l % PACK;
             let m: i32 = lay.ov_tri[r.clone()]
                 .iter()
-                .map(|&t| signed(signs[base + (t & !ODD) as usize], t))
+                .map(|&t| signed(signs[base + (t & !ODD) as usize * PACK], t))
                 .sum();
             out[e - e_start] = m;
             if m != 0 {
@@ -321,13 +334,11 @@ pub(crate) fn edge_sums_general(
     }
 }
 
-/// [`edge_sums`] with 8 edges per AVX2 vector: two 32-bit gathers of sign bytes per block and
-/// light. Identical results.
+/// [`edge_sums`] with 8 edges per AVX2 vector: per block, two 32-bit gathers per pack of four
+/// lights fetch the signs of both triangles of 8 edges for all four lights. Identical results.
 ///
 /// # Safety
-/// The CPU must support AVX2. `signs` must extend at least 3 bytes beyond
-/// `max(bases) + tri_count` (the gathers read 4 bytes at each sign), and `signs.len()` must be
-/// below `i32::MAX`.
+/// The CPU must support AVX2, and `signs.len()` must be below `i32::MAX`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 pub(crate) unsafe fn edge_sums_avx2(
@@ -342,7 +353,10 @@ pub(crate) unsafe fn edge_sums_avx2(
     use std::arch::x86_64::*;
     let e_start = blocks.start * LANES;
     assert!(signs.len() < i32::MAX as usize);
-    assert!(bases.iter().all(|&b| b + lay.tri_count + 3 <= signs.len()));
+    assert!(bases
+        .iter()
+        .all(|&b| b + lay.tri_count * PACK <= signs.len()));
+    assert!(bases.len() == out.len().div_ceil(PACK));
     let mask = _mm256_set1_epi32(!ODD as i32);
     for blk in blocks {
         let e0 = blk * LANES;
@@ -354,13 +368,14 @@ pub(crate) unsafe fn edge_sums_avx2(
                     _mm256_loadu_si256(lay.tri_b[e0..e0 + LANES].as_ptr().cast()),
                 )
             };
-            // Parity masks: -1 for odd (bit 31 set), 0 for even.
+            // Parity masks: -1 for odd (bit 31 set), 0 for even. Byte offsets of the records.
             let (k1, k2) = (_mm256_srai_epi32::<31>(t1), _mm256_srai_epi32::<31>(t2));
-            let (i1, i2) = (_mm256_and_si256(t1, mask), _mm256_and_si256(t2, mask));
-            for (l, (&base, out)) in bases.iter().zip(out.iter_mut()).enumerate() {
+            let i1 = _mm256_slli_epi32::<2>(_mm256_and_si256(t1, mask));
+            let i2 = _mm256_slli_epi32::<2>(_mm256_and_si256(t2, mask));
+            for (pack, &base) in bases.iter().enumerate() {
                 let b = _mm256_set1_epi32(base as i32);
-                // SAFETY: every index is base + slot with slot < tri_count, and 4 bytes from
-                // there are inside `signs` (asserted above); gathers need no alignment.
+                // SAFETY: every index is base + 4 * slot with slot < tri_count, and the 4-byte
+                // record there is inside `signs` (asserted above); gathers need no alignment.
                 let (g1, g2) = unsafe {
                     let p = signs.as_ptr().cast::<i32>();
                     (
@@ -368,25 +383,31 @@ pub(crate) unsafe fn edge_sums_avx2(
                         _mm256_i32gather_epi32::<1>(p, _mm256_add_epi32(b, i2)),
                     )
                 };
-                // Sign-extend the low byte, then negate where the parity is odd.
-                let s1 = _mm256_srai_epi32::<24>(_mm256_slli_epi32::<24>(g1));
-                let s2 = _mm256_srai_epi32::<24>(_mm256_slli_epi32::<24>(g2));
-                let s1 = _mm256_sub_epi32(_mm256_xor_si256(s1, k1), k1);
-                let s2 = _mm256_sub_epi32(_mm256_xor_si256(s2, k2), k2);
-                let m = _mm256_add_epi32(s1, s2);
-                let dst = &mut out[e0 - e_start..e0 - e_start + LANES];
-                // SAFETY: `dst` holds 8 i32; unaligned store.
-                unsafe { _mm256_storeu_si256(dst.as_mut_ptr().cast(), m) };
-                let zero = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
-                    m,
-                    _mm256_setzero_si256(),
-                ))) as u32;
-                if zero != 0xFF {
-                    let mut nz = !zero & 0xFF;
-                    while nz != 0 {
-                        let i = nz.trailing_zeros() as usize;
-                        nz &= nz - 1;
-                        sil[l].push((edge_base + e0 + i) as u32);
+                let lights = (out.len() - pack * PACK).min(PACK);
+                for lane in 0..lights {
+                    let l = pack * PACK + lane;
+                    // Byte `lane` of each record, sign-extended.
+                    let shift = _mm_cvtsi32_si128((24 - 8 * lane) as i32);
+                    let s1 = _mm256_srai_epi32::<24>(_mm256_sll_epi32(g1, shift));
+                    let s2 = _mm256_srai_epi32::<24>(_mm256_sll_epi32(g2, shift));
+                    // Negate where the parity is odd.
+                    let s1 = _mm256_sub_epi32(_mm256_xor_si256(s1, k1), k1);
+                    let s2 = _mm256_sub_epi32(_mm256_xor_si256(s2, k2), k2);
+                    let m = _mm256_add_epi32(s1, s2);
+                    let dst = &mut out[l][e0 - e_start..e0 - e_start + LANES];
+                    // SAFETY: `dst` holds 8 i32; unaligned store.
+                    unsafe { _mm256_storeu_si256(dst.as_mut_ptr().cast(), m) };
+                    let zero = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                        m,
+                        _mm256_setzero_si256(),
+                    ))) as u32;
+                    if zero != 0xFF {
+                        let mut nz = !zero & 0xFF;
+                        while nz != 0 {
+                            let i = nz.trailing_zeros() as usize;
+                            nz &= nz - 1;
+                            sil[l].push((edge_base + e0 + i) as u32);
+                        }
                     }
                 }
             }

@@ -60,9 +60,6 @@ pub const LEVEL_ENV: &str = "SHADOWVOL_SIMD_LEVEL";
 /// threads, large enough that scheduling costs nothing.
 const BLOCKS_PER_ITEM: usize = 256;
 
-/// Bytes after the triangle signs (the AVX2 edge pass reads 4 bytes at each sign).
-const SIGN_PADDING: usize = 4;
-
 /// The instruction-set level the kernels run at.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum SimdLevel {
@@ -190,7 +187,7 @@ pub struct SimdBackend {
     pool: Option<rayon::ThreadPool>,
     scenes: HashMap<PreparedId, Prepared>,
     next: u64,
-    /// Scratch: triangle signs, light-major.
+    /// Scratch: triangle signs, in packs of four lights (see `kernel::PACK`).
     signs: Vec<i8>,
 }
 
@@ -454,10 +451,12 @@ fn run_extract(
     if mode != Accuracy::Original {
         // Phase 1: one sign per (canonical triangle, light).
         let slots = p.total_tri_slots;
+        let packs = nl.div_ceil(kernel::PACK);
+        let pack_len = slots * kernel::PACK;
         signs.clear();
-        // 4 bytes of padding: the AVX2 edge pass gathers 4 bytes at each sign.
-        signs.resize(slots * nl + SIGN_PADDING, 0);
-        let parts = split_items(&mut signs[..slots * nl], slots, &p.tri_bounds());
+        signs.resize(pack_len * packs, 0);
+        let bounds: Vec<usize> = p.tri_bounds().iter().map(|b| b * kernel::PACK).collect();
+        let parts = split_items(signs, pack_len, &bounds);
         uncertain = p
             .tri_items
             .par_iter()
@@ -497,7 +496,9 @@ fn run_extract(
                     o.edge_base,
                 );
             } else {
-                let bases: Vec<usize> = (0..nl).map(|l| l * slots + o.tri_base).collect();
+                let bases: Vec<usize> = (0..nl.div_ceil(kernel::PACK))
+                    .map(|pack| (pack * slots + o.tri_base) * kernel::PACK)
+                    .collect();
                 dispatch::edge_sums(
                     level,
                     &o.layout,
