@@ -13,6 +13,7 @@ use std::process::ExitCode;
 mod cmd_accuracy;
 mod cmd_backends;
 mod cmd_bench;
+mod cmd_render;
 mod cmd_scenes;
 mod cmd_silhouette;
 
@@ -50,6 +51,10 @@ enum Command {
     /// Work with one scene: `scene export NAME OUT.glb` writes it as binary glTF.
     #[command(long_about = cmd_scenes::SCENE_LONG_ABOUT)]
     Scene(cmd_scenes::SceneArgs),
+    /// Render a scene with stencil shadow volumes (wgpu, headless) to a PNG; optionally compare
+    /// with a ray-traced reference and count artifact pixels.
+    #[command(long_about = cmd_render::LONG_ABOUT, after_help = cmd_render::AFTER_HELP)]
+    Render(cmd_render::Args),
 }
 
 fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
@@ -60,6 +65,7 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Bench(args) => cmd_bench::run(&args, out),
         Command::Scenes(args) => cmd_scenes::run(&args, out),
         Command::Scene(args) => cmd_scenes::run_scene(&args, out),
+        Command::Render(args) => cmd_render::run(&args, out),
     }
 }
 

@@ -1,0 +1,282 @@
+//! `shadowvol render`: a headless stencil-shadow-volume render of a scene, with its plan, timings
+//! and (optionally) the ray-traced reference and the artifact count.
+
+use shadowvol::{find_backend, CliError, Format, ModeArg};
+use shadowvol_renderer::{
+    reference, Frame, PlanPolicy, RenderError, RenderOptions, RenderScene, Renderer,
+};
+use shadowvol_robust_math::Accuracy;
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// The long help of the subcommand.
+pub const LONG_ABOUT: &str =
+    "Render SCENE (a preset name from `shadowvol scenes`, or a .gltf/.glb \
+    file with its KHR_lights_punctual lights and camera) with stencil shadow volumes on the GPU \
+    (wgpu; headless), and write a PNG.\n\n\
+    Silhouettes come from --backend in --mode; caps use the same per-triangle signs. For each \
+    (light, object) the plan picks: culled (its shadow cannot reach the view), z-pass (the \
+    near-clip volume test proves the camera is outside the shadow volume) or z-fail with caps \
+    (no back cap for directional lights). --explain prints the plan.\n\n\
+    --reference ray-casts every pixel's surface point to every light (BVH, all cores) and counts \
+    artifact pixels: pixels whose lit/shadowed state differs from the reference and that are more \
+    than one pixel from a reference shadow boundary. --diff FILE writes the disagreement (red: \
+    lit but should be shadowed, blue: shadowed but should be lit, yellow: at a boundary or \
+    undecidable, not counted); it implies --reference.\n\n\
+    JSON: {\"artifact_pixels\": N or null without --reference, \"shadow_pixels\": N, \"plan\": \
+    [{\"light\", \"object\", \"object_name\", \"technique\", \"back_cap\", \"silhouette\", \
+    \"silhouette_edges\", \"side_quads\", \"cap_triangles\", \"reason\"}], \"timings\": \
+    {\"silhouette_ms\", \"side_building_ms\", \"raster_ms\", \"prepare_ms\", \"total_ms\", \
+    \"reference_ms\"}, \"scene\", \"backend\", \"mode\", \"size\": [w, h], \"adapter\", \"out\", \
+    \"covered_pixels\", \"reference_shadow_pixels\"}.";
+
+/// Examples shown after the help.
+pub const AFTER_HELP: &str = "Examples:\n  shadowvol render hard-book-3 --out book.png --reference --backdrop\n  \
+    shadowvol render scene.glb --out scene.png --size 640x480 --mode robust --backend simd --explain\n  \
+    shadowvol render town --out town.png --reference --diff town-diff.png --format json";
+
+/// How the plan may choose between z-pass and z-fail.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum TechniqueArg {
+    /// Z-pass where the near-clip volume test proves it safe, else z-fail.
+    #[default]
+    Auto,
+    /// Always z-fail with caps (after culling).
+    ZFail,
+    /// Always z-pass (after culling); wrong when the camera is inside a shadow volume.
+    ZPass,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The scene: a preset name (see `shadowvol scenes`) or a .gltf/.glb/.obj file.
+    #[arg(value_name = "SCENE")]
+    scene: String,
+
+    /// The PNG to write.
+    #[arg(long, value_name = "FILE.png")]
+    out: PathBuf,
+
+    /// Image size in pixels.
+    #[arg(long, default_value = "512x512", value_name = "WxH", value_parser = parse_size)]
+    size: (u32, u32),
+
+    /// Accuracy mode of silhouettes and caps.
+    #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
+    mode: ModeArg,
+
+    /// Silhouette backend (see `shadowvol backends`).
+    #[arg(long, default_value = "cpu", value_name = "NAME")]
+    backend: String,
+
+    /// Ray-trace the reference and count artifact pixels.
+    #[arg(long)]
+    reference: bool,
+
+    /// Print the plan (technique per light and object, and why).
+    #[arg(long)]
+    explain: bool,
+
+    /// Write the disagreement with the reference as a PNG (implies --reference).
+    #[arg(long, value_name = "FILE.png")]
+    diff: Option<PathBuf>,
+
+    /// Restrict the plan's choice between z-pass and z-fail.
+    #[arg(long, value_enum, default_value_t = TechniqueArg::Auto)]
+    technique: TechniqueArg,
+
+    /// Add a receiver-only backdrop behind the scene as seen from its first light (for scenes
+    /// without a ground, such as the hard-* presets).
+    #[arg(long)]
+    backdrop: bool,
+
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    format: Format,
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("size {s:?}: expected WxH, for example 640x480"))?;
+    let parse = |v: &str, what: &str| -> Result<u32, String> {
+        let n: u32 = v
+            .trim()
+            .parse()
+            .map_err(|e| format!("size {s:?}: {what} {v:?}: {e}"))?;
+        if n == 0 || n > 16384 {
+            return Err(format!("size {s:?}: {what} must be in 1..=16384"));
+        }
+        Ok(n)
+    };
+    Ok((parse(w, "width")?, parse(h, "height")?))
+}
+
+fn render_error(e: RenderError) -> CliError {
+    match e {
+        RenderError::Backend(b) => CliError::Backend(b),
+        other => CliError::Other(format!("render: {other}")),
+    }
+}
+
+/// The JSON report (the CLI contract's `render` shape, extended).
+#[derive(Debug, serde::Serialize)]
+struct Report<'a> {
+    artifact_pixels: Option<usize>,
+    shadow_pixels: usize,
+    plan: &'a [shadowvol_renderer::PlanEntry],
+    timings: Timings,
+    scene: String,
+    backend: &'static str,
+    mode: Accuracy,
+    size: [u32; 2],
+    adapter: &'a str,
+    out: String,
+    covered_pixels: Option<usize>,
+    reference_shadow_pixels: Option<usize>,
+}
+
+#[derive(Debug, serde::Serialize)]
+struct Timings {
+    silhouette_ms: f64,
+    side_building_ms: f64,
+    raster_ms: f64,
+    prepare_ms: f64,
+    total_ms: f64,
+    reference_ms: Option<f64>,
+}
+
+pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
+    let entry = find_backend(&args.backend)?;
+    let scene = shadowvol_scenes::Scene::from_name_or_path(&args.scene)
+        .map_err(|e| CliError::Other(format!("{}: {e}", args.scene)))?;
+    if scene.lights.is_empty() {
+        return Err(CliError::Usage(format!(
+            "scene {} has no lights: nothing would cast a shadow (glTF: add KHR_lights_punctual lights)",
+            args.scene
+        )));
+    }
+    let mut rscene = RenderScene::from_scene(&scene).map_err(render_error)?;
+    if args.backdrop {
+        rscene.add_backdrop();
+    }
+    let backend = entry.start()?;
+    let backend_name = entry.name;
+    let mut options = RenderOptions::new(args.size.0, args.size.1);
+    options.mode = Accuracy::from(args.mode);
+    options.policy = match args.technique {
+        TechniqueArg::Auto => PlanPolicy::Auto,
+        TechniqueArg::ZFail => PlanPolicy::AlwaysZFail,
+        TechniqueArg::ZPass => PlanPolicy::AlwaysZPass,
+    };
+    let mut renderer = Renderer::new(backend, options).map_err(render_error)?;
+    let frame = renderer.render(&rscene).map_err(render_error)?;
+    frame.save_png(&args.out).map_err(render_error)?;
+
+    let want_reference = args.reference || args.diff.is_some();
+    let (cmp, reference_ms) = if want_reference {
+        let t = Instant::now();
+        let cmp = reference::compare(&frame);
+        (Some(cmp), Some(t.elapsed().as_secs_f64() * 1e3))
+    } else {
+        (None, None)
+    };
+    if let (Some(path), Some(cmp)) = (&args.diff, &cmp) {
+        reference::save_diff(&frame, cmp, path).map_err(render_error)?;
+    }
+    let shadow_pixels = cmp
+        .as_ref()
+        .map_or_else(|| reference::shadow_pixels(&frame), |c| c.shadow_pixels);
+    match args.format {
+        Format::Json => {
+            let t = frame.timings;
+            let report = Report {
+                artifact_pixels: cmp.as_ref().map(|c| c.artifact_pixels),
+                shadow_pixels,
+                plan: &frame.plan,
+                timings: Timings {
+                    silhouette_ms: t.silhouette_ms,
+                    side_building_ms: t.side_building_ms,
+                    raster_ms: t.raster_ms,
+                    prepare_ms: t.prepare_ms,
+                    total_ms: t.total_ms,
+                    reference_ms,
+                },
+                scene: scene.name.clone(),
+                backend: backend_name,
+                mode: frame.mode,
+                size: [frame.width, frame.height],
+                adapter: &frame.adapter,
+                out: args.out.display().to_string(),
+                covered_pixels: cmp.as_ref().map(|c| c.covered_pixels),
+                reference_shadow_pixels: cmp.as_ref().map(|c| c.reference_shadow_pixels),
+            };
+            serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
+            writeln!(out)?;
+        }
+        Format::Text => write_text(
+            out,
+            args,
+            &scene.name,
+            backend_name,
+            &frame,
+            shadow_pixels,
+            cmp.as_ref(),
+            reference_ms,
+        )?,
+    }
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn write_text(
+    out: &mut dyn Write,
+    args: &Args,
+    scene: &str,
+    backend: &str,
+    frame: &Frame,
+    shadow_pixels: usize,
+    cmp: Option<&reference::Comparison>,
+    reference_ms: Option<f64>,
+) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "rendered {scene} ({}x{}, mode {}, backend {backend}) on {} -> {}",
+        frame.width,
+        frame.height,
+        frame.mode,
+        frame.adapter,
+        args.out.display()
+    )?;
+    writeln!(out, "shadow pixels   {shadow_pixels}")?;
+    if let Some(c) = cmp {
+        let total = (frame.width * frame.height) as usize;
+        writeln!(
+            out,
+            "artifact pixels {} ({:.3}% of the image; {} differ at boundaries or are undecidable; reference shadow pixels {})",
+            c.artifact_pixels,
+            100.0 * c.artifact_fraction(total),
+            c.differing_pixels - c.artifact_pixels,
+            c.reference_shadow_pixels
+        )?;
+    }
+    let t = frame.timings;
+    write!(
+        out,
+        "timings         silhouette {:.2} ms, side building {:.2} ms, raster {:.2} ms, prepare {:.2} ms, total {:.2} ms",
+        t.silhouette_ms, t.side_building_ms, t.raster_ms, t.prepare_ms, t.total_ms
+    )?;
+    if let Some(r) = reference_ms {
+        write!(out, ", reference {r:.2} ms")?;
+    }
+    writeln!(out)?;
+    if let Some(p) = &args.diff {
+        writeln!(out, "diff            {}", p.display())?;
+    }
+    if args.explain {
+        writeln!(out, "\nplan:")?;
+        write!(out, "{}", frame.explain())?;
+    }
+    Ok(())
+}
