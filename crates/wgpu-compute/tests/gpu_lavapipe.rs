@@ -352,3 +352,30 @@ fn gpu_buffer_limits_chunk_lights_or_refuse_with_numbers() {
         assert_eq!(res.first_light + res.light_count, lights.len());
     }
 }
+
+#[test]
+fn gpu_lost_device_is_an_error_not_a_panic() {
+    let Some(mut b) = backend(
+        "gpu_lost_device_is_an_error_not_a_panic",
+        WgpuOptions::default(),
+    ) else {
+        return;
+    };
+    let case = &common::all_cases()[0];
+    let id = b.prepare(&case.scene).unwrap();
+    let mut m = Multiplicities::default();
+    b.extract(id, &case.lights, Accuracy::Exact, &mut m)
+        .unwrap();
+    b.device().destroy();
+    let _ = b.device().poll(wgpu::PollType::wait_indefinitely());
+    for mode in Accuracy::ALL {
+        match b.extract(id, &case.lights, mode, &mut m) {
+            Err(BackendError::Device { message, .. }) => assert!(!message.is_empty()),
+            other => panic!("{mode}: expected a device error, got {other:?}"),
+        }
+    }
+    assert!(matches!(
+        b.prepare(&case.scene),
+        Err(BackendError::Device { .. })
+    ));
+}
