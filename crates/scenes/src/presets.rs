@@ -76,6 +76,22 @@ const FIXED: &[Fixed] = &[
         description: "10 x 10 grid of icospheres of 1,000 triangles (100 objects, one mesh)",
     },
     Fixed {
+        name: "sphere-10k",
+        description: "one icosphere of 10,000 triangles (time against triangles, 10^4)",
+    },
+    Fixed {
+        name: "sphere-1k",
+        description: "one icosphere of 1,000 triangles (time against triangles, 10^3)",
+    },
+    Fixed {
+        name: "bunny",
+        description: "the bundled Stanford bunny (3,674 triangles; the Toy Wars table)",
+    },
+    Fixed {
+        name: "bunny-subdivided",
+        description: "the bunny Loop-subdivided twice (58,784 triangles; the Toy Wars table)",
+    },
+    Fixed {
         name: "town",
         description: "~570k triangles of axis-aligned box buildings; sun exactly along +Y, so every wall is parallel to it",
     },
@@ -134,6 +150,10 @@ pub fn preset(name: &str) -> Result<Scene, SceneError> {
         "sphere-100k" => sphere_grid(name, 100_000, 1, 1),
         "spheres-100x10k" => sphere_grid(name, 10_000, 10, 10),
         "spheres-100x1k" => sphere_grid(name, 1_000, 10, 10),
+        "sphere-10k" => sphere_grid(name, 10_000, 1, 1),
+        "sphere-1k" => sphere_grid(name, 1_000, 1, 1),
+        "bunny" => single_bunny(name, 0),
+        "bunny-subdivided" => single_bunny(name, BUNNY_LEVELS),
         "town" => town_scene(),
         _ => match name.strip_prefix("hard-").and_then(|case| {
             shadowvol_silhouette::corpus::cases()
@@ -193,6 +213,30 @@ fn bunnies(name: &str) -> Scene {
     framed(
         scene,
         vec![Light::point(Vec3::new(-20.0, 40.0, 25.0))],
+        Vec3::new(0.4, 0.6, 1.0),
+    )
+}
+
+/// One bunny (`levels` Loop subdivisions) standing on the ground, lit from above and to the side.
+fn single_bunny(name: &str, levels: u32) -> Scene {
+    let base = bunny();
+    let mesh = Arc::new(if levels == 0 {
+        base
+    } else {
+        loop_subdivide_levels(&base, levels)
+    });
+    let scene = Scene {
+        name: name.to_owned(),
+        objects: grid_objects("bunny", &mesh, 1, 1, 12.0),
+        effects: Effects {
+            ground_y: Some(0.0),
+            ..Effects::default()
+        },
+        ..Scene::default()
+    };
+    framed(
+        scene,
+        vec![Light::point(Vec3::new(-8.0, 25.0, 12.0))],
         Vec3::new(0.4, 0.6, 1.0),
     )
 }

@@ -27,6 +27,10 @@ const GRIDS: &[(&str, usize, usize)] = &[
     ("sphere-100k", 1, 100_000),
     ("spheres-100x10k", 100, 10_000),
     ("spheres-100x1k", 100, 1_000),
+    ("sphere-10k", 1, 10_000),
+    ("sphere-1k", 1, 1_000),
+    ("bunny", 1, 3_674),
+    ("bunny-subdivided", 1, 3_674 * 16),
 ];
 
 #[test]
@@ -146,6 +150,10 @@ fn every_listed_preset_builds_and_names_resolve() {
         "spheres-100x10k",
         "spheres-100x1k",
         "town",
+        "sphere-1k",
+        "sphere-10k",
+        "bunny",
+        "bunny-subdivided",
     ] {
         assert!(names.iter().any(|n| n == required), "{required} missing");
     }
