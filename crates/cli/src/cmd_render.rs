@@ -280,3 +280,18 @@ fn write_text(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::parse_size;
+
+    #[test]
+    fn size_parsing() {
+        assert_eq!(parse_size("640x480"), Ok((640, 480)));
+        assert_eq!(parse_size("16X9"), Ok((16, 9)));
+        for bad in ["640", "0x10", "10x0", "axb", "-1x5", "20000x10", ""] {
+            let e = parse_size(bad).unwrap_err();
+            assert!(e.contains("size"), "{bad}: {e}");
+        }
+    }
+}

@@ -1,0 +1,31 @@
+//! The renderer is backend-agnostic: in exact mode the `simd` backend's multiplicities are
+//! bit-identical to the `cpu` backend's, so the stencil (shadow) masks must be identical too.
+mod common;
+
+use shadowvol_renderer::{hard, RenderOptions, Renderer};
+use shadowvol_robust_math::Accuracy;
+
+#[test]
+fn simd_and_cpu_give_identical_stencils_in_exact_mode() {
+    let Some(mut cpu) = common::renderer(96, 96, Accuracy::Exact) else {
+        return;
+    };
+    let simd = shadowvol_simd::create_backend().expect("the simd backend always starts");
+    let mut simd = Renderer::new(simd, RenderOptions::new(96, 96)).unwrap();
+    let scenes = [
+        hard::edge_on_frustum(),
+        hard::bunny_offset(1e4).unwrap(),
+        hard::hard_preset("hard-multi-object-transforms").unwrap(),
+        hard::hard_preset("hard-book-4").unwrap(),
+    ];
+    for scene in &scenes {
+        let a = cpu.render(scene).unwrap();
+        let b = simd.render(scene).unwrap();
+        assert_eq!(a.stencil, b.stencil, "{}", a.explain());
+        assert_eq!(a.rgba, b.rgba);
+        assert!(
+            a.stencil.iter().flatten().any(|&s| s != 0),
+            "the scene has shadows"
+        );
+    }
+}
