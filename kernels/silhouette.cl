@@ -13,9 +13,11 @@
 //   ovs       opposite vertices (global vertex ids)
 //   lights    4 floats per (object, light): object-space light, index obj * num_lights + l
 // Outputs:
-//   counts    counts[0] = uncertain records appended, counts[1 + l] = silhouette edges of light l
-//   sil       per light l, a region of num_edges (edge, m) int pairs starting at l * num_edges;
-//             the first counts[1 + l] entries are filled (in any order)
+//   counts    counts[0] = uncertain records appended, counts[1] = silhouette entries appended
+//   sil       the compact silhouette list of all lights: (l * num_edges + e, m) int pairs, in any
+//             order; the first counts[1] are filled (capacity num_edges * num_lights, the most
+//             there can be). The index is light-major like the host's multiplicity array, so one
+//             read brings back every light's silhouette.
 //   unc       (edge, ov slot, light) uint triples that the exact filter could not certify;
 //             only the first unc_capacity are stored, counts[0] counts them all
 //
@@ -257,9 +259,9 @@ __kernel void silhouette(__global const float* restrict pos,
         m += s;
     }
     if (m != 0) {
-        const uint slot = atomic_inc(&counts[1 + l]);
-        const size_t at = 2 * ((size_t)l * num_edges + slot);
-        sil[at] = (int)e;
+        const uint slot = atomic_inc(&counts[1]);
+        const size_t at = 2 * (size_t)slot;
+        sil[at] = (int)(l * num_edges + e);
         sil[at + 1] = m;
     }
 }

@@ -142,20 +142,20 @@ pub fn flat_lights(object_lights: &[Vec<[f32; 4]>]) -> Vec<f32> {
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct KernelOutput {
     /// `counts[0]`: uncertain records appended (possibly more than stored);
-    /// `counts[1 + l]`: silhouette edges of light `l`.
+    /// `counts[1]`: silhouette entries appended.
     pub counts: Vec<u32>,
-    /// Per light, its `(edge, m)` pairs (only the first `counts[1 + l]`, any order).
-    pub silhouettes: Vec<Vec<(u32, i32)>>,
+    /// The compact silhouette list of all lights: `(light * edges + edge, m)` pairs, any order.
+    pub silhouettes: Vec<(u32, i32)>,
     /// `(edge, ov slot, light)` records the filter could not certify.
     pub uncertain: Vec<[u32; 3]>,
 }
 
-/// Fills `out` from a kernel run: scatters the compact lists, decides the uncertain records
-/// with [`orient_exact`] and adds them, and sets the compact silhouette lists.
+/// Fills `out` from a kernel run: scatters the compact list, decides the uncertain records
+/// with [`orient_exact`] and adds them, and sets the per-light compact silhouette lists.
 ///
 /// # Errors
-/// [`BackendError::Device`] when the kernel's output is malformed (an edge, slot or light out of
-/// range, or fewer uncertain records than counted): a device or driver fault.
+/// [`BackendError::Device`] when the kernel's output is malformed (an index, slot or light out
+/// of range, an edge listed twice, or fewer records than counted): a device or driver fault.
 pub fn finish(
     flat: &FlatScene,
     object_lights: &[Vec<[f32; 4]>],
@@ -175,30 +175,38 @@ pub fn finish(
         silhouettes,
         uncertain,
     } = output;
-    if counts.first().copied().unwrap_or(0) as usize != uncertain.len() {
+    let counted = |i: usize| counts.get(i).copied().unwrap_or(0) as usize;
+    if counted(0) != uncertain.len() || counted(1) != silhouettes.len() {
         return Err(bad(format!(
-            "{} uncertain records counted, {} read back",
-            counts.first().copied().unwrap_or(0),
-            uncertain.len()
+            "{} uncertain records and {} silhouette entries counted, {} and {} read back",
+            counted(0),
+            counted(1),
+            uncertain.len(),
+            silhouettes.len()
         )));
     }
-    for (l, list) in silhouettes.iter().enumerate().take(lights) {
-        let values = out.values_mut(l);
-        for &(e, m) in list {
-            let slot = values.get_mut(e as usize).ok_or_else(|| {
+    let mut lists: Vec<Vec<u32>> = vec![Vec::new(); lights];
+    {
+        let values = out.all_values_mut();
+        for &(index, m) in &silhouettes {
+            let slot = values.get_mut(index as usize).ok_or_else(|| {
                 bad(format!(
-                    "edge {e} of light {l} out of range ({edges} edges)"
+                    "silhouette index {index} out of range ({edges} edges x {lights} lights)"
                 ))
             })?;
-            if *slot != 0 {
-                return Err(bad(format!("edge {e} of light {l} listed twice")));
+            if *slot != 0 || m == 0 {
+                return Err(bad(format!(
+                    "silhouette index {index} listed twice or with m = 0"
+                )));
             }
             *slot = m;
+            let (l, e) = (index as usize / edges, index as usize % edges);
+            lists[l].push(e as u32);
         }
     }
     if uncertain.is_empty() {
-        for (l, list) in silhouettes.into_iter().enumerate().take(lights) {
-            out.set_silhouette(l, list.into_iter().map(|(e, _)| e).collect());
+        for (l, list) in lists.into_iter().enumerate() {
+            out.set_silhouette(l, list);
         }
         return Ok(());
     }

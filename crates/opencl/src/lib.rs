@@ -8,8 +8,9 @@
 //!   There is no per-object synchronisation.
 //! * **Uploaded once.** Positions, edges, OV lists and offsets are uploaded at `prepare`; an
 //!   `extract` uploads only the lights (and zeroes the counters).
-//! * **Compact output.** The kernel appends `(edge, m)` for each silhouette edge to a per-light
-//!   list with an atomic counter; only those lists are read back and scattered on the host.
+//! * **Compact output.** The kernel appends `(light * edges + edge, m)` for each silhouette edge
+//!   of every light to one list with an atomic counter; only that list (one read, whatever the
+//!   number of lights) is read back, scattered and split per light on the host.
 //! * **All four modes.** `original`, `robust` and `ordered` evaluate robust-math's `sign_f32`
 //!   expression exactly as written (`#pragma OPENCL FP_CONTRACT OFF`), with the canonical order
 //!   and parity rules. `exact` runs a certified filter on the device (the `f64` filter of
@@ -436,7 +437,7 @@ impl OpenClBackend {
         })?;
         let edges = p.flat.edge_count();
         let t = Instant::now();
-        let zeros = vec![0u32; num_lights + 1];
+        let zeros = [0u32; 2];
         let (lights_buf, _) = p.lights.as_mut().expect("ensured by extract");
         let (counts_buf, _) = p.counts.as_mut().expect("ensured by extract");
         // SAFETY: blocking writes (they return once the slices have been read) from live slices
@@ -592,7 +593,7 @@ impl SilhouetteBackend for OpenClBackend {
             let ctx = &self.context;
             let p = self.scenes.get_mut(&id).expect("checked above");
             ensure(ctx, &mut p.lights, flat_l.len(), "the light buffer")?;
-            ensure(ctx, &mut p.counts, num_lights + 1, "the counters")?;
+            ensure(ctx, &mut p.counts, 2, "the counters")?;
             ensure(
                 ctx,
                 &mut p.sil,
@@ -616,7 +617,7 @@ impl SilhouetteBackend for OpenClBackend {
             upload: prep_start.elapsed(),
             ..ExtractStats::default()
         };
-        let mut counts = vec![0u32; num_lights + 1];
+        let mut counts = vec![0u32; 2];
         loop {
             let (up, comp) = self.run_once(id, &flat_l, num_lights, mode)?;
             stats.upload += up;
@@ -645,33 +646,24 @@ impl SilhouetteBackend for OpenClBackend {
         }
         let t = Instant::now();
         let p = self.scenes.get(&id).expect("checked above");
-        let mut raw_sil: Vec<Vec<i32>> = counts[1..]
-            .iter()
-            .map(|&c| vec![0i32; 2 * (c as usize).min(edges)])
-            .collect();
+        // At most one entry per (edge, light): a larger count is a device fault, caught by
+        // `finish` when fewer entries than counted come back.
+        let mut raw_sil = vec![0i32; 2 * (counts[1] as usize).min(edges * num_lights)];
         let mut raw_unc = vec![0u32; 3 * counts[0] as usize];
         {
             let (sil_buf, _) = p.sil.as_ref().expect("ensured");
             let (unc_buf, _) = p.unc.as_ref().expect("ensured");
             // SAFETY: non-blocking reads into slices that outlive the `finish` below, which runs
             // on every path (also after a failed enqueue), so no read is pending when they drop;
-            // offsets and lengths lie inside the buffers (per-light regions of `edges` pairs).
+            // the lengths lie inside the buffers.
             let mut enqueued = Ok(());
             unsafe {
-                for (l, dst) in raw_sil.iter_mut().enumerate() {
-                    if !dst.is_empty() && enqueued.is_ok() {
-                        enqueued = self
-                            .queue
-                            .enqueue_read_buffer(
-                                sil_buf,
-                                CL_NON_BLOCKING,
-                                2 * l * edges * 4,
-                                dst,
-                                &[],
-                            )
-                            .map(drop)
-                            .map_err(|e| device_error("reading silhouette lists", e));
-                    }
+                if !raw_sil.is_empty() {
+                    enqueued = self
+                        .queue
+                        .enqueue_read_buffer(sil_buf, CL_NON_BLOCKING, 0, &mut raw_sil, &[])
+                        .map(drop)
+                        .map_err(|e| device_error("reading the silhouette list", e));
                 }
                 if !raw_unc.is_empty() && enqueued.is_ok() {
                     enqueued = self
@@ -692,8 +684,8 @@ impl SilhouetteBackend for OpenClBackend {
         let t = Instant::now();
         let output = KernelOutput {
             silhouettes: raw_sil
-                .iter()
-                .map(|r| r.chunks_exact(2).map(|c| (c[0] as u32, c[1])).collect())
+                .chunks_exact(2)
+                .map(|c| (c[0] as u32, c[1]))
                 .collect(),
             uncertain: raw_unc
                 .chunks_exact(3)

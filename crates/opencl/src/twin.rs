@@ -244,8 +244,9 @@ fn work_item(
         m += s;
     }
     if m != 0 {
-        out.counts[1 + l] += 1;
-        out.silhouettes[l].push((e as u32, m));
+        out.counts[1] += 1;
+        out.silhouettes
+            .push(((l * flat.edge_count() + e) as u32, m));
     }
 }
 
@@ -262,8 +263,8 @@ pub fn run_kernel(
     use_f64: bool,
 ) -> KernelOutput {
     let mut out = KernelOutput {
-        counts: vec![0; num_lights + 1],
-        silhouettes: vec![Vec::new(); num_lights],
+        counts: vec![0; 2],
+        silhouettes: Vec::new(),
         uncertain: Vec::new(),
     };
     let code = mode_code(mode);
