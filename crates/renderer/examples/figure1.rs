@@ -72,7 +72,7 @@ fn run() -> Result<(), String> {
         ),
         (
             "town",
-            "the town preset: axis-aligned buildings, sun exactly along +Y",
+            "the town preset, sun (1, 2, 0): walls facing ±Z exactly parallel to it",
             hard::town().map_err(|e| e.to_string())?,
         ),
     ];
