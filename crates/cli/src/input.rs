@@ -26,13 +26,37 @@ pub struct Input {
 ///
 /// # Errors
 /// [`CliError::Scene`] for an unreadable or malformed file (naming the file and the line,
-/// accessor or vertex), an unsupported extension, or an unknown preset name.
+/// accessor or vertex), an unsupported extension, or an unknown preset name;
+/// [`CliError::Other`] for an input without triangles (an empty or garbage file).
 pub fn load_input(path_or_name: &str) -> Result<Input, CliError> {
     let scene = Scene::from_name_or_path(path_or_name)?;
     let mesh = scene.baked_mesh()?;
+    if mesh.triangles.is_empty() {
+        return Err(CliError::Other(format!(
+            "{path_or_name}: no triangles found, nothing can cast a shadow{}",
+            not_text_hint(path_or_name)
+        )));
+    }
     Ok(Input {
         name: path_or_name.to_owned(),
         mesh,
         lights: scene.lights.clone(),
     })
+}
+
+/// For a file that is not UTF-8 text (a binary or garbage file given as `.obj`), where the
+/// first invalid byte is; empty otherwise.
+fn not_text_hint(path: &str) -> String {
+    let Ok(bytes) = std::fs::read(path) else {
+        return String::new();
+    };
+    let is_glb = bytes.starts_with(b"glTF");
+    match std::str::from_utf8(&bytes) {
+        Err(e) if !is_glb => {
+            let at = e.valid_up_to();
+            let line = 1 + bytes[..at].iter().filter(|&&b| b == b'\n').count();
+            format!(" (the file is not UTF-8 text: first invalid byte at offset {at}, line {line})")
+        }
+        _ => String::new(),
+    }
 }

@@ -75,6 +75,71 @@ pub enum MeshError {
         /// The limit.
         limit: u64,
     },
+    /// Building the edge table would need more memory than is available (checked by
+    /// [`EdgeTable::check_size`] before anything big is allocated).
+    #[error(
+        "not enough memory for the edge table of {triangles} triangles and {vertices} vertices: \
+         it needs up to {needed} bytes ({} MiB) but {available} bytes ({} MiB) are available \
+         ({origin})",
+        .needed >> 20,
+        .available >> 20
+    )]
+    OutOfMemory {
+        /// Input triangles.
+        triangles: u64,
+        /// Input vertices.
+        vertices: u64,
+        /// Upper bound of the bytes the build allocates ([`EdgeTable::estimate_bytes`]).
+        needed: u64,
+        /// Bytes available.
+        available: u64,
+        /// Where `available` comes from (`/proc/meminfo MemAvailable`, the cgroup limit or
+        /// [`MEMORY_LIMIT_ENV`]).
+        origin: String,
+    },
+}
+
+/// Environment variable that caps the bytes [`EdgeTable::build`] may allocate (a decimal
+/// number of bytes). It takes precedence over `/proc/meminfo`; use it to test the
+/// out-of-memory path or to keep a build inside a budget.
+pub const MEMORY_LIMIT_ENV: &str = "SHADOWVOL_MEMORY_LIMIT";
+
+/// Builds whose estimate is below this many bytes skip the memory check (it reads
+/// `/proc/meminfo`), unless [`MEMORY_LIMIT_ENV`] is set.
+pub const MEMORY_CHECK_THRESHOLD: u64 = 64 << 20;
+
+/// Bytes available for new allocations and where that number comes from: [`MEMORY_LIMIT_ENV`]
+/// if set, otherwise the smaller of `MemAvailable` in `/proc/meminfo` and the cgroup v2 limit
+/// (`memory.max - memory.current`). `None` when none of these can be read (non-Linux hosts).
+#[must_use]
+pub fn available_memory() -> Option<(u64, String)> {
+    if let Ok(v) = std::env::var(MEMORY_LIMIT_ENV) {
+        if let Ok(n) = v.trim().parse::<u64>() {
+            return Some((n, format!("{MEMORY_LIMIT_ENV}={n}")));
+        }
+    }
+    let meminfo = std::fs::read_to_string("/proc/meminfo").ok().and_then(|t| {
+        t.lines()
+            .find_map(|l| l.strip_prefix("MemAvailable:"))
+            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+            .map(|kb| (kb * 1024, "/proc/meminfo MemAvailable".to_owned()))
+    });
+    let read = |f: &str| {
+        std::fs::read_to_string(format!("/sys/fs/cgroup/{f}"))
+            .ok()
+            .and_then(|t| t.trim().parse::<u64>().ok())
+    };
+    let cgroup = match (read("memory.max"), read("memory.current")) {
+        (Some(max), Some(cur)) => Some((
+            max.saturating_sub(cur),
+            "cgroup memory.max - memory.current".to_owned(),
+        )),
+        _ => None,
+    };
+    match (meminfo, cgroup) {
+        (Some(m), Some(c)) => Some(if c.0 < m.0 { c } else { m }),
+        (m, c) => m.or(c),
+    }
 }
 
 /// A triangle mesh as loaded: `f32` positions and `u32` vertex-index triples.
@@ -332,9 +397,14 @@ pub struct EdgeTable {
 impl EdgeTable {
     /// Validates `mesh`, welds it and builds the edge table in linear time.
     ///
+    /// Before allocating anything, [`EdgeTable::check_size`] refuses meshes beyond `u32`
+    /// indexing and meshes whose table would not fit the available memory.
+    ///
     /// # Errors
-    /// Any [`MeshError`] from [`Mesh::validate`].
+    /// [`MeshError::TooLarge`] or [`MeshError::OutOfMemory`] from [`EdgeTable::check_size`], or
+    /// any [`MeshError`] from [`Mesh::validate`].
     pub fn build(mesh: &Mesh) -> Result<Self, MeshError> {
+        Self::check_size(mesh.triangles.len() as u64, mesh.positions.len() as u64)?;
         mesh.validate()?;
         let weld = weld(&mesh.positions);
         Ok(Self::from_weld(weld, &mesh.triangles))
@@ -475,6 +545,65 @@ impl EdgeTable {
         }
     }
 
+    /// Upper bound of the heap bytes [`EdgeTable::build`] allocates for a mesh of `triangles`
+    /// triangles and `vertices` input vertices, not counting the input mesh itself.
+    ///
+    /// Per triangle (166 bytes): kept triangles and their sources (16), the counting-sort entries
+    /// (36), OV lists (12), per-triangle edge ids and neighbours (24), edge records, CSR offsets
+    /// and the neighbour scratch at the worst case of 3 edges per triangle, including one vector
+    /// regrowth (78). Per vertex (76 bytes): the weld's hash slots (up to 16), keys, names and
+    /// positions at double capacity (56) and the input-to-compact map (4). A closed manifold mesh
+    /// needs about 70 % of this.
+    #[must_use]
+    pub fn estimate_bytes(triangles: u64, vertices: u64) -> u64 {
+        triangles
+            .saturating_mul(166)
+            .saturating_add(vertices.saturating_mul(76))
+    }
+
+    /// Checks, without allocating, that a mesh of `triangles` triangles and `vertices` vertices
+    /// fits `u32` indexing and that its edge table ([`EdgeTable::estimate_bytes`]) fits the
+    /// available memory ([`available_memory`]). Returns the estimate in bytes.
+    ///
+    /// The memory check runs when the estimate is at least [`MEMORY_CHECK_THRESHOLD`] or when
+    /// [`MEMORY_LIMIT_ENV`] is set; it is skipped when the available memory cannot be read.
+    ///
+    /// # Errors
+    /// [`MeshError::TooLarge`] when `vertices >= 2^32 - 1` or `3 * triangles >= 2^32 - 1`;
+    /// [`MeshError::OutOfMemory`] naming both numbers when the estimate exceeds what is available.
+    pub fn check_size(triangles: u64, vertices: u64) -> Result<u64, MeshError> {
+        let limit = u64::from(u32::MAX);
+        if vertices >= limit {
+            return Err(MeshError::TooLarge {
+                what: "vertices",
+                count: vertices,
+                limit: limit - 1,
+            });
+        }
+        if triangles.saturating_mul(3) >= limit {
+            return Err(MeshError::TooLarge {
+                what: "edge entries (3 x triangles)",
+                count: triangles.saturating_mul(3),
+                limit: limit - 1,
+            });
+        }
+        let needed = Self::estimate_bytes(triangles, vertices);
+        if needed >= MEMORY_CHECK_THRESHOLD || std::env::var_os(MEMORY_LIMIT_ENV).is_some() {
+            if let Some((available, source)) = available_memory() {
+                if needed > available {
+                    return Err(MeshError::OutOfMemory {
+                        triangles,
+                        vertices,
+                        needed,
+                        available,
+                        origin: source,
+                    });
+                }
+            }
+        }
+        Ok(needed)
+    }
+
     /// Number of edges.
     #[must_use]
     pub fn edge_count(&self) -> usize {
@@ -511,9 +640,164 @@ impl EdgeTable {
     }
 }
 
+/// Peak-allocation tracking for the estimate tests: a global allocator that counts live bytes
+/// (only in this crate's unit-test binary).
+#[cfg(test)]
+mod counting {
+    use std::alloc::{GlobalAlloc, Layout, System};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    pub struct Counting;
+    pub static LIVE: AtomicUsize = AtomicUsize::new(0);
+    pub static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+    // SAFETY: forwards to the system allocator; only counts.
+    unsafe impl GlobalAlloc for Counting {
+        unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+            let live = LIVE.fetch_add(layout.size(), Ordering::SeqCst) + layout.size();
+            PEAK.fetch_max(live, Ordering::SeqCst);
+            // SAFETY: same contract as the caller's.
+            unsafe { System.alloc(layout) }
+        }
+        unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+            LIVE.fetch_sub(layout.size(), Ordering::SeqCst);
+            // SAFETY: same contract as the caller's.
+            unsafe { System.dealloc(ptr, layout) }
+        }
+    }
+
+    #[global_allocator]
+    static GLOBAL: Counting = Counting;
+
+    /// Peak live bytes above the level at the start, while `f` runs.
+    pub fn peak_during<R>(f: impl FnOnce() -> R) -> (R, usize) {
+        let base = LIVE.load(Ordering::SeqCst);
+        PEAK.store(base, Ordering::SeqCst);
+        let r = f();
+        (r, PEAK.load(Ordering::SeqCst) - base)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An `n x n` grid of quads (2 n^2 triangles, manifold inside, boundary around).
+    fn grid(n: u32) -> Mesh {
+        let mut positions = Vec::new();
+        for y in 0..=n {
+            for x in 0..=n {
+                positions.push(Vec3::new(x as f32, y as f32, ((x * 7 + y * 3) % 5) as f32));
+            }
+        }
+        let mut triangles = Vec::new();
+        let id = |x: u32, y: u32| y * (n + 1) + x;
+        for y in 0..n {
+            for x in 0..n {
+                triangles.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
+                triangles.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
+            }
+        }
+        Mesh::new(positions, triangles).unwrap()
+    }
+
+    /// A soup: every triangle has its own three vertices (3 boundary edges per triangle, the
+    /// most edges a mesh can have).
+    fn soup(t: u32) -> Mesh {
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for i in 0..t {
+            let f = i as f32;
+            positions.extend([
+                Vec3::new(f, 0.0, 0.0),
+                Vec3::new(f, 1.0, 0.0),
+                Vec3::new(f, 0.0, 1.0),
+            ]);
+            triangles.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        Mesh::new(positions, triangles).unwrap()
+    }
+
+    #[test]
+    fn estimate_bounds_the_measured_peak_allocation() {
+        for (name, mesh) in [("grid", grid(300)), ("soup", soup(150_000))] {
+            let t = mesh.triangles.len() as u64;
+            let v = mesh.positions.len() as u64;
+            let estimate = EdgeTable::estimate_bytes(t, v);
+            let (table, peak) = counting::peak_during(|| EdgeTable::build(&mesh).unwrap());
+            assert_eq!(table.stats.triangles, mesh.triangles.len());
+            let peak = peak as u64;
+            eprintln!("{name}: {t} triangles, {v} vertices: peak {peak} B, estimate {estimate} B");
+            assert!(
+                peak <= estimate,
+                "{name}: peak {peak} > estimate {estimate}"
+            );
+            // Not uselessly loose either.
+            assert!(
+                2 * peak >= estimate,
+                "{name}: peak {peak} is under half of {estimate}"
+            );
+        }
+    }
+
+    #[test]
+    fn beyond_u32_is_refused_without_allocating() {
+        let ((), peak) = counting::peak_during(|| {
+            let e = EdgeTable::check_size(1 << 31, 10).unwrap_err();
+            assert!(matches!(
+                e,
+                MeshError::TooLarge {
+                    what: "edge entries (3 x triangles)",
+                    ..
+                }
+            ));
+            assert!(e.to_string().contains("6442450944"), "{e}");
+            let e = EdgeTable::check_size(10, u64::from(u32::MAX)).unwrap_err();
+            assert!(
+                matches!(
+                    e,
+                    MeshError::TooLarge {
+                        what: "vertices",
+                        ..
+                    }
+                ),
+                "{e}"
+            );
+        });
+        assert!(peak < 4096, "{peak} bytes allocated");
+        // Just inside the limit passes the index check (the memory check may still refuse).
+        let inside = EdgeTable::check_size((u64::from(u32::MAX) - 1) / 3, 3);
+        assert!(
+            !matches!(inside, Err(MeshError::TooLarge { .. })),
+            "{inside:?}"
+        );
+    }
+
+    #[test]
+    fn memory_check_names_the_numbers() {
+        // 10^12 triangles fits no machine this runs on (1.66e14 bytes); vertices stay in range
+        // but triangles don't: use a count inside u32 and a huge vertex count instead.
+        let Some((available, _)) = available_memory() else {
+            return; // not Linux: nothing to compare against
+        };
+        let t = (u64::from(u32::MAX) - 1) / 3;
+        let v = u64::from(u32::MAX) - 2;
+        let needed = EdgeTable::estimate_bytes(t, v);
+        if needed <= available {
+            return; // a machine with over 500 GB free
+        }
+        let e = EdgeTable::check_size(t, v).unwrap_err();
+        let msg = e.to_string();
+        assert!(matches!(e, MeshError::OutOfMemory { .. }), "{msg}");
+        assert!(
+            msg.contains(&needed.to_string()) && msg.contains("MiB"),
+            "{msg}"
+        );
+        assert!(
+            msg.contains(&t.to_string()) && msg.contains(&v.to_string()),
+            "{msg}"
+        );
+    }
 
     #[test]
     fn weld_negative_zero_and_names() {

@@ -119,7 +119,28 @@ pub fn load_gltf_slice(
     validate(&document).map_err(|m| err("document", m))?;
     let buffers =
         gltf::import_buffers(&document, base, blob).map_err(|e| err("buffers", e.to_string()))?;
-    let buffers: Vec<&[u8]> = buffers.iter().map(|b| &b.0[..]).collect();
+    // `import_buffers` rejects data shorter than `byteLength`; data longer than it (beyond the
+    // up to 3 padding bytes a GLB BIN chunk may carry) is a lie about the length too. Views are
+    // then checked against the declared length only.
+    for (b, data) in document.buffers().zip(&buffers) {
+        if data.0.len() > b.length() + 3 {
+            return Err(err(
+                "buffers",
+                format!(
+                    "buffer {}: its data holds {} bytes but byteLength declares {} (a data URI, \
+                     file or GLB chunk must match byteLength)",
+                    b.index(),
+                    data.0.len(),
+                    b.length()
+                ),
+            ));
+        }
+    }
+    let buffers: Vec<&[u8]> = document
+        .buffers()
+        .zip(&buffers)
+        .map(|(b, d)| &d.0[..d.0.len().min(b.length())])
+        .collect();
 
     let roots: Vec<gltf::Node> = match document
         .default_scene()
@@ -572,6 +593,23 @@ impl Loader<'_> {
 fn validate(document: &gltf::Document) -> Result<(), String> {
     use gltf::json::validation::{Error, Validate};
     let root = document.as_json();
+    // gltf-json's validation indexes the POSITION accessor without a bounds check (it panics on
+    // a dangling index): check that reference first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let pos = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(a) = prim.attributes.get(&pos) {
+                if a.value() >= root.accessors.len() {
+                    return Err(format!(
+                        "invalid glTF: meshes[{m}].primitives[{p}].attributes[\"POSITION\"]: \
+                         accessor {} does not exist (the file has {} accessors)",
+                        a.value(),
+                        root.accessors.len()
+                    ));
+                }
+            }
+        }
+    }
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |path, error| {
         let p = path().to_string();

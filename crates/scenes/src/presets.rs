@@ -155,6 +155,8 @@ pub fn preset(name: &str) -> Result<Scene, SceneError> {
         "bunny" => single_bunny(name, 0),
         "bunny-subdivided" => single_bunny(name, BUNNY_LEVELS),
         "town" => town_scene(),
+        // Unlisted (so `shadowvol scenes` does not generate it): the 10^7-triangle limit test.
+        "sphere-10m" => sphere_grid(name, 10_000_000, 1, 1),
         _ => match name.strip_prefix("hard-").and_then(|case| {
             shadowvol_silhouette::corpus::cases()
                 .into_iter()

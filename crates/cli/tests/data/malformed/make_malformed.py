@@ -1,0 +1,91 @@
+#!/usr/bin/env python3
+"""Regenerates the malformed-input corpus of crates/cli/tests/reliability.rs (run in this folder).
+
+Fixtures that crates/scenes/tests/data already has (index_out_of_range.gltf, zero_count.gltf,
+nan_position.gltf, inf_position.gltf, past_view.gltf, truncated.glb, bad_magic.glb,
+short_face.obj, nan_position.obj, ...) are referenced from there, not copied.
+"""
+import base64, json, random, struct
+
+TRI = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+
+
+def blob(positions, indices):
+    pos = b"".join(struct.pack("<3f", *p) for p in positions)
+    idx = b"".join(struct.pack("<I", i) for i in indices)
+    return pos, idx
+
+
+def doc(positions=TRI, indices=(0, 1, 2), byte_length=None, pos_accessor=0, extra=None,
+        translation=None, scale=None):
+    pos, idx = blob(positions, indices)
+    data = pos + idx
+    node = {"name": "thing", "mesh": 0}
+    if translation is not None:
+        node["translation"] = translation
+    if scale is not None:
+        node["scale"] = scale
+    d = {
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [node],
+        "meshes": [{"name": "tri", "primitives": [
+            {"attributes": {"POSITION": pos_accessor}, "indices": 1, "mode": 4}]}],
+        "buffers": [{"byteLength": len(data) if byte_length is None else byte_length,
+                     "uri": "data:application/octet-stream;base64,"
+                            + base64.b64encode(data).decode()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": len(pos)},
+            {"buffer": 0, "byteOffset": len(pos), "byteLength": len(idx)},
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": len(positions)},
+            {"bufferView": 1, "componentType": 5125, "type": "SCALAR", "count": len(indices)},
+        ],
+    }
+    if extra:
+        d.update(extra)
+    return d
+
+
+def write_json(name, d):
+    with open(name, "w") as f:
+        json.dump(d, f, indent=1)
+
+
+def write(name, data, mode="w"):
+    with open(name, mode) as f:
+        f.write(data)
+
+
+# --- glTF ---
+full = json.dumps(doc(), indent=1)
+write("truncated.gltf", full[: len(full) // 2])
+rng = random.Random(20261122)
+write("garbage.gltf", bytes(rng.randrange(256) for _ in range(512)), "wb")
+write("garbage.glb", b"glTF" + struct.pack("<II", 2, 512) + bytes(rng.randrange(256) for _ in range(500)), "wb")
+# An accessor index that does not exist (POSITION -> accessor 5 of 2).
+write_json("missing_accessor.gltf", doc(pos_accessor=5))
+# The data URI holds 48 bytes but the buffer claims 4096 (and one that claims fewer).
+write_json("uri_longer_claim.gltf", doc(byte_length=4096))
+write_json("uri_shorter_claim.gltf", doc(byte_length=8))
+# A required extension this loader does not implement.
+write_json("required_extension.gltf", doc(extra={
+    "extensionsUsed": ["KHR_draco_mesh_compression"],
+    "extensionsRequired": ["KHR_draco_mesh_compression"]}))
+# f32 overflow: a node translation of 1e39 (JSON number beyond f32), and a finite scale that
+# takes finite positions past f32's range in the world transform.
+write_json("overflow_translation.gltf", doc(translation=[1e39, 0, 0]))
+write_json("overflow_world.gltf", doc(positions=[(0, 0, 0), (3e38, 0, 0), (0, 1, 0)], scale=[10, 1, 1]))
+
+# --- OBJ ---
+write("truncated.obj", "v 0 0 0\nv 1 0 0\nv 0 1")
+write("garbage.obj", bytes(rng.randrange(256) for _ in range(512)), "wb")
+write("face_one_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1\n")
+write("face_no_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf\n")
+write("index_beyond_u32.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4294967296\n")
+write("index_far_beyond_u32.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999999999999999\n")
+write("relative_off_start.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n")
+write("inf_position.obj", "v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n")
+write("overflow_position.obj", "v 0 0 0\nv 1 0 0\nv 0 1e39 0\nf 1 2 3\n")
