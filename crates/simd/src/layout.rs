@@ -53,14 +53,18 @@ pub(crate) struct Layout {
     pub tri_a: Vec<u32>,
     /// Second triangle reference of each edge (see `tri_a`).
     pub tri_b: Vec<u32>,
-    /// Edge endpoints, for the general path.
+    /// Edge endpoints (storage indices), for the general path.
     pub edges: Vec<[u32; 2]>,
     /// CSR offsets into `ovs` / `ov_tri`.
     pub ov_offsets: Vec<u32>,
-    /// Opposite vertices.
+    /// Opposite vertices (storage indices).
     pub ovs: Vec<u32>,
     /// Canonical-triangle index of each entry of `ovs`, with [`ODD`] for odd parity.
     pub ov_tri: Vec<u32>,
+}
+
+const fn zero_record() -> [f32; 4] {
+    [0.0; 4]
 }
 
 /// Why a table cannot be laid out.
@@ -95,14 +99,37 @@ impl Layout {
                 "edge table refers to a vertex id >= its {nv} positions"
             )));
         }
-        let xs = table.positions.iter().map(|p| p.x).collect();
-        let ys = table.positions.iter().map(|p| p.y).collect();
-        let zs = table.positions.iter().map(|p| p.z).collect();
-        let xyz = table
-            .positions
-            .iter()
-            .map(|p| [p.x, p.y, p.z, 0.0])
-            .collect();
+        // Storage order of the vertices: order of first reference when walking the edges (and
+        // their OVs) in table order, so the vertices one block of edges touches sit close
+        // together in memory (a Cuthill-McKee-like renumbering). Only where positions are
+        // *stored* changes; canonical order and parity below still use the table's ids.
+        let mut st = vec![u32::MAX; nv];
+        let mut next = 0u32;
+        let mut place = |v: u32, st: &mut Vec<u32>| {
+            if st[v as usize] == u32::MAX {
+                st[v as usize] = next;
+                next += 1;
+            }
+        };
+        for (e, &[a, b]) in table.edges.iter().enumerate() {
+            place(a, &mut st);
+            place(b, &mut st);
+            for &o in table.ovs_of(e) {
+                place(o, &mut st);
+            }
+        }
+        for v in 0..nv as u32 {
+            place(v, &mut st);
+        }
+        let mut stored = vec![zero_record(); nv];
+        for (v, p) in table.positions.iter().enumerate() {
+            stored[st[v] as usize] = [p.x, p.y, p.z, 0.0];
+        }
+        let xs = stored.iter().map(|p| p[0]).collect();
+        let ys = stored.iter().map(|p| p[1]).collect();
+        let zs = stored.iter().map(|p| p[2]).collect();
+        let xyz = stored;
+        let sv = |v: u32| st[v as usize];
 
         // Canonical triangles, sorted for locality; `slot[t]` = position of table triangle t.
         let mut canon: Vec<([u32; 3], u32)> = table
@@ -123,7 +150,7 @@ impl Layout {
         let tri_count = canon.len();
         let padded = tri_count.div_ceil(LANES) * LANES;
         let column = |k: usize| -> Vec<u32> {
-            let mut v: Vec<u32> = canon.iter().map(|(c, _)| c[k]).collect();
+            let mut v: Vec<u32> = canon.iter().map(|(c, _)| sv(c[k])).collect();
             v.resize(padded, 0);
             v
         };
@@ -169,8 +196,8 @@ impl Layout {
             );
             if t - s == 2 {
                 let [a, b] = table.edges[e];
-                (ea[e], eb[e]) = (a, b);
-                (eo1[e], eo2[e]) = (table.ovs[s], table.ovs[s + 1]);
+                (ea[e], eb[e]) = (sv(a), sv(b));
+                (eo1[e], eo2[e]) = (sv(table.ovs[s]), sv(table.ovs[s + 1]));
                 (tri_a[e], tri_b[e]) = (ov_tri[s], ov_tri[s + 1]);
             }
         }
@@ -200,14 +227,15 @@ impl Layout {
             eo2,
             tri_a,
             tri_b,
-            edges: table.edges.clone(),
+            edges: table.edges.iter().map(|&[a, b]| [sv(a), sv(b)]).collect(),
             ov_offsets: table.ov_offsets.clone(),
-            ovs: table.ovs.clone(),
+            ovs: table.ovs.iter().map(|&o| sv(o)).collect(),
             ov_tri,
         })
     }
 
-    /// Position of compact vertex `v` as an array.
+    /// Position of the vertex stored at index `v` (all index arrays of the layout hold storage
+    /// indices) as an array.
     #[inline(always)]
     pub(crate) fn pos(&self, v: u32) -> [f32; 3] {
         let v = v as usize;
