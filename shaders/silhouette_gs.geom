@@ -16,8 +16,9 @@
 // triangle's sign in the mode (canonical order) and emits its front cap (the triangle) and, for
 // point lights, its back cap at infinity, oriented to close the prisms the side quads bound.
 //
-// Regenerate the SPIR-V with `cargo xtask shaders` (two outputs: silhouette_gs.geom.spv with f64,
-// silhouette_gs.f32.geom.spv compiled with -DSHADOWVOL_NO_F64).
+// Regenerate the SPIR-V with `cargo xtask shaders`: silhouette_gs.geom.spv (f64 filter),
+// silhouette_gs.f32.geom.spv (-DSHADOWVOL_NO_F64), and the extraction-only variants
+// silhouette_gs.extract.geom.spv / silhouette_gs.extract.f32.geom.spv (-DSHADOWVOL_EXTRACT_ONLY).
 
 #ifndef SHADOWVOL_NO_F64
 #extension GL_ARB_gpu_shader_fp64 : require
@@ -26,7 +27,13 @@
 layout(points) in;
 // At most MAX_QUADS copies of a side quad per edge; larger |m| is clamped and counted.
 #define MAX_QUADS 16
+#ifdef SHADOWVOL_EXTRACT_ONLY
+// Extraction only (rasterisation discarded): declaring no real output keeps the per-invocation
+// output storage minimal, which decides how many invocations a GPU runs at once.
+layout(points, max_vertices = 1) out;
+#else
 layout(triangle_strip, max_vertices = 64) out;
+#endif
 
 layout(location = 0) flat in uint v_edge[];
 layout(location = 1) flat in uint v_light[];
@@ -86,6 +93,13 @@ vec3 position(uint v) {
 
 uvec3 position_bits(uint v) {
     return uvec3(pos_bits[3u * v], pos_bits[3u * v + 1u], pos_bits[3u * v + 2u]);
+}
+
+// The renderer's convention for a point light at a vertex: a triangle with a vertex p for which
+// p * L.w == L.xyz in f32 casts no volume (its shadow has no volume). Render passes only.
+bool touches_light(vec3 p, vec4 l) {
+    precise vec3 q = p * l.w;
+    return l.w != 0.0 && all(equal(q, l.xyz));
 }
 
 // robust-math `sign_f32`: the paper's plane evaluation, in exactly this operation order.
@@ -288,6 +302,8 @@ void emit_caps(uint t, uint li) {
     int s;
     if (pc.mode == MODE_EXACT || pc.mode == MODE_PRECOMPUTED) {
         s = tri_sign[t];
+    } else if (touches_light(p0, l) || touches_light(p1, l) || touches_light(p2, l)) {
+        s = 0;
     } else {
         // Original has no triangle sign of its own: its caps use ordered's.
         s = sign_f32(p0, p1, l, p2);
@@ -329,12 +345,14 @@ void emit_caps(uint t, uint li) {
 }
 
 void main() {
+#ifndef SHADOWVOL_EXTRACT_ONLY
     if (pc.pass == PASS_CAPS) {
         if (v_edge[0] < pc.edge_count && v_light[0] < pc.light_count) {
             emit_caps(v_edge[0], v_light[0]);
         }
         return;
     }
+#endif
     uint e = v_edge[0];
     uint li = v_light[0];
     if (e >= pc.edge_count || li >= pc.light_count) {
@@ -353,8 +371,12 @@ void main() {
     } else {
         vec3 pa = position(a);
         vec3 pb = position(b);
+        bool edge_touches = pc.emit != 0u && (touches_light(pa, l) || touches_light(pb, l));
         for (uint k = ed.z; k < ed.w; k++) {
             uint o = ovs[k];
+            if (pc.emit != 0u && (edge_touches || touches_light(position(o), l))) {
+                continue; // rendering: triangles touching a point light cast no volume
+            }
             int s = 0;
             if (pc.mode == MODE_ORIGINAL) {
                 s = sign_f32(pa, pb, l, position(o));
@@ -395,7 +417,9 @@ void main() {
         }
         m_out[out_index] = m;
     }
+#ifndef SHADOWVOL_EXTRACT_ONLY
     if (pc.emit != 0u && m != 0) {
         emit_quads(obj, a, b, l, m);
     }
+#endif
 }

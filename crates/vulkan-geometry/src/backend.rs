@@ -261,7 +261,8 @@ impl VulkanBackend {
         }
         p.lights.write(0, light_bytes);
         if (slots as u64) * 4 > p.mult.size {
-            let new = Buffer::new(ctx, slots as u64 * 4, vk::BufferUsageFlags::STORAGE_BUFFER)?;
+            let new =
+                Buffer::host_read(ctx, slots as u64 * 4, vk::BufferUsageFlags::STORAGE_BUFFER)?;
             std::mem::replace(&mut p.mult, new).destroy(ctx);
             changed = true;
         }
@@ -293,7 +294,7 @@ impl VulkanBackend {
                 ),
             });
         }
-        let new = Buffer::new(ctx, bytes, vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        let new = Buffer::host_read(ctx, bytes, vk::BufferUsageFlags::STORAGE_BUFFER)?;
         std::mem::replace(&mut p.uncertain, new).destroy(ctx);
         p.uncertain_capacity = records;
         p.write_set(ctx);
@@ -548,8 +549,8 @@ impl SilhouetteBackend for VulkanBackend {
         )?);
         guard
             .bufs
-            .push(Buffer::new(ctx, 4 * ds.edges.len() as u64, storage)?);
-        guard.bufs.push(Buffer::new(
+            .push(Buffer::host_read(ctx, 4 * ds.edges.len() as u64, storage)?);
+        guard.bufs.push(Buffer::host_read(
             ctx,
             UNCERTAIN_HEADER as u64 + 16 * u64::from(INITIAL_UNCERTAIN),
             storage,

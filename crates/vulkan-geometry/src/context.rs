@@ -461,11 +461,33 @@ pub(crate) struct Buffer {
 }
 
 impl Buffer {
-    /// Creates a buffer of at least `size` bytes (16 at least).
+    /// Creates a buffer of at least `size` bytes (16 at least) that the device reads and the host
+    /// writes: device-local host-visible memory where there is some (resizable BAR), else any
+    /// host-visible coherent memory.
     pub fn new(
         ctx: &Context,
         size: u64,
         usage: vk::BufferUsageFlags,
+    ) -> Result<Self, BackendError> {
+        Self::create(ctx, size, usage, false)
+    }
+
+    /// Creates a buffer the host reads back: host-cached coherent memory where there is some
+    /// (reading device-local memory through the BAR is uncached and very slow), else any
+    /// host-visible coherent memory.
+    pub fn host_read(
+        ctx: &Context,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+    ) -> Result<Self, BackendError> {
+        Self::create(ctx, size, usage, true)
+    }
+
+    fn create(
+        ctx: &Context,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        host_read: bool,
     ) -> Result<Self, BackendError> {
         let size = size.max(16).next_multiple_of(16);
         let d = &ctx.device;
@@ -481,11 +503,13 @@ impl Buffer {
             let req = d.get_buffer_memory_requirements(buffer);
             let host =
                 vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+            let preferred = if host_read {
+                host | vk::MemoryPropertyFlags::HOST_CACHED
+            } else {
+                host | vk::MemoryPropertyFlags::DEVICE_LOCAL
+            };
             let Some(ty) = ctx
-                .memory_type(
-                    req.memory_type_bits,
-                    host | vk::MemoryPropertyFlags::DEVICE_LOCAL,
-                )
+                .memory_type(req.memory_type_bits, preferred)
                 .or_else(|| ctx.memory_type(req.memory_type_bits, host))
             else {
                 d.destroy_buffer(buffer, None);

@@ -11,6 +11,10 @@ pub(crate) const SILHOUETTE_GS_F64: &[u8] =
     include_bytes!("../../../shaders/silhouette_gs.geom.spv");
 pub(crate) const SILHOUETTE_GS_F32: &[u8] =
     include_bytes!("../../../shaders/silhouette_gs.f32.geom.spv");
+pub(crate) const SILHOUETTE_GS_EXTRACT_F64: &[u8] =
+    include_bytes!("../../../shaders/silhouette_gs.extract.geom.spv");
+pub(crate) const SILHOUETTE_GS_EXTRACT_F32: &[u8] =
+    include_bytes!("../../../shaders/silhouette_gs.extract.f32.geom.spv");
 
 /// Number of storage-buffer bindings in set 0 (see the shaders).
 pub(crate) const BINDINGS: u32 = 11;
@@ -155,6 +159,20 @@ impl Pipelines {
             module(ctx, "shaders/silhouette_gs.f32.geom.spv", SILHOUETTE_GS_F32)?
         };
         self.modules.push(gs);
+        let gs_extract = if ctx.use_f64 {
+            module(
+                ctx,
+                "shaders/silhouette_gs.extract.geom.spv",
+                SILHOUETTE_GS_EXTRACT_F64,
+            )?
+        } else {
+            module(
+                ctx,
+                "shaders/silhouette_gs.extract.f32.geom.spv",
+                SILHOUETTE_GS_EXTRACT_F32,
+            )?
+        };
+        self.modules.push(gs_extract);
 
         // Render passes.
         let subpass_empty =
@@ -236,6 +254,16 @@ impl Pipelines {
                 .module(gs)
                 .name(entry),
         ];
+        let extract_stages = [
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(vs_edge)
+                .name(entry),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::GEOMETRY)
+                .module(gs_extract)
+                .name(entry),
+        ];
         let depth_stages = [vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::VERTEX)
             .module(vs_depth)
@@ -315,7 +343,7 @@ impl Pipelines {
             ));
         let infos = [
             vk::GraphicsPipelineCreateInfo::default()
-                .stages(&gs_stages)
+                .stages(&extract_stages)
                 .vertex_input_state(&vertex_input)
                 .input_assembly_state(&points)
                 .viewport_state(&viewport_state)

@@ -23,7 +23,7 @@
 use crate::backend::{host_barrier, VulkanBackend, PRECOMPUTED};
 use crate::context::{device_err, Buffer, Context};
 use crate::pipelines::Push;
-use crate::twin::mode_code_of;
+use crate::twin::{mode_code_of, touches_light};
 use ash::vk;
 use glam::{DMat4, DVec3, DVec4, Vec3};
 use shadowvol_robust_math::{orient_exact, Accuracy, Light};
@@ -313,19 +313,43 @@ impl VulkanBackend {
         let mut stats = RenderStats::default();
         let mode_code = if mode == Accuracy::Exact {
             let mut m = Multiplicities::default();
-            stats.extract = Some(self.extract_impl(id, &[light], mode, &mut m, true)?);
+            stats.extract = Some(self.extract_impl(id, &[light], mode, &mut m, false)?);
+            let p = self.scene(id)?;
+            let l = object_lights(&p.scene, &[light]);
+            let ds = &p.ds;
+            let pos = |v: u32| ds.positions[v as usize];
+            let touch: Vec<bool> = ds
+                .positions
+                .iter()
+                .zip(&ds.vertex_object)
+                .map(|(&q, &o)| touches_light(q, l[o as usize][0]))
+                .collect();
+            if touch.iter().any(|&t| t) {
+                // Triangles touching the point light cast no volume: take their exact
+                // contributions out of the multiplicities the shader emits from.
+                let values = m.values_mut(0);
+                for (e, &[a, b, begin, end]) in ds.edges.iter().enumerate() {
+                    let lo = l[ds.edge_object[e] as usize][0];
+                    for k in begin..end {
+                        let o = ds.ovs[k as usize];
+                        if touch[a as usize] || touch[b as usize] || touch[o as usize] {
+                            values[e] -= i32::from(orient_exact(pos(a), pos(b), lo, pos(o)));
+                        }
+                    }
+                }
+            }
+            p.mult.write(0, bytemuck::cast_slice(m.all_values()));
             if technique == StencilTechnique::ZFail {
-                let p = self.scene(id)?;
-                let l = object_lights(&p.scene, &[light]);
-                let ds = &p.ds;
                 let signs: Vec<i32> = ds
                     .corners
                     .chunks_exact(3)
                     .map(|t| {
                         let mut c = [t[0], t[1], t[2]];
                         c.sort_unstable();
+                        if c.iter().any(|&v| touch[v as usize]) {
+                            return 0;
+                        }
                         let obj = ds.vertex_object[c[0] as usize] as usize;
-                        let pos = |v: u32| ds.positions[v as usize];
                         i32::from(orient_exact(pos(c[0]), pos(c[1]), l[obj][0], pos(c[2])))
                     })
                     .collect();
@@ -348,9 +372,9 @@ impl VulkanBackend {
             width,
             height,
         )?;
-        let bufs = Buffer::new(&self.ctx, pixels as u64, vk::BufferUsageFlags::TRANSFER_DST)
+        let bufs = Buffer::host_read(&self.ctx, pixels as u64, vk::BufferUsageFlags::TRANSFER_DST)
             .and_then(|s| {
-                Buffer::new(
+                Buffer::host_read(
                     &self.ctx,
                     4 * pixels as u64,
                     vk::BufferUsageFlags::TRANSFER_DST,

@@ -304,6 +304,15 @@ pub fn gs_edge(
     out
 }
 
+/// True when `p` is the point light `l` in `f32` arithmetic: `l.w != 0` and `p * l.w == l.xyz`
+/// componentwise. The render path follows the renderer crate's convention that triangles with
+/// such a vertex cast no shadow volume (with the light at a vertex the shadow has no volume);
+/// extraction results are not affected.
+#[must_use]
+pub fn touches_light(p: [f32; 3], l: [f32; 4]) -> bool {
+    l[3] != 0.0 && (0..3).all(|k| p[k] * l[3] == l[k])
+}
+
 /// The exact sign of an uncertain (edge, OV) pair, as the host decides it.
 ///
 /// # Panics
