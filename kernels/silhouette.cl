@@ -100,6 +100,11 @@ int sv_filter_f32(float3 a, float3 b, float4 l, float3 o) {
         sv_is_subnormal(l.w)) {
         return SV_UNCERTAIN;
     }
+    // For w other than 0 or 1, w*A is rounded, and when it cancels against L.xyz the error of V
+    // is relative to |w*A|, not to |V|: the bound below would not hold (robust-math's rule).
+    if (l.w != 0.0f && l.w != 1.0f) {
+        return SV_UNCERTAIN;
+    }
     float ex = a.x - b.x;
     float ey = a.y - b.y;
     float ez = a.z - b.z;

@@ -85,6 +85,11 @@ pub fn filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> i32 {
     if any_subnormal(a, b, l, o) {
         return UNCERTAIN;
     }
+    // For w other than 0 or 1, w*A is rounded, and when it cancels against L.xyz the error of V
+    // is relative to |w*A|, not to |V|: the bound would not hold (robust-math's rule).
+    if l[3] != 0.0 && l[3] != 1.0 {
+        return UNCERTAIN;
+    }
     let ex = a[0] - b[0];
     let ey = a[1] - b[1];
     let ez = a[2] - b[2];

@@ -167,3 +167,23 @@ fn twin_guards_subnormal_and_underflowing_inputs() {
         assert_eq!(got, want);
     }
 }
+
+/// Regression: with `w` other than 0 or 1, `fl(w * A)` can round to exactly `L.xyz`, so the
+/// computed V is 0 while the exact V is not. The kernel's f32 filter (and this twin) used to
+/// certify a wrong 0 there; it must leave such lights to the host.
+#[test]
+fn f32_filter_never_certifies_general_w() {
+    let w = 1.1f32;
+    let a = [1.3f32, 0.0, 0.0];
+    let b = [1.3f32, -1.0, -2.0];
+    let o = [1.3f32, 3.0, 1.0];
+    let l = [w * a[0], 0.0, 0.0, w];
+    let want = orient_exact(a, b, l, o);
+    assert_ne!(want, 0, "w * A is inexact in f32, so the exact V.x is not 0");
+    let got = twin::filter_f32(a, b, l, o);
+    assert!(
+        got == UNCERTAIN || got == i32::from(want),
+        "f32 filter certified {got}, exact sign is {want}"
+    );
+    assert_eq!(got, UNCERTAIN, "general w must go to the host");
+}
