@@ -14,7 +14,9 @@
 
 use crate::CliError;
 use shadowvol_cpu::CpuBackend;
-use shadowvol_silhouette::{BackendError, SilhouetteBackend};
+use shadowvol_silhouette::{BackendError, BackendInfo, SilhouetteBackend};
+use std::sync::mpsc;
+use std::time::Duration;
 
 /// The signature every backend crate's `create_backend` has.
 pub type CreateFn = fn() -> Result<Box<dyn SilhouetteBackend>, BackendError>;
@@ -116,18 +118,183 @@ pub fn backend_names() -> Vec<&'static str> {
     backends().iter().map(|e| e.name).collect()
 }
 
-/// The entry named `name` (case-insensitive, surrounding spaces ignored).
+/// The `--backend` value that picks a backend automatically (see [`choose_auto`]).
+pub const AUTO: &str = "auto";
+
+/// The GPU backends `--backend auto` considers, in order of preference (fastest first, by
+/// design: one compute dispatch and a compact readback (`wgpu`) before the geometry-shader
+/// pipeline (`vulkan`) before `opencl`). None of them was timed on a hardware GPU here.
+pub const AUTO_GPU_ORDER: [&str; 3] = ["wgpu", "vulkan", "opencl"];
+
+/// How long `auto` waits for one backend to start (they start in parallel) before skipping it.
+pub const AUTO_START_TIMEOUT: Duration = Duration::from_secs(30);
+
+/// If `info` describes a device that is emulated on the CPU (Mesa llvmpipe/lavapipe/softpipe,
+/// SwiftShader, PoCL, WARP, or any device whose reported type is CPU), the reason in words;
+/// `None` for a hardware GPU (and for the `cpu` and `simd` backends, which are not devices).
+///
+/// It reads the `device_type` detail where a backend reports one (`opencl`), wgpu's device
+/// type in [`BackendInfo::device`] (`"(Vulkan, Cpu; ..."`), and known software driver names.
+#[must_use]
+pub fn cpu_emulated(info: &BackendInfo) -> Option<String> {
+    if matches!(info.name, "cpu" | "simd") {
+        return None;
+    }
+    for (k, v) in &info.details {
+        if k == "device_type" && v.eq_ignore_ascii_case("cpu") {
+            return Some(format!("its device type is CPU ({})", info.device));
+        }
+    }
+    let device = info.device.to_ascii_lowercase();
+    if device.contains(", cpu;") || device.contains("(cpu,") {
+        return Some(format!("its device type is CPU ({})", info.device));
+    }
+    const SOFTWARE: [&str; 6] = [
+        "llvmpipe",
+        "lavapipe",
+        "softpipe",
+        "swiftshader",
+        "portable computing language",
+        "microsoft basic render",
+    ];
+    SOFTWARE
+        .iter()
+        .find(|s| device.contains(*s))
+        .map(|s| format!("{s} is a CPU implementation, not a GPU ({})", info.device))
+}
+
+/// What `--backend auto` chose and what it skipped.
+#[derive(Debug, Clone)]
+pub struct AutoChoice {
+    /// The chosen backend: the first hardware GPU backend of [`AUTO_GPU_ORDER`] that starts,
+    /// otherwise `simd`, otherwise `cpu`.
+    pub entry: BackendEntry,
+    /// The chosen backend's device, in words.
+    pub device: String,
+    /// Each backend passed over and why (GPU backends that are unavailable, emulated on the CPU
+    /// or did not start in time; `simd` when it could not start).
+    pub skipped: Vec<(&'static str, String)>,
+}
+
+impl AutoChoice {
+    /// True when `auto` fell back from the GPU backends to a host backend.
+    #[must_use]
+    pub fn fell_back(&self) -> bool {
+        !AUTO_GPU_ORDER.contains(&self.entry.name)
+    }
+
+    /// The message `--backend auto` prints on stderr: a warning naming every skipped backend
+    /// and why when it fell back to `simd`/`cpu`, a note naming the device otherwise.
+    #[must_use]
+    pub fn message(&self) -> String {
+        let skipped = self
+            .skipped
+            .iter()
+            .map(|(n, why)| format!("  {n}: {why}"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        if self.fell_back() {
+            format!(
+                "warning: --backend auto: no hardware GPU backend is available, falling back to \
+                 {} ({}); skipped:\n{skipped}",
+                self.entry.name, self.device
+            )
+        } else if skipped.is_empty() {
+            format!(
+                "note: --backend auto: using {} ({})",
+                self.entry.name, self.device
+            )
+        } else {
+            format!(
+                "note: --backend auto: using {} ({}); skipped:\n{skipped}",
+                self.entry.name, self.device
+            )
+        }
+    }
+}
+
+/// Starts every backend in `entries` on its own thread and waits at most `timeout` for each;
+/// returns, per entry, its device or why it can't be used.
+fn probe(entries: &[BackendEntry], timeout: Duration) -> Vec<Result<BackendInfo, String>> {
+    let pending: Vec<_> = entries
+        .iter()
+        .map(|&entry| {
+            let (tx, rx) = mpsc::channel();
+            std::thread::spawn(move || {
+                let _ = tx.send(entry.start().map(|b| b.info()));
+            });
+            rx
+        })
+        .collect();
+    pending
+        .into_iter()
+        .map(|rx| match rx.recv_timeout(timeout) {
+            Ok(Ok(info)) => Ok(info),
+            Ok(Err(BackendError::Unavailable { reason, .. })) => {
+                Err(format!("unavailable: {reason}"))
+            }
+            Ok(Err(e)) => Err(format!("failed to start: {e}")),
+            Err(_) => Err(format!("did not start within {} s", timeout.as_secs())),
+        })
+        .collect()
+}
+
+/// Chooses the backend for `--backend auto`: the first backend of [`AUTO_GPU_ORDER`] that
+/// starts on a hardware GPU (see [`cpu_emulated`]), otherwise `simd`, otherwise `cpu`. Backends
+/// are started in parallel to find out (each at most [`AUTO_START_TIMEOUT`]) and dropped again;
+/// the caller starts the chosen entry.
+#[must_use]
+pub fn choose_auto() -> AutoChoice {
+    let all = backends();
+    let by_name = |n: &str| all.iter().copied().find(|e| e.name == n);
+    let gpus: Vec<BackendEntry> = AUTO_GPU_ORDER.iter().filter_map(|n| by_name(n)).collect();
+    let mut candidates = gpus.clone();
+    candidates.extend(by_name("simd"));
+    let results = probe(&candidates, AUTO_START_TIMEOUT);
+    let mut skipped = Vec::new();
+    for (entry, result) in candidates.iter().zip(results) {
+        let is_gpu = gpus.iter().any(|g| g.name == entry.name);
+        match result {
+            Ok(info) => match cpu_emulated(&info) {
+                Some(why) if is_gpu => skipped.push((entry.name, why)),
+                _ => {
+                    return AutoChoice {
+                        entry: *entry,
+                        device: info.device,
+                        skipped,
+                    }
+                }
+            },
+            Err(why) => skipped.push((entry.name, why)),
+        }
+    }
+    let cpu = by_name("cpu").expect("the registry always has cpu");
+    AutoChoice {
+        entry: cpu,
+        device: CpuBackend::new().info().device,
+        skipped,
+    }
+}
+
+/// The entry named `name` (case-insensitive, surrounding spaces ignored). `auto` ([`AUTO`])
+/// runs [`choose_auto`], prints its [`AutoChoice::message`] on stderr and returns the chosen
+/// entry, so every command that takes `--backend` accepts it.
 ///
 /// # Errors
 /// [`CliError::Usage`] naming the unknown backend and listing the known ones.
 pub fn find_backend(name: &str) -> Result<BackendEntry, CliError> {
     let wanted = name.trim().to_ascii_lowercase();
+    if wanted == AUTO {
+        let choice = choose_auto();
+        eprintln!("{}", choice.message());
+        return Ok(choice.entry);
+    }
     backends()
         .into_iter()
         .find(|e| e.name == wanted)
         .ok_or_else(|| {
             CliError::Usage(format!(
-                "unknown backend {name:?}; known backends: {}",
+                "unknown backend {name:?}; known backends: {}, or {AUTO}",
                 backend_names().join(", ")
             ))
         })
@@ -145,6 +312,86 @@ mod tests {
         assert_eq!(err.exit_code(), crate::error::EXIT_USAGE);
         assert!(err.to_string().contains("unknown backend \"metal\""));
         assert!(err.to_string().contains("cpu, simd, wgpu, opencl, vulkan"));
+    }
+
+    fn info(name: &'static str, device: &str, details: &[(&str, &str)]) -> BackendInfo {
+        BackendInfo {
+            name,
+            device: device.to_owned(),
+            modes: Vec::new(),
+            max_lights: None,
+            details: details
+                .iter()
+                .map(|(k, v)| ((*k).to_owned(), (*v).to_owned()))
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn cpu_emulated_devices_are_recognised() {
+        // The strings the backends report on this machine (lavapipe, PoCL).
+        let lavapipe_wgpu = info(
+            "wgpu",
+            "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Cpu; driver llvmpipe Mesa 22.3.6 (LLVM 15.0.6))",
+            &[],
+        );
+        let pocl = info(
+            "opencl",
+            "Portable Computing Language / pthread-haswell-AMD EPYC (CPU, OpenCL 3.0 PoCL 3.1+debian Linux, driver 3.1+debian, device 0:0)",
+            &[("device_type", "CPU")],
+        );
+        let lavapipe_vk = info(
+            "vulkan",
+            "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan 1.3.230, driver version 0x1), geometry shader",
+            &[],
+        );
+        for i in [&lavapipe_wgpu, &pocl, &lavapipe_vk] {
+            let why = cpu_emulated(i).unwrap_or_else(|| panic!("{} not recognised", i.device));
+            assert!(why.contains(&i.device), "{why}");
+        }
+        // Hardware GPUs as their drivers name them.
+        for i in [
+            info(
+                "wgpu",
+                "NVIDIA GeForce RTX 4090 (Vulkan, DiscreteGpu; driver NVIDIA 550.54.14)",
+                &[],
+            ),
+            info(
+                "opencl",
+                "NVIDIA CUDA / NVIDIA H100 80GB HBM3 (GPU, OpenCL 3.0 CUDA 12.4.89, driver 550.54.15, device 0:0)",
+                &[("device_type", "GPU")],
+            ),
+            info(
+                "vulkan",
+                "AMD Radeon RX 7900 XTX (RADV NAVI31) (Vulkan 1.3.255, driver version 0x5c00004), geometry shader",
+                &[],
+            ),
+            info("simd", "host CPU, 2 threads, avx2 lanes", &[]),
+        ] {
+            assert_eq!(cpu_emulated(&i), None, "{}", i.device);
+        }
+    }
+
+    #[test]
+    fn auto_choice_message_names_what_was_skipped() {
+        let choice = choose_auto();
+        let msg = choice.message();
+        if choice.fell_back() {
+            assert!(msg.starts_with("warning: --backend auto"), "{msg}");
+            for gpu in AUTO_GPU_ORDER {
+                assert!(
+                    choice.skipped.iter().any(|(n, _)| *n == gpu),
+                    "{gpu} not reported as skipped: {msg}"
+                );
+                assert!(msg.contains(&format!("  {gpu}: ")), "{msg}");
+            }
+        } else {
+            assert!(AUTO_GPU_ORDER.contains(&choice.entry.name));
+        }
+        // The chosen entry starts and is what was chosen.
+        let started = choice.entry.start().unwrap();
+        assert_eq!(started.info().name, choice.entry.name);
+        assert!(cpu_emulated(&started.info()).is_none(), "{msg}");
     }
 
     #[test]
