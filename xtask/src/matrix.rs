@@ -88,6 +88,8 @@ struct Options {
     backends: Option<Vec<String>>,
     modes: Vec<String>,
     frames: u32,
+    /// Untimed warm-up frames per measurement (3, or 1 with `--quick`).
+    warmup: u32,
 }
 
 fn parse_args(args: &[String]) -> Result<Option<Options>, String> {
@@ -97,6 +99,7 @@ fn parse_args(args: &[String]) -> Result<Option<Options>, String> {
         backends: None,
         modes: MODES.iter().map(|s| (*s).to_owned()).collect(),
         frames: 0,
+        warmup: 3,
     };
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -141,6 +144,9 @@ fn parse_args(args: &[String]) -> Result<Option<Options>, String> {
     if o.frames == 0 {
         o.frames = if o.quick { 5 } else { 30 };
     }
+    if o.quick {
+        o.warmup = 1;
+    }
     Ok(Some(o))
 }
 
@@ -184,7 +190,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
     std::fs::create_dir_all(opts.out.join("renders"))
         .map_err(|e| format!("cannot create {}/renders: {e}", opts.out.display()))?;
 
-    let host = host_info(&root);
+    let mut host = host_info(&root);
     let backends_json = cli.json(&["backends", "--format", "json"])?;
     let all: Vec<Value> = backends_json.as_array().cloned().unwrap_or_default();
     let mut devices = BTreeMap::new();
@@ -217,6 +223,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
         return Err("no backend is available".into());
     }
     eprintln!("matrix: backends: {}", available.join(", "));
+    probe_build(&cli, &mut host);
 
     let plan = Plan::new(&opts, &available);
     let mut m = Matrix {
@@ -324,6 +331,71 @@ fn host_info(root: &Path) -> Map<String, Value> {
     m
 }
 
+/// Asks the release CLI what it was built with (target features, profile) and which SIMD
+/// level the `simd` backend picks at run time, with one tiny `bench` run; adds them to `host`.
+fn probe_build(cli: &Cli, host: &mut Map<String, Value>) {
+    let probe = cli.json(&[
+        "bench",
+        "--scene",
+        "hard-tetrahedron",
+        "--backend",
+        "simd",
+        "--mode",
+        "original",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--format",
+        "json",
+    ]);
+    let (level, features, profile) = match &probe {
+        Ok(v) => (
+            v["records"][0]["details"]["simd_level"]
+                .as_str()
+                .unwrap_or("unknown")
+                .to_owned(),
+            v["host"]["compile_target_features"]
+                .as_array()
+                .map(|a| {
+                    a.iter()
+                        .filter_map(Value::as_str)
+                        .collect::<Vec<_>>()
+                        .join("+")
+                })
+                .unwrap_or_default(),
+            v["host"]["profile"]
+                .as_str()
+                .unwrap_or("release")
+                .to_owned(),
+        ),
+        Err(e) => (
+            format!("unknown (simd probe failed: {e})"),
+            String::new(),
+            "release".to_owned(),
+        ),
+    };
+    let rustflags = host
+        .get("rustflags")
+        .and_then(Value::as_str)
+        .unwrap_or("")
+        .to_owned();
+    host.insert("simd_level".into(), json!(level));
+    host.insert("compile_target_features".into(), json!(features));
+    host.insert("profile".into(), json!(profile));
+    host.insert(
+        "flags".into(),
+        json!(format!(
+            "cargo build --release; RUSTFLAGS={rustflags:?}; compile-time target features: {}",
+            if features.is_empty() {
+                "none beyond the target default"
+            } else {
+                &features
+            }
+        )),
+    );
+}
+
 // ---------------------------------------------------------------------------------------------
 // The plan
 
@@ -346,11 +418,17 @@ const TRI_SCENES: [&str; 4] = ["sphere-1k", "sphere-10k", "sphere-100k", "sphere
 /// Scene for time against lights.
 const LIGHT_SCENE: &str = "sphere-100k";
 /// Scenes for rendered artifact counts.
-const RENDER_SCENES_QUICK: [&str; 3] = ["hard-edge-on", "hard-offset-1e4", "hard-sphere-pole"];
-const RENDER_SCENES_FULL: [&str; 4] = [
-    "hard-edge-on",
-    "hard-offset-1e4",
-    "hard-sphere-pole",
+const RENDER_SCENES_QUICK: [&str; 3] = [
+    "hard-edge-on-tilted-grid",
+    "hard-offset-1e4-sphere",
+    "hard-uv-sphere-poles",
+];
+const RENDER_SCENES_FULL: [&str; 6] = [
+    "hard-edge-on-tilted-grid",
+    "hard-offset-1e4-sphere",
+    "hard-uv-sphere-poles",
+    "hard-light-at-vertex",
+    "hard-book-3",
     "town",
 ];
 
@@ -383,15 +461,26 @@ impl Plan {
         }
     }
 
+    /// Progress steps; must follow [`Matrix::run_plan`]: one per bench call (all backends
+    /// at once), render, accuracy call (per backend) and baselines call.
     fn steps(&self) -> u64 {
         let b = self.backends.len() as u64;
         let m = self.modes.len() as u64;
-        // T1 bench + frame renders, T2, T3, triangles, lights, accuracy, artifacts, toy wars.
-        b + b * m
-            + 4 * b
-            + 4 * b
-            + 4 * b
-            + b * self.light_counts.len() as u64
+        let tri = TRI_SCENES.iter().filter(|s| **s != T1_SCENE).count() as u64;
+        let t3 = T3_SCENES
+            .iter()
+            .filter(|s| **s != T1_SCENE && !TRI_SCENES.contains(s))
+            .count() as u64;
+        let lights = self
+            .light_counts
+            .iter()
+            .filter(|&&n| !(n == 1 && TRI_SCENES.contains(&LIGHT_SCENE)))
+            .count() as u64;
+        1 + b * m
+            + T2_SCENES.len() as u64
+            + tri
+            + t3
+            + lights
             + b
             + self.render_scenes.len() as u64 * b * m
             + self.toywars_scenes.len() as u64
@@ -465,6 +554,12 @@ impl Matrix {
     /// Adds host, device and experiment fields to a record and stores it.
     fn push(&mut self, experiment: &str, mut rec: Map<String, Value>) {
         rec.insert("experiment".into(), json!(experiment));
+        // Backend details (for example simd_level) become columns of their own.
+        if let Some(Value::Object(d)) = rec.remove("details") {
+            for (k, v) in d {
+                rec.entry(format!("detail_{k}")).or_insert(v);
+            }
+        }
         if let Some(b) = rec.get("backend").and_then(Value::as_str) {
             let dev = self.devices.get(b).cloned().unwrap_or_default();
             rec.entry("device").or_insert(json!(dev));
@@ -480,79 +575,139 @@ impl Matrix {
         self.failures.push(what);
     }
 
-    /// `shadowvol bench` for one scene and backend, all given modes; records each result.
+    /// `shadowvol bench` of one scene on several backends in one process (the scene is built
+    /// once), all given modes; records each result. When the combined call fails, each backend
+    /// is retried on its own so that one failing backend does not lose the others.
     fn bench(
         &mut self,
         experiment: &str,
         scene: &str,
-        backend: &str,
+        backends: &[String],
         modes: &[String],
         lights: u32,
     ) {
         self.progress
-            .step(&format!("{experiment}: {scene} {backend} x{lights}"));
+            .step(&format!("{experiment}: {scene} x{lights} light(s)"));
+        if let Err(e) = self.bench_call(experiment, scene, backends, modes, lights) {
+            if backends.len() == 1 {
+                self.fail(format!("{experiment}: {e}"));
+                return;
+            }
+            for b in backends {
+                if let Err(e) =
+                    self.bench_call(experiment, scene, std::slice::from_ref(b), modes, lights)
+                {
+                    self.fail(format!("{experiment}: {e}"));
+                }
+            }
+        }
+    }
+
+    fn bench_call(
+        &mut self,
+        experiment: &str,
+        scene: &str,
+        backends: &[String],
+        modes: &[String],
+        lights: u32,
+    ) -> Result<(), String> {
         let modes_s = modes.join(",");
+        let backends_s = backends.join(",");
         let frames = self.frames();
+        let warmup = self.opts.warmup.to_string();
         let lights_s = lights.to_string();
         let args = [
             "bench",
             "--scene",
             scene,
             "--backend",
-            backend,
+            &backends_s,
             "--mode",
             &modes_s,
             "--frames",
             &frames,
+            "--warmup",
+            &warmup,
             "--lights",
             &lights_s,
             "--format",
             "json",
         ];
-        match self.cli.json(&args) {
-            Ok(v) => {
-                let floor = v["floor_ms"].clone();
-                for r in v["records"].as_array().cloned().unwrap_or_default() {
-                    let mut rec = r.as_object().cloned().unwrap_or_default();
-                    rec.insert("floor_ms".into(), floor.clone());
-                    self.push(experiment, rec);
-                }
-            }
-            Err(e) => self.fail(format!("{experiment}: {e}")),
+        let v = self.cli.json(&args)?;
+        let floor = v["floor_ms"].clone();
+        for r in v["records"].as_array().cloned().unwrap_or_default() {
+            let mut rec = r.as_object().cloned().unwrap_or_default();
+            rec.insert("floor_ms".into(), floor.clone());
+            self.push(experiment, rec);
         }
+        Ok(())
+    }
+
+    /// Copies the records of one measurement under another experiment's name (the same
+    /// scene, backend, mode and lights measured once serves several tables).
+    fn reuse(&mut self, from: &str, scene: &str, lights: u64, to: &str) {
+        let copies: Vec<Value> = self
+            .records
+            .iter()
+            .filter(|r| {
+                r["experiment"] == from
+                    && r["scene"] == scene
+                    && r["lights"].as_u64() == Some(lights)
+            })
+            .cloned()
+            .map(|mut r| {
+                r["experiment"] = json!(to);
+                r["reused_from"] = json!(from);
+                r
+            })
+            .collect();
+        self.records.extend(copies);
     }
 
     fn run_plan(&mut self, plan: &Plan) {
         let modes = plan.modes.clone();
-        for b in &plan.backends {
-            // Table 1 and the accuracy table's time ratios.
-            self.bench("table1", T1_SCENE, b, &modes, 1);
-            // Full frame time per mode (render included).
-            for m in &modes {
-                self.render("table1-frame", T1_SCENE, b, m, false, plan.render_size);
-            }
-        }
+        let backends = plan.backends.clone();
         let two: Vec<String> = ["original", "robust"]
             .iter()
             .filter(|m| modes.iter().any(|x| x == *m))
             .map(|s| (*s).to_owned())
             .collect();
-        for b in &plan.backends {
-            for s in T2_SCENES {
-                self.bench("table2", s, b, &two, 1);
+        // Table 1 and the accuracy table's time ratios; also the 10^6 point of Table 3 and
+        // of time against triangles.
+        self.bench("table1", T1_SCENE, &backends, &modes, 1);
+        self.reuse("table1", T1_SCENE, 1, "table3");
+        self.reuse("table1", T1_SCENE, 1, "triangles");
+        // Full frame time per mode (render included).
+        for b in &backends {
+            for m in &modes {
+                self.render("table1-frame", T1_SCENE, b, m, false, plan.render_size);
             }
-            for s in T3_SCENES {
-                self.bench("table3", s, b, &two, 1);
+        }
+        for s in T2_SCENES {
+            self.bench("table2", s, &backends, &two, 1);
+        }
+        for s in TRI_SCENES.iter().filter(|s| **s != T1_SCENE) {
+            self.bench("triangles", s, &backends, &modes, 1);
+        }
+        for s in T3_SCENES {
+            if s == T1_SCENE {
+                continue;
             }
-            for s in TRI_SCENES {
-                self.bench("triangles", s, b, &modes, 1);
+            if TRI_SCENES.contains(&s) {
+                self.reuse("triangles", s, 1, "table3");
+            } else {
+                self.bench("table3", s, &backends, &two, 1);
             }
-            for &n in &plan.light_counts {
-                self.bench("lights", LIGHT_SCENE, b, &modes, n);
+        }
+        for &n in &plan.light_counts {
+            if n == 1 && TRI_SCENES.contains(&LIGHT_SCENE) {
+                self.reuse("triangles", LIGHT_SCENE, 1, "lights");
+            } else {
+                self.bench("lights", LIGHT_SCENE, &backends, &modes, n);
             }
         }
         // Accuracy on hard-* scenes: open vertices and sign differences against exact.
-        for b in &plan.backends {
+        for b in &backends {
             self.progress.step(&format!("accuracy: {b}"));
             let modes_s = modes.join(",");
             match self.cli.json(&[
@@ -573,35 +728,31 @@ impl Matrix {
             }
         }
         for s in &plan.render_scenes {
-            for b in &plan.backends {
+            for b in &backends {
                 for m in &modes {
                     self.render("artifacts", s, b, m, true, plan.render_size);
                 }
             }
         }
+        // The seeds' CPU algorithms against our modes on cpu and simd.
         for s in &plan.toywars_scenes {
             self.progress.step(&format!("toywars: {s}"));
             let frames = self.frames();
+            let warmup = self.opts.warmup.to_string();
             match self.cli.json(&[
-                "bench",
+                "baselines",
                 "--scene",
                 s,
-                "--baselines",
-                "--backend",
-                "cpu,simd",
-                "--mode",
-                "original,robust,ordered,exact",
                 "--frames",
                 &frames,
+                "--warmup",
+                &warmup,
                 "--format",
                 "json",
             ]) {
                 Ok(v) => {
-                    let floor = v["floor_ms"].clone();
                     for r in v["records"].as_array().cloned().unwrap_or_default() {
-                        let mut rec = r.as_object().cloned().unwrap_or_default();
-                        rec.insert("floor_ms".into(), floor.clone());
-                        self.push("toywars", rec);
+                        self.push("toywars", r.as_object().cloned().unwrap_or_default());
                     }
                 }
                 Err(e) => self.fail(format!("toywars: {e}")),
@@ -642,6 +793,10 @@ impl Matrix {
         ];
         if reference {
             args.push("--reference");
+        }
+        // The hard-* presets have no ground: a backdrop receives their shadows.
+        if scene.starts_with("hard-") {
+            args.push("--backdrop");
         }
         match self.cli.json(&args) {
             Ok(v) => {
@@ -758,13 +913,11 @@ impl Matrix {
         for (b, r) in unavailable {
             s += &format!("| {b} | unavailable: {r} |\n");
         }
-        if let Some(level) = self
-            .records
-            .iter()
-            .find_map(|r| r.get("simd_level").and_then(Value::as_str))
-        {
-            s += &format!("\nSIMD level used by `simd`: {level}.\n");
-        }
+        s += &format!(
+            "\nSIMD level used by `simd`: {}. Build: {}.\n",
+            get("simd_level"),
+            get("flags")
+        );
         s +=
             "\nTimes are medians over the timed frames after warm-up, in milliseconds (p10-p90 in \
               results.json). `floor` is the time to stream the bytes the extraction must touch, \
@@ -773,7 +926,7 @@ impl Matrix {
 
         // Table 1.
         s += &format!("## Table 1: accuracy modes on `{T1_SCENE}` (silhouette and full frame)\n\n");
-        s += "Ours (this machine): silhouette ms / frame ms (frame = render including silhouettes), and the ratio to `original`.\n\n";
+        s += "Ours (this machine): silhouette ms (median of `bench`) / frame ms (one `render` frame at the run's image size: silhouettes, side building and raster, without the one-off upload of the edge tables), and the silhouette time's ratio to `original`.\n\n";
         s += "| backend |";
         for m in &self.opts.modes {
             s += &format!(" {m} |");
@@ -941,16 +1094,7 @@ impl Matrix {
 
         // Toy Wars.
         s += "\n## Seed \"Toy Wars\" table: the seeds' CPU algorithms against ours\n\n";
-        s += "| scene | algorithm | mode | median ms |\n|---|---|---|---|\n";
-        for r in self.records.iter().filter(|r| r["experiment"] == "toywars") {
-            s += &format!(
-                "| {} | {} | {} | {} |\n",
-                r["scene"].as_str().unwrap_or("?"),
-                r["backend"].as_str().unwrap_or("?"),
-                r["mode"].as_str().unwrap_or("-"),
-                fmt_ms(r["median_ms"].as_f64())
-            );
-        }
+        s += &self.toywars_table();
         s += "\nThe Toy Wars notes (PSP-era hardware, ms):\n\n";
         s += PAPER_TOYWARS;
 
@@ -961,6 +1105,81 @@ impl Matrix {
                 s += &format!("- {}\n", f.replace('\n', " "));
             }
         }
+        s
+    }
+
+    /// One row per algorithm (the seeds' and ours per backend and mode), one column group per
+    /// scene: median ms (p10-p90), silhouette edges, and whether the edge set equals exact's.
+    fn toywars_table(&self) -> String {
+        let recs: Vec<&Value> = self
+            .records
+            .iter()
+            .filter(|r| r["experiment"] == "toywars")
+            .collect();
+        let mut scenes: Vec<(String, u64)> = Vec::new();
+        let mut rows: Vec<(String, String)> = Vec::new();
+        for r in &recs {
+            let sc = r["scene"].as_str().unwrap_or("?").to_owned();
+            if !scenes.iter().any(|(x, _)| *x == sc) {
+                scenes.push((sc, r["triangles"].as_u64().unwrap_or(0)));
+            }
+            let row = (
+                r["backend"].as_str().unwrap_or("?").to_owned(),
+                r["mode"].as_str().unwrap_or("-").to_owned(),
+            );
+            if !rows.contains(&row) {
+                rows.push(row);
+            }
+        }
+        if recs.is_empty() {
+            return "No data in this run (see Failures).\n".into();
+        }
+        let mut s = String::from("| algorithm | mode |");
+        for (sc, t) in &scenes {
+            s += &format!(" {sc} ({t} tri.) ms | silhouette edges | = exact |");
+        }
+        s += "\n|---|---|";
+        for _ in &scenes {
+            s += "---|---|---|";
+        }
+        s += "\n";
+        for (alg, mode) in &rows {
+            s += &format!("| {alg} | {mode} |");
+            for (sc, _) in &scenes {
+                let r = recs.iter().find(|r| {
+                    r["scene"] == sc.as_str()
+                        && r["backend"] == alg.as_str()
+                        && r["mode"].as_str().unwrap_or("-") == mode
+                });
+                match r {
+                    Some(r) if r["median_ms"].is_number() => {
+                        s += &format!(
+                            " {} ({}-{}) | {} | {} |",
+                            fmt_ms(r["median_ms"].as_f64()),
+                            fmt_ms(r["p10_ms"].as_f64()),
+                            fmt_ms(r["p90_ms"].as_f64()),
+                            r["silhouette_edges"],
+                            match r["agrees_with_exact"].as_bool() {
+                                Some(true) => "yes",
+                                Some(false) => "**no**",
+                                None => "?",
+                            }
+                        );
+                    }
+                    Some(r) => {
+                        s += &format!(
+                            " failed: {} | | |",
+                            r["error"].as_str().unwrap_or("?").replace('|', "/")
+                        );
+                    }
+                    None => s += " n/a | | |",
+                }
+            }
+            s += "\n";
+        }
+        s += "\nThe seeds' algorithms (`classic`, `fast-hash-N`, `connectivity`, `two-step`) are \
+              single-threaded scalar code with an f32 facing test per triangle; `= exact` compares \
+              the edge set (m != 0, every light) with the `cpu` backend's `exact` result.\n";
         s
     }
 
@@ -990,13 +1209,18 @@ impl Matrix {
     }
 }
 
-/// Frame time of a render from its timings: `total_ms` when given, else the sum of `*_ms`.
+/// Frame time of a render from its timings: `total_ms - prepare_ms` (the one-off upload of the
+/// edge tables is not part of a frame) when given, else the sum of the per-stage `*_ms` without
+/// `prepare` and `reference`.
 fn frame_ms(t: &Map<String, Value>) -> f64 {
+    let prepare = t.get("prepare_ms").and_then(Value::as_f64).unwrap_or(0.0);
     if let Some(v) = t.get("total_ms").and_then(Value::as_f64) {
-        return v;
+        return v - prepare;
     }
     t.iter()
-        .filter(|(k, _)| k.ends_with("_ms") && !k.starts_with("reference"))
+        .filter(|(k, _)| {
+            k.ends_with("_ms") && !k.starts_with("reference") && !k.starts_with("prepare")
+        })
         .filter_map(|(_, v)| v.as_f64())
         .sum()
 }
@@ -1080,6 +1304,11 @@ mod tests {
         let t = json!({"silhouette_ms": 1.0, "raster_ms": 2.0});
         assert_eq!(frame_ms(t.as_object().unwrap()), 3.0);
         let t = json!({"silhouette_ms": 1.0, "total_ms": 5.0});
+        assert_eq!(frame_ms(t.as_object().unwrap()), 5.0);
+        let t =
+            json!({"silhouette_ms": 1.0, "prepare_ms": 2.0, "total_ms": 5.0, "reference_ms": 9.0});
+        assert_eq!(frame_ms(t.as_object().unwrap()), 3.0);
+        let t = json!({"silhouette_ms": 1.0, "prepare_ms": 2.0, "raster_ms": 4.0});
         assert_eq!(frame_ms(t.as_object().unwrap()), 5.0);
     }
 }

@@ -12,6 +12,7 @@ use std::process::ExitCode;
 
 mod cmd_accuracy;
 mod cmd_backends;
+mod cmd_baselines;
 mod cmd_bench;
 mod cmd_render;
 mod cmd_scenes;
@@ -45,6 +46,9 @@ enum Command {
     /// floor (median, p10, p90).
     #[command(long_about = cmd_bench::LONG_ABOUT)]
     Bench(cmd_bench::Args),
+    /// Time the seeds' CPU silhouette algorithms (Toy Wars, the thesis) next to our modes.
+    #[command(long_about = cmd_baselines::LONG_ABOUT, after_help = cmd_baselines::AFTER_HELP)]
+    Baselines(cmd_baselines::Args),
     /// List the scene presets with their objects, triangles and lights.
     #[command(long_about = cmd_scenes::LONG_ABOUT)]
     Scenes(cmd_scenes::Args),
@@ -63,6 +67,7 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Silhouette(args) => cmd_silhouette::run(&args, out),
         Command::Accuracy(args) => cmd_accuracy::run(&args, out),
         Command::Bench(args) => cmd_bench::run(&args, out),
+        Command::Baselines(args) => cmd_baselines::run(&args, out),
         Command::Scenes(args) => cmd_scenes::run(&args, out),
         Command::Scene(args) => cmd_scenes::run_scene(&args, out),
         Command::Render(args) => cmd_render::run(&args, out),
