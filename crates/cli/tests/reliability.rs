@@ -146,6 +146,11 @@ fn malformed_inputs_fail_clearly_fast_and_without_panic() {
             malformed("uri_shorter_claim.gltf"),
             &["buffer 0", "holds 48 bytes but byteLength declares 8"],
         ),
+        // Fuzz regression (gltf_loader crash-330f0110): panicked inside the gltf crate.
+        (
+            malformed("uri_bad_percent_escape.gltf"),
+            &["buffer 0", "percent-decodes to bytes that are not UTF-8"],
+        ),
         (
             malformed("required_extension.gltf"),
             &[

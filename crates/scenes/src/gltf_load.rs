@@ -117,6 +117,21 @@ pub fn load_gltf_slice(
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| err("document", e.to_string()))?;
     validate(&document).map_err(|m| err("document", m))?;
+    // `import_buffers` unwraps the percent-decoding of relative URIs (it panics when the decoded
+    // bytes are not UTF-8): check them first.
+    for b in document.buffers() {
+        if let gltf::buffer::Source::Uri(uri) = b.source() {
+            if !uri.contains(':') && std::str::from_utf8(&percent_decode(uri)).is_err() {
+                return Err(err(
+                    "buffers",
+                    format!(
+                        "buffer {}: uri {uri:?} percent-decodes to bytes that are not UTF-8",
+                        b.index()
+                    ),
+                ));
+            }
+        }
+    }
     let buffers =
         gltf::import_buffers(&document, base, blob).map_err(|e| err("buffers", e.to_string()))?;
     // `import_buffers` rejects data shorter than `byteLength`; data longer than it (beyond the
@@ -590,6 +605,27 @@ impl Loader<'_> {
 /// The `gltf` crate's structural validation (every index refers to something that exists, enums
 /// are known, required fields are present), except that a missing `min`/`max` on `POSITION`
 /// accessors is accepted: many exporters omit them and this loader does not use them.
+/// `%XX` escapes decoded to bytes (anything else kept as is), as the gltf crate decodes relative
+/// URIs.
+fn percent_decode(uri: &str) -> Vec<u8> {
+    let b = uri.as_bytes();
+    let hex = |c: u8| (c as char).to_digit(16);
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    out
+}
+
 fn validate(document: &gltf::Document) -> Result<(), String> {
     use gltf::json::validation::{Error, Validate};
     let root = document.as_json();

@@ -159,3 +159,29 @@ fn missing_files_and_unknown_formats_are_clear() {
         &["unknown scene 'no-such-preset'", "sphere-1m", "town"],
     );
 }
+
+/// Regressions from fuzzing and the reliability corpus (issue 10): inputs that used to panic
+/// inside the gltf crates, or to load although they lie about their data.
+#[test]
+fn fuzz_regressions_are_errors_not_panics() {
+    let base = std::fs::read_to_string(data("index_out_of_range.gltf")).unwrap();
+    let uri_at = base.find("\"uri\": \"").unwrap() + "\"uri\": \"".len();
+    let uri_end = uri_at + base[uri_at..].find('"').unwrap();
+    let with_uri = |uri: &str| format!("{}{uri}{}", &base[..uri_at], &base[uri_end..]);
+    let load = |text: &str| {
+        shadowvol_scenes::load_gltf_slice(text.as_bytes(), "regression.gltf", None)
+            .map(|s| s.objects.len())
+            .unwrap_err()
+            .to_string()
+    };
+    // gltf_loader crash-330f0110: percent escapes that decode to invalid UTF-8 (gltf's import
+    // unwrapped the decoding).
+    let m = load(&with_uri("bad%AAescape.bin"));
+    assert_has(&m, &["regression.gltf", "buffer 0", "not UTF-8"]);
+    // A POSITION accessor index past the accessors (gltf-json's validation indexed it).
+    let m = load(&base.replace("\"POSITION\": 0", "\"POSITION\": 5"));
+    assert_has(&m, &["POSITION", "accessor 5 does not exist", "2 accessors"]);
+    // A data URI holding more bytes than byteLength declares.
+    let m = load(&base.replace("\"byteLength\": 48", "\"byteLength\": 8"));
+    assert_has(&m, &["buffer 0", "holds 48 bytes but byteLength declares 8"]);
+}

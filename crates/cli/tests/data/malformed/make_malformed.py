@@ -89,3 +89,9 @@ write("index_far_beyond_u32.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 999999999999
 write("relative_off_start.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n")
 write("inf_position.obj", "v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n")
 write("overflow_position.obj", "v 0 0 0\nv 1 0 0\nv 0 1e39 0\nf 1 2 3\n")
+
+# Fuzz regression (gltf_loader, crash-330f0110): a relative buffer URI whose percent escapes
+# decode to bytes that are not UTF-8 made the gltf crate's import panic.
+d = doc()
+d["buffers"][0]["uri"] = "bad%AAescape.bin"
+write_json("uri_bad_percent_escape.gltf", d)
