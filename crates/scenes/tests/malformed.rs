@@ -180,8 +180,14 @@ fn fuzz_regressions_are_errors_not_panics() {
     assert_has(&m, &["regression.gltf", "buffer 0", "not UTF-8"]);
     // A POSITION accessor index past the accessors (gltf-json's validation indexed it).
     let m = load(&base.replace("\"POSITION\": 0", "\"POSITION\": 5"));
-    assert_has(&m, &["POSITION", "accessor 5 does not exist", "2 accessors"]);
+    assert_has(
+        &m,
+        &["POSITION", "accessor 5 does not exist", "2 accessors"],
+    );
     // A data URI holding more bytes than byteLength declares.
     let m = load(&base.replace("\"byteLength\": 48", "\"byteLength\": 8"));
-    assert_has(&m, &["buffer 0", "holds 48 bytes but byteLength declares 8"]);
+    assert_has(
+        &m,
+        &["buffer 0", "holds 48 bytes but byteLength declares 8"],
+    );
 }
