@@ -259,7 +259,9 @@ fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() {
         };
         assert_eq!(e.silhouette, expected, "{e}");
     }
-    assert_eq!(lights.load(Ordering::SeqCst), 6);
+    // No object moved: one call over the whole scene, for light 0 only.
+    assert_eq!(extracts.load(Ordering::SeqCst), 3, "one batched call");
+    assert_eq!(lights.load(Ordering::SeqCst), 5, "for light 0 only");
     assert_eq!(reference::compare(&third).artifact_pixels, 0);
 
     // The box moves: only the box is re-extracted, for both lights.
@@ -273,8 +275,21 @@ fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() {
         };
         assert_eq!(e.silhouette, expected, "{e}");
     }
-    assert_eq!(lights.load(Ordering::SeqCst), 8);
+    assert_eq!(extracts.load(Ordering::SeqCst), 4, "one call for the box");
+    assert_eq!(lights.load(Ordering::SeqCst), 7, "with both lights");
     assert_eq!(reference::compare(&fourth).artifact_pixels, 0);
+
+    // Both lights move, nothing else: one batched call again, and the image equals a fresh
+    // renderer's (the batched multiplicities are the per-object ones).
+    scene.lights[0] = Light::point(Vec3::new(0.5, 5.0, -1.0));
+    scene.lights[1] = Light::directional(Vec3::new(0.5, 1.0, -0.2));
+    let moved = r.render(&scene).unwrap();
+    assert_eq!(extracts.load(Ordering::SeqCst), 5);
+    assert_eq!(lights.load(Ordering::SeqCst), 9);
+    let mut fresh = Renderer::new(Box::new(CpuBackend::new()), RenderOptions::new(96, 96)).unwrap();
+    let fresh = fresh.render(&scene).unwrap();
+    assert_eq!(moved.stencil, fresh.stencil);
+    assert_eq!(moved.rgba, fresh.rgba);
 
     // Switching the mode invalidates everything.
     let mut o = r.options();
