@@ -1,0 +1,169 @@
+//! Determinism of `shadowvol silhouette --format json` (issue 10): the same input gives
+//! byte-identical JSON across runs, across thread counts (`RAYON_NUM_THREADS=1` and `2` on
+//! `simd`, in every mode) and across backends in exact mode.
+//!
+//! Only the fields that describe the run rather than the result are cut out before comparing,
+//! on the raw bytes: `"timings"` (durations, and the count of pairs a device's filter could not
+//! certify, which depends on the device) always; `"device"` across thread counts (it names the
+//! thread count); `"backend"` and `"device"` across backends. Everything else (mesh statistics,
+//! lights as printed, every `[a, b, m]`, open vertices, key order, number formatting) must match
+//! byte for byte.
+
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_shadowvol");
+
+/// Scenes with degenerate and near-degenerate configurations, several objects, and the bunny.
+const SCENES: [&str; 6] = [
+    "hard-edge-on-tilted-grid",
+    "hard-light-at-vertex",
+    "hard-book-4",
+    "hard-offset-1e4-sphere",
+    "hard-multi-object-transforms",
+    "bunny",
+];
+
+/// Runs `silhouette SCENE --format json` with `extra` arguments and environment; returns stdout.
+fn silhouette(scene: &str, extra: &[&str], env: &[(&str, &str)]) -> String {
+    let mut cmd = Command::new(BIN);
+    cmd.args(["silhouette", scene, "--format", "json"])
+        .args(extra);
+    if scene == "bunny" {
+        // The bunny preset has one light; add a directional one and one close to the surface.
+        cmd.args([
+            "--light",
+            "0.3,10,0.2,1",
+            "--light=-1,0.5,0.25,0",
+            "--light=0,0.12,0.05,1",
+        ]);
+    }
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    let out = cmd.output().expect("run shadowvol");
+    assert!(
+        out.status.success(),
+        "silhouette {scene} {extra:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("UTF-8 JSON")
+}
+
+/// Cuts the object member `"key":...` out of the top level of `json` (raw text; the value is a
+/// string or a flat object), with its separating comma. Panics if the key is missing.
+fn cut(json: &str, key: &str) -> String {
+    let pat = format!("\"{key}\":");
+    let start = json
+        .find(&pat)
+        .unwrap_or_else(|| panic!("{key} missing: {json}"));
+    let rest = &json[start + pat.len()..];
+    let len = if rest.starts_with('"') {
+        // A string without escaped quotes (backend and device names).
+        1 + rest[1..].find('"').unwrap() + 1
+    } else {
+        assert!(rest.starts_with('{'), "{key} is not flat: {rest}");
+        rest.find('}').unwrap() + 1
+    };
+    let end = start + pat.len() + len;
+    // Remove one adjacent comma so the result stays valid JSON.
+    if json[end..].starts_with(',') {
+        format!("{}{}", &json[..start], &json[end + 1..])
+    } else {
+        let before = json[..start].trim_end_matches(',');
+        format!("{before}{}", &json[end..])
+    }
+}
+
+fn without(json: &str, keys: &[&str]) -> String {
+    let mut s = json.to_owned();
+    for k in keys {
+        s = cut(&s, k);
+    }
+    let v: serde_json::Value = serde_json::from_str(&s).expect("still valid JSON");
+    for k in keys {
+        assert!(v.get(k).is_none(), "{k} left in {s}");
+    }
+    assert!(
+        v["lights"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|l| !l["edges"].as_array().unwrap().is_empty()),
+        "a trivial result proves nothing: {s}"
+    );
+    s
+}
+
+/// The backends that can start here.
+fn available() -> Vec<String> {
+    let out = Command::new(BIN)
+        .args(["backends", "--format", "json"])
+        .output()
+        .unwrap();
+    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    rows.as_array()
+        .unwrap()
+        .iter()
+        .filter(|r| r["available"] == true)
+        .map(|r| r["name"].as_str().unwrap().to_owned())
+        .collect()
+}
+
+#[test]
+fn cut_removes_exactly_the_member() {
+    let j = r#"{"backend":"simd","mode":"exact","lights":[{"edges":[[0,1,2]]}],"device":"x, 2 threads","timings":{"a":1.5,"uncertain":0}}"#;
+    assert_eq!(
+        without(j, &["backend", "device", "timings"]),
+        r#"{"mode":"exact","lights":[{"edges":[[0,1,2]]}]}"#
+    );
+}
+
+#[test]
+fn same_input_same_bytes_across_runs_on_every_backend() {
+    for backend in available() {
+        for scene in ["hard-book-4", "bunny"] {
+            let args = ["--backend", backend.as_str(), "--mode", "exact"];
+            let a = without(&silhouette(scene, &args, &[]), &["timings"]);
+            let b = without(&silhouette(scene, &args, &[]), &["timings"]);
+            assert_eq!(a, b, "{backend} {scene}: two runs differ");
+        }
+    }
+}
+
+#[test]
+fn simd_gives_the_same_bytes_with_one_and_two_threads_in_every_mode() {
+    for scene in ["bunny-subdivided", "hard-offset-1e4-sphere", "hard-book-5"] {
+        for mode in ["original", "robust", "ordered", "exact"] {
+            let args = ["--backend", "simd", "--mode", mode];
+            let one = silhouette(scene, &args, &[("RAYON_NUM_THREADS", "1")]);
+            let two = silhouette(scene, &args, &[("RAYON_NUM_THREADS", "2")]);
+            assert!(one.contains("1 thread"), "{one}");
+            assert!(two.contains("2 threads"), "{two}");
+            assert_eq!(
+                without(&one, &["device", "timings"]),
+                without(&two, &["device", "timings"]),
+                "{scene} {mode}: 1 and 2 threads differ"
+            );
+        }
+    }
+}
+
+#[test]
+fn every_backend_gives_the_same_bytes_in_exact_mode() {
+    let backends = available();
+    assert!(backends.iter().any(|b| b == "cpu"));
+    for scene in SCENES {
+        let reference = without(
+            &silhouette(scene, &["--backend", "cpu", "--mode", "exact"], &[]),
+            &["backend", "device", "timings"],
+        );
+        for backend in backends.iter().filter(|b| *b != "cpu") {
+            let got = without(
+                &silhouette(scene, &["--backend", backend, "--mode", "exact"], &[]),
+                &["backend", "device", "timings"],
+            );
+            assert_eq!(got, reference, "{scene}: {backend} differs from cpu");
+        }
+        eprintln!("{scene}: {} backends identical", backends.len());
+    }
+}
