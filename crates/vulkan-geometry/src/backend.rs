@@ -510,7 +510,7 @@ impl SilhouetteBackend for VulkanBackend {
                 ("validation".to_owned(), self.ctx.validation().to_string()),
                 (
                     "stencil".to_owned(),
-                    "z-pass, two-sided, wrapping".to_owned(),
+                    "z-pass or z-fail with caps, two-sided, wrapping".to_owned(),
                 ),
                 ("silhouette_list".to_owned(), "host, from m".to_owned()),
             ],
