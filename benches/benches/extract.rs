@@ -95,7 +95,9 @@ fn floor(c: &mut Criterion) {
     for n in SIZES {
         let s = scene(n);
         let mut f = MemoryFloor::new(&s, 1);
-        group.throughput(Throughput::Bytes((f.bytes_read() + f.bytes_written()) as u64));
+        group.throughput(Throughput::Bytes(
+            (f.bytes_read() + f.bytes_written()) as u64,
+        ));
         group.bench_function(BenchmarkId::from_parameter(n), |b| {
             b.iter(|| black_box(f.run_once()));
         });
