@@ -57,9 +57,9 @@ fn cut(json: &str, key: &str) -> String {
         .find(&pat)
         .unwrap_or_else(|| panic!("{key} missing: {json}"));
     let rest = &json[start + pat.len()..];
-    let len = if rest.starts_with('"') {
+    let len = if let Some(string) = rest.strip_prefix('"') {
         // A string without escaped quotes (backend and device names).
-        1 + rest[1..].find('"').unwrap() + 1
+        1 + string.find('"').unwrap() + 1
     } else {
         assert!(rest.starts_with('{'), "{key} is not flat: {rest}");
         rest.find('}').unwrap() + 1
