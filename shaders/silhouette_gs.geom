@@ -197,6 +197,11 @@ int orient_filter(uvec3 a_bits, uvec3 b_bits, uvec4 l_bits, uvec3 o_bits) {
     if (f32_bits_subnormal(l_bits.w)) {
         return UNCERTAIN;
     }
+    // For w other than 0 or 1, w*A is rounded, and when it cancels against L.xyz the error of V
+    // is relative to |w*A|, not to |V|: the bound would not hold (robust-math's rule).
+    if (l_bits.w != 0u && l_bits.w != 0x80000000u && l_bits.w != 0x3f800000u) {
+        return UNCERTAIN;
+    }
     vec3 a = uintBitsToFloat(a_bits);
     vec3 b = uintBitsToFloat(b_bits);
     vec4 l = uintBitsToFloat(l_bits);

@@ -198,6 +198,11 @@ pub fn device_filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> 
     {
         return None;
     }
+    // For w other than 0 or 1, w*A is rounded, and when it cancels against L.xyz the error of V
+    // is relative to |w*A|, not to |V|: the bound would not hold (robust-math's rule).
+    if l[3] != 0.0 && l[3] != 1.0 {
+        return None;
+    }
     let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let la = [l[3] * a[0], l[3] * a[1], l[3] * a[2]];
     let v = [l[0] - la[0], l[1] - la[1], l[2] - la[2]];

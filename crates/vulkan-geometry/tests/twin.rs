@@ -168,3 +168,22 @@ fn twin_side_quads_close_in_consistent_modes() {
         "original mode should crack somewhere in the corpus"
     );
 }
+
+/// Regression: with `w` other than 0 or 1, `fl(w * A)` can round to exactly `L.xyz`, so the
+/// computed V is 0 while the exact V is not. The shader's f32 filter (and this twin) must leave
+/// such lights to the host instead of certifying a wrong 0.
+#[test]
+fn f32_filter_never_certifies_general_w() {
+    let w = 1.1f32;
+    let a = [1.3f32, 0.0, 0.0];
+    let b = [1.3f32, -1.0, -2.0];
+    let o = [1.3f32, 3.0, 1.0];
+    let l = [w * a[0], 0.0, 0.0, w];
+    let want = shadowvol_robust_math::orient_exact(a, b, l, o);
+    assert_ne!(want, 0, "w * A is inexact in f32, so the exact V.x is not 0");
+    assert_eq!(
+        shadowvol_vulkan_geometry::twin::device_filter_f32(a, b, l, o),
+        None,
+        "general w must go to the host"
+    );
+}
