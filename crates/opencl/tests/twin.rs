@@ -179,7 +179,10 @@ fn f32_filter_never_certifies_general_w() {
     let o = [1.3f32, 3.0, 1.0];
     let l = [w * a[0], 0.0, 0.0, w];
     let want = orient_exact(a, b, l, o);
-    assert_ne!(want, 0, "w * A is inexact in f32, so the exact V.x is not 0");
+    assert_ne!(
+        want, 0,
+        "w * A is inexact in f32, so the exact V.x is not 0"
+    );
     let got = twin::filter_f32(a, b, l, o);
     assert!(
         got == UNCERTAIN || got == i32::from(want),

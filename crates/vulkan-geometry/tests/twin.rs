@@ -180,7 +180,10 @@ fn f32_filter_never_certifies_general_w() {
     let o = [1.3f32, 3.0, 1.0];
     let l = [w * a[0], 0.0, 0.0, w];
     let want = shadowvol_robust_math::orient_exact(a, b, l, o);
-    assert_ne!(want, 0, "w * A is inexact in f32, so the exact V.x is not 0");
+    assert_ne!(
+        want, 0,
+        "w * A is inexact in f32, so the exact V.x is not 0"
+    );
     assert_eq!(
         shadowvol_vulkan_geometry::twin::device_filter_f32(a, b, l, o),
         None,
