@@ -14,7 +14,7 @@
 
 use crate::CliError;
 use serde::Serialize;
-use shadowvol_mesh_topology::{EdgeTable, Mesh, MeshStats};
+use shadowvol_mesh_topology::{EdgeTable, Mesh, MeshError, MeshStats};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{invariant, SilhouetteBackend, TopologyScene};
 use std::time::{Duration, Instant};
@@ -122,8 +122,12 @@ pub fn silhouette_report(
             "no light given: add --light X,Y,Z,W (w = 1 point, w = 0 directional)".to_owned(),
         ));
     }
-    let table =
-        EdgeTable::build(mesh).map_err(|e| CliError::Other(format!("invalid mesh: {e}")))?;
+    let table = EdgeTable::build(mesh).map_err(|e| match e {
+        MeshError::OutOfMemory { .. } | MeshError::TooLarge { .. } => {
+            CliError::Other(format!("mesh too large: {e}"))
+        }
+        _ => CliError::Other(format!("invalid mesh: {e}")),
+    })?;
     let stats = table.stats;
     let scene = TopologyScene::single(table);
     let start = Instant::now();
