@@ -8,7 +8,9 @@
 //!   [`BackendInfo::details`] as `simd_level`. AVX-512 is not dispatched (see the README).
 //! * **Threads**: [`rayon`], over a work list that covers every object of the prepared scene, so
 //!   objects are batched with no per-object barrier; all lights are handled in the same pass
-//!   (the geometry of a block is loaded once and evaluated for every light).
+//!   (the geometry of a block is loaded once and evaluated for every light). `original` is one
+//!   parallel pass over the edges of all objects; the per-triangle modes are two (all triangles,
+//!   then all edges) with a single join between them.
 //! * **Layout**: structure-of-arrays positions, canonical triangles sorted by vertex id, edges in
 //!   the table's sorted order with a fast path for blocks of 8 two-OV (manifold) edges next to the
 //!   general CSR path.
