@@ -27,6 +27,8 @@ backend and writes DIR/tables.md, DIR/results.json, DIR/results.csv and PNG plot
   --backends LIST  comma-separated backend names (default: all available)
   --modes LIST     comma-separated accuracy modes (default: original,robust,ordered,exact)
   --frames N       timed frames per measurement (default: 30, or 5 with --quick)
+  --replot DIR     measure nothing: rewrite DIR/tables.md, DIR/results.csv and the plots from
+                   DIR/results.json (after a change to the tables or plots)
 ";
 
 /// The accuracy modes in table order.
@@ -90,6 +92,8 @@ struct Options {
     frames: u32,
     /// Untimed warm-up frames per measurement (3, or 1 with `--quick`).
     warmup: u32,
+    /// `--replot DIR`: rewrite the tables and plots of an earlier run.
+    replot: Option<PathBuf>,
 }
 
 fn parse_args(args: &[String]) -> Result<Option<Options>, String> {
@@ -100,6 +104,7 @@ fn parse_args(args: &[String]) -> Result<Option<Options>, String> {
         modes: MODES.iter().map(|s| (*s).to_owned()).collect(),
         frames: 0,
         warmup: 3,
+        replot: None,
     };
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -115,6 +120,7 @@ fn parse_args(args: &[String]) -> Result<Option<Options>, String> {
             }
             "--quick" => o.quick = true,
             "--out" => o.out = PathBuf::from(value("--out")?),
+            "--replot" => o.replot = Some(PathBuf::from(value("--replot")?)),
             "--backends" => {
                 o.backends = Some(split_list(&value("--backends")?));
             }
@@ -168,6 +174,9 @@ pub fn run(args: &[String]) -> Result<(), String> {
         return Ok(());
     };
     let root = crate::project_root();
+    if let Some(dir) = &opts.replot {
+        return replot(dir, root);
+    }
     let started = Instant::now();
     eprintln!("matrix: building the release CLI (cargo build --release -p shadowvol)");
     let status = Command::new(crate::cargo())
@@ -225,9 +234,14 @@ pub fn run(args: &[String]) -> Result<(), String> {
     eprintln!("matrix: backends: {}", available.join(", "));
     probe_build(&cli, &mut host);
 
-    let plan = Plan::new(&opts, &available);
+    let scenes = scene_names(&cli)?;
+    let plan = Plan::new(&opts, &available, &scenes);
     let mut m = Matrix {
         cli,
+        command: std::iter::once("cargo xtask matrix".to_owned())
+            .chain(args.iter().cloned())
+            .collect::<Vec<_>>()
+            .join(" "),
         opts: opts.clone(),
         host,
         devices,
@@ -331,6 +345,119 @@ fn host_info(root: &Path) -> Map<String, Value> {
     m
 }
 
+/// `--replot DIR`: rebuilds the tables, CSV and plots from `DIR/results.json`.
+fn replot(dir: &Path, root: PathBuf) -> Result<(), String> {
+    let path = dir.join("results.json");
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let v: Value = serde_json::from_str(&text)
+        .map_err(|e| format!("{}: invalid JSON: {e}", path.display()))?;
+    let strings = |k: &str| -> Vec<String> {
+        v[k].as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|x| x.as_str().map(str::to_owned))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let available = strings("backends");
+    let unavailable: Vec<(String, String)> = v["unavailable"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .map(|u| {
+                    (
+                        u["name"].as_str().unwrap_or("?").to_owned(),
+                        u["reason"].as_str().unwrap_or("?").to_owned(),
+                    )
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let records: Vec<Value> = v["records"].as_array().cloned().unwrap_or_default();
+    let modes: Vec<String> = MODES
+        .iter()
+        .filter(|m| records.iter().any(|r| r["mode"] == **m))
+        .map(|m| (*m).to_owned())
+        .collect();
+    let m = Matrix {
+        cli: Cli {
+            bin: PathBuf::new(),
+            root,
+        },
+        command: v["command"]
+            .as_str()
+            .unwrap_or("cargo xtask matrix")
+            .to_owned(),
+        opts: Options {
+            quick: v["quick"].as_bool().unwrap_or(false),
+            out: dir.to_path_buf(),
+            backends: None,
+            modes,
+            frames: v["frames"].as_u64().unwrap_or(0) as u32,
+            warmup: v["warmup"]
+                .as_u64()
+                .unwrap_or(if v["quick"] == true { 1 } else { 3 }) as u32,
+            replot: None,
+        },
+        host: v["host"].as_object().cloned().unwrap_or_default(),
+        devices: v["devices"]
+            .as_object()
+            .map(|d| {
+                d.iter()
+                    .map(|(k, x)| (k.clone(), x.as_str().unwrap_or("").to_owned()))
+                    .collect()
+            })
+            .unwrap_or_default(),
+        records,
+        failures: strings("failures"),
+        progress: Progress::new(1),
+    };
+    m.write_derived(
+        &available,
+        &unavailable,
+        v["elapsed_s"].as_f64().unwrap_or(0.0),
+    )?;
+    eprintln!(
+        "matrix: rewrote the tables, CSV and plots in {}",
+        dir.display()
+    );
+    Ok(())
+}
+
+/// The presets of the CLI (`shadowvol scenes --format json`); fails when a scene the tables
+/// need is missing, before anything is measured.
+fn scene_names(cli: &Cli) -> Result<Vec<String>, String> {
+    let v = cli.json(&["scenes", "--format", "json"])?;
+    let names: Vec<String> = v
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .filter_map(|s| s["name"].as_str().map(str::to_owned))
+                .collect()
+        })
+        .unwrap_or_default();
+    let needed = std::iter::once(T1_SCENE)
+        .chain(T2_SCENES)
+        .chain(T3_SCENES)
+        .chain(TRI_SCENES)
+        .chain([LIGHT_SCENE])
+        .chain(RENDER_SCENES_EXTRA)
+        .chain(TOYWARS_SCENES);
+    let missing: BTreeSet<&str> = needed.filter(|n| !names.iter().any(|x| x == n)).collect();
+    if !missing.is_empty() {
+        return Err(format!(
+            "`shadowvol scenes` lacks presets the matrix needs: {}",
+            missing.into_iter().collect::<Vec<_>>().join(", ")
+        ));
+    }
+    if !names.iter().any(|n| n.starts_with("hard-")) {
+        return Err("`shadowvol scenes` lists no hard-* preset to render".into());
+    }
+    Ok(names)
+}
+
 /// Asks the release CLI what it was built with (target features, profile) and which SIMD
 /// level the `simd` backend picks at run time, with one tiny `bench` run; adds them to `host`.
 fn probe_build(cli: &Cli, host: &mut Map<String, Value>) {
@@ -417,32 +544,23 @@ const T3_SCENES: [&str; 4] = [
 const TRI_SCENES: [&str; 4] = ["sphere-1k", "sphere-10k", "sphere-100k", "sphere-1m"];
 /// Scene for time against lights.
 const LIGHT_SCENE: &str = "sphere-100k";
-/// Scenes for rendered artifact counts.
-const RENDER_SCENES_QUICK: [&str; 3] = [
-    "hard-edge-on-tilted-grid",
-    "hard-offset-1e4-sphere",
-    "hard-uv-sphere-poles",
-];
-const RENDER_SCENES_FULL: [&str; 6] = [
-    "hard-edge-on-tilted-grid",
-    "hard-offset-1e4-sphere",
-    "hard-uv-sphere-poles",
-    "hard-light-at-vertex",
-    "hard-book-3",
-    "town",
-];
+/// Scenes rendered against the ray-traced reference for artifact counts: every `hard-*` preset
+/// that `shadowvol scenes` lists (the corpus grows; the matrix follows it), then these.
+const RENDER_SCENES_EXTRA: [&str; 1] = ["town"];
+/// Scenes of the Toy Wars table (closed manifold meshes, which the seeds' algorithms need).
+const TOYWARS_SCENES: [&str; 2] = ["bunny", "bunny-subdivided"];
 
 struct Plan {
     backends: Vec<String>,
     modes: Vec<String>,
     light_counts: Vec<u32>,
-    render_scenes: Vec<&'static str>,
+    render_scenes: Vec<String>,
     render_size: &'static str,
     toywars_scenes: Vec<&'static str>,
 }
 
 impl Plan {
-    fn new(o: &Options, backends: &[String]) -> Self {
+    fn new(o: &Options, backends: &[String], scenes: &[String]) -> Self {
         Self {
             backends: backends.to_vec(),
             modes: o.modes.clone(),
@@ -451,13 +569,14 @@ impl Plan {
             } else {
                 (1..=8).collect()
             },
-            render_scenes: if o.quick {
-                RENDER_SCENES_QUICK.to_vec()
-            } else {
-                RENDER_SCENES_FULL.to_vec()
-            },
+            render_scenes: scenes
+                .iter()
+                .filter(|s| s.starts_with("hard-"))
+                .cloned()
+                .chain(RENDER_SCENES_EXTRA.iter().map(|s| (*s).to_owned()))
+                .collect(),
             render_size: if o.quick { "160x120" } else { "640x480" },
-            toywars_scenes: vec!["bunny", "bunny-subdivided"],
+            toywars_scenes: TOYWARS_SCENES.to_vec(),
         }
     }
 
@@ -538,6 +657,8 @@ impl Progress {
 
 struct Matrix {
     cli: Cli,
+    /// The command line of the run, for the tables.
+    command: String,
     opts: Options,
     host: Map<String, Value>,
     devices: BTreeMap<String, String>,
@@ -805,7 +926,13 @@ impl Matrix {
                 rec.insert("backend".into(), json!(backend));
                 rec.insert("mode".into(), json!(mode));
                 rec.insert("size".into(), json!(size));
-                for k in ["artifact_pixels", "shadow_pixels"] {
+                for k in [
+                    "artifact_pixels",
+                    "shadow_pixels",
+                    "reference_shadow_pixels",
+                    "covered_pixels",
+                    "adapter",
+                ] {
                     if let Some(x) = v.get(k) {
                         rec.insert(k.into(), x.clone());
                     }
@@ -835,7 +962,8 @@ impl Matrix {
         let out = &self.opts.out;
         let results = json!({
             "host": self.host,
-            "command": format!("cargo xtask matrix {}", std::env::args().skip(2).collect::<Vec<_>>().join(" ")),
+            "command": self.command,
+            "warmup": self.opts.warmup,
             "quick": self.opts.quick,
             "frames": self.opts.frames,
             "elapsed_s": elapsed,
@@ -849,6 +977,17 @@ impl Matrix {
             &out.join("results.json"),
             &serde_json::to_string_pretty(&results).map_err(|e| e.to_string())?,
         )?;
+        self.write_derived(available, unavailable, elapsed)
+    }
+
+    /// Writes what is derived from the records: CSV, tables and plots.
+    fn write_derived(
+        &self,
+        available: &[String],
+        unavailable: &[(String, String)],
+        elapsed: f64,
+    ) -> Result<(), String> {
+        let out = &self.opts.out;
         write(&out.join("results.csv"), &to_csv(&self.records))?;
         let tables = self.tables(available, unavailable, elapsed);
         write(&out.join("tables.md"), &tables)?;
@@ -889,9 +1028,9 @@ impl Matrix {
         let get = |k: &str| h.get(k).and_then(Value::as_str).unwrap_or("?").to_owned();
         s += "# shadowvol experiment matrix\n\n";
         s += &format!(
-            "Command: `cargo xtask matrix{}` ({} frames per measurement, {elapsed:.0} s).\n\n",
-            if self.opts.quick { " --quick" } else { "" },
-            self.opts.frames
+            "Command: `{}` ({} warm-up and {} timed frames per measurement; {elapsed:.0} s in \
+             all).\n\n",
+            self.command, self.opts.warmup, self.opts.frames
         );
         s += "**This machine**: ";
         s += &format!(
@@ -1028,21 +1167,7 @@ impl Matrix {
                 );
             }
         }
-        s += "\nArtifact pixels per rendered scene:\n\n| scene | backend | mode | artifact pixels | shadow pixels |\n|---|---|---|---|---|\n";
-        for r in self
-            .records
-            .iter()
-            .filter(|r| r["experiment"] == "artifacts")
-        {
-            s += &format!(
-                "| {} | {} | {} | {} | {} |\n",
-                r["scene"].as_str().unwrap_or("?"),
-                r["backend"].as_str().unwrap_or("?"),
-                r["mode"].as_str().unwrap_or("?"),
-                r["artifact_pixels"],
-                r["shadow_pixels"]
-            );
-        }
+        s += &self.artifact_table(available);
 
         // The thesis' scaling.
         s += &format!("\n## Scaling (the thesis): time against lights on `{LIGHT_SCENE}`\n\n");
@@ -1104,6 +1229,79 @@ impl Matrix {
             for f in &self.failures {
                 s += &format!("- {}\n", f.replace('\n', " "));
             }
+        }
+        s
+    }
+
+    /// Artifact pixels per rendered scene (rows) and mode (columns): one number when every
+    /// backend got the same count, else the count of each backend in `available` order.
+    fn artifact_table(&self, available: &[String]) -> String {
+        let recs: Vec<&Value> = self
+            .records
+            .iter()
+            .filter(|r| r["experiment"] == "artifacts")
+            .collect();
+        let mut scenes: Vec<&str> = Vec::new();
+        for r in &recs {
+            let sc = r["scene"].as_str().unwrap_or("?");
+            if !scenes.contains(&sc) {
+                scenes.push(sc);
+            }
+        }
+        let size = recs.first().and_then(|r| r["size"].as_str()).unwrap_or("?");
+        let mut s = format!(
+            "\nArtifact pixels per rendered scene ({size} pixels, `--backdrop` behind the hard-* \
+             scenes). One number when all backends \
+             agree, else one per backend ({}):\n\n| scene | reference shadow pixels |",
+            available.join(" / ")
+        );
+        for m in &self.opts.modes {
+            s += &format!(" {m} |");
+        }
+        s += "\n|---|---|";
+        for _ in &self.opts.modes {
+            s += "---|";
+        }
+        s += "\n";
+        for sc in scenes {
+            let shadow = recs
+                .iter()
+                .find(|r| r["scene"] == sc && r["mode"] == "exact")
+                .or_else(|| recs.iter().find(|r| r["scene"] == sc))
+                .map_or("?".to_owned(), |r| {
+                    r["reference_shadow_pixels"]
+                        .as_u64()
+                        .or_else(|| r["shadow_pixels"].as_u64())
+                        .map_or("?".into(), |n| n.to_string())
+                });
+            s += &format!("| {sc} | {shadow} |");
+            for m in &self.opts.modes {
+                let per: Vec<String> = available
+                    .iter()
+                    .map(|b| {
+                        recs.iter()
+                            .find(|r| {
+                                r["scene"] == sc
+                                    && r["backend"] == b.as_str()
+                                    && r["mode"] == m.as_str()
+                            })
+                            .and_then(|r| r["artifact_pixels"].as_u64())
+                            .map_or("n/a".to_owned(), |n| n.to_string())
+                    })
+                    .collect();
+                let cell = if per.windows(2).all(|w| w[0] == w[1]) {
+                    per.first().cloned().unwrap_or_default()
+                } else {
+                    per.join(" / ")
+                };
+                let cell = if cell != "0" && cell != "n/a" {
+                    format!("**{cell}**")
+                } else {
+                    cell
+                };
+                s += &format!(" {cell} |");
+            }
+            s += "\n";
         }
         s
     }

@@ -131,6 +131,8 @@ fn time_vs_triangles(path: &Path, records: &[Value], mode: &str) -> PlotResult {
         .configure_mesh()
         .x_desc("triangles")
         .y_desc("median ms")
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
         .label_style(("sans-serif", 14))
         .draw()?;
     for (i, (b, pts)) in s.iter().enumerate() {
@@ -143,6 +145,7 @@ fn time_vs_triangles(path: &Path, records: &[Value], mode: &str) -> PlotResult {
     }
     chart
         .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .label_font(("sans-serif", 16))
@@ -168,8 +171,11 @@ fn time_vs_lights(path: &Path, records: &[Value], mode: &str) -> PlotResult {
         .build_cartesian_2d(x0 - 0.5..x1 + 0.5, (y0 * 0.7..y1 * 1.4).log_scale())?;
     chart
         .configure_mesh()
-        .x_desc("lights")
+        .x_desc("lights in one extract call")
         .y_desc("median ms")
+        .x_labels(8)
+        .x_label_formatter(&|x: &f64| format!("{x:.0}"))
+        .y_label_formatter(&tick)
         .label_style(("sans-serif", 14))
         .draw()?;
     for (i, (b, pts)) in s.iter().enumerate() {
@@ -190,9 +196,69 @@ fn time_vs_lights(path: &Path, records: &[Value], mode: &str) -> PlotResult {
     Ok(())
 }
 
-/// Time ratio (mode / original on the table-1 scene) against artifacts + open vertices.
+/// Draws `pts` (a `Vec<(f64, f64)>`) as filled markers: circle, triangle, square or cross by
+/// `shape`; evaluates to the series annotation (for `.label`).
+macro_rules! markers {
+    ($chart:expr, $shape:expr, $pts:expr, $c:expr) => {{
+        let c: RGBColor = $c;
+        let pts: Vec<(f64, f64)> = $pts;
+        match $shape % 4 {
+            0 => $chart.draw_series(pts.iter().map(|&p| Circle::new(p, 6, c.filled())))?,
+            1 => $chart.draw_series(pts.iter().map(|&p| TriangleMarker::new(p, 8, c.filled())))?,
+            2 => $chart
+                .draw_series(pts.iter().map(|&p| {
+                    EmptyElement::at(p) + Rectangle::new([(-5, -5), (5, 5)], c.filled())
+                }))?,
+            _ => $chart.draw_series(pts.iter().map(|&p| Cross::new(p, 6, c.stroke_width(3))))?,
+        }
+    }};
+}
+
+/// Sets the legend of a series annotation to the marker of `shape` in colour `c`.
+macro_rules! marker_legend {
+    ($anno:expr, $shape:expr, $c:expr) => {{
+        let c: RGBColor = $c;
+        let a = $anno;
+        match $shape % 4 {
+            0 => a.legend(move |(x, y)| Circle::new((x + 10, y), 6, c.filled())),
+            1 => a.legend(move |(x, y)| TriangleMarker::new((x + 10, y), 8, c.filled())),
+            2 => a.legend(move |(x, y)| {
+                EmptyElement::at((x + 10, y)) + Rectangle::new([(-5, -5), (5, 5)], c.filled())
+            }),
+            _ => a.legend(move |(x, y)| Cross::new((x + 10, y), 6, c.stroke_width(3))),
+        }
+    }};
+}
+
+/// Mode -> marker shape (original, robust, ordered, exact).
+fn mode_shape(m: &str) -> usize {
+    match m {
+        "original" => 3,
+        "robust" => 1,
+        "ordered" => 2,
+        _ => 0,
+    }
+}
+
+/// Compact tick labels on log axes: 0.01, 0.1, 1, 10, 1000, 1e6.
+fn tick(v: &f64) -> String {
+    let a = v.abs();
+    if a >= 1e5 {
+        format!("{v:.0e}")
+    } else if a >= 1.0 || a == 0.0 {
+        format!("{v:.0}")
+    } else {
+        let s = format!("{v:.3}");
+        s.trim_end_matches('0').to_owned()
+    }
+}
+
+/// Time ratio (mode / original on the table-1 scene) against two error counts, one panel
+/// each: edges whose sign differs from exact (hard-* scenes), and artifact pixels plus open
+/// vertices. Colour = backend, marker = mode.
 fn accuracy_cost(path: &Path, records: &[Value]) -> PlotResult {
-    let mut pts: Vec<(String, String, f64, f64)> = Vec::new();
+    // (backend, mode, time ratio, sign differences, artifacts + open vertices)
+    let mut pts: Vec<(String, String, f64, f64, f64)> = Vec::new();
     let t1 = |b: &str, m: &str| {
         records
             .iter()
@@ -220,74 +286,113 @@ fn accuracy_cost(path: &Path, records: &[Value]) -> PlotResult {
         let (Some(x), Some(o)) = (t1(&b, &m), t1(&b, "original")) else {
             continue;
         };
-        let bad: u64 = records
+        let mine = records
             .iter()
-            .filter(|r| r["backend"] == b.as_str() && r["mode"] == m.as_str())
-            .map(|r| match r["experiment"].as_str() {
-                Some("artifacts") => r["artifact_pixels"].as_u64().unwrap_or(0),
-                Some("accuracy") => r["open_vertices"].as_u64().unwrap_or(0),
-                _ => 0,
-            })
-            .sum();
-        pts.push((b, m, x / o, bad as f64 + 1.0));
+            .filter(|r| r["backend"] == b.as_str() && r["mode"] == m.as_str());
+        let (mut signs, mut bad) = (0u64, 0u64);
+        for r in mine {
+            match r["experiment"].as_str() {
+                Some("artifacts") => bad += r["artifact_pixels"].as_u64().unwrap_or(0),
+                Some("accuracy") => {
+                    bad += r["open_vertices"].as_u64().unwrap_or(0);
+                    signs += r["sign_diff_vs_exact"].as_u64().unwrap_or(0);
+                }
+                _ => {}
+            }
+        }
+        pts.push((b, m, x / o, signs as f64 + 1.0, bad as f64 + 1.0));
     }
-    let title = "What accuracy costs: time / original vs artifact pixels + open vertices";
+    let title = "What accuracy costs (time on sphere-1m; errors on the hard-* scenes)";
     if pts.is_empty() {
         return no_data(path, title);
     }
-    let x1 = pts.iter().map(|p| p.2).fold(1.0f64, f64::max) * 1.15;
-    let y1 = pts.iter().map(|p| p.3).fold(10.0f64, f64::max) * 3.0;
-    let root = BitMapBackend::new(path, SIZE).into_drawing_area();
+    let x1 = pts.iter().map(|p| p.2).fold(1.0f64, f64::max) * 1.1;
+    let root = BitMapBackend::new(path, (1200, 600)).into_drawing_area();
     root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 20))
-        .margin(15)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
-        .build_cartesian_2d(0.0..x1, (0.8..y1).log_scale())?;
-    chart
-        .configure_mesh()
-        .x_desc("silhouette time / original (same backend)")
-        .y_desc("1 + artifact pixels + open vertices")
-        .label_style(("sans-serif", 14))
-        .draw()?;
-    let backends: Vec<String> = {
-        let mut v: Vec<String> = pts.iter().map(|p| p.0.clone()).collect();
-        v.dedup();
-        v
-    };
-    for (i, b) in backends.iter().enumerate() {
-        let c = palette(i);
-        let mine: Vec<&(String, String, f64, f64)> = pts.iter().filter(|p| &p.0 == b).collect();
+    let root = root.titled(title, ("sans-serif", 22))?;
+    let (left, right) = root.split_horizontally(600);
+    let mut backends: Vec<String> = pts.iter().map(|p| p.0.clone()).collect();
+    backends.dedup();
+    for (panel, (desc, pick)) in [
+        (&left, ("1 + edges whose sign differs from exact", 3usize)),
+        (&right, ("1 + artifact pixels + open vertices", 4usize)),
+    ] {
+        let y = |p: &(String, String, f64, f64, f64)| if pick == 3 { p.3 } else { p.4 };
+        let y1 = pts.iter().map(y).fold(10.0f64, f64::max) * 3.0;
+        let mut chart = ChartBuilder::on(panel)
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(0.0..x1, (0.8..y1).log_scale())?;
         chart
-            .draw_series(mine.iter().map(|p| Circle::new((p.2, p.3), 6, c.filled())))?
-            .label(b.clone())
-            .legend(move |(x, y)| Circle::new((x + 10, y), 5, c.filled()));
-        chart.draw_series(mine.iter().map(|p| {
-            Text::new(
-                p.1.clone(),
-                (p.2, p.3),
-                ("sans-serif", 13).into_font().color(&BLACK),
-            )
-        }))?;
+            .configure_mesh()
+            .x_desc("silhouette time / original (same backend)")
+            .y_desc(desc)
+            .y_label_formatter(&tick)
+            .label_style(("sans-serif", 14))
+            .draw()?;
+        for (i, b) in backends.iter().enumerate() {
+            let c = palette(i);
+            for m in ["original", "robust", "ordered", "exact"] {
+                let mine: Vec<(f64, f64)> = pts
+                    .iter()
+                    .filter(|p| &p.0 == b && p.1 == m)
+                    .map(|p| (p.2, y(p)))
+                    .collect();
+                let anno = markers!(chart, mode_shape(m), mine, c);
+                // Left panel: colours (backends); right panel: markers (modes).
+                if pick == 3 && m == "exact" {
+                    anno.label(b.clone())
+                        .legend(move |(x, y)| Circle::new((x + 10, y), 6, c.filled()));
+                }
+            }
+        }
+        if pick == 4 {
+            for m in ["original", "robust", "ordered", "exact"] {
+                let anno = markers!(chart, mode_shape(m), Vec::new(), BLACK);
+                marker_legend!(anno.label(m), mode_shape(m), BLACK);
+            }
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperMiddle)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 15))
+            .draw()?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 16))
-        .draw()?;
     root.present()?;
     Ok(())
 }
 
-/// Individual objects against the same triangles baked into one mesh.
+/// Individual objects against the same triangles in fewer objects: the ratio
+/// individual / baked per backend, one marker per scene pair.
 fn individual_vs_baked(path: &Path, records: &[Value]) -> PlotResult {
-    const PAIRS: [(&str, &str, &str); 4] = [
-        ("bunnies-10-individual", "bunnies-10-baked", "table2"),
-        ("spheres-10-individual", "spheres-10-baked", "table2"),
-        ("spheres-100x1k", "sphere-100k", "table3"),
-        ("spheres-100x10k", "sphere-1m", "table3"),
+    const PAIRS: [(&str, &str, &str, &str); 4] = [
+        (
+            "bunnies-10-individual",
+            "bunnies-10-baked",
+            "table2",
+            "10 bunnies / baked",
+        ),
+        (
+            "spheres-10-individual",
+            "spheres-10-baked",
+            "table2",
+            "10 spheres / baked",
+        ),
+        (
+            "spheres-100x1k",
+            "sphere-100k",
+            "table3",
+            "100 x 1k / one 100k",
+        ),
+        (
+            "spheres-100x10k",
+            "sphere-1m",
+            "table3",
+            "100 x 10k / one 1M",
+        ),
     ];
     let mode = preferred_mode(records);
     let ms = |exp: &str, scene: &str, b: &str| {
@@ -301,65 +406,83 @@ fn individual_vs_baked(path: &Path, records: &[Value]) -> PlotResult {
             })
             .and_then(|r| r["median_ms"].as_f64())
     };
-    let mut backends: Vec<String> = records
+    let mut backends: Vec<String> = Vec::new();
+    for r in records
         .iter()
         .filter(|r| r["experiment"] == "table2" || r["experiment"] == "table3")
-        .filter_map(|r| r["backend"].as_str().map(str::to_owned))
-        .collect();
-    backends.sort();
-    backends.dedup();
-    let mut pts = Vec::new();
-    for b in &backends {
-        for (ind, baked, exp) in PAIRS {
-            if let (Some(i), Some(k)) = (ms(exp, ind, b), ms(exp, baked, b)) {
-                pts.push((b.clone(), ind, k, i));
+    {
+        if let Some(b) = r["backend"].as_str() {
+            if !backends.iter().any(|x| x == b) {
+                backends.push(b.to_owned());
             }
         }
     }
-    let title = format!("Individual objects vs one baked mesh ({mode})");
+    // (backend index, pair index, ratio)
+    let mut pts = Vec::new();
+    for (bi, b) in backends.iter().enumerate() {
+        for (pi, (ind, baked, exp, _)) in PAIRS.iter().enumerate() {
+            if let (Some(i), Some(k)) = (ms(exp, ind, b), ms(exp, baked, b)) {
+                if i > 0.0 && k > 0.0 {
+                    pts.push((bi, pi, i / k));
+                }
+            }
+        }
+    }
+    let title = format!("Individual objects vs the same triangles baked ({mode}): time ratio");
     if pts.is_empty() {
         return no_data(path, &title);
     }
-    let lo = pts.iter().map(|p| p.2.min(p.3)).fold(f64::MAX, f64::min) * 0.6;
-    let hi = pts.iter().map(|p| p.2.max(p.3)).fold(0.0f64, f64::max) * 1.6;
+    let lo = pts.iter().map(|p| p.2).fold(1.0f64, f64::min) * 0.7;
+    let hi = pts.iter().map(|p| p.2).fold(1.0f64, f64::max) * 1.4;
     let root = BitMapBackend::new(path, SIZE).into_drawing_area();
     root.fill(&WHITE)?;
+    let n = backends.len();
+    let names = backends.clone();
     let mut chart = ChartBuilder::on(&root)
-        .caption(&title, ("sans-serif", 22))
+        .caption(&title, ("sans-serif", 20))
         .margin(15)
         .x_label_area_size(45)
         .y_label_area_size(70)
-        .build_cartesian_2d((lo..hi).log_scale(), (lo..hi).log_scale())?;
+        .build_cartesian_2d(-0.5..n as f64 - 0.5, (lo..hi).log_scale())?;
     chart
         .configure_mesh()
-        .x_desc("baked ms")
-        .y_desc("individual objects ms")
+        .disable_x_mesh()
+        .x_labels(n)
+        .x_label_formatter(&move |x: &f64| {
+            let i = x.round();
+            if (x - i).abs() < 0.01 && i >= 0.0 {
+                names.get(i as usize).cloned().unwrap_or_default()
+            } else {
+                String::new()
+            }
+        })
+        .y_labels(12)
+        .y_label_formatter(&tick)
+        .x_desc("backend")
+        .y_desc("individual ms / baked ms (> 1: many objects cost more)")
         .label_style(("sans-serif", 14))
         .draw()?;
     chart.draw_series(LineSeries::new(
-        vec![(lo, lo), (hi, hi)],
-        BLACK.mix(0.4).stroke_width(1),
+        vec![(-0.5, 1.0), (n as f64 - 0.5, 1.0)],
+        BLACK.mix(0.5).stroke_width(1),
     ))?;
-    for (i, b) in backends.iter().enumerate() {
-        let c = palette(i);
-        let mine: Vec<_> = pts.iter().filter(|p| &p.0 == b).collect();
-        chart
-            .draw_series(mine.iter().map(|p| Circle::new((p.2, p.3), 6, c.filled())))?
-            .label(b.clone())
-            .legend(move |(x, y)| Circle::new((x + 10, y), 5, c.filled()));
-        chart.draw_series(mine.iter().map(|p| {
-            Text::new(
-                p.1.to_owned(),
-                (p.2, p.3),
-                ("sans-serif", 12).into_font().color(&BLACK),
-            )
-        }))?;
+    for (pi, (_, _, _, label)) in PAIRS.iter().enumerate() {
+        let c = palette(pi);
+        let dx = (pi as f64 - 1.5) * 0.15;
+        let mine: Vec<(f64, f64)> = pts
+            .iter()
+            .filter(|p| p.1 == pi)
+            .map(|p| (p.0 as f64 + dx, p.2))
+            .collect();
+        let anno = markers!(chart, pi, mine, c);
+        marker_legend!(anno.label(*label), pi, c);
     }
     chart
         .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .label_font(("sans-serif", 16))
+        .label_font(("sans-serif", 15))
         .draw()?;
     root.present()?;
     Ok(())
