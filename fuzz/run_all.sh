@@ -1,0 +1,24 @@
+#!/bin/bash
+# Runs every fuzz target for a set time, one at a time, niced, seeded with the test fixtures.
+# Usage (from anywhere): fuzz/run_all.sh [SECONDS_PER_TARGET]   (default 180)
+# Needs cargo-fuzz; on a stable toolchain only `--sanitizer none` works. Crashes land in
+# fuzz/artifacts/TARGET/; the new corpus in fuzz/corpus/TARGET/ (both git-ignored).
+set -u
+secs=${1:-180}
+cd "$(dirname "$0")"
+D=../crates/scenes/tests/data
+M=../crates/cli/tests/data/malformed
+seeds() {
+  case $1 in
+    obj_loader) echo "$D $M ../assets" ;;
+    gltf_loader) echo "$D $M" ;;
+    *) echo "" ;;
+  esac
+}
+for t in obj_loader gltf_loader topology exact_predicate pipeline; do
+  mkdir -p corpus/$t
+  echo "=== $t: ${secs} s from $(date -u +%H:%M:%S)"
+  # shellcheck disable=SC2046
+  nice -n 10 cargo fuzz run --sanitizer none $t corpus/$t $(seeds $t) -- \
+    -max_total_time="$secs" 2>&1 | grep -E "^Done|DONE|Test unit written|panicked" || true
+done
