@@ -15,7 +15,7 @@ seeds() {
     *) echo "" ;;
   esac
 }
-for t in obj_loader gltf_loader topology exact_predicate pipeline; do
+for t in obj_loader gltf_loader topology exact_predicate pipeline simd_differential; do
   mkdir -p corpus/$t
   echo "=== $t: ${secs} s from $(date -u +%H:%M:%S)"
   # shellcheck disable=SC2046
