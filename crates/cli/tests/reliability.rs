@@ -135,6 +135,26 @@ fn malformed_inputs_fail_clearly_fast_and_without_panic() {
             ],
         ),
         (
+            malformed("accessor_dangling_view.gltf"),
+            &["accessors[0].bufferView", "Index out of bounds"],
+        ),
+        (
+            malformed("dangling_indices.gltf"),
+            &["meshes[0].primitives[0].indices", "Index out of bounds"],
+        ),
+        (
+            malformed("huge_count.gltf"),
+            &[
+                "accessor 0 (POSITION)",
+                "4000000000 elements",
+                "run past the end of buffer view 0",
+            ],
+        ),
+        (
+            malformed("sparse_beyond_views.gltf"),
+            &["accessor 0 (POSITION), sparse", "2000000000 sparse indices"],
+        ),
+        (
             scenes_fixture("zero_count.gltf"),
             &["accessor 1 (indices)", "count is 0"],
         ),

@@ -95,3 +95,20 @@ write("overflow_position.obj", "v 0 0 0\nv 1 0 0\nv 0 1e39 0\nf 1 2 3\n")
 d = doc()
 d["buffers"][0]["uri"] = "bad%AAescape.bin"
 write_json("uri_bad_percent_escape.gltf", d)
+
+# More out-of-range accessors: a dangling bufferView of an accessor, a dangling indices accessor,
+# a count far beyond the data, and a sparse accessor whose count is beyond its views.
+d = doc()
+d["accessors"][0]["bufferView"] = 9
+write_json("accessor_dangling_view.gltf", d)
+d = doc()
+d["meshes"][0]["primitives"][0]["indices"] = 7
+write_json("dangling_indices.gltf", d)
+d = doc()
+d["accessors"][0]["count"] = 4000000000
+write_json("huge_count.gltf", d)
+d = doc()
+d["accessors"][0]["sparse"] = {"count": 2000000000,
+                               "indices": {"bufferView": 1, "componentType": 5125},
+                               "values": {"bufferView": 0}}
+write_json("sparse_beyond_views.gltf", d)
