@@ -20,6 +20,10 @@ use std::path::Path;
 
 /// Writes `scene` as a `.glb` file.
 ///
+/// Lights go through `KHR_lights_punctual`. glTF has no homogeneous lights: a directional light
+/// (`w = 0`) and a point light with `w = 1` are written bit for bit, and a point light with any
+/// other `w` is written at `xyz / w` (rounded once in `f32`), so it loads back with `w = 1`.
+///
 /// # Errors
 /// [`SceneError::Export`] if the scene cannot be encoded (over 4 GiB) and
 /// [`SceneError::Io`] if the file cannot be written.
