@@ -143,7 +143,8 @@ pub fn run(args: &[String]) -> Result<(), String> {
     });
     let mut counts = TestCounts::default();
     step("test", &mut || {
-        let mut a = vec!["test"];
+        // --no-fail-fast: one failing test binary must not hide the others' results.
+        let mut a = vec!["test", "--no-fail-fast"];
         a.extend(&scope);
         if !test_args.is_empty() {
             a.push("--");
