@@ -11,6 +11,11 @@
 //! add it as an optional dependency behind a cargo feature of the same name as the backend in
 //! `crates/cli/Cargo.toml` (and pass the feature through in `tests/Cargo.toml`), and add one
 //! `backend!` line to [`backends`].
+//!
+//! `--backend auto` ([`AUTO`]) is resolved here too, by [`find_backend`]: [`choose_auto`] picks
+//! the first backend of [`AUTO_GPU_ORDER`] that runs on a hardware GPU ([`cpu_emulated`] tells
+//! llvmpipe, lavapipe, PoCL and other CPU implementations apart), otherwise `simd`, and says on
+//! stderr what it skipped and why.
 
 use crate::CliError;
 use shadowvol_cpu::CpuBackend;
