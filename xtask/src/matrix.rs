@@ -575,7 +575,7 @@ impl Plan {
                 .cloned()
                 .chain(RENDER_SCENES_EXTRA.iter().map(|s| (*s).to_owned()))
                 .collect(),
-            render_size: if o.quick { "160x120" } else { "640x480" },
+            render_size: if o.quick { "160x120" } else { "320x240" },
             toywars_scenes: TOYWARS_SCENES.to_vec(),
         }
     }
