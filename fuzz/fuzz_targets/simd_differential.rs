@@ -78,7 +78,11 @@ fuzz_target!(|input: Input| {
         extract_once(&mut cpu, &scene, &lights, Accuracy::Exact).expect("cpu never fails");
     let (exact, _) =
         extract_once(simd.as_mut(), &scene, &lights, Accuracy::Exact).expect("simd exact");
-    assert_eq!(exact.all_values(), reference.all_values(), "simd exact != cpu exact");
+    assert_eq!(
+        exact.all_values(),
+        reference.all_values(),
+        "simd exact != cpu exact"
+    );
     assert!(exact.silhouettes_consistent());
     for mode in [Accuracy::Robust, Accuracy::Ordered] {
         let (m, _) = extract_once(simd.as_mut(), &scene, &lights, mode).expect("simd");
