@@ -16,10 +16,9 @@
 
 use shadowvol_robust_math::{ov_sign, Accuracy, Light};
 use shadowvol_silhouette::{
-    object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId,
-    SilhouetteBackend, TopologyScene,
+    check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
+    PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
-use std::collections::HashMap;
 use std::time::Instant;
 
 pub mod baselines;
@@ -27,8 +26,7 @@ pub mod baselines;
 /// The scalar reference backend. Always available.
 #[derive(Debug, Default)]
 pub struct CpuBackend {
-    scenes: HashMap<PreparedId, TopologyScene>,
-    next: u64,
+    scenes: PreparedScenes<TopologyScene>,
 }
 
 impl CpuBackend {
@@ -88,10 +86,7 @@ impl SilhouetteBackend for CpuBackend {
     }
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
-        let id = PreparedId(self.next);
-        self.next += 1;
-        self.scenes.insert(id, scene.clone());
-        Ok(id)
+        Ok(self.scenes.insert(scene.clone()))
     }
 
     fn extract(
@@ -101,13 +96,8 @@ impl SilhouetteBackend for CpuBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
-        let scene = self
-            .scenes
-            .get(&id)
-            .ok_or(BackendError::UnknownScene { backend: "cpu", id })?;
-        if lights.is_empty() {
-            return Err(BackendError::InvalidInput("no lights given".to_owned()));
-        }
+        let scene = self.scenes.get("cpu", id)?;
+        check_lights(lights)?;
         let start = Instant::now();
         let obj_lights = object_lights(scene, lights);
         let offsets = scene.edge_offsets();
@@ -126,7 +116,7 @@ impl SilhouetteBackend for CpuBackend {
     }
 
     fn release(&mut self, id: PreparedId) {
-        self.scenes.remove(&id);
+        self.scenes.remove(id);
     }
 }
 

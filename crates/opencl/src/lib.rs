@@ -60,10 +60,9 @@ use opencl3::program::Program;
 use opencl3::types::{cl_mem_flags, CL_BLOCKING, CL_NON_BLOCKING};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
-    object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId,
-    SilhouetteBackend, TopologyScene,
+    check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
+    PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
-use std::collections::HashMap;
 use std::path::PathBuf;
 use std::ptr;
 use std::time::{Duration, Instant};
@@ -157,8 +156,7 @@ pub struct OpenClBackend {
     _program: Program,
     queue: CommandQueue,
     context: Context,
-    scenes: HashMap<PreparedId, Prepared>,
-    next: u64,
+    scenes: PreparedScenes<Prepared>,
 }
 
 impl std::fmt::Debug for OpenClBackend {
@@ -337,8 +335,7 @@ impl OpenClBackend {
             _program: program,
             queue,
             context,
-            scenes: HashMap::new(),
-            next: 0,
+            scenes: PreparedScenes::new(),
         };
         backend.warm_up()?;
         Ok(backend)
@@ -431,10 +428,7 @@ impl OpenClBackend {
         num_lights: usize,
         mode: Accuracy,
     ) -> Result<(Duration, Duration), BackendError> {
-        let p = self.scenes.get_mut(&id).ok_or(BackendError::UnknownScene {
-            backend: BACKEND,
-            id,
-        })?;
+        let p = self.scenes.get_mut(BACKEND, id)?;
         let edges = p.flat.edge_count();
         let t = Instant::now();
         let zeros = [0u32; 2];
@@ -549,10 +543,7 @@ impl SilhouetteBackend for OpenClBackend {
             unc: None,
             unc_records: 0,
         };
-        let id = PreparedId(self.next);
-        self.next += 1;
-        self.scenes.insert(id, prepared);
-        Ok(id)
+        Ok(self.scenes.insert(prepared))
     }
 
     fn extract(
@@ -562,13 +553,8 @@ impl SilhouetteBackend for OpenClBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
-        let p = self.scenes.get(&id).ok_or(BackendError::UnknownScene {
-            backend: BACKEND,
-            id,
-        })?;
-        if lights.is_empty() {
-            return Err(BackendError::InvalidInput("no lights given".to_owned()));
-        }
+        let p = self.scenes.get(BACKEND, id)?;
+        check_lights(lights)?;
         let num_lights = lights.len();
         let edges = p.flat.edge_count();
         let objects = p.flat.objects;
@@ -591,7 +577,7 @@ impl SilhouetteBackend for OpenClBackend {
         let flat_l = flat_lights(&obj_lights);
         {
             let ctx = &self.context;
-            let p = self.scenes.get_mut(&id).expect("checked above");
+            let p = self.scenes.get_mut(BACKEND, id).expect("checked above");
             ensure(ctx, &mut p.lights, flat_l.len(), "the light buffer")?;
             ensure(ctx, &mut p.counts, 2, "the counters")?;
             ensure(
@@ -623,7 +609,7 @@ impl SilhouetteBackend for OpenClBackend {
             stats.upload += up;
             stats.compute += comp;
             let t = Instant::now();
-            let p = self.scenes.get(&id).expect("checked above");
+            let p = self.scenes.get(BACKEND, id).expect("checked above");
             let (counts_buf, _) = p.counts.as_ref().expect("ensured");
             // SAFETY: blocking read into a live slice no larger than the buffer.
             unsafe {
@@ -640,12 +626,12 @@ impl SilhouetteBackend for OpenClBackend {
             let records = needed.next_power_of_two();
             self.check_alloc("the uncertain records", records * 12, "")?;
             let ctx = &self.context;
-            let p = self.scenes.get_mut(&id).expect("checked above");
+            let p = self.scenes.get_mut(BACKEND, id).expect("checked above");
             ensure(ctx, &mut p.unc, 3 * records, "the uncertain records")?;
             p.unc_records = records;
         }
         let t = Instant::now();
-        let p = self.scenes.get(&id).expect("checked above");
+        let p = self.scenes.get(BACKEND, id).expect("checked above");
         // At most one entry per (edge, light): a larger count is a device fault, caught by
         // `finish` when fewer entries than counted come back.
         let mut raw_sil = vec![0i32; 2 * (counts[1] as usize).min(edges * num_lights)];
@@ -700,7 +686,7 @@ impl SilhouetteBackend for OpenClBackend {
     }
 
     fn release(&mut self, id: PreparedId) {
-        self.scenes.remove(&id);
+        self.scenes.remove(id);
     }
 }
 

@@ -11,10 +11,9 @@ use crate::layout::{
 };
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
-    object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId,
-    SilhouetteBackend, TopologyScene,
+    check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
+    PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
-use std::collections::HashMap;
 use std::time::Instant;
 
 /// The kernel's "not certified" filter result.
@@ -295,8 +294,7 @@ pub fn run_kernel(
 /// registry). Uses the same layout and host finishing as the device backend.
 #[derive(Debug, Default)]
 pub struct TwinBackend {
-    scenes: HashMap<PreparedId, (TopologyScene, FlatScene)>,
-    next: u64,
+    scenes: PreparedScenes<(TopologyScene, FlatScene)>,
     use_f64: bool,
 }
 
@@ -327,10 +325,7 @@ impl SilhouetteBackend for TwinBackend {
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
         let flat = FlatScene::build(scene, "opencl-twin")?;
-        let id = PreparedId(self.next);
-        self.next += 1;
-        self.scenes.insert(id, (scene.clone(), flat));
-        Ok(id)
+        Ok(self.scenes.insert((scene.clone(), flat)))
     }
 
     fn extract(
@@ -340,13 +335,8 @@ impl SilhouetteBackend for TwinBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
-        let (scene, flat) = self.scenes.get(&id).ok_or(BackendError::UnknownScene {
-            backend: "opencl-twin",
-            id,
-        })?;
-        if lights.is_empty() {
-            return Err(BackendError::InvalidInput("no lights given".to_owned()));
-        }
+        let (scene, flat) = self.scenes.get("opencl-twin", id)?;
+        check_lights(lights)?;
         let start = Instant::now();
         let obj_lights = object_lights(scene, lights);
         let flat_l = flat_lights(&obj_lights);
@@ -364,6 +354,6 @@ impl SilhouetteBackend for TwinBackend {
     }
 
     fn release(&mut self, id: PreparedId) {
-        self.scenes.remove(&id);
+        self.scenes.remove(id);
     }
 }

@@ -5,6 +5,8 @@
 //! * [`Multiplicities`]: the per-edge, per-light result plus a compact silhouette list.
 //! * [`invariant`]: the closed-chain check (`open_vertices`) and comparisons between results.
 //! * [`corpus`]: the hard cases every backend must pass.
+//! * [`PreparedScenes`] and [`check_lights`]: the prepared-scene store and light-list check
+//!   every backend shares.
 //! * [`object_lights`]: the one place where world lights become object-space `f32` lights, so
 //!   that every backend evaluates bit-identical inputs.
 //!
@@ -26,10 +28,12 @@
 pub mod corpus;
 pub mod invariant;
 mod multiplicities;
+mod prepared;
 mod scene;
 mod shapes;
 
 pub use multiplicities::{ExtractStats, Multiplicities};
+pub use prepared::{check_lights, PreparedScenes};
 pub use scene::{object_lights, SceneObject, TopologyScene};
 pub use shadowvol_robust_math::{Accuracy, Light};
 

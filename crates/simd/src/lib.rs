@@ -47,8 +47,8 @@ use layout::{Layout, LANES};
 use rayon::prelude::*;
 use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_silhouette::{
-    object_lights, Accuracy, BackendError, BackendInfo, ExtractStats, Light, Multiplicities,
-    PreparedId, SilhouetteBackend, TopologyScene,
+    check_lights, object_lights, Accuracy, BackendError, BackendInfo, ExtractStats, Light,
+    Multiplicities, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
 use std::collections::HashMap;
 use std::ops::Range;
@@ -187,8 +187,7 @@ struct Prepared {
 pub struct SimdBackend {
     level: SimdLevel,
     pool: Option<rayon::ThreadPool>,
-    scenes: HashMap<PreparedId, Prepared>,
-    next: u64,
+    scenes: PreparedScenes<Prepared>,
     /// Scratch: triangle signs, in packs of four lights (see `kernel::PACK`).
     signs: Vec<i8>,
 }
@@ -222,8 +221,7 @@ impl SimdBackend {
         Ok(Self {
             level,
             pool,
-            scenes: HashMap::new(),
-            next: 0,
+            scenes: PreparedScenes::new(),
             signs: Vec::new(),
         })
     }
@@ -550,10 +548,7 @@ impl SilhouetteBackend for SimdBackend {
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
         let prepared = Prepared::build(scene)?;
-        let id = PreparedId(self.next);
-        self.next += 1;
-        self.scenes.insert(id, prepared);
-        Ok(id)
+        Ok(self.scenes.insert(prepared))
     }
 
     fn extract(
@@ -563,13 +558,8 @@ impl SilhouetteBackend for SimdBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
-        let p = self.scenes.get(&id).ok_or(BackendError::UnknownScene {
-            backend: "simd",
-            id,
-        })?;
-        if lights.is_empty() {
-            return Err(BackendError::InvalidInput("no lights given".to_owned()));
-        }
+        let p = self.scenes.get("simd", id)?;
+        check_lights(lights)?;
         let start = Instant::now();
         let obj_lights = object_lights(&p.scene, lights);
         let level = self.level;
@@ -586,6 +576,6 @@ impl SilhouetteBackend for SimdBackend {
     }
 
     fn release(&mut self, id: PreparedId) {
-        self.scenes.remove(&id);
+        self.scenes.remove(id);
     }
 }

@@ -6,10 +6,9 @@ use crate::twin::{mode_code, mode_code_of, resolve_uncertain, DeviceFilter, Devi
 use ash::vk;
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
-    object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId,
-    SilhouetteBackend, TopologyScene,
+    check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
+    PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
-use std::collections::HashMap;
 use std::time::Instant;
 
 /// Bytes of the uncertain buffer's header (count, clamped count, two pads).
@@ -121,8 +120,7 @@ impl Prepared {
 /// [`VulkanBackend::render_shadow_mask`] (in `render.rs`) runs the same shader with emission on,
 /// after a depth pre-pass, into a depth/stencil attachment.
 pub struct VulkanBackend {
-    pub(crate) prepared: HashMap<PreparedId, Prepared>,
-    next: u64,
+    pub(crate) prepared: PreparedScenes<Prepared>,
     pub(crate) pipes: Pipelines,
     pub(crate) ctx: Context,
 }
@@ -149,8 +147,7 @@ impl VulkanBackend {
         let ctx = Context::new(options)?;
         let pipes = Pipelines::new(&ctx)?;
         Ok(Self {
-            prepared: HashMap::new(),
-            next: 0,
+            prepared: PreparedScenes::new(),
             pipes,
             ctx,
         })
@@ -208,10 +205,7 @@ impl VulkanBackend {
     }
 
     pub(crate) fn scene(&self, id: PreparedId) -> Result<&Prepared, BackendError> {
-        self.prepared.get(&id).ok_or(BackendError::UnknownScene {
-            backend: BACKEND,
-            id,
-        })
+        self.prepared.get(BACKEND, id)
     }
 
     /// Makes the light, multiplicity and uncertain buffers large enough and writes the lights.
@@ -224,13 +218,7 @@ impl VulkanBackend {
     ) -> Result<(), BackendError> {
         let max_range = self.ctx.caps.max_storage_buffer_range;
         let ctx = &self.ctx;
-        let p = self
-            .prepared
-            .get_mut(&id)
-            .ok_or(BackendError::UnknownScene {
-                backend: BACKEND,
-                id,
-            })?;
+        let p = self.prepared.get_mut(BACKEND, id)?;
         let edges = p.ds.edges.len();
         let slots = edges
             .checked_mul(light_count)
@@ -276,13 +264,7 @@ impl VulkanBackend {
     /// Grows the uncertain buffer to hold `records` records (contents are discarded).
     fn grow_uncertain(&mut self, id: PreparedId, records: u32) -> Result<(), BackendError> {
         let ctx = &self.ctx;
-        let p = self
-            .prepared
-            .get_mut(&id)
-            .ok_or(BackendError::UnknownScene {
-                backend: BACKEND,
-                id,
-            })?;
+        let p = self.prepared.get_mut(BACKEND, id)?;
         let bytes = UNCERTAIN_HEADER as u64 + 16 * u64::from(records);
         if bytes > ctx.caps.max_storage_buffer_range {
             return Err(BackendError::Limit {
@@ -388,9 +370,7 @@ impl VulkanBackend {
         out: &mut Multiplicities,
         write_back: bool,
     ) -> Result<ExtractStats, BackendError> {
-        if lights.is_empty() {
-            return Err(BackendError::InvalidInput("no lights given".to_owned()));
-        }
+        check_lights(lights)?;
         let mut stats = ExtractStats::default();
         let t = Instant::now();
         let obj_lights = object_lights(&self.scene(id)?.scene, lights);
@@ -617,10 +597,7 @@ impl SilhouetteBackend for VulkanBackend {
             set,
         };
         p.write_set(ctx);
-        let id = PreparedId(self.next);
-        self.next += 1;
-        self.prepared.insert(id, p);
-        Ok(id)
+        Ok(self.prepared.insert(p))
     }
 
     fn extract(
@@ -634,7 +611,7 @@ impl SilhouetteBackend for VulkanBackend {
     }
 
     fn release(&mut self, id: PreparedId) {
-        if let Some(p) = self.prepared.remove(&id) {
+        if let Some(p) = self.prepared.remove(id) {
             p.destroy(&self.ctx);
         }
     }

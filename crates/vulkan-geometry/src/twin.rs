@@ -19,7 +19,9 @@ use shadowvol_robust_math::{
     orient_exact, orient_filter_f64, sign_f32, Accuracy, Light, F32_FILTER_EPS, F32_FILTER_MAX,
     F32_FILTER_MIN,
 };
-use shadowvol_silhouette::{object_lights, BackendError, Multiplicities, TopologyScene};
+use shadowvol_silhouette::{
+    check_lights, object_lights, BackendError, Multiplicities, TopologyScene,
+};
 
 /// Shader mode codes (push constant `mode`).
 pub mod mode_code {
@@ -359,9 +361,7 @@ pub fn extract_twin(
     mode: Accuracy,
     filter: DeviceFilter,
 ) -> Result<(Multiplicities, u64), BackendError> {
-    if lights.is_empty() {
-        return Err(BackendError::InvalidInput("no lights given".to_owned()));
-    }
+    check_lights(lights)?;
     let ds = DeviceScene::build(scene)?;
     let obj_lights = object_lights(scene, lights);
     let mut out = Multiplicities::zeroed(ds.edges.len(), lights.len());

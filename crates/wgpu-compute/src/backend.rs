@@ -7,10 +7,9 @@ use crate::resolve::{finish_chunk, ChunkOutput, Patch};
 use crate::{shaders, NAME};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
-    object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId,
-    SilhouetteBackend, TopologyScene,
+    check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
+    PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
-use std::collections::HashMap;
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 use wgpu::util::DeviceExt;
@@ -170,8 +169,7 @@ pub struct WgpuBackend {
     bind_group_layout: wgpu::BindGroupLayout,
     pipelines: Vec<wgpu::ComputePipeline>,
     health: Arc<Health>,
-    scenes: HashMap<PreparedId, Prepared>,
-    next: u64,
+    scenes: PreparedScenes<Prepared>,
 }
 
 impl std::fmt::Debug for WgpuBackend {
@@ -384,8 +382,7 @@ impl WgpuBackend {
             bind_group_layout,
             pipelines,
             health,
-            scenes: HashMap::new(),
-            next: 0,
+            scenes: PreparedScenes::new(),
         };
         backend.check_health()?;
         Ok(backend)
@@ -418,7 +415,7 @@ impl WgpuBackend {
     /// The flat layout of a prepared scene (global vertex ids, edge records), as uploaded.
     #[must_use]
     pub fn layout(&self, id: PreparedId) -> Option<&SceneLayout> {
-        self.scenes.get(&id).map(|p| &p.layout)
+        self.scenes.get(NAME, id).ok().map(|p| &p.layout)
     }
 
     /// The device buffers holding the results of the last `extract` on `id` (see
@@ -426,7 +423,7 @@ impl WgpuBackend {
     /// or for a scene without edges.
     #[must_use]
     pub fn gpu_results(&self, id: PreparedId) -> Option<GpuResults<'_>> {
-        let p = self.scenes.get(&id)?;
+        let p = self.scenes.get(NAME, id).ok()?;
         let (first_light, light_count) = p.last?;
         let gpu = p.gpu.as_ref()?;
         let frame = p.frame.as_ref()?;
@@ -813,20 +810,15 @@ impl SilhouetteBackend for WgpuBackend {
             Some(buffers)
         };
         self.check_health()?;
-        let id = PreparedId(self.next);
-        self.next += 1;
-        self.scenes.insert(
-            id,
-            Prepared {
-                scene: scene.clone(),
-                layout,
-                gpu,
-                frame: None,
-                last: None,
-                list_prefix: u64::from(self.options.min_list_prefix),
-                uncertain_prefix: u64::from(self.options.min_list_prefix),
-            },
-        );
+        let id = self.scenes.insert(Prepared {
+            scene: scene.clone(),
+            layout,
+            gpu,
+            frame: None,
+            last: None,
+            list_prefix: u64::from(self.options.min_list_prefix),
+            uncertain_prefix: u64::from(self.options.min_list_prefix),
+        });
         Ok(id)
     }
 
@@ -838,16 +830,14 @@ impl SilhouetteBackend for WgpuBackend {
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
         self.check_health()?;
-        let Some(mut prepared) = self.scenes.remove(&id) else {
-            return Err(BackendError::UnknownScene { backend: NAME, id });
-        };
+        let mut prepared = self.scenes.take(NAME, id)?;
         let result = self.extract_prepared(&mut prepared, lights, mode, out);
-        self.scenes.insert(id, prepared);
+        self.scenes.restore(id, prepared);
         result
     }
 
     fn release(&mut self, id: PreparedId) {
-        self.scenes.remove(&id);
+        self.scenes.remove(id);
     }
 }
 
@@ -859,9 +849,7 @@ impl WgpuBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
-        if lights.is_empty() {
-            return Err(BackendError::InvalidInput("no lights given".to_owned()));
-        }
+        check_lights(lights)?;
         let mut stats = ExtractStats::default();
         let edge_count = p.layout.edge_count();
         // Zeroing the host result is part of bringing results back (the device sends only the

@@ -29,7 +29,9 @@ use crate::resolve::{finish_chunk, ChunkOutput};
 use shadowvol_robust_math::{
     sign_f32, Accuracy, Light, F32_FILTER_EPS, F32_FILTER_MAX, F32_FILTER_MIN, F64_FILTER_EPS,
 };
-use shadowvol_silhouette::{object_lights, BackendError, Multiplicities, TopologyScene};
+use shadowvol_silhouette::{
+    check_lights, object_lights, BackendError, Multiplicities, TopologyScene,
+};
 
 /// Which certified filter exact mode runs on the device.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -333,9 +335,7 @@ pub fn extract(
     filter: ExactFilter,
     out: &mut Multiplicities,
 ) -> Result<u64, BackendError> {
-    if lights.is_empty() {
-        return Err(BackendError::InvalidInput("no lights given".to_owned()));
-    }
+    check_lights(lights)?;
     let layout = SceneLayout::build(scene)?;
     let packed = pack_lights(&object_lights(scene, lights), 0, lights.len());
     let k = run_kernel(&layout, &packed, lights.len(), mode, filter);
