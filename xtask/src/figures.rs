@@ -10,7 +10,8 @@
 use crate::{cargo, project_root};
 use std::process::Command;
 
-const HELP: &str = "cargo xtask figures [--size N] [--scenes a,b,...] [--profile P] [--out DIR]\n\n\
+const HELP: &str =
+    "cargo xtask figures [--size N] [--scenes a,b,...] [--profile P] [--out DIR]\n\n\
 Regenerates docs/images/figure1*.{png,md,json}: original / robust / exact renders of the hard\n\
 scenes with their artifact counts (crates/renderer/examples/figure1.rs).\n\n\
 Options:\n  \
@@ -43,9 +44,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
             }
             "--size" => {
                 size = value("--size")?;
-                let n: u32 = size
-                    .parse()
-                    .map_err(|e| format!("--size {size:?}: {e}"))?;
+                let n: u32 = size.parse().map_err(|e| format!("--size {size:?}: {e}"))?;
                 if !(16..=4096).contains(&n) {
                     return Err(format!("--size {n}: must be in 16..=4096"));
                 }
@@ -72,9 +71,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
         cmd.args(["--scenes", s]);
     }
     eprintln!("running {cmd:?}");
-    let status = cmd
-        .status()
-        .map_err(|e| format!("cannot run cargo: {e}"))?;
+    let status = cmd.status().map_err(|e| format!("cannot run cargo: {e}"))?;
     if !status.success() {
         return Err(format!("the figure1 example failed ({status})"));
     }

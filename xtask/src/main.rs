@@ -12,6 +12,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+mod figures;
 mod matrix;
 mod plots;
 mod shaders;
@@ -37,6 +38,11 @@ const COMMANDS: &[(&str, &str, RunFn)] = &[
         "shaders",
         "regenerate shaders/*.spv with glslangValidator (--check: fail when stale or missing)",
         shaders::run,
+    ),
+    (
+        "figures",
+        "regenerate docs/images (Figure 1 redone: original/robust/exact renders, artifact counts)",
+        figures::run,
     ),
 ];
 
