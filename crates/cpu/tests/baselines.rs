@@ -6,6 +6,7 @@ use shadowvol_cpu::baselines::{Baseline, BaselineError, ClosedMesh};
 use shadowvol_cpu::extract_table;
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use shadowvol_robust_math::Accuracy;
+use shadowvol_silhouette::shapes::uv_sphere_y;
 
 fn tetrahedron() -> Mesh {
     Mesh::new(
@@ -15,41 +16,9 @@ fn tetrahedron() -> Mesh {
     .unwrap()
 }
 
-/// UV sphere, outward winding, poles as fans (pole valence = `segments`).
+/// UV sphere of radius 1, outward winding, poles as fans (pole valence = `segments`).
 fn uv_sphere(rings: u32, segments: u32) -> Mesh {
-    let mut p = vec![Vec3::Y];
-    for r in 1..rings {
-        let th = std::f32::consts::PI * r as f32 / rings as f32;
-        for s in 0..segments {
-            let ph = std::f32::consts::TAU * s as f32 / segments as f32;
-            p.push(Vec3::new(
-                th.sin() * ph.cos(),
-                th.cos(),
-                th.sin() * ph.sin(),
-            ));
-        }
-    }
-    p.push(-Vec3::Y);
-    let south = (p.len() - 1) as u32;
-    let ring = |r: u32, s: u32| 1 + (r - 1) * segments + (s % segments);
-    let mut t = Vec::new();
-    for s in 0..segments {
-        t.push([0, ring(1, s + 1), ring(1, s)]);
-        t.push([south, ring(rings - 1, s), ring(rings - 1, s + 1)]);
-    }
-    for r in 1..rings - 1 {
-        for s in 0..segments {
-            let (a, b, c, d) = (
-                ring(r, s),
-                ring(r, s + 1),
-                ring(r + 1, s),
-                ring(r + 1, s + 1),
-            );
-            t.push([a, b, d]);
-            t.push([a, d, c]);
-        }
-    }
-    Mesh::new(p, t).unwrap()
+    uv_sphere_y(rings, segments, 1.0)
 }
 
 /// A torus (genus 1, every vertex valence 6): closed, manifold, not convex, so silhouettes have

@@ -5,6 +5,7 @@
 //! * [`Multiplicities`]: the per-edge, per-light result plus a compact silhouette list.
 //! * [`invariant`]: the closed-chain check (`open_vertices`) and comparisons between results.
 //! * [`corpus`]: the hard cases every backend must pass.
+//! * [`shapes`]: [`shapes::uv_sphere_y`], a closed test sphere shared by the backends' tests.
 //! * [`PreparedScenes`] and [`check_lights`]: the prepared-scene store and light-list check
 //!   every backend shares.
 //! * [`object_lights`]: the one place where world lights become object-space `f32` lights, so
@@ -30,7 +31,7 @@ pub mod invariant;
 mod multiplicities;
 mod prepared;
 mod scene;
-mod shapes;
+pub mod shapes;
 
 pub use multiplicities::{ExtractStats, Multiplicities};
 pub use prepared::{check_lights, PreparedScenes};

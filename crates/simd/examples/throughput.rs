@@ -6,46 +6,11 @@
 //! ```
 
 use glam::Vec3;
-use shadowvol_mesh_topology::{EdgeTable, Mesh};
+use shadowvol_mesh_topology::EdgeTable;
+use shadowvol_silhouette::shapes::uv_sphere_y;
 use shadowvol_silhouette::{Accuracy, Light, Multiplicities, SilhouetteBackend, TopologyScene};
 use shadowvol_simd::{MemoryFloor, SimdBackend, SimdLevel};
 use std::time::Duration;
-
-fn uv_sphere(rings: u32, segments: u32) -> Mesh {
-    let mut p = vec![Vec3::Y];
-    for r in 1..rings {
-        let th = std::f32::consts::PI * r as f32 / rings as f32;
-        for s in 0..segments {
-            let ph = std::f32::consts::TAU * s as f32 / segments as f32;
-            p.push(Vec3::new(
-                th.sin() * ph.cos(),
-                th.cos(),
-                th.sin() * ph.sin(),
-            ));
-        }
-    }
-    p.push(-Vec3::Y);
-    let south = (p.len() - 1) as u32;
-    let ring = |r: u32, s: u32| 1 + (r - 1) * segments + (s % segments);
-    let mut t = Vec::new();
-    for s in 0..segments {
-        t.push([0, ring(1, s + 1), ring(1, s)]);
-        t.push([south, ring(rings - 1, s), ring(rings - 1, s + 1)]);
-    }
-    for r in 1..rings - 1 {
-        for s in 0..segments {
-            let (a, b, c, d) = (
-                ring(r, s),
-                ring(r, s + 1),
-                ring(r + 1, s),
-                ring(r + 1, s + 1),
-            );
-            t.push([a, b, d]);
-            t.push([a, d, c]);
-        }
-    }
-    Mesh::new(p, t).expect("valid sphere")
-}
 
 fn median(mut v: Vec<Duration>) -> f64 {
     v.sort();
@@ -58,7 +23,7 @@ fn main() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(1_000_000);
     let rings = ((n / 4) as f64).sqrt().max(3.0) as u32;
-    let mesh = uv_sphere(rings, 2 * rings);
+    let mesh = uv_sphere_y(rings, 2 * rings, 1.0);
     let scene = TopologyScene::single(EdgeTable::build(&mesh).expect("table"));
     println!(
         "triangles {} edges {}",

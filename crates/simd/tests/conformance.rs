@@ -12,8 +12,8 @@ use glam::{Affine3A, Quat, Vec3};
 use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use shadowvol_silhouette::{
-    corpus, extract_once, invariant, Accuracy, Light, Multiplicities, SceneObject,
-    SilhouetteBackend, TopologyScene,
+    corpus, extract_once, invariant, shapes::uv_sphere_y, Accuracy, Light, Multiplicities,
+    SceneObject, SilhouetteBackend, TopologyScene,
 };
 use shadowvol_simd::{SimdBackend, SimdLevel};
 use std::sync::Arc;
@@ -99,39 +99,6 @@ fn corpus_lights_one_at_a_time_equal_batched() {
     }
 }
 
-/// A UV sphere with `rings` x `segments` quads (poles as fans): closed and manifold.
-fn uv_sphere(rings: u32, segments: u32, radius: f32) -> Mesh {
-    let mut p = vec![Vec3::new(0.0, radius, 0.0)];
-    for r in 1..rings {
-        let th = std::f32::consts::PI * r as f32 / rings as f32;
-        for s in 0..segments {
-            let ph = std::f32::consts::TAU * s as f32 / segments as f32;
-            p.push(radius * Vec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin()));
-        }
-    }
-    p.push(Vec3::new(0.0, -radius, 0.0));
-    let south = (p.len() - 1) as u32;
-    let ring = |r: u32, s: u32| 1 + (r - 1) * segments + (s % segments);
-    let mut t = Vec::new();
-    for s in 0..segments {
-        t.push([0, ring(1, s + 1), ring(1, s)]);
-        t.push([south, ring(rings - 1, s), ring(rings - 1, s + 1)]);
-    }
-    for r in 1..rings - 1 {
-        for s in 0..segments {
-            let (a, b, c, d) = (
-                ring(r, s),
-                ring(r, s + 1),
-                ring(r + 1, s),
-                ring(r + 1, s + 1),
-            );
-            t.push([a, b, d]);
-            t.push([a, d, c]);
-        }
-    }
-    Mesh::new(p, t).unwrap()
-}
-
 /// An open height-field grid (boundary edges) on a lattice, so many points are coplanar.
 fn grid(n: u32) -> Mesh {
     let mut p = Vec::new();
@@ -197,7 +164,7 @@ fn lights() -> Vec<Light> {
 fn sphere_all_block_shapes() {
     // Sizes chosen so triangle and edge counts are not multiples of 8 (partial blocks).
     for (rings, segs) in [(3, 3), (5, 7), (17, 23)] {
-        let mesh = uv_sphere(rings, segs, 1.5);
+        let mesh = uv_sphere_y(rings, segs, 1.5);
         check_scene(&format!("sphere {rings}x{segs}"), &single(&mesh), &lights());
     }
 }
@@ -222,7 +189,7 @@ fn nonmanifold_book_and_soup() {
 
 #[test]
 fn many_objects_transforms_and_shared_tables() {
-    let sphere = Arc::new(EdgeTable::build(&uv_sphere(6, 9, 1.0)).unwrap());
+    let sphere = Arc::new(EdgeTable::build(&uv_sphere_y(6, 9, 1.0)).unwrap());
     let grid = Arc::new(EdgeTable::build(&grid(5)).unwrap());
     let book = Arc::new(EdgeTable::build(&book_and_soup(4, 13)).unwrap());
     let mut objects = Vec::new();
@@ -285,7 +252,7 @@ fn uncertain_lanes_are_counted_and_decided_exactly() {
 #[test]
 fn empty_lights_and_unknown_scene_are_errors() {
     let mut simd = SimdBackend::with_level(SimdLevel::Wide, Some(1)).unwrap();
-    let scene = single(&uv_sphere(3, 3, 1.0));
+    let scene = single(&uv_sphere_y(3, 3, 1.0));
     let id = simd.prepare(&scene).unwrap();
     let mut out = Multiplicities::default();
     assert!(simd.extract(id, &[], Accuracy::Exact, &mut out).is_err());
@@ -317,7 +284,7 @@ fn info_reports_the_level() {
 fn reused_output_is_fully_overwritten() {
     // The backend skips zeroing when the output already has the right shape; a stale result
     // from another mode / light must not leak through.
-    let scene = single(&uv_sphere(9, 11, 1.0));
+    let scene = single(&uv_sphere_y(9, 11, 1.0));
     let mut simd = SimdBackend::with_level(SimdLevel::detect(), None).unwrap();
     let mut cpu = CpuBackend::new();
     let (sid, cid) = (simd.prepare(&scene).unwrap(), cpu.prepare(&scene).unwrap());
