@@ -140,11 +140,7 @@ impl Common<'_> {
     }
 
     /// Runs `frame` warm-up + timed times; fills the statistics of `rec`.
-    fn time<E>(
-        &self,
-        rec: &mut Record,
-        mut frame: impl FnMut() -> Result<(), E>,
-    ) -> Result<(), E> {
+    fn time<E>(&self, rec: &mut Record, mut frame: impl FnMut() -> Result<(), E>) -> Result<(), E> {
         let mut samples = Vec::with_capacity(self.frames as usize);
         for i in 0..self.warmup + self.frames {
             let t = Instant::now();
@@ -170,7 +166,11 @@ fn run_baseline(
     for (i, (mesh, per_light)) in meshes.iter().zip(obj_lights).enumerate() {
         for (l, &light) in per_light.iter().enumerate() {
             let edges = mesh.run(which, light).map_err(|e| e.to_string())?;
-            set.extend(edges.into_iter().map(|e| (l, (offsets[i] + e as usize) as u32)));
+            set.extend(
+                edges
+                    .into_iter()
+                    .map(|e| (l, (offsets[i] + e as usize) as u32)),
+            );
         }
     }
     Ok(set)
@@ -211,9 +211,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let meshes: Result<Vec<ClosedMesh<'_>>, String> = topo
         .objects
         .iter()
-        .map(|o| {
-            ClosedMesh::new(&o.table).map_err(|e| format!("object {:?}: {e}", o.name))
-        })
+        .map(|o| ClosedMesh::new(&o.table).map_err(|e| format!("object {:?}: {e}", o.name)))
         .collect();
     for which in BASELINES {
         let mut rec = common.record(which.name(), None, "baseline");
@@ -356,7 +354,13 @@ mod tests {
             .collect();
         assert_eq!(
             names,
-            ["classic", "fast-hash-64", "fast-hash-8", "connectivity", "two-step"]
+            [
+                "classic",
+                "fast-hash-64",
+                "fast-hash-8",
+                "connectivity",
+                "two-step"
+            ]
         );
         for r in recs {
             assert_eq!(r["triangles"], 3674);
