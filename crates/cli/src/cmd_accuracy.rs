@@ -30,7 +30,8 @@ pub struct Args {
     /// hard-* preset.
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
-    /// Backend to measure (see `shadowvol backends`).
+    /// Backend to measure (see `shadowvol backends`), or `auto`: the first backend on a hardware
+    /// GPU, else `simd`, with a warning naming what was skipped.
     #[arg(long, default_value = "cpu")]
     backend: String,
     /// Accuracy modes, comma-separated.

@@ -25,7 +25,8 @@ pub struct Args {
     /// Scene: a preset name (see `shadowvol scenes`) or a .gltf/.glb/.obj file.
     #[arg(long)]
     scene: String,
-    /// Backends to time, comma-separated (names from `shadowvol backends`).
+    /// Backends to time, comma-separated (names from `shadowvol backends`, or `auto`: the first
+    /// backend on a hardware GPU, else `simd`, with a warning naming what was skipped).
     #[arg(long, value_delimiter = ',', default_value = "cpu,simd")]
     backend: Vec<String>,
     /// Accuracy modes to time, comma-separated.

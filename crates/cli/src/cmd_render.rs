@@ -66,7 +66,8 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
     mode: ModeArg,
 
-    /// Silhouette backend (see `shadowvol backends`).
+    /// Silhouette backend (see `shadowvol backends`), or `auto`: the first backend on a hardware
+    /// GPU, else `simd`, with a warning naming what was skipped.
     #[arg(long, default_value = "cpu", value_name = "NAME")]
     backend: String,
 
