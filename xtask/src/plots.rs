@@ -355,7 +355,11 @@ fn accuracy_cost(path: &Path, records: &[Value]) -> PlotResult {
         }
         chart
             .configure_series_labels()
-            .position(SeriesLabelPosition::UpperMiddle)
+            .position(if pick == 3 {
+                SeriesLabelPosition::MiddleMiddle
+            } else {
+                SeriesLabelPosition::LowerMiddle
+            })
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .label_font(("sans-serif", 15))
@@ -432,8 +436,8 @@ fn individual_vs_baked(path: &Path, records: &[Value]) -> PlotResult {
     if pts.is_empty() {
         return no_data(path, &title);
     }
-    let lo = pts.iter().map(|p| p.2).fold(1.0f64, f64::min) * 0.7;
-    let hi = pts.iter().map(|p| p.2).fold(1.0f64, f64::max) * 1.4;
+    let lo = (pts.iter().map(|p| p.2).fold(1.0f64, f64::min) - 0.15).max(0.0);
+    let hi = pts.iter().map(|p| p.2).fold(1.0f64, f64::max) + 0.35;
     let root = BitMapBackend::new(path, SIZE).into_drawing_area();
     root.fill(&WHITE)?;
     let n = backends.len();
@@ -443,7 +447,7 @@ fn individual_vs_baked(path: &Path, records: &[Value]) -> PlotResult {
         .margin(15)
         .x_label_area_size(45)
         .y_label_area_size(70)
-        .build_cartesian_2d(-0.5..n as f64 - 0.5, (lo..hi).log_scale())?;
+        .build_cartesian_2d(-0.5..n as f64 - 0.5, lo..hi)?;
     chart
         .configure_mesh()
         .disable_x_mesh()
@@ -457,7 +461,7 @@ fn individual_vs_baked(path: &Path, records: &[Value]) -> PlotResult {
             }
         })
         .y_labels(12)
-        .y_label_formatter(&tick)
+        .y_label_formatter(&|y: &f64| format!("{y:.2}"))
         .x_desc("backend")
         .y_desc("individual ms / baked ms (> 1: many objects cost more)")
         .label_style(("sans-serif", 14))
