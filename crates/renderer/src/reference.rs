@@ -287,8 +287,17 @@ pub fn surface_points(frame: &Frame) -> Vec<Option<SurfacePoint>> {
         .collect()
 }
 
+/// The vector from `p` to the light: towards the light for a directional light (`w = 0`), and
+/// exactly to the light's position `xyz / w` for a point light, so that the shadow segment
+/// `p + t·v`, `t ∈ (0, 1)`, ends at the light for every `w > 0` (not only `w = 1`).
 fn light_vec(l: [f32; 4], p: DVec3) -> DVec3 {
-    DVec3::new(f64::from(l[0]), f64::from(l[1]), f64::from(l[2])) - p * f64::from(l[3])
+    let xyz = DVec3::new(f64::from(l[0]), f64::from(l[1]), f64::from(l[2]));
+    let w = f64::from(l[3]);
+    if w == 0.0 {
+        xyz
+    } else {
+        xyz / w - p
+    }
 }
 
 /// True when light `li` of `frame` visibly lights the surface point: the Lambert term
@@ -546,6 +555,29 @@ pub fn save_diff(
 
 #[cfg(test)]
 mod tests {
+
+    /// Regression: the shadow segment `p + t·v`, `t ∈ (0, 1)`, must end at the light for every
+    /// `w > 0`; it used to end at `L.xyz - (w - 1)·p`, which is the light only for `w = 1`.
+    #[test]
+    fn shadow_segment_ends_at_the_light_for_any_w() {
+        let p = DVec3::new(0.5, -1.0, 0.25);
+        for (l, light) in [
+            ([0.0f32, 0.0, 4.0, 2.0], DVec3::new(0.0, 0.0, 2.0)),
+            ([3.0, 1.5, -6.0, 0.75], DVec3::new(4.0, 2.0, -8.0)),
+            ([1.0, 2.0, 3.0, 1.0], DVec3::new(1.0, 2.0, 3.0)),
+        ] {
+            let end = p + super::light_vec(l, p);
+            assert!(
+                (end - light).length() < 1e-12,
+                "{l:?}: ends at {end}, light at {light}"
+            );
+        }
+        // Directional: the direction towards the light, whatever the point.
+        assert_eq!(
+            super::light_vec([1.0, 2.0, 3.0, 0.0], p),
+            DVec3::new(1.0, 2.0, 3.0)
+        );
+    }
     use super::*;
 
     #[test]
