@@ -1,38 +1,14 @@
 //! `shadowvol scenes`, `shadowvol scene export`, and `shadowvol silhouette` on glTF files and
 //! preset names, checked against the scenes crate and the cpu backend directly.
 
+mod common;
+
+use common::{json_of, run};
 use serde_json::Value;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_silhouette::{extract_once, Accuracy, TopologyScene};
 use std::path::PathBuf;
-use std::process::{Command, Output};
-
-const BIN: &str = env!("CARGO_BIN_EXE_shadowvol");
-
-fn run(args: &[&str]) -> Output {
-    let out = Command::new(BIN)
-        .args(args)
-        .output()
-        .expect("run shadowvol");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        !stderr.contains("panicked"),
-        "shadowvol {args:?} panicked:\n{stderr}"
-    );
-    out
-}
-
-fn json_of(args: &[&str]) -> Value {
-    let out = run(args);
-    assert!(
-        out.status.success(),
-        "shadowvol {args:?} failed ({:?}):\n{}",
-        out.status.code(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("valid JSON on stdout")
-}
 
 fn fails(args: &[&str]) -> (i32, String) {
     let out = run(args);
