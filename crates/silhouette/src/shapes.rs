@@ -1,5 +1,5 @@
-//! Small procedural meshes for the conformance corpus, and [`uv_sphere_y`] for tests and
-//! benchmarks.
+//! Small procedural meshes for the conformance corpus, and [`uv_sphere_y`] and [`cuboid`] for
+//! tests and benchmarks.
 //!
 //! The corpus shapes (crate-private) are computed with `+ - * /` and `sqrt` only (IEEE correctly
 //! rounded), in `f64` and rounded to `f32` once, so the corpus is bit-identical on every
@@ -154,8 +154,12 @@ pub fn uv_sphere_y(rings: u32, segments: u32, radius: f32) -> Mesh {
     }
 }
 
-/// A closed axis-aligned box `[lo, hi]` with 8 shared vertices and 12 triangles.
-pub(crate) fn cuboid(lo: Vec3, hi: Vec3) -> Mesh {
+/// A closed axis-aligned box `[lo, hi]` with 8 shared vertices and 12 triangles, wound outward.
+///
+/// Vertex `i` takes `hi` on the axes whose bit (1 = x, 2 = y, 4 = z) is set in `i`, `lo` on
+/// the others. No validation: `lo` and `hi` are expected finite.
+#[must_use]
+pub fn cuboid(lo: Vec3, hi: Vec3) -> Mesh {
     let positions = (0..8)
         .map(|i| {
             Vec3::new(

@@ -28,29 +28,7 @@ pub fn renderer(width: u32, height: u32, mode: Accuracy) -> Option<Renderer> {
 
 /// An axis-aligned box `lo..hi` as 12 triangles (closed, outward winding).
 pub fn cuboid(lo: Vec3, hi: Vec3) -> Mesh {
-    let p = |i: u32| {
-        Vec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        )
-    };
-    let positions = (0..8).map(p).collect();
-    let triangles = vec![
-        [0, 2, 3],
-        [0, 3, 1], // z = lo
-        [4, 5, 7],
-        [4, 7, 6], // z = hi
-        [0, 1, 5],
-        [0, 5, 4], // y = lo
-        [2, 6, 7],
-        [2, 7, 3], // y = hi
-        [0, 4, 6],
-        [0, 6, 2], // x = lo
-        [1, 3, 7],
-        [1, 7, 5], // x = hi
-    ];
-    Mesh::new(positions, triangles).expect("valid cuboid")
+    shadowvol_silhouette::shapes::cuboid(lo, hi)
 }
 
 /// A square floor at `y = 0`, half-size `s`, split into `n × n` cells.
