@@ -72,9 +72,12 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 
 /// Starts `entry` on its own thread (backends need not be `Send`), which then serves jobs: the
 /// scene of each case is prepared once, on first use.
-fn spawn_worker(entry: BackendEntry, cases: Arc<Vec<Case>>) -> Receiver<Started> {
+fn spawn_worker(
+    entry: BackendEntry,
+    cases: Arc<Vec<Case>>,
+) -> (Receiver<Started>, std::thread::JoinHandle<()>) {
     let (started_tx, started_rx) = mpsc::channel();
-    std::thread::spawn(move || {
+    let handle = std::thread::spawn(move || {
         let mut backend: Box<dyn SilhouetteBackend> = match entry.start() {
             Ok(b) => b,
             Err(e) => {
@@ -118,8 +121,47 @@ fn spawn_worker(entry: BackendEntry, cases: Arc<Vec<Case>>) -> Receiver<Started>
             };
             let _ = job.reply.send(reply);
         }
+        // `backend` drops here, on its own thread: the caller joins this thread before the
+        // process exits (see `join_workers`).
     });
-    started_rx
+    (started_rx, handle)
+}
+
+/// How long the backends get to shut down after the last test.
+const SHUTDOWN_TIMEOUT: Duration = Duration::from_secs(120);
+
+/// Waits for every worker thread to drop its backend.
+///
+/// Without this, `process::exit` ran the drivers' exit-time destructors (Mesa's and PoCL's LLVM,
+/// the Vulkan loader) while worker threads were still destroying their devices, and the process
+/// could die with SIGSEGV after every test had passed (seen once in CI). A worker that does not
+/// finish in [`SHUTDOWN_TIMEOUT`] is named and the run fails rather than hanging.
+fn join_workers(handles: Vec<(&'static str, std::thread::JoinHandle<()>)>) -> Result<(), String> {
+    let deadline = std::time::Instant::now() + SHUTDOWN_TIMEOUT;
+    let mut problems = Vec::new();
+    for (name, handle) in handles {
+        while !handle.is_finished() && std::time::Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        if !handle.is_finished() {
+            problems.push(format!(
+                "{name}: the backend did not shut down within {} s",
+                SHUTDOWN_TIMEOUT.as_secs()
+            ));
+            continue;
+        }
+        if let Err(p) = handle.join() {
+            problems.push(format!(
+                "{name}: dropping the backend panicked: {}",
+                panic_message(p.as_ref())
+            ));
+        }
+    }
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(problems.join("; "))
+    }
 }
 
 /// Names an edge by its object and input vertex names, for messages.
@@ -270,9 +312,14 @@ fn main() {
 
     // Start every backend in parallel, then wait for each to report.
     let entries = shadowvol::backends();
+    let mut handles = Vec::new();
     let starting: Vec<(BackendEntry, Receiver<Started>)> = entries
         .iter()
-        .map(|&e| (e, spawn_worker(e, Arc::clone(&cases))))
+        .map(|&e| {
+            let (rx, handle) = spawn_worker(e, Arc::clone(&cases));
+            handles.push((e.name, handle));
+            (e, rx)
+        })
         .collect();
     let mut trials = Vec::new();
     let mut known_names = Vec::new();
@@ -280,6 +327,8 @@ fn main() {
     eprintln!("conformance: {} corpus cases, CI={ci}", cases.len());
     for (entry, rx) in starting {
         let started = rx.recv_timeout(START_TIMEOUT).unwrap_or_else(|_| {
+            // Still starting: it can't be joined at the end without waiting on its driver.
+            handles.retain(|(n, _)| *n != entry.name);
             Started::No(format!(
                 "did not start within {} s",
                 START_TIMEOUT.as_secs()
@@ -430,6 +479,10 @@ fn main() {
 
     let conclusion = libtest_mimic::run(&args, trials);
     drop(workers); // closes the job channels so the worker threads end
+    if let Err(e) = join_workers(handles) {
+        eprintln!("conformance: backend shutdown failed: {e}");
+        std::process::exit(101);
+    }
     let notes = notes.lock().map(|n| n.clone()).unwrap_or_default();
     if !notes.is_empty() {
         let mut notes = notes;
