@@ -32,10 +32,12 @@ mod multiplicities;
 mod prepared;
 mod scene;
 pub mod shapes;
+mod wait;
 
 pub use multiplicities::{ExtractStats, Multiplicities};
 pub use prepared::{check_lights, PreparedScenes};
 pub use scene::{object_lights, SceneObject, TopologyScene};
+pub use wait::{gpu_wait_limit, DEFAULT_GPU_TIMEOUT, GPU_TIMEOUT_ENV};
 pub use shadowvol_robust_math::{Accuracy, Light};
 
 use std::time::Duration;

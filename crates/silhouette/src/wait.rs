@@ -1,0 +1,58 @@
+//! How long a GPU backend waits for its device before giving up.
+//!
+//! Every GPU backend bounds each wait for the device (a fence, a queue finish, a buffer mapping)
+//! by [`gpu_wait_limit`], so a hung kernel or a lost device becomes a
+//! [`BackendError::Device`](crate::BackendError::Device) instead of a hang. The limit is
+//! [`DEFAULT_GPU_TIMEOUT`] unless the environment variable [`GPU_TIMEOUT_ENV`] gives another one
+//! in seconds.
+
+use std::time::Duration;
+
+/// The environment variable that sets [`gpu_wait_limit`], in seconds (a positive decimal
+/// number, for example `SHADOWVOL_GPU_TIMEOUT=30` or `0.5`).
+pub const GPU_TIMEOUT_ENV: &str = "SHADOWVOL_GPU_TIMEOUT";
+
+/// The wait limit when [`GPU_TIMEOUT_ENV`] is not set: 600 s, far beyond any extraction of the
+/// bundled scenes, even on a CPU-emulated device.
+pub const DEFAULT_GPU_TIMEOUT: Duration = Duration::from_secs(600);
+
+/// The longest a GPU backend waits for one submission, readback or mapping.
+///
+/// # Errors
+///
+/// A message naming [`GPU_TIMEOUT_ENV`] and its value when the variable is set but is not a
+/// positive, finite number of seconds (at most 10⁹).
+pub fn gpu_wait_limit() -> Result<Duration, String> {
+    match std::env::var(GPU_TIMEOUT_ENV) {
+        Err(std::env::VarError::NotPresent) => Ok(DEFAULT_GPU_TIMEOUT),
+        Err(std::env::VarError::NotUnicode(v)) => Err(format!(
+            "{GPU_TIMEOUT_ENV}={v:?} is not valid text; give the limit in seconds, e.g. {GPU_TIMEOUT_ENV}=30"
+        )),
+        Ok(v) => parse_limit(&v),
+    }
+}
+
+fn parse_limit(v: &str) -> Result<Duration, String> {
+    match v.trim().parse::<f64>() {
+        Ok(s) if s.is_finite() && s > 0.0 && s <= 1e9 => Ok(Duration::from_secs_f64(s)),
+        _ => Err(format!(
+            "{GPU_TIMEOUT_ENV}={v:?} is not a positive number of seconds (at most 1e9); \
+             give the limit in seconds, e.g. {GPU_TIMEOUT_ENV}=30"
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_seconds_and_refuses_nonsense() {
+        assert_eq!(parse_limit("30"), Ok(Duration::from_secs(30)));
+        assert_eq!(parse_limit(" 0.5 "), Ok(Duration::from_millis(500)));
+        for bad in ["", "0", "-1", "nan", "inf", "1e10", "ten"] {
+            let e = parse_limit(bad).unwrap_err();
+            assert!(e.contains(GPU_TIMEOUT_ENV) && e.contains(bad), "{bad}: {e}");
+        }
+    }
+}
