@@ -716,11 +716,24 @@ impl Gpu {
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
         });
+        // Bounded like every GPU wait (SHADOWVOL_GPU_TIMEOUT): a hung device is an error.
+        let limit = shadowvol_silhouette::gpu_wait_limit().map_err(RenderError::Device)?;
         self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| RenderError::Device(format!("poll: {e}")))?;
-        rx.recv()
-            .map_err(|e| RenderError::Device(format!("map_async: {e}")))?
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: Some(limit),
+            })
+            .map_err(|e| match e {
+                wgpu::PollError::Timeout => RenderError::Device(format!(
+                    "the device did not finish the frame within {:.3} s (the limit is {}, default {} s)",
+                    limit.as_secs_f64(),
+                    shadowvol_silhouette::GPU_TIMEOUT_ENV,
+                    shadowvol_silhouette::DEFAULT_GPU_TIMEOUT.as_secs()
+                )),
+                other => RenderError::Device(format!("poll: {other}")),
+            })?;
+        rx.try_recv()
+            .map_err(|e| RenderError::Device(format!("map_async did not complete: {e}")))?
             .map_err(|e| RenderError::Device(format!("map_async: {e}")))?;
         let data = slice
             .get_mapped_range()

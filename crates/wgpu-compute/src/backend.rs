@@ -14,8 +14,24 @@ use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 use wgpu::util::DeviceExt;
 
-/// How long one wait for the device may take before it counts as a device failure.
-const WAIT_LIMIT: Duration = Duration::from_secs(600);
+/// How long one wait for the device may take before it counts as a device failure:
+/// [`shadowvol_silhouette::gpu_wait_limit`] (`SHADOWVOL_GPU_TIMEOUT`, default 600 s).
+fn wait_limit() -> Result<Duration, BackendError> {
+    shadowvol_silhouette::gpu_wait_limit().map_err(BackendError::InvalidInput)
+}
+
+/// The error for a wait that failed; a timeout names the limit and how to change it.
+fn wait_error(what: &str, e: &wgpu::PollError, limit: Duration) -> BackendError {
+    match e {
+        wgpu::PollError::Timeout => device_error(format!(
+            "{what}: the device did not finish within {:.3} s (the limit is {}, default {} s)",
+            limit.as_secs_f64(),
+            shadowvol_silhouette::GPU_TIMEOUT_ENV,
+            shadowvol_silhouette::DEFAULT_GPU_TIMEOUT.as_secs()
+        )),
+        other => device_error(format!("{what}: {other}")),
+    }
+}
 
 /// Options of [`WgpuBackend`].
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -464,12 +480,13 @@ impl WgpuBackend {
     }
 
     fn wait(&self, index: wgpu::SubmissionIndex) -> Result<(), BackendError> {
+        let limit = wait_limit()?;
         self.device
             .poll(wgpu::PollType::Wait {
                 submission_index: Some(index),
-                timeout: Some(WAIT_LIMIT),
+                timeout: Some(limit),
             })
-            .map_err(|e| device_error(format!("waiting for the device: {e}")))?;
+            .map_err(|e| wait_error("waiting for the device", &e, limit))?;
         self.check_health()
     }
 
@@ -485,12 +502,13 @@ impl WgpuBackend {
         buffer.map_async(wgpu::MapMode::Read, 0..size, move |r| {
             *s.lock().unwrap_or_else(PoisonError::into_inner) = Some(r);
         });
+        let limit = wait_limit()?;
         self.device
             .poll(wgpu::PollType::Wait {
                 submission_index: None,
-                timeout: Some(WAIT_LIMIT),
+                timeout: Some(limit),
             })
-            .map_err(|e| device_error(format!("waiting for a buffer mapping: {e}")))?;
+            .map_err(|e| wait_error("waiting for a buffer mapping", &e, limit))?;
         self.check_health()?;
         let state = slot.lock().unwrap_or_else(PoisonError::into_inner).take();
         match state {
