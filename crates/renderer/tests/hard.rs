@@ -25,9 +25,12 @@ fn scenes() -> Vec<(String, RenderScene)> {
     v
 }
 
-fn check_mode(mode: Accuracy) {
+/// Checks `mode` on every scene; returns each scene's geometric artifact count (empty without
+/// an adapter).
+fn check_mode(mode: Accuracy) -> Vec<(String, usize)> {
+    let mut geometric = Vec::new();
     let Some(mut r) = common::renderer(SIZE, SIZE, mode) else {
-        return;
+        return geometric;
     };
     let mut total_shadow = 0;
     let mut report = String::new();
@@ -36,8 +39,11 @@ fn check_mode(mode: Accuracy) {
         let cmp = reference::compare(&frame);
         total_shadow += cmp.reference_shadow_pixels;
         report.push_str(&format!(
-            "{name}: {} artifacts, {} differing, {} reference shadow pixels\n",
-            cmp.artifact_pixels, cmp.differing_pixels, cmp.reference_shadow_pixels
+            "{name}: {} artifacts ({} geometric), {} differing, {} reference shadow pixels\n",
+            cmp.artifact_pixels,
+            cmp.geometric_artifact_pixels,
+            cmp.differing_pixels,
+            cmp.reference_shadow_pixels
         ));
         assert!(
             cmp.artifact_pixels <= MAX_ARTIFACTS,
@@ -45,17 +51,35 @@ fn check_mode(mode: Accuracy) {
             cmp.artifact_pixels,
             frame.explain()
         );
+        geometric.push((name, cmp.geometric_artifact_pixels));
     }
     println!("{mode}:\n{report}");
     assert!(
         total_shadow > 50_000,
         "the scenes must show shadows: {total_shadow}"
     );
+    geometric
 }
 
 #[test]
 fn exact_has_no_artifacts_on_hard_scenes() {
-    check_mode(Accuracy::Exact);
+    let geometric = check_mode(Accuracy::Exact);
+    if geometric.is_empty() {
+        return;
+    }
+    // What README "Why the 1/255 threshold" says: with lit meaning any cos θ > 0, even exact
+    // silhouettes leave z-fighting on the faces the light grazes (here the edge-on frustum),
+    // so the geometric count measures the raster, not the silhouettes.
+    let frustum = geometric
+        .iter()
+        .find(|(n, _)| n == "edge-on-frustum")
+        .map(|&(_, g)| g)
+        .unwrap();
+    assert!(
+        frustum > MAX_ARTIFACTS,
+        "exact on the edge-on frustum: {frustum} geometric artifact pixels; if the raster no \
+         longer z-fights at grazing incidence, update crates/renderer/README.md"
+    );
 }
 
 #[test]
