@@ -9,6 +9,8 @@ use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
     PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
+use std::num::NonZeroUsize;
+use std::ops::Range;
 use std::time::Instant;
 
 /// Bytes of the uncertain buffer's header (count, clamped count, two pads).
@@ -17,6 +19,9 @@ const UNCERTAIN_HEADER: usize = 16;
 pub(crate) const XFORM_BYTES: u64 = 80;
 /// Initial capacity of the uncertain buffer, in records.
 const INITIAL_UNCERTAIN: u32 = 1024;
+
+/// Frees device objects (see [`VulkanBackend::retire`]).
+type Cleanup = Box<dyn FnOnce(&Context)>;
 
 /// One prepared scene: its device buffers and descriptor set.
 pub(crate) struct Prepared {
@@ -117,11 +122,26 @@ impl Prepared {
 /// cannot certify to a buffer that the host decides with `orient_exact`. The compact silhouette
 /// lists are built on the host from the multiplicities.
 ///
+/// When the result buffer (`edges x lights` multiplicities) or the light buffer would exceed
+/// `maxStorageBufferRange` (or [`Options::max_lights_per_pass`] is set), the lights are split
+/// into batches, one pass each; the result is the same as one pass would give.
+///
+/// Every wait for the device is bounded by [`shadowvol_silhouette::gpu_wait_limit`]
+/// (`SHADOWVOL_GPU_TIMEOUT`). After a timeout the late work is still pending: the backend then
+/// refuses new work with [`BackendError::Device`] until that work's fence signals (each later
+/// call waits for it up to the limit again and recovers when it has finished), and dropping the
+/// backend leaks the device instead of destroying it under running work.
+///
 /// [`VulkanBackend::render_shadow_mask`] (in `render.rs`) runs the same shader with emission on,
 /// after a depth pre-pass, into a depth/stencil attachment.
 pub struct VulkanBackend {
     pub(crate) prepared: PreparedScenes<Prepared>,
     pub(crate) pipes: Pipelines,
+    /// Cleanups of objects that a timed-out submission may still use; run once it has finished.
+    retired: Vec<Cleanup>,
+    max_lights_per_pass: Option<NonZeroUsize>,
+    /// Geometry-shader passes (light batches) of the last `extract`.
+    last_passes: usize,
     pub(crate) ctx: Context,
 }
 
@@ -149,8 +169,61 @@ impl VulkanBackend {
         Ok(Self {
             prepared: PreparedScenes::new(),
             pipes,
+            retired: Vec::new(),
+            max_lights_per_pass: options.max_lights_per_pass,
+            last_passes: 0,
             ctx,
         })
+    }
+
+    /// Makes sure no timed-out submission is still running (see `Context::ensure_idle`), then
+    /// frees what was retired while one was.
+    pub(crate) fn settle(&mut self) -> Result<(), BackendError> {
+        self.ctx.ensure_idle()?;
+        for cleanup in self.retired.drain(..) {
+            cleanup(&self.ctx);
+        }
+        Ok(())
+    }
+
+    /// Runs `cleanup` now when the device is idle, else once a timed-out submission that may
+    /// still use the objects has finished (or never, if it never does: they are leaked).
+    pub(crate) fn retire(&mut self, cleanup: impl FnOnce(&Context) + 'static) {
+        if self.ctx.pending() {
+            self.retired.push(Box::new(cleanup));
+        } else {
+            cleanup(&self.ctx);
+        }
+    }
+
+    /// Lights per geometry-shader pass for `edges` edges and `objects` objects: as many as the
+    /// result buffer (`4 * edges` bytes per light) and the light buffer (`16 * objects` bytes
+    /// per light) allow within `maxStorageBufferRange` and `u32` indices, at most
+    /// [`Options::max_lights_per_pass`].
+    fn lights_per_pass(&self, edges: usize, objects: usize) -> Result<usize, BackendError> {
+        let max_range = self.ctx.caps.max_storage_buffer_range;
+        let mult = 4 * edges as u64;
+        let light = 16 * objects as u64;
+        let n = (max_range / mult.max(1))
+            .min(max_range / light.max(1))
+            .min(u64::from(u32::MAX) / (edges as u64).max(1))
+            .min(
+                self.max_lights_per_pass
+                    .map_or(u64::MAX, |n| n.get() as u64),
+            );
+        if n == 0 {
+            return Err(BackendError::Limit {
+                backend: BACKEND,
+                message: format!(
+                    "one light alone does not fit the device's buffers: it needs {mult} bytes of \
+                     multiplicities for {edges} edges and {light} bytes of object-space lights \
+                     for {objects} objects, but maxStorageBufferRange is {max_range} bytes (and \
+                     at most {} multiplicities per pass); split the scene",
+                    u32::MAX
+                ),
+            });
+        }
+        Ok(usize::try_from(n).unwrap_or(usize::MAX))
     }
 
     /// The exact-mode filter in use: `F64` when the device has `shaderFloat64` (and it was not
@@ -182,6 +255,14 @@ impl VulkanBackend {
         self.ctx.messages()
     }
 
+    /// How many light batches (geometry-shader passes, not counting reruns after the uncertain
+    /// buffer grew) the last `extract` ran; for tests of the light splitting.
+    #[doc(hidden)]
+    #[must_use]
+    pub fn passes_of_last_extract_for_tests(&self) -> usize {
+        self.last_passes
+    }
+
     /// Makes one deliberately invalid but harmless call (a buffer with no usage flags) so that
     /// tests can check the validation layer is really listening. Returns false without
     /// validation.
@@ -208,18 +289,20 @@ impl VulkanBackend {
         self.prepared.get(BACKEND, id)
     }
 
-    /// Makes the light, multiplicity and uncertain buffers large enough and writes the lights.
-    /// Returns the number of (edge, light) slots.
+    /// Makes the light, multiplicity and uncertain buffers large enough for the lights
+    /// `lights` (indices into each object's list in `obj_lights`), writes those lights and zeroes
+    /// the uncertain counters. The caller keeps the batch within [`Self::lights_per_pass`].
     pub(crate) fn upload_lights(
         &mut self,
         id: PreparedId,
         obj_lights: &[Vec<[f32; 4]>],
-        light_count: usize,
+        lights: Range<usize>,
     ) -> Result<(), BackendError> {
         let max_range = self.ctx.caps.max_storage_buffer_range;
         let ctx = &self.ctx;
         let p = self.prepared.get_mut(BACKEND, id)?;
         let edges = p.ds.edges.len();
+        let light_count = lights.len();
         let slots = edges
             .checked_mul(light_count)
             .filter(|&s| u32::try_from(s).is_ok() && (s as u64) * 4 <= max_range)
@@ -227,16 +310,32 @@ impl VulkanBackend {
                 backend: BACKEND,
                 message: format!(
                     "{edges} edges x {light_count} lights do not fit one result buffer (at most \
-                     {} multiplicities, maxStorageBufferRange {max_range} bytes); pass fewer \
-                     lights per call",
+                     {} multiplicities, maxStorageBufferRange {max_range} bytes)",
                     (max_range / 4).min(u64::from(u32::MAX))
                 ),
             })?;
         let mut bits: Vec<[u32; 4]> = Vec::with_capacity(obj_lights.len() * light_count);
         for per_object in obj_lights {
-            bits.extend(per_object.iter().map(|l| l.map(f32::to_bits)));
+            let batch = per_object.get(lights.clone()).ok_or_else(|| {
+                BackendError::InvalidInput(format!(
+                    "lights {lights:?} are out of range: an object has {} lights",
+                    per_object.len()
+                ))
+            })?;
+            bits.extend(batch.iter().map(|l| l.map(f32::to_bits)));
         }
         let light_bytes: &[u8] = bytemuck::cast_slice(&bits);
+        if light_bytes.len() as u64 > max_range {
+            return Err(BackendError::Limit {
+                backend: BACKEND,
+                message: format!(
+                    "{light_count} lights for {} objects need {} bytes, more than one light \
+                     buffer holds (maxStorageBufferRange {max_range} bytes)",
+                    obj_lights.len(),
+                    light_bytes.len()
+                ),
+            });
+        }
         let mut changed = false;
         if (light_bytes.len() as u64) > p.lights.size {
             let new = Buffer::new(
@@ -359,29 +458,61 @@ impl VulkanBackend {
         }
     }
 
-    /// Runs the GS over every (edge, light), host-resolves uncertain pairs, and fills `out`.
-    /// The multiplicity buffer on the device is left holding the resolved values when
-    /// `write_back` is set (the render path then emits from it).
+    /// Runs the GS over every (edge, light), in batches of at most [`Self::lights_per_pass`]
+    /// lights, host-resolves uncertain pairs, and fills `out` (light-major). The stats add up
+    /// over the batches.
     pub(crate) fn extract_impl(
         &mut self,
         id: PreparedId,
         lights: &[Light],
         mode: Accuracy,
         out: &mut Multiplicities,
-        write_back: bool,
     ) -> Result<ExtractStats, BackendError> {
         check_lights(lights)?;
+        self.settle()?;
+        self.last_passes = 0;
         let mut stats = ExtractStats::default();
         let t = Instant::now();
         let obj_lights = object_lights(&self.scene(id)?.scene, lights);
-        self.upload_lights(id, &obj_lights, lights.len())?;
         stats.upload = t.elapsed();
 
         let edges = self.scene(id)?.ds.edges.len();
         out.reset(edges, lights.len());
-        if edges == 0 {
+        if edges == 0 || lights.is_empty() {
             return Ok(stats);
         }
+        let per_pass = self.lights_per_pass(edges, obj_lights.len())?;
+        let mut first = 0;
+        while first < lights.len() {
+            let batch = first..(first + per_pass).min(lights.len());
+            first = batch.end;
+            self.extract_batch(id, &obj_lights, batch, mode, out, &mut stats)?;
+            self.last_passes += 1;
+        }
+        // The compact silhouette lists are built on the host from m; counted as readback.
+        let t = Instant::now();
+        out.rebuild_silhouettes();
+        stats.readback += t.elapsed();
+        Ok(stats)
+    }
+
+    /// One pass over the lights `batch`: uploads them, draws, reads the multiplicities into
+    /// their rows of `out` and resolves their uncertain pairs, adding the times to `stats`.
+    fn extract_batch(
+        &mut self,
+        id: PreparedId,
+        obj_lights: &[Vec<[f32; 4]>],
+        batch: Range<usize>,
+        mode: Accuracy,
+        out: &mut Multiplicities,
+        stats: &mut ExtractStats,
+    ) -> Result<(), BackendError> {
+        let t = Instant::now();
+        self.upload_lights(id, obj_lights, batch.clone())?;
+        stats.upload += t.elapsed();
+
+        let edges = self.scene(id)?.ds.edges.len();
+        let light_count = batch.len() as u32;
         let t = Instant::now();
         let mut count;
         loop {
@@ -389,14 +520,13 @@ impl VulkanBackend {
             let push = Push {
                 mode: mode_code_of(mode),
                 edge_count: edges as u32,
-                light_count: lights.len() as u32,
+                light_count,
                 uncertain_capacity: p.uncertain_capacity,
                 emit: 0,
                 pass: 0,
             };
-            self.ctx.submit_and_wait(|_, cmd| {
-                self.record_extract(p, cmd, &push, lights.len() as u32)
-            })?;
+            self.ctx
+                .submit_and_wait(|_, cmd| self.record_extract(p, cmd, &push, light_count))?;
             (count, _) = Self::uncertain_header(p);
             if count <= p.uncertain_capacity {
                 break;
@@ -404,35 +534,44 @@ impl VulkanBackend {
             // Too many uncertain pairs for the buffer: grow it and run again.
             self.grow_uncertain(id, count.next_power_of_two())?;
         }
-        stats.compute = t.elapsed();
+        stats.compute += t.elapsed();
 
         let t = Instant::now();
         let p = self.scene(id)?;
-        p.mult
-            .read(0, bytemuck::cast_slice_mut(out.all_values_mut()));
+        let rows = &mut out.all_values_mut()[batch.start * edges..batch.end * edges];
+        p.mult.read(0, bytemuck::cast_slice_mut(rows));
         let mut records = vec![[0u32; 4]; count as usize];
         if count > 0 {
             p.uncertain
                 .read(UNCERTAIN_HEADER, bytemuck::cast_slice_mut(&mut records));
         }
-        stats.readback = t.elapsed();
+        stats.readback += t.elapsed();
 
         let t = Instant::now();
-        stats.uncertain = u64::from(count);
+        stats.uncertain += u64::from(count);
         for [e, k, li, _] in records {
             let (e, li) = (e as usize, li as usize);
+            let valid = e < edges
+                && li < batch.len()
+                && p.ds.edges[e][2] <= k
+                && k < p.ds.edges[e][3]
+                && (k as usize) < p.ds.ovs.len();
+            if !valid {
+                return Err(BackendError::Device {
+                    backend: BACKEND,
+                    message: format!(
+                        "the device reported an invalid uncertain pair (edge {e}, opposite-vertex \
+                         slot {k}, light {li} of a {}-light pass over {edges} edges)",
+                        batch.len()
+                    ),
+                });
+            }
+            let li = batch.start + li;
             let l = obj_lights[p.ds.edge_object[e] as usize][li];
             out.values_mut(li)[e] += i32::from(resolve_uncertain(&p.ds, e, k, l));
         }
-        if write_back && count > 0 {
-            p.mult.write(0, bytemuck::cast_slice(out.all_values()));
-        }
-        stats.host_resolve = t.elapsed();
-        // The compact silhouette lists are built on the host from m; counted as readback.
-        let t = Instant::now();
-        out.rebuild_silhouettes();
-        stats.readback += t.elapsed();
-        Ok(stats)
+        stats.host_resolve += t.elapsed();
+        Ok(())
     }
 }
 
@@ -607,21 +746,27 @@ impl SilhouetteBackend for VulkanBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
-        self.extract_impl(id, lights, mode, out, false)
+        self.extract_impl(id, lights, mode, out)
     }
 
     fn release(&mut self, id: PreparedId) {
         if let Some(p) = self.prepared.remove(id) {
-            p.destroy(&self.ctx);
+            // A timed-out submission may still read this scene's buffers: free them later.
+            self.retire(move |ctx| p.destroy(ctx));
         }
     }
 }
 
 impl Drop for VulkanBackend {
     fn drop(&mut self) {
-        // SAFETY: wait until nothing runs before destroying.
-        unsafe {
-            let _ = self.ctx.device.device_wait_idle();
+        // Waits for a timed-out submission at most `gpu_wait_limit`. If it is still running,
+        // its buffers, descriptor sets and pipelines are leaked rather than destroyed under it
+        // (and the context leaks the device; see `Drop for Context`).
+        if !self.ctx.idle_for_destruction() {
+            return;
+        }
+        for cleanup in self.retired.drain(..) {
+            cleanup(&self.ctx);
         }
         for (_, p) in self.prepared.drain() {
             p.destroy(&self.ctx);

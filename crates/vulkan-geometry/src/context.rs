@@ -2,9 +2,12 @@
 //! device, one graphics queue, host-visible buffers.
 
 use ash::vk;
-use shadowvol_silhouette::BackendError;
+use shadowvol_silhouette::{gpu_wait_limit, BackendError, DEFAULT_GPU_TIMEOUT, GPU_TIMEOUT_ENV};
 use std::ffi::{c_void, CStr, CString};
+use std::num::NonZeroUsize;
+use std::sync::atomic::{AtomicU8, Ordering};
 use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
 pub(crate) const BACKEND: &str = "vulkan";
 
@@ -24,6 +27,12 @@ pub struct Options {
     /// Use the `f32` exact-mode filter even when the device has `shaderFloat64` (for testing the
     /// fallback path on devices that have f64).
     pub force_f32_filter: bool,
+    /// Most lights per geometry-shader pass (default `None`: as many as the device's buffer
+    /// limits allow). `extract` splits its lights into batches of at most this many, one pass
+    /// each, and assembles one result identical to a single pass; a small value exercises the
+    /// splitting on small scenes. The device limits (`maxStorageBufferRange` for the result and
+    /// light buffers, `u32` result indices) lower it further.
+    pub max_lights_per_pass: Option<NonZeroUsize>,
 }
 
 impl Options {
@@ -33,6 +42,7 @@ impl Options {
         Self {
             validation: std::env::var(VALIDATION_ENV).is_ok_and(|v| v.trim() == "1"),
             force_f32_filter: false,
+            max_lights_per_pass: None,
         }
     }
 }
@@ -50,6 +60,37 @@ pub(crate) fn device_err(what: &str, r: vk::Result) -> BackendError {
         message: format!("{what} failed: {r}"),
     }
 }
+
+/// [`gpu_wait_limit`], with a bad `SHADOWVOL_GPU_TIMEOUT` as [`BackendError::InvalidInput`].
+pub(crate) fn wait_limit() -> Result<Duration, BackendError> {
+    gpu_wait_limit().map_err(BackendError::InvalidInput)
+}
+
+/// `limit` in nanoseconds for `vkWaitForFences`.
+fn nanos(limit: Duration) -> u64 {
+    u64::try_from(limit.as_nanos()).unwrap_or(u64::MAX)
+}
+
+/// The error for a submission that did not finish within `limit`.
+fn timeout_err(limit: Duration) -> BackendError {
+    BackendError::Device {
+        backend: BACKEND,
+        message: format!(
+            "the device did not finish within {} s (the limit set by {GPU_TIMEOUT_ENV}, default \
+             {} s); the work is still pending, so this backend refuses new work until it \
+             finishes (raise {GPU_TIMEOUT_ENV} for scenes this large on a slow device)",
+            limit.as_secs_f64(),
+            DEFAULT_GPU_TIMEOUT.as_secs()
+        ),
+    }
+}
+
+/// No submission is in flight.
+const IDLE: u8 = 0;
+/// A submission timed out and may still be running: nothing it uses may be touched or freed.
+const PENDING: u8 = 1;
+/// Dropping gave up waiting for a pending submission: the device's handles are leaked.
+const ABANDONED: u8 = 2;
 
 /// Messages collected from the validation layer (warnings and errors).
 pub(crate) type MessageLog = Arc<Mutex<Vec<String>>>;
@@ -94,7 +135,7 @@ pub(crate) struct Capabilities {
 /// A started Vulkan device with one queue.
 pub(crate) struct Context {
     /// Keeps the loaded Vulkan library alive as long as the handles made from it.
-    _entry: ash::Entry,
+    entry: ash::Entry,
     pub instance: ash::Instance,
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     pub messages: MessageLog,
@@ -107,6 +148,8 @@ pub(crate) struct Context {
     pub memory: vk::PhysicalDeviceMemoryProperties,
     pub caps: Capabilities,
     pub use_f64: bool,
+    /// [`IDLE`], [`PENDING`] or [`ABANDONED`].
+    state: AtomicU8,
 }
 
 fn device_type_rank(t: vk::PhysicalDeviceType) -> u32 {
@@ -270,7 +313,7 @@ impl Context {
         let debug = ctx_partial.debug.take();
         ctx_partial.instance = None;
         Ok(Self {
-            _entry: entry,
+            entry,
             instance,
             debug,
             messages,
@@ -283,6 +326,7 @@ impl Context {
             memory,
             caps,
             use_f64,
+            state: AtomicU8::new(IDLE),
         })
     }
 
@@ -296,13 +340,63 @@ impl Context {
         })
     }
 
-    /// Records with `record`, submits, and waits for completion.
+    /// True while a submission that timed out may still be running on the device. Nothing it
+    /// uses (buffers, images, descriptor sets, the command buffer) may be written or destroyed
+    /// then.
+    pub fn pending(&self) -> bool {
+        self.state.load(Ordering::Acquire) != IDLE
+    }
+
+    /// Makes sure no earlier submission is still running. After a timeout the context is
+    /// poisoned: this waits for the late submission up to [`gpu_wait_limit`] once more; if its
+    /// fence has signalled by then the context recovers (everything the late work touched is
+    /// rewritten before the next submission reads it), otherwise this fails.
+    ///
+    /// Call it before touching any device memory that a submission uses.
+    pub fn ensure_idle(&self) -> Result<(), BackendError> {
+        if !self.pending() {
+            return Ok(());
+        }
+        let limit = wait_limit()?;
+        // SAFETY: the fence is ours and was submitted (the state says so).
+        match unsafe {
+            self.device
+                .wait_for_fences(&[self.fence], true, nanos(limit))
+        } {
+            Ok(()) => {
+                self.state.store(IDLE, Ordering::Release);
+                Ok(())
+            }
+            Err(vk::Result::TIMEOUT) => Err(BackendError::Device {
+                backend: BACKEND,
+                message: format!(
+                    "an earlier submission that timed out is still running on the device (it \
+                     has not finished within another {} s, the limit set by {GPU_TIMEOUT_ENV}); \
+                     this backend cannot run anything until it does: retry later, or drop the \
+                     backend and start a new one",
+                    limit.as_secs_f64()
+                ),
+            }),
+            Err(e) => Err(device_err(
+                "vkWaitForFences (for an earlier submission that timed out)",
+                e,
+            )),
+        }
+    }
+
+    /// Records with `record`, submits, and waits for completion, at most [`gpu_wait_limit`].
+    ///
+    /// On a timeout the context becomes pending (see [`Context::ensure_idle`]) and the error is
+    /// a [`BackendError::Device`] naming the limit and `SHADOWVOL_GPU_TIMEOUT`.
     pub fn submit_and_wait(
         &self,
         record: impl FnOnce(&ash::Device, vk::CommandBuffer),
     ) -> Result<(), BackendError> {
+        self.ensure_idle()?;
+        let limit = wait_limit()?;
         let d = &self.device;
-        // SAFETY: the command buffer is idle (we always wait for the fence), from our pool.
+        // SAFETY: the command buffer is idle (`ensure_idle` saw its last submission finish), from
+        // our pool.
         unsafe {
             d.reset_command_buffer(self.cmd, vk::CommandBufferResetFlags::empty())
                 .map_err(|e| device_err("vkResetCommandBuffer", e))?;
@@ -321,10 +415,48 @@ impl Context {
                 .map_err(|e| device_err("vkResetFences", e))?;
             d.queue_submit(self.queue, &submit, self.fence)
                 .map_err(|e| device_err("vkQueueSubmit", e))?;
-            d.wait_for_fences(&[self.fence], true, u64::MAX)
-                .map_err(|e| device_err("vkWaitForFences", e))?;
+            self.state.store(PENDING, Ordering::Release);
+            match d.wait_for_fences(&[self.fence], true, nanos(limit)) {
+                Ok(()) => self.state.store(IDLE, Ordering::Release),
+                Err(vk::Result::TIMEOUT) => return Err(timeout_err(limit)),
+                // Device lost or out of memory: the state stays pending, so nothing the
+                // submission used is freed while the driver may still hold it.
+                Err(e) => return Err(device_err("vkWaitForFences", e)),
+            }
         }
         Ok(())
+    }
+
+    /// Before destroying anything: true when no submission is running, waiting for a pending
+    /// one at most [`gpu_wait_limit`] (the default limit when `SHADOWVOL_GPU_TIMEOUT` is
+    /// invalid). False when the work is still running; the context is then abandoned (its
+    /// handles will be leaked) and later calls return false at once.
+    pub fn idle_for_destruction(&self) -> bool {
+        match self.state.load(Ordering::Acquire) {
+            IDLE => return true,
+            ABANDONED => return false,
+            _ => {}
+        }
+        let limit = gpu_wait_limit().unwrap_or(DEFAULT_GPU_TIMEOUT);
+        // SAFETY: the fence is ours and was submitted.
+        if unsafe {
+            self.device
+                .wait_for_fences(&[self.fence], true, nanos(limit))
+        }
+        .is_ok()
+        {
+            self.state.store(IDLE, Ordering::Release);
+            true
+        } else {
+            self.state.store(ABANDONED, Ordering::Release);
+            eprintln!(
+                "shadowvol vulkan backend: a submission is still running on the device after \
+                 {} s ({GPU_TIMEOUT_ENV}); leaking the device instead of destroying it under \
+                 the running work",
+                limit.as_secs_f64()
+            );
+            false
+        }
     }
 
     /// Validation messages collected so far.
@@ -360,9 +492,20 @@ impl Drop for Partial {
 
 impl Drop for Context {
     fn drop(&mut self) {
-        // SAFETY: we own every handle; the device is idled before destruction.
+        if !self.idle_for_destruction() {
+            // A submission is still running (it outlived the wait limit twice, or the device was
+            // lost). Destroying the fence, pool, device or instance under it is undefined
+            // behaviour (drivers free memory the work still writes to), and waiting longer is a
+            // hang, so every handle is leaked instead: the instance, device and debug messenger
+            // stay alive, and so do the loader library (the driver's threads run its code) and
+            // the message log (the messenger's callback points at it).
+            std::mem::forget(self.entry.clone());
+            std::mem::forget(Arc::clone(&self.messages));
+            return;
+        }
+        // SAFETY: we own every handle; every submission has finished (all go through our one
+        // fence and `idle_for_destruction` saw it signalled or none was pending).
         unsafe {
-            let _ = self.device.device_wait_idle();
             self.device.destroy_fence(self.fence, None);
             self.device.destroy_command_pool(self.pool, None);
             self.device.destroy_device(None);

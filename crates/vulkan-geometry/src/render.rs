@@ -294,8 +294,11 @@ impl VulkanBackend {
     /// where the stencil is non-zero.
     ///
     /// # Errors
-    /// [`BackendError::InvalidInput`] for a zero or oversized image,
-    /// [`BackendError::UnknownScene`], [`BackendError::Device`] on driver failures.
+    /// [`BackendError::InvalidInput`] for a zero or oversized image or an invalid
+    /// `SHADOWVOL_GPU_TIMEOUT`, [`BackendError::UnknownScene`], [`BackendError::Device`] on driver
+    /// failures, when the device does not finish within
+    /// [`shadowvol_silhouette::gpu_wait_limit`], or while an earlier timed-out submission is
+    /// still running.
     pub fn render_shadow_mask_with(
         &mut self,
         id: PreparedId,
@@ -310,10 +313,12 @@ impl VulkanBackend {
                 "shadow mask size {width}x{height}: each side must be 1..={MAX_MASK_SIDE}"
             )));
         }
+        // Nothing below may touch the buffers while a timed-out submission still runs.
+        self.settle()?;
         let mut stats = RenderStats::default();
         let mode_code = if mode == Accuracy::Exact {
             let mut m = Multiplicities::default();
-            stats.extract = Some(self.extract_impl(id, &[light], mode, &mut m, false)?);
+            stats.extract = Some(self.extract_impl(id, &[light], mode, &mut m)?);
             let p = self.scene(id)?;
             let l = object_lights(&p.scene, &[light]);
             let ds = &p.ds;
@@ -360,7 +365,7 @@ impl VulkanBackend {
             PRECOMPUTED
         } else {
             let obj_lights = object_lights(&self.scene(id)?.scene, &[light]);
-            self.upload_lights(id, &obj_lights, 1)?;
+            self.upload_lights(id, &obj_lights, 0..1)?;
             mode_code_of(mode)
         };
         let t = Instant::now();
@@ -412,13 +417,17 @@ impl VulkanBackend {
             };
             (stencil, depth)
         });
-        let clamped = self
-            .scene(id)
-            .map(|p| VulkanBackend::uncertain_header(p).1)
-            .unwrap_or(0);
-        stencil_buf.destroy(&self.ctx);
-        depth_buf.destroy(&self.ctx);
-        target.destroy(&self.ctx);
+        let clamped = match (&out, self.scene(id)) {
+            (Ok(_), Ok(p)) => VulkanBackend::uncertain_header(p).1,
+            _ => 0,
+        };
+        // After a timeout the draw may still be running: the target and copies are freed once
+        // it has finished (or leaked if it never does).
+        self.retire(move |ctx| {
+            stencil_buf.destroy(ctx);
+            depth_buf.destroy(ctx);
+            target.destroy(ctx);
+        });
         let (stencil, depth) = out?;
         stats.readback = t.elapsed();
         stats.clamped_edges = clamped;

@@ -1,0 +1,133 @@
+//! Light splitting: `extract` with at most 1, 2 or 3 lights per geometry-shader pass gives the
+//! same result as one pass: `exact` bit-identical to the `cpu` backend, 0 open vertices in
+//! `robust` and `ordered`, and the statistics summed over the passes.
+
+mod common;
+
+use shadowvol_cpu::CpuBackend;
+use shadowvol_silhouette::{
+    corpus, extract_once, invariant, Accuracy, Multiplicities, SilhouetteBackend,
+};
+use shadowvol_vulkan_geometry::Options;
+use std::num::NonZeroUsize;
+
+#[test]
+fn corpus_split_into_light_batches_matches_one_pass_and_cpu() {
+    let Some(mut whole) = common::backend(Options::default(), "light batches (one pass)") else {
+        return;
+    };
+    let mut cpu = CpuBackend::new();
+    let cases: Vec<_> = corpus::cases()
+        .into_iter()
+        .filter(|c| c.lights.len() >= 3)
+        .collect();
+    assert!(
+        cases.len() >= 3,
+        "the corpus should have several cases with 3 or more lights"
+    );
+    let mut split_runs = 0;
+    for per_pass in [1, 2, 3] {
+        let opts = Options {
+            max_lights_per_pass: NonZeroUsize::new(per_pass),
+            ..Options::default()
+        };
+        let Some(mut vk) = common::backend(opts, "light batches") else {
+            return;
+        };
+        for case in &cases {
+            let scene = case.scene().unwrap();
+            let n = case.lights.len();
+            let id = vk.prepare(&scene).unwrap();
+            for mode in Accuracy::ALL {
+                let what = format!("{} {mode}, {per_pass} light(s) per pass", case.name);
+                let mut got = Multiplicities::default();
+                let stats = vk
+                    .extract(id, &case.lights, mode, &mut got)
+                    .unwrap_or_else(|e| panic!("{what}: {e}"));
+                assert_eq!(
+                    vk.passes_of_last_extract_for_tests(),
+                    n.div_ceil(per_pass),
+                    "{what}: {n} lights should take that many passes"
+                );
+                split_runs += usize::from(n > per_pass);
+                assert_eq!(got.light_count(), n, "{what}");
+                assert!(got.silhouettes_consistent(), "{what}");
+                let (one, one_stats) = extract_once(&mut whole, &scene, &case.lights, mode)
+                    .unwrap_or_else(|e| panic!("{what} (one pass): {e}"));
+                assert_eq!(whole.passes_of_last_extract_for_tests(), 1, "{what}");
+                assert_eq!(
+                    invariant::first_difference(&got, &one),
+                    None,
+                    "{what}: split result differs from one pass (light, edge, split, one pass)"
+                );
+                if mode == Accuracy::Exact {
+                    let (want, _) = extract_once(&mut cpu, &scene, &case.lights, mode).unwrap();
+                    assert_eq!(
+                        invariant::first_difference(&got, &want),
+                        None,
+                        "{what}: differs from cpu (light, edge, vulkan, cpu)"
+                    );
+                    // Each (edge, OV, light) is certified or not regardless of its batch, so the
+                    // per-pass counts must add up to the one-pass count.
+                    assert_eq!(stats.uncertain, one_stats.uncertain, "{what}");
+                } else {
+                    assert_eq!(stats.uncertain, 0, "{what}");
+                }
+                if mode.is_consistent() {
+                    for l in 0..n {
+                        assert_eq!(
+                            invariant::open_vertices_scene(&scene, &got, l),
+                            0,
+                            "{what}: light {l} has open vertices"
+                        );
+                    }
+                }
+                assert!(stats.compute > std::time::Duration::ZERO, "{what}");
+                assert!(stats.total() >= stats.compute + stats.upload, "{what}");
+            }
+            vk.release(id);
+        }
+        assert!(
+            vk.validation_messages().is_empty(),
+            "validation messages:\n{}",
+            vk.validation_messages().join("\n")
+        );
+    }
+    assert!(split_runs > 0, "no extraction was actually split");
+}
+
+/// Uncertain pairs of a later batch land in that batch's lights: a case whose exact mode needs
+/// host resolution for several lights, one light per pass.
+#[test]
+fn uncertain_pairs_resolve_into_their_own_light_across_batches() {
+    let opts = Options {
+        max_lights_per_pass: NonZeroUsize::new(1),
+        ..Options::default()
+    };
+    let Some(mut vk) = common::backend(opts, "uncertain across batches") else {
+        return;
+    };
+    let mut cpu = CpuBackend::new();
+    let mut uncertain_in_split = 0;
+    for case in corpus::cases().iter().filter(|c| c.lights.len() >= 2) {
+        let scene = case.scene().unwrap();
+        // Reverse the lights too, so a light's uncertain pairs come from a different batch index.
+        let mut lights = case.lights.clone();
+        lights.reverse();
+        for lights in [&case.lights, &lights] {
+            let (got, stats) = extract_once(&mut vk, &scene, lights, Accuracy::Exact).unwrap();
+            let (want, _) = extract_once(&mut cpu, &scene, lights, Accuracy::Exact).unwrap();
+            assert_eq!(
+                invariant::first_difference(&got, &want),
+                None,
+                "{}: one light per pass differs from cpu",
+                case.name
+            );
+            uncertain_in_split += stats.uncertain;
+        }
+    }
+    assert!(
+        uncertain_in_split > 0,
+        "the corpus should need host resolution somewhere (degenerate lights)"
+    );
+}
