@@ -13,7 +13,7 @@ use std::num::NonZeroUsize;
 
 #[test]
 fn corpus_split_into_light_batches_matches_one_pass_and_cpu() {
-    let Some(mut whole) = common::backend(Options::default(), "light batches (one pass)") else {
+    let Some(mut whole) = common::backend(Options::from_env(), "light batches (one pass)") else {
         return;
     };
     let mut cpu = CpuBackend::new();
@@ -29,7 +29,7 @@ fn corpus_split_into_light_batches_matches_one_pass_and_cpu() {
     for per_pass in [1, 2, 3] {
         let opts = Options {
             max_lights_per_pass: NonZeroUsize::new(per_pass),
-            ..Options::default()
+            ..Options::from_env()
         };
         let Some(mut vk) = common::backend(opts, "light batches") else {
             return;
@@ -102,7 +102,7 @@ fn corpus_split_into_light_batches_matches_one_pass_and_cpu() {
 fn uncertain_pairs_resolve_into_their_own_light_across_batches() {
     let opts = Options {
         max_lights_per_pass: NonZeroUsize::new(1),
-        ..Options::default()
+        ..Options::from_env()
     };
     let Some(mut vk) = common::backend(opts, "uncertain across batches") else {
         return;
