@@ -16,6 +16,11 @@
 //! [`create_backend`] returns [`BackendError::Unavailable`] naming what is missing. Set
 //! `SHADOWVOL_VULKAN_VALIDATION=1` to run under `VK_LAYER_KHRONOS_validation`.
 //!
+//! Lights that do not fit the device's buffers in one pass are split into batches
+//! ([`Options::max_lights_per_pass`] caps them further); every wait for the device is bounded by
+//! `SHADOWVOL_GPU_TIMEOUT` ([`shadowvol_silhouette::gpu_wait_limit`]), and a timeout is a
+//! [`BackendError::Device`] (see the README's "Wait limit and timeouts").
+//!
 //! ```no_run
 //! use shadowvol_silhouette::{corpus, extract_once, Accuracy};
 //!
