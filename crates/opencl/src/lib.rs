@@ -20,6 +20,16 @@
 //!   `cpu` backend. [`ExtractStats::uncertain`] counts them.
 //! * **A CPU twin.** [`twin`] is the kernel's logic in Rust, loop for loop, run through the same
 //!   layout and host code.
+//! * **Bounded waits.** Nothing waits for the device without a limit (no `clFinish`, no blocking
+//!   reads or writes): every command is enqueued non-blocking and its event waited for within
+//!   [`shadowvol_silhouette::gpu_wait_limit`] (`SHADOWVOL_GPU_TIMEOUT` seconds, default 600; read
+//!   at every `extract`), woken by a completion callback and checked by status reads between.
+//!   A command that fails is a [`BackendError::Device`] naming it and its decoded status; one
+//!   that does not end in time is a `Device` error naming `SHADOWVOL_GPU_TIMEOUT`. The work that
+//!   was still running is then *abandoned*: the host memory it uses stays with the backend, and
+//!   the next `extract` first waits (within the limit again) for that work to end. If it has,
+//!   the backend carries on as usual; if not, that `extract` is a `Device` error saying so.
+//!   Dropping the backend never waits (see its `Drop`).
 //!
 //! # Device selection
 //! The first GPU, otherwise the first CPU device, over all platforms in ICD order. The
@@ -46,6 +56,7 @@
 mod device;
 pub mod layout;
 pub mod twin;
+mod wait;
 
 pub use device::{list_devices, select_device, DeviceDesc, DEVICE_ENV};
 
@@ -54,15 +65,17 @@ use opencl3::command_queue::CommandQueue;
 use opencl3::context::Context;
 use opencl3::device::Device;
 use opencl3::error_codes::ClError;
+use opencl3::event::Event;
 use opencl3::kernel::Kernel;
 use opencl3::memory::{Buffer, ClMem, CL_MEM_COPY_HOST_PTR, CL_MEM_READ_ONLY, CL_MEM_READ_WRITE};
 use opencl3::program::Program;
-use opencl3::types::{cl_mem_flags, CL_BLOCKING, CL_NON_BLOCKING};
+use opencl3::types::{cl_mem_flags, CL_NON_BLOCKING};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
-    check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
-    PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
+    check_lights, gpu_wait_limit, object_lights, BackendError, BackendInfo, ExtractStats,
+    Multiplicities, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene, GPU_TIMEOUT_ENV,
 };
+use std::any::Any;
 use std::path::PathBuf;
 use std::ptr;
 use std::time::{Duration, Instant};
@@ -143,6 +156,22 @@ struct Prepared {
     unc_records: usize,
 }
 
+/// Device work that a wait gave up on (it timed out or a command failed before the rest ended),
+/// with the host memory its commands may still read or write.
+struct Pending {
+    /// The last command of the abandoned submission. The queue is in order, so once this has
+    /// ended (finished or failed), nothing of the submission touches host memory any more.
+    last: Event,
+    /// What that command was, for messages.
+    what: &'static str,
+    /// Host memory the commands use (light data, read-back targets), kept alive until `last`
+    /// has ended, and leaked by `Drop` if it never does.
+    host: Vec<Box<dyn Any + Send>>,
+}
+
+/// Static zeros for the counter reset: a non-blocking write reads them whenever it runs.
+static ZEROS: [u32; 2] = [0; 2];
+
 /// The OpenCL backend. See the crate documentation.
 pub struct OpenClBackend {
     device: DeviceDesc,
@@ -157,6 +186,23 @@ pub struct OpenClBackend {
     queue: CommandQueue,
     context: Context,
     scenes: PreparedScenes<Prepared>,
+    /// Work abandoned by a wait that gave up; the next `extract` waits for it first.
+    pending: Option<Pending>,
+}
+
+impl Drop for OpenClBackend {
+    /// Never waits for the device. When abandoned work has still not ended, the host memory it
+    /// may read or write is leaked rather than freed. The queue, buffers, kernel and context are
+    /// released as usual: OpenCL keeps an object with commands pending alive until they have
+    /// finished, and releasing does not wait for them (on PoCL 3.1, dropping a backend whose
+    /// kernel still runs returns in microseconds; `tests/timeout.rs` checks it).
+    fn drop(&mut self) {
+        if let Some(p) = self.pending.take() {
+            if !wait::has_ended(&p.last) {
+                std::mem::forget(p.host);
+            }
+        }
+    }
 }
 
 impl std::fmt::Debug for OpenClBackend {
@@ -177,12 +223,23 @@ fn device_error(what: &str, e: ClError) -> BackendError {
     }
 }
 
+/// The wait limit, [`gpu_wait_limit`]; a malformed [`GPU_TIMEOUT_ENV`] is
+/// [`BackendError::InvalidInput`].
+fn wait_limit() -> Result<Duration, BackendError> {
+    gpu_wait_limit().map_err(BackendError::InvalidInput)
+}
+
+/// Seconds for messages: `600`, `0.5`, `0.000001`.
+fn seconds(d: Duration) -> String {
+    format!("{}", d.as_secs_f64())
+}
+
 /// Starts the `opencl` backend with [`OpenClOptions::from_env`].
 ///
 /// # Errors
 /// [`BackendError::Unavailable`] naming what is missing (the ICD loader `libOpenCL.so.1`, a
 /// platform, a device, or a device matching [`DEVICE_ENV`]); [`BackendError::Build`] with the
-/// compiler's log if the kernel does not build.
+/// compiler's log if the kernel does not build; otherwise as [`OpenClBackend::with_options`].
 pub fn create_backend() -> Result<Box<dyn SilhouetteBackend>, BackendError> {
     Ok(Box::new(OpenClBackend::with_options(
         OpenClOptions::from_env(),
@@ -269,12 +326,16 @@ impl OpenClBackend {
         Self::with_options(OpenClOptions::default())
     }
 
-    /// Starts the backend: finds the device, creates a context and queue, and builds the kernel.
+    /// Starts the backend: finds the device, creates a context and queue, builds the kernel and
+    /// runs it once on a tetrahedron (a self-test, waited for within
+    /// [`shadowvol_silhouette::gpu_wait_limit`]).
     ///
     /// # Errors
     /// [`BackendError::Unavailable`] when there is no ICD loader, platform or (matching) device,
     /// or the kernel file cannot be read; [`BackendError::Build`] with the compiler's log when
-    /// the kernel does not build; [`BackendError::Device`] when the driver fails.
+    /// the kernel does not build; [`BackendError::Device`] when the driver fails or the self-test
+    /// does not finish within the limit; [`BackendError::InvalidInput`] when
+    /// `SHADOWVOL_GPU_TIMEOUT` is set but is not a positive number of seconds.
     pub fn with_options(options: OpenClOptions) -> Result<Self, BackendError> {
         // Some drivers (PoCL 3.1) crash when threads enumerate and initialise devices at once.
         let _guard = device::INIT_LOCK
@@ -336,6 +397,7 @@ impl OpenClBackend {
             queue,
             context,
             scenes: PreparedScenes::new(),
+            pending: None,
         };
         backend.warm_up()?;
         Ok(backend)
@@ -419,77 +481,255 @@ impl OpenClBackend {
         Ok(())
     }
 
-    /// Writes the lights and zeroed counters, runs the kernel to completion.
-    /// Returns (upload, compute) times.
+    /// Flushes the queue and waits for `events` in order (they were enqueued in this order on
+    /// the in-order queue), all within `limit` from now, and returns the instant each was seen
+    /// finished. `enqueued` is the result of enqueueing them: after a failed enqueue the commands
+    /// already enqueued are waited for all the same and the enqueue error is returned.
+    ///
+    /// On any error, if the last command has not ended, `host` is called to take the host memory
+    /// the commands use, which is kept in [`OpenClBackend::pending`] until the command ends.
+    /// `events` is left empty.
+    ///
+    /// # Errors
+    /// [`BackendError::Device`]: a failed flush, a command that ended with an error (decoded),
+    /// a status query that failed, or a deadline that passed (naming [`GPU_TIMEOUT_ENV`]).
+    fn wait_for(
+        &mut self,
+        events: &mut Vec<(&'static str, Event)>,
+        enqueued: Result<(), BackendError>,
+        limit: Duration,
+        host: impl FnOnce() -> Vec<Box<dyn Any + Send>>,
+    ) -> Result<Vec<Instant>, BackendError> {
+        let waited = self.await_events(events, limit);
+        let result = enqueued.and(waited);
+        if result.is_err() {
+            if let Some((what, last)) = events.pop() {
+                if !wait::has_ended(&last) {
+                    self.pending = Some(Pending {
+                        last,
+                        what,
+                        host: host(),
+                    });
+                }
+            }
+        }
+        events.clear();
+        result
+    }
+
+    /// The waiting part of [`OpenClBackend::wait_for`].
+    fn await_events(
+        &self,
+        events: &[(&'static str, Event)],
+        limit: Duration,
+    ) -> Result<Vec<Instant>, BackendError> {
+        if events.is_empty() {
+            return Ok(Vec::new());
+        }
+        self.queue
+            .flush()
+            .map_err(|e| device_error("flushing the command queue", e))?;
+        let deadline = wait::deadline_after(limit);
+        let mut times = Vec::with_capacity(events.len());
+        for (what, event) in events {
+            match wait::wait(event, deadline) {
+                wait::Outcome::Complete => times.push(Instant::now()),
+                wait::Outcome::Failed(status) => {
+                    return Err(BackendError::Device {
+                        backend: BACKEND,
+                        message: format!(
+                            "{what} failed on the device with {} ({status})",
+                            ClError(status)
+                        ),
+                    })
+                }
+                wait::Outcome::QueryFailed(e) => {
+                    return Err(device_error(&format!("querying the status of {what}"), e))
+                }
+                wait::Outcome::TimedOut => {
+                    return Err(BackendError::Device {
+                        backend: BACKEND,
+                        message: format!(
+                            "the device did not finish {what} within {} s, the limit set by \
+                             {GPU_TIMEOUT_ENV} (seconds, default {} s); raise it for larger \
+                             scenes or slower devices. The next extract on this backend first \
+                             waits (as long again) for the unfinished work",
+                            seconds(limit),
+                            seconds(shadowvol_silhouette::DEFAULT_GPU_TIMEOUT),
+                        ),
+                    })
+                }
+            }
+        }
+        Ok(times)
+    }
+
+    /// Waits (within `limit`) for work abandoned by an earlier call, and frees the host memory
+    /// it held once it has ended.
+    ///
+    /// # Errors
+    /// [`BackendError::Device`] when it has still not ended, or its status cannot be read.
+    fn settle(&mut self, limit: Duration) -> Result<(), BackendError> {
+        let Some(p) = &self.pending else {
+            return Ok(());
+        };
+        // Ignore a flush error here: the status query below reports the state either way.
+        let _ = self.queue.flush();
+        match wait::wait(&p.last, wait::deadline_after(limit)) {
+            // A failed command has ended too; if the device is broken, new work reports it.
+            wait::Outcome::Complete | wait::Outcome::Failed(_) => {
+                self.pending = None;
+                Ok(())
+            }
+            wait::Outcome::QueryFailed(e) => Err(device_error(
+                &format!(
+                    "querying the status of {} left unfinished by an earlier extract",
+                    p.what
+                ),
+                e,
+            )),
+            wait::Outcome::TimedOut => Err(BackendError::Device {
+                backend: BACKEND,
+                message: format!(
+                    "the device has still not finished {} left by an earlier extract that timed \
+                     out, after another {} s (the limit set by {GPU_TIMEOUT_ENV}); this backend \
+                     runs no new work until it does",
+                    p.what,
+                    seconds(limit)
+                ),
+            }),
+        }
+    }
+
+    /// Writes the lights and zeroed counters, runs the kernel and reads the two counters into
+    /// `counts`: three submissions, each waited for within `limit`. Returns their (upload,
+    /// compute, readback) times.
+    ///
+    /// On an error, `flat_l` or `counts` may have been moved into [`OpenClBackend::pending`]
+    /// (left empty): their memory stays with a command that had not ended.
     fn run_once(
         &mut self,
         id: PreparedId,
-        flat_l: &[f32],
+        flat_l: &mut Vec<f32>,
+        counts: &mut Vec<u32>,
         num_lights: usize,
         mode: Accuracy,
-    ) -> Result<(Duration, Duration), BackendError> {
-        let p = self.scenes.get_mut(BACKEND, id)?;
-        let edges = p.flat.edge_count();
+        limit: Duration,
+    ) -> Result<(Duration, Duration, Duration), BackendError> {
+        let mut events = Vec::with_capacity(1);
         let t = Instant::now();
-        let zeros = [0u32; 2];
+        let p = self.scenes.get_mut(BACKEND, id)?;
         let (lights_buf, _) = p.lights.as_mut().expect("ensured by extract");
         let (counts_buf, _) = p.counts.as_mut().expect("ensured by extract");
-        // SAFETY: blocking writes (they return once the slices have been read) from live slices
-        // into buffers at least that large.
-        unsafe {
+        // SAFETY: non-blocking writes into buffers at least that large, from `ZEROS` (static)
+        // and `flat_l`, which `wait_for` keeps alive until the writes have ended (moving it into
+        // `pending` if it stops waiting before that).
+        let enqueued = unsafe {
             self.queue
-                .enqueue_write_buffer(lights_buf, CL_BLOCKING, 0, flat_l, &[])
-                .map_err(|e| device_error("writing lights", e))?;
-            self.queue
-                .enqueue_write_buffer(counts_buf, CL_BLOCKING, 0, &zeros, &[])
-                .map_err(|e| device_error("zeroing counters", e))?;
-        }
-        let upload = t.elapsed();
-        let t = Instant::now();
-        let k = &self.kernel;
-        let set = |i: u32, r: Result<(), ClError>| {
-            r.map_err(|e| device_error(&format!("setting kernel argument {i}"), e))
+                .enqueue_write_buffer(lights_buf, CL_NON_BLOCKING, 0, flat_l, &[])
+                .map_err(|e| device_error("writing lights", e))
+                .and_then(|e| {
+                    events.push(("writing the lights", e));
+                    self.queue
+                        .enqueue_write_buffer(counts_buf, CL_NON_BLOCKING, 0, &ZEROS, &[])
+                        .map_err(|e| device_error("zeroing counters", e))
+                })
+                .map(|e| events.push(("zeroing the counters", e)))
         };
-        let (sil_buf, _) = p.sil.as_ref().expect("ensured by extract");
-        let (unc_buf, _) = p.unc.as_ref().expect("ensured by extract");
-        let lights_mem = p.lights.as_ref().expect("ensured").0.get();
-        let counts_mem = p.counts.as_ref().expect("ensured").0.get();
-        let (ne, nl, code, cap) = (
-            edges as u32,
-            num_lights as u32,
-            mode_code(mode),
-            p.unc_records as u32,
-        );
-        // SAFETY: argument types and order match `silhouette` in kernels/silhouette.cl.
-        unsafe {
-            set(0, k.set_arg(0, &p.pos.get()))?;
-            set(1, k.set_arg(1, &p.edges.get()))?;
-            set(2, k.set_arg(2, &p.edge_obj.get()))?;
-            set(3, k.set_arg(3, &p.ov_off.get()))?;
-            set(4, k.set_arg(4, &p.ovs.get()))?;
-            set(5, k.set_arg(5, &lights_mem))?;
-            set(6, k.set_arg(6, &ne))?;
-            set(7, k.set_arg(7, &nl))?;
-            set(8, k.set_arg(8, &code))?;
-            set(9, k.set_arg(9, &counts_mem))?;
-            set(10, k.set_arg(10, &sil_buf.get()))?;
-            set(11, k.set_arg(11, &unc_buf.get()))?;
-            set(12, k.set_arg(12, &cap))?;
-            let global = [edges.div_ceil(GROUP) * GROUP, num_lights];
-            let local = [GROUP, 1];
-            let local_ptr = if self.fixed_group {
-                local.as_ptr()
-            } else {
-                ptr::null()
-            };
-            self.queue
-                .enqueue_nd_range_kernel(k.get(), 2, ptr::null(), global.as_ptr(), local_ptr, &[])
-                .map_err(|e| device_error("enqueueing the silhouette kernel", e))?;
+        self.wait_for(&mut events, enqueued, limit, || {
+            vec![Box::new(std::mem::take(flat_l))]
+        })?;
+        let upload = t.elapsed();
+
+        let t = Instant::now();
+        let p = self.scenes.get(BACKEND, id)?;
+        // SAFETY: the kernel uses device buffers only, which `p` keeps alive.
+        let enqueued = unsafe {
+            enqueue_kernel(
+                &self.queue,
+                &self.kernel,
+                self.fixed_group,
+                p,
+                num_lights,
+                mode,
+            )
         }
-        self.queue
-            .finish()
-            .map_err(|e| device_error("running the silhouette kernel", e))?;
-        Ok((upload, t.elapsed()))
+        .map(|e| events.push(("the silhouette kernel", e)));
+        self.wait_for(&mut events, enqueued, limit, Vec::new)?;
+        let compute = t.elapsed();
+
+        let t = Instant::now();
+        let p = self.scenes.get(BACKEND, id)?;
+        let (counts_buf, _) = p.counts.as_ref().expect("ensured by extract");
+        // SAFETY: a non-blocking read, no larger than the buffer, into `counts`, which
+        // `wait_for` keeps alive and untouched until the read has ended (moving it into
+        // `pending` if it stops waiting before that).
+        let enqueued = unsafe {
+            self.queue
+                .enqueue_read_buffer(counts_buf, CL_NON_BLOCKING, 0, counts, &[])
+                .map_err(|e| device_error("reading counters", e))
+        }
+        .map(|e| events.push(("reading the counters", e)));
+        self.wait_for(&mut events, enqueued, limit, || {
+            vec![Box::new(std::mem::take(counts))]
+        })?;
+        Ok((upload, compute, t.elapsed()))
+    }
+}
+
+/// Sets the kernel's arguments for prepared scene `p` and enqueues it over (edges × lights).
+///
+/// # Safety
+/// The kernel must be [`KERNEL_NAME`] of [`KERNEL_SOURCE`] (or a source with the same
+/// signature), and `p`'s buffers must stay alive until the kernel has ended (dropping them is
+/// fine in OpenCL: a released buffer lives on until the commands using it have finished).
+unsafe fn enqueue_kernel(
+    queue: &CommandQueue,
+    k: &Kernel,
+    fixed_group: bool,
+    p: &Prepared,
+    num_lights: usize,
+    mode: Accuracy,
+) -> Result<Event, BackendError> {
+    let edges = p.flat.edge_count();
+    let set = |i: u32, r: Result<(), ClError>| {
+        r.map_err(|e| device_error(&format!("setting kernel argument {i}"), e))
+    };
+    let (lights_buf, _) = p.lights.as_ref().expect("ensured by extract");
+    let (counts_buf, _) = p.counts.as_ref().expect("ensured by extract");
+    let (sil_buf, _) = p.sil.as_ref().expect("ensured by extract");
+    let (unc_buf, _) = p.unc.as_ref().expect("ensured by extract");
+    let (ne, nl, code, cap) = (
+        edges as u32,
+        num_lights as u32,
+        mode_code(mode),
+        p.unc_records as u32,
+    );
+    // SAFETY: argument types and order match `silhouette` in kernels/silhouette.cl.
+    unsafe {
+        set(0, k.set_arg(0, &p.pos.get()))?;
+        set(1, k.set_arg(1, &p.edges.get()))?;
+        set(2, k.set_arg(2, &p.edge_obj.get()))?;
+        set(3, k.set_arg(3, &p.ov_off.get()))?;
+        set(4, k.set_arg(4, &p.ovs.get()))?;
+        set(5, k.set_arg(5, &lights_buf.get()))?;
+        set(6, k.set_arg(6, &ne))?;
+        set(7, k.set_arg(7, &nl))?;
+        set(8, k.set_arg(8, &code))?;
+        set(9, k.set_arg(9, &counts_buf.get()))?;
+        set(10, k.set_arg(10, &sil_buf.get()))?;
+        set(11, k.set_arg(11, &unc_buf.get()))?;
+        set(12, k.set_arg(12, &cap))?;
+        let global = [edges.div_ceil(GROUP) * GROUP, num_lights];
+        let local = [GROUP, 1];
+        let local_ptr = if fixed_group {
+            local.as_ptr()
+        } else {
+            ptr::null()
+        };
+        queue
+            .enqueue_nd_range_kernel(k.get(), 2, ptr::null(), global.as_ptr(), local_ptr, &[])
+            .map_err(|e| device_error("enqueueing the silhouette kernel", e))
     }
 }
 
@@ -553,8 +793,11 @@ impl SilhouetteBackend for OpenClBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
-        let p = self.scenes.get(BACKEND, id)?;
+        let limit = wait_limit()?;
+        self.scenes.get(BACKEND, id)?;
         check_lights(lights)?;
+        self.settle(limit)?;
+        let p = self.scenes.get(BACKEND, id)?;
         let num_lights = lights.len();
         let edges = p.flat.edge_count();
         let objects = p.flat.objects;
@@ -574,7 +817,7 @@ impl SilhouetteBackend for OpenClBackend {
         // Per-frame host preparation (object-space lights) counts as upload.
         let prep_start = Instant::now();
         let obj_lights = object_lights(&p.scene, lights);
-        let flat_l = flat_lights(&obj_lights);
+        let mut flat_l = flat_lights(&obj_lights);
         {
             let ctx = &self.context;
             let p = self.scenes.get_mut(BACKEND, id).expect("checked above");
@@ -605,19 +848,12 @@ impl SilhouetteBackend for OpenClBackend {
         };
         let mut counts = vec![0u32; 2];
         loop {
-            let (up, comp) = self.run_once(id, &flat_l, num_lights, mode)?;
+            let (up, comp, read) =
+                self.run_once(id, &mut flat_l, &mut counts, num_lights, mode, limit)?;
             stats.upload += up;
             stats.compute += comp;
-            let t = Instant::now();
+            stats.readback += read;
             let p = self.scenes.get(BACKEND, id).expect("checked above");
-            let (counts_buf, _) = p.counts.as_ref().expect("ensured");
-            // SAFETY: blocking read into a live slice no larger than the buffer.
-            unsafe {
-                self.queue
-                    .enqueue_read_buffer(counts_buf, CL_BLOCKING, 0, &mut counts, &[])
-                    .map_err(|e| device_error("reading counters", e))?;
-            }
-            stats.readback += t.elapsed();
             let needed = counts[0] as usize;
             if needed <= p.unc_records {
                 break;
@@ -636,36 +872,39 @@ impl SilhouetteBackend for OpenClBackend {
         // `finish` when fewer entries than counted come back.
         let mut raw_sil = vec![0i32; 2 * (counts[1] as usize).min(edges * num_lights)];
         let mut raw_unc = vec![0u32; 3 * counts[0] as usize];
-        {
-            let (sil_buf, _) = p.sil.as_ref().expect("ensured");
-            let (unc_buf, _) = p.unc.as_ref().expect("ensured");
-            // SAFETY: non-blocking reads into slices that outlive the `finish` below, which runs
-            // on every path (also after a failed enqueue), so no read is pending when they drop;
-            // the lengths lie inside the buffers.
-            let mut enqueued = Ok(());
-            unsafe {
+        let mut events = Vec::with_capacity(2);
+        let (sil_buf, _) = p.sil.as_ref().expect("ensured");
+        let (unc_buf, _) = p.unc.as_ref().expect("ensured");
+        // SAFETY: non-blocking reads into slices that `wait_for` keeps alive and untouched until
+        // the reads have ended (moving them into `pending` when it stops waiting before that);
+        // the lengths lie inside the buffers.
+        let enqueued = unsafe {
+            (|| {
                 if !raw_sil.is_empty() {
-                    enqueued = self
-                        .queue
-                        .enqueue_read_buffer(sil_buf, CL_NON_BLOCKING, 0, &mut raw_sil, &[])
-                        .map(drop)
-                        .map_err(|e| device_error("reading the silhouette list", e));
+                    events.push((
+                        "reading the silhouette list",
+                        self.queue
+                            .enqueue_read_buffer(sil_buf, CL_NON_BLOCKING, 0, &mut raw_sil, &[])
+                            .map_err(|e| device_error("reading the silhouette list", e))?,
+                    ));
                 }
-                if !raw_unc.is_empty() && enqueued.is_ok() {
-                    enqueued = self
-                        .queue
-                        .enqueue_read_buffer(unc_buf, CL_NON_BLOCKING, 0, &mut raw_unc, &[])
-                        .map(drop)
-                        .map_err(|e| device_error("reading uncertain records", e));
+                if !raw_unc.is_empty() {
+                    events.push((
+                        "reading the uncertain records",
+                        self.queue
+                            .enqueue_read_buffer(unc_buf, CL_NON_BLOCKING, 0, &mut raw_unc, &[])
+                            .map_err(|e| device_error("reading uncertain records", e))?,
+                    ));
                 }
-            }
-            let finished = self
-                .queue
-                .finish()
-                .map_err(|e| device_error("reading results", e));
-            enqueued?;
-            finished?;
-        }
+                Ok(())
+            })()
+        };
+        self.wait_for(&mut events, enqueued, limit, || {
+            vec![
+                Box::new(std::mem::take(&mut raw_sil)),
+                Box::new(std::mem::take(&mut raw_unc)),
+            ]
+        })?;
         stats.readback += t.elapsed();
         let t = Instant::now();
         let output = KernelOutput {
@@ -680,6 +919,7 @@ impl SilhouetteBackend for OpenClBackend {
             counts,
         };
         stats.uncertain = output.uncertain.len() as u64;
+        let p = self.scenes.get(BACKEND, id).expect("checked above");
         finish(&p.flat, &obj_lights, num_lights, output, out, BACKEND)?;
         stats.host_resolve = t.elapsed();
         Ok(stats)

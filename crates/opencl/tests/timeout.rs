@@ -1,0 +1,178 @@
+//! A device that does not finish in time: with a tiny `SHADOWVOL_GPU_TIMEOUT`, an extraction
+//! that PoCL cannot finish within it is a `BackendError::Device` naming the variable (no panic,
+//! no hang), the next extraction on the same backend is a clear error while the abandoned kernel
+//! is still running, and with the limit back to its default the backend recovers, with results
+//! identical to the `cpu` backend's. Dropping a backend with unfinished work does not hang.
+//!
+//! The limit is read from the environment at every extraction, and environment variables are
+//! process-wide, so this is its own test binary with a single test that sets the variable only
+//! between calls (no extraction is running on the test's side then; PoCL's worker threads
+//! do not read the environment while they run a kernel).
+//!
+//! Without an OpenCL platform the test prints a visible `SKIPPED` line and passes, except under
+//! `CI=true`.
+
+use shadowvol_cpu::CpuBackend;
+use shadowvol_mesh_topology::EdgeTable;
+use shadowvol_opencl::OpenClBackend;
+use shadowvol_silhouette::{
+    extract_once, shapes, Accuracy, BackendError, Light, Multiplicities, PreparedId,
+    SilhouetteBackend, TopologyScene, GPU_TIMEOUT_ENV,
+};
+use std::time::{Duration, Instant};
+
+fn in_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true") || v == "1")
+}
+
+/// The tiny limit: far below what the kernel needs on a sphere of 10^5 triangles and more with
+/// eight lights (tens of milliseconds on PoCL), well above what the light and counter writes
+/// before it need.
+const TINY: &str = "0.001";
+
+/// Eight point lights around the sphere.
+fn lights() -> Vec<Light> {
+    (0..8)
+        .map(|i| {
+            let a = i as f32 * 0.785;
+            Light::point(glam::Vec3::new(
+                3.0 * a.cos(),
+                1.0 + 0.2 * i as f32,
+                3.0 * a.sin(),
+            ))
+        })
+        .collect()
+}
+
+/// The message of a `Device` error, or a panic naming what came instead.
+fn device_message(r: Result<impl std::fmt::Debug, BackendError>, what: &str) -> String {
+    match r {
+        Err(BackendError::Device { message, .. }) => message,
+        other => panic!("{what}: expected BackendError::Device, got {other:?}"),
+    }
+}
+
+/// Extracts with the tiny limit until an extraction times out, enlarging the sphere after an
+/// extraction that finished in time (at most four sizes). Returns the prepared scene, the scene
+/// and the timeout message.
+fn time_out(cl: &mut OpenClBackend) -> (PreparedId, TopologyScene, String) {
+    let lights = lights();
+    let mut out = Multiplicities::default();
+    for (attempt, rings) in [200u32, 400, 800, 1600].into_iter().enumerate() {
+        let mesh = shapes::uv_sphere_y(rings, 2 * rings, 1.0);
+        let scene = TopologyScene::single(EdgeTable::build(&mesh).expect("a UV sphere is valid"));
+        let id = cl.prepare(&scene).expect("prepare");
+        std::env::set_var(GPU_TIMEOUT_ENV, TINY);
+        let t = Instant::now();
+        let r = cl.extract(id, &lights, Accuracy::Exact, &mut out);
+        let took = t.elapsed();
+        std::env::remove_var(GPU_TIMEOUT_ENV);
+        match r {
+            Err(BackendError::Device { message, .. }) if message.contains("did not finish") => {
+                eprintln!(
+                    "attempt {attempt}: {} triangles, 8 lights: timed out after {took:?}: {message}",
+                    mesh.triangles.len()
+                );
+                // Bounded: the limit plus the enqueues, not the kernel's run time.
+                assert!(
+                    took < Duration::from_secs(5),
+                    "the timed-out extract took {took:?}"
+                );
+                return (id, scene, message);
+            }
+            Ok(_) => {
+                eprintln!(
+                    "attempt {attempt}: {} triangles finished within {TINY} s ({took:?}); enlarging",
+                    mesh.triangles.len()
+                );
+                cl.release(id);
+            }
+            Err(e) => panic!("attempt {attempt}: expected a timeout, got {e}"),
+        }
+    }
+    panic!("no extraction timed out with {GPU_TIMEOUT_ENV}={TINY}, up to 5.1e6 triangles");
+}
+
+#[test]
+fn a_device_that_does_not_finish_in_time_is_an_error_and_the_backend_recovers() {
+    let mut cl = match OpenClBackend::new() {
+        Ok(b) => b,
+        Err(e @ BackendError::Unavailable { .. }) => {
+            assert!(!in_ci(), "CI=true but OpenCL is unavailable: {e}");
+            eprintln!("SKIPPED timeout test: {e}");
+            println!("SKIPPED timeout test: {e}");
+            return;
+        }
+        Err(e) => panic!("the OpenCL backend failed to start: {e}"),
+    };
+    let lights = lights();
+
+    // 1. The timeout: a Device error naming the variable and its value.
+    let (id, scene, message) = time_out(&mut cl);
+    assert!(
+        message.contains(GPU_TIMEOUT_ENV) && message.contains(TINY),
+        "{message}"
+    );
+
+    // 2. The next extraction, still with the tiny limit, while the abandoned kernel runs: a clear
+    //    Device error that says the earlier work has not finished.
+    std::env::set_var(GPU_TIMEOUT_ENV, TINY);
+    let mut out = Multiplicities::default();
+    let t = Instant::now();
+    let again = cl.extract(id, &lights, Accuracy::Exact, &mut out);
+    let took = t.elapsed();
+    std::env::remove_var(GPU_TIMEOUT_ENV);
+    let again = device_message(again, "the extract after a timeout");
+    eprintln!("next extract ({took:?}): {again}");
+    assert!(again.contains(GPU_TIMEOUT_ENV), "{again}");
+    assert!(took < Duration::from_secs(5), "took {took:?}");
+
+    // 3. A malformed limit is invalid input, naming the variable.
+    std::env::set_var(GPU_TIMEOUT_ENV, "soon");
+    let bad = cl.extract(id, &lights, Accuracy::Exact, &mut out);
+    std::env::remove_var(GPU_TIMEOUT_ENV);
+    match bad {
+        Err(BackendError::InvalidInput(m)) => {
+            assert!(m.contains(GPU_TIMEOUT_ENV) && m.contains("soon"), "{m}");
+        }
+        other => panic!("expected InvalidInput for {GPU_TIMEOUT_ENV}=soon, got {other:?}"),
+    }
+
+    // 4. With the default limit the backend waits for the abandoned work, then recovers: the
+    //    same scene gives exactly the cpu backend's results.
+    let t = Instant::now();
+    let stats = cl
+        .extract(id, &lights, Accuracy::Exact, &mut out)
+        .expect("the backend recovers once the abandoned work has finished");
+    let full = t.elapsed();
+    let (want, _) = extract_once(&mut CpuBackend::new(), &scene, &lights, Accuracy::Exact)
+        .expect("cpu extraction");
+    assert_eq!(out.light_count(), lights.len());
+    for l in 0..lights.len() {
+        assert!(
+            out.values(l) == want.values(l),
+            "light {l} differs from cpu"
+        );
+        assert!(!out.silhouette(l).is_empty(), "light {l}: no silhouette");
+    }
+    eprintln!("recovered: {full:?} ({stats:?})");
+    // A second full extract on the recovered backend is fine too.
+    let t = Instant::now();
+    cl.extract(id, &lights, Accuracy::Exact, &mut out)
+        .expect("extract after recovery");
+    let kernel_time = t.elapsed();
+
+    // 5. Dropping a backend whose work has timed out returns without waiting for the device.
+    std::env::set_var(GPU_TIMEOUT_ENV, TINY);
+    let r = cl.extract(id, &lights, Accuracy::Exact, &mut out);
+    std::env::remove_var(GPU_TIMEOUT_ENV);
+    let m = device_message(r, "the second timeout");
+    assert!(m.contains(GPU_TIMEOUT_ENV), "{m}");
+    let t = Instant::now();
+    drop(cl);
+    let dropped = t.elapsed();
+    eprintln!("dropped with unfinished work in {dropped:?} (a full extract takes {kernel_time:?})");
+    // Let the abandoned kernel end before the process exits (the driver's exit-time destructors
+    // should not race its worker threads).
+    std::thread::sleep(kernel_time * 2 + Duration::from_millis(100));
+}
