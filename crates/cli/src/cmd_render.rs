@@ -21,7 +21,10 @@ pub const LONG_ABOUT: &str =
     (no back cap for directional lights). --explain prints the plan.\n\n\
     --reference ray-casts every pixel's surface point to every light (BVH, all cores) and counts \
     artifact pixels: pixels whose lit/shadowed state differs from the reference and that are more \
-    than one pixel from a reference shadow boundary. --diff FILE writes the disagreement (red: \
+    than one pixel from a reference shadow boundary. Lit means the light changes the 8-bit pixel \
+    (albedo x intensity x cos >= 1/255); geometric_artifact_pixels counts the same with lit \
+    meaning cos > 0, however dim (there even exact silhouettes leave raster z-fighting on faces \
+    edge-on to the light, which is invisible in the image). --diff FILE writes the disagreement (red: \
     lit but should be shadowed, blue: shadowed but should be lit, yellow: at a boundary or \
     undecidable, not counted); it implies --reference.\n\n\
     JSON: {\"artifact_pixels\": N or null without --reference, \"shadow_pixels\": N, \"plan\": \
@@ -29,7 +32,7 @@ pub const LONG_ABOUT: &str =
     \"silhouette_edges\", \"side_quads\", \"cap_triangles\", \"reason\"}], \"timings\": \
     {\"silhouette_ms\", \"side_building_ms\", \"raster_ms\", \"prepare_ms\", \"total_ms\", \
     \"reference_ms\"}, \"scene\", \"backend\", \"mode\", \"size\": [w, h], \"adapter\", \"out\", \
-    \"covered_pixels\", \"reference_shadow_pixels\"}.";
+    \"covered_pixels\", \"reference_shadow_pixels\", \"geometric_artifact_pixels\"}.";
 
 /// Examples shown after the help.
 pub const AFTER_HELP: &str = "Examples:\n  shadowvol render hard-book-3 --out book.png --reference --backdrop\n  \
@@ -136,6 +139,8 @@ struct Report<'a> {
     out: String,
     covered_pixels: Option<usize>,
     reference_shadow_pixels: Option<usize>,
+    /// `artifact_pixels` with lit meaning `cos θ > 0` (no 1/255 visibility threshold).
+    geometric_artifact_pixels: Option<usize>,
 }
 
 #[derive(Debug, serde::Serialize)]
@@ -212,6 +217,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 out: args.out.display().to_string(),
                 covered_pixels: cmp.as_ref().map(|c| c.covered_pixels),
                 reference_shadow_pixels: cmp.as_ref().map(|c| c.reference_shadow_pixels),
+                geometric_artifact_pixels: cmp.as_ref().map(|c| c.geometric_artifact_pixels),
             };
             serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
             writeln!(out)?;
@@ -255,11 +261,12 @@ fn write_text(
         let total = (frame.width * frame.height) as usize;
         writeln!(
             out,
-            "artifact pixels {} ({:.3}% of the image; {} differ at boundaries or are undecidable; reference shadow pixels {})",
+            "artifact pixels {} ({:.3}% of the image; {} differ at boundaries or are undecidable; reference shadow pixels {}; geometric, with no 1/255 threshold: {})",
             c.artifact_pixels,
             100.0 * c.artifact_fraction(total),
             c.differing_pixels - c.artifact_pixels,
-            c.reference_shadow_pixels
+            c.reference_shadow_pixels,
+            c.geometric_artifact_pixels
         )?;
     }
     let t = frame.timings;
@@ -331,6 +338,7 @@ mod tests {
             assert!(v.get(key).is_some(), "missing {key}: {v}");
         }
         assert!(v["artifact_pixels"].as_u64().is_some());
+        assert!(v["geometric_artifact_pixels"].as_u64().is_some());
         assert!(v["shadow_pixels"].as_u64().unwrap() > 0);
         let plan = v["plan"].as_array().unwrap();
         assert!(!plan.is_empty());
