@@ -115,7 +115,8 @@ fn a_device_that_does_not_finish_in_time_is_an_error_and_the_backend_recovers() 
     );
 
     // 2. The next extraction, still with the tiny limit, while the abandoned kernel runs: a clear
-    //    Device error that says the earlier work has not finished.
+    //    Device error naming the variable (that the earlier kernel has not finished; or, should
+    //    PoCL have finished it meanwhile, that this extraction's own kernel did not).
     std::env::set_var(GPU_TIMEOUT_ENV, TINY);
     let mut out = Multiplicities::default();
     let t = Instant::now();
