@@ -76,6 +76,7 @@ use shadowvol_silhouette::{
     Multiplicities, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene, GPU_TIMEOUT_ENV,
 };
 use std::any::Any;
+use std::mem::ManuallyDrop;
 use std::path::PathBuf;
 use std::ptr;
 use std::time::{Duration, Instant};
@@ -166,7 +167,7 @@ struct Pending {
     what: &'static str,
     /// Host memory the commands use (light data, read-back targets), kept alive until `last`
     /// has ended, and leaked by `Drop` if it never does.
-    host: Vec<Box<dyn Any + Send>>,
+    _host: Vec<Box<dyn Any + Send>>,
 }
 
 /// Static zeros for the counter reset: a non-blocking write reads them whenever it runs.
@@ -180,27 +181,37 @@ pub struct OpenClBackend {
     max_alloc: u64,
     /// Launch with a fixed work-group size of [`GROUP`] × 1.
     fixed_group: bool,
-    // Drop order: kernel, program, queue before the context.
-    kernel: Kernel,
-    _program: Program,
-    queue: CommandQueue,
-    context: Context,
-    scenes: PreparedScenes<Prepared>,
+    // Released by `Drop` (scenes, kernel, program, queue, then the context), or leaked while
+    // abandoned work has not ended.
+    kernel: ManuallyDrop<Kernel>,
+    program: ManuallyDrop<Program>,
+    queue: ManuallyDrop<CommandQueue>,
+    context: ManuallyDrop<Context>,
+    scenes: ManuallyDrop<PreparedScenes<Prepared>>,
     /// Work abandoned by a wait that gave up; the next `extract` waits for it first.
     pending: Option<Pending>,
 }
 
 impl Drop for OpenClBackend {
-    /// Never waits for the device. When abandoned work has still not ended, the host memory it
-    /// may read or write is leaked rather than freed. The queue, buffers, kernel and context are
-    /// released as usual: OpenCL keeps an object with commands pending alive until they have
-    /// finished, and releasing does not wait for them (on PoCL 3.1, dropping a backend whose
-    /// kernel still runs returns in microseconds; `tests/timeout.rs` checks it).
+    /// Never waits for the device. When abandoned work has still not ended, everything it may
+    /// use is leaked rather than released: the host memory it may read or write, and the
+    /// buffers, kernel, program, queue and context (OpenCL would keep them alive until the work
+    /// ends anyway, but a driver may block in a release while a kernel hangs). Otherwise they
+    /// are released as usual.
     fn drop(&mut self) {
         if let Some(p) = self.pending.take() {
             if !wait::has_ended(&p.last) {
-                std::mem::forget(p.host);
+                std::mem::forget(p);
+                return;
             }
+        }
+        // SAFETY: each field is dropped once, here, and not used afterwards.
+        unsafe {
+            ManuallyDrop::drop(&mut self.scenes);
+            ManuallyDrop::drop(&mut self.kernel);
+            ManuallyDrop::drop(&mut self.program);
+            ManuallyDrop::drop(&mut self.queue);
+            ManuallyDrop::drop(&mut self.context);
         }
     }
 }
@@ -392,11 +403,11 @@ impl OpenClBackend {
             kernel_origin: origin,
             max_alloc,
             fixed_group,
-            kernel,
-            _program: program,
-            queue,
-            context,
-            scenes: PreparedScenes::new(),
+            kernel: ManuallyDrop::new(kernel),
+            program: ManuallyDrop::new(program),
+            queue: ManuallyDrop::new(queue),
+            context: ManuallyDrop::new(context),
+            scenes: ManuallyDrop::new(PreparedScenes::new()),
             pending: None,
         };
         backend.warm_up()?;
@@ -455,6 +466,16 @@ impl OpenClBackend {
         Ok(())
     }
 
+    /// How long a wait spins before it sleeps: [`wait::GPU_SPIN`], or nothing on a CPU device,
+    /// whose worker threads need the cores (see the `wait` module).
+    fn spin(&self) -> Duration {
+        if self.device.device_type == "CPU" {
+            Duration::ZERO
+        } else {
+            wait::GPU_SPIN
+        }
+    }
+
     /// The device in use.
     #[must_use]
     pub fn device(&self) -> &DeviceDesc {
@@ -508,7 +529,7 @@ impl OpenClBackend {
                     self.pending = Some(Pending {
                         last,
                         what,
-                        host: host(),
+                        _host: host(),
                     });
                 }
             }
@@ -532,7 +553,7 @@ impl OpenClBackend {
         let deadline = wait::deadline_after(limit);
         let mut times = Vec::with_capacity(events.len());
         for (what, event) in events {
-            match wait::wait(event, deadline) {
+            match wait::wait(event, deadline, self.spin()) {
                 wait::Outcome::Complete => times.push(Instant::now()),
                 wait::Outcome::Failed(status) => {
                     return Err(BackendError::Device {
@@ -575,7 +596,7 @@ impl OpenClBackend {
         };
         // Ignore a flush error here: the status query below reports the state either way.
         let _ = self.queue.flush();
-        match wait::wait(&p.last, wait::deadline_after(limit)) {
+        match wait::wait(&p.last, wait::deadline_after(limit), self.spin()) {
             // A failed command has ended too; if the device is broken, new work reports it.
             wait::Outcome::Complete | wait::Outcome::Failed(_) => {
                 self.pending = None;

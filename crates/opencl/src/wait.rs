@@ -5,13 +5,20 @@
 //! non-blocking, flushes the queue and waits for the commands' events here, each wait ending
 //! when the command is `CL_COMPLETE`, reports an error (a negative status), or a deadline passes.
 //!
-//! A wait registers a completion callback (`clSetEventCallback`) that signals a condition
-//! variable, and sleeps on it with a timeout: the thread is woken as soon as the driver reports
-//! the end, without spinning (spinning on PoCL took a core from the device's worker threads and
-//! made short extractions ~25 % slower). Between wake-ups it also reads
-//! `CL_EVENT_COMMAND_EXECUTION_STATUS`, so a driver whose callbacks are late or missing is still
-//! seen finished within [`MAX_STEP`]; the steps grow from [`MIN_STEP`] by 1/16 of the time
-//! waited so far. Where the callback cannot be registered, the same steps are slept through.
+//! A wait has two phases:
+//!
+//! 1. **Spin** (devices other than the host CPU only): read
+//!    `CL_EVENT_COMMAND_EXECUTION_STATUS` in a loop, yielding the core between reads, for up to
+//!    [`GPU_SPIN`]. A GPU's short commands (tens of µs) are seen finished at once, as `clFinish`
+//!    saw them; NVIDIA's completion callbacks arrive ~30 µs late, which made every wait that
+//!    much slower. On a CPU device (PoCL) the spinning thread would take a core from the
+//!    device's worker threads (it made short extractions 10–25 % slower), so there is no spin.
+//! 2. **Sleep**: register a completion callback (`clSetEventCallback`) that signals a condition
+//!    variable, and sleep on it with a timeout: the thread is woken as soon as the driver reports
+//!    the end. Between wake-ups it also reads the status, so a driver whose callbacks are late or
+//!    missing is still seen finished within [`MAX_STEP`]; the steps grow from [`MIN_STEP`] by
+//!    1/16 of the time waited so far. Where the callback cannot be registered, the same steps are
+//!    slept through.
 
 use opencl3::error_codes::ClError;
 use opencl3::event::{Event, CL_COMPLETE};
@@ -20,7 +27,10 @@ use std::ffi::c_void;
 use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 
-/// The first interval between two status reads.
+/// How long a wait for a device other than the host CPU spins before it sleeps.
+pub(crate) const GPU_SPIN: Duration = Duration::from_millis(2);
+
+/// The first interval between two status reads while sleeping.
 pub(crate) const MIN_STEP: Duration = Duration::from_micros(50);
 /// The longest interval between two status reads.
 pub(crate) const MAX_STEP: Duration = Duration::from_millis(1);
@@ -69,15 +79,27 @@ fn ended(status: cl_int) -> Option<Outcome> {
     }
 }
 
-/// Waits until `event` finishes, fails, or `deadline` passes (`None`: no deadline).
-pub(crate) fn wait(event: &Event, deadline: Option<Instant>) -> Outcome {
-    match event.command_execution_status() {
-        Ok(s) => {
-            if let Some(o) = ended(s.0) {
-                return o;
+/// Waits until `event` finishes, fails, or `deadline` passes (`None`: no deadline), spinning
+/// for up to `spin` first (zero: no spin).
+pub(crate) fn wait(event: &Event, deadline: Option<Instant>, spin: Duration) -> Outcome {
+    let start = Instant::now();
+    loop {
+        match event.command_execution_status() {
+            Ok(s) => {
+                if let Some(o) = ended(s.0) {
+                    return o;
+                }
             }
+            Err(e) => return Outcome::QueryFailed(e),
         }
-        Err(e) => return Outcome::QueryFailed(e),
+        let now = Instant::now();
+        if deadline.is_some_and(|d| now >= d) {
+            return Outcome::TimedOut;
+        }
+        if now - start >= spin {
+            break;
+        }
+        std::thread::yield_now();
     }
     let signal = Arc::new(Signal::default());
     let raw = Arc::into_raw(Arc::clone(&signal))
