@@ -325,25 +325,11 @@ pub fn faces_light_geometric(frame: &Frame, sp: &SurfacePoint, li: usize) -> boo
     sp.normal.dot(light_vec(l, sp.position)) > 0.0
 }
 
-/// The raster's per-light states (light-major), from the stencil and the facing.
+/// The raster's per-light states (light-major), from the stencil and the facing
+/// ([`faces_light`]).
 #[must_use]
 pub fn raster_states(frame: &Frame, points: &[Option<SurfacePoint>]) -> Vec<Vec<PixelState>> {
-    frame
-        .lights
-        .iter()
-        .enumerate()
-        .map(|(li, _)| {
-            points
-                .iter()
-                .zip(&frame.stencil[li])
-                .map(|(p, &s)| match p {
-                    None => PixelState::Background,
-                    Some(sp) if s == 0 && faces_light(frame, sp, li) => PixelState::Lit,
-                    Some(_) => PixelState::Unlit,
-                })
-                .collect()
-        })
-        .collect()
+    raster_states_with(frame, points, faces_light)
 }
 
 /// The raster's per-light states with the geometric facing ([`faces_light_geometric`]).
@@ -351,6 +337,15 @@ pub fn raster_states(frame: &Frame, points: &[Option<SurfacePoint>]) -> Vec<Vec<
 pub fn raster_states_geometric(
     frame: &Frame,
     points: &[Option<SurfacePoint>],
+) -> Vec<Vec<PixelState>> {
+    raster_states_with(frame, points, faces_light_geometric)
+}
+
+/// Lit where the stencil is 0 and `facing` holds.
+fn raster_states_with(
+    frame: &Frame,
+    points: &[Option<SurfacePoint>],
+    facing: fn(&Frame, &SurfacePoint, usize) -> bool,
 ) -> Vec<Vec<PixelState>> {
     frame
         .lights
@@ -362,7 +357,7 @@ pub fn raster_states_geometric(
                 .zip(&frame.stencil[li])
                 .map(|(p, &s)| match p {
                     None => PixelState::Background,
-                    Some(sp) if s == 0 && faces_light_geometric(frame, sp, li) => PixelState::Lit,
+                    Some(sp) if s == 0 && facing(frame, sp, li) => PixelState::Lit,
                     Some(_) => PixelState::Unlit,
                 })
                 .collect()
