@@ -6,6 +6,7 @@
 
 use shadowvol_robust_math::orient_exact;
 use shadowvol_silhouette::{BackendError, Multiplicities, TopologyScene};
+use std::ops::Range;
 
 /// Accuracy mode codes passed to the kernel (`mode` argument).
 pub(crate) const MODE_ORIGINAL: u32 = 0;
@@ -138,6 +139,29 @@ pub fn flat_lights(object_lights: &[Vec<[f32; 4]>]) -> Vec<f32> {
         .collect()
 }
 
+/// The lights `batch` of `object_lights` flattened for one kernel launch: 4 `f32` per (object,
+/// light of the batch), index `object * batch.len() + (light - batch.start)`. The whole range
+/// gives [`flat_lights`].
+///
+/// # Errors
+/// [`BackendError::InvalidInput`] when `batch` is not a range of every object's lights.
+pub fn flat_light_batch(
+    object_lights: &[Vec<[f32; 4]>],
+    batch: Range<usize>,
+) -> Result<Vec<f32>, BackendError> {
+    let mut flat = Vec::with_capacity(object_lights.len() * batch.len() * 4);
+    for (i, per_object) in object_lights.iter().enumerate() {
+        let lights = per_object.get(batch.clone()).ok_or_else(|| {
+            BackendError::InvalidInput(format!(
+                "light batch {batch:?} out of range: object {i} has {} lights",
+                per_object.len()
+            ))
+        })?;
+        flat.extend(lights.iter().flatten());
+    }
+    Ok(flat)
+}
+
 /// What one kernel run produced, as read back from the device (or produced by the twin).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct KernelOutput {
@@ -150,12 +174,14 @@ pub struct KernelOutput {
     pub uncertain: Vec<[u32; 3]>,
 }
 
-/// Fills `out` from a kernel run: scatters the compact list, decides the uncertain records
-/// with [`orient_exact`] and adds them, and sets the per-light compact silhouette lists.
+/// Fills `out` from a kernel run over all `lights`: scatters the compact list, decides the
+/// uncertain records with [`orient_exact`] and adds them, and sets the per-light compact
+/// silhouette lists. The same as [`finish_batch`] over `0..lights` after resetting `out`.
 ///
 /// # Errors
 /// [`BackendError::Device`] when the kernel's output is malformed (an index, slot or light out
 /// of range, an edge listed twice, or fewer records than counted): a device or driver fault.
+/// [`BackendError::InvalidInput`] when `object_lights` has fewer than `lights` lights per object.
 pub fn finish(
     flat: &FlatScene,
     object_lights: &[Vec<[f32; 4]>],
@@ -164,12 +190,56 @@ pub fn finish(
     out: &mut Multiplicities,
     backend: &'static str,
 ) -> Result<(), BackendError> {
+    out.reset(flat.edge_count(), lights);
+    finish_batch(flat, object_lights, 0..lights, output, out, backend)
+}
+
+/// Fills the rows of the lights `batch` of `out` from one kernel launch over those lights:
+/// scatters the compact list, decides the uncertain records with [`orient_exact`] and adds them,
+/// and sets those lights' compact silhouette lists. Other rows are left as they are.
+///
+/// The launch numbers its lights from 0: light `l` of `output` (in its silhouette indices
+/// `l * edges + edge` and its uncertain records) is light `batch.start + l` of `out` and of
+/// `object_lights` (all lights of the extraction, per object). The rows of `batch` must be zero
+/// (as [`Multiplicities::reset`] leaves them).
+///
+/// # Errors
+/// [`BackendError::Device`] when the kernel's output is malformed (an index, slot or light out
+/// of range, an edge listed twice, or fewer records than counted): a device or driver fault.
+/// [`BackendError::InvalidInput`] when `out` does not have `flat`'s edges and at least
+/// `batch.end` lights, or an object of `object_lights` has fewer than `batch.end` lights.
+pub fn finish_batch(
+    flat: &FlatScene,
+    object_lights: &[Vec<[f32; 4]>],
+    batch: Range<usize>,
+    output: KernelOutput,
+    out: &mut Multiplicities,
+    backend: &'static str,
+) -> Result<(), BackendError> {
     let edges = flat.edge_count();
+    let lights = batch.len();
+    if out.edge_count() != edges || out.light_count() < batch.end {
+        return Err(BackendError::InvalidInput(format!(
+            "light batch {batch:?} over {edges} edges does not fit multiplicities of {} edges \
+             and {} lights",
+            out.edge_count(),
+            out.light_count()
+        )));
+    }
+    if let Some((i, l)) = object_lights
+        .iter()
+        .enumerate()
+        .find(|(_, l)| l.len() < batch.end)
+    {
+        return Err(BackendError::InvalidInput(format!(
+            "light batch {batch:?} out of range: object {i} has {} lights",
+            l.len()
+        )));
+    }
     let bad = |what: String| BackendError::Device {
         backend,
         message: format!("malformed kernel output: {what}"),
     };
-    out.reset(edges, lights);
     let KernelOutput {
         counts,
         silhouettes,
@@ -187,7 +257,7 @@ pub fn finish(
     }
     let mut lists: Vec<Vec<u32>> = vec![Vec::new(); lights];
     {
-        let values = out.all_values_mut();
+        let values = &mut out.all_values_mut()[batch.start * edges..batch.end * edges];
         for &(index, m) in &silhouettes {
             let slot = values.get_mut(index as usize).ok_or_else(|| {
                 bad(format!(
@@ -206,7 +276,7 @@ pub fn finish(
     }
     if uncertain.is_empty() {
         for (l, list) in lists.into_iter().enumerate() {
-            out.set_silhouette(l, list);
+            out.set_silhouette(batch.start + l, list);
         }
         return Ok(());
     }
@@ -214,7 +284,7 @@ pub fn finish(
         let (ei, ki, li) = (e as usize, k as usize, l as usize);
         if ei >= edges || li >= lights {
             return Err(bad(format!(
-                "uncertain record ({e}, {k}, {l}) out of range"
+                "uncertain record ({e}, {k}, {l}) out of range ({edges} edges x {lights} lights)"
             )));
         }
         if ki < flat.ov_offsets[ei] as usize || ki >= flat.ov_offsets[ei + 1] as usize {
@@ -225,10 +295,21 @@ pub fn finish(
         let a = flat.position(flat.edges[2 * ei]);
         let b = flat.position(flat.edges[2 * ei + 1]);
         let o = flat.position(flat.ovs[ki]);
+        let li = batch.start + li;
         let light = object_lights[flat.edge_obj[ei] as usize][li];
         out.values_mut(li)[ei] += i32::from(orient_exact(a, b, light, o));
     }
-    // Host decisions may add or remove silhouette edges: rebuild the lists from the values.
-    out.rebuild_silhouettes();
+    // Host decisions may add or remove silhouette edges: rebuild the batch's lists from the
+    // values.
+    for l in batch {
+        let list = out
+            .values(l)
+            .iter()
+            .enumerate()
+            .filter(|(_, &m)| m != 0)
+            .map(|(e, _)| e as u32)
+            .collect();
+        out.set_silhouette(l, list);
+    }
     Ok(())
 }

@@ -6,6 +6,10 @@
 //!   uploaded per (object, light) in object space, computed by
 //!   [`shadowvol_silhouette::object_lights`] so that every backend sees the same `f32` inputs.
 //!   There is no per-object synchronisation.
+//! * **Many lights.** When the per-light buffers of all lights would exceed the device's largest
+//!   allocation or the kernel's 32-bit indices (or [`OpenClOptions::max_lights_per_launch`] is
+//!   set), the lights are split into batches of one launch each, with the same result as one
+//!   launch; only a scene where one light alone does not fit is a [`BackendError::Limit`].
 //! * **Uploaded once.** Positions, edges, OV lists and offsets are uploaded at `prepare`; an
 //!   `extract` uploads only the lights (and zeroes the counters).
 //! * **Compact output.** The kernel appends `(light * edges + edge, m)` for each silhouette edge
@@ -60,7 +64,7 @@ mod wait;
 
 pub use device::{list_devices, select_device, DeviceDesc, DEVICE_ENV};
 
-use layout::{finish, flat_lights, mode_code, FlatScene, KernelOutput};
+use layout::{finish_batch, flat_light_batch, mode_code, FlatScene, KernelOutput};
 use opencl3::command_queue::CommandQueue;
 use opencl3::context::Context;
 use opencl3::device::Device;
@@ -77,6 +81,8 @@ use shadowvol_silhouette::{
 };
 use std::any::Any;
 use std::mem::ManuallyDrop;
+use std::num::NonZeroUsize;
+use std::ops::Range;
 use std::path::PathBuf;
 use std::ptr;
 use std::time::{Duration, Instant};
@@ -121,6 +127,10 @@ pub struct OpenClOptions {
     pub kernel: KernelSource,
     /// Use the `f32` filter in exact mode even when the device has `cl_khr_fp64`.
     pub force_f32_filter: bool,
+    /// At most this many lights per kernel launch. `None` (the default) lets only the device's
+    /// limits split the lights (see [`OpenClBackend`]); a small value forces an `extract` into
+    /// several launches, for tests. The result does not depend on it.
+    pub max_lights_per_launch: Option<NonZeroUsize>,
 }
 
 impl OpenClOptions {
@@ -136,6 +146,7 @@ impl OpenClOptions {
                 .and_then(non_empty)
                 .map_or(KernelSource::Builtin, |p| KernelSource::Path(p.into())),
             force_f32_filter: false,
+            max_lights_per_launch: None,
         }
     }
 }
@@ -173,12 +184,32 @@ struct Pending {
 /// Static zeros for the counter reset: a non-blocking write reads them whenever it runs.
 static ZEROS: [u32; 2] = [0; 2];
 
+/// What one light batch of an `extract` came to.
+enum Batch {
+    /// Its rows of the result are filled.
+    Done,
+    /// Its uncertain records (exact mode) need more than the device's largest allocation; the
+    /// batch has two or more lights and is to be split. Its rows are untouched.
+    TooManyUncertain,
+}
+
 /// The OpenCL backend. See the crate documentation.
+///
+/// An `extract` runs one kernel launch per batch of lights: as many lights as fit the device's
+/// largest allocation (`CL_DEVICE_MAX_MEM_ALLOC_SIZE`: the silhouette list takes 8 bytes per
+/// edge and light, the light buffer 16 bytes per object and light) and the kernel's 32-bit
+/// indices, and at most [`OpenClOptions::max_lights_per_launch`]. Usually that is all of them;
+/// the result is the same however they are split.
 pub struct OpenClBackend {
     device: DeviceDesc,
     use_f64: bool,
     kernel_origin: String,
+    /// `CL_DEVICE_MAX_MEM_ALLOC_SIZE`, bytes.
     max_alloc: u64,
+    max_lights_per_launch: Option<NonZeroUsize>,
+    /// Light batches (kernel launches, not counting reruns after the uncertain-record buffer
+    /// grew) of the last `extract`.
+    last_batches: usize,
     /// Launch with a fixed work-group size of [`GROUP`] × 1.
     fixed_group: bool,
     // Released by `Drop` (scenes, kernel, program, queue, then the context), or leaked while
@@ -402,6 +433,8 @@ impl OpenClBackend {
             use_f64,
             kernel_origin: origin,
             max_alloc,
+            max_lights_per_launch: options.max_lights_per_launch,
+            last_batches: 0,
             fixed_group,
             kernel: ManuallyDrop::new(kernel),
             program: ManuallyDrop::new(program),
@@ -486,6 +519,70 @@ impl OpenClBackend {
     #[must_use]
     pub fn uses_f64_filter(&self) -> bool {
         self.use_f64
+    }
+
+    /// How many light batches (kernel launches, not counting reruns after the uncertain-record
+    /// buffer grew) the last `extract` ran; for tests of the light splitting.
+    #[doc(hidden)]
+    #[must_use]
+    pub fn batches_of_last_extract_for_tests(&self) -> usize {
+        self.last_batches
+    }
+
+    /// Pretends the device's largest allocation is `bytes` from now on (checks and batch sizes
+    /// only; nothing is allocated differently), so that tests can reach the device limits.
+    #[doc(hidden)]
+    pub fn set_max_alloc_for_tests(&mut self, bytes: u64) {
+        self.max_alloc = bytes;
+    }
+
+    /// The most records the uncertain-record buffer (12 bytes each) may hold: the device's
+    /// largest allocation, at least 1.
+    fn max_uncertain_records(&self) -> usize {
+        usize::try_from(self.max_alloc / 12)
+            .unwrap_or(usize::MAX)
+            .max(1)
+    }
+
+    /// Lights per kernel launch for a scene of `edges` edges (at least 1), `objects` objects
+    /// and `ovs` opposite-vertex slots: as many as the silhouette list (8 bytes per edge and
+    /// light) and the light buffer (16 bytes per object and light) allow within the device's
+    /// largest allocation, with `light * edges + edge` and the uncertain-record counter (at most
+    /// one per OV slot and light) within `u32`, and at most
+    /// [`OpenClOptions::max_lights_per_launch`].
+    ///
+    /// # Errors
+    /// [`BackendError::Limit`] with the numbers when not even one light fits.
+    fn lights_per_launch(
+        &self,
+        edges: usize,
+        objects: usize,
+        ovs: usize,
+    ) -> Result<usize, BackendError> {
+        let sil = 8 * edges as u64;
+        let light = 16 * objects as u64;
+        let index = u64::from(u32::MAX);
+        let n = (self.max_alloc / sil.max(1))
+            .min(self.max_alloc / light.max(1))
+            .min(index / (edges as u64).max(1))
+            .min(index / (ovs as u64).max(1))
+            .min(
+                self.max_lights_per_launch
+                    .map_or(u64::MAX, |n| n.get() as u64),
+            );
+        if n == 0 {
+            return Err(BackendError::Limit {
+                backend: BACKEND,
+                message: format!(
+                    "one light alone does not fit a kernel launch: its silhouette list needs \
+                     {sil} bytes for {edges} edges and its light buffer {light} bytes for \
+                     {objects} objects, but the device's largest allocation is {} bytes; split \
+                     the scene",
+                    self.max_alloc
+                ),
+            });
+        }
+        Ok(usize::try_from(n).unwrap_or(usize::MAX))
     }
 
     fn check_alloc(&self, what: &str, bytes: usize, hint: &str) -> Result<(), BackendError> {
@@ -698,6 +795,155 @@ impl OpenClBackend {
     }
 }
 
+impl OpenClBackend {
+    /// One kernel launch over the lights `batch` of `obj_lights` (rerun while the
+    /// uncertain-record buffer grows): uploads their object-space lights, runs the kernel, reads
+    /// back the silhouette list and uncertain records, and fills the batch's rows of `out`
+    /// (already reset to the scene's edges and all lights), adding the times and the uncertain
+    /// count to `stats`. Every wait is bounded by `limit`, as in [`OpenClBackend::run_once`].
+    ///
+    /// Returns [`Batch::TooManyUncertain`] instead when the batch has two or more lights and its
+    /// uncertain records need more than the device's largest allocation.
+    ///
+    /// # Errors
+    /// [`BackendError::Device`] when a command fails, a wait times out, or the output is
+    /// malformed; [`BackendError::Limit`] when the uncertain records of a single light do not
+    /// fit the device's largest allocation.
+    #[allow(clippy::too_many_arguments)]
+    fn extract_batch(
+        &mut self,
+        id: PreparedId,
+        obj_lights: &[Vec<[f32; 4]>],
+        batch: Range<usize>,
+        mode: Accuracy,
+        limit: Duration,
+        out: &mut Multiplicities,
+        stats: &mut ExtractStats,
+    ) -> Result<Batch, BackendError> {
+        let t = Instant::now();
+        let num_lights = batch.len();
+        let mut flat_l = flat_light_batch(obj_lights, batch.clone())?;
+        let max_records = self.max_uncertain_records();
+        let edges = {
+            let ctx = &self.context;
+            let p = self.scenes.get_mut(BACKEND, id)?;
+            let edges = p.flat.edge_count();
+            ensure(ctx, &mut p.lights, flat_l.len(), "the light buffer")?;
+            ensure(ctx, &mut p.counts, 2, "the counters")?;
+            ensure(
+                ctx,
+                &mut p.sil,
+                2 * edges * num_lights,
+                "the silhouette lists",
+            )?;
+            let initial = INITIAL_UNCERTAIN_CAPACITY.min(max_records);
+            if mode == Accuracy::Exact && p.unc_records < initial {
+                ensure(ctx, &mut p.unc, 3 * initial, "the uncertain records")?;
+                p.unc_records = initial;
+            } else if p.unc.is_none() {
+                ensure(ctx, &mut p.unc, 3, "the uncertain records")?;
+                p.unc_records = 1;
+            }
+            edges
+        };
+        stats.upload += t.elapsed();
+        let mut counts = vec![0u32; 2];
+        loop {
+            let (up, comp, read) =
+                self.run_once(id, &mut flat_l, &mut counts, num_lights, mode, limit)?;
+            stats.upload += up;
+            stats.compute += comp;
+            stats.readback += read;
+            let p = self.scenes.get(BACKEND, id)?;
+            let needed = counts[0] as usize;
+            // (The buffer never exceeds the largest allocation; the `min` matters only when
+            // tests lower the pretended limit after the buffer grew.)
+            if needed <= p.unc_records.min(max_records) {
+                break;
+            }
+            if needed > max_records {
+                if num_lights > 1 {
+                    return Ok(Batch::TooManyUncertain);
+                }
+                return Err(BackendError::Limit {
+                    backend: BACKEND,
+                    message: format!(
+                        "exact mode left {needed} (edge, OV, light) records of light {} \
+                         uncertain; they need {} bytes, more than the device's largest \
+                         allocation ({} bytes); split the scene",
+                        batch.start,
+                        needed as u64 * 12,
+                        self.max_alloc
+                    ),
+                });
+            }
+            // More uncertain records than the buffer holds: grow it and run again.
+            let records = needed.next_power_of_two().min(max_records);
+            let ctx = &self.context;
+            let p = self.scenes.get_mut(BACKEND, id)?;
+            ensure(ctx, &mut p.unc, 3 * records, "the uncertain records")?;
+            p.unc_records = records;
+        }
+        let t = Instant::now();
+        let p = self.scenes.get(BACKEND, id)?;
+        // At most one entry per (edge, light): a larger count is a device fault, caught by
+        // `finish_batch` when fewer entries than counted come back.
+        let mut raw_sil = vec![0i32; 2 * (counts[1] as usize).min(edges * num_lights)];
+        let mut raw_unc = vec![0u32; 3 * counts[0] as usize];
+        let mut events = Vec::with_capacity(2);
+        let (sil_buf, _) = p.sil.as_ref().expect("ensured");
+        let (unc_buf, _) = p.unc.as_ref().expect("ensured");
+        // SAFETY: non-blocking reads into slices that `wait_for` keeps alive and untouched until
+        // the reads have ended (moving them into `pending` when it stops waiting before that);
+        // the lengths lie inside the buffers.
+        let enqueued = unsafe {
+            (|| {
+                if !raw_sil.is_empty() {
+                    events.push((
+                        "reading the silhouette list",
+                        self.queue
+                            .enqueue_read_buffer(sil_buf, CL_NON_BLOCKING, 0, &mut raw_sil, &[])
+                            .map_err(|e| device_error("reading the silhouette list", e))?,
+                    ));
+                }
+                if !raw_unc.is_empty() {
+                    events.push((
+                        "reading the uncertain records",
+                        self.queue
+                            .enqueue_read_buffer(unc_buf, CL_NON_BLOCKING, 0, &mut raw_unc, &[])
+                            .map_err(|e| device_error("reading uncertain records", e))?,
+                    ));
+                }
+                Ok(())
+            })()
+        };
+        self.wait_for(&mut events, enqueued, limit, || {
+            vec![
+                Box::new(std::mem::take(&mut raw_sil)),
+                Box::new(std::mem::take(&mut raw_unc)),
+            ]
+        })?;
+        stats.readback += t.elapsed();
+        let t = Instant::now();
+        let output = KernelOutput {
+            silhouettes: raw_sil
+                .chunks_exact(2)
+                .map(|c| (c[0] as u32, c[1]))
+                .collect(),
+            uncertain: raw_unc
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect(),
+            counts,
+        };
+        stats.uncertain += output.uncertain.len() as u64;
+        let p = self.scenes.get(BACKEND, id)?;
+        finish_batch(&p.flat, obj_lights, batch, output, out, BACKEND)?;
+        stats.host_resolve += t.elapsed();
+        Ok(Batch::Done)
+    }
+}
+
 /// Sets the kernel's arguments for prepared scene `p` and enqueues it over (edges × lights).
 ///
 /// # Safety
@@ -818,131 +1064,43 @@ impl SilhouetteBackend for OpenClBackend {
         self.scenes.get(BACKEND, id)?;
         check_lights(lights)?;
         self.settle(limit)?;
+        self.last_batches = 0;
         let p = self.scenes.get(BACKEND, id)?;
         let num_lights = lights.len();
         let edges = p.flat.edge_count();
-        let objects = p.flat.objects;
         if edges == 0 {
             out.reset(0, num_lights);
             return Ok(ExtractStats::default());
         }
-        let hint = format!("; pass fewer lights per call ({num_lights} given)");
-        self.check_alloc("the silhouette lists", 2 * edges * num_lights * 4, &hint)?;
-        self.check_alloc("the light buffer", objects * num_lights * 16, &hint)?;
-        if u32::try_from(num_lights).is_err() || u32::try_from(edges * num_lights).is_err() {
-            return Err(BackendError::Limit {
-                backend: BACKEND,
-                message: format!("{num_lights} lights × {edges} edges exceed 32-bit slot indices"),
-            });
-        }
+        let mut per_launch = self.lights_per_launch(edges, p.flat.objects, p.flat.ovs.len())?;
         // Per-frame host preparation (object-space lights) counts as upload.
         let prep_start = Instant::now();
         let obj_lights = object_lights(&p.scene, lights);
-        let mut flat_l = flat_lights(&obj_lights);
-        {
-            let ctx = &self.context;
-            let p = self.scenes.get_mut(BACKEND, id).expect("checked above");
-            ensure(ctx, &mut p.lights, flat_l.len(), "the light buffer")?;
-            ensure(ctx, &mut p.counts, 2, "the counters")?;
-            ensure(
-                ctx,
-                &mut p.sil,
-                2 * edges * num_lights,
-                "the silhouette lists",
-            )?;
-            if mode == Accuracy::Exact && p.unc_records < INITIAL_UNCERTAIN_CAPACITY {
-                ensure(
-                    ctx,
-                    &mut p.unc,
-                    3 * INITIAL_UNCERTAIN_CAPACITY,
-                    "the uncertain records",
-                )?;
-                p.unc_records = INITIAL_UNCERTAIN_CAPACITY;
-            } else if p.unc.is_none() {
-                ensure(ctx, &mut p.unc, 3, "the uncertain records")?;
-                p.unc_records = 1;
-            }
-        }
+        out.reset(edges, num_lights);
         let mut stats = ExtractStats {
             upload: prep_start.elapsed(),
             ..ExtractStats::default()
         };
-        let mut counts = vec![0u32; 2];
-        loop {
-            let (up, comp, read) =
-                self.run_once(id, &mut flat_l, &mut counts, num_lights, mode, limit)?;
-            stats.upload += up;
-            stats.compute += comp;
-            stats.readback += read;
-            let p = self.scenes.get(BACKEND, id).expect("checked above");
-            let needed = counts[0] as usize;
-            if needed <= p.unc_records {
-                break;
+        let mut first = 0;
+        while first < num_lights {
+            let batch = first..(first + per_launch).min(num_lights);
+            match self.extract_batch(
+                id,
+                &obj_lights,
+                batch.clone(),
+                mode,
+                limit,
+                out,
+                &mut stats,
+            )? {
+                Batch::Done => {
+                    first = batch.end;
+                    self.last_batches += 1;
+                }
+                // Only returned for batches of two or more lights.
+                Batch::TooManyUncertain => per_launch = batch.len() / 2,
             }
-            // More uncertain records than the buffer holds: grow it and run again.
-            let records = needed.next_power_of_two();
-            self.check_alloc("the uncertain records", records * 12, "")?;
-            let ctx = &self.context;
-            let p = self.scenes.get_mut(BACKEND, id).expect("checked above");
-            ensure(ctx, &mut p.unc, 3 * records, "the uncertain records")?;
-            p.unc_records = records;
         }
-        let t = Instant::now();
-        let p = self.scenes.get(BACKEND, id).expect("checked above");
-        // At most one entry per (edge, light): a larger count is a device fault, caught by
-        // `finish` when fewer entries than counted come back.
-        let mut raw_sil = vec![0i32; 2 * (counts[1] as usize).min(edges * num_lights)];
-        let mut raw_unc = vec![0u32; 3 * counts[0] as usize];
-        let mut events = Vec::with_capacity(2);
-        let (sil_buf, _) = p.sil.as_ref().expect("ensured");
-        let (unc_buf, _) = p.unc.as_ref().expect("ensured");
-        // SAFETY: non-blocking reads into slices that `wait_for` keeps alive and untouched until
-        // the reads have ended (moving them into `pending` when it stops waiting before that);
-        // the lengths lie inside the buffers.
-        let enqueued = unsafe {
-            (|| {
-                if !raw_sil.is_empty() {
-                    events.push((
-                        "reading the silhouette list",
-                        self.queue
-                            .enqueue_read_buffer(sil_buf, CL_NON_BLOCKING, 0, &mut raw_sil, &[])
-                            .map_err(|e| device_error("reading the silhouette list", e))?,
-                    ));
-                }
-                if !raw_unc.is_empty() {
-                    events.push((
-                        "reading the uncertain records",
-                        self.queue
-                            .enqueue_read_buffer(unc_buf, CL_NON_BLOCKING, 0, &mut raw_unc, &[])
-                            .map_err(|e| device_error("reading uncertain records", e))?,
-                    ));
-                }
-                Ok(())
-            })()
-        };
-        self.wait_for(&mut events, enqueued, limit, || {
-            vec![
-                Box::new(std::mem::take(&mut raw_sil)),
-                Box::new(std::mem::take(&mut raw_unc)),
-            ]
-        })?;
-        stats.readback += t.elapsed();
-        let t = Instant::now();
-        let output = KernelOutput {
-            silhouettes: raw_sil
-                .chunks_exact(2)
-                .map(|c| (c[0] as u32, c[1]))
-                .collect(),
-            uncertain: raw_unc
-                .chunks_exact(3)
-                .map(|c| [c[0], c[1], c[2]])
-                .collect(),
-            counts,
-        };
-        stats.uncertain = output.uncertain.len() as u64;
-        let p = self.scenes.get(BACKEND, id).expect("checked above");
-        finish(&p.flat, &obj_lights, num_lights, output, out, BACKEND)?;
-        stats.host_resolve = t.elapsed();
         Ok(stats)
     }
 

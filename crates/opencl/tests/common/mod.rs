@@ -5,8 +5,29 @@
 
 use glam::{Affine3A, Quat, Vec3};
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
-use shadowvol_silhouette::{corpus, Light, SceneObject, TopologyScene};
+use shadowvol_opencl::{OpenClBackend, OpenClOptions};
+use shadowvol_silhouette::{corpus, BackendError, Light, SceneObject, TopologyScene};
 use std::sync::Arc;
+
+/// True under `CI=true` (or `CI=1`), where a missing OpenCL platform fails the tests.
+pub fn in_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true") || v == "1")
+}
+
+/// Starts the backend with `options`, or skips (visibly: a `SKIPPED` line) when OpenCL is
+/// unavailable here; under `CI=true` that fails instead.
+pub fn start(options: OpenClOptions, test: &str) -> Option<OpenClBackend> {
+    match OpenClBackend::with_options(options) {
+        Ok(b) => Some(b),
+        Err(e @ BackendError::Unavailable { .. }) => {
+            assert!(!in_ci(), "CI=true but OpenCL is unavailable: {e}");
+            eprintln!("SKIPPED {test}: {e}");
+            println!("SKIPPED {test}: {e}");
+            None
+        }
+        Err(e) => panic!("{test}: the OpenCL backend failed to start: {e}"),
+    }
+}
 
 /// A named scene with its lights.
 pub struct Case {
