@@ -149,6 +149,44 @@ pub(crate) fn tri_signs<Lv: Level>(
         } else {
             (1u32 << (lay.tri_count - t)) - 1
         };
+        let dst = (blk - b0) * LANES;
+        if let ([light], Accuracy::Ordered | Accuracy::Original, 0xFF) = (lights, mode, valid) {
+            // One light, a full block (the common case): `plane`'s operations with fewer vectors
+            // live (O is loaded once N and N·A exist), and the signs stored as one vector of
+            // `i32` records: byte 0 of each 4-byte record is the sign, the other three bytes
+            // (lights 1-3 of the pack) are unused with one light.
+            // SAFETY: as below.
+            let (a, b) = unsafe {
+                (
+                    gather::<Lv>(lay, &lay.t0[t..]),
+                    gather::<Lv>(lay, &lay.t1[t..]),
+                )
+            };
+            let lv = splat4::<Lv::F>(*light);
+            let v = [
+                lv[0] - lv[3] * a[0],
+                lv[1] - lv[3] * a[1],
+                lv[2] - lv[3] * a[2],
+            ];
+            let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+            let n = [
+                e[1] * v[2] - e[2] * v[1],
+                e[2] * v[0] - e[0] * v[2],
+                e[0] * v[1] - e[1] * v[0],
+            ];
+            let na = (n[0] * a[0] + n[1] * a[1]) + n[2] * a[2];
+            // SAFETY: as below.
+            let o = unsafe { gather::<Lv>(lay, &lay.t2[t..]) };
+            let no = (n[0] * o[0] + n[1] * o[1]) + n[2] * o[2];
+            let m = (no - na).signum0().to_i32();
+            let pack = &mut out[0][dst * PACK..(dst + LANES) * PACK];
+            for (record, s) in pack.chunks_exact_mut(PACK).zip(m) {
+                for (byte, x) in record.iter_mut().zip(s.to_le_bytes()) {
+                    *byte = x as i8;
+                }
+            }
+            continue;
+        }
         // SAFETY: `t + 8 <= t0.len()` (asserted above), and the layout's ids are in range.
         let (a, b, o) = unsafe {
             (
@@ -157,7 +195,6 @@ pub(crate) fn tri_signs<Lv: Level>(
                 gather::<Lv>(lay, &lay.t2[t..]),
             )
         };
-        let dst = (blk - b0) * LANES;
         match mode {
             Accuracy::Ordered | Accuracy::Original => {
                 for (l, light) in lights.iter().enumerate() {
@@ -437,15 +474,37 @@ pub(crate) fn edge_original<Lv: Level>(
                 |v: &[u32]| -> [u32; LANES] { v[e0..e0 + LANES].try_into().unwrap_or([0; LANES]) };
             let (ia, ib, i1, i2) = (idx(&lay.ea), idx(&lay.eb), idx(&lay.eo1), idx(&lay.eo2));
             // SAFETY: 8 ids each, all vertices of the layout (`Layout::build`).
-            let (a, b, o1, o2) = unsafe {
-                (
-                    gather::<Lv>(lay, &ia),
-                    gather::<Lv>(lay, &ib),
-                    gather::<Lv>(lay, &i1),
-                    gather::<Lv>(lay, &i2),
-                )
-            };
+            let (a, b) = unsafe { (gather::<Lv>(lay, &ia), gather::<Lv>(lay, &ib)) };
             let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+            if let [light] = lights {
+                // One light (the common case): the same operations, ordered so that fewer
+                // vectors are live at once (the OVs are loaded only once N and N·A exist), which
+                // spares the register spills of the general loop below.
+                let lv = splat4::<Lv::F>(*light);
+                let v = [
+                    lv[0] - lv[3] * a[0],
+                    lv[1] - lv[3] * a[1],
+                    lv[2] - lv[3] * a[2],
+                ];
+                let n = [
+                    e[1] * v[2] - e[2] * v[1],
+                    e[2] * v[0] - e[0] * v[2],
+                    e[0] * v[1] - e[1] * v[0],
+                ];
+                let na = (n[0] * a[0] + n[1] * a[1]) + n[2] * a[2];
+                // SAFETY: as above.
+                let o1 = unsafe { gather::<Lv>(lay, &i1) };
+                let d1 = ((n[0] * o1[0] + n[1] * o1[1]) + n[2] * o1[2]) - na;
+                // SAFETY: as above.
+                let o2 = unsafe { gather::<Lv>(lay, &i2) };
+                let d2 = ((n[0] * o2[0] + n[1] * o2[1]) + n[2] * o2[2]) - na;
+                let m = (d1.signum0() + d2.signum0()).to_i32();
+                out[0][e0 - e_start..e0 - e_start + LANES].copy_from_slice(&m);
+                push_nonzero(&mut sil[0], &m, edge_base + e0);
+                continue;
+            }
+            // SAFETY: as above.
+            let (o1, o2) = unsafe { (gather::<Lv>(lay, &i1), gather::<Lv>(lay, &i2)) };
             for (l, light) in lights.iter().enumerate() {
                 let lv = splat4::<Lv::F>(*light);
                 // The operations of `sign_f32`, with V, A - B, N and N·A shared by both OVs.

@@ -25,7 +25,8 @@ fn levels() -> Vec<SimdLevel> {
         .collect()
 }
 
-/// Runs cpu and simd (every level, 1 and 3 threads) and checks equality and consistency.
+/// Runs cpu and simd (every level, 1 and 3 threads; all lights in one call and each light
+/// alone) and checks equality and consistency.
 /// Returns the total `uncertain` count of the exact runs (per level and thread count).
 fn check_scene(name: &str, scene: &TopologyScene, lights: &[Light]) -> u64 {
     let mut uncertain = 0;
@@ -56,6 +57,17 @@ fn check_scene(name: &str, scene: &TopologyScene, lights: &[Light]) -> u64 {
                     uncertain += stats.uncertain;
                 } else {
                     assert_eq!(stats.uncertain, 0);
+                }
+                // One light per call takes the kernels' single-light paths: the same bits.
+                for (l, light) in lights.iter().enumerate() {
+                    let (one, _) = extract_once(&mut simd, scene, &[*light], mode).unwrap();
+                    assert_eq!(
+                        one.values(0),
+                        reference.values(l),
+                        "{name}: simd {level:?} {threads:?}, light {l} alone, differs from cpu \
+                         in mode {mode}"
+                    );
+                    assert_eq!(one.silhouette(0), reference.silhouette(l));
                 }
             }
         }
