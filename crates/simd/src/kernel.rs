@@ -142,6 +142,16 @@ pub(crate) fn tri_signs<Lv: Level>(
             && out.len() == lights.len().div_ceil(PACK)
             && out.iter().all(|o| o.len() == blocks.len() * LANES * PACK)
     );
+    // The lights' lanes, made once per call rather than once per block.
+    let lights32: Vec<[Lv::F; 4]> = lights.iter().map(|l| splat4::<Lv::F>(*l)).collect();
+    let lights64: Vec<[Lv::D; 4]> = if mode == Accuracy::Exact {
+        lights
+            .iter()
+            .map(|light| std::array::from_fn(|c| Lv::D::splat(f64::from(light[c]))))
+            .collect()
+    } else {
+        Vec::new()
+    };
     for blk in blocks {
         let t = blk * LANES;
         let valid: u32 = if t + LANES <= lay.tri_count {
@@ -150,7 +160,7 @@ pub(crate) fn tri_signs<Lv: Level>(
             (1u32 << (lay.tri_count - t)) - 1
         };
         let dst = (blk - b0) * LANES;
-        if let ([light], Accuracy::Ordered | Accuracy::Original, 0xFF) = (lights, mode, valid) {
+        if let ([_], Accuracy::Ordered | Accuracy::Original, 0xFF) = (lights, mode, valid) {
             // One light, a full block (the common case): `plane`'s operations with fewer vectors
             // live (O is loaded once N and N·A exist), and the signs stored as one vector of
             // `i32` records: byte 0 of each 4-byte record is the sign, the other three bytes
@@ -162,7 +172,7 @@ pub(crate) fn tri_signs<Lv: Level>(
                     gather::<Lv>(lay, &lay.t1[t..]),
                 )
             };
-            let lv = splat4::<Lv::F>(*light);
+            let lv = lights32[0];
             let v = [
                 lv[0] - lv[3] * a[0],
                 lv[1] - lv[3] * a[1],
@@ -197,14 +207,13 @@ pub(crate) fn tri_signs<Lv: Level>(
         };
         match mode {
             Accuracy::Ordered | Accuracy::Original => {
-                for (l, light) in lights.iter().enumerate() {
-                    let (pos, neg) = plane(&a, &b, &splat4(*light), &o).sign_bits();
+                for (l, lv) in lights32.iter().enumerate() {
+                    let (pos, neg) = plane(&a, &b, lv, &o).sign_bits();
                     write_signs(out, l, dst, pos & valid, neg & valid);
                 }
             }
             Accuracy::Robust => {
-                for (l, light) in lights.iter().enumerate() {
-                    let lv = splat4(*light);
+                for (l, &lv) in lights32.iter().enumerate() {
                     let (pa, na) = plane(&a, &b, &lv, &o).sign_bits();
                     let (pb, nb) = plane(&b, &o, &lv, &a).sign_bits();
                     let (pc, nc) = plane(&o, &a, &lv, &b).sign_bits();
@@ -213,8 +222,7 @@ pub(crate) fn tri_signs<Lv: Level>(
             }
             Accuracy::Exact => {
                 let (a, b, o) = (widen3::<Lv>(&a), widen3::<Lv>(&b), widen3::<Lv>(&o));
-                for (l, light) in lights.iter().enumerate() {
-                    let lv: [Lv::D; 4] = std::array::from_fn(|c| Lv::D::splat(f64::from(light[c])));
+                for (l, (light, &lv)) in lights.iter().zip(&lights64).enumerate() {
                     let (p_lo, n_lo, u_lo) = filter_f64(a.0, b.0, lv, o.0);
                     let (p_hi, n_hi, u_hi) = filter_f64(a.1, b.1, lv, o.1);
                     let (mut pos, mut neg) = (p_lo | p_hi << 4, n_lo | n_hi << 4);
@@ -238,7 +246,15 @@ pub(crate) fn tri_signs<Lv: Level>(
                             }
                         }
                     }
-                    write_signs(out, l, dst, pos & valid, neg & valid);
+                    if lights.len() == 1 {
+                        // One light: the 8 records (byte 0 = the sign) in one store.
+                        Lv::store_sign_records(
+                            sign_bytes(pos & valid, neg & valid),
+                            &mut out[0][dst * PACK..(dst + LANES) * PACK],
+                        );
+                    } else {
+                        write_signs(out, l, dst, pos & valid, neg & valid);
+                    }
                 }
             }
         }
@@ -283,6 +299,16 @@ fn push_nonzero(sil: &mut Vec<u32>, m: &[i32; LANES], base: usize) {
                 sil.push((base + i) as u32);
             }
         }
+    }
+}
+
+/// Pushes `base + i` for the set bits `i` of `bits`.
+#[inline(always)]
+fn push_bits(sil: &mut Vec<u32>, mut bits: u32, base: usize) {
+    while bits != 0 {
+        let i = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        sil.push((base + i) as u32);
     }
 }
 
@@ -395,6 +421,58 @@ pub(crate) unsafe fn edge_sums_avx2(
         .all(|&b| b + lay.tri_count * PACK <= signs.len()));
     assert!(bases.len() == out.len().div_ceil(PACK));
     let mask = _mm256_set1_epi32(!ODD as i32);
+    if let ([base], [out0], [sil0]) = (bases, &mut *out, &mut *sil) {
+        // One light (the common case): the loop below without the pack and lane loops, so the
+        // gathers of consecutive blocks overlap. Byte 0 of each record is the sign.
+        let b = _mm256_set1_epi32(*base as i32);
+        for blk in blocks.clone() {
+            let e0 = blk * LANES;
+            if !lay.block_fast[blk] {
+                let mut one = [&mut **out0];
+                edge_sums_general(
+                    lay,
+                    e0,
+                    signs,
+                    bases,
+                    &mut one,
+                    std::slice::from_mut(sil0),
+                    edge_base,
+                    e_start,
+                );
+                continue;
+            }
+            // SAFETY: fast blocks are full, so e0 + 8 <= tri_a.len() = tri_b.len(); every index
+            // is base + 4 * slot with slot < tri_count, inside `signs` (asserted above).
+            let (g1, g2, k1, k2) = unsafe {
+                let t1 = _mm256_loadu_si256(lay.tri_a[e0..e0 + LANES].as_ptr().cast());
+                let t2 = _mm256_loadu_si256(lay.tri_b[e0..e0 + LANES].as_ptr().cast());
+                let i1 = _mm256_add_epi32(b, _mm256_slli_epi32::<2>(_mm256_and_si256(t1, mask)));
+                let i2 = _mm256_add_epi32(b, _mm256_slli_epi32::<2>(_mm256_and_si256(t2, mask)));
+                let p = signs.as_ptr().cast::<i32>();
+                (
+                    _mm256_i32gather_epi32::<1>(p, i1),
+                    _mm256_i32gather_epi32::<1>(p, i2),
+                    _mm256_srai_epi32::<31>(t1),
+                    _mm256_srai_epi32::<31>(t2),
+                )
+            };
+            let s1 = _mm256_srai_epi32::<24>(_mm256_slli_epi32::<24>(g1));
+            let s2 = _mm256_srai_epi32::<24>(_mm256_slli_epi32::<24>(g2));
+            let s1 = _mm256_sub_epi32(_mm256_xor_si256(s1, k1), k1);
+            let s2 = _mm256_sub_epi32(_mm256_xor_si256(s2, k2), k2);
+            let m = _mm256_add_epi32(s1, s2);
+            let dst = &mut out0[e0 - e_start..e0 - e_start + LANES];
+            // SAFETY: `dst` holds 8 i32 (written once, not read back here).
+            unsafe { crate::lanes::stream_i32x8(dst.as_mut_ptr().cast(), m) };
+            let zero = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                m,
+                _mm256_setzero_si256(),
+            ))) as u32;
+            push_bits(sil0, !zero & 0xFF, edge_base + e0);
+        }
+        _mm_sfence();
+        return;
+    }
     for blk in blocks {
         let e0 = blk * LANES;
         if lay.block_fast[blk] {
@@ -432,7 +510,9 @@ pub(crate) unsafe fn edge_sums_avx2(
                     let s2 = _mm256_sub_epi32(_mm256_xor_si256(s2, k2), k2);
                     let m = _mm256_add_epi32(s1, s2);
                     let dst = &mut out[l][e0 - e_start..e0 - e_start + LANES];
-                    // SAFETY: `dst` holds 8 i32; unaligned store.
+                    // SAFETY: `dst` holds 8 i32; unaligned store. (Not a streaming store: with
+                    // several lights' rows, half a cache line each per block, those thrash the
+                    // write-combining buffers.)
                     unsafe { _mm256_storeu_si256(dst.as_mut_ptr().cast(), m) };
                     let zero = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
                         m,
@@ -452,6 +532,9 @@ pub(crate) unsafe fn edge_sums_avx2(
             edge_sums_general(lay, e0, signs, bases, out, sil, edge_base, e_start);
         }
     }
+    // The streaming stores above are weakly ordered: make them visible before the caller
+    // (another thread, after rayon's join) reads the output.
+    _mm_sfence();
 }
 
 /// `original` mode for the edges in `blocks`: per (edge, OV) `sign_f32(A, B, L, O)`, 8 edges per
@@ -465,6 +548,10 @@ pub(crate) fn edge_original<Lv: Level>(
     sil: &mut [Vec<u32>],
     edge_base: usize,
 ) {
+    if let ([light], [out0], [sil0]) = (lights, &mut *out, &mut *sil) {
+        edge_original_one::<Lv>(lay, blocks, *light, out0, sil0, edge_base);
+        return;
+    }
     let e_start = blocks.start * LANES;
     for blk in blocks {
         let e0 = blk * LANES;
@@ -474,37 +561,15 @@ pub(crate) fn edge_original<Lv: Level>(
                 |v: &[u32]| -> [u32; LANES] { v[e0..e0 + LANES].try_into().unwrap_or([0; LANES]) };
             let (ia, ib, i1, i2) = (idx(&lay.ea), idx(&lay.eb), idx(&lay.eo1), idx(&lay.eo2));
             // SAFETY: 8 ids each, all vertices of the layout (`Layout::build`).
-            let (a, b) = unsafe { (gather::<Lv>(lay, &ia), gather::<Lv>(lay, &ib)) };
+            let (a, b, o1, o2) = unsafe {
+                (
+                    gather::<Lv>(lay, &ia),
+                    gather::<Lv>(lay, &ib),
+                    gather::<Lv>(lay, &i1),
+                    gather::<Lv>(lay, &i2),
+                )
+            };
             let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-            if let [light] = lights {
-                // One light (the common case): the same operations, ordered so that fewer
-                // vectors are live at once (the OVs are loaded only once N and N·A exist), which
-                // spares the register spills of the general loop below.
-                let lv = splat4::<Lv::F>(*light);
-                let v = [
-                    lv[0] - lv[3] * a[0],
-                    lv[1] - lv[3] * a[1],
-                    lv[2] - lv[3] * a[2],
-                ];
-                let n = [
-                    e[1] * v[2] - e[2] * v[1],
-                    e[2] * v[0] - e[0] * v[2],
-                    e[0] * v[1] - e[1] * v[0],
-                ];
-                let na = (n[0] * a[0] + n[1] * a[1]) + n[2] * a[2];
-                // SAFETY: as above.
-                let o1 = unsafe { gather::<Lv>(lay, &i1) };
-                let d1 = ((n[0] * o1[0] + n[1] * o1[1]) + n[2] * o1[2]) - na;
-                // SAFETY: as above.
-                let o2 = unsafe { gather::<Lv>(lay, &i2) };
-                let d2 = ((n[0] * o2[0] + n[1] * o2[1]) + n[2] * o2[2]) - na;
-                let m = (d1.signum0() + d2.signum0()).to_i32();
-                out[0][e0 - e_start..e0 - e_start + LANES].copy_from_slice(&m);
-                push_nonzero(&mut sil[0], &m, edge_base + e0);
-                continue;
-            }
-            // SAFETY: as above.
-            let (o1, o2) = unsafe { (gather::<Lv>(lay, &i1), gather::<Lv>(lay, &i2)) };
             for (l, light) in lights.iter().enumerate() {
                 let lv = splat4::<Lv::F>(*light);
                 // The operations of `sign_f32`, with V, A - B, N and N·A shared by both OVs.
@@ -543,6 +608,76 @@ pub(crate) fn edge_original<Lv: Level>(
             }
         }
     }
+}
+
+/// [`edge_original`] for one light (the common case): the same operations as the general
+/// loop, ordered so that fewer vectors are live at once (the OVs are loaded only once `N` and
+/// `N·A` exist, which spares the general loop's register spills), with the light's lanes made
+/// once and the output written with streaming stores (one output row, written once).
+#[inline(always)]
+fn edge_original_one<Lv: Level>(
+    lay: &Layout,
+    blocks: Range<usize>,
+    light: [f32; 4],
+    out: &mut [i32],
+    sil: &mut Vec<u32>,
+    edge_base: usize,
+) {
+    let e_start = blocks.start * LANES;
+    let lv = splat4::<Lv::F>(light);
+    for blk in blocks {
+        let e0 = blk * LANES;
+        if !lay.block_fast[blk] {
+            for e in e0..(e0 + LANES).min(lay.edge_count) {
+                let [a, b] = lay.edges[e];
+                let (pa, pb) = (lay.pos(a), lay.pos(b));
+                let ovs = &lay.ovs[lay.ov_offsets[e] as usize..lay.ov_offsets[e + 1] as usize];
+                let m: i32 = ovs
+                    .iter()
+                    .map(|&o| i32::from(sign_f32(pa, pb, light, lay.pos(o))))
+                    .sum();
+                out[e - e_start] = m;
+                if m != 0 {
+                    sil.push((edge_base + e) as u32);
+                }
+            }
+            continue;
+        }
+        // Fast blocks are full: e0 + 8 <= edge_count = ea.len() (and eb, eo1, eo2).
+        let idx =
+            |v: &[u32]| -> [u32; LANES] { v[e0..e0 + LANES].try_into().unwrap_or([0; LANES]) };
+        // SAFETY: 8 ids each, all vertices of the layout (`Layout::build`).
+        let (a, b) = unsafe {
+            (
+                gather::<Lv>(lay, &idx(&lay.ea)),
+                gather::<Lv>(lay, &idx(&lay.eb)),
+            )
+        };
+        let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let v = [
+            lv[0] - lv[3] * a[0],
+            lv[1] - lv[3] * a[1],
+            lv[2] - lv[3] * a[2],
+        ];
+        let n = [
+            e[1] * v[2] - e[2] * v[1],
+            e[2] * v[0] - e[0] * v[2],
+            e[0] * v[1] - e[1] * v[0],
+        ];
+        let na = (n[0] * a[0] + n[1] * a[1]) + n[2] * a[2];
+        // SAFETY: as above.
+        let o1 = unsafe { gather::<Lv>(lay, &idx(&lay.eo1)) };
+        let d1 = ((n[0] * o1[0] + n[1] * o1[1]) + n[2] * o1[2]) - na;
+        // SAFETY: as above.
+        let o2 = unsafe { gather::<Lv>(lay, &idx(&lay.eo2)) };
+        let d2 = ((n[0] * o2[0] + n[1] * o2[1]) + n[2] * o2[2]) - na;
+        let nz =
+            (d1.signum0() + d2.signum0()).store_i32(&mut out[e0 - e_start..e0 - e_start + LANES]);
+        push_bits(sil, nz, edge_base + e0);
+    }
+    // Streaming stores (`store_i32`) are weakly ordered: make them visible before the caller
+    // (another thread, after rayon's join) reads the output.
+    Lv::store_fence();
 }
 
 #[cfg(test)]

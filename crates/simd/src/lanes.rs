@@ -32,6 +32,19 @@ pub(crate) trait F32V:
     fn signum0(self) -> Self;
     /// Truncates to integers (the lanes are small exact integers here).
     fn to_i32(self) -> [i32; 8];
+    /// Truncates to integers, writes them to `dst[..8]` (a streaming store that bypasses the
+    /// caches where the level has one and `dst` is suitably aligned: results are written once
+    /// and not read back by the kernel) and returns the bits of the non-zero lanes.
+    ///
+    /// # Panics
+    /// If `dst.len() < 8`.
+    fn store_i32(self, dst: &mut [i32]) -> u32 {
+        let m = self.to_i32();
+        dst[..8].copy_from_slice(&m);
+        m.iter()
+            .enumerate()
+            .fold(0, |bits, (i, &x)| bits | u32::from(x != 0) << i)
+    }
 }
 
 /// Four `f64` lanes.
@@ -63,6 +76,19 @@ pub(crate) trait Level {
     /// # Safety
     /// `idx` has at least 8 entries, each `< pos.len()`.
     unsafe fn gather_xyz(pos: &[[f32; 4]], idx: &[u32]) -> [Self::F; 3];
+    /// Writes 8 sign bytes as 8 four-byte records (`dst[4 i]` = `bytes[i]`, the other three bytes
+    /// of each record its sign extension), the layout of a one-light sign pack.
+    ///
+    /// # Panics
+    /// If `dst.len() < 32`.
+    fn store_sign_records(bytes: [u8; 8], dst: &mut [i8]) {
+        for (record, b) in dst[..32].chunks_exact_mut(4).zip(bytes) {
+            record.copy_from_slice(&i32::from(b as i8).to_le_bytes().map(|x| x as i8));
+        }
+    }
+    /// Orders this thread's earlier streaming stores ([`F32V::store_i32`]) before its later
+    /// stores, as `_mm_sfence` does; a no-op where the level has no streaming stores.
+    fn store_fence() {}
 }
 
 /// The `wide` crate at the compile-time target level.
@@ -148,7 +174,7 @@ impl F64V for wide::f64x4 {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub(crate) use avx2::Avx2;
+pub(crate) use avx2::{stream_i32x8, Avx2};
 
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
@@ -166,9 +192,48 @@ mod avx2 {
     /// AVX2 level (256-bit `f32` and `f64` lanes).
     pub(crate) struct Avx2;
 
+    /// Stores 8 `i32` at `p` with a streaming (non-temporal) store where `p` is 32- or 16-byte
+    /// aligned (large allocations are often only 16-byte aligned: then two 16-byte halves),
+    /// otherwise with an ordinary unaligned store. The caller orders streaming stores with
+    /// `_mm_sfence` before the data is read by another thread.
+    ///
+    /// # Safety
+    /// `p` points to 32 writable bytes; AVX2 present (module docs).
+    #[inline(always)]
+    pub(crate) unsafe fn stream_i32x8(p: *mut __m256i, m: __m256i) {
+        // SAFETY: forwarded from the caller; each streaming store only on an address aligned
+        // as it requires.
+        unsafe {
+            if p.align_offset(32) == 0 {
+                _mm256_stream_si256(p, m);
+            } else if p.align_offset(16) == 0 {
+                let q = p.cast::<__m128i>();
+                _mm_stream_si128(q, _mm256_castsi256_si128(m));
+                _mm_stream_si128(q.add(1), _mm256_extracti128_si256::<1>(m));
+            } else {
+                _mm256_storeu_si256(p, m);
+            }
+        }
+    }
+
     impl Level for Avx2 {
         type F = F8;
         type D = D4;
+        #[inline(always)]
+        fn store_sign_records(bytes: [u8; 8], dst: &mut [i8]) {
+            let dst = &mut dst[..32];
+            // SAFETY: `dst` holds 32 bytes (checked above); unaligned load/store; AVX2 present
+            // (module docs).
+            unsafe {
+                let v = _mm_loadl_epi64(bytes.as_ptr().cast());
+                _mm256_storeu_si256(dst.as_mut_ptr().cast(), _mm256_cvtepi8_epi32(v));
+            }
+        }
+        #[inline(always)]
+        fn store_fence() {
+            // SAFETY: SSE is part of x86-64.
+            unsafe { _mm_sfence() }
+        }
         #[inline(always)]
         fn widen(f: F8) -> (D4, D4) {
             // SAFETY: see the module documentation. f32 -> f64 is exact.
@@ -269,6 +334,19 @@ mod avx2 {
                 let gt = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(self.0, z), one);
                 let lt = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(self.0, z), one);
                 F8(_mm256_sub_ps(gt, lt))
+            }
+        }
+        #[inline(always)]
+        fn store_i32(self, dst: &mut [i32]) -> u32 {
+            let dst = &mut dst[..8];
+            // SAFETY: `dst` holds 8 i32 (checked above); streaming stores are used only on
+            // addresses aligned as they require (32 or 16 bytes); AVX2 present (module docs).
+            unsafe {
+                let m = _mm256_cvttps_epi32(self.0);
+                let p = dst.as_mut_ptr().cast::<__m256i>();
+                stream_i32x8(p, m);
+                let zero = _mm256_cmpeq_epi32(m, _mm256_setzero_si256());
+                !(_mm256_movemask_ps(_mm256_castsi256_ps(zero)) as u32) & 0xFF
             }
         }
         #[inline(always)]
