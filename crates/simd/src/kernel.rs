@@ -142,15 +142,13 @@ pub(crate) fn tri_signs<Lv: Level>(
             && out.len() == lights.len().div_ceil(PACK)
             && out.iter().all(|o| o.len() == blocks.len() * LANES * PACK)
     );
-    // The lights' lanes, made once per call rather than once per block.
-    let lights32: Vec<[Lv::F; 4]> = lights.iter().map(|l| splat4::<Lv::F>(*l)).collect();
-    let lights64: Vec<[Lv::D; 4]> = if mode == Accuracy::Exact {
-        lights
-            .iter()
-            .map(|light| std::array::from_fn(|c| Lv::D::splat(f64::from(light[c]))))
-            .collect()
-    } else {
-        Vec::new()
+    // One light: its lanes made once per call rather than once per block (no allocation).
+    let one32 = lights.first().map(|l| splat4::<Lv::F>(*l));
+    let one64: Option<[Lv::D; 4]> = match lights {
+        [light] if mode == Accuracy::Exact => {
+            Some(std::array::from_fn(|c| Lv::D::splat(f64::from(light[c]))))
+        }
+        _ => None,
     };
     for blk in blocks {
         let t = blk * LANES;
@@ -160,7 +158,9 @@ pub(crate) fn tri_signs<Lv: Level>(
             (1u32 << (lay.tri_count - t)) - 1
         };
         let dst = (blk - b0) * LANES;
-        if let ([_], Accuracy::Ordered | Accuracy::Original, 0xFF) = (lights, mode, valid) {
+        if let ([_], Accuracy::Ordered | Accuracy::Original, 0xFF, Some(lv)) =
+            (lights, mode, valid, one32)
+        {
             // One light, a full block (the common case): `plane`'s operations with fewer vectors
             // live (O is loaded once N and N·A exist), and the signs stored as one vector of
             // `i32` records: byte 0 of each 4-byte record is the sign, the other three bytes
@@ -172,7 +172,6 @@ pub(crate) fn tri_signs<Lv: Level>(
                     gather::<Lv>(lay, &lay.t1[t..]),
                 )
             };
-            let lv = lights32[0];
             let v = [
                 lv[0] - lv[3] * a[0],
                 lv[1] - lv[3] * a[1],
@@ -207,13 +206,14 @@ pub(crate) fn tri_signs<Lv: Level>(
         };
         match mode {
             Accuracy::Ordered | Accuracy::Original => {
-                for (l, lv) in lights32.iter().enumerate() {
-                    let (pos, neg) = plane(&a, &b, lv, &o).sign_bits();
+                for (l, light) in lights.iter().enumerate() {
+                    let (pos, neg) = plane(&a, &b, &splat4(*light), &o).sign_bits();
                     write_signs(out, l, dst, pos & valid, neg & valid);
                 }
             }
             Accuracy::Robust => {
-                for (l, &lv) in lights32.iter().enumerate() {
+                for (l, light) in lights.iter().enumerate() {
+                    let lv = splat4(*light);
                     let (pa, na) = plane(&a, &b, &lv, &o).sign_bits();
                     let (pb, nb) = plane(&b, &o, &lv, &a).sign_bits();
                     let (pc, nc) = plane(&o, &a, &lv, &b).sign_bits();
@@ -222,7 +222,10 @@ pub(crate) fn tri_signs<Lv: Level>(
             }
             Accuracy::Exact => {
                 let (a, b, o) = (widen3::<Lv>(&a), widen3::<Lv>(&b), widen3::<Lv>(&o));
-                for (l, (light, &lv)) in lights.iter().zip(&lights64).enumerate() {
+                for (l, light) in lights.iter().enumerate() {
+                    let lv: [Lv::D; 4] = one64.unwrap_or_else(|| {
+                        std::array::from_fn(|c| Lv::D::splat(f64::from(light[c])))
+                    });
                     let (p_lo, n_lo, u_lo) = filter_f64(a.0, b.0, lv, o.0);
                     let (p_hi, n_hi, u_hi) = filter_f64(a.1, b.1, lv, o.1);
                     let (mut pos, mut neg) = (p_lo | p_hi << 4, n_lo | n_hi << 4);
