@@ -57,13 +57,15 @@ struct Host {
     cores: usize,
     os: &'static str,
     arch: &'static str,
-    /// `rustc -V` of the toolchain found at run time (the build's own is not recorded by cargo).
+    /// `rustc -V` of the compiler that built this binary (recorded by `build.rs`).
     rustc: String,
     /// Target features enabled at compile time (`-C target-cpu` / `-C target-feature`).
     compile_target_features: Vec<&'static str>,
-    /// `RUSTFLAGS` in the environment of this run (informational).
+    /// The `RUSTFLAGS` this binary was built with (`null` for none; recorded by `build.rs`).
     rustflags: Option<String>,
     profile: &'static str,
+    /// The git revision of the checkout this binary was built from (`build.rs`; `unknown`
+    /// outside a git checkout).
     git_rev: String,
 }
 
@@ -161,15 +163,6 @@ fn host() -> Host {
                 .map(|s| s.trim().to_owned())
         })
         .unwrap_or_else(|| "unknown".to_owned());
-    let run = |cmd: &str, args: &[&str]| {
-        std::process::Command::new(cmd)
-            .args(args)
-            .output()
-            .ok()
-            .filter(|o| o.status.success())
-            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned())
-            .unwrap_or_else(|| "unknown".to_owned())
-    };
     let mut features = Vec::new();
     macro_rules! feature {
         ($($f:literal),*) => { $( if cfg!(target_feature = $f) { features.push($f); } )* };
@@ -180,15 +173,17 @@ fn host() -> Host {
         cores: std::thread::available_parallelism().map_or(1, std::num::NonZero::get),
         os: std::env::consts::OS,
         arch: std::env::consts::ARCH,
-        rustc: run("rustc", &["-V"]),
+        rustc: env!("SHADOWVOL_BUILD_RUSTC").to_owned(),
         compile_target_features: features,
-        rustflags: std::env::var("RUSTFLAGS").ok(),
+        rustflags: Some(env!("SHADOWVOL_BUILD_RUSTFLAGS"))
+            .filter(|f| !f.is_empty())
+            .map(str::to_owned),
         profile: if cfg!(debug_assertions) {
             "debug"
         } else {
             "release"
         },
-        git_rev: run("git", &["rev-parse", "--short=12", "HEAD"]),
+        git_rev: env!("SHADOWVOL_BUILD_GIT_REV").to_owned(),
     }
 }
 
