@@ -55,16 +55,28 @@ fn splat4<F: F32V>(l: [f32; 4]) -> [F; 4] {
 /// [`sign_f32`]; its sign is `sign_f32(A, B, L, O)` in every lane.
 #[inline(always)]
 fn plane<F: F32V>(a: &[F; 3], b: &[F; 3], l: &[F; 4], o: &[F; 3]) -> F {
-    let v = [l[0] - l[3] * a[0], l[1] - l[3] * a[1], l[2] - l[3] * a[2]];
     let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let (n, na) = edge_plane(l, a, &e);
+    let no = (n[0] * o[0] + n[1] * o[1]) + n[2] * o[2];
+    no - na
+}
+
+/// `N = (A − B) × V` with `V = L.xyz − L.w·A`, and `N·A`, given `E = A − B`: the first
+/// operations of [`sign_f32`], in its order (shared by both OVs of an edge in `original`).
+#[inline(always)]
+fn edge_plane<F: F32V>(lv: &[F; 4], a: &[F; 3], e: &[F; 3]) -> ([F; 3], F) {
+    let v = [
+        lv[0] - lv[3] * a[0],
+        lv[1] - lv[3] * a[1],
+        lv[2] - lv[3] * a[2],
+    ];
     let n = [
         e[1] * v[2] - e[2] * v[1],
         e[2] * v[0] - e[0] * v[2],
         e[0] * v[1] - e[1] * v[0],
     ];
-    let no = (n[0] * o[0] + n[1] * o[1]) + n[2] * o[2];
     let na = (n[0] * a[0] + n[1] * a[1]) + n[2] * a[2];
-    no - na
+    (n, na)
 }
 
 /// The certified `f64` filter of `orient_filter_f64`, four lanes at a time: the same formula,
@@ -172,18 +184,8 @@ pub(crate) fn tri_signs<Lv: Level>(
                     gather::<Lv>(lay, &lay.t1[t..]),
                 )
             };
-            let v = [
-                lv[0] - lv[3] * a[0],
-                lv[1] - lv[3] * a[1],
-                lv[2] - lv[3] * a[2],
-            ];
             let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-            let n = [
-                e[1] * v[2] - e[2] * v[1],
-                e[2] * v[0] - e[0] * v[2],
-                e[0] * v[1] - e[1] * v[0],
-            ];
-            let na = (n[0] * a[0] + n[1] * a[1]) + n[2] * a[2];
+            let (n, na) = edge_plane(&lv, &a, &e);
             // SAFETY: as below.
             let o = unsafe { gather::<Lv>(lay, &lay.t2[t..]) };
             let no = (n[0] * o[0] + n[1] * o[1]) + n[2] * o[2];
@@ -576,17 +578,7 @@ pub(crate) fn edge_original<Lv: Level>(
             for (l, light) in lights.iter().enumerate() {
                 let lv = splat4::<Lv::F>(*light);
                 // The operations of `sign_f32`, with V, A - B, N and N·A shared by both OVs.
-                let v = [
-                    lv[0] - lv[3] * a[0],
-                    lv[1] - lv[3] * a[1],
-                    lv[2] - lv[3] * a[2],
-                ];
-                let n = [
-                    e[1] * v[2] - e[2] * v[1],
-                    e[2] * v[0] - e[0] * v[2],
-                    e[0] * v[1] - e[1] * v[0],
-                ];
-                let na = (n[0] * a[0] + n[1] * a[1]) + n[2] * a[2];
+                let (n, na) = edge_plane(&lv, &a, &e);
                 let d1 = ((n[0] * o1[0] + n[1] * o1[1]) + n[2] * o1[2]) - na;
                 let d2 = ((n[0] * o2[0] + n[1] * o2[1]) + n[2] * o2[2]) - na;
                 let m = (d1.signum0() + d2.signum0()).to_i32();
@@ -657,17 +649,7 @@ fn edge_original_one<Lv: Level>(
             )
         };
         let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-        let v = [
-            lv[0] - lv[3] * a[0],
-            lv[1] - lv[3] * a[1],
-            lv[2] - lv[3] * a[2],
-        ];
-        let n = [
-            e[1] * v[2] - e[2] * v[1],
-            e[2] * v[0] - e[0] * v[2],
-            e[0] * v[1] - e[1] * v[0],
-        ];
-        let na = (n[0] * a[0] + n[1] * a[1]) + n[2] * a[2];
+        let (n, na) = edge_plane(&lv, &a, &e);
         // SAFETY: as above.
         let o1 = unsafe { gather::<Lv>(lay, &idx(&lay.eo1)) };
         let d1 = ((n[0] * o1[0] + n[1] * o1[1]) + n[2] * o1[2]) - na;
