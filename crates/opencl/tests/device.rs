@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::all_cases;
+use common::{all_cases, in_ci, start};
 use shadowvol_cpu::CpuBackend;
 use shadowvol_opencl::twin::TwinBackend;
 use shadowvol_opencl::{
@@ -15,24 +15,6 @@ use shadowvol_silhouette::{
     extract_once, invariant, Accuracy, BackendError, Light, Multiplicities, PreparedId,
     SilhouetteBackend,
 };
-
-fn in_ci() -> bool {
-    std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true") || v == "1")
-}
-
-/// Starts the backend with `options`, or skips (visibly) when OpenCL is unavailable here.
-fn start(options: OpenClOptions, test: &str) -> Option<OpenClBackend> {
-    match OpenClBackend::with_options(options) {
-        Ok(b) => Some(b),
-        Err(e @ BackendError::Unavailable { .. }) => {
-            assert!(!in_ci(), "CI=true but OpenCL is unavailable: {e}");
-            eprintln!("SKIPPED {test}: {e}");
-            println!("SKIPPED {test}: {e}");
-            None
-        }
-        Err(e) => panic!("{test}: the OpenCL backend failed to start: {e}"),
-    }
-}
 
 fn options(force_f32_filter: bool) -> OpenClOptions {
     OpenClOptions {
