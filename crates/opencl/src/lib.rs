@@ -76,8 +76,9 @@ use opencl3::program::Program;
 use opencl3::types::{cl_mem_flags, CL_NON_BLOCKING};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
-    check_lights, gpu_wait_limit, object_lights, BackendError, BackendInfo, ExtractStats,
-    Multiplicities, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene, GPU_TIMEOUT_ENV,
+    check_lights, describe_gpu_wait_limit, gpu_wait_limit, object_lights, BackendError,
+    BackendInfo, ExtractStats, Multiplicities, PreparedId, PreparedScenes, SilhouetteBackend,
+    TopologyScene, GPU_TIMEOUT_ENV,
 };
 use std::any::Any;
 use std::mem::ManuallyDrop;
@@ -269,11 +270,6 @@ fn device_error(what: &str, e: ClError) -> BackendError {
 /// [`BackendError::InvalidInput`].
 fn wait_limit() -> Result<Duration, BackendError> {
     gpu_wait_limit().map_err(BackendError::InvalidInput)
-}
-
-/// Seconds for messages: `600`, `0.5`, `0.000001`.
-fn seconds(d: Duration) -> String {
-    format!("{}", d.as_secs_f64())
 }
 
 /// Starts the `opencl` backend with [`OpenClOptions::from_env`].
@@ -668,12 +664,10 @@ impl OpenClBackend {
                     return Err(BackendError::Device {
                         backend: BACKEND,
                         message: format!(
-                            "the device did not finish {what} within {} s, the limit set by \
-                             {GPU_TIMEOUT_ENV} (seconds, default {} s); raise it for larger \
-                             scenes or slower devices. The next extract on this backend first \
+                            "the device did not finish {what} within {}; raise \
+                             {GPU_TIMEOUT_ENV} for larger scenes or slower devices. The next extract on this backend first \
                              waits (as long again) for the unfinished work",
-                            seconds(limit),
-                            seconds(shadowvol_silhouette::DEFAULT_GPU_TIMEOUT),
+                            describe_gpu_wait_limit(limit),
                         ),
                     })
                 }
@@ -710,10 +704,9 @@ impl OpenClBackend {
                 backend: BACKEND,
                 message: format!(
                     "the device has still not finished {} left by an earlier extract that timed \
-                     out, after another {} s (the limit set by {GPU_TIMEOUT_ENV}); this backend \
-                     runs no new work until it does",
+                     out, within another {}; this backend runs no new work until it does",
                     p.what,
-                    seconds(limit)
+                    describe_gpu_wait_limit(limit)
                 ),
             }),
         }

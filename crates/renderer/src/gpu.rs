@@ -725,10 +725,8 @@ impl Gpu {
             })
             .map_err(|e| match e {
                 wgpu::PollError::Timeout => RenderError::Device(format!(
-                    "the device did not finish the frame within {:.3} s (the limit is {}, default {} s)",
-                    limit.as_secs_f64(),
-                    shadowvol_silhouette::GPU_TIMEOUT_ENV,
-                    shadowvol_silhouette::DEFAULT_GPU_TIMEOUT.as_secs()
+                    "the device did not finish the frame within {}",
+                    shadowvol_silhouette::describe_gpu_wait_limit(limit)
                 )),
                 other => RenderError::Device(format!("poll: {other}")),
             })?;

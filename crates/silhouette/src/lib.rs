@@ -38,7 +38,7 @@ pub use multiplicities::{ExtractStats, Multiplicities};
 pub use prepared::{check_lights, PreparedScenes};
 pub use scene::{object_lights, SceneObject, TopologyScene};
 pub use shadowvol_robust_math::{Accuracy, Light};
-pub use wait::{gpu_wait_limit, DEFAULT_GPU_TIMEOUT, GPU_TIMEOUT_ENV};
+pub use wait::{describe_gpu_wait_limit, gpu_wait_limit, DEFAULT_GPU_TIMEOUT, GPU_TIMEOUT_ENV};
 
 use std::time::Duration;
 

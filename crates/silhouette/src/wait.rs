@@ -32,6 +32,18 @@ pub fn gpu_wait_limit() -> Result<Duration, String> {
     }
 }
 
+/// `limit` as error messages state it after "within": `"<seconds> s (the limit set by
+/// SHADOWVOL_GPU_TIMEOUT, in seconds; default 600 s)"`, the seconds in full (`0.000001`, not
+/// rounded to `0.000`), so every backend words a timeout the same way.
+#[must_use]
+pub fn describe_gpu_wait_limit(limit: Duration) -> String {
+    format!(
+        "{} s (the limit set by {GPU_TIMEOUT_ENV}, in seconds; default {} s)",
+        limit.as_secs_f64(),
+        DEFAULT_GPU_TIMEOUT.as_secs()
+    )
+}
+
 fn parse_limit(v: &str) -> Result<Duration, String> {
     match v.trim().parse::<f64>() {
         Ok(s) if s.is_finite() && s > 0.0 && s <= 1e9 => Ok(Duration::from_secs_f64(s)),
@@ -45,6 +57,16 @@ fn parse_limit(v: &str) -> Result<Duration, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_limit_is_described_in_full_with_its_variable() {
+        let d = describe_gpu_wait_limit(Duration::from_micros(1));
+        assert!(
+            d.starts_with("0.000001 s") && d.contains(GPU_TIMEOUT_ENV),
+            "{d}"
+        );
+        assert!(describe_gpu_wait_limit(DEFAULT_GPU_TIMEOUT).starts_with("600 s"));
+    }
 
     #[test]
     fn parses_seconds_and_refuses_nonsense() {

@@ -2,7 +2,9 @@
 //! device, one graphics queue, host-visible buffers.
 
 use ash::vk;
-use shadowvol_silhouette::{gpu_wait_limit, BackendError, DEFAULT_GPU_TIMEOUT, GPU_TIMEOUT_ENV};
+use shadowvol_silhouette::{
+    describe_gpu_wait_limit, gpu_wait_limit, BackendError, DEFAULT_GPU_TIMEOUT, GPU_TIMEOUT_ENV,
+};
 use std::ffi::{c_void, CStr, CString};
 use std::num::NonZeroUsize;
 use std::sync::atomic::{AtomicU8, Ordering};
@@ -76,11 +78,10 @@ fn timeout_err(limit: Duration) -> BackendError {
     BackendError::Device {
         backend: BACKEND,
         message: format!(
-            "the device did not finish within {} s (the limit set by {GPU_TIMEOUT_ENV}, default \
-             {} s); the work is still pending, so this backend refuses new work until it \
-             finishes (raise {GPU_TIMEOUT_ENV} for scenes this large on a slow device)",
-            limit.as_secs_f64(),
-            DEFAULT_GPU_TIMEOUT.as_secs()
+            "the device did not finish within {}; the work is still pending, so this backend \
+             refuses new work until it finishes (raise {GPU_TIMEOUT_ENV} for scenes this large \
+             on a slow device)",
+            describe_gpu_wait_limit(limit)
         ),
     }
 }
@@ -371,10 +372,9 @@ impl Context {
                 backend: BACKEND,
                 message: format!(
                     "an earlier submission that timed out is still running on the device (it \
-                     has not finished within another {} s, the limit set by {GPU_TIMEOUT_ENV}); \
-                     this backend cannot run anything until it does: retry later, or drop the \
-                     backend and start a new one",
-                    limit.as_secs_f64()
+                     has not finished within another {}); this backend cannot run anything until \
+                     it does: retry later, or drop the backend and start a new one",
+                    describe_gpu_wait_limit(limit)
                 ),
             }),
             Err(e) => Err(device_err(

@@ -24,10 +24,8 @@ fn wait_limit() -> Result<Duration, BackendError> {
 fn wait_error(what: &str, e: &wgpu::PollError, limit: Duration) -> BackendError {
     match e {
         wgpu::PollError::Timeout => device_error(format!(
-            "{what}: the device did not finish within {:.3} s (the limit is {}, default {} s)",
-            limit.as_secs_f64(),
-            shadowvol_silhouette::GPU_TIMEOUT_ENV,
-            shadowvol_silhouette::DEFAULT_GPU_TIMEOUT.as_secs()
+            "{what}: the device did not finish within {}",
+            shadowvol_silhouette::describe_gpu_wait_limit(limit)
         )),
         other => device_error(format!("{what}: {other}")),
     }
