@@ -155,7 +155,10 @@ pub(crate) fn tri_signs<Lv: Level>(
             && out.iter().all(|o| o.len() == blocks.len() * LANES * PACK)
     );
     // One light: its lanes made once per call rather than once per block (no allocation).
-    let one32 = lights.first().map(|l| splat4::<Lv::F>(*l));
+    let one32 = match lights {
+        [light] => Some(splat4::<Lv::F>(*light)),
+        _ => None,
+    };
     let one64: Option<[Lv::D; 4]> = match lights {
         [light] if mode == Accuracy::Exact => {
             Some(std::array::from_fn(|c| Lv::D::splat(f64::from(light[c]))))
@@ -170,9 +173,7 @@ pub(crate) fn tri_signs<Lv: Level>(
             (1u32 << (lay.tri_count - t)) - 1
         };
         let dst = (blk - b0) * LANES;
-        if let ([_], Accuracy::Ordered | Accuracy::Original, 0xFF, Some(lv)) =
-            (lights, mode, valid, one32)
-        {
+        if let (Accuracy::Ordered | Accuracy::Original, 0xFF, Some(lv)) = (mode, valid, one32) {
             // One light, a full block (the common case): `plane`'s operations with fewer vectors
             // live (O is loaded once N and N·A exist), and the signs stored as one vector of
             // `i32` records: byte 0 of each 4-byte record is the sign, the other three bytes
@@ -251,15 +252,7 @@ pub(crate) fn tri_signs<Lv: Level>(
                             }
                         }
                     }
-                    if lights.len() == 1 {
-                        // One light: the 8 records (byte 0 = the sign) in one store.
-                        Lv::store_sign_records(
-                            sign_bytes(pos & valid, neg & valid),
-                            &mut out[0][dst * PACK..(dst + LANES) * PACK],
-                        );
-                    } else {
-                        write_signs(out, l, dst, pos & valid, neg & valid);
-                    }
+                    write_signs(out, l, dst, pos & valid, neg & valid);
                 }
             }
         }
@@ -523,14 +516,7 @@ pub(crate) unsafe fn edge_sums_avx2(
                         m,
                         _mm256_setzero_si256(),
                     ))) as u32;
-                    if zero != 0xFF {
-                        let mut nz = !zero & 0xFF;
-                        while nz != 0 {
-                            let i = nz.trailing_zeros() as usize;
-                            nz &= nz - 1;
-                            sil[l].push((edge_base + e0 + i) as u32);
-                        }
-                    }
+                    push_bits(&mut sil[l], !zero & 0xFF, edge_base + e0);
                 }
             }
         } else {
@@ -586,20 +572,35 @@ pub(crate) fn edge_original<Lv: Level>(
                 push_nonzero(&mut sil[l], &m, edge_base + e0);
             }
         } else {
-            for e in e0..(e0 + LANES).min(lay.edge_count) {
-                let [a, b] = lay.edges[e];
-                let (pa, pb) = (lay.pos(a), lay.pos(b));
-                let ovs = &lay.ovs[lay.ov_offsets[e] as usize..lay.ov_offsets[e + 1] as usize];
-                for (l, light) in lights.iter().enumerate() {
-                    let m: i32 = ovs
-                        .iter()
-                        .map(|&o| i32::from(sign_f32(pa, pb, *light, lay.pos(o))))
-                        .sum();
-                    out[l][e - e_start] = m;
-                    if m != 0 {
-                        sil[l].push((edge_base + e) as u32);
-                    }
-                }
+            original_general_block(lay, e0, lights, out, sil, edge_base, e_start);
+        }
+    }
+}
+
+/// `original` for the block starting at edge `e0` through the general (CSR) path, scalar: any
+/// number of OVs per edge. Output as in [`edge_original`].
+#[inline(always)]
+fn original_general_block(
+    lay: &Layout,
+    e0: usize,
+    lights: &[[f32; 4]],
+    out: &mut [&mut [i32]],
+    sil: &mut [Vec<u32>],
+    edge_base: usize,
+    e_start: usize,
+) {
+    for e in e0..(e0 + LANES).min(lay.edge_count) {
+        let [a, b] = lay.edges[e];
+        let (pa, pb) = (lay.pos(a), lay.pos(b));
+        let ovs = &lay.ovs[lay.ov_offsets[e] as usize..lay.ov_offsets[e + 1] as usize];
+        for (l, light) in lights.iter().enumerate() {
+            let m: i32 = ovs
+                .iter()
+                .map(|&o| i32::from(sign_f32(pa, pb, *light, lay.pos(o))))
+                .sum();
+            out[l][e - e_start] = m;
+            if m != 0 {
+                sil[l].push((edge_base + e) as u32);
             }
         }
     }
@@ -623,19 +624,15 @@ fn edge_original_one<Lv: Level>(
     for blk in blocks {
         let e0 = blk * LANES;
         if !lay.block_fast[blk] {
-            for e in e0..(e0 + LANES).min(lay.edge_count) {
-                let [a, b] = lay.edges[e];
-                let (pa, pb) = (lay.pos(a), lay.pos(b));
-                let ovs = &lay.ovs[lay.ov_offsets[e] as usize..lay.ov_offsets[e + 1] as usize];
-                let m: i32 = ovs
-                    .iter()
-                    .map(|&o| i32::from(sign_f32(pa, pb, light, lay.pos(o))))
-                    .sum();
-                out[e - e_start] = m;
-                if m != 0 {
-                    sil.push((edge_base + e) as u32);
-                }
-            }
+            original_general_block(
+                lay,
+                e0,
+                &[light],
+                &mut [&mut *out],
+                std::slice::from_mut(sil),
+                edge_base,
+                e_start,
+            );
             continue;
         }
         // Fast blocks are full: e0 + 8 <= edge_count = ea.len() (and eb, eo1, eo2).

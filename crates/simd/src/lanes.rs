@@ -76,16 +76,6 @@ pub(crate) trait Level {
     /// # Safety
     /// `idx` has at least 8 entries, each `< pos.len()`.
     unsafe fn gather_xyz(pos: &[[f32; 4]], idx: &[u32]) -> [Self::F; 3];
-    /// Writes 8 sign bytes as 8 four-byte records (`dst[4 i]` = `bytes[i]`, the other three bytes
-    /// of each record its sign extension), the layout of a one-light sign pack.
-    ///
-    /// # Panics
-    /// If `dst.len() < 32`.
-    fn store_sign_records(bytes: [u8; 8], dst: &mut [i8]) {
-        for (record, b) in dst[..32].chunks_exact_mut(4).zip(bytes) {
-            record.copy_from_slice(&i32::from(b as i8).to_le_bytes().map(|x| x as i8));
-        }
-    }
     /// Orders this thread's earlier streaming stores ([`F32V::store_i32`]) before its later
     /// stores, as `_mm_sfence` does; a no-op where the level has no streaming stores.
     fn store_fence() {}
@@ -219,16 +209,6 @@ mod avx2 {
     impl Level for Avx2 {
         type F = F8;
         type D = D4;
-        #[inline(always)]
-        fn store_sign_records(bytes: [u8; 8], dst: &mut [i8]) {
-            let dst = &mut dst[..32];
-            // SAFETY: `dst` holds 32 bytes (checked above); unaligned load/store; AVX2 present
-            // (module docs).
-            unsafe {
-                let v = _mm_loadl_epi64(bytes.as_ptr().cast());
-                _mm256_storeu_si256(dst.as_mut_ptr().cast(), _mm256_cvtepi8_epi32(v));
-            }
-        }
         #[inline(always)]
         fn store_fence() {
             // SAFETY: SSE is part of x86-64.
