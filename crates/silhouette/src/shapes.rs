@@ -224,8 +224,12 @@ pub(crate) fn cuboid_unwelded(lo: Vec3, hi: Vec3) -> Mesh {
 
 /// A `nu x nv`-quad grid on the plane `origin + i * du + j * dv`, each point computed in `f64`
 /// and rounded to `f32` (so a tilted plane is only nearly coplanar after rounding), plus an
-/// optional out-of-plane bump `h(i, j) * normal`.
-pub(crate) fn plane_grid(
+/// optional out-of-plane bump `h(i, j) * normal`. Vertex `(i, j)` is `j * (nu + 1) + i`; quads
+/// alternate their diagonal, so both directions occur.
+///
+/// `du` and `dv` must not be parallel: the normal, and with it every point, would be NaN.
+#[must_use]
+pub fn plane_grid(
     origin: DVec3,
     du: DVec3,
     dv: DVec3,

@@ -4,9 +4,9 @@
 
 #![allow(dead_code)]
 
-use glam::{Affine3A, Quat, Vec3};
+use glam::{Affine3A, DVec3, Quat, Vec3};
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
-use shadowvol_silhouette::{corpus, Light, SceneObject, TopologyScene};
+use shadowvol_silhouette::{corpus, shapes, Light, SceneObject, TopologyScene};
 use std::sync::Arc;
 
 /// A named scene with its lights.
@@ -67,29 +67,14 @@ pub fn sphere(rings: u32, segments: u32, radius: f32) -> Mesh {
 /// A flat n x n grid in the slanted plane z = x + 2y (an open surface, exact integer
 /// coordinates), triangulated both ways.
 pub fn grid(n: u32) -> Mesh {
-    let mut positions = Vec::new();
-    for y in 0..=n {
-        for x in 0..=n {
-            positions.push(Vec3::new(x as f32, y as f32, (x + 2 * y) as f32));
-        }
-    }
-    let id = |x: u32, y: u32| y * (n + 1) + x;
-    let mut triangles = Vec::new();
-    for y in 0..n {
-        for x in 0..n {
-            if (x + y) % 2 == 0 {
-                triangles.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
-                triangles.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
-            } else {
-                triangles.push([id(x, y), id(x + 1, y), id(x, y + 1)]);
-                triangles.push([id(x + 1, y), id(x + 1, y + 1), id(x, y + 1)]);
-            }
-        }
-    }
-    Mesh {
-        positions,
-        triangles,
-    }
+    shapes::plane_grid(
+        DVec3::ZERO,
+        DVec3::new(1.0, 0.0, 1.0),
+        DVec3::new(0.0, 1.0, 2.0),
+        n,
+        n,
+        |_, _| 0.0,
+    )
 }
 
 /// Three triangles on one edge (a non-manifold "book") plus a boundary fan.
