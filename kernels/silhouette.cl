@@ -63,7 +63,7 @@ float3 sv_load(__global const float* pos, uint i) {
     return vload3(i, pos);
 }
 
-// The paper's f32 plane evaluation; exactly robust-math's `sign_f32` op order.
+// ((A - B) x V) . (O - A) in f32; exactly robust-math's `sign_f32` op order.
 int sv_sign_f32(float3 a, float3 b, float4 l, float3 o) {
     float vx = l.x - l.w * a.x;
     float vy = l.y - l.w * a.y;
@@ -74,9 +74,10 @@ int sv_sign_f32(float3 a, float3 b, float4 l, float3 o) {
     float nx = ey * vz - ez * vy;
     float ny = ez * vx - ex * vz;
     float nz = ex * vy - ey * vx;
-    float no = (nx * o.x + ny * o.y) + nz * o.z;
-    float na = (nx * a.x + ny * a.y) + nz * a.z;
-    return sv_sgn32(no - na);
+    float dx = o.x - a.x;
+    float dy = o.y - a.y;
+    float dz = o.z - a.z;
+    return sv_sgn32((nx * dx + ny * dy) + nz * dz);
 }
 
 // 1 when the difference d = x - y is acceptable to the f32 filter: x == y (then d is exactly 0),

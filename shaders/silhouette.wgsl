@@ -90,9 +90,10 @@ fn sign_f32(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>, o: vec3<f32>) -> i32 {
     let nx = ey * vz - ez * vy;
     let ny = ez * vx - ex * vz;
     let nz = ex * vy - ey * vx;
-    let no = (nx * o.x + ny * o.y) + nz * o.z;
-    let na = (nx * a.x + ny * a.y) + nz * a.z;
-    return sgn(no - na);
+    let dx = o.x - a.x;
+    let dy = o.y - a.y;
+    let dz = o.z - a.z;
+    return sgn((nx * dx + ny * dy) + nz * dz);
 }
 
 // Robust and ordered: the canonical triangle (ids ascending) and the permutation parity.

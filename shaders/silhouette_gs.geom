@@ -102,7 +102,7 @@ bool touches_light(vec3 p, vec4 l) {
     return l.w != 0.0 && all(equal(q, l.xyz));
 }
 
-// robust-math `sign_f32`: the paper's plane evaluation, in exactly this operation order.
+// robust-math `sign_f32`: ((A - B) x V) . (O - A) in f32, in exactly this operation order.
 int sign_f32(vec3 a, vec3 b, vec4 l, vec3 o) {
     precise float vx = l.x - l.w * a.x;
     precise float vy = l.y - l.w * a.y;
@@ -113,9 +113,10 @@ int sign_f32(vec3 a, vec3 b, vec4 l, vec3 o) {
     precise float nx = ey * vz - ez * vy;
     precise float ny = ez * vx - ex * vz;
     precise float nz = ex * vy - ey * vx;
-    precise float no = (nx * o.x + ny * o.y) + nz * o.z;
-    precise float na = (nx * a.x + ny * a.y) + nz * a.z;
-    precise float d = no - na;
+    precise float dx = o.x - a.x;
+    precise float dy = o.y - a.y;
+    precise float dz = o.z - a.z;
+    precise float d = (nx * dx + ny * dy) + nz * dz;
     return d > 0.0 ? 1 : (d < 0.0 ? -1 : 0);
 }
 

@@ -43,7 +43,7 @@ pub fn is_subnormal(x: f32) -> bool {
     (u & 0x7f80_0000) == 0 && (u & 0x007f_ffff) != 0
 }
 
-/// `sv_sign_f32`: the paper's plane evaluation, robust-math's `sign_f32` op order.
+/// `sv_sign_f32`: `((A − B) × V)·(O − A)` in f32, robust-math's `sign_f32` op order.
 #[must_use]
 pub fn sign_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> i32 {
     let vx = l[0] - l[3] * a[0];
@@ -55,9 +55,10 @@ pub fn sign_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> i32 {
     let nx = ey * vz - ez * vy;
     let ny = ez * vx - ex * vz;
     let nz = ex * vy - ey * vx;
-    let no = (nx * o[0] + ny * o[1]) + nz * o[2];
-    let na = (nx * a[0] + ny * a[1]) + nz * a[2];
-    sgn32(no - na)
+    let dx = o[0] - a[0];
+    let dy = o[1] - a[1];
+    let dz = o[2] - a[2];
+    sgn32((nx * dx + ny * dy) + nz * dz)
 }
 
 fn diff_ok(x: f32, y: f32, d: f32) -> bool {

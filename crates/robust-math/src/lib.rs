@@ -17,7 +17,7 @@
 //!
 //! | mode | per (edge, OV) | consistent |
 //! |---|---|---|
-//! | [`Accuracy::Original`] | one `f32` evaluation of the paper's plane equation, as given | no |
+//! | [`Accuracy::Original`] | one `f32` evaluation ([`sign_f32`]) of the paper's plane test on its own | no |
 //! | [`Accuracy::Robust`] | three `f32` evaluations (all sides of the triangle) in the triangle's canonical order; 0 if they disagree | yes |
 //! | [`Accuracy::Ordered`] | one `f32` evaluation in the canonical order, times the permutation parity | yes |
 //! | [`Accuracy::Exact`] | the exact sign ([`orient_exact`]) | yes, and correct |
@@ -125,7 +125,16 @@ fn sgn32(x: f32) -> i8 {
     }
 }
 
-/// The paper's `f32` evaluation of `s(a, b, o)`: eq. (1)-(2) without the normalisation.
+/// The `f32` evaluation of `s(a, b, o)`: the paper's eq. (1)-(2) without the normalisation,
+/// evaluated as `N·(O − A)` (the convention's formula above).
+///
+/// The paper writes the light plane as `LP = (N, −N·A)` and tests `LP·(O, 1) = N·O − N·A`. That
+/// is the same number in exact arithmetic, but in `f32` the two dot products cancel: 10⁴ from the
+/// origin each is about 10⁴·|N| while their difference may be 10⁻¹·|N|·cos φ, so rounding
+/// decides the sign of every triangle the light grazes (in `hard-offset-1e4-*` every mode, the
+/// consistent ones included, then disagreed with `exact` on hundreds of edges). `O − A` is exact
+/// for nearby points (Sterbenz), so the error stays relative to the triangle's own size. Both
+/// forms cost the same (`N·A` shared by the OVs of an edge against one subtraction per OV).
 ///
 /// Exactly this sequence of `f32` operations (no fused multiply-add; Rust never contracts):
 ///
@@ -133,7 +142,8 @@ fn sgn32(x: f32) -> i8 {
 /// v = (lx - lw*ax, ly - lw*ay, lz - lw*az)
 /// e = (ax - bx, ay - by, az - bz)
 /// n = (ey*vz - ez*vy, ez*vx - ex*vz, ex*vy - ey*vx)        // (A - B) x V
-/// s = sgn( ((nx*ox + ny*oy) + nz*oz) - ((nx*ax + ny*ay) + nz*az) )   // LP . (O, 1)
+/// d = (ox - ax, oy - ay, oz - az)
+/// s = sgn( (nx*dx + ny*dy) + nz*dz )                       // N . (O - A)
 /// ```
 ///
 /// GPU kernels implement the same expression; there, contraction may change the last bits, which
@@ -148,9 +158,8 @@ pub fn sign_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> i8 {
         e[2] * v[0] - e[0] * v[2],
         e[0] * v[1] - e[1] * v[0],
     ];
-    let no = (n[0] * o[0] + n[1] * o[1]) + n[2] * o[2];
-    let na = (n[0] * a[0] + n[1] * a[1]) + n[2] * a[2];
-    sgn32(no - na)
+    let d = [o[0] - a[0], o[1] - a[1], o[2] - a[2]];
+    sgn32((n[0] * d[0] + n[1] * d[1]) + n[2] * d[2])
 }
 
 /// The sign of a whole triangle `(p0, p1, p2)`, given in canonical order (ascending ids), in the

@@ -180,8 +180,10 @@ fn coplanar_families_agree_with_oracle_and_are_hard() {
         uncertain64 > n / 100,
         "only {uncertain64} of {n} needed the fallback"
     );
+    // (`sign_f32`'s `N·(O − A)` gets about 9 % of these wrong; the paper's expanded
+    // `N·O − N·A`, which cancels at the 1e4 and 3e5 offsets, got more than 10 %.)
     assert!(
-        disagree_f32 > n / 10,
+        disagree_f32 > n / 20,
         "f32 got only {disagree_f32} of {n} wrong"
     );
     assert!(zeros > n / 20, "only {zeros} of {n} exactly degenerate");

@@ -277,7 +277,9 @@ fn offset_1e4_sphere() -> CorpusCase {
             near(DVec3::new(0.0, 0.0, 1.0) + DVec3::new(5.0, 3.0, 0.0)), // in the pole's tangent plane
             Light::directional(Vec3::new(1.0, 1.0, 0.0)),
         ],
-        true,
+        // No longer cracks in `original`: `sign_f32` evaluates `N·(O − A)`, whose differences
+        // are exact this close together; the paper's expanded `N·O − N·A` did crack here.
+        false,
     )
 }
 
@@ -296,7 +298,8 @@ fn offset_1e4_grid() -> CorpusCase {
         "a tilted grid 1e4 from the origin (rounded far off its plane), lights in and near its plane",
         mesh,
         lights,
-        true,
+        // Closed in `original` too since `sign_f32` evaluates `N·(O − A)` (see the sphere above).
+        false,
     )
 }
 

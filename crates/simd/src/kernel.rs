@@ -9,7 +9,7 @@
 //!   times the pair's permutation parity is exactly `ov_sign` of the reference, so each triangle
 //!   is evaluated once instead of once per edge.
 //! * [`edge_sums`]: `m(e) = Σ sign(t) · parity` over the triangles of each edge.
-//! * [`edge_original`]: `original` mode, per (edge, OV), sharing `V`, `A − B`, `N` and `N·A`
+//! * [`edge_original`]: `original` mode, per (edge, OV), sharing `V`, `A − B` and `N`
 //!   between the two OVs of a manifold edge.
 
 use crate::lanes::{Level, F32V, F64V};
@@ -51,32 +51,36 @@ fn splat4<F: F32V>(l: [f32; 4]) -> [F; 4] {
     ]
 }
 
-/// `((A − B) × V)·O − ((A − B) × V)·A` with exactly the operations (and order) of
-/// [`sign_f32`]; its sign is `sign_f32(A, B, L, O)` in every lane.
+/// `((A − B) × V)·(O − A)` with exactly the operations (and order) of [`sign_f32`]; its sign
+/// is `sign_f32(A, B, L, O)` in every lane.
 #[inline(always)]
 fn plane<F: F32V>(a: &[F; 3], b: &[F; 3], l: &[F; 4], o: &[F; 3]) -> F {
     let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let (n, na) = edge_plane(l, a, &e);
-    let no = (n[0] * o[0] + n[1] * o[1]) + n[2] * o[2];
-    no - na
+    let n = edge_normal(l, a, &e);
+    off_plane(&n, a, o)
 }
 
-/// `N = (A − B) × V` with `V = L.xyz − L.w·A`, and `N·A`, given `E = A − B`: the first
-/// operations of [`sign_f32`], in its order (shared by both OVs of an edge in `original`).
+/// `N = (A − B) × V` with `V = L.xyz − L.w·A`, given `E = A − B`: the first operations of
+/// [`sign_f32`], in its order (shared by both OVs of an edge in `original`).
 #[inline(always)]
-fn edge_plane<F: F32V>(lv: &[F; 4], a: &[F; 3], e: &[F; 3]) -> ([F; 3], F) {
+fn edge_normal<F: F32V>(lv: &[F; 4], a: &[F; 3], e: &[F; 3]) -> [F; 3] {
     let v = [
         lv[0] - lv[3] * a[0],
         lv[1] - lv[3] * a[1],
         lv[2] - lv[3] * a[2],
     ];
-    let n = [
+    [
         e[1] * v[2] - e[2] * v[1],
         e[2] * v[0] - e[0] * v[2],
         e[0] * v[1] - e[1] * v[0],
-    ];
-    let na = (n[0] * a[0] + n[1] * a[1]) + n[2] * a[2];
-    (n, na)
+    ]
+}
+
+/// `N·(O − A)`: the last operations of [`sign_f32`], in its order.
+#[inline(always)]
+fn off_plane<F: F32V>(n: &[F; 3], a: &[F; 3], o: &[F; 3]) -> F {
+    let d = [o[0] - a[0], o[1] - a[1], o[2] - a[2]];
+    (n[0] * d[0] + n[1] * d[1]) + n[2] * d[2]
 }
 
 /// The certified `f64` filter of `orient_filter_f64`, four lanes at a time: the same formula,
@@ -175,7 +179,7 @@ pub(crate) fn tri_signs<Lv: Level>(
         let dst = (blk - b0) * LANES;
         if let (Accuracy::Ordered | Accuracy::Original, 0xFF, Some(lv)) = (mode, valid, one32) {
             // One light, a full block (the common case): `plane`'s operations with fewer vectors
-            // live (O is loaded once N and N·A exist), and the signs stored as one vector of
+            // live (O is loaded once N exists), and the signs stored as one vector of
             // `i32` records: byte 0 of each 4-byte record is the sign, the other three bytes
             // (lights 1-3 of the pack) are unused with one light.
             // SAFETY: as below.
@@ -186,11 +190,10 @@ pub(crate) fn tri_signs<Lv: Level>(
                 )
             };
             let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-            let (n, na) = edge_plane(&lv, &a, &e);
+            let n = edge_normal(&lv, &a, &e);
             // SAFETY: as below.
             let o = unsafe { gather::<Lv>(lay, &lay.t2[t..]) };
-            let no = (n[0] * o[0] + n[1] * o[1]) + n[2] * o[2];
-            let m = (no - na).signum0().to_i32();
+            let m = off_plane(&n, &a, &o).signum0().to_i32();
             let pack = &mut out[0][dst * PACK..(dst + LANES) * PACK];
             for (record, s) in pack.chunks_exact_mut(PACK).zip(m) {
                 for (byte, x) in record.iter_mut().zip(s.to_le_bytes()) {
@@ -563,10 +566,10 @@ pub(crate) fn edge_original<Lv: Level>(
             let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
             for (l, light) in lights.iter().enumerate() {
                 let lv = splat4::<Lv::F>(*light);
-                // The operations of `sign_f32`, with V, A - B, N and N·A shared by both OVs.
-                let (n, na) = edge_plane(&lv, &a, &e);
-                let d1 = ((n[0] * o1[0] + n[1] * o1[1]) + n[2] * o1[2]) - na;
-                let d2 = ((n[0] * o2[0] + n[1] * o2[1]) + n[2] * o2[2]) - na;
+                // The operations of `sign_f32`, with V, A - B and N shared by both OVs.
+                let n = edge_normal(&lv, &a, &e);
+                let d1 = off_plane(&n, &a, &o1);
+                let d2 = off_plane(&n, &a, &o2);
                 let m = (d1.signum0() + d2.signum0()).to_i32();
                 out[l][e0 - e_start..e0 - e_start + LANES].copy_from_slice(&m);
                 push_nonzero(&mut sil[l], &m, edge_base + e0);
@@ -607,8 +610,8 @@ fn original_general_block(
 }
 
 /// [`edge_original`] for one light (the common case): the same operations as the general
-/// loop, ordered so that fewer vectors are live at once (the OVs are loaded only once `N` and
-/// `N·A` exist, which spares the general loop's register spills), with the light's lanes made
+/// loop, ordered so that fewer vectors are live at once (the OVs are loaded only once `N`
+/// exists, which spares the general loop's register spills), with the light's lanes made
 /// once and the output written with streaming stores (one output row, written once).
 #[inline(always)]
 fn edge_original_one<Lv: Level>(
@@ -646,13 +649,13 @@ fn edge_original_one<Lv: Level>(
             )
         };
         let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-        let (n, na) = edge_plane(&lv, &a, &e);
+        let n = edge_normal(&lv, &a, &e);
         // SAFETY: as above.
         let o1 = unsafe { gather::<Lv>(lay, &idx(&lay.eo1)) };
-        let d1 = ((n[0] * o1[0] + n[1] * o1[1]) + n[2] * o1[2]) - na;
+        let d1 = off_plane(&n, &a, &o1);
         // SAFETY: as above.
         let o2 = unsafe { gather::<Lv>(lay, &idx(&lay.eo2)) };
-        let d2 = ((n[0] * o2[0] + n[1] * o2[1]) + n[2] * o2[2]) - na;
+        let d2 = off_plane(&n, &a, &o2);
         let nz =
             (d1.signum0() + d2.signum0()).store_i32(&mut out[e0 - e_start..e0 - e_start + LANES]);
         push_bits(sil, nz, edge_base + e0);

@@ -5,14 +5,11 @@
 mod common;
 
 use glam::{DVec3, Vec3};
-use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use shadowvol_renderer::reference::compare;
 use shadowvol_renderer::{plan, Camera as RefCamera, Frame, Timings};
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::{
-    extract_once, invariant, SceneObject, SilhouetteBackend, TopologyScene,
-};
+use shadowvol_silhouette::{SceneObject, SilhouetteBackend, TopologyScene};
 use shadowvol_vulkan_geometry::{Camera, Options, ShadowMask, StencilTechnique};
 use std::sync::Arc;
 
@@ -258,8 +255,8 @@ fn gs_shadow_mask_matches_ray_traced_reference() {
     assert!(cases.len() >= 2, "no hard-* scenes found");
     let (mut checked, mut skipped, mut shadowed_somewhere) = (0, 0, false);
     let mut failures = Vec::new();
-    let mut mode_limited = 0;
-    let mut cpu = CpuBackend::new();
+    // Largest artifact fraction per mode (indexed by `Accuracy as usize`).
+    let mut worst = [0.0f64; 4];
     for case in &cases {
         let cam = case.vk_camera();
         let ids = pixel_ids(&cam, &case.world_triangles());
@@ -289,33 +286,13 @@ fn gs_shadow_mask_matches_ray_traced_reference() {
                     100.0 * fraction,
                     mask.shadowed.iter().filter(|&&s| s).count()
                 );
+                    worst[mode as usize] = worst[mode as usize].max(fraction);
                     if mode.is_consistent() && fraction > MAX_ARTIFACT_FRACTION {
-                        // Where robust/ordered's f32 signs differ from the exact ones (cpu reference),
-                        // the volumes are wrong by design of the mode, whatever the renderer does:
-                        // such a mask is reported, not failed. Exact mode is always held.
-                        let mode_errors = if mode == Accuracy::Exact {
-                            0
-                        } else {
-                            let (m, _) =
-                                extract_once(&mut cpu, &case.scene, &[light], mode).unwrap();
-                            let (x, _) =
-                                extract_once(&mut cpu, &case.scene, &[light], Accuracy::Exact)
-                                    .unwrap();
-                            invariant::differing_edges(&m, &x, 0)
-                        };
-                        let what = format!(
-                        "{} light {li} {technique:?} {mode}: {bad} artifact pixels ({:.4}% > 0.05%)",
-                        case.name,
-                        100.0 * fraction
-                    );
-                        if mode_errors > 0 {
-                            eprintln!(
-                            "MODE-LIMITED {what}: {mode_errors} edges' multiplicities differ from exact in this mode"
-                        );
-                            mode_limited += 1;
-                        } else {
-                            failures.push(what);
-                        }
+                        failures.push(format!(
+                            "{} light {li} {technique:?} {mode}: {bad} artifact pixels ({:.4}% > 0.05%)",
+                            case.name,
+                            100.0 * fraction
+                        ));
                     }
                     if mode.is_consistent() {
                         checked += 1;
@@ -326,15 +303,26 @@ fn gs_shadow_mask_matches_ray_traced_reference() {
         vk.release(id);
     }
     eprintln!(
-        "checked {checked} (scene, light, mode) masks; {mode_limited} robust/ordered masks whose \
-         multiplicities differ from exact not held to the bound; {skipped} (scene, light) pairs where only z-fail applies"
+        "checked {checked} (scene, light, mode) masks, every consistent mode held to 0.05%; \
+         {skipped} (scene, light) pairs where only z-fail applies"
     );
+    for mode in Accuracy::ALL {
+        eprintln!(
+            "largest artifact fraction, {mode}: {:.4}%",
+            100.0 * worst[mode as usize]
+        );
+    }
     assert!(
         failures.is_empty(),
         "artifacts above 0.05%:\n{}",
         failures.join("\n")
     );
     assert!(checked >= 6, "too few masks checked: {checked}");
+    // The baseline cracks visibly somewhere, so the bound is not met by a blind metric.
+    assert!(
+        worst[Accuracy::Original as usize] > MAX_ARTIFACT_FRACTION,
+        "original never exceeds 0.05%: the comparison would not see cracks"
+    );
     assert!(
         shadowed_somewhere,
         "no reference shadow anywhere: the comparison would be vacuous"
