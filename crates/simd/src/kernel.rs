@@ -13,8 +13,12 @@
 //!   between the two OVs of a manifold edge.
 
 use crate::lanes::{Level, F32V, F64V};
+use crate::layout::coord_in_filter_range;
 use crate::layout::{Layout, LANES, ODD};
-use shadowvol_robust_math::{orient_exact, sign_f32, Accuracy, F64_FILTER_EPS};
+use shadowvol_robust_math::{
+    orient_exact, sign_f32, Accuracy, F32_FILTER_EPS, F32_FILTER_MAX, F32_FILTER_MIN,
+    F64_FILTER_EPS,
+};
 use std::ops::Range;
 
 /// Gathers the positions of the 8 vertex ids `idx[..8]` from the SoA arrays.
@@ -114,6 +118,75 @@ fn filter_f64<D: F64V>(a: [D; 3], b: [D; 3], l: [D; 4], o: [D; 3]) -> (u32, u32,
     (pos, neg, !(pos | neg | zero) & 0xF)
 }
 
+/// The certified `f32` filter of `orient_filter_f32`, eight lanes at a time: the same formula,
+/// the same operations in the same order and the same constants ([`F32_FILTER_EPS`], the range
+/// [`F32_FILTER_MIN`]`..=`[`F32_FILTER_MAX`]), so each lane makes the scalar filter's decision and
+/// a certified lane carries its proof. Returns `(positive, negative, uncertain)` bits.
+///
+/// The caller checks `L.w ∈ {0, 1}` (one scalar test per light; other lights must not come
+/// here). With `RANGE = false` the range check on the nine differences is skipped: only sound
+/// when every coordinate of `A`, `B`, `O` and `L.xyz` passes [`coord_in_filter_range`], which
+/// proves that every difference passes it.
+///
+/// The scalar filter's `!perm.is_finite()` test is implied here: a non-finite `perm` makes
+/// `bound` infinite or NaN, so `|det| > bound` is false, and `perm == 0` is false, so the lane is
+/// uncertain, as in the scalar filter. (A non-finite difference always reaches `perm`: each one
+/// is a factor of some term of it, and every term is `>= 0` or NaN.)
+#[inline(always)]
+fn filter_f32<F: F32V, const RANGE: bool>(
+    a: &[F; 3],
+    b: &[F; 3],
+    l: &[F; 4],
+    o: &[F; 3],
+) -> (u32, u32, u32) {
+    let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let wa = [l[3] * a[0], l[3] * a[1], l[3] * a[2]];
+    let v = [l[0] - wa[0], l[1] - wa[1], l[2] - wa[2]];
+    let d = [o[0] - a[0], o[1] - a[1], o[2] - a[2]];
+    let mut bad = 0u32;
+    if RANGE {
+        for x in e.iter().chain(&v).chain(&d) {
+            bad |= x.out_of_range_bits(F32_FILTER_MIN, F32_FILTER_MAX);
+        }
+    }
+    let (p1, q1) = (e[1] * v[2], e[2] * v[1]);
+    let (p2, q2) = (e[2] * v[0], e[0] * v[2]);
+    let (p3, q3) = (e[0] * v[1], e[1] * v[0]);
+    let det = (p1 - q1) * d[0] + (p2 - q2) * d[1] + (p3 - q3) * d[2];
+    let perm = (p1.abs() + q1.abs()) * d[0].abs()
+        + (p2.abs() + q2.abs()) * d[1].abs()
+        + (p3.abs() + q3.abs()) * d[2].abs();
+    let bound = F::splat(F32_FILTER_EPS) * perm;
+    let certified = det.abs().gt_bits(bound) & !bad;
+    let pos = certified & det.gt_bits(F::splat(0.0));
+    let neg = certified & !pos;
+    let zero = perm.zero_bits() & !bad;
+    (pos, neg, !(pos | neg | zero) & 0xFF)
+}
+
+/// How the `f32` filter stage treats one light in `exact` mode.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum F32Stage {
+    /// `L.w` is neither 0 nor 1: `orient_filter_f32` is uncertain for every input; go to `f64`.
+    Skip,
+    /// Run the filter with its range check on the differences.
+    Checked,
+    /// Run the filter without the range check: the layout's coordinates and the light's pass
+    /// [`coord_in_filter_range`], so every difference passes it.
+    Unchecked,
+}
+
+#[inline(always)]
+fn f32_stage(lay: &Layout, light: &[f32; 4]) -> F32Stage {
+    if light[3] != 0.0 && light[3] != 1.0 {
+        F32Stage::Skip
+    } else if lay.coords_in_filter_range && light[..3].iter().all(|&c| coord_in_filter_range(c)) {
+        F32Stage::Unchecked
+    } else {
+        F32Stage::Checked
+    }
+}
+
 /// Byte `i` = 1 where bit `i` of the index is set (sign bytes of positive lanes).
 const POS_BYTES: [u64; 256] = {
     let mut t = [0u64; 256];
@@ -141,8 +214,9 @@ fn sign_bytes(pos: u32, neg: u32) -> [u8; 8] {
 /// Signs of the canonical triangles in `blocks` (blocks of 8) for every light.
 ///
 /// `out[l / PACK]` receives the signs of this range for light `l` (`blocks.len() * 8` records of
-/// [`PACK`] bytes; padding lanes get 0). Returns the number of (triangle, light) evaluations the `f64` filter could not
-/// certify (exact mode), which were decided with the scalar exact predicate.
+/// [`PACK`] bytes; padding lanes get 0). Returns the number of (triangle, light) evaluations
+/// neither the `f32` nor the `f64` filter could certify (exact mode), which were decided with
+/// the scalar exact predicate.
 #[inline(always)]
 pub(crate) fn tri_signs<Lv: Level>(
     lay: &Layout,
@@ -168,6 +242,20 @@ pub(crate) fn tri_signs<Lv: Level>(
             Some(std::array::from_fn(|c| Lv::D::splat(f64::from(light[c]))))
         }
         _ => None,
+    };
+    // The f32 stage of each light (exact mode), decided once per call.
+    let mut stage_buf = [F32Stage::Skip; 8];
+    let stage_vec: Vec<F32Stage>;
+    let stages: &[F32Stage] = if mode != Accuracy::Exact {
+        &[]
+    } else if lights.len() <= stage_buf.len() {
+        for (s, light) in stage_buf.iter_mut().zip(lights) {
+            *s = f32_stage(lay, light);
+        }
+        &stage_buf[..lights.len()]
+    } else {
+        stage_vec = lights.iter().map(|light| f32_stage(lay, light)).collect();
+        &stage_vec
     };
     for blk in blocks {
         let t = blk * LANES;
@@ -227,15 +315,53 @@ pub(crate) fn tri_signs<Lv: Level>(
                 }
             }
             Accuracy::Exact => {
-                let (a, b, o) = (widen3::<Lv>(&a), widen3::<Lv>(&b), widen3::<Lv>(&o));
+                // Lanes 0..4 and 4..8 widened to f64, made only when some lane of this block
+                // needs the f64 filter. They are gathered again from memory rather than widened
+                // from `a`, `b`, `o`: a conversion of those registers is loop-invariant and
+                // speculatable, so LLVM hoisted it (and its spills) out of the light loop into
+                // every block; a gather after the stores of earlier lights cannot be hoisted.
+                type Wide3<Lv> = ([<Lv as Level>::D; 3], [<Lv as Level>::D; 3]);
+                let mut w64: Option<(Wide3<Lv>, Wide3<Lv>, Wide3<Lv>)> = None;
                 for (l, light) in lights.iter().enumerate() {
-                    let lv: [Lv::D; 4] = one64.unwrap_or_else(|| {
-                        std::array::from_fn(|c| Lv::D::splat(f64::from(light[c])))
-                    });
-                    let (p_lo, n_lo, u_lo) = filter_f64(a.0, b.0, lv, o.0);
-                    let (p_hi, n_hi, u_hi) = filter_f64(a.1, b.1, lv, o.1);
-                    let (mut pos, mut neg) = (p_lo | p_hi << 4, n_lo | n_hi << 4);
-                    let unc = (u_lo | u_hi << 4) & valid;
+                    // 1. The f32 filter on all 8 lanes.
+                    let lv32 = one32.unwrap_or_else(|| splat4(*light));
+                    let (mut pos, mut neg, unc32) = match stages[l] {
+                        F32Stage::Skip => (0, 0, 0xFF),
+                        F32Stage::Checked => filter_f32::<Lv::F, true>(&a, &b, &lv32, &o),
+                        F32Stage::Unchecked => filter_f32::<Lv::F, false>(&a, &b, &lv32, &o),
+                    };
+                    let mut unc = unc32 & valid;
+                    // 2. The f64 filter on the halves that hold uncertain lanes.
+                    if unc != 0 {
+                        if w64.is_none() {
+                            // SAFETY: as for `a`, `b`, `o` above.
+                            let (a, b, o) = unsafe {
+                                (
+                                    gather::<Lv>(lay, &lay.t0[t..]),
+                                    gather::<Lv>(lay, &lay.t1[t..]),
+                                    gather::<Lv>(lay, &lay.t2[t..]),
+                                )
+                            };
+                            w64 = Some((widen3::<Lv>(&a), widen3::<Lv>(&b), widen3::<Lv>(&o)));
+                        }
+                        if let Some((a64, b64, o64)) = &w64 {
+                            let lv: [Lv::D; 4] = one64.unwrap_or_else(|| {
+                                std::array::from_fn(|c| Lv::D::splat(f64::from(light[c])))
+                            });
+                            let (mut p, mut n, mut u) = (0, 0, 0);
+                            if unc & 0x0F != 0 {
+                                (p, n, u) = filter_f64(a64.0, b64.0, lv, o64.0);
+                            }
+                            if unc & 0xF0 != 0 {
+                                let (ph, nh, uh) = filter_f64(a64.1, b64.1, lv, o64.1);
+                                (p, n, u) = (p | ph << 4, n | nh << 4, u | uh << 4);
+                            }
+                            pos |= p & unc;
+                            neg |= n & unc;
+                            unc &= u;
+                        }
+                    }
+                    // 3. The scalar exact predicate for the lanes neither filter certified.
                     if unc != 0 {
                         uncertain += u64::from(unc.count_ones());
                         let mut bits = unc;
@@ -669,7 +795,8 @@ fn edge_original_one<Lv: Level>(
 mod tests {
     use super::*;
     use crate::lanes::Wide;
-    use shadowvol_robust_math::orient_filter_f64;
+    use crate::layout::COORD_MAX;
+    use shadowvol_robust_math::{orient_filter_f32, orient_filter_f64};
 
     /// The 4-lane filter makes exactly the decisions of the scalar `orient_filter_f64`
     /// (certified sign, certified zero, or uncertain) on random and on coplanar inputs.
@@ -729,6 +856,279 @@ mod tests {
             uncertain_seen > 0,
             "the coplanar rounds must produce uncertain lanes"
         );
+    }
+
+    /// One 8-lane input set of `filter_f32`: per lane `(A, B, O)`.
+    type Lanes8 = [([f32; 3], [f32; 3], [f32; 3]); 8];
+
+    /// Runs `filter_f32` at level `Lv` (both range variants where the unchecked one is sound) and
+    /// asserts each lane's decision equals `orient_filter_f32`'s. Returns the uncertain count.
+    fn check_f32_lanes<Lv: Level>(lanes: &Lanes8, l: [f32; 4]) -> usize {
+        let ld = |f: &dyn Fn(usize) -> f32| -> Lv::F {
+            let v: [f32; 8] = std::array::from_fn(f);
+            // SAFETY: 8 in-range indices into `v` (lane i = v[i]).
+            unsafe { Lv::F::gather(&v, &[0, 1, 2, 3, 4, 5, 6, 7]) }
+        };
+        let a = std::array::from_fn(|c| ld(&|i| lanes[i].0[c]));
+        let b = std::array::from_fn(|c| ld(&|i| lanes[i].1[c]));
+        let o = std::array::from_fn(|c| ld(&|i| lanes[i].2[c]));
+        let lv = splat4::<Lv::F>(l);
+        let decide = |(pos, neg, unc): (u32, u32, u32), i: usize| {
+            if unc >> i & 1 == 1 {
+                None
+            } else if pos >> i & 1 == 1 {
+                Some(1)
+            } else if neg >> i & 1 == 1 {
+                Some(-1)
+            } else {
+                Some(0)
+            }
+        };
+        let checked = filter_f32::<Lv::F, true>(&a, &b, &lv, &o);
+        let in_range = |p: &[f32]| p.iter().all(|&c| coord_in_filter_range(c));
+        let unchecked_sound = in_range(&l[..3])
+            && lanes
+                .iter()
+                .all(|(pa, pb, po)| in_range(pa) && in_range(pb) && in_range(po));
+        let unchecked = filter_f32::<Lv::F, false>(&a, &b, &lv, &o);
+        let mut unc = 0;
+        for (i, (pa, pb, po)) in lanes.iter().enumerate() {
+            let expect = orient_filter_f32(*pa, *pb, l, *po);
+            assert_eq!(
+                decide(checked, i),
+                expect,
+                "lane {i}: {pa:?} {pb:?} {l:?} {po:?}"
+            );
+            if unchecked_sound {
+                assert_eq!(
+                    decide(unchecked, i),
+                    expect,
+                    "unchecked, lane {i}: {pa:?} {pb:?} {l:?} {po:?}"
+                );
+            }
+            unc += usize::from(expect.is_none());
+        }
+        unc
+    }
+
+    /// The 8-lane `f32` filter makes exactly the decisions of the scalar `orient_filter_f32`
+    /// (certified sign, certified zero, or uncertain) on random, coplanar, near-degenerate and
+    /// huge / tiny inputs (range checks), with `w = 0` and `w = 1`, at every available level;
+    /// and without its range check wherever [`coord_in_filter_range`] holds for every input.
+    #[test]
+    fn vector_f32_filter_mirrors_scalar_filter() {
+        let mut x = 0x2545_F491u32;
+        let mut rnd = move || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x
+        };
+        let (mut uncertain, mut range_rejects, mut zeros, mut unchecked_rounds) = (0, 0, 0, 0);
+        for round in 0..6000u32 {
+            let kind = round % 6;
+            let l: [f32; 4] = match round % 4 {
+                0 => [0.25, -0.5, 0.75, 1.0],
+                1 => [1.0, -0.5, 0.0, 0.0],
+                2 => [3.0, 7.0, -2.0, 1.0],
+                _ => [0.0, 0.0, 1.0, 0.0],
+            };
+            let mut lanes: Lanes8 = [([0f32; 3], [0f32; 3], [0f32; 3]); 8];
+            for lane in &mut lanes {
+                let mut p = || -> [f32; 3] {
+                    let f = |r: u32| (r % 20001) as f32 / 1000.0 - 10.0;
+                    match kind {
+                        // Random small lattice points in the plane y = -(x + z) / 2.
+                        0 => {
+                            let (a, c) = ((rnd() % 9) as f32, (rnd() % 9) as f32);
+                            [a, -(a + c) * 0.5, c]
+                        }
+                        // Random points.
+                        1 => [f(rnd()), f(rnd()), f(rnd())],
+                        // Near-degenerate: almost on the plane x + y + z = 1.
+                        2 => {
+                            let (a, c) = (f(rnd()), f(rnd()));
+                            let y = 1.0 - a - c;
+                            let nudge = [0.0, 1e-7, -1e-7, 1e-6][(rnd() % 4) as usize];
+                            [a, y + nudge, c]
+                        }
+                        // Huge and tiny magnitudes around the range limits, and zeros.
+                        3 => std::array::from_fn(|_| {
+                            let m = [
+                                0.0,
+                                1.0,
+                                F32_FILTER_MIN,
+                                F32_FILTER_MAX,
+                                1e-13,
+                                3e12,
+                                f32::MIN_POSITIVE,
+                                1e-45,
+                                1e30,
+                                1.5 * F32_FILTER_MIN,
+                                COORD_MAX,
+                            ][(rnd() % 11) as usize];
+                            if rnd() % 2 == 0 {
+                                m
+                            } else {
+                                -m * (1.0 + (rnd() % 4) as f32 * 0.25)
+                            }
+                        }),
+                        // Axis-aligned points (exact zeros: perm = 0 in some lanes).
+                        4 => {
+                            let mut q = [0.0; 3];
+                            q[(rnd() % 3) as usize] = (rnd() % 5) as f32;
+                            q
+                        }
+                        // Scaled random points: tiny or huge differences.
+                        _ => {
+                            let s = [1e-12, 1e-6, 1e6, 1e11, 1e20][(rnd() % 5) as usize];
+                            [f(rnd()) * s, f(rnd()) * s, f(rnd()) * s]
+                        }
+                    }
+                };
+                *lane = (p(), p(), p());
+            }
+            let unc = check_f32_lanes::<Wide>(&lanes, l);
+            #[cfg(target_arch = "x86_64")]
+            if std::is_x86_feature_detected!("avx2") {
+                check_avx2(&lanes, l);
+            }
+            uncertain += unc;
+            for (pa, pb, po) in &lanes {
+                let e = |u: [f32; 3], v: [f32; 3]| [u[0] - v[0], u[1] - v[1], u[2] - v[2]];
+                let v = [0, 1, 2].map(|c| l[c] - l[3] * pa[c]);
+                let diffs = [e(*pa, *pb), v, e(*po, *pa)];
+                if diffs
+                    .iter()
+                    .flatten()
+                    .any(|&d| d != 0.0 && !(F32_FILTER_MIN..=F32_FILTER_MAX).contains(&d.abs()))
+                {
+                    range_rejects += 1;
+                }
+                zeros += usize::from(orient_filter_f32(*pa, *pb, l, *po) == Some(0));
+            }
+            let all_in = lanes.iter().all(|(pa, pb, po)| {
+                [pa, pb, po]
+                    .iter()
+                    .all(|p| p.iter().all(|&c| coord_in_filter_range(c)))
+            });
+            unchecked_rounds += usize::from(all_in);
+        }
+        assert!(uncertain > 0, "coplanar rounds must give uncertain lanes");
+        assert!(range_rejects > 0, "the range check must be exercised");
+        assert!(zeros > 0, "certified zeros must occur");
+        assert!(
+            unchecked_rounds > 1000,
+            "the unchecked variant must be compared"
+        );
+    }
+
+    /// `check_f32_lanes` at the AVX2 level, entered with the feature enabled.
+    #[cfg(target_arch = "x86_64")]
+    fn check_avx2(lanes: &Lanes8, l: [f32; 4]) {
+        #[target_feature(enable = "avx2")]
+        unsafe fn run(lanes: &Lanes8, l: [f32; 4]) -> usize {
+            check_f32_lanes::<crate::lanes::Avx2>(lanes, l)
+        }
+        // SAFETY: only called after `is_x86_feature_detected!("avx2")`.
+        unsafe {
+            run(lanes, l);
+        }
+    }
+
+    /// `coord_in_filter_range` on both operands implies the range check on their difference
+    /// (the argument of the unchecked `f32` stage), on values at and near the limits.
+    #[test]
+    fn coordinate_range_implies_difference_range() {
+        let step = F32_FILTER_MIN; // 2^-40
+        let mut vals = vec![
+            0.0f32,
+            step,
+            3.0 * step,
+            2.0f32.powi(-24),
+            1.0,
+            0.1,
+            COORD_MAX,
+        ];
+        vals.extend([
+            1.0 - 0.999_999_94f32,
+            7.629_394_5e-6,
+            COORD_MAX - 65536.0,
+            12345.678,
+        ]);
+        vals.extend(vals.clone().iter().map(|v| -v));
+        assert!(vals.iter().all(|&v| coord_in_filter_range(v)), "{vals:?}");
+        for bad in [
+            1.5 * step,
+            f32::MIN_POSITIVE,
+            1e-45,
+            2.0 * COORD_MAX,
+            f32::NAN,
+            f32::INFINITY,
+        ] {
+            assert!(!coord_in_filter_range(bad), "{bad}");
+        }
+        for &x in &vals {
+            for &y in &vals {
+                for w in [0.0f32, 1.0] {
+                    let d = x - w * y;
+                    let m = d.abs();
+                    assert!(
+                        m == 0.0 || (F32_FILTER_MIN..=F32_FILTER_MAX).contains(&m),
+                        "{x} - {w} * {y} = {d}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// `w` outside `{0, 1}` is left to the f64 stage, like `orient_filter_f32` (always `None`).
+    #[test]
+    fn f32_stage_skips_lights_with_other_w() {
+        let lay = |p: [f32; 3]| Layout {
+            coords_in_filter_range: p.iter().all(|&c| coord_in_filter_range(c)),
+            ..empty_layout()
+        };
+        let ok = lay([1.0, 2.0, 0.0]);
+        assert!(f32_stage(&ok, &[1.0, 2.0, 3.0, 0.5]) == F32Stage::Skip);
+        assert!(orient_filter_f32(
+            [0.0; 3],
+            [1.0, 0.0, 0.0],
+            [1.0, 2.0, 3.0, 0.5],
+            [0.0, 1.0, 0.0]
+        )
+        .is_none());
+        assert!(f32_stage(&ok, &[1.0, 2.0, 3.0, 1.0]) == F32Stage::Unchecked);
+        assert!(f32_stage(&ok, &[1.0, 2.0, 3.0, 0.0]) == F32Stage::Unchecked);
+        assert!(f32_stage(&ok, &[1e-30, 2.0, 3.0, 1.0]) == F32Stage::Checked);
+        let tiny = lay([1e-30, 1.0, 1.0]);
+        assert!(f32_stage(&tiny, &[1.0, 2.0, 3.0, 1.0]) == F32Stage::Checked);
+    }
+
+    fn empty_layout() -> Layout {
+        Layout {
+            xs: vec![],
+            ys: vec![],
+            zs: vec![],
+            xyz: vec![],
+            t0: vec![],
+            t1: vec![],
+            t2: vec![],
+            tri_count: 0,
+            edge_count: 0,
+            block_fast: vec![],
+            ea: vec![],
+            eb: vec![],
+            eo1: vec![],
+            eo2: vec![],
+            tri_a: vec![],
+            tri_b: vec![],
+            edges: vec![],
+            ov_offsets: vec![],
+            ovs: vec![],
+            ov_tri: vec![],
+            coords_in_filter_range: true,
+        }
     }
 
     #[test]

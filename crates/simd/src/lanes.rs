@@ -32,6 +32,15 @@ pub(crate) trait F32V:
     fn signum0(self) -> Self;
     /// Truncates to integers (the lanes are small exact integers here).
     fn to_i32(self) -> [i32; 8];
+    /// Lane-wise absolute value (clears the sign bit; exact).
+    fn abs(self) -> Self;
+    /// Bit `i` set when `self[i] > other[i]` (false for NaN lanes).
+    fn gt_bits(self, other: Self) -> u32;
+    /// Bit `i` set when lane `i` equals `0.0` (either sign).
+    fn zero_bits(self) -> u32;
+    /// Bit `i` set unless lane `i` is zero or its magnitude lies in `[min, max]` (NaN lanes
+    /// are set): the range check of `orient_filter_f32` on one difference.
+    fn out_of_range_bits(self, min: f32, max: f32) -> u32;
     /// Truncates to integers, writes them to `dst[..8]` (a streaming store that bypasses the
     /// caches where the level has one and `dst` is suitably aligned: results are written once
     /// and not read back by the kernel) and returns the bits of the non-zero lanes.
@@ -132,6 +141,25 @@ impl F32V for wide::f32x8 {
     #[inline(always)]
     fn to_i32(self) -> [i32; 8] {
         self.trunc_int().to_array()
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        wide::f32x8::abs(self)
+    }
+    #[inline(always)]
+    fn gt_bits(self, other: Self) -> u32 {
+        self.simd_gt(other).to_bitmask()
+    }
+    #[inline(always)]
+    fn zero_bits(self) -> u32 {
+        self.simd_eq(wide::f32x8::ZERO).to_bitmask()
+    }
+    #[inline(always)]
+    fn out_of_range_bits(self, min: f32, max: f32) -> u32 {
+        let m = wide::f32x8::abs(self);
+        let ok = m.simd_eq(wide::f32x8::ZERO)
+            | (m.simd_ge(wide::f32x8::splat(min)) & m.simd_le(wide::f32x8::splat(max)));
+        !ok.to_bitmask() & 0xFF
     }
 }
 
@@ -340,6 +368,35 @@ mod avx2 {
                 );
             }
             out
+        }
+        #[inline(always)]
+        fn abs(self) -> Self {
+            // SAFETY: see the module documentation. Clears the sign bit.
+            F8(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0) })
+        }
+        #[inline(always)]
+        fn gt_bits(self, other: Self) -> u32 {
+            // SAFETY: see the module documentation.
+            unsafe { _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(self.0, other.0)) as u32 }
+        }
+        #[inline(always)]
+        fn zero_bits(self) -> u32 {
+            // SAFETY: see the module documentation.
+            unsafe {
+                _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(self.0, _mm256_setzero_ps())) as u32
+            }
+        }
+        #[inline(always)]
+        fn out_of_range_bits(self, min: f32, max: f32) -> u32 {
+            // SAFETY: see the module documentation. Ordered comparisons: false for NaN.
+            unsafe {
+                let m = _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0);
+                let zero = _mm256_cmp_ps::<_CMP_EQ_OQ>(m, _mm256_setzero_ps());
+                let ge = _mm256_cmp_ps::<_CMP_GE_OQ>(m, _mm256_set1_ps(min));
+                let le = _mm256_cmp_ps::<_CMP_LE_OQ>(m, _mm256_set1_ps(max));
+                let ok = _mm256_or_ps(zero, _mm256_and_ps(ge, le));
+                !(_mm256_movemask_ps(ok) as u32) & 0xFF
+            }
         }
     }
 

@@ -61,6 +61,33 @@ pub(crate) struct Layout {
     pub ovs: Vec<u32>,
     /// Canonical-triangle index of each entry of `ovs`, with [`ODD`] for odd parity.
     pub ov_tri: Vec<u32>,
+    /// Every stored coordinate passes [`coord_in_filter_range`] (a multiple of 2^-40 of
+    /// magnitude at most 2^39): then, with a light whose coordinates pass too, no difference the
+    /// `f32` filter forms can fail its range check.
+    pub coords_in_filter_range: bool,
+}
+
+/// Largest coordinate magnitude (2^39) for which the `f32` filter's range check is known to
+/// pass without evaluating it.
+pub(crate) const COORD_MAX: f32 = 549_755_813_888.0;
+
+/// The grid step (2^-40 = `F32_FILTER_MIN`) every coordinate must be a multiple of.
+const COORD_STEP_INV: f32 = 1_099_511_627_776.0; // 2^40
+
+/// Whether `x` is an integer multiple of 2^-40 with `|x| <= 2^39` (false for NaN and
+/// infinities). Every `f32` of magnitude at least 2^-17 is such a multiple (its ulp is 2^-40 or
+/// coarser), and so are 0 and, for example, `1 - 0.99999994 = 2^-24`.
+///
+/// If every coordinate of `A`, `B`, `O` and `L.xyz` passes and `L.w` is 0 or 1, each of the nine
+/// differences of `orient_filter_f32` (`A - B`, `L.xyz - w A`, `O - A`) passes its range check
+/// (`0` or a magnitude in `[2^-40, 2^40]`): `w A` is `A` or a zero exactly, so each exact
+/// difference is a multiple of 2^-40 of magnitude at most 2^39 + 2^39 = 2^40; round-to-nearest
+/// is monotone and both bounds are representable, so a non-zero exact difference rounds into
+/// `[2^-40, 2^40]`, and a zero one gives 0.
+#[inline]
+pub(crate) fn coord_in_filter_range(x: f32) -> bool {
+    // `x * 2^40` is exact: a power-of-two scaling that cannot overflow for |x| <= 2^39.
+    x.abs() <= COORD_MAX && (x * COORD_STEP_INV).fract() == 0.0
 }
 
 const fn zero_record() -> [f32; 4] {
@@ -128,6 +155,9 @@ impl Layout {
         let xs = stored.iter().map(|p| p[0]).collect();
         let ys = stored.iter().map(|p| p[1]).collect();
         let zs = stored.iter().map(|p| p[2]).collect();
+        let coords_in_filter_range = stored
+            .iter()
+            .all(|p| p[..3].iter().all(|&c| coord_in_filter_range(c)));
         let xyz = stored;
         let sv = |v: u32| st[v as usize];
 
@@ -231,6 +261,7 @@ impl Layout {
             ov_offsets: table.ov_offsets.clone(),
             ovs: table.ovs.iter().map(|&o| sv(o)).collect(),
             ov_tri,
+            coords_in_filter_range,
         })
     }
 

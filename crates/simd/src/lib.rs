@@ -18,9 +18,11 @@
 //!   [`shadowvol_robust_math::sign_f32`]; `ordered`, `robust` and `exact` once per canonical
 //!   triangle (every (edge, OV) pair of a triangle has that triangle as its canonical form, so
 //!   `ov_sign = sign(triangle) × parity`), then one pass over the edges. `exact` runs the
-//!   certified `f64` filter of `orient_filter_f64` (same formula and constant) four lanes at a
-//!   time and decides the lanes it cannot certify with the scalar `orient_exact`; they are counted
-//!   in [`ExtractStats::uncertain`] (three (edge, OV) pairs per uncertain triangle evaluation).
+//!   certified `f32` filter of `orient_filter_f32` (same operations, constants, range checks)
+//!   eight lanes at a time, then, only for the lanes it cannot certify, the certified `f64`
+//!   filter of `orient_filter_f64` four lanes at a time, and decides the lanes neither certifies
+//!   with the scalar `orient_exact`; those are counted in [`ExtractStats::uncertain`] (three
+//!   (edge, OV) pairs per uncertain triangle evaluation).
 //!
 //! Results are bit-identical to the `cpu` backend in every mode (all four evaluate the same IEEE
 //! operations on the same inputs).
