@@ -139,19 +139,45 @@ fn filter_f32<F: F32V, const RANGE: bool>(
     l: &[F; 4],
     o: &[F; 3],
 ) -> (u32, u32, u32) {
+    let (pq, bad) = f32_products::<F, RANGE>(a, b, l);
+    f32_decide::<F, RANGE>(&pq, a, o, bad)
+}
+
+/// The first half of [`filter_f32`]: `E = A - B`, `V = L.xyz - w A`, the range check on them
+/// (with `RANGE`; its bits are returned) and the six products `[p1, q1, p2, q2, p3, q3]`.
+#[inline(always)]
+fn f32_products<F: F32V, const RANGE: bool>(a: &[F; 3], b: &[F; 3], l: &[F; 4]) -> ([F; 6], u32) {
     let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let wa = [l[3] * a[0], l[3] * a[1], l[3] * a[2]];
     let v = [l[0] - wa[0], l[1] - wa[1], l[2] - wa[2]];
-    let d = [o[0] - a[0], o[1] - a[1], o[2] - a[2]];
     let mut bad = 0u32;
     if RANGE {
-        for x in e.iter().chain(&v).chain(&d) {
+        for x in e.iter().chain(&v) {
             bad |= x.out_of_range_bits(F32_FILTER_MIN, F32_FILTER_MAX);
         }
     }
     let (p1, q1) = (e[1] * v[2], e[2] * v[1]);
     let (p2, q2) = (e[2] * v[0], e[0] * v[2]);
     let (p3, q3) = (e[0] * v[1], e[1] * v[0]);
+    ([p1, q1, p2, q2, p3, q3], bad)
+}
+
+/// The second half of [`filter_f32`]: `D = O - A`, its range check (with `RANGE`), `det`,
+/// `perm` and the decision, given the products and range bits of [`f32_products`].
+#[inline(always)]
+fn f32_decide<F: F32V, const RANGE: bool>(
+    pq: &[F; 6],
+    a: &[F; 3],
+    o: &[F; 3],
+    mut bad: u32,
+) -> (u32, u32, u32) {
+    let [p1, q1, p2, q2, p3, q3] = *pq;
+    let d = [o[0] - a[0], o[1] - a[1], o[2] - a[2]];
+    if RANGE {
+        for x in &d {
+            bad |= x.out_of_range_bits(F32_FILTER_MIN, F32_FILTER_MAX);
+        }
+    }
     let det = (p1 - q1) * d[0] + (p2 - q2) * d[1] + (p3 - q3) * d[2];
     let perm = (p1.abs() + q1.abs()) * d[0].abs()
         + (p2.abs() + q2.abs()) * d[1].abs()
@@ -290,6 +316,35 @@ pub(crate) fn tri_signs<Lv: Level>(
             }
             continue;
         }
+        if let (Accuracy::Exact, 0xFF, Some(lv), [F32Stage::Unchecked]) =
+            (mode, valid, one32, stages)
+        {
+            // One light, a full block, no range check: as the ordered path above, `O` is
+            // loaded only once the products exist (fewer vectors live).
+            // SAFETY: as below.
+            let (a, b) = unsafe {
+                (
+                    gather::<Lv>(lay, &lay.t0[t..]),
+                    gather::<Lv>(lay, &lay.t1[t..]),
+                )
+            };
+            let (pq, bad) = f32_products::<Lv::F, false>(&a, &b, &lv);
+            // SAFETY: as below.
+            let o = unsafe { gather::<Lv>(lay, &lay.t2[t..]) };
+            let (mut pos, mut neg, unc) = f32_decide::<Lv::F, false>(&pq, &a, &o, bad);
+            uncertain += exact_fallback::<Lv>(
+                lay, t, &lights[0], one64, &mut None, unc, &mut pos, &mut neg,
+            );
+            // Whole 4-byte records as in the ordered path (byte 0 is the sign).
+            let m = sign_bytes(pos, neg).map(|x| i32::from(x as i8));
+            let pack = &mut out[0][dst * PACK..(dst + LANES) * PACK];
+            for (record, s) in pack.chunks_exact_mut(PACK).zip(m) {
+                for (byte, x) in record.iter_mut().zip(s.to_le_bytes()) {
+                    *byte = x as i8;
+                }
+            }
+            continue;
+        }
         // SAFETY: `t + 8 <= t0.len()` (asserted above), and the layout's ids are in range.
         let (a, b, o) = unsafe {
             (
@@ -315,13 +370,9 @@ pub(crate) fn tri_signs<Lv: Level>(
                 }
             }
             Accuracy::Exact => {
-                // Lanes 0..4 and 4..8 widened to f64, made only when some lane of this block
-                // needs the f64 filter. They are gathered again from memory rather than widened
-                // from `a`, `b`, `o`: a conversion of those registers is loop-invariant and
-                // speculatable, so LLVM hoisted it (and its spills) out of the light loop into
-                // every block; a gather after the stores of earlier lights cannot be hoisted.
-                type Wide3<Lv> = ([<Lv as Level>::D; 3], [<Lv as Level>::D; 3]);
-                let mut w64: Option<(Wide3<Lv>, Wide3<Lv>, Wide3<Lv>)> = None;
+                // The block's points widened to f64, made (by `exact_fallback`) only when some
+                // lane needs the f64 filter.
+                let mut w64: Option<Widened<Lv>> = None;
                 for (l, light) in lights.iter().enumerate() {
                     // 1. The f32 filter on all 8 lanes.
                     let lv32 = one32.unwrap_or_else(|| splat4(*light));
@@ -330,63 +381,91 @@ pub(crate) fn tri_signs<Lv: Level>(
                         F32Stage::Checked => filter_f32::<Lv::F, true>(&a, &b, &lv32, &o),
                         F32Stage::Unchecked => filter_f32::<Lv::F, false>(&a, &b, &lv32, &o),
                     };
-                    let mut unc = unc32 & valid;
-                    // 2. The f64 filter on the halves that hold uncertain lanes.
-                    if unc != 0 {
-                        if w64.is_none() {
-                            // SAFETY: as for `a`, `b`, `o` above.
-                            let (a, b, o) = unsafe {
-                                (
-                                    gather::<Lv>(lay, &lay.t0[t..]),
-                                    gather::<Lv>(lay, &lay.t1[t..]),
-                                    gather::<Lv>(lay, &lay.t2[t..]),
-                                )
-                            };
-                            w64 = Some((widen3::<Lv>(&a), widen3::<Lv>(&b), widen3::<Lv>(&o)));
-                        }
-                        if let Some((a64, b64, o64)) = &w64 {
-                            let lv: [Lv::D; 4] = one64.unwrap_or_else(|| {
-                                std::array::from_fn(|c| Lv::D::splat(f64::from(light[c])))
-                            });
-                            let (mut p, mut n, mut u) = (0, 0, 0);
-                            if unc & 0x0F != 0 {
-                                (p, n, u) = filter_f64(a64.0, b64.0, lv, o64.0);
-                            }
-                            if unc & 0xF0 != 0 {
-                                let (ph, nh, uh) = filter_f64(a64.1, b64.1, lv, o64.1);
-                                (p, n, u) = (p | ph << 4, n | nh << 4, u | uh << 4);
-                            }
-                            pos |= p & unc;
-                            neg |= n & unc;
-                            unc &= u;
-                        }
-                    }
-                    // 3. The scalar exact predicate for the lanes neither filter certified.
-                    if unc != 0 {
-                        uncertain += u64::from(unc.count_ones());
-                        let mut bits = unc;
-                        while bits != 0 {
-                            let i = bits.trailing_zeros() as usize;
-                            bits &= bits - 1;
-                            let s = orient_exact(
-                                lay.pos(lay.t0[t + i]),
-                                lay.pos(lay.t1[t + i]),
-                                *light,
-                                lay.pos(lay.t2[t + i]),
-                            );
-                            if s > 0 {
-                                pos |= 1 << i;
-                            } else if s < 0 {
-                                neg |= 1 << i;
-                            }
-                        }
-                    }
+                    let unc = unc32 & valid;
+                    uncertain += exact_fallback::<Lv>(
+                        lay, t, light, one64, &mut w64, unc, &mut pos, &mut neg,
+                    );
                     write_signs(out, l, dst, pos & valid, neg & valid);
                 }
             }
         }
     }
     uncertain
+}
+
+/// `A`, `B` and `O` of a block, lanes 0..4 and 4..8, widened to `f64`.
+type Widened<Lv> = [([<Lv as Level>::D; 3], [<Lv as Level>::D; 3]); 3];
+
+/// Stages 2 and 3 of `exact` for the lanes `unc` of the block at triangle `t` that the `f32`
+/// filter left uncertain: the `f64` filter on the halves that hold such lanes, then the scalar
+/// `orient_exact` for the lanes it leaves uncertain. Their signs are or-ed into `pos` / `neg`;
+/// returns the number of lanes decided by `orient_exact`. `w64` caches the block's widened
+/// points across lights.
+///
+/// The points are gathered again from memory rather than widened from the registers of the
+/// `f32` stage: a conversion of those registers is loop-invariant and speculatable, so LLVM
+/// hoisted it (and its spills) out of the light loop into every block; a gather after the
+/// stores of earlier lights cannot be hoisted.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn exact_fallback<Lv: Level>(
+    lay: &Layout,
+    t: usize,
+    light: &[f32; 4],
+    one64: Option<[Lv::D; 4]>,
+    w64: &mut Option<Widened<Lv>>,
+    mut unc: u32,
+    pos: &mut u32,
+    neg: &mut u32,
+) -> u64 {
+    if unc == 0 {
+        return 0;
+    }
+    if w64.is_none() {
+        // SAFETY: `t + 8 <= t0.len()` (asserted by `tri_signs`), and the layout's ids are in
+        // range.
+        let (a, b, o) = unsafe {
+            (
+                gather::<Lv>(lay, &lay.t0[t..]),
+                gather::<Lv>(lay, &lay.t1[t..]),
+                gather::<Lv>(lay, &lay.t2[t..]),
+            )
+        };
+        *w64 = Some([widen3::<Lv>(&a), widen3::<Lv>(&b), widen3::<Lv>(&o)]);
+    }
+    if let Some([a64, b64, o64]) = w64 {
+        let lv: [Lv::D; 4] =
+            one64.unwrap_or_else(|| std::array::from_fn(|c| Lv::D::splat(f64::from(light[c]))));
+        let (mut p, mut n, mut u) = (0, 0, 0);
+        if unc & 0x0F != 0 {
+            (p, n, u) = filter_f64(a64.0, b64.0, lv, o64.0);
+        }
+        if unc & 0xF0 != 0 {
+            let (ph, nh, uh) = filter_f64(a64.1, b64.1, lv, o64.1);
+            (p, n, u) = (p | ph << 4, n | nh << 4, u | uh << 4);
+        }
+        *pos |= p & unc;
+        *neg |= n & unc;
+        unc &= u;
+    }
+    // The scalar exact predicate for the lanes neither filter certified.
+    let mut bits = unc;
+    while bits != 0 {
+        let i = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        let s = orient_exact(
+            lay.pos(lay.t0[t + i]),
+            lay.pos(lay.t1[t + i]),
+            *light,
+            lay.pos(lay.t2[t + i]),
+        );
+        if s > 0 {
+            *pos |= 1 << i;
+        } else if s < 0 {
+            *neg |= 1 << i;
+        }
+    }
+    u64::from(unc.count_ones())
 }
 
 /// Lanes 0..4 and 4..8 of a point vector, widened to `f64`. (A function, not a closure: closures
