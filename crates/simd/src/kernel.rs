@@ -915,19 +915,11 @@ mod tests {
             let b = std::array::from_fn(|c| wd(&|i| lanes[i].1[c]));
             let o = std::array::from_fn(|c| wd(&|i| lanes[i].2[c]));
             let lv = std::array::from_fn(|c| <Wide as Level>::D::splat(f64::from(l[c])));
-            let (pos, neg, unc) = filter_f64(a, b, lv, o);
+            let bits = filter_f64(a, b, lv, o);
             for (i, (pa, pb, po)) in lanes.iter().enumerate() {
                 let expect = orient_filter_f64(*pa, *pb, l, *po);
-                let got = if unc >> i & 1 == 1 {
-                    uncertain_seen += 1;
-                    None
-                } else if pos >> i & 1 == 1 {
-                    Some(1)
-                } else if neg >> i & 1 == 1 {
-                    Some(-1)
-                } else {
-                    Some(0)
-                };
+                let got = decision(bits, i);
+                uncertain_seen += usize::from(got.is_none());
                 assert_eq!(got, expect, "lane {i}: {pa:?} {pb:?} {l:?} {po:?}");
             }
         }
@@ -935,6 +927,20 @@ mod tests {
             uncertain_seen > 0,
             "the coplanar rounds must produce uncertain lanes"
         );
+    }
+
+    /// Lane `i`'s decision from a filter's `(positive, negative, uncertain)` bits, as the scalar
+    /// filters return it: `None` for uncertain, else the certified sign (0 when neither bit).
+    fn decision((pos, neg, unc): (u32, u32, u32), i: usize) -> Option<i8> {
+        if unc >> i & 1 == 1 {
+            None
+        } else if pos >> i & 1 == 1 {
+            Some(1)
+        } else if neg >> i & 1 == 1 {
+            Some(-1)
+        } else {
+            Some(0)
+        }
     }
 
     /// One 8-lane input set of `filter_f32`: per lane `(A, B, O)`.
@@ -952,17 +958,6 @@ mod tests {
         let b = std::array::from_fn(|c| ld(&|i| lanes[i].1[c]));
         let o = std::array::from_fn(|c| ld(&|i| lanes[i].2[c]));
         let lv = splat4::<Lv::F>(l);
-        let decide = |(pos, neg, unc): (u32, u32, u32), i: usize| {
-            if unc >> i & 1 == 1 {
-                None
-            } else if pos >> i & 1 == 1 {
-                Some(1)
-            } else if neg >> i & 1 == 1 {
-                Some(-1)
-            } else {
-                Some(0)
-            }
-        };
         let checked = filter_f32::<Lv::F, true>(&a, &b, &lv, &o);
         let in_range = |p: &[f32]| p.iter().all(|&c| coord_in_filter_range(c));
         let unchecked_sound = in_range(&l[..3])
@@ -974,13 +969,13 @@ mod tests {
         for (i, (pa, pb, po)) in lanes.iter().enumerate() {
             let expect = orient_filter_f32(*pa, *pb, l, *po);
             assert_eq!(
-                decide(checked, i),
+                decision(checked, i),
                 expect,
                 "lane {i}: {pa:?} {pb:?} {l:?} {po:?}"
             );
             if unchecked_sound {
                 assert_eq!(
-                    decide(unchecked, i),
+                    decision(unchecked, i),
                     expect,
                     "unchecked, lane {i}: {pa:?} {pb:?} {l:?} {po:?}"
                 );
