@@ -240,7 +240,8 @@ fn sign_bytes(pos: u32, neg: u32) -> [u8; 8] {
 /// Signs of the canonical triangles in `blocks` (blocks of 8) for every light.
 ///
 /// `out[l / PACK]` receives the signs of this range for light `l` (`blocks.len() * 8` records of
-/// [`PACK`] bytes; padding lanes get 0). Returns the number of (triangle, light) evaluations
+/// [`sign_stride`]`(lights.len())` bytes: one byte per triangle with one light, [`PACK`] bytes
+/// otherwise; padding lanes get 0). Returns the number of (triangle, light) evaluations
 /// neither the `f32` nor the `f64` filter could certify (exact mode), which were decided with
 /// the scalar exact predicate.
 #[inline(always)]
@@ -253,10 +254,11 @@ pub(crate) fn tri_signs<Lv: Level>(
 ) -> u64 {
     let mut uncertain = 0u64;
     let b0 = blocks.start;
+    let stride = sign_stride(lights.len());
     assert!(
         blocks.end * LANES <= lay.t0.len()
             && out.len() == lights.len().div_ceil(PACK)
-            && out.iter().all(|o| o.len() == blocks.len() * LANES * PACK)
+            && out.iter().all(|o| o.len() == blocks.len() * LANES * stride)
     );
     // One light: its lanes made once per call rather than once per block (no allocation).
     let one32 = match lights {
@@ -293,9 +295,8 @@ pub(crate) fn tri_signs<Lv: Level>(
         let dst = (blk - b0) * LANES;
         if let (Accuracy::Ordered | Accuracy::Original, 0xFF, Some(lv)) = (mode, valid, one32) {
             // One light, a full block (the common case): `plane`'s operations with fewer vectors
-            // live (O is loaded once N exists), and the signs stored as one vector of
-            // `i32` records: byte 0 of each 4-byte record is the sign, the other three bytes
-            // (lights 1-3 of the pack) are unused with one light.
+            // live (O is loaded once N exists), and the 8 signs stored as 8 consecutive bytes
+            // (one light: stride 1).
             // SAFETY: as below.
             let (a, b) = unsafe {
                 (
@@ -308,11 +309,8 @@ pub(crate) fn tri_signs<Lv: Level>(
             // SAFETY: as below.
             let o = unsafe { gather::<Lv>(lay, &lay.t2[t..]) };
             let m = off_plane(&n, &a, &o).signum0().to_i32();
-            let pack = &mut out[0][dst * PACK..(dst + LANES) * PACK];
-            for (record, s) in pack.chunks_exact_mut(PACK).zip(m) {
-                for (byte, x) in record.iter_mut().zip(s.to_le_bytes()) {
-                    *byte = x as i8;
-                }
+            for (byte, s) in out[0][dst..dst + LANES].iter_mut().zip(m) {
+                *byte = s as i8;
             }
             continue;
         }
@@ -335,13 +333,12 @@ pub(crate) fn tri_signs<Lv: Level>(
             uncertain += exact_fallback::<Lv>(
                 lay, t, &lights[0], one64, &mut None, unc, &mut pos, &mut neg,
             );
-            // Whole 4-byte records as in the ordered path (byte 0 is the sign).
-            let m = sign_bytes(pos, neg).map(|x| i32::from(x as i8));
-            let pack = &mut out[0][dst * PACK..(dst + LANES) * PACK];
-            for (record, s) in pack.chunks_exact_mut(PACK).zip(m) {
-                for (byte, x) in record.iter_mut().zip(s.to_le_bytes()) {
-                    *byte = x as i8;
-                }
+            // 8 consecutive bytes as in the ordered path (one light: stride 1).
+            for (byte, x) in out[0][dst..dst + LANES]
+                .iter_mut()
+                .zip(sign_bytes(pos, neg))
+            {
+                *byte = x as i8;
             }
             continue;
         }
@@ -357,7 +354,7 @@ pub(crate) fn tri_signs<Lv: Level>(
             Accuracy::Ordered | Accuracy::Original => {
                 for (l, light) in lights.iter().enumerate() {
                     let (pos, neg) = plane(&a, &b, &splat4(*light), &o).sign_bits();
-                    write_signs(out, l, dst, pos & valid, neg & valid);
+                    write_signs(out, stride, l, dst, pos & valid, neg & valid);
                 }
             }
             Accuracy::Robust => {
@@ -366,7 +363,14 @@ pub(crate) fn tri_signs<Lv: Level>(
                     let (pa, na) = plane(&a, &b, &lv, &o).sign_bits();
                     let (pb, nb) = plane(&b, &o, &lv, &a).sign_bits();
                     let (pc, nc) = plane(&o, &a, &lv, &b).sign_bits();
-                    write_signs(out, l, dst, pa & pb & pc & valid, na & nb & nc & valid);
+                    write_signs(
+                        out,
+                        stride,
+                        l,
+                        dst,
+                        pa & pb & pc & valid,
+                        na & nb & nc & valid,
+                    );
                 }
             }
             Accuracy::Exact => {
@@ -385,7 +389,7 @@ pub(crate) fn tri_signs<Lv: Level>(
                     uncertain += exact_fallback::<Lv>(
                         lay, t, light, one64, &mut w64, unc, &mut pos, &mut neg,
                     );
-                    write_signs(out, l, dst, pos & valid, neg & valid);
+                    write_signs(out, stride, l, dst, pos & valid, neg & valid);
                 }
             }
         }
@@ -477,17 +481,36 @@ fn widen3<Lv: Level>(p: &[Lv::F; 3]) -> ([Lv::D; 3], [Lv::D; 3]) {
 }
 
 #[inline(always)]
-fn write_signs(out: &mut [&mut [i8]], l: usize, dst: usize, pos: u32, neg: u32) {
+fn write_signs(out: &mut [&mut [i8]], stride: usize, l: usize, dst: usize, pos: u32, neg: u32) {
     let bytes = sign_bytes(pos, neg);
-    let pack = &mut out[l / PACK][dst * PACK..(dst + LANES) * PACK];
+    let pack = &mut out[l / PACK][dst * stride..(dst + LANES) * stride];
     for (i, b) in bytes.into_iter().enumerate() {
-        pack[i * PACK + l % PACK] = b as i8;
+        pack[i * stride + l % PACK] = b as i8;
     }
 }
 
-/// Lights per sign pack: the sign of triangle slot `t` for light `l` is byte `l % 4` of the
-/// 4-byte record `t` in pack `l / 4`, so one 32-bit load (or gather) serves four lights.
+/// Lights per sign pack: with several lights, the sign of triangle slot `t` for light `l` is
+/// byte `l % 4` of the 4-byte record `t` in pack `l / 4`, so one 32-bit load (or gather) serves
+/// four lights. With one light the records shrink to one byte (see [`sign_stride`]).
 pub(crate) const PACK: usize = 4;
+
+/// Bytes per triangle slot in a sign pack for `lights` lights: 1 with one light (a dense array,
+/// a quarter of the size, so the edge pass's gathers stay in a smaller cache), [`PACK`] otherwise.
+#[inline(always)]
+pub(crate) const fn sign_stride(lights: usize) -> usize {
+    if lights == 1 {
+        1
+    } else {
+        PACK
+    }
+}
+
+/// Bytes the AVX2 edge pass may read from a pack at `base` for `tri_count` slots at `stride`:
+/// a 4-byte gather at the last slot's byte, so with stride 1 three bytes past the last sign.
+#[inline(always)]
+pub(crate) const fn gather_end(base: usize, tri_count: usize, stride: usize) -> usize {
+    base + tri_count * stride + (PACK - stride)
+}
 
 /// `±s` by the parity bit of a triangle reference.
 #[inline(always)]
@@ -520,7 +543,8 @@ fn push_bits(sil: &mut Vec<u32>, mut bits: u32, base: usize) {
 
 /// Multiplicities of the edges in `blocks` from the triangle signs (`robust`, `ordered`,
 /// `exact`), scalar. Light `l`'s sign of this object's triangle slot `t` is
-/// `signs[bases[l / PACK] + t * PACK + l % PACK]`; `out[l]` receives this range's
+/// `signs[bases[l / PACK] + t * stride + l % PACK]` with `stride` =
+/// [`sign_stride`]`(out.len())` (1 with one light, [`PACK`] otherwise); `out[l]` receives this range's
 /// multiplicities; `sil[l]` collects `edge_base + e` for `m != 0`.
 ///
 /// # Panics
@@ -535,10 +559,11 @@ pub(crate) fn edge_sums(
     edge_base: usize,
 ) {
     let e_start = blocks.start * LANES;
+    let stride = sign_stride(out.len());
     // Every triangle reference of the layout is < tri_count.
     assert!(bases
         .iter()
-        .all(|&b| b + lay.tri_count * PACK <= signs.len()));
+        .all(|&b| b + lay.tri_count * stride <= signs.len()));
     assert!(bases.len() == out.len().div_ceil(PACK));
     for blk in blocks {
         let e0 = blk * LANES;
@@ -547,11 +572,12 @@ pub(crate) fn edge_sums(
             let (ta, tb) = (&lay.tri_a[e0..e0 + LANES], &lay.tri_b[e0..e0 + LANES]);
             for (l, out) in out.iter_mut().enumerate() {
                 let base = bases[l / PACK] + l % PACK;
-                let s = &signs[base..base + (lay.tri_count - 1) * PACK + 1];
+                let s = &signs[base..base + (lay.tri_count - 1) * stride + 1];
                 let dst = &mut out[e0 - e_start..e0 - e_start + LANES];
                 let mut any = 0;
                 for ((d, &t1), &t2) in dst.iter_mut().zip(ta).zip(tb) {
-                    let (i1, i2) = ((t1 & !ODD) as usize * PACK, (t2 & !ODD) as usize * PACK);
+                    let i1 = (t1 & !ODD) as usize * stride;
+                    let i2 = (t2 & !ODD) as usize * stride;
                     debug_assert!(i1 < s.len() && i2 < s.len());
                     // SAFETY: `Layout::build` stores only triangle slots < tri_count, and
                     // `s` covers slot tri_count - 1 (asserted above).
@@ -574,7 +600,8 @@ pub(crate) fn edge_sums(
     }
 }
 
-/// The general (CSR) path of [`edge_sums`] for the block starting at edge `e0`.
+/// The general (CSR) path of [`edge_sums`] for the block starting at edge `e0` (same sign
+/// layout: stride [`sign_stride`]`(out.len())`).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn edge_sums_general(
@@ -587,13 +614,14 @@ pub(crate) fn edge_sums_general(
     edge_base: usize,
     e_start: usize,
 ) {
+    let stride = sign_stride(out.len());
     for e in e0..(e0 + LANES).min(lay.edge_count) {
         let r = lay.ov_offsets[e] as usize..lay.ov_offsets[e + 1] as usize;
         for (l, out) in out.iter_mut().enumerate() {
             let base = bases[l / PACK] + l % PACK;
             let m: i32 = lay.ov_tri[r.clone()]
                 .iter()
-                .map(|&t| signed(signs[base + (t & !ODD) as usize * PACK], t))
+                .map(|&t| signed(signs[base + (t & !ODD) as usize * stride], t))
                 .sum();
             out[e - e_start] = m;
             if m != 0 {
@@ -604,10 +632,15 @@ pub(crate) fn edge_sums_general(
 }
 
 /// [`edge_sums`] with 8 edges per AVX2 vector: per block, two 32-bit gathers per pack of four
-/// lights fetch the signs of both triangles of 8 edges for all four lights. Identical results.
+/// lights fetch the signs of both triangles of 8 edges for all four lights. With one light
+/// (stride 1) the gathers read 4 bytes at the sign's byte and keep byte 0, so the array needs 3
+/// bytes of padding after the last sign (see [`gather_end`]). Identical results.
 ///
 /// # Safety
 /// The CPU must support AVX2, and `signs.len()` must be below `i32::MAX`.
+///
+/// # Panics
+/// If a slice is shorter than described (including the padding).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 pub(crate) unsafe fn edge_sums_avx2(
@@ -622,14 +655,17 @@ pub(crate) unsafe fn edge_sums_avx2(
     use std::arch::x86_64::*;
     let e_start = blocks.start * LANES;
     assert!(signs.len() < i32::MAX as usize);
+    let stride = sign_stride(out.len());
     assert!(bases
         .iter()
-        .all(|&b| b + lay.tri_count * PACK <= signs.len()));
+        .all(|&b| gather_end(b, lay.tri_count, stride) <= signs.len()));
     assert!(bases.len() == out.len().div_ceil(PACK));
     let mask = _mm256_set1_epi32(!ODD as i32);
     if let ([base], [out0], [sil0]) = (bases, &mut *out, &mut *sil) {
         // One light (the common case): the loop below without the pack and lane loops, so the
-        // gathers of consecutive blocks overlap. Byte 0 of each record is the sign.
+        // gathers of consecutive blocks overlap. The signs are dense (stride 1): each gather
+        // reads the 4 bytes at `base + slot`, whose byte 0 is the sign.
+        debug_assert_eq!(stride, 1);
         let b = _mm256_set1_epi32(*base as i32);
         for blk in blocks.clone() {
             let e0 = blk * LANES;
@@ -648,12 +684,14 @@ pub(crate) unsafe fn edge_sums_avx2(
                 continue;
             }
             // SAFETY: fast blocks are full, so e0 + 8 <= tri_a.len() = tri_b.len(); every index
-            // is base + 4 * slot with slot < tri_count, inside `signs` (asserted above).
+            // is base + slot with slot < tri_count, and the 4 bytes read there end at most at
+            // base + tri_count + 3 <= signs.len() (asserted above with stride 1); the sum fits
+            // in i32 as signs.len() < i32::MAX.
             let (g1, g2, k1, k2) = unsafe {
                 let t1 = _mm256_loadu_si256(lay.tri_a[e0..e0 + LANES].as_ptr().cast());
                 let t2 = _mm256_loadu_si256(lay.tri_b[e0..e0 + LANES].as_ptr().cast());
-                let i1 = _mm256_add_epi32(b, _mm256_slli_epi32::<2>(_mm256_and_si256(t1, mask)));
-                let i2 = _mm256_add_epi32(b, _mm256_slli_epi32::<2>(_mm256_and_si256(t2, mask)));
+                let i1 = _mm256_add_epi32(b, _mm256_and_si256(t1, mask));
+                let i2 = _mm256_add_epi32(b, _mm256_and_si256(t2, mask));
                 let p = signs.as_ptr().cast::<i32>();
                 (
                     _mm256_i32gather_epi32::<1>(p, i1),
@@ -695,8 +733,9 @@ pub(crate) unsafe fn edge_sums_avx2(
             let i2 = _mm256_slli_epi32::<2>(_mm256_and_si256(t2, mask));
             for (pack, &base) in bases.iter().enumerate() {
                 let b = _mm256_set1_epi32(base as i32);
-                // SAFETY: every index is base + 4 * slot with slot < tri_count, and the 4-byte
-                // record there is inside `signs` (asserted above); gathers need no alignment.
+                // SAFETY: several lights, so stride 4: every index is base + 4 * slot with
+                // slot < tri_count, and the 4-byte record there is inside `signs` (asserted
+                // above); gathers need no alignment.
                 let (g1, g2) = unsafe {
                     let p = signs.as_ptr().cast::<i32>();
                     (

@@ -190,7 +190,9 @@ pub struct SimdBackend {
     level: SimdLevel,
     pool: Option<rayon::ThreadPool>,
     scenes: PreparedScenes<Prepared>,
-    /// Scratch: triangle signs, in packs of four lights (see `kernel::PACK`).
+    /// Scratch: triangle signs, in packs of four lights (see `kernel::PACK`), one byte per
+    /// triangle with one light (`kernel::sign_stride`), plus 3 bytes of padding for the AVX2
+    /// edge pass's 4-byte gathers.
     signs: Vec<i8>,
 }
 
@@ -352,10 +354,13 @@ mod dispatch {
             #[cfg(target_arch = "x86_64")]
             SimdLevel::Avx2
                 if signs.len() < i32::MAX as usize
-                    && bases.iter().all(|&b| b + lay.tri_count + 3 <= signs.len()) =>
+                    && bases.iter().all(|&b| {
+                        kernel::gather_end(b, lay.tri_count, kernel::sign_stride(out.len()))
+                            <= signs.len()
+                    }) =>
             {
                 // SAFETY: AVX2 as in `tri_signs`; the padding and size conditions are checked
-                // by the guard above.
+                // by the guard above (the same as `edge_sums_avx2`'s asserts).
                 unsafe { kernel::edge_sums_avx2(lay, blocks, signs, bases, out, sil, edge_base) }
             }
             _ => kernel::edge_sums(lay, blocks, signs, bases, out, sil, edge_base),
@@ -452,13 +457,16 @@ fn run_extract(
     let mut uncertain = 0u64;
     if mode != Accuracy::Original {
         // Phase 1: one sign per (canonical triangle, light).
+        // One light: one byte per triangle slot; several: packs of `PACK`-byte records.
         let slots = p.total_tri_slots;
+        let stride = kernel::sign_stride(nl);
         let packs = nl.div_ceil(kernel::PACK);
-        let pack_len = slots * kernel::PACK;
+        let pack_len = slots * stride;
         signs.clear();
-        signs.resize(pack_len * packs, 0);
-        let bounds: Vec<usize> = p.tri_bounds().iter().map(|b| b * kernel::PACK).collect();
-        let parts = split_items(signs, pack_len, &bounds);
+        // 3 bytes of padding: the AVX2 edge pass reads 4 bytes at each (one-light) sign.
+        signs.resize(pack_len * packs + (kernel::PACK - 1), 0);
+        let bounds: Vec<usize> = p.tri_bounds().iter().map(|b| b * stride).collect();
+        let parts = split_items(&mut signs[..pack_len * packs], pack_len, &bounds);
         uncertain = p
             .tri_items
             .par_iter()
@@ -479,6 +487,7 @@ fn run_extract(
     // Phase 2: one pass over all edges of all objects.
     let signs: &[i8] = signs;
     let slots = p.total_tri_slots;
+    let stride = kernel::sign_stride(nl);
     let parts = split_items(out.all_values_mut(), ne, &p.edge_bounds());
     let lists: Vec<Vec<Vec<u32>>> = p
         .edge_items
@@ -499,7 +508,7 @@ fn run_extract(
                 );
             } else {
                 let bases: Vec<usize> = (0..nl.div_ceil(kernel::PACK))
-                    .map(|pack| (pack * slots + o.tri_base) * kernel::PACK)
+                    .map(|pack| (pack * slots + o.tri_base) * stride)
                     .collect();
                 dispatch::edge_sums(
                     level,
