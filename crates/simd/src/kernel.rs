@@ -83,7 +83,18 @@ fn edge_normal<F: F32V>(lv: &[F; 4], a: &[F; 3], e: &[F; 3]) -> [F; 3] {
 /// `N·(O − A)`: the last operations of [`sign_f32`], in its order.
 #[inline(always)]
 fn off_plane<F: F32V>(n: &[F; 3], a: &[F; 3], o: &[F; 3]) -> F {
-    let d = [o[0] - a[0], o[1] - a[1], o[2] - a[2]];
+    dot3(n, &sub3(o, a))
+}
+
+/// `p − q` per coordinate.
+#[inline(always)]
+fn sub3<F: F32V>(p: &[F; 3], q: &[F; 3]) -> [F; 3] {
+    [p[0] - q[0], p[1] - q[1], p[2] - q[2]]
+}
+
+/// `(n.x·d.x + n.y·d.y) + n.z·d.z`: the dot product of [`sign_f32`], in its order.
+#[inline(always)]
+fn dot3<F: F32V>(n: &[F; 3], d: &[F; 3]) -> F {
     (n[0] * d[0] + n[1] * d[1]) + n[2] * d[2]
 }
 
@@ -352,8 +363,11 @@ pub(crate) fn tri_signs<Lv: Level>(
         };
         match mode {
             Accuracy::Ordered | Accuracy::Original => {
+                // `plane`'s operations with `A − B` and `O − A` made once for all lights.
+                let (e, d) = (sub3(&a, &b), sub3(&o, &a));
                 for (l, light) in lights.iter().enumerate() {
-                    let (pos, neg) = plane(&a, &b, &splat4(*light), &o).sign_bits();
+                    let n = edge_normal(&splat4(*light), &a, &e);
+                    let (pos, neg) = dot3(&n, &d).sign_bits();
                     write_signs(out, stride, l, dst, pos & valid, neg & valid);
                 }
             }
@@ -517,18 +531,6 @@ pub(crate) const fn gather_end(base: usize, tri_count: usize, stride: usize) -> 
 fn signed(s: i8, tref: u32) -> i32 {
     let k = (tref >> 31) as i32; // 1 for odd parity
     (i32::from(s) ^ -k) + k
-}
-
-/// Pushes `base + i` for the non-zero lanes of `m`.
-#[inline(always)]
-fn push_nonzero(sil: &mut Vec<u32>, m: &[i32; LANES], base: usize) {
-    if *m != [0; LANES] {
-        for (i, &mi) in m.iter().enumerate() {
-            if mi != 0 {
-                sil.push((base + i) as u32);
-            }
-        }
-    }
 }
 
 /// Pushes `base + i` for the set bits `i` of `bits`.
@@ -807,16 +809,14 @@ pub(crate) fn edge_original<Lv: Level>(
                     gather::<Lv>(lay, &i2),
                 )
             };
-            let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+            // The operations of `sign_f32`: `A − B` and both `O − A` made once for all lights,
+            // `V` and `N` once per light for both OVs.
+            let (e, d1, d2) = (sub3(&a, &b), sub3(&o1, &a), sub3(&o2, &a));
             for (l, light) in lights.iter().enumerate() {
-                let lv = splat4::<Lv::F>(*light);
-                // The operations of `sign_f32`, with V, A - B and N shared by both OVs.
-                let n = edge_normal(&lv, &a, &e);
-                let d1 = off_plane(&n, &a, &o1);
-                let d2 = off_plane(&n, &a, &o2);
-                let m = (d1.signum0() + d2.signum0()).to_i32();
-                out[l][e0 - e_start..e0 - e_start + LANES].copy_from_slice(&m);
-                push_nonzero(&mut sil[l], &m, edge_base + e0);
+                let n = edge_normal(&splat4::<Lv::F>(*light), &a, &e);
+                let m = dot3(&n, &d1).signum0() + dot3(&n, &d2).signum0();
+                let nz = m.store_i32_cached(&mut out[l][e0 - e_start..e0 - e_start + LANES]);
+                push_bits(&mut sil[l], nz, edge_base + e0);
             }
         } else {
             original_general_block(lay, e0, lights, out, sil, edge_base, e_start);

@@ -54,6 +54,18 @@ pub(crate) trait F32V:
             .enumerate()
             .fold(0, |bits, (i, &x)| bits | u32::from(x != 0) << i)
     }
+    /// [`F32V::store_i32`] with an ordinary (cached) store: for several output rows written
+    /// in turn, where streaming stores thrash the write-combining buffers.
+    ///
+    /// # Panics
+    /// If `dst.len() < 8`.
+    fn store_i32_cached(self, dst: &mut [i32]) -> u32 {
+        let m = self.to_i32();
+        dst[..8].copy_from_slice(&m);
+        m.iter()
+            .enumerate()
+            .fold(0, |bits, (i, &x)| bits | u32::from(x != 0) << i)
+    }
 }
 
 /// Four `f64` lanes.
@@ -353,6 +365,18 @@ mod avx2 {
                 let m = _mm256_cvttps_epi32(self.0);
                 let p = dst.as_mut_ptr().cast::<__m256i>();
                 stream_i32x8(p, m);
+                let zero = _mm256_cmpeq_epi32(m, _mm256_setzero_si256());
+                !(_mm256_movemask_ps(_mm256_castsi256_ps(zero)) as u32) & 0xFF
+            }
+        }
+        #[inline(always)]
+        fn store_i32_cached(self, dst: &mut [i32]) -> u32 {
+            let dst = &mut dst[..8];
+            // SAFETY: `dst` holds 8 i32 (checked above); unaligned store; AVX2 present
+            // (module docs).
+            unsafe {
+                let m = _mm256_cvttps_epi32(self.0);
+                _mm256_storeu_si256(dst.as_mut_ptr().cast::<__m256i>(), m);
                 let zero = _mm256_cmpeq_epi32(m, _mm256_setzero_si256());
                 !(_mm256_movemask_ps(_mm256_castsi256_ps(zero)) as u32) & 0xFF
             }
