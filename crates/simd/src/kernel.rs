@@ -365,10 +365,22 @@ pub(crate) fn tri_signs<Lv: Level>(
             Accuracy::Ordered | Accuracy::Original => {
                 // `plane`'s operations with `A − B` and `O − A` made once for all lights.
                 let (e, d) = (sub3(&a, &b), sub3(&o, &a));
-                for (l, light) in lights.iter().enumerate() {
-                    let n = edge_normal(&splat4(*light), &a, &e);
-                    let (pos, neg) = dot3(&n, &d).sign_bits();
-                    write_signs(out, stride, l, dst, pos & valid, neg & valid);
+                if valid == 0xFF && stride == PACK {
+                    // A full block: each pack's 4-byte records built in registers, one store.
+                    for (pack, chunk) in lights.chunks(PACK).enumerate() {
+                        let mut rec = [0u32; LANES];
+                        for (k, light) in chunk.iter().enumerate() {
+                            let n = edge_normal(&splat4(*light), &a, &e);
+                            dot3(&n, &d).or_sign_byte(&mut rec, k as u32);
+                        }
+                        write_records(out, pack, dst, &rec);
+                    }
+                } else {
+                    for (l, light) in lights.iter().enumerate() {
+                        let n = edge_normal(&splat4(*light), &a, &e);
+                        let (pos, neg) = dot3(&n, &d).sign_bits();
+                        write_signs(out, stride, l, dst, pos & valid, neg & valid);
+                    }
                 }
             }
             Accuracy::Robust => {
@@ -500,6 +512,18 @@ fn write_signs(out: &mut [&mut [i8]], stride: usize, l: usize, dst: usize, pos: 
     let pack = &mut out[l / PACK][dst * stride..(dst + LANES) * stride];
     for (i, b) in bytes.into_iter().enumerate() {
         pack[i * stride + l % PACK] = b as i8;
+    }
+}
+
+/// Writes the 8 four-light sign records `rec` (byte `k` = light `4 * pack + k`) of the block at
+/// slot `dst` into pack `pack` ([`PACK`] bytes per slot).
+#[inline(always)]
+fn write_records(out: &mut [&mut [i8]], pack: usize, dst: usize, rec: &[u32; LANES]) {
+    let dst = &mut out[pack][dst * PACK..(dst + LANES) * PACK];
+    for (d, r) in dst.chunks_exact_mut(PACK).zip(rec) {
+        for (byte, x) in d.iter_mut().zip(r.to_le_bytes()) {
+            *byte = x as i8;
+        }
     }
 }
 

@@ -32,6 +32,22 @@ pub(crate) trait F32V:
     fn signum0(self) -> Self;
     /// Truncates to integers (the lanes are small exact integers here).
     fn to_i32(self) -> [i32; 8];
+    /// Ors lane `i`'s sign as an `i8` byte (`+1` = 0x01, `-1` = 0xFF, zero or NaN = 0x00) into
+    /// byte `k` (0 to 3) of `rec[i]`, whose byte `k` must be 0: the 4-byte sign records of four
+    /// lights, built in registers instead of byte by byte.
+    fn or_sign_byte(self, rec: &mut [u32; 8], k: u32) {
+        let (pos, neg) = self.sign_bits();
+        for (i, r) in rec.iter_mut().enumerate() {
+            let b = if pos >> i & 1 == 1 {
+                0x01
+            } else if neg >> i & 1 == 1 {
+                0xFF
+            } else {
+                0
+            };
+            *r |= b << (8 * k);
+        }
+    }
     /// Lane-wise absolute value (clears the sign bit; exact).
     fn abs(self) -> Self;
     /// Bit `i` set when `self[i] > other[i]` (false for NaN lanes).
@@ -367,6 +383,23 @@ mod avx2 {
                 stream_i32x8(p, m);
                 let zero = _mm256_cmpeq_epi32(m, _mm256_setzero_si256());
                 !(_mm256_movemask_ps(_mm256_castsi256_ps(zero)) as u32) & 0xFF
+            }
+        }
+        #[inline(always)]
+        fn or_sign_byte(self, rec: &mut [u32; 8], k: u32) {
+            // SAFETY: `rec` is 32 readable and writable bytes; unaligned load and store; AVX2
+            // present (module docs).
+            unsafe {
+                let z = _mm256_setzero_ps();
+                let gt = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GT_OQ>(self.0, z));
+                let lt = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(self.0, z));
+                let byte = _mm256_or_si256(
+                    _mm256_and_si256(gt, _mm256_set1_epi32(0x01)),
+                    _mm256_and_si256(lt, _mm256_set1_epi32(0xFF)),
+                );
+                let shifted = _mm256_sll_epi32(byte, _mm_cvtsi32_si128((8 * k) as i32));
+                let p = rec.as_mut_ptr().cast::<__m256i>();
+                _mm256_storeu_si256(p, _mm256_or_si256(_mm256_loadu_si256(p), shifted));
             }
         }
         #[inline(always)]
