@@ -191,8 +191,7 @@ pub struct SimdBackend {
     pool: Option<rayon::ThreadPool>,
     scenes: PreparedScenes<Prepared>,
     /// Scratch: triangle signs, in packs of four lights (see `kernel::PACK`), one byte per
-    /// triangle with one light (`kernel::sign_stride`), plus 3 bytes of padding for the AVX2
-    /// edge pass's 4-byte gathers.
+    /// triangle with one light (`kernel::sign_stride`).
     signs: Vec<i8>,
 }
 
@@ -355,11 +354,11 @@ mod dispatch {
             SimdLevel::Avx2
                 if signs.len() < i32::MAX as usize
                     && bases.iter().all(|&b| {
-                        kernel::gather_end(b, lay.tri_count, kernel::sign_stride(out.len()))
+                        kernel::signs_end(b, lay.tri_count, kernel::sign_stride(out.len()))
                             <= signs.len()
                     }) =>
             {
-                // SAFETY: AVX2 as in `tri_signs`; the padding and size conditions are checked
+                // SAFETY: AVX2 as in `tri_signs`; the size conditions are checked
                 // by the guard above (the same as `edge_sums_avx2`'s asserts).
                 unsafe { kernel::edge_sums_avx2(lay, blocks, signs, bases, out, sil, edge_base) }
             }
@@ -463,10 +462,9 @@ fn run_extract(
         let packs = nl.div_ceil(kernel::PACK);
         let pack_len = slots * stride;
         signs.clear();
-        // 3 bytes of padding: the AVX2 edge pass reads 4 bytes at each (one-light) sign.
-        signs.resize(pack_len * packs + (kernel::PACK - 1), 0);
+        signs.resize(pack_len * packs, 0);
         let bounds: Vec<usize> = p.tri_bounds().iter().map(|b| b * stride).collect();
-        let parts = split_items(&mut signs[..pack_len * packs], pack_len, &bounds);
+        let parts = split_items(signs, pack_len, &bounds);
         uncertain = p
             .tri_items
             .par_iter()
