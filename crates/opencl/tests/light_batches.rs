@@ -46,8 +46,8 @@ fn one_launch(
     r
 }
 
-/// `got` (split) against one launch and, in exact mode, against `cpu`; robust and ordered
-/// closed; the uncertain counts equal.
+/// `got` (split) against one launch of `whole` and, in exact mode, against `cpu`
+/// ([`invariant::check_split_batches`]).
 #[allow(clippy::too_many_arguments)]
 fn check_split(
     got: &Multiplicities,
@@ -59,42 +59,10 @@ fn check_split(
     mode: Accuracy,
     what: &str,
 ) {
-    assert_eq!(got.light_count(), lights.len(), "{what}");
-    assert_eq!(got.edge_count(), scene.total_edges(), "{what}");
-    assert!(got.silhouettes_consistent(), "{what}: compact lists");
     let (one, one_stats) = one_launch(whole, scene, lights, mode, what);
-    assert_eq!(
-        invariant::first_difference(got, &one),
-        None,
-        "{what}: split result differs from one launch (light, edge, split, one launch)"
-    );
-    for l in 0..lights.len() {
-        assert_eq!(got.silhouette(l), one.silhouette(l), "{what}: light {l}");
-    }
-    // Each (edge, OV, light) is certified or not regardless of its batch, so the per-launch
-    // counts must add up to the one-launch count (0 outside exact mode).
-    assert_eq!(stats.uncertain, one_stats.uncertain, "{what}: uncertain");
-    if mode == Accuracy::Exact {
-        let (want, _) = extract_once(cpu, scene, lights, mode).unwrap();
-        assert_eq!(
-            invariant::first_difference(got, &want),
-            None,
-            "{what}: differs from cpu (light, edge, opencl, cpu)"
-        );
-    } else {
-        assert_eq!(stats.uncertain, 0, "{what}");
-    }
-    if mode.is_consistent() {
-        for l in 0..lights.len() {
-            assert_eq!(
-                invariant::open_vertices_scene(scene, got, l),
-                0,
-                "{what}: light {l} has open vertices"
-            );
-        }
-    }
-    assert!(stats.compute > std::time::Duration::ZERO, "{what}");
-    assert!(stats.total() >= stats.compute + stats.upload, "{what}");
+    let want = (mode == Accuracy::Exact).then(|| extract_once(cpu, scene, lights, mode).unwrap().0);
+    invariant::check_split_batches(scene, mode, (got, stats), (&one, &one_stats), want.as_ref())
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
 }
 
 #[test]

@@ -85,3 +85,123 @@ pub fn first_difference(
             .map(|e| (l, e, a.values(l)[e], b.values(l)[e]))
     })
 }
+
+/// Checks a result a backend computed with its lights split into several batches (launches,
+/// passes) against the same backend's result for all lights at once, and the closed-chain
+/// invariant. `split` and `whole` are each a result with its stats; `exact` is an independent
+/// exact reference (for example the `cpu` backend in [`Accuracy::Exact`](crate::Accuracy)), compared
+/// in exact mode only.
+///
+/// The properties, in order: the same light and edge counts; consistent compact lists; the same
+/// multiplicities and the same silhouette list per light as `whole`; the same uncertain count
+/// (each (edge, OV, light) is certified or not regardless of its batch), and none outside exact
+/// mode; in exact mode the values of `exact`; in the consistent modes no open vertex for any
+/// light; a non-zero compute time, within the total.
+///
+/// # Errors
+/// A message naming the first property that does not hold (with the light and edge of the first
+/// differing value where there is one).
+pub fn check_split_batches(
+    scene: &TopologyScene,
+    mode: crate::Accuracy,
+    split: (&Multiplicities, &crate::ExtractStats),
+    whole: (&Multiplicities, &crate::ExtractStats),
+    exact: Option<&Multiplicities>,
+) -> Result<(), String> {
+    let ((got, stats), (one, one_stats)) = (split, whole);
+    if got.light_count() != one.light_count() || got.edge_count() != scene.total_edges() {
+        return Err(format!(
+            "{} lights x {} edges, expected {} x {}",
+            got.light_count(),
+            got.edge_count(),
+            one.light_count(),
+            scene.total_edges()
+        ));
+    }
+    if !got.silhouettes_consistent() {
+        return Err("compact silhouette lists disagree with the multiplicities".to_owned());
+    }
+    if let Some(d) = first_difference(got, one) {
+        return Err(format!(
+            "split result differs from one batch (light, edge, split, one batch): {d:?}"
+        ));
+    }
+    if let Some(l) = (0..got.light_count()).find(|&l| got.silhouette(l) != one.silhouette(l)) {
+        return Err(format!("light {l}: silhouette list differs from one batch"));
+    }
+    if stats.uncertain != one_stats.uncertain {
+        return Err(format!(
+            "uncertain: {} split, {} in one batch",
+            stats.uncertain, one_stats.uncertain
+        ));
+    }
+    if mode == crate::Accuracy::Exact {
+        if let Some(d) = exact.and_then(|want| first_difference(got, want)) {
+            return Err(format!(
+                "differs from the exact reference (light, edge, got, reference): {d:?}"
+            ));
+        }
+    } else if stats.uncertain != 0 {
+        return Err(format!("{} uncertain outside exact mode", stats.uncertain));
+    }
+    if mode.is_consistent() {
+        if let Some(l) = (0..got.light_count()).find(|&l| open_vertices_scene(scene, got, l) > 0) {
+            return Err(format!("light {l} has open vertices"));
+        }
+    }
+    if stats.compute.is_zero() || stats.total() < stats.compute + stats.upload {
+        return Err(format!("implausible times: {stats:?}"));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{corpus, Accuracy, ExtractStats};
+    use std::time::Duration;
+
+    /// `check_split_batches` accepts equal results and names each broken property.
+    #[test]
+    fn check_split_batches_names_what_differs() {
+        let case = corpus::case("book-4").expect("corpus case");
+        let scene = case.scene().unwrap();
+        let (edges, lights) = (scene.total_edges(), 2);
+        // Zero multiplicities: every chain is trivially closed.
+        let mut one = Multiplicities::zeroed(edges, lights);
+        one.rebuild_silhouettes();
+        let stats = ExtractStats {
+            compute: Duration::from_micros(5),
+            ..ExtractStats::default()
+        };
+        let check = |got: &Multiplicities, s: &ExtractStats, mode| {
+            check_split_batches(&scene, mode, (got, s), (&one, &stats), Some(&one))
+        };
+        assert_eq!(check(&one, &stats, Accuracy::Robust), Ok(()));
+
+        let mut other = one.clone();
+        other.values_mut(1)[3] = 1;
+        other.rebuild_silhouettes();
+        let e = check(&other, &stats, Accuracy::Robust).unwrap_err();
+        assert!(e.contains("differs from one batch"), "{e}");
+
+        let mut stale = one.clone();
+        stale.values_mut(0)[0] = 1;
+        let e = check(&stale, &stats, Accuracy::Robust).unwrap_err();
+        assert!(e.contains("compact silhouette lists"), "{e}");
+
+        let more = ExtractStats {
+            uncertain: 2,
+            ..stats
+        };
+        let e = check(&one, &more, Accuracy::Exact).unwrap_err();
+        assert!(e.contains("uncertain: 2 split, 0"), "{e}");
+
+        let e = check(&one, &ExtractStats::default(), Accuracy::Original).unwrap_err();
+        assert!(e.contains("implausible times"), "{e}");
+
+        let wrong = Multiplicities::zeroed(edges, 1);
+        let e = check(&wrong, &stats, Accuracy::Ordered).unwrap_err();
+        assert!(e.contains("expected 2 x"), "{e}");
+    }
+}
