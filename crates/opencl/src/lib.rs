@@ -558,14 +558,15 @@ impl OpenClBackend {
         let sil = 8 * edges as u64;
         let light = 16 * objects as u64;
         let index = u64::from(u32::MAX);
-        let n = (self.max_alloc / sil.max(1))
-            .min(self.max_alloc / light.max(1))
-            .min(index / (edges as u64).max(1))
-            .min(index / (ovs as u64).max(1))
-            .min(
-                self.max_lights_per_launch
-                    .map_or(u64::MAX, |n| n.get() as u64),
-            );
+        let n = shadowvol_silhouette::lights_per_batch(
+            &[
+                (self.max_alloc, sil),
+                (self.max_alloc, light),
+                (index, edges as u64),
+                (index, ovs as u64),
+            ],
+            self.max_lights_per_launch,
+        );
         if n == 0 {
             return Err(BackendError::Limit {
                 backend: BACKEND,
@@ -578,7 +579,7 @@ impl OpenClBackend {
                 ),
             });
         }
-        Ok(usize::try_from(n).unwrap_or(usize::MAX))
+        Ok(n)
     }
 
     fn check_alloc(&self, what: &str, bytes: usize, hint: &str) -> Result<(), BackendError> {

@@ -26,6 +26,7 @@
 //! assert_eq!(invariant::open_vertices_scene(&scene, &m, 0), 0);
 //! ```
 
+mod batches;
 pub mod corpus;
 pub mod invariant;
 mod multiplicities;
@@ -34,6 +35,7 @@ mod scene;
 pub mod shapes;
 mod wait;
 
+pub use batches::lights_per_batch;
 pub use multiplicities::{ExtractStats, Multiplicities};
 pub use prepared::{check_lights, PreparedScenes};
 pub use scene::{object_lights, SceneObject, TopologyScene};

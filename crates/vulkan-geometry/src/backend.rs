@@ -204,13 +204,14 @@ impl VulkanBackend {
         let max_range = self.ctx.caps.max_storage_buffer_range;
         let mult = 4 * edges as u64;
         let light = 16 * objects as u64;
-        let n = (max_range / mult.max(1))
-            .min(max_range / light.max(1))
-            .min(u64::from(u32::MAX) / (edges as u64).max(1))
-            .min(
-                self.max_lights_per_pass
-                    .map_or(u64::MAX, |n| n.get() as u64),
-            );
+        let n = shadowvol_silhouette::lights_per_batch(
+            &[
+                (max_range, mult),
+                (max_range, light),
+                (u64::from(u32::MAX), edges as u64),
+            ],
+            self.max_lights_per_pass,
+        );
         if n == 0 {
             return Err(BackendError::Limit {
                 backend: BACKEND,
@@ -223,7 +224,7 @@ impl VulkanBackend {
                 ),
             });
         }
-        Ok(usize::try_from(n).unwrap_or(usize::MAX))
+        Ok(n)
     }
 
     /// The exact-mode filter in use: `F64` when the device has `shaderFloat64` (and it was not
