@@ -59,7 +59,7 @@ fn splat4<F: F32V>(l: [f32; 4]) -> [F; 4] {
 /// is `sign_f32(A, B, L, O)` in every lane.
 #[inline(always)]
 fn plane<F: F32V>(a: &[F; 3], b: &[F; 3], l: &[F; 4], o: &[F; 3]) -> F {
-    let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let e = sub3(a, b);
     let n = edge_normal(l, a, &e);
     off_plane(&n, a, o)
 }
@@ -158,7 +158,7 @@ fn filter_f32<F: F32V, const RANGE: bool>(
 /// (with `RANGE`; its bits are returned) and the six products `[p1, q1, p2, q2, p3, q3]`.
 #[inline(always)]
 fn f32_products<F: F32V, const RANGE: bool>(a: &[F; 3], b: &[F; 3], l: &[F; 4]) -> ([F; 6], u32) {
-    let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let e = sub3(a, b);
     let wa = [l[3] * a[0], l[3] * a[1], l[3] * a[2]];
     let v = [l[0] - wa[0], l[1] - wa[1], l[2] - wa[2]];
     let mut bad = 0u32;
@@ -183,7 +183,7 @@ fn f32_decide<F: F32V, const RANGE: bool>(
     mut bad: u32,
 ) -> (u32, u32, u32) {
     let [p1, q1, p2, q2, p3, q3] = *pq;
-    let d = [o[0] - a[0], o[1] - a[1], o[2] - a[2]];
+    let d = sub3(o, a);
     if RANGE {
         for x in &d {
             bad |= x.out_of_range_bits(F32_FILTER_MIN, F32_FILTER_MAX);
@@ -315,7 +315,7 @@ pub(crate) fn tri_signs<Lv: Level>(
                     gather::<Lv>(lay, &lay.t1[t..]),
                 )
             };
-            let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+            let e = sub3(&a, &b);
             let n = edge_normal(&lv, &a, &e);
             // SAFETY: as below.
             let o = unsafe { gather::<Lv>(lay, &lay.t2[t..]) };
@@ -934,7 +934,7 @@ fn edge_original_one<Lv: Level>(
                 gather::<Lv>(lay, &idx(&lay.eb)),
             )
         };
-        let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let e = sub3(&a, &b);
         let n = edge_normal(&lv, &a, &e);
         // SAFETY: as above.
         let o1 = unsafe { gather::<Lv>(lay, &idx(&lay.eo1)) };

@@ -64,11 +64,8 @@ pub(crate) trait F32V:
     /// # Panics
     /// If `dst.len() < 8`.
     fn store_i32(self, dst: &mut [i32]) -> u32 {
-        let m = self.to_i32();
-        dst[..8].copy_from_slice(&m);
-        m.iter()
-            .enumerate()
-            .fold(0, |bits, (i, &x)| bits | u32::from(x != 0) << i)
+        // No streaming store at this level: the ordinary store.
+        self.store_i32_cached(dst)
     }
     /// [`F32V::store_i32`] with an ordinary (cached) store: for several output rows written
     /// in turn, where streaming stores thrash the write-combining buffers.
