@@ -787,27 +787,42 @@ pub(crate) unsafe fn edge_sums_avx2(
                         _mm256_i32gather_epi32::<1>(p, _mm256_add_epi32(b, i2)),
                     )
                 };
+                // Each record holds up to four lights' signs, one byte each. Negate every
+                // byte where the parity is odd (`k` is 0 or all ones in each 32-bit lane, so
+                // `(g ^ k) - k` per byte) and add the two triangles: byte `j` of lane `i` is
+                // then `m` of edge `e0 + i` for light `4 pack + j`, in `-2 ..= 2`.
+                let s1 = _mm256_sub_epi8(_mm256_xor_si256(g1, k1), k1);
+                let s2 = _mm256_sub_epi8(_mm256_xor_si256(g2, k2), k2);
+                let m = _mm256_add_epi8(s1, s2);
                 let lights = (out.len() - pack * PACK).min(PACK);
-                for lane in 0..lights {
-                    let l = pack * PACK + lane;
-                    // Byte `lane` of each record, sign-extended.
-                    let shift = _mm_cvtsi32_si128((24 - 8 * lane) as i32);
-                    let s1 = _mm256_srai_epi32::<24>(_mm256_sll_epi32(g1, shift));
-                    let s2 = _mm256_srai_epi32::<24>(_mm256_sll_epi32(g2, shift));
-                    // Negate where the parity is odd.
-                    let s1 = _mm256_sub_epi32(_mm256_xor_si256(s1, k1), k1);
-                    let s2 = _mm256_sub_epi32(_mm256_xor_si256(s2, k2), k2);
-                    let m = _mm256_add_epi32(s1, s2);
-                    let dst = &mut out[l][e0 - e_start..e0 - e_start + LANES];
+                // Bit `4 i + j` set where that byte is non-zero, for this pack's lights only
+                // (the bytes of absent lights are not read).
+                let zero = _mm256_movemask_epi8(_mm256_cmpeq_epi8(m, _mm256_setzero_si256()));
+                let nz = !(zero as u32) & (0x1111_1111u32 * ((1 << lights) - 1));
+                // Byte `j` of each lane, sign-extended to i32.
+                let rows = [
+                    _mm256_srai_epi32::<24>(_mm256_slli_epi32::<24>(m)),
+                    _mm256_srai_epi32::<24>(_mm256_slli_epi32::<16>(m)),
+                    _mm256_srai_epi32::<24>(_mm256_slli_epi32::<8>(m)),
+                    _mm256_srai_epi32::<24>(m),
+                ];
+                let pack_out = &mut out[pack * PACK..pack * PACK + lights];
+                for (row, dst) in rows.iter().zip(pack_out.iter_mut()) {
+                    let dst = &mut dst[e0 - e_start..e0 - e_start + LANES];
                     // SAFETY: `dst` holds 8 i32; unaligned store. (Not a streaming store: with
                     // several lights' rows, half a cache line each per block, those thrash the
                     // write-combining buffers.)
-                    unsafe { _mm256_storeu_si256(dst.as_mut_ptr().cast(), m) };
-                    let zero = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
-                        m,
-                        _mm256_setzero_si256(),
-                    ))) as u32;
-                    push_bits(&mut sil[l], !zero & 0xFF, edge_base + e0);
+                    unsafe { _mm256_storeu_si256(dst.as_mut_ptr().cast(), *row) };
+                }
+                if nz != 0 {
+                    // Silhouette edges in this block (rare): the lanes of each light.
+                    for (j, row) in rows.iter().enumerate().take(lights) {
+                        let z = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                            *row,
+                            _mm256_setzero_si256(),
+                        ))) as u32;
+                        push_bits(&mut sil[pack * PACK + j], !z & 0xFF, edge_base + e0);
+                    }
                 }
             }
         } else {
