@@ -244,8 +244,41 @@ const POS_BYTES: [u64; 256] = {
 /// Per-lane `i8` signs from disjoint positive / negative bit masks.
 #[inline(always)]
 fn sign_bytes(pos: u32, neg: u32) -> [u8; 8] {
+    sign_bytes_u64(pos, neg).to_le_bytes()
+}
+
+/// [`sign_bytes`] as one little-endian `u64` (byte `i` = lane `i`).
+#[inline(always)]
+fn sign_bytes_u64(pos: u32, neg: u32) -> u64 {
     // Negative lanes become 0xFF (= -1i8) = 0xFF * 1.
-    (POS_BYTES[(pos & 0xFF) as usize] | (POS_BYTES[(neg & 0xFF) as usize] * 0xFF)).to_le_bytes()
+    POS_BYTES[(pos & 0xFF) as usize] | (POS_BYTES[(neg & 0xFF) as usize] * 0xFF)
+}
+
+/// The 8 four-light records of a block from the sign bytes of its (up to) [`PACK`] lights:
+/// byte `k` of record `i` is byte `i` of `bytes[k]` (an 8 x 4 byte transpose).
+#[inline(always)]
+fn records_from_bytes(bytes: [u64; PACK]) -> [u32; LANES] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        // SAFETY: SSE2 is part of x86-64; `rec` is 32 writable bytes (unaligned stores).
+        unsafe {
+            let q = |x: u64| _mm_cvtsi64_si128(x as i64);
+            // [b0_0, b1_0, b0_1, b1_1, ...] and [b2_0, b3_0, b2_1, b3_1, ...]
+            let l01 = _mm_unpacklo_epi8(q(bytes[0]), q(bytes[1]));
+            let l23 = _mm_unpacklo_epi8(q(bytes[2]), q(bytes[3]));
+            let mut rec = [0u32; LANES];
+            _mm_storeu_si128(rec.as_mut_ptr().cast(), _mm_unpacklo_epi16(l01, l23));
+            _mm_storeu_si128(rec[4..].as_mut_ptr().cast(), _mm_unpackhi_epi16(l01, l23));
+            rec
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    std::array::from_fn(|i| {
+        (0..PACK).fold(0u32, |r, k| {
+            r | ((bytes[k] >> (8 * i)) as u32 & 0xFF) << (8 * k)
+        })
+    })
 }
 
 /// Signs of the canonical triangles in `blocks` (blocks of 8) for every light.
@@ -383,6 +416,21 @@ pub(crate) fn tri_signs<Lv: Level>(
                     }
                 }
             }
+            Accuracy::Robust if stride == PACK => {
+                // Several lights: each pack's records built from the lights' sign bytes, one
+                // store per pack.
+                for (pack, chunk) in lights.chunks(PACK).enumerate() {
+                    let mut bytes = [0u64; PACK];
+                    for (k, light) in chunk.iter().enumerate() {
+                        let lv = splat4(*light);
+                        let (pa, na) = plane(&a, &b, &lv, &o).sign_bits();
+                        let (pb, nb) = plane(&b, &o, &lv, &a).sign_bits();
+                        let (pc, nc) = plane(&o, &a, &lv, &b).sign_bits();
+                        bytes[k] = sign_bytes_u64(pa & pb & pc & valid, na & nb & nc & valid);
+                    }
+                    write_records(out, pack, dst, &records_from_bytes(bytes));
+                }
+            }
             Accuracy::Robust => {
                 for (l, light) in lights.iter().enumerate() {
                     let lv = splat4(*light);
@@ -399,9 +447,34 @@ pub(crate) fn tri_signs<Lv: Level>(
                     );
                 }
             }
-            Accuracy::Exact => {
-                // The block's points widened to f64, made (by `exact_fallback`) only when some
+            Accuracy::Exact if one32.is_none() => {
+                // Several lights: each pack's sign records built from the lights' sign bytes
+                // and stored once. The block's points widened to f64, made (by `exact_fallback`) only when some
                 // lane needs the f64 filter.
+                let mut w64: Option<Widened<Lv>> = None;
+                for (pack, chunk) in lights.chunks(PACK).enumerate() {
+                    let mut bytes = [0u64; PACK];
+                    for (k, light) in chunk.iter().enumerate() {
+                        // 1. The f32 filter on all 8 lanes.
+                        let lv32 = splat4(*light);
+                        let (mut pos, mut neg, unc32) = match stages[pack * PACK + k] {
+                            F32Stage::Skip => (0, 0, 0xFF),
+                            F32Stage::Checked => filter_f32::<Lv::F, true>(&a, &b, &lv32, &o),
+                            F32Stage::Unchecked => filter_f32::<Lv::F, false>(&a, &b, &lv32, &o),
+                        };
+                        let unc = unc32 & valid;
+                        uncertain += exact_fallback::<Lv>(
+                            lay, t, light, one64, &mut w64, unc, &mut pos, &mut neg,
+                        );
+                        bytes[k] = sign_bytes_u64(pos & valid, neg & valid);
+                    }
+                    // Each pack's records built from the lights' sign bytes, one store.
+                    write_records(out, pack, dst, &records_from_bytes(bytes));
+                }
+            }
+            Accuracy::Exact => {
+                // One light, where the one-light path above does not apply (a partial block, a
+                // light needing the range check, or `w` other than 0 and 1).
                 let mut w64: Option<Widened<Lv>> = None;
                 for (l, light) in lights.iter().enumerate() {
                     // 1. The f32 filter on all 8 lanes.
@@ -1299,6 +1372,23 @@ mod tests {
             ov_tri: vec![],
             coords_in_filter_range: true,
         }
+    }
+
+    #[test]
+    fn records_transpose_the_lights_sign_bytes() {
+        let bytes = [
+            0x0807_0605_0403_0201u64,
+            0x1817_1615_1413_1211,
+            0x2827_2625_2423_2221,
+            0xF8F7_F6F5_F4F3_F2F1,
+        ];
+        let rec = records_from_bytes(bytes);
+        for (i, r) in rec.iter().enumerate() {
+            let want = u32::from_le_bytes(std::array::from_fn(|k| (bytes[k] >> (8 * i)) as u8));
+            assert_eq!(*r, want, "record {i}");
+        }
+        assert_eq!(rec[0], 0xF121_1101);
+        assert_eq!(rec[7], 0xF828_1808);
     }
 
     #[test]
