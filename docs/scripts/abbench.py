@@ -2,15 +2,18 @@
 """A/B benchmark of `shadowvol` binaries, alternated to cancel slow drifts of a shared machine.
 
 Usage:
-  python3 docs/scripts/abbench.py NAME=BINARY[,NAME=BINARY...] ROUNDS [extra bench args...]
+  python3 docs/scripts/abbench.py NAME=BINARY[,NAME=BINARY...] ROUNDS [--separate] [extra bench args...]
 
-Each round runs, for every binary in turn and for 1 and 4 lights:
+Each round runs, for every binary in turn, one call timing 1 and 4 lights (interleaved turns, the
+bench's default schedule):
   BINARY bench --scene sphere-1m --backend simd --mode original,robust,ordered,exact \
-         --frames 100 --lights N --format json [extra bench args...]
-and prints, per binary and light count, the median over the rounds of each mode's `median_ms`
-(and of `floor_ms`), the ratios the issue-4 targets use (original/floor, ordered/original,
-exact/original, robust/original, 4 lights / 1 light), and, for two binaries, the per-round paired
-ratios second/first. Needs only the standard library.
+         --frames 100 --lights 1,4 --format json [extra bench args...]
+With --separate (for binaries older than `--lights 1,4`), two calls per round instead, one per
+light count. It prints, per binary and light count, the median over the rounds of each mode's
+`median_ms` (and of `floor_ms`), the ratios the issue-4 targets use (original/floor,
+ordered/original, exact/original, robust/original, 4 lights / 1 light, the last both as a ratio of
+the medians and as the median of the per-call ratios), and, for two binaries, the per-round
+paired ratios second/first. Needs only the standard library.
 """
 import collections
 import json
@@ -28,18 +31,25 @@ def main() -> int:
     bins = dict(a.split("=", 1) for a in sys.argv[1].split(","))
     rounds = int(sys.argv[2])
     extra = sys.argv[3:]
+    separate = "--separate" in extra
+    extra = [a for a in extra if a != "--separate"]
     res = collections.defaultdict(list)
+    calls = [[1], [4]] if separate else [[1, 4]]
     for r in range(rounds):
         for name, binary in bins.items():
-            for lights in (1, 4):
+            for counts in calls:
                 cmd = [binary, "bench", "--scene", "sphere-1m", "--backend", "simd",
-                       "--mode", ",".join(MODES), "--frames", "100", "--lights", str(lights),
-                       "--format", "json"] + extra
+                       "--mode", ",".join(MODES), "--frames", "100",
+                       "--lights", ",".join(map(str, counts)), "--format", "json"] + extra
                 d = json.loads(subprocess.run(cmd, capture_output=True, text=True,
                                               check=True).stdout)
-                res[(name, lights, "floor")].append(d["floor_ms"])
+                floors = {f["lights"]: f["floor_ms"] for f in d.get("floors", [])}
+                if not floors:
+                    floors = {counts[0]: d["floor_ms"]}
+                for lights, f in floors.items():
+                    res[(name, lights, "floor")].append(f)
                 for rec in d["records"]:
-                    res[(name, lights, rec["mode"])].append(rec["median_ms"])
+                    res[(name, rec["lights"], rec["mode"])].append(rec["median_ms"])
         print(f"round {r + 1}/{rounds} done", file=sys.stderr, flush=True)
     med = {k: statistics.median(v) for k, v in res.items()}
     print("| build | lights | floor | " + " | ".join(MODES)
@@ -53,8 +63,11 @@ def main() -> int:
                   + f" | {m['original'] / m['floor']:.2f} | {m['ordered'] / m['original']:.2f}"
                   + f" | {m['exact'] / m['original']:.2f} | {m['robust'] / m['original']:.2f} |")
     for name in bins:
-        print(name, "4 lights / 1 light:", ", ".join(
+        print(name, "4 lights / 1 light (ratio of medians):", ", ".join(
             f"{k} {med[(name, 4, k)] / med[(name, 1, k)]:.2f}" for k in MODES))
+        print(name, "4 lights / 1 light (median of per-round ratios):", ", ".join(
+            f"{k} {statistics.median(y / x for x, y in zip(res[(name, 1, k)], res[(name, 4, k)])):.2f}"
+            for k in MODES))
     names = list(bins)
     if len(names) == 2:
         a, b = names

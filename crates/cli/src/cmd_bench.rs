@@ -9,16 +9,37 @@ use std::io::Write;
 use std::time::{Duration, Instant};
 
 /// The long help of the subcommand.
-pub const LONG_ABOUT: &str = "Time silhouette extraction on a scene for each backend and mode: \
-    warm-up frames, then --frames timed frames (one extract call for all lights each); report \
-    the median, p10 and p90 frame times. In the same run, floor_ms is measured: the time to \
-    stream-read the bytes any extraction must touch (edge records 8 B, opposite vertices 4 B, \
-    positions 12 B per vertex) and write its output (4 B per edge and light), on all cores.\n\n\
+pub const LONG_ABOUT: &str = "Time silhouette extraction on a scene for each backend, mode \
+    and light count: warm-up frames, then --frames timed frames (one extract call for all lights \
+    each); report the median, p10 and p90 frame times. By default the timed frames of one \
+    backend's modes and light counts are interleaved, in turns of 5 frames of each (every turn \
+    after one untimed frame of it, which brings its data back into the caches), so that a busy \
+    or drifting host slows them alike and their ratios stay comparable; --schedule sequential \
+    times each one's frames back to back. In the same run, floor_ms is measured for each light \
+    count: the time to stream-read the bytes any extraction must touch (edge records 8 B, \
+    opposite vertices 4 B, positions 12 B per vertex) and write its output (4 B per edge and \
+    light), on all cores.\n\n\
     JSON: {\"floor_ms\": F, \"records\": [{\"scene\", \"backend\", \"mode\", \"triangles\", \
     \"edges\", \"objects\", \"lights\", \"median_ms\", \"p10_ms\", \"p90_ms\", ...}], \
-    \"host\": {...}}. Records also carry upload/compute/readback medians, the uncertain count \
-    (exact mode), the backend's device and details (simd_level for simd). A progress bar is \
-    drawn on stderr when it is a terminal.";
+    \"host\": {...}}. floor_ms is that of the first light count; \"floors\" lists every \
+    light count's floor, and each record carries its own floor_ms and floor_ratio. Records also \
+    carry upload/compute/readback medians, the uncertain count (exact mode), the backend's \
+    device and details (simd_level for simd). A progress bar is drawn on stderr when it is a \
+    terminal.";
+
+/// Timed frames per (mode, light count) in one turn of the interleaved schedule.
+const TURN_FRAMES: u32 = 5;
+
+/// How the timed frames of one backend are ordered.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Schedule {
+    /// After each one's warm-up, turns of a few timed frames of each (mode, light count), each
+    /// turn preceded by one untimed frame of it.
+    #[default]
+    Interleaved,
+    /// All frames of one (mode, light count), then the next.
+    Sequential,
+}
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -39,9 +60,15 @@ pub struct Args {
     #[arg(long, default_value_t = 3)]
     warmup: u32,
     /// Number of lights per call (default: the scene's own lights, or 1 if it has none). Extra
-    /// lights beyond the scene's are point lights placed around it.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
-    lights: Option<u32>,
+    /// lights beyond the scene's are point lights placed around it. Several counts,
+    /// comma-separated (for example `1,4`), are all timed in the same run.
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=1024))]
+    lights: Vec<u32>,
+    /// Order of the timed frames of one backend: `interleaved` (turns of 5 timed frames of each
+    /// mode and light count, each after one untimed frame of it) or `sequential` (all frames of
+    /// one, then the next).
+    #[arg(long, value_enum, default_value_t = Schedule::Interleaved)]
+    schedule: Schedule,
     /// Skip backends that cannot start here (with a warning) instead of failing.
     #[arg(long)]
     skip_unavailable: bool,
@@ -87,9 +114,22 @@ struct Record {
     readback_ms: f64,
     host_resolve_ms: f64,
     uncertain: u64,
+    /// The floor of this record's light count (the run's `floor_ms` for the first count).
+    floor_ms: f64,
     floor_ratio: f64,
     device: String,
     details: serde_json::Map<String, serde_json::Value>,
+}
+
+/// The floor of one light count.
+#[derive(Debug, Serialize)]
+struct FloorRecord {
+    lights: usize,
+    floor_ms: f64,
+    floor_p10_ms: f64,
+    floor_p90_ms: f64,
+    floor_bytes_read: usize,
+    floor_bytes_written: usize,
 }
 
 #[derive(Debug, Serialize)]
@@ -99,6 +139,9 @@ struct Report {
     floor_p90_ms: f64,
     floor_bytes_read: usize,
     floor_bytes_written: usize,
+    /// Every light count's floor, in the order of `--lights`.
+    floors: Vec<FloorRecord>,
+    schedule: &'static str,
     records: Vec<Record>,
     host: Host,
 }
@@ -264,6 +307,17 @@ fn floor_samples(floor: &mut Floor, warmup: u32, frames: u32, into: &mut Vec<Dur
     }
 }
 
+/// Samples of one (mode, light count) of a backend.
+#[derive(Default)]
+struct Samples {
+    frame: Vec<Duration>,
+    upload: Vec<Duration>,
+    compute: Vec<Duration>,
+    readback: Vec<Duration>,
+    host: Vec<Duration>,
+    uncertain: u64,
+}
+
 pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     // Resolve everything named on the command line before any timing.
     let entries = args
@@ -282,10 +336,32 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let topo = scene
         .topology()
         .map_err(|e| CliError::Other(format!("scene {:?}: {e}", args.scene)))?;
-    let lights = bench_lights(&scene.lights, &topo, args.lights);
+    if let Some(n) = args
+        .lights
+        .iter()
+        .enumerate()
+        .find_map(|(i, n)| args.lights[..i].contains(n).then_some(n))
+    {
+        return Err(CliError::Usage(format!("--lights lists {n} twice")));
+    }
+    let counts: Vec<Option<u32>> = if args.lights.is_empty() {
+        vec![None]
+    } else {
+        args.lights.iter().map(|&n| Some(n)).collect()
+    };
+    let light_sets: Vec<Vec<Light>> = counts
+        .iter()
+        .map(|&n| bench_lights(&scene.lights, &topo, n))
+        .collect();
+    // (mode, light set) in the order of the records.
+    let combos: Vec<(Accuracy, usize)> = modes
+        .iter()
+        .flat_map(|&m| (0..light_sets.len()).map(move |k| (m, k)))
+        .collect();
 
+    let per = u64::from(args.warmup + args.frames);
     let bar = indicatif::ProgressBar::new(
-        u64::from(args.warmup + args.frames) * (entries.len() * modes.len() + 2) as u64,
+        per * (entries.len() * combos.len() + 2 * light_sets.len()) as u64,
     );
     bar.set_style(
         indicatif::ProgressStyle::with_template(
@@ -294,12 +370,19 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
 
-    // The floor, before and after the backends (same run, same threads); median of both.
-    let mut floor = Floor::new(&topo, lights.len());
-    let mut floor_times = Vec::new();
-    bar.set_message("memory floor");
-    floor_samples(&mut floor, args.warmup, args.frames, &mut floor_times);
-    bar.inc(u64::from(args.warmup + args.frames));
+    // The floors, before and after the backends (same run, same threads); median of both.
+    let mut floors: Vec<(Floor, Vec<Duration>)> = light_sets
+        .iter()
+        .map(|l| (Floor::new(&topo, l.len()), Vec::new()))
+        .collect();
+    let run_floors = |floors: &mut Vec<(Floor, Vec<Duration>)>| {
+        for (floor, times) in floors.iter_mut() {
+            bar.set_message("memory floor");
+            floor_samples(floor, args.warmup, args.frames, times);
+            bar.inc(per);
+        }
+    };
+    run_floors(&mut floors);
 
     let mut records = Vec::new();
     for entry in &entries {
@@ -307,12 +390,18 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
             Ok(b) => b,
             Err(e) if args.skip_unavailable => {
                 bar.suspend(|| eprintln!("warning: skipping {}: {e}", entry.name));
-                bar.inc(u64::from(args.warmup + args.frames) * modes.len() as u64);
+                bar.inc(per * combos.len() as u64);
                 continue;
             }
             Err(e) => return Err(e.into()),
         };
         let info = backend.info();
+        if let Some(mode) = modes.iter().find(|m| !info.modes.contains(m)) {
+            return Err(CliError::Other(format!(
+                "backend {} does not support mode {mode}",
+                entry.name
+            )));
+        }
         let details: serde_json::Map<String, serde_json::Value> = info
             .details
             .iter()
@@ -320,33 +409,64 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
             .collect();
         bar.set_message(format!("{}: prepare", entry.name));
         let id = backend.prepare(&topo)?;
-        let mut result = Multiplicities::default();
-        for &mode in &modes {
-            if !info.modes.contains(&mode) {
-                return Err(CliError::Other(format!(
-                    "backend {} does not support mode {mode}",
-                    entry.name
-                )));
+        // One output per light set, so that interleaving never resizes it inside a timed frame.
+        let mut results: Vec<Multiplicities> = light_sets
+            .iter()
+            .map(|_| Multiplicities::default())
+            .collect();
+        let mut samples: Vec<Samples> = combos.iter().map(|_| Samples::default()).collect();
+        let mut frame = |c: usize, timed: bool| -> Result<(), CliError> {
+            let (mode, k) = combos[c];
+            let t = Instant::now();
+            let stats = backend.extract(id, &light_sets[k], mode, &mut results[k])?;
+            let wall = t.elapsed();
+            bar.inc(1);
+            if timed {
+                let s = &mut samples[c];
+                s.frame.push(wall);
+                s.upload.push(stats.upload);
+                s.compute.push(stats.compute);
+                s.readback.push(stats.readback);
+                s.host.push(stats.host_resolve);
+                s.uncertain = stats.uncertain;
             }
-            bar.set_message(format!("{} {mode}", entry.name));
-            let (mut frame, mut up, mut comp, mut back, mut host) =
-                (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
-            let mut uncertain = 0;
-            for i in 0..args.warmup + args.frames {
-                let t = Instant::now();
-                let stats = backend.extract(id, &lights, mode, &mut result)?;
-                let wall = t.elapsed();
-                bar.inc(1);
-                if i >= args.warmup {
-                    frame.push(wall);
-                    up.push(stats.upload);
-                    comp.push(stats.compute);
-                    back.push(stats.readback);
-                    host.push(stats.host_resolve);
-                    uncertain = stats.uncertain;
+            Ok(())
+        };
+        match args.schedule {
+            Schedule::Sequential => {
+                for (c, (mode, _)) in combos.iter().enumerate() {
+                    bar.set_message(format!("{} {mode}", entry.name));
+                    for i in 0..args.warmup + args.frames {
+                        frame(c, i >= args.warmup)?;
+                    }
                 }
             }
-            let (median, p10, p90) = percentiles(&mut frame);
+            Schedule::Interleaved => {
+                for (c, (mode, _)) in combos.iter().enumerate() {
+                    bar.set_message(format!("{} {mode}: warm-up", entry.name));
+                    for _ in 0..args.warmup {
+                        frame(c, false)?;
+                    }
+                }
+                bar.set_message(format!("{}: interleaved frames", entry.name));
+                // Turns of TURN_FRAMES timed frames per combination, each turn after one
+                // untimed frame that brings its data back into the caches (as a sequential run
+                // keeps them), so the turns compare the same steady state.
+                let mut done = 0;
+                while done < args.frames {
+                    let n = TURN_FRAMES.min(args.frames - done);
+                    for c in 0..combos.len() {
+                        frame(c, false)?;
+                        for _ in 0..n {
+                            frame(c, true)?;
+                        }
+                    }
+                    done += n;
+                }
+            }
+        }
+        for (&(mode, k), s) in combos.iter().zip(&mut samples) {
+            let (median, p10, p90) = percentiles(&mut s.frame);
             records.push(Record {
                 scene: scene.name.clone(),
                 backend: entry.name.to_owned(),
@@ -354,16 +474,17 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 triangles: topo.total_triangles(),
                 edges: topo.total_edges(),
                 objects: topo.objects.len(),
-                lights: lights.len(),
+                lights: light_sets[k].len(),
                 median_ms: median,
                 p10_ms: p10,
                 p90_ms: p90,
                 frames: args.frames,
-                upload_ms: median_ms(&mut up),
-                compute_ms: median_ms(&mut comp),
-                readback_ms: median_ms(&mut back),
-                host_resolve_ms: median_ms(&mut host),
-                uncertain,
+                upload_ms: median_ms(&mut s.upload),
+                compute_ms: median_ms(&mut s.compute),
+                readback_ms: median_ms(&mut s.readback),
+                host_resolve_ms: median_ms(&mut s.host),
+                uncertain: s.uncertain,
+                floor_ms: 0.0,
                 floor_ratio: 0.0,
                 device: info.device.clone(),
                 details: details.clone(),
@@ -371,26 +492,45 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         }
         backend.release(id);
     }
-    bar.set_message("memory floor");
-    floor_samples(&mut floor, args.warmup, args.frames, &mut floor_times);
-    bar.inc(u64::from(args.warmup + args.frames));
+    run_floors(&mut floors);
     bar.finish_and_clear();
 
-    let (floor_ms, floor_p10, floor_p90) = percentiles(&mut floor_times);
+    let floor_records: Vec<FloorRecord> = floors
+        .iter_mut()
+        .zip(&light_sets)
+        .map(|((floor, times), lights)| {
+            let (floor_ms, p10, p90) = percentiles(times);
+            let (bytes_read, bytes_written) = floor.bytes();
+            FloorRecord {
+                lights: lights.len(),
+                floor_ms,
+                floor_p10_ms: p10,
+                floor_p90_ms: p90,
+                floor_bytes_read: bytes_read,
+                floor_bytes_written: bytes_written,
+            }
+        })
+        .collect();
     for r in &mut records {
-        r.floor_ratio = if floor_ms > 0.0 {
-            r.median_ms / floor_ms
-        } else {
-            0.0
-        };
+        let f = floor_records
+            .iter()
+            .find(|f| f.lights == r.lights)
+            .map_or(0.0, |f| f.floor_ms);
+        r.floor_ms = f;
+        r.floor_ratio = if f > 0.0 { r.median_ms / f } else { 0.0 };
     }
-    let (bytes_read, bytes_written) = floor.bytes();
+    let first = &floor_records[0];
     let report = Report {
-        floor_ms,
-        floor_p10_ms: floor_p10,
-        floor_p90_ms: floor_p90,
-        floor_bytes_read: bytes_read,
-        floor_bytes_written: bytes_written,
+        floor_ms: first.floor_ms,
+        floor_p10_ms: first.floor_p10_ms,
+        floor_p90_ms: first.floor_p90_ms,
+        floor_bytes_read: first.floor_bytes_read,
+        floor_bytes_written: first.floor_bytes_written,
+        schedule: match args.schedule {
+            Schedule::Interleaved => "interleaved",
+            Schedule::Sequential => "sequential",
+        },
+        floors: floor_records,
         records,
         host: host(),
     };
@@ -408,23 +548,26 @@ fn print_text(r: &Report, out: &mut dyn Write) -> Result<(), CliError> {
     if let Some(first) = r.records.first() {
         writeln!(
             out,
-            "scene {}: {} triangles, {} edges, {} object(s), {} light(s)",
-            first.scene, first.triangles, first.edges, first.objects, first.lights
+            "scene {}: {} triangles, {} edges, {} object(s); {} frames",
+            first.scene, first.triangles, first.edges, first.objects, r.schedule
+        )?;
+    }
+    for f in &r.floors {
+        writeln!(
+            out,
+            "floor, {} light(s): {:.3} ms (p10 {:.3}, p90 {:.3}; reads {:.1} MB, writes {:.1} MB)",
+            f.lights,
+            f.floor_ms,
+            f.floor_p10_ms,
+            f.floor_p90_ms,
+            f.floor_bytes_read as f64 / 1e6,
+            f.floor_bytes_written as f64 / 1e6
         )?;
     }
     writeln!(
         out,
-        "floor {:.3} ms (p10 {:.3}, p90 {:.3}; reads {:.1} MB, writes {:.1} MB)",
-        r.floor_ms,
-        r.floor_p10_ms,
-        r.floor_p90_ms,
-        r.floor_bytes_read as f64 / 1e6,
-        r.floor_bytes_written as f64 / 1e6
-    )?;
-    writeln!(
-        out,
-        "{:8} {:9} {:>10} {:>10} {:>10} {:>8} {:>10}  details",
-        "backend", "mode", "median_ms", "p10_ms", "p90_ms", "x floor", "uncertain"
+        "{:8} {:9} {:>6} {:>10} {:>10} {:>10} {:>8} {:>10}  details",
+        "backend", "mode", "lights", "median_ms", "p10_ms", "p90_ms", "x floor", "uncertain"
     )?;
     for rec in &r.records {
         let level = rec
@@ -435,15 +578,36 @@ fn print_text(r: &Report, out: &mut dyn Write) -> Result<(), CliError> {
             .unwrap_or_default();
         writeln!(
             out,
-            "{:8} {:9} {:10.3} {:10.3} {:10.3} {:8.2} {:10}  {level}",
+            "{:8} {:9} {:>6} {:10.3} {:10.3} {:10.3} {:8.2} {:10}  {level}",
             rec.backend,
             rec.mode,
+            rec.lights,
             rec.median_ms,
             rec.p10_ms,
             rec.p90_ms,
             rec.floor_ratio,
             rec.uncertain
         )?;
+    }
+    // Light scaling: each light count's median over the first count's, per backend and mode.
+    if r.floors.len() > 1 {
+        let base = r.floors[0].lights;
+        for rec in r.records.iter().filter(|x| x.lights != base) {
+            if let Some(b) = r
+                .records
+                .iter()
+                .find(|x| x.lights == base && x.backend == rec.backend && x.mode == rec.mode)
+            {
+                writeln!(
+                    out,
+                    "{} {}: {} lights / {base} = {:.2}",
+                    rec.backend,
+                    rec.mode,
+                    rec.lights,
+                    rec.median_ms / b.median_ms
+                )?;
+            }
+        }
     }
     writeln!(
         out,

@@ -571,3 +571,92 @@ fn help_describes_commands_and_contract() {
         }
     }
 }
+
+#[test]
+fn bench_json_follows_the_contract_for_several_light_counts() {
+    let path = write_obj("bench_tet.obj", &TET, &tet_faces());
+    let path = path.to_str().unwrap();
+    let backends: Vec<String> = ["cpu", "simd"]
+        .into_iter()
+        .filter(|b| available_backends().iter().any(|a| a == b))
+        .map(str::to_owned)
+        .collect();
+    assert!(backends.contains(&"cpu".to_owned()));
+    let modes = ["original", "robust", "ordered", "exact"];
+    for schedule in ["interleaved", "sequential"] {
+        let v = json_of(&[
+            "bench",
+            "--scene",
+            path,
+            "--backend",
+            &backends.join(","),
+            "--frames",
+            "7",
+            "--warmup",
+            "1",
+            "--lights",
+            "1,3",
+            "--schedule",
+            schedule,
+            "--format",
+            "json",
+        ]);
+        assert_eq!(v["schedule"], schedule);
+        // One floor per light count, in order; the output grows with the lights, the input not.
+        let floors = v["floors"].as_array().unwrap();
+        assert_eq!(floors.len(), 2);
+        assert_eq!(
+            (floors[0]["lights"].as_u64(), floors[1]["lights"].as_u64()),
+            (Some(1), Some(3))
+        );
+        let w = |k: usize| floors[k]["floor_bytes_written"].as_u64().unwrap();
+        assert_eq!(
+            w(0),
+            6 * 4,
+            "a tetrahedron has 6 edges, 4 bytes each per light"
+        );
+        assert_eq!(w(1), 3 * w(0));
+        assert_eq!(floors[0]["floor_bytes_read"], floors[1]["floor_bytes_read"]);
+        // The top-level floor is the first count's (the contract's single-count shape).
+        assert_eq!(v["floor_ms"], floors[0]["floor_ms"]);
+        let records = v["records"].as_array().unwrap();
+        assert_eq!(records.len(), backends.len() * modes.len() * 2);
+        for b in &backends {
+            for m in modes {
+                for (k, lights) in [1u64, 3].into_iter().enumerate() {
+                    let r = records
+                        .iter()
+                        .find(|r| r["backend"] == **b && r["mode"] == m && r["lights"] == lights)
+                        .unwrap_or_else(|| panic!("no record for {b} {m} {lights}"));
+                    for key in [
+                        "scene",
+                        "triangles",
+                        "edges",
+                        "objects",
+                        "median_ms",
+                        "p10_ms",
+                        "p90_ms",
+                    ] {
+                        assert!(!r[key].is_null(), "{key} missing in {r}");
+                    }
+                    assert_eq!(
+                        (r["triangles"].as_u64(), r["edges"].as_u64()),
+                        (Some(4), Some(6))
+                    );
+                    let (p10, med, p90) = (
+                        r["p10_ms"].as_f64().unwrap(),
+                        r["median_ms"].as_f64().unwrap(),
+                        r["p90_ms"].as_f64().unwrap(),
+                    );
+                    assert!(0.0 < p10 && p10 <= med && med <= p90, "{r}");
+                    assert_eq!(r["frames"], 7);
+                    assert_eq!(r["floor_ms"], floors[k]["floor_ms"], "{r}");
+                }
+            }
+        }
+    }
+    // A light count given twice is a usage error.
+    let (code, stderr) = failure(&["bench", "--scene", path, "--lights", "2,2"]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("--lights lists 2 twice"), "{stderr}");
+}
