@@ -180,8 +180,26 @@ fn f32_decide<F: F32V, const RANGE: bool>(
     pq: &[F; 6],
     a: &[F; 3],
     o: &[F; 3],
-    mut bad: u32,
+    bad: u32,
 ) -> (u32, u32, u32) {
+    let (det, perm, bad) = f32_terms::<F, RANGE>(pq, a, o, bad);
+    let bound = F::splat(F32_FILTER_EPS) * perm;
+    let certified = det.abs().gt_bits(bound) & !bad;
+    let pos = certified & det.gt_bits(F::splat(0.0));
+    let neg = certified & !pos;
+    let zero = perm.zero_bits() & !bad;
+    (pos, neg, !(pos | neg | zero) & 0xFF)
+}
+
+/// `det`, `perm` and the range bits (those of [`f32_products`] or-ed with those of `D = O − A`,
+/// with `RANGE`) of [`f32_decide`].
+#[inline(always)]
+fn f32_terms<F: F32V, const RANGE: bool>(
+    pq: &[F; 6],
+    a: &[F; 3],
+    o: &[F; 3],
+    mut bad: u32,
+) -> (F, F, u32) {
     let [p1, q1, p2, q2, p3, q3] = *pq;
     let d = sub3(o, a);
     if RANGE {
@@ -193,12 +211,27 @@ fn f32_decide<F: F32V, const RANGE: bool>(
     let perm = (p1.abs() + q1.abs()) * d[0].abs()
         + (p2.abs() + q2.abs()) * d[1].abs()
         + (p3.abs() + q3.abs()) * d[2].abs();
+    (det, perm, bad)
+}
+
+/// [`filter_f32`] returning `det` itself with the uncertain bits: in every lane that is not
+/// uncertain, the sign of `det` is the filter's decision. (Where `|det| > bound` that is the
+/// definition; where the filter certifies a zero, `perm = 0` means every term of `perm`, hence
+/// every term of `det`, is 0, so `det` is ±0, whose sign is 0.) The several-light triangle pass
+/// turns `det` into sign bytes with vector operations and decides only the uncertain lanes
+/// another way.
+#[inline(always)]
+fn filter_f32_det<F: F32V, const RANGE: bool>(
+    a: &[F; 3],
+    b: &[F; 3],
+    l: &[F; 4],
+    o: &[F; 3],
+) -> (F, u32) {
+    let (pq, bad) = f32_products::<F, RANGE>(a, b, l);
+    let (det, perm, bad) = f32_terms::<F, RANGE>(&pq, a, o, bad);
     let bound = F::splat(F32_FILTER_EPS) * perm;
-    let certified = det.abs().gt_bits(bound) & !bad;
-    let pos = certified & det.gt_bits(F::splat(0.0));
-    let neg = certified & !pos;
-    let zero = perm.zero_bits() & !bad;
-    (pos, neg, !(pos | neg | zero) & 0xFF)
+    let decided = det.abs().gt_bits(bound) | perm.zero_bits();
+    (det, (!decided | bad) & 0xFF)
 }
 
 /// How the `f32` filter stage treats one light in `exact` mode.
@@ -244,41 +277,27 @@ const POS_BYTES: [u64; 256] = {
 /// Per-lane `i8` signs from disjoint positive / negative bit masks.
 #[inline(always)]
 fn sign_bytes(pos: u32, neg: u32) -> [u8; 8] {
-    sign_bytes_u64(pos, neg).to_le_bytes()
-}
-
-/// [`sign_bytes`] as one little-endian `u64` (byte `i` = lane `i`).
-#[inline(always)]
-fn sign_bytes_u64(pos: u32, neg: u32) -> u64 {
     // Negative lanes become 0xFF (= -1i8) = 0xFF * 1.
-    POS_BYTES[(pos & 0xFF) as usize] | (POS_BYTES[(neg & 0xFF) as usize] * 0xFF)
+    (POS_BYTES[(pos & 0xFF) as usize] | (POS_BYTES[(neg & 0xFF) as usize] * 0xFF)).to_le_bytes()
 }
 
-/// The 8 four-light records of a block from the sign bytes of its (up to) [`PACK`] lights:
-/// byte `k` of record `i` is byte `i` of `bytes[k]` (an 8 x 4 byte transpose).
+/// Sets byte `k` of `rec[i]`, for the lanes `i` in `lanes`, to the sign given by the disjoint
+/// bit masks `pos` / `neg` (`+1` = 0x01, `-1` = 0xFF, neither = 0).
 #[inline(always)]
-fn records_from_bytes(bytes: [u64; PACK]) -> [u32; LANES] {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::*;
-        // SAFETY: SSE2 is part of x86-64; `rec` is 32 writable bytes (unaligned stores).
-        unsafe {
-            let q = |x: u64| _mm_cvtsi64_si128(x as i64);
-            // [b0_0, b1_0, b0_1, b1_1, ...] and [b2_0, b3_0, b2_1, b3_1, ...]
-            let l01 = _mm_unpacklo_epi8(q(bytes[0]), q(bytes[1]));
-            let l23 = _mm_unpacklo_epi8(q(bytes[2]), q(bytes[3]));
-            let mut rec = [0u32; LANES];
-            _mm_storeu_si128(rec.as_mut_ptr().cast(), _mm_unpacklo_epi16(l01, l23));
-            _mm_storeu_si128(rec[4..].as_mut_ptr().cast(), _mm_unpackhi_epi16(l01, l23));
-            rec
-        }
+fn set_sign_bytes(rec: &mut [u32; LANES], k: usize, lanes: u32, pos: u32, neg: u32) {
+    let mut bits = lanes & 0xFF;
+    while bits != 0 {
+        let i = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        let b = if pos >> i & 1 == 1 {
+            0x01
+        } else if neg >> i & 1 == 1 {
+            0xFF
+        } else {
+            0
+        };
+        rec[i] = rec[i] & !(0xFF << (8 * k)) | b << (8 * k);
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    std::array::from_fn(|i| {
-        (0..PACK).fold(0u32, |r, k| {
-            r | ((bytes[k] >> (8 * i)) as u32 & 0xFF) << (8 * k)
-        })
-    })
 }
 
 /// Signs of the canonical triangles in `blocks` (blocks of 8) for every light.
@@ -417,18 +436,21 @@ pub(crate) fn tri_signs<Lv: Level>(
                 }
             }
             Accuracy::Robust if stride == PACK => {
-                // Several lights: each pack's records built from the lights' sign bytes, one
-                // store per pack.
+                // Several lights: each pack's 4-byte records built in registers, one store.
                 for (pack, chunk) in lights.chunks(PACK).enumerate() {
-                    let mut bytes = [0u64; PACK];
+                    let mut rec = [0u32; LANES];
                     for (k, light) in chunk.iter().enumerate() {
                         let lv = splat4(*light);
-                        let (pa, na) = plane(&a, &b, &lv, &o).sign_bits();
-                        let (pb, nb) = plane(&b, &o, &lv, &a).sign_bits();
-                        let (pc, nc) = plane(&o, &a, &lv, &b).sign_bits();
-                        bytes[k] = sign_bytes_u64(pa & pb & pc & valid, na & nb & nc & valid);
+                        let sa = plane(&a, &b, &lv, &o);
+                        let sb = plane(&b, &o, &lv, &a);
+                        let sc = plane(&o, &a, &lv, &b);
+                        sa.or_sign_byte3(sb, sc, &mut rec, k as u32);
                     }
-                    write_records(out, pack, dst, &records_from_bytes(bytes));
+                    if valid != 0xFF {
+                        // Padding lanes of a partial block get 0.
+                        rec[valid.count_ones() as usize..].fill(0);
+                    }
+                    write_records(out, pack, dst, &rec);
                 }
             }
             Accuracy::Robust => {
@@ -453,23 +475,35 @@ pub(crate) fn tri_signs<Lv: Level>(
                 // lane needs the f64 filter.
                 let mut w64: Option<Widened<Lv>> = None;
                 for (pack, chunk) in lights.chunks(PACK).enumerate() {
-                    let mut bytes = [0u64; PACK];
+                    let mut rec = [0u32; LANES];
                     for (k, light) in chunk.iter().enumerate() {
-                        // 1. The f32 filter on all 8 lanes.
+                        // 1. The f32 filter on all 8 lanes; the sign of `det` is its decision
+                        // in every lane that is not uncertain.
                         let lv32 = splat4(*light);
-                        let (mut pos, mut neg, unc32) = match stages[pack * PACK + k] {
-                            F32Stage::Skip => (0, 0, 0xFF),
-                            F32Stage::Checked => filter_f32::<Lv::F, true>(&a, &b, &lv32, &o),
-                            F32Stage::Unchecked => filter_f32::<Lv::F, false>(&a, &b, &lv32, &o),
+                        let (det, unc32) = match stages[pack * PACK + k] {
+                            F32Stage::Skip => (Lv::F::splat(0.0), 0xFF),
+                            F32Stage::Checked => filter_f32_det::<Lv::F, true>(&a, &b, &lv32, &o),
+                            F32Stage::Unchecked => {
+                                filter_f32_det::<Lv::F, false>(&a, &b, &lv32, &o)
+                            }
                         };
+                        det.or_sign_byte(&mut rec, k as u32);
                         let unc = unc32 & valid;
-                        uncertain += exact_fallback::<Lv>(
-                            lay, t, light, one64, &mut w64, unc, &mut pos, &mut neg,
-                        );
-                        bytes[k] = sign_bytes_u64(pos & valid, neg & valid);
+                        if unc != 0 {
+                            // 2, 3. The uncertain lanes (rare): their bytes replaced.
+                            let (mut pos, mut neg) = (0, 0);
+                            uncertain += exact_fallback::<Lv>(
+                                lay, t, light, one64, &mut w64, unc, &mut pos, &mut neg,
+                            );
+                            set_sign_bytes(&mut rec, k, unc, pos, neg);
+                        }
                     }
-                    // Each pack's records built from the lights' sign bytes, one store.
-                    write_records(out, pack, dst, &records_from_bytes(bytes));
+                    if valid != 0xFF {
+                        // Padding lanes of a partial block get 0.
+                        rec[valid.count_ones() as usize..].fill(0);
+                    }
+                    // Each pack's records built in registers, one store.
+                    write_records(out, pack, dst, &rec);
                 }
             }
             Accuracy::Exact => {
@@ -1151,6 +1185,24 @@ mod tests {
             }
             unc += usize::from(expect.is_none());
         }
+        // `filter_f32_det`: the sign of `det` where it says certain, the same decisions.
+        for (range, (det, unc_bits)) in [
+            (true, filter_f32_det::<Lv::F, true>(&a, &b, &lv, &o)),
+            (false, filter_f32_det::<Lv::F, false>(&a, &b, &lv, &o)),
+        ] {
+            if !range && !unchecked_sound {
+                continue;
+            }
+            let signs = det.signum0().to_i32();
+            for (i, (pa, pb, po)) in lanes.iter().enumerate() {
+                let got = (unc_bits >> i & 1 == 0).then_some(signs[i] as i8);
+                assert_eq!(
+                    got,
+                    orient_filter_f32(*pa, *pb, l, *po),
+                    "filter_f32_det (range check {range}), lane {i}: {pa:?} {pb:?} {l:?} {po:?}"
+                );
+            }
+        }
         unc
     }
 
@@ -1375,20 +1427,16 @@ mod tests {
     }
 
     #[test]
-    fn records_transpose_the_lights_sign_bytes() {
-        let bytes = [
-            0x0807_0605_0403_0201u64,
-            0x1817_1615_1413_1211,
-            0x2827_2625_2423_2221,
-            0xF8F7_F6F5_F4F3_F2F1,
-        ];
-        let rec = records_from_bytes(bytes);
-        for (i, r) in rec.iter().enumerate() {
-            let want = u32::from_le_bytes(std::array::from_fn(|k| (bytes[k] >> (8 * i)) as u8));
-            assert_eq!(*r, want, "record {i}");
-        }
-        assert_eq!(rec[0], 0xF121_1101);
-        assert_eq!(rec[7], 0xF828_1808);
+    fn set_sign_bytes_replaces_one_byte_of_the_chosen_lanes() {
+        let mut rec = [0x5555_5555u32; LANES];
+        // Lanes 1, 2 and 6 of byte 2: lane 1 negative, lane 2 zero, lane 6 positive; the
+        // positive bit of lane 0 is outside `lanes` and ignored.
+        set_sign_bytes(&mut rec, 2, 0b0100_0110, 0b0100_0001, 0b0000_0010);
+        let mut want = [0x5555_5555u32; LANES];
+        want[1] = 0x55FF_5555;
+        want[2] = 0x5500_5555;
+        want[6] = 0x5501_5555;
+        assert_eq!(rec, want);
     }
 
     #[test]

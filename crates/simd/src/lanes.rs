@@ -48,6 +48,25 @@ pub(crate) trait F32V:
             *r |= b << (8 * k);
         }
     }
+    /// [`F32V::or_sign_byte`] for the agreement of three lanes: `+1` where `self`, `b` and `c`
+    /// are all positive, `-1` where all three are negative, 0 otherwise (any zero or NaN, or
+    /// a disagreement): `robust` mode's sign of a triangle from its three plane tests.
+    fn or_sign_byte3(self, b: Self, c: Self, rec: &mut [u32; 8], k: u32) {
+        let (pa, na) = self.sign_bits();
+        let (pb, nb) = b.sign_bits();
+        let (pc, nc) = c.sign_bits();
+        let (pos, neg) = (pa & pb & pc, na & nb & nc);
+        for (i, r) in rec.iter_mut().enumerate() {
+            let x = if pos >> i & 1 == 1 {
+                0x01
+            } else if neg >> i & 1 == 1 {
+                0xFF
+            } else {
+                0
+            };
+            *r |= x << (8 * k);
+        }
+    }
     /// Lane-wise absolute value (clears the sign bit; exact).
     fn abs(self) -> Self;
     /// Bit `i` set when `self[i] > other[i]` (false for NaN lanes).
@@ -400,6 +419,24 @@ mod avx2 {
             }
         }
         #[inline(always)]
+        fn or_sign_byte3(self, b: Self, c: Self, rec: &mut [u32; 8], k: u32) {
+            // SAFETY: as in `or_sign_byte`.
+            unsafe {
+                let z = _mm256_setzero_ps();
+                let gt = |x: __m256| _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GT_OQ>(x, z));
+                let lt = |x: __m256| _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(x, z));
+                let all_gt = _mm256_and_si256(_mm256_and_si256(gt(self.0), gt(b.0)), gt(c.0));
+                let all_lt = _mm256_and_si256(_mm256_and_si256(lt(self.0), lt(b.0)), lt(c.0));
+                let byte = _mm256_or_si256(
+                    _mm256_and_si256(all_gt, _mm256_set1_epi32(0x01)),
+                    _mm256_and_si256(all_lt, _mm256_set1_epi32(0xFF)),
+                );
+                let shifted = _mm256_sll_epi32(byte, _mm_cvtsi32_si128((8 * k) as i32));
+                let p = rec.as_mut_ptr().cast::<__m256i>();
+                _mm256_storeu_si256(p, _mm256_or_si256(_mm256_loadu_si256(p), shifted));
+            }
+        }
+        #[inline(always)]
         fn store_i32_cached(self, dst: &mut [i32]) -> u32 {
             let dst = &mut dst[..8];
             // SAFETY: `dst` holds 8 i32 (checked above); unaligned store; AVX2 present
@@ -481,6 +518,83 @@ mod avx2 {
             unsafe {
                 _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(self.0, _mm256_setzero_pd())) as u32
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The scalar definition of a sign byte: `+1` = 0x01, `-1` = 0xFF, zero or NaN = 0.
+    fn byte(x: f32) -> u32 {
+        if x > 0.0 {
+            0x01
+        } else if x < 0.0 {
+            0xFF
+        } else {
+            0
+        }
+    }
+
+    /// `or_sign_byte` and `or_sign_byte3` at level `Lv` against the scalar definitions, on
+    /// lanes mixing signs, zeros of both signs, NaN and infinities.
+    fn check_level<Lv: Level>() {
+        let vals = [
+            1.0f32,
+            -2.0,
+            0.0,
+            -0.0,
+            f32::NAN,
+            f32::INFINITY,
+            -f32::INFINITY,
+            1e-45,
+        ];
+        let ld = |v: [f32; 8]| -> Lv::F {
+            // SAFETY: 8 in-range indices into `v`.
+            unsafe { Lv::F::gather(&v, &[0, 1, 2, 3, 4, 5, 6, 7]) }
+        };
+        let mut n = 0u32;
+        for i in 0..vals.len() {
+            for j in 0..vals.len() {
+                // Lane q holds (vals[i], vals[j], vals[q]) rotated, so every triple occurs.
+                let a: [f32; 8] = std::array::from_fn(|q| vals[(i + q) % 8]);
+                let b: [f32; 8] = std::array::from_fn(|q| vals[(j + 3 * q) % 8]);
+                let c: [f32; 8] = std::array::from_fn(|q| vals[q]);
+                for k in 0..4u32 {
+                    let mut rec = [0x0000_0000u32; 8];
+                    ld(a).or_sign_byte3(ld(b), ld(c), &mut rec, k);
+                    let mut one = [0u32; 8];
+                    ld(a).or_sign_byte(&mut one, k);
+                    for q in 0..8 {
+                        let (x, y, z) = (byte(a[q]), byte(b[q]), byte(c[q]));
+                        let agree = if x == y && y == z { x } else { 0 };
+                        assert_eq!(
+                            rec[q],
+                            agree << (8 * k),
+                            "{:?} lane {q}",
+                            (a[q], b[q], c[q])
+                        );
+                        assert_eq!(one[q], x << (8 * k), "{} lane {q}", a[q]);
+                        n += u32::from(agree != 0);
+                    }
+                }
+            }
+        }
+        assert!(n > 0, "some triples must agree");
+    }
+
+    #[test]
+    fn sign_bytes_of_every_level_follow_the_scalar_definition() {
+        check_level::<Wide>();
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            #[target_feature(enable = "avx2")]
+            unsafe fn run() {
+                check_level::<Avx2>();
+            }
+            // SAFETY: AVX2 detected above.
+            unsafe { run() }
         }
     }
 }
