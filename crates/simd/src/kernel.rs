@@ -281,30 +281,24 @@ fn sign_bytes(pos: u32, neg: u32) -> [u8; 8] {
     (POS_BYTES[(pos & 0xFF) as usize] | (POS_BYTES[(neg & 0xFF) as usize] * 0xFF)).to_le_bytes()
 }
 
-/// Sets byte `k` of `rec[i]`, for the lanes `i` in `lanes`, to the sign given by the disjoint
-/// bit masks `pos` / `neg` (`+1` = 0x01, `-1` = 0xFF, neither = 0).
+/// Sets the bits of light `k` in the several-light sign bytes `acc[i]`, for the lanes `i` in
+/// `lanes`, to the sign given by the disjoint bit masks `pos` / `neg` (bit `k` for `+1`, bit
+/// `4 + k` for `-1`, neither for 0).
 #[inline(always)]
-fn set_sign_bytes(rec: &mut [u32; LANES], k: usize, lanes: u32, pos: u32, neg: u32) {
-    let mut bits = lanes & 0xFF;
-    while bits != 0 {
-        let i = bits.trailing_zeros() as usize;
-        bits &= bits - 1;
-        let b = if pos >> i & 1 == 1 {
-            0x01
-        } else if neg >> i & 1 == 1 {
-            0xFF
-        } else {
-            0
-        };
-        rec[i] = rec[i] & !(0xFF << (8 * k)) | b << (8 * k);
+fn set_sign_bits(acc: &mut [u32; LANES], k: usize, lanes: u32, pos: u32, neg: u32) {
+    let mut m = lanes & 0xFF;
+    while m != 0 {
+        let i = m.trailing_zeros() as usize;
+        m &= m - 1;
+        acc[i] = acc[i] & !(0x11 << k) | (pos >> i & 1) << k | (neg >> i & 1) << (4 + k);
     }
 }
 
 /// Signs of the canonical triangles in `blocks` (blocks of 8) for every light.
 ///
-/// `out[l / PACK]` receives the signs of this range for light `l` (`blocks.len() * 8` records of
-/// [`sign_stride`]`(lights.len())` bytes: one byte per triangle with one light, [`PACK`] bytes
-/// otherwise; padding lanes get 0). Returns the number of (triangle, light) evaluations
+/// `out[l / PACK]` receives the signs of this range for light `l`: one byte per triangle slot
+/// (`blocks.len() * 8` bytes; padding lanes get 0). With one light the byte is the sign as an
+/// `i8`; with several, the byte of pack `p` holds lights `4p .. 4p + 4` as bits ([`PACK`]). Returns the number of (triangle, light) evaluations
 /// neither the `f32` nor the `f64` filter could certify (exact mode), which were decided with
 /// the scalar exact predicate.
 #[inline(always)]
@@ -317,12 +311,12 @@ pub(crate) fn tri_signs<Lv: Level>(
 ) -> u64 {
     let mut uncertain = 0u64;
     let b0 = blocks.start;
-    let stride = sign_stride(lights.len());
     assert!(
         blocks.end * LANES <= lay.t0.len()
             && out.len() == lights.len().div_ceil(PACK)
-            && out.iter().all(|o| o.len() == blocks.len() * LANES * stride)
+            && out.iter().all(|o| o.len() == blocks.len() * LANES)
     );
+    let several = lights.len() > 1;
     // One light: its lanes made once per call rather than once per block (no allocation).
     let one32 = match lights {
         [light] => Some(splat4::<Lv::F>(*light)),
@@ -359,7 +353,7 @@ pub(crate) fn tri_signs<Lv: Level>(
         if let (Accuracy::Ordered | Accuracy::Original, 0xFF, Some(lv)) = (mode, valid, one32) {
             // One light, a full block (the common case): `plane`'s operations with fewer vectors
             // live (O is loaded once N exists), and the 8 signs stored as 8 consecutive bytes
-            // (one light: stride 1).
+            // (one byte per slot).
             // SAFETY: as below.
             let (a, b) = unsafe {
                 (
@@ -396,7 +390,7 @@ pub(crate) fn tri_signs<Lv: Level>(
             uncertain += exact_fallback::<Lv>(
                 lay, t, &lights[0], one64, &mut None, unc, &mut pos, &mut neg,
             );
-            // 8 consecutive bytes as in the ordered path (one light: stride 1).
+            // 8 consecutive bytes as in the ordered path.
             for (byte, x) in out[0][dst..dst + LANES]
                 .iter_mut()
                 .zip(sign_bytes(pos, neg))
@@ -417,65 +411,52 @@ pub(crate) fn tri_signs<Lv: Level>(
             Accuracy::Ordered | Accuracy::Original => {
                 // `plane`'s operations with `A − B` and `O − A` made once for all lights.
                 let (e, d) = (sub3(&a, &b), sub3(&o, &a));
-                if valid == 0xFF && stride == PACK {
-                    // A full block: each pack's 4-byte records built in registers, one store.
+                if several {
+                    // Each pack's sign bytes built in registers, one store.
                     for (pack, chunk) in lights.chunks(PACK).enumerate() {
-                        let mut rec = [0u32; LANES];
+                        let mut acc = [0u32; LANES];
                         for (k, light) in chunk.iter().enumerate() {
                             let n = edge_normal(&splat4(*light), &a, &e);
-                            dot3(&n, &d).or_sign_byte(&mut rec, k as u32);
+                            dot3(&n, &d).or_sign_bits(&mut acc, k as u32);
                         }
-                        write_records(out, pack, dst, &rec);
+                        write_pack(out, pack, dst, &acc, valid);
                     }
                 } else {
-                    for (l, light) in lights.iter().enumerate() {
-                        let n = edge_normal(&splat4(*light), &a, &e);
-                        let (pos, neg) = dot3(&n, &d).sign_bits();
-                        write_signs(out, stride, l, dst, pos & valid, neg & valid);
-                    }
+                    // One light, a partial block.
+                    let n = edge_normal(&splat4(lights[0]), &a, &e);
+                    let (pos, neg) = dot3(&n, &d).sign_bits();
+                    write_one(out, dst, pos & valid, neg & valid);
                 }
             }
-            Accuracy::Robust if stride == PACK => {
-                // Several lights: each pack's 4-byte records built in registers, one store.
+            Accuracy::Robust if several => {
+                // Each pack's sign bytes built in registers, one store.
                 for (pack, chunk) in lights.chunks(PACK).enumerate() {
-                    let mut rec = [0u32; LANES];
+                    let mut acc = [0u32; LANES];
                     for (k, light) in chunk.iter().enumerate() {
                         let lv = splat4(*light);
                         let sa = plane(&a, &b, &lv, &o);
                         let sb = plane(&b, &o, &lv, &a);
                         let sc = plane(&o, &a, &lv, &b);
-                        sa.or_sign_byte3(sb, sc, &mut rec, k as u32);
+                        sa.or_sign_bits3(sb, sc, &mut acc, k as u32);
                     }
-                    if valid != 0xFF {
-                        // Padding lanes of a partial block get 0.
-                        rec[valid.count_ones() as usize..].fill(0);
-                    }
-                    write_records(out, pack, dst, &rec);
+                    write_pack(out, pack, dst, &acc, valid);
                 }
             }
             Accuracy::Robust => {
-                for (l, light) in lights.iter().enumerate() {
-                    let lv = splat4(*light);
-                    let (pa, na) = plane(&a, &b, &lv, &o).sign_bits();
-                    let (pb, nb) = plane(&b, &o, &lv, &a).sign_bits();
-                    let (pc, nc) = plane(&o, &a, &lv, &b).sign_bits();
-                    write_signs(
-                        out,
-                        stride,
-                        l,
-                        dst,
-                        pa & pb & pc & valid,
-                        na & nb & nc & valid,
-                    );
-                }
+                // One light.
+                let lv = splat4(lights[0]);
+                let (pa, na) = plane(&a, &b, &lv, &o).sign_bits();
+                let (pb, nb) = plane(&b, &o, &lv, &a).sign_bits();
+                let (pc, nc) = plane(&o, &a, &lv, &b).sign_bits();
+                write_one(out, dst, pa & pb & pc & valid, na & nb & nc & valid);
             }
             Accuracy::Exact if one32.is_none() => {
-                // Several lights: each pack's sign records built from the lights' sign bytes
-                // and stored once. The block's points widened to f64, made (by `exact_fallback`) only when some
-                // lane needs the f64 filter.
+                // Several lights: each pack's sign bytes built in registers, one store. The
+                // block's points widened to f64, made (by `exact_fallback`) only when some lane
+                // needs the f64 filter.
                 let mut w64: Option<Widened<Lv>> = None;
                 for (pack, chunk) in lights.chunks(PACK).enumerate() {
-                    let mut rec = [0u32; LANES];
+                    let mut acc = [0u32; LANES];
                     for (k, light) in chunk.iter().enumerate() {
                         // 1. The f32 filter on all 8 lanes; the sign of `det` is its decision
                         // in every lane that is not uncertain.
@@ -487,23 +468,18 @@ pub(crate) fn tri_signs<Lv: Level>(
                                 filter_f32_det::<Lv::F, false>(&a, &b, &lv32, &o)
                             }
                         };
-                        det.or_sign_byte(&mut rec, k as u32);
+                        det.or_sign_bits(&mut acc, k as u32);
                         let unc = unc32 & valid;
                         if unc != 0 {
-                            // 2, 3. The uncertain lanes (rare): their bytes replaced.
+                            // 2, 3. The uncertain lanes (rare): their bits replaced.
                             let (mut pos, mut neg) = (0, 0);
                             uncertain += exact_fallback::<Lv>(
                                 lay, t, light, one64, &mut w64, unc, &mut pos, &mut neg,
                             );
-                            set_sign_bytes(&mut rec, k, unc, pos, neg);
+                            set_sign_bits(&mut acc, k, unc, pos, neg);
                         }
                     }
-                    if valid != 0xFF {
-                        // Padding lanes of a partial block get 0.
-                        rec[valid.count_ones() as usize..].fill(0);
-                    }
-                    // Each pack's records built in registers, one store.
-                    write_records(out, pack, dst, &rec);
+                    write_pack(out, pack, dst, &acc, valid);
                 }
             }
             Accuracy::Exact => {
@@ -522,7 +498,7 @@ pub(crate) fn tri_signs<Lv: Level>(
                     uncertain += exact_fallback::<Lv>(
                         lay, t, light, one64, &mut w64, unc, &mut pos, &mut neg,
                     );
-                    write_signs(out, stride, l, dst, pos & valid, neg & valid);
+                    write_one(out, dst, pos & valid, neg & valid);
                 }
             }
         }
@@ -613,48 +589,47 @@ fn widen3<Lv: Level>(p: &[Lv::F; 3]) -> ([Lv::D; 3], [Lv::D; 3]) {
     ([x.0, y.0, z.0], [x.1, y.1, z.1])
 }
 
+/// Writes one light's signs of the block at slot `dst` (one light: `i8` signs, one byte per
+/// slot).
 #[inline(always)]
-fn write_signs(out: &mut [&mut [i8]], stride: usize, l: usize, dst: usize, pos: u32, neg: u32) {
-    let bytes = sign_bytes(pos, neg);
-    let pack = &mut out[l / PACK][dst * stride..(dst + LANES) * stride];
-    for (i, b) in bytes.into_iter().enumerate() {
-        pack[i * stride + l % PACK] = b as i8;
+fn write_one(out: &mut [&mut [i8]], dst: usize, pos: u32, neg: u32) {
+    for (d, b) in out[0][dst..dst + LANES]
+        .iter_mut()
+        .zip(sign_bytes(pos, neg))
+    {
+        *d = b as i8;
     }
 }
 
-/// Writes the 8 four-light sign records `rec` (byte `k` = light `4 * pack + k`) of the block at
-/// slot `dst` into pack `pack` ([`PACK`] bytes per slot).
+/// Writes the several-light sign bytes `acc` (byte of lane `i` = `acc[i]`, see [`PACK`]) of
+/// the block at slot `dst` into pack `pack`; lanes outside `valid` (padding) get 0.
 #[inline(always)]
-fn write_records(out: &mut [&mut [i8]], pack: usize, dst: usize, rec: &[u32; LANES]) {
-    let dst = &mut out[pack][dst * PACK..(dst + LANES) * PACK];
-    for (d, r) in dst.chunks_exact_mut(PACK).zip(rec) {
-        for (byte, x) in d.iter_mut().zip(r.to_le_bytes()) {
-            *byte = x as i8;
-        }
+fn write_pack(out: &mut [&mut [i8]], pack: usize, dst: usize, acc: &[u32; LANES], valid: u32) {
+    for (i, (d, a)) in out[pack][dst..dst + LANES].iter_mut().zip(acc).enumerate() {
+        *d = if valid >> i & 1 == 1 {
+            *a as u8 as i8
+        } else {
+            0
+        };
     }
 }
 
-/// Lights per sign pack: with several lights, the sign of triangle slot `t` for light `l` is
-/// byte `l % 4` of the 4-byte record `t` in pack `l / 4`, so one 32-bit load (or gather) serves
-/// four lights. With one light the records shrink to one byte (see [`sign_stride`]).
+/// Lights per sign pack. Every pack holds one byte per triangle slot. With one light the byte
+/// is the sign as an `i8` (`1`, `0`, `-1`). With several, the byte of slot `t` in pack `l / 4`
+/// holds light `l`'s sign as bits: bit `l % 4` set for `+1`, bit `4 + l % 4` set for `-1`
+/// (neither for 0), so one byte load serves four lights and the array is as small as with one
+/// light (see [`pack_sign`]).
 pub(crate) const PACK: usize = 4;
 
-/// Bytes per triangle slot in a sign pack for `lights` lights: 1 with one light (a dense array,
-/// a quarter of the size, so the edge pass's reads stay in a smaller cache), [`PACK`] otherwise.
+/// Light `l`'s sign from its slot byte `b` in a call with `lights` lights (see [`PACK`]).
 #[inline(always)]
-pub(crate) const fn sign_stride(lights: usize) -> usize {
+pub(crate) fn pack_sign(b: i8, lights: usize, l: usize) -> i8 {
     if lights == 1 {
-        1
+        b
     } else {
-        PACK
+        let (b, k) = (b as u8, l % PACK);
+        (b >> k & 1) as i8 - (b >> (4 + k) & 1) as i8
     }
-}
-
-/// End of the bytes the AVX2 edge pass reads from a pack at `base` for `tri_count` slots at
-/// `stride` (4-byte gathers of whole records with several lights, single bytes with one).
-#[inline(always)]
-pub(crate) const fn signs_end(base: usize, tri_count: usize, stride: usize) -> usize {
-    base + tri_count * stride
 }
 
 /// `±s` by the parity bit of a triangle reference.
@@ -676,8 +651,7 @@ fn push_bits(sil: &mut Vec<u32>, mut bits: u32, base: usize) {
 
 /// Multiplicities of the edges in `blocks` from the triangle signs (`robust`, `ordered`,
 /// `exact`), scalar. Light `l`'s sign of this object's triangle slot `t` is
-/// `signs[bases[l / PACK] + t * stride + l % PACK]` with `stride` =
-/// [`sign_stride`]`(out.len())` (1 with one light, [`PACK`] otherwise); `out[l]` receives this range's
+/// [`pack_sign`]`(signs[bases[l / PACK] + t], out.len(), l)`; `out[l]` receives this range's
 /// multiplicities; `sil[l]` collects `edge_base + e` for `m != 0`.
 ///
 /// # Panics
@@ -692,30 +666,28 @@ pub(crate) fn edge_sums(
     edge_base: usize,
 ) {
     let e_start = blocks.start * LANES;
-    let stride = sign_stride(out.len());
+    let nl = out.len();
     // Every triangle reference of the layout is < tri_count.
-    assert!(bases
-        .iter()
-        .all(|&b| b + lay.tri_count * stride <= signs.len()));
-    assert!(bases.len() == out.len().div_ceil(PACK));
+    assert!(bases.iter().all(|&b| b + lay.tri_count <= signs.len()));
+    assert!(bases.len() == nl.div_ceil(PACK));
     for blk in blocks {
         let e0 = blk * LANES;
         if lay.block_fast[blk] {
             // Block-outer, light-inner: the block's triangle references are read once.
             let (ta, tb) = (&lay.tri_a[e0..e0 + LANES], &lay.tri_b[e0..e0 + LANES]);
             for (l, out) in out.iter_mut().enumerate() {
-                let base = bases[l / PACK] + l % PACK;
-                let s = &signs[base..base + (lay.tri_count - 1) * stride + 1];
+                let base = bases[l / PACK];
+                let s = &signs[base..base + lay.tri_count];
                 let dst = &mut out[e0 - e_start..e0 - e_start + LANES];
                 let mut any = 0;
                 for ((d, &t1), &t2) in dst.iter_mut().zip(ta).zip(tb) {
-                    let i1 = (t1 & !ODD) as usize * stride;
-                    let i2 = (t2 & !ODD) as usize * stride;
+                    let i1 = (t1 & !ODD) as usize;
+                    let i2 = (t2 & !ODD) as usize;
                     debug_assert!(i1 < s.len() && i2 < s.len());
                     // SAFETY: `Layout::build` stores only triangle slots < tri_count, and
                     // `s` covers slot tri_count - 1 (asserted above).
                     let (s1, s2) = unsafe { (*s.get_unchecked(i1), *s.get_unchecked(i2)) };
-                    let m = signed(s1, t1) + signed(s2, t2);
+                    let m = signed(pack_sign(s1, nl, l), t1) + signed(pack_sign(s2, nl, l), t2);
                     *d = m;
                     any |= m;
                 }
@@ -734,7 +706,7 @@ pub(crate) fn edge_sums(
 }
 
 /// The general (CSR) path of [`edge_sums`] for the block starting at edge `e0` (same sign
-/// layout: stride [`sign_stride`]`(out.len())`).
+/// layout).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn edge_sums_general(
@@ -747,14 +719,14 @@ pub(crate) fn edge_sums_general(
     edge_base: usize,
     e_start: usize,
 ) {
-    let stride = sign_stride(out.len());
+    let nl = out.len();
     for e in e0..(e0 + LANES).min(lay.edge_count) {
         let r = lay.ov_offsets[e] as usize..lay.ov_offsets[e + 1] as usize;
         for (l, out) in out.iter_mut().enumerate() {
-            let base = bases[l / PACK] + l % PACK;
+            let base = bases[l / PACK];
             let m: i32 = lay.ov_tri[r.clone()]
                 .iter()
-                .map(|&t| signed(signs[base + (t & !ODD) as usize * stride], t))
+                .map(|&t| signed(pack_sign(signs[base + (t & !ODD) as usize], nl, l), t))
                 .sum();
             out[e - e_start] = m;
             if m != 0 {
@@ -764,12 +736,12 @@ pub(crate) fn edge_sums_general(
     }
 }
 
-/// [`edge_sums`] with 8 edges per AVX2 vector: per block, two 32-bit gathers per pack of four
-/// lights fetch the signs of both triangles of 8 edges for all four lights. With one light
-/// (stride 1) the 16 sign bytes of a block are read with scalar loads. Identical results.
+/// [`edge_sums`] with 8 edges per AVX2 vector: per block and pack of four lights, 16 scalar
+/// byte loads fetch the signs of both triangles of 8 edges for all four lights (see [`PACK`]).
+/// Identical results.
 ///
 /// # Safety
-/// The CPU must support AVX2, and `signs.len()` must be below `i32::MAX`.
+/// The CPU must support AVX2.
 ///
 /// # Panics
 /// If a slice is shorter than described.
@@ -786,19 +758,13 @@ pub(crate) unsafe fn edge_sums_avx2(
 ) {
     use std::arch::x86_64::*;
     let e_start = blocks.start * LANES;
-    assert!(signs.len() < i32::MAX as usize);
-    let stride = sign_stride(out.len());
-    assert!(bases
-        .iter()
-        .all(|&b| signs_end(b, lay.tri_count, stride) <= signs.len()));
+    assert!(bases.iter().all(|&b| b + lay.tri_count <= signs.len()));
     assert!(bases.len() == out.len().div_ceil(PACK));
-    let mask = _mm256_set1_epi32(!ODD as i32);
     if let ([base], [out0], [sil0]) = (bases, &mut *out, &mut *sil) {
         // One light (the common case): the loop below without the pack and lane loops. The
-        // signs are dense (stride 1), and the 16 signs of a block are read with scalar byte
-        // loads rather than two `vpgatherdd`: measured faster on Zen 3 (ordered 0.81x and 0.93x,
-        // exact 0.88x and 0.90x in two paired A/B runs; PERFORMANCE.md).
-        debug_assert_eq!(stride, 1);
+        // 16 signs of a block are read with scalar byte loads rather than two `vpgatherdd`:
+        // measured faster on Zen 3 (ordered 0.81x and 0.93x, exact 0.88x and 0.90x in two paired
+        // A/B runs; PERFORMANCE.md).
         for blk in blocks.clone() {
             let e0 = blk * LANES;
             if !lay.block_fast[blk] {
@@ -817,7 +783,7 @@ pub(crate) unsafe fn edge_sums_avx2(
             }
             // SAFETY: fast blocks are full, so e0 + 8 <= tri_a.len() = tri_b.len(); every byte
             // read is signs[base + slot] with slot < tri_count, and base + tri_count <=
-            // signs.len() (asserted above with stride 1).
+            // signs.len() (asserted above).
             let (g1, g2, k1, k2) = unsafe {
                 let ta = lay.tri_a.as_ptr().add(e0);
                 let tb = lay.tri_b.as_ptr().add(e0);
@@ -878,26 +844,68 @@ pub(crate) unsafe fn edge_sums_avx2(
                     _mm256_loadu_si256(lay.tri_b[e0..e0 + LANES].as_ptr().cast()),
                 )
             };
-            // Parity masks: -1 for odd (bit 31 set), 0 for even. Byte offsets of the records.
+            // Parity masks: -1 for odd (bit 31 set), 0 for even.
             let (k1, k2) = (_mm256_srai_epi32::<31>(t1), _mm256_srai_epi32::<31>(t2));
-            let i1 = _mm256_slli_epi32::<2>(_mm256_and_si256(t1, mask));
-            let i2 = _mm256_slli_epi32::<2>(_mm256_and_si256(t2, mask));
             for (pack, &base) in bases.iter().enumerate() {
-                let b = _mm256_set1_epi32(base as i32);
-                // SAFETY: several lights, so stride 4: every index is base + 4 * slot with
-                // slot < tri_count, and the 4-byte record there is inside `signs` (asserted
-                // above); gathers need no alignment.
+                // The 16 sign bytes (zero-extended) of the block's triangles: scalar loads, as
+                // in the one-light loop. SAFETY: e0 + 8 <= tri_a.len() = tri_b.len(); every
+                // byte read is signs[base + slot] with slot < tri_count, and base + tri_count
+                // <= signs.len() (asserted above).
                 let (g1, g2) = unsafe {
-                    let p = signs.as_ptr().cast::<i32>();
+                    let ta = lay.tri_a.as_ptr().add(e0);
+                    let tb = lay.tri_b.as_ptr().add(e0);
+                    let sp = signs.as_ptr().add(base).cast::<u8>();
+                    let ld = |t: *const u32, i: usize| -> i32 {
+                        i32::from(*sp.add((*t.add(i) & !ODD) as usize))
+                    };
                     (
-                        _mm256_i32gather_epi32::<1>(p, _mm256_add_epi32(b, i1)),
-                        _mm256_i32gather_epi32::<1>(p, _mm256_add_epi32(b, i2)),
+                        _mm256_setr_epi32(
+                            ld(ta, 0),
+                            ld(ta, 1),
+                            ld(ta, 2),
+                            ld(ta, 3),
+                            ld(ta, 4),
+                            ld(ta, 5),
+                            ld(ta, 6),
+                            ld(ta, 7),
+                        ),
+                        _mm256_setr_epi32(
+                            ld(tb, 0),
+                            ld(tb, 1),
+                            ld(tb, 2),
+                            ld(tb, 3),
+                            ld(tb, 4),
+                            ld(tb, 5),
+                            ld(tb, 6),
+                            ld(tb, 7),
+                        ),
                     )
                 };
-                // Each record holds up to four lights' signs, one byte each. Negate every
-                // byte where the parity is odd (`k` is 0 or all ones in each 32-bit lane, so
-                // `(g ^ k) - k` per byte) and add the two triangles: byte `j` of lane `i` is
-                // then `m` of edge `e0 + i` for light `4 pack + j`, in `-2 ..= 2`.
+                // Each byte holds four lights' signs as bits (`PACK`). Copy it to the four
+                // bytes of its lane, and make byte `j` the sign of light `4 pack + j`: `+1`
+                // where bit `j` is set, `-1` where bit `4 + j` is.
+                let bcast = _mm256_setr_epi8(
+                    0, 0, 0, 0, 4, 4, 4, 4, 8, 8, 8, 8, 12, 12, 12, 12, 0, 0, 0, 0, 4, 4, 4, 4, 8,
+                    8, 8, 8, 12, 12, 12, 12,
+                );
+                let pos_bit = _mm256_set1_epi32(0x0804_0201);
+                let neg_bit = _mm256_set1_epi32(0x8040_2010_u32 as i32);
+                let (x1, x2) = (
+                    _mm256_shuffle_epi8(g1, bcast),
+                    _mm256_shuffle_epi8(g2, bcast),
+                );
+                // -1 where the bit is set, so `neg - pos` is the sign.
+                let sign = |x: __m256i| {
+                    _mm256_sub_epi8(
+                        _mm256_cmpeq_epi8(_mm256_and_si256(x, neg_bit), neg_bit),
+                        _mm256_cmpeq_epi8(_mm256_and_si256(x, pos_bit), pos_bit),
+                    )
+                };
+                let (g1, g2) = (sign(x1), sign(x2));
+                // Negate every byte where the parity is odd (`k` is 0 or all ones in each
+                // 32-bit lane, so `(g ^ k) - k` per byte) and add the two triangles: byte `j`
+                // of lane `i` is then `m` of edge `e0 + i` for light `4 pack + j`, in
+                // `-2 ..= 2`.
                 let s1 = _mm256_sub_epi8(_mm256_xor_si256(g1, k1), k1);
                 let s2 = _mm256_sub_epi8(_mm256_xor_si256(g2, k2), k2);
                 let m = _mm256_add_epi8(s1, s2);
@@ -1427,16 +1435,33 @@ mod tests {
     }
 
     #[test]
-    fn set_sign_bytes_replaces_one_byte_of_the_chosen_lanes() {
-        let mut rec = [0x5555_5555u32; LANES];
-        // Lanes 1, 2 and 6 of byte 2: lane 1 negative, lane 2 zero, lane 6 positive; the
-        // positive bit of lane 0 is outside `lanes` and ignored.
-        set_sign_bytes(&mut rec, 2, 0b0100_0110, 0b0100_0001, 0b0000_0010);
-        let mut want = [0x5555_5555u32; LANES];
-        want[1] = 0x55FF_5555;
-        want[2] = 0x5500_5555;
-        want[6] = 0x5501_5555;
-        assert_eq!(rec, want);
+    fn set_sign_bits_replaces_one_light_of_the_chosen_lanes() {
+        // Light 2 (bits 2 and 6) of lanes 1, 2 and 6: lane 1 negative, lane 2 zero, lane 6
+        // positive; the positive bit of lane 0 is outside `lanes` and ignored. The other bits
+        // are kept.
+        let mut acc = [0xFFu32; LANES];
+        set_sign_bits(&mut acc, 2, 0b0100_0110, 0b0100_0001, 0b0000_0010);
+        let mut want = [0xFFu32; LANES];
+        want[1] = 0xFF & !0x04;
+        want[2] = 0xFF & !0x44;
+        want[6] = 0xFF & !0x40;
+        assert_eq!(acc, want);
+    }
+
+    #[test]
+    fn pack_signs_decode_every_light() {
+        // One light: the i8 itself.
+        for b in [-1i8, 0, 1] {
+            assert_eq!(pack_sign(b, 1, 0), b);
+        }
+        // Several: light k of the pack is +1 with bit k, -1 with bit 4 + k.
+        let byte = (0b0010_1001u8) as i8; // light 0: +1, light 1: -1, light 2: 0, light 3: +1
+        let want = [1i8, -1, 0, 1];
+        for lights in [2usize, 4, 7] {
+            for l in 0..lights {
+                assert_eq!(pack_sign(byte, lights, l), want[l % PACK], "{lights} {l}");
+            }
+        }
     }
 
     #[test]

@@ -32,39 +32,25 @@ pub(crate) trait F32V:
     fn signum0(self) -> Self;
     /// Truncates to integers (the lanes are small exact integers here).
     fn to_i32(self) -> [i32; 8];
-    /// Ors lane `i`'s sign as an `i8` byte (`+1` = 0x01, `-1` = 0xFF, zero or NaN = 0x00) into
-    /// byte `k` (0 to 3) of `rec[i]`, whose byte `k` must be 0: the 4-byte sign records of four
-    /// lights, built in registers instead of byte by byte.
-    fn or_sign_byte(self, rec: &mut [u32; 8], k: u32) {
+    /// Ors lane `i`'s sign into the several-light sign byte `acc[i]` of light `k` (0 to 3):
+    /// bit `k` for `+1`, bit `4 + k` for `-1`, nothing for zero or NaN. Those bits of `acc[i]`
+    /// must be 0.
+    fn or_sign_bits(self, acc: &mut [u32; 8], k: u32) {
         let (pos, neg) = self.sign_bits();
-        for (i, r) in rec.iter_mut().enumerate() {
-            let b = if pos >> i & 1 == 1 {
-                0x01
-            } else if neg >> i & 1 == 1 {
-                0xFF
-            } else {
-                0
-            };
-            *r |= b << (8 * k);
+        for (i, r) in acc.iter_mut().enumerate() {
+            *r |= (pos >> i & 1) << k | (neg >> i & 1) << (4 + k);
         }
     }
-    /// [`F32V::or_sign_byte`] for the agreement of three lanes: `+1` where `self`, `b` and `c`
-    /// are all positive, `-1` where all three are negative, 0 otherwise (any zero or NaN, or
-    /// a disagreement): `robust` mode's sign of a triangle from its three plane tests.
-    fn or_sign_byte3(self, b: Self, c: Self, rec: &mut [u32; 8], k: u32) {
+    /// [`F32V::or_sign_bits`] for the agreement of three lanes: `+1` where `self`, `b` and `c`
+    /// are all positive, `-1` where all three are negative, nothing otherwise (any zero or NaN,
+    /// or a disagreement): `robust` mode's sign of a triangle from its three plane tests.
+    fn or_sign_bits3(self, b: Self, c: Self, acc: &mut [u32; 8], k: u32) {
         let (pa, na) = self.sign_bits();
         let (pb, nb) = b.sign_bits();
         let (pc, nc) = c.sign_bits();
         let (pos, neg) = (pa & pb & pc, na & nb & nc);
-        for (i, r) in rec.iter_mut().enumerate() {
-            let x = if pos >> i & 1 == 1 {
-                0x01
-            } else if neg >> i & 1 == 1 {
-                0xFF
-            } else {
-                0
-            };
-            *r |= x << (8 * k);
+        for (i, r) in acc.iter_mut().enumerate() {
+            *r |= (pos >> i & 1) << k | (neg >> i & 1) << (4 + k);
         }
     }
     /// Lane-wise absolute value (clears the sign bit; exact).
@@ -278,6 +264,24 @@ mod avx2 {
         }
     }
 
+    /// `acc[i] |= bit k` where lane `i` of `pos` is all ones and `bit 4 + k` where lane `i` of
+    /// `neg` is (the several-light sign byte of light `k`).
+    ///
+    /// # Safety
+    /// AVX2 present (module docs).
+    #[inline(always)]
+    unsafe fn or_bits(acc: &mut [u32; 8], pos: __m256i, neg: __m256i, k: u32) {
+        // SAFETY: `acc` is 32 readable and writable bytes; unaligned load and store.
+        unsafe {
+            let bits = _mm256_or_si256(
+                _mm256_and_si256(pos, _mm256_set1_epi32(1 << k)),
+                _mm256_and_si256(neg, _mm256_set1_epi32(16 << k)),
+            );
+            let p = acc.as_mut_ptr().cast::<__m256i>();
+            _mm256_storeu_si256(p, _mm256_or_si256(_mm256_loadu_si256(p), bits));
+        }
+    }
+
     impl Level for Avx2 {
         type F = F8;
         type D = D4;
@@ -402,38 +406,26 @@ mod avx2 {
             }
         }
         #[inline(always)]
-        fn or_sign_byte(self, rec: &mut [u32; 8], k: u32) {
-            // SAFETY: `rec` is 32 readable and writable bytes; unaligned load and store; AVX2
+        fn or_sign_bits(self, acc: &mut [u32; 8], k: u32) {
+            // SAFETY: `acc` is 32 readable and writable bytes; unaligned load and store; AVX2
             // present (module docs).
             unsafe {
                 let z = _mm256_setzero_ps();
                 let gt = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GT_OQ>(self.0, z));
                 let lt = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(self.0, z));
-                let byte = _mm256_or_si256(
-                    _mm256_and_si256(gt, _mm256_set1_epi32(0x01)),
-                    _mm256_and_si256(lt, _mm256_set1_epi32(0xFF)),
-                );
-                let shifted = _mm256_sll_epi32(byte, _mm_cvtsi32_si128((8 * k) as i32));
-                let p = rec.as_mut_ptr().cast::<__m256i>();
-                _mm256_storeu_si256(p, _mm256_or_si256(_mm256_loadu_si256(p), shifted));
+                or_bits(acc, gt, lt, k);
             }
         }
         #[inline(always)]
-        fn or_sign_byte3(self, b: Self, c: Self, rec: &mut [u32; 8], k: u32) {
-            // SAFETY: as in `or_sign_byte`.
+        fn or_sign_bits3(self, b: Self, c: Self, acc: &mut [u32; 8], k: u32) {
+            // SAFETY: as in `or_sign_bits`.
             unsafe {
                 let z = _mm256_setzero_ps();
                 let gt = |x: __m256| _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GT_OQ>(x, z));
                 let lt = |x: __m256| _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(x, z));
                 let all_gt = _mm256_and_si256(_mm256_and_si256(gt(self.0), gt(b.0)), gt(c.0));
                 let all_lt = _mm256_and_si256(_mm256_and_si256(lt(self.0), lt(b.0)), lt(c.0));
-                let byte = _mm256_or_si256(
-                    _mm256_and_si256(all_gt, _mm256_set1_epi32(0x01)),
-                    _mm256_and_si256(all_lt, _mm256_set1_epi32(0xFF)),
-                );
-                let shifted = _mm256_sll_epi32(byte, _mm_cvtsi32_si128((8 * k) as i32));
-                let p = rec.as_mut_ptr().cast::<__m256i>();
-                _mm256_storeu_si256(p, _mm256_or_si256(_mm256_loadu_si256(p), shifted));
+                or_bits(acc, all_gt, all_lt, k);
             }
         }
         #[inline(always)]
@@ -526,18 +518,18 @@ mod avx2 {
 mod tests {
     use super::*;
 
-    /// The scalar definition of a sign byte: `+1` = 0x01, `-1` = 0xFF, zero or NaN = 0.
-    fn byte(x: f32) -> u32 {
+    /// The scalar definition of a several-light sign byte's bits for light `k`.
+    fn bits(x: f32, k: u32) -> u32 {
         if x > 0.0 {
-            0x01
+            1 << k
         } else if x < 0.0 {
-            0xFF
+            16 << k
         } else {
             0
         }
     }
 
-    /// `or_sign_byte` and `or_sign_byte3` at level `Lv` against the scalar definitions, on
+    /// `or_sign_bits` and `or_sign_bits3` at level `Lv` against the scalar definitions, on
     /// lanes mixing signs, zeros of both signs, NaN and infinities.
     fn check_level<Lv: Level>() {
         let vals = [
@@ -557,25 +549,22 @@ mod tests {
         let mut n = 0u32;
         for i in 0..vals.len() {
             for j in 0..vals.len() {
-                // Lane q holds (vals[i], vals[j], vals[q]) rotated, so every triple occurs.
+                // Lane q holds a rotation of the values, so every triple occurs.
                 let a: [f32; 8] = std::array::from_fn(|q| vals[(i + q) % 8]);
                 let b: [f32; 8] = std::array::from_fn(|q| vals[(j + 3 * q) % 8]);
                 let c: [f32; 8] = std::array::from_fn(|q| vals[q]);
                 for k in 0..4u32 {
-                    let mut rec = [0x0000_0000u32; 8];
-                    ld(a).or_sign_byte3(ld(b), ld(c), &mut rec, k);
-                    let mut one = [0u32; 8];
-                    ld(a).or_sign_byte(&mut one, k);
+                    // Bits of the other lights are kept.
+                    let other = 0xFF & !(0x11 << k);
+                    let mut three = [other; 8];
+                    ld(a).or_sign_bits3(ld(b), ld(c), &mut three, k);
+                    let mut one = [other; 8];
+                    ld(a).or_sign_bits(&mut one, k);
                     for q in 0..8 {
-                        let (x, y, z) = (byte(a[q]), byte(b[q]), byte(c[q]));
+                        let (x, y, z) = (bits(a[q], k), bits(b[q], k), bits(c[q], k));
                         let agree = if x == y && y == z { x } else { 0 };
-                        assert_eq!(
-                            rec[q],
-                            agree << (8 * k),
-                            "{:?} lane {q}",
-                            (a[q], b[q], c[q])
-                        );
-                        assert_eq!(one[q], x << (8 * k), "{} lane {q}", a[q]);
+                        assert_eq!(three[q], other | agree, "{:?} lane {q}", (a[q], b[q], c[q]));
+                        assert_eq!(one[q], other | x, "{} lane {q}", a[q]);
                         n += u32::from(agree != 0);
                     }
                 }
@@ -583,9 +572,8 @@ mod tests {
         }
         assert!(n > 0, "some triples must agree");
     }
-
     #[test]
-    fn sign_bytes_of_every_level_follow_the_scalar_definition() {
+    fn sign_bits_of_every_level_follow_the_scalar_definition() {
         check_level::<Wide>();
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {

@@ -190,8 +190,8 @@ pub struct SimdBackend {
     level: SimdLevel,
     pool: Option<rayon::ThreadPool>,
     scenes: PreparedScenes<Prepared>,
-    /// Scratch: triangle signs, in packs of four lights (see `kernel::PACK`), one byte per
-    /// triangle with one light (`kernel::sign_stride`).
+    /// Scratch: triangle signs, one byte per triangle slot in each pack of up to four lights
+    /// (see `kernel::PACK`).
     signs: Vec<i8>,
 }
 
@@ -351,15 +351,8 @@ mod dispatch {
     ) {
         match level {
             #[cfg(target_arch = "x86_64")]
-            SimdLevel::Avx2
-                if signs.len() < i32::MAX as usize
-                    && bases.iter().all(|&b| {
-                        kernel::signs_end(b, lay.tri_count, kernel::sign_stride(out.len()))
-                            <= signs.len()
-                    }) =>
-            {
-                // SAFETY: AVX2 as in `tri_signs`; the size conditions are checked
-                // by the guard above (the same as `edge_sums_avx2`'s asserts).
+            SimdLevel::Avx2 => {
+                // SAFETY: AVX2 as in `tri_signs`.
                 unsafe { kernel::edge_sums_avx2(lay, blocks, signs, bases, out, sil, edge_base) }
             }
             _ => kernel::edge_sums(lay, blocks, signs, bases, out, sil, edge_base),
@@ -456,15 +449,12 @@ fn run_extract(
     let mut uncertain = 0u64;
     if mode != Accuracy::Original {
         // Phase 1: one sign per (canonical triangle, light).
-        // One light: one byte per triangle slot; several: packs of `PACK`-byte records.
+        // One byte per triangle slot in each pack of up to `PACK` lights.
         let slots = p.total_tri_slots;
-        let stride = kernel::sign_stride(nl);
         let packs = nl.div_ceil(kernel::PACK);
-        let pack_len = slots * stride;
         signs.clear();
-        signs.resize(pack_len * packs, 0);
-        let bounds: Vec<usize> = p.tri_bounds().iter().map(|b| b * stride).collect();
-        let parts = split_items(signs, pack_len, &bounds);
+        signs.resize(slots * packs, 0);
+        let parts = split_items(signs, slots, &p.tri_bounds());
         uncertain = p
             .tri_items
             .par_iter()
@@ -485,7 +475,6 @@ fn run_extract(
     // Phase 2: one pass over all edges of all objects.
     let signs: &[i8] = signs;
     let slots = p.total_tri_slots;
-    let stride = kernel::sign_stride(nl);
     let parts = split_items(out.all_values_mut(), ne, &p.edge_bounds());
     let lists: Vec<Vec<Vec<u32>>> = p
         .edge_items
@@ -506,7 +495,7 @@ fn run_extract(
                 );
             } else {
                 let bases: Vec<usize> = (0..nl.div_ceil(kernel::PACK))
-                    .map(|pack| (pack * slots + o.tri_base) * stride)
+                    .map(|pack| pack * slots + o.tri_base)
                     .collect();
                 dispatch::edge_sums(
                     level,
