@@ -483,20 +483,19 @@ pub(crate) fn tri_signs<Lv: Level>(
                 }
             }
             Accuracy::Exact => {
-                // One light, where the one-light path above does not apply (a partial block, a
-                // light needing the range check, or `w` other than 0 and 1).
-                let mut w64: Option<Widened<Lv>> = None;
-                for (l, light) in lights.iter().enumerate() {
+                // One light (the arm above takes several), where the one-light path above does
+                // not apply (a partial block, a light needing the range check, or `w` other
+                // than 0 and 1).
+                if let (Some(lv32), [light], [stage]) = (one32, lights, stages) {
                     // 1. The f32 filter on all 8 lanes.
-                    let lv32 = one32.unwrap_or_else(|| splat4(*light));
-                    let (mut pos, mut neg, unc32) = match stages[l] {
+                    let (mut pos, mut neg, unc32) = match stage {
                         F32Stage::Skip => (0, 0, 0xFF),
                         F32Stage::Checked => filter_f32::<Lv::F, true>(&a, &b, &lv32, &o),
                         F32Stage::Unchecked => filter_f32::<Lv::F, false>(&a, &b, &lv32, &o),
                     };
                     let unc = unc32 & valid;
                     uncertain += exact_fallback::<Lv>(
-                        lay, t, light, one64, &mut w64, unc, &mut pos, &mut neg,
+                        lay, t, light, one64, &mut None, unc, &mut pos, &mut neg,
                     );
                     write_one(out, dst, pos & valid, neg & valid);
                 }
