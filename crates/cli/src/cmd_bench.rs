@@ -331,11 +331,6 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
             "give at least one backend and one mode".to_owned(),
         ));
     }
-    let scene = shadowvol_scenes::Scene::from_name_or_path(&args.scene)
-        .map_err(|e| CliError::Other(format!("scene {:?}: {e}", args.scene)))?;
-    let topo = scene
-        .topology()
-        .map_err(|e| CliError::Other(format!("scene {:?}: {e}", args.scene)))?;
     if let Some(n) = args
         .lights
         .iter()
@@ -344,6 +339,11 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     {
         return Err(CliError::Usage(format!("--lights lists {n} twice")));
     }
+    let scene = shadowvol_scenes::Scene::from_name_or_path(&args.scene)
+        .map_err(|e| CliError::Other(format!("scene {:?}: {e}", args.scene)))?;
+    let topo = scene
+        .topology()
+        .map_err(|e| CliError::Other(format!("scene {:?}: {e}", args.scene)))?;
     let counts: Vec<Option<u32>> = if args.lights.is_empty() {
         vec![None]
     } else {
@@ -359,9 +359,16 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         .flat_map(|&m| (0..light_sets.len()).map(move |k| (m, k)))
         .collect();
 
+    // Frames per floor, and per (backend, mode, light count): the interleaved schedule adds one
+    // untimed frame per turn.
     let per = u64::from(args.warmup + args.frames);
+    let per_combo = per
+        + match args.schedule {
+            Schedule::Interleaved => u64::from(args.frames.div_ceil(TURN_FRAMES)),
+            Schedule::Sequential => 0,
+        };
     let bar = indicatif::ProgressBar::new(
-        per * (entries.len() * combos.len() + 2 * light_sets.len()) as u64,
+        per_combo * (entries.len() * combos.len()) as u64 + per * 2 * light_sets.len() as u64,
     );
     bar.set_style(
         indicatif::ProgressStyle::with_template(
@@ -390,7 +397,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
             Ok(b) => b,
             Err(e) if args.skip_unavailable => {
                 bar.suspend(|| eprintln!("warning: skipping {}: {e}", entry.name));
-                bar.inc(per * combos.len() as u64);
+                bar.inc(per_combo * combos.len() as u64);
                 continue;
             }
             Err(e) => return Err(e.into()),
