@@ -640,27 +640,39 @@ impl EdgeTable {
     }
 }
 
-/// Peak-allocation tracking for the estimate tests: a global allocator that counts live bytes
-/// (only in this crate's unit-test binary).
+/// Peak-allocation tracking for the estimate tests: a global allocator that counts each
+/// thread's live bytes (only in this crate's unit-test binary).
 #[cfg(test)]
 mod counting {
+    // The counts are per thread: the test harness runs tests on parallel threads, and a
+    // process-wide count let one test's allocations show up in another's peak (seen in CI: a
+    // 9834-byte "peak" in a test that allocates nothing). Nothing measured here spawns threads.
     use std::alloc::{GlobalAlloc, Layout, System};
-    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::cell::Cell;
 
     pub struct Counting;
-    pub static LIVE: AtomicUsize = AtomicUsize::new(0);
-    pub static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+    thread_local! {
+        // Const-initialised, no destructor: reading them never allocates.
+        static LIVE: Cell<isize> = const { Cell::new(0) };
+        static PEAK: Cell<isize> = const { Cell::new(0) };
+    }
 
     // SAFETY: forwards to the system allocator; only counts.
     unsafe impl GlobalAlloc for Counting {
         unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-            let live = LIVE.fetch_add(layout.size(), Ordering::SeqCst) + layout.size();
-            PEAK.fetch_max(live, Ordering::SeqCst);
+            let size = layout.size() as isize;
+            // `try_with`: during thread teardown the counters may be gone; then nothing counts.
+            let _ = LIVE.try_with(|live| {
+                live.set(live.get() + size);
+                let _ = PEAK.try_with(|peak| peak.set(peak.get().max(live.get())));
+            });
             // SAFETY: same contract as the caller's.
             unsafe { System.alloc(layout) }
         }
         unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-            LIVE.fetch_sub(layout.size(), Ordering::SeqCst);
+            let size = layout.size() as isize;
+            let _ = LIVE.try_with(|live| live.set(live.get() - size));
             // SAFETY: same contract as the caller's.
             unsafe { System.dealloc(ptr, layout) }
         }
@@ -669,12 +681,13 @@ mod counting {
     #[global_allocator]
     static GLOBAL: Counting = Counting;
 
-    /// Peak live bytes above the level at the start, while `f` runs.
+    /// Peak live bytes allocated by this thread above its level at the start, while `f` runs.
     pub fn peak_during<R>(f: impl FnOnce() -> R) -> (R, usize) {
-        let base = LIVE.load(Ordering::SeqCst);
-        PEAK.store(base, Ordering::SeqCst);
+        let base = LIVE.with(Cell::get);
+        PEAK.with(|p| p.set(base));
         let r = f();
-        (r, PEAK.load(Ordering::SeqCst) - base)
+        let peak = PEAK.with(Cell::get);
+        (r, usize::try_from(peak - base).unwrap_or(0))
     }
 }
 
