@@ -12,7 +12,7 @@
 //! * [`edge_original`]: `original` mode, per (edge, OV), sharing `V`, `A − B` and `N`
 //!   between the two OVs of a manifold edge.
 
-use crate::lanes::{Level, F32V, F64V};
+use crate::lanes::{or_sign_mask_bits, Level, F32V, F64V};
 use crate::layout::coord_in_filter_range;
 use crate::layout::{Layout, LANES, ODD};
 use shadowvol_robust_math::{
@@ -286,12 +286,12 @@ fn sign_bytes(pos: u32, neg: u32) -> [u8; 8] {
 /// `4 + k` for `-1`, neither for 0).
 #[inline(always)]
 fn set_sign_bits(acc: &mut [u32; LANES], k: usize, lanes: u32, pos: u32, neg: u32) {
-    let mut m = lanes & 0xFF;
-    while m != 0 {
-        let i = m.trailing_zeros() as usize;
-        m &= m - 1;
-        acc[i] = acc[i] & !(0x11 << k) | (pos >> i & 1) << k | (neg >> i & 1) << (4 + k);
+    for (i, a) in acc.iter_mut().enumerate() {
+        if lanes >> i & 1 == 1 {
+            *a &= !(0x11 << k);
+        }
     }
+    or_sign_mask_bits(acc, pos & lanes, neg & lanes, k as u32);
 }
 
 /// Signs of the canonical triangles in `blocks` (blocks of 8) for every light.
@@ -390,13 +390,7 @@ pub(crate) fn tri_signs<Lv: Level>(
             uncertain += exact_fallback::<Lv>(
                 lay, t, &lights[0], one64, &mut None, unc, &mut pos, &mut neg,
             );
-            // 8 consecutive bytes as in the ordered path.
-            for (byte, x) in out[0][dst..dst + LANES]
-                .iter_mut()
-                .zip(sign_bytes(pos, neg))
-            {
-                *byte = x as i8;
-            }
+            write_one(out, dst, pos, neg);
             continue;
         }
         // SAFETY: `t + 8 <= t0.len()` (asserted above), and the layout's ids are in range.

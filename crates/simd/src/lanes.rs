@@ -15,6 +15,15 @@
 
 use std::ops::{Add, Mul, Sub};
 
+/// Ors light `k`'s sign bits into the several-light sign bytes `acc[i]`: bit `k` for the lanes
+/// set in `pos`, bit `4 + k` for those set in `neg` (disjoint masks, lane `i` = bit `i`).
+#[inline(always)]
+pub(crate) fn or_sign_mask_bits(acc: &mut [u32; 8], pos: u32, neg: u32, k: u32) {
+    for (i, r) in acc.iter_mut().enumerate() {
+        *r |= (pos >> i & 1) << k | (neg >> i & 1) << (4 + k);
+    }
+}
+
 /// Eight `f32` lanes.
 pub(crate) trait F32V:
     Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self>
@@ -37,9 +46,7 @@ pub(crate) trait F32V:
     /// must be 0.
     fn or_sign_bits(self, acc: &mut [u32; 8], k: u32) {
         let (pos, neg) = self.sign_bits();
-        for (i, r) in acc.iter_mut().enumerate() {
-            *r |= (pos >> i & 1) << k | (neg >> i & 1) << (4 + k);
-        }
+        or_sign_mask_bits(acc, pos, neg, k);
     }
     /// [`F32V::or_sign_bits`] for the agreement of three lanes: `+1` where `self`, `b` and `c`
     /// are all positive, `-1` where all three are negative, nothing otherwise (any zero or NaN,
@@ -49,9 +56,7 @@ pub(crate) trait F32V:
         let (pb, nb) = b.sign_bits();
         let (pc, nc) = c.sign_bits();
         let (pos, neg) = (pa & pb & pc, na & nb & nc);
-        for (i, r) in acc.iter_mut().enumerate() {
-            *r |= (pos >> i & 1) << k | (neg >> i & 1) << (4 + k);
-        }
+        or_sign_mask_bits(acc, pos, neg, k);
     }
     /// Lane-wise absolute value (clears the sign bit; exact).
     fn abs(self) -> Self;
