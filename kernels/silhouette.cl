@@ -7,9 +7,9 @@
 //
 // Layout (built once by the host at prepare, all objects concatenated):
 //   pos       3 floats per vertex; vertex ids are global (object's base + compact id)
-//   edges     2 uints per edge (a, b), a < b, global vertex ids
-//   edge_obj  object index of each edge
-//   ov_off    CSR offsets into ovs, num_edges + 1 entries
+//   edges     4 uints per edge (a, b, first OV slot, object), a < b, global vertex ids, plus a
+//             sentinel whose third value is the OV count (edge e's OVs are slots
+//             edges[4e + 2] .. edges[4e + 6]); shadowvol-silhouette's gpu::SceneLayout
 //   ovs       opposite vertices (global vertex ids)
 //   lights    4 floats per (object, light): object-space light, index obj * num_lights + l
 // Outputs:
@@ -18,7 +18,7 @@
 //             order; the first counts[1] are filled (capacity num_edges * num_lights, the most
 //             there can be). The index is light-major like the host's multiplicity array, so one
 //             read brings back every light's silhouette.
-//   unc       (edge, ov slot, light) uint triples that the exact filter could not certify;
+//   unc       (edge, ov slot, light, 0) uint records that the exact filter could not certify;
 //             only the first unc_capacity are stored, counts[0] counts them all
 //
 // Build options: -DSHADOWVOL_EXACT_F64=1 selects the f64 filter for exact mode (needs
@@ -199,8 +199,6 @@ int sv_filter(float3 a, float3 b, float4 l, float3 o) {
 
 __kernel void silhouette(__global const float* restrict pos,
                          __global const uint* restrict edges,
-                         __global const uint* restrict edge_obj,
-                         __global const uint* restrict ov_off,
                          __global const uint* restrict ovs,
                          __global const float* restrict lights,
                          const uint num_edges,
@@ -215,14 +213,15 @@ __kernel void silhouette(__global const float* restrict pos,
     if (e >= num_edges || l >= num_lights) {
         return;
     }
-    const size_t li = ((size_t)edge_obj[e] * num_lights + l) * 4;
+    const size_t rec = 4 * (size_t)e;
+    const size_t li = ((size_t)edges[rec + 3] * num_lights + l) * 4;
     const float4 light = (float4)(lights[li], lights[li + 1], lights[li + 2], lights[li + 3]);
-    const uint ia = edges[2 * (size_t)e];
-    const uint ib = edges[2 * (size_t)e + 1];
+    const uint ia = edges[rec];
+    const uint ib = edges[rec + 1];
     const float3 pa = sv_load(pos, ia);
     const float3 pb = sv_load(pos, ib);
-    const uint begin = ov_off[e];
-    const uint end = ov_off[e + 1];
+    const uint begin = edges[rec + 2];
+    const uint end = edges[rec + 6];
     int m = 0;
     for (uint k = begin; k < end; ++k) {
         const uint io = ovs[k];
@@ -235,9 +234,10 @@ __kernel void silhouette(__global const float* restrict pos,
             if (s == SV_UNCERTAIN) {
                 const uint slot = atomic_inc(&counts[0]);
                 if (slot < unc_capacity) {
-                    unc[3 * (size_t)slot] = e;
-                    unc[3 * (size_t)slot + 1] = k;
-                    unc[3 * (size_t)slot + 2] = l;
+                    unc[4 * (size_t)slot] = e;
+                    unc[4 * (size_t)slot + 1] = k;
+                    unc[4 * (size_t)slot + 2] = l;
+                    unc[4 * (size_t)slot + 3] = 0u;
                 }
                 s = 0;
             }

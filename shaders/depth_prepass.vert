@@ -9,9 +9,9 @@ struct ObjectXform {
     mat4 clip_from_anchor;
     vec4 anchor;
 };
-layout(std430, set = 0, binding = 5) readonly buffer Xforms { ObjectXform xf[]; };
-layout(std430, set = 0, binding = 8) readonly buffer VertexObject { uint vertex_obj[]; };
-layout(std430, set = 0, binding = 9) readonly buffer TriangleCorners { uint corners[]; };
+layout(std430, set = 0, binding = 4) readonly buffer Xforms { ObjectXform xf[]; };
+layout(std430, set = 0, binding = 7) readonly buffer VertexObject { uint vertex_obj[]; };
+layout(std430, set = 0, binding = 8) readonly buffer TriangleCorners { uint corners[]; };
 
 layout(push_constant) uniform Push {
     uint mode;

@@ -39,12 +39,13 @@ layout(location = 0) flat in uint v_edge[];
 layout(location = 1) flat in uint v_light[];
 
 layout(std430, set = 0, binding = 0) readonly buffer Positions { uint pos_bits[]; };
-// (a, b, first OV, one past the last OV), global vertex ids and global OV indices.
+// shadowvol-silhouette's gpu::SceneLayout: (a, b, first OV slot, object) per edge, global vertex
+// ids and OV slots, plus a sentinel whose z is the OV count (edge e's OVs: edges[e].z until
+// edges[e + 1].z).
 layout(std430, set = 0, binding = 1) readonly buffer Edges { uvec4 edges[]; };
 layout(std430, set = 0, binding = 2) readonly buffer Ovs { uint ovs[]; };
-layout(std430, set = 0, binding = 3) readonly buffer EdgeObject { uint edge_obj[]; };
 // Object-space lights (bits of x, y, z, w), index object * light_count + light.
-layout(std430, set = 0, binding = 4) readonly buffer Lights { uvec4 light_bits[]; };
+layout(std430, set = 0, binding = 3) readonly buffer Lights { uvec4 light_bits[]; };
 // Per object: clip_from_anchor = view_proj * world_from_object * translate(anchor), composed in
 // f64 on the host and rounded once; object-space positions are taken relative to the anchor
 // (near the object) before the transform, so large coordinates (1e4 offsets) keep their precision.
@@ -52,10 +53,10 @@ struct ObjectXform {
     mat4 clip_from_anchor;
     vec4 anchor;
 };
-layout(std430, set = 0, binding = 5) readonly buffer Xforms { ObjectXform xf[]; };
+layout(std430, set = 0, binding = 4) readonly buffer Xforms { ObjectXform xf[]; };
 // Multiplicities, index light * edge_count + edge.
-layout(std430, set = 0, binding = 6) buffer Mult { int m_out[]; };
-layout(std430, set = 0, binding = 7) buffer Uncertain {
+layout(std430, set = 0, binding = 5) buffer Mult { int m_out[]; };
+layout(std430, set = 0, binding = 6) buffer Uncertain {
     uint uncertain_count;
     uint clamped_count;
     uint pad0;
@@ -63,10 +64,10 @@ layout(std430, set = 0, binding = 7) buffer Uncertain {
     uvec4 uncertain[]; // (edge, global OV index, light, 0)
 };
 
-layout(std430, set = 0, binding = 8) readonly buffer VertexObject { uint vertex_obj[]; };
-layout(std430, set = 0, binding = 9) readonly buffer TriangleCorners { uint corners[]; };
+layout(std430, set = 0, binding = 7) readonly buffer VertexObject { uint vertex_obj[]; };
+layout(std430, set = 0, binding = 8) readonly buffer TriangleCorners { uint corners[]; };
 // Exact triangle signs for one light (host-computed; exact-mode caps only).
-layout(std430, set = 0, binding = 10) readonly buffer TriangleSigns { int tri_sign[]; };
+layout(std430, set = 0, binding = 9) readonly buffer TriangleSigns { int tri_sign[]; };
 
 layout(push_constant) uniform Push {
     uint mode;
@@ -367,7 +368,8 @@ void main() {
     uvec4 ed = edges[e];
     uint a = ed.x;
     uint b = ed.y;
-    uint obj = edge_obj[e];
+    uint obj = ed.w;
+    uint ov_end = edges[e + 1u].z;
     uvec4 lb = light_bits[obj * pc.light_count + li];
     vec4 l = uintBitsToFloat(lb);
     uint out_index = li * pc.edge_count + e;
@@ -378,7 +380,7 @@ void main() {
         vec3 pa = position(a);
         vec3 pb = position(b);
         bool edge_touches = pc.emit != 0u && (touches_light(pa, l) || touches_light(pb, l));
-        for (uint k = ed.z; k < ed.w; k++) {
+        for (uint k = ed.z; k < ov_end; k++) {
             uint o = ovs[k];
             if (pc.emit != 0u && (edge_touches || touches_light(position(o), l))) {
                 continue; // rendering: triangles touching a point light cast no volume

@@ -23,17 +23,28 @@ use std::time::Instant;
 
 pub mod baselines;
 
+/// The backend's registry name.
+pub const NAME: &str = "cpu";
+
 /// The scalar reference backend. Always available.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct CpuBackend {
     scenes: PreparedScenes<TopologyScene>,
+}
+
+impl Default for CpuBackend {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl CpuBackend {
     /// Creates the backend (no set-up needed).
     #[must_use]
     pub fn new() -> Self {
-        Self::default()
+        Self {
+            scenes: PreparedScenes::new(NAME),
+        }
     }
 }
 
@@ -77,7 +88,7 @@ pub fn extract_table(
 impl SilhouetteBackend for CpuBackend {
     fn info(&self) -> BackendInfo {
         BackendInfo {
-            name: "cpu",
+            name: NAME,
             device: "host CPU, scalar, 1 thread".to_owned(),
             modes: Accuracy::ALL.to_vec(),
             max_lights: None,
@@ -96,7 +107,7 @@ impl SilhouetteBackend for CpuBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
-        let scene = self.scenes.get("cpu", id)?;
+        let scene = self.scenes.get(id)?;
         check_lights(lights)?;
         let start = Instant::now();
         let obj_lights = object_lights(scene, lights);

@@ -6,8 +6,7 @@ mod common;
 
 use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{
-    corpus, extract_once, invariant, Accuracy, BackendError, Multiplicities, PreparedId,
-    SilhouetteBackend,
+    corpus, extract_once, invariant, Accuracy, BackendError, Multiplicities, SilhouetteBackend,
 };
 
 #[test]
@@ -177,8 +176,10 @@ fn backend_errors() {
         cpu.extract(id, &[], Accuracy::Exact, &mut out),
         Err(BackendError::InvalidInput(_))
     ));
+    let released = cpu.prepare(&scene).unwrap();
+    cpu.release(released);
     assert!(matches!(
-        cpu.extract(PreparedId(999), &case.lights, Accuracy::Exact, &mut out),
+        cpu.extract(released, &case.lights, Accuracy::Exact, &mut out),
         Err(BackendError::UnknownScene { backend: "cpu", .. })
     ));
     cpu.extract(id, &case.lights, Accuracy::Robust, &mut out)

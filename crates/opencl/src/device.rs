@@ -1,6 +1,6 @@
 //! Finding OpenCL platforms and devices, and choosing one.
 
-use crate::BACKEND;
+use crate::NAME;
 use opencl3::device::{
     Device, CL_DEVICE_TYPE_ACCELERATOR, CL_DEVICE_TYPE_ALL, CL_DEVICE_TYPE_CPU, CL_DEVICE_TYPE_GPU,
 };
@@ -72,7 +72,7 @@ impl DeviceDesc {
 
 fn unavailable(reason: String) -> BackendError {
     BackendError::Unavailable {
-        backend: BACKEND,
+        backend: NAME,
         reason,
     }
 }

@@ -7,7 +7,7 @@
 //!   [`shadowvol_silhouette::object_lights`] so that every backend sees the same `f32` inputs.
 //!   There is no per-object synchronisation.
 //! * **Many lights.** When the per-light buffers of all lights would exceed the device's largest
-//!   allocation or the kernel's 32-bit indices (or [`OpenClOptions::max_lights_per_launch`] is
+//!   allocation or the kernel's 32-bit indices (or [`OpenClOptions::max_lights_per_batch`] is
 //!   set), the lights are split into batches of one launch each, with the same result as one
 //!   launch; only a scene where one light alone does not fit is a [`BackendError::Limit`].
 //! * **Uploaded once.** Positions, edges, OV lists and offsets are uploaded at `prepare`; an
@@ -26,7 +26,7 @@
 //!   layout and host code.
 //! * **Bounded waits.** Nothing waits for the device without a limit (no `clFinish`, no blocking
 //!   reads or writes): every command is enqueued non-blocking and its event waited for within
-//!   [`shadowvol_silhouette::gpu_wait_limit`] (`SHADOWVOL_GPU_TIMEOUT` seconds, default 600; read
+//!   [`shadowvol_silhouette::gpu::wait_limit`] (`SHADOWVOL_GPU_TIMEOUT` seconds, default 600; read
 //!   at every `extract`), woken by a completion callback and checked by status reads between.
 //!   A command that fails is a [`BackendError::Device`] naming it and its decoded status; one
 //!   that does not end in time is a `Device` error naming `SHADOWVOL_GPU_TIMEOUT`. The work that
@@ -64,7 +64,7 @@ mod wait;
 
 pub use device::{list_devices, select_device, DeviceDesc, DEVICE_ENV};
 
-use layout::{finish_batch, flat_light_batch, mode_code, FlatScene, KernelOutput};
+use layout::{finish_batch, flat_light_batch, KernelOutput};
 use opencl3::command_queue::CommandQueue;
 use opencl3::context::Context;
 use opencl3::device::Device;
@@ -75,10 +75,11 @@ use opencl3::memory::{Buffer, ClMem, CL_MEM_COPY_HOST_PTR, CL_MEM_READ_ONLY, CL_
 use opencl3::program::Program;
 use opencl3::types::{cl_mem_flags, CL_NON_BLOCKING};
 use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::gpu::{self, describe_wait_limit, TIMEOUT_ENV};
+use shadowvol_silhouette::gpu::{mode_code, SceneLayout, UncertainRecord};
 use shadowvol_silhouette::{
-    check_lights, describe_gpu_wait_limit, gpu_wait_limit, object_lights, BackendError,
-    BackendInfo, ExtractStats, Multiplicities, PreparedId, PreparedScenes, SilhouetteBackend,
-    TopologyScene, GPU_TIMEOUT_ENV,
+    check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
+    PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
 use std::any::Any;
 use std::mem::ManuallyDrop;
@@ -89,7 +90,7 @@ use std::ptr;
 use std::time::{Duration, Instant};
 
 /// The backend's registry name.
-pub const BACKEND: &str = "opencl";
+pub const NAME: &str = "opencl";
 
 /// The built-in kernel source (`kernels/silhouette.cl`, embedded at compile time).
 pub const KERNEL_SOURCE: &str = include_str!("../../../kernels/silhouette.cl");
@@ -131,7 +132,7 @@ pub struct OpenClOptions {
     /// At most this many lights per kernel launch. `None` (the default) lets only the device's
     /// limits split the lights (see [`OpenClBackend`]); a small value forces an `extract` into
     /// several launches, for tests. The result does not depend on it.
-    pub max_lights_per_launch: Option<NonZeroUsize>,
+    pub max_lights_per_batch: Option<NonZeroUsize>,
 }
 
 impl OpenClOptions {
@@ -147,7 +148,7 @@ impl OpenClOptions {
                 .and_then(non_empty)
                 .map_or(KernelSource::Builtin, |p| KernelSource::Path(p.into())),
             force_f32_filter: false,
-            max_lights_per_launch: None,
+            max_lights_per_batch: None,
         }
     }
 }
@@ -155,11 +156,9 @@ impl OpenClOptions {
 /// Device buffers of one prepared scene.
 struct Prepared {
     scene: TopologyScene,
-    flat: FlatScene,
+    layout: SceneLayout,
     pos: Buffer<f32>,
     edges: Buffer<u32>,
-    edge_obj: Buffer<u32>,
-    ov_off: Buffer<u32>,
     ovs: Buffer<u32>,
     /// Per-frame buffers, grown on demand: (buffer, capacity in elements).
     lights: Option<(Buffer<f32>, usize)>,
@@ -199,7 +198,7 @@ enum Batch {
 /// An `extract` runs one kernel launch per batch of lights: as many lights as fit the device's
 /// largest allocation (`CL_DEVICE_MAX_MEM_ALLOC_SIZE`: the silhouette list takes 8 bytes per
 /// edge and light, the light buffer 16 bytes per object and light) and the kernel's 32-bit
-/// indices, and at most [`OpenClOptions::max_lights_per_launch`]. Usually that is all of them;
+/// indices, and at most [`OpenClOptions::max_lights_per_batch`]. Usually that is all of them;
 /// the result is the same however they are split.
 pub struct OpenClBackend {
     device: DeviceDesc,
@@ -207,7 +206,7 @@ pub struct OpenClBackend {
     kernel_origin: String,
     /// `CL_DEVICE_MAX_MEM_ALLOC_SIZE`, bytes.
     max_alloc: u64,
-    max_lights_per_launch: Option<NonZeroUsize>,
+    max_lights_per_batch: Option<NonZeroUsize>,
     /// Light batches (kernel launches, not counting reruns after the uncertain-record buffer
     /// grew) of the last `extract`.
     last_batches: usize,
@@ -261,15 +260,9 @@ impl std::fmt::Debug for OpenClBackend {
 
 fn device_error(what: &str, e: ClError) -> BackendError {
     BackendError::Device {
-        backend: BACKEND,
+        backend: NAME,
         message: format!("{what}: {e} ({})", e.0),
     }
-}
-
-/// The wait limit, [`gpu_wait_limit`]; a malformed [`GPU_TIMEOUT_ENV`] is
-/// [`BackendError::InvalidInput`].
-fn wait_limit() -> Result<Duration, BackendError> {
-    gpu_wait_limit().map_err(BackendError::InvalidInput)
 }
 
 /// Starts the `opencl` backend with [`OpenClOptions::from_env`].
@@ -334,7 +327,7 @@ fn build_program(
 ) -> Result<Program, BackendError> {
     let mut program =
         Program::create_from_source(context, source).map_err(|e| BackendError::Build {
-            backend: BACKEND,
+            backend: NAME,
             what: origin.to_owned(),
             log: format!("clCreateProgramWithSource failed: {e} ({})", e.0),
         })?;
@@ -343,7 +336,7 @@ fn build_program(
             .get_build_log(device.id)
             .unwrap_or_else(|le| format!("(no build log: {le})"));
         return Err(BackendError::Build {
-            backend: BACKEND,
+            backend: NAME,
             what: format!(
                 "{origin} (options {options:?}, device {})",
                 device.device_name
@@ -366,7 +359,7 @@ impl OpenClBackend {
 
     /// Starts the backend: finds the device, creates a context and queue, builds the kernel and
     /// runs it once on a tetrahedron (a self-test, waited for within
-    /// [`shadowvol_silhouette::gpu_wait_limit`]).
+    /// [`shadowvol_silhouette::gpu::wait_limit`]).
     ///
     /// # Errors
     /// [`BackendError::Unavailable`] when there is no ICD loader, platform or (matching) device,
@@ -388,7 +381,7 @@ impl OpenClBackend {
             ),
             KernelSource::Path(p) => (
                 std::fs::read_to_string(p).map_err(|e| BackendError::Unavailable {
-                    backend: BACKEND,
+                    backend: NAME,
                     reason: format!("cannot read kernel source {}: {e}", p.display()),
                 })?,
                 p.display().to_string(),
@@ -411,7 +404,7 @@ impl OpenClBackend {
         };
         let program = build_program(&context, &device, &source, build_options, &origin)?;
         let kernel = Kernel::create(&program, KERNEL_NAME).map_err(|e| BackendError::Build {
-            backend: BACKEND,
+            backend: NAME,
             what: origin.clone(),
             log: format!("the program has no kernel {KERNEL_NAME:?}: {e} ({})", e.0),
         })?;
@@ -429,14 +422,14 @@ impl OpenClBackend {
             use_f64,
             kernel_origin: origin,
             max_alloc,
-            max_lights_per_launch: options.max_lights_per_launch,
+            max_lights_per_batch: options.max_lights_per_batch,
             last_batches: 0,
             fixed_group,
             kernel: ManuallyDrop::new(kernel),
             program: ManuallyDrop::new(program),
             queue: ManuallyDrop::new(queue),
             context: ManuallyDrop::new(context),
-            scenes: ManuallyDrop::new(PreparedScenes::new()),
+            scenes: ManuallyDrop::new(PreparedScenes::new(NAME)),
             pending: None,
         };
         backend.warm_up()?;
@@ -484,7 +477,7 @@ impl OpenClBackend {
         result?;
         if out.values(0) != want.as_slice() {
             return Err(BackendError::Device {
-                backend: BACKEND,
+                backend: NAME,
                 message: format!(
                     "self-test failed on {}: the kernel gave {:?} for a tetrahedron, expected {want:?}",
                     self.device.describe(),
@@ -535,7 +528,7 @@ impl OpenClBackend {
     /// The most records the uncertain-record buffer (12 bytes each) may hold: the device's
     /// largest allocation, at least 1.
     fn max_uncertain_records(&self) -> usize {
-        usize::try_from(self.max_alloc / 12)
+        usize::try_from(self.max_alloc / (UncertainRecord::WORDS as u64 * 4))
             .unwrap_or(usize::MAX)
             .max(1)
     }
@@ -545,11 +538,11 @@ impl OpenClBackend {
     /// light) and the light buffer (16 bytes per object and light) allow within the device's
     /// largest allocation, with `light * edges + edge` and the uncertain-record counter (at most
     /// one per OV slot and light) within `u32`, and at most
-    /// [`OpenClOptions::max_lights_per_launch`].
+    /// [`OpenClOptions::max_lights_per_batch`].
     ///
     /// # Errors
     /// [`BackendError::Limit`] with the numbers when not even one light fits.
-    fn lights_per_launch(
+    fn lights_per_batch(
         &self,
         edges: usize,
         objects: usize,
@@ -558,18 +551,18 @@ impl OpenClBackend {
         let sil = 8 * edges as u64;
         let light = 16 * objects as u64;
         let index = u64::from(u32::MAX);
-        let n = shadowvol_silhouette::lights_per_batch(
+        let n = shadowvol_silhouette::gpu::lights_per_batch(
             &[
                 (self.max_alloc, sil),
                 (self.max_alloc, light),
                 (index, edges as u64),
                 (index, ovs as u64),
             ],
-            self.max_lights_per_launch,
+            self.max_lights_per_batch,
         );
         if n == 0 {
             return Err(BackendError::Limit {
-                backend: BACKEND,
+                backend: NAME,
                 message: format!(
                     "one light alone does not fit a kernel launch: its silhouette list needs \
                      {sil} bytes for {edges} edges and its light buffer {light} bytes for \
@@ -585,7 +578,7 @@ impl OpenClBackend {
     fn check_alloc(&self, what: &str, bytes: usize, hint: &str) -> Result<(), BackendError> {
         if bytes as u64 > self.max_alloc {
             return Err(BackendError::Limit {
-                backend: BACKEND,
+                backend: NAME,
                 message: format!(
                     "{what} needs {bytes} bytes, more than the device's largest allocation \
                      ({} bytes){hint}",
@@ -607,7 +600,7 @@ impl OpenClBackend {
     ///
     /// # Errors
     /// [`BackendError::Device`]: a failed flush, a command that ended with an error (decoded),
-    /// a status query that failed, or a deadline that passed (naming [`GPU_TIMEOUT_ENV`]).
+    /// a status query that failed, or a deadline that passed (naming [`TIMEOUT_ENV`]).
     fn wait_for(
         &mut self,
         events: &mut Vec<(&'static str, Event)>,
@@ -651,7 +644,7 @@ impl OpenClBackend {
                 wait::Outcome::Complete => times.push(Instant::now()),
                 wait::Outcome::Failed(status) => {
                     return Err(BackendError::Device {
-                        backend: BACKEND,
+                        backend: NAME,
                         message: format!(
                             "{what} failed on the device with {} ({status})",
                             ClError(status)
@@ -663,12 +656,12 @@ impl OpenClBackend {
                 }
                 wait::Outcome::TimedOut => {
                     return Err(BackendError::Device {
-                        backend: BACKEND,
+                        backend: NAME,
                         message: format!(
                             "the device did not finish {what} within {}; raise \
-                             {GPU_TIMEOUT_ENV} for larger scenes or slower devices. The next extract on this backend first \
+                             {TIMEOUT_ENV} for larger scenes or slower devices. The next extract on this backend first \
                              waits (as long again) for the unfinished work",
-                            describe_gpu_wait_limit(limit),
+                            describe_wait_limit(limit),
                         ),
                     })
                 }
@@ -702,12 +695,12 @@ impl OpenClBackend {
                 e,
             )),
             wait::Outcome::TimedOut => Err(BackendError::Device {
-                backend: BACKEND,
+                backend: NAME,
                 message: format!(
                     "the device has still not finished {} left by an earlier extract that timed \
                      out, within another {}; this backend runs no new work until it does",
                     p.what,
-                    describe_gpu_wait_limit(limit)
+                    describe_wait_limit(limit)
                 ),
             }),
         }
@@ -730,7 +723,7 @@ impl OpenClBackend {
     ) -> Result<(Duration, Duration, Duration), BackendError> {
         let mut events = Vec::with_capacity(1);
         let t = Instant::now();
-        let p = self.scenes.get_mut(BACKEND, id)?;
+        let p = self.scenes.get_mut(id)?;
         let (lights_buf, _) = p.lights.as_mut().expect("ensured by extract");
         let (counts_buf, _) = p.counts.as_mut().expect("ensured by extract");
         // SAFETY: non-blocking writes into buffers at least that large, from `ZEROS` (static)
@@ -754,7 +747,7 @@ impl OpenClBackend {
         let upload = t.elapsed();
 
         let t = Instant::now();
-        let p = self.scenes.get(BACKEND, id)?;
+        let p = self.scenes.get(id)?;
         // SAFETY: the kernel uses device buffers only, which `p` keeps alive.
         let enqueued = unsafe {
             enqueue_kernel(
@@ -771,7 +764,7 @@ impl OpenClBackend {
         let compute = t.elapsed();
 
         let t = Instant::now();
-        let p = self.scenes.get(BACKEND, id)?;
+        let p = self.scenes.get(id)?;
         let (counts_buf, _) = p.counts.as_ref().expect("ensured by extract");
         // SAFETY: a non-blocking read, no larger than the buffer, into `counts`, which
         // `wait_for` keeps alive and untouched until the read has ended (moving it into
@@ -820,8 +813,8 @@ impl OpenClBackend {
         let max_records = self.max_uncertain_records();
         let edges = {
             let ctx = &self.context;
-            let p = self.scenes.get_mut(BACKEND, id)?;
-            let edges = p.flat.edge_count();
+            let p = self.scenes.get_mut(id)?;
+            let edges = p.layout.edge_count();
             ensure(ctx, &mut p.lights, flat_l.len(), "the light buffer")?;
             ensure(ctx, &mut p.counts, 2, "the counters")?;
             ensure(
@@ -832,10 +825,20 @@ impl OpenClBackend {
             )?;
             let initial = INITIAL_UNCERTAIN_CAPACITY.min(max_records);
             if mode == Accuracy::Exact && p.unc_records < initial {
-                ensure(ctx, &mut p.unc, 3 * initial, "the uncertain records")?;
+                ensure(
+                    ctx,
+                    &mut p.unc,
+                    UncertainRecord::WORDS * initial,
+                    "the uncertain records",
+                )?;
                 p.unc_records = initial;
             } else if p.unc.is_none() {
-                ensure(ctx, &mut p.unc, 3, "the uncertain records")?;
+                ensure(
+                    ctx,
+                    &mut p.unc,
+                    UncertainRecord::WORDS,
+                    "the uncertain records",
+                )?;
                 p.unc_records = 1;
             }
             edges
@@ -848,7 +851,7 @@ impl OpenClBackend {
             stats.upload += up;
             stats.compute += comp;
             stats.readback += read;
-            let p = self.scenes.get(BACKEND, id)?;
+            let p = self.scenes.get(id)?;
             let needed = counts[0] as usize;
             // (The buffer never exceeds the largest allocation; the `min` matters only when
             // tests lower the pretended limit after the buffer grew.)
@@ -860,13 +863,13 @@ impl OpenClBackend {
                     return Ok(Batch::TooManyUncertain);
                 }
                 return Err(BackendError::Limit {
-                    backend: BACKEND,
+                    backend: NAME,
                     message: format!(
                         "exact mode left {needed} (edge, OV, light) records of light {} \
                          uncertain; they need {} bytes, more than the device's largest \
                          allocation ({} bytes); split the scene",
                         batch.start,
-                        needed as u64 * 12,
+                        (needed * UncertainRecord::WORDS * 4) as u64,
                         self.max_alloc
                     ),
                 });
@@ -874,16 +877,21 @@ impl OpenClBackend {
             // More uncertain records than the buffer holds: grow it and run again.
             let records = needed.next_power_of_two().min(max_records);
             let ctx = &self.context;
-            let p = self.scenes.get_mut(BACKEND, id)?;
-            ensure(ctx, &mut p.unc, 3 * records, "the uncertain records")?;
+            let p = self.scenes.get_mut(id)?;
+            ensure(
+                ctx,
+                &mut p.unc,
+                UncertainRecord::WORDS * records,
+                "the uncertain records",
+            )?;
             p.unc_records = records;
         }
         let t = Instant::now();
-        let p = self.scenes.get(BACKEND, id)?;
+        let p = self.scenes.get(id)?;
         // At most one entry per (edge, light): a larger count is a device fault, caught by
         // `finish_batch` when fewer entries than counted come back.
         let mut raw_sil = vec![0i32; 2 * (counts[1] as usize).min(edges * num_lights)];
-        let mut raw_unc = vec![0u32; 3 * counts[0] as usize];
+        let mut raw_unc = vec![0u32; UncertainRecord::WORDS * counts[0] as usize];
         let mut events = Vec::with_capacity(2);
         let (sil_buf, _) = p.sil.as_ref().expect("ensured");
         let (unc_buf, _) = p.unc.as_ref().expect("ensured");
@@ -924,15 +932,12 @@ impl OpenClBackend {
                 .chunks_exact(2)
                 .map(|c| (c[0] as u32, c[1]))
                 .collect(),
-            uncertain: raw_unc
-                .chunks_exact(3)
-                .map(|c| [c[0], c[1], c[2]])
-                .collect(),
+            uncertain: UncertainRecord::read_all(&raw_unc),
             counts,
         };
         stats.uncertain += output.uncertain.len() as u64;
-        let p = self.scenes.get(BACKEND, id)?;
-        finish_batch(&p.flat, obj_lights, batch, output, out, BACKEND)?;
+        let p = self.scenes.get(id)?;
+        finish_batch(&p.layout, obj_lights, batch, output, out, NAME)?;
         stats.host_resolve += t.elapsed();
         Ok(Batch::Done)
     }
@@ -952,7 +957,7 @@ unsafe fn enqueue_kernel(
     num_lights: usize,
     mode: Accuracy,
 ) -> Result<Event, BackendError> {
-    let edges = p.flat.edge_count();
+    let edges = p.layout.edge_count();
     let set = |i: u32, r: Result<(), ClError>| {
         r.map_err(|e| device_error(&format!("setting kernel argument {i}"), e))
     };
@@ -970,17 +975,15 @@ unsafe fn enqueue_kernel(
     unsafe {
         set(0, k.set_arg(0, &p.pos.get()))?;
         set(1, k.set_arg(1, &p.edges.get()))?;
-        set(2, k.set_arg(2, &p.edge_obj.get()))?;
-        set(3, k.set_arg(3, &p.ov_off.get()))?;
-        set(4, k.set_arg(4, &p.ovs.get()))?;
-        set(5, k.set_arg(5, &lights_buf.get()))?;
-        set(6, k.set_arg(6, &ne))?;
-        set(7, k.set_arg(7, &nl))?;
-        set(8, k.set_arg(8, &code))?;
-        set(9, k.set_arg(9, &counts_buf.get()))?;
-        set(10, k.set_arg(10, &sil_buf.get()))?;
-        set(11, k.set_arg(11, &unc_buf.get()))?;
-        set(12, k.set_arg(12, &cap))?;
+        set(2, k.set_arg(2, &p.ovs.get()))?;
+        set(3, k.set_arg(3, &lights_buf.get()))?;
+        set(4, k.set_arg(4, &ne))?;
+        set(5, k.set_arg(5, &nl))?;
+        set(6, k.set_arg(6, &code))?;
+        set(7, k.set_arg(7, &counts_buf.get()))?;
+        set(8, k.set_arg(8, &sil_buf.get()))?;
+        set(9, k.set_arg(9, &unc_buf.get()))?;
+        set(10, k.set_arg(10, &cap))?;
         let global = [edges.div_ceil(GROUP) * GROUP, num_lights];
         let local = [GROUP, 1];
         let local_ptr = if fixed_group {
@@ -997,7 +1000,7 @@ unsafe fn enqueue_kernel(
 impl SilhouetteBackend for OpenClBackend {
     fn info(&self) -> BackendInfo {
         BackendInfo {
-            name: BACKEND,
+            name: NAME,
             device: self.device.describe(),
             modes: Accuracy::ALL.to_vec(),
             max_lights: None,
@@ -1024,20 +1027,19 @@ impl SilhouetteBackend for OpenClBackend {
     }
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
-        let flat = FlatScene::build(scene, BACKEND)?;
+        let layout = SceneLayout::build(scene, NAME)?;
+        let edge_words = layout.edges.as_flattened();
         let hint = "; split the scene";
-        self.check_alloc("the position buffer", flat.positions.len() * 4, hint)?;
-        self.check_alloc("the edge buffer", flat.edges.len() * 4, hint)?;
-        self.check_alloc("the OV buffer", flat.ovs.len() * 4, hint)?;
+        self.check_alloc("the position buffer", layout.positions.len() * 4, hint)?;
+        self.check_alloc("the edge buffer", edge_words.len() * 4, hint)?;
+        self.check_alloc("the OV buffer", layout.ovs.len() * 4, hint)?;
         let ro = CL_MEM_READ_ONLY;
         let prepared = Prepared {
-            pos: upload(&self.context, ro, &flat.positions, "positions")?,
-            edges: upload(&self.context, ro, &flat.edges, "edges")?,
-            edge_obj: upload(&self.context, ro, &flat.edge_obj, "edge objects")?,
-            ov_off: upload(&self.context, ro, &flat.ov_offsets, "OV offsets")?,
-            ovs: upload(&self.context, ro, &flat.ovs, "opposite vertices")?,
+            pos: upload(&self.context, ro, &layout.positions, "positions")?,
+            edges: upload(&self.context, ro, edge_words, "edges")?,
+            ovs: upload(&self.context, ro, &layout.ovs, "opposite vertices")?,
             scene: scene.clone(),
-            flat,
+            layout,
             lights: None,
             counts: None,
             sil: None,
@@ -1054,19 +1056,20 @@ impl SilhouetteBackend for OpenClBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
-        let limit = wait_limit()?;
-        self.scenes.get(BACKEND, id)?;
+        let limit = gpu::wait_limit()?;
+        self.scenes.get(id)?;
         check_lights(lights)?;
         self.settle(limit)?;
         self.last_batches = 0;
-        let p = self.scenes.get(BACKEND, id)?;
+        let p = self.scenes.get(id)?;
         let num_lights = lights.len();
-        let edges = p.flat.edge_count();
+        let edges = p.layout.edge_count();
         if edges == 0 {
             out.reset(0, num_lights);
             return Ok(ExtractStats::default());
         }
-        let mut per_launch = self.lights_per_launch(edges, p.flat.objects, p.flat.ovs.len())?;
+        let mut per_launch =
+            self.lights_per_batch(edges, p.layout.object_count(), p.layout.ovs.len())?;
         // Per-frame host preparation (object-space lights) counts as upload.
         let prep_start = Instant::now();
         let obj_lights = object_lights(&p.scene, lights);

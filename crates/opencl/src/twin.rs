@@ -4,77 +4,44 @@
 //! When the device and the `cpu` backend disagree, run the twin: if it agrees with `cpu`, the
 //! fault is in the kernel build or the driver; if not, in the logic shared by both.
 //! [`TwinBackend`] runs it behind the [`SilhouetteBackend`] trait, through the same layout
-//! ([`FlatScene`]) and host finishing ([`finish`]) as the device path.
+//! ([`SceneLayout`]) and host finishing ([`finish`]) as the device path.
 
-use crate::layout::{
-    finish, flat_lights, mode_code, FlatScene, KernelOutput, MODE_EXACT, MODE_ORIGINAL, MODE_ROBUST,
+use crate::layout::{finish, flat_lights, KernelOutput};
+use shadowvol_robust_math::filter::{self, TermsF32};
+use shadowvol_robust_math::{orient_filter_f64, Accuracy, Light, F32_FILTER_EPS};
+use shadowvol_silhouette::gpu::{
+    mode_code, SceneLayout, UncertainRecord, MODE_EXACT, MODE_ORIGINAL, MODE_ROBUST,
 };
-use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
     PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
 use std::time::Instant;
 
+/// The registry-style name of [`TwinBackend`] (not in the CLI registry).
+pub const TWIN_NAME: &str = "opencl-twin";
+
 /// The kernel's "not certified" filter result.
 pub const UNCERTAIN: i32 = 2;
 
-const F32_FILTER_EPS: f32 = 1.0 / 524_288.0; // 2^-19
-const F32_FILTER_MIN: f32 = 1.0 / 1_099_511_627_776.0; // 2^-40
-const F32_FILTER_MAX: f32 = 1_099_511_627_776.0; // 2^40
 const F32_PRODUCT_MIN: f32 = f32::from_bits(27 << 23); // 2^-100
 const F32_PERM_MIN: f32 = f32::from_bits(31 << 23); // 2^-96
-const F64_FILTER_EPS: f64 = 1.0e-15;
 
-fn sgn32(x: f32) -> i32 {
-    if x > 0.0 {
-        1
-    } else if x < 0.0 {
-        -1
-    } else {
-        0
-    }
+fn decision(s: Option<i8>) -> i32 {
+    s.map_or(UNCERTAIN, i32::from)
 }
 
-/// `sv_is_subnormal`: a subnormal `f32`, tested on the bits.
+/// `sv_is_subnormal`: a subnormal `f32`, tested on the bits (robust-math's
+/// [`is_subnormal`](shadowvol_robust_math::filter::is_subnormal)).
 #[must_use]
 pub fn is_subnormal(x: f32) -> bool {
-    let u = x.to_bits();
-    (u & 0x7f80_0000) == 0 && (u & 0x007f_ffff) != 0
+    filter::is_subnormal(x)
 }
 
-/// `sv_sign_f32`: `((A − B) × V)·(O − A)` in f32, robust-math's `sign_f32` op order.
+/// `sv_sign_f32`: `((A − B) × V)·(O − A)` in f32, robust-math's [`sign_f32`] op order.
 #[must_use]
 pub fn sign_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> i32 {
-    let vx = l[0] - l[3] * a[0];
-    let vy = l[1] - l[3] * a[1];
-    let vz = l[2] - l[3] * a[2];
-    let ex = a[0] - b[0];
-    let ey = a[1] - b[1];
-    let ez = a[2] - b[2];
-    let nx = ey * vz - ez * vy;
-    let ny = ez * vx - ex * vz;
-    let nz = ex * vy - ey * vx;
-    let dx = o[0] - a[0];
-    let dy = o[1] - a[1];
-    let dz = o[2] - a[2];
-    sgn32((nx * dx + ny * dy) + nz * dz)
-}
-
-fn diff_ok(x: f32, y: f32, d: f32) -> bool {
-    if x == y {
-        return true;
-    }
-    let m = d.abs();
-    (F32_FILTER_MIN..=F32_FILTER_MAX).contains(&m)
-}
-
-fn any_subnormal(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> bool {
-    a.iter()
-        .chain(&b)
-        .chain(&o)
-        .chain(&l)
-        .any(|&x| is_subnormal(x))
+    i32::from(shadowvol_robust_math::sign_f32(a, b, l, o))
 }
 
 /// `sv_filter_f32`: robust-math's `orient_filter_f32` plus the kernel's flush-to-zero guards
@@ -82,130 +49,65 @@ fn any_subnormal(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> bool {
 /// Returns -1, 0, 1 or [`UNCERTAIN`].
 #[must_use]
 pub fn filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> i32 {
-    if any_subnormal(a, b, l, o) {
+    if filter::any_subnormal(a, b, l, o) || !filter::w_is_exact_f32(l[3]) {
         return UNCERTAIN;
     }
-    // For w other than 0 or 1, w*A is rounded, and when it cancels against L.xyz the error of V
-    // is relative to |w*A|, not to |V|: the bound would not hold (robust-math's rule).
-    if l[3] != 0.0 && l[3] != 1.0 {
+    let t = TermsF32::new(a, b, l, o);
+    if l[3] != 0.0 && (0..3).any(|i| a[i] != 0.0 && t.wa[i].abs() < F32_PRODUCT_MIN) {
         return UNCERTAIN;
     }
-    let ex = a[0] - b[0];
-    let ey = a[1] - b[1];
-    let ez = a[2] - b[2];
-    let wx = l[3] * a[0];
-    let wy = l[3] * a[1];
-    let wz = l[3] * a[2];
-    if l[3] != 0.0
-        && ((a[0] != 0.0 && wx.abs() < F32_PRODUCT_MIN)
-            || (a[1] != 0.0 && wy.abs() < F32_PRODUCT_MIN)
-            || (a[2] != 0.0 && wz.abs() < F32_PRODUCT_MIN))
-    {
+    if !t.diffs_in_range(a, b, l, o) {
         return UNCERTAIN;
     }
-    let vx = l[0] - wx;
-    let vy = l[1] - wy;
-    let vz = l[2] - wz;
-    let dx = o[0] - a[0];
-    let dy = o[1] - a[1];
-    let dz = o[2] - a[2];
-    if !(diff_ok(a[0], b[0], ex)
-        && diff_ok(a[1], b[1], ey)
-        && diff_ok(a[2], b[2], ez)
-        && diff_ok(l[0], wx, vx)
-        && diff_ok(l[1], wy, vy)
-        && diff_ok(l[2], wz, vz)
-        && diff_ok(o[0], a[0], dx)
-        && diff_ok(o[1], a[1], dy)
-        && diff_ok(o[2], a[2], dz))
-    {
+    let (det, perm) = t.det_perm();
+    if !perm.is_finite() || (perm != 0.0 && perm < F32_PERM_MIN) {
         return UNCERTAIN;
     }
-    let (p1, q1) = (ey * vz, ez * vy);
-    let (p2, q2) = (ez * vx, ex * vz);
-    let (p3, q3) = (ex * vy, ey * vx);
-    let det = ((p1 - q1) * dx + (p2 - q2) * dy) + (p3 - q3) * dz;
-    let perm = ((p1.abs() + q1.abs()) * dx.abs() + (p2.abs() + q2.abs()) * dy.abs())
-        + (p3.abs() + q3.abs()) * dz.abs();
-    if !perm.is_finite() {
-        return UNCERTAIN;
-    }
-    if perm == 0.0 {
-        return 0;
-    }
-    if perm < F32_PERM_MIN {
-        return UNCERTAIN;
-    }
-    if det.abs() > F32_FILTER_EPS * perm {
-        return if det > 0.0 { 1 } else { -1 };
-    }
-    UNCERTAIN
+    decision(filter::certify_f32(det, perm, F32_FILTER_EPS))
 }
 
 /// `sv_filter_f64`: robust-math's `orient_filter_f64` (same expression and bound); subnormal
 /// `f32` inputs are "uncertain". Returns -1, 0, 1 or [`UNCERTAIN`].
 #[must_use]
 pub fn filter_f64(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> i32 {
-    if any_subnormal(a, b, l, o) {
+    if filter::any_subnormal(a, b, l, o) {
         return UNCERTAIN;
     }
-    let (ax, ay, az) = (f64::from(a[0]), f64::from(a[1]), f64::from(a[2]));
-    let lw = f64::from(l[3]);
-    let ex = ax - f64::from(b[0]);
-    let ey = ay - f64::from(b[1]);
-    let ez = az - f64::from(b[2]);
-    let vx = f64::from(l[0]) - lw * ax;
-    let vy = f64::from(l[1]) - lw * ay;
-    let vz = f64::from(l[2]) - lw * az;
-    let dx = f64::from(o[0]) - ax;
-    let dy = f64::from(o[1]) - ay;
-    let dz = f64::from(o[2]) - az;
-    let (p1, q1) = (ey * vz, ez * vy);
-    let (p2, q2) = (ez * vx, ex * vz);
-    let (p3, q3) = (ex * vy, ey * vx);
-    let det = ((p1 - q1) * dx + (p2 - q2) * dy) + (p3 - q3) * dz;
-    let perm = ((p1.abs() + q1.abs()) * dx.abs() + (p2.abs() + q2.abs()) * dy.abs())
-        + (p3.abs() + q3.abs()) * dz.abs();
-    let bound = F64_FILTER_EPS * perm;
-    if det.abs() > bound {
-        if det > 0.0 {
-            1
-        } else {
-            -1
-        }
-    } else if perm == 0.0 {
-        0
-    } else {
-        UNCERTAIN
-    }
+    decision(orient_filter_f64(a, b, l, o))
+}
+
+/// What every work item of one enqueue shares: the kernel's arguments.
+struct Launch<'a> {
+    layout: &'a SceneLayout,
+    /// The flattened per-(object, light) buffer ([`flat_lights`]).
+    lights: &'a [f32],
+    num_lights: usize,
+    /// The kernel's mode code.
+    mode: u32,
+    use_f64: bool,
+    unc_capacity: usize,
 }
 
 /// One work item of the kernel: edge `e`, light `l`. Appends to `out` exactly like the kernel's
 /// atomics (here in work-item order).
-#[allow(clippy::too_many_arguments)]
-fn work_item(
-    flat: &FlatScene,
-    lights: &[f32],
-    num_lights: usize,
-    mode: u32,
-    use_f64: bool,
-    e: usize,
-    l: usize,
-    unc_capacity: usize,
-    out: &mut KernelOutput,
-) {
-    let li = (flat.edge_obj[e] as usize * num_lights + l) * 4;
+fn work_item(launch: &Launch<'_>, e: usize, l: usize, out: &mut KernelOutput) {
+    let Launch {
+        layout,
+        lights,
+        num_lights,
+        mode,
+        use_f64,
+        unc_capacity,
+    } = *launch;
+    let (ia, ib, object) = layout.edge(e);
+    let li = (object as usize * num_lights + l) * 4;
     let light = [lights[li], lights[li + 1], lights[li + 2], lights[li + 3]];
-    let ia = flat.edges[2 * e];
-    let ib = flat.edges[2 * e + 1];
-    let pa = flat.position(ia);
-    let pb = flat.position(ib);
-    let begin = flat.ov_offsets[e] as usize;
-    let end = flat.ov_offsets[e + 1] as usize;
+    let pa = layout.position(ia);
+    let pb = layout.position(ib);
     let mut m = 0i32;
-    for k in begin..end {
-        let io = flat.ovs[k];
-        let po = flat.position(io);
+    for k in layout.ov_slots(e) {
+        let io = layout.ovs[k];
+        let po = layout.position(io);
         let s = if mode == MODE_ORIGINAL {
             sign_f32(pa, pb, light, po)
         } else if mode == MODE_EXACT {
@@ -218,7 +120,11 @@ fn work_item(
                 let slot = out.counts[0] as usize;
                 out.counts[0] += 1;
                 if slot < unc_capacity {
-                    out.uncertain.push([e as u32, k as u32, l as u32]);
+                    out.uncertain.push(UncertainRecord {
+                        edge: e as u32,
+                        ov_slot: k as u32,
+                        light: l as u32,
+                    });
                 }
                 0
             } else {
@@ -251,7 +157,7 @@ fn work_item(
     if m != 0 {
         out.counts[1] += 1;
         out.silhouettes
-            .push(((l * flat.edge_count() + e) as u32, m));
+            .push(((l * layout.edge_count() + e) as u32, m));
     }
 }
 
@@ -261,7 +167,7 @@ fn work_item(
 /// mode code; `use_f64` picks the exact filter.
 #[must_use]
 pub fn run_kernel(
-    flat: &FlatScene,
+    layout: &SceneLayout,
     lights: &[f32],
     num_lights: usize,
     mode: Accuracy,
@@ -272,20 +178,17 @@ pub fn run_kernel(
         silhouettes: Vec::new(),
         uncertain: Vec::new(),
     };
-    let code = mode_code(mode);
+    let launch = Launch {
+        layout,
+        lights,
+        num_lights,
+        mode: mode_code(mode),
+        use_f64,
+        unc_capacity: usize::MAX,
+    };
     for l in 0..num_lights {
-        for e in 0..flat.edge_count() {
-            work_item(
-                flat,
-                lights,
-                num_lights,
-                code,
-                use_f64,
-                e,
-                l,
-                usize::MAX,
-                &mut out,
-            );
+        for e in 0..layout.edge_count() {
+            work_item(&launch, e, l, &mut out);
         }
     }
     out
@@ -293,9 +196,9 @@ pub fn run_kernel(
 
 /// The twin behind the [`SilhouetteBackend`] trait (name `opencl-twin`; not in the CLI
 /// registry). Uses the same layout and host finishing as the device backend.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct TwinBackend {
-    scenes: PreparedScenes<(TopologyScene, FlatScene)>,
+    scenes: PreparedScenes<(TopologyScene, SceneLayout)>,
     use_f64: bool,
 }
 
@@ -304,8 +207,8 @@ impl TwinBackend {
     #[must_use]
     pub fn new(use_f64: bool) -> Self {
         Self {
+            scenes: PreparedScenes::new(TWIN_NAME),
             use_f64,
-            ..Self::default()
         }
     }
 }
@@ -313,7 +216,7 @@ impl TwinBackend {
 impl SilhouetteBackend for TwinBackend {
     fn info(&self) -> BackendInfo {
         BackendInfo {
-            name: "opencl-twin",
+            name: TWIN_NAME,
             device: "host CPU, Rust twin of kernels/silhouette.cl".to_owned(),
             modes: Accuracy::ALL.to_vec(),
             max_lights: None,
@@ -325,8 +228,8 @@ impl SilhouetteBackend for TwinBackend {
     }
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
-        let flat = FlatScene::build(scene, "opencl-twin")?;
-        Ok(self.scenes.insert((scene.clone(), flat)))
+        let layout = SceneLayout::build(scene, TWIN_NAME)?;
+        Ok(self.scenes.insert((scene.clone(), layout)))
     }
 
     fn extract(
@@ -336,16 +239,16 @@ impl SilhouetteBackend for TwinBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
-        let (scene, flat) = self.scenes.get("opencl-twin", id)?;
+        let (scene, layout) = self.scenes.get(id)?;
         check_lights(lights)?;
         let start = Instant::now();
         let obj_lights = object_lights(scene, lights);
         let flat_l = flat_lights(&obj_lights);
-        let output = run_kernel(flat, &flat_l, lights.len(), mode, self.use_f64);
+        let output = run_kernel(layout, &flat_l, lights.len(), mode, self.use_f64);
         let uncertain = u64::from(output.counts[0]);
         let compute = start.elapsed();
         let start = Instant::now();
-        finish(flat, &obj_lights, lights.len(), output, out, "opencl-twin")?;
+        finish(layout, &obj_lights, lights.len(), output, out, TWIN_NAME)?;
         Ok(ExtractStats {
             compute,
             host_resolve: start.elapsed(),

@@ -1,5 +1,5 @@
 //! Light splitting: `extract` with at most 1, 2 or 3 lights per kernel launch
-//! (`OpenClOptions::max_lights_per_launch`), or with a (pretended) small device allocation
+//! (`OpenClOptions::max_lights_per_batch`), or with a (pretended) small device allocation
 //! limit, gives the same result as one launch: `exact` bit-identical to the `cpu` backend, 0 open
 //! vertices in `robust` and `ordered`, the uncertain count equal to one launch's, and the
 //! statistics summed over the launches. Only a light that does not fit alone is a `Limit` error.
@@ -21,9 +21,12 @@ use shadowvol_silhouette::{
 use std::num::NonZeroUsize;
 use std::sync::Arc;
 
+/// Bytes of one uncertain record in the device buffer.
+const RECORD_BYTES: u64 = (shadowvol_silhouette::gpu::UncertainRecord::WORDS * 4) as u64;
+
 fn per_launch(n: usize) -> OpenClOptions {
     OpenClOptions {
-        max_lights_per_launch: NonZeroUsize::new(n),
+        max_lights_per_batch: NonZeroUsize::new(n),
         ..OpenClOptions::from_env()
     }
 }
@@ -208,7 +211,7 @@ fn allocation_limit_splits_lights_and_refuses_only_a_light_that_does_not_fit() {
         let two = 2 * 8 * edges as u64;
         assert!(2 * 16 * objects as u64 <= two, "{}", case.name);
         cl.set_max_alloc_for_tests(two);
-        // The most uncertain records (12 bytes each) of one light alone in exact mode.
+        // The most uncertain records (`RECORD_BYTES` each) of one light alone in exact mode.
         let most_uncertain = case
             .lights
             .iter()
@@ -222,7 +225,7 @@ fn allocation_limit_splits_lights_and_refuses_only_a_light_that_does_not_fit() {
             let what = format!("{} {mode}, allocation limit {two} bytes", case.name);
             let mut got = Multiplicities::default();
             let result = cl.extract(id, &case.lights, mode, &mut got);
-            if mode == Accuracy::Exact && 12 * most_uncertain > two {
+            if mode == Accuracy::Exact && RECORD_BYTES * most_uncertain > two {
                 // One light's records alone exceed the limit: no split can help.
                 match result {
                     Err(BackendError::Limit { message, .. }) => {
@@ -318,14 +321,14 @@ fn too_many_uncertain_records_split_the_batch_further() {
         *per_light.iter().max().unwrap(),
         *per_light.iter().min().unwrap(),
     );
-    // Room for 1.5 lights' records (12 bytes each), so only one light per launch fits them,
+    // Room for 1.5 lights' records (`RECORD_BYTES` each), so only one light per launch fits them,
     // while the silhouette lists alone would allow several lights per launch.
     let records = most + most / 2;
     assert!(
         2 * least > records,
         "every light should leave about as many records uncertain: {per_light:?}"
     );
-    let limit = 12 * records;
+    let limit = RECORD_BYTES * records;
     assert!(limit >= 2 * 8 * edges, "{limit} bytes, {edges} edges");
     cl.set_max_alloc_for_tests(limit);
     let mut got = Multiplicities::default();
@@ -346,7 +349,7 @@ fn too_many_uncertain_records_split_the_batch_further() {
     );
 
     // One light's records no longer fit: Limit, naming the count and the bytes.
-    let limit = 12 * least - 1;
+    let limit = RECORD_BYTES * least - 1;
     assert!(limit >= 8 * edges, "{limit} bytes, {edges} edges");
     cl.set_max_alloc_for_tests(limit);
     match cl.extract(id, &lights, Accuracy::Exact, &mut got) {

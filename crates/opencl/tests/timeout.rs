@@ -16,8 +16,8 @@ use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_opencl::OpenClBackend;
 use shadowvol_silhouette::{
-    extract_once, shapes, Accuracy, BackendError, Light, Multiplicities, PreparedId,
-    SilhouetteBackend, TopologyScene, GPU_TIMEOUT_ENV,
+    extract_once, gpu::TIMEOUT_ENV, shapes, Accuracy, BackendError, Light, Multiplicities,
+    PreparedId, SilhouetteBackend, TopologyScene,
 };
 use std::time::{Duration, Instant};
 
@@ -71,11 +71,11 @@ fn time_out(cl: &mut OpenClBackend) -> (PreparedId, TopologyScene, &'static str,
         let mesh = shapes::uv_sphere_y(rings, 2 * rings, 1.0);
         let scene = TopologyScene::single(EdgeTable::build(&mesh).expect("a UV sphere is valid"));
         let id = cl.prepare(&scene).expect("prepare");
-        std::env::set_var(GPU_TIMEOUT_ENV, tiny);
+        std::env::set_var(TIMEOUT_ENV, tiny);
         let t = Instant::now();
         let r = cl.extract(id, &lights, Accuracy::Exact, &mut out);
         let took = t.elapsed();
-        std::env::remove_var(GPU_TIMEOUT_ENV);
+        std::env::remove_var(TIMEOUT_ENV);
         match r {
             Err(BackendError::Device { message, .. }) if message.contains("did not finish") => {
                 eprintln!(
@@ -99,7 +99,7 @@ fn time_out(cl: &mut OpenClBackend) -> (PreparedId, TopologyScene, &'static str,
             Err(e) => panic!("attempt {attempt}: expected a timeout, got {e}"),
         }
     }
-    panic!("no extraction timed out, with {GPU_TIMEOUT_ENV} down to 1e-6 (see ATTEMPTS)");
+    panic!("no extraction timed out, with {TIMEOUT_ENV} down to 1e-6 (see ATTEMPTS)");
 }
 
 #[test]
@@ -119,33 +119,33 @@ fn a_device_that_does_not_finish_in_time_is_an_error_and_the_backend_recovers() 
     // 1. The timeout: a Device error naming the variable and its value.
     let (id, scene, tiny, message) = time_out(&mut cl);
     assert!(
-        message.contains(GPU_TIMEOUT_ENV) && message.contains(tiny),
+        message.contains(TIMEOUT_ENV) && message.contains(tiny),
         "{message}"
     );
 
     // 2. The next extraction, still with the tiny limit, while the abandoned kernel runs: a clear
     //    Device error naming the variable (that the earlier kernel has not finished; or, should
     //    PoCL have finished it meanwhile, that this extraction's own kernel did not).
-    std::env::set_var(GPU_TIMEOUT_ENV, tiny);
+    std::env::set_var(TIMEOUT_ENV, tiny);
     let mut out = Multiplicities::default();
     let t = Instant::now();
     let again = cl.extract(id, &lights, Accuracy::Exact, &mut out);
     let took = t.elapsed();
-    std::env::remove_var(GPU_TIMEOUT_ENV);
+    std::env::remove_var(TIMEOUT_ENV);
     let again = device_message(again, "the extract after a timeout");
     eprintln!("next extract ({took:?}): {again}");
-    assert!(again.contains(GPU_TIMEOUT_ENV), "{again}");
+    assert!(again.contains(TIMEOUT_ENV), "{again}");
     assert!(took < Duration::from_secs(5), "took {took:?}");
 
     // 3. A malformed limit is invalid input, naming the variable.
-    std::env::set_var(GPU_TIMEOUT_ENV, "soon");
+    std::env::set_var(TIMEOUT_ENV, "soon");
     let bad = cl.extract(id, &lights, Accuracy::Exact, &mut out);
-    std::env::remove_var(GPU_TIMEOUT_ENV);
+    std::env::remove_var(TIMEOUT_ENV);
     match bad {
         Err(BackendError::InvalidInput(m)) => {
-            assert!(m.contains(GPU_TIMEOUT_ENV) && m.contains("soon"), "{m}");
+            assert!(m.contains(TIMEOUT_ENV) && m.contains("soon"), "{m}");
         }
-        other => panic!("expected InvalidInput for {GPU_TIMEOUT_ENV}=soon, got {other:?}"),
+        other => panic!("expected InvalidInput for {TIMEOUT_ENV}=soon, got {other:?}"),
     }
 
     // 4. With the default limit the backend waits for the abandoned work, then recovers: the
@@ -173,11 +173,11 @@ fn a_device_that_does_not_finish_in_time_is_an_error_and_the_backend_recovers() 
     let kernel_time = t.elapsed();
 
     // 5. Dropping a backend whose work has timed out returns without waiting for the device.
-    std::env::set_var(GPU_TIMEOUT_ENV, tiny);
+    std::env::set_var(TIMEOUT_ENV, tiny);
     let r = cl.extract(id, &lights, Accuracy::Exact, &mut out);
-    std::env::remove_var(GPU_TIMEOUT_ENV);
+    std::env::remove_var(TIMEOUT_ENV);
     let m = device_message(r, "the second timeout");
-    assert!(m.contains(GPU_TIMEOUT_ENV), "{m}");
+    assert!(m.contains(TIMEOUT_ENV), "{m}");
     let t = Instant::now();
     drop(cl);
     let dropped = t.elapsed();

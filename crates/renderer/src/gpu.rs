@@ -717,7 +717,8 @@ impl Gpu {
             let _ = tx.send(r);
         });
         // Bounded like every GPU wait (SHADOWVOL_GPU_TIMEOUT): a hung device is an error.
-        let limit = shadowvol_silhouette::gpu_wait_limit().map_err(RenderError::Device)?;
+        let limit = shadowvol_silhouette::gpu::wait_limit()
+            .map_err(|e| RenderError::Device(e.to_string()))?;
         self.device
             .poll(wgpu::PollType::Wait {
                 submission_index: None,
@@ -726,7 +727,7 @@ impl Gpu {
             .map_err(|e| match e {
                 wgpu::PollError::Timeout => RenderError::Device(format!(
                     "the device did not finish the frame within {}",
-                    shadowvol_silhouette::describe_gpu_wait_limit(limit)
+                    shadowvol_silhouette::gpu::describe_wait_limit(limit)
                 )),
                 other => RenderError::Device(format!("poll: {other}")),
             })?;

@@ -7,7 +7,7 @@ mod common;
 use glam::Vec3;
 use shadowvol_renderer::{reference, RenderError};
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::GPU_TIMEOUT_ENV;
+use shadowvol_silhouette::gpu::TIMEOUT_ENV;
 
 #[test]
 fn frame_past_the_wait_limit_is_a_device_error_and_the_renderer_recovers() {
@@ -22,12 +22,12 @@ fn frame_past_the_wait_limit_is_a_device_error_and_the_renderer_recovers() {
     r.render(&scene).unwrap();
     let mut saw_timeout = false;
     for _ in 0..5 {
-        std::env::set_var(GPU_TIMEOUT_ENV, "0.000001");
+        std::env::set_var(TIMEOUT_ENV, "0.000001");
         let result = r.render(&scene);
-        std::env::remove_var(GPU_TIMEOUT_ENV);
+        std::env::remove_var(TIMEOUT_ENV);
         match result {
             Err(RenderError::Device(m)) => {
-                assert!(m.contains(GPU_TIMEOUT_ENV), "{m}");
+                assert!(m.contains(TIMEOUT_ENV), "{m}");
                 saw_timeout = true;
                 break;
             }

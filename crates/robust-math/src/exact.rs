@@ -38,16 +38,9 @@ pub const F32_FILTER_MIN: f32 = 1.0 / 1_099_511_627_776.0; // 2^-40
 /// Largest magnitude the `f32` filter accepts for differences (2^40).
 pub const F32_FILTER_MAX: f32 = 1_099_511_627_776.0;
 
-#[inline]
-fn sgn64(x: f64) -> i8 {
-    if x > 0.0 {
-        1
-    } else if x < 0.0 {
-        -1
-    } else {
-        0
-    }
-}
+use crate::filter::{
+    certify_f32, certify_f64, det_perm_f64, sign_of_f64, w_is_exact_f32, TermsF32,
+};
 
 /// Certified `f64` filter for `sgn det4(A, B, L, O)`.
 ///
@@ -55,50 +48,28 @@ fn sgn64(x: f64) -> i8 {
 /// (the caller must then use [`orient_exact_expansion`]). Exact zeros are certified when every
 /// term vanishes (for example axis-aligned geometry with a light on an axis).
 ///
+/// It is [`det_perm_f64`] decided by [`certify_f64`] with [`F64_FILTER_EPS`].
+///
 /// Inputs must be finite; this holds for every [`crate::Light`] and validated mesh.
 #[must_use]
 #[inline]
 pub fn orient_filter_f64(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<i8> {
-    let (ax, ay, az) = (f64::from(a[0]), f64::from(a[1]), f64::from(a[2]));
-    let lw = f64::from(l[3]);
-    // e = A - B, v = L.xyz - L.w * A (the product is exact), d = O - A.
-    let ex = ax - f64::from(b[0]);
-    let ey = ay - f64::from(b[1]);
-    let ez = az - f64::from(b[2]);
-    let vx = f64::from(l[0]) - lw * ax;
-    let vy = f64::from(l[1]) - lw * ay;
-    let vz = f64::from(l[2]) - lw * az;
-    let dx = f64::from(o[0]) - ax;
-    let dy = f64::from(o[1]) - ay;
-    let dz = f64::from(o[2]) - az;
-    let (p1, q1) = (ey * vz, ez * vy);
-    let (p2, q2) = (ez * vx, ex * vz);
-    let (p3, q3) = (ex * vy, ey * vx);
-    let det = (p1 - q1) * dx + (p2 - q2) * dy + (p3 - q3) * dz;
-    let perm = (p1.abs() + q1.abs()) * dx.abs()
-        + (p2.abs() + q2.abs()) * dy.abs()
-        + (p3.abs() + q3.abs()) * dz.abs();
-    let bound = F64_FILTER_EPS * perm;
-    if det.abs() > bound {
-        Some(sgn64(det))
-    } else if perm == 0.0 {
-        Some(0)
-    } else {
-        None
-    }
+    let (det, perm) = det_perm_f64(a, b, l, o);
+    certify_f64(det, perm, F64_FILTER_EPS)
 }
 
 /// Certified `f32` filter for `sgn det4(A, B, L, O)`: the CPU twin of the filter used by shaders
 /// without `f64`.
 ///
-/// Evaluates the same formula as [`orient_filter_f64`] in `f32`. It returns `None` (uncertain)
-/// when
-/// * the light's `w` is neither 0 nor 1 (only then is `w * A` exact in `f32`; otherwise its
-///   rounding is not bounded relative to `V = L.xyz - w A`, which may cancel to 0),
+/// Evaluates the same formula as [`orient_filter_f64`] in `f32` ([`TermsF32`]). It returns
+/// `None` (uncertain) when
+/// * the light's `w` is neither 0 nor 1 ([`w_is_exact_f32`]: only then is `w * A` exact in
+///   `f32`; otherwise its rounding is not bounded relative to `V = L.xyz - w A`, which may cancel
+///   to 0),
 /// * a non-zero difference (`A - B`, `V`, `O - A`) lies outside
 ///   `[F32_FILTER_MIN, F32_FILTER_MAX]` (where products could underflow or overflow),
-/// * any intermediate is not finite,
-/// * or `|det| <= F32_FILTER_EPS * P` for the permanent `P` of the same terms.
+/// * the permanent is not finite,
+/// * or `|det| <= F32_FILTER_EPS * P` for the permanent `P` of the same terms ([`certify_f32`]).
 ///
 /// Shader ports must keep every one of these checks (the `w` check included). On
 /// flush-to-zero hardware, subnormal inputs are flushed before this function would see them;
@@ -108,40 +79,18 @@ pub fn orient_filter_f64(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> 
 #[must_use]
 #[inline]
 pub fn orient_filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<i8> {
-    let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    // Only w = 0 and w = 1 make `w * A` exact in f32. For any other w the rounding of `w * A`
-    // is relative to |w A|, not to |V|: when `L.xyz` and `w A` cancel, the computed V can be 0
-    // (or have the wrong sign) while the exact one is not, and no bound on the computed terms
-    // covers that. (A tiny w also makes `w * A` underflow.) Leave those inputs to the host.
-    if l[3] != 0.0 && l[3] != 1.0 {
+    if !w_is_exact_f32(l[3]) {
         return None;
     }
-    let wa = [l[3] * a[0], l[3] * a[1], l[3] * a[2]];
-    let v = [l[0] - wa[0], l[1] - wa[1], l[2] - wa[2]];
-    let d = [o[0] - a[0], o[1] - a[1], o[2] - a[2]];
-    for x in e.iter().chain(&v).chain(&d) {
-        let m = x.abs();
-        if m != 0.0 && !(F32_FILTER_MIN..=F32_FILTER_MAX).contains(&m) {
-            return None;
-        }
+    let t = TermsF32::new(a, b, l, o);
+    if !t.diffs_in_range(a, b, l, o) {
+        return None;
     }
-    let (p1, q1) = (e[1] * v[2], e[2] * v[1]);
-    let (p2, q2) = (e[2] * v[0], e[0] * v[2]);
-    let (p3, q3) = (e[0] * v[1], e[1] * v[0]);
-    let det = (p1 - q1) * d[0] + (p2 - q2) * d[1] + (p3 - q3) * d[2];
-    let perm = (p1.abs() + q1.abs()) * d[0].abs()
-        + (p2.abs() + q2.abs()) * d[1].abs()
-        + (p3.abs() + q3.abs()) * d[2].abs();
+    let (det, perm) = t.det_perm();
     if !perm.is_finite() {
         return None;
     }
-    if det.abs() > F32_FILTER_EPS * perm {
-        Some(if det > 0.0 { 1 } else { -1 })
-    } else if perm == 0.0 {
-        Some(0)
-    } else {
-        None
-    }
+    certify_f32(det, perm, F32_FILTER_EPS)
 }
 
 // ---- error-free transformations -------------------------------------------------------------
@@ -212,7 +161,7 @@ impl Expansion {
         // The largest component (last) carries the sign of a non-overlapping expansion.
         (0..self.n)
             .rev()
-            .map(|i| sgn64(self.c[i]))
+            .map(|i| sign_of_f64(self.c[i]))
             .find(|&s| s != 0)
             .unwrap_or(0)
     }

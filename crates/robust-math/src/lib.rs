@@ -37,6 +37,7 @@
 //! ```
 
 mod exact;
+pub mod filter;
 mod light;
 
 pub use exact::{
@@ -114,17 +115,6 @@ impl std::str::FromStr for Accuracy {
     }
 }
 
-#[inline]
-fn sgn32(x: f32) -> i8 {
-    if x > 0.0 {
-        1
-    } else if x < 0.0 {
-        -1
-    } else {
-        0
-    }
-}
-
 /// The `f32` evaluation of `s(a, b, o)`: the paper's eq. (1)-(2) without the normalisation,
 /// evaluated as `N·(O − A)` (the convention's formula above).
 ///
@@ -151,15 +141,7 @@ fn sgn32(x: f32) -> i8 {
 #[must_use]
 #[inline]
 pub fn sign_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> i8 {
-    let v = [l[0] - l[3] * a[0], l[1] - l[3] * a[1], l[2] - l[3] * a[2]];
-    let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let n = [
-        e[1] * v[2] - e[2] * v[1],
-        e[2] * v[0] - e[0] * v[2],
-        e[0] * v[1] - e[1] * v[0],
-    ];
-    let d = [o[0] - a[0], o[1] - a[1], o[2] - a[2]];
-    sgn32((n[0] * d[0] + n[1] * d[1]) + n[2] * d[2])
+    filter::sign_of_f32(filter::TermsF32::new(a, b, l, o).det())
 }
 
 /// The sign of a whole triangle `(p0, p1, p2)`, given in canonical order (ascending ids), in the

@@ -447,7 +447,7 @@ fn welded_duplicates() -> CorpusCase {
 
 fn soup_near_light() -> CorpusCase {
     let light = Vec3::new(0.125, 0.25, -0.375);
-    let mut rng = Rng(0x5eed);
+    let mut rng = Rng::new(0x5eed);
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
     for k in 0..400u32 {

@@ -5,6 +5,8 @@
 //! * [`Multiplicities`]: the per-edge, per-light result plus a compact silhouette list.
 //! * [`invariant`]: the closed-chain check (`open_vertices`) and comparisons between results.
 //! * [`corpus`]: the hard cases every backend must pass.
+//! * [`gpu`]: what the GPU backends share (scene layout, mode codes, uncertain records and their
+//!   exact resolution, wait limits, light batches).
 //! * [`shapes`]: [`shapes::uv_sphere_y`], a closed test sphere shared by the backends' tests.
 //! * [`PreparedScenes`] and [`check_lights`]: the prepared-scene store and light-list check
 //!   every backend shares.
@@ -26,27 +28,25 @@
 //! assert_eq!(invariant::open_vertices_scene(&scene, &m, 0), 0);
 //! ```
 
-mod batches;
 pub mod corpus;
+pub mod gpu;
 pub mod invariant;
 mod multiplicities;
 mod prepared;
 mod scene;
 pub mod shapes;
-mod wait;
 
-pub use batches::lights_per_batch;
 pub use multiplicities::{ExtractStats, Multiplicities};
 pub use prepared::{check_lights, PreparedScenes};
 pub use scene::{object_lights, SceneObject, TopologyScene};
 pub use shadowvol_robust_math::{Accuracy, Light};
-pub use wait::{describe_gpu_wait_limit, gpu_wait_limit, DEFAULT_GPU_TIMEOUT, GPU_TIMEOUT_ENV};
 
 use std::time::Duration;
 
-/// Identifies a scene prepared on a backend.
+/// Identifies a scene prepared on a backend. Opaque: only [`PreparedScenes::insert`] (that is,
+/// a backend's `prepare`) makes one, and an id is never reused by its backend.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct PreparedId(pub u64);
+pub struct PreparedId(u64);
 
 /// What a backend is and what it can do.
 #[derive(Debug, Clone, PartialEq)]
@@ -144,8 +144,15 @@ pub trait SilhouetteBackend {
     /// `scene.total_edges()` × `lights.len()`, and fills its compact silhouette lists.
     ///
     /// # Errors
-    /// [`BackendError::UnknownScene`], [`BackendError::InvalidInput`] for an empty light list,
-    /// [`BackendError::UnsupportedMode`], [`BackendError::Device`].
+    /// * [`BackendError::UnknownScene`]: `id` was not returned by this backend's `prepare`, or
+    ///   was released;
+    /// * [`BackendError::InvalidInput`]: an empty light list, or a bad setting the call reads
+    ///   (for example a malformed `SHADOWVOL_GPU_TIMEOUT`);
+    /// * [`BackendError::UnsupportedMode`]: the device cannot run `mode`;
+    /// * [`BackendError::Limit`]: even one light does not fit the device's buffers or indices
+    ///   (more lights are split into batches, so only the size of one light's work counts);
+    /// * [`BackendError::Device`]: a driver or device failure, a wait past
+    ///   [`gpu::wait_limit`], or device output that cannot be right.
     fn extract(
         &mut self,
         id: PreparedId,

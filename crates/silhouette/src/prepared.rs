@@ -4,45 +4,44 @@
 use crate::{BackendError, Light, PreparedId};
 use std::collections::HashMap;
 
-/// The scenes a backend has prepared, keyed by the [`PreparedId`] that `prepare` returned.
+/// The scenes a backend has prepared, keyed by the [`PreparedId`] that `prepare` returned, with
+/// the backend's name for the errors about unknown ids.
 ///
-/// Ids are allocated by [`insert`](Self::insert): the first is `PreparedId(0)` and each next one
-/// is one larger, so an id is never reused, even after [`remove`](Self::remove).
+/// Ids are allocated by [`insert`](Self::insert): each is one larger than the one before, so an
+/// id is never reused, even after [`remove`](Self::remove).
 ///
 /// ```
-/// use shadowvol_silhouette::{BackendError, PreparedId, PreparedScenes};
+/// use shadowvol_silhouette::{BackendError, PreparedScenes};
 ///
-/// let mut scenes = PreparedScenes::new();
+/// let mut scenes = PreparedScenes::new("cpu");
 /// let a = scenes.insert("scene a");
-/// assert_eq!(a, PreparedId(0));
-/// assert_eq!(scenes.get("cpu", a), Ok(&"scene a"));
+/// assert_eq!(scenes.get(a), Ok(&"scene a"));
 /// assert_eq!(scenes.remove(a), Some("scene a"));
-/// assert_eq!(
-///     scenes.get("cpu", a),
-///     Err(BackendError::UnknownScene { backend: "cpu", id: a })
-/// );
-/// assert_eq!(scenes.insert("scene b"), PreparedId(1));
+/// assert_eq!(scenes.get(a), Err(BackendError::UnknownScene { backend: "cpu", id: a }));
+/// assert_ne!(scenes.insert("scene b"), a);
 /// ```
 #[derive(Debug, Clone)]
 pub struct PreparedScenes<T> {
+    backend: &'static str,
     scenes: HashMap<PreparedId, T>,
     next: u64,
 }
 
-impl<T> Default for PreparedScenes<T> {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
 impl<T> PreparedScenes<T> {
-    /// An empty store whose first id will be `PreparedId(0)`.
+    /// An empty store of the backend named `backend`.
     #[must_use]
-    pub fn new() -> Self {
+    pub fn new(backend: &'static str) -> Self {
         Self {
+            backend,
             scenes: HashMap::new(),
             next: 0,
         }
+    }
+
+    /// The name of the backend the store belongs to.
+    #[must_use]
+    pub fn backend(&self) -> &'static str {
+        self.backend
     }
 
     /// Stores `scene` under a fresh id and returns that id.
@@ -53,30 +52,30 @@ impl<T> PreparedScenes<T> {
         id
     }
 
+    fn unknown(&self, id: PreparedId) -> BackendError {
+        BackendError::UnknownScene {
+            backend: self.backend,
+            id,
+        }
+    }
+
     /// The scene stored under `id`.
     ///
     /// # Errors
-    /// [`BackendError::UnknownScene`] naming `backend` and `id` when no scene is stored under
+    /// [`BackendError::UnknownScene`] naming the backend and `id` when no scene is stored under
     /// `id` (never returned by [`insert`](Self::insert), or removed since).
-    pub fn get(&self, backend: &'static str, id: PreparedId) -> Result<&T, BackendError> {
-        self.scenes
-            .get(&id)
-            .ok_or(BackendError::UnknownScene { backend, id })
+    pub fn get(&self, id: PreparedId) -> Result<&T, BackendError> {
+        self.scenes.get(&id).ok_or_else(|| self.unknown(id))
     }
 
     /// The scene stored under `id`, mutably.
     ///
     /// # Errors
-    /// [`BackendError::UnknownScene`] naming `backend` and `id` when no scene is stored under
+    /// [`BackendError::UnknownScene`] naming the backend and `id` when no scene is stored under
     /// `id`.
-    pub fn get_mut(
-        &mut self,
-        backend: &'static str,
-        id: PreparedId,
-    ) -> Result<&mut T, BackendError> {
-        self.scenes
-            .get_mut(&id)
-            .ok_or(BackendError::UnknownScene { backend, id })
+    pub fn get_mut(&mut self, id: PreparedId) -> Result<&mut T, BackendError> {
+        let unknown = self.unknown(id);
+        self.scenes.get_mut(&id).ok_or(unknown)
     }
 
     /// Removes and returns the scene stored under `id`, or `None` when there is none.
@@ -88,12 +87,11 @@ impl<T> PreparedScenes<T> {
     /// [`restore`](Self::restore) (for backends that need the scene mutably and `&self` at once).
     ///
     /// # Errors
-    /// [`BackendError::UnknownScene`] naming `backend` and `id` when no scene is stored under
+    /// [`BackendError::UnknownScene`] naming the backend and `id` when no scene is stored under
     /// `id`.
-    pub fn take(&mut self, backend: &'static str, id: PreparedId) -> Result<T, BackendError> {
-        self.scenes
-            .remove(&id)
-            .ok_or(BackendError::UnknownScene { backend, id })
+    pub fn take(&mut self, id: PreparedId) -> Result<T, BackendError> {
+        let unknown = self.unknown(id);
+        self.scenes.remove(&id).ok_or(unknown)
     }
 
     /// Puts back a scene taken out with [`take`](Self::take) or [`remove`](Self::remove) under
@@ -142,32 +140,33 @@ mod tests {
 
     #[test]
     fn ids_start_at_zero_increase_and_are_never_reused() {
-        let mut s = PreparedScenes::default();
+        let mut s = PreparedScenes::new("t");
         assert!(s.is_empty());
+        assert_eq!(s.backend(), "t");
         let a = s.insert(10);
         let b = s.insert(20);
         assert_eq!((a, b), (PreparedId(0), PreparedId(1)));
         assert_eq!(s.len(), 2);
-        *s.get_mut("t", b).unwrap() += 1;
-        assert_eq!(s.get("t", b), Ok(&21));
+        *s.get_mut(b).unwrap() += 1;
+        assert_eq!(s.get(b), Ok(&21));
         assert_eq!(s.remove(a), Some(10));
         assert_eq!(s.remove(a), None);
         assert_eq!(
-            s.get("t", a),
+            s.get(a),
             Err(BackendError::UnknownScene {
                 backend: "t",
                 id: a
             })
         );
         assert_eq!(
-            s.get_mut("x", PreparedId(7)).unwrap_err().to_string(),
-            "x backend: unknown prepared scene PreparedId(7)"
+            s.get_mut(PreparedId(7)).unwrap_err().to_string(),
+            "t backend: unknown prepared scene PreparedId(7)"
         );
         assert_eq!(s.insert(30), PreparedId(2));
-        let v = s.take("t", b).unwrap();
-        assert!(s.take("t", b).is_err());
+        let v = s.take(b).unwrap();
+        assert!(s.take(b).is_err());
         s.restore(b, v);
-        assert_eq!(s.get("t", b), Ok(&21));
+        assert_eq!(s.get(b), Ok(&21));
         let mut all: Vec<_> = s.drain().collect();
         all.sort_unstable();
         assert_eq!(all, vec![(PreparedId(1), 21), (PreparedId(2), 30)]);

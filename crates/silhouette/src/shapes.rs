@@ -35,11 +35,28 @@ pub(crate) fn f32v(p: DVec3) -> Vec3 {
     p.as_vec3()
 }
 
-/// Deterministic generator (splitmix64).
-pub(crate) struct Rng(pub(crate) u64);
+/// A deterministic generator (splitmix64) for the corpus and the backends' randomised tests:
+/// the same seed gives the same sequence on every platform.
+///
+/// ```
+/// use shadowvol_silhouette::shapes::Rng;
+/// let mut a = Rng::new(7);
+/// let x = a.unit();
+/// assert!((-1.0..1.0).contains(&x));
+/// assert_eq!(Rng::new(7).unit(), x);
+/// ```
+#[derive(Debug, Clone)]
+pub struct Rng(u64);
 
 impl Rng {
-    pub(crate) fn next_u64(&mut self) -> u64 {
+    /// A generator with the state `seed`.
+    #[must_use]
+    pub fn new(seed: u64) -> Self {
+        Self(seed)
+    }
+
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
@@ -47,9 +64,17 @@ impl Rng {
         z ^ (z >> 31)
     }
 
-    /// Uniform integer in `0..n`.
-    pub(crate) fn below(&mut self, n: u64) -> u64 {
+    /// A uniform integer in `0..n`.
+    ///
+    /// # Panics
+    /// If `n` is 0.
+    pub fn below(&mut self, n: u64) -> u64 {
         self.next_u64() % n
+    }
+
+    /// A uniform `f32` in `[-1, 1)` with 24 random bits.
+    pub fn unit(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
     }
 }
 

@@ -224,7 +224,7 @@ impl SimdBackend {
         Ok(Self {
             level,
             pool,
-            scenes: PreparedScenes::new(),
+            scenes: PreparedScenes::new("simd"),
             signs: Vec::new(),
         })
     }
@@ -556,7 +556,7 @@ impl SilhouetteBackend for SimdBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
-        let p = self.scenes.get("simd", id)?;
+        let p = self.scenes.get(id)?;
         check_lights(lights)?;
         let start = Instant::now();
         let obj_lights = object_lights(&p.scene, lights);

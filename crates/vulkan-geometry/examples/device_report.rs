@@ -9,7 +9,7 @@ use shadowvol_silhouette::{
     corpus, extract_once, invariant, Accuracy, ExtractStats, Multiplicities, SceneObject,
     SilhouetteBackend, TopologyScene,
 };
-use shadowvol_vulkan_geometry::{Options, VulkanBackend};
+use shadowvol_vulkan_geometry::{VulkanBackend, VulkanOptions};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -74,7 +74,7 @@ fn time(
 }
 
 fn main() {
-    let mut vk = match VulkanBackend::new(Options::from_env()) {
+    let mut vk = match VulkanBackend::new(VulkanOptions::from_env()) {
         Ok(v) => v,
         Err(e) => {
             eprintln!("{e}");
@@ -85,9 +85,9 @@ fn main() {
     println!("details: {:?}", vk.info().details);
     let label = format!("{} filter", vk.filter().name());
     let mut ok = corpus_report(&mut vk, &label);
-    let mut vk32 = VulkanBackend::new(Options {
+    let mut vk32 = VulkanBackend::new(VulkanOptions {
         force_f32_filter: true,
-        ..Options::from_env()
+        ..VulkanOptions::from_env()
     })
     .expect("second device");
     ok &= corpus_report(&mut vk32, "f32 filter");

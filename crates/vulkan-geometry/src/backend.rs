@@ -1,10 +1,12 @@
 //! [`VulkanBackend`]: the `SilhouetteBackend` implementation over the geometry shader.
 
-use crate::context::{device_err, Buffer, Context, Options, BACKEND};
+use crate::context::{device_err, Buffer, Context, VulkanOptions};
 use crate::pipelines::{Pipelines, Push, BINDINGS};
-use crate::twin::{mode_code, mode_code_of, resolve_uncertain, DeviceFilter, DeviceScene};
+use crate::twin::{DeviceFilter, DeviceScene};
+use crate::NAME;
 use ash::vk;
 use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::gpu::{self, UncertainRecord};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
     PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
@@ -30,7 +32,6 @@ pub(crate) struct Prepared {
     positions: Buffer,
     edges: Buffer,
     ovs: Buffer,
-    edge_object: Buffer,
     lights: Buffer,
     pub models: Buffer,
     pub mult: Buffer,
@@ -50,7 +51,6 @@ impl Prepared {
             &self.positions,
             &self.edges,
             &self.ovs,
-            &self.edge_object,
             &self.lights,
             &self.models,
             &self.mult,
@@ -99,7 +99,6 @@ impl Prepared {
             self.positions,
             self.edges,
             self.ovs,
-            self.edge_object,
             self.lights,
             self.models,
             self.mult,
@@ -123,10 +122,10 @@ impl Prepared {
 /// lists are built on the host from the multiplicities.
 ///
 /// When the result buffer (`edges x lights` multiplicities) or the light buffer would exceed
-/// `maxStorageBufferRange` (or [`Options::max_lights_per_pass`] is set), the lights are split
+/// `maxStorageBufferRange` (or [`VulkanOptions::max_lights_per_batch`] is set), the lights are split
 /// into batches, one pass each; the result is the same as one pass would give.
 ///
-/// Every wait for the device is bounded by [`shadowvol_silhouette::gpu_wait_limit`]
+/// Every wait for the device is bounded by [`shadowvol_silhouette::gpu::wait_limit`]
 /// (`SHADOWVOL_GPU_TIMEOUT`). After a timeout the late work is still pending: the backend then
 /// refuses new work with [`BackendError::Device`] until that work's fence signals (each later
 /// call waits for it up to the limit again and recovers when it has finished), and dropping the
@@ -139,7 +138,7 @@ pub struct VulkanBackend {
     pub(crate) pipes: Pipelines,
     /// Cleanups of objects that a timed-out submission may still use; run once it has finished.
     retired: Vec<Cleanup>,
-    max_lights_per_pass: Option<NonZeroUsize>,
+    max_lights_per_batch: Option<NonZeroUsize>,
     /// Geometry-shader passes (light batches) of the last `extract`.
     last_passes: usize,
     pub(crate) ctx: Context,
@@ -163,14 +162,14 @@ impl VulkanBackend {
     /// 1.1, `geometryShader`, `vertexPipelineStoresAndAtomics`, a depth/stencil format, or the
     /// validation layer when it was asked for. [`BackendError::Build`] if a shader module or
     /// pipeline cannot be created.
-    pub fn new(options: Options) -> Result<Self, BackendError> {
+    pub fn new(options: VulkanOptions) -> Result<Self, BackendError> {
         let ctx = Context::new(options)?;
         let pipes = Pipelines::new(&ctx)?;
         Ok(Self {
-            prepared: PreparedScenes::new(),
+            prepared: PreparedScenes::new(NAME),
             pipes,
             retired: Vec::new(),
-            max_lights_per_pass: options.max_lights_per_pass,
+            max_lights_per_batch: options.max_lights_per_batch,
             last_passes: 0,
             ctx,
         })
@@ -199,22 +198,22 @@ impl VulkanBackend {
     /// Lights per geometry-shader pass for `edges` edges and `objects` objects: as many as the
     /// result buffer (`4 * edges` bytes per light) and the light buffer (`16 * objects` bytes
     /// per light) allow within `maxStorageBufferRange` and `u32` indices, at most
-    /// [`Options::max_lights_per_pass`].
-    fn lights_per_pass(&self, edges: usize, objects: usize) -> Result<usize, BackendError> {
+    /// [`VulkanOptions::max_lights_per_batch`].
+    fn lights_per_batch(&self, edges: usize, objects: usize) -> Result<usize, BackendError> {
         let max_range = self.ctx.caps.max_storage_buffer_range;
         let mult = 4 * edges as u64;
         let light = 16 * objects as u64;
-        let n = shadowvol_silhouette::lights_per_batch(
+        let n = shadowvol_silhouette::gpu::lights_per_batch(
             &[
                 (max_range, mult),
                 (max_range, light),
                 (u64::from(u32::MAX), edges as u64),
             ],
-            self.max_lights_per_pass,
+            self.max_lights_per_batch,
         );
         if n == 0 {
             return Err(BackendError::Limit {
-                backend: BACKEND,
+                backend: NAME,
                 message: format!(
                     "one light alone does not fit the device's buffers: it needs {mult} bytes of \
                      multiplicities for {edges} edges and {light} bytes of object-space lights \
@@ -228,7 +227,7 @@ impl VulkanBackend {
     }
 
     /// The exact-mode filter in use: `F64` when the device has `shaderFloat64` (and it was not
-    /// disabled with [`Options::force_f32_filter`]), else `F32`.
+    /// disabled with [`VulkanOptions::force_f32_filter`]), else `F32`.
     #[must_use]
     pub fn filter(&self) -> DeviceFilter {
         if self.ctx.use_f64 {
@@ -287,7 +286,7 @@ impl VulkanBackend {
     }
 
     pub(crate) fn scene(&self, id: PreparedId) -> Result<&Prepared, BackendError> {
-        self.prepared.get(BACKEND, id)
+        self.prepared.get(id)
     }
 
     /// Makes the light, multiplicity and uncertain buffers large enough for the lights
@@ -301,14 +300,14 @@ impl VulkanBackend {
     ) -> Result<(), BackendError> {
         let max_range = self.ctx.caps.max_storage_buffer_range;
         let ctx = &self.ctx;
-        let p = self.prepared.get_mut(BACKEND, id)?;
-        let edges = p.ds.edges.len();
+        let p = self.prepared.get_mut(id)?;
+        let edges = p.ds.layout.edge_count();
         let light_count = lights.len();
         let slots = edges
             .checked_mul(light_count)
             .filter(|&s| u32::try_from(s).is_ok() && (s as u64) * 4 <= max_range)
             .ok_or_else(|| BackendError::Limit {
-                backend: BACKEND,
+                backend: NAME,
                 message: format!(
                     "{edges} edges x {light_count} lights do not fit one result buffer (at most \
                      {} multiplicities, maxStorageBufferRange {max_range} bytes)",
@@ -328,7 +327,7 @@ impl VulkanBackend {
         let light_bytes: &[u8] = bytemuck::cast_slice(&bits);
         if light_bytes.len() as u64 > max_range {
             return Err(BackendError::Limit {
-                backend: BACKEND,
+                backend: NAME,
                 message: format!(
                     "{light_count} lights for {} objects need {} bytes, more than one light \
                      buffer holds (maxStorageBufferRange {max_range} bytes)",
@@ -364,11 +363,11 @@ impl VulkanBackend {
     /// Grows the uncertain buffer to hold `records` records (contents are discarded).
     fn grow_uncertain(&mut self, id: PreparedId, records: u32) -> Result<(), BackendError> {
         let ctx = &self.ctx;
-        let p = self.prepared.get_mut(BACKEND, id)?;
+        let p = self.prepared.get_mut(id)?;
         let bytes = UNCERTAIN_HEADER as u64 + 16 * u64::from(records);
         if bytes > ctx.caps.max_storage_buffer_range {
             return Err(BackendError::Limit {
-                backend: BACKEND,
+                backend: NAME,
                 message: format!(
                     "{records} uncertain pairs do not fit one storage buffer \
                      (maxStorageBufferRange {} bytes)",
@@ -397,7 +396,7 @@ impl VulkanBackend {
     /// Records the extraction draw (rasteriser discard) into `cmd`.
     fn record_extract(&self, p: &Prepared, cmd: vk::CommandBuffer, push: &Push, lights: u32) {
         let d = &self.ctx.device;
-        let edges = p.ds.edges.len() as u32;
+        let edges = p.ds.layout.edge_count() as u32;
         // SAFETY: all handles are live; the command buffer is recording.
         unsafe {
             d.cmd_begin_render_pass(
@@ -477,12 +476,12 @@ impl VulkanBackend {
         let obj_lights = object_lights(&self.scene(id)?.scene, lights);
         stats.upload = t.elapsed();
 
-        let edges = self.scene(id)?.ds.edges.len();
+        let edges = self.scene(id)?.ds.layout.edge_count();
         out.reset(edges, lights.len());
         if edges == 0 || lights.is_empty() {
             return Ok(stats);
         }
-        let per_pass = self.lights_per_pass(edges, obj_lights.len())?;
+        let per_pass = self.lights_per_batch(edges, obj_lights.len())?;
         let mut first = 0;
         while first < lights.len() {
             let batch = first..(first + per_pass).min(lights.len());
@@ -512,14 +511,14 @@ impl VulkanBackend {
         self.upload_lights(id, obj_lights, batch.clone())?;
         stats.upload += t.elapsed();
 
-        let edges = self.scene(id)?.ds.edges.len();
+        let edges = self.scene(id)?.ds.layout.edge_count();
         let light_count = batch.len() as u32;
         let t = Instant::now();
         let mut count;
         loop {
             let p = self.scene(id)?;
             let push = Push {
-                mode: mode_code_of(mode),
+                mode: gpu::mode_code(mode),
                 edge_count: edges as u32,
                 light_count,
                 uncertain_capacity: p.uncertain_capacity,
@@ -541,36 +540,17 @@ impl VulkanBackend {
         let p = self.scene(id)?;
         let rows = &mut out.all_values_mut()[batch.start * edges..batch.end * edges];
         p.mult.read(0, bytemuck::cast_slice_mut(rows));
-        let mut records = vec![[0u32; 4]; count as usize];
+        let mut words = vec![0u32; UncertainRecord::WORDS * count as usize];
         if count > 0 {
             p.uncertain
-                .read(UNCERTAIN_HEADER, bytemuck::cast_slice_mut(&mut records));
+                .read(UNCERTAIN_HEADER, bytemuck::cast_slice_mut(&mut words));
         }
+        let records = UncertainRecord::read_all(&words);
         stats.readback += t.elapsed();
 
         let t = Instant::now();
         stats.uncertain += u64::from(count);
-        for [e, k, li, _] in records {
-            let (e, li) = (e as usize, li as usize);
-            let valid = e < edges
-                && li < batch.len()
-                && p.ds.edges[e][2] <= k
-                && k < p.ds.edges[e][3]
-                && (k as usize) < p.ds.ovs.len();
-            if !valid {
-                return Err(BackendError::Device {
-                    backend: BACKEND,
-                    message: format!(
-                        "the device reported an invalid uncertain pair (edge {e}, opposite-vertex \
-                         slot {k}, light {li} of a {}-light pass over {edges} edges)",
-                        batch.len()
-                    ),
-                });
-            }
-            let li = batch.start + li;
-            let l = obj_lights[p.ds.edge_object[e] as usize][li];
-            out.values_mut(li)[e] += i32::from(resolve_uncertain(&p.ds, e, k, l));
-        }
+        gpu::resolve_uncertain(&p.ds.layout, obj_lights, batch, &records, out, NAME)?;
         stats.host_resolve += t.elapsed();
         Ok(())
     }
@@ -619,7 +599,7 @@ impl SilhouetteBackend for VulkanBackend {
     fn info(&self) -> BackendInfo {
         let c = &self.ctx.caps;
         BackendInfo {
-            name: BACKEND,
+            name: NAME,
             device: format!("{} ({}), geometry shader", c.device_name, c.driver),
             modes: Accuracy::ALL.to_vec(),
             max_lights: None,
@@ -641,11 +621,7 @@ impl SilhouetteBackend for VulkanBackend {
         let ds = DeviceScene::build(scene)?;
         let ctx = &self.ctx;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let positions: Vec<u32> = ds
-            .positions
-            .iter()
-            .flat_map(|p| p.map(f32::to_bits))
-            .collect();
+        let positions: Vec<u32> = ds.layout.positions.iter().map(|p| p.to_bits()).collect();
         // Everything created so far is freed if a later step fails.
         let mut guard = BufferGuard {
             ctx,
@@ -653,9 +629,8 @@ impl SilhouetteBackend for VulkanBackend {
             pool: vk::DescriptorPool::null(),
         };
         guard.bufs.push(Buffer::with_data(ctx, &positions)?);
-        guard.bufs.push(Buffer::with_data(ctx, &ds.edges)?);
-        guard.bufs.push(Buffer::with_data(ctx, &ds.ovs)?);
-        guard.bufs.push(Buffer::with_data(ctx, &ds.edge_object)?);
+        guard.bufs.push(Buffer::with_data(ctx, &ds.layout.edges)?);
+        guard.bufs.push(Buffer::with_data(ctx, &ds.layout.ovs)?);
         guard.bufs.push(Buffer::new(
             ctx,
             16 * scene.objects.len().max(1) as u64,
@@ -667,9 +642,11 @@ impl SilhouetteBackend for VulkanBackend {
             XFORM_BYTES * ds.models.len().max(1) as u64,
             storage,
         )?);
-        guard
-            .bufs
-            .push(Buffer::host_read(ctx, 4 * ds.edges.len() as u64, storage)?);
+        guard.bufs.push(Buffer::host_read(
+            ctx,
+            4 * ds.layout.edge_count().max(1) as u64,
+            storage,
+        )?);
         guard.bufs.push(Buffer::host_read(
             ctx,
             UNCERTAIN_HEADER as u64 + 16 * u64::from(INITIAL_UNCERTAIN),
@@ -709,7 +686,7 @@ impl SilhouetteBackend for VulkanBackend {
         let pool = std::mem::replace(&mut guard.pool, vk::DescriptorPool::null());
         let bufs = std::mem::take(&mut guard.bufs);
         let Ok::<[Buffer; BINDINGS as usize], _>(
-            [positions, edges, ovs, edge_object, lights, models, mult, uncertain, vertex_object, corners, tri_sign],
+            [positions, edges, ovs, lights, models, mult, uncertain, vertex_object, corners, tri_sign],
         ) = bufs.try_into()
         else {
             // Unreachable: exactly BINDINGS buffers were pushed above.
@@ -724,7 +701,6 @@ impl SilhouetteBackend for VulkanBackend {
             positions,
             edges,
             ovs,
-            edge_object,
             lights,
             models,
             mult,
@@ -760,7 +736,7 @@ impl SilhouetteBackend for VulkanBackend {
 
 impl Drop for VulkanBackend {
     fn drop(&mut self) {
-        // Waits for a timed-out submission at most `gpu_wait_limit`. If it is still running,
+        // Waits for a timed-out submission at most `wait_limit`. If it is still running,
         // its buffers, descriptor sets and pipelines are leaked rather than destroyed under it
         // (and the context leaks the device; see `Drop for Context`).
         if !self.ctx.idle_for_destruction() {
@@ -775,6 +751,3 @@ impl Drop for VulkanBackend {
         self.pipes.destroy(&self.ctx);
     }
 }
-
-/// The mode code used for the render path's exact emission.
-pub(crate) const PRECOMPUTED: u32 = mode_code::PRECOMPUTED;

@@ -1,17 +1,15 @@
 //! Headless Vulkan set-up: loader, instance (with optional validation), physical device, logical
 //! device, one graphics queue, host-visible buffers.
 
+use crate::NAME;
 use ash::vk;
-use shadowvol_silhouette::{
-    describe_gpu_wait_limit, gpu_wait_limit, BackendError, DEFAULT_GPU_TIMEOUT, GPU_TIMEOUT_ENV,
-};
+use shadowvol_silhouette::gpu::{self, describe_wait_limit, TIMEOUT_ENV};
+use shadowvol_silhouette::BackendError;
 use std::ffi::{c_void, CStr, CString};
 use std::num::NonZeroUsize;
 use std::sync::atomic::{AtomicU8, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
-
-pub(crate) const BACKEND: &str = "vulkan";
 
 /// Environment variable that turns the Khronos validation layer on (`1`).
 pub const VALIDATION_ENV: &str = "SHADOWVOL_VULKAN_VALIDATION";
@@ -21,7 +19,7 @@ pub const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
 /// How to start the Vulkan backend.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Options {
+pub struct VulkanOptions {
     /// Enable `VK_LAYER_KHRONOS_validation` and collect its messages (see
     /// [`crate::VulkanBackend::validation_messages`]). Starting fails with
     /// [`BackendError::Unavailable`] when the layer is not installed.
@@ -34,38 +32,33 @@ pub struct Options {
     /// each, and assembles one result identical to a single pass; a small value exercises the
     /// splitting on small scenes. The device limits (`maxStorageBufferRange` for the result and
     /// light buffers, `u32` result indices) lower it further.
-    pub max_lights_per_pass: Option<NonZeroUsize>,
+    pub max_lights_per_batch: Option<NonZeroUsize>,
 }
 
-impl Options {
+impl VulkanOptions {
     /// Options from the environment: `validation` is on when `SHADOWVOL_VULKAN_VALIDATION=1`.
     #[must_use]
     pub fn from_env() -> Self {
         Self {
             validation: std::env::var(VALIDATION_ENV).is_ok_and(|v| v.trim() == "1"),
             force_f32_filter: false,
-            max_lights_per_pass: None,
+            max_lights_per_batch: None,
         }
     }
 }
 
 pub(crate) fn unavailable(reason: impl Into<String>) -> BackendError {
     BackendError::Unavailable {
-        backend: BACKEND,
+        backend: NAME,
         reason: reason.into(),
     }
 }
 
 pub(crate) fn device_err(what: &str, r: vk::Result) -> BackendError {
     BackendError::Device {
-        backend: BACKEND,
+        backend: NAME,
         message: format!("{what} failed: {r}"),
     }
-}
-
-/// [`gpu_wait_limit`], with a bad `SHADOWVOL_GPU_TIMEOUT` as [`BackendError::InvalidInput`].
-pub(crate) fn wait_limit() -> Result<Duration, BackendError> {
-    gpu_wait_limit().map_err(BackendError::InvalidInput)
 }
 
 /// `limit` in nanoseconds for `vkWaitForFences`.
@@ -76,12 +69,12 @@ fn nanos(limit: Duration) -> u64 {
 /// The error for a submission that did not finish within `limit`.
 fn timeout_err(limit: Duration) -> BackendError {
     BackendError::Device {
-        backend: BACKEND,
+        backend: NAME,
         message: format!(
             "the device did not finish within {}; the work is still pending, so this backend \
-             refuses new work until it finishes (raise {GPU_TIMEOUT_ENV} for scenes this large \
+             refuses new work until it finishes (raise {TIMEOUT_ENV} for scenes this large \
              on a slow device)",
-            describe_gpu_wait_limit(limit)
+            describe_wait_limit(limit)
         ),
     }
 }
@@ -165,7 +158,7 @@ fn device_type_rank(t: vk::PhysicalDeviceType) -> u32 {
 
 impl Context {
     /// Loads the Vulkan library and starts the best device that has what the GS path needs.
-    pub fn new(options: Options) -> Result<Self, BackendError> {
+    pub fn new(options: VulkanOptions) -> Result<Self, BackendError> {
         // SAFETY: loading the system Vulkan loader; its initialisers are trusted like any driver.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| {
             unavailable(format!(
@@ -349,7 +342,7 @@ impl Context {
     }
 
     /// Makes sure no earlier submission is still running. After a timeout the context is
-    /// poisoned: this waits for the late submission up to [`gpu_wait_limit`] once more; if its
+    /// poisoned: this waits for the late submission up to [`wait_limit`] once more; if its
     /// fence has signalled by then the context recovers (everything the late work touched is
     /// rewritten before the next submission reads it), otherwise this fails.
     ///
@@ -358,7 +351,7 @@ impl Context {
         if !self.pending() {
             return Ok(());
         }
-        let limit = wait_limit()?;
+        let limit = gpu::wait_limit()?;
         // SAFETY: the fence is ours and was submitted (the state says so).
         match unsafe {
             self.device
@@ -369,12 +362,12 @@ impl Context {
                 Ok(())
             }
             Err(vk::Result::TIMEOUT) => Err(BackendError::Device {
-                backend: BACKEND,
+                backend: NAME,
                 message: format!(
                     "an earlier submission that timed out is still running on the device (it \
                      has not finished within another {}); this backend cannot run anything until \
                      it does: retry later, or drop the backend and start a new one",
-                    describe_gpu_wait_limit(limit)
+                    describe_wait_limit(limit)
                 ),
             }),
             Err(e) => Err(device_err(
@@ -384,7 +377,7 @@ impl Context {
         }
     }
 
-    /// Records with `record`, submits, and waits for completion, at most [`gpu_wait_limit`].
+    /// Records with `record`, submits, and waits for completion, at most [`wait_limit`].
     ///
     /// On a timeout the context becomes pending (see [`Context::ensure_idle`]) and the error is
     /// a [`BackendError::Device`] naming the limit and `SHADOWVOL_GPU_TIMEOUT`.
@@ -393,7 +386,7 @@ impl Context {
         record: impl FnOnce(&ash::Device, vk::CommandBuffer),
     ) -> Result<(), BackendError> {
         self.ensure_idle()?;
-        let limit = wait_limit()?;
+        let limit = gpu::wait_limit()?;
         let d = &self.device;
         // SAFETY: the command buffer is idle (`ensure_idle` saw its last submission finish), from
         // our pool.
@@ -428,7 +421,7 @@ impl Context {
     }
 
     /// Before destroying anything: true when no submission is running, waiting for a pending
-    /// one at most [`gpu_wait_limit`] (the default limit when `SHADOWVOL_GPU_TIMEOUT` is
+    /// one at most [`wait_limit`] (the default limit when `SHADOWVOL_GPU_TIMEOUT` is
     /// invalid). False when the work is still running; the context is then abandoned (its
     /// handles will be leaked) and later calls return false at once.
     pub fn idle_for_destruction(&self) -> bool {
@@ -437,7 +430,7 @@ impl Context {
             ABANDONED => return false,
             _ => {}
         }
-        let limit = gpu_wait_limit().unwrap_or(DEFAULT_GPU_TIMEOUT);
+        let limit = gpu::wait_limit().unwrap_or(gpu::DEFAULT_TIMEOUT);
         // SAFETY: the fence is ours and was submitted.
         if unsafe {
             self.device
@@ -451,7 +444,7 @@ impl Context {
             self.state.store(ABANDONED, Ordering::Release);
             eprintln!(
                 "shadowvol vulkan backend: a submission is still running on the device after \
-                 {} s ({GPU_TIMEOUT_ENV}); leaking the device instead of destroying it under \
+                 {} s ({TIMEOUT_ENV}); leaking the device instead of destroying it under \
                  the running work",
                 limit.as_secs_f64()
             );
@@ -668,7 +661,7 @@ impl Buffer {
                 Err(e) => {
                     d.destroy_buffer(buffer, None);
                     return Err(BackendError::Limit {
-                        backend: BACKEND,
+                        backend: NAME,
                         message: format!("cannot allocate a buffer of {size} bytes: {e}"),
                     });
                 }

@@ -17,8 +17,8 @@
 //! `SHADOWVOL_VULKAN_VALIDATION=1` to run under `VK_LAYER_KHRONOS_validation`.
 //!
 //! Lights that do not fit the device's buffers in one pass are split into batches
-//! ([`Options::max_lights_per_pass`] caps them further); every wait for the device is bounded by
-//! `SHADOWVOL_GPU_TIMEOUT` ([`shadowvol_silhouette::gpu_wait_limit`]), and a timeout is a
+//! ([`VulkanOptions::max_lights_per_batch`] caps them further); every wait for the device is bounded by
+//! `SHADOWVOL_GPU_TIMEOUT` ([`shadowvol_silhouette::gpu::wait_limit`]), and a timeout is a
 //! [`BackendError::Device`] (see the README's "Wait limit and timeouts").
 //!
 //! ```no_run
@@ -40,16 +40,19 @@ pub mod twin;
 
 pub use backend::VulkanBackend;
 
+/// The backend's registry name.
+pub const NAME: &str = "vulkan";
+
 /// The crate README, compiled and run as a doctest.
 #[doc = include_str!("../README.md")]
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
-pub use context::{Options, VALIDATION_ENV};
+pub use context::{VulkanOptions, VALIDATION_ENV};
 pub use render::{Camera, RenderStats, ShadowMask, StencilTechnique};
 
 use shadowvol_silhouette::{BackendError, SilhouetteBackend};
 
-/// Starts the `vulkan` backend with [`Options::from_env`] (validation when
+/// Starts the `vulkan` backend with [`VulkanOptions::from_env`] (validation when
 /// `SHADOWVOL_VULKAN_VALIDATION=1`).
 ///
 /// # Errors
@@ -57,5 +60,5 @@ use shadowvol_silhouette::{BackendError, SilhouetteBackend};
 /// `geometryShader`, `vertexPipelineStoresAndAtomics`, or the validation layer when requested);
 /// [`BackendError::Build`] when a pipeline cannot be built.
 pub fn create_backend() -> Result<Box<dyn SilhouetteBackend>, BackendError> {
-    Ok(Box::new(VulkanBackend::new(Options::from_env())?))
+    Ok(Box::new(VulkanBackend::new(VulkanOptions::from_env())?))
 }

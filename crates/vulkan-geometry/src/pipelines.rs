@@ -17,7 +17,7 @@ pub(crate) const SILHOUETTE_GS_EXTRACT_F32: &[u8] =
     include_bytes!("../../../shaders/silhouette_gs.extract.f32.geom.spv");
 
 /// Number of storage-buffer bindings in set 0 (see the shaders).
-pub(crate) const BINDINGS: u32 = 11;
+pub(crate) const BINDINGS: u32 = 10;
 
 /// The push constants shared by every stage (24 bytes).
 #[repr(C)]

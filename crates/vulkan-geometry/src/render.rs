@@ -20,10 +20,10 @@
 //! Side quads: for edge `(A, B)` with multiplicity `m`, `|m|` copies of `A, B, A∞, B∞` (reversed
 //! for `m < 0`), `X∞ = (X * L.w - L.xyz, 0)`; see [`crate::twin::side_quad`].
 
-use crate::backend::{host_barrier, VulkanBackend, PRECOMPUTED};
+use crate::backend::{host_barrier, VulkanBackend};
 use crate::context::{device_err, Buffer, Context};
 use crate::pipelines::Push;
-use crate::twin::{mode_code_of, touches_light};
+use crate::twin::{touches_light, MODE_PRECOMPUTED};
 use ash::vk;
 use glam::{DMat4, DVec3, DVec4, Vec3};
 use shadowvol_robust_math::{orient_exact, Accuracy, Light};
@@ -297,7 +297,7 @@ impl VulkanBackend {
     /// [`BackendError::InvalidInput`] for a zero or oversized image or an invalid
     /// `SHADOWVOL_GPU_TIMEOUT`, [`BackendError::UnknownScene`], [`BackendError::Device`] on driver
     /// failures, when the device does not finish within
-    /// [`shadowvol_silhouette::gpu_wait_limit`], or while an earlier timed-out submission is
+    /// [`shadowvol_silhouette::gpu::wait_limit`], or while an earlier timed-out submission is
     /// still running.
     pub fn render_shadow_mask_with(
         &mut self,
@@ -322,23 +322,21 @@ impl VulkanBackend {
             let p = self.scene(id)?;
             let l = object_lights(&p.scene, &[light]);
             let ds = &p.ds;
-            let pos = |v: u32| ds.positions[v as usize];
-            let touch: Vec<bool> = ds
-                .positions
-                .iter()
+            let pos = |v: u32| ds.layout.position(v);
+            let touch: Vec<bool> = (0..ds.layout.vertex_count() as u32)
                 .zip(&ds.vertex_object)
-                .map(|(&q, &o)| touches_light(q, l[o as usize][0]))
+                .map(|(v, &o)| touches_light(pos(v), l[o as usize][0]))
                 .collect();
             if touch.iter().any(|&t| t) {
                 // Triangles touching the point light cast no volume: take their exact
                 // contributions out of the multiplicities the shader emits from.
-                let values = m.values_mut(0);
-                for (e, &[a, b, begin, end]) in ds.edges.iter().enumerate() {
-                    let lo = l[ds.edge_object[e] as usize][0];
-                    for k in begin..end {
-                        let o = ds.ovs[k as usize];
+                for (e, value) in m.values_mut(0).iter_mut().enumerate() {
+                    let (a, b, object) = ds.layout.edge(e);
+                    let lo = l[object as usize][0];
+                    for k in ds.layout.ov_slots(e) {
+                        let o = ds.layout.ovs[k];
                         if touch[a as usize] || touch[b as usize] || touch[o as usize] {
-                            values[e] -= i32::from(orient_exact(pos(a), pos(b), lo, pos(o)));
+                            *value -= i32::from(orient_exact(pos(a), pos(b), lo, pos(o)));
                         }
                     }
                 }
@@ -362,11 +360,11 @@ impl VulkanBackend {
                     p.tri_sign.write(0, bytemuck::cast_slice(&signs));
                 }
             }
-            PRECOMPUTED
+            MODE_PRECOMPUTED
         } else {
             let obj_lights = object_lights(&self.scene(id)?.scene, &[light]);
             self.upload_lights(id, &obj_lights, 0..1)?;
-            mode_code_of(mode)
+            shadowvol_silhouette::gpu::mode_code(mode)
         };
         let t = Instant::now();
         let pixels = width as usize * height as usize;
@@ -472,7 +470,7 @@ impl VulkanBackend {
         }
         let push = Push {
             mode: mode_code,
-            edge_count: p.ds.edges.len() as u32,
+            edge_count: p.ds.layout.edge_count() as u32,
             light_count: 1,
             uncertain_capacity: p.uncertain_capacity,
             emit: 1,
@@ -487,7 +485,7 @@ impl VulkanBackend {
         // Reset the counters (uncertain appends do not happen here; clamped emissions do).
         p.uncertain_reset();
         let corners = p.ds.corners.len() as u32;
-        let edges = p.ds.edges.len() as u32;
+        let edges = p.ds.layout.edge_count() as u32;
         let extent = vk::Extent2D { width, height };
         let clear = [vk::ClearValue {
             depth_stencil: vk::ClearDepthStencilValue {

@@ -14,39 +14,18 @@
 //! assert_eq!(m.edge_count(), scene.total_edges());
 //! ```
 
+use crate::NAME;
 use glam::{Mat4, Vec3, Vec4};
-use shadowvol_robust_math::{
-    orient_exact, orient_filter_f64, sign_f32, Accuracy, Light, F32_FILTER_EPS, F32_FILTER_MAX,
-    F32_FILTER_MIN,
-};
+use shadowvol_robust_math::filter::{self, TermsF32};
+use shadowvol_robust_math::{orient_filter_f64, sign_f32, Accuracy, Light, F32_FILTER_EPS};
+use shadowvol_silhouette::gpu::{self, SceneLayout, UncertainRecord};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, Multiplicities, TopologyScene,
 };
 
-/// Shader mode codes (push constant `mode`).
-pub mod mode_code {
-    /// [`shadowvol_robust_math::Accuracy::Original`].
-    pub const ORIGINAL: u32 = 0;
-    /// [`shadowvol_robust_math::Accuracy::Robust`].
-    pub const ROBUST: u32 = 1;
-    /// [`shadowvol_robust_math::Accuracy::Ordered`].
-    pub const ORDERED: u32 = 2;
-    /// [`shadowvol_robust_math::Accuracy::Exact`] (device filter + host resolution).
-    pub const EXACT: u32 = 3;
-    /// Emit quads from multiplicities already in the result buffer (the render path's exact mode).
-    pub const PRECOMPUTED: u32 = 4;
-}
-
-/// The shader code of an accuracy mode.
-#[must_use]
-pub fn mode_code_of(mode: Accuracy) -> u32 {
-    match mode {
-        Accuracy::Original => mode_code::ORIGINAL,
-        Accuracy::Robust => mode_code::ROBUST,
-        Accuracy::Ordered => mode_code::ORDERED,
-        Accuracy::Exact => mode_code::EXACT,
-    }
-}
+/// The shader's mode code that emits quads from multiplicities already in the result buffer
+/// (the render path's exact mode). The other codes are [`shadowvol_silhouette::gpu::mode_code`]'s.
+pub const MODE_PRECOMPUTED: u32 = 4;
 
 /// Which certified filter exact mode runs on the device.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -68,21 +47,17 @@ impl DeviceFilter {
     }
 }
 
-/// The global arrays the shaders read, built from a [`TopologyScene`].
+/// The global arrays the shaders read, built from a [`TopologyScene`]: the shared
+/// [`SceneLayout`] (positions, edge records, opposite vertices) and what the render path adds.
 ///
-/// Vertex ids are global: object `i`'s welded vertex `v` is `vertex_base[i] + v`. Adding the same
-/// base to all ids of an object keeps their order, so canonical orders and parities are those of
-/// the object-local ids the `cpu` backend uses.
+/// Vertex ids are global: object `i`'s welded vertex `v` is `layout.vertex_offsets[i] + v`.
+/// Adding the same base to all ids of an object keeps their order, so canonical orders and
+/// parities are those of the object-local ids the `cpu` backend uses.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct DeviceScene {
-    /// Welded positions of all objects (object space), `xyz` per vertex.
-    pub positions: Vec<[f32; 3]>,
-    /// Per global edge: `(a, b, first OV, one past the last OV)`, global ids and OV indices.
-    pub edges: Vec<[u32; 4]>,
-    /// Opposite vertices (global ids).
-    pub ovs: Vec<u32>,
-    /// Object index of every global edge.
-    pub edge_object: Vec<u32>,
+    /// Positions, edge records `(a, b, first OV slot, object)` plus the sentinel, and opposite
+    /// vertices.
+    pub layout: SceneLayout,
     /// Object index of every global vertex.
     pub vertex_object: Vec<u32>,
     /// Triangle corners (global ids), three per kept triangle.
@@ -93,15 +68,6 @@ pub struct DeviceScene {
     /// `f32`): the render path transforms `position - anchor`, which keeps precision for objects
     /// far from the origin.
     pub anchors: Vec<[f32; 3]>,
-    /// First global vertex id of each object.
-    pub vertex_base: Vec<u32>,
-}
-
-fn too_large(what: &str, count: usize) -> BackendError {
-    BackendError::Limit {
-        backend: "vulkan",
-        message: format!("{what} is {count}, more than u32 indices can address"),
-    }
 }
 
 impl DeviceScene {
@@ -110,44 +76,25 @@ impl DeviceScene {
     /// # Errors
     /// [`BackendError::Limit`] when a count exceeds `u32` indexing.
     pub fn build(scene: &TopologyScene) -> Result<Self, BackendError> {
-        let (vertices, edges, ovs) = (
-            scene.total_vertices(),
-            scene.total_edges(),
-            scene.total_ovs(),
-        );
-        for (what, n) in [
-            ("the number of vertices", vertices),
-            ("the number of edges", edges),
-            ("the number of opposite vertices", ovs),
-            (
-                "the number of triangle corners",
-                3 * scene.total_triangles(),
-            ),
-        ] {
-            if u32::try_from(n).is_err() {
-                return Err(too_large(what, n));
-            }
+        let layout = SceneLayout::build(scene, NAME)?;
+        let corners = 3 * scene.total_triangles();
+        if u32::try_from(corners).is_err() {
+            return Err(BackendError::Limit {
+                backend: NAME,
+                message: format!(
+                    "the number of triangle corners is {corners}, more than u32 indices can address"
+                ),
+            });
         }
-        let mut ds = DeviceScene::default();
+        let mut ds = DeviceScene {
+            layout,
+            ..DeviceScene::default()
+        };
         for (i, o) in scene.objects.iter().enumerate() {
             let t = &o.table;
-            let base = ds.positions.len() as u32;
-            let ov_base = ds.ovs.len() as u32;
-            ds.vertex_base.push(base);
-            ds.positions
-                .extend(t.positions.iter().map(|p| p.to_array()));
+            let base = ds.layout.vertex_offsets[i];
             ds.vertex_object
                 .extend(std::iter::repeat_n(i as u32, t.positions.len()));
-            ds.ovs.extend(t.ovs.iter().map(|&v| v + base));
-            for (e, &[a, b]) in t.edges.iter().enumerate() {
-                ds.edges.push([
-                    a + base,
-                    b + base,
-                    t.ov_offsets[e] + ov_base,
-                    t.ov_offsets[e + 1] + ov_base,
-                ]);
-                ds.edge_object.push(i as u32);
-            }
             ds.corners
                 .extend(t.triangles.iter().flat_map(|tri| tri.map(|v| v + base)));
             ds.models
@@ -167,22 +114,8 @@ impl DeviceScene {
     }
 
     fn p(&self, v: u32) -> [f32; 3] {
-        self.positions[v as usize]
+        self.layout.position(v)
     }
-}
-
-#[inline]
-fn subnormal(x: f32) -> bool {
-    x != 0.0 && !x.is_normal() && x.is_finite()
-}
-
-#[inline]
-fn diff_ok(x: f32, y: f32, d: f32) -> bool {
-    let m = d.abs();
-    if m == 0.0 {
-        return x == y;
-    }
-    (F32_FILTER_MIN..=F32_FILTER_MAX).contains(&m)
 }
 
 /// The shader's `f32` filter: [`shadowvol_robust_math::orient_filter_f32`] plus guards that keep
@@ -192,49 +125,24 @@ fn diff_ok(x: f32, y: f32, d: f32) -> bool {
 /// Returns `Some(sign)` only when the sign equals the exact sign.
 #[must_use]
 pub fn device_filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<i8> {
-    if a.iter()
-        .chain(&b)
-        .chain(&o)
-        .chain(&l)
-        .any(|&x| subnormal(x))
-    {
+    if filter::any_subnormal(a, b, l, o) || !filter::w_is_exact_f32(l[3]) {
         return None;
     }
-    // For w other than 0 or 1, w*A is rounded, and when it cancels against L.xyz the error of V
-    // is relative to |w*A|, not to |V|: the bound would not hold (robust-math's rule).
-    if l[3] != 0.0 && l[3] != 1.0 {
+    let t = TermsF32::new(a, b, l, o);
+    if !t.diffs_in_range(a, b, l, o) {
         return None;
     }
-    let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let la = [l[3] * a[0], l[3] * a[1], l[3] * a[2]];
-    let v = [l[0] - la[0], l[1] - la[1], l[2] - la[2]];
-    let d = [o[0] - a[0], o[1] - a[1], o[2] - a[2]];
-    for i in 0..3 {
-        if !diff_ok(a[i], b[i], e[i]) || !diff_ok(l[i], la[i], v[i]) || !diff_ok(o[i], a[i], d[i]) {
-            return None;
-        }
-        // `L.w * A` must stay normal: an underflowed (or flushed) product has an absolute error.
-        if (l[3] != 0.0 && a[i] != 0.0 && la[i].abs() < f32::MIN_POSITIVE) || la[i].is_infinite() {
-            return None;
-        }
+    // `L.w * A` must stay normal: an underflowed (or flushed) product has an absolute error.
+    if (0..3).any(|i| {
+        (l[3] != 0.0 && a[i] != 0.0 && t.wa[i].abs() < f32::MIN_POSITIVE) || t.wa[i].is_infinite()
+    }) {
+        return None;
     }
-    let (p1, q1) = (e[1] * v[2], e[2] * v[1]);
-    let (p2, q2) = (e[2] * v[0], e[0] * v[2]);
-    let (p3, q3) = (e[0] * v[1], e[1] * v[0]);
-    let det = (p1 - q1) * d[0] + (p2 - q2) * d[1] + (p3 - q3) * d[2];
-    let perm = (p1.abs() + q1.abs()) * d[0].abs()
-        + (p2.abs() + q2.abs()) * d[1].abs()
-        + (p3.abs() + q3.abs()) * d[2].abs();
+    let (det, perm) = t.det_perm();
     if !perm.is_finite() || det.is_nan() {
         return None;
     }
-    if det.abs() > F32_FILTER_EPS * perm {
-        Some(if det > 0.0 { 1 } else { -1 })
-    } else if perm == 0.0 {
-        Some(0)
-    } else {
-        None
-    }
+    filter::certify_f32(det, perm, F32_FILTER_EPS)
 }
 
 /// The device filter of exact mode: `Some(sign)` when certified, `None` when the host must decide.
@@ -257,7 +165,7 @@ pub fn device_filter(
 pub struct GsEdge {
     /// The multiplicity the shader writes: in exact mode, the sum of the certified signs only.
     pub m: i32,
-    /// Global OV indices (into [`DeviceScene::ovs`]) whose sign the device could not certify.
+    /// Global OV slots (into [`SceneLayout::ovs`]) whose sign the device could not certify.
     pub uncertain: Vec<u32>,
 }
 
@@ -273,10 +181,11 @@ pub fn gs_edge(
     mode: Accuracy,
     filter: DeviceFilter,
 ) -> GsEdge {
-    let [a, b, begin, end] = ds.edges[e];
+    let (a, b, _) = ds.layout.edge(e);
     let mut out = GsEdge::default();
-    for k in begin..end {
-        let o = ds.ovs[k as usize];
+    for k in ds.layout.ov_slots(e) {
+        let k = k as u32;
+        let o = ds.layout.ovs[k as usize];
         let s = match mode {
             Accuracy::Original => sign_f32(ds.p(a), ds.p(b), l, ds.p(o)),
             Accuracy::Exact => match device_filter(filter, ds.p(a), ds.p(b), l, ds.p(o)) {
@@ -320,17 +229,6 @@ pub fn touches_light(p: [f32; 3], l: [f32; 4]) -> bool {
     l[3] != 0.0 && (0..3).all(|k| p[k] * l[3] == l[k])
 }
 
-/// The exact sign of an uncertain (edge, OV) pair, as the host decides it.
-///
-/// # Panics
-/// If `e` or `k` is out of range.
-#[must_use]
-pub fn resolve_uncertain(ds: &DeviceScene, e: usize, k: u32, l: [f32; 4]) -> i8 {
-    let [a, b, _, _] = ds.edges[e];
-    let o = ds.ovs[k as usize];
-    orient_exact(ds.p(a), ds.p(b), l, ds.p(o))
-}
-
 /// The side quad the shader emits (|m| times) for edge `(A, B)` with multiplicity sign
 /// `m.signum()`, as homogeneous object-space points in triangle-strip order: `A, B, A∞, B∞` for
 /// `m > 0`, `B, A, B∞, A∞` for `m < 0`, where `X∞ = (X * L.w - L.xyz, 0)` is the point at infinity
@@ -364,24 +262,29 @@ pub fn extract_twin(
     check_lights(lights)?;
     let ds = DeviceScene::build(scene)?;
     let obj_lights = object_lights(scene, lights);
-    let mut out = Multiplicities::zeroed(ds.edges.len(), lights.len());
-    let mut uncertain = 0u64;
-    for li in 0..lights.len() {
-        let values = out.values_mut(li);
+    let mut out = Multiplicities::zeroed(ds.layout.edge_count(), lights.len());
+    let mut records = Vec::new();
+    let edges = ds.layout.edge_count().max(1);
+    for (li, values) in out.all_values_mut().chunks_mut(edges).enumerate() {
         for (e, v) in values.iter_mut().enumerate() {
-            let l = obj_lights
-                .get(ds.edge_object[e] as usize)
-                .and_then(|per_light| per_light.get(li))
-                .copied()
-                .unwrap_or([0.0; 4]);
+            let l = obj_lights[ds.layout.edge(e).2 as usize][li];
             let r = gs_edge(&ds, e, l, mode, filter);
             *v = r.m;
-            for k in r.uncertain {
-                uncertain += 1;
-                *v += i32::from(resolve_uncertain(&ds, e, k, l));
-            }
+            records.extend(r.uncertain.into_iter().map(|k| UncertainRecord {
+                edge: e as u32,
+                ov_slot: k,
+                light: li as u32,
+            }));
         }
     }
+    gpu::resolve_uncertain(
+        &ds.layout,
+        &obj_lights,
+        0..lights.len(),
+        &records,
+        &mut out,
+        NAME,
+    )?;
     out.rebuild_silhouettes();
-    Ok((out, uncertain))
+    Ok((out, records.len() as u64))
 }

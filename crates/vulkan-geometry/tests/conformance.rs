@@ -5,7 +5,7 @@ mod common;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy};
 use shadowvol_vulkan_geometry::twin::{extract_twin, DeviceFilter};
-use shadowvol_vulkan_geometry::{Options, VulkanBackend};
+use shadowvol_vulkan_geometry::{VulkanBackend, VulkanOptions};
 
 fn run_corpus(vk: &mut VulkanBackend, test: &str) {
     let mut cpu = CpuBackend::new();
@@ -58,7 +58,8 @@ fn run_corpus(vk: &mut VulkanBackend, test: &str) {
 
 #[test]
 fn corpus_on_vulkan_f64_filter() {
-    let Some(mut vk) = common::backend(Options::default(), "corpus_on_vulkan_f64_filter") else {
+    let Some(mut vk) = common::backend(VulkanOptions::default(), "corpus_on_vulkan_f64_filter")
+    else {
         return;
     };
     run_corpus(&mut vk, "default filter");
@@ -66,9 +67,9 @@ fn corpus_on_vulkan_f64_filter() {
 
 #[test]
 fn corpus_on_vulkan_f32_filter() {
-    let opts = Options {
+    let opts = VulkanOptions {
         force_f32_filter: true,
-        ..Options::default()
+        ..VulkanOptions::default()
     };
     let Some(mut vk) = common::backend(opts, "corpus_on_vulkan_f32_filter") else {
         return;

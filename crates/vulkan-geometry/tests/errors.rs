@@ -5,13 +5,13 @@ mod common;
 use glam::Vec3;
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
-    corpus, BackendError, Multiplicities, PreparedId, SilhouetteBackend, TopologyScene,
+    corpus, BackendError, Multiplicities, SilhouetteBackend, TopologyScene,
 };
-use shadowvol_vulkan_geometry::{Camera, Options};
+use shadowvol_vulkan_geometry::{Camera, VulkanOptions};
 
 #[test]
 fn bad_input_is_an_error() {
-    let Some(mut vk) = common::backend(Options::default(), "bad_input_is_an_error") else {
+    let Some(mut vk) = common::backend(VulkanOptions::default(), "bad_input_is_an_error") else {
         return;
     };
     let case = &corpus::cases()[0];
@@ -25,7 +25,8 @@ fn bad_input_is_an_error() {
         "{e}"
     );
 
-    let bogus = PreparedId(9_999);
+    let bogus = vk.prepare(&scene).unwrap();
+    vk.release(bogus);
     let e = vk
         .extract(bogus, &case.lights, Accuracy::Exact, &mut out)
         .unwrap_err();
@@ -80,7 +81,7 @@ fn bad_input_is_an_error() {
 
 #[test]
 fn many_lights_in_one_call_match_one_light_at_a_time() {
-    let Some(mut vk) = common::backend(Options::default(), "many_lights_in_one_call") else {
+    let Some(mut vk) = common::backend(VulkanOptions::default(), "many_lights_in_one_call") else {
         return;
     };
     for case in corpus::cases() {

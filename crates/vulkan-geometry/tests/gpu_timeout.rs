@@ -11,10 +11,10 @@ mod common;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_silhouette::{
-    extract_once, invariant, shapes::uv_sphere_y, Accuracy, BackendError, Light, Multiplicities,
-    PreparedId, SilhouetteBackend, TopologyScene, GPU_TIMEOUT_ENV,
+    extract_once, gpu::TIMEOUT_ENV, invariant, shapes::uv_sphere_y, Accuracy, BackendError, Light,
+    Multiplicities, PreparedId, SilhouetteBackend, TopologyScene,
 };
-use shadowvol_vulkan_geometry::{Camera, Options, VulkanBackend};
+use shadowvol_vulkan_geometry::{Camera, VulkanBackend, VulkanOptions};
 use std::time::{Duration, Instant};
 
 const TINY: &str = "0.000001";
@@ -34,13 +34,13 @@ fn sphere(segments: u32) -> TopologyScene {
 
 /// True for the timeout error this test expects: a device error naming the variable.
 fn is_timeout_error(e: &BackendError) -> bool {
-    matches!(e, BackendError::Device { message, .. } if message.contains(GPU_TIMEOUT_ENV))
+    matches!(e, BackendError::Device { message, .. } if message.contains(TIMEOUT_ENV))
 }
 
 /// Extracts scenes of growing size under the tiny limit until one times out. Returns the backend
 /// and scene with the pending work, or fails when even the largest finishes in time.
 fn provoke_timeout(vk: &mut VulkanBackend) -> (PreparedId, TopologyScene) {
-    std::env::set_var(GPU_TIMEOUT_ENV, TINY);
+    std::env::set_var(TIMEOUT_ENV, TINY);
     for segments in [64, 128, 256, 512] {
         let scene = sphere(segments);
         let id = vk.prepare(&scene).unwrap();
@@ -50,7 +50,7 @@ fn provoke_timeout(vk: &mut VulkanBackend) -> (PreparedId, TopologyScene) {
             Err(e) => {
                 assert!(
                     is_timeout_error(&e),
-                    "expected a Device error naming {GPU_TIMEOUT_ENV}, got: {e}"
+                    "expected a Device error naming {TIMEOUT_ENV}, got: {e}"
                 );
                 let BackendError::Device { message, .. } = &e else {
                     unreachable!()
@@ -73,13 +73,13 @@ fn provoke_timeout(vk: &mut VulkanBackend) -> (PreparedId, TopologyScene) {
             }
         }
     }
-    panic!("no extraction timed out under {GPU_TIMEOUT_ENV}={TINY}: the limit is not applied");
+    panic!("no extraction timed out under {TIMEOUT_ENV}={TINY}: the limit is not applied");
 }
 
 #[test]
 fn tiny_wait_limit_times_out_refuses_work_then_recovers() {
-    std::env::remove_var(GPU_TIMEOUT_ENV);
-    let Some(mut vk) = common::backend(Options::from_env(), "tiny_wait_limit") else {
+    std::env::remove_var(TIMEOUT_ENV);
+    let Some(mut vk) = common::backend(VulkanOptions::from_env(), "tiny_wait_limit") else {
         return;
     };
     let (id, scene) = provoke_timeout(&mut vk);
@@ -108,23 +108,23 @@ fn tiny_wait_limit_times_out_refuses_work_then_recovers() {
     assert!(is_timeout_error(&e), "{e}");
 
     // An invalid limit is an input error, not a device error.
-    std::env::set_var(GPU_TIMEOUT_ENV, "soon");
+    std::env::set_var(TIMEOUT_ENV, "soon");
     let e = vk
         .extract(id, &lights(), Accuracy::Exact, &mut m)
         .expect_err("an invalid limit must be refused");
     assert!(
-        matches!(&e, BackendError::InvalidInput(msg) if msg.contains(GPU_TIMEOUT_ENV)),
+        matches!(&e, BackendError::InvalidInput(msg) if msg.contains(TIMEOUT_ENV)),
         "{e}"
     );
 
     // Releasing the scene the late work still reads defers freeing its buffers until that work
     // has finished (under validation, freeing them now would be reported as a buffer in use).
-    std::env::set_var(GPU_TIMEOUT_ENV, TINY);
+    std::env::set_var(TIMEOUT_ENV, TINY);
     vk.release(id);
 
     // With a normal limit the late work is waited for, the backend recovers (and frees the
     // released scene), and the result is the cpu backend's, in every mode.
-    std::env::remove_var(GPU_TIMEOUT_ENV);
+    std::env::remove_var(TIMEOUT_ENV);
     let id = vk.prepare(&scene).unwrap();
     let mut cpu = CpuBackend::new();
     for mode in Accuracy::ALL {
@@ -175,7 +175,7 @@ fn tiny_wait_limit_times_out_refuses_work_then_recovers() {
         "drop with pending work took {:?}",
         t.elapsed()
     );
-    std::env::remove_var(GPU_TIMEOUT_ENV);
+    std::env::remove_var(TIMEOUT_ENV);
     // The leaked device still runs the late work on the driver's threads; let it finish before
     // the process exits (exit-time destructors of the driver must not race it).
     std::thread::sleep(full_time + Duration::from_millis(200));

@@ -8,12 +8,13 @@ use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{
     corpus, extract_once, invariant, Accuracy, Multiplicities, SilhouetteBackend,
 };
-use shadowvol_vulkan_geometry::Options;
+use shadowvol_vulkan_geometry::VulkanOptions;
 use std::num::NonZeroUsize;
 
 #[test]
 fn corpus_split_into_light_batches_matches_one_pass_and_cpu() {
-    let Some(mut whole) = common::backend(Options::from_env(), "light batches (one pass)") else {
+    let Some(mut whole) = common::backend(VulkanOptions::from_env(), "light batches (one pass)")
+    else {
         return;
     };
     let mut cpu = CpuBackend::new();
@@ -27,9 +28,9 @@ fn corpus_split_into_light_batches_matches_one_pass_and_cpu() {
     );
     let mut split_runs = 0;
     for per_pass in [1, 2, 3] {
-        let opts = Options {
-            max_lights_per_pass: NonZeroUsize::new(per_pass),
-            ..Options::from_env()
+        let opts = VulkanOptions {
+            max_lights_per_batch: NonZeroUsize::new(per_pass),
+            ..VulkanOptions::from_env()
         };
         let Some(mut vk) = common::backend(opts, "light batches") else {
             return;
@@ -82,9 +83,9 @@ fn corpus_split_into_light_batches_matches_one_pass_and_cpu() {
 /// host resolution for several lights, one light per pass.
 #[test]
 fn uncertain_pairs_resolve_into_their_own_light_across_batches() {
-    let opts = Options {
-        max_lights_per_pass: NonZeroUsize::new(1),
-        ..Options::from_env()
+    let opts = VulkanOptions {
+        max_lights_per_batch: NonZeroUsize::new(1),
+        ..VulkanOptions::from_env()
     };
     let Some(mut vk) = common::backend(opts, "uncertain across batches") else {
         return;

@@ -10,7 +10,7 @@ use shadowvol_renderer::reference::compare;
 use shadowvol_renderer::{plan, Camera as RefCamera, Frame, Timings};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{SceneObject, SilhouetteBackend, TopologyScene};
-use shadowvol_vulkan_geometry::{Camera, Options, ShadowMask, StencilTechnique};
+use shadowvol_vulkan_geometry::{Camera, ShadowMask, StencilTechnique, VulkanOptions};
 use std::sync::Arc;
 
 const W: u32 = 128;
@@ -246,7 +246,7 @@ fn cases() -> Vec<Case> {
 #[test]
 fn gs_shadow_mask_matches_ray_traced_reference() {
     let Some(mut vk) = common::backend(
-        Options::from_env(),
+        VulkanOptions::from_env(),
         "gs_shadow_mask_matches_ray_traced_reference",
     ) else {
         return;
@@ -332,7 +332,8 @@ fn gs_shadow_mask_matches_ray_traced_reference() {
 /// The metric is not vacuous: a mask rendered for the wrong light is caught.
 #[test]
 fn wrong_light_mask_is_detected() {
-    let Some(mut vk) = common::backend(Options::from_env(), "wrong_light_mask_is_detected") else {
+    let Some(mut vk) = common::backend(VulkanOptions::from_env(), "wrong_light_mask_is_detected")
+    else {
         return;
     };
     let case = cases().pop().unwrap();

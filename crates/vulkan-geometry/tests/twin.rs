@@ -3,33 +3,20 @@
 
 use glam::Vec3;
 use shadowvol_robust_math::{orient_exact, orient_filter_f32, Accuracy};
+use shadowvol_silhouette::shapes::Rng;
 use shadowvol_silhouette::{corpus, invariant, object_lights};
 use shadowvol_vulkan_geometry::twin::{
     device_filter_f32, extract_twin, side_quad, DeviceFilter, DeviceScene,
 };
 use std::collections::HashMap;
 
-/// A small deterministic generator (xorshift64*).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn unit(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-    }
-    fn v3(&mut self, scale: f32, offset: f32) -> [f32; 3] {
-        [0, 1, 2].map(|_| offset + scale * self.unit())
-    }
+fn v3(rng: &mut Rng, scale: f32, offset: f32) -> [f32; 3] {
+    [0, 1, 2].map(|_| offset + scale * rng.unit())
 }
 
 #[test]
 fn f32_device_filter_certifies_only_exact_signs() {
-    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let mut rng = Rng::new(0x9e37_79b9_7f4a_7c15);
     let (mut certified, mut total) = (0usize, 0usize);
     for i in 0..200_000 {
         // Mix easy, offset, tiny, subnormal and near-coplanar inputs.
@@ -40,15 +27,15 @@ fn f32_device_filter_certifies_only_exact_signs() {
             3 => (1.0e-39, 0.0),
             _ => (1.0e3, -5.0),
         };
-        let a = rng.v3(scale, offset);
-        let b = rng.v3(scale, offset);
-        let mut o = rng.v3(scale, offset);
+        let a = v3(&mut rng, scale, offset);
+        let b = v3(&mut rng, scale, offset);
+        let mut o = v3(&mut rng, scale, offset);
         if i % 7 == 0 {
             // O on the line AB (rounded): nearly degenerate.
             let t = rng.unit();
             o = [0, 1, 2].map(|k| a[k] + t * (b[k] - a[k]));
         }
-        let lp = rng.v3(scale * 3.0, offset);
+        let lp = v3(&mut rng, scale * 3.0, offset);
         let l = if i % 3 == 0 {
             [lp[0], lp[1], lp[2], 0.0]
         } else {
@@ -107,16 +94,15 @@ fn open_lateral_vertices(
     let ds = DeviceScene::build(scene).unwrap();
     let obj_lights = object_lights(scene, lights);
     let mut sum: HashMap<(u32, [u32; 3]), i64> = HashMap::new();
-    for (e, &[a, b, _, _]) in ds.edges.iter().enumerate() {
-        let mult = m[e];
+    for (e, &mult) in m.iter().enumerate().take(ds.layout.edge_count()) {
         if mult == 0 {
             continue;
         }
-        let obj = ds.edge_object[e];
+        let (a, b, obj) = ds.layout.edge(e);
         let l = obj_lights[obj as usize][li];
         let q = side_quad(
-            Vec3::from_array(ds.positions[a as usize]),
-            Vec3::from_array(ds.positions[b as usize]),
+            Vec3::from_array(ds.layout.position(a)),
+            Vec3::from_array(ds.layout.position(b)),
             l,
             mult,
         );

@@ -8,13 +8,13 @@ mod common;
 use glam::Vec3;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy, SilhouetteBackend};
-use shadowvol_vulkan_geometry::{Camera, Options, StencilTechnique};
+use shadowvol_vulkan_geometry::{Camera, StencilTechnique, VulkanOptions};
 
 #[test]
 fn corpus_and_render_under_validation_layers() {
-    let opts = Options {
+    let opts = VulkanOptions {
         validation: true,
-        ..Options::default()
+        ..VulkanOptions::default()
     };
     let Some(mut vk) = common::backend(opts, "corpus_and_render_under_validation_layers") else {
         return;
@@ -70,9 +70,9 @@ fn corpus_and_render_under_validation_layers() {
 /// above means something.
 #[test]
 fn validation_layer_reports_misuse() {
-    let opts = Options {
+    let opts = VulkanOptions {
         validation: true,
-        ..Options::default()
+        ..VulkanOptions::default()
     };
     let Some(vk) = common::backend(opts, "validation_layer_reports_misuse") else {
         return;

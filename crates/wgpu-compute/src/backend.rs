@@ -1,31 +1,26 @@
 //! The wgpu backend: device set-up, prepare (static buffers), extract (dispatch, readback,
 //! host resolution).
 
-use crate::cpu_twin::{pack_lights, ExactFilter, UncertainRecord};
-use crate::layout::SceneLayout;
-use crate::resolve::{finish_chunk, ChunkOutput, Patch};
+use crate::resolve::{finish_batch, BatchOutput, Patch};
+use crate::twin::{pack_lights, ExactFilter};
 use crate::{shaders, NAME};
 use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::gpu::{SceneLayout, UncertainRecord};
 use shadowvol_silhouette::{
-    check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
+    check_lights, gpu, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
     PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
+use std::num::NonZeroUsize;
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 use wgpu::util::DeviceExt;
-
-/// How long one wait for the device may take before it counts as a device failure:
-/// [`shadowvol_silhouette::gpu_wait_limit`] (`SHADOWVOL_GPU_TIMEOUT`, default 600 s).
-fn wait_limit() -> Result<Duration, BackendError> {
-    shadowvol_silhouette::gpu_wait_limit().map_err(BackendError::InvalidInput)
-}
 
 /// The error for a wait that failed; a timeout names the limit and how to change it.
 fn wait_error(what: &str, e: &wgpu::PollError, limit: Duration) -> BackendError {
     match e {
         wgpu::PollError::Timeout => device_error(format!(
             "{what}: the device did not finish within {}",
-            shadowvol_silhouette::describe_gpu_wait_limit(limit)
+            shadowvol_silhouette::gpu::describe_wait_limit(limit)
         )),
         other => device_error(format!("{what}: {other}")),
     }
@@ -34,16 +29,17 @@ fn wait_error(what: &str, e: &wgpu::PollError, limit: Duration) -> BackendError 
 /// Options of [`WgpuBackend`].
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct WgpuOptions {
-    /// Use the `f64` exact filter when the adapter has `SHADER_F64` (default `true`). `false`
-    /// forces the `f32` filter, for testing both paths on one device.
-    pub allow_f64: bool,
+    /// Use the `f32` exact-mode filter even when the adapter has `SHADER_F64` (default
+    /// `false`), for testing both paths on one device.
+    pub force_f32_filter: bool,
     /// Read back the whole per-edge multiplicity buffer instead of rebuilding the values from the
     /// compact lists (default `false`). Same result, more bytes moved; for checking the device
     /// buffer.
     pub full_readback: bool,
-    /// Most lights per dispatch (default 64); more lights are processed in several dispatches.
-    /// Buffer limits may lower it further.
-    pub max_lights_per_dispatch: usize,
+    /// Most lights per batch, one dispatch each (default 64; `None`: only the buffer limits
+    /// split the lights). More lights are processed in several batches with the same result;
+    /// the buffer limits may lower it further.
+    pub max_lights_per_batch: Option<NonZeroUsize>,
     /// Initial capacity of the uncertain-triple buffer (default 4096); it grows (and the
     /// dispatch is repeated) when a dispatch overflows it.
     pub initial_uncertain_capacity: u32,
@@ -65,9 +61,9 @@ pub struct WgpuOptions {
 impl Default for WgpuOptions {
     fn default() -> Self {
         Self {
-            allow_f64: true,
+            force_f32_filter: false,
             full_readback: false,
-            max_lights_per_dispatch: 64,
+            max_lights_per_batch: NonZeroUsize::new(64),
             initial_uncertain_capacity: 4096,
             max_buffer_bytes: None,
             max_workgroups_per_dimension: None,
@@ -103,6 +99,21 @@ struct StaticBuffers {
     positions: wgpu::Buffer,
     edges: wgpu::Buffer,
     ovs: wgpu::Buffer,
+}
+
+/// One batch of the lights of an `extract`: what [`WgpuBackend::run_batch`] uploads and where
+/// its rows of the result go.
+struct LightBatch<'a> {
+    /// Every light of the extraction, per object (object space).
+    object_lights: &'a [Vec<[f32; 4]>],
+    /// The batch's lights packed object-major, as uploaded.
+    packed: Vec<[f32; 4]>,
+    /// The batch's lights within the extraction.
+    lights: std::ops::Range<usize>,
+    /// Whether this is the extraction's last batch (its device buffers stay readable).
+    last: bool,
+    /// Exact mode: uncertain records are read back and resolved.
+    exact: bool,
 }
 
 /// Per-frame buffers (lights in, results out), reused between frames while they are big enough.
@@ -264,7 +275,7 @@ impl WgpuBackend {
             });
         };
         let mut features = wgpu::Features::empty();
-        if options.allow_f64 && adapter.features().contains(wgpu::Features::SHADER_F64) {
+        if !options.force_f32_filter && adapter.features().contains(wgpu::Features::SHADER_F64) {
             features |= wgpu::Features::SHADER_F64;
         }
         let info = adapter.get_info();
@@ -288,7 +299,7 @@ impl WgpuBackend {
 
     /// Builds the backend on an existing device (for example the renderer's), so that
     /// [`WgpuBackend::gpu_results`] can be used by other pipelines on that device. Exact mode uses
-    /// the `f64` filter when the device was opened with `SHADER_F64` and `options.allow_f64`.
+    /// the `f64` filter when the device was opened with `SHADER_F64` and not `options.force_f32_filter`.
     ///
     /// This installs an uncaptured-error handler and a device-lost callback on `device`: wgpu
     /// errors become [`BackendError::Device`] instead of panics.
@@ -340,7 +351,8 @@ impl WgpuBackend {
                 ),
             });
         }
-        let filter = if options.allow_f64 && device.features().contains(wgpu::Features::SHADER_F64)
+        let filter = if !options.force_f32_filter
+            && device.features().contains(wgpu::Features::SHADER_F64)
         {
             ExactFilter::F64
         } else {
@@ -396,7 +408,7 @@ impl WgpuBackend {
             bind_group_layout,
             pipelines,
             health,
-            scenes: PreparedScenes::new(),
+            scenes: PreparedScenes::new(NAME),
         };
         backend.check_health()?;
         Ok(backend)
@@ -429,7 +441,7 @@ impl WgpuBackend {
     /// The flat layout of a prepared scene (global vertex ids, edge records), as uploaded.
     #[must_use]
     pub fn layout(&self, id: PreparedId) -> Option<&SceneLayout> {
-        self.scenes.get(NAME, id).ok().map(|p| &p.layout)
+        self.scenes.get(id).ok().map(|p| &p.layout)
     }
 
     /// The device buffers holding the results of the last `extract` on `id` (see
@@ -437,7 +449,7 @@ impl WgpuBackend {
     /// or for a scene without edges.
     #[must_use]
     pub fn gpu_results(&self, id: PreparedId) -> Option<GpuResults<'_>> {
-        let p = self.scenes.get(NAME, id).ok()?;
+        let p = self.scenes.get(id).ok()?;
         let (first_light, light_count) = p.last?;
         let gpu = p.gpu.as_ref()?;
         let frame = p.frame.as_ref()?;
@@ -478,7 +490,7 @@ impl WgpuBackend {
     }
 
     fn wait(&self, index: wgpu::SubmissionIndex) -> Result<(), BackendError> {
-        let limit = wait_limit()?;
+        let limit = gpu::wait_limit()?;
         self.device
             .poll(wgpu::PollType::Wait {
                 submission_index: Some(index),
@@ -500,7 +512,7 @@ impl WgpuBackend {
         buffer.map_async(wgpu::MapMode::Read, 0..size, move |r| {
             *s.lock().unwrap_or_else(PoisonError::into_inner) = Some(r);
         });
-        let limit = wait_limit()?;
+        let limit = gpu::wait_limit()?;
         self.device
             .poll(wgpu::PollType::Wait {
                 submission_index: None,
@@ -535,8 +547,8 @@ impl WgpuBackend {
         Ok(())
     }
 
-    /// Lights per dispatch for a scene of `edges` edges and `objects` objects.
-    fn lights_per_dispatch(
+    /// Lights per batch for a scene of `edges` edges and `objects` objects.
+    fn lights_per_batch(
         &self,
         edges: u64,
         objects: u64,
@@ -551,21 +563,23 @@ impl WgpuBackend {
             } else {
                 0
             };
-        let by_list = max_binding.min(max_buffer) / list;
-        let by_readback = max_buffer / readback.max(1);
-        let by_lights = max_binding.min(max_buffer) / (objects * 16).max(1);
-        let n = by_list
-            .min(by_readback)
-            .min(by_lights)
-            .min(self.options.max_lights_per_dispatch.max(1) as u64)
-            .min(lights as u64);
+        let storage = max_binding.min(max_buffer);
+        let n = gpu::lights_per_batch(
+            &[
+                (storage, list),
+                (max_buffer, readback),
+                (storage, objects * 16),
+            ],
+            self.options.max_lights_per_batch,
+        )
+        .min(lights);
         if n == 0 {
             return Err(limit_error(format!(
                 "one light needs a {list}-byte compact list for {edges} edges and {} bytes of object-space lights for {objects} objects, but the device allows storage bindings of {max_binding} bytes and buffers of {max_buffer} bytes",
                 objects * 16
             )));
         }
-        Ok(n as usize)
+        Ok(n)
     }
 
     fn create_frame(
@@ -722,17 +736,10 @@ fn read_pairs(bytes: &[u8]) -> Vec<(u32, i32)> {
     words.chunks_exact(2).map(|w| (w[0], w[1] as i32)).collect()
 }
 
-/// Uncertain records from little-endian `u32` quadruples.
+/// Uncertain records from little-endian `u32` words.
 fn read_records(bytes: &[u8]) -> Vec<UncertainRecord> {
     let words: Vec<u32> = read_u32s(bytes).collect();
-    words
-        .chunks_exact(4)
-        .map(|w| UncertainRecord {
-            edge: w[0],
-            ov_slot: w[1],
-            light: w[2],
-        })
-        .collect()
+    UncertainRecord::read_all(&words)
 }
 
 fn read_u32s(bytes: &[u8]) -> impl Iterator<Item = u32> + '_ {
@@ -772,8 +779,10 @@ impl SilhouetteBackend for WgpuBackend {
                     shaders::WORKGROUP_SIZE.to_string(),
                 ),
                 (
-                    "max_lights_per_dispatch".to_owned(),
-                    self.options.max_lights_per_dispatch.to_string(),
+                    "max_lights_per_batch".to_owned(),
+                    self.options
+                        .max_lights_per_batch
+                        .map_or_else(|| "device limits".to_owned(), |n| n.to_string()),
                 ),
                 (
                     "max_storage_buffer_binding_size".to_owned(),
@@ -794,7 +803,7 @@ impl SilhouetteBackend for WgpuBackend {
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
         self.check_health()?;
-        let layout = SceneLayout::build(scene)?;
+        let layout = SceneLayout::build(scene, NAME)?;
         let gpu = if layout.edge_count() == 0 {
             None
         } else {
@@ -846,7 +855,7 @@ impl SilhouetteBackend for WgpuBackend {
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
         self.check_health()?;
-        let mut prepared = self.scenes.take(NAME, id)?;
+        let mut prepared = self.scenes.take(id)?;
         let result = self.extract_prepared(&mut prepared, lights, mode, out);
         self.scenes.restore(id, prepared);
         result
@@ -882,15 +891,15 @@ impl WgpuBackend {
         let obj_lights = object_lights(&p.scene, lights);
         let edges = edge_count as u64;
         let objects = p.layout.object_count() as u64;
-        let per_dispatch = self.lights_per_dispatch(edges, objects, lights.len())?;
+        let per_batch = self.lights_per_batch(edges, objects, lights.len())?;
         let needs_new_frame = p
             .frame
             .as_ref()
-            .is_none_or(|f| f.light_capacity < per_dispatch);
+            .is_none_or(|f| f.light_capacity < per_batch);
         if needs_new_frame {
             let capacity = self.options.initial_uncertain_capacity;
             let scope = ErrorScopes::push(&self.device);
-            let frame = self.create_frame(&gpu, edges, objects, per_dispatch, capacity);
+            let frame = self.create_frame(&gpu, edges, objects, per_batch, capacity);
             if let Some(e) = scope.pop() {
                 return Err(device_error(format!("allocating frame buffers: {e}")));
             }
@@ -898,50 +907,38 @@ impl WgpuBackend {
         }
         stats.upload += t_upload.elapsed();
         let pipeline = &self.pipelines[shaders::mode_value(mode) as usize];
-        let mut first = 0;
-        while first < lights.len() {
-            let count = per_dispatch.min(lights.len() - first);
-            let last_chunk = first + count == lights.len();
-            let packed = pack_lights(&obj_lights, first, count);
+        for range in gpu::batches(lights.len(), per_batch) {
+            let batch = LightBatch {
+                object_lights: &obj_lights,
+                packed: pack_lights(&obj_lights, range.start, range.len()),
+                last: range.end == lights.len(),
+                lights: range,
+                exact: mode == Accuracy::Exact,
+            };
             let scope = ErrorScopes::push(&self.device);
-            let r = self.run_chunk(
-                p,
-                &gpu,
-                pipeline,
-                &packed,
-                first,
-                count,
-                last_chunk,
-                mode == Accuracy::Exact,
-                out,
-                &mut stats,
-            );
+            let r = self.run_batch(p, &gpu, pipeline, &batch, out, &mut stats);
             if let Some(e) = scope.pop() {
                 return Err(device_error(e));
             }
             r?;
-            if last_chunk {
-                p.last = Some((first, count));
+            if batch.last {
+                p.last = Some((batch.lights.start, batch.lights.len()));
             }
-            first += count;
         }
         Ok(stats)
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn run_chunk(
+    /// Runs one batch of lights: upload, dispatch, readback, host resolution.
+    fn run_batch(
         &self,
         p: &mut Prepared,
         gpu: &StaticBuffers,
         pipeline: &wgpu::ComputePipeline,
-        packed: &[[f32; 4]],
-        first: usize,
-        count: usize,
-        last_chunk: bool,
-        exact: bool,
+        batch: &LightBatch<'_>,
         out: &mut Multiplicities,
         stats: &mut ExtractStats,
     ) -> Result<(), BackendError> {
+        let (packed, count, exact) = (&batch.packed[..], batch.lights.len(), batch.exact);
         let edge_count = p.layout.edge_count();
         let edges = edge_count as u64;
         let objects = p.layout.object_count() as u64;
@@ -1053,7 +1050,7 @@ impl WgpuBackend {
                 let uncertain = read_records(&b[at..at + n * 16]);
                 (
                     counts,
-                    ChunkOutput {
+                    BatchOutput {
                         mult: None,
                         lists,
                         uncertain,
@@ -1187,9 +1184,15 @@ impl WgpuBackend {
 
         // ---- host: exact decisions for uncertain triples, then patch the device copy
         let t = Instant::now();
-        validate_chunk(&chunk, &p.layout, count)?;
-        let patch = finish_chunk(&p.layout, packed, count, first, chunk, out);
-        if last_chunk {
+        validate_lists(&chunk, p.layout.edge_count())?;
+        let patch = finish_batch(
+            &p.layout,
+            batch.object_lights,
+            batch.lights.clone(),
+            chunk,
+            out,
+        )?;
+        if batch.last {
             self.apply_patch(frame, edges, &patch);
         }
         stats.host_resolve += t.elapsed();
@@ -1229,30 +1232,15 @@ impl WgpuBackend {
     }
 }
 
-/// Rejects device output that cannot be right (an index out of range), instead of panicking.
-fn validate_chunk(
-    chunk: &ChunkOutput,
-    layout: &SceneLayout,
-    lights: usize,
-) -> Result<(), BackendError> {
-    let edges = layout.edge_count();
+/// Rejects compact lists that cannot be right (an edge out of range, m = 0), instead of
+/// panicking. Uncertain records are checked by [`resolve_uncertain`](gpu::resolve_uncertain).
+fn validate_lists(chunk: &BatchOutput, edges: usize) -> Result<(), BackendError> {
     for (li, list) in chunk.lists.iter().enumerate() {
         if let Some(&(e, m)) = list.iter().find(|&&(e, m)| e as usize >= edges || m == 0) {
             return Err(device_error(format!(
                 "the device returned an invalid silhouette entry (edge {e}, m {m}) for light {li}"
             )));
         }
-    }
-    if let Some(r) = chunk.uncertain.iter().find(|r| {
-        r.edge as usize >= edges
-            || !layout
-                .ov_slots(r.edge as usize)
-                .contains(&(r.ov_slot as usize))
-            || r.light as usize >= lights
-    }) {
-        return Err(device_error(format!(
-            "the device returned an invalid uncertain record {r:?}"
-        )));
     }
     Ok(())
 }

@@ -3,12 +3,12 @@
 //!
 //! # How it works
 //! * [`SilhouetteBackend::prepare`] concatenates every object of the scene into one
-//!   [`SceneLayout`] (global vertex ids, an edge record `(a, b, first OV, object)` per edge, CSR
+//!   [`SceneLayout`](shadowvol_silhouette::gpu::SceneLayout) (global vertex ids, an edge record `(a, b, first OV, object)` per edge, CSR
 //!   opposite vertices) and uploads it once.
 //! * [`SilhouetteBackend::extract`] uploads only the object-space lights (from
 //!   [`shadowvol_silhouette::object_lights`], an `objects × lights` table) and runs
 //!   `shaders/silhouette.wgsl` once for all objects and up to
-//!   [`WgpuOptions::max_lights_per_dispatch`] lights. One invocation handles one edge for every
+//!   [`WgpuOptions::max_lights_per_batch`] lights. One invocation handles one edge for every
 //!   light; it writes the per-edge multiplicity and appends `(edge, m)` to the light's compact
 //!   silhouette list with an atomic counter. The list lengths and an adaptive prefix of every
 //!   list come back in the same submission (one round trip); longer lists, and with
@@ -20,10 +20,10 @@
 //!   consistent (closed chains) either way, because each triangle is still evaluated once, in
 //!   one order, for all its edges.
 //! * `exact` runs a certified filter on the device: `f64` when the device has `SHADER_F64`
-//!   (bound [`cpu_twin::GPU_F64_FILTER_EPS`] = 8 × robust-math's `F64_FILTER_EPS`, margin for
+//!   (bound [`twin::GPU_F64_FILTER_EPS`] = 8 × robust-math's `F64_FILTER_EPS`, margin for
 //!   contraction), else robust-math's `f32` filter (`F32_FILTER_EPS`, its range checks, `w` in
 //!   {0, 1} only) plus
-//!   two device guards ([`cpu_twin::GPU_F32_INPUT_MAX`], [`cpu_twin::GPU_F32_PERM_MIN`]).
+//!   two device guards ([`twin::GPU_F32_INPUT_MAX`], [`twin::GPU_F32_PERM_MIN`]).
 //!   Subnormal inputs are never certified. The `(edge, OV, light)` triples the device cannot
 //!   certify go to an append buffer; the host decides them with `orient_exact`, patches the
 //!   values and lists (on the host and on the device) and counts them in
@@ -33,7 +33,7 @@
 //!   counts and list prefixes), `readback` zeroing the host result, mapping and any second round
 //!   trip, `host_resolve` the exact decisions, list sorting and the device patch.
 //!
-//! [`cpu_twin`] is a CPU port of the kernel with the same loop structure, for pinning down
+//! [`twin`] is a CPU port of the kernel with the same loop structure, for pinning down
 //! failures.
 //!
 //! ```no_run
@@ -50,14 +50,12 @@
 //! ```
 
 mod backend;
-pub mod cpu_twin;
-mod layout;
 mod resolve;
 pub mod shaders;
+pub mod twin;
 
 pub use backend::{GpuResults, WgpuBackend, WgpuOptions};
-pub use cpu_twin::ExactFilter;
-pub use layout::SceneLayout;
+pub use twin::ExactFilter;
 
 use shadowvol_silhouette::{BackendError, SilhouetteBackend};
 

@@ -1,13 +1,12 @@
 //! Host side of a dispatch: fill [`Multiplicities`] from the device's output and decide the
 //! uncertain triples exactly. Shared by the wgpu backend and the CPU twin.
 
-use crate::cpu_twin::UncertainRecord;
-use crate::layout::SceneLayout;
-use shadowvol_robust_math::orient_exact;
-use shadowvol_silhouette::Multiplicities;
+use shadowvol_silhouette::gpu::{resolve_uncertain, SceneLayout, UncertainRecord};
+use shadowvol_silhouette::{BackendError, Multiplicities};
+use std::ops::Range;
 
-/// The device output of one dispatch (a chunk of lights).
-pub(crate) struct ChunkOutput {
+/// The device output of one dispatch (a batch of lights).
+pub(crate) struct BatchOutput {
     /// Full per-edge values `[light * edge_count + edge]`, when read back.
     pub mult: Option<Vec<i32>>,
     /// Per light, the compact list `(edge, m)`, any order.
@@ -25,19 +24,22 @@ pub(crate) struct Patch {
     pub lists: Vec<(u32, Vec<(u32, i32)>)>,
 }
 
-/// Writes one chunk into `out` (lights `first..first + light_count`), resolves its uncertain
-/// triples with `orient_exact` on the same object-space `f32` inputs, fixes the compact lists and
-/// returns the patch.
-pub(crate) fn finish_chunk(
+/// Writes one batch into `out` (the rows of the lights `batch`), resolves its uncertain triples
+/// with [`resolve_uncertain`] on the same object-space `f32` inputs (`object_lights`, all lights
+/// of the extraction per object), fixes the compact lists and returns the patch.
+///
+/// # Errors
+/// [`BackendError::Device`] for an uncertain record out of range.
+pub(crate) fn finish_batch(
     layout: &SceneLayout,
-    packed_lights: &[[f32; 4]],
-    light_count: usize,
-    first: usize,
-    chunk: ChunkOutput,
+    object_lights: &[Vec<[f32; 4]>],
+    batch: Range<usize>,
+    chunk: BatchOutput,
     out: &mut Multiplicities,
-) -> Patch {
+) -> Result<Patch, BackendError> {
+    let first = batch.start;
     let edge_count = layout.edge_count();
-    let ChunkOutput {
+    let BatchOutput {
         mult,
         mut lists,
         mut uncertain,
@@ -56,18 +58,7 @@ pub(crate) fn finish_chunk(
     let mut patch = Patch::default();
     if !uncertain.is_empty() {
         uncertain.sort_unstable_by_key(|r| (r.light, r.edge, r.ov_slot));
-        for r in &uncertain {
-            let [ia, ib, _, object] = layout.edges[r.edge as usize];
-            let io = layout.ovs[r.ov_slot as usize];
-            let l = packed_lights[object as usize * light_count + r.light as usize];
-            let s = orient_exact(
-                layout.position(ia),
-                layout.position(ib),
-                l,
-                layout.position(io),
-            );
-            out.values_mut(first + r.light as usize)[r.edge as usize] += i32::from(s);
-        }
+        resolve_uncertain(layout, object_lights, batch, &uncertain, out, crate::NAME)?;
         let mut touched: Vec<(u32, u32)> = uncertain.iter().map(|r| (r.light, r.edge)).collect();
         touched.dedup();
         for &(li, e) in &touched {
@@ -96,7 +87,7 @@ pub(crate) fn finish_chunk(
         // Already sorted: `set_silhouette`'s own sort only confirms it (linear).
         out.set_silhouette(first + li, edges);
     }
-    patch
+    Ok(patch)
 }
 
 /// Sorts distinct-or-not `u32` keys ascending with an LSD radix sort (11-bit digits, passes

@@ -1,6 +1,6 @@
 //! The WGSL sources (from the workspace's `shaders/` folder) and how modules are composed.
 
-use crate::cpu_twin::ExactFilter;
+use crate::twin::ExactFilter;
 
 /// `shaders/silhouette.wgsl`: the kernel, complete with the `f32` exact filter.
 pub const SILHOUETTE_WGSL: &str = include_str!("../../../shaders/silhouette.wgsl");

@@ -7,8 +7,7 @@ mod common;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_robust_math::Accuracy;
 use shadowvol_silhouette::{
-    extract_once, invariant, BackendError, Light, Multiplicities, PreparedId, SilhouetteBackend,
-    TopologyScene,
+    extract_once, invariant, BackendError, Light, Multiplicities, SilhouetteBackend, TopologyScene,
 };
 use shadowvol_wgpu_compute::{ExactFilter, WgpuBackend, WgpuOptions};
 
@@ -84,7 +83,7 @@ fn gpu_corpus_exact_identical_to_cpu_with_preferred_filter() {
 #[test]
 fn gpu_corpus_exact_identical_to_cpu_with_forced_f32_filter() {
     let options = WgpuOptions {
-        allow_f64: false,
+        force_f32_filter: true,
         ..WgpuOptions::default()
     };
     let Some(mut b) = backend(
@@ -169,7 +168,7 @@ fn gpu_full_readback_chunking_and_device_buffers_agree() {
     // uncertain buffer must grow (the dispatch is repeated).
     let mut full = WgpuBackend::new(WgpuOptions {
         full_readback: true,
-        max_lights_per_dispatch: 2,
+        max_lights_per_batch: std::num::NonZeroUsize::new(2),
         initial_uncertain_capacity: 1,
         max_workgroups_per_dimension: Some(cap as u32),
         // No prefix in the first round trip: every list comes in the second.
@@ -268,8 +267,10 @@ fn gpu_errors_are_reported_not_panics() {
     };
     let case = &common::all_cases()[0];
     let mut m = Multiplicities::default();
+    let released = b.prepare(&case.scene).unwrap();
+    b.release(released);
     assert!(matches!(
-        b.extract(PreparedId(12345), &case.lights, Accuracy::Exact, &mut m),
+        b.extract(released, &case.lights, Accuracy::Exact, &mut m),
         Err(BackendError::UnknownScene { .. })
     ));
     let id = b.prepare(&case.scene).unwrap();

@@ -7,8 +7,8 @@ use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_robust_math::Accuracy;
 use shadowvol_silhouette::{
-    extract_once, shapes, BackendError, Light, Multiplicities, SilhouetteBackend, TopologyScene,
-    GPU_TIMEOUT_ENV,
+    extract_once, gpu::TIMEOUT_ENV, shapes, BackendError, Light, Multiplicities, SilhouetteBackend,
+    TopologyScene,
 };
 use shadowvol_wgpu_compute::{WgpuBackend, WgpuOptions};
 
@@ -35,14 +35,14 @@ fn gpu_wait_past_the_limit_is_a_device_error_and_the_backend_recovers() {
         let mesh = shapes::uv_sphere_y(segments / 2, segments, 1.0);
         let scene = TopologyScene::single(EdgeTable::build(&mesh).unwrap());
         let id = b.prepare(&scene).unwrap();
-        std::env::set_var(GPU_TIMEOUT_ENV, "0.000001");
+        std::env::set_var(TIMEOUT_ENV, "0.000001");
         let mut m = Multiplicities::default();
         let r = b.extract(id, &lights, Accuracy::Exact, &mut m);
-        std::env::remove_var(GPU_TIMEOUT_ENV);
+        std::env::remove_var(TIMEOUT_ENV);
         match r {
             Err(BackendError::Device { message, .. }) => {
                 assert!(
-                    message.contains(GPU_TIMEOUT_ENV) && message.contains("did not finish"),
+                    message.contains(TIMEOUT_ENV) && message.contains("did not finish"),
                     "{message}"
                 );
                 timed_out = Some((scene, id));
@@ -54,11 +54,11 @@ fn gpu_wait_past_the_limit_is_a_device_error_and_the_backend_recovers() {
     }
     let (scene, id) = timed_out.expect("no extraction ever exceeded a 1 µs limit");
     // A bad limit is refused, not ignored.
-    std::env::set_var(GPU_TIMEOUT_ENV, "soon");
+    std::env::set_var(TIMEOUT_ENV, "soon");
     let r = b.extract(id, &lights, Accuracy::Exact, &mut Multiplicities::default());
-    std::env::remove_var(GPU_TIMEOUT_ENV);
+    std::env::remove_var(TIMEOUT_ENV);
     assert!(
-        matches!(&r, Err(BackendError::InvalidInput(m)) if m.contains(GPU_TIMEOUT_ENV)),
+        matches!(&r, Err(BackendError::InvalidInput(m)) if m.contains(TIMEOUT_ENV)),
         "{r:?}"
     );
     // With the default limit the backend works again and agrees with cpu bit for bit.

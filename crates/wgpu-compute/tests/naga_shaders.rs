@@ -4,7 +4,7 @@
 
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 use shadowvol_robust_math::{F32_FILTER_EPS, F32_FILTER_MAX, F32_FILTER_MIN};
-use shadowvol_wgpu_compute::cpu_twin::{GPU_F32_INPUT_MAX, GPU_F32_PERM_MIN, GPU_F64_FILTER_EPS};
+use shadowvol_wgpu_compute::twin::{GPU_F32_INPUT_MAX, GPU_F32_PERM_MIN, GPU_F64_FILTER_EPS};
 use shadowvol_wgpu_compute::{shaders, ExactFilter};
 use std::path::PathBuf;
 

@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use shadowvol_silhouette::BackendError;
-use shadowvol_vulkan_geometry::{Options, VulkanBackend};
+use shadowvol_vulkan_geometry::{VulkanBackend, VulkanOptions};
 
 /// True when running in CI (`CI=true`): a missing driver is then a failure, not a skip.
 pub fn in_ci() -> bool {
@@ -12,7 +12,7 @@ pub fn in_ci() -> bool {
 
 /// Starts the backend, or prints a visible SKIPPED line and returns `None` when Vulkan is not
 /// available here. Under `CI=true` an unavailable backend fails the test.
-pub fn backend(options: Options, test: &str) -> Option<VulkanBackend> {
+pub fn backend(options: VulkanOptions, test: &str) -> Option<VulkanBackend> {
     match VulkanBackend::new(options) {
         Ok(b) => Some(b),
         Err(e @ BackendError::Unavailable { .. }) => {

@@ -14,21 +14,20 @@
 //!
 //! ```
 //! use shadowvol_silhouette::{corpus, Accuracy, Multiplicities};
-//! use shadowvol_wgpu_compute::cpu_twin::{self, ExactFilter};
+//! use shadowvol_wgpu_compute::twin::{self, ExactFilter};
 //!
 //! let case = &corpus::cases()[0];
 //! let scene = case.scene().unwrap();
 //! let mut m = Multiplicities::default();
-//! let uncertain = cpu_twin::extract(&scene, &case.lights, Accuracy::Exact, ExactFilter::F32, &mut m).unwrap();
+//! let uncertain = twin::extract(&scene, &case.lights, Accuracy::Exact, ExactFilter::F32, &mut m).unwrap();
 //! assert_eq!(m.light_count(), case.lights.len());
 //! assert!(uncertain <= (scene.total_ovs() * case.lights.len()) as u64);
 //! ```
 
-use crate::layout::SceneLayout;
-use crate::resolve::{finish_chunk, ChunkOutput};
-use shadowvol_robust_math::{
-    sign_f32, Accuracy, Light, F32_FILTER_EPS, F32_FILTER_MAX, F32_FILTER_MIN, F64_FILTER_EPS,
-};
+use crate::resolve::{finish_batch, BatchOutput};
+use shadowvol_robust_math::filter::{self, TermsF32};
+use shadowvol_robust_math::{sign_f32, Accuracy, Light, F32_FILTER_EPS, F64_FILTER_EPS};
+use shadowvol_silhouette::gpu::{SceneLayout, UncertainRecord};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, Multiplicities, TopologyScene,
 };
@@ -72,31 +71,10 @@ pub const GPU_F32_INPUT_MAX: f32 = 549_755_813_888.0; // 2^39
 /// range checks); each flush moves `det` by less than 2^-126, far below `F32_FILTER_EPS × 2^-60`.
 pub const GPU_F32_PERM_MIN: f32 = 1.0 / 1_152_921_504_606_846_976.0; // 2^-60
 
-#[inline]
-fn sgn(x: f32) -> i8 {
-    if x > 0.0 {
-        1
-    } else if x < 0.0 {
-        -1
-    } else {
-        0
-    }
-}
-
-#[inline]
-fn is_subnormal(x: f32) -> bool {
-    x != 0.0 && x.abs() < f32::MIN_POSITIVE
-}
-
-#[inline]
-fn out_of_range(x: f32) -> bool {
-    let m = x.abs();
-    m != 0.0 && !(F32_FILTER_MIN..=F32_FILTER_MAX).contains(&m)
-}
-
-/// Twin of WGSL `filter_f32`: robust-math's `orient_filter_f32` (same formula, same
-/// [`F32_FILTER_EPS`], range checks, and only `w` in {0, 1} certified) plus the two device guards [`GPU_F32_INPUT_MAX`] and
-/// [`GPU_F32_PERM_MIN`]. `Some(sign)` is certified, `None` is uncertain.
+/// Twin of WGSL `filter_f32`: robust-math's `orient_filter_f32` (the same
+/// [`TermsF32`] arithmetic, [`F32_FILTER_EPS`], range checks, and only `w` in {0, 1} certified)
+/// plus the two device guards [`GPU_F32_INPUT_MAX`] and [`GPU_F32_PERM_MIN`]. `Some(sign)` is
+/// certified, `None` is uncertain.
 ///
 /// Whenever it certifies, `orient_filter_f32` certifies the same sign (the guards only add
 /// `None`s); a test checks this.
@@ -107,67 +85,27 @@ pub fn filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<
         .chain(&o)
         .chain(&l)
         .any(|x| x.abs() > GPU_F32_INPUT_MAX)
+        || !filter::w_is_exact_f32(l[3])
     {
         return None;
     }
-    let (ex, ey, ez) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
-    if l[3] != 0.0 && l[3] != 1.0 {
+    let t = TermsF32::new(a, b, l, o);
+    if !t.diffs_in_range(a, b, l, o) {
         return None;
     }
-    let (vx, vy, vz) = (l[0] - l[3] * a[0], l[1] - l[3] * a[1], l[2] - l[3] * a[2]);
-    let (dx, dy, dz) = (o[0] - a[0], o[1] - a[1], o[2] - a[2]);
-    if [ex, ey, ez, vx, vy, vz, dx, dy, dz]
-        .into_iter()
-        .any(out_of_range)
-    {
+    let (det, perm) = t.det_perm();
+    if perm != 0.0 && perm < GPU_F32_PERM_MIN {
         return None;
     }
-    let (p1, q1) = (ey * vz, ez * vy);
-    let (p2, q2) = (ez * vx, ex * vz);
-    let (p3, q3) = (ex * vy, ey * vx);
-    let det = ((p1 - q1) * dx + (p2 - q2) * dy) + (p3 - q3) * dz;
-    let perm = ((p1.abs() + q1.abs()) * dx.abs() + (p2.abs() + q2.abs()) * dy.abs())
-        + (p3.abs() + q3.abs()) * dz.abs();
-    if perm == 0.0 {
-        return Some(0);
-    }
-    if perm < GPU_F32_PERM_MIN {
-        return None;
-    }
-    if det.abs() > F32_FILTER_EPS * perm {
-        return Some(sgn(det));
-    }
-    None
+    filter::certify_f32(det, perm, F32_FILTER_EPS)
 }
 
-/// Twin of WGSL `filter_f64` (shaders/exact_f64.wgsl): robust-math's `orient_filter_f64` with
-/// the bound [`GPU_F64_FILTER_EPS`].
+/// Twin of WGSL `filter_f64` (shaders/exact_f64.wgsl): robust-math's [`filter::det_perm_f64`]
+/// with the bound [`GPU_F64_FILTER_EPS`].
 #[must_use]
 pub fn filter_f64(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<i8> {
-    let (ax, ay, az) = (f64::from(a[0]), f64::from(a[1]), f64::from(a[2]));
-    let lw = f64::from(l[3]);
-    let ex = ax - f64::from(b[0]);
-    let ey = ay - f64::from(b[1]);
-    let ez = az - f64::from(b[2]);
-    let vx = f64::from(l[0]) - lw * ax;
-    let vy = f64::from(l[1]) - lw * ay;
-    let vz = f64::from(l[2]) - lw * az;
-    let dx = f64::from(o[0]) - ax;
-    let dy = f64::from(o[1]) - ay;
-    let dz = f64::from(o[2]) - az;
-    let (p1, q1) = (ey * vz, ez * vy);
-    let (p2, q2) = (ez * vx, ex * vz);
-    let (p3, q3) = (ex * vy, ey * vx);
-    let det = ((p1 - q1) * dx + (p2 - q2) * dy) + (p3 - q3) * dz;
-    let perm = ((p1.abs() + q1.abs()) * dx.abs() + (p2.abs() + q2.abs()) * dy.abs())
-        + (p3.abs() + q3.abs()) * dz.abs();
-    if det.abs() > GPU_F64_FILTER_EPS * perm {
-        return Some(if det > 0.0 { 1 } else { -1 });
-    }
-    if perm == 0.0 {
-        return Some(0);
-    }
-    None
+    let (det, perm) = filter::det_perm_f64(a, b, l, o);
+    filter::certify_f64(det, perm, GPU_F64_FILTER_EPS)
 }
 
 /// Twin of WGSL `exact_filter`: inputs with a subnormal component are never certified (a device
@@ -180,12 +118,7 @@ pub fn exact_filter(
     l: [f32; 4],
     o: [f32; 3],
 ) -> Option<i8> {
-    if a.iter()
-        .chain(&b)
-        .chain(&o)
-        .chain(&l)
-        .any(|&x| is_subnormal(x))
-    {
+    if filter::any_subnormal(a, b, l, o) {
         return None;
     }
     match filter {
@@ -224,17 +157,6 @@ pub fn canonical_sign(
         }
     }
     s0 * parity
-}
-
-/// One uncertain `(edge, OV, light)` triple, as the kernel appends it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct UncertainRecord {
-    /// Global edge index.
-    pub edge: u32,
-    /// Global OV slot (index into [`SceneLayout::ovs`]).
-    pub ov_slot: u32,
-    /// Light index within the dispatch.
-    pub light: u32,
 }
 
 /// What one kernel dispatch produces.
@@ -336,22 +258,22 @@ pub fn extract(
     out: &mut Multiplicities,
 ) -> Result<u64, BackendError> {
     check_lights(lights)?;
-    let layout = SceneLayout::build(scene)?;
-    let packed = pack_lights(&object_lights(scene, lights), 0, lights.len());
+    let layout = SceneLayout::build(scene, crate::NAME)?;
+    let obj_lights = object_lights(scene, lights);
+    let packed = pack_lights(&obj_lights, 0, lights.len());
     let k = run_kernel(&layout, &packed, lights.len(), mode, filter);
     out.reset(layout.edge_count(), lights.len());
     let uncertain = k.uncertain.len() as u64;
-    let _patch = finish_chunk(
+    let _patch = finish_batch(
         &layout,
-        &packed,
-        lights.len(),
-        0,
-        ChunkOutput {
+        &obj_lights,
+        0..lights.len(),
+        BatchOutput {
             mult: Some(k.mult),
             lists: k.silhouettes,
             uncertain: k.uncertain,
         },
         out,
-    );
+    )?;
     Ok(uncertain)
 }

@@ -5,9 +5,10 @@ mod common;
 
 use shadowvol_cpu::CpuBackend;
 use shadowvol_robust_math::{orient_exact, orient_filter_f32, Accuracy};
+use shadowvol_silhouette::gpu::SceneLayout;
+use shadowvol_silhouette::shapes::Rng;
 use shadowvol_silhouette::{extract_once, invariant, object_lights, Multiplicities};
-use shadowvol_wgpu_compute::cpu_twin::{self, ExactFilter};
-use shadowvol_wgpu_compute::SceneLayout;
+use shadowvol_wgpu_compute::twin::{self, ExactFilter};
 
 #[test]
 fn twin_equals_cpu_in_every_mode_with_both_filters() {
@@ -18,7 +19,7 @@ fn twin_equals_cpu_in_every_mode_with_both_filters() {
             for filter in [ExactFilter::F64, ExactFilter::F32] {
                 let mut got = Multiplicities::default();
                 let uncertain =
-                    cpu_twin::extract(&case.scene, &case.lights, mode, filter, &mut got).unwrap();
+                    twin::extract(&case.scene, &case.lights, mode, filter, &mut got).unwrap();
                 assert_eq!(
                     invariant::first_difference(&got, &expected),
                     None,
@@ -45,7 +46,7 @@ fn hard_cases_send_triples_to_the_host() {
     // the f32 filter rejects coordinates outside its range. The host path must run on these.
     for case in common::extra_cases() {
         let mut m = Multiplicities::default();
-        let u64_ = cpu_twin::extract(
+        let u64_ = twin::extract(
             &case.scene,
             &case.lights,
             Accuracy::Exact,
@@ -53,7 +54,7 @@ fn hard_cases_send_triples_to_the_host() {
             &mut m,
         )
         .unwrap();
-        let u32_ = cpu_twin::extract(
+        let u32_ = twin::extract(
             &case.scene,
             &case.lights,
             Accuracy::Exact,
@@ -81,11 +82,11 @@ fn hard_cases_send_triples_to_the_host() {
 #[test]
 fn kernel_records_are_well_formed() {
     for case in common::all_cases() {
-        let layout = SceneLayout::build(&case.scene).unwrap();
+        let layout = SceneLayout::build(&case.scene, "wgpu").unwrap();
         let obj = object_lights(&case.scene, &case.lights);
         let n = case.lights.len();
         let packed: Vec<[f32; 4]> = obj.iter().flat_map(|v| v.iter().copied()).collect();
-        let k = cpu_twin::run_kernel(&layout, &packed, n, Accuracy::Exact, ExactFilter::F32);
+        let k = twin::run_kernel(&layout, &packed, n, Accuracy::Exact, ExactFilter::F32);
         let e = layout.edge_count();
         assert_eq!(k.mult.len(), e * n);
         for (li, list) in k.silhouettes.iter().enumerate() {
@@ -107,37 +108,25 @@ fn kernel_records_are_well_formed() {
     }
 }
 
-/// xorshift64*: deterministic, dependency-free.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+/// A value whose exponent ranges over the whole `f32` range, subnormals and zeros included.
+fn scaled(rng: &mut Rng) -> f32 {
+    match rng.below(8) {
+        0 => 0.0,
+        1 => rng.unit() * 1e-40,
+        2 => rng.unit() * 1e30,
+        3 => rng.unit() * 1e-20,
+        _ => rng.unit() * 4.0,
     }
-    fn unit(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-    }
-    fn scaled(&mut self) -> f32 {
-        // Exponents across the whole f32 range, including subnormals and zeros.
-        match self.next() % 8 {
-            0 => 0.0,
-            1 => self.unit() * 1e-40,
-            2 => self.unit() * 1e30,
-            3 => self.unit() * 1e-20,
-            _ => self.unit() * 4.0,
-        }
-    }
-    fn v3(&mut self, f: impl Fn(&mut Self) -> f32) -> [f32; 3] {
-        [f(self), f(self), f(self)]
-    }
+}
+
+fn v3(rng: &mut Rng, f: impl Fn(&mut Rng) -> f32) -> [f32; 3] {
+    [f(rng), f(rng), f(rng)]
 }
 
 fn check(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3], stats: &mut [usize; 3]) {
     let exact = orient_exact(a, b, l, o);
     for (i, filter) in [ExactFilter::F64, ExactFilter::F32].into_iter().enumerate() {
-        match cpu_twin::exact_filter(filter, a, b, l, o) {
+        match twin::exact_filter(filter, a, b, l, o) {
             Some(s) => assert_eq!(
                 s, exact,
                 "{filter:?} certified a wrong sign for {a:?} {b:?} {l:?} {o:?}"
@@ -145,7 +134,7 @@ fn check(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3], stats: &mut [usize;
             None => stats[i] += 1,
         }
     }
-    if let Some(s) = cpu_twin::filter_f32(a, b, l, o) {
+    if let Some(s) = twin::filter_f32(a, b, l, o) {
         // The device guards only add uncertainty to robust-math's f32 filter.
         assert_eq!(
             orient_filter_f32(a, b, l, o),
@@ -158,30 +147,36 @@ fn check(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3], stats: &mut [usize;
 
 #[test]
 fn device_filters_certify_only_exact_signs() {
-    let mut rng = Rng(0x5eed_1234_abcd_0001);
+    let mut rng = Rng::new(0x5eed_1234_abcd_0001);
     let mut stats = [0usize; 3];
     for _ in 0..20_000 {
         // Random inputs over many exponents.
         let (a, b, o) = (
-            rng.v3(Rng::scaled),
-            rng.v3(Rng::scaled),
-            rng.v3(Rng::scaled),
+            v3(&mut rng, scaled),
+            v3(&mut rng, scaled),
+            v3(&mut rng, scaled),
         );
         // w = 0, 1, and others (which the f32 filter must leave to the host).
-        let w = [0.0, 1.0, 0.5, 3.0, 1e-30][(rng.next() % 5) as usize];
-        let l = [rng.scaled(), rng.scaled(), rng.scaled(), w];
+        let w = [0.0, 1.0, 0.5, 3.0, 1e-30][rng.below(5) as usize];
+        let l = [scaled(&mut rng), scaled(&mut rng), scaled(&mut rng), w];
         check(a, b, l, o, &mut stats);
         // Point lights with w != 1 whose V = L.xyz - w A nearly cancels.
-        let w = [0.1f32, 0.3, 3.0, 7.0][(rng.next() % 4) as usize];
-        let a2 = rng.v3(Rng::unit);
+        let w = [0.1f32, 0.3, 3.0, 7.0][rng.below(4) as usize];
+        let a2 = v3(&mut rng, Rng::unit);
         let l2 = [a2[0] * w, a2[1] * w + 1e-6 * rng.unit(), a2[2] * w, w];
-        check(a2, rng.v3(Rng::unit), l2, rng.v3(Rng::unit), &mut stats);
+        check(
+            a2,
+            v3(&mut rng, Rng::unit),
+            l2,
+            v3(&mut rng, Rng::unit),
+            &mut stats,
+        );
         // Nearly degenerate: O close to the plane through A, B and the light.
-        let a = rng.v3(Rng::unit);
-        let b = rng.v3(Rng::unit);
-        let lp = rng.v3(Rng::unit);
+        let a = v3(&mut rng, Rng::unit);
+        let b = v3(&mut rng, Rng::unit);
+        let lp = v3(&mut rng, Rng::unit);
         let (s, t) = (rng.unit(), rng.unit());
-        let eps = [0.0, 1e-7, 1e-4][(rng.next() % 3) as usize];
+        let eps = [0.0, 1e-7, 1e-4][rng.below(3) as usize];
         let o = [0, 1, 2].map(|i| a[i] + s * (b[i] - a[i]) + t * (lp[i] - a[i]) + eps * rng.unit());
         check(a, b, [lp[0], lp[1], lp[2], 1.0], o, &mut stats);
         // Directional light in the plane of the triangle.
@@ -195,14 +190,18 @@ fn device_filters_certify_only_exact_signs() {
 #[test]
 fn device_filters_certify_generic_input() {
     // Well-conditioned input (unit-cube coordinates) must almost never need the host.
-    let mut rng = Rng(0x0dd_ba11);
+    let mut rng = Rng::new(0x0dd_ba11);
     let mut uncertain = [0usize; 2];
     let n = 20_000;
     for _ in 0..n {
-        let (a, b, o) = (rng.v3(Rng::unit), rng.v3(Rng::unit), rng.v3(Rng::unit));
+        let (a, b, o) = (
+            v3(&mut rng, Rng::unit),
+            v3(&mut rng, Rng::unit),
+            v3(&mut rng, Rng::unit),
+        );
         let l = [rng.unit() * 4.0, rng.unit() * 4.0, rng.unit() * 4.0, 1.0];
         for (i, filter) in [ExactFilter::F64, ExactFilter::F32].into_iter().enumerate() {
-            match cpu_twin::exact_filter(filter, a, b, l, o) {
+            match twin::exact_filter(filter, a, b, l, o) {
                 Some(s) => assert_eq!(s, orient_exact(a, b, l, o)),
                 None => uncertain[i] += 1,
             }

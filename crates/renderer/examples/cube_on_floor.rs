@@ -2,7 +2,7 @@
 //! volumes, compared with the ray-traced reference, plan printed.
 //!
 //! ```text
-//! cargo run -p shadowvol-renderer --example readme -- out.png
+//! cargo run -p shadowvol-renderer --example cube_on_floor -- out.png
 //! ```
 
 use glam::{Affine3A, Vec3};
@@ -14,7 +14,7 @@ use std::sync::Arc;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = std::env::args()
         .nth(1)
-        .unwrap_or_else(|| "readme.png".to_owned());
+        .unwrap_or_else(|| "cube_on_floor.png".to_owned());
     // A unit cube (closed, 12 triangles) and a floor quad.
     let cube = Mesh::new(
         (0..8u32)

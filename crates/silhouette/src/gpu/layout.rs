@@ -1,8 +1,9 @@
-//! The flat, all-objects-concatenated buffer layout the kernel reads (built once per prepare).
+//! The flat, all-objects-concatenated buffer layout every GPU kernel reads (built once per
+//! prepare).
 
-use shadowvol_silhouette::{BackendError, TopologyScene};
+use crate::{BackendError, TopologyScene};
 
-/// The scene as the kernel sees it: every object's tables concatenated, with vertex ids made
+/// The scene as the GPU kernels see it: every object's tables concatenated, with vertex ids made
 /// global (object `i`'s compact ids plus `vertex_offsets[i]`).
 ///
 /// Adding a per-object constant keeps the order of ids within an object, so the canonical
@@ -28,30 +29,30 @@ pub struct SceneLayout {
     pub edge_offsets: Vec<usize>,
 }
 
-fn to_u32(what: &str, n: usize) -> Result<u32, BackendError> {
+fn to_u32(backend: &'static str, what: &str, n: usize) -> Result<u32, BackendError> {
     u32::try_from(n).map_err(|_| BackendError::Limit {
-        backend: crate::NAME,
+        backend,
         message: format!(
-            "the scene has {n} {what}; the wgpu kernel indexes them with u32 (at most {})",
+            "the scene has {n} {what}; the {backend} kernel indexes them with u32 (at most {})",
             u32::MAX
         ),
     })
 }
 
 impl SceneLayout {
-    /// Concatenates the objects of `scene`.
+    /// Concatenates the objects of `scene` for `backend` (named in errors).
     ///
     /// # Errors
-    /// [`BackendError::Limit`] when the scene has more than `u32::MAX - 1` vertices, edges or
-    /// opposite vertices in total.
-    pub fn build(scene: &TopologyScene) -> Result<Self, BackendError> {
+    /// [`BackendError::Limit`] naming `backend` when the scene has more than `u32::MAX` vertices,
+    /// opposite vertices or objects, or more than `u32::MAX - 1` edges, in total.
+    pub fn build(scene: &TopologyScene, backend: &'static str) -> Result<Self, BackendError> {
         let vertices = scene.total_vertices();
         let edges = scene.total_edges();
         let ovs = scene.total_ovs();
-        to_u32("vertices", vertices)?;
-        to_u32("edges", edges + 1)?;
-        to_u32("opposite vertices", ovs)?;
-        to_u32("objects", scene.objects.len())?;
+        to_u32(backend, "vertices", vertices)?;
+        to_u32(backend, "edges", edges + 1)?;
+        to_u32(backend, "opposite vertices", ovs)?;
+        to_u32(backend, "objects", scene.objects.len())?;
         let mut layout = Self {
             positions: Vec::with_capacity(3 * vertices),
             edges: Vec::with_capacity(edges + 1),
@@ -87,6 +88,12 @@ impl SceneLayout {
         self.edges.len().saturating_sub(1)
     }
 
+    /// Number of vertices (all objects).
+    #[must_use]
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len() / 3
+    }
+
     /// Number of objects.
     #[must_use]
     pub fn object_count(&self) -> usize {
@@ -107,6 +114,16 @@ impl SceneLayout {
         ]
     }
 
+    /// The vertices `(a, b)` and the object of global edge `e`.
+    ///
+    /// # Panics
+    /// Panics if `e >= self.edge_count()`.
+    #[must_use]
+    pub fn edge(&self, e: usize) -> (u32, u32, u32) {
+        let [a, b, _, object] = self.edges[e];
+        (a, b, object)
+    }
+
     /// The OV slots of global edge `e` (indices into [`SceneLayout::ovs`]).
     ///
     /// # Panics
@@ -114,5 +131,46 @@ impl SceneLayout {
     #[must_use]
     pub fn ov_slots(&self, e: usize) -> std::ops::Range<usize> {
         self.edges[e][2] as usize..self.edges[e + 1][2] as usize
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes;
+
+    #[test]
+    fn objects_are_concatenated_with_global_ids() {
+        let sphere = shapes::uv_sphere_y(6, 4, 1.0);
+        let one = crate::TopologyScene::single(
+            shadowvol_mesh_topology::EdgeTable::build(&sphere).unwrap(),
+        );
+        let mut two = one.clone();
+        two.objects.push(one.objects[0].clone());
+        let l1 = SceneLayout::build(&one, "t").unwrap();
+        let l2 = SceneLayout::build(&two, "t").unwrap();
+        let (v, e, k) = (l1.vertex_count(), l1.edge_count(), l1.ovs.len());
+        assert_eq!(
+            (l2.vertex_count(), l2.edge_count(), l2.object_count()),
+            (2 * v, 2 * e, 2)
+        );
+        assert_eq!(l2.vertex_offsets, vec![0, v as u32, 2 * v as u32]);
+        assert_eq!(l2.edge_offsets, vec![0, e, 2 * e]);
+        for i in 0..e {
+            let (a, b, o) = l2.edge(i);
+            let (a2, b2, o2) = l2.edge(e + i);
+            assert_eq!((a2, b2, o2), (a + v as u32, b + v as u32, o + 1));
+            assert_eq!(l2.position(a), l2.position(a2));
+            let (s1, s2) = (l2.ov_slots(i), l2.ov_slots(e + i));
+            assert_eq!((s2.start, s2.end), (s1.start + k, s1.end + k));
+            for (x, y) in s1.zip(s2) {
+                assert_eq!(l2.ovs[y], l2.ovs[x] + v as u32);
+            }
+        }
+        assert_eq!(
+            l2.edges.last(),
+            Some(&[0, 0, 2 * k as u32, 0]),
+            "the sentinel"
+        );
     }
 }
