@@ -32,11 +32,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
     let mut out = root.join("docs").join("images");
     let mut it = args.iter();
     while let Some(a) = it.next() {
-        let mut value = |name: &str| {
-            it.next()
-                .cloned()
-                .ok_or_else(|| format!("{name} needs a value\n\n{HELP}"))
-        };
+        let mut value = |name: &str| crate::next_value(&mut it, name, HELP);
         match a.as_str() {
             "-h" | "--help" => {
                 print!("{HELP}");

@@ -1,7 +1,8 @@
 //! `cargo xtask`: project automation (the alias lives in `.cargo/config.toml`).
 //!
 //! Each subcommand is a module with `pub fn run(args: &[String]) -> Result<(), String>` and one
-//! line in [`COMMANDS`]. Shared helpers for the modules: [`project_root`] and [`cargo`].
+//! line in [`COMMANDS`]. Shared helpers for the modules: [`project_root`], [`cargo`] and
+//! [`next_value`].
 //!
 //! ```text
 //! cargo xtask test            drivers check/install, fmt, clippy, workspace tests, SPIR-V check
@@ -59,6 +60,20 @@ pub fn project_root() -> PathBuf {
 #[must_use]
 pub fn cargo() -> String {
     std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned())
+}
+
+/// The value of option `name`: the next argument of `it`.
+///
+/// # Errors
+/// `NAME needs a value`, then `usage`, when there is no next argument.
+pub fn next_value(
+    it: &mut std::slice::Iter<'_, String>,
+    name: &str,
+    usage: &str,
+) -> Result<String, String> {
+    it.next()
+        .cloned()
+        .ok_or_else(|| format!("{name} needs a value\n\n{usage}"))
 }
 
 fn usage() -> String {

@@ -1,8 +1,9 @@
 //! PNG plots of the matrix records, drawn with plotters and a bundled font (DejaVu Sans, see
 //! assets/fonts), so no system font library is needed.
 
+use crate::matrix::records::Record;
+use plotters::coord::Shift;
 use plotters::prelude::*;
-use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -30,7 +31,7 @@ fn palette(i: usize) -> RGBColor {
 ///
 /// # Errors
 /// Font registration or drawing failures.
-pub fn all(out: &Path, records: &[Value]) -> PlotResult {
+pub fn all(out: &Path, records: &[Record]) -> PlotResult {
     // Registering twice is harmless (the map entry is replaced).
     plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
         .map_err(|_| "the bundled font assets/fonts/DejaVuSans.ttf is not a valid font")?;
@@ -42,37 +43,42 @@ pub fn all(out: &Path, records: &[Value]) -> PlotResult {
     Ok(())
 }
 
-fn preferred_mode(records: &[Value]) -> String {
-    if records.iter().any(|r| r["mode"] == "robust") {
+fn preferred_mode(records: &[Record]) -> String {
+    if records.iter().any(|r| r.mode() == Some("robust")) {
         "robust".into()
     } else {
         records
             .iter()
-            .find_map(|r| r["mode"].as_str())
+            .find_map(Record::mode)
             .unwrap_or("original")
             .to_owned()
     }
 }
 
-/// Series per backend of (x, median_ms) for one experiment and mode.
+/// Points of one line per backend.
+type Series = BTreeMap<String, Vec<(f64, f64)>>;
+
+/// `((x min, x max), (y min, y max))` of a series.
+type Bounds = ((f64, f64), (f64, f64));
+
+/// Series per backend of (x, median_ms) of the `bench` records of one experiment and mode,
+/// with x from `x`.
 fn series(
-    records: &[Value],
+    records: &[Record],
     experiment: &str,
     mode: &str,
-    x_key: &str,
-) -> BTreeMap<String, Vec<(f64, f64)>> {
-    let mut s: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
+    x: fn(&crate::matrix::records::Bench) -> Option<u64>,
+) -> Series {
+    let mut s = Series::new();
     for r in records
         .iter()
-        .filter(|r| r["experiment"] == experiment && r["mode"] == mode)
+        .filter(|r| r.experiment == experiment && r.mode() == Some(mode))
     {
-        if let (Some(b), Some(x), Some(y)) = (
-            r["backend"].as_str(),
-            r[x_key].as_f64(),
-            r["median_ms"].as_f64(),
-        ) {
+        let Some(b) = r.bench() else { continue };
+        if let (Some(x), Some(y)) = (x(b), b.median_ms) {
+            let x = x as f64;
             if x > 0.0 && y > 0.0 {
-                s.entry(b.to_owned()).or_default().push((x, y));
+                s.entry(r.key.backend.clone()).or_default().push((x, y));
             }
         }
     }
@@ -82,7 +88,7 @@ fn series(
     s
 }
 
-fn bounds(s: &BTreeMap<String, Vec<(f64, f64)>>) -> ((f64, f64), (f64, f64)) {
+fn bounds(s: &Series) -> Bounds {
     let pts = s.values().flatten();
     let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for &(x, y) in pts {
@@ -98,8 +104,7 @@ fn bounds(s: &BTreeMap<String, Vec<(f64, f64)>>) -> ((f64, f64), (f64, f64)) {
 }
 
 fn no_data(path: &Path, title: &str) -> PlotResult {
-    let root = BitMapBackend::new(path, SIZE).into_drawing_area();
-    root.fill(&WHITE)?;
+    let root = canvas(path, SIZE)?;
     root.draw_text(
         &format!("{title}: no data in this run"),
         &("sans-serif", 24).into_font().color(&BLACK),
@@ -109,20 +114,90 @@ fn no_data(path: &Path, title: &str) -> PlotResult {
     Ok(())
 }
 
-fn time_vs_triangles(path: &Path, records: &[Value], mode: &str) -> PlotResult {
-    let s = series(records, "triangles", mode, "triangles");
-    let title = format!("Silhouette time vs triangles ({mode}, 1 light)");
+/// The bounds of `s`, or `None` after writing a "no data" image titled `title` to `path`
+/// when `s` is empty.
+fn bounds_or_no_data(
+    path: &Path,
+    title: &str,
+    s: &Series,
+) -> Result<Option<Bounds>, Box<dyn std::error::Error>> {
     if s.is_empty() {
-        return no_data(path, &title);
+        no_data(path, title)?;
+        return Ok(None);
     }
-    let ((x0, x1), (y0, y1)) = bounds(&s);
-    let root = BitMapBackend::new(path, SIZE).into_drawing_area();
+    Ok(Some(bounds(s)))
+}
+
+/// A white image of `size` pixels, to be written to `path`.
+fn canvas(
+    path: &Path,
+    size: (u32, u32),
+) -> Result<DrawingArea<BitMapBackend<'_>, Shift>, Box<dyn std::error::Error>> {
+    let root = BitMapBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
+    Ok(root)
+}
+
+/// A chart on `area` with the margins and label areas of every plot.
+fn chart_on<'a, 'b>(
+    area: &'a DrawingArea<BitMapBackend<'b>, Shift>,
+) -> ChartBuilder<'a, 'b, BitMapBackend<'b>> {
+    let mut c = ChartBuilder::on(area);
+    c.margin(15).x_label_area_size(45).y_label_area_size(70);
+    c
+}
+
+/// Draws the legend of `chart` at `position`, on white of opacity `opacity`.
+fn legend<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, BitMapBackend<'b>, Cartesian2d<X, Y>>,
+    position: SeriesLabelPosition,
+    opacity: f64,
+    font_size: u32,
+) -> PlotResult
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(opacity))
+        .border_style(BLACK)
+        .label_font(("sans-serif", font_size))
+        .draw()?;
+    Ok(())
+}
+
+/// One line with point markers per backend of `s`, and their legend at `position`.
+fn backend_lines<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, BitMapBackend<'b>, Cartesian2d<X, Y>>,
+    s: &Series,
+    position: SeriesLabelPosition,
+) -> PlotResult
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    for (i, (b, pts)) in s.iter().enumerate() {
+        let c = palette(i);
+        chart
+            .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))?
+            .label(b.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
+    }
+    legend(chart, position, 0.8, 16)
+}
+
+fn time_vs_triangles(path: &Path, records: &[Record], mode: &str) -> PlotResult {
+    let s = series(records, "triangles", mode, |b| b.triangles);
+    let title = format!("Silhouette time vs triangles ({mode}, 1 light)");
+    let Some(((x0, x1), (y0, y1))) = bounds_or_no_data(path, &title, &s)? else {
+        return Ok(());
+    };
+    let root = canvas(path, SIZE)?;
+    let mut chart = chart_on(&root)
         .caption(&title, ("sans-serif", 24))
-        .margin(15)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
         .build_cartesian_2d(
             (x0 * 0.8..x1 * 1.25).log_scale(),
             (y0 * 0.7..y1 * 1.4).log_scale(),
@@ -135,39 +210,20 @@ fn time_vs_triangles(path: &Path, records: &[Value], mode: &str) -> PlotResult {
         .y_label_formatter(&tick)
         .label_style(("sans-serif", 14))
         .draw()?;
-    for (i, (b, pts)) in s.iter().enumerate() {
-        let c = palette(i);
-        chart
-            .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))?
-            .label(b.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
-        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
-    }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 16))
-        .draw()?;
+    backend_lines(&mut chart, &s, SeriesLabelPosition::UpperLeft)?;
     root.present()?;
     Ok(())
 }
 
-fn time_vs_lights(path: &Path, records: &[Value], mode: &str) -> PlotResult {
-    let s = series(records, "lights", mode, "lights");
+fn time_vs_lights(path: &Path, records: &[Record], mode: &str) -> PlotResult {
+    let s = series(records, "lights", mode, |b| b.lights);
     let title = format!("Silhouette time vs lights in one call ({mode})");
-    if s.is_empty() {
-        return no_data(path, &title);
-    }
-    let ((x0, x1), (y0, y1)) = bounds(&s);
-    let root = BitMapBackend::new(path, SIZE).into_drawing_area();
-    root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
+    let Some(((x0, x1), (y0, y1))) = bounds_or_no_data(path, &title, &s)? else {
+        return Ok(());
+    };
+    let root = canvas(path, SIZE)?;
+    let mut chart = chart_on(&root)
         .caption(&title, ("sans-serif", 24))
-        .margin(15)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
         .build_cartesian_2d(x0 - 0.5..x1 + 0.5, (y0 * 0.7..y1 * 1.4).log_scale())?;
     chart
         .configure_mesh()
@@ -178,20 +234,7 @@ fn time_vs_lights(path: &Path, records: &[Value], mode: &str) -> PlotResult {
         .y_label_formatter(&tick)
         .label_style(("sans-serif", 14))
         .draw()?;
-    for (i, (b, pts)) in s.iter().enumerate() {
-        let c = palette(i);
-        chart
-            .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))?
-            .label(b.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
-        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 16))
-        .draw()?;
+    backend_lines(&mut chart, &s, SeriesLabelPosition::MiddleRight)?;
     root.present()?;
     Ok(())
 }
@@ -256,29 +299,21 @@ fn tick(v: &f64) -> String {
 /// Time ratio (mode / original on the table-1 scene) against two error counts, one panel
 /// each: edges whose sign differs from exact (hard-* scenes), and artifact pixels plus open
 /// vertices. Colour = backend, marker = mode.
-fn accuracy_cost(path: &Path, records: &[Value]) -> PlotResult {
+fn accuracy_cost(path: &Path, records: &[Record]) -> PlotResult {
     // (backend, mode, time ratio, sign differences, artifacts + open vertices)
     let mut pts: Vec<(String, String, f64, f64, f64)> = Vec::new();
     let t1 = |b: &str, m: &str| {
         records
             .iter()
-            .find(|r| {
-                r["experiment"] == "table1"
-                    && r["backend"] == b
-                    && r["mode"] == m
-                    && r["lights"].as_u64() == Some(1)
-            })
-            .and_then(|r| r["median_ms"].as_f64())
+            .filter(|r| r.is("table1", None, b, m))
+            .filter_map(Record::bench)
+            .find(|x| x.lights == Some(1))
+            .and_then(|x| x.median_ms)
     };
     let mut keys: Vec<(String, String)> = records
         .iter()
-        .filter(|r| r["experiment"] == "table1")
-        .filter_map(|r| {
-            Some((
-                r["backend"].as_str()?.to_owned(),
-                r["mode"].as_str()?.to_owned(),
-            ))
-        })
+        .filter(|r| r.experiment == "table1")
+        .filter_map(|r| Some((r.key.backend.clone(), r.mode()?.to_owned())))
         .collect();
     keys.sort();
     keys.dedup();
@@ -288,16 +323,14 @@ fn accuracy_cost(path: &Path, records: &[Value]) -> PlotResult {
         };
         let mine = records
             .iter()
-            .filter(|r| r["backend"] == b.as_str() && r["mode"] == m.as_str());
+            .filter(|r| r.key.backend == b && r.mode() == Some(m.as_str()));
         let (mut signs, mut bad) = (0u64, 0u64);
         for r in mine {
-            match r["experiment"].as_str() {
-                Some("artifacts") => bad += r["artifact_pixels"].as_u64().unwrap_or(0),
-                Some("accuracy") => {
-                    bad += r["open_vertices"].as_u64().unwrap_or(0);
-                    signs += r["sign_diff_vs_exact"].as_u64().unwrap_or(0);
-                }
-                _ => {}
+            if r.experiment == "artifacts" {
+                bad += r.render().and_then(|x| x.artifact_pixels).unwrap_or(0);
+            } else if let (true, Some(a)) = (r.experiment == "accuracy", r.accuracy()) {
+                bad += a.open_vertices.unwrap_or(0);
+                signs += a.sign_diff_vs_exact.unwrap_or(0);
             }
         }
         pts.push((b, m, x / o, signs as f64 + 1.0, bad as f64 + 1.0));
@@ -307,8 +340,7 @@ fn accuracy_cost(path: &Path, records: &[Value]) -> PlotResult {
         return no_data(path, title);
     }
     let x1 = pts.iter().map(|p| p.2).fold(1.0f64, f64::max) * 1.1;
-    let root = BitMapBackend::new(path, (1200, 600)).into_drawing_area();
-    root.fill(&WHITE)?;
+    let root = canvas(path, (1200, 600))?;
     let root = root.titled(title, ("sans-serif", 22))?;
     let (left, right) = root.split_horizontally(600);
     let mut backends: Vec<String> = pts.iter().map(|p| p.0.clone()).collect();
@@ -319,11 +351,7 @@ fn accuracy_cost(path: &Path, records: &[Value]) -> PlotResult {
     ] {
         let y = |p: &(String, String, f64, f64, f64)| if pick == 3 { p.3 } else { p.4 };
         let y1 = pts.iter().map(y).fold(10.0f64, f64::max) * 3.0;
-        let mut chart = ChartBuilder::on(panel)
-            .margin(15)
-            .x_label_area_size(45)
-            .y_label_area_size(70)
-            .build_cartesian_2d(0.0..x1, (0.8..y1).log_scale())?;
+        let mut chart = chart_on(panel).build_cartesian_2d(0.0..x1, (0.8..y1).log_scale())?;
         chart
             .configure_mesh()
             .x_desc("silhouette time / original (same backend)")
@@ -353,17 +381,12 @@ fn accuracy_cost(path: &Path, records: &[Value]) -> PlotResult {
                 marker_legend!(anno.label(m), mode_shape(m), BLACK);
             }
         }
-        chart
-            .configure_series_labels()
-            .position(if pick == 3 {
-                SeriesLabelPosition::MiddleMiddle
-            } else {
-                SeriesLabelPosition::LowerMiddle
-            })
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 15))
-            .draw()?;
+        let position = if pick == 3 {
+            SeriesLabelPosition::MiddleMiddle
+        } else {
+            SeriesLabelPosition::LowerMiddle
+        };
+        legend(&mut chart, position, 0.85, 15)?;
     }
     root.present()?;
     Ok(())
@@ -371,7 +394,7 @@ fn accuracy_cost(path: &Path, records: &[Value]) -> PlotResult {
 
 /// Individual objects against the same triangles in fewer objects: the ratio
 /// individual / baked per backend, one marker per scene pair.
-fn individual_vs_baked(path: &Path, records: &[Value]) -> PlotResult {
+fn individual_vs_baked(path: &Path, records: &[Record]) -> PlotResult {
     const PAIRS: [(&str, &str, &str, &str); 4] = [
         (
             "bunnies-10-individual",
@@ -402,23 +425,16 @@ fn individual_vs_baked(path: &Path, records: &[Value]) -> PlotResult {
     let ms = |exp: &str, scene: &str, b: &str| {
         records
             .iter()
-            .find(|r| {
-                r["experiment"] == exp
-                    && r["scene"] == scene
-                    && r["backend"] == b
-                    && r["mode"] == mode.as_str()
-            })
-            .and_then(|r| r["median_ms"].as_f64())
+            .find(|r| r.is(exp, Some(scene), b, &mode))
+            .and_then(|r| r.bench()?.median_ms)
     };
     let mut backends: Vec<String> = Vec::new();
     for r in records
         .iter()
-        .filter(|r| r["experiment"] == "table2" || r["experiment"] == "table3")
+        .filter(|r| r.experiment == "table2" || r.experiment == "table3")
     {
-        if let Some(b) = r["backend"].as_str() {
-            if !backends.iter().any(|x| x == b) {
-                backends.push(b.to_owned());
-            }
+        if !backends.contains(&r.key.backend) {
+            backends.push(r.key.backend.clone());
         }
     }
     // (backend index, pair index, ratio)
@@ -438,15 +454,11 @@ fn individual_vs_baked(path: &Path, records: &[Value]) -> PlotResult {
     }
     let lo = (pts.iter().map(|p| p.2).fold(1.0f64, f64::min) - 0.15).max(0.0);
     let hi = pts.iter().map(|p| p.2).fold(1.0f64, f64::max) + 0.35;
-    let root = BitMapBackend::new(path, SIZE).into_drawing_area();
-    root.fill(&WHITE)?;
+    let root = canvas(path, SIZE)?;
     let n = backends.len();
     let names = backends.clone();
-    let mut chart = ChartBuilder::on(&root)
+    let mut chart = chart_on(&root)
         .caption(&title, ("sans-serif", 20))
-        .margin(15)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
         .build_cartesian_2d(-0.5..n as f64 - 0.5, lo..hi)?;
     chart
         .configure_mesh()
@@ -481,13 +493,7 @@ fn individual_vs_baked(path: &Path, records: &[Value]) -> PlotResult {
         let anno = markers!(chart, pi, mine, c);
         marker_legend!(anno.label(*label), pi, c);
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 15))
-        .draw()?;
+    legend(&mut chart, SeriesLabelPosition::UpperRight, 0.85, 15)?;
     root.present()?;
     Ok(())
 }

@@ -9,9 +9,11 @@
 //!    then skip visibly), unless `CI=true`, where a missing driver is a failure.
 //! 2. **fmt**: `cargo fmt --all -- --check`.
 //! 3. **clippy**: `cargo clippy --workspace --all-targets -- -D warnings`.
-//! 4. **test**: `cargo test --workspace` (with `CI=true`, the conformance tests fail for a backend
+//! 4. **docs**: `RUSTDOCFLAGS=-D warnings cargo doc --workspace --no-deps` (a broken intra-doc
+//!    link or malformed doc comment fails; `-D warnings` is added to any `RUSTDOCFLAGS` set).
+//! 5. **test**: `cargo test --workspace` (with `CI=true`, the conformance tests fail for a backend
 //!    that cannot start instead of skipping it).
-//! 5. **shaders**: `cargo xtask shaders --check` (the committed SPIR-V matches the GLSL).
+//! 6. **shaders**: `cargo xtask shaders --check` (the committed SPIR-V matches the GLSL).
 
 use std::path::Path;
 use std::process::Command;
@@ -27,6 +29,9 @@ const APT_PACKAGES: &[&str] = &[
     "vulkan-validationlayers",
 ];
 
+/// The steps, in the order they run (the names `--skip` takes).
+const STEPS: [&str; 6] = ["drivers", "fmt", "clippy", "docs", "test", "shaders"];
+
 const USAGE: &str =
     "cargo xtask test [--no-drivers] [--skip STEP]... [-p PACKAGE]... [-- CARGO_TEST_ARGS...]
 
@@ -35,13 +40,14 @@ Runs, in order, and prints a summary:
            install them with apt-get when missing and running as root
   fmt      cargo fmt --all -- --check
   clippy   cargo clippy --workspace --all-targets -- -D warnings
+  docs     RUSTDOCFLAGS=\"-D warnings\" cargo doc --workspace --no-deps
   test     cargo test --workspace [CARGO_TEST_ARGS]
   shaders  cargo xtask shaders --check
 
 Options:
   --no-drivers   same as --skip drivers
-  --skip STEP    skip a step (drivers, fmt, clippy, test, shaders); repeatable
-  -p PACKAGE     clippy and test only PACKAGE instead of --workspace; repeatable
+  --skip STEP    skip a step (drivers, fmt, clippy, docs, test, shaders); repeatable
+  -p PACKAGE     clippy, docs and test only PACKAGE instead of --workspace; repeatable
 
 Environment:
   CI=true        a missing driver, and a backend that cannot start, fail instead of skipping
@@ -83,7 +89,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
             "--no-drivers" => skip.push("drivers".into()),
             "--skip" => {
                 let step = it.next().ok_or("--skip needs a step name")?;
-                if !["drivers", "fmt", "clippy", "test", "shaders"].contains(&step.as_str()) {
+                if !STEPS.contains(&step.as_str()) {
                     return Err(format!("unknown step {step:?} for --skip\n\n{USAGE}"));
                 }
                 skip.push(step.clone());
@@ -140,6 +146,13 @@ pub fn run(args: &[String]) -> Result<(), String> {
         a.extend(&scope);
         a.extend(["--all-targets", "--", "-D", "warnings"]);
         cargo_step(&root, &a, &[])
+    });
+    step("docs", &mut || {
+        let mut a = vec!["doc"];
+        a.extend(&scope);
+        a.push("--no-deps");
+        let flags = rustdocflags(std::env::var("RUSTDOCFLAGS").ok().as_deref());
+        cargo_step(&root, &a, &[("RUSTDOCFLAGS", &flags)])
     });
     let mut counts = TestCounts::default();
     step("test", &mut || {
@@ -206,9 +219,18 @@ pub fn run(args: &[String]) -> Result<(), String> {
     }
 }
 
+/// `RUSTDOCFLAGS` for the docs step: the caller's, then `-D warnings`.
+fn rustdocflags(current: Option<&str>) -> String {
+    match current.map(str::trim) {
+        Some(c) if !c.is_empty() => format!("{c} -D warnings"),
+        _ => "-D warnings".to_owned(),
+    }
+}
+
 /// Runs `cargo ARGS` in the workspace root, streaming its output.
 fn cargo_step(root: &Path, args: &[&str], env: &[(&str, &str)]) -> Outcome {
-    let line = format!("cargo {}", args.join(" "));
+    let vars: String = env.iter().map(|(k, v)| format!("{k}={v:?} ")).collect();
+    let line = format!("{vars}cargo {}", args.join(" "));
     println!("$ {line}");
     let mut cmd = Command::new(crate::cargo());
     cmd.current_dir(root).args(args);
@@ -423,7 +445,29 @@ fn drivers(ci: bool) -> Outcome {
 
 #[cfg(test)]
 mod tests {
-    use super::TestCounts;
+    use super::{rustdocflags, TestCounts, STEPS, USAGE};
+
+    #[test]
+    fn docs_step_denies_warnings_on_top_of_the_callers_flags() {
+        assert_eq!(rustdocflags(None), "-D warnings");
+        assert_eq!(rustdocflags(Some(" ")), "-D warnings");
+        assert_eq!(
+            rustdocflags(Some("--cfg docsrs")),
+            "--cfg docsrs -D warnings"
+        );
+    }
+
+    #[test]
+    fn every_step_is_in_the_usage() {
+        for s in STEPS {
+            assert!(
+                USAGE
+                    .lines()
+                    .any(|l| l.trim_start().starts_with(&format!("{s} "))),
+                "step {s} is not listed in the usage"
+            );
+        }
+    }
 
     #[test]
     fn libtest_summaries_are_added_up() {

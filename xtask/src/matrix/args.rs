@@ -1,0 +1,132 @@
+//! The command line of `cargo xtask matrix`.
+
+use std::path::PathBuf;
+
+pub(super) const USAGE: &str = "\
+cargo xtask matrix [--quick] [--out DIR] [--backends LIST] [--modes LIST] [--frames N]
+
+Runs the paper's experiment matrix with the release `shadowvol` binary on every available
+backend and writes DIR/tables.md, DIR/results.json, DIR/results.csv and PNG plots.
+
+  --quick          every table and scene, fewer frames and smaller images (about 10 minutes on a
+                   2-core machine with lavapipe and PoCL)
+  --out DIR        output folder (default: matrix-out)
+  --backends LIST  comma-separated backend names (default: all available)
+  --modes LIST     comma-separated accuracy modes (default: original,robust,ordered,exact)
+  --frames N       timed frames per measurement (default: 30, or 5 with --quick)
+  --replot DIR     measure nothing: rewrite DIR/tables.md, DIR/results.csv and the plots from
+                   DIR/results.json (after a change to the tables or plots)
+";
+
+/// The accuracy modes in table order.
+pub(super) const MODES: [&str; 4] = ["original", "robust", "ordered", "exact"];
+
+/// Options of one matrix run.
+#[derive(Debug, Clone)]
+pub(super) struct Options {
+    pub quick: bool,
+    pub out: PathBuf,
+    pub backends: Option<Vec<String>>,
+    pub modes: Vec<String>,
+    pub frames: u32,
+    /// Untimed warm-up frames per measurement (3, or 1 with `--quick`).
+    pub warmup: u32,
+    /// `--replot DIR`: rewrite the tables and plots of an earlier run.
+    pub replot: Option<PathBuf>,
+}
+
+/// Parses the arguments after `matrix`; `None` after `--help` (the usage is printed).
+///
+/// # Errors
+/// A message naming the unknown argument, mode or bad value, with the usage.
+pub(super) fn parse_args(args: &[String]) -> Result<Option<Options>, String> {
+    let mut o = Options {
+        quick: false,
+        out: PathBuf::from("matrix-out"),
+        backends: None,
+        modes: MODES.iter().map(|s| (*s).to_owned()).collect(),
+        frames: 0,
+        warmup: 3,
+        replot: None,
+    };
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut value = |name: &str| crate::next_value(&mut it, name, USAGE);
+        match a.as_str() {
+            "-h" | "--help" => {
+                print!("{USAGE}");
+                return Ok(None);
+            }
+            "--quick" => o.quick = true,
+            "--out" => o.out = PathBuf::from(value("--out")?),
+            "--replot" => o.replot = Some(PathBuf::from(value("--replot")?)),
+            "--backends" => {
+                o.backends = Some(split_list(&value("--backends")?));
+            }
+            "--modes" => {
+                let modes = split_list(&value("--modes")?);
+                for m in &modes {
+                    if !MODES.contains(&m.as_str()) {
+                        return Err(format!(
+                            "unknown mode {m:?} in --modes; expected some of {}",
+                            MODES.join(",")
+                        ));
+                    }
+                }
+                o.modes = modes;
+            }
+            "--frames" => {
+                let v = value("--frames")?;
+                o.frames = v
+                    .parse()
+                    .ok()
+                    .filter(|&n| n > 0)
+                    .ok_or_else(|| format!("--frames {v:?}: expected a positive integer"))?;
+            }
+            other => return Err(format!("unknown argument {other:?}\n\n{USAGE}")),
+        }
+    }
+    if o.frames == 0 {
+        o.frames = if o.quick { 5 } else { 30 };
+    }
+    if o.quick {
+        o.warmup = 1;
+    }
+    Ok(Some(o))
+}
+
+fn split_list(s: &str) -> Vec<String> {
+    s.split(',')
+        .map(|x| x.trim().to_owned())
+        .filter(|x| !x.is_empty())
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(a: &[&str]) -> Vec<String> {
+        a.iter().map(|s| (*s).to_owned()).collect()
+    }
+
+    #[test]
+    fn args_parse() {
+        let o = parse_args(&args(&["--quick", "--modes", "exact"]))
+            .unwrap()
+            .unwrap();
+        assert!(o.quick);
+        assert_eq!(o.frames, 5);
+        assert_eq!(o.warmup, 1);
+        assert_eq!(o.modes, vec!["exact"]);
+        let o = parse_args(&args(&["--backends", "cpu, simd,", "--frames", "7"]))
+            .unwrap()
+            .unwrap();
+        assert_eq!(o.backends, Some(vec!["cpu".to_owned(), "simd".to_owned()]));
+        assert_eq!((o.frames, o.warmup), (7, 3));
+        assert!(parse_args(&args(&["--modes", "fast"])).is_err());
+        assert!(parse_args(&args(&["--frames", "0"])).is_err());
+        let e = parse_args(&args(&["--out"])).unwrap_err();
+        assert!(e.starts_with("--out needs a value"), "{e}");
+    }
+}

@@ -1,0 +1,420 @@
+//! The matrix's records: one per measurement, as `results.json` and `results.csv` hold them.
+//!
+//! A measurement names only the fields the tables and plots read; the rest of what the CLI
+//! printed stays in its flattened `extra` map, so that `results.json` and `results.csv` carry
+//! every field the CLI gave, new ones included. Reading `results.json` back (`--replot`) gives
+//! the same records.
+
+use super::cli::{CliRecord, RenderReport, RenderTimings};
+use serde::{Deserialize, Deserializer, Serialize};
+use serde_json::{Map, Value};
+use std::collections::BTreeMap;
+
+/// One `bench` measurement: silhouette time of one (scene, backend, mode, light count).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Bench {
+    /// Lights extracted in one call.
+    pub lights: Option<u64>,
+    /// Triangles of the scene.
+    pub triangles: Option<u64>,
+    /// Median silhouette time over the timed frames, ms.
+    pub median_ms: Option<f64>,
+    /// 10th percentile, ms.
+    pub p10_ms: Option<f64>,
+    /// 90th percentile, ms.
+    pub p90_ms: Option<f64>,
+    /// The run's floor, ms (the matrix sets it to the report's `floor_ms`).
+    pub floor_ms: Option<f64>,
+    /// Every other field the CLI printed, and the `detail_*` columns.
+    #[serde(flatten)]
+    pub extra: Map<String, Value>,
+}
+
+/// One `accuracy` measurement: one (scene, backend, mode) against `exact`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Accuracy {
+    /// Lights of the scene.
+    pub lights: Option<u64>,
+    /// Vertices where the silhouette chain does not close, over all lights.
+    pub open_vertices: Option<u64>,
+    /// Edges whose multiplicity differs from `exact`'s, over all lights.
+    pub sign_diff_vs_exact: Option<u64>,
+    /// Evaluations decided on the host (exact mode).
+    pub uncertain: Option<u64>,
+    /// Every other field the CLI printed.
+    #[serde(flatten)]
+    pub extra: Map<String, Value>,
+}
+
+/// One `baselines` measurement: one of the seeds' algorithms, or ours, on one scene.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Baseline {
+    /// Triangles of the scene.
+    pub triangles: Option<u64>,
+    /// Median time, ms (`null` when the algorithm failed).
+    pub median_ms: Option<f64>,
+    /// 10th percentile, ms.
+    pub p10_ms: Option<f64>,
+    /// 90th percentile, ms.
+    pub p90_ms: Option<f64>,
+    /// Edges with `m != 0`, over all lights.
+    pub silhouette_edges: Option<u64>,
+    /// Whether the edge set equals the `cpu` backend's `exact` one.
+    pub agrees_with_exact: Option<bool>,
+    /// Why the algorithm failed.
+    pub error: Option<String>,
+    /// Every other field the CLI printed, and the `detail_*` columns.
+    #[serde(flatten)]
+    pub extra: Map<String, Value>,
+}
+
+/// One `render` of the matrix, as recorded.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Render {
+    /// Image size, `WxH`.
+    pub size: String,
+    /// See [`RenderReport`].
+    pub artifact_pixels: Option<u64>,
+    /// See [`RenderReport`].
+    pub shadow_pixels: Option<u64>,
+    /// See [`RenderReport`].
+    pub reference_shadow_pixels: Option<u64>,
+    /// See [`RenderReport`].
+    pub covered_pixels: Option<u64>,
+    /// See [`RenderReport`].
+    pub adapter: Option<String>,
+    /// [`RenderTimings::frame_ms`], when the report had timings.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frame_ms: Option<f64>,
+    /// Where the image was written.
+    pub png: String,
+    /// The report's timings as `timing_<stage>` columns.
+    #[serde(flatten)]
+    pub timing: Map<String, Value>,
+}
+
+impl Render {
+    /// The record of `report`, rendered at `size` into `png`.
+    #[must_use]
+    pub fn new(report: RenderReport, size: &str, png: String) -> Self {
+        Self {
+            size: size.to_owned(),
+            artifact_pixels: report.artifact_pixels,
+            shadow_pixels: report.shadow_pixels,
+            reference_shadow_pixels: report.reference_shadow_pixels,
+            covered_pixels: report.covered_pixels,
+            adapter: report.adapter,
+            frame_ms: report.timings.as_ref().map(RenderTimings::frame_ms),
+            png,
+            timing: report
+                .timings
+                .as_ref()
+                .map(RenderTimings::columns)
+                .unwrap_or_default(),
+        }
+    }
+}
+
+/// What one record measured.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum Data {
+    /// `bench`: tables 1-3, time against triangles and lights.
+    Bench(Bench),
+    /// `accuracy`.
+    Accuracy(Accuracy),
+    /// `render`: frame times and artifact counts.
+    Render(Render),
+    /// `baselines`: the Toy Wars table.
+    Baseline(Baseline),
+}
+
+impl Data {
+    /// Which measurement the records of `experiment` hold.
+    fn parse(experiment: &str, fields: Map<String, Value>) -> serde_json::Result<Self> {
+        let v = Value::Object(fields);
+        Ok(match experiment {
+            "accuracy" => Self::Accuracy(serde_json::from_value(v)?),
+            "artifacts" | "table1-frame" => Self::Render(serde_json::from_value(v)?),
+            "toywars" => Self::Baseline(serde_json::from_value(v)?),
+            _ => Self::Bench(serde_json::from_value(v)?),
+        })
+    }
+
+    /// Adds `detail_*` columns that the measurement does not have yet.
+    fn add_columns(&mut self, columns: Map<String, Value>) {
+        let extra = match self {
+            Self::Bench(b) => &mut b.extra,
+            Self::Baseline(b) => &mut b.extra,
+            Self::Accuracy(a) => &mut a.extra,
+            Self::Render(r) => &mut r.timing,
+        };
+        for (k, v) in columns {
+            extra.entry(k).or_insert(v);
+        }
+    }
+}
+
+/// Where and how the matrix ran; `results.json`'s `host`, and columns of every record (`null`
+/// where unknown).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct HostInfo {
+    /// `uname -n`.
+    pub host: Option<String>,
+    /// `uname -sr`.
+    pub os: Option<String>,
+    /// CPU model.
+    pub cpu: Option<String>,
+    /// Logical cores.
+    pub cores: Option<u64>,
+    /// `rustc -V`.
+    pub rustc: Option<String>,
+    /// Git revision, `-dirty` with uncommitted changes.
+    pub git_rev: Option<String>,
+    /// `RUSTFLAGS` of the build.
+    pub rustflags: Option<String>,
+    /// Cargo profile of the CLI.
+    pub profile: Option<String>,
+    /// SIMD level the `simd` backend picks at run time.
+    pub simd_level: Option<String>,
+    /// Compile-time target features, joined with `+`.
+    pub compile_target_features: Option<String>,
+    /// The build, in words.
+    pub flags: Option<String>,
+}
+
+/// The scene, backend and mode a record is about.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Key {
+    /// Scene name.
+    pub scene: String,
+    /// Backend (or seed algorithm) name.
+    pub backend: String,
+    /// Accuracy mode (`null` for the seeds' algorithms).
+    pub mode: Option<String>,
+}
+
+/// One record of `results.json` and one row of `results.csv`.
+///
+/// Serialised through a `serde_json::Value` (a sorted map), where a field of `data` wins over a
+/// host field of the same name.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Record {
+    /// Where it ran.
+    #[serde(flatten)]
+    pub host: HostInfo,
+    /// Which table or plot it is for (`table1`, `lights`, `accuracy`, `artifacts`, ...).
+    pub experiment: String,
+    /// The experiment whose measurement this copies.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reused_from: Option<String>,
+    /// Scene, backend, mode.
+    #[serde(flatten)]
+    pub key: Key,
+    /// The backend's device, in words.
+    pub device: String,
+    /// The measurement.
+    #[serde(flatten)]
+    pub data: Data,
+}
+
+impl Record {
+    /// A record of `experiment` from one CLI record: its details become `detail_*` columns,
+    /// and `device` is used where the CLI names none.
+    #[must_use]
+    pub fn from_cli<T>(
+        experiment: &str,
+        rec: CliRecord<T>,
+        wrap: fn(T) -> Data,
+        device: &str,
+        host: &HostInfo,
+    ) -> Self {
+        let mut data = wrap(rec.data);
+        data.add_columns(rec.details.into_columns());
+        Self {
+            host: host.clone(),
+            experiment: experiment.to_owned(),
+            reused_from: None,
+            key: Key {
+                scene: rec.scene,
+                backend: rec.backend,
+                mode: rec.mode,
+            },
+            device: rec.device.unwrap_or_else(|| device.to_owned()),
+            data,
+        }
+    }
+
+    /// Whether the record is of `experiment`, `scene` (any with `None`), `backend` and `mode`.
+    #[must_use]
+    pub fn is(&self, experiment: &str, scene: Option<&str>, backend: &str, mode: &str) -> bool {
+        self.experiment == experiment
+            && scene.is_none_or(|s| self.key.scene == s)
+            && self.key.backend == backend
+            && self.mode() == Some(mode)
+    }
+
+    /// The accuracy mode.
+    #[must_use]
+    pub fn mode(&self) -> Option<&str> {
+        self.key.mode.as_deref()
+    }
+
+    /// The `bench` measurement, if that is what this is.
+    #[must_use]
+    pub fn bench(&self) -> Option<&Bench> {
+        match &self.data {
+            Data::Bench(b) => Some(b),
+            _ => None,
+        }
+    }
+
+    /// The `accuracy` measurement, if that is what this is.
+    #[must_use]
+    pub fn accuracy(&self) -> Option<&Accuracy> {
+        match &self.data {
+            Data::Accuracy(a) => Some(a),
+            _ => None,
+        }
+    }
+
+    /// The `render` measurement, if that is what this is.
+    #[must_use]
+    pub fn render(&self) -> Option<&Render> {
+        match &self.data {
+            Data::Render(r) => Some(r),
+            _ => None,
+        }
+    }
+
+    /// The `baselines` measurement, if that is what this is.
+    #[must_use]
+    pub fn baseline(&self) -> Option<&Baseline> {
+        match &self.data {
+            Data::Baseline(b) => Some(b),
+            _ => None,
+        }
+    }
+
+    /// The record as one JSON object (host fields first, so the record's own win).
+    ///
+    /// # Errors
+    /// When serde_json cannot represent a value (never for these types).
+    pub fn to_value(&self) -> serde_json::Result<Value> {
+        serde_json::to_value(self)
+    }
+}
+
+impl<'de> Deserialize<'de> for Record {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        /// A record as stored: the named parts, then the measurement's own fields.
+        #[derive(Deserialize)]
+        struct Stored {
+            #[serde(flatten)]
+            host: HostInfo,
+            experiment: String,
+            reused_from: Option<String>,
+            scene: String,
+            backend: String,
+            mode: Option<String>,
+            #[serde(default)]
+            device: String,
+            #[serde(flatten)]
+            rest: Map<String, Value>,
+        }
+        let s = Stored::deserialize(d)?;
+        let data = Data::parse(&s.experiment, s.rest).map_err(serde::de::Error::custom)?;
+        Ok(Self {
+            host: s.host,
+            experiment: s.experiment,
+            reused_from: s.reused_from,
+            key: Key {
+                scene: s.scene,
+                backend: s.backend,
+                mode: s.mode,
+            },
+            device: s.device,
+            data,
+        })
+    }
+}
+
+/// A backend that did not start.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Unavailable {
+    /// Backend name.
+    pub name: String,
+    /// Why, in the CLI's words.
+    pub reason: String,
+}
+
+/// `results.json`: one matrix run.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Results {
+    /// Where it ran.
+    pub host: HostInfo,
+    /// The command line.
+    #[serde(default = "default_command")]
+    pub command: String,
+    /// Untimed frames per measurement (missing in old files: 1 with `quick`, else 3).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warmup: Option<u32>,
+    /// `--quick`.
+    pub quick: bool,
+    /// Timed frames per measurement.
+    pub frames: u32,
+    /// Wall time of the run, s.
+    pub elapsed_s: f64,
+    /// The backends measured, in table order.
+    pub backends: Vec<String>,
+    /// Backend name to device.
+    pub devices: BTreeMap<String, String>,
+    /// Backends that did not start.
+    pub unavailable: Vec<Unavailable>,
+    /// Measurements that failed, in words.
+    pub failures: Vec<String>,
+    /// Every measurement.
+    pub records: Vec<Record>,
+}
+
+fn default_command() -> String {
+    "cargo xtask matrix".to_owned()
+}
+
+impl Results {
+    /// Warm-up frames per measurement.
+    #[must_use]
+    pub fn warmup(&self) -> u32 {
+        self.warmup.unwrap_or(if self.quick { 1 } else { 3 })
+    }
+
+    /// The first `bench` record of `experiment` on `scene`, `backend`, `mode` with `lights`
+    /// lights (any with `None`).
+    #[must_use]
+    pub fn bench(
+        &self,
+        experiment: &str,
+        scene: &str,
+        backend: &str,
+        mode: &str,
+        lights: Option<u64>,
+    ) -> Option<&Bench> {
+        self.records
+            .iter()
+            .filter(|r| r.is(experiment, Some(scene), backend, mode))
+            .filter_map(Record::bench)
+            .find(|b| lights.is_none_or(|n| b.lights == Some(n)))
+    }
+
+    /// Median silhouette ms of the one-light `bench` record of `experiment`.
+    #[must_use]
+    pub fn ms(&self, experiment: &str, scene: &str, backend: &str, mode: &str) -> Option<f64> {
+        self.bench(experiment, scene, backend, mode, Some(1))
+            .and_then(|b| b.median_ms)
+    }
+}
