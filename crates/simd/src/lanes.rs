@@ -24,10 +24,20 @@ pub(crate) fn or_sign_mask_bits(acc: &mut [u32; 8], pos: u32, neg: u32, k: u32) 
     }
 }
 
-/// Eight `f32` lanes.
-pub(crate) trait F32V:
+/// What the `f32` and the `f64` lanes share: IEEE-754 arithmetic and comparisons to bits.
+pub(crate) trait Arith:
     Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self>
 {
+    /// Lane-wise absolute value (clears the sign bit; exact).
+    fn abs(self) -> Self;
+    /// Bit `i` set when `self[i] > other[i]` (false for NaN lanes).
+    fn gt_bits(self, other: Self) -> u32;
+    /// Bit `i` set when lane `i` equals `0.0` (either sign).
+    fn zero_bits(self) -> u32;
+}
+
+/// Eight `f32` lanes.
+pub(crate) trait F32V: Arith {
     /// All lanes `x`.
     fn splat(x: f32) -> Self;
     /// Lane `i` = `base[idx[i]]`.
@@ -58,12 +68,6 @@ pub(crate) trait F32V:
         let (pos, neg) = (pa & pb & pc, na & nb & nc);
         or_sign_mask_bits(acc, pos, neg, k);
     }
-    /// Lane-wise absolute value (clears the sign bit; exact).
-    fn abs(self) -> Self;
-    /// Bit `i` set when `self[i] > other[i]` (false for NaN lanes).
-    fn gt_bits(self, other: Self) -> u32;
-    /// Bit `i` set when lane `i` equals `0.0` (either sign).
-    fn zero_bits(self) -> u32;
     /// Bit `i` set unless lane `i` is zero or its magnitude lies in `[min, max]` (NaN lanes
     /// are set): the range check of `orient_filter_f32` on one difference.
     fn out_of_range_bits(self, min: f32, max: f32) -> u32;
@@ -92,19 +96,11 @@ pub(crate) trait F32V:
 }
 
 /// Four `f64` lanes.
-pub(crate) trait F64V:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self>
-{
+pub(crate) trait F64V: Arith {
     /// All lanes `x`.
     fn splat(x: f64) -> Self;
     /// Four `f32` values widened exactly to `f64`.
     fn from_f32(a: [f32; 4]) -> Self;
-    /// Lane-wise absolute value.
-    fn abs(self) -> Self;
-    /// Bit `i` set when `self[i] > other[i]`.
-    fn gt_bits(self, other: Self) -> u32;
-    /// Bit `i` set when lane `i` equals `0.0`.
-    fn zero_bits(self) -> u32;
 }
 
 /// An instruction-set level: a pair of lane types.
@@ -178,18 +174,6 @@ impl F32V for wide::f32x8 {
         self.trunc_int().to_array()
     }
     #[inline(always)]
-    fn abs(self) -> Self {
-        wide::f32x8::abs(self)
-    }
-    #[inline(always)]
-    fn gt_bits(self, other: Self) -> u32 {
-        self.simd_gt(other).to_bitmask()
-    }
-    #[inline(always)]
-    fn zero_bits(self) -> u32 {
-        self.simd_eq(wide::f32x8::ZERO).to_bitmask()
-    }
-    #[inline(always)]
     fn out_of_range_bits(self, min: f32, max: f32) -> u32 {
         let m = wide::f32x8::abs(self);
         let ok = m.simd_eq(wide::f32x8::ZERO)
@@ -212,19 +196,29 @@ impl F64V for wide::f64x4 {
             f64::from(a[3]),
         ])
     }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        wide::f64x4::abs(self)
-    }
-    #[inline(always)]
-    fn gt_bits(self, other: Self) -> u32 {
-        self.simd_gt(other).to_bitmask()
-    }
-    #[inline(always)]
-    fn zero_bits(self) -> u32 {
-        self.simd_eq(wide::f64x4::ZERO).to_bitmask()
-    }
 }
+
+/// [`Arith`] for a `wide` vector type.
+macro_rules! wide_arith {
+    ($t:ty) => {
+        impl Arith for $t {
+            #[inline(always)]
+            fn abs(self) -> Self {
+                <$t>::abs(self)
+            }
+            #[inline(always)]
+            fn gt_bits(self, other: Self) -> u32 {
+                self.simd_gt(other).to_bitmask()
+            }
+            #[inline(always)]
+            fn zero_bits(self) -> u32 {
+                self.simd_eq(<$t>::ZERO).to_bitmask()
+            }
+        }
+    };
+}
+wide_arith!(wide::f32x8);
+wide_arith!(wide::f64x4);
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) use avx2::{stream_i32x8, Avx2};
@@ -238,7 +232,7 @@ mod avx2 {
     //! these types are only created inside `#[target_feature(enable = "avx2")]` functions that
     //! the backend enters after `is_x86_feature_detected!("avx2")` returned true, so every
     //! intrinsic here runs on a CPU that has it.
-    use super::{Level, F32V, F64V};
+    use super::{Arith, Level, F32V, F64V};
     use std::arch::x86_64::*;
     use std::ops::{Add, Mul, Sub};
 
@@ -458,23 +452,6 @@ mod avx2 {
             out
         }
         #[inline(always)]
-        fn abs(self) -> Self {
-            // SAFETY: see the module documentation. Clears the sign bit.
-            F8(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0) })
-        }
-        #[inline(always)]
-        fn gt_bits(self, other: Self) -> u32 {
-            // SAFETY: see the module documentation.
-            unsafe { _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(self.0, other.0)) as u32 }
-        }
-        #[inline(always)]
-        fn zero_bits(self) -> u32 {
-            // SAFETY: see the module documentation.
-            unsafe {
-                _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(self.0, _mm256_setzero_ps())) as u32
-            }
-        }
-        #[inline(always)]
         fn out_of_range_bits(self, min: f32, max: f32) -> u32 {
             // SAFETY: see the module documentation. Ordered comparisons: false for NaN.
             unsafe {
@@ -499,24 +476,46 @@ mod avx2 {
             // SAFETY: `a` is 4 readable f32; AVX present (module docs). f32 -> f64 is exact.
             D4(unsafe { _mm256_cvtps_pd(_mm_loadu_ps(a.as_ptr())) })
         }
-        #[inline(always)]
-        fn abs(self) -> Self {
-            // SAFETY: see the module documentation. Clears the sign bit.
-            D4(unsafe { _mm256_andnot_pd(_mm256_set1_pd(-0.0), self.0) })
-        }
-        #[inline(always)]
-        fn gt_bits(self, other: Self) -> u32 {
-            // SAFETY: see the module documentation.
-            unsafe { _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(self.0, other.0)) as u32 }
-        }
-        #[inline(always)]
-        fn zero_bits(self) -> u32 {
-            // SAFETY: see the module documentation.
-            unsafe {
-                _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(self.0, _mm256_setzero_pd())) as u32
-            }
-        }
     }
+
+    /// [`Arith`] for a 256-bit lane type, from its intrinsics (`_ps` or `_pd`).
+    macro_rules! arith {
+        ($t:ident, $andnot:ident, $set1:ident, $cmp:ident, $movemask:ident, $setzero:ident) => {
+            impl Arith for $t {
+                #[inline(always)]
+                fn abs(self) -> Self {
+                    // SAFETY: see the module documentation. Clears the sign bit.
+                    $t(unsafe { $andnot($set1(-0.0), self.0) })
+                }
+                #[inline(always)]
+                fn gt_bits(self, other: Self) -> u32 {
+                    // SAFETY: see the module documentation.
+                    unsafe { $movemask($cmp::<_CMP_GT_OQ>(self.0, other.0)) as u32 }
+                }
+                #[inline(always)]
+                fn zero_bits(self) -> u32 {
+                    // SAFETY: see the module documentation.
+                    unsafe { $movemask($cmp::<_CMP_EQ_OQ>(self.0, $setzero())) as u32 }
+                }
+            }
+        };
+    }
+    arith!(
+        F8,
+        _mm256_andnot_ps,
+        _mm256_set1_ps,
+        _mm256_cmp_ps,
+        _mm256_movemask_ps,
+        _mm256_setzero_ps
+    );
+    arith!(
+        D4,
+        _mm256_andnot_pd,
+        _mm256_set1_pd,
+        _mm256_cmp_pd,
+        _mm256_movemask_pd,
+        _mm256_setzero_pd
+    );
 }
 
 #[cfg(test)]

@@ -1,0 +1,324 @@
+//! The edge pass of `robust`, `ordered` and `exact`: `m(e) = Σ sign(t) · parity(e, t)` over
+//! the triangles of each edge, from the triangle pass's signs. Scalar at the `wide` level; with
+//! AVX2, 8 edges per vector ([`edge_sums_avx2`]).
+
+use super::signs::{pack_sign, signed, PACK};
+use super::{push_bits, EdgeOut};
+use crate::dispatch::Pass;
+use crate::lanes::Level;
+use crate::layout::{Layout, LANES, ODD};
+use std::ops::Range;
+
+/// The triangle signs an edge pass reads for one object: light `l`'s sign of the object's
+/// triangle slot `t` is [`pack_sign`]`(all[bases[l / PACK] + t], lights, l)`.
+#[derive(Clone, Copy)]
+pub(crate) struct PackedSigns<'a> {
+    /// The signs of every object, pack after pack of lights.
+    pub all: &'a [i8],
+    /// Per pack of lights, the index in `all` of the object's slot 0.
+    pub bases: &'a [usize],
+}
+
+/// The edge pass over the blocks `blocks` of one object: `out.rows[l]` receives the range's
+/// multiplicities for light `l`, `out.sil[l]` collects `edge_base + e` where `m != 0`.
+pub(crate) struct EdgeSums<'a, 'r> {
+    /// The object's layout.
+    pub lay: &'a Layout,
+    /// Blocks of 8 edges.
+    pub blocks: Range<usize>,
+    /// The object's triangle signs.
+    pub signs: PackedSigns<'a>,
+    /// Where the results go.
+    pub out: EdgeOut<'a, 'r>,
+}
+
+impl Pass for EdgeSums<'_, '_> {
+    type Out = ();
+    #[inline(always)]
+    fn run<Lv: Level>(self) {
+        edge_sums(self);
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn run_avx2(self) {
+        // SAFETY: AVX2 is present (the contract of `run_avx2`).
+        unsafe { edge_sums_avx2(self) }
+    }
+}
+
+impl EdgeSums<'_, '_> {
+    /// Asserts what the kernels rely on (one sign base per pack of lights, each followed by the
+    /// object's `tri_count` slots) and returns the range's first edge, where `out.rows` start.
+    #[inline(always)]
+    fn check(&self) -> usize {
+        let PackedSigns { all, bases } = self.signs;
+        // Every triangle reference of the layout is < tri_count.
+        assert!(bases.iter().all(|&b| b + self.lay.tri_count <= all.len()));
+        assert!(bases.len() == self.out.rows.len().div_ceil(PACK));
+        self.blocks.start * LANES
+    }
+}
+
+/// Multiplicities of the edges in `blocks` from the triangle signs, scalar (see [`EdgeSums`]).
+///
+/// # Panics
+/// If a slice is shorter than described.
+fn edge_sums(pass: EdgeSums) {
+    let e_start = pass.check();
+    let (lay, blocks, ps, mut out) = (pass.lay, pass.blocks, pass.signs, pass.out);
+    let (signs, bases, edge_base) = (ps.all, ps.bases, out.edge_base);
+    let nl = out.rows.len();
+    for blk in blocks {
+        let e0 = blk * LANES;
+        if lay.block_fast[blk] {
+            // Block-outer, light-inner: the block's triangle references are read once.
+            let (ta, tb) = (&lay.tri_a[e0..e0 + LANES], &lay.tri_b[e0..e0 + LANES]);
+            for (l, row) in out.rows.iter_mut().enumerate() {
+                let base = bases[l / PACK];
+                let s = &signs[base..base + lay.tri_count];
+                let dst = &mut row[e0 - e_start..e0 - e_start + LANES];
+                let mut any = 0;
+                for ((d, &t1), &t2) in dst.iter_mut().zip(ta).zip(tb) {
+                    let i1 = (t1 & !ODD) as usize;
+                    let i2 = (t2 & !ODD) as usize;
+                    debug_assert!(i1 < s.len() && i2 < s.len());
+                    // SAFETY: `Layout::build` stores only triangle slots < tri_count, and
+                    // `s` covers slot tri_count - 1 (asserted above).
+                    let (s1, s2) = unsafe { (*s.get_unchecked(i1), *s.get_unchecked(i2)) };
+                    let m = signed(pack_sign(s1, nl, l), t1) + signed(pack_sign(s2, nl, l), t2);
+                    *d = m;
+                    any |= m;
+                }
+                if any != 0 {
+                    for (i, &m) in dst.iter().enumerate() {
+                        if m != 0 {
+                            out.sil[l].push((edge_base + e0 + i) as u32);
+                        }
+                    }
+                }
+            }
+        } else {
+            edge_sums_general(lay, e0, e_start, &ps, &mut out);
+        }
+    }
+}
+
+/// The general (CSR) path of [`edge_sums`] for the block starting at edge `e0`; `out.rows`
+/// start at edge `e_start`.
+#[inline(always)]
+fn edge_sums_general(lay: &Layout, e0: usize, e_start: usize, ps: &PackedSigns, out: &mut EdgeOut) {
+    let nl = out.rows.len();
+    for e in e0..(e0 + LANES).min(lay.edge_count) {
+        let r = lay.ov_offsets[e] as usize..lay.ov_offsets[e + 1] as usize;
+        for (l, row) in out.rows.iter_mut().enumerate() {
+            let base = ps.bases[l / PACK];
+            let m: i32 = lay.ov_tri[r.clone()]
+                .iter()
+                .map(|&t| signed(pack_sign(ps.all[base + (t & !ODD) as usize], nl, l), t))
+                .sum();
+            row[e - e_start] = m;
+            if m != 0 {
+                out.sil[l].push((out.edge_base + e) as u32);
+            }
+        }
+    }
+}
+
+/// The sign bytes of the 8 triangle slots `ta[..8]` and of `tb[..8]` (parity bit cleared) in
+/// the pack at `sp`, sign-extended to 32-bit lanes: 16 scalar byte loads, which are faster than
+/// two `vpgatherdd` on Zen 3 (docs/PERFORMANCE.md).
+///
+/// # Safety
+/// AVX2 present (the caller is compiled with it); `ta` and `tb` point to 8 readable `u32` each,
+/// and every slot `t & !ODD` they hold is inside the pack at `sp`.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn sign_bytes_of_block(
+    sp: *const i8,
+    ta: *const u32,
+    tb: *const u32,
+) -> (std::arch::x86_64::__m256i, std::arch::x86_64::__m256i) {
+    use std::arch::x86_64::_mm256_setr_epi32;
+    // SAFETY: forwarded from the caller.
+    unsafe {
+        let ld =
+            |t: *const u32, i: usize| -> i32 { i32::from(*sp.add((*t.add(i) & !ODD) as usize)) };
+        (
+            _mm256_setr_epi32(
+                ld(ta, 0),
+                ld(ta, 1),
+                ld(ta, 2),
+                ld(ta, 3),
+                ld(ta, 4),
+                ld(ta, 5),
+                ld(ta, 6),
+                ld(ta, 7),
+            ),
+            _mm256_setr_epi32(
+                ld(tb, 0),
+                ld(tb, 1),
+                ld(tb, 2),
+                ld(tb, 3),
+                ld(tb, 4),
+                ld(tb, 5),
+                ld(tb, 6),
+                ld(tb, 7),
+            ),
+        )
+    }
+}
+
+/// [`edge_sums`] with 8 edges per AVX2 vector: per block and pack of four lights, 16 scalar
+/// byte loads fetch the signs of both triangles of 8 edges for all four lights (see [`PACK`]).
+/// Identical results.
+///
+/// # Safety
+/// The CPU must support AVX2.
+///
+/// # Panics
+/// If a slice is shorter than described.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn edge_sums_avx2(pass: EdgeSums) {
+    use std::arch::x86_64::*;
+    let e_start = pass.check();
+    let (lay, blocks, ps, mut out) = (pass.lay, pass.blocks, pass.signs, pass.out);
+    let (signs, bases, edge_base) = (ps.all, ps.bases, out.edge_base);
+    if let ([base], [out0], [sil0]) = (bases, &mut *out.rows, &mut *out.sil) {
+        // One light (the common case): the loop below without the pack and lane loops.
+        for blk in blocks.clone() {
+            let e0 = blk * LANES;
+            if !lay.block_fast[blk] {
+                let mut one = [&mut **out0];
+                let mut rest = EdgeOut {
+                    rows: &mut one,
+                    sil: std::slice::from_mut(sil0),
+                    edge_base,
+                };
+                edge_sums_general(lay, e0, e_start, &ps, &mut rest);
+                continue;
+            }
+            // SAFETY: fast blocks are full, so e0 + 8 <= tri_a.len() = tri_b.len(); every byte
+            // read is signs[base + slot] with slot < tri_count, and base + tri_count <=
+            // signs.len() (asserted above).
+            let (g1, g2, k1, k2) = unsafe {
+                let ta = lay.tri_a.as_ptr().add(e0);
+                let tb = lay.tri_b.as_ptr().add(e0);
+                let t1 = _mm256_loadu_si256(ta.cast());
+                let t2 = _mm256_loadu_si256(tb.cast());
+                let (g1, g2) = sign_bytes_of_block(signs.as_ptr().add(*base), ta, tb);
+                (
+                    g1,
+                    g2,
+                    _mm256_srai_epi32::<31>(t1),
+                    _mm256_srai_epi32::<31>(t2),
+                )
+            };
+            // The loads sign-extended each byte already.
+            let s1 = _mm256_sub_epi32(_mm256_xor_si256(g1, k1), k1);
+            let s2 = _mm256_sub_epi32(_mm256_xor_si256(g2, k2), k2);
+            let m = _mm256_add_epi32(s1, s2);
+            let dst = &mut out0[e0 - e_start..e0 - e_start + LANES];
+            // SAFETY: `dst` holds 8 i32 (written once, not read back here).
+            unsafe { crate::lanes::stream_i32x8(dst.as_mut_ptr().cast(), m) };
+            let zero = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                m,
+                _mm256_setzero_si256(),
+            ))) as u32;
+            push_bits(sil0, !zero & 0xFF, edge_base + e0);
+        }
+        _mm_sfence();
+        return;
+    }
+    for blk in blocks {
+        let e0 = blk * LANES;
+        if lay.block_fast[blk] {
+            // SAFETY: fast blocks are full, so e0 + 8 <= tri_a.len() = tri_b.len().
+            let (t1, t2) = unsafe {
+                (
+                    _mm256_loadu_si256(lay.tri_a[e0..e0 + LANES].as_ptr().cast()),
+                    _mm256_loadu_si256(lay.tri_b[e0..e0 + LANES].as_ptr().cast()),
+                )
+            };
+            // Parity masks: -1 for odd (bit 31 set), 0 for even.
+            let (k1, k2) = (_mm256_srai_epi32::<31>(t1), _mm256_srai_epi32::<31>(t2));
+            for (pack, &base) in bases.iter().enumerate() {
+                // The 16 sign bytes of the block's triangles, as in the one-light loop.
+                // SAFETY: e0 + 8 <= tri_a.len() = tri_b.len(); every byte read is
+                // signs[base + slot] with slot < tri_count, and base + tri_count <= signs.len()
+                // (asserted above).
+                let (g1, g2) = unsafe {
+                    sign_bytes_of_block(
+                        signs.as_ptr().add(base),
+                        lay.tri_a.as_ptr().add(e0),
+                        lay.tri_b.as_ptr().add(e0),
+                    )
+                };
+                // Each byte holds four lights' signs as bits (`PACK`; the loads sign-extended
+                // it, the shuffle reads byte 0 only). Copy it to the four
+                // bytes of its lane, and make byte `j` the sign of light `4 pack + j`: `+1`
+                // where bit `j` is set, `-1` where bit `4 + j` is.
+                let bcast = _mm256_setr_epi8(
+                    0, 0, 0, 0, 4, 4, 4, 4, 8, 8, 8, 8, 12, 12, 12, 12, 0, 0, 0, 0, 4, 4, 4, 4, 8,
+                    8, 8, 8, 12, 12, 12, 12,
+                );
+                let pos_bit = _mm256_set1_epi32(0x0804_0201);
+                let neg_bit = _mm256_set1_epi32(0x8040_2010_u32 as i32);
+                let (x1, x2) = (
+                    _mm256_shuffle_epi8(g1, bcast),
+                    _mm256_shuffle_epi8(g2, bcast),
+                );
+                // -1 where the bit is set, so `neg - pos` is the sign.
+                let sign = |x: __m256i| {
+                    _mm256_sub_epi8(
+                        _mm256_cmpeq_epi8(_mm256_and_si256(x, neg_bit), neg_bit),
+                        _mm256_cmpeq_epi8(_mm256_and_si256(x, pos_bit), pos_bit),
+                    )
+                };
+                let (g1, g2) = (sign(x1), sign(x2));
+                // Negate every byte where the parity is odd (`k` is 0 or all ones in each
+                // 32-bit lane, so `(g ^ k) - k` per byte) and add the two triangles: byte `j`
+                // of lane `i` is then `m` of edge `e0 + i` for light `4 pack + j`, in
+                // `-2 ..= 2`.
+                let s1 = _mm256_sub_epi8(_mm256_xor_si256(g1, k1), k1);
+                let s2 = _mm256_sub_epi8(_mm256_xor_si256(g2, k2), k2);
+                let m = _mm256_add_epi8(s1, s2);
+                let lights = (out.rows.len() - pack * PACK).min(PACK);
+                // Bit `4 i + j` set where that byte is non-zero, for this pack's lights only
+                // (the bytes of absent lights are not read).
+                let zero = _mm256_movemask_epi8(_mm256_cmpeq_epi8(m, _mm256_setzero_si256()));
+                let nz = !(zero as u32) & (0x1111_1111u32 * ((1 << lights) - 1));
+                // Byte `j` of each lane, sign-extended to i32.
+                let rows = [
+                    _mm256_srai_epi32::<24>(_mm256_slli_epi32::<24>(m)),
+                    _mm256_srai_epi32::<24>(_mm256_slli_epi32::<16>(m)),
+                    _mm256_srai_epi32::<24>(_mm256_slli_epi32::<8>(m)),
+                    _mm256_srai_epi32::<24>(m),
+                ];
+                let pack_out = &mut out.rows[pack * PACK..pack * PACK + lights];
+                for (row, dst) in rows.iter().zip(pack_out.iter_mut()) {
+                    let dst = &mut dst[e0 - e_start..e0 - e_start + LANES];
+                    // SAFETY: `dst` holds 8 i32; unaligned store. (Not a streaming store: with
+                    // several lights' rows, half a cache line each per block, those thrash the
+                    // write-combining buffers.)
+                    unsafe { _mm256_storeu_si256(dst.as_mut_ptr().cast(), *row) };
+                }
+                if nz != 0 {
+                    // Silhouette edges in this block (rare): the lanes of each light.
+                    for (j, row) in rows.iter().enumerate().take(lights) {
+                        let z = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                            *row,
+                            _mm256_setzero_si256(),
+                        ))) as u32;
+                        push_bits(&mut out.sil[pack * PACK + j], !z & 0xFF, edge_base + e0);
+                    }
+                }
+            }
+        } else {
+            edge_sums_general(lay, e0, e_start, &ps, &mut out);
+        }
+    }
+    // The streaming stores above are weakly ordered: make them visible before the caller
+    // (another thread, after rayon's join) reads the output.
+    _mm_sfence();
+}
