@@ -39,12 +39,17 @@ fn check_mode(mode: Accuracy) -> Vec<(String, usize)> {
         let cmp = reference::compare(&frame);
         total_shadow += cmp.reference_shadow_pixels;
         report.push_str(&format!(
-            "{name}: {} artifacts ({} geometric), {} differing, {} reference shadow pixels\n",
+            "{name}: {} artifacts ({} geometric), {} boundary, {} undecidable, {} reference shadow pixels\n",
             cmp.artifact_pixels,
             cmp.geometric_artifact_pixels,
-            cmp.differing_pixels,
+            cmp.boundary_pixels,
+            cmp.undecidable_pixels,
             cmp.reference_shadow_pixels
         ));
+        assert_eq!(
+            cmp.undecidable_pixels, 0,
+            "{mode} on {name}: the exact reference left pixels undecided"
+        );
         assert!(
             cmp.artifact_pixels <= MAX_ARTIFACTS,
             "{mode} on {name}: {} artifact pixels (max {MAX_ARTIFACTS})\n{}",
