@@ -254,16 +254,14 @@ impl ShadowRay {
                 return false;
             }
         }
-        for k in 0..3 {
-            if unknown[k] {
-                match self.edge_exact(c.v[k], c.v[(k + 1) % 3]) {
-                    1 => pos = true,
-                    -1 => neg = true,
-                    _ => {}
-                }
-                if pos && neg {
-                    return false;
-                }
+        for (k, _) in unknown.iter().enumerate().filter(|(_, &u)| u) {
+            match self.edge_exact(c.v[k], c.v[(k + 1) % 3]) {
+                1 => pos = true,
+                -1 => neg = true,
+                _ => {}
+            }
+            if pos && neg {
+                return false;
             }
         }
         true
