@@ -32,7 +32,9 @@ pub const LONG_ABOUT: &str =
     \"silhouette_edges\", \"side_quads\", \"cap_triangles\", \"reason\"}], \"timings\": \
     {\"silhouette_ms\", \"side_building_ms\", \"raster_ms\", \"prepare_ms\", \"total_ms\", \
     \"reference_ms\"}, \"scene\", \"backend\", \"mode\", \"size\": [w, h], \"adapter\", \"out\", \
-    \"covered_pixels\", \"reference_shadow_pixels\", \"geometric_artifact_pixels\"}.";
+    \"covered_pixels\", \"reference_shadow_pixels\", \"geometric_artifact_pixels\", \"undecidable_pixels\" \
+    (covered pixels the reference could not decide), \"boundary_pixels\" (raster and reference differ \
+    within one pixel of a reference shadow boundary; neither is counted as an artifact)}.";
 
 /// Examples shown after the help.
 pub const AFTER_HELP: &str = "Examples:\n  shadowvol render hard-book-3 --out book.png --reference --backdrop\n  \
@@ -141,6 +143,11 @@ struct Report<'a> {
     reference_shadow_pixels: Option<usize>,
     /// `artifact_pixels` with lit meaning `cos θ > 0` (no 1/255 visibility threshold).
     geometric_artifact_pixels: Option<usize>,
+    /// Covered pixels the reference could not decide (not counted as artifacts).
+    undecidable_pixels: Option<usize>,
+    /// Pixels where raster and reference differ within one pixel of a reference shadow boundary
+    /// (not counted as artifacts).
+    boundary_pixels: Option<usize>,
 }
 
 #[derive(Debug, serde::Serialize)]
@@ -218,6 +225,8 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 covered_pixels: cmp.as_ref().map(|c| c.covered_pixels),
                 reference_shadow_pixels: cmp.as_ref().map(|c| c.reference_shadow_pixels),
                 geometric_artifact_pixels: cmp.as_ref().map(|c| c.geometric_artifact_pixels),
+                undecidable_pixels: cmp.as_ref().map(|c| c.undecidable_pixels),
+                boundary_pixels: cmp.as_ref().map(|c| c.boundary_pixels),
             };
             serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
             writeln!(out)?;
@@ -261,10 +270,12 @@ fn write_text(
         let total = (frame.width * frame.height) as usize;
         writeln!(
             out,
-            "artifact pixels {} ({:.3}% of the image; {} differ at boundaries or are undecidable; reference shadow pixels {}; geometric, with no 1/255 threshold: {})",
+            "artifact pixels {} ({:.3}% of the image; {} differ at boundaries, {} undecidable: {:.1}% of covered pixels checked; reference shadow pixels {}; geometric, with no 1/255 threshold: {})",
             c.artifact_pixels,
             100.0 * c.artifact_fraction(total),
-            c.differing_pixels - c.artifact_pixels,
+            c.boundary_pixels,
+            c.undecidable_pixels,
+            100.0 * c.checked_fraction(),
             c.reference_shadow_pixels,
             c.geometric_artifact_pixels
         )?;
@@ -339,6 +350,8 @@ mod tests {
         }
         assert!(v["artifact_pixels"].as_u64().is_some());
         assert!(v["geometric_artifact_pixels"].as_u64().is_some());
+        assert!(v["undecidable_pixels"].as_u64().is_some());
+        assert!(v["boundary_pixels"].as_u64().is_some());
         assert!(v["shadow_pixels"].as_u64().unwrap() > 0);
         let plan = v["plan"].as_array().unwrap();
         assert!(!plan.is_empty());

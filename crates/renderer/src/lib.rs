@@ -56,6 +56,7 @@ pub struct ReadmeDoctests;
 
 pub mod gpu;
 pub mod hard;
+pub mod occlusion;
 pub mod plan;
 pub mod reference;
 mod renderer;

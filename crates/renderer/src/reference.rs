@@ -2,24 +2,30 @@
 //!
 //! For every covered pixel, the rasterized ids name the triangle the pre-pass kept. The surface
 //! point is the intersection of the pixel-centre ray (from the same camera, in `f64`) with that
-//! triangle's plane. From it, a shadow ray goes to each light (a segment to a point light, a ray
-//! towards a directional one) through a BVH over all world triangles (the same `f32` positions
-//! the GPU drew), skipping the triangle itself; any hit means shadowed. Intersection is done in
-//! `f64` and is run in parallel with rayon.
+//! triangle's plane; that `f64` point is the reference's input. From it, a shadow segment goes to
+//! each light (to a point light; towards a directional one, a ray) through a BVH over all world
+//! caster triangles (the same `f32` positions the GPU drew), skipping the triangle itself. Every
+//! caster whose box the segment reaches is decided exactly ([`crate::occlusion`]): it blocks when
+//! the surface point and the light lie strictly on opposite sides of its plane and the line
+//! through them meets the closed triangle. A light in a caster's plane (edge-on) or on the caster
+//! does not block it, as the volumes' sign 0 casts nothing. Run in parallel with rayon.
 //!
 //! Per pixel and light the state is background, unlit (the surface faces away from the light,
 //! the light adds less than one 8-bit step there ([`faces_light`]), or the light is blocked) or
 //! lit. [`Comparison::geometric_artifact_pixels`] repeats the count with the geometric facing
 //! ([`faces_light_geometric`], any `cos θ > 0`), where rasterized volumes z-fight with faces the
-//! light grazes even for exact silhouettes (see the crate README). The raster state uses the same surface point and facing and the
-//! stencil (0 = lit). A pixel is an *artifact* when, for some light, the raster state differs
-//! from the reference and the reference state is the same over the pixel's 3×3 neighbourhood
-//! (that is, the pixel is more than one pixel away from a reference shadow boundary).
+//! light grazes even for exact silhouettes (see the crate README). The raster state uses the same
+//! surface point and facing and the stencil (0 = lit). A pixel is an *artifact* when, for some
+//! light, the raster state differs from the reference and the reference state is the same over
+//! the pixel's 3×3 neighbourhood (that is, the pixel is more than one pixel away from a reference
+//! shadow boundary); [`Comparison::boundary_pixels`] counts the differences within one pixel of
+//! a boundary and [`Comparison::undecidable_pixels`] the pixels the reference could not decide.
 //!
 //! Why our own BVH: the `bvh` crate (0.13) needs Rust 1.90 (the workspace's MSRV is 1.89) and
-//! brings in nalgebra; a median-split BVH over `glam` types with an any-hit `f64` traversal is a
-//! hundred lines and keeps the intersection arithmetic in our hands.
+//! brings in nalgebra; a median-split BVH over `glam` types is a hundred lines and keeps the
+//! traversal (padded boxes, so that rounding never drops a candidate) in our hands.
 
+use crate::occlusion::{light_side, Caster, Crossing, ShadowRay};
 use crate::Frame;
 use glam::{DMat4, DVec3, DVec4};
 use rayon::prelude::*;
@@ -34,9 +40,9 @@ pub enum PixelState {
     Unlit = 1,
     /// Surface lit.
     Lit = 2,
-    /// Reference only: the answer hangs on the last bit. The shadow ray meets a surface within
-    /// `10⁻⁶ ×` the scene's coordinate scale of the light (a light lying on a surface) or of the
-    /// surface point itself (contact). Never counted as an artifact.
+    /// Reference only: the answer hangs on the surface point's last `f64` bits: no caster
+    /// blocks, but one touches the surface point while the shadow ray grazes its plane into it
+    /// ([`crate::occlusion::Crossing::Undecidable`]). Never counted as an artifact.
     Uncertain = 3,
 }
 
@@ -61,6 +67,8 @@ struct Node {
 }
 
 const LEAF: usize = 4;
+/// Relative padding of the BVH boxes (`2⁻⁴⁰`).
+const BOX_PAD: f64 = 1.0 / 1_099_511_627_776.0;
 
 impl Bvh {
     /// Builds the hierarchy; triangle ids are the indices into `tris`.
@@ -98,8 +106,11 @@ impl Bvh {
                 clo = clo.min(centroids[i as usize]);
                 chi = chi.max(centroids[i as usize]);
             }
-            nodes[node].lo = lo;
-            nodes[node].hi = hi;
+            // Padded by 2⁻⁴⁰ of the box's magnitude, so that the rounding of the slab test can
+            // never drop a triangle a shadow ray meets exactly (at a corner or along a face).
+            let pad = lo.abs().max(hi.abs()) * BOX_PAD + DVec3::splat(f64::MIN_POSITIVE);
+            nodes[node].lo = lo - pad;
+            nodes[node].hi = hi + pad;
             let ext = chi - clo;
             if end - begin <= LEAF || ext.max_element() <= 0.0 {
                 nodes[node].first = begin as u32;
@@ -171,6 +182,46 @@ impl Bvh {
                                 return true;
                             }
                         }
+                    }
+                }
+            } else if sp + 2 <= stack.len() {
+                stack[sp] = n.first;
+                stack[sp + 1] = n.first + 1;
+                sp += 2;
+            }
+        }
+        false
+    }
+}
+
+impl Bvh {
+    /// Calls `visit(index)` for every triangle whose (padded) box the segment
+    /// `origin + t·dir`, `t ∈ [0, t_max]`, meets, until it returns true; `index` is the position
+    /// of the triangle in the list given to [`Bvh::build_with_ids`]. Returns whether some call
+    /// returned true.
+    pub fn visit(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        t_max: f64,
+        mut visit: impl FnMut(usize) -> bool,
+    ) -> bool {
+        if self.tris.is_empty() {
+            return false;
+        }
+        let inv = DVec3::ONE / dir;
+        let mut stack = [0u32; 64];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let n = self.nodes[stack[sp] as usize];
+            if !slab(n.lo, n.hi, origin, inv, 0.0, t_max) {
+                continue;
+            }
+            if n.count > 0 {
+                for &i in &self.order[n.first as usize..(n.first + n.count) as usize] {
+                    if visit(i as usize) {
+                        return true;
                     }
                 }
             } else if sp + 2 <= stack.len() {
@@ -392,51 +443,43 @@ fn visible_only(
 }
 
 /// The reference's per-light states by ray casting, with the geometric facing
-/// ([`faces_light_geometric`]): every surface point with `cos θ > 0` is ray cast.
+/// ([`faces_light_geometric`]): every surface point with `cos θ > 0` is ray cast, and every caster
+/// the shadow ray's BVH boxes reach is decided exactly ([`crate::occlusion`]): unlit when one
+/// blocks, [`PixelState::Uncertain`] when none blocks but one is [`Crossing::Undecidable`], else
+/// lit. The pixel's own triangle is skipped (the surface point lies on it).
 #[must_use]
 pub fn reference_states_geometric(
     frame: &Frame,
     points: &[Option<SurfacePoint>],
 ) -> Vec<Vec<PixelState>> {
     let mut tris: Vec<[DVec3; 3]> = Vec::new();
+    let mut casters: Vec<Caster> = Vec::new();
+    let mut raw: Vec<[glam::Vec3; 3]> = Vec::new();
     let mut ids = Vec::new();
     let mut next = 0u32;
     for (oi, obj) in frame.triangles.iter().enumerate() {
         for t in obj {
             if frame.casts_shadows[oi] {
-                tris.push([t[0].as_dvec3(), t[1].as_dvec3(), t[2].as_dvec3()]);
+                let c = Caster::new(*t);
+                tris.push(c.v);
+                casters.push(c);
+                raw.push(*t);
                 ids.push(next);
             }
             next += 1;
         }
     }
-    let scale = tris
-        .iter()
-        .flatten()
-        .fold(0f64, |m, p| m.max(p.abs().max_element()))
-        .max(1e-30);
-    let bvh = Bvh::build_with_ids(tris, ids);
+    let bvh = Bvh::build_with_ids(tris, ids.clone());
+    let eye = frame.camera.eye.as_dvec3();
     frame
         .lights
         .iter()
         .enumerate()
         .map(|(li, light)| {
             let l = light.to_array();
-            // Triangles with a vertex exactly at a point light cast no shadow (their shadow has no
-            // volume); the renderer draws them without a volume too.
-            let touching: Vec<bool> = if l[3] == 0.0 {
-                Vec::new()
-            } else {
-                frame
-                    .triangles
-                    .iter()
-                    .flatten()
-                    .map(|t| {
-                        t.iter()
-                            .any(|p| p.x * l[3] == l[0] && p.y * l[3] == l[1] && p.z * l[3] == l[2])
-                    })
-                    .collect()
-            };
+            // Which side of each caster's plane the light is on (0: in it, never blocks).
+            let sides: Vec<i8> = raw.par_iter().map(|t| light_side(*t, l)).collect();
+            let t_max = if l[3] == 0.0 { f64::INFINITY } else { 1.0 };
             points
                 .par_iter()
                 .map(|p| match p {
@@ -445,28 +488,25 @@ pub fn reference_states_geometric(
                         if !faces_light_geometric(frame, sp, li) {
                             return PixelState::Unlit;
                         }
-                        let v = light_vec(l, sp.position);
-                        let len = v.length();
-                        let eps = scale * 1e-9 / len;
-                        let delta = scale * 1e-6 / len;
-                        let own = sp.triangle;
-                        let skip = |id: u32| {
-                            id != own && !touching.get(id as usize).copied().unwrap_or(false)
-                        };
-                        let o = sp.position;
-                        if l[3] == 0.0 {
-                            if bvh.occluded_by(o, v, delta, f64::INFINITY, skip) {
-                                PixelState::Unlit
-                            } else if bvh.occluded_by(o, v, eps, delta, skip) {
-                                PixelState::Uncertain
-                            } else {
-                                PixelState::Lit
-                            }
-                        } else if bvh.occluded_by(o, v, delta, 1.0 - delta, skip) {
+                        let ray = ShadowRay::new(sp.position, l, eye);
+                        let mut undecidable = false;
+                        let blocked =
+                            bvh.visit(sp.position, light_vec(l, sp.position), t_max, |i| {
+                                if ids[i] == sp.triangle {
+                                    return false;
+                                }
+                                match ray.crossing(&casters[i], sides[i]) {
+                                    Crossing::Blocks => true,
+                                    Crossing::Clear => false,
+                                    Crossing::Undecidable => {
+                                        undecidable = true;
+                                        false
+                                    }
+                                }
+                            });
+                        if blocked {
                             PixelState::Unlit
-                        } else if bvh.occluded_by(o, v, eps, delta, skip)
-                            || bvh.occluded_by(o, v, 1.0 - delta, 1.0 + delta, skip)
-                        {
+                        } else if undecidable {
                             PixelState::Uncertain
                         } else {
                             PixelState::Lit
@@ -492,6 +532,14 @@ pub struct Comparison {
     /// Pixels whose state differs for some light (boundaries included), or where the reference
     /// is [`PixelState::Uncertain`].
     pub differing_pixels: usize,
+    /// Covered pixels where the reference could not decide some light
+    /// ([`PixelState::Uncertain`]; see [`crate::occlusion`] for the one case that remains) and
+    /// that are not artifacts for another light.
+    pub undecidable_pixels: usize,
+    /// Pixels where raster and reference differ for some light but the reference's own state
+    /// changes within the pixel's 3×3 neighbourhood (within one pixel of a reference shadow
+    /// boundary), that are neither artifacts nor undecidable: not counted as artifacts.
+    pub boundary_pixels: usize,
     /// Covered pixels the raster shadows (stencil ≠ 0 on a surface facing the light) for some
     /// light.
     pub shadow_pixels: usize,
@@ -510,6 +558,18 @@ impl Comparison {
     #[must_use]
     pub fn artifact_fraction(&self, total_pixels: usize) -> f64 {
         self.artifact_pixels as f64 / total_pixels.max(1) as f64
+    }
+
+    /// The share of covered pixels the metric checked: covered pixels that are neither
+    /// [`Comparison::boundary_pixels`] nor [`Comparison::undecidable_pixels`] (1 when nothing is
+    /// covered).
+    #[must_use]
+    pub fn checked_fraction(&self) -> f64 {
+        if self.covered_pixels == 0 {
+            return 1.0;
+        }
+        let left_out = self.boundary_pixels + self.undecidable_pixels;
+        self.covered_pixels.saturating_sub(left_out) as f64 / self.covered_pixels as f64
     }
 }
 
@@ -534,18 +594,21 @@ fn count_shadowed(
         .count()
 }
 
-/// Per pixel, the worst class over the lights (see [`Comparison::classes`]).
+/// Per pixel, the worst class over the lights (see [`Comparison::classes`]), and whether the
+/// reference is [`PixelState::Uncertain`] for some light.
 fn classify(
     raster: &[Vec<PixelState>],
     reference: &[Vec<PixelState>],
     w: usize,
     h: usize,
-) -> Vec<u8> {
+) -> (Vec<u8>, Vec<bool>) {
     let mut classes = vec![0u8; w * h];
+    let mut uncertain = vec![false; w * h];
     for (r, f) in raster.iter().zip(reference) {
         for i in 0..w * h {
             if f[i] == PixelState::Uncertain {
                 classes[i] = classes[i].max(1);
+                uncertain[i] = true;
                 continue;
             }
             if r[i] == f[i] {
@@ -570,7 +633,7 @@ fn classify(
             classes[i] = classes[i].max(class);
         }
     }
-    classes
+    (classes, uncertain)
 }
 
 /// Renders the reference and compares, with the visible facing ([`faces_light`]) for
@@ -581,14 +644,25 @@ pub fn compare(frame: &Frame) -> Comparison {
     let (w, h) = (frame.width as usize, frame.height as usize);
     let raster_geometric = raster_states_geometric(frame, &points);
     let reference_geometric = reference_states_geometric(frame, &points);
-    let geometric = classify(&raster_geometric, &reference_geometric, w, h);
+    let (geometric, _) = classify(&raster_geometric, &reference_geometric, w, h);
     let raster = raster_states(frame, &points);
     let reference = visible_only(frame, &points, reference_geometric);
-    let classes = classify(&raster, &reference, w, h);
+    let (classes, uncertain) = classify(&raster, &reference, w, h);
+    let undecidable_pixels = classes
+        .iter()
+        .zip(&uncertain)
+        .filter(|&(&c, &u)| u && c == 1)
+        .count();
     Comparison {
         artifact_pixels: classes.iter().filter(|&&c| c >= 2).count(),
         geometric_artifact_pixels: geometric.iter().filter(|&&c| c >= 2).count(),
         differing_pixels: classes.iter().filter(|&&c| c >= 1).count(),
+        undecidable_pixels,
+        boundary_pixels: classes
+            .iter()
+            .zip(&uncertain)
+            .filter(|&(&c, &u)| !u && c == 1)
+            .count(),
         shadow_pixels: count_shadowed(frame, &points, &raster),
         reference_shadow_pixels: count_shadowed(frame, &points, &reference),
         covered_pixels: points.iter().filter(|p| p.is_some()).count(),
