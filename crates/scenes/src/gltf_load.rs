@@ -199,12 +199,19 @@ pub fn load_gltf_slice_with_notes(
             }
         }
     }
-    // Buffers are read one by one: an EXT_meshopt_compression fallback buffer has no data (no
-    // uri, and not the GLB's BIN chunk); its views are decoded from their compressed source.
+    // Only the buffers that positions and indices read are loaded (others may be placeholders
+    // without data, or URIs this loader cannot resolve, which is valid glTF). An
+    // EXT_meshopt_compression fallback buffer has no data; its views are decoded instead.
+    let needed = needed_buffers(&document, &ext);
     let mut blob = blob;
     let mut data: Vec<Option<Vec<u8>>> = Vec::with_capacity(document.buffers().len());
     for b in document.buffers() {
-        if ext.fallback.contains(&b.index()) && matches!(b.source(), gltf::buffer::Source::Bin) {
+        let bin = matches!(b.source(), gltf::buffer::Source::Bin);
+        if !needed.contains(&b.index()) || (ext.fallback.contains(&b.index()) && bin) {
+            if bin && b.index() == 0 {
+                // The GLB's BIN chunk belongs to buffer 0 only.
+                blob = None;
+            }
             data.push(None);
             continue;
         }
@@ -289,10 +296,19 @@ pub fn load_gltf_slice_with_notes(
 /// * `animations`: shadowvol reads no animation, and `gltf-json` refuses channel targets without
 ///   a `node` (valid in glTF 2.0, used by `KHR_animation_pointer`), so they are dropped before
 ///   parsing.
+/// * a scene without `nodes` (optional in the spec) gets an empty list.
 fn normalize_json(value: &mut serde_json::Value) {
     use serde_json::Value;
     if let Value::Object(m) = value {
         m.remove("animations");
+        // `scene.nodes` is optional in glTF 2.0, required by gltf-json.
+        if let Some(Value::Array(scenes)) = m.get_mut("scenes") {
+            for sc in scenes {
+                if let Value::Object(o) = sc {
+                    o.entry("nodes").or_insert_with(|| Value::Array(Vec::new()));
+                }
+            }
+        }
     }
     let mut stack = vec![value];
     while let Some(v) = stack.pop() {
@@ -350,6 +366,40 @@ impl Extensions {
                 .collect(),
         }
     }
+}
+
+/// The buffers that positions and indices read: the buffers of their views (and sparse views),
+/// or, for `EXT_meshopt_compression` views, the buffer of the compressed source.
+fn needed_buffers(document: &gltf::Document, ext: &Extensions) -> std::collections::HashSet<usize> {
+    let mut out = std::collections::HashSet::new();
+    let mut add = |v: gltf::buffer::View| {
+        match ext
+            .meshopt
+            .get(&v.index())
+            .and_then(|e| e.get("buffer"))
+            .and_then(|b| b.as_u64())
+        {
+            Some(src) => out.insert(src as usize),
+            None => out.insert(v.buffer().index()),
+        };
+    };
+    for mesh in document.meshes() {
+        for prim in mesh.primitives() {
+            for acc in [prim.get(&gltf::Semantic::Positions), prim.indices()]
+                .into_iter()
+                .flatten()
+            {
+                if let Some(v) = acc.view() {
+                    add(v);
+                }
+                if let Some(s) = acc.sparse() {
+                    add(s.indices().view());
+                    add(s.values().view());
+                }
+            }
+        }
+    }
+    out
 }
 
 /// Extensions that may be required: those read here, and those that only change appearance
@@ -997,7 +1047,11 @@ fn validate(document: &gltf::Document) -> Result<(), String> {
         let required = p.starts_with("extensionsRequired") && matches!(error, Error::Unsupported);
         // A primitive without POSITION is valid glTF; it is skipped with a note.
         let position = p.ends_with("attributes[\"POSITION\"]");
-        if !((min_max || position) && matches!(error, Error::Missing)) && !required {
+        // An accessor without bufferView is zero-filled; a texture without source is valid (an
+        // extension provides the image) and textures are not read.
+        let optional = (p.starts_with("accessors[") && p.ends_with("].bufferView"))
+            || (p.starts_with("textures[") && p.ends_with("].source"));
+        if !((min_max || position || optional) && matches!(error, Error::Missing)) && !required {
             errors.push(format!("{p}: {error}"));
         }
     });
