@@ -11,11 +11,13 @@ M=../crates/cli/tests/data/malformed
 seeds() {
   case $1 in
     obj_loader) echo "$D $M ../assets" ;;
-    gltf_loader) echo "$D $M" ;;
+    gltf_loader) echo "$D $M $D/real" ;;
+    stl_loader | ply_loader) echo "$D/real" ;;
     *) echo "" ;;
   esac
 }
-for t in obj_loader gltf_loader topology exact_predicate pipeline simd_differential; do
+for t in obj_loader gltf_loader stl_loader ply_loader meshopt_decode topology exact_predicate \
+  pipeline simd_differential; do
   mkdir -p corpus/$t
   echo "=== $t: ${secs} s from $(date -u +%H:%M:%S)"
   # shellcheck disable=SC2046

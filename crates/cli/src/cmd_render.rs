@@ -12,8 +12,8 @@ use std::time::Instant;
 
 /// The long help of the subcommand.
 pub const LONG_ABOUT: &str =
-    "Render SCENE (a preset name from `shadowvol scenes`, or a .gltf/.glb \
-    file with its KHR_lights_punctual lights and camera) with stencil shadow volumes on the GPU \
+    "Render SCENE (a preset name from `shadowvol scenes`, a .gltf/.glb \
+    file with its KHR_lights_punctual lights and camera, or a .obj/.stl/.ply mesh with --light) with stencil shadow volumes on the GPU \
     (wgpu; headless), and write a PNG.\n\n\
     Silhouettes come from --backend in --mode; caps use the same per-triangle signs. For each \
     (light, object) the plan picks: culled (its shadow cannot reach the view), z-pass (the \
@@ -55,9 +55,21 @@ pub enum TechniqueArg {
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The scene: a preset name (see `shadowvol scenes`) or a .gltf/.glb/.obj file.
+    /// The scene: a preset name (see `shadowvol scenes`) or a .gltf/.glb/.obj/.stl/.ply file
+    /// (`shadowvol --help` lists what each format reads).
     #[arg(value_name = "SCENE")]
     scene: String,
+
+    /// A light as homogeneous X,Y,Z,W (w = 1 point, w = 0 directional towards (X,Y,Z)); repeat
+    /// for several. Replaces the scene's own lights; needed for .obj/.stl/.ply meshes, which
+    /// have none.
+    #[arg(
+        long = "light",
+        value_name = "X,Y,Z,W",
+        allow_hyphen_values = true,
+        value_parser = parse_light
+    )]
+    lights: Vec<shadowvol_robust_math::Light>,
 
     /// The PNG to write.
     #[arg(long, value_name = "FILE.png")]
@@ -160,13 +172,25 @@ struct Timings {
     reference_ms: Option<f64>,
 }
 
+fn parse_light(s: &str) -> Result<shadowvol_robust_math::Light, String> {
+    s.parse::<shadowvol_robust_math::Light>()
+        .map_err(|e| e.to_string())
+}
+
 pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let entry = find_backend(&args.backend)?;
-    let scene = shadowvol_scenes::Scene::from_name_or_path(&args.scene)
+    let (mut scene, notes) = shadowvol_scenes::Scene::from_name_or_path_with_notes(&args.scene)
         .map_err(|e| CliError::Other(format!("{}: {e}", args.scene)))?;
+    for n in &notes {
+        eprintln!("note: {n}");
+    }
+    if !args.lights.is_empty() {
+        scene.lights.clone_from(&args.lights);
+    }
     if scene.lights.is_empty() {
         return Err(CliError::Usage(format!(
-            "scene {} has no lights: nothing would cast a shadow (glTF: add KHR_lights_punctual lights)",
+            "scene {} has no lights: nothing would cast a shadow (add --light X,Y,Z,W, or \
+             KHR_lights_punctual lights to a glTF file)",
             args.scene
         )));
     }

@@ -10,13 +10,13 @@ use std::path::PathBuf;
 pub const LONG_ABOUT: &str =
     "List the scene presets (the paper's scenes and the hard cases of the \
      conformance corpus) with their number of objects, triangles and lights. Every command that \
-     takes a scene accepts these names as well as .gltf, .glb and .obj files. Presets are \
+     takes a scene accepts these names as well as .gltf, .glb, .obj, .stl and .ply files. Presets are \
      generated on request, so listing them builds each once.\n\n\
      JSON: [{\"name\": \"...\", \"objects\": N, \"triangles\": N, \"lights\": N}, ...]";
 
 /// The long help of `shadowvol scene`.
 pub const SCENE_LONG_ABOUT: &str = "Work with one scene. `shadowvol scene export NAME OUT.glb` \
-     writes a preset (or any .gltf/.glb/.obj file) as binary glTF 2.0 that other tools can \
+     writes a preset (or any .gltf/.glb/.obj/.stl/.ply file) as binary glTF 2.0 that other tools can \
      open: one node per object with its transform, meshes shared between instances, lights as \
      KHR_lights_punctual, and the camera. Loading the file back gives the same objects, lights \
      and silhouettes bit for bit.\n\n\

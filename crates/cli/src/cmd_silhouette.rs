@@ -16,7 +16,8 @@ pub const LONG_ABOUT: &str =
                   \"triangles\", \"edges\", \"boundary_edges\", \"nonmanifold_edges\", ...}, \
                   \"lights\": [{\"light\": [x,y,z,w], \"edges\": [[a,b,m], ...], \
                   \"open_vertices\": N}], \"device\", \"timings\"}; only m != 0 is listed, \
-                  sorted by (a, b).";
+                  sorted by (a, b); \"notes\": [\"...\"] is added when the loader skipped \
+                  something (glTF primitives that are not triangles).";
 
 /// Examples shown after the help.
 pub const AFTER_HELP: &str =
@@ -27,8 +28,10 @@ pub const AFTER_HELP: &str =
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// The mesh: a .obj file (v and f statements; polygons are fanned), a .gltf/.glb file (node
-    /// transforms applied in f32; all objects merged into one mesh) or a scene preset name
-    /// (`shadowvol scenes`).
+    /// transforms applied in f32; all objects merged into one mesh; quantized and
+    /// meshopt-compressed files too), a .stl file (ASCII or binary), a .ply file (ASCII or
+    /// binary) or a scene preset name (`shadowvol scenes`). `shadowvol --help` lists what each
+    /// format reads.
     #[arg(value_name = "MESH")]
     mesh: String,
 
@@ -85,10 +88,19 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let report = silhouette_report(backend.as_mut(), &input.mesh, &lights, mode)?;
     match args.format {
         Format::Json => {
-            serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
+            let mut json = serde_json::to_value(&report).map_err(|e| CliError::Output(e.into()))?;
+            if !input.notes.is_empty() {
+                json["notes"] = serde_json::Value::from(input.notes.clone());
+            }
+            serde_json::to_writer(&mut *out, &json).map_err(|e| CliError::Output(e.into()))?;
             writeln!(out)?;
         }
-        Format::Text => write_text(out, &input.name, &report, args.max_edges)?,
+        Format::Text => {
+            for n in &input.notes {
+                writeln!(out, "note     {n}")?;
+            }
+            write_text(out, &input.name, &report, args.max_edges)?;
+        }
     }
     Ok(())
 }

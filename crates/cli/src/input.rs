@@ -17,11 +17,23 @@ pub struct Input {
     /// Lights defined by the input (glTF `KHR_lights_punctual`, preset lights; none for OBJ).
     /// Used when no `--light` is given.
     pub lights: Vec<Light>,
+    /// What the loader skipped, one sentence each naming the file and element (glTF primitives
+    /// that are not triangles or have no positions, nodes left without triangles); empty for
+    /// the other formats and presets.
+    pub notes: Vec<String>,
 }
 
-/// Loads `path_or_name`: a `.obj`, `.gltf` or `.glb` file (case-insensitive extension) or a
-/// scene preset name (`shadowvol scenes` lists them), through
-/// [`Scene::from_name_or_path`]. Several objects are baked into one world-space mesh with
+/// The input formats every subcommand accepts, for `--help`.
+pub const INPUT_FORMATS: &str = "Input formats (by extension, case-insensitive): .gltf/.glb \
+    (glTF 2.0: node transforms, KHR_lights_punctual, cameras, KHR_mesh_quantization, \
+    EXT_meshopt_compression, sparse accessors; points and lines are skipped with a note), .obj \
+    (v and f; polygons fanned), .stl (ASCII or binary; a triangle soup, welded by exact \
+    position), .ply (ASCII or binary little/big-endian; vertex x, y, z and face vertex_indices, \
+    polygons fanned, other properties ignored), or a preset name (`shadowvol scenes`).";
+
+/// Loads `path_or_name`: a `.obj`, `.gltf`, `.glb`, `.stl` or `.ply` file (case-insensitive
+/// extension) or a scene preset name (`shadowvol scenes` lists them), through
+/// [`Scene::from_name_or_path_with_notes`]. Several objects are baked into one world-space mesh with
 /// [`Scene::baked_mesh`] (transforms applied in `f32` on the host).
 ///
 /// # Errors
@@ -29,11 +41,16 @@ pub struct Input {
 /// accessor or vertex), an unsupported extension, or an unknown preset name;
 /// [`CliError::Other`] for an input without triangles (an empty or garbage file).
 pub fn load_input(path_or_name: &str) -> Result<Input, CliError> {
-    let scene = Scene::from_name_or_path(path_or_name)?;
+    let (scene, notes) = Scene::from_name_or_path_with_notes(path_or_name)?;
     let mesh = scene.baked_mesh()?;
     if mesh.triangles.is_empty() {
+        let skipped = if notes.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", notes.join("; "))
+        };
         return Err(CliError::Other(format!(
-            "{path_or_name}: no triangles found, nothing can cast a shadow{}",
+            "{path_or_name}: no triangles found, nothing can cast a shadow{}{skipped}",
             not_text_hint(path_or_name)
         )));
     }
@@ -41,6 +58,7 @@ pub fn load_input(path_or_name: &str) -> Result<Input, CliError> {
         name: path_or_name.to_owned(),
         mesh,
         lights: scene.lights.clone(),
+        notes,
     })
 }
 

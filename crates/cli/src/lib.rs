@@ -7,7 +7,7 @@
 //!   and nothing else. Adding a backend means one new crate and one line in
 //!   [`registry`](registry::backends).
 //! * [`load_input`]: the one function that turns a command-line mesh argument (`.obj`, `.gltf`,
-//!   `.glb` or a preset name) into one world-space [`Mesh`] and the input's own lights.
+//!   `.glb`, `.stl`, `.ply` or a preset name; [`INPUT_FORMATS`] describes them) into one world-space [`Mesh`] and the input's own lights.
 //! * [`report`]: the silhouette report that `shadowvol silhouette --format json` prints (the JSON
 //!   contract of DESIGN.md).
 //! * [`CliError`]: errors with their exit codes (2 for usage, 1 for everything else).
@@ -29,7 +29,7 @@ pub mod registry;
 pub mod report;
 
 pub use error::CliError;
-pub use input::{load_input, Input};
+pub use input::{load_input, Input, INPUT_FORMATS};
 pub use registry::{backend_names, backends, find_backend, BackendEntry};
 
 use shadowvol_robust_math::Accuracy;

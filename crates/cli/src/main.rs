@@ -24,7 +24,12 @@ mod cmd_silhouette;
 /// Exit codes: 0 success, 1 failure (bad input file, unavailable backend, device error),
 /// 2 usage error (bad arguments).
 #[derive(Debug, Parser)]
-#[command(name = "shadowvol", version, propagate_version = true)]
+#[command(
+    name = "shadowvol",
+    version,
+    propagate_version = true,
+    after_help = shadowvol::INPUT_FORMATS
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -2,16 +2,36 @@
 //!
 //! What is read:
 //!
-//! * **Nodes** of the default scene (else the first scene, else every root node), visited depth
-//!   first in order: a node, then its children in order. Each node with a mesh becomes one
+//! * **Nodes** of the scene named by `scene`, else of the first scene, else every root node,
+//!   visited depth first in order: a node, then its children in order. Each node with a mesh becomes one
 //!   [`Object`] whose transform is the node's world transform, composed in `f32`
 //!   (`parent * local`, glTF's `matrix` or `T * R * S`). This order is the vertex numbering of
 //!   the CLI contract: depth-first node order, then primitive order, then accessor order.
 //! * **Meshes**: all primitives of a mesh are concatenated, in order, into one [`Mesh`]. Nodes
 //!   that use the same mesh share one `Arc<Mesh>`. Modes `TRIANGLES`, `TRIANGLE_STRIP` and
-//!   `TRIANGLE_FAN` are read (strips and fans are turned into triangle lists); points and lines
-//!   are an error. Only `POSITION` (`VEC3`/`FLOAT`) and the indices (`UNSIGNED_BYTE`, `_SHORT`,
-//!   `_INT`) are read; sparse accessors are applied. Skins and morph targets are ignored.
+//!   `TRIANGLE_FAN` are read (strips and fans are turned into triangle lists); points and lines,
+//!   and primitives without `POSITION`, are skipped with a note (see
+//!   [`load_gltf_slice_with_notes`]), and a node whose mesh is left without triangles is skipped
+//!   too. Non-indexed primitives use their vertices in order. Only `POSITION` and the indices
+//!   (`UNSIGNED_BYTE`, `_SHORT`, `_INT`) are read. Skins and morph targets are not applied: a
+//!   skinned or morphed mesh is read at its base `POSITION`s, under its node's transform.
+//! * **Accessors**, to the spec: an accessor without `bufferView` is zero-filled; a sparse
+//!   accessor's values replace those of its base (a view, or zeros).
+//! * **`KHR_mesh_quantization`** (when in `extensionsUsed`): `POSITION` may also be `BYTE`,
+//!   `UNSIGNED_BYTE`, `SHORT` or `UNSIGNED_SHORT`. Integers are read as their value; normalized
+//!   ones are decoded by the spec's formulas in `f32`, correctly rounded: `c / 255`, `c / 65535`,
+//!   `max(c / 127, -1)`, `max(c / 32767, -1)`. The node transform (where exporters put the
+//!   dequantization scale and offset) is then applied in `f32` as for float positions: exact
+//!   results are exact for these `f32` world positions, not for the real numbers a quantizer
+//!   had in mind.
+//! * **`EXT_meshopt_compression`**: compressed buffer views read by positions and indices are
+//!   decoded with meshoptimizer (the `meshopt` crate; see [`crate::meshopt_view`]); a fallback
+//!   buffer (no data) is never read. Decoding is lossless: a compressed file gives exactly the
+//!   vertex data of the same file uncompressed (the index codec may rotate a triangle's
+//!   corners, keeping its winding).
+//! * **`KHR_draco_mesh_compression`** is not supported (there is no maintained Rust decoder): a
+//!   file that requires it is refused with an error saying so; a file that only uses it reads
+//!   the uncompressed fallback accessors.
 //! * **Cameras**: the first node with a perspective camera (depth-first order) becomes the scene
 //!   camera: eye at the node's origin, looking down its `-Z`, up its `+Y`. A `"target"` in the
 //!   node's extras (written by [`crate::export_glb`]) sets the target point exactly.
@@ -21,10 +41,19 @@
 //!   is treated as a point light at its position: shadow volumes of a spot light are those of a
 //!   point light, the cone only limits what is lit.
 //!
-//! The `gltf` crate checks the JSON structure but not what accessors contain, so this module
-//! validates it: every accessor must be in its buffer view and buffer, have a count above 0 and
-//! the right type; positions must be finite, indices in range, and index counts must make whole
-//! triangles. Every error names the file and the node, mesh, primitive and accessor.
+//! Parsing goes through the `gltf` crate's types without its validation, plus checks of our own:
+//! the crate's serde types refuse files the spec calls valid (an integer written as `1.0`, an
+//! animation channel target without `node`), and its validation refuses every required extension
+//! it does not implement (`KHR_mesh_quantization`, `EXT_meshopt_compression`) and primitives
+//! without `POSITION`. So the JSON is first normalised (integral numbers become integers,
+//! `animations`, which are not read, are dropped), then the crate's structural validation runs
+//! with those findings left out, and required extensions are checked against what is read here
+//! (material and texture extensions do not change geometry and are accepted).
+//!
+//! The `gltf` crate does not check what accessors contain, so this module validates it: every
+//! accessor must be in its buffer view and buffer, have a count above 0 and the right type;
+//! positions must be finite, indices in range, and index counts must make whole triangles. Every
+//! error names the file and the node, mesh, primitive and accessor.
 
 use crate::scene::{file_name, Camera, Effects, Object, Scene};
 use crate::SceneError;
@@ -43,6 +72,15 @@ use std::sync::Arc;
 /// [`SceneError::Io`] if the file cannot be read, [`SceneError::Gltf`] naming the file and the
 /// node/mesh/primitive/accessor for anything malformed (see the module documentation).
 pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+    load_gltf_with_notes(path).map(|(s, _)| s)
+}
+
+/// As [`load_gltf`], and also returns the notes about what was skipped (see
+/// [`load_gltf_slice_with_notes`]).
+///
+/// # Errors
+/// As [`load_gltf`].
+pub fn load_gltf_with_notes(path: impl AsRef<Path>) -> Result<(Scene, Vec<String>), SceneError> {
     let path = path.as_ref();
     let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
         path: path.display().to_string(),
@@ -70,9 +108,9 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
             ),
         });
     }
-    load_gltf_slice(&bytes, &name, base).map(|mut s| {
+    load_gltf_slice_with_notes(&bytes, &name, base).map(|(mut s, notes)| {
         s.name = file_name(path);
-        s
+        (s, notes)
     })
 }
 
@@ -96,27 +134,56 @@ pub fn load_gltf_slice(
     source_name: &str,
     base: Option<&Path>,
 ) -> Result<Scene, SceneError> {
+    load_gltf_slice_with_notes(bytes, source_name, base).map(|(s, _)| s)
+}
+
+/// As [`load_gltf_slice`], and also returns the notes about what was skipped: primitives that
+/// are not triangles (points, lines) or have no `POSITION`, and nodes whose mesh is left without
+/// triangles. Each note names the file and the node, mesh and primitive.
+///
+/// # Errors
+/// As [`load_gltf_slice`].
+pub fn load_gltf_slice_with_notes(
+    bytes: &[u8],
+    source_name: &str,
+    base: Option<&Path>,
+) -> Result<(Scene, Vec<String>), SceneError> {
     let err = |context: &str, message: String| SceneError::Gltf {
         file: source_name.to_owned(),
         context: context.to_owned(),
         message,
     };
-    if bytes.starts_with(b"glTF") && bytes.len() >= 12 {
-        let declared = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize;
-        if declared != bytes.len() {
-            return Err(err(
-                "document",
-                format!(
-                    "GLB header declares {declared} bytes but the file has {} (truncated or \
-                     corrupted)",
-                    bytes.len()
-                ),
-            ));
+    let (json, blob) = if bytes.starts_with(b"glTF") {
+        if bytes.len() >= 12 {
+            let declared = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize;
+            if declared != bytes.len() {
+                return Err(err(
+                    "document",
+                    format!(
+                        "GLB header declares {declared} bytes but the file has {} (truncated or \
+                         corrupted)",
+                        bytes.len()
+                    ),
+                ));
+            }
         }
-    }
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
-        .map_err(|e| err("document", e.to_string()))?;
+        let glb = gltf::Glb::from_slice(bytes).map_err(|e| err("document", e.to_string()))?;
+        (
+            glb.json.into_owned(),
+            glb.bin.map(std::borrow::Cow::into_owned),
+        )
+    } else {
+        (bytes.to_vec(), None)
+    };
+    let mut value: serde_json::Value = serde_json::from_slice(&json)
+        .map_err(|e| err("document", format!("not valid JSON: {e}")))?;
+    normalize_json(&mut value);
+    let ext = Extensions::read(&value);
+    let json = serde_json::to_vec(&value).map_err(|e| err("document", e.to_string()))?;
+    let root = gltf::json::Root::from_slice(&json).map_err(|e| err("document", e.to_string()))?;
+    let document = gltf::Document::from_json_without_validation(root);
     validate(&document).map_err(|m| err("document", m))?;
+    check_required_extensions(&document).map_err(|m| err("document", m))?;
     // `import_buffers` unwraps the percent-decoding of relative URIs (it panics when the decoded
     // bytes are not UTF-8): check them first.
     for b in document.buffers() {
@@ -132,30 +199,45 @@ pub fn load_gltf_slice(
             }
         }
     }
-    let buffers =
-        gltf::import_buffers(&document, base, blob).map_err(|e| err("buffers", e.to_string()))?;
-    // `import_buffers` rejects data shorter than `byteLength`; data longer than it (beyond the
-    // up to 3 padding bytes a GLB BIN chunk may carry) is a lie about the length too. Views are
-    // then checked against the declared length only.
-    for (b, data) in document.buffers().zip(&buffers) {
-        if data.0.len() > b.length() + 3 {
+    // Only the buffers that positions and indices read are loaded (others may be placeholders
+    // without data, or URIs this loader cannot resolve, which is valid glTF). An
+    // EXT_meshopt_compression fallback buffer has no data; its views are decoded instead.
+    let needed = needed_buffers(&document, &ext);
+    let mut blob = blob;
+    let mut data: Vec<Option<Vec<u8>>> = Vec::with_capacity(document.buffers().len());
+    for b in document.buffers() {
+        let bin = matches!(b.source(), gltf::buffer::Source::Bin);
+        if !needed.contains(&b.index()) || (ext.fallback.contains(&b.index()) && bin) {
+            if bin && b.index() == 0 {
+                // The GLB's BIN chunk belongs to buffer 0 only.
+                blob = None;
+            }
+            data.push(None);
+            continue;
+        }
+        let d = gltf::buffer::Data::from_source_and_blob(b.source(), base, &mut blob)
+            .map_err(|e| err("buffers", format!("buffer {}: {e}", b.index())))?;
+        // Data shorter than byteLength is refused; data longer than it (beyond the up to 3
+        // padding bytes a GLB BIN chunk may carry) is a lie about the length too. Views are then
+        // checked against the declared length only.
+        if d.0.len() < b.length() || d.0.len() > b.length() + 3 {
             return Err(err(
                 "buffers",
                 format!(
                     "buffer {}: its data holds {} bytes but byteLength declares {} (a data URI, \
                      file or GLB chunk must match byteLength)",
                     b.index(),
-                    data.0.len(),
+                    d.0.len(),
                     b.length()
                 ),
             ));
         }
+        let mut d = d.0;
+        d.truncate(b.length());
+        data.push(Some(d));
     }
-    let buffers: Vec<&[u8]> = document
-        .buffers()
-        .zip(&buffers)
-        .map(|(b, d)| &d.0[..d.0.len().min(b.length())])
-        .collect();
+    let buffers: Vec<Option<&[u8]>> = data.iter().map(Option::as_deref).collect();
+    let decoded = decode_meshopt_views(&document, &ext, &buffers).map_err(|(c, m)| err(&c, m))?;
 
     let roots: Vec<gltf::Node> = match document
         .default_scene()
@@ -176,8 +258,13 @@ pub fn load_gltf_slice(
     let mut loader = Loader {
         source_name,
         buffers: &buffers,
+        decoded: &decoded,
         meshes: HashMap::new(),
         visited: vec![false; document.nodes().len()],
+        quantization: document
+            .extensions_used()
+            .any(|e| e == "KHR_mesh_quantization"),
+        notes: Vec::new(),
         scene: Scene {
             name: source_name.to_owned(),
             effects: Effects::default(),
@@ -197,14 +284,265 @@ pub fn load_gltf_slice(
             stack.push((c, world));
         }
     }
-    Ok(loader.scene)
+    Ok((loader.scene, loader.notes))
+}
+
+/// Rewrites what the glTF 2.0 schema allows but the `gltf` crate's serde types refuse:
+///
+/// * a number with an integral value written with a fraction or exponent (`1.0`, `3e2`) where
+///   an integer is expected: JSON does not distinguish them and the spec's JSON Schema accepts
+///   them, but `gltf-json` deserializes indices and counts as Rust integers. Every such number
+///   (below 2^53, not `-0.0`) becomes an integer; `f32` fields read it to the same value.
+/// * `animations`: shadowvol reads no animation, and `gltf-json` refuses channel targets without
+///   a `node` (valid in glTF 2.0, used by `KHR_animation_pointer`), so they are dropped before
+///   parsing.
+/// * a scene without `nodes` (optional in the spec) gets an empty list.
+fn normalize_json(value: &mut serde_json::Value) {
+    use serde_json::Value;
+    if let Value::Object(m) = value {
+        m.remove("animations");
+        // `scene.nodes` is optional in glTF 2.0, required by gltf-json.
+        if let Some(Value::Array(scenes)) = m.get_mut("scenes") {
+            for sc in scenes {
+                if let Value::Object(o) = sc {
+                    o.entry("nodes").or_insert_with(|| Value::Array(Vec::new()));
+                }
+            }
+        }
+    }
+    let mut stack = vec![value];
+    while let Some(v) = stack.pop() {
+        match v {
+            Value::Number(n) if !(n.is_i64() || n.is_u64()) => {
+                if let Some(f) = n.as_f64() {
+                    if f.fract() == 0.0
+                        && f.abs() < 9_007_199_254_740_992.0
+                        && !(f == 0.0 && f.is_sign_negative())
+                    {
+                        *v = Value::from(f as i64);
+                    }
+                }
+            }
+            Value::Array(a) => stack.extend(a.iter_mut()),
+            Value::Object(m) => stack.extend(m.values_mut()),
+            _ => {}
+        }
+    }
+}
+
+/// The extension data that the `gltf` crate's types do not keep (it is read from the JSON).
+#[derive(Default)]
+struct Extensions {
+    /// Buffers marked `EXT_meshopt_compression.fallback`.
+    fallback: Vec<usize>,
+    /// `EXT_meshopt_compression` objects of buffer views, by view index.
+    meshopt: HashMap<usize, serde_json::Value>,
+}
+
+impl Extensions {
+    fn read(root: &serde_json::Value) -> Self {
+        let ext =
+            |v: &serde_json::Value| v.get("extensions")?.get("EXT_meshopt_compression").cloned();
+        let list = |k: &str| {
+            root.get(k)
+                .and_then(|v| v.as_array())
+                .cloned()
+                .unwrap_or_default()
+        };
+        Self {
+            fallback: list("buffers")
+                .iter()
+                .enumerate()
+                .filter(|(_, b)| {
+                    ext(b)
+                        .is_some_and(|e| e.get("fallback") == Some(&serde_json::Value::Bool(true)))
+                })
+                .map(|(i, _)| i)
+                .collect(),
+            meshopt: list("bufferViews")
+                .iter()
+                .enumerate()
+                .filter_map(|(i, v)| ext(v).map(|e| (i, e)))
+                .collect(),
+        }
+    }
+}
+
+/// The buffers that positions and indices read: the buffers of their views (and sparse views),
+/// or, for `EXT_meshopt_compression` views, the buffer of the compressed source.
+fn needed_buffers(document: &gltf::Document, ext: &Extensions) -> std::collections::HashSet<usize> {
+    let mut out = std::collections::HashSet::new();
+    let mut add = |v: gltf::buffer::View| {
+        match ext
+            .meshopt
+            .get(&v.index())
+            .and_then(|e| e.get("buffer"))
+            .and_then(|b| b.as_u64())
+        {
+            Some(src) => out.insert(src as usize),
+            None => out.insert(v.buffer().index()),
+        };
+    };
+    for mesh in document.meshes() {
+        for prim in mesh.primitives() {
+            for acc in [prim.get(&gltf::Semantic::Positions), prim.indices()]
+                .into_iter()
+                .flatten()
+            {
+                if let Some(v) = acc.view() {
+                    add(v);
+                }
+                if let Some(s) = acc.sparse() {
+                    add(s.indices().view());
+                    add(s.values().view());
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Extensions that may be required: those read here, and those that only change appearance
+/// (materials, textures), which shadow volumes do not depend on.
+fn check_required_extensions(document: &gltf::Document) -> Result<(), String> {
+    for ext in document.extensions_required() {
+        let ok = matches!(
+            ext,
+            "KHR_lights_punctual" | "KHR_mesh_quantization" | "EXT_meshopt_compression"
+        ) || ext.starts_with("KHR_materials_")
+            || ext.starts_with("KHR_texture_")
+            || ext.starts_with("EXT_texture_")
+            || ext == "MSFT_texture_dds";
+        if ok {
+            continue;
+        }
+        return Err(if ext == "KHR_draco_mesh_compression" {
+            "extension KHR_draco_mesh_compression is required but not supported (there is no \
+             maintained Rust Draco decoder): re-export the file without Draco, for example with \
+             meshopt compression (`gltfpack -i in.glb -o out.glb -c`)"
+                .to_owned()
+        } else {
+            format!(
+                "extension {ext} is required but not supported (supported: KHR_lights_punctual, \
+                 KHR_mesh_quantization, EXT_meshopt_compression, and material and texture \
+                 extensions, which do not change geometry)"
+            )
+        });
+    }
+    Ok(())
+}
+
+/// Decodes the `EXT_meshopt_compression` views that positions and indices read (views of
+/// other attributes are left alone). Errors are `(context, message)`.
+fn decode_meshopt_views(
+    document: &gltf::Document,
+    ext: &Extensions,
+    buffers: &[Option<&[u8]>],
+) -> Result<HashMap<usize, Vec<u8>>, (String, String)> {
+    let mut wanted = std::collections::HashSet::new();
+    let mut want = |acc: gltf::Accessor| {
+        if let Some(v) = acc.view() {
+            wanted.insert(v.index());
+        }
+        if let Some(s) = acc.sparse() {
+            wanted.insert(s.indices().view().index());
+            wanted.insert(s.values().view().index());
+        }
+    };
+    for mesh in document.meshes() {
+        for prim in mesh.primitives() {
+            if let Some(a) = prim.get(&gltf::Semantic::Positions) {
+                want(a);
+            }
+            if let Some(a) = prim.indices() {
+                want(a);
+            }
+        }
+    }
+    let mut out = HashMap::new();
+    for view in document.views().filter(|v| wanted.contains(&v.index())) {
+        let Some(e) = ext.meshopt.get(&view.index()) else {
+            continue;
+        };
+        let ctx = format!("buffer view {}, EXT_meshopt_compression", view.index());
+        let bad = |m: String| (ctx.clone(), m);
+        let uint = |k: &str| -> Result<Option<usize>, (String, String)> {
+            match e.get(k) {
+                None => Ok(None),
+                Some(v) => v
+                    .as_u64()
+                    .and_then(|x| usize::try_from(x).ok())
+                    .map(Some)
+                    .ok_or_else(|| {
+                        bad(format!("\"{k}\" must be a non-negative integer, found {v}"))
+                    }),
+            }
+        };
+        let need = |k: &str| uint(k)?.ok_or_else(|| bad(format!("\"{k}\" is missing")));
+        let name = |k: &str, default: Option<&str>| -> Result<String, (String, String)> {
+            match e.get(k) {
+                None => default
+                    .map(str::to_owned)
+                    .ok_or_else(|| bad(format!("\"{k}\" is missing"))),
+                Some(serde_json::Value::String(s)) => Ok(s.clone()),
+                Some(v) => Err(bad(format!("\"{k}\" must be a string, found {v}"))),
+            }
+        };
+        let src_index = need("buffer")?;
+        let offset = uint("byteOffset")?.unwrap_or(0);
+        let length = need("byteLength")?;
+        let stride = need("byteStride")?;
+        let count = need("count")?;
+        let mode_name = name("mode", None)?;
+        let filter_name = name("filter", Some("NONE"))?;
+        let mode = crate::meshopt_view::Mode::from_name(&mode_name)
+            .ok_or_else(|| bad(format!("unknown mode {mode_name:?}")))?;
+        let filter = crate::meshopt_view::Filter::from_name(&filter_name)
+            .ok_or_else(|| bad(format!("unknown filter {filter_name:?}")))?;
+        let src = match buffers.get(src_index) {
+            Some(Some(b)) => *b,
+            Some(None) => {
+                return Err(bad(format!(
+                    "source buffer {src_index} is a fallback buffer without data"
+                )))
+            }
+            None => return Err(bad(format!("source buffer {src_index} does not exist"))),
+        };
+        let encoded = offset
+            .checked_add(length)
+            .filter(|&end| end <= src.len())
+            .map(|end| &src[offset..end])
+            .ok_or_else(|| {
+                bad(format!(
+                    "source range byteOffset {offset}, byteLength {length} runs past the end of \
+                     buffer {src_index} ({} bytes)",
+                    src.len()
+                ))
+            })?;
+        if count.checked_mul(stride) != Some(view.length()) {
+            return Err(bad(format!(
+                "count {count} x byteStride {stride} does not equal the view's byteLength {}",
+                view.length()
+            )));
+        }
+        let bytes =
+            crate::meshopt_view::decode(encoded, count, stride, mode, filter).map_err(bad)?;
+        out.insert(view.index(), bytes);
+    }
+    Ok(out)
 }
 
 struct Loader<'a> {
     source_name: &'a str,
-    buffers: &'a [&'a [u8]],
+    /// Buffer data by index; `None` for an `EXT_meshopt_compression` fallback buffer.
+    buffers: &'a [Option<&'a [u8]>],
+    /// Decoded `EXT_meshopt_compression` views by view index.
+    decoded: &'a HashMap<usize, Vec<u8>>,
     meshes: HashMap<usize, Arc<Mesh>>,
     visited: Vec<bool>,
+    /// `KHR_mesh_quantization` is in `extensionsUsed`: integer positions are allowed.
+    quantization: bool,
+    notes: Vec<String>,
     scene: Scene,
 }
 
@@ -275,11 +613,19 @@ impl Loader<'_> {
                 .name()
                 .or(mesh.name())
                 .map_or_else(|| format!("node{}", node.index()), str::to_owned);
-            self.scene.objects.push(Object {
-                name,
-                mesh: shared,
-                transform: world,
-            });
+            if shared.triangles.is_empty() {
+                self.notes.push(format!(
+                    "{}: {label}: mesh {} has no triangles, the node is skipped",
+                    self.source_name,
+                    mesh.index()
+                ));
+            } else {
+                self.scene.objects.push(Object {
+                    name,
+                    mesh: shared,
+                    transform: world,
+                });
+            }
         }
 
         if let Some(light) = node.light() {
@@ -337,7 +683,7 @@ impl Loader<'_> {
         Ok(world)
     }
 
-    fn read_mesh(&self, node_label: &str, mesh: &gltf::Mesh) -> Result<Mesh, SceneError> {
+    fn read_mesh(&mut self, node_label: &str, mesh: &gltf::Mesh) -> Result<Mesh, SceneError> {
         let mut out = Mesh::default();
         let mesh_label = match mesh.name() {
             Some(n) => format!("{node_label}, mesh {} '{n}'", mesh.index()),
@@ -350,16 +696,19 @@ impl Loader<'_> {
                 mode,
                 Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
             ) {
-                return Err(self.err(
-                    label,
-                    format!(
-                        "mode {mode:?} is not a triangle mode (TRIANGLES, TRIANGLE_STRIP or \
-                         TRIANGLE_FAN are needed for shadow volumes)"
-                    ),
+                self.notes.push(format!(
+                    "{}: {label}: mode {mode:?} is not a triangle mode, the primitive is skipped \
+                     (shadow volumes need TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN)",
+                    self.source_name
                 ));
+                continue;
             }
             let Some(pos_acc) = prim.get(&gltf::Semantic::Positions) else {
-                return Err(self.err(label, "has no POSITION attribute"));
+                self.notes.push(format!(
+                    "{}: {label}: no POSITION attribute, the primitive is skipped",
+                    self.source_name
+                ));
+                continue;
             };
             let positions = self.read_positions(&label, &pos_acc)?;
             let n = positions.len();
@@ -386,26 +735,52 @@ impl Loader<'_> {
         Ok(out)
     }
 
+    /// Positions as `f32`: `FLOAT`, or with `KHR_mesh_quantization` `BYTE`, `UNSIGNED_BYTE`,
+    /// `SHORT`, `UNSIGNED_SHORT`, normalized or not (see the module documentation).
     fn read_positions(&self, label: &str, acc: &gltf::Accessor) -> Result<Vec<Vec3>, SceneError> {
         let alabel = format!("{label}, accessor {} (POSITION)", acc.index());
-        if acc.data_type() != DataType::F32 || acc.dimensions() != Dimensions::Vec3 {
+        let ty = acc.data_type();
+        let allowed = ty == DataType::F32 || (self.quantization && ty != DataType::U32);
+        if acc.dimensions() != Dimensions::Vec3 || !allowed {
             return Err(self.err(
                 alabel,
                 format!(
-                    "POSITION must be VEC3 of FLOAT, found {:?} of {:?} (quantized positions are \
-                     not supported)",
+                    "POSITION must be VEC3 of FLOAT (or, with KHR_mesh_quantization in \
+                     extensionsUsed, of BYTE, UNSIGNED_BYTE, SHORT or UNSIGNED_SHORT), found \
+                     {:?} of {:?}",
                     acc.dimensions(),
-                    acc.data_type()
+                    ty
                 ),
             ));
         }
+        let normalized = acc.normalized();
+        if normalized && ty == DataType::F32 {
+            return Err(self.err(alabel, "a FLOAT accessor cannot be normalized"));
+        }
         let bytes = self.accessor_bytes(&alabel, acc)?;
+        let size = acc.size() / 3;
+        let component = |c: &[u8]| -> f32 {
+            match (ty, normalized) {
+                (DataType::F32, _) => f32::from_le_bytes([c[0], c[1], c[2], c[3]]),
+                (DataType::I8, false) => f32::from(c[0] as i8),
+                (DataType::U8, false) => f32::from(c[0]),
+                (DataType::I16, false) => f32::from(i16::from_le_bytes([c[0], c[1]])),
+                (DataType::U16, false) => f32::from(u16::from_le_bytes([c[0], c[1]])),
+                (DataType::I8, true) => (f32::from(c[0] as i8) / 127.0).max(-1.0),
+                (DataType::U8, true) => f32::from(c[0]) / 255.0,
+                (DataType::I16, true) => {
+                    (f32::from(i16::from_le_bytes([c[0], c[1]])) / 32767.0).max(-1.0)
+                }
+                (DataType::U16, true) => f32::from(u16::from_le_bytes([c[0], c[1]])) / 65535.0,
+                (DataType::U32, _) => f32::NAN,
+            }
+        };
         let mut out = Vec::with_capacity(acc.count());
-        for (i, c) in bytes.chunks_exact(12).enumerate() {
+        for (i, c) in bytes.chunks_exact(3 * size).enumerate() {
             let v = [
-                f32::from_le_bytes([c[0], c[1], c[2], c[3]]),
-                f32::from_le_bytes([c[4], c[5], c[6], c[7]]),
-                f32::from_le_bytes([c[8], c[9], c[10], c[11]]),
+                component(&c[..size]),
+                component(&c[size..2 * size]),
+                component(&c[2 * size..]),
             ];
             for (axis, value) in ['x', 'y', 'z'].into_iter().zip(v) {
                 if !value.is_finite() {
@@ -577,12 +952,29 @@ impl Loader<'_> {
     }
 
     fn view_bytes(&self, alabel: &str, view: &gltf::buffer::View) -> Result<&[u8], SceneError> {
-        let buf = self.buffers.get(view.buffer().index()).ok_or_else(|| {
-            self.err(
-                alabel.to_owned(),
-                format!("buffer {} is missing", view.buffer().index()),
-            )
-        })?;
+        if let Some(d) = self.decoded.get(&view.index()) {
+            return Ok(d);
+        }
+        let buf = match self.buffers.get(view.buffer().index()) {
+            Some(Some(b)) => *b,
+            Some(None) => {
+                return Err(self.err(
+                    alabel.to_owned(),
+                    format!(
+                        "buffer view {} is in buffer {}, an EXT_meshopt_compression fallback \
+                         without data, but the view is not compressed",
+                        view.index(),
+                        view.buffer().index()
+                    ),
+                ))
+            }
+            None => {
+                return Err(self.err(
+                    alabel.to_owned(),
+                    format!("buffer {} is missing", view.buffer().index()),
+                ))
+            }
+        };
         let end = view.offset().checked_add(view.length());
         match end {
             Some(end) if end <= buf.len() => Ok(&buf[view.offset()..end]),
@@ -602,9 +994,6 @@ impl Loader<'_> {
     }
 }
 
-/// The `gltf` crate's structural validation (every index refers to something that exists, enums
-/// are known, required fields are present), except that a missing `min`/`max` on `POSITION`
-/// accessors is accepted: many exporters omit them and this loader does not use them.
 /// `%XX` escapes decoded to bytes (anything else kept as is), as the gltf crate decodes relative
 /// URIs.
 fn percent_decode(uri: &str) -> Vec<u8> {
@@ -626,6 +1015,11 @@ fn percent_decode(uri: &str) -> Vec<u8> {
     out
 }
 
+/// The `gltf` crate's structural validation (every index refers to something that exists, enums
+/// are known, required fields are present), except that a missing `min`/`max` on `POSITION`
+/// accessors is accepted (many exporters omit them and this loader does not use them), and that
+/// `extensionsRequired` is checked by [`check_required_extensions`] instead (the crate refuses
+/// every extension it does not implement, including those read here).
 fn validate(document: &gltf::Document) -> Result<(), String> {
     use gltf::json::validation::{Error, Validate};
     let root = document.as_json();
@@ -650,7 +1044,14 @@ fn validate(document: &gltf::Document) -> Result<(), String> {
     root.validate(root, gltf::json::Path::new, &mut |path, error| {
         let p = path().to_string();
         let min_max = p.ends_with(".min") || p.ends_with(".max");
-        if !(min_max && matches!(error, Error::Missing)) {
+        let required = p.starts_with("extensionsRequired") && matches!(error, Error::Unsupported);
+        // A primitive without POSITION is valid glTF; it is skipped with a note.
+        let position = p.ends_with("attributes[\"POSITION\"]");
+        // An accessor without bufferView is zero-filled; a texture without source is valid (an
+        // extension provides the image) and textures are not read.
+        let optional = (p.starts_with("accessors[") && p.ends_with("].bufferView"))
+            || (p.starts_with("textures[") && p.ends_with("].source"));
+        if !((min_max || position || optional) && matches!(error, Error::Missing)) && !required {
             errors.push(format!("{p}: {error}"));
         }
     });

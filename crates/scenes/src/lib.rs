@@ -1,14 +1,15 @@
-//! Scenes for shadowvol: loaders (glTF 2.0, OBJ), procedural meshes, and the paper's presets.
+//! Scenes for shadowvol: loaders (glTF 2.0, OBJ, STL, PLY), procedural meshes, and the paper's presets.
 //!
 //! * [`Scene`]: objects (a shared [`Mesh`](shadowvol_mesh_topology::Mesh) and a world transform),
 //!   lights, a camera and the [`Effects`] the scene calls for. Load one with [`Scene::load`]
-//!   (`.gltf`, `.glb`, `.obj`), build a preset with [`preset`], or either with
+//!   (`.gltf`, `.glb`, `.obj`, `.stl`, `.ply`), build a preset with [`preset`], or either with
 //!   [`Scene::from_name_or_path`]. [`Scene::topology`] gives the backends'
 //!   [`TopologyScene`](shadowvol_silhouette::TopologyScene) (instances share one edge table);
 //!   [`Scene::baked_mesh`] merges everything into one world-space mesh, transforms applied in
 //!   `f32` on the host.
 //! * [`gltf_load`]: glTF loading with node transforms, shared meshes, cameras and
-//!   `KHR_lights_punctual`, validating accessor contents; [`obj`]: OBJ loading.
+//!   `KHR_lights_punctual`, validating accessor contents; [`obj`], [`stl`], [`ply`]: OBJ, STL
+//!   (ASCII and binary) and PLY (ASCII and binary) loading.
 //! * [`export_glb`]: writes any scene as binary glTF that other tools can open.
 //! * [`procedural`]: UV spheres and icospheres with an exact triangle count, Loop subdivision,
 //!   the "town".
@@ -30,13 +31,16 @@
 
 mod glb_write;
 pub mod gltf_load;
+pub mod meshopt_view;
 pub mod obj;
+pub mod ply;
 pub mod presets;
 pub mod procedural;
 mod scene;
+pub mod stl;
 
 pub use glb_write::{export_glb, to_glb};
-pub use gltf_load::{load_gltf, load_gltf_mesh, load_gltf_slice};
+pub use gltf_load::{load_gltf, load_gltf_mesh, load_gltf_slice, load_gltf_slice_with_notes};
 pub use presets::{is_preset, preset, preset_names, presets, PresetInfo};
 pub use scene::{apply_f32, mesh_bounds, transformed, Camera, Effects, Object, Scene};
 
@@ -77,9 +81,30 @@ pub enum SceneError {
         /// The mesh error.
         source: MeshError,
     },
+    /// An STL file is malformed (the error names the file and the line or facet).
+    #[error("{file}: {location}: {message}")]
+    Stl {
+        /// The file (or source name).
+        file: String,
+        /// Where: `line N` (ASCII), `facet T (byte B)` (binary) or `header`.
+        location: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A PLY file is malformed (the error names the file and the line or element).
+    #[error("{file}: {location}: {message}")]
+    Ply {
+        /// The file (or source name).
+        file: String,
+        /// Where: `line N`, `header`, `payload`, or `element vertex I` / `element face F`.
+        location: String,
+        /// What is wrong.
+        message: String,
+    },
     /// A scene name is neither a preset nor a file with a known extension.
     #[error(
-        "unknown scene '{name}': not a .gltf/.glb/.obj file and not a preset (presets: {known})"
+        "unknown scene '{name}': not a .gltf/.glb/.obj/.stl/.ply file and not a preset \
+         (presets: {known})"
     )]
     UnknownPreset {
         /// The name given.
@@ -87,8 +112,8 @@ pub enum SceneError {
         /// The preset names, comma separated.
         known: String,
     },
-    /// The file extension is not one of `.gltf`, `.glb`, `.obj`.
-    #[error("{path}: unsupported scene format (expected .gltf, .glb or .obj)")]
+    /// The file extension is not one of `.gltf`, `.glb`, `.obj`, `.stl`, `.ply`.
+    #[error("{path}: unsupported scene format (expected .gltf, .glb, .obj, .stl or .ply)")]
     UnsupportedFormat {
         /// The path given.
         path: String,

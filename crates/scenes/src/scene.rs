@@ -111,24 +111,38 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Loads a scene file: `.gltf` or `.glb` (objects, lights, camera) or `.obj` (one object,
-    /// identity transform, no lights or camera).
+    /// Loads a scene file: `.gltf` or `.glb` (objects, lights, camera), or `.obj`, `.stl`,
+    /// `.ply` (one object, identity transform, no lights or camera). Extensions are
+    /// case-insensitive.
     ///
     /// # Errors
     /// [`SceneError::UnsupportedFormat`] for another extension, otherwise any error of the
     /// loader, naming the file and what in it is wrong.
     pub fn load(path: impl AsRef<Path>) -> Result<Self, SceneError> {
+        Self::load_with_notes(path).map(|(s, _)| s)
+    }
+
+    /// As [`Scene::load`], and also returns notes about what the loader skipped (glTF
+    /// primitives that are not triangles or have no positions; none for the other formats).
+    ///
+    /// # Errors
+    /// As [`Scene::load`].
+    pub fn load_with_notes(path: impl AsRef<Path>) -> Result<(Self, Vec<String>), SceneError> {
         let path = path.as_ref();
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase);
         match ext.as_deref() {
-            Some("gltf" | "glb") => crate::gltf_load::load_gltf(path),
-            Some("obj") => {
-                let mesh = crate::obj::load_obj(path)?;
+            Some("gltf" | "glb") => crate::gltf_load::load_gltf_with_notes(path),
+            Some(ext @ ("obj" | "stl" | "ply")) => {
+                let mesh = match ext {
+                    "obj" => crate::obj::load_obj(path)?,
+                    "stl" => crate::stl::load_stl(path)?,
+                    _ => crate::ply::load_ply(path)?,
+                };
                 let name = file_name(path);
-                Ok(Self {
+                let scene = Self {
                     objects: vec![Object {
                         name: name.clone(),
                         mesh: Arc::new(mesh),
@@ -136,7 +150,8 @@ impl Scene {
                     }],
                     name,
                     ..Self::default()
-                })
+                };
+                Ok((scene, Vec::new()))
             }
             _ => Err(SceneError::UnsupportedFormat {
                 path: path.display().to_string(),
@@ -151,19 +166,28 @@ impl Scene {
     /// As [`Scene::load`]; for a string that is neither a preset nor has a known extension,
     /// [`SceneError::UnknownPreset`] listing the preset names.
     pub fn from_name_or_path(s: &str) -> Result<Self, SceneError> {
+        Self::from_name_or_path_with_notes(s).map(|(s, _)| s)
+    }
+
+    /// As [`Scene::from_name_or_path`], and also returns the loader's notes (see
+    /// [`Scene::load_with_notes`]; none for a preset).
+    ///
+    /// # Errors
+    /// As [`Scene::from_name_or_path`].
+    pub fn from_name_or_path_with_notes(s: &str) -> Result<(Self, Vec<String>), SceneError> {
         if crate::presets::is_preset(s) {
-            return crate::preset(s);
+            return crate::preset(s).map(|p| (p, Vec::new()));
         }
         let path = Path::new(s);
         let known_ext = path
             .extension()
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase)
-            .is_some_and(|e| matches!(e.as_str(), "gltf" | "glb" | "obj"));
+            .is_some_and(|e| matches!(e.as_str(), "gltf" | "glb" | "obj" | "stl" | "ply"));
         if known_ext {
-            Self::load(path)
+            Self::load_with_notes(path)
         } else {
-            crate::preset(s)
+            crate::preset(s).map(|p| (p, Vec::new()))
         }
     }
 

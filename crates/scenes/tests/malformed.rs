@@ -1,4 +1,4 @@
-//! Malformed glTF, GLB and OBJ files fail with a message naming the file and what is wrong.
+//! Malformed glTF, GLB, OBJ, STL and PLY files fail with a message naming the file and what is wrong.
 
 use shadowvol_scenes::{Scene, SceneError};
 use std::path::PathBuf;
@@ -72,9 +72,20 @@ fn zero_count_is_rejected() {
 }
 
 #[test]
-fn non_triangle_modes_and_partial_triangles_are_rejected() {
-    let m = message("lines_mode.gltf");
-    assert_has(&m, &["primitive 0", "Lines", "not a triangle mode"]);
+fn non_triangle_modes_are_skipped_with_a_note_and_partial_triangles_rejected() {
+    // Lines are valid glTF, but cast no shadow: skipped, with a note naming them.
+    let (scene, notes) = Scene::load_with_notes(data("lines_mode.gltf")).unwrap();
+    assert!(scene.objects.is_empty());
+    assert_has(
+        &notes.join("\n"),
+        &[
+            "lines_mode.gltf",
+            "primitive 0",
+            "Lines",
+            "not a triangle mode",
+            "skipped",
+        ],
+    );
     let m = message("partial_triangle.gltf");
     assert_has(
         &m,
@@ -95,12 +106,16 @@ fn accessor_past_its_view_is_rejected() {
 }
 
 #[test]
-fn wrong_types_and_missing_attributes_are_rejected() {
+fn wrong_types_are_rejected_and_missing_positions_skipped() {
     let m = message("integer_positions.gltf");
     assert_has(&m, &["accessor 0 (POSITION)", "must be VEC3 of FLOAT"]);
-    let m = message("missing_position.gltf");
-    // The crate's structural validation catches this one, with the JSON path.
-    assert_has(&m, &["primitives[0]", "POSITION", "Missing"]);
+    // A primitive without POSITION is valid glTF with nothing to cast: skipped, with a note.
+    let (scene, notes) = Scene::load_with_notes(data("missing_position.gltf")).unwrap();
+    assert!(scene.objects.is_empty());
+    assert_has(
+        &notes.join("\n"),
+        &["primitive 0", "no POSITION", "skipped"],
+    );
 }
 
 #[test]

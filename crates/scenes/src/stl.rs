@@ -1,0 +1,320 @@
+//! STL loading, ASCII and binary.
+//!
+//! An STL file is a triangle soup: every facet lists its three corners by position. The mesh
+//! keeps that soup as it is: facet `t` becomes triangle `[3t, 3t + 1, 3t + 2]` over its own
+//! three vertices, in file order. Welding (exact `f32` position, `-0 == +0`, as for every input)
+//! then decides the topology when the edge table is built, so two facets share an edge exactly
+//! when their corners have equal coordinates. Input vertex `k` is corner `k % 3` of facet
+//! `k / 3`; the CLI's JSON names silhouette edges by these indices (each weld group by its
+//! smallest one). Facet normals and the binary attribute bytes are ignored.
+//!
+//! Which kind a file is: a file of `84 + 50 n` bytes whose header declares `n` facets is binary,
+//! even when its 80-byte header starts with `solid` (many exporters write that); otherwise a file
+//! that starts with `solid` is ASCII; anything else is a binary file of the wrong length.
+//!
+//! ASCII grammar (keywords case-insensitive, any whitespace): `solid [name]`, then facets
+//! `facet normal nx ny nz` / `outer loop` / three `vertex x y z` / `endloop` / `endfacet`, then
+//! `endsolid [name]`; several solids may follow one another. Coordinates are read as `f32`
+//! (round to nearest) and must be finite.
+//!
+//! This is a parser of our own rather than `stl_io`: errors must name the file and the line
+//! (ASCII) or the facet and byte offset (binary), and `stl_io` reports neither, reads a binary
+//! file whose header starts with `solid ` as ASCII (and fails), and accepts a binary file
+//! longer than its facet count silently.
+//!
+//! ```
+//! use shadowvol_scenes::stl::parse_stl;
+//!
+//! let text = "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n\
+//!             vertex 0 1 0\nendloop\nendfacet\nendsolid t\n";
+//! let mesh = parse_stl(text.as_bytes(), "t.stl").unwrap();
+//! assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+//!
+//! let err = parse_stl(b"solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 x\n", "bad.stl");
+//! assert_eq!(
+//!     err.unwrap_err().to_string(),
+//!     "bad.stl: line 4: vertex coordinate z: 'x' is not a number"
+//! );
+//! ```
+
+use crate::SceneError;
+use glam::Vec3;
+use shadowvol_mesh_topology::Mesh;
+use std::path::Path;
+
+/// Reads an STL file (ASCII or binary). See the [module documentation](self).
+///
+/// # Errors
+/// [`SceneError::Io`] if the file cannot be read; [`SceneError::Stl`] naming the file and the
+/// line (ASCII) or facet (binary) for malformed content.
+pub fn load_stl(path: impl AsRef<Path>) -> Result<Mesh, SceneError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
+    parse_stl(&bytes, &path.display().to_string())
+}
+
+/// Parses STL bytes (ASCII or binary). `source_name` is used in messages.
+///
+/// # Errors
+/// [`SceneError::Stl`] naming `source_name` and the line (ASCII) or facet and byte offset
+/// (binary): a wrong file length, a malformed or missing keyword or number, a NaN or infinite
+/// coordinate, too many facets for `u32` vertex indices.
+pub fn parse_stl(bytes: &[u8], source_name: &str) -> Result<Mesh, SceneError> {
+    let err = |location: String, message: String| SceneError::Stl {
+        file: source_name.to_owned(),
+        location,
+        message,
+    };
+    if bytes.len() >= 84 {
+        let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]);
+        if 84 + 50 * n as u64 == bytes.len() as u64 {
+            return parse_binary(bytes, n as usize, &err);
+        }
+    }
+    if starts_with_solid(bytes) {
+        return parse_ascii(bytes, &err);
+    }
+    if bytes.len() < 84 {
+        return Err(err(
+            "header".to_owned(),
+            format!(
+                "{} bytes: too short for a binary STL (84-byte header) and not ASCII STL (it \
+                 does not start with \"solid\")",
+                bytes.len()
+            ),
+        ));
+    }
+    let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]);
+    Err(err(
+        "header".to_owned(),
+        format!(
+            "not ASCII STL (it does not start with \"solid\"), and as binary STL its header \
+             declares {n} facets, 84 + 50 * {n} = {} bytes, but the file has {} bytes",
+            84 + 50 * u64::from(n),
+            bytes.len()
+        ),
+    ))
+}
+
+fn starts_with_solid(bytes: &[u8]) -> bool {
+    let start = bytes
+        .iter()
+        .position(|b| !b.is_ascii_whitespace())
+        .unwrap_or(bytes.len());
+    let rest = &bytes[start..];
+    rest.len() >= 5
+        && rest[..5].eq_ignore_ascii_case(b"solid")
+        && rest.get(5).is_none_or(|b| b.is_ascii_whitespace())
+}
+
+fn check_size(facets: usize) -> Result<(), String> {
+    if facets as u64 * 3 >= u64::from(u32::MAX) {
+        return Err(format!(
+            "{facets} facets: too many for u32 vertex indices (3 vertices per facet)"
+        ));
+    }
+    Ok(())
+}
+
+fn parse_binary(
+    bytes: &[u8],
+    n: usize,
+    err: &dyn Fn(String, String) -> SceneError,
+) -> Result<Mesh, SceneError> {
+    check_size(n).map_err(|m| err("header".to_owned(), m))?;
+    let mut positions = Vec::with_capacity(3 * n);
+    for (t, rec) in bytes[84..].chunks_exact(50).enumerate() {
+        for c in 0..3 {
+            let mut p = [0.0f32; 3];
+            for (axis, v) in p.iter_mut().enumerate() {
+                let o = 12 + 12 * c + 4 * axis;
+                *v = f32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]);
+                if !v.is_finite() {
+                    return Err(err(
+                        format!("facet {t} (byte {})", 84 + 50 * t + o),
+                        format!(
+                            "vertex {c} coordinate {} is {v}, but positions must be finite",
+                            ['x', 'y', 'z'][axis]
+                        ),
+                    ));
+                }
+            }
+            positions.push(Vec3::from_array(p));
+        }
+    }
+    Ok(soup(positions))
+}
+
+/// Triangle `t` over vertices `3t, 3t + 1, 3t + 2`.
+fn soup(positions: Vec<Vec3>) -> Mesh {
+    let triangles = (0..positions.len() as u32 / 3)
+        .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+        .collect();
+    Mesh {
+        positions,
+        triangles,
+    }
+}
+
+/// Whitespace-separated tokens with their 1-based line numbers.
+struct Tokens<'a> {
+    text: &'a [u8],
+    at: usize,
+    line: usize,
+}
+
+impl<'a> Tokens<'a> {
+    fn next(&mut self) -> Option<(&'a [u8], usize)> {
+        while self.at < self.text.len() && self.text[self.at].is_ascii_whitespace() {
+            if self.text[self.at] == b'\n' {
+                self.line += 1;
+            }
+            self.at += 1;
+        }
+        if self.at == self.text.len() {
+            return None;
+        }
+        let start = self.at;
+        while self.at < self.text.len() && !self.text[self.at].is_ascii_whitespace() {
+            self.at += 1;
+        }
+        Some((&self.text[start..self.at], self.line))
+    }
+
+    /// Skips the rest of the current line (a solid's name).
+    fn skip_line(&mut self) {
+        while self.at < self.text.len() && self.text[self.at] != b'\n' {
+            self.at += 1;
+        }
+    }
+}
+
+fn parse_ascii(
+    bytes: &[u8],
+    err: &dyn Fn(String, String) -> SceneError,
+) -> Result<Mesh, SceneError> {
+    let mut tok = Tokens {
+        text: bytes,
+        at: 0,
+        line: 1,
+    };
+    let at = |line: usize| format!("line {line}");
+    let show = |t: &[u8]| String::from_utf8_lossy(t).into_owned();
+    let mut positions: Vec<Vec3> = Vec::new();
+    // One solid per turn; `solid` has been read when the loop body starts.
+    let Some((first, _)) = tok.next() else {
+        return Err(err("line 1".to_owned(), "empty file".to_owned()));
+    };
+    debug_assert!(first.eq_ignore_ascii_case(b"solid"));
+    tok.skip_line();
+    'solids: loop {
+        loop {
+            let Some((word, line)) = tok.next() else {
+                return Err(err(
+                    at(tok.line),
+                    "end of file inside a solid: \"endsolid\" expected".to_owned(),
+                ));
+            };
+            if word.eq_ignore_ascii_case(b"endsolid") {
+                tok.skip_line();
+                break;
+            }
+            if !word.eq_ignore_ascii_case(b"facet") {
+                return Err(err(
+                    at(line),
+                    format!("expected \"facet\" or \"endsolid\", found '{}'", show(word)),
+                ));
+            }
+            expect(&mut tok, b"normal", err)?;
+            for _ in 0..3 {
+                // Normals are ignored; exporters write "nan" for degenerate facets, so any token
+                // is accepted.
+                if tok.next().is_none() {
+                    return Err(err(
+                        at(tok.line),
+                        "end of file in a facet normal: 3 numbers expected".to_owned(),
+                    ));
+                }
+            }
+            expect(&mut tok, b"outer", err)?;
+            expect(&mut tok, b"loop", err)?;
+            for _ in 0..3 {
+                expect(&mut tok, b"vertex", err)?;
+                let mut p = [0.0f32; 3];
+                for (axis, v) in p.iter_mut().enumerate() {
+                    let name = ['x', 'y', 'z'][axis];
+                    let Some((t, line)) = tok.next() else {
+                        return Err(err(
+                            at(tok.line),
+                            format!("end of file: vertex coordinate {name} expected"),
+                        ));
+                    };
+                    let parsed = std::str::from_utf8(t)
+                        .ok()
+                        .and_then(|s| s.parse::<f32>().ok());
+                    *v = match parsed {
+                        Some(x) if x.is_finite() => x,
+                        Some(x) => {
+                            return Err(err(
+                                at(line),
+                                format!(
+                                    "vertex coordinate {name} is {x}, but positions must be \
+                                     finite"
+                                ),
+                            ))
+                        }
+                        None => {
+                            return Err(err(
+                                at(line),
+                                format!("vertex coordinate {name}: '{}' is not a number", show(t)),
+                            ))
+                        }
+                    };
+                }
+                positions.push(Vec3::from_array(p));
+            }
+            expect(&mut tok, b"endloop", err)?;
+            expect(&mut tok, b"endfacet", err)?;
+            check_size(positions.len() / 3).map_err(|m| err(at(tok.line), m))?;
+        }
+        match tok.next() {
+            None => break 'solids,
+            Some((w, _)) if w.eq_ignore_ascii_case(b"solid") => tok.skip_line(),
+            Some((w, line)) => {
+                return Err(err(
+                    at(line),
+                    format!(
+                        "expected \"solid\" or the end of the file after \"endsolid\", found '{}'",
+                        show(w)
+                    ),
+                ))
+            }
+        }
+    }
+    Ok(soup(positions))
+}
+
+fn expect(
+    tok: &mut Tokens,
+    word: &[u8],
+    err: &dyn Fn(String, String) -> SceneError,
+) -> Result<(), SceneError> {
+    let want = String::from_utf8_lossy(word);
+    match tok.next() {
+        Some((w, _)) if w.eq_ignore_ascii_case(word) => Ok(()),
+        Some((w, line)) => Err(err(
+            format!("line {line}"),
+            format!(
+                "expected \"{want}\", found '{}'",
+                String::from_utf8_lossy(w)
+            ),
+        )),
+        None => Err(err(
+            format!("line {}", tok.line),
+            format!("end of file: \"{want}\" expected"),
+        )),
+    }
+}

@@ -1,0 +1,192 @@
+//! The real-exporter corpus (`tests/data/real/`, made by `make.sh` with obj2gltf, gltfpack,
+//! glTF Transform, trimesh and plyfile from one OBJ): every file gives the OBJ's triangles by
+//! position, and the OBJ's exact silhouettes edge for edge by position (cpu backend); the
+//! meshopt-compressed files give the uncompressed quantized file's triangles and silhouettes.
+
+use glam::Vec3;
+use shadowvol_cpu::CpuBackend;
+use shadowvol_mesh_topology::{EdgeTable, Mesh};
+use shadowvol_scenes::Scene;
+use shadowvol_silhouette::{extract_once, Accuracy, Light, TopologyScene};
+use std::path::PathBuf;
+
+fn data(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/real")
+        .join(name)
+}
+
+fn load(name: &str) -> Mesh {
+    let (scene, notes) = Scene::load_with_notes(data(name)).unwrap_or_else(|e| panic!("{e}"));
+    assert!(notes.is_empty(), "{name}: {notes:?}");
+    scene.baked_mesh().unwrap()
+}
+
+/// The weld key of a position: its coordinates' bits, `-0` as `+0`.
+fn key(p: Vec3) -> [u32; 3] {
+    [
+        (p.x + 0.0).to_bits(),
+        (p.y + 0.0).to_bits(),
+        (p.z + 0.0).to_bits(),
+    ]
+}
+
+/// Triangles as position triples, rotated so the smallest key comes first (winding kept), sorted.
+fn triangles_by_position(m: &Mesh) -> Vec<[[u32; 3]; 3]> {
+    let mut out: Vec<[[u32; 3]; 3]> = m
+        .triangles
+        .iter()
+        .map(|t| {
+            let k = t.map(|i| key(m.positions[i as usize]));
+            let r = (0..3).min_by_key(|&i| k[i]).unwrap_or(0);
+            [k[r], k[(r + 1) % 3], k[(r + 2) % 3]]
+        })
+        .collect();
+    out.sort_unstable();
+    out
+}
+
+/// Silhouette edges with `m != 0` for each light, as (position, position, m) with the smaller
+/// key first (m negated when the edge is turned around), sorted.
+/// A silhouette edge by position: (smaller key, larger key, multiplicity from the first).
+type EdgeByPosition = ([u32; 3], [u32; 3], i32);
+
+fn silhouettes_by_position(m: &Mesh, lights: &[Light]) -> Vec<Vec<EdgeByPosition>> {
+    let table = EdgeTable::build(m).unwrap();
+    let positions = table.positions.clone();
+    let edges = table.edges.clone();
+    let scene = TopologyScene::single(table);
+    let (mult, _) = extract_once(&mut CpuBackend::new(), &scene, lights, Accuracy::Exact).unwrap();
+    (0..lights.len())
+        .map(|l| {
+            let mut out: Vec<_> = mult
+                .values(l)
+                .iter()
+                .zip(&edges)
+                .filter(|(&v, _)| v != 0)
+                .map(|(&v, e)| {
+                    let (a, b) = (key(positions[e[0] as usize]), key(positions[e[1] as usize]));
+                    if a <= b {
+                        (a, b, v)
+                    } else {
+                        (b, a, -v)
+                    }
+                })
+                .collect();
+            out.sort_unstable();
+            out
+        })
+        .collect()
+}
+
+fn lights(reference: &Mesh) -> Vec<Light> {
+    let p = reference.positions[0];
+    vec![
+        Light::point(Vec3::new(9000.0, 20000.0, 9000.0)),
+        Light::point(Vec3::new(-5000.0, 1000.0, 30000.0)),
+        // In the planes x = p.x and z = p.z of a vertex: many faces edge-on or nearly.
+        Light::point(Vec3::new(p.x, 50000.0, p.z)),
+        Light::new(1.0, 2.0, 3.0, 0.0).unwrap(),
+        Light::new(-0.3, 1.0, 0.2, 0.0).unwrap(),
+    ]
+}
+
+const FILES: [&str; 12] = [
+    "obj2gltf.glb",
+    "gltfpack.glb",
+    "gltfpack-c.glb",
+    "gltfpack-cc.glb",
+    "gltfpack-noq.glb",
+    "sparse.glb",
+    "reference-ascii.stl",
+    "reference-binary.stl",
+    "reference-ascii.ply",
+    "reference-binary-le.ply",
+    "reference-binary-be.ply",
+    "reference.obj",
+];
+
+#[test]
+fn every_file_has_the_obj_triangles_and_its_exact_silhouettes() {
+    let reference = load("reference.obj");
+    assert_eq!(reference.triangles.len(), 557);
+    let lights = lights(&reference);
+    let tris = triangles_by_position(&reference);
+    let sil = silhouettes_by_position(&reference, &lights);
+    assert!(
+        sil.iter().all(|s| s.len() > 20),
+        "every light sees a silhouette"
+    );
+    for name in FILES {
+        let m = load(name);
+        assert_eq!(m.triangles.len(), 557, "{name}");
+        assert_eq!(
+            triangles_by_position(&m),
+            tris,
+            "{name}: triangles by position"
+        );
+        assert_eq!(
+            silhouettes_by_position(&m, &lights),
+            sil,
+            "{name}: silhouettes"
+        );
+    }
+}
+
+#[test]
+fn meshopt_compressed_files_decode_to_the_uncompressed_quantized_file() {
+    let quantized = load("gltfpack.glb");
+    let lights = lights(&quantized);
+    let silhouettes = silhouettes_by_position(&quantized, &lights);
+    // meshoptimizer's index codec keeps each triangle's winding but may rotate its corners.
+    let rotated = |t: [u32; 3]| {
+        let r = (0..3).min_by_key(|&i| t[i]).unwrap_or(0);
+        [t[r], t[(r + 1) % 3], t[(r + 2) % 3]]
+    };
+    // -c: the same vertex stream bit for bit, the same triangles in the same order.
+    let c = load("gltfpack-c.glb");
+    assert_eq!(c.positions, quantized.positions);
+    assert_eq!(c.triangles.len(), quantized.triangles.len());
+    for (a, b) in c.triangles.iter().zip(&quantized.triangles) {
+        assert_eq!(rotated(*a), rotated(*b));
+    }
+    // -cc also reorders vertices for its codec: the same triangles and silhouettes by position.
+    for name in ["gltfpack-c.glb", "gltfpack-cc.glb"] {
+        let m = load(name);
+        assert_eq!(
+            triangles_by_position(&m),
+            triangles_by_position(&quantized),
+            "{name}"
+        );
+        assert_eq!(silhouettes_by_position(&m, &lights), silhouettes, "{name}");
+    }
+}
+
+#[test]
+fn the_corpus_uses_what_it_is_meant_to_test() {
+    let json = |name: &str| -> serde_json::Value {
+        let b = std::fs::read(data(name)).unwrap();
+        let n = u32::from_le_bytes([b[12], b[13], b[14], b[15]]) as usize;
+        serde_json::from_slice(&b[20..20 + n]).unwrap()
+    };
+    let q = json("gltfpack.glb");
+    assert_eq!(q["extensionsRequired"][0], "KHR_mesh_quantization");
+    assert_eq!(q["accessors"][0]["componentType"], 5123, "u16 positions");
+    for name in ["gltfpack-c.glb", "gltfpack-cc.glb"] {
+        let c = json(name);
+        assert!(c["extensionsRequired"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|e| e == "EXT_meshopt_compression"));
+        assert_eq!(
+            c["buffers"][1]["extensions"]["EXT_meshopt_compression"]["fallback"],
+            true
+        );
+    }
+    let s = json("sparse.glb");
+    assert!(s["accessors"][0].get("bufferView").is_none());
+    assert!(s["accessors"][0].get("sparse").is_some());
+    let ply = std::fs::read(data("reference-binary-be.ply")).unwrap();
+    assert!(ply.starts_with(b"ply\nformat binary_big_endian 1.0\n"));
+}
