@@ -411,9 +411,9 @@ fn unreadable_and_unknown_files_fail_cleanly() {
         stderr.contains("cannot read") && stderr.contains("a_directory.obj"),
         "{stderr}"
     );
-    let (code, stderr) = failure(&["silhouette", "mesh.stl", "--light", "1,2,3,1"]);
+    let (code, stderr) = failure(&["silhouette", "mesh.xyz", "--light", "1,2,3,1"]);
     assert_eq!(code, 1);
-    assert!(stderr.contains("unknown scene 'mesh.stl'"), "{stderr}");
+    assert!(stderr.contains("unknown scene 'mesh.xyz'"), "{stderr}");
 }
 
 #[test]

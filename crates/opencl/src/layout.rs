@@ -1,6 +1,6 @@
 //! The host side of an extraction: the kernel's light buffer, and turning the kernel's compact
 //! lists and uncertain records into [`Multiplicities`]. The scene itself is the shared
-//! [`SceneLayout`](shadowvol_silhouette::gpu::SceneLayout).
+//! [`SceneLayout`].
 //!
 //! Both the device path and the [CPU twin](crate::twin) use exactly this code, so a difference
 //! between them can only come from the kernel itself.

@@ -405,7 +405,7 @@ fn needed_buffers(document: &gltf::Document, ext: &Extensions) -> std::collectio
 /// Extensions that may be required: those read here, and those that only change appearance
 /// (materials, textures), which shadow volumes do not depend on.
 fn check_required_extensions(document: &gltf::Document) -> Result<(), String> {
-    for ext in document.extensions_required() {
+    for (i, ext) in document.extensions_required().enumerate() {
         let ok = matches!(
             ext,
             "KHR_lights_punctual" | "KHR_mesh_quantization" | "EXT_meshopt_compression"
@@ -417,15 +417,18 @@ fn check_required_extensions(document: &gltf::Document) -> Result<(), String> {
             continue;
         }
         return Err(if ext == "KHR_draco_mesh_compression" {
-            "extension KHR_draco_mesh_compression is required but not supported (there is no \
-             maintained Rust Draco decoder): re-export the file without Draco, for example with \
-             meshopt compression (`gltfpack -i in.glb -o out.glb -c`)"
-                .to_owned()
+            format!(
+                "extensionsRequired[{i}]: extension KHR_draco_mesh_compression is required but \
+                 not supported (there is no maintained Rust Draco decoder): re-export the file \
+                 without Draco, for example with meshopt compression \
+                 (`gltfpack -i in.glb -o out.glb -c`)"
+            )
         } else {
             format!(
-                "extension {ext} is required but not supported (supported: KHR_lights_punctual, \
-                 KHR_mesh_quantization, EXT_meshopt_compression, and material and texture \
-                 extensions, which do not change geometry)"
+                "extensionsRequired[{i}]: extension {ext} is required but not supported \
+                 (supported: KHR_lights_punctual, KHR_mesh_quantization, \
+                 EXT_meshopt_compression, and material and texture extensions, which do not \
+                 change geometry)"
             )
         });
     }
