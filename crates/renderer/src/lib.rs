@@ -54,7 +54,7 @@
 #[doc = include_str!("../README.md")]
 pub struct ReadmeDoctests;
 
-pub mod gpu;
+mod gpu;
 pub mod hard;
 pub mod occlusion;
 pub mod plan;
