@@ -59,7 +59,7 @@ enum Started {
 }
 
 fn is_ci() -> bool {
-    std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true"))
+    shadowvol_silhouette::ci::is_ci()
 }
 
 fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {

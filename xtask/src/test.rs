@@ -51,6 +51,7 @@ Options:
 
 Environment:
   CI=true        a missing driver, and a backend that cannot start, fail instead of skipping
+                 (CI=1 and any case of true mean the same: shadowvol_silhouette::ci)
 ";
 
 /// Outcome of one step.
@@ -68,7 +69,7 @@ struct Step {
 }
 
 fn is_ci() -> bool {
-    std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true"))
+    shadowvol_silhouette::ci::is_ci()
 }
 
 /// Runs `cargo xtask test`.

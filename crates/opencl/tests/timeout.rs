@@ -22,7 +22,7 @@ use shadowvol_silhouette::{
 use std::time::{Duration, Instant};
 
 fn in_ci() -> bool {
-    std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true") || v == "1")
+    shadowvol_silhouette::ci::is_ci()
 }
 
 /// The attempts: (rings of the UV sphere, limit in seconds). The first limit is far below what

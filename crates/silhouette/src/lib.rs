@@ -5,6 +5,7 @@
 //! * [`Multiplicities`]: the per-edge, per-light result plus a compact silhouette list.
 //! * [`invariant`]: the closed-chain check (`open_vertices`) and comparisons between results.
 //! * [`corpus`]: the hard cases every backend must pass.
+//! * [`ci`]: whether this is a CI run (`CI`), read the same way by every test and tool.
 //! * [`gpu`]: what the GPU backends share (scene layout, mode codes, uncertain records and their
 //!   exact resolution, wait limits, light batches).
 //! * [`shapes`]: [`shapes::uv_sphere_y`], a closed test sphere shared by the backends' tests.
@@ -28,6 +29,7 @@
 //! assert_eq!(invariant::open_vertices_scene(&scene, &m, 0), 0);
 //! ```
 
+pub mod ci;
 pub mod corpus;
 pub mod gpu;
 pub mod invariant;

@@ -18,7 +18,7 @@ fn backend(test: &str, options: WgpuOptions) -> Option<WgpuBackend> {
             Some(b)
         }
         Err(e) => {
-            if std::env::var("CI").is_ok_and(|v| v == "true") {
+            if shadowvol_silhouette::ci::is_ci() {
                 panic!("{test}: CI=true, but the wgpu backend is unavailable: {e}");
             }
             eprintln!("{test}: SKIPPED (no wgpu adapter): {e}");

@@ -11,7 +11,7 @@ use std::sync::Arc;
 
 /// True under `CI=true` (or `CI=1`), where a missing OpenCL platform fails the tests.
 pub fn in_ci() -> bool {
-    std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true") || v == "1")
+    shadowvol_silhouette::ci::is_ci()
 }
 
 /// Starts the backend with `options`, or skips (visibly: a `SKIPPED` line) when OpenCL is

@@ -7,7 +7,7 @@ use shadowvol_vulkan_geometry::{VulkanBackend, VulkanOptions};
 
 /// True when running in CI (`CI=true`): a missing driver is then a failure, not a skip.
 pub fn in_ci() -> bool {
-    std::env::var("CI").is_ok_and(|v| v == "true" || v == "1")
+    shadowvol_silhouette::ci::is_ci()
 }
 
 /// Starts the backend, or prints a visible SKIPPED line and returns `None` when Vulkan is not
