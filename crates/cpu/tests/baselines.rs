@@ -9,11 +9,7 @@ use shadowvol_robust_math::Accuracy;
 use shadowvol_silhouette::shapes::uv_sphere_y;
 
 fn tetrahedron() -> Mesh {
-    Mesh::new(
-        vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
-        vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
-    )
-    .unwrap()
+    shadowvol_silhouette::shapes::tetrahedron(1.0)
 }
 
 /// UV sphere of radius 1, outward winding, poles as fans (pole valence = `segments`).

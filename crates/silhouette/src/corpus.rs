@@ -32,7 +32,7 @@
 use crate::shapes::{
     book, cuboid, cuboid_unwelded, f32v, merge, plane_fan, plane_grid, uv_sphere, Rng,
 };
-use crate::{SceneObject, TopologyScene};
+use crate::{shapes, SceneObject, TopologyScene};
 use glam::{Affine3A, DVec3, Quat, Vec3};
 use shadowvol_mesh_topology::{EdgeTable, Mesh, MeshError};
 use shadowvol_robust_math::Light;
@@ -119,14 +119,6 @@ fn point_v(p: Vec3) -> Light {
 
 fn directional(x: f32, y: f32, z: f32) -> Light {
     Light::directional(Vec3::new(x, y, z))
-}
-
-/// A closed tetrahedron.
-fn tetrahedron() -> Mesh {
-    Mesh {
-        positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
-        triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
-    }
 }
 
 /// The tilted plane used by the edge-on cases: through `TILT_ORIGIN`, spanned by the
@@ -221,7 +213,7 @@ fn light_at_vertex() -> CorpusCase {
     let sphere = uv_sphere(DVec3::new(0.1, -0.2, 0.3), 1.0, 12, 16);
     let v0 = sphere.positions[2 + 16 * 3 + 5];
     let v1 = sphere.positions[2 + 16 * 7 + 11];
-    let tet = tetrahedron();
+    let tet = shapes::tetrahedron(1.0);
     let mesh = merge(sphere, &tet);
     single(
         "light-at-vertex",
@@ -652,7 +644,7 @@ pub fn cases() -> Vec<CorpusCase> {
         single(
             "tetrahedron",
             "a closed manifold tetrahedron, light outside (sanity)",
-            tetrahedron(),
+            shapes::tetrahedron(1.0),
             vec![
                 Light::point(Vec3::new(2.0, 3.0, 5.0)),
                 Light::directional(Vec3::new(1.0, 2.0, 3.0)),

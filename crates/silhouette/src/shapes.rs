@@ -78,6 +78,26 @@ impl Rng {
     }
 }
 
+/// The closed tetrahedron `0, scale·X, scale·Y, scale·Z` with outward winding: the smallest
+/// closed mesh (4 vertices, 6 edges, 4 triangles), exact in `f32` for power-of-two scales.
+///
+/// ```
+/// let t = shadowvol_silhouette::shapes::tetrahedron(2.0);
+/// assert_eq!((t.positions.len(), t.triangles.len()), (4, 4));
+/// ```
+#[must_use]
+pub fn tetrahedron(scale: f32) -> Mesh {
+    Mesh {
+        positions: vec![
+            Vec3::ZERO,
+            Vec3::X * scale,
+            Vec3::Y * scale,
+            Vec3::Z * scale,
+        ],
+        triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+    }
+}
+
 /// A UV sphere with its poles on the z axis: `rings` latitude bands (>= 2), `segments`
 /// longitudes (>= 3), single pole vertices (0 = north at +z, 1 = south at -z).
 pub(crate) fn uv_sphere(center: DVec3, radius: f64, rings: u32, segments: u32) -> Mesh {

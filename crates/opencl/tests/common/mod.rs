@@ -6,7 +6,7 @@
 use glam::{Affine3A, Quat, Vec3};
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use shadowvol_opencl::{OpenClBackend, OpenClOptions};
-use shadowvol_silhouette::{corpus, BackendError, Light, SceneObject, TopologyScene};
+use shadowvol_silhouette::{corpus, shapes, BackendError, Light, SceneObject, TopologyScene};
 use std::sync::Arc;
 
 /// True under `CI=true` (or `CI=1`), where a missing OpenCL platform fails the tests.
@@ -64,10 +64,7 @@ impl Lcg {
 }
 
 pub fn tetrahedron() -> Mesh {
-    Mesh {
-        positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
-        triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
-    }
+    shapes::tetrahedron(1.0)
 }
 
 /// An `n` × `n` height field (open, with boundary) of amplitude `amp` around z = 0.

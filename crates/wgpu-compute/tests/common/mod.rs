@@ -16,54 +16,6 @@ pub struct Case {
     pub lights: Vec<Light>,
 }
 
-pub fn tetrahedron(scale: f32) -> Mesh {
-    Mesh {
-        positions: vec![
-            Vec3::ZERO,
-            Vec3::X * scale,
-            Vec3::Y * scale,
-            Vec3::Z * scale,
-        ],
-        triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
-    }
-}
-
-/// A closed latitude/longitude sphere (poles welded), `rings` x `segments`.
-pub fn sphere(rings: u32, segments: u32, radius: f32) -> Mesh {
-    let mut positions = vec![Vec3::new(0.0, 0.0, radius)];
-    for r in 1..rings {
-        let th = std::f32::consts::PI * r as f32 / rings as f32;
-        for s in 0..segments {
-            let ph = std::f32::consts::TAU * s as f32 / segments as f32;
-            positions.push(radius * Vec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()));
-        }
-    }
-    positions.push(Vec3::new(0.0, 0.0, -radius));
-    let south = positions.len() as u32 - 1;
-    let ring = |r: u32, s: u32| 1 + (r - 1) * segments + s % segments;
-    let mut triangles = Vec::new();
-    for s in 0..segments {
-        triangles.push([0, ring(1, s), ring(1, s + 1)]);
-        triangles.push([south, ring(rings - 1, s + 1), ring(rings - 1, s)]);
-    }
-    for r in 1..rings - 1 {
-        for s in 0..segments {
-            let (a, b, c, d) = (
-                ring(r, s),
-                ring(r, s + 1),
-                ring(r + 1, s),
-                ring(r + 1, s + 1),
-            );
-            triangles.push([a, c, b]);
-            triangles.push([b, c, d]);
-        }
-    }
-    Mesh {
-        positions,
-        triangles,
-    }
-}
-
 /// A flat n x n grid in the slanted plane z = x + 2y (an open surface, exact integer
 /// coordinates), triangulated both ways.
 pub fn grid(n: u32) -> Mesh {
@@ -123,12 +75,12 @@ fn d(x: f32, y: f32, z: f32) -> Light {
 
 /// This crate's own hard cases.
 pub fn extra_cases() -> Vec<Case> {
-    let sphere_table = Arc::new(EdgeTable::build(&sphere(12, 16, 1.0)).unwrap());
-    let tet_table = Arc::new(EdgeTable::build(&tetrahedron(1.0)).unwrap());
+    let sphere_table = Arc::new(EdgeTable::build(&shapes::uv_sphere_y(12, 16, 1.0)).unwrap());
+    let tet_table = Arc::new(EdgeTable::build(&shapes::tetrahedron(1.0)).unwrap());
     vec![
         Case {
             name: "light-in-face-plane".into(),
-            scene: single(&tetrahedron(1.0)),
+            scene: single(&shapes::tetrahedron(1.0)),
             // On the plane x + y + z = 1 of the slanted face (exact zeros with a non-zero
             // permanent), on the axis plane z = 0 (exact zeros, zero permanent), then generic.
             lights: vec![
@@ -153,7 +105,7 @@ pub fn extra_cases() -> Vec<Case> {
         },
         Case {
             name: "sphere-light-at-vertex".into(),
-            scene: single(&sphere(12, 16, 1.0)),
+            scene: single(&shapes::uv_sphere_y(12, 16, 1.0)),
             lights: vec![
                 p(0.0, 0.0, 1.0),
                 p(0.0, 0.0, 3.0),
@@ -163,17 +115,17 @@ pub fn extra_cases() -> Vec<Case> {
         },
         Case {
             name: "tiny-coordinates".into(),
-            scene: single(&tetrahedron(1e-20)),
+            scene: single(&shapes::tetrahedron(1e-20)),
             lights: vec![p(2e-20, 3e-20, 5e-20), d(1.0, 2.0, 3.0)],
         },
         Case {
             name: "subnormal-coordinates".into(),
-            scene: single(&tetrahedron(1e-40)),
+            scene: single(&shapes::tetrahedron(1e-40)),
             lights: vec![p(2e-40, 3e-40, 5e-40), d(1.0, 2.0, 3.0), p(1.0, 1.0, 1.0)],
         },
         Case {
             name: "huge-coordinates".into(),
-            scene: single(&tetrahedron(1e30)),
+            scene: single(&shapes::tetrahedron(1e30)),
             lights: vec![p(2e30, 3e30, 5e30), d(1.0, 2.0, 3.0), p(1e30, 0.0, 0.0)],
         },
         Case {
