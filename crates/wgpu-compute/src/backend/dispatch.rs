@@ -1,0 +1,383 @@
+//! One `extract` on the device: the batches of lights, each uploaded, dispatched, read back and
+//! resolved on the host, and the host's exact decisions patched into the device buffers.
+
+use super::*;
+
+impl WgpuBackend {
+    pub(super) fn extract_prepared(
+        &self,
+        p: &mut Prepared,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        check_lights(lights)?;
+        let mut stats = ExtractStats::default();
+        let edge_count = p.layout.edge_count();
+        // Zeroing the host result is part of bringing results back (the device sends only the
+        // non-zero entries).
+        let t_reset = Instant::now();
+        out.reset(edge_count, lights.len());
+        stats.readback += t_reset.elapsed();
+        p.last = None;
+        let Some(gpu) = p.gpu.clone() else {
+            // No edges: nothing to compute, every list is empty.
+            return Ok(stats);
+        };
+        let t_upload = Instant::now();
+        let obj_lights = object_lights(&p.scene, lights);
+        let edges = edge_count as u64;
+        let objects = p.layout.object_count() as u64;
+        let per_batch = self.lights_per_batch(edges, objects, lights.len())?;
+        let needs_new_frame = p
+            .frame
+            .as_ref()
+            .is_none_or(|f| f.light_capacity < per_batch);
+        if needs_new_frame {
+            let capacity = self.options.initial_uncertain_capacity;
+            let scope = ErrorScopes::push(&self.device);
+            let frame = self.create_frame(&gpu, edges, objects, per_batch, capacity);
+            if let Some(e) = scope.pop() {
+                return Err(device_error(format!("allocating frame buffers: {e}")));
+            }
+            p.frame = Some(frame?);
+        }
+        stats.upload += t_upload.elapsed();
+        let pipeline = &self.pipelines[shaders::mode_value(mode) as usize];
+        for range in gpu::batches(lights.len(), per_batch) {
+            let batch = LightBatch {
+                object_lights: &obj_lights,
+                packed: pack_lights(&obj_lights, range.start, range.len()),
+                last: range.end == lights.len(),
+                lights: range,
+                exact: mode == Accuracy::Exact,
+            };
+            let scope = ErrorScopes::push(&self.device);
+            let r = self.run_batch(p, &gpu, pipeline, &batch, out, &mut stats);
+            if let Some(e) = scope.pop() {
+                return Err(device_error(e));
+            }
+            r?;
+            if batch.last {
+                p.last = Some((batch.lights.start, batch.lights.len()));
+            }
+        }
+        Ok(stats)
+    }
+
+    /// Runs one batch of lights: upload, dispatch, readback, host resolution.
+    fn run_batch(
+        &self,
+        p: &mut Prepared,
+        gpu: &StaticBuffers,
+        pipeline: &wgpu::ComputePipeline,
+        batch: &LightBatch<'_>,
+        out: &mut Multiplicities,
+        stats: &mut ExtractStats,
+    ) -> Result<(), BackendError> {
+        let (packed, count, exact) = (&batch.packed[..], batch.lights.len(), batch.exact);
+        let edge_count = p.layout.edge_count();
+        let edges = edge_count as u64;
+        let objects = p.layout.object_count() as u64;
+        // ---- compute (repeated with a bigger uncertain buffer if it overflowed)
+        let groups = edge_count.div_ceil(shaders::WORKGROUP_SIZE as usize) as u64;
+        let max_dim = u64::from(self.limits.max_compute_workgroups_per_dimension);
+        let gx = groups.min(max_dim);
+        let gy = groups.div_ceil(gx);
+        if gy > max_dim {
+            return Err(limit_error(format!(
+                "{edge_count} edges need {groups} workgroups; the device allows {max_dim} x {max_dim}"
+            )));
+        }
+        // The first round trip brings the counts and the first `k` entries of every list (and
+        // `ku` uncertain records); the second, if needed, the rest.
+        let (counts, mut chunk, k, ku) = loop {
+            let t = Instant::now();
+            let frame = p
+                .frame
+                .as_mut()
+                .ok_or_else(|| device_error("no frame buffers"))?;
+            // ---- upload: lights and parameters (again after the buffers were regrown)
+            let params = [edge_count as u32, count as u32, frame.uncertain_capacity, 0];
+            self.queue
+                .write_buffer(&frame.lights, 0, bytemuck::cast_slice(packed));
+            self.queue
+                .write_buffer(&frame.params, 0, bytemuck::cast_slice(&params));
+            let k = p.list_prefix.min(edges);
+            let ku = if exact {
+                p.uncertain_prefix.min(u64::from(frame.uncertain_capacity))
+            } else {
+                0
+            };
+            let counters_bytes = (count as u64 + 1) * 4;
+            let lists_at = counters_bytes.next_multiple_of(8);
+            let uncertain_at = lists_at + count as u64 * k * 8;
+            let staging_bytes = uncertain_at + ku * 16;
+            if frame
+                .staging
+                .as_ref()
+                .is_none_or(|b| b.size() < staging_bytes)
+            {
+                self.check_buffer("the staging buffer", staging_bytes, false)?;
+                frame.staging = Some(
+                    self.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("counts and list prefixes"),
+                        size: staging_bytes
+                            .next_power_of_two()
+                            .min(self.limits.max_buffer_size)
+                            .max(staging_bytes),
+                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    }),
+                );
+            }
+            let staging = frame
+                .staging
+                .as_ref()
+                .ok_or_else(|| device_error("no staging buffer"))?;
+            stats.upload += t.elapsed();
+            // ---- compute
+            let t = Instant::now();
+            let mut encoder = self
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("extract"),
+                });
+            encoder.clear_buffer(&frame.counters, 0, Some(counters_bytes));
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("silhouette"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, &frame.bind_group, &[]);
+                pass.dispatch_workgroups(gx as u32, gy as u32, 1);
+            }
+            encoder.copy_buffer_to_buffer(&frame.counters, 0, staging, 0, counters_bytes);
+            if k > 0 {
+                for li in 0..count as u64 {
+                    encoder.copy_buffer_to_buffer(
+                        &frame.silhouettes,
+                        li * edges * 8,
+                        staging,
+                        lists_at + li * k * 8,
+                        k * 8,
+                    );
+                }
+            }
+            if ku > 0 {
+                encoder.copy_buffer_to_buffer(&frame.uncertain, 0, staging, uncertain_at, ku * 16);
+            }
+            let index = self.queue.submit([encoder.finish()]);
+            self.wait(index)?;
+            stats.compute += t.elapsed();
+            // ---- readback, first round trip
+            let t = Instant::now();
+            let (counts, chunk) = self.read_mapped(staging, staging_bytes, |b| {
+                let counts: Vec<u32> = read_u32s(&b[..counters_bytes as usize]).collect();
+                let lists = (0..count)
+                    .map(|li| {
+                        let n = u64::from(counts[li]).min(k) as usize;
+                        let at = (lists_at + li as u64 * k * 8) as usize;
+                        read_pairs(&b[at..at + n * 8])
+                    })
+                    .collect();
+                let n = u64::from(counts[count]).min(ku) as usize;
+                let at = uncertain_at as usize;
+                let uncertain = read_records(&b[at..at + n * 16]);
+                (
+                    counts,
+                    BatchOutput {
+                        mult: None,
+                        lists,
+                        uncertain,
+                    },
+                )
+            })?;
+            stats.readback += t.elapsed();
+            let uncertain = counts[count];
+            if uncertain <= frame.uncertain_capacity {
+                break (counts, chunk, k, ku);
+            }
+            // Overflow: grow the uncertain buffer and run the dispatch again.
+            let t = Instant::now();
+            let capacity = uncertain.checked_next_power_of_two().unwrap_or(uncertain);
+            let light_capacity = frame.light_capacity;
+            let staging = frame.staging.take();
+            let mut frame = self.create_frame(gpu, edges, objects, light_capacity, capacity)?;
+            if frame.uncertain_capacity < uncertain {
+                return Err(limit_error(format!(
+                    "{uncertain} uncertain (edge, OV, light) triples need {} bytes, but the device allows storage bindings of {} bytes; pass fewer lights per call",
+                    u64::from(uncertain) * 16,
+                    self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size)
+                )));
+            }
+            frame.staging = staging;
+            p.frame = Some(frame);
+            stats.upload += t.elapsed();
+        };
+        let frame = p
+            .frame
+            .as_mut()
+            .ok_or_else(|| device_error("no frame buffers"))?;
+        let uncertain_count = u64::from(counts[count]);
+        stats.uncertain += uncertain_count;
+        // Adapt the prefixes to this frame's sizes.
+        let grow = |n: u64| (n + n / 4).max(1).next_power_of_two();
+        let longest = counts[..count].iter().copied().max().unwrap_or(0);
+        p.list_prefix = grow(u64::from(longest)).max(u64::from(self.options.min_list_prefix));
+        p.uncertain_prefix = grow(uncertain_count).max(u64::from(self.options.min_list_prefix));
+
+        // ---- readback, second round trip: the rest of long lists and of the uncertain
+        // records, and with `full_readback` the whole multiplicity buffer
+        let t = Instant::now();
+        let rest: Vec<(usize, u64, u64)> = counts[..count]
+            .iter()
+            .enumerate()
+            .filter(|&(_, &c)| u64::from(c) > k)
+            .map(|(li, &c)| (li, k, u64::from(c) - k))
+            .collect();
+        let rest_bytes: u64 = rest.iter().map(|r| r.2 * 8).sum();
+        let uncertain_rest = uncertain_count.saturating_sub(ku);
+        let uncertain_bytes = uncertain_rest * 16;
+        let mult_bytes = if self.options.full_readback {
+            edges * count as u64 * 4
+        } else {
+            0
+        };
+        let total = rest_bytes + uncertain_bytes + mult_bytes;
+        if total > 0 {
+            if frame.readback.as_ref().is_none_or(|b| b.size() < total) {
+                self.check_buffer("the readback buffer", total, false)?;
+                frame.readback = Some(
+                    self.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("readback"),
+                        size: total
+                            .next_power_of_two()
+                            .min(self.limits.max_buffer_size)
+                            .max(total),
+                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    }),
+                );
+            }
+            let readback = frame
+                .readback
+                .as_ref()
+                .ok_or_else(|| device_error("no readback buffer"))?;
+            let mut encoder = self
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("readback"),
+                });
+            let mut offset = 0;
+            for &(li, from, n) in &rest {
+                encoder.copy_buffer_to_buffer(
+                    &frame.silhouettes,
+                    (li as u64 * edges + from) * 8,
+                    readback,
+                    offset,
+                    n * 8,
+                );
+                offset += n * 8;
+            }
+            if uncertain_bytes > 0 {
+                encoder.copy_buffer_to_buffer(
+                    &frame.uncertain,
+                    ku * 16,
+                    readback,
+                    offset,
+                    uncertain_bytes,
+                );
+                offset += uncertain_bytes;
+            }
+            if mult_bytes > 0 {
+                encoder.copy_buffer_to_buffer(&frame.mult, 0, readback, offset, mult_bytes);
+            }
+            let index = self.queue.submit([encoder.finish()]);
+            self.wait(index)?;
+            self.read_mapped(readback, total, |bytes| {
+                let mut at = 0usize;
+                for &(li, _, n) in &rest {
+                    let b = n as usize * 8;
+                    chunk.lists[li].extend(read_pairs(&bytes[at..at + b]));
+                    at += b;
+                }
+                let b = uncertain_bytes as usize;
+                chunk.uncertain.extend(read_records(&bytes[at..at + b]));
+                at += b;
+                if mult_bytes > 0 {
+                    chunk.mult = Some(
+                        read_u32s(&bytes[at..at + mult_bytes as usize])
+                            .map(|w| w as i32)
+                            .collect(),
+                    );
+                }
+            })?;
+        } else if self.options.full_readback {
+            chunk.mult = Some(vec![0; edge_count * count]);
+        }
+        stats.readback += t.elapsed();
+
+        // ---- host: exact decisions for uncertain triples, then patch the device copy
+        let t = Instant::now();
+        validate_lists(&chunk, p.layout.edge_count())?;
+        let patch = finish_batch(
+            &p.layout,
+            batch.object_lights,
+            batch.lights.clone(),
+            chunk,
+            out,
+        )?;
+        if batch.last {
+            self.apply_patch(frame, edges, &patch);
+        }
+        stats.host_resolve += t.elapsed();
+        Ok(())
+    }
+
+    /// Writes the host's exact decisions into the device buffers, so that [`GpuResults`] is final.
+    fn apply_patch(&self, frame: &Frame, edges: u64, patch: &Patch) {
+        if patch.mult.is_empty() && patch.lists.is_empty() {
+            return;
+        }
+        for &(li, e, m) in &patch.mult {
+            self.queue.write_buffer(
+                &frame.mult,
+                (u64::from(li) * edges + u64::from(e)) * 4,
+                bytemuck::bytes_of(&m),
+            );
+        }
+        for (li, list) in &patch.lists {
+            let words: Vec<u32> = list.iter().flat_map(|&(e, m)| [e, m as u32]).collect();
+            if !words.is_empty() {
+                self.queue.write_buffer(
+                    &frame.silhouettes,
+                    u64::from(*li) * edges * 8,
+                    bytemuck::cast_slice(&words),
+                );
+            }
+            let len = list.len() as u32;
+            self.queue.write_buffer(
+                &frame.counters,
+                u64::from(*li) * 4,
+                bytemuck::bytes_of(&len),
+            );
+        }
+        // Flush the staged writes.
+        self.queue.submit(std::iter::empty::<wgpu::CommandBuffer>());
+    }
+}
+
+/// Rejects compact lists that cannot be right (an edge out of range, m = 0), instead of
+/// panicking. Uncertain records are checked by [`resolve_uncertain`](gpu::resolve_uncertain).
+fn validate_lists(chunk: &BatchOutput, edges: usize) -> Result<(), BackendError> {
+    for (li, list) in chunk.lists.iter().enumerate() {
+        if let Some(&(e, m)) = list.iter().find(|&&(e, m)| e as usize >= edges || m == 0) {
+            return Err(device_error(format!(
+                "the device returned an invalid silhouette entry (edge {e}, m {m}) for light {li}"
+            )));
+        }
+    }
+    Ok(())
+}
