@@ -104,7 +104,7 @@ impl Prepared {
                 Some(l) => Arc::clone(l),
                 None => {
                     let l = Arc::new(Layout::build(&o.table).map_err(|e| BackendError::Limit {
-                        backend: "simd",
+                        backend: crate::NAME,
                         message: format!("object {i} ({}): {}", o.name, e.0),
                     })?);
                     cache.insert(key, Arc::clone(&l));

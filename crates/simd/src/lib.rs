@@ -57,6 +57,9 @@ use std::time::Instant;
 /// Environment variable that forces a [`SimdLevel`] in [`create_backend`]: `wide` or `avx2`.
 pub const LEVEL_ENV: &str = "SHADOWVOL_SIMD_LEVEL";
 
+/// The backend's registry name.
+pub const NAME: &str = "simd";
+
 /// The instruction-set level the kernels run at.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum SimdLevel {
@@ -141,7 +144,7 @@ fn wide_compile_level() -> &'static str {
 pub fn create_backend() -> Result<Box<dyn SilhouetteBackend>, BackendError> {
     let level = match std::env::var(LEVEL_ENV) {
         Ok(v) if !v.trim().is_empty() => v.parse().map_err(|why| BackendError::Unavailable {
-            backend: "simd",
+            backend: NAME,
             reason: format!("{LEVEL_ENV}: {why}"),
         })?,
         _ => SimdLevel::detect(),
@@ -170,7 +173,7 @@ impl SimdBackend {
     pub fn with_level(level: SimdLevel, threads: Option<usize>) -> Result<Self, BackendError> {
         if !level.is_supported() {
             return Err(BackendError::Unavailable {
-                backend: "simd",
+                backend: NAME,
                 reason: format!("this CPU does not support SIMD level {}", level.name()),
             });
         }
@@ -181,7 +184,7 @@ impl SimdBackend {
                     .num_threads(n.max(1))
                     .build()
                     .map_err(|e| BackendError::Unavailable {
-                        backend: "simd",
+                        backend: NAME,
                         reason: format!("cannot start {n} worker threads: {e}"),
                     })?,
             ),
@@ -189,7 +192,7 @@ impl SimdBackend {
         Ok(Self {
             level,
             pool,
-            scenes: PreparedScenes::new("simd"),
+            scenes: PreparedScenes::new(NAME),
             signs: Vec::new(),
         })
     }
@@ -213,7 +216,7 @@ impl SimdBackend {
 impl SilhouetteBackend for SimdBackend {
     fn info(&self) -> BackendInfo {
         BackendInfo {
-            name: "simd",
+            name: NAME,
             device: format!(
                 "host CPU, {} threads, {} lanes (8 x f32, 4 x f64)",
                 self.threads(),
