@@ -162,35 +162,10 @@ impl Bvh {
         t_max: f64,
         accept: impl Fn(u32) -> bool,
     ) -> bool {
-        if self.tris.is_empty() {
-            return false;
-        }
-        let inv = DVec3::ONE / dir;
-        let mut stack = [0u32; 64];
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let n = self.nodes[stack[sp] as usize];
-            if !slab(n.lo, n.hi, origin, inv, t_min, t_max) {
-                continue;
-            }
-            if n.count > 0 {
-                for &i in &self.order[n.first as usize..(n.first + n.count) as usize] {
-                    if accept(self.ids[i as usize]) {
-                        if let Some(t) = intersect(&self.tris[i as usize], origin, dir) {
-                            if t > t_min && t < t_max {
-                                return true;
-                            }
-                        }
-                    }
-                }
-            } else if sp + 2 <= stack.len() {
-                stack[sp] = n.first;
-                stack[sp + 1] = n.first + 1;
-                sp += 2;
-            }
-        }
-        false
+        self.traverse(origin, dir, t_min, t_max, |i| {
+            accept(self.ids[i])
+                && intersect(&self.tris[i], origin, dir).is_some_and(|t| t > t_min && t < t_max)
+        })
     }
 }
 
@@ -204,6 +179,19 @@ impl Bvh {
         origin: DVec3,
         dir: DVec3,
         t_max: f64,
+        visit: impl FnMut(usize) -> bool,
+    ) -> bool {
+        self.traverse(origin, dir, 0.0, t_max, visit)
+    }
+
+    /// Calls `visit(index)` for the triangles whose (padded) box meets the segment
+    /// `t ∈ [t_min, t_max]`, until it returns true; returns whether some call did.
+    fn traverse(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        t_min: f64,
+        t_max: f64,
         mut visit: impl FnMut(usize) -> bool,
     ) -> bool {
         if self.tris.is_empty() {
@@ -215,7 +203,7 @@ impl Bvh {
         while sp > 0 {
             sp -= 1;
             let n = self.nodes[stack[sp] as usize];
-            if !slab(n.lo, n.hi, origin, inv, 0.0, t_max) {
+            if !slab(n.lo, n.hi, origin, inv, t_min, t_max) {
                 continue;
             }
             if n.count > 0 {
