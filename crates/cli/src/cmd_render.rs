@@ -13,8 +13,17 @@ use std::time::Instant;
 /// The long help of the subcommand.
 pub const LONG_ABOUT: &str =
     "Render SCENE (a preset name from `shadowvol scenes`, a .gltf/.glb \
-    file with its KHR_lights_punctual lights and camera, or a .obj/.stl/.ply mesh with --light) with stencil shadow volumes on the GPU \
-    (wgpu; headless), and write a PNG.\n\n\
+    file with its KHR_lights_punctual lights and camera, or a .obj/.stl/.ply mesh) with stencil \
+    shadow volumes on the GPU (wgpu; headless), and write a PNG (--out, by default SCENE's file \
+    stem or preset name + .png in the current directory).\n\n\
+    Any mesh renders without flags. Lights: --light (repeatable) replaces the scene's own; a \
+    scene without any gets a default key light, a point light above the scene, to the camera's \
+    left and slightly towards it, at 4 bounding radii from the centre, so that the shadow falls \
+    to the right of the objects in view. Camera: the file's, else a framing of the bounds. \
+    Ground (--ground auto, the default): a file whose casters have nothing below them (every \
+    .obj/.stl/.ply, and glTF scenes without a floor object) gets a receiver plane (y up) just \
+    under its lowest point; presets keep the receivers they declare. --ground on adds one to \
+    any scene that has none, --ground off removes it.\n\n\
     Silhouettes come from --backend in --mode; caps use the same per-triangle signs. For each \
     (light, object) the plan picks: culled (its shadow cannot reach the view), z-pass (the \
     near-clip volume test proves the camera is outside the shadow volume) or z-fail with caps \
@@ -34,10 +43,13 @@ pub const LONG_ABOUT: &str =
     \"reference_ms\"}, \"scene\", \"backend\", \"mode\", \"size\": [w, h], \"adapter\", \"out\", \
     \"covered_pixels\", \"reference_shadow_pixels\", \"geometric_artifact_pixels\", \"undecidable_pixels\" \
     (covered pixels the reference could not decide), \"boundary_pixels\" (raster and reference differ \
-    within one pixel of a reference shadow boundary; neither is counted as an artifact)}.";
+    within one pixel of a reference shadow boundary; neither is counted as an artifact), \
+    \"lights\": [[x, y, z, w]] (the lights used), \"lights_source\": \"file\", \"flags\" or \
+    \"default\", \"ground\": null or {\"y\", \"source\": \"scene\", \"auto\" or \"flags\"}}.";
 
 /// Examples shown after the help.
-pub const AFTER_HELP: &str = "Examples:\n  shadowvol render hard-book-3 --out book.png --reference --backdrop\n  \
+pub const AFTER_HELP: &str = "Examples:\n  shadowvol render model.obj\n  \
+    shadowvol render hard-book-3 --out book.png --reference --backdrop\n  \
     shadowvol render scene.glb --out scene.png --size 640x480 --mode robust --backend simd --explain\n  \
     shadowvol render town --out town.png --reference --diff town-diff.png --format json";
 
@@ -53,6 +65,18 @@ pub enum TechniqueArg {
     ZPass,
 }
 
+/// Whether to add a receiver plane under the scene.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum GroundArg {
+    /// A plane under files whose casters have nothing below them; presets keep their own.
+    #[default]
+    Auto,
+    /// A plane under any scene that has no ground of its own.
+    On,
+    /// No added plane, and none of the scene's own.
+    Off,
+}
+
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// The scene: a preset name (see `shadowvol scenes`) or a .gltf/.glb/.obj/.stl/.ply file
@@ -61,8 +85,8 @@ pub struct Args {
     scene: String,
 
     /// A light as homogeneous X,Y,Z,W (w = 1 point, w = 0 directional towards (X,Y,Z)); repeat
-    /// for several. Replaces the scene's own lights; needed for .obj/.stl/.ply meshes, which
-    /// have none.
+    /// for several. Replaces the scene's own lights; without any light anywhere, a default key
+    /// light is placed from the scene's bounds.
     #[arg(
         long = "light",
         value_name = "X,Y,Z,W",
@@ -71,9 +95,15 @@ pub struct Args {
     )]
     lights: Vec<shadowvol_robust_math::Light>,
 
-    /// The PNG to write.
+    /// The PNG to write [default: SCENE's file stem or preset name + .png, in the current
+    /// directory].
     #[arg(long, value_name = "FILE.png")]
-    out: PathBuf,
+    out: Option<PathBuf>,
+
+    /// A receiver plane under the scene: auto (under files with nothing below their casters),
+    /// on or off.
+    #[arg(long, value_enum, default_value_t = GroundArg::Auto)]
+    ground: GroundArg,
 
     /// Image size in pixels.
     #[arg(long, default_value = "512x512", value_name = "WxH", value_parser = parse_size)]
@@ -160,6 +190,33 @@ struct Report<'a> {
     /// Pixels where raster and reference differ within one pixel of a reference shadow boundary
     /// (not counted as artifacts).
     boundary_pixels: Option<usize>,
+    /// The lights used, homogeneous `[x, y, z, w]`.
+    lights: Vec<[f32; 4]>,
+    /// Where they came from.
+    lights_source: LightsSource,
+    /// The receiver plane under the scene, if any.
+    ground: Option<Ground>,
+}
+
+/// Where the lights of a render came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+enum LightsSource {
+    /// The scene file or preset.
+    File,
+    /// `--light`.
+    Flags,
+    /// The default key light ([`shadowvol_scenes::Scene::key_light`]).
+    Default,
+}
+
+/// The receiver plane `y = ground_y` and why it is there.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+struct Ground {
+    y: f32,
+    /// `scene` (the preset declares it), `auto` (nothing lay below the casters) or `flags`
+    /// (`--ground on`).
+    source: &'static str,
 }
 
 #[derive(Debug, serde::Serialize)]
@@ -184,16 +241,8 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     for n in &notes {
         eprintln!("note: {n}");
     }
-    if !args.lights.is_empty() {
-        scene.lights.clone_from(&args.lights);
-    }
-    if scene.lights.is_empty() {
-        return Err(CliError::Usage(format!(
-            "scene {} has no lights: nothing would cast a shadow (add --light X,Y,Z,W, or \
-             KHR_lights_punctual lights to a glTF file)",
-            args.scene
-        )));
-    }
+    let (lights_source, ground) = stage(&mut scene, args)?;
+    let out_path = out_path(args);
     let mut rscene = RenderScene::from_scene(&scene).map_err(render_error)?;
     if args.backdrop {
         rscene.add_backdrop();
@@ -209,7 +258,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     };
     let mut renderer = Renderer::new(backend, options).map_err(render_error)?;
     let frame = renderer.render(&rscene).map_err(render_error)?;
-    frame.save_png(&args.out).map_err(render_error)?;
+    frame.save_png(&out_path).map_err(render_error)?;
 
     let want_reference = args.reference || args.diff.is_some();
     let (cmp, reference_ms) = if want_reference {
@@ -245,52 +294,144 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 mode: frame.mode,
                 size: [frame.width, frame.height],
                 adapter: &frame.adapter,
-                out: args.out.display().to_string(),
+                out: out_path.display().to_string(),
                 covered_pixels: cmp.as_ref().map(|c| c.covered_pixels),
                 reference_shadow_pixels: cmp.as_ref().map(|c| c.reference_shadow_pixels),
                 geometric_artifact_pixels: cmp.as_ref().map(|c| c.geometric_artifact_pixels),
                 undecidable_pixels: cmp.as_ref().map(|c| c.undecidable_pixels),
                 boundary_pixels: cmp.as_ref().map(|c| c.boundary_pixels),
+                lights: scene.lights.iter().map(|l| l.to_array()).collect(),
+                lights_source,
+                ground,
             };
             serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
             writeln!(out)?;
         }
         Format::Text => write_text(
             out,
-            args,
-            &scene.name,
-            backend_name,
-            &frame,
-            shadow_pixels,
-            cmp.as_ref(),
-            reference_ms,
+            &TextReport {
+                args,
+                out_path: &out_path,
+                scene: &scene,
+                lights_source,
+                ground,
+                backend: backend_name,
+                frame: &frame,
+                shadow_pixels,
+                cmp: cmp.as_ref(),
+                reference_ms,
+            },
         )?,
     }
     Ok(())
 }
 
-#[allow(clippy::too_many_arguments)]
-fn write_text(
-    out: &mut dyn Write,
+/// Chooses the lights and the ground of `scene` from the flags: `--light` replaces the scene's
+/// lights, a scene without any gets [`shadowvol_scenes::Scene::key_light`] seen from its camera
+/// (or the default framing); `--ground` sets `effects.ground_y`.
+fn stage(
+    scene: &mut shadowvol_scenes::Scene,
     args: &Args,
-    scene: &str,
-    backend: &str,
-    frame: &Frame,
+) -> Result<(LightsSource, Option<Ground>), CliError> {
+    let lights_source = if !args.lights.is_empty() {
+        scene.lights.clone_from(&args.lights);
+        LightsSource::Flags
+    } else if !scene.lights.is_empty() {
+        LightsSource::File
+    } else {
+        let camera = scene.camera_or_default().ok_or_else(|| {
+            CliError::Other(format!(
+                "{}: no vertices, nothing to render or light",
+                args.scene
+            ))
+        })?;
+        scene.lights.extend(scene.key_light(&camera));
+        LightsSource::Default
+    };
+    let own = scene
+        .effects
+        .ground_y
+        .map(|y| Ground { y, source: "scene" });
+    let ground = match args.ground {
+        GroundArg::Off => None,
+        GroundArg::On => own.or_else(|| {
+            scene
+                .ground_y_below()
+                .map(|y| Ground { y, source: "flags" })
+        }),
+        GroundArg::Auto if shadowvol_scenes::is_preset(&args.scene) => own,
+        GroundArg::Auto => {
+            own.or_else(|| scene.auto_ground_y().map(|y| Ground { y, source: "auto" }))
+        }
+    };
+    scene.effects.ground_y = ground.map(|g| g.y);
+    Ok((lights_source, ground))
+}
+
+/// `--out`, or SCENE's file stem (a preset's name) + `.png` in the current directory.
+fn out_path(args: &Args) -> PathBuf {
+    args.out.clone().unwrap_or_else(|| {
+        let stem = std::path::Path::new(&args.scene)
+            .file_stem()
+            .map_or_else(|| "render".into(), |s| s.to_string_lossy().into_owned());
+        PathBuf::from(format!("{stem}.png"))
+    })
+}
+
+/// What the text output shows.
+struct TextReport<'a> {
+    args: &'a Args,
+    out_path: &'a std::path::Path,
+    scene: &'a shadowvol_scenes::Scene,
+    lights_source: LightsSource,
+    ground: Option<Ground>,
+    backend: &'a str,
+    frame: &'a Frame,
     shadow_pixels: usize,
-    cmp: Option<&reference::Comparison>,
+    cmp: Option<&'a reference::Comparison>,
     reference_ms: Option<f64>,
-) -> std::io::Result<()> {
+}
+
+fn write_text(out: &mut dyn Write, r: &TextReport<'_>) -> std::io::Result<()> {
+    let (args, frame, backend) = (r.args, r.frame, r.backend);
     writeln!(
         out,
-        "rendered {scene} ({}x{}, mode {}, backend {backend}) on {} -> {}",
+        "rendered {} ({}x{}, mode {}, backend {backend}) on {} -> {}",
+        r.scene.name,
         frame.width,
         frame.height,
         frame.mode,
         frame.adapter,
-        args.out.display()
+        r.out_path.display()
     )?;
-    writeln!(out, "shadow pixels   {shadow_pixels}")?;
-    if let Some(c) = cmp {
+    let from = match r.lights_source {
+        LightsSource::File => "from the scene",
+        LightsSource::Flags => "from --light",
+        LightsSource::Default => "default key light: the scene has none",
+    };
+    let list: Vec<String> = r
+        .scene
+        .lights
+        .iter()
+        .map(|l| {
+            let [x, y, z, w] = l.to_array();
+            format!("({x}, {y}, {z}, {w})")
+        })
+        .collect();
+    writeln!(out, "lights          {} ({from})", list.join(", "))?;
+    match r.ground {
+        Some(g) => {
+            let why = match g.source {
+                "auto" => "added: nothing lies below the casters",
+                "flags" => "added by --ground on",
+                _ => "the scene's own",
+            };
+            writeln!(out, "ground          y = {} ({why})", g.y)?;
+        }
+        None => writeln!(out, "ground          none")?,
+    }
+    writeln!(out, "shadow pixels   {}", r.shadow_pixels)?;
+    if let Some(c) = r.cmp {
         let total = (frame.width * frame.height) as usize;
         writeln!(
             out,
@@ -310,8 +451,8 @@ fn write_text(
         "timings         silhouette {:.2} ms, side building {:.2} ms, raster {:.2} ms, prepare {:.2} ms, total {:.2} ms",
         t.silhouette_ms, t.side_building_ms, t.raster_ms, t.prepare_ms, t.total_ms
     )?;
-    if let Some(r) = reference_ms {
-        write!(out, ", reference {r:.2} ms")?;
+    if let Some(ms) = r.reference_ms {
+        write!(out, ", reference {ms:.2} ms")?;
     }
     writeln!(out)?;
     if let Some(p) = &args.diff {

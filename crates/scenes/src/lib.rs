@@ -37,6 +37,7 @@ pub mod ply;
 pub mod presets;
 pub mod procedural;
 mod scene;
+pub mod staging;
 pub mod stl;
 
 pub use glb_write::{export_glb, to_glb};

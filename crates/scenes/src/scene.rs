@@ -285,26 +285,9 @@ impl Scene {
     /// corners transformed), or `None` for a scene without vertices.
     #[must_use]
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
-        let mut min = Vec3::splat(f32::INFINITY);
-        let mut max = Vec3::splat(f32::NEG_INFINITY);
-        let mut any = false;
-        for o in &self.objects {
-            let Some((lo, hi)) = mesh_bounds(&o.mesh) else {
-                continue;
-            };
-            for k in 0..8 {
-                let c = Vec3::new(
-                    if k & 1 == 0 { lo.x } else { hi.x },
-                    if k & 2 == 0 { lo.y } else { hi.y },
-                    if k & 4 == 0 { lo.z } else { hi.z },
-                );
-                let w = o.transform.transform_point3(c);
-                min = min.min(w);
-                max = max.max(w);
-                any = true;
-            }
-        }
-        any.then_some((min, max))
+        (0..self.objects.len())
+            .filter_map(|i| self.object_bounds(i))
+            .reduce(|(lo, hi), (l, h)| (lo.min(l), hi.max(h)))
     }
 
     /// The scene's camera, or one framing its bounds (from `+x+y+z`-ish) when it has none.

@@ -1,0 +1,425 @@
+//! `shadowvol render` on any mesh, with no flags: OBJ files of every kind a user brings (a
+//! scan, a CAD part with flat polygon faces, a quad mesh, an open model, a non-manifold one) and
+//! glTF files without lights or camera. Each must exit 0 with its object in view and its shadow
+//! on the added ground, and in exact mode agree with the ray-traced reference on all but
+//! 0.05 % of the pixels.
+
+mod common;
+
+use common::{run, BIN};
+use serde_json::Value;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The size of the compared renders: large enough for a few thousand shadow pixels.
+const SIZE: &str = "160x160";
+const PIXELS: f64 = 160.0 * 160.0;
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "shadowvol-render-any-{}-{name}",
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `true` when the render could not find a GPU adapter and the test may skip (never under CI).
+fn no_adapter(stderr: &str) -> bool {
+    if stderr.contains("no GPU adapter") {
+        assert!(
+            !shadowvol_silhouette::ci::is_ci(),
+            "CI: render needs a GPU adapter (Mesa lavapipe): {stderr}"
+        );
+        eprintln!("SKIPPED: {stderr}");
+        return true;
+    }
+    false
+}
+
+/// An OBJ text from positions and faces (1-based on output).
+fn obj(positions: &[[f32; 3]], faces: &[Vec<usize>]) -> String {
+    let mut s = String::from("# written by the render_any test\n");
+    for p in positions {
+        writeln!(s, "v {} {} {}", p[0], p[1], p[2]).unwrap();
+    }
+    for f in faces {
+        s.push('f');
+        for i in f {
+            write!(s, " {}", i + 1).unwrap();
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// A lumpy sphere of irregular triangles, as a scanner writes: an icosphere subdivided twice
+/// with every vertex pushed in or out by a deterministic amount.
+fn scan() -> String {
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut p: Vec<[f32; 3]> = vec![
+        [-1., t, 0.],
+        [1., t, 0.],
+        [-1., -t, 0.],
+        [1., -t, 0.],
+        [0., -1., t],
+        [0., 1., t],
+        [0., -1., -t],
+        [0., 1., -t],
+        [t, 0., -1.],
+        [t, 0., 1.],
+        [-t, 0., -1.],
+        [-t, 0., 1.],
+    ];
+    let mut f: Vec<[usize; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..2 {
+        let mut mid = std::collections::HashMap::new();
+        let mut next = Vec::new();
+        for [a, b, c] in f {
+            let mut m = |i: usize, j: usize| {
+                *mid.entry((i.min(j), i.max(j))).or_insert_with(|| {
+                    let q = [0, 1, 2].map(|k| (p[i][k] + p[j][k]) * 0.5);
+                    p.push(q);
+                    p.len() - 1
+                })
+            };
+            let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        f = next;
+    }
+    for (i, q) in p.iter_mut().enumerate() {
+        let len = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+        let bump = 1.0 + 0.08 * ((i * 7919 % 23) as f32 / 23.0 - 0.5);
+        *q = q.map(|c| c / len * bump * 3.0 + 0.0);
+        q[1] += 3.2; // a scan in the scanner's frame, not at the origin
+    }
+    obj(&p, &f.iter().map(|t| t.to_vec()).collect::<Vec<_>>())
+}
+
+/// An L-shaped bracket: two flat L faces written as one 6-gon each, and its sides as quads.
+fn cad_bracket() -> String {
+    let l = [
+        [0., 0.],
+        [40., 0.],
+        [40., 8.],
+        [8., 8.],
+        [8., 30.],
+        [0., 30.],
+    ];
+    let mut p = Vec::new();
+    for z in [0f32, 20.] {
+        for [x, y] in l {
+            p.push([x, y, z]);
+        }
+    }
+    // Both L faces fan from the outer corner, as the loader fans polygons: convex pieces only.
+    let mut faces = vec![vec![0, 5, 4, 3, 2, 1], (6..12).collect()];
+    for i in 0..6 {
+        let j = (i + 1) % 6;
+        faces.push(vec![i, j, j + 6, i + 6]);
+    }
+    obj(&p, &faces)
+}
+
+/// A box whose faces are 4x4 grids of quads.
+fn quad_box() -> String {
+    let n = 4usize;
+    let mut p = Vec::new();
+    let mut faces = Vec::new();
+    // Each face: origin, u and v directions (outward normal u x v).
+    let sides: [([f32; 3], [f32; 3], [f32; 3]); 6] = [
+        ([0., 0., 0.], [0., 1., 0.], [1., 0., 0.]),
+        ([0., 0., 1.], [1., 0., 0.], [0., 1., 0.]),
+        ([0., 0., 0.], [0., 0., 1.], [0., 1., 0.]),
+        ([1., 0., 0.], [0., 1., 0.], [0., 0., 1.]),
+        ([0., 0., 0.], [1., 0., 0.], [0., 0., 1.]),
+        ([0., 1., 0.], [0., 0., 1.], [1., 0., 0.]),
+    ];
+    let mut index = std::collections::HashMap::new();
+    for (o, u, v) in sides {
+        let mut id = |a: usize, b: usize| {
+            let q =
+                [0, 1, 2].map(|k| o[k] + u[k] * a as f32 / n as f32 + v[k] * b as f32 / n as f32);
+            let key = q.map(|c| (c * 1000.0).round() as i64);
+            *index.entry(key).or_insert_with(|| {
+                p.push(q.map(|c| c * 2.0));
+                p.len() - 1
+            })
+        };
+        for a in 0..n {
+            for b in 0..n {
+                faces.push(vec![id(a, b), id(a + 1, b), id(a + 1, b + 1), id(a, b + 1)]);
+            }
+        }
+    }
+    obj(&p, &faces)
+}
+
+/// A box without its top: an open model with boundary edges, lit from inside as well.
+fn open_box() -> String {
+    let p: Vec<[f32; 3]> = (0..8)
+        .map(|k| {
+            [
+                if k & 1 == 0 { 0. } else { 2. },
+                if k & 2 == 0 { 0. } else { 1.5 },
+                if k & 4 == 0 { 0. } else { 2. },
+            ]
+        })
+        .collect();
+    let faces = vec![
+        vec![0, 1, 5, 4], // bottom
+        vec![0, 2, 3, 1], // back
+        vec![4, 5, 7, 6], // front
+        vec![0, 4, 6, 2], // left
+        vec![1, 3, 7, 5], // right
+    ];
+    obj(&p, &faces)
+}
+
+/// Two cubes sharing one edge (four triangles on it) and a fin: a triangle hanging off an edge
+/// of the first cube.
+fn non_manifold() -> String {
+    let mut p: Vec<[f32; 3]> = Vec::new();
+    let mut faces = Vec::new();
+    for (dx, dy) in [(0f32, 0f32), (1., 1.)] {
+        let base = p.len();
+        for k in 0..8 {
+            p.push([
+                dx + if k & 1 == 0 { 0. } else { 1. },
+                dy + if k & 2 == 0 { 0. } else { 1. },
+                if k & 4 == 0 { 0. } else { 1. },
+            ]);
+        }
+        for q in [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ] {
+            faces.push(q.iter().map(|i| base + i).collect());
+        }
+    }
+    p.push([-0.8, 1.6, 0.5]);
+    faces.push(vec![2, 6, 16]);
+    // The second cube's corner (1, 1, z) is the first cube's (1, 1, z): weld them by index so
+    // the shared edge is one edge of four triangles.
+    for f in &mut faces {
+        for i in f.iter_mut() {
+            if *i >= 8 && *i < 16 {
+                let k = *i - 8;
+                if k & 1 == 0 && k & 2 == 0 {
+                    *i = 3 | (k & 4);
+                }
+            }
+        }
+    }
+    obj(&p, &faces)
+}
+
+fn real(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scenes/tests/data/real")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+/// Renders `file` with only `--size`, `--reference` and `--format json`, and checks the
+/// result; `None` when there is no GPU adapter (outside CI).
+fn render_checked(file: &str, out_dir: &Path) -> Option<Value> {
+    let out_png = out_dir.join("out.png");
+    let args = [
+        "render",
+        file,
+        "--out",
+        out_png.to_str().unwrap(),
+        "--size",
+        SIZE,
+        "--reference",
+        "--format",
+        "json",
+    ];
+    let out = run(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() && no_adapter(&stderr) {
+        return None;
+    }
+    assert!(out.status.success(), "render {file} failed:\n{stderr}");
+    let v: Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(v["lights_source"], "default", "{file}: {v}");
+    assert_eq!(v["lights"].as_array().unwrap().len(), 1, "{file}");
+    assert_eq!(v["ground"]["source"], "auto", "{file}: {v}");
+    assert_eq!(v["mode"], "exact");
+    let plan = v["plan"].as_array().unwrap();
+    let casters: Vec<&Value> = plan
+        .iter()
+        .filter(|e| e["object_name"] != "ground")
+        .collect();
+    assert!(!casters.is_empty(), "{file}: no caster in the plan");
+    for e in &casters {
+        assert_ne!(e["technique"], "culled", "{file}: caster culled: {e}");
+        assert!(e["silhouette_edges"].as_u64().unwrap() > 0, "{file}: {e}");
+    }
+    let covered = v["covered_pixels"].as_f64().unwrap();
+    let shadow = v["shadow_pixels"].as_f64().unwrap();
+    let reference_shadow = v["reference_shadow_pixels"].as_f64().unwrap();
+    let artifacts = v["artifact_pixels"].as_f64().unwrap();
+    assert!(
+        covered > 0.3 * PIXELS,
+        "{file}: only {covered} pixels covered"
+    );
+    assert!(
+        shadow > 0.005 * PIXELS && reference_shadow > 0.005 * PIXELS,
+        "{file}: the shadow is not in view ({shadow} raster, {reference_shadow} reference pixels)"
+    );
+    assert!(
+        artifacts <= 0.0005 * PIXELS,
+        "{file}: {artifacts} artifact pixels, more than 0.05 % of {PIXELS}: {v}"
+    );
+    eprintln!(
+        "{file}: {shadow} shadow pixels, {artifacts} artifact, {} boundary, {} undecidable",
+        v["boundary_pixels"], v["undecidable_pixels"]
+    );
+    Some(v)
+}
+
+#[test]
+fn every_kind_of_obj_renders_with_a_default_light_and_ground() {
+    let dir = scratch("obj");
+    let meshes = [
+        ("scan", scan()),
+        ("cad-bracket", cad_bracket()),
+        ("quad-box", quad_box()),
+        ("open-box", open_box()),
+        ("non-manifold", non_manifold()),
+    ];
+    for (name, text) in meshes {
+        let path = dir.join(format!("{name}.obj"));
+        std::fs::write(&path, text).unwrap();
+        if render_checked(path.to_str().unwrap(), &dir).is_none() {
+            return;
+        }
+    }
+    render_checked(&real("reference.obj"), &dir);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn gltf_files_without_lights_or_camera_render() {
+    let dir = scratch("gltf");
+    for f in ["obj2gltf.glb", "gltfpack.glb", "gltfpack-c.glb"] {
+        if render_checked(&real(f), &dir).is_none() {
+            return;
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// With no flag at all, the PNG goes to `STEM.png` in the current directory.
+#[test]
+fn no_flags_at_all_writes_stem_png_in_the_current_directory() {
+    let dir = scratch("bare");
+    std::fs::write(dir.join("part.obj"), cad_bracket()).unwrap();
+    let out = Command::new(BIN)
+        .current_dir(&dir)
+        .args(["render", "part.obj"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() && no_adapter(&stderr) {
+        return;
+    }
+    assert!(out.status.success(), "{stderr}");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("-> part.png"), "{text}");
+    assert!(text.contains("default key light"), "{text}");
+    assert!(text.contains("nothing lies below the casters"), "{text}");
+    assert_eq!(&std::fs::read(dir.join("part.png")).unwrap()[1..4], b"PNG");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `--light` replaces the default, `--ground off` removes the plane, and a preset keeps its own
+/// receivers under `auto`.
+#[test]
+fn flags_override_the_defaults() {
+    let dir = scratch("flags");
+    let path = dir.join("box.obj");
+    std::fs::write(&path, quad_box()).unwrap();
+    let png = dir.join("o.png");
+    let base = [
+        "render",
+        path.to_str().unwrap(),
+        "--out",
+        png.to_str().unwrap(),
+        "--size",
+        "48x48",
+        "--format",
+        "json",
+    ];
+    let mut args = base.to_vec();
+    args.extend(["--light", "1,10,2,1", "--ground", "off"]);
+    let out = run(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() && no_adapter(&stderr) {
+        return;
+    }
+    let v: Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(v["lights_source"], "flags");
+    assert_eq!(v["lights"][0], serde_json::json!([1.0, 10.0, 2.0, 1.0]));
+    assert!(v["ground"].is_null(), "{v}");
+    assert!(v["plan"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|e| e["object_name"] != "ground"));
+
+    let mut args = base.to_vec();
+    args.extend(["--ground", "on"]);
+    let v: Value = serde_json::from_slice(&run(&args).stdout).expect("JSON");
+    assert_eq!(v["ground"]["source"], "flags");
+    assert_eq!(v["lights_source"], "default");
+
+    // A hard-* preset declares no ground and keeps none under auto; its lights are the file's.
+    let v: Value = serde_json::from_slice(
+        &run(&[
+            "render",
+            "hard-book-3",
+            "--out",
+            png.to_str().unwrap(),
+            "--size",
+            "48x48",
+            "--format",
+            "json",
+        ])
+        .stdout,
+    )
+    .expect("JSON");
+    assert!(v["ground"].is_null(), "{v}");
+    assert_eq!(v["lights_source"], "file");
+    std::fs::remove_dir_all(&dir).ok();
+}
