@@ -3,7 +3,7 @@
 
 use shadowvol::{find_backend, CliError, Format, ModeArg};
 use shadowvol_renderer::{
-    reference, Frame, PlanPolicy, RenderError, RenderOptions, RenderScene, Renderer,
+    reference, Exposure, Frame, PlanPolicy, RenderError, RenderOptions, RenderScene, Renderer,
 };
 use shadowvol_robust_math::Accuracy;
 use std::io::Write;
@@ -45,7 +45,14 @@ pub const LONG_ABOUT: &str =
     (covered pixels the reference could not decide), \"boundary_pixels\" (raster and reference differ \
     within one pixel of a reference shadow boundary; neither is counted as an artifact), \
     \"lights\": [[x, y, z, w]] (the lights used), \"lights_source\": \"file\", \"flags\" or \
-    \"default\", \"ground\": null or {\"y\", \"source\": \"scene\", \"auto\" or \"flags\"}}.";
+    \"default\", \"ground\": null or {\"y\", \"source\": \"scene\", \"auto\" or \"flags\"}, \
+    \"exposure\": output per lux for the file's lights, null when all are unit lights}.\n\n\
+    glTF lights are lit as KHR_lights_punctual says: colour, intensity (candela for point and \
+    spot lights, lux for directional ones) over distance squared, the range window \
+    saturate(1 - (d/range)^4) and the spot cone's smooth falloff; a spot light's shadow volume \
+    is a point light's. The plan culls casters that lie wholly beyond a light's range or \
+    outside its cone. Lights from --light, presets and the default key light are white unit \
+    lights without falloff.";
 
 /// Examples shown after the help.
 pub const AFTER_HELP: &str = "Examples:\n  shadowvol render model.obj\n  \
@@ -139,9 +146,30 @@ pub struct Args {
     #[arg(long)]
     backdrop: bool,
 
+    /// How the glTF lights' intensities (candela, lux) map to the image: `auto` (the brightest
+    /// light's nominal illuminance at the scene's centre gives the default light's brightness)
+    /// or output per lux (1 = one lux on a white surface is full white). Lights from --light,
+    /// presets and the default key light are unit lights and ignore it.
+    #[arg(long, default_value = "auto", value_name = "auto|X", value_parser = parse_exposure)]
+    exposure: Exposure,
+
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
+}
+
+fn parse_exposure(s: &str) -> Result<Exposure, String> {
+    if s.eq_ignore_ascii_case("auto") {
+        return Ok(Exposure::Auto);
+    }
+    let x: f32 = s
+        .parse()
+        .map_err(|e| format!("exposure {s:?}: expected auto or a number > 0: {e}"))?;
+    if x.is_finite() && x > 0.0 {
+        Ok(Exposure::Fixed(x))
+    } else {
+        Err(format!("exposure {s:?}: must be finite and > 0"))
+    }
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -196,6 +224,8 @@ struct Report<'a> {
     lights_source: LightsSource,
     /// The receiver plane under the scene, if any.
     ground: Option<Ground>,
+    /// Output per lux used for the file's lights, `null` when every light is a unit light.
+    exposure: Option<f32>,
 }
 
 /// Where the lights of a render came from.
@@ -251,6 +281,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let backend_name = entry.name;
     let mut options = RenderOptions::new(args.size.0, args.size.1);
     options.mode = Accuracy::from(args.mode);
+    options.exposure = args.exposure;
     options.policy = match args.technique {
         TechniqueArg::Auto => PlanPolicy::Auto,
         TechniqueArg::ZFail => PlanPolicy::AlwaysZFail,
@@ -303,6 +334,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 lights: scene.lights.iter().map(|l| l.to_array()).collect(),
                 lights_source,
                 ground,
+                exposure: frame.exposure,
             };
             serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
             writeln!(out)?;
@@ -335,6 +367,7 @@ fn stage(
 ) -> Result<(LightsSource, Option<Ground>), CliError> {
     let lights_source = if !args.lights.is_empty() {
         scene.lights.clone_from(&args.lights);
+        scene.emission.clear();
         LightsSource::Flags
     } else if !scene.lights.is_empty() {
         LightsSource::File
@@ -346,6 +379,7 @@ fn stage(
             ))
         })?;
         scene.lights.extend(scene.key_light(&camera));
+        scene.emission.clear();
         LightsSource::Default
     };
     let own = scene
@@ -429,6 +463,12 @@ fn write_text(out: &mut dyn Write, r: &TextReport<'_>) -> std::io::Result<()> {
             writeln!(out, "ground          y = {} ({why})", g.y)?;
         }
         None => writeln!(out, "ground          none")?,
+    }
+    if let Some(x) = frame.exposure {
+        writeln!(
+            out,
+            "exposure        {x:e} per lux (the file's lights; --exposure)"
+        )?;
     }
     writeln!(out, "shadow pixels   {}", r.shadow_pixels)?;
     if let Some(c) = r.cmp {

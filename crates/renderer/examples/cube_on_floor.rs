@@ -48,6 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Light::point(Vec3::new(1.5, 6.0, 1.0)),
             Light::directional(Vec3::new(-1.0, 2.0, 0.5)),
         ],
+        emission: Vec::new(),
         camera: Camera::look_at(Vec3::new(4.0, 5.0, 7.0), Vec3::new(0.0, 0.5, 0.0)),
         ambient: 0.15,
     };

@@ -32,8 +32,10 @@ pub struct SurfaceVertex {
 pub struct LightDraws {
     /// World light `(x, y, z, w)`.
     pub light: [f32; 4],
-    /// Light colour (linear RGB).
+    /// Light colour times gain (linear RGB).
     pub color: [f32; 3],
+    /// What it emits: range and cone attenuation in the lit pass (`None`: a unit light).
+    pub emission: Option<shadowvol_scenes::Emission>,
     /// Z-pass sides (counter-clockwise front faces).
     pub zpass: Range<u32>,
     /// Z-fail sides and back caps and `σ = +1` front caps (counter-clockwise front faces).
@@ -106,6 +108,27 @@ impl std::fmt::Debug for Gpu {
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 const IDS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
 const LIGHT_STRIDE: u64 = 256;
+
+/// The shader's `LightU`: position, colour, then `emit = (inverse square 0/1, 1 / range or 0,
+/// cone scale, cone offset)` and `spot = (axis, 1 for a cone)` (see `fs_lit`).
+fn light_uniform(l: &LightDraws) -> [f32; 16] {
+    let mut v = [0f32; 16];
+    v[..4].copy_from_slice(&l.light);
+    v[4..7].copy_from_slice(&l.color);
+    v[7] = 1.0;
+    if let (Some(e), true) = (l.emission, l.light[3] != 0.0) {
+        v[8] = 1.0;
+        v[9] = e.range.map_or(0.0, |r| 1.0 / r);
+        if let Some(s) = e.spot {
+            let (scale, offset) = s.scale_offset();
+            v[10] = scale;
+            v[11] = offset;
+            v[12..15].copy_from_slice(&s.direction.normalize().to_array());
+            v[15] = 1.0;
+        }
+    }
+    v
+}
 
 fn stencil_face(
     pass: wgpu::StencilOperation,
@@ -411,12 +434,9 @@ impl Gpu {
         let n_lights = input.lights.len().max(1);
         let mut light_bytes = vec![0u8; n_lights * LIGHT_STRIDE as usize];
         for (i, l) in input.lights.iter().enumerate() {
-            let v: [f32; 8] = [
-                l.light[0], l.light[1], l.light[2], l.light[3], l.color[0], l.color[1], l.color[2],
-                1.0,
-            ];
+            let v = light_uniform(l);
             let o = i * LIGHT_STRIDE as usize;
-            light_bytes[o..o + 32].copy_from_slice(bytemuck::cast_slice(&v));
+            light_bytes[o..o + v.len() * 4].copy_from_slice(bytemuck::cast_slice(&v));
         }
         let light_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("lights"),
@@ -439,7 +459,7 @@ impl Gpu {
                 resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                     buffer: &light_buf,
                     offset: 0,
-                    size: std::num::NonZeroU64::new(32),
+                    size: std::num::NonZeroU64::new(64),
                 }),
             }],
         });

@@ -76,6 +76,7 @@ pub fn edge_on_frustum() -> RenderScene {
             Affine3A::IDENTITY,
         )],
         lights: vec![Light::point(Vec3::new(0.0, 2.0, 0.0))],
+        emission: Vec::new(),
         camera: Camera::look_at(Vec3::new(2.6, 3.4, 4.2), Vec3::new(0.0, -0.6, 0.0)),
         ambient: 0.15,
     };
@@ -106,6 +107,7 @@ pub fn bunny_offset(offset: f32) -> Result<RenderScene, RenderError> {
             Affine3A::IDENTITY,
         )],
         lights: vec![Light::point(c + Vec3::new(-1.2, 0.9, 0.3) * size)],
+        emission: Vec::new(),
         camera: Camera::look_at(
             c + Vec3::new(0.5, 0.55, 1.0) * size * 1.3,
             c - Vec3::Y * size * 0.1,
@@ -146,6 +148,7 @@ pub fn uv_sphere_pole(triangles: usize) -> RenderScene {
             Affine3A::IDENTITY,
         )],
         lights: vec![Light::point(Vec3::new(0.0, light_y, 0.0))],
+        emission: Vec::new(),
         camera: Camera::look_at(Vec3::new(2.4, 2.6, 3.6), Vec3::new(0.0, -0.8, 0.0)),
         ambient: 0.15,
     };

@@ -38,6 +38,7 @@
 //!         RenderObject::new("tet", Arc::new(tet), Affine3A::from_translation(Vec3::Y)),
 //!     ],
 //!     lights: vec![Light::point(Vec3::new(0.5, 6.0, 0.5))],
+//!     emission: Vec::new(),
 //!     camera: Camera::look_at(Vec3::new(3., 5., 6.), Vec3::ZERO),
 //!     ambient: 0.15,
 //! };
@@ -56,12 +57,14 @@ pub struct ReadmeDoctests;
 
 mod gpu;
 pub mod hard;
+pub mod lighting;
 pub mod occlusion;
 pub mod plan;
 pub mod reference;
 mod renderer;
 pub mod volume;
 
+pub use lighting::Exposure;
 pub use plan::{PlanEntry, PlanPolicy, SilhouetteSource, Technique};
 pub use renderer::{Frame, RenderOptions, Renderer, Timings};
 pub use shadowvol_robust_math::{Accuracy, Light};
@@ -266,6 +269,9 @@ pub struct RenderScene {
     pub objects: Vec<RenderObject>,
     /// Lights in world space (point `w = 1`, directional `w = 0`).
     pub lights: Vec<Light>,
+    /// What each light emits: empty (every light a unit light, see [`lighting`]) or one per
+    /// light, in the order of `lights`.
+    pub emission: Vec<shadowvol_scenes::Emission>,
     /// The camera.
     pub camera: Camera,
     /// Ambient factor in `[0, 1]` applied to the albedo in the pre-pass.
@@ -295,6 +301,7 @@ impl RenderScene {
         let mut out = Self {
             objects: Vec::new(),
             lights: scene.lights.clone(),
+            emission: scene.emission.clone(),
             camera: Camera {
                 eye: cam.eye,
                 target: cam.target,

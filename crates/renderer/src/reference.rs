@@ -343,7 +343,8 @@ fn light_vec(l: [f32; 4], p: DVec3) -> DVec3 {
 }
 
 /// True when light `li` of `frame` visibly lights the surface point: the Lambert term
-/// `albedo × intensity × cos θ` is at least one 8-bit step (1/255). Below that, lit and shadowed
+/// `albedo × intensity × attenuation × cos θ` is at least one 8-bit step (1/255), with the
+/// attenuation of the light's emission ([`light_attenuation`]). Below that, lit and shadowed
 /// give the same 8-bit pixel, so the state is invisible (and, for faces edge-on to the light,
 /// ill-posed for the raster and the ray caster alike); such pixels count as unlit on both sides.
 #[must_use]
@@ -351,7 +352,9 @@ pub fn faces_light(frame: &Frame, sp: &SurfacePoint, li: usize) -> bool {
     let l = frame.lights[li].to_array();
     let v = light_vec(l, sp.position);
     let d = sp.normal.dot(v);
-    let gain = f64::from(sp.albedo) * f64::from(frame.light_intensity[li]);
+    let gain = f64::from(sp.albedo)
+        * f64::from(frame.light_intensity[li])
+        * light_attenuation(frame, sp, li);
     d > 0.0 && gain > 0.0 && d * gain * 255.0 >= sp.normal.length() * v.length()
 }
 
@@ -361,7 +364,16 @@ pub fn faces_light(frame: &Frame, sp: &SurfacePoint, li: usize) -> bool {
 #[must_use]
 pub fn faces_light_geometric(frame: &Frame, sp: &SurfacePoint, li: usize) -> bool {
     let l = frame.lights[li].to_array();
-    sp.normal.dot(light_vec(l, sp.position)) > 0.0
+    sp.normal.dot(light_vec(l, sp.position)) > 0.0 && light_attenuation(frame, sp, li) > 0.0
+}
+
+/// The attenuation of light `li` at the surface point: range window, inverse square and cone
+/// ([`shadowvol_scenes::Emission::attenuation`], in `f64`), 1 for a unit light.
+#[must_use]
+pub fn light_attenuation(frame: &Frame, sp: &SurfacePoint, li: usize) -> f64 {
+    frame.emission.get(li).map_or(1.0, |e| {
+        e.attenuation(frame.lights[li].to_array(), sp.position)
+    })
 }
 
 /// The raster's per-light states (light-major), from the stencil and the facing
@@ -656,6 +668,67 @@ pub fn compare(frame: &Frame) -> Comparison {
         covered_pixels: points.iter().filter(|p| p.is_some()).count(),
         classes,
     }
+}
+
+/// How well the image's colours match the lighting model where raster and reference agree.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct ShadingCheck {
+    /// Pixels compared: covered, and every light's state the same in raster and reference.
+    pub compared: usize,
+    /// Of those, pixels with a channel more than the tolerance away from the prediction.
+    pub mismatched: usize,
+    /// The largest channel difference seen, in 8-bit steps.
+    pub max_error: u8,
+}
+
+/// Predicts every compared pixel's colour from the lighting model in `f64` (the pre-pass's
+/// `albedo × ambient`, plus per light whose state is lit `albedo × colour × attenuation ×
+/// cos θ`, [`light_attenuation`]) and compares it with the 8-bit image, channel by channel, to
+/// within `tolerance` steps. Pixels where raster and reference disagree (`cmp.classes != 0`) are
+/// left out: the artifact metric counts them.
+///
+/// # Panics
+/// Panics if `cmp` was not computed from `frame`.
+#[must_use]
+pub fn shading_check(frame: &Frame, cmp: &Comparison, tolerance: u8) -> ShadingCheck {
+    let points = surface_points(frame);
+    let raster = raster_states(frame, &points);
+    let mut out = ShadingCheck::default();
+    for (i, sp) in points.iter().enumerate() {
+        let Some(sp) = sp else { continue };
+        if cmp.classes[i] != 0 {
+            continue;
+        }
+        let albedo = frame.albedo[frame.ids[i][0] as usize - 1];
+        let mut c = albedo.map(|a| f64::from(a) * f64::from(frame.ambient));
+        for (li, light) in frame.lights.iter().enumerate() {
+            if raster[li][i] != PixelState::Lit {
+                continue;
+            }
+            let v = light_vec(light.to_array(), sp.position);
+            let cos = sp.normal.dot(v) / (sp.normal.length() * v.length());
+            if cos > 0.0 {
+                let k = cos * light_attenuation(frame, sp, li);
+                for (ch, value) in c.iter_mut().enumerate() {
+                    *value += f64::from(albedo[ch]) * f64::from(frame.light_color[li][ch]) * k;
+                }
+            }
+        }
+        out.compared += 1;
+        let px = &frame.rgba[i * 4..i * 4 + 3];
+        let err = (0..3)
+            .map(|ch| {
+                let want = (c[ch].clamp(0.0, 1.0) * 255.0).round() as i32;
+                (want - i32::from(px[ch])).unsigned_abs()
+            })
+            .max()
+            .unwrap_or(0);
+        out.max_error = out.max_error.max(err.min(255) as u8);
+        if err > u32::from(tolerance) {
+            out.mismatched += 1;
+        }
+    }
+    out
 }
 
 /// The disagreement as an image: the frame dimmed to grey, artifacts where the raster is lit

@@ -1,6 +1,7 @@
 //! The stateful renderer: caches edge tables and silhouettes between frames, plans, draws.
 
 use crate::gpu::{FrameInput, Gpu, LightDraws, SurfaceVertex};
+use crate::lighting::{self, Exposure};
 use crate::plan::{self, PlanEntry, PlanPolicy, SilhouetteSource, Technique};
 use crate::volume::{
     build_caps, build_sides, canonical_triangle, remove_triangles, touching_triangles,
@@ -26,10 +27,12 @@ pub struct RenderOptions {
     pub mode: Accuracy,
     /// What the planner may choose.
     pub policy: PlanPolicy,
+    /// How lights with an emission map to the image ([`crate::lighting`]).
+    pub exposure: Exposure,
 }
 
 impl RenderOptions {
-    /// `width × height`, [`Accuracy::Exact`], [`PlanPolicy::Auto`].
+    /// `width × height`, [`Accuracy::Exact`], [`PlanPolicy::Auto`], [`Exposure::Auto`].
     #[must_use]
     pub fn new(width: u32, height: u32) -> Self {
         Self {
@@ -37,6 +40,7 @@ impl RenderOptions {
             height,
             mode: Accuracy::Exact,
             policy: PlanPolicy::Auto,
+            exposure: Exposure::Auto,
         }
     }
 }
@@ -79,8 +83,17 @@ pub struct Frame {
     pub casts_shadows: Vec<bool>,
     /// Per object: its albedo.
     pub albedo: Vec<[f32; 3]>,
-    /// Per light: its intensity (the lit pass adds `albedo × intensity × cos θ`).
+    /// Per light: its largest colour channel times its gain (the lit pass adds
+    /// `albedo × colour × gain × attenuation × cos θ`; see [`crate::lighting`]).
     pub light_intensity: Vec<f32>,
+    /// Per light: the colour times gain its lit pass multiplies by `albedo × attenuation × cos θ`.
+    pub light_color: Vec<[f32; 3]>,
+    /// The ambient factor of the pre-pass (`albedo × ambient`).
+    pub ambient: f32,
+    /// Per light: what it emits (empty: unit lights, no attenuation).
+    pub emission: Vec<shadowvol_scenes::Emission>,
+    /// Output per lux used for the lights with an emission (`None` without any).
+    pub exposure: Option<f32>,
     /// The lights.
     pub lights: Vec<Light>,
     /// The camera.
@@ -243,7 +256,11 @@ impl Renderer {
             height,
             mode,
             policy,
+            exposure,
         } = self.options;
+        lighting::validate(scene, exposure).map_err(RenderError::InvalidInput)?;
+        let exposure = lighting::exposure_factor(scene, exposure);
+        let colors = lighting::light_colors(scene, exposure);
         let aspect = f64::from(width) / f64::from(height);
         let n_lights = scene.lights.len();
 
@@ -270,6 +287,15 @@ impl Renderer {
                     )
                 } else if c.world.is_empty() || c.table.triangles.is_empty() {
                     (Technique::Culled, "no triangles".to_owned())
+                } else if let Some(why) = scene
+                    .emission
+                    .get(li)
+                    .and_then(|e| e.unreachable(l, lo, hi))
+                {
+                    (
+                        Technique::Culled,
+                        format!("{why}: it lights neither the object nor its shadow"),
+                    )
                 } else if plan::shadow_outside_frustum(lo, hi, l, &frustum) {
                     (
                         Technique::Culled,
@@ -406,7 +432,8 @@ impl Renderer {
             let l = light.to_array();
             let mut d = LightDraws {
                 light: l,
-                color: [light_intensity(n_lights); 3],
+                color: colors[li],
+                emission: scene.emission.get(li).copied(),
                 ..LightDraws::default()
             };
             let mut zfail_objects = Vec::new();
@@ -531,7 +558,14 @@ impl Renderer {
             triangles,
             casts_shadows: scene.objects.iter().map(|o| o.casts_shadows).collect(),
             albedo: scene.objects.iter().map(|o| o.albedo).collect(),
-            light_intensity: vec![light_intensity(n_lights); n_lights],
+            light_intensity: colors
+                .iter()
+                .map(|c| c.iter().copied().fold(0.0, f32::max))
+                .collect(),
+            light_color: colors.clone(),
+            ambient: scene.ambient,
+            emission: scene.emission.clone(),
+            exposure,
             lights: scene.lights.clone(),
             camera: scene.camera,
             plan: entries,
@@ -657,10 +691,6 @@ impl Renderer {
         self.whole = Some((id, key));
         Ok(id)
     }
-}
-
-fn light_intensity(n: usize) -> f32 {
-    (1.2 / n.max(1) as f32).min(0.85)
 }
 
 /// World positions of the welded vertices: the object transform applied in `f32` once.

@@ -14,6 +14,10 @@ struct LightU {
     // (x, y, z, w): w = 1 point light, w = 0 directional (towards the light).
     pos: vec4<f32>,
     color: vec4<f32>,
+    // (inverse square 0/1, 1 / range or 0, cone scale, cone offset): glTF's attenuation.
+    emit: vec4<f32>,
+    // (axis the spot shines along, 1 for a spot light).
+    spot: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> g: Globals;
@@ -70,6 +74,28 @@ fn fs_prepass(i: SurfaceOut) -> PrepassOut {
     return o;
 }
 
+// glTF KHR_lights_punctual: saturate(1 - (d / range)^4) / d^2, times the cone's
+// saturate(cos * scale + offset)^2; 1 for unit and directional lights. The same formulas as
+// shadowvol_scenes::Emission in f64.
+fn attenuation(world: vec3<f32>) -> f32 {
+    if (lt.emit.x == 0.0 || lt.pos.w == 0.0) {
+        return 1.0;
+    }
+    let v = world - lt.pos.xyz / lt.pos.w;
+    let d2 = max(dot(v, v), 1e-30);
+    var a = 1.0 / d2;
+    if (lt.emit.y > 0.0) {
+        let q = d2 * lt.emit.y * lt.emit.y;
+        a = a * clamp(1.0 - q * q, 0.0, 1.0);
+    }
+    if (lt.spot.w > 0.0) {
+        let c = dot(v * inverseSqrt(d2), lt.spot.xyz);
+        let s = clamp(c * lt.emit.z + lt.emit.w, 0.0, 1.0);
+        a = a * s * s;
+    }
+    return a;
+}
+
 @fragment
 fn fs_lit(i: SurfaceOut) -> @location(0) vec4<f32> {
     let len = length(i.normal);
@@ -81,6 +107,6 @@ fn fs_lit(i: SurfaceOut) -> @location(0) vec4<f32> {
         n = -n;
     }
     let l = normalize(lt.pos.xyz - lt.pos.w * i.world);
-    let k = max(dot(n, l), 0.0);
+    let k = max(dot(n, l), 0.0) * attenuation(i.world);
     return vec4<f32>(i.albedo * lt.color.rgb * k, 0.0);
 }

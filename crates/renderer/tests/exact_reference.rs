@@ -516,6 +516,10 @@ fn frame_for(case: &Case, size: u32) -> Frame {
         casts_shadows: vec![false, true],
         albedo: vec![[1.0; 3], [1.0; 3]],
         light_intensity: vec![1.0],
+        light_color: vec![[1.0; 3]],
+        ambient: 0.0,
+        emission: Vec::new(),
+        exposure: None,
         lights: vec![
             Light::new(case.light[0], case.light[1], case.light[2], case.light[3]).unwrap(),
         ],

@@ -40,6 +40,7 @@ fn glb_scene_with_lights_and_camera_matches_the_reference() {
                 ),
             },
         ],
+        emission: Vec::new(),
         lights: vec![
             Light::point(Vec3::new(0.5, 5.0, 2.0)),
             Light::directional(Vec3::new(-0.3, 1.0, 0.4)),

@@ -315,6 +315,7 @@ fn many_objects_several_lights_match_the_reference() {
             Light::point(Vec3::new(-3.0, 5.0, -1.0)),
             Light::directional(Vec3::new(0.4, 1.0, -0.3)),
         ],
+        emission: Vec::new(),
         camera: Camera::look_at(Vec3::new(5.0, 7.0, 8.0), Vec3::ZERO),
         ambient: 0.1,
     };

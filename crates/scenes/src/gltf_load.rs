@@ -39,7 +39,9 @@
 //!   directional light towards the node's `+Z` axis (the light shines down `-Z`; `w = 0`, the
 //!   direction is the `f32` third column of the world matrix, not renormalised). A **spot** light
 //!   is treated as a point light at its position: shadow volumes of a spot light are those of a
-//!   point light, the cone only limits what is lit.
+//!   point light, the cone only limits what is lit. Each light's colour, intensity (candela,
+//!   lux for directional lights), `range` and cone angles become its [`crate::Emission`]
+//!   (the spot's axis is the node's `-Z`, normalised).
 //!
 //! Parsing goes through the `gltf` crate's types without its validation, plus checks of our own:
 //! the crate's serde types refuse files the spec calls valid (an integer written as `1.0`, an
@@ -649,7 +651,10 @@ impl Loader<'_> {
                     format!("invalid light: {e}"),
                 )
             })?;
+            let emission = crate::emission::from_gltf(&light, &world)
+                .map_err(|m| self.err(format!("{label}, light {}", light.index()), m))?;
             self.scene.lights.push(l);
+            self.scene.emission.push(emission);
         }
 
         if let (Some(cam), None) = (node.camera(), self.scene.camera) {

@@ -29,6 +29,7 @@
 //! # Ok::<(), shadowvol_scenes::SceneError>(())
 //! ```
 
+pub mod emission;
 mod glb_write;
 pub mod gltf_load;
 pub mod meshopt_view;
@@ -40,6 +41,7 @@ mod scene;
 pub mod staging;
 pub mod stl;
 
+pub use emission::{Emission, SpotCone};
 pub use glb_write::{export_glb, to_glb};
 pub use gltf_load::{load_gltf, load_gltf_mesh, load_gltf_slice, load_gltf_slice_with_notes};
 pub use presets::{is_preset, preset, preset_names, presets, PresetInfo};

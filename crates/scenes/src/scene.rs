@@ -1,7 +1,7 @@
 //! The scene model: objects (a shared mesh and a transform), lights, a camera and the effects the
 //! scene calls for.
 
-use crate::SceneError;
+use crate::{Emission, SceneError};
 use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use shadowvol_robust_math::Light;
@@ -104,6 +104,10 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// Lights in world space (homogeneous: `w = 1` point, `w = 0` directional towards the light).
     pub lights: Vec<Light>,
+    /// What each light emits (glTF `KHR_lights_punctual` colour, intensity, range, cone): empty,
+    /// or one per light in the order of `lights`. Empty means the renderer's unit lights (white,
+    /// no falloff; presets and `--light`).
+    pub emission: Vec<Emission>,
     /// The camera, if the scene has one.
     pub camera: Option<Camera>,
     /// What the renderer should simulate.
@@ -276,6 +280,7 @@ impl Scene {
                 transform: Affine3A::IDENTITY,
             }],
             lights: self.lights.clone(),
+            emission: self.emission.clone(),
             camera: self.camera,
             effects: self.effects,
         })

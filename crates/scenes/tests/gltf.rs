@@ -433,3 +433,78 @@ fn sparse_strided_and_fan_accessors_are_read() {
     );
     assert_eq!(mesh.triangles, [[0, 1, 2], [0, 2, 3], [4, 5, 6]]);
 }
+
+/// A tetrahedron and one light of `light` (a KHR_lights_punctual light object) at a node that
+/// turns `-Z` towards world `-Y` and stands at (1, 8, 2).
+fn lit_glb(light: serde_json::Value) -> Vec<u8> {
+    let mut b = Bin {
+        data: vec![],
+        views: vec![],
+        accessors: vec![],
+    };
+    let p0 = b.positions(&TETRA);
+    let i0 = b.add(bytemuck::cast_slice(&TETRA_IDX), 5123, "SCALAR", 12);
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [
+            {"name": "t", "mesh": 0},
+            // Columns: x -> x, y -> -z, z -> +y: the node's -Z is world -Y.
+            {"name": "lamp", "matrix": [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 8.0, 2.0, 1.0],
+             "extensions": {"KHR_lights_punctual": {"light": 0}}}
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": p0}, "indices": i0}]}],
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [light]}},
+        "buffers": [{"byteLength": b.data.len()}],
+        "bufferViews": b.views,
+        "accessors": b.accessors,
+    });
+    glb(&doc, &b.data)
+}
+
+/// Colour, intensity, range and the spot cone are read as the spec defines them, with the spot's
+/// axis the node's `-Z`; a point light without them gets the spec's defaults.
+#[test]
+fn light_emission_is_read() {
+    let spot = json!({"type": "spot", "color": [1.0, 0.5, 0.25], "intensity": 40.0, "range": 12.5,
+                      "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}});
+    let s = load_gltf_slice(&lit_glb(spot), "spot.glb", None).unwrap();
+    assert_eq!(s.lights.len(), 1);
+    assert_eq!(s.lights[0].to_array(), [1.0, 8.0, 2.0, 1.0]);
+    let e = s.emission[0];
+    assert_eq!(e.color, [1.0, 0.5, 0.25]);
+    assert_eq!(e.intensity, 40.0);
+    assert_eq!(e.range, Some(12.5));
+    let cone = e.spot.unwrap();
+    assert_eq!((cone.inner_cone_angle, cone.outer_cone_angle), (0.2, 0.5));
+    assert!((cone.direction - Vec3::NEG_Y).length() < 1e-6, "{cone:?}");
+
+    let s = load_gltf_slice(&lit_glb(json!({"type": "point"})), "p.glb", None).unwrap();
+    assert_eq!(s.emission, vec![shadowvol_scenes::Emission::default()]);
+    // The spec's default outer cone is π/4, inner 0.
+    let s = load_gltf_slice(&lit_glb(json!({"type": "spot", "spot": {}})), "s.glb", None).unwrap();
+    let cone = s.emission[0].spot.unwrap();
+    assert_eq!(cone.inner_cone_angle, 0.0);
+    assert!((cone.outer_cone_angle - std::f32::consts::FRAC_PI_4).abs() < 1e-6);
+}
+
+#[test]
+fn bad_light_emission_is_refused_naming_the_light() {
+    for (light, what) in [
+        (json!({"type": "point", "intensity": -1.0}), "intensity"),
+        (json!({"type": "point", "range": 0.0}), "range"),
+        (json!({"type": "point", "color": [2.0, 0.0, 0.0]}), "color"),
+        (
+            json!({"type": "spot", "spot": {"innerConeAngle": 0.6, "outerConeAngle": 0.5}}),
+            "cone",
+        ),
+    ] {
+        let e = load_gltf_slice(&lit_glb(light.clone()), "bad.glb", None).unwrap_err();
+        let msg = e.to_string();
+        assert!(
+            msg.contains("light 0") && msg.contains(what),
+            "{light}: {msg}"
+        );
+    }
+}

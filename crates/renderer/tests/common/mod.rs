@@ -12,6 +12,11 @@ use std::sync::Arc;
 pub fn renderer(width: u32, height: u32, mode: Accuracy) -> Option<Renderer> {
     let mut opts = RenderOptions::new(width, height);
     opts.mode = mode;
+    renderer_with(opts)
+}
+
+/// A renderer on the `cpu` backend with `opts`, or `None` as [`renderer`].
+pub fn renderer_with(opts: RenderOptions) -> Option<Renderer> {
     match Renderer::new(Box::new(shadowvol_cpu::CpuBackend::new()), opts) {
         Ok(r) => Some(r),
         Err(RenderError::NoAdapter(why)) => {
@@ -67,6 +72,7 @@ pub fn box_on_floor(light: Light, camera: Camera) -> RenderScene {
             ),
         ],
         lights: vec![light],
+        emission: Vec::new(),
         camera,
         ambient: 0.15,
     }

@@ -1,0 +1,224 @@
+//! Lights as glTF's `KHR_lights_punctual` defines them: colour, intensity, range and spot cone
+//! change the image as the spec says, checked pixel by pixel against the lighting model in
+//! `f64` ([`reference::shading_check`]) and, for shadows, against the ray-traced reference; a
+//! caster the light cannot reach is culled without changing the image.
+
+mod common;
+
+use common::{box_on_floor, renderer_with};
+use glam::Vec3;
+use shadowvol_renderer::{
+    reference, Camera, Exposure, Frame, RenderOptions, RenderScene, Technique,
+};
+use shadowvol_robust_math::Light;
+use shadowvol_scenes::{Emission, SpotCone};
+
+const W: u32 = 96;
+
+fn camera() -> Camera {
+    Camera::look_at(Vec3::new(0.0, 9.0, 6.0), Vec3::ZERO)
+}
+
+fn scene(emission: Emission) -> RenderScene {
+    let mut s = box_on_floor(Light::point(Vec3::new(0.5, 6.0, 0.3)), camera());
+    s.emission = vec![emission];
+    s
+}
+
+fn render(scene: &RenderScene, exposure: Exposure) -> Option<Frame> {
+    let mut opts = RenderOptions::new(W, W);
+    opts.exposure = exposure;
+    let mut r = renderer_with(opts)?;
+    Some(r.render(scene).expect("render"))
+}
+
+/// Renders, and checks shadows against the ray-traced reference and every agreeing pixel's
+/// colour against the lighting model.
+fn checked(scene: &RenderScene, exposure: Exposure) -> Option<Frame> {
+    let frame = render(scene, exposure)?;
+    let cmp = reference::compare(&frame);
+    assert_eq!(cmp.artifact_pixels, 0, "shadow artifacts: {cmp:?}");
+    let shading = reference::shading_check(&frame, &cmp, 2);
+    assert!(shading.compared > (W * W / 2) as usize, "{shading:?}");
+    assert_eq!(
+        shading.mismatched, 0,
+        "colours off the lighting model: {shading:?}"
+    );
+    Some(frame)
+}
+
+/// Per pixel, the sum of the three channels.
+fn brightness(f: &Frame) -> Vec<u32> {
+    f.rgba
+        .chunks(4)
+        .map(|p| u32::from(p[0]) + u32::from(p[1]) + u32::from(p[2]))
+        .collect()
+}
+
+fn spot(inner: f32, outer: f32) -> Emission {
+    Emission {
+        intensity: 30.0,
+        spot: Some(SpotCone {
+            direction: Vec3::new(-0.1, -1.0, 0.0).normalize(),
+            inner_cone_angle: inner,
+            outer_cone_angle: outer,
+        }),
+        ..Emission::default()
+    }
+}
+
+#[test]
+fn a_spot_cone_only_removes_light_outside_it() {
+    let x = Exposure::Fixed(0.05);
+    let Some(wide) = checked(
+        &scene(Emission {
+            intensity: 30.0,
+            ..Emission::default()
+        }),
+        x,
+    ) else {
+        return;
+    };
+    let narrow = checked(&scene(spot(0.2, 0.35)), x).unwrap();
+    let (a, b) = (brightness(&wide), brightness(&narrow));
+    let darker = a.iter().zip(&b).filter(|(a, b)| b < a).count();
+    let brighter = a.iter().zip(&b).filter(|(a, b)| b > a).count();
+    assert!(
+        darker > (W * W / 4) as usize,
+        "the cone darkened only {darker} pixels"
+    );
+    assert_eq!(brighter, 0, "a cone never adds light");
+    // A softer edge (smaller inner angle) is darker inside the outer cone, never brighter.
+    let soft = checked(&scene(spot(0.0, 0.35)), x).unwrap();
+    let c = brightness(&soft);
+    assert!(c.iter().zip(&b).all(|(c, b)| c <= b));
+    assert!(c.iter().zip(&b).filter(|(c, b)| c < b).count() > 50);
+}
+
+#[test]
+fn range_cuts_the_light_off_at_its_distance() {
+    let x = Exposure::Fixed(0.05);
+    let base = Emission {
+        intensity: 30.0,
+        ..Emission::default()
+    };
+    let Some(unbounded) = checked(&scene(base), x) else {
+        return;
+    };
+    let ranged = checked(
+        &scene(Emission {
+            range: Some(7.0),
+            ..base
+        }),
+        x,
+    )
+    .unwrap();
+    let (a, b) = (brightness(&unbounded), brightness(&ranged));
+    assert!(a.iter().zip(&b).all(|(a, b)| b <= a));
+    assert!(a.iter().zip(&b).filter(|(a, b)| b < a).count() > (W * W / 4) as usize);
+}
+
+#[test]
+fn colour_and_intensity_scale_the_light() {
+    let x = Exposure::Fixed(0.05);
+    let white = Emission {
+        intensity: 20.0,
+        ..Emission::default()
+    };
+    let Some(w) = checked(&scene(white), x) else {
+        return;
+    };
+    let red = checked(
+        &scene(Emission {
+            color: [1.0, 0.0, 0.0],
+            ..white
+        }),
+        x,
+    )
+    .unwrap();
+    let dark = render(
+        &scene(Emission {
+            intensity: 0.0,
+            ..white
+        }),
+        x,
+    )
+    .unwrap();
+    let twice = checked(
+        &scene(Emission {
+            intensity: 40.0,
+            ..white
+        }),
+        x,
+    )
+    .unwrap();
+    let mut lit = 0;
+    for i in 0..(W * W) as usize {
+        let px = |f: &Frame, ch: usize| i32::from(f.rgba[i * 4 + ch]);
+        // Red light: green and blue stay at the ambient level.
+        assert!((px(&red, 1) - px(&dark, 1)).abs() <= 1 && (px(&red, 2) - px(&dark, 2)).abs() <= 1);
+        assert!((px(&red, 0) - px(&w, 0)).abs() <= 1);
+        // Twice the candela, twice the light above ambient (below saturation).
+        let (l1, l2) = (px(&w, 1) - px(&dark, 1), px(&twice, 1) - px(&dark, 1));
+        if l1 > 4 && px(&twice, 1) < 250 {
+            lit += 1;
+            assert!((l2 - 2 * l1).abs() <= 2, "pixel {i}: {l1} -> {l2}");
+        }
+    }
+    assert!(lit > (W * W / 8) as usize, "only {lit} lit pixels compared");
+}
+
+/// Auto exposure keeps a file's units out of the picture: the same light at a thousand times
+/// the candela gives the same image, and not a burnt-out one.
+#[test]
+fn auto_exposure_is_independent_of_units() {
+    let a = Emission {
+        intensity: 1.0,
+        ..Emission::default()
+    };
+    let b = Emission {
+        intensity: 1000.0,
+        ..Emission::default()
+    };
+    let Some(fa) = checked(&scene(a), Exposure::Auto) else {
+        return;
+    };
+    let fb = checked(&scene(b), Exposure::Auto).unwrap();
+    let (x, y) = (brightness(&fa), brightness(&fb));
+    assert!(x.iter().zip(&y).all(|(x, y)| x.abs_diff(*y) <= 3));
+    let burnt = fb.rgba.chunks(4).filter(|p| p[0] == 255).count();
+    assert!(burnt < (W * W / 100) as usize, "{burnt} burnt-out pixels");
+}
+
+/// A caster outside the cone or beyond the range is culled with the reason, and the image is
+/// the reference's: its shadow would not have been lit anyway.
+#[test]
+fn casters_the_light_cannot_reach_are_culled() {
+    let x = Exposure::Fixed(0.05);
+    for (emission, why) in [
+        (spot(0.05, 0.1), "outside the spot light's cone"),
+        (
+            Emission {
+                intensity: 30.0,
+                range: Some(3.0),
+                ..Emission::default()
+            },
+            "beyond the light's range",
+        ),
+    ] {
+        let mut s = scene(emission);
+        s.lights = vec![Light::point(Vec3::new(-4.0, 1.0, 0.0))];
+        let Some(frame) = checked(&s, x) else {
+            return;
+        };
+        let box_entry = frame.plan.iter().find(|e| e.object_name == "box").unwrap();
+        assert_eq!(box_entry.technique, Technique::Culled, "{box_entry:?}");
+        assert!(box_entry.reason.contains(why), "{}", box_entry.reason);
+        let floor = frame
+            .plan
+            .iter()
+            .find(|e| e.object_name == "floor")
+            .unwrap();
+        assert_ne!(floor.technique, Technique::Culled, "{floor:?}");
+    }
+}
