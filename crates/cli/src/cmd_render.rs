@@ -46,7 +46,10 @@ pub const LONG_ABOUT: &str =
     within one pixel of a reference shadow boundary; neither is counted as an artifact), \
     \"lights\": [[x, y, z, w]] (the lights used), \"lights_source\": \"file\", \"flags\" or \
     \"default\", \"ground\": null or {\"y\", \"source\": \"scene\", \"auto\" or \"flags\"}, \
-    \"exposure\": output per lux for the file's lights, null when all are unit lights}.\n\n\
+    \"exposure\": output per lux for the file's lights, null when all are unit lights, \
+    \"scissor_pixels_saved\": pixels kept out of the stencil and lit passes by each light's \
+    scissor, the screen rectangle of its range (each plan entry's \"scissor\": [x, y, w, h] or \
+    null for the whole image; --no-scissor turns it off, the image is the same)}.\n\n\
     glTF lights are lit as KHR_lights_punctual says: colour, intensity (candela for point and \
     spot lights, lux for directional ones) over distance squared, the range window \
     saturate(1 - (d/range)^4) and the spot cone's smooth falloff; a spot light's shadow volume \
@@ -153,6 +156,11 @@ pub struct Args {
     #[arg(long, default_value = "auto", value_name = "auto|X", value_parser = parse_exposure)]
     exposure: Exposure,
 
+    /// Draw every light's stencil and lit passes over the whole image instead of the screen
+    /// rectangle of its range (for comparisons: the image is the same).
+    #[arg(long)]
+    no_scissor: bool,
+
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
@@ -226,6 +234,8 @@ struct Report<'a> {
     ground: Option<Ground>,
     /// Output per lux used for the file's lights, `null` when every light is a unit light.
     exposure: Option<f32>,
+    /// Pixels the per-light scissor kept out of the stencil and lit passes.
+    scissor_pixels_saved: usize,
 }
 
 /// Where the lights of a render came from.
@@ -282,6 +292,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let mut options = RenderOptions::new(args.size.0, args.size.1);
     options.mode = Accuracy::from(args.mode);
     options.exposure = args.exposure;
+    options.scissor = !args.no_scissor;
     options.policy = match args.technique {
         TechniqueArg::Auto => PlanPolicy::Auto,
         TechniqueArg::ZFail => PlanPolicy::AlwaysZFail,
@@ -335,6 +346,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 lights_source,
                 ground,
                 exposure: frame.exposure,
+                scissor_pixels_saved: frame.scissor_pixels_saved,
             };
             serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
             writeln!(out)?;

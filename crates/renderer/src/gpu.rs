@@ -34,6 +34,8 @@ pub struct LightDraws {
     pub light: [f32; 4],
     /// Light colour times gain (linear RGB).
     pub color: [f32; 3],
+    /// Scissor `[x, y, width, height]` of its stencil and lit passes (`None`: whole image).
+    pub scissor: Option<[u32; 4]>,
     /// What it emits: range and cone attenuation in the lit pass (`None`: a unit light).
     pub emission: Option<shadowvol_scenes::Emission>,
     /// Z-pass sides (counter-clockwise front faces).
@@ -600,6 +602,9 @@ impl Gpu {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
+                if let Some([x, y, sw, sh]) = l.scissor {
+                    pass.set_scissor_rect(x, y, sw, sh);
+                }
                 pass.set_bind_group(0, &globals_bg, &[]);
                 pass.set_bind_group(1, &light_bg, &[offset]);
                 pass.set_vertex_buffer(0, volume_buf.slice(..));
@@ -608,7 +613,7 @@ impl Gpu {
                     (&self.zfail_ccw, &l.zfail_ccw),
                     (&self.zfail_cw, &l.zfail_cw),
                 ] {
-                    if !range.is_empty() {
+                    if !range.is_empty() && !l.scissor.is_some_and(|r| r[2] == 0 || r[3] == 0) {
                         pass.set_pipeline(pipe);
                         pass.draw(range.clone(), 0..1);
                     }
@@ -658,7 +663,10 @@ impl Gpu {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
-                if !input.surface.is_empty() {
+                if let Some([x, y, sw, sh]) = l.scissor {
+                    pass.set_scissor_rect(x, y, sw, sh);
+                }
+                if !input.surface.is_empty() && !l.scissor.is_some_and(|r| r[2] == 0 || r[3] == 0) {
                     pass.set_pipeline(&self.lit);
                     pass.set_stencil_reference(0);
                     pass.set_bind_group(0, &globals_bg, &[]);

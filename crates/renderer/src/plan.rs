@@ -88,6 +88,10 @@ pub struct PlanEntry {
     pub cap_triangles: usize,
     /// Why this technique, in words.
     pub reason: String,
+    /// The light's scissor rectangle `[x, y, width, height]` in pixels (top-left origin), which
+    /// limits its stencil and lit passes; `None`: the whole image. The same for every object of
+    /// a light.
+    pub scissor: Option<[u32; 4]>,
 }
 
 impl std::fmt::Display for PlanEntry {
@@ -119,6 +123,59 @@ impl std::fmt::Display for PlanEntry {
             self.reason
         )
     }
+}
+
+/// The screen rectangle `[x, y, width, height]` (pixels, top-left origin) outside which light
+/// `light` adds nothing: the projection of the bounding box of its range sphere, widened by a
+/// pixel on each side. `None` (the whole image) for a light without a range, a directional
+/// light, or a sphere that reaches behind the near plane. A spot light's cone lies inside its
+/// range sphere, so the same rectangle bounds it. `view_proj` is the `f64` matrix of the
+/// frame ([`crate::Camera::view_proj_f64`]).
+#[must_use]
+pub fn light_scissor(
+    light: [f32; 4],
+    emission: Option<&shadowvol_scenes::Emission>,
+    view_proj: glam::DMat4,
+    near: f64,
+    width: u32,
+    height: u32,
+) -> Option<[u32; 4]> {
+    let range = f64::from(emission?.range?);
+    if light[3] == 0.0 {
+        return None;
+    }
+    let c = DVec3::new(light[0].into(), light[1].into(), light[2].into()) / f64::from(light[3]);
+    let (mut x0, mut y0, mut x1, mut y1) = (
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for corner in box_corners(c - DVec3::splat(range), c + DVec3::splat(range)) {
+        let p = view_proj * corner.extend(1.0);
+        // Clip w is the view depth: a corner at or behind the near plane projects unboundedly.
+        if p.w.is_nan() || p.w <= near {
+            return None;
+        }
+        let (sx, sy) = (
+            (p.x / p.w * 0.5 + 0.5) * f64::from(width),
+            (0.5 - p.y / p.w * 0.5) * f64::from(height),
+        );
+        x0 = x0.min(sx);
+        y0 = y0.min(sy);
+        x1 = x1.max(sx);
+        y1 = y1.max(sy);
+    }
+    let clamp = |v: f64, hi: u32| v.clamp(0.0, f64::from(hi)) as u32;
+    let (ax, ay) = (
+        clamp(x0.floor() - 1.0, width),
+        clamp(y0.floor() - 1.0, height),
+    );
+    let (bx, by) = (
+        clamp(x1.ceil() + 1.0, width),
+        clamp(y1.ceil() + 1.0, height),
+    );
+    Some([ax, ay, bx.saturating_sub(ax), by.saturating_sub(ay)])
 }
 
 /// A plane `n · x + d >= 0` is inside, as `(n, d)`.

@@ -29,6 +29,9 @@ pub struct RenderOptions {
     pub policy: PlanPolicy,
     /// How lights with an emission map to the image ([`crate::lighting`]).
     pub exposure: Exposure,
+    /// Limit each light's stencil and lit passes to the screen rectangle of its range
+    /// ([`plan::light_scissor`]). The image is the same either way.
+    pub scissor: bool,
 }
 
 impl RenderOptions {
@@ -41,6 +44,7 @@ impl RenderOptions {
             mode: Accuracy::Exact,
             policy: PlanPolicy::Auto,
             exposure: Exposure::Auto,
+            scissor: true,
         }
     }
 }
@@ -94,6 +98,9 @@ pub struct Frame {
     pub emission: Vec<shadowvol_scenes::Emission>,
     /// Output per lux used for the lights with an emission (`None` without any).
     pub exposure: Option<f32>,
+    /// Pixels the per-light scissor kept out of the stencil and lit passes, summed over lights
+    /// (`width × height` minus each light's rectangle).
+    pub scissor_pixels_saved: usize,
     /// The lights.
     pub lights: Vec<Light>,
     /// The camera.
@@ -257,6 +264,7 @@ impl Renderer {
             mode,
             policy,
             exposure,
+            scissor,
         } = self.options;
         lighting::validate(scene, exposure).map_err(RenderError::InvalidInput)?;
         let exposure = lighting::exposure_factor(scene, exposure);
@@ -274,6 +282,26 @@ impl Renderer {
         let frustum = plan::frustum_planes(scene.camera.eye.as_dvec3(), near);
         let mut entries = Vec::with_capacity(n_lights * scene.objects.len());
         let bounds: Vec<(DVec3, DVec3)> = self.cache.iter().map(|c| bounds_f64(&c.world)).collect();
+        let view_proj = scene.camera.view_proj_f64(aspect);
+        let scissors: Vec<Option<[u32; 4]>> = scene
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(li, light)| {
+                scissor
+                    .then(|| {
+                        plan::light_scissor(
+                            light.to_array(),
+                            scene.emission.get(li),
+                            view_proj,
+                            f64::from(scene.camera.near),
+                            width,
+                            height,
+                        )
+                    })
+                    .flatten()
+            })
+            .collect();
         for (li, light) in scene.lights.iter().enumerate() {
             let l = light.to_array();
             let ncv = plan::near_clip_volume(near, l);
@@ -332,6 +360,7 @@ impl Renderer {
                     side_quads: 0,
                     cap_triangles: 0,
                     reason,
+                    scissor: scissors[li],
                 });
             }
         }
@@ -433,6 +462,7 @@ impl Renderer {
             let mut d = LightDraws {
                 light: l,
                 color: colors[li],
+                scissor: scissors[li],
                 emission: scene.emission.get(li).copied(),
                 ..LightDraws::default()
             };
@@ -566,6 +596,11 @@ impl Renderer {
             ambient: scene.ambient,
             emission: scene.emission.clone(),
             exposure,
+            scissor_pixels_saved: scissors
+                .iter()
+                .flatten()
+                .map(|r| (width * height - r[2] * r[3]) as usize)
+                .sum(),
             lights: scene.lights.clone(),
             camera: scene.camera,
             plan: entries,

@@ -520,6 +520,7 @@ fn frame_for(case: &Case, size: u32) -> Frame {
         ambient: 0.0,
         emission: Vec::new(),
         exposure: None,
+        scissor_pixels_saved: 0,
         lights: vec![
             Light::new(case.light[0], case.light[1], case.light[2], case.light[3]).unwrap(),
         ],

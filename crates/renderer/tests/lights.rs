@@ -222,3 +222,67 @@ fn casters_the_light_cannot_reach_are_culled() {
         assert_ne!(floor.technique, Technique::Culled, "{floor:?}");
     }
 }
+
+/// Scissor: lights with a range draw their stencil and lit passes only over the screen rectangle
+/// of the range sphere. The image and every light's stencil inside the rectangle are the same
+/// pixel for pixel as without it, and the plan reports the rectangle.
+#[test]
+fn the_range_scissor_changes_no_pixel() {
+    let mut s = scene(Emission {
+        intensity: 30.0,
+        range: Some(2.5),
+        ..Emission::default()
+    });
+    s.lights = vec![
+        Light::point(Vec3::new(-1.5, 1.2, 0.5)),
+        Light::point(Vec3::new(1.5, 2.0, -1.0)),
+    ];
+    s.emission.push(Emission {
+        intensity: 20.0,
+        range: Some(3.0),
+        ..Emission::default()
+    });
+    s.camera = Camera::look_at(Vec3::new(0.0, 16.0, 11.0), Vec3::ZERO);
+    let mut opts = RenderOptions::new(W, W);
+    opts.exposure = Exposure::Fixed(0.05);
+    let Some(mut r) = renderer_with(opts) else {
+        return;
+    };
+    let with = r.render(&s).unwrap();
+    opts.scissor = false;
+    let without = renderer_with(opts).unwrap().render(&s).unwrap();
+    assert_eq!(without.scissor_pixels_saved, 0);
+    assert!(
+        with.scissor_pixels_saved > (W * W / 4) as usize,
+        "{} {:?}",
+        with.scissor_pixels_saved,
+        with.plan.iter().map(|e| e.scissor).collect::<Vec<_>>()
+    );
+    assert!(with.rgba == without.rgba, "the scissor changed the image");
+    for (li, rect) in [0usize, 1].map(|li| {
+        (
+            li,
+            with.plan
+                .iter()
+                .find(|e| e.light == li)
+                .unwrap()
+                .scissor
+                .unwrap(),
+        )
+    }) {
+        assert!(rect[2] * rect[3] < W * W, "light {li}: {rect:?}");
+        assert!(without.plan.iter().all(|e| e.scissor.is_none()));
+        for y in rect[1]..rect[1] + rect[3] {
+            for x in rect[0]..rect[0] + rect[2] {
+                let i = (y * W + x) as usize;
+                assert_eq!(
+                    with.stencil[li][i], without.stencil[li][i],
+                    "light {li} at ({x}, {y})"
+                );
+            }
+        }
+    }
+    let cmp = reference::compare(&with);
+    assert_eq!(cmp.artifact_pixels, 0, "{cmp:?}");
+    assert_eq!(reference::shading_check(&with, &cmp, 2).mismatched, 0);
+}

@@ -170,6 +170,7 @@ fn artifacts(
         ambient: 0.0,
         emission: Vec::new(),
         exposure: None,
+        scissor_pixels_saved: 0,
         lights: vec![light],
         camera: case.camera,
         plan: Vec::new(),
