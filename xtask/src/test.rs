@@ -4,7 +4,7 @@
 //!
 //! 1. **drivers**: the Vulkan loader and Mesa's lavapipe ICD, the OpenCL ICD loader and PoCL, and
 //!    `glslangValidator`, the Khronos Vulkan validation layer (the vulkan backend's validation
-//!    test runs with it). When one is missing and we are root, they are installed with apt-get;
+//!    test runs with it), Xvfb and the X11 client libraries (the viewer's window test). When one is missing and we are root, they are installed with apt-get;
 //!    when we are not root, the exact command is printed and the run goes on (the GPU backends
 //!    then skip visibly), unless `CI=true`, where a missing driver is a failure.
 //! 2. **fmt**: `cargo fmt --all -- --check`.
@@ -27,6 +27,13 @@ const APT_PACKAGES: &[&str] = &[
     "ocl-icd-libopencl1",
     "glslang-tools",
     "vulkan-validationlayers",
+    "xvfb",
+    "libx11-6",
+    "libx11-xcb1",
+    "libxcursor1",
+    "libxrandr2",
+    "libxi6",
+    "libxkbcommon-x11-0",
 ];
 
 /// The steps, in the order they run (the names `--skip` takes).
@@ -369,6 +376,22 @@ fn requirements() -> Vec<Requirement> {
         Requirement {
             what: "glslangValidator",
             present: in_path("glslangValidator"),
+        },
+        Requirement {
+            what: "Xvfb (a virtual X server for the viewer's window test)",
+            present: in_path("Xvfb"),
+        },
+        Requirement {
+            what: "X11 client libraries (libX11, libXcursor, libXrandr, libXi, libxkbcommon-x11)",
+            present: [
+                "libX11.so",
+                "libXcursor.so",
+                "libXrandr.so",
+                "libXi.so",
+                "libxkbcommon-x11.so",
+            ]
+            .iter()
+            .all(|lib| any_file(&libs, &|n| n.starts_with(lib))),
         },
         Requirement {
             what: "Vulkan validation layer (VK_LAYER_KHRONOS_validation)",

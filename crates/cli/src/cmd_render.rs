@@ -180,7 +180,7 @@ fn parse_exposure(s: &str) -> Result<Exposure, String> {
     }
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
+pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("size {s:?}: expected WxH, for example 640x480"))?;
@@ -197,7 +197,7 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((parse(w, "width")?, parse(h, "height")?))
 }
 
-fn render_error(e: RenderError) -> CliError {
+pub(crate) fn render_error(e: RenderError) -> CliError {
     match e {
         RenderError::Backend(b) => CliError::Backend(b),
         other => CliError::Other(format!("render: {other}")),
@@ -241,7 +241,7 @@ struct Report<'a> {
 /// Where the lights of a render came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
-enum LightsSource {
+pub(crate) enum LightsSource {
     /// The scene file or preset.
     File,
     /// `--light`.
@@ -252,7 +252,7 @@ enum LightsSource {
 
 /// The receiver plane `y = ground_y` and why it is there.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-struct Ground {
+pub(crate) struct Ground {
     y: f32,
     /// `scene` (the preset declares it), `auto` (nothing lay below the casters) or `flags`
     /// (`--ground on`).
@@ -269,7 +269,7 @@ struct Timings {
     reference_ms: Option<f64>,
 }
 
-fn parse_light(s: &str) -> Result<shadowvol_robust_math::Light, String> {
+pub(crate) fn parse_light(s: &str) -> Result<shadowvol_robust_math::Light, String> {
     s.parse::<shadowvol_robust_math::Light>()
         .map_err(|e| e.to_string())
 }
@@ -281,7 +281,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     for n in &notes {
         eprintln!("note: {n}");
     }
-    let (lights_source, ground) = stage(&mut scene, args)?;
+    let (lights_source, ground) = stage(&mut scene, &args.scene, &args.lights, args.ground)?;
     let out_path = out_path(args);
     let mut rscene = RenderScene::from_scene(&scene).map_err(render_error)?;
     if args.backdrop {
@@ -373,12 +373,14 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
 /// Chooses the lights and the ground of `scene` from the flags: `--light` replaces the scene's
 /// lights, a scene without any gets [`shadowvol_scenes::Scene::key_light`] seen from its camera
 /// (or the default framing); `--ground` sets `effects.ground_y`.
-fn stage(
+pub(crate) fn stage(
     scene: &mut shadowvol_scenes::Scene,
-    args: &Args,
+    scene_arg: &str,
+    lights: &[shadowvol_robust_math::Light],
+    ground: GroundArg,
 ) -> Result<(LightsSource, Option<Ground>), CliError> {
-    let lights_source = if !args.lights.is_empty() {
-        scene.lights.clone_from(&args.lights);
+    let lights_source = if !lights.is_empty() {
+        scene.lights = lights.to_vec();
         scene.emission.clear();
         LightsSource::Flags
     } else if !scene.lights.is_empty() {
@@ -386,8 +388,7 @@ fn stage(
     } else {
         let camera = scene.camera_or_default().ok_or_else(|| {
             CliError::Other(format!(
-                "{}: no vertices, nothing to render or light",
-                args.scene
+                "{scene_arg}: no vertices, nothing to render or light"
             ))
         })?;
         scene.lights.extend(scene.key_light(&camera));
@@ -398,14 +399,14 @@ fn stage(
         .effects
         .ground_y
         .map(|y| Ground { y, source: "scene" });
-    let ground = match args.ground {
+    let ground = match ground {
         GroundArg::Off => None,
         GroundArg::On => own.or_else(|| {
             scene
                 .ground_y_below()
                 .map(|y| Ground { y, source: "flags" })
         }),
-        GroundArg::Auto if shadowvol_scenes::is_preset(&args.scene) => own,
+        GroundArg::Auto if shadowvol_scenes::is_preset(scene_arg) => own,
         GroundArg::Auto => {
             own.or_else(|| scene.auto_ground_y().map(|y| Ground { y, source: "auto" }))
         }

@@ -17,6 +17,7 @@ mod cmd_bench;
 mod cmd_render;
 mod cmd_scenes;
 mod cmd_silhouette;
+mod cmd_view;
 
 /// Robust silhouette shadow volumes: silhouette edges with multiplicities on five
 /// interchangeable backends (cpu, simd, wgpu, opencl, vulkan), in four accuracy modes.
@@ -64,6 +65,10 @@ enum Command {
     /// with a ray-traced reference and count artifact pixels.
     #[command(long_about = cmd_render::LONG_ABOUT, after_help = cmd_render::AFTER_HELP)]
     Render(cmd_render::Args),
+    /// Open a live window onto a scene: orbit, move the light, switch modes and techniques,
+    /// show the volumes.
+    #[command(long_about = cmd_view::LONG_ABOUT, after_help = cmd_view::AFTER_HELP)]
+    View(cmd_view::Args),
 }
 
 fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
@@ -76,6 +81,7 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Scenes(args) => cmd_scenes::run(&args, out),
         Command::Scene(args) => cmd_scenes::run_scene(&args, out),
         Command::Render(args) => cmd_render::run(&args, out),
+        Command::View(args) => cmd_view::run(&args, out),
     }
 }
 

@@ -32,6 +32,9 @@ pub struct RenderOptions {
     /// Limit each light's stencil and lit passes to the screen rectangle of its range
     /// ([`plan::light_scissor`]). The image is the same either way.
     pub scissor: bool,
+    /// Keep the frame's shadow-volume vertices in [`Frame::volumes`] (for viewers that draw the
+    /// volumes themselves).
+    pub keep_volumes: bool,
 }
 
 impl RenderOptions {
@@ -45,6 +48,7 @@ impl RenderOptions {
             policy: PlanPolicy::Auto,
             exposure: Exposure::Auto,
             scissor: true,
+            keep_volumes: false,
         }
     }
 }
@@ -101,6 +105,12 @@ pub struct Frame {
     /// Pixels the per-light scissor kept out of the stencil and lit passes, summed over lights
     /// (`width × height` minus each light's rectangle).
     pub scissor_pixels_saved: usize,
+    /// (edge, opposite vertex, light) evaluations of this frame's extractions that the
+    /// backend's filter could not certify and the host decided exactly (exact mode).
+    pub uncertain: u64,
+    /// With [`RenderOptions::keep_volumes`]: every shadow-volume vertex drawn, as triangles,
+    /// relative to the camera's eye (`w = 0`: extruded to infinity); empty otherwise.
+    pub volumes: Vec<[f32; 4]>,
     /// The lights.
     pub lights: Vec<Light>,
     /// The camera.
@@ -265,6 +275,7 @@ impl Renderer {
             policy,
             exposure,
             scissor,
+            keep_volumes,
         } = self.options;
         lighting::validate(scene, exposure).map_err(RenderError::InvalidInput)?;
         let exposure = lighting::exposure_factor(scene, exposure);
@@ -370,6 +381,7 @@ impl Renderer {
         let n_obj = scene.objects.len();
         let mut silhouette_time = Duration::ZERO;
         let mut m_buf = Multiplicities::default();
+        let mut uncertain = 0u64;
         let mut stale_by_obj: Vec<Vec<usize>> = Vec::with_capacity(n_obj);
         for oi in 0..n_obj {
             let needed: Vec<usize> = (0..n_lights)
@@ -440,8 +452,10 @@ impl Renderer {
             let stale_lights: Vec<Light> = stale.iter().map(|&li| scene.lights[li]).collect();
             let obj_lights = object_space_lights(&obj.name, &c.table, c.transform, &stale_lights)?;
             let t = Instant::now();
-            self.backend
-                .extract(c.prepared, &obj_lights, mode, &mut m_buf)?;
+            uncertain += self
+                .backend
+                .extract(c.prepared, &obj_lights, mode, &mut m_buf)?
+                .uncertain;
             silhouette_time += t.elapsed();
             let c = &mut self.cache[oi];
             for (k, &li) in stale.iter().enumerate() {
@@ -601,6 +615,8 @@ impl Renderer {
                 .flatten()
                 .map(|r| (width * height - r[2] * r[3]) as usize)
                 .sum(),
+            uncertain,
+            volumes: if keep_volumes { volumes } else { Vec::new() },
             lights: scene.lights.clone(),
             camera: scene.camera,
             plan: entries,

@@ -521,6 +521,8 @@ fn frame_for(case: &Case, size: u32) -> Frame {
         emission: Vec::new(),
         exposure: None,
         scissor_pixels_saved: 0,
+        uncertain: 0,
+        volumes: Vec::new(),
         lights: vec![
             Light::new(case.light[0], case.light[1], case.light[2], case.light[3]).unwrap(),
         ],

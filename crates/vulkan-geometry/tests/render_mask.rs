@@ -171,6 +171,8 @@ fn artifacts(
         emission: Vec::new(),
         exposure: None,
         scissor_pixels_saved: 0,
+        uncertain: 0,
+        volumes: Vec::new(),
         lights: vec![light],
         camera: case.camera,
         plan: Vec::new(),

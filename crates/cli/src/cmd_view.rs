@@ -1,0 +1,166 @@
+//! `shadowvol view`: a live window onto a scene or mesh (see `shadowvol_viewer`).
+
+use crate::cmd_render::{parse_light, parse_size, render_error, stage, GroundArg, TechniqueArg};
+use shadowvol::{find_backend, CliError, Format, ModeArg};
+use shadowvol_renderer::{PlanPolicy, RenderScene};
+use shadowvol_viewer::controls::VolumeView;
+use shadowvol_viewer::{ViewError, ViewOptions};
+use std::io::Write;
+use std::path::PathBuf;
+
+/// The long help of the subcommand.
+pub const LONG_ABOUT: &str = "Open a window onto SCENE (a preset, a .gltf/.glb scene or a \
+    .obj/.stl/.ply mesh) rendered with stencil shadow volumes, live. Lights, camera and ground \
+    as for `render`: a scene without lights gets the default key light, a file with nothing \
+    below its casters a ground plane.\n\n\
+    Controls: left drag orbits, right (or middle) drag pans, the wheel zooms; the arrow keys or \
+    shift + left drag move the first light around the scene; 1-4 pick the accuracy mode \
+    (original, ordered, robust, exact); T cycles the technique (auto, z-pass, z-fail); V cycles \
+    how the volumes show (hidden, translucent, wire: cracks become visible); Esc or Q quits. \
+    The overlay shows fps, frame ms, silhouette edges, the uncertain pairs the host resolved \
+    and each object's technique.\n\n\
+    Each frame is rendered by the headless renderer and copied to the window through the host, \
+    so frame times include that copy.\n\n\
+    For automation: --frames N renders N frames, writes the last one's 3D view to --screenshot \
+    and prints {\"frames\", \"fps\", \"median_ms\", \"adapter\", \"screenshot\"}, then exits 0. \
+    Without a display (DISPLAY and WAYLAND_DISPLAY unset) it exits 1 saying so; xvfb-run \
+    gives it a virtual one.";
+
+/// Examples shown after the help.
+pub const AFTER_HELP: &str = "Examples:\n  shadowvol view model.obj\n  \
+    shadowvol view hard-book-3 --mode robust\n  \
+    xvfb-run shadowvol view town --frames 60 --screenshot town.png --format json";
+
+/// How the volumes show.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum VolumesArg {
+    /// Not drawn.
+    Hidden,
+    /// Translucent sides and caps.
+    Translucent,
+    /// Triangle edges.
+    Wire,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The scene: a preset name (see `shadowvol scenes`) or a .gltf/.glb/.obj/.stl/.ply file.
+    #[arg(value_name = "SCENE")]
+    scene: String,
+
+    /// A light as homogeneous X,Y,Z,W (repeatable); replaces the scene's own.
+    #[arg(long = "light", value_name = "X,Y,Z,W", allow_hyphen_values = true, value_parser = parse_light)]
+    lights: Vec<shadowvol_robust_math::Light>,
+
+    /// A receiver plane under the scene: auto, on or off (as for `render`).
+    #[arg(long, value_enum, default_value_t = GroundArg::Auto)]
+    ground: GroundArg,
+
+    /// Window size in pixels.
+    #[arg(long, default_value = "960x720", value_name = "WxH", value_parser = parse_size)]
+    size: (u32, u32),
+
+    /// Accuracy mode at start (keys 1-4 switch it).
+    #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
+    mode: ModeArg,
+
+    /// Silhouette backend (see `shadowvol backends`).
+    #[arg(long, default_value = "cpu", value_name = "NAME")]
+    backend: String,
+
+    /// Technique at start (T cycles it).
+    #[arg(long, value_enum, default_value_t = TechniqueArg::Auto)]
+    technique: TechniqueArg,
+
+    /// Render this many frames, then exit and report (for automation and tests).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    frames: Option<u32>,
+
+    /// With --frames: write the last frame's 3D view (no overlay) as PNG.
+    #[arg(long, value_name = "FILE.png", requires = "frames")]
+    screenshot: Option<PathBuf>,
+
+    /// With --frames: write the last frame's whole window (view, volumes, overlay) as PNG.
+    #[arg(long, value_name = "FILE.png", requires = "frames")]
+    window_screenshot: Option<PathBuf>,
+
+    /// How the shadow volumes show at start (V cycles it): hidden, translucent or wire.
+    #[arg(long, value_enum, default_value_t = VolumesArg::Hidden)]
+    volumes: VolumesArg,
+
+    /// Output format of the --frames report.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    format: Format,
+}
+
+/// The `--frames` report.
+#[derive(Debug, serde::Serialize)]
+struct Report {
+    frames: u32,
+    fps: f64,
+    median_ms: f64,
+    adapter: String,
+    screenshot: Option<String>,
+}
+
+pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
+    shadowvol_viewer::check_display().map_err(|e| CliError::Other(e.to_string()))?;
+    let entry = find_backend(&args.backend)?;
+    let (mut scene, notes) = shadowvol_scenes::Scene::from_name_or_path_with_notes(&args.scene)
+        .map_err(|e| CliError::Other(format!("{}: {e}", args.scene)))?;
+    for n in &notes {
+        eprintln!("note: {n}");
+    }
+    stage(&mut scene, &args.scene, &args.lights, args.ground)?;
+    let rscene = RenderScene::from_scene(&scene).map_err(render_error)?;
+    let backend = entry.start()?;
+    let mut options = ViewOptions::new(args.size.0, args.size.1);
+    options.mode = args.mode.into();
+    options.policy = match args.technique {
+        TechniqueArg::Auto => PlanPolicy::Auto,
+        TechniqueArg::ZFail => PlanPolicy::AlwaysZFail,
+        TechniqueArg::ZPass => PlanPolicy::AlwaysZPass,
+    };
+    options.frames = args.frames;
+    options.screenshot.clone_from(&args.screenshot);
+    options
+        .window_screenshot
+        .clone_from(&args.window_screenshot);
+    options.volumes = match args.volumes {
+        VolumesArg::Hidden => VolumeView::Hidden,
+        VolumesArg::Translucent => VolumeView::Translucent,
+        VolumesArg::Wire => VolumeView::Wire,
+    };
+    options.title = format!("shadowvol - {}", scene.name);
+    let report = shadowvol_viewer::view(rscene, backend, options).map_err(|e| match e {
+        ViewError::Render(r) => render_error(r),
+        other => CliError::Other(other.to_string()),
+    })?;
+    if args.frames.is_none() {
+        return Ok(());
+    }
+    let report = Report {
+        frames: report.frames,
+        fps: report.fps,
+        median_ms: report.median_ms,
+        adapter: report.adapter,
+        screenshot: report.screenshot,
+    };
+    match args.format {
+        Format::Json => {
+            serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
+            writeln!(out)?;
+        }
+        Format::Text => {
+            writeln!(
+                out,
+                "{} frames, {:.1} fps, median {:.2} ms per frame, on {}",
+                report.frames, report.fps, report.median_ms, report.adapter
+            )?;
+            if let Some(s) = &report.screenshot {
+                writeln!(out, "screenshot {s}")?;
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,185 @@
+//! `shadowvol view`: a live window onto a scene, rendered with stencil shadow volumes.
+//!
+//! Each frame the headless [`Renderer`] renders the scene (silhouettes from the chosen backend,
+//! the plan, the stencil and lit passes) and the image is shown in a winit window with wgpu,
+//! with an [egui](https://docs.rs/egui) overlay of the frame's figures. The frame still travels
+//! through the host between the renderer's device and the window's (the GPU-resident pass that
+//! would remove this is not built yet), so the viewer's frame times include that copy.
+//!
+//! Controls: left drag orbits, right (or middle) drag pans, the wheel zooms; the arrow keys or
+//! shift + left drag move the first light around the scene's centre; 1–4 pick the accuracy
+//! mode (original, ordered, robust, exact); T cycles the technique (auto, z-pass, z-fail); V
+//! cycles the volumes (hidden, translucent, wire), drawn over the image so that cracks show;
+//! Esc or Q quits.
+//!
+//! For automation, [`ViewOptions::frames`] renders that many frames, writes the last one's
+//! image to [`ViewOptions::screenshot`] and returns a [`ViewReport`].
+//!
+//! ```no_run
+//! use shadowvol_viewer::{view, ViewOptions};
+//! let scene = shadowvol_renderer::hard::edge_on_frustum();
+//! let backend = Box::new(shadowvol_cpu::CpuBackend::new());
+//! let mut options = ViewOptions::new(640, 480);
+//! options.frames = Some(10);
+//! options.screenshot = Some("view.png".into());
+//! let report = view(scene, backend, options)?;
+//! println!("{:.1} fps on {}", report.fps, report.adapter);
+//! # Ok::<(), shadowvol_viewer::ViewError>(())
+//! ```
+
+/// The README's code, compiled as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
+pub mod controls;
+mod window;
+
+use shadowvol_renderer::{Accuracy, PlanPolicy, RenderError, RenderOptions, RenderScene, Renderer};
+use shadowvol_silhouette::SilhouetteBackend;
+use std::path::PathBuf;
+
+/// What to open and how.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ViewOptions {
+    /// Window width in physical pixels.
+    pub width: u32,
+    /// Window height in physical pixels.
+    pub height: u32,
+    /// The accuracy mode at start (keys 1–4 change it).
+    pub mode: Accuracy,
+    /// The technique policy at start (T changes it).
+    pub policy: PlanPolicy,
+    /// Render this many frames, then close and report; `None`: until the user closes it.
+    pub frames: Option<u32>,
+    /// With `frames`: where to write the last frame's image (the 3D view without the overlay),
+    /// as PNG.
+    pub screenshot: Option<PathBuf>,
+    /// With `frames`: where to write the last frame's whole window (view, volumes and
+    /// overlay) as PNG.
+    pub window_screenshot: Option<PathBuf>,
+    /// How the volumes show at start (V cycles it).
+    pub volumes: controls::VolumeView,
+    /// The window title.
+    pub title: String,
+}
+
+impl ViewOptions {
+    /// A `width × height` window in exact mode with the automatic technique, until closed.
+    #[must_use]
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            mode: Accuracy::Exact,
+            policy: PlanPolicy::Auto,
+            frames: None,
+            screenshot: None,
+            window_screenshot: None,
+            volumes: controls::VolumeView::Hidden,
+            title: "shadowvol".into(),
+        }
+    }
+}
+
+/// What an automated run measured.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ViewReport {
+    /// Frames rendered and shown.
+    pub frames: u32,
+    /// Frames per second over the whole run (wall time from the first frame's start).
+    pub fps: f64,
+    /// Median wall time of one frame (render, copy to the window, overlay, present), ms.
+    pub median_ms: f64,
+    /// The renderer's GPU adapter.
+    pub adapter: String,
+    /// The screenshot written, if any.
+    pub screenshot: Option<String>,
+}
+
+/// Why the viewer could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum ViewError {
+    /// No display to open a window on.
+    #[error(
+        "no display: neither DISPLAY (X11) nor WAYLAND_DISPLAY (Wayland) is set; run it in a \
+         desktop session, or under a virtual X server (for example `xvfb-run shadowvol view ...`)"
+    )]
+    NoDisplay,
+    /// The window or its event loop failed.
+    #[error("window: {0}")]
+    Window(String),
+    /// The window's GPU device or surface failed.
+    #[error("GPU: {0}")]
+    Gpu(String),
+    /// Rendering a frame failed.
+    #[error("render: {0}")]
+    Render(#[from] RenderError),
+    /// Bad options.
+    #[error("invalid options: {0}")]
+    Options(String),
+}
+
+/// Whether a display is there to open a window on: `DISPLAY` or `WAYLAND_DISPLAY` set and not
+/// empty (on Linux and the BSDs; elsewhere always).
+///
+/// # Errors
+/// [`ViewError::NoDisplay`] naming both variables.
+pub fn check_display() -> Result<(), ViewError> {
+    if cfg!(all(
+        unix,
+        not(target_os = "macos"),
+        not(target_os = "android")
+    )) {
+        let set = |v: &str| std::env::var_os(v).is_some_and(|s| !s.is_empty());
+        if !set("DISPLAY") && !set("WAYLAND_DISPLAY") {
+            return Err(ViewError::NoDisplay);
+        }
+    }
+    Ok(())
+}
+
+/// Opens a window onto `scene`, with silhouettes from `backend`, and runs until the user closes
+/// it or, with [`ViewOptions::frames`], until that many frames are shown.
+///
+/// # Errors
+/// [`ViewError::NoDisplay`] without a display (checked before anything opens),
+/// [`ViewError::Options`] for a zero size or `frames = Some(0)`, [`ViewError::Window`] when the
+/// event loop or window cannot be created, [`ViewError::Gpu`] when no adapter can present to it,
+/// [`ViewError::Render`] when the renderer fails to start or to render a frame.
+pub fn view(
+    scene: RenderScene,
+    backend: Box<dyn SilhouetteBackend>,
+    options: ViewOptions,
+) -> Result<ViewReport, ViewError> {
+    if options.width == 0 || options.height == 0 {
+        return Err(ViewError::Options(format!(
+            "window size {}x{}: both must be > 0",
+            options.width, options.height
+        )));
+    }
+    if options.frames == Some(0) {
+        return Err(ViewError::Options("frames must be at least 1".into()));
+    }
+    check_display()?;
+    let mut render_options = RenderOptions::new(options.width, options.height);
+    render_options.mode = options.mode;
+    render_options.policy = options.policy;
+    let renderer = Renderer::new(backend, render_options)?;
+    let event_loop = winit::event_loop::EventLoop::new()
+        .map_err(|e| ViewError::Window(format!("cannot connect to the display: {e}")))?;
+    let mut app = window::App::new(scene, renderer, options);
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| ViewError::Window(format!("event loop: {e}")))?;
+    if let Some(e) = app.error.take() {
+        return Err(e);
+    }
+    Ok(app.report.take().unwrap_or(ViewReport {
+        frames: 0,
+        fps: 0.0,
+        median_ms: 0.0,
+        adapter: String::new(),
+        screenshot: None,
+    }))
+}
