@@ -54,69 +54,26 @@ fn obj(positions: &[[f32; 3]], faces: &[Vec<usize>]) -> String {
     s
 }
 
-/// A lumpy sphere of irregular triangles, as a scanner writes: an icosphere subdivided twice
-/// with every vertex pushed in or out by a deterministic amount.
+/// A lumpy sphere of irregular triangles, as a scanner writes: an icosphere with every vertex
+/// pushed in or out by a deterministic amount, off the origin.
 fn scan() -> String {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut p: Vec<[f32; 3]> = vec![
-        [-1., t, 0.],
-        [1., t, 0.],
-        [-1., -t, 0.],
-        [1., -t, 0.],
-        [0., -1., t],
-        [0., 1., t],
-        [0., -1., -t],
-        [0., 1., -t],
-        [t, 0., -1.],
-        [t, 0., 1.],
-        [-t, 0., -1.],
-        [-t, 0., 1.],
-    ];
-    let mut f: Vec<[usize; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..2 {
-        let mut mid = std::collections::HashMap::new();
-        let mut next = Vec::new();
-        for [a, b, c] in f {
-            let mut m = |i: usize, j: usize| {
-                *mid.entry((i.min(j), i.max(j))).or_insert_with(|| {
-                    let q = [0, 1, 2].map(|k| (p[i][k] + p[j][k]) * 0.5);
-                    p.push(q);
-                    p.len() - 1
-                })
-            };
-            let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        f = next;
-    }
-    for (i, q) in p.iter_mut().enumerate() {
-        let len = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
-        let bump = 1.0 + 0.08 * ((i * 7919 % 23) as f32 / 23.0 - 0.5);
-        *q = q.map(|c| c / len * bump * 3.0 + 0.0);
-        q[1] += 3.2; // a scan in the scanner's frame, not at the origin
-    }
-    obj(&p, &f.iter().map(|t| t.to_vec()).collect::<Vec<_>>())
+    let m = shadowvol_scenes::procedural::icosphere(320, 3.0);
+    let p: Vec<[f32; 3]> = m
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(i, q)| {
+            let bump = 1.0 + 0.08 * ((i * 7919 % 23) as f32 / 23.0 - 0.5);
+            let q = *q * bump;
+            [q.x, q.y + 3.2, q.z]
+        })
+        .collect();
+    let f: Vec<Vec<usize>> = m
+        .triangles
+        .iter()
+        .map(|t| t.iter().map(|&i| i as usize).collect())
+        .collect();
+    obj(&p, &f)
 }
 
 /// An L-shaped bracket: two flat L faces written as one 6-gon each, and its sides as quads.

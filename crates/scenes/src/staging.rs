@@ -126,28 +126,7 @@ mod tests {
     use std::sync::Arc;
 
     fn cube(lo: Vec3, hi: Vec3) -> Arc<Mesh> {
-        let p = |k: usize| {
-            Vec3::new(
-                if k & 1 == 0 { lo.x } else { hi.x },
-                if k & 2 == 0 { lo.y } else { hi.y },
-                if k & 4 == 0 { lo.z } else { hi.z },
-            )
-        };
-        let tris = vec![
-            [0, 2, 3],
-            [0, 3, 1],
-            [4, 5, 7],
-            [4, 7, 6],
-            [0, 1, 5],
-            [0, 5, 4],
-            [2, 6, 7],
-            [2, 7, 3],
-            [0, 4, 6],
-            [0, 6, 2],
-            [1, 3, 7],
-            [1, 7, 5],
-        ];
-        Arc::new(Mesh::new((0..8).map(p).collect(), tris).unwrap())
+        Arc::new(shadowvol_silhouette::shapes::cuboid(lo, hi))
     }
 
     fn scene(objects: &[(Vec3, Vec3)]) -> Scene {
