@@ -635,3 +635,25 @@ fn f32_modes_equal_the_emulated_evaluation_and_their_rules() {
         "{robust_zeros} triangles whose evaluations disagree"
     );
 }
+
+#[test]
+fn filters_certify_well_conditioned_inputs() {
+    // Triangles in [-1, 1]^3 with a light anywhere in [-4, 4]^3 (point or directional): both
+    // filters must decide nearly all of them. A filter that is always uncertain is correct but
+    // sends every pair to the exact fallback (the host, on the GPU backends).
+    let mut rng = Rng(5);
+    let (mut by_f32, mut by_f64, mut n) = (0, 0, 0);
+    for i in 0..3000 {
+        let (a, b, o) = (rng.p3(1.0, 0.0), rng.p3(1.0, 0.0), rng.p3(1.0, 0.0));
+        let w = if i % 3 == 0 { 0.0 } else { 1.0 };
+        let l = [rng.unit() * 4.0, rng.unit() * 4.0, rng.unit() * 4.0, w];
+        if check(a, b, l, o) == 0 {
+            continue;
+        }
+        n += 1;
+        by_f32 += usize::from(orient_filter_f32(a, b, l, o).is_some());
+        by_f64 += usize::from(orient_filter_f64(a, b, l, o).is_some());
+    }
+    assert!(by_f32 * 10 > n * 9, "f32 filter decided {by_f32} of {n}");
+    assert!(by_f64 * 100 > n * 99, "f64 filter decided {by_f64} of {n}");
+}
