@@ -1,24 +1,39 @@
 //! Cross-backend conformance: every registered backend, on every corpus case, in every mode.
 //!
-//! One test per (backend, case, mode), named `conformance::<backend>::<case>::<mode>`:
+//! One test per (backend, case, mode), named `conformance::<backend>::<case>::<mode>::<rule>`.
+//! No trial compares a backend with itself: the references are computed in the test
+//! (`support/values.rs`) and share no code with any backend. How each kind of trial can fail:
 //!
-//! * `exact`: bit-identical to the `cpu` reference, and 0 open vertices for every light;
-//! * `robust`, `ordered`: 0 open vertices for every light (the chains close);
-//! * `original`: runs; its open vertices and its differences from the cpu's `original` are
-//!   reported after the run (it is the baseline: no closure is asserted);
-//! * all modes: the result has one value per (edge, light) and compact silhouette lists that list
-//!   exactly the edges with `m != 0`.
+//! * `::oracle` (exact mode): a multiplicity differs from the big-integer oracle (with a loose
+//!   `f64` pre-filter of its own), or a chain is open;
+//! * `::bit-exact` (original, robust, ordered on host backends and on devices that evaluate
+//!   without contraction: lavapipe, PoCL): a multiplicity differs from the reference `f32`
+//!   evaluation written in the test with the mode's rule; or, on any edge whose every pair the
+//!   `f64` filter certifies with a margin above the `f32` error bound, differs from exact; or
+//!   (robust, ordered) a chain is open;
+//! * `::certified` (the same modes on any other device, which may contract): only the
+//!   certified edges are compared, with exact; robust and ordered must close every chain;
+//! * every trial: the result has one value per (edge, light) and compact silhouette lists that
+//!   list exactly the edges with `m != 0`.
+//!
+//! `original`'s open vertices are reported after the run (it is the baseline). The
+//! `checks_detect_corruption` trial corrupts a correct result (a changed, a negated and an
+//! all-zero result, a wrong list, a wrong shape) under both rules and in every mode, and fails if
+//! a check misses it.
 //!
 //! A backend that cannot start is a visible skip (`ignored (<backend> unavailable: reason)`),
-//! except when `CI=true`: then each of its tests fails with the reason. A backend whose cargo
-//! feature is off is always skipped. Tests listed in [`EXPECTED_FAILURES`] show `[xfail]` before
-//! their name; they pass when their check fails and fail when it passes, so the list can't go
-//! stale.
+//! except under CI (`shadowvol_silhouette::ci::is_ci`: `CI=true`, `CI=True`, `CI=1`): then each
+//! of its tests fails with the reason, a backend whose cargo feature is off included. Tests
+//! listed in [`EXPECTED_FAILURES`] show `[xfail]` before their name; they pass when their check
+//! fails and fail when it passes, so the list can't go stale.
 //!
 //! Backends come only from `shadowvol::backends()`; cases only from
 //! `shadowvol_silhouette::corpus::cases()`.
 
 use libtest_mimic::{Arguments, Completion, Failed, Trial};
+#[path = "support/values.rs"]
+mod values;
+
 use shadowvol::BackendEntry;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_robust_math::Accuracy;
@@ -28,8 +43,9 @@ use shadowvol_silhouette::{
 };
 use std::collections::HashMap;
 use std::sync::mpsc::{self, Receiver, Sender};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Duration;
+use values::Rule;
 
 /// Tests expected to fail, as `(test name, why)`. Empty: every backend must pass everything.
 const EXPECTED_FAILURES: &[(&str, &str)] = &[];
@@ -164,21 +180,25 @@ fn join_workers(handles: Vec<(&'static str, std::thread::JoinHandle<()>)>) -> Re
     }
 }
 
-/// Names an edge by its object and input vertex names, for messages.
-fn edge_label(scene: &TopologyScene, global: usize) -> String {
-    let offsets = scene.edge_offsets();
-    let obj = offsets.partition_point(|&o| o <= global) - 1;
-    let (a, b) = scene.objects[obj].table.edge_names(global - offsets[obj]);
-    format!("{} edge ({a}, {b})", scene.objects[obj].name)
-}
-
 /// Observations of non-asserted quantities, printed after the run.
 type Notes = Arc<Mutex<Vec<String>>>;
+
+/// The references of every case, one per mode, computed on first use and shared by all backends.
+type References = Arc<Vec<[OnceLock<values::Reference>; 4]>>;
+
+fn mode_index(mode: Accuracy) -> usize {
+    Accuracy::ALL
+        .iter()
+        .position(|&m| m == mode)
+        .expect("a mode")
+}
 
 fn check(
     backend: &str,
     case: &Case,
     mode: Accuracy,
+    rule: Rule,
+    reference: &values::Reference,
     got: &Multiplicities,
     notes: &Notes,
 ) -> Result<(), String> {
@@ -194,48 +214,35 @@ fn check(
     if !got.silhouettes_consistent() {
         return Err("compact silhouette lists do not list exactly the edges with m != 0".into());
     }
-    let mut cpu = CpuBackend::new();
-    let (reference, _) = extract_once(&mut cpu, &case.scene, &case.lights, mode)
-        .map_err(|e| format!("cpu reference failed: {e}"))?;
     let open: Vec<usize> = (0..case.lights.len())
         .map(|l| invariant::open_vertices_scene(&case.scene, got, l))
         .collect();
-    let differing: Vec<usize> = (0..case.lights.len())
-        .map(|l| invariant::differing_edges(got, &reference, l))
-        .collect();
-    match mode {
-        Accuracy::Exact => {
-            if let Some((l, e, g, want)) = invariant::first_difference(got, &reference) {
-                return Err(format!(
-                    "exact differs from cpu: light {l} ({}), {}: m = {g}, cpu m = {want}; \
-                     differing edges per light: {differing:?}",
-                    case.lights[l],
-                    edge_label(&case.scene, e)
-                ));
-            }
-            if open.iter().any(|&o| o != 0) {
-                return Err(format!("exact leaves open vertices per light: {open:?}"));
-            }
-        }
-        Accuracy::Robust | Accuracy::Ordered => {
-            if open.iter().any(|&o| o != 0) {
-                return Err(format!("{mode} leaves open vertices per light: {open:?}"));
-            }
-            if differing.iter().any(|&d| d != 0) {
-                notes.lock().unwrap().push(format!(
-                    "{backend:>7} {:<24} {mode:<8} differs from cpu {mode} on edges per light {differing:?} (allowed: f32 evaluation order)",
-                    case.name
-                ));
-            }
-        }
-        Accuracy::Original if open.iter().all(|&o| o == 0) && differing.iter().all(|&d| d == 0) => {
-        }
-        Accuracy::Original => {
-            notes.lock().unwrap().push(format!(
-                "{backend:>7} {:<24} original open vertices per light {open:?}, edges differing from cpu original {differing:?}",
-                case.name
-            ));
-        }
+    if mode.is_consistent() && open.iter().any(|&o| o != 0) {
+        return Err(format!("{mode} leaves open vertices per light: {open:?}"));
+    }
+    // The certified comparison holds on every device; the bit-exact one adds every other edge.
+    let mut compared = values::check(
+        &case.scene,
+        &case.lights,
+        mode,
+        Rule::Certified,
+        reference,
+        got,
+    )?;
+    if rule == Rule::BitExact {
+        compared = values::check(&case.scene, &case.lights, mode, rule, reference, got)?;
+    }
+    if mode == Accuracy::Original && open.iter().any(|&o| o != 0) {
+        notes.lock().unwrap().push(format!(
+            "{backend:>7} {:<24} original open vertices per light {open:?}",
+            case.name
+        ));
+    }
+    if rule == Rule::Certified && mode != Accuracy::Exact {
+        notes
+            .lock()
+            .unwrap()
+            .push(format!("{backend:>7} {:<24} {compared}", case.name));
     }
     Ok(())
 }
@@ -308,6 +315,7 @@ fn main() {
     cases.push(bunny_case());
     cases.extend(empty_cases());
     let cases = Arc::new(cases);
+    let references: References = Arc::new(cases.iter().map(|_| Default::default()).collect());
     let notes: Notes = Arc::default();
 
     // Start every backend in parallel, then wait for each to report.
@@ -334,19 +342,42 @@ fn main() {
                 START_TIMEOUT.as_secs()
             ))
         });
-        match &started {
-            Started::Yes { device, .. } => eprintln!("  {:>7}: available: {device}", entry.name),
+        let rule = match &started {
+            Started::Yes { device, .. } => {
+                let rule = Rule::for_device(entry.name, device);
+                eprintln!(
+                    "  {:>7}: available: {device} (f32 modes: {} rule)",
+                    entry.name,
+                    rule.name()
+                );
+                Some(rule)
+            }
             Started::NotCompiled(r) | Started::No(r) => {
                 eprintln!("  {:>7}: UNAVAILABLE: {r}", entry.name);
+                None
             }
-        }
+        };
         for (ci_idx, case) in cases.iter().enumerate() {
             for mode in Accuracy::ALL {
-                let name = format!("conformance::{}::{}::{}", entry.name, case.name, mode);
+                // The rule that applies is part of the name: `oracle` for exact (always bit for
+                // bit against the big-integer oracle), `bit-exact` or `certified` for the f32
+                // modes (see `support/values.rs`).
+                let name = match rule {
+                    Some(_) if mode == Accuracy::Exact => {
+                        format!("conformance::{}::{}::{mode}::oracle", entry.name, case.name)
+                    }
+                    Some(r) => format!(
+                        "conformance::{}::{}::{mode}::{}",
+                        entry.name,
+                        case.name,
+                        r.name()
+                    ),
+                    None => format!("conformance::{}::{}::{mode}", entry.name, case.name),
+                };
                 known_names.push(name.clone());
                 let xfail = EXPECTED_FAILURES.iter().find(|(n, _)| *n == name);
                 let trial = match &started {
-                    Started::NotCompiled(reason) => {
+                    Started::NotCompiled(reason) if !ci => {
                         let why = format!("{}: {reason}", entry.name);
                         Trial::ignorable_test(name, move || Ok(Completion::ignored_with(why)))
                     }
@@ -354,9 +385,9 @@ fn main() {
                         let why = format!("{} unavailable: {reason}", entry.name);
                         Trial::ignorable_test(name, move || Ok(Completion::ignored_with(why)))
                     }
-                    Started::No(reason) => {
+                    Started::No(reason) | Started::NotCompiled(reason) => {
                         let why = format!(
-                            "{} unavailable (CI=true, so this fails): {reason}",
+                            "{} unavailable (CI is set, so this fails): {reason}",
                             entry.name
                         );
                         Trial::test(name, move || Err(Failed::from(why)))
@@ -365,6 +396,8 @@ fn main() {
                         let jobs = jobs.clone();
                         let cases = Arc::clone(&cases);
                         let notes = Arc::clone(&notes);
+                        let references = Arc::clone(&references);
+                        let rule = rule.expect("a started backend has a rule");
                         let backend = entry.name;
                         let xfail_reason = xfail.map(|(_, why)| *why);
                         Trial::test(name, move || {
@@ -386,7 +419,12 @@ fn main() {
                                             cases[ci_idx].name, stats.uncertain
                                         ));
                                     }
-                                    check(backend, &cases[ci_idx], mode, &m, &notes)
+                                    let case = &cases[ci_idx];
+                                    let reference = references[ci_idx][mode_index(mode)]
+                                        .get_or_init(|| {
+                                            values::reference(&case.scene, &case.lights, mode)
+                                        });
+                                    check(backend, case, mode, rule, reference, &m, &notes)
                                 });
                             match (outcome, xfail_reason) {
                                 (Ok(()), None) => Ok(()),
@@ -436,36 +474,70 @@ fn main() {
                 .ok_or("no case with edges")?;
             let notes: Notes = Arc::default();
             let mut cpu = CpuBackend::new();
-            for mode in [Accuracy::Exact, Accuracy::Robust] {
+            for (mode, rule) in Accuracy::ALL
+                .into_iter()
+                .flat_map(|m| [(m, Rule::BitExact), (m, Rule::Certified)])
+            {
+                let reference = values::reference(&case.scene, &case.lights, mode);
                 let (good, _) = extract_once(&mut cpu, &case.scene, &case.lights, mode)
                     .map_err(|e| e.to_string())?;
-                check("self-test", case, mode, &good, &notes)?;
-                // A changed multiplicity (with its list kept consistent): exact must see the
-                // difference, robust the open chain.
+                check("self-test", case, mode, rule, &reference, &good, &notes)?;
+                let corrupt = |bad: &Multiplicities, what: &str| {
+                    if check("self-test", case, mode, rule, &reference, bad, &notes).is_ok() {
+                        Err(format!(
+                            "{mode}, {} rule: {what} went unnoticed",
+                            rule.name()
+                        ))
+                    } else {
+                        Ok(())
+                    }
+                };
+                // A changed multiplicity (with its list kept consistent).
                 let mut bad = good.clone();
                 bad.values_mut(0)[0] += 1;
                 bad.rebuild_silhouettes();
-                if check("self-test", case, mode, &bad, &notes).is_ok() {
-                    return Err(format!("{mode}: a changed multiplicity went unnoticed").into());
-                }
+                corrupt(&bad, "a changed multiplicity")?;
+                // Every sign negated, and every sign 0: both close every chain.
+                let mut bad = good.clone();
+                bad.all_values_mut().iter_mut().for_each(|m| *m = -*m);
+                bad.rebuild_silhouettes();
+                corrupt(&bad, "a negated result")?;
+                let bad = Multiplicities::zeroed(good.edge_count(), good.light_count());
+                corrupt(&bad, "an all-zero result")?;
                 // A compact list that does not match the values.
                 let mut bad = good.clone();
                 bad.set_silhouette(0, vec![]);
                 if good.silhouette(0).is_empty() {
                     bad.set_silhouette(0, vec![0]);
                 }
-                if check("self-test", case, mode, &bad, &notes).is_ok() {
-                    return Err(
-                        format!("{mode}: an inconsistent compact list went unnoticed").into(),
-                    );
-                }
+                corrupt(&bad, "an inconsistent compact list")?;
                 // A result of the wrong shape.
                 let bad = Multiplicities::zeroed(case.scene.total_edges() + 1, case.lights.len());
-                if check("self-test", case, mode, &bad, &notes).is_ok() {
-                    return Err(format!("{mode}: a wrongly sized result went unnoticed").into());
-                }
+                corrupt(&bad, "a wrongly sized result")?;
             }
             Ok(())
+        },
+    ));
+    // The corpus must make the exact fallback answer both signs, so that exact mode's trials
+    // check the fallback of every backend (and of `cpu`) against the oracle, not only zeros.
+    let fallback_cases = Arc::clone(&cases);
+    trials.push(Trial::test(
+        "conformance::corpus_reaches_exact_fallback_with_both_signs",
+        move || {
+            let mut total = [0; 3];
+            for c in fallback_cases.iter() {
+                let n = values::fallback_signs(&c.scene, &c.lights);
+                (0..3).for_each(|i| total[i] += n[i]);
+            }
+            if total[0] > 0 && total[2] > 0 {
+                Ok(())
+            } else {
+                Err(format!(
+                    "pairs left to the exact fallback by sign [-1, 0, +1]: {total:?}; \
+                     the corpus needs both non-zero answers"
+                )
+                .into())
+            }
         },
     ));
     let case_count = cases.len();
@@ -488,7 +560,7 @@ fn main() {
         let mut notes = notes;
         notes.sort();
         eprintln!(
-            "\nreported, not asserted (original is the baseline; f32 modes may differ from cpu):"
+            "\nreported, not asserted (original's open vertices: it is the baseline; what the certified rule compared):"
         );
         for n in notes {
             eprintln!("  {n}");

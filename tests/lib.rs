@@ -1,7 +1,8 @@
 //! Cross-backend conformance tests for shadowvol.
 //!
 //! The tests live in `conformance.rs` (a `harness = false` test built on `libtest-mimic`): one
-//! test per (backend, corpus case, accuracy mode), named `conformance::<backend>::<case>::<mode>`,
+//! test per (backend, corpus case, accuracy mode), named
+//! `conformance::<backend>::<case>::<mode>::<rule>` (the rule is in `conformance.rs`),
 //! generated from the backend registry (`shadowvol::backends()`) and the shared corpus
 //! (`shadowvol_silhouette::corpus::cases()`). Run them with
 //!
@@ -9,6 +10,7 @@
 //! cargo test -p shadowvol-tests                      # all backends (features on by default)
 //! cargo test -p shadowvol-tests -- conformance::wgpu  # one backend
 //! CI=true cargo test -p shadowvol-tests               # an unavailable backend fails instead of skipping
+//!                                                    # (CI=1 and CI=True alike)
 //! ```
 //!
 //! This library itself is empty; it exists so that the package can carry the backend features.

@@ -14,6 +14,10 @@
 //! 5. **test**: `cargo test --workspace` (with `CI=true`, the conformance tests fail for a backend
 //!    that cannot start instead of skipping it).
 //! 6. **shaders**: `cargo xtask shaders --check` (the committed SPIR-V matches the GLSL).
+//! 7. **fuzz**: each fuzz target (`fuzz/`, its own workspace) built and run for [`FUZZ_SECONDS`]
+//!    seconds on its seed corpus with `cargo fuzz run --dev --sanitizer none` (stable Rust is
+//!    enough). Without `cargo-fuzz` the targets are only `cargo check`ed, and the step says what
+//!    to install and warns, or fails under CI.
 
 use std::path::Path;
 use std::process::Command;
@@ -37,7 +41,40 @@ const APT_PACKAGES: &[&str] = &[
 ];
 
 /// The steps, in the order they run (the names `--skip` takes).
-const STEPS: [&str; 6] = ["drivers", "fmt", "clippy", "docs", "test", "shaders"];
+const STEPS: [&str; 7] = [
+    "drivers", "fmt", "clippy", "docs", "test", "shaders", "fuzz",
+];
+
+/// Seconds each fuzz target runs in the `fuzz` step: enough to load and run its seeds and some
+/// mutations, cheap on two cores.
+const FUZZ_SECONDS: u32 = 4;
+
+/// The fuzz targets and their seed folders (relative to `fuzz/`), as in `fuzz/run_all.sh`.
+const FUZZ_TARGETS: &[(&str, &[&str])] = &[
+    (
+        "obj_loader",
+        &[
+            "../crates/scenes/tests/data",
+            "../crates/cli/tests/data/malformed",
+            "../assets",
+        ],
+    ),
+    (
+        "gltf_loader",
+        &[
+            "../crates/scenes/tests/data",
+            "../crates/cli/tests/data/malformed",
+            "../crates/scenes/tests/data/real",
+        ],
+    ),
+    ("stl_loader", &["../crates/scenes/tests/data/real"]),
+    ("ply_loader", &["../crates/scenes/tests/data/real"]),
+    ("meshopt_decode", &[]),
+    ("topology", &[]),
+    ("exact_predicate", &[]),
+    ("pipeline", &[]),
+    ("simd_differential", &[]),
+];
 
 const USAGE: &str =
     "cargo xtask test [--no-drivers] [--skip STEP]... [-p PACKAGE]... [-- CARGO_TEST_ARGS...]
@@ -50,10 +87,13 @@ Runs, in order, and prints a summary:
   docs     RUSTDOCFLAGS=\"-D warnings\" cargo doc --workspace --no-deps
   test     cargo test --workspace [CARGO_TEST_ARGS]
   shaders  cargo xtask shaders --check
+  fuzz     build and run each fuzz target a few seconds on its seeds (cargo fuzz run
+           --dev --sanitizer none); without cargo-fuzz only cargo check them and say
+           what to install (`cargo install cargo-fuzz`; a failure under CI)
 
 Options:
   --no-drivers   same as --skip drivers
-  --skip STEP    skip a step (drivers, fmt, clippy, docs, test, shaders); repeatable
+  --skip STEP    skip a step (drivers, fmt, clippy, docs, test, shaders, fuzz); repeatable
   -p PACKAGE     clippy, docs and test only PACKAGE instead of --workspace; repeatable
 
 Environment:
@@ -180,6 +220,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
             Err(e) => Outcome::Failed(e),
         },
     );
+    step("fuzz", &mut || fuzz(&root, ci));
 
     println!("\n==> summary");
     let mut failed = 0;
@@ -467,9 +508,108 @@ fn drivers(ci: bool) -> Outcome {
     }
 }
 
+/// Whether `cargo fuzz` can run here.
+fn cargo_fuzz_available() -> bool {
+    Command::new(crate::cargo())
+        .args(["fuzz", "--version"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// The `fuzz` step: the targets must compile, and each must run its seeds without a crash.
+fn fuzz(root: &Path, ci: bool) -> Outcome {
+    let dir = root.join("fuzz");
+    if !cargo_fuzz_available() {
+        // At least the targets must compile.
+        let manifest = dir.join("Cargo.toml");
+        let manifest = manifest.to_string_lossy();
+        let check = ["check", "--manifest-path", &manifest, "--bins"];
+        if let Outcome::Failed(e) = cargo_step(root, &check, &[]) {
+            return Outcome::Failed(e);
+        }
+        let msg = "cargo-fuzz is not installed, so the fuzz targets were only checked: \
+                   install it with `cargo install cargo-fuzz` (stable Rust is enough)";
+        return if ci {
+            Outcome::Failed(format!("{msg} (CI is set, so this fails)"))
+        } else {
+            Outcome::Warned(msg.to_owned())
+        };
+    }
+    // `cargo fuzz run` builds every target first (a debug build: cheaper than release, and
+    // more than `cargo check`).
+    // New inputs go to a scratch corpus per target (libFuzzer writes to the first folder), so
+    // the seed folders stay as they are.
+    let scratch = std::env::temp_dir().join(format!("shadowvol-fuzz-{}", std::process::id()));
+    let mut failures = Vec::new();
+    for (target, seeds) in FUZZ_TARGETS {
+        let corpus = scratch.join(target);
+        if let Err(e) = std::fs::create_dir_all(&corpus) {
+            return Outcome::Failed(format!("cannot create {}: {e}", corpus.display()));
+        }
+        let corpus = corpus.to_string_lossy().into_owned();
+        let time = format!("-max_total_time={FUZZ_SECONDS}");
+        let mut args = vec![
+            "fuzz",
+            "run",
+            "--dev",
+            "--sanitizer",
+            "none",
+            target,
+            &corpus,
+        ];
+        args.extend(seeds.iter().copied());
+        args.extend(["--", &time]);
+        println!("$ (cd fuzz && cargo {})", args.join(" "));
+        let status = Command::new(crate::cargo())
+            .current_dir(&dir)
+            .args(&args)
+            .status();
+        match status {
+            Ok(s) if s.success() => {}
+            Ok(s) => failures.push(format!(
+                "{target} ({s}; the input is in fuzz/artifacts/{target}/)"
+            )),
+            Err(e) => failures.push(format!("{target}: cannot run cargo fuzz: {e}")),
+        }
+    }
+    let _ = std::fs::remove_dir_all(&scratch);
+    if failures.is_empty() {
+        Outcome::Passed
+    } else {
+        Outcome::Failed(format!("fuzz targets failed: {}", failures.join("; ")))
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{rustdocflags, TestCounts, STEPS, USAGE};
+    use super::{rustdocflags, TestCounts, FUZZ_TARGETS, STEPS, USAGE};
+
+    #[test]
+    fn every_fuzz_target_is_run_and_its_seeds_exist() {
+        let fuzz = crate::project_root().join("fuzz");
+        let manifest = std::fs::read_to_string(fuzz.join("Cargo.toml")).unwrap();
+        let bins = manifest
+            .lines()
+            .filter_map(|l| l.trim().strip_prefix("name = \""))
+            .filter_map(|l| l.strip_suffix('"'))
+            .filter(|n| *n != "shadowvol-fuzz")
+            .collect::<Vec<_>>();
+        assert!(bins.len() >= 9, "{bins:?}");
+        for b in &bins {
+            assert!(
+                FUZZ_TARGETS.iter().any(|(t, _)| t == b),
+                "fuzz target {b} is not run by the fuzz step"
+            );
+        }
+        for (t, seeds) in FUZZ_TARGETS {
+            assert!(bins.contains(t), "{t} is not a fuzz target");
+            for s in *seeds {
+                assert!(fuzz.join(s).is_dir(), "{t}: no seed folder {s}");
+            }
+        }
+    }
 
     #[test]
     fn docs_step_denies_warnings_on_top_of_the_callers_flags() {

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{json_of, run};
+use common::{available_backends, json_of, run};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -124,16 +124,6 @@ fn edges_of(light: &Value) -> Vec<(u64, u64, i64)> {
                 e[2].as_i64().unwrap(),
             )
         })
-        .collect()
-}
-
-fn available_backends() -> Vec<String> {
-    let v = json_of(&["backends", "--format", "json"]);
-    v.as_array()
-        .unwrap()
-        .iter()
-        .filter(|b| b["available"] == Value::Bool(true))
-        .map(|b| b["name"].as_str().unwrap().to_owned())
         .collect()
 }
 

@@ -7,6 +7,8 @@
 //! off a plane), the edge naming of the JSON (welded names, `a < b`, sorted, only `m != 0`),
 //! `open_vertices`, and `exact` on every available backend through the CLI.
 
+mod common;
+
 use glam::Affine3A;
 use serde_json::Value;
 use shadowvol_cpu::CpuBackend;
@@ -29,21 +31,11 @@ fn json(args: &[String]) -> Value {
     serde_json::from_slice(&out.stdout).expect("JSON")
 }
 
-fn available_backends() -> Vec<String> {
-    let v = json(&["backends".into(), "--format".into(), "json".into()]);
-    v.as_array()
-        .unwrap()
-        .iter()
-        .filter(|b| b["available"] == Value::Bool(true))
-        .map(|b| b["name"].as_str().unwrap().to_owned())
-        .collect()
-}
-
 #[test]
 fn corpus_cases_through_the_cli_match_the_library() {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli-corpus");
     std::fs::create_dir_all(&dir).unwrap();
-    let backends = available_backends();
+    let backends = common::available_backends();
     let mut exported = 0;
     for case in corpus::cases() {
         if case.objects.len() != 1 || case.objects[0].1 != Affine3A::IDENTITY {

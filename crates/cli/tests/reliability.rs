@@ -11,6 +11,8 @@
 //! * GPU failures (a kernel that does not build, a result buffer beyond the device's limit) are
 //!   errors with exit code 1, never panics.
 
+mod common;
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -75,16 +77,6 @@ fn json_ok(args: &[&str]) -> Value {
 }
 
 /// The backends `shadowvol backends` reports as available here, in registry order.
-fn available_backends() -> Vec<String> {
-    let rows = json_ok(&["backends", "--format", "json"]);
-    rows.as_array()
-        .expect("an array")
-        .iter()
-        .filter(|r| r["available"] == true)
-        .map(|r| r["name"].as_str().unwrap().to_owned())
-        .collect()
-}
-
 #[test]
 fn malformed_inputs_fail_clearly_fast_and_without_panic() {
     // (file, parts the message must contain besides the file name and "error:").
@@ -383,7 +375,7 @@ fn subnormal_coordinates_are_accepted_and_exact_on_every_backend() {
         lights.len()
     );
 
-    let available = available_backends();
+    let available = common::available_backends();
     assert!(available.iter().any(|b| b == "cpu"));
     for backend in &available {
         let mut a = args.clone();
@@ -446,9 +438,11 @@ fn memory_estimate_refuses_big_tables_with_the_numbers() {
 
 #[test]
 fn opencl_kernel_build_failure_is_an_error_not_a_panic() {
-    if !available_backends().iter().any(|b| b == "opencl") {
-        eprintln!("SKIP: opencl is not available here");
-        return;
+    if !common::available_backends().iter().any(|b| b == "opencl") {
+        return common::skip(
+            "opencl_kernel_build_failure_is_an_error_not_a_panic",
+            "no opencl",
+        );
     }
     let bad = write_tmp(
         "broken.cl",
@@ -495,13 +489,13 @@ fn oversized_device_buffers_are_a_limit_error_or_work() {
     // 150,000 edges x 240 lights x 4 bytes = 144 MB of multiplicities: more than lavapipe's
     // 128 MiB maxStorageBufferRange. A backend either splits the lights or refuses with the
     // numbers (BackendError::Limit, exit 1); it never panics.
-    let available = available_backends();
+    let available = common::available_backends();
     let lights: Vec<String> = (0..240)
         .map(|i| format!("--light={},5,{},1", i % 17 - 8, i / 17))
         .collect();
     for backend in ["vulkan"] {
         if !available.iter().any(|b| b == backend) {
-            eprintln!("SKIP: {backend} is not available here");
+            common::skip(backend, "not available here");
             continue;
         }
         let mut args = vec![

@@ -239,6 +239,30 @@ mod tests {
     }
 
     #[test]
+    fn mode_names_parse_back_and_consistency() {
+        let names = Accuracy::ALL.map(Accuracy::name);
+        assert_eq!(names, ["original", "robust", "ordered", "exact"]);
+        for m in Accuracy::ALL {
+            assert_eq!(m.name().parse::<Accuracy>(), Ok(m));
+            assert_eq!(m.to_string(), m.name());
+            assert_eq!(m.is_consistent(), m != Accuracy::Original);
+        }
+        assert_eq!(" ROBUST ".parse::<Accuracy>(), Ok(Accuracy::Robust));
+        assert!("fast".parse::<Accuracy>().is_err());
+    }
+
+    #[test]
+    fn light_accessors_and_text() {
+        let p = Light::new(1.0, 2.0, 3.0, 1.0).unwrap();
+        let d = Light::new(0.0, 0.0, -1.5, 0.0).unwrap();
+        assert!(!p.is_directional() && d.is_directional());
+        assert_eq!(p.to_vec4(), glam::Vec4::new(1.0, 2.0, 3.0, 1.0));
+        assert_eq!(<[f32; 4]>::from(d), [0.0, 0.0, -1.5, 0.0]);
+        assert_eq!(d.to_string(), "0,0,-1.5,0");
+        assert_eq!(d.to_string().parse::<Light>().unwrap(), d);
+    }
+
+    #[test]
     fn light_parse_errors() {
         assert!("1,2,3".parse::<Light>().is_err());
         assert!("1,2,x,1".parse::<Light>().is_err());

@@ -505,3 +505,155 @@ proptest! {
         }
     }
 }
+
+// ---- the f32 modes against an emulated evaluation ---------------------------------------------
+
+/// The mode's rule, written here: `original` evaluates `(a, b, o)` as given; `ordered` the
+/// canonical order (ids sorted) times the parity of the sorting permutation (inversions
+/// counted); `robust` the three rotations of the canonical order, 0 unless they agree, times the
+/// parity. Each evaluation is [`oracle::sign_f32_emulated`].
+fn mode_rule(mode: Accuracy, p: &[P3], a: u32, b: u32, o: u32, l: L4) -> i8 {
+    let ids = [a, b, o];
+    let inversions = (0..3)
+        .flat_map(|i| (i + 1..3).map(move |j| (i, j)))
+        .filter(|&(i, j)| ids[i] > ids[j])
+        .count();
+    let parity = if inversions % 2 == 0 { 1 } else { -1 };
+    let mut c = ids;
+    c.sort_unstable();
+    let ev = |x: u32, y: u32, z: u32| {
+        oracle::sign_f32_emulated(p[x as usize], p[y as usize], l, p[z as usize])
+    };
+    match mode {
+        Accuracy::Original => ev(a, b, o),
+        Accuracy::Ordered => ev(c[0], c[1], c[2]) * parity,
+        Accuracy::Robust => {
+            let s = [
+                ev(c[0], c[1], c[2]),
+                ev(c[1], c[2], c[0]),
+                ev(c[2], c[0], c[1]),
+            ];
+            if s[0] == s[1] && s[1] == s[2] {
+                s[0] * parity
+            } else {
+                0
+            }
+        }
+        Accuracy::Exact => oracle::sign_exact(p[a as usize], p[b as usize], l, p[o as usize]),
+    }
+}
+
+#[test]
+fn emulated_f32_rounds_like_the_hardware() {
+    // The emulation itself: single operations on awkward values, subnormal results included.
+    let mut rng = Rng(99);
+    let vals = |rng: &mut Rng| {
+        let m = rng.unit();
+        let e = rng.below(60) as i32 - 30;
+        m * 2f32.powi(e)
+    };
+    for _ in 0..20_000 {
+        let (x, y) = (vals(&mut rng), vals(&mut rng));
+        let ex = |f: fn(&oracle::Exact, &oracle::Exact) -> oracle::Exact| {
+            f(&oracle::Exact::of(x), &oracle::Exact::of(y)).round()
+        };
+        assert_eq!(
+            ex(oracle::Exact::add).to_bits(),
+            (x + y).to_bits(),
+            "{x} + {y}"
+        );
+        assert_eq!(
+            ex(oracle::Exact::sub).to_bits(),
+            (x - y).to_bits(),
+            "{x} - {y}"
+        );
+        let p = ex(oracle::Exact::mul);
+        assert!(p == x * y, "{x} * {y}: {p} vs {}", x * y);
+    }
+    let tiny = f32::MIN_POSITIVE;
+    for (x, y) in [
+        (tiny, 0.75),
+        (tiny * 3.0, 0.5),
+        (1e-30, 1e-15),
+        (tiny, tiny),
+    ] {
+        let p = oracle::Exact::of(x).mul(&oracle::Exact::of(y)).round();
+        assert_eq!(p.to_bits(), (x * y).to_bits(), "{x:e} * {y:e}");
+    }
+}
+
+#[test]
+fn f32_modes_equal_the_emulated_evaluation_and_their_rules() {
+    let mut rng = Rng(2024);
+    let (mut robust_zeros, mut wrong_vs_exact, mut total) = (0, 0, 0);
+    for i in 0..3000 {
+        let offset = [0.0, 1.0, 1e4, -1e4, 3.0e5][i % 5];
+        let scale = [1.0, 1e-3, 10.0][i % 3];
+        let p = [
+            rng.p3(scale, offset),
+            rng.p3(scale, offset),
+            rng.p3(scale, offset),
+        ];
+        // A light in (or near) the plane of the triangle, or a directional light along an edge.
+        let mut lp = lerp3(p[0], p[1], p[2], rng.unit() * 3.0, rng.unit() * 3.0);
+        let c = rng.below(3) as usize;
+        lp[c] = ulps(lp[c], rng.below(5) as i32 - 2);
+        let l = if i % 4 == 3 {
+            let d = [0, 1, 2].map(|c| p[1][c] - p[0][c]);
+            [d[0], d[1], d[2], 0.0]
+        } else {
+            [lp[0], lp[1], lp[2], 1.0]
+        };
+        let positions: Vec<glam::Vec3> = p.iter().map(|&q| glam::Vec3::from_array(q)).collect();
+        // The three (edge, opposite vertex) pairs of the triangle: o > b, a < o < b, o < a.
+        for (a, b, o) in [(0, 1, 2), (0, 2, 1), (1, 2, 0)] {
+            for mode in [Accuracy::Original, Accuracy::Ordered, Accuracy::Robust] {
+                let want = mode_rule(mode, &p, a, b, o, l);
+                let got = ov_sign(mode, &positions, a, b, o, l);
+                assert_eq!(
+                    got, want,
+                    "{mode} s({a}, {b}, {o}) with positions {p:?}, light {l:?}"
+                );
+                total += 1;
+                if mode == Accuracy::Robust
+                    && got == 0
+                    && mode_rule(Accuracy::Ordered, &p, a, b, o, l) != 0
+                {
+                    robust_zeros += 1;
+                }
+                if got != mode_rule(Accuracy::Exact, &p, a, b, o, l) {
+                    wrong_vs_exact += 1;
+                }
+            }
+        }
+    }
+    // The family must be hard: the modes often differ from exact, and robust's disagreement
+    // rule decides many triangles (0 where ordered's evaluation is not).
+    assert!(wrong_vs_exact > total / 50, "{wrong_vs_exact} of {total}");
+    assert!(
+        robust_zeros > 100,
+        "{robust_zeros} triangles whose evaluations disagree"
+    );
+}
+
+#[test]
+fn filters_certify_well_conditioned_inputs() {
+    // Triangles in [-1, 1]^3 with a light anywhere in [-4, 4]^3 (point or directional): both
+    // filters must decide nearly all of them. A filter that is always uncertain is correct but
+    // sends every pair to the exact fallback (the host, on the GPU backends).
+    let mut rng = Rng(5);
+    let (mut by_f32, mut by_f64, mut n) = (0, 0, 0);
+    for i in 0..3000 {
+        let (a, b, o) = (rng.p3(1.0, 0.0), rng.p3(1.0, 0.0), rng.p3(1.0, 0.0));
+        let w = if i % 3 == 0 { 0.0 } else { 1.0 };
+        let l = [rng.unit() * 4.0, rng.unit() * 4.0, rng.unit() * 4.0, w];
+        if check(a, b, l, o) == 0 {
+            continue;
+        }
+        n += 1;
+        by_f32 += usize::from(orient_filter_f32(a, b, l, o).is_some());
+        by_f64 += usize::from(orient_filter_f64(a, b, l, o).is_some());
+    }
+    assert!(by_f32 * 10 > n * 9, "f32 filter decided {by_f32} of {n}");
+    assert!(by_f64 * 100 > n * 99, "f64 filter decided {by_f64} of {n}");
+}

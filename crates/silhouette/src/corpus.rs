@@ -637,6 +637,44 @@ fn homogeneous_w() -> CorpusCase {
     )
 }
 
+/// A flat sheet of three triangles on the tilted plane `x + 2y + 3z = 6` (integer vertices, all
+/// with `y >= 1`), scaled by `2^k`, with a point light exactly in the plane beside the sheet, at
+/// `(12, 0, -2)`, then moved off it along y by `+2^e` and `-2^e` (times `2^k`) for each `e` in
+/// `offsets`. The light's y is 0 in the plane, so `2^e` is the smallest step there is at that
+/// exponent: one ulp of a coordinate near `2^(e+23)`.
+///
+/// Every vertex and the in-plane light are exact, so the in-plane light gives exactly 0. Off the
+/// plane the determinant is about `2^e` times its permanent, far below the `f64` filter's bound
+/// (`1e-15`, about `2^-50`), so the exact fallback decides each pair, and its answers are `+1`
+/// and `-1`. In `f32` the step vanishes in `L.y - A.y`, so the `f32` modes see an in-plane light.
+fn off_plane(name: &'static str, k: i32, offsets: &[i32]) -> CorpusCase {
+    let s = 2f32.powi(k);
+    let p = |x: f32, y: f32, z: f32| Vec3::new(x * s, y * s, z * s);
+    let mesh = Mesh {
+        positions: vec![
+            p(1.0, 1.0, 1.0),
+            p(4.0, 1.0, 0.0),
+            p(0.0, 3.0, 0.0),
+            p(3.0, 3.0, -1.0),
+            p(-2.0, 1.0, 2.0),
+        ],
+        triangles: vec![[0, 1, 2], [1, 0, 3], [2, 1, 4]],
+    };
+    let mut lights = vec![point_v(p(12.0, 0.0, -2.0))];
+    for &e in offsets {
+        for side in [1.0, -1.0] {
+            lights.push(point_v(p(12.0, side * 2f32.powi(e), -2.0)));
+        }
+    }
+    single(
+        name,
+        "a flat sheet with point lights beside it in its plane and a tiny step off it: the f64 filter leaves them undecided, the exact answers are +1 and -1",
+        mesh,
+        lights,
+        false,
+    )
+}
+
 /// All cases of the corpus, in a fixed order.
 #[must_use]
 pub fn cases() -> Vec<CorpusCase> {
@@ -669,6 +707,9 @@ pub fn cases() -> Vec<CorpusCase> {
         directional_parallel(),
         multi_object_transforms(),
         homogeneous_w(),
+        off_plane("off-plane-steps", 0, &[-60, -80, -100]),
+        off_plane("off-plane-steps-scaled-2e20", 20, &[-60, -80, -100]),
+        off_plane("off-plane-steps-scaled-2e-20", -20, &[-60, -80, -100]),
     ]
 }
 

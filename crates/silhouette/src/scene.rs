@@ -116,3 +116,114 @@ pub fn object_lights(scene: &TopologyScene, lights: &[Light]) -> Vec<Vec<[f32; 4
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{Quat, Vec3, Vec3A};
+
+    /// Brings light `l` into the object space of `t`, independently of `object_lights`: the inverse
+    /// of the 3x3 part from its adjugate (rows `c1 x c2`, `c2 x c0`, `c0 x c1` over the
+    /// determinant), applied to `l.xyz - w t`, in `f64`.
+    fn independent(t: Affine3A, l: [f32; 4]) -> ([f64; 3], f64) {
+        let c = [t.matrix3.x_axis, t.matrix3.y_axis, t.matrix3.z_axis].map(|v| v.as_dvec3());
+        let rows = [c[1].cross(c[2]), c[2].cross(c[0]), c[0].cross(c[1])];
+        let det = c[0].dot(rows[0]);
+        let w = f64::from(l[3]);
+        let rhs = DVec3::new(f64::from(l[0]), f64::from(l[1]), f64::from(l[2]))
+            - w * t.translation.as_dvec3();
+        let y = rows.map(|r| r.dot(rhs) / det);
+        // A bound on the absolute size of the terms, for the tolerance near 0.
+        let scale = rows.iter().map(|r| r.length()).sum::<f64>() / det.abs()
+            * (rhs.length() + w.abs() * t.translation.as_dvec3().length() + 1e-300);
+        (y, scale)
+    }
+
+    fn scene_of(transforms: &[Affine3A]) -> TopologyScene {
+        let table = Arc::new(
+            EdgeTable::build(
+                &shadowvol_mesh_topology::Mesh::new(
+                    vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+                    vec![[0, 1, 2]],
+                )
+                .unwrap(),
+            )
+            .unwrap(),
+        );
+        TopologyScene {
+            objects: transforms
+                .iter()
+                .enumerate()
+                .map(|(i, &t)| SceneObject {
+                    name: format!("o{i}"),
+                    table: Arc::clone(&table),
+                    world_from_object: t,
+                })
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn object_lights_match_an_independent_inverse() {
+        let rot = Quat::from_xyzw(1.0, 2.0, 3.0, 4.0).normalize();
+        let transforms = [
+            Affine3A::IDENTITY,
+            Affine3A::from_translation(Vec3::new(5.0, -3.0, 1e4)),
+            Affine3A::from_scale_rotation_translation(
+                Vec3::new(2.0, 0.5, 1.5),
+                rot,
+                Vec3::new(3.0, -1.0, 0.5),
+            ),
+            // A shear with a large translation.
+            Affine3A::from_cols(
+                Vec3A::new(1.0, 0.25, 0.0),
+                Vec3A::new(-0.5, 2.0, 0.125),
+                Vec3A::new(0.3, 0.0, 0.7),
+                Vec3A::new(-250.0, 1e3, 42.0),
+            ),
+        ];
+        let lights = [
+            Light::new(1.0, 2.0, 3.0, 1.0).unwrap(),
+            Light::new(0.3, -0.4, 1.0, 0.0).unwrap(),
+            Light::new(-7.5, 0.25, 2.0, 0.75).unwrap(),
+            Light::new(3.0, -1.0, 0.5, 1.0).unwrap(), // at the origin of one object
+            Light::new(1e-3, 2e-3, 4e-3, 1e-3).unwrap(),
+        ];
+        let scene = scene_of(&transforms);
+        let got = object_lights(&scene, &lights);
+        for (o, t) in transforms.iter().enumerate() {
+            for (i, l) in lights.iter().enumerate() {
+                let l = l.to_array();
+                let r = got[o][i];
+                assert_eq!(
+                    r[3].to_bits(),
+                    l[3].to_bits(),
+                    "w is kept: object {o}, light {i}"
+                );
+                let (want, scale) = independent(*t, l);
+                for c in 0..3 {
+                    // Rounded once from f64: within one f32 ulp of the exact value, up to the
+                    // f64 error of either computation.
+                    let ulp = f64::from((want[c] as f32).abs().next_up() - (want[c] as f32).abs());
+                    let err = (f64::from(r[c]) - want[c]).abs();
+                    assert!(
+                        err <= ulp + 1e-12 * scale,
+                        "object {o}, light {i}, component {c}: {} vs independent {} (err {err:e})",
+                        r[c],
+                        want[c]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn identity_transform_returns_the_light_unchanged() {
+        let lights = [Light::new(0.1, f32::MIN_POSITIVE, -3.0, 0.0).unwrap()];
+        let got = object_lights(&scene_of(&[Affine3A::IDENTITY]), &lights);
+        assert_eq!(
+            got[0][0].map(f32::to_bits),
+            lights[0].to_array().map(f32::to_bits)
+        );
+    }
+}

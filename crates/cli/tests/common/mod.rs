@@ -33,3 +33,34 @@ pub fn json_of(args: &[&str]) -> Value {
     );
     serde_json::from_slice(&out.stdout).expect("valid JSON on stdout")
 }
+
+/// The backends that `shadowvol backends` reports available, by name.
+///
+/// Under CI (`shadowvol_silhouette::ci::is_ci`: `CI=true`, `CI=True`, `CI=1`) every backend it
+/// lists must be available, so that a test looping over these never quietly tests fewer: an
+/// unavailable one fails the test with its reason. Elsewhere each missing one is named on a
+/// visible `SKIPPED` line.
+pub fn available_backends() -> Vec<String> {
+    let rows = json_of(&["backends", "--format", "json"]);
+    let mut available = Vec::new();
+    for r in rows.as_array().expect("an array") {
+        let name = r["name"].as_str().expect("a name").to_owned();
+        if r["available"] == Value::Bool(true) {
+            available.push(name);
+        } else {
+            skip(&format!("backend {name}"), &r["reason"].to_string());
+        }
+    }
+    available
+}
+
+/// A skip: fails the test under CI (`shadowvol_silhouette::ci::is_ci`), otherwise prints a
+/// `SKIPPED` line with the reason (on stdout and stderr, so it shows with or without capture).
+pub fn skip(what: &str, why: &str) {
+    assert!(
+        !shadowvol_silhouette::ci::is_ci(),
+        "{what} is unavailable, and CI is set, so this fails: {why}"
+    );
+    eprintln!("SKIPPED {what}: {why}");
+    println!("SKIPPED {what}: {why}");
+}

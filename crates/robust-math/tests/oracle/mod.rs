@@ -168,3 +168,127 @@ pub fn multiplicity(positions: &[[f32; 3]], a: u32, b: u32, ovs: &[u32], light: 
         })
         .sum()
 }
+
+// ---- an emulation of f32 arithmetic, exact big-integer operations rounded once -------------
+
+/// A finite `f32`-representable value `m * 2^e` kept exactly.
+#[derive(Clone, Debug)]
+pub struct Exact {
+    m: BigInt,
+    e: i32,
+}
+
+impl Exact {
+    /// The exact value of a finite `f32`.
+    pub fn of(x: f32) -> Exact {
+        let (m, e) = decompose(x);
+        Exact {
+            m: BigInt::from(m),
+            e,
+        }
+    }
+
+    fn aligned(&self, other: &Exact) -> (BigInt, BigInt, i32) {
+        let e = self.e.min(other.e);
+        (
+            &self.m << ((self.e - e) as usize),
+            &other.m << ((other.e - e) as usize),
+            e,
+        )
+    }
+
+    /// The exact sum.
+    pub fn add(&self, other: &Exact) -> Exact {
+        let (a, b, e) = self.aligned(other);
+        Exact { m: a + b, e }
+    }
+
+    /// The exact difference.
+    pub fn sub(&self, other: &Exact) -> Exact {
+        let (a, b, e) = self.aligned(other);
+        Exact { m: a - b, e }
+    }
+
+    /// The exact product.
+    pub fn mul(&self, other: &Exact) -> Exact {
+        Exact {
+            m: &self.m * &other.m,
+            e: self.e + other.e,
+        }
+    }
+
+    /// The sign, -1, 0 or 1.
+    pub fn sign(&self) -> i8 {
+        sign_of(&self.m)
+    }
+
+    /// Rounded to the nearest `f32`, ties to even, subnormals included (IEEE 754 binary32
+    /// round-to-nearest).
+    ///
+    /// # Panics
+    /// Panics when the rounded value overflows the `f32` range: the callers keep their inputs
+    /// where every intermediate is finite.
+    pub fn round(&self) -> f32 {
+        if self.m.sign() == Sign::NoSign {
+            return 0.0;
+        }
+        let negative = self.m.sign() == Sign::Minus;
+        let mag = self.m.magnitude().clone();
+        let bits = mag.bits() as i32;
+        // The exponent of the last significand bit: 24 bits, but never below 2^-149.
+        let q = (self.e + bits - 24).max(-149);
+        let r = if q <= self.e {
+            mag << ((self.e - q) as usize)
+        } else {
+            let shift = (q - self.e) as usize;
+            let r = &mag >> shift;
+            let rem = &mag - (&r << shift);
+            let half = num_bigint::BigUint::from(1u8) << (shift - 1);
+            let odd = r.bit(0);
+            if rem > half || (rem == half && odd) {
+                r + 1u8
+            } else {
+                r
+            }
+        };
+        let r = u64::try_from(r).expect("at most 2^24");
+        assert!(r <= 1 << 24);
+        let v = r as f64 * 2f64.powi(q);
+        assert!(v < 2f64.powi(128), "f32 overflow in the emulation");
+        let v = v as f32; // exact: r has at most 25 significant bits, and r = 2^24 is a power of 2
+        if negative {
+            -v
+        } else {
+            v
+        }
+    }
+}
+
+/// One `f32` operation emulated: exact result, rounded once.
+fn op(x: f32, y: f32, f: impl Fn(&Exact, &Exact) -> Exact) -> f32 {
+    f(&Exact::of(x), &Exact::of(y)).round()
+}
+
+/// The `f32` evaluation of `sgn(((A - B) x V) . (O - A))` with `V = L.xyz - L.w * A`, operation by
+/// operation in the documented order, every operation emulated by [`Exact`]:
+///
+/// ```text
+/// v = (lx - lw*ax, ly - lw*ay, lz - lw*az); e = A - B; d = O - A
+/// n = (ey*vz - ez*vy, ez*vx - ex*vz, ex*vy - ey*vx)
+/// s = sgn((nx*dx + ny*dy) + nz*dz)
+/// ```
+pub fn sign_f32_emulated(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> i8 {
+    let add = |x, y| op(x, y, Exact::add);
+    let sub = |x, y| op(x, y, Exact::sub);
+    let mul = |x, y| op(x, y, Exact::mul);
+    let v: Vec<f32> = (0..3).map(|i| sub(l[i], mul(l[3], a[i]))).collect();
+    let e: Vec<f32> = (0..3).map(|i| sub(a[i], b[i])).collect();
+    let d: Vec<f32> = (0..3).map(|i| sub(o[i], a[i])).collect();
+    let n = [
+        sub(mul(e[1], v[2]), mul(e[2], v[1])),
+        sub(mul(e[2], v[0]), mul(e[0], v[2])),
+        sub(mul(e[0], v[1]), mul(e[1], v[0])),
+    ];
+    let s = add(add(mul(n[0], d[0]), mul(n[1], d[1])), mul(n[2], d[2]));
+    Exact::of(s).sign()
+}

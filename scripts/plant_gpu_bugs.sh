@@ -1,0 +1,113 @@
+#!/usr/bin/env bash
+# Plants GPU-side bugs by hand, one at a time, in a scratch copy of the working tree, and checks
+# that each one makes at least one test fail (the tests CI runs, with CI=true, on the drivers of
+# this machine: lavapipe for wgpu and vulkan, PoCL for opencl).
+#
+#   scripts/plant_gpu_bugs.sh [SCRATCH_DIR]      (default: ${TMPDIR:-/tmp}/shadowvol-plant)
+#
+# Each mutant is one literal text replacement in a kernel source (WGSL, OpenCL C, GLSL; GLSL is
+# recompiled to SPIR-V in the scratch copy, as `cargo xtask shaders` does). The script
+# prints one line per mutant: KILLED (with the failing tests) or SURVIVED, and exits non-zero if
+# any mutant survived or could not be planted. The working tree itself is never modified.
+# CARGO_TARGET_DIR is honoured (a shared target dir keeps the registry dependencies built).
+set -euo pipefail
+
+root="$(cd "$(dirname "$0")/.." && pwd)"
+scratch="${1:-${TMPDIR:-/tmp}/shadowvol-plant}"
+export CI=true
+
+# The source file of the crate that embeds each kernel (include_str!/include_bytes!). Cargo
+# records a file outside the package by its absolute path, so a kernel planted in the scratch copy
+# would not be seen as changed: touching the embedding file rebuilds the crate.
+embedder() {
+  case "$1" in
+    shaders/*.wgsl) echo crates/wgpu-compute/src/shaders.rs ;;
+    kernels/*.cl) echo crates/opencl/src/lib.rs ;;
+    shaders/*.geom) echo crates/vulkan-geometry/src/pipelines.rs ;;
+  esac
+}
+
+# One mutant per line, tab-separated: name, file, original text, planted text, test targets.
+mutants="$(cat <<'LIST'
+wgsl-sign-negated	shaders/silhouette.wgsl	return s0 * parity;	return -s0 * parity;	conformance gpu_lavapipe
+wgsl-robust-rule-dropped	shaders/silhouette.wgsl	if s0 != s1 || s1 != s2 {	if false {	conformance gpu_lavapipe
+wgsl-f32-bound-shrunk	shaders/silhouette.wgsl	const F32_FILTER_EPS: f32 = 0x1p-19f;	const F32_FILTER_EPS: f32 = 0x1p-40f;	conformance gpu_lavapipe
+wgsl-f64-bound-shrunk	shaders/exact_f64.wgsl	const GPU_F64_FILTER_EPS: f64 = 8e-15lf;	const GPU_F64_FILTER_EPS: f64 = 1e-30lf;	conformance gpu_lavapipe
+opencl-sign-negated	kernels/silhouette.cl	s *= parity;	s *= -parity;	conformance device
+opencl-robust-rule-dropped	kernels/silhouette.cl	s = (s0 == s1 && s1 == s2) ? s0 : 0;	s = s0;	conformance device
+opencl-f32-bound-shrunk	kernels/silhouette.cl	#define SV_F32_FILTER_EPS 0x1.0p-19f	#define SV_F32_FILTER_EPS 0x1.0p-40f	conformance device
+opencl-f64-bound-shrunk	kernels/silhouette.cl	double bound = 1.0e-15 * perm;	double bound = 1.0e-30 * perm;	conformance device
+glsl-sign-negated	shaders/silhouette_gs.geom	s = t * parity;	s = -t * parity;	conformance
+glsl-robust-rule-dropped	shaders/silhouette_gs.geom	if (t != t1 || t1 != t2) {	if (false) {	conformance
+glsl-f32-bound-shrunk	shaders/silhouette_gs.geom	precise float bound = 1.9073486328125e-06 * perm;	precise float bound = 1.0e-12 * perm;	conformance
+glsl-f64-bound-shrunk	shaders/silhouette_gs.geom	precise double bound = 1.0e-15LF * perm;	precise double bound = 1.0e-30LF * perm;	conformance
+LIST
+)"
+
+echo "scratch copy: $scratch"
+rm -rf "$scratch"
+mkdir -p "$scratch"
+tar -C "$root" --exclude=./target --exclude=./.git --exclude=./fuzz/target -cf - . | tar -C "$scratch" -xf -
+cd "$scratch"
+
+# The unplanted copy must pass the same tests, or a kill would mean nothing.
+if ! cargo test --workspace --test conformance --test gpu_lavapipe --test device \
+  >"$scratch/plant-baseline.log" 2>&1; then
+  echo "baseline: the unplanted copy fails its tests; see $scratch/plant-baseline.log"
+  exit 2
+fi
+echo "baseline: the unplanted copy passes"
+
+only="${PLANT_ONLY:-}"   # optional: a substring of the mutant names to run
+survived=0
+while IFS=$'\t' read -r name file from to tests; do
+  [ -n "$only" ] && [[ "$name" != *"$only"* ]] && continue
+  cp "$root/$file" "$file"
+  count=$(grep -cF -- "$from" "$file" || true)
+  if [ "$count" -ne 1 ]; then
+    echo "$name: CANNOT PLANT: '$from' occurs $count times in $file (expected once)"
+    survived=$((survived + 1))
+    continue
+  fi
+  FROM="$from" TO="$to" perl -0pi -e 's/\Q$ENV{FROM}\E/$ENV{TO}/' "$file"
+  touch "$(embedder "$file")"
+  if [[ "$file" == *.geom ]]; then
+    # What `cargo xtask shaders` does for this source (not run here: a shared xtask binary
+    # would write into the working tree it was built from).
+    g() { glslangValidator -V --target-env vulkan1.1 "$@" shaders/silhouette_gs.geom >/dev/null; }
+    g -o shaders/silhouette_gs.geom.spv
+    g -DSHADOWVOL_NO_F64 -o shaders/silhouette_gs.f32.geom.spv
+    g -DSHADOWVOL_EXTRACT_ONLY -o shaders/silhouette_gs.extract.geom.spv
+    g -DSHADOWVOL_EXTRACT_ONLY -DSHADOWVOL_NO_F64 -o shaders/silhouette_gs.extract.f32.geom.spv
+  fi
+  args=()
+  for t in $tests; do args+=(--test "$t"); done
+  log="$scratch/plant-$name.log"
+  if cargo test --workspace --no-fail-fast "${args[@]}" >"$log" 2>&1; then
+    echo "$name: SURVIVED ($file: '$from' -> '$to'; tests: $tests)"
+    survived=$((survived + 1))
+  else
+    failed=$(grep -E '^test .* FAILED$' "$log" | sed -E 's/^test //; s/ +\.\.\. FAILED$//' | head -3 | tr '\n' ' ')
+    nfail=$(grep -cE '^test .* FAILED$' "$log" || true)
+    if [ "$nfail" -eq 0 ]; then
+      echo "$name: ERROR (no test failed, but cargo did; see $log)"
+      survived=$((survived + 1))
+    else
+      # Failing tests per test binary ("conformance.rs" is the cross-backend suite, tests/*.rs
+      # the crates' own).
+      per=$(awk '/^     Running /{bin=$2} /^test .* FAILED$/{n[bin]++} END{for (b in n) printf "%s %d, ", b, n[b]}' "$log")
+      echo "$name: KILLED ($nfail failing tests: ${per%, }; e.g. $failed)"
+    fi
+  fi
+  # Restore the file (and the SPIR-V) before the next mutant.
+  cp "$root/$file" "$file"
+  if [[ "$file" == *.geom ]]; then
+    cp "$root"/shaders/*.spv shaders/
+  fi
+  touch "$(embedder "$file")"
+done <<<"$mutants"
+
+# The scratch copy shares artifacts with the working tree (same target dir, same metadata):
+# rebuild them from the restored sources before leaving.
+cargo test --workspace --test conformance --test gpu_lavapipe --test device --no-run >/dev/null 2>&1
+[ "$survived" -eq 0 ]
