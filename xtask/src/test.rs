@@ -16,8 +16,9 @@
 //! 6. **shaders**: `cargo xtask shaders --check` (the committed SPIR-V matches the GLSL).
 //! 7. **fuzz**: each fuzz target (`fuzz/`, its own workspace) built and run for [`FUZZ_SECONDS`]
 //!    seconds on its seed corpus with `cargo fuzz run --dev --sanitizer none` (stable Rust is
-//!    enough). Without `cargo-fuzz` the targets are only `cargo check`ed, and the step says what
-//!    to install and warns, or fails under CI.
+//!    enough). A missing `cargo-fuzz` is installed with `cargo install` under CI or as root;
+//!    otherwise the targets are only `cargo check`ed and the step says what to install and
+//!    warns. Under CI a `cargo-fuzz` that still is not there fails the step.
 
 use std::path::Path;
 use std::process::Command;
@@ -88,8 +89,9 @@ Runs, in order, and prints a summary:
   test     cargo test --workspace [CARGO_TEST_ARGS]
   shaders  cargo xtask shaders --check
   fuzz     build and run each fuzz target a few seconds on its seeds (cargo fuzz run
-           --dev --sanitizer none); without cargo-fuzz only cargo check them and say
-           what to install (`cargo install cargo-fuzz`; a failure under CI)
+           --dev --sanitizer none); cargo-fuzz is installed with cargo install when
+           missing under CI or as root; otherwise the targets are only checked and the
+           step says what to install (`cargo install cargo-fuzz`)
 
 Options:
   --no-drivers   same as --skip drivers
@@ -521,6 +523,17 @@ fn cargo_fuzz_available() -> bool {
 /// The `fuzz` step: the targets must compile, and each must run its seeds without a crash.
 fn fuzz(root: &Path, ci: bool) -> Outcome {
     let dir = root.join("fuzz");
+    if !cargo_fuzz_available() && (ci || is_root()) {
+        // Like the drivers: installed where CI or root runs, so a fresh machine needs nothing.
+        println!("$ cargo install cargo-fuzz --locked");
+        let installed = Command::new(crate::cargo())
+            .args(["install", "cargo-fuzz", "--locked"])
+            .status()
+            .is_ok_and(|s| s.success());
+        if !installed {
+            eprintln!("cargo install cargo-fuzz failed");
+        }
+    }
     if !cargo_fuzz_available() {
         // At least the targets must compile.
         let manifest = dir.join("Cargo.toml");
