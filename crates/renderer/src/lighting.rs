@@ -1,11 +1,11 @@
 //! Light gains and exposure: how bright each light's lit pass is, in the renderer and in the
 //! reference alike.
 //!
-//! A light without an [`Emission`] (presets, `--light`, the default key light) is a unit light:
+//! A light without an [`Emission`](shadowvol_scenes::Emission) (presets, `--light`, the default key light) is a unit light:
 //! white, no distance falloff, gain `min(1.2 / lights, 0.85)`, so that several lights together
 //! do not burn out. A light with one (glTF `KHR_lights_punctual`) adds
 //! `albedo × colour × intensity × attenuation × exposure × cos θ`, where the attenuation is
-//! glTF's range window over `d²` and the cone's falloff ([`Emission::attenuation`]).
+//! glTF's range window over `d²` and the cone's falloff ([`Emission::attenuation`](shadowvol_scenes::Emission::attenuation)).
 //!
 //! [`Exposure::Auto`] scales so that the brightest light's nominal illuminance at the centre of
 //! the scene's bounds (intensity over distance², lux for directional lights; range and cone left
@@ -16,7 +16,6 @@
 //! factor per lux, so that a light's intensity shows in absolute terms too.
 
 use crate::RenderScene;
-use shadowvol_scenes::Emission;
 
 /// How lux map to the lit pass's output (linear, `1.0` = full 8-bit white on a white albedo).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -32,14 +31,14 @@ pub enum Exposure {
 /// this fraction of a unit light's gain, leaving headroom for surfaces nearer the light.
 pub const AUTO_TARGET: f64 = 0.6;
 
-/// The gain of a unit light (no [`Emission`]) among `n` lights.
+/// The gain of a unit light (no [`Emission`](shadowvol_scenes::Emission)) among `n` lights.
 #[must_use]
 pub fn unit_gain(n: usize) -> f32 {
     (1.2 / n.max(1) as f32).min(0.85)
 }
 
 /// The exposure factor (output per lux) [`Exposure::Auto`] picks for `scene`, or the fixed one;
-/// `None` when no light has an [`Emission`].
+/// `None` when no light has an [`Emission`](shadowvol_scenes::Emission).
 #[must_use]
 pub fn exposure_factor(scene: &RenderScene, exposure: Exposure) -> Option<f32> {
     if scene.emission.is_empty() {
@@ -75,7 +74,7 @@ pub fn exposure_factor(scene: &RenderScene, exposure: Exposure) -> Option<f32> {
 }
 
 /// Per light: its colour times its gain, the `rgb` its lit pass multiplies by `albedo × cos θ`
-/// (and, for an [`Emission`], by the attenuation at the surface point).
+/// (and, for an [`Emission`](shadowvol_scenes::Emission), by the attenuation at the surface point).
 #[must_use]
 pub fn light_colors(scene: &RenderScene, exposure: Option<f32>) -> Vec<[f32; 3]> {
     let n = scene.lights.len();
@@ -121,10 +120,4 @@ pub fn validate(scene: &RenderScene, exposure: Exposure) -> Result<(), String> {
         }
     }
     Ok(())
-}
-
-/// The emission of light `li`, if the scene gives one.
-#[must_use]
-pub fn emission_of(emission: &[Emission], li: usize) -> Option<&Emission> {
-    emission.get(li)
 }

@@ -353,7 +353,7 @@ pub fn faces_light(frame: &Frame, sp: &SurfacePoint, li: usize) -> bool {
     let v = light_vec(l, sp.position);
     let d = sp.normal.dot(v);
     let gain = f64::from(sp.albedo)
-        * f64::from(frame.light_intensity[li])
+        * f64::from(frame.light_color[li].iter().copied().fold(0.0, f32::max))
         * light_attenuation(frame, sp, li);
     d > 0.0 && gain > 0.0 && d * gain * 255.0 >= sp.normal.length() * v.length()
 }

@@ -91,9 +91,6 @@ pub struct Frame {
     pub casts_shadows: Vec<bool>,
     /// Per object: its albedo.
     pub albedo: Vec<[f32; 3]>,
-    /// Per light: its largest colour channel times its gain (the lit pass adds
-    /// `albedo × colour × gain × attenuation × cos θ`; see [`crate::lighting`]).
-    pub light_intensity: Vec<f32>,
     /// Per light: the colour times gain its lit pass multiplies by `albedo × attenuation × cos θ`.
     pub light_color: Vec<[f32; 3]>,
     /// The ambient factor of the pre-pass (`albedo × ambient`).
@@ -602,11 +599,7 @@ impl Renderer {
             triangles,
             casts_shadows: scene.objects.iter().map(|o| o.casts_shadows).collect(),
             albedo: scene.objects.iter().map(|o| o.albedo).collect(),
-            light_intensity: colors
-                .iter()
-                .map(|c| c.iter().copied().fold(0.0, f32::max))
-                .collect(),
-            light_color: colors.clone(),
+            light_color: colors,
             ambient: scene.ambient,
             emission: scene.emission.clone(),
             exposure,

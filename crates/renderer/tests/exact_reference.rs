@@ -515,7 +515,6 @@ fn frame_for(case: &Case, size: u32) -> Frame {
         triangles: vec![vec![ground], case.casters.clone()],
         casts_shadows: vec![false, true],
         albedo: vec![[1.0; 3], [1.0; 3]],
-        light_intensity: vec![1.0],
         light_color: vec![[1.0; 3]],
         ambient: 0.0,
         emission: Vec::new(),

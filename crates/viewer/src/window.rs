@@ -53,6 +53,8 @@ struct Gfx {
     tri: wgpu::RenderPipeline,
     wire: wgpu::RenderPipeline,
     volume_layout: wgpu::BindGroupLayout,
+    /// The frame texture and its bind group, remade when the window size changes.
+    frame_texture: Option<(wgpu::Texture, wgpu::BindGroup)>,
     egui_ctx: egui::Context,
     egui_state: egui_winit::State,
     egui: egui_wgpu::Renderer,
@@ -105,20 +107,31 @@ impl App {
         self.renderer.set_options(opts);
         let frame = self.renderer.render(&self.scene)?;
 
-        let texture = gfx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("frame"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba8Unorm,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        });
+        let stale = gfx
+            .frame_texture
+            .as_ref()
+            .is_none_or(|(t, _)| t.width() != w || t.height() != h);
+        if stale {
+            let texture = texture_2d(
+                &gfx.device,
+                "frame",
+                w,
+                h,
+                wgpu::TextureFormat::Rgba8Unorm,
+                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            );
+            let view = texture.create_view(&Default::default());
+            let bind_group = gfx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("frame"),
+                layout: &gfx.blit_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&view),
+                }],
+            });
+            gfx.frame_texture = Some((texture, bind_group));
+        }
+        let (texture, blit_bg) = gfx.frame_texture.as_ref().expect("created above");
         gfx.queue.write_texture(
             texture.as_image_copy(),
             &frame.rgba,
@@ -129,15 +142,6 @@ impl App {
             },
             texture.size(),
         );
-        let view = texture.create_view(&Default::default());
-        let blit_bg = gfx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("frame"),
-            layout: &gfx.blit_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::TextureView(&view),
-            }],
-        });
         let volumes = volume_draw(gfx, &frame, self.volumes, w, h);
 
         let surface_texture = match gfx.surface.get_current_texture() {
@@ -180,20 +184,14 @@ impl App {
             .frames
             .is_some_and(|n| self.frame_ms.len() + 1 >= n as usize);
         let capture = match (&self.options.window_screenshot, last) {
-            (Some(_), true) => Some(gfx.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("window capture"),
-                size: wgpu::Extent3d {
-                    width: w,
-                    height: h,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: gfx.config.format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            })),
+            (Some(_), true) => Some(texture_2d(
+                &gfx.device,
+                "window capture",
+                w,
+                h,
+                gfx.config.format,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            )),
             _ => None,
         };
         let capture_view = capture.as_ref().map(|t| t.create_view(&Default::default()));
@@ -217,7 +215,7 @@ impl App {
                 })
                 .forget_lifetime();
             pass.set_pipeline(&gfx.blit);
-            pass.set_bind_group(0, &blit_bg, &[]);
+            pass.set_bind_group(0, blit_bg, &[]);
             pass.draw(0..3, 0..1);
             if let Some((pipeline, bg, buf, n)) = &volumes {
                 pass.set_pipeline(pipeline);
@@ -415,6 +413,31 @@ impl Stats {
                 line(ui, self.adapter.clone());
             });
     }
+}
+
+/// A `w × h` 2D texture with one mip level.
+fn texture_2d(
+    device: &wgpu::Device,
+    label: &str,
+    w: u32,
+    h: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
 }
 
 /// Maps a window capture and writes it as an RGBA PNG (BGRA surfaces swizzled).
@@ -699,6 +722,7 @@ impl Gfx {
             tri,
             wire,
             volume_layout,
+            frame_texture: None,
             egui_ctx,
             egui_state,
             egui,

@@ -165,7 +165,6 @@ fn artifacts(
         triangles: case.world_triangles(),
         casts_shadows: vec![true; objects],
         albedo: vec![[1.0; 3]; objects],
-        light_intensity: vec![1.0],
         light_color: vec![[1.0; 3]],
         ambient: 0.0,
         emission: Vec::new(),
