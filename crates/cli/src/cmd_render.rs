@@ -75,6 +75,16 @@ pub enum TechniqueArg {
     ZPass,
 }
 
+impl From<TechniqueArg> for PlanPolicy {
+    fn from(t: TechniqueArg) -> Self {
+        match t {
+            TechniqueArg::Auto => PlanPolicy::Auto,
+            TechniqueArg::ZFail => PlanPolicy::AlwaysZFail,
+            TechniqueArg::ZPass => PlanPolicy::AlwaysZPass,
+        }
+    }
+}
+
 /// Whether to add a receiver plane under the scene.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum GroundArg {
@@ -150,7 +160,7 @@ pub struct Args {
     backdrop: bool,
 
     /// How the glTF lights' intensities (candela, lux) map to the image: `auto` (the brightest
-    /// light's nominal illuminance at the scene's centre gives the default light's brightness)
+    /// light's nominal illuminance at the scene's centre gives 0.6 of a unit light's brightness)
     /// or output per lux (1 = one lux on a white surface is full white). Lights from --light,
     /// presets and the default key light are unit lights and ignore it.
     #[arg(long, default_value = "auto", value_name = "auto|X", value_parser = parse_exposure)]
@@ -293,11 +303,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     options.mode = Accuracy::from(args.mode);
     options.exposure = args.exposure;
     options.scissor = !args.no_scissor;
-    options.policy = match args.technique {
-        TechniqueArg::Auto => PlanPolicy::Auto,
-        TechniqueArg::ZFail => PlanPolicy::AlwaysZFail,
-        TechniqueArg::ZPass => PlanPolicy::AlwaysZPass,
-    };
+    options.policy = args.technique.into();
     let mut renderer = Renderer::new(backend, options).map_err(render_error)?;
     let frame = renderer.render(&rscene).map_err(render_error)?;
     frame.save_png(&out_path).map_err(render_error)?;

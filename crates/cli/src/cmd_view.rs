@@ -2,7 +2,7 @@
 
 use crate::cmd_render::{parse_light, parse_size, render_error, stage, GroundArg, TechniqueArg};
 use shadowvol::{find_backend, CliError, Format, ModeArg};
-use shadowvol_renderer::{PlanPolicy, RenderScene};
+use shadowvol_renderer::RenderScene;
 use shadowvol_viewer::controls::VolumeView;
 use shadowvol_viewer::{ViewError, ViewOptions};
 use std::io::Write;
@@ -116,11 +116,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let backend = entry.start()?;
     let mut options = ViewOptions::new(args.size.0, args.size.1);
     options.mode = args.mode.into();
-    options.policy = match args.technique {
-        TechniqueArg::Auto => PlanPolicy::Auto,
-        TechniqueArg::ZFail => PlanPolicy::AlwaysZFail,
-        TechniqueArg::ZPass => PlanPolicy::AlwaysZPass,
-    };
+    options.policy = args.technique.into();
     options.frames = args.frames;
     options.screenshot.clone_from(&args.screenshot);
     options
