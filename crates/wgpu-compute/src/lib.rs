@@ -50,6 +50,7 @@
 //! ```
 
 mod backend;
+pub mod exact_int;
 mod resolve;
 pub mod shaders;
 pub mod twin;
