@@ -5,6 +5,8 @@
 # fuzz/artifacts/TARGET/; the new corpus in fuzz/corpus/TARGET/ (both git-ignored).
 set -u
 secs=${1:-180}
+# The loaders' memory checks plan for 1 GiB, below libFuzzer's 2 GB RSS limit (as xtask test).
+export SHADOWVOL_MEMORY_LIMIT=$((1 << 30))
 cd "$(dirname "$0")"
 D=../crates/scenes/tests/data
 M=../crates/cli/tests/data/malformed

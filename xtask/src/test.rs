@@ -50,6 +50,10 @@ const STEPS: [&str; 7] = [
 /// mutations, cheap on two cores.
 const FUZZ_SECONDS: u32 = 4;
 
+/// Bytes the fuzz targets' memory checks may plan for (`SHADOWVOL_MEMORY_LIMIT`): 1 GiB, below
+/// libFuzzer's 2 GB RSS limit.
+const FUZZ_MEMORY_LIMIT: u64 = 1 << 30;
+
 /// The fuzz targets and their seed folders (relative to `fuzz/`), as in `fuzz/run_all.sh`.
 const FUZZ_TARGETS: &[(&str, &[&str])] = &[
     (
@@ -575,9 +579,13 @@ fn fuzz(root: &Path, ci: bool) -> Outcome {
         args.extend(seeds.iter().copied());
         args.extend(["--", &time]);
         println!("$ (cd fuzz && cargo {})", args.join(" "));
+        // libFuzzer stops at 2 GB of RSS; the loaders' memory checks get a smaller budget, so
+        // an input that declares a huge allocation is refused with an error, as it would be on a
+        // machine without that much memory.
         let status = Command::new(crate::cargo())
             .current_dir(&dir)
             .args(&args)
+            .env("SHADOWVOL_MEMORY_LIMIT", FUZZ_MEMORY_LIMIT.to_string())
             .status();
         match status {
             Ok(s) if s.success() => {}

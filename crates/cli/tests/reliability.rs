@@ -142,6 +142,15 @@ fn malformed_inputs_fail_clearly_fast_and_without_panic() {
                 "run past the end of buffer view 0",
             ],
         ),
+        // Fuzz regression (gltf_loader, CI): a view-less accessor was allocated as zeros of
+        // any count, and aborted the process on a failed allocation.
+        (
+            malformed("viewless_huge_count.gltf"),
+            &[
+                "accessor 0 (POSITION)",
+                "4000000000000 elements without a bufferView need 48000000000000 bytes",
+            ],
+        ),
         (
             malformed("sparse_beyond_views.gltf"),
             &["accessor 0 (POSITION), sparse", "2000000000 sparse indices"],

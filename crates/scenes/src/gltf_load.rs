@@ -867,8 +867,35 @@ impl Loader<'_> {
         let total = count
             .checked_mul(size)
             .ok_or_else(|| self.err(alabel.to_owned(), format!("count {count} overflows")))?;
+        // A view-less accessor is zeros of any declared count: its size is not bounded by the
+        // file, so it is checked against the memory budget before it is allocated.
+        if acc.view().is_none() && total as u64 > shadowvol_mesh_topology::MEMORY_CHECK_THRESHOLD {
+            if let Some((available, source)) = shadowvol_mesh_topology::available_memory() {
+                if total as u64 > available {
+                    return Err(self.err(
+                        alabel.to_owned(),
+                        format!(
+                            "{count} elements without a bufferView need {total} bytes, more than \
+                             the {available} bytes available ({source})"
+                        ),
+                    ));
+                }
+            }
+        }
         let mut out = match acc.view() {
-            None => vec![0u8; total],
+            None => {
+                let mut v = Vec::new();
+                v.try_reserve_exact(total).map_err(|_| {
+                    self.err(
+                        alabel.to_owned(),
+                        format!(
+                            "{count} elements without a bufferView: cannot allocate {total} bytes"
+                        ),
+                    )
+                })?;
+                v.resize(total, 0u8);
+                v
+            }
             Some(view) => {
                 let stride = view.stride().unwrap_or(size);
                 if stride < size {

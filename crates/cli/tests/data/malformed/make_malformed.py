@@ -112,3 +112,8 @@ d["accessors"][0]["sparse"] = {"count": 2000000000,
                                "indices": {"bufferView": 1, "componentType": 5125},
                                "values": {"bufferView": 0}}
 write_json("sparse_beyond_views.gltf", d)
+# no bufferView (zeros) with a count no memory holds: refused before it is allocated.
+d = doc()
+del d["accessors"][0]["bufferView"]
+d["accessors"][0]["count"] = 4000000000000
+write_json("viewless_huge_count.gltf", d)
