@@ -3,7 +3,8 @@
 
 use shadowvol::{find_backend, CliError, Format, ModeArg};
 use shadowvol_renderer::{
-    reference, Exposure, Frame, PlanPolicy, RenderError, RenderOptions, RenderScene, Renderer,
+    reference, Exposure, Frame, Pipeline, PlanPolicy, RenderError, RenderOptions, RenderScene,
+    Renderer,
 };
 use shadowvol_robust_math::Accuracy;
 use std::io::Write;
@@ -24,7 +25,17 @@ pub const LONG_ABOUT: &str =
     .obj/.stl/.ply, and glTF scenes without a floor object) gets a receiver plane (y up) just \
     under its lowest point; presets keep the receivers they declare. --ground on adds one to \
     any scene that has none, --ground off removes it.\n\n\
-    Silhouettes come from --backend in --mode; caps use the same per-triangle signs. For each \
+    Pipelines (--pipeline): `gpu`, the default where the adapter supports it, extracts the \
+    silhouettes (in --mode), builds the side quads and caps and draws them on the renderer's \
+    device with nothing read back during a frame (the `wgpu` backend's kernels; exact mode \
+    decides every triangle on the device with exact integer arithmetic); `host` brings the \
+    multiplicities of --backend (default cpu) to the host, which builds and uploads the volumes. \
+    Giving --backend means host. Where the adapter cannot run the GPU pipeline, host is used \
+    with a warning. --frames N renders N further frames with every light moving on a fixed \
+    orbit (1 degree per frame about the vertical axis through the scene's centre), so each \
+    frame re-extracts, and reports their times; nothing but the final image is read back in the \
+    GPU pipeline (frame_readback_bytes).\n\n\
+    Silhouettes come from the pipeline in --mode; caps use the same per-triangle signs. For each \
     (light, object) the plan picks: culled (its shadow cannot reach the view), z-pass (the \
     near-clip volume test proves the camera is outside the shadow volume) or z-fail with caps \
     (no back cap for directional lights). --explain prints the plan.\n\n\
@@ -49,7 +60,16 @@ pub const LONG_ABOUT: &str =
     \"exposure\": output per lux for the file's lights, null when all are unit lights, \
     \"scissor_pixels_saved\": pixels kept out of the stencil and lit passes by each light's \
     scissor, the screen rectangle of its range (each plan entry's \"scissor\": [x, y, w, h] or \
-    null for the whole image; --no-scissor turns it off, the image is the same)}.\n\n\
+    null for the whole image; --no-scissor turns it off, the image is the same), \
+    \"pipeline\": \"gpu\" or \"host\", \"frame_readback_bytes\": bytes brought to the host during \
+    the --frames frames besides the final image (host: the multiplicities, 4 bytes per edge and \
+    light and extraction; gpu: 0), \"frames\": null or {\"count\", \"median_ms\", \"p10_ms\", \
+    \"p90_ms\"}, \"gpu_timings_ms\": per-pass GPU times, null (timestamp queries are not read), \
+    \"uncertain\": exact-mode evaluations the certified filter left undecided (host: (edge, \
+    opposite vertex, light) triples; gpu: (triangle, light) pairs), \"host_resolved\": those \
+    decided on the host (gpu: 0)}. With the gpu pipeline \"backend\" is \"wgpu\", whose kernels it runs, \
+    and timings.silhouette_ms and side_building_ms are 0: extraction and volumes are part of \
+    raster_ms.\n\n\
     glTF lights are lit as KHR_lights_punctual says: colour, intensity (candela for point and \
     spot lights, lux for directional ones) over distance squared, the range window \
     saturate(1 - (d/range)^4) and the spot cone's smooth falloff; a spot light's shadow volume \
@@ -59,6 +79,7 @@ pub const LONG_ABOUT: &str =
 
 /// Examples shown after the help.
 pub const AFTER_HELP: &str = "Examples:\n  shadowvol render model.obj\n  \
+    shadowvol render sphere-1m --frames 10 --pipeline gpu --format json\n  \
     shadowvol render hard-book-3 --out book.png --reference --backdrop\n  \
     shadowvol render scene.glb --out scene.png --size 640x480 --mode robust --backend simd --explain\n  \
     shadowvol render town --out town.png --reference --diff town-diff.png --format json";
@@ -83,6 +104,15 @@ impl From<TechniqueArg> for PlanPolicy {
             TechniqueArg::ZPass => PlanPolicy::AlwaysZPass,
         }
     }
+}
+
+/// Where silhouettes and volumes are built (see [`Pipeline`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PipelineArg {
+    /// On the renderer's device, nothing read back during a frame.
+    Gpu,
+    /// On the host, from --backend's multiplicities.
+    Host,
 }
 
 /// Whether to add a receiver plane under the scene.
@@ -133,10 +163,22 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
     mode: ModeArg,
 
-    /// Silhouette backend (see `shadowvol backends`), or `auto`: the first backend on a hardware
-    /// GPU, else `simd`, with a warning naming what was skipped.
-    #[arg(long, default_value = "cpu", value_name = "NAME")]
-    backend: String,
+    /// Silhouette backend of the host pipeline (see `shadowvol backends`), or `auto`: the first
+    /// backend on a hardware GPU, else `simd`, with a warning naming what was skipped. Giving it
+    /// selects the host pipeline [default with --pipeline host: cpu].
+    #[arg(long, value_name = "NAME")]
+    backend: Option<String>,
+
+    /// gpu: extraction, sides and caps on the renderer's device, nothing read back during a
+    /// frame; host: the backend's multiplicities come to the host, which builds the volumes
+    /// [default: gpu where the adapter supports it and no --backend is given, else host].
+    #[arg(long, value_enum, value_name = "gpu|host")]
+    pipeline: Option<PipelineArg>,
+
+    /// After the final image, render N further frames with the lights on a fixed orbit (each
+    /// re-extracts) and report their median, p10 and p90 times.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    frames: u32,
 
     /// Ray-trace the reference and count artifact pixels.
     #[arg(long)]
@@ -246,6 +288,66 @@ struct Report<'a> {
     exposure: Option<f32>,
     /// Pixels the per-light scissor kept out of the stencil and lit passes.
     scissor_pixels_saved: usize,
+    /// `gpu` or `host`.
+    pipeline: Pipeline,
+    /// Bytes brought to the host during the `--frames` frames, besides the final image.
+    frame_readback_bytes: u64,
+    /// The `--frames` frames' times, `null` without them.
+    frames: Option<FrameStats>,
+    /// Per-pass GPU times from timestamp queries; `null`: not read.
+    gpu_timings_ms: Option<()>,
+    /// Exact-mode evaluations the certified filter left undecided.
+    uncertain: u64,
+    /// Of those, the ones decided on the host.
+    host_resolved: u64,
+}
+
+/// Times of the `--frames` frames.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub(crate) struct FrameStats {
+    count: usize,
+    median_ms: f64,
+    p10_ms: f64,
+    p90_ms: f64,
+}
+
+impl FrameStats {
+    /// Median, p10 and p90 (nearest rank) of `ms`; `None` when empty.
+    fn of(ms: &mut [f64]) -> Option<Self> {
+        if ms.is_empty() {
+            return None;
+        }
+        ms.sort_by(f64::total_cmp);
+        let at = |q: f64| ms[((ms.len() - 1) as f64 * q).round() as usize];
+        Some(Self {
+            count: ms.len(),
+            median_ms: at(0.5),
+            p10_ms: at(0.1),
+            p90_ms: at(0.9),
+        })
+    }
+}
+
+/// The lights of orbit frame `k`: each turned by `k` degrees about the vertical axis through
+/// `centre` (point lights move, directional lights turn).
+fn orbit_lights(
+    lights: &[shadowvol_robust_math::Light],
+    centre: glam::Vec3,
+    k: u32,
+) -> Vec<shadowvol_robust_math::Light> {
+    let rot = glam::Quat::from_rotation_y((k as f32).to_radians());
+    lights
+        .iter()
+        .map(|l| {
+            if l.is_directional() {
+                shadowvol_robust_math::Light::directional(rot * l.to_vec4().truncate())
+            } else {
+                shadowvol_robust_math::Light::point(
+                    centre + rot * (l.to_vec4().truncate() - centre),
+                )
+            }
+        })
+        .collect()
 }
 
 /// Where the lights of a render came from.
@@ -285,7 +387,15 @@ pub(crate) fn parse_light(s: &str) -> Result<shadowvol_robust_math::Light, Strin
 }
 
 pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
-    let entry = find_backend(&args.backend)?;
+    if args.pipeline == Some(PipelineArg::Gpu) {
+        if let Some(b) = &args.backend {
+            return Err(CliError::Other(format!(
+                "--backend {b} selects the host pipeline; it cannot be combined with --pipeline gpu \
+                 (the GPU pipeline runs the wgpu kernels on the renderer's device)"
+            )));
+        }
+    }
+    let entry = find_backend(args.backend.as_deref().unwrap_or("cpu"))?;
     let (mut scene, notes) = shadowvol_scenes::Scene::from_name_or_path_with_notes(&args.scene)
         .map_err(|e| CliError::Other(format!("{}: {e}", args.scene)))?;
     for n in &notes {
@@ -298,15 +408,39 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         rscene.add_backdrop();
     }
     let backend = entry.start()?;
-    let backend_name = entry.name;
     let mut options = RenderOptions::new(args.size.0, args.size.1);
     options.mode = Accuracy::from(args.mode);
     options.exposure = args.exposure;
     options.scissor = !args.no_scissor;
     options.policy = args.technique.into();
     let mut renderer = Renderer::new(backend, options).map_err(render_error)?;
+    let pipeline = match (args.pipeline, &args.backend) {
+        (Some(PipelineArg::Host), _) | (None, Some(_)) => Pipeline::Host,
+        (Some(PipelineArg::Gpu), _) => {
+            if let Some(why) = renderer.gpu_pipeline_unsupported() {
+                return Err(CliError::Other(format!(
+                    "--pipeline gpu: the adapter cannot run the GPU pipeline: {why}"
+                )));
+            }
+            Pipeline::Gpu
+        }
+        (None, None) => match renderer.gpu_pipeline_unsupported() {
+            Some(why) => {
+                eprintln!("warning: using the host pipeline: the adapter cannot run the GPU pipeline: {why}");
+                Pipeline::Host
+            }
+            None => Pipeline::Gpu,
+        },
+    };
+    options.pipeline = pipeline;
+    renderer.set_options(options);
+    let backend_name = match pipeline {
+        Pipeline::Gpu => "wgpu",
+        Pipeline::Host => entry.name,
+    };
     let frame = renderer.render(&rscene).map_err(render_error)?;
     frame.save_png(&out_path).map_err(render_error)?;
+    let (frames, frame_readback_bytes) = timed_frames(&mut renderer, &rscene, &scene, args.frames)?;
 
     let want_reference = args.reference || args.diff.is_some();
     let (cmp, reference_ms) = if want_reference {
@@ -353,6 +487,12 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 ground,
                 exposure: frame.exposure,
                 scissor_pixels_saved: frame.scissor_pixels_saved,
+                pipeline,
+                frame_readback_bytes,
+                frames,
+                gpu_timings_ms: None,
+                uncertain: frame.uncertain,
+                host_resolved: frame.host_resolved,
             };
             serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
             writeln!(out)?;
@@ -370,6 +510,8 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 shadow_pixels,
                 cmp: cmp.as_ref(),
                 reference_ms,
+                frames,
+                frame_readback_bytes,
             },
         )?,
     }
@@ -443,17 +585,55 @@ struct TextReport<'a> {
     shadow_pixels: usize,
     cmp: Option<&'a reference::Comparison>,
     reference_ms: Option<f64>,
+    frames: Option<FrameStats>,
+    frame_readback_bytes: u64,
+}
+
+/// `--frames`: `n` frames with the lights on the orbit, timed without reading images back.
+/// Returns their statistics and the bytes read back during them.
+fn timed_frames(
+    renderer: &mut Renderer,
+    rscene: &RenderScene,
+    scene: &shadowvol_scenes::Scene,
+    n: u32,
+) -> Result<(Option<FrameStats>, u64), CliError> {
+    if n == 0 {
+        return Ok((None, 0));
+    }
+    let centre = scene
+        .bounds()
+        .map_or(glam::Vec3::ZERO, |(lo, hi)| (lo + hi) * 0.5);
+    let mut moving = rscene.clone();
+    let bar = indicatif::ProgressBar::new(u64::from(n));
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} frames",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let mut ms = Vec::with_capacity(n as usize);
+    let mut bytes = 0u64;
+    for k in 1..=n {
+        moving.lights = orbit_lights(&rscene.lights, centre, k);
+        let t = renderer.render_timed(&moving).map_err(render_error)?;
+        ms.push(t.total_ms);
+        bytes += t.readback_bytes;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok((FrameStats::of(&mut ms), bytes))
 }
 
 fn write_text(out: &mut dyn Write, r: &TextReport<'_>) -> std::io::Result<()> {
     let (args, frame, backend) = (r.args, r.frame, r.backend);
     writeln!(
         out,
-        "rendered {} ({}x{}, mode {}, backend {backend}) on {} -> {}",
+        "rendered {} ({}x{}, mode {}, {} pipeline, backend {backend}) on {} -> {}",
         r.scene.name,
         frame.width,
         frame.height,
         frame.mode,
+        frame.pipeline.name(),
         frame.adapter,
         r.out_path.display()
     )?;
@@ -514,6 +694,20 @@ fn write_text(out: &mut dyn Write, r: &TextReport<'_>) -> std::io::Result<()> {
         write!(out, ", reference {ms:.2} ms")?;
     }
     writeln!(out)?;
+    if let Some(f) = r.frames {
+        writeln!(
+            out,
+            "frames          {} on the light orbit: median {:.2} ms (p10 {:.2}, p90 {:.2}); {} bytes read back",
+            f.count, f.median_ms, f.p10_ms, f.p90_ms, r.frame_readback_bytes
+        )?;
+    }
+    if frame.mode == Accuracy::Exact {
+        writeln!(
+            out,
+            "exact           {} uncertain, {} decided on the host",
+            frame.uncertain, frame.host_resolved
+        )?;
+    }
     if let Some(p) = &args.diff {
         writeln!(out, "diff            {}", p.display())?;
     }

@@ -81,6 +81,10 @@ pub struct Timings {
     pub host_resolve_ms: f64,
     /// (edge, opposite vertex, light) evaluations decided on the host (exact mode).
     pub uncertain: u64,
+    /// Of `uncertain`, the pairs decided on the host: every backend resolves what its filter
+    /// leaves on the host, so this equals `uncertain` (the GPU pipeline of `render` reports its
+    /// own, 0).
+    pub host_resolved: u64,
 }
 
 /// The whole report. Field order is the JSON order.
@@ -184,6 +188,7 @@ pub fn silhouette_report(
             readback_ms: ms(extract.readback),
             host_resolve_ms: ms(extract.host_resolve),
             uncertain: extract.uncertain,
+            host_resolved: extract.uncertain,
         },
     })
 }

@@ -65,6 +65,8 @@ pub struct FrameInput<'a> {
     pub volumes: &'a [[f32; 4]],
     /// Per-light draws.
     pub lights: &'a [LightDraws],
+    /// Copy colour, ids and per-light stencil back; without it, only wait for the device.
+    pub readback: bool,
 }
 
 /// What comes back from the GPU.
@@ -88,6 +90,10 @@ pub struct Gpu {
     pub depth_format: wgpu::TextureFormat,
     /// True when z-fail volumes are drawn with `unclipped_depth` (depth clamp).
     pub depth_clamp: bool,
+    /// The adapter the device was opened on (the GPU pipeline checks its capabilities).
+    pub wgpu_adapter: wgpu::Adapter,
+    /// Why the GPU pipeline cannot run on this adapter, if it cannot.
+    pub resident_unsupported: Option<String>,
     globals_bgl: wgpu::BindGroupLayout,
     light_bgl: wgpu::BindGroupLayout,
     prepass: wgpu::RenderPipeline,
@@ -113,7 +119,7 @@ const LIGHT_STRIDE: u64 = 256;
 
 /// The shader's `LightU`: position, colour, then `emit = (inverse square 0/1, 1 / range or 0,
 /// cone scale, cone offset)` and `spot = (axis, 1 for a cone)` (see `fs_lit`).
-fn light_uniform(l: &LightDraws) -> [f32; 16] {
+pub(crate) fn light_uniform(l: &LightDraws) -> [f32; 16] {
     let mut v = [0f32; 16];
     v[..4].copy_from_slice(&l.light);
     v[4..7].copy_from_slice(&l.color);
@@ -178,10 +184,18 @@ impl Gpu {
         } else {
             wgpu::TextureFormat::Depth24PlusStencil8
         };
+        // The GPU pipeline's limits and features where the adapter has them; otherwise only the
+        // host pipeline runs, and asking for the GPU one names what is missing.
+        let resident = crate::resident::ShadowPass::required_limits(&adapter);
+        required |= crate::resident::ShadowPass::optional_features(&adapter);
+        let limits = match &resident {
+            Ok(l) => l.clone(),
+            Err(_) => wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
+        };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("shadowvol-renderer"),
             required_features: required,
-            required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
+            required_limits: limits,
             ..Default::default()
         }))
         .map_err(|e| RenderError::Device(format!("request_device on {}: {e}", info.name)))?;
@@ -396,6 +410,8 @@ impl Gpu {
             adapter: format!("{} ({:?}, {})", info.name, info.backend, info.driver_info),
             depth_format,
             depth_clamp,
+            wgpu_adapter: adapter,
+            resident_unsupported: resident.err().map(|e| e.to_string()),
             globals_bgl,
             light_bgl,
             prepass,
@@ -411,7 +427,7 @@ impl Gpu {
     /// # Errors
     /// [`RenderError::InvalidInput`] for a zero or too large size, [`RenderError::Device`] on
     /// validation or device errors.
-    pub fn render(&self, input: &FrameInput<'_>) -> Result<FrameOutput, RenderError> {
+    pub fn render(&self, input: &FrameInput<'_>) -> Result<Option<FrameOutput>, RenderError> {
         let (w, h) = (input.width, input.height);
         let max = self.device.limits().max_texture_dimension_2d;
         if w == 0 || h == 0 || w > max || h > max {
@@ -461,7 +477,7 @@ impl Gpu {
                 resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                     buffer: &light_buf,
                     offset: 0,
-                    size: std::num::NonZeroU64::new(64),
+                    size: std::num::NonZeroU64::new(80),
                 }),
             }],
         });
@@ -619,23 +635,25 @@ impl Gpu {
                     }
                 }
             }
-            enc.copy_texture_to_buffer(
-                wgpu::TexelCopyTextureInfo {
-                    texture: &depth,
-                    mip_level: 0,
-                    origin: wgpu::Origin3d::ZERO,
-                    aspect: wgpu::TextureAspect::StencilOnly,
-                },
-                wgpu::TexelCopyBufferInfo {
-                    buffer: &stencil_rb,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset: u64::from(row(1)) * u64::from(h) * li as u64,
-                        bytes_per_row: Some(row(1)),
-                        rows_per_image: Some(h),
+            if input.readback {
+                enc.copy_texture_to_buffer(
+                    wgpu::TexelCopyTextureInfo {
+                        texture: &depth,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d::ZERO,
+                        aspect: wgpu::TextureAspect::StencilOnly,
                     },
-                },
-                size,
-            );
+                    wgpu::TexelCopyBufferInfo {
+                        buffer: &stencil_rb,
+                        layout: wgpu::TexelCopyBufferLayout {
+                            offset: u64::from(row(1)) * u64::from(h) * li as u64,
+                            bytes_per_row: Some(row(1)),
+                            rows_per_image: Some(h),
+                        },
+                    },
+                    size,
+                );
+            }
             {
                 let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("lit"),
@@ -676,7 +694,12 @@ impl Gpu {
                 }
             }
         }
-        for (texture, buffer, bpp) in [(&color, &color_rb, 4), (&ids, &ids_rb, 8)] {
+        let copies = if input.readback {
+            vec![(&color, &color_rb, 4), (&ids, &ids_rb, 8)]
+        } else {
+            Vec::new()
+        };
+        for (texture, buffer, bpp) in copies {
             enc.copy_texture_to_buffer(
                 wgpu::TexelCopyTextureInfo {
                     texture,
@@ -702,6 +725,10 @@ impl Gpu {
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(RenderError::Device(format!("validation: {e}")));
         }
+        if !input.readback {
+            wait(device)?;
+            return Ok(None);
+        }
         let color_bytes = self.read(&color_rb, row(4), w * 4, h, 1)?;
         let ids_bytes = self.read(&ids_rb, row(8), w * 8, h, 1)?;
         let stencil_bytes = if input.lights.is_empty() {
@@ -723,11 +750,11 @@ impl Gpu {
             .chunks_exact(px.max(1))
             .map(<[u8]>::to_vec)
             .collect();
-        Ok(FrameOutput {
+        Ok(Some(FrameOutput {
             color: color_bytes,
             ids,
             stencil,
-        })
+        }))
     }
 
     /// Maps `buffer`, strips row padding and returns `images` images of `w_bytes` × `h` bytes.
@@ -775,5 +802,232 @@ impl Gpu {
         drop(data);
         buffer.unmap();
         Ok(out)
+    }
+}
+
+/// Maps `buffer` (`MAP_READ`, its copies already submitted) and returns its bytes, with the
+/// bounded wait of every GPU read (`SHADOWVOL_GPU_TIMEOUT`).
+pub(crate) fn map_read(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+) -> Result<Vec<u8>, RenderError> {
+    let slice = buffer.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    wait(device)?;
+    rx.try_recv()
+        .map_err(|e| RenderError::Device(format!("map_async did not complete: {e}")))?
+        .map_err(|e| RenderError::Device(format!("map_async: {e}")))?;
+    let data = slice
+        .get_mapped_range()
+        .map_err(|e| RenderError::Device(format!("get_mapped_range: {e}")))?;
+    let out = data.to_vec();
+    drop(data);
+    buffer.unmap();
+    Ok(out)
+}
+
+/// Waits for all submitted work, bounded by `SHADOWVOL_GPU_TIMEOUT`: a hung device is an error.
+pub(crate) fn wait(device: &wgpu::Device) -> Result<(), RenderError> {
+    let limit =
+        shadowvol_silhouette::gpu::wait_limit().map_err(|e| RenderError::Device(e.to_string()))?;
+    device
+        .poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: Some(limit),
+        })
+        .map_err(|e| match e {
+            wgpu::PollError::Timeout => RenderError::Device(format!(
+                "the device did not finish the frame within {}",
+                shadowvol_silhouette::gpu::describe_wait_limit(limit)
+            )),
+            other => RenderError::Device(format!("poll: {other}")),
+        })?;
+    Ok(())
+}
+
+impl Gpu {
+    /// The GPU pipeline's pass on this device, with the renderer's formats.
+    ///
+    /// # Errors
+    /// [`RenderError::Unsupported`] naming what the adapter lacks; [`RenderError::Device`] if a
+    /// pipeline fails to build.
+    pub fn shadow_pass(&self) -> Result<crate::resident::ShadowPass, RenderError> {
+        if let Some(why) = &self.resident_unsupported {
+            return Err(RenderError::Unsupported(why.clone()));
+        }
+        crate::resident::ShadowPass::new(
+            &self.wgpu_adapter,
+            &self.device,
+            &self.queue,
+            crate::resident::PassFormats {
+                color: COLOR_FORMAT,
+                ids: Some(IDS_FORMAT),
+                depth: self.depth_format,
+            },
+        )
+    }
+
+    /// Renders one frame of the GPU pipeline (pre-pass, extraction, per light stencil and lit
+    /// passes) from the inputs last given to [`crate::resident::ShadowPass::update`]; with
+    /// `readback`, colour, ids and per-light stencil come back, otherwise it only waits.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] for a bad size, [`RenderError::Device`] on device errors.
+    pub fn render_resident(
+        &self,
+        pass: &crate::resident::ShadowPass,
+        rs: &crate::resident::ResidentScene,
+        (w, h): (u32, u32),
+        lights: usize,
+        readback: bool,
+    ) -> Result<Option<FrameOutput>, RenderError> {
+        let max = self.device.limits().max_texture_dimension_2d;
+        if w == 0 || h == 0 || w > max || h > max {
+            return Err(RenderError::InvalidInput(format!(
+                "image size {w}x{h}: each side must be in 1..={max}"
+            )));
+        }
+        let device = &self.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let size = wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        };
+        let tex = |label: &str, format: wgpu::TextureFormat| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let color = tex("color", COLOR_FORMAT);
+        let ids = tex("ids", IDS_FORMAT);
+        let depth = tex("depth-stencil", self.depth_format);
+        let color_view = color.create_view(&Default::default());
+        let ids_view = ids.create_view(&Default::default());
+        let depth_view = depth.create_view(&Default::default());
+        let row = |bytes_per_px: u32| (w * bytes_per_px).div_ceil(256) * 256;
+        let buffer = |label: &str, bytes_per_px: u32, count: usize| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: u64::from(row(bytes_per_px)) * u64::from(h) * count.max(1) as u64,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            })
+        };
+        let readbacks = readback.then(|| {
+            (
+                buffer("color-readback", 4, 1),
+                buffer("ids-readback", 8, 1),
+                buffer("stencil-readback", 1, lights),
+            )
+        });
+        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("resident frame"),
+        });
+        pass.encode_prepass(
+            &mut enc,
+            rs,
+            &color_view,
+            Some(&ids_view),
+            &depth_view,
+            wgpu::Color {
+                r: 0.02,
+                g: 0.02,
+                b: 0.04,
+                a: 1.0,
+            },
+        );
+        pass.encode_extract(&mut enc, rs);
+        for li in 0..lights {
+            pass.encode_stencil(&mut enc, rs, li, &depth_view);
+            if let Some((_, _, stencil_rb)) = &readbacks {
+                enc.copy_texture_to_buffer(
+                    wgpu::TexelCopyTextureInfo {
+                        texture: &depth,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d::ZERO,
+                        aspect: wgpu::TextureAspect::StencilOnly,
+                    },
+                    wgpu::TexelCopyBufferInfo {
+                        buffer: stencil_rb,
+                        layout: wgpu::TexelCopyBufferLayout {
+                            offset: u64::from(row(1)) * u64::from(h) * li as u64,
+                            bytes_per_row: Some(row(1)),
+                            rows_per_image: Some(h),
+                        },
+                    },
+                    size,
+                );
+            }
+            pass.encode_lit(&mut enc, rs, li, &color_view, &depth_view);
+        }
+        if let Some((color_rb, ids_rb, _)) = &readbacks {
+            for (texture, buffer, bpp) in [(&color, color_rb, 4), (&ids, ids_rb, 8)] {
+                enc.copy_texture_to_buffer(
+                    wgpu::TexelCopyTextureInfo {
+                        texture,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d::ZERO,
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    wgpu::TexelCopyBufferInfo {
+                        buffer,
+                        layout: wgpu::TexelCopyBufferLayout {
+                            offset: 0,
+                            bytes_per_row: Some(row(bpp)),
+                            rows_per_image: Some(h),
+                        },
+                    },
+                    size,
+                );
+            }
+        }
+        self.queue.submit([enc.finish()]);
+        if let Some(e) = pollster::block_on(oom.pop()) {
+            return Err(RenderError::Device(format!("out of memory: {e}")));
+        }
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Device(format!("validation: {e}")));
+        }
+        let Some((color_rb, ids_rb, stencil_rb)) = readbacks else {
+            wait(device)?;
+            return Ok(None);
+        };
+        let color_bytes = self.read(&color_rb, row(4), w * 4, h, 1)?;
+        let ids_bytes = self.read(&ids_rb, row(8), w * 8, h, 1)?;
+        let stencil_bytes = if lights == 0 {
+            Vec::new()
+        } else {
+            self.read(&stencil_rb, row(1), w, h, lights)?
+        };
+        let ids = ids_bytes
+            .chunks_exact(8)
+            .map(|c| {
+                [
+                    u32::from_le_bytes([c[0], c[1], c[2], c[3]]),
+                    u32::from_le_bytes([c[4], c[5], c[6], c[7]]),
+                ]
+            })
+            .collect();
+        let px = (w * h) as usize;
+        Ok(Some(FrameOutput {
+            color: color_bytes,
+            ids,
+            stencil: stencil_bytes
+                .chunks_exact(px.max(1))
+                .map(<[u8]>::to_vec)
+                .collect(),
+        }))
     }
 }

@@ -62,11 +62,12 @@ pub mod occlusion;
 pub mod plan;
 pub mod reference;
 mod renderer;
+pub mod resident;
 pub mod volume;
 
 pub use lighting::Exposure;
 pub use plan::{PlanEntry, PlanPolicy, SilhouetteSource, Technique};
-pub use renderer::{Frame, RenderOptions, Renderer, Timings};
+pub use renderer::{Frame, FrameTime, Pipeline, RenderOptions, Renderer, Timings};
 pub use shadowvol_robust_math::{Accuracy, Light};
 
 use glam::{Affine3A, DMat4, DVec3, Mat4, Vec3};
@@ -388,6 +389,9 @@ pub enum RenderError {
         /// What is wrong.
         source: MeshError,
     },
+    /// The device lacks a feature, capability or limit the GPU pipeline needs (named).
+    #[error("unsupported device: {0}")]
+    Unsupported(String),
     /// Bad parameters (size, camera, light).
     #[error("invalid input: {0}")]
     InvalidInput(String),

@@ -1,5 +1,7 @@
 //! The stateful renderer: caches edge tables and silhouettes between frames, plans, draws.
 
+mod resident_frame;
+
 use crate::gpu::{FrameInput, Gpu, LightDraws, SurfaceVertex};
 use crate::lighting::{self, Exposure};
 use crate::plan::{self, PlanEntry, PlanPolicy, SilhouetteSource, Technique};
@@ -33,8 +35,44 @@ pub struct RenderOptions {
     /// ([`plan::light_scissor`]). The image is the same either way.
     pub scissor: bool,
     /// Keep the frame's shadow-volume vertices in [`Frame::volumes`] (for viewers that draw the
-    /// volumes themselves).
+    /// volumes themselves; host pipeline only).
     pub keep_volumes: bool,
+    /// Where silhouettes and volumes are built: on the host from the backend's multiplicities,
+    /// or on the GPU without readback ([`crate::resident`]).
+    pub pipeline: Pipeline,
+}
+
+/// Where a frame's silhouettes and shadow volumes are built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Pipeline {
+    /// The backend's multiplicities come back to the host, which builds sides and caps and
+    /// uploads them (any backend).
+    Host,
+    /// Extraction, sides and caps on the renderer's device with the [`crate::resident`] pass;
+    /// nothing is read back during a frame (the backend is not used).
+    Gpu,
+}
+
+impl Pipeline {
+    /// `"host"` or `"gpu"`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Pipeline::Host => "host",
+            Pipeline::Gpu => "gpu",
+        }
+    }
+}
+
+/// One frame rendered without reading its image back ([`Renderer::render_timed`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FrameTime {
+    /// Wall time from the start of the call until the device finished, milliseconds.
+    pub total_ms: f64,
+    /// Bytes brought to the host during the frame: for the host pipeline the multiplicities
+    /// every extraction returned (4 bytes per edge and light), for the GPU pipeline 0.
+    pub readback_bytes: u64,
 }
 
 impl RenderOptions {
@@ -49,6 +87,7 @@ impl RenderOptions {
             exposure: Exposure::Auto,
             scissor: true,
             keep_volumes: false,
+            pipeline: Pipeline::Host,
         }
     }
 }
@@ -102,9 +141,16 @@ pub struct Frame {
     /// Pixels the per-light scissor kept out of the stencil and lit passes, summed over lights
     /// (`width × height` minus each light's rectangle).
     pub scissor_pixels_saved: usize,
-    /// (edge, opposite vertex, light) evaluations of this frame's extractions that the
-    /// backend's filter could not certify and the host decided exactly (exact mode).
+    /// Exact mode: evaluations the certified filter could not decide. Host pipeline: (edge,
+    /// opposite vertex, light) triples of this frame's extractions, decided by the backend's
+    /// exact fallback; GPU pipeline: (triangle, light) pairs, decided on the device with exact
+    /// integer arithmetic.
     pub uncertain: u64,
+    /// Of those, the ones decided on the host: all of them in the host pipeline, 0 in the GPU
+    /// pipeline.
+    pub host_resolved: u64,
+    /// The pipeline that drew the frame.
+    pub pipeline: Pipeline,
     /// With [`RenderOptions::keep_volumes`]: every shadow-volume vertex drawn, as triangles,
     /// relative to the camera's eye (`w = 0`: extruded to infinity); empty otherwise.
     pub volumes: Vec<[f32; 4]>,
@@ -195,6 +241,8 @@ pub struct Renderer {
     /// The whole scene prepared at once (real transforms), with the (mesh, transform) of each
     /// object it was prepared for.
     whole: Option<(PreparedId, Vec<ObjectKey>)>,
+    /// The GPU pipeline's pass and the scene uploaded to it, built on first use.
+    resident: resident_frame::ResidentState,
 }
 
 impl std::fmt::Debug for Renderer {
@@ -230,6 +278,7 @@ impl Renderer {
             cache: Vec::new(),
             changed: Vec::new(),
             whole: None,
+            resident: resident_frame::ResidentState::default(),
         })
     }
 
@@ -242,6 +291,13 @@ impl Renderer {
     /// Changes size, mode or policy; cached silhouettes of another mode are not reused.
     pub fn set_options(&mut self, options: RenderOptions) {
         self.options = options;
+    }
+
+    /// Why this renderer's adapter cannot run [`Pipeline::Gpu`] (a missing capability or
+    /// limit, named), or `None` when it can.
+    #[must_use]
+    pub fn gpu_pipeline_unsupported(&self) -> Option<&str> {
+        self.gpu.resident_unsupported.as_deref()
     }
 
     /// The GPU adapter, in words.
@@ -257,6 +313,32 @@ impl Renderer {
     /// invalid mesh, [`RenderError::Backend`] when extraction fails, [`RenderError::Device`] on
     /// GPU failure.
     pub fn render(&mut self, scene: &RenderScene) -> Result<Frame, RenderError> {
+        let (frame, _) = self.frame(scene, true)?;
+        Ok(frame.expect("a frame with readback has its image"))
+    }
+
+    /// Renders `scene` like [`Renderer::render`] but reads nothing back (no image, ids or
+    /// stencil, and in the GPU pipeline nothing at all), waits for the device, and returns the
+    /// wall time: what `render --frames` measures.
+    ///
+    /// # Errors
+    /// As [`Renderer::render`].
+    pub fn render_timed(&mut self, scene: &RenderScene) -> Result<FrameTime, RenderError> {
+        let t0 = Instant::now();
+        let (_, readback_bytes) = self.frame(scene, false)?;
+        Ok(FrameTime {
+            total_ms: ms(t0.elapsed()),
+            readback_bytes,
+        })
+    }
+
+    /// One frame; with `readback` the image and per-pixel data come back as a [`Frame`].
+    /// Returns the frame and the bytes brought to the host besides the image.
+    fn frame(
+        &mut self,
+        scene: &RenderScene,
+        readback: bool,
+    ) -> Result<(Option<Frame>, u64), RenderError> {
         let t0 = Instant::now();
         scene.camera.validate()?;
         if !(scene.ambient.is_finite() && (0.0..=1.0).contains(&scene.ambient)) {
@@ -273,6 +355,7 @@ impl Renderer {
             exposure,
             scissor,
             keep_volumes,
+            pipeline,
         } = self.options;
         lighting::validate(scene, exposure).map_err(RenderError::InvalidInput)?;
         let exposure = lighting::exposure_factor(scene, exposure);
@@ -373,12 +456,28 @@ impl Renderer {
             }
         }
 
+        if pipeline == Pipeline::Gpu {
+            return self.frame_gpu(
+                scene,
+                resident_frame::Planned {
+                    entries,
+                    scissors,
+                    colors,
+                    exposure,
+                    t0,
+                    prepare_time,
+                },
+                readback,
+            );
+        }
+
         // 3. Silhouettes. Per object, the lights whose cached multiplicities are stale (the
         // light moved, the object moved or changed, the mode changed).
         let n_obj = scene.objects.len();
         let mut silhouette_time = Duration::ZERO;
         let mut m_buf = Multiplicities::default();
         let mut uncertain = 0u64;
+        let mut readback_bytes = 0u64;
         let mut stale_by_obj: Vec<Vec<usize>> = Vec::with_capacity(n_obj);
         for oi in 0..n_obj {
             let needed: Vec<usize> = (0..n_lights)
@@ -418,8 +517,12 @@ impl Renderer {
             let whole = self.whole_scene(scene)?;
             let lights: Vec<Light> = union.iter().map(|&li| scene.lights[li]).collect();
             let t = Instant::now();
-            self.backend.extract(whole, &lights, mode, &mut m_buf)?;
+            uncertain += self
+                .backend
+                .extract(whole, &lights, mode, &mut m_buf)?
+                .uncertain;
             silhouette_time += t.elapsed();
+            readback_bytes += 4 * (m_buf.edge_count() * m_buf.light_count()) as u64;
             let offsets: Vec<usize> = std::iter::once(0)
                 .chain(self.cache.iter().scan(0, |acc, c| {
                     *acc += c.table.edges.len();
@@ -454,6 +557,7 @@ impl Renderer {
                 .extract(c.prepared, &obj_lights, mode, &mut m_buf)?
                 .uncertain;
             silhouette_time += t.elapsed();
+            readback_bytes += 4 * (m_buf.edge_count() * m_buf.light_count()) as u64;
             let c = &mut self.cache[oi];
             for (k, &li) in stale.iter().enumerate() {
                 c.lights[li] = Some(LightCache {
@@ -549,7 +653,7 @@ impl Renderer {
         let mut triangles = Vec::with_capacity(scene.objects.len());
         for (oi, obj) in scene.objects.iter().enumerate() {
             let c = &self.cache[oi];
-            let mut tris = Vec::with_capacity(c.table.triangles.len());
+            let mut tris = Vec::with_capacity(if readback { c.table.triangles.len() } else { 0 });
             for (ti, t) in c.table.triangles.iter().enumerate() {
                 let k = canonical_triangle(*t);
                 let p = [
@@ -568,7 +672,9 @@ impl Renderer {
                         pad: [0; 2],
                     });
                 }
-                tris.push(p);
+                if readback {
+                    tris.push(p);
+                }
             }
             triangles.push(tris);
         }
@@ -587,43 +693,52 @@ impl Renderer {
             surface: &surface,
             volumes: &volumes,
             lights: &draws,
+            readback,
         })?;
         let raster_time = t_raster.elapsed();
+        let Some(out) = out else {
+            return Ok((None, readback_bytes));
+        };
 
-        Ok(Frame {
-            width,
-            height,
-            rgba: out.color,
-            ids: out.ids,
-            stencil: out.stencil,
-            triangles,
-            casts_shadows: scene.objects.iter().map(|o| o.casts_shadows).collect(),
-            albedo: scene.objects.iter().map(|o| o.albedo).collect(),
-            light_color: colors,
-            ambient: scene.ambient,
-            emission: scene.emission.clone(),
-            exposure,
-            scissor_pixels_saved: scissors
-                .iter()
-                .flatten()
-                .map(|r| (width * height - r[2] * r[3]) as usize)
-                .sum(),
-            uncertain,
-            volumes: if keep_volumes { volumes } else { Vec::new() },
-            lights: scene.lights.clone(),
-            camera: scene.camera,
-            plan: entries,
-            timings: Timings {
-                silhouette_ms: ms(silhouette_time),
-                side_building_ms: ms(build_time),
-                raster_ms: ms(raster_time),
-                prepare_ms: ms(prepare_time),
-                total_ms: ms(t0.elapsed()),
-            },
-            mode,
-            adapter: self.gpu.adapter.clone(),
-            depth_clamp: self.gpu.depth_clamp,
-        })
+        Ok((
+            Some(Frame {
+                width,
+                height,
+                rgba: out.color,
+                ids: out.ids,
+                stencil: out.stencil,
+                triangles,
+                casts_shadows: scene.objects.iter().map(|o| o.casts_shadows).collect(),
+                albedo: scene.objects.iter().map(|o| o.albedo).collect(),
+                light_color: colors,
+                ambient: scene.ambient,
+                emission: scene.emission.clone(),
+                exposure,
+                scissor_pixels_saved: scissors
+                    .iter()
+                    .flatten()
+                    .map(|r| (width * height - r[2] * r[3]) as usize)
+                    .sum(),
+                uncertain,
+                host_resolved: uncertain,
+                pipeline,
+                volumes: if keep_volumes { volumes } else { Vec::new() },
+                lights: scene.lights.clone(),
+                camera: scene.camera,
+                plan: entries,
+                timings: Timings {
+                    silhouette_ms: ms(silhouette_time),
+                    side_building_ms: ms(build_time),
+                    raster_ms: ms(raster_time),
+                    prepare_ms: ms(prepare_time),
+                    total_ms: ms(t0.elapsed()),
+                },
+                mode,
+                adapter: self.gpu.adapter.clone(),
+                depth_clamp: self.gpu.depth_clamp,
+            }),
+            readback_bytes,
+        ))
     }
 
     /// Brings the per-object cache in line with the scene: new meshes get an edge table and a

@@ -18,6 +18,9 @@ struct LightU {
     emit: vec4<f32>,
     // (axis the spot shines along, 1 for a spot light).
     spot: vec4<f32>,
+    // GPU-resident pass only (resident.wgsl): (record region start, region size, first sign of
+    // this light, 1 when it has a back cap). Zero in the host pipeline.
+    draw: vec4<u32>,
 };
 
 @group(0) @binding(0) var<uniform> g: Globals;
@@ -109,4 +112,10 @@ fn fs_lit(i: SurfaceOut) -> @location(0) vec4<f32> {
     let l = normalize(lt.pos.xyz - lt.pos.w * i.world);
     let k = max(dot(n, l), 0.0) * attenuation(i.world);
     return vec4<f32>(i.albedo * lt.color.rgb * k, 0.0);
+}
+
+// The pre-pass for a colour target alone (embedders without an ids target).
+@fragment
+fn fs_prepass_color(i: SurfaceOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(i.albedo * g.ambient.x, 1.0);
 }

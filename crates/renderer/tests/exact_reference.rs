@@ -521,6 +521,8 @@ fn frame_for(case: &Case, size: u32) -> Frame {
         exposure: None,
         scissor_pixels_saved: 0,
         uncertain: 0,
+        host_resolved: 0,
+        pipeline: shadowvol_renderer::Pipeline::Host,
         volumes: Vec::new(),
         lights: vec![
             Light::new(case.light[0], case.light[1], case.light[2], case.light[3]).unwrap(),

@@ -171,6 +171,8 @@ fn artifacts(
         exposure: None,
         scissor_pixels_saved: 0,
         uncertain: 0,
+        host_resolved: 0,
+        pipeline: shadowvol_renderer::Pipeline::Host,
         volumes: Vec::new(),
         lights: vec![light],
         camera: case.camera,

@@ -1,0 +1,158 @@
+// GPU-resident shadow volumes: the draws of the shadow-volume pass, by vertex pulling.
+//
+// Appended to the renderer's shader.wgsl (its Globals, LightU, fragment shaders and attenuation),
+// so the host and GPU pipelines light pixels with the same code. Every vertex shader here builds
+// positions with `rel` and clips them with `g.view_proj * pos` (@invariant), so a front cap lands
+// on exactly the depth the pre-pass wrote from the same triangle.
+//
+// Sides: one instance per side record (resident_edges), 6 vertices: the quad (p, q, q_inf) +
+// (p, q_inf, p_inf), with (p, q) = (b, a) for m > 0 and (a, b) for m < 0 (outward, as
+// `volume::build_sides`); x_inf = (L.w x - L.xyz, 0). For a directional light p_inf == q_inf,
+// so the second triangle is degenerate and draws nothing, and the side is one triangle.
+// Caps: per triangle of a z-fail object, read its sign; the front cap is the triangle itself in
+// canonical order (sigma = +1 with counter-clockwise front faces, sigma = -1 in the clockwise
+// pipeline), the back cap its extrusion with reversed order for sigma = +1. A vertex a draw does
+// not need goes to one fixed point, so its triangle is degenerate and rasterizes nothing.
+
+const R_NEGATIVE: u32 = 0x80000000u;
+const R_TOUCH: i32 = 2;
+
+// Object-space positions of all objects, xyz per global vertex id (the extraction's layout).
+@group(0) @binding(1) var<storage, read> r_positions: array<f32>;
+// Global edges (a, b, first OV slot, object).
+@group(0) @binding(2) var<storage, read> r_edges: array<vec4<u32>>;
+// Global triangles: canonical global vertex ids and the object.
+@group(0) @binding(3) var<storage, read> r_tris: array<vec4<u32>>;
+// [light * tri_count + triangle] signs from resident_triangles.
+@group(0) @binding(4) var<storage, read> r_signs: array<i32>;
+// [light * capacity + slot] side records from resident_edges.
+@group(0) @binding(5) var<storage, read> r_records: array<u32>;
+// Per object, 5 words of 4: rows 0-2 of the camera-relative world-from-object transform (f32
+// bits), the albedo (f32 bits), (first global triangle, 0, 0, 0).
+@group(0) @binding(6) var<storage, read> r_objects: array<vec4<u32>>;
+
+// The camera-relative world position of global vertex `id` of object `obj`.
+fn rel(obj: u32, id: u32) -> vec3<f32> {
+    let i = id * 3u;
+    let p = vec3<f32>(r_positions[i], r_positions[i + 1u], r_positions[i + 2u]);
+    let r0 = bitcast<vec4<f32>>(r_objects[obj * 5u]);
+    let r1 = bitcast<vec4<f32>>(r_objects[obj * 5u + 1u]);
+    let r2 = bitcast<vec4<f32>>(r_objects[obj * 5u + 2u]);
+    return vec3<f32>(
+        ((r0.x * p.x + r0.y * p.y) + r0.z * p.z) + r0.w,
+        ((r1.x * p.x + r1.y * p.y) + r1.z * p.z) + r1.w,
+        ((r2.x * p.x + r2.y * p.y) + r2.z * p.z) + r2.w,
+    );
+}
+
+fn extrude(p: vec3<f32>) -> vec4<f32> {
+    return vec4<f32>(p * lt.pos.w - lt.pos.xyz, 0.0);
+}
+
+fn clip(pos: vec4<f32>) -> VolumeOut {
+    var o: VolumeOut;
+    o.clip = g.view_proj * pos;
+    return o;
+}
+
+fn degenerate() -> VolumeOut {
+    return clip(vec4<f32>(0.0, 0.0, 0.0, 1.0));
+}
+
+@vertex
+fn vs_resident_surface(@builtin(vertex_index) vi: u32) -> SurfaceOut {
+    let t = vi / 3u;
+    let tr = r_tris[t];
+    let p0 = rel(tr.w, tr.x);
+    let p1 = rel(tr.w, tr.y);
+    let p2 = rel(tr.w, tr.z);
+    var p = p0;
+    let c = vi % 3u;
+    if c == 1u {
+        p = p1;
+    } else if c == 2u {
+        p = p2;
+    }
+    var o: SurfaceOut;
+    o.clip = g.view_proj * vec4<f32>(p, 1.0);
+    o.world = p;
+    o.normal = cross(p1 - p0, p2 - p0);
+    o.albedo = bitcast<vec4<f32>>(r_objects[tr.w * 5u + 3u]).rgb;
+    o.ids = vec2<u32>(tr.w + 1u, t - r_objects[tr.w * 5u + 4u].x);
+    return o;
+}
+
+fn side_vertex(record: u32, v: u32) -> VolumeOut {
+    let er = r_edges[record & ~R_NEGATIVE];
+    var p = rel(er.w, er.y);
+    var q = rel(er.w, er.x);
+    if (record & R_NEGATIVE) != 0u {
+        let t = p;
+        p = q;
+        q = t;
+    }
+    switch v {
+        case 0u, 3u: {
+            return clip(vec4<f32>(p, 1.0));
+        }
+        case 1u: {
+            return clip(vec4<f32>(q, 1.0));
+        }
+        case 2u, 4u: {
+            return clip(extrude(q));
+        }
+        default: {
+            return clip(extrude(p));
+        }
+    }
+}
+
+// Z-pass sides: the light's records from the front of its region.
+@vertex
+fn vs_resident_side_zpass(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> VolumeOut {
+    return side_vertex(r_records[lt.draw.x + i], v);
+}
+
+// Z-fail sides: the light's records from the back of its region.
+@vertex
+fn vs_resident_side_zfail(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> VolumeOut {
+    return side_vertex(r_records[lt.draw.x + lt.draw.y - 1u - i], v);
+}
+
+// 6 vertices per triangle: the sigma = +1 front cap, then the back cap (sigma != 0, point lights).
+@vertex
+fn vs_resident_cap_ccw(@builtin(vertex_index) vi: u32) -> VolumeOut {
+    let t = vi / 6u;
+    let k = vi % 6u;
+    let s = r_signs[lt.draw.z + t];
+    if s == 0 || s == R_TOUCH {
+        return degenerate();
+    }
+    let tr = r_tris[t];
+    if k < 3u {
+        if s != 1 {
+            return degenerate();
+        }
+        return clip(vec4<f32>(rel(tr.w, tr[k]), 1.0));
+    }
+    if lt.draw.w == 0u {
+        return degenerate();
+    }
+    // Back cap, outward: (inf0, inf2, inf1) for sigma = +1, (inf0, inf1, inf2) for sigma = -1.
+    var c = k - 3u;
+    if s == 1 && c != 0u {
+        c = 3u - c;
+    }
+    return clip(extrude(rel(tr.w, tr[c])));
+}
+
+// 3 vertices per triangle: the sigma = -1 front cap (drawn with clockwise front faces).
+@vertex
+fn vs_resident_cap_cw(@builtin(vertex_index) vi: u32) -> VolumeOut {
+    let t = vi / 3u;
+    if r_signs[lt.draw.z + t] != -1 {
+        return degenerate();
+    }
+    let tr = r_tris[t];
+    return clip(vec4<f32>(rel(tr.w, tr[vi % 3u]), 1.0));
+}

@@ -1,0 +1,407 @@
+//! The GPU-resident pass against its CPU twin, the `cpu` backend's exact multiplicities, the
+//! host pipeline and the ray-traced reference.
+mod common;
+
+use glam::{Affine3A, Vec3};
+use shadowvol_mesh_topology::Mesh;
+use shadowvol_renderer::resident::{twin, PassFormats, PassFrame, ResidentScene, ShadowPass};
+use shadowvol_renderer::{hard, reference, volume, Camera, Pipeline, RenderOptions, Technique};
+use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::{corpus, object_lights, SceneObject, TopologyScene};
+use std::sync::Arc;
+
+/// A device with the pass, or `None` (visible skip) without an adapter; under `CI=true` a
+/// missing adapter fails.
+fn device() -> Option<(ShadowPass, wgpu::Device, wgpu::Queue)> {
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter = match pollster::block_on(instance.request_adapter(&Default::default())) {
+        Ok(a) => a,
+        Err(e) => {
+            assert!(
+                !shadowvol_silhouette::ci::is_ci(),
+                "CI=true but no GPU adapter: {e}"
+            );
+            eprintln!("SKIPPED: no GPU adapter ({e}); install Mesa lavapipe to run this test");
+            return None;
+        }
+    };
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        required_features: ShadowPass::optional_features(&adapter),
+        required_limits: ShadowPass::required_limits(&adapter).unwrap(),
+        ..Default::default()
+    }))
+    .unwrap();
+    let formats = PassFormats {
+        color: wgpu::TextureFormat::Rgba8Unorm,
+        ids: None,
+        depth: wgpu::TextureFormat::Depth24PlusStencil8,
+    };
+    let pass = ShadowPass::new(&adapter, &device, &queue, formats).unwrap();
+    Some((pass, device, queue))
+}
+
+/// The scene's objects in object space (transforms are per-frame inputs of the pass).
+fn object_space(scene: &TopologyScene) -> TopologyScene {
+    TopologyScene {
+        objects: scene
+            .objects
+            .iter()
+            .map(|o| SceneObject {
+                world_from_object: Affine3A::IDENTITY,
+                ..o.clone()
+            })
+            .collect(),
+    }
+}
+
+/// What one extraction on the device gave, and what the twin gives for the same input.
+struct Run {
+    signs: Vec<i32>,
+    records: Vec<twin::LightRecords>,
+    twin_signs: Vec<i32>,
+    twin_records: Vec<twin::LightRecords>,
+    twin_integer: u64,
+    integer: u64,
+}
+
+fn extract(
+    gpu: &(ShadowPass, wgpu::Device, wgpu::Queue),
+    scene: &TopologyScene,
+    lights: &[Light],
+    mode: Accuracy,
+    techniques: &[Technique],
+) -> (ResidentScene, Run) {
+    let (pass, device, queue) = gpu;
+    let mut rs = pass.prepare(&object_space(scene)).unwrap();
+    let n_obj = scene.objects.len();
+    let transforms: Vec<Affine3A> = scene.objects.iter().map(|o| o.world_from_object).collect();
+    let camera = Camera::look_at(Vec3::new(5.0, 4.0, 6.0), Vec3::ZERO);
+    pass.update(
+        &mut rs,
+        &PassFrame {
+            camera: &camera,
+            aspect: 1.0,
+            lights,
+            colors: &vec![[1.0; 3]; lights.len()],
+            emission: &[],
+            transforms: &transforms,
+            albedo: &vec![[1.0; 3]; n_obj],
+            techniques,
+            scissors: &vec![None; lights.len()],
+            ambient: 0.1,
+            mode,
+            count: true,
+        },
+    )
+    .unwrap();
+    let mut enc = device.create_command_encoder(&Default::default());
+    pass.encode_extract(&mut enc, &rs);
+    queue.submit([enc.finish()]);
+    let signs = pass.read_signs(&rs).unwrap();
+    let records = pass.read_records(&rs).unwrap();
+    let integer = pass.read_counts(&rs).unwrap().integer_decided;
+    let ol: Vec<[f32; 4]> = object_lights(scene, lights).into_iter().flatten().collect();
+    let codes: Vec<u32> = techniques
+        .iter()
+        .map(|t| match t {
+            Technique::Culled => twin::technique::CULLED,
+            Technique::ZPass => twin::technique::ZPASS,
+            Technique::ZFail => twin::technique::ZFAIL,
+        })
+        .collect();
+    let layout = rs.layout();
+    let (twin_signs, twin_integer) =
+        twin::triangle_signs(layout, &ol, lights.len(), &codes, mode, pass.filter());
+    let (_, twin_records) =
+        twin::side_records(layout, &twin_signs, &ol, lights.len(), &codes, mode);
+    (
+        rs,
+        Run {
+            signs,
+            records,
+            twin_signs,
+            twin_records,
+            twin_integer,
+            integer,
+        },
+    )
+}
+
+/// Per light, the multiplicity of every global edge from the side records.
+fn multiplicities(records: &[twin::LightRecords], edges: usize) -> Vec<Vec<i32>> {
+    records
+        .iter()
+        .map(|r| {
+            let mut m = vec![0i32; edges];
+            for &x in r.zpass.iter().chain(&r.zfail) {
+                let e = (x & !0x8000_0000) as usize;
+                m[e] += if x & 0x8000_0000 != 0 { -1 } else { 1 };
+            }
+            m
+        })
+        .collect()
+}
+
+/// Alternating techniques, so both lists and culling are exercised.
+fn mixed_techniques(lights: usize, objects: usize) -> Vec<Technique> {
+    (0..lights * objects)
+        .map(|i| match i % 3 {
+            0 => Technique::ZFail,
+            1 => Technique::ZPass,
+            _ if objects == 1 => Technique::ZFail,
+            _ => Technique::Culled,
+        })
+        .collect()
+}
+
+#[test]
+fn exact_multiplicities_equal_cpu_bit_for_bit_on_the_corpus_with_no_host_resolution() {
+    let Some(gpu) = device() else { return };
+    let mut cpu = shadowvol_cpu::CpuBackend::new();
+    let mut integer_total = 0;
+    for case in corpus::cases() {
+        let scene = case.scene().unwrap();
+        let n_obj = scene.objects.len();
+        let techniques = vec![Technique::ZFail; case.lights.len() * n_obj];
+        let (rs, run) = extract(&gpu, &scene, &case.lights, Accuracy::Exact, &techniques);
+        let (want, _) =
+            shadowvol_silhouette::extract_once(&mut cpu, &scene, &case.lights, Accuracy::Exact)
+                .unwrap();
+        let got = multiplicities(&run.records, rs.layout().scene.edge_count());
+        let ol = object_lights(&scene, &case.lights);
+        let offsets = scene.edge_offsets();
+        for (li, m) in got.iter().enumerate() {
+            // The host pipeline's multiplicities: the backend's, less the triangles touching a
+            // point light (they have no volume).
+            let mut want = want.values(li).to_vec();
+            for (oi, o) in scene.objects.iter().enumerate() {
+                let touching = volume::touching_triangles(&o.table, ol[oi][li]);
+                if !touching.is_empty() {
+                    volume::remove_triangles(
+                        &o.table,
+                        ol[oi][li],
+                        Accuracy::Exact,
+                        &touching,
+                        &mut want[offsets[oi]..offsets[oi + 1]],
+                    );
+                }
+            }
+            assert_eq!(m, &want, "{}: light {li}", case.name);
+        }
+        assert_eq!(
+            run.signs, run.twin_signs,
+            "{}: signs differ from the twin",
+            case.name
+        );
+        assert_eq!(run.records, run.twin_records, "{}", case.name);
+        assert_eq!(
+            run.integer, run.twin_integer,
+            "{}: integer-path count",
+            case.name
+        );
+        integer_total += run.integer;
+    }
+    // The corpus has degenerate cases the filter cannot certify: the integer path is exercised.
+    assert!(integer_total > 0, "no triangle reached the integer path");
+}
+
+#[test]
+fn every_mode_matches_its_twin_and_the_consistent_modes_close_their_chains() {
+    let Some(gpu) = device() else { return };
+    for mode in Accuracy::ALL {
+        let mut original_cracked = false;
+        for case in corpus::cases() {
+            let scene = case.scene().unwrap();
+            let techniques = mixed_techniques(case.lights.len(), scene.objects.len());
+            let (rs, run) = extract(&gpu, &scene, &case.lights, mode, &techniques);
+            // WGSL may contract f32 arithmetic where Rust does not; lavapipe does not, so the
+            // f32 modes are compared exactly too (a driver that contracts would show here).
+            assert_eq!(run.signs, run.twin_signs, "{mode} {}: signs", case.name);
+            assert_eq!(
+                run.records, run.twin_records,
+                "{mode} {}: records",
+                case.name
+            );
+            let m = multiplicities(&run.records, rs.layout().scene.edge_count());
+            let offsets = scene.edge_offsets();
+            for (li, m) in m.iter().enumerate() {
+                for (oi, o) in scene.objects.iter().enumerate() {
+                    if techniques[li * scene.objects.len() + oi] == Technique::Culled {
+                        assert!(m[offsets[oi]..offsets[oi + 1]].iter().all(|&x| x == 0));
+                        continue;
+                    }
+                    let open = shadowvol_silhouette::invariant::open_vertices(
+                        &o.table,
+                        &m[offsets[oi]..offsets[oi + 1]],
+                    );
+                    if mode.is_consistent() {
+                        assert_eq!(open, 0, "{mode} {} light {li} object {oi}", case.name);
+                    } else if open > 0 {
+                        original_cracked = true;
+                    }
+                }
+            }
+        }
+        if mode == Accuracy::Original {
+            assert!(
+                original_cracked,
+                "original must keep its cracks somewhere in the corpus"
+            );
+        }
+    }
+}
+
+/// Subnormal and near-`f32::MAX` coordinates: the filter certifies none of them, the integer
+/// path decides them on the device, equal to `cpu`.
+#[test]
+fn exact_mode_decides_subnormal_and_huge_inputs_on_the_device() {
+    let Some(gpu) = device() else { return };
+    let mut cpu = shadowvol_cpu::CpuBackend::new();
+    let tet = |s: f32| {
+        Mesh::new(
+            vec![
+                Vec3::ZERO,
+                Vec3::new(s, 0.0, 0.0),
+                Vec3::new(0.0, 0.0, s),
+                Vec3::new(0.0, s, 0.0),
+                Vec3::new(s, s, s * 0.5),
+            ],
+            vec![
+                [0, 2, 1],
+                [0, 1, 3],
+                [1, 2, 3],
+                [0, 3, 2],
+                [1, 4, 3],
+                [3, 4, 2],
+            ],
+        )
+        .unwrap()
+    };
+    for (s, light) in [
+        (1e-40f32, Light::point(Vec3::new(3e-40, 2e-40, 1e-40))),
+        (1e-44, Light::directional(Vec3::new(1.0, 2.0, 0.5))),
+        (1e37, Light::point(Vec3::new(3e37, 2e37, 1e37))),
+        (3e38, Light::directional(Vec3::new(-1.0, 3.0, 0.25))),
+    ] {
+        let table = Arc::new(shadowvol_mesh_topology::EdgeTable::build(&tet(s)).unwrap());
+        let scene = TopologyScene {
+            objects: vec![SceneObject {
+                name: format!("tet {s:e}"),
+                table,
+                world_from_object: Affine3A::IDENTITY,
+            }],
+        };
+        let lights = [light];
+        let (rs, run) = extract(&gpu, &scene, &lights, Accuracy::Exact, &[Technique::ZFail]);
+        let (want, _) =
+            shadowvol_silhouette::extract_once(&mut cpu, &scene, &lights, Accuracy::Exact).unwrap();
+        let got = multiplicities(&run.records, rs.layout().scene.edge_count());
+        assert_eq!(got[0].as_slice(), want.values(0), "scale {s:e}");
+        if s < 1e-30 {
+            assert!(
+                run.integer > 0,
+                "scale {s:e}: subnormals must go to the integer path"
+            );
+        }
+    }
+}
+
+const SIZE: u32 = 128;
+/// 0.05 % of the image.
+const MAX_PIXELS: usize = (SIZE * SIZE) as usize * 5 / 10_000;
+/// As in tests/hard.rs: scenes whose rasterized volumes are wrong in every consistent mode on
+/// the host pipeline too (raster findings); they are compared, not bounded.
+const RASTER_FINDINGS: [&str; 2] = ["hard-edge-on-tilted-fan", "hard-homogeneous-w"];
+
+#[test]
+fn gpu_pipeline_matches_the_host_pipeline_and_the_reference_on_hard_scenes() {
+    let mut opts = RenderOptions::new(SIZE, SIZE);
+    let Some(mut host) = common::renderer_with(opts) else {
+        return;
+    };
+    opts.pipeline = Pipeline::Gpu;
+    let mut gpu = common::renderer_with(opts).unwrap();
+    if let Some(why) = gpu.gpu_pipeline_unsupported() {
+        assert!(!shadowvol_silhouette::ci::is_ci(), "CI=true: {why}");
+        eprintln!("SKIPPED: the adapter cannot run the GPU pipeline: {why}");
+        return;
+    }
+    let mut report = String::new();
+    for mode in [Accuracy::Robust, Accuracy::Ordered, Accuracy::Exact] {
+        opts.mode = mode;
+        opts.pipeline = Pipeline::Host;
+        host.set_options(opts);
+        opts.pipeline = Pipeline::Gpu;
+        gpu.set_options(opts);
+        for name in hard::hard_preset_names() {
+            let scene = hard::hard_preset(&name).unwrap();
+            let h = host.render(&scene).unwrap();
+            let g = gpu.render(&scene).unwrap();
+            assert_eq!(g.pipeline, Pipeline::Gpu);
+            assert_eq!(g.host_resolved, 0, "{name} {mode}");
+            // The images: pixels where a channel differs by more than rounding (the pipelines
+            // compute positions and normals in f32 in different orders).
+            let differ = h
+                .rgba
+                .chunks_exact(4)
+                .zip(g.rgba.chunks_exact(4))
+                .filter(|(a, b)| a.iter().zip(*b).any(|(x, y)| x.abs_diff(*y) > 3))
+                .count();
+            let cmp = reference::compare(&g);
+            report.push_str(&format!(
+                "{mode} {name}: {differ} pixels differ from host, {} artifacts (host {})\n",
+                cmp.artifact_pixels,
+                reference::compare(&h).artifact_pixels
+            ));
+            if RASTER_FINDINGS.contains(&name.as_str()) {
+                continue;
+            }
+            assert!(
+                differ <= MAX_PIXELS,
+                "{mode} {name}: {differ} pixels differ from the host pipeline\n{report}"
+            );
+            assert!(
+                cmp.artifact_pixels <= MAX_PIXELS,
+                "{mode} {name}: {} artifact pixels\n{report}",
+                cmp.artifact_pixels
+            );
+            // The plan's counts come from the device: the same silhouettes as the host's.
+            for (eh, eg) in h.plan.iter().zip(&g.plan) {
+                assert_eq!(eh.technique, eg.technique, "{mode} {name}");
+                if mode == Accuracy::Exact {
+                    assert_eq!(
+                        eh.side_quads, eg.side_quads,
+                        "{mode} {name}: {eh:?} vs {eg:?}"
+                    );
+                }
+            }
+        }
+    }
+    eprintln!("{report}");
+}
+
+#[test]
+fn timed_gpu_frames_read_nothing_back() {
+    let mut opts = RenderOptions::new(64, 64);
+    opts.pipeline = Pipeline::Gpu;
+    let Some(mut r) = common::renderer_with(opts) else {
+        return;
+    };
+    if r.gpu_pipeline_unsupported().is_some() {
+        return;
+    }
+    let scene = common::box_on_floor(
+        Light::point(Vec3::new(1.0, 5.0, 1.0)),
+        Camera::look_at(Vec3::new(4.0, 4.0, 6.0), Vec3::ZERO),
+    );
+    let t = r.render_timed(&scene).unwrap();
+    assert_eq!(t.readback_bytes, 0);
+    opts.pipeline = Pipeline::Host;
+    r.set_options(opts);
+    let t = r.render_timed(&scene).unwrap();
+    assert!(
+        t.readback_bytes > 0,
+        "the host pipeline brings multiplicities back"
+    );
+}
