@@ -24,6 +24,7 @@ embedder() {
     shaders/*.wgsl) echo crates/wgpu-compute/src/shaders.rs ;;
     kernels/*.cl) echo crates/opencl/src/lib.rs ;;
     shaders/*.geom) echo crates/vulkan-geometry/src/pipelines.rs ;;
+    crates/renderer/src/resident/*) echo crates/renderer/src/resident/mod.rs ;;
   esac
 }
 
@@ -41,6 +42,12 @@ glsl-sign-negated	shaders/silhouette_gs.geom	s = t * parity;	s = -t * parity;	co
 glsl-robust-rule-dropped	shaders/silhouette_gs.geom	if (t != t1 || t1 != t2) {	if (false) {	conformance
 glsl-f32-bound-shrunk	shaders/silhouette_gs.geom	precise float bound = 1.9073486328125e-06 * perm;	precise float bound = 1.0e-12 * perm;	conformance
 glsl-f64-bound-shrunk	shaders/silhouette_gs.geom	precise double bound = 1.0e-15LF * perm;	precise double bound = 1.0e-30LF * perm;	conformance
+resident-parity-dropped	crates/renderer/src/resident/extract.wgsl	m += select(s, -s, (ot & NEGATIVE) != 0u);	m += s;	resident
+resident-touch-ignored	crates/renderer/src/resident/extract.wgsl	return l.w != 0.0 && p.x	return false && p.x	resident
+resident-side-flipped	crates/renderer/src/resident/draw.wgsl	if (record & R_NEGATIVE) != 0u {	if (record & R_NEGATIVE) == 0u {	resident
+resident-back-cap-flipped	crates/renderer/src/resident/draw.wgsl	if s == 1 && c != 0u {	if s == -1 && c != 0u {	resident
+resident-zfail-list-from-front	crates/renderer/src/resident/draw.wgsl	return side_vertex(r_records[lt.draw.x + lt.draw.y - 1u - i], v);	return side_vertex(r_records[lt.draw.x + i], v);	resident
+resident-twin-robust-rule	crates/renderer/src/resident/twin.rs	if s0 == s1 && s1 == s2 {	if true {	resident
 LIST
 )"
 
@@ -51,7 +58,7 @@ tar -C "$root" --exclude=./target --exclude=./.git --exclude=./fuzz/target -cf -
 cd "$scratch"
 
 # The unplanted copy must pass the same tests, or a kill would mean nothing.
-if ! cargo test --workspace --test conformance --test gpu_lavapipe --test device \
+if ! cargo test --workspace --test conformance --test gpu_lavapipe --test device --test resident \
   >"$scratch/plant-baseline.log" 2>&1; then
   echo "baseline: the unplanted copy fails its tests; see $scratch/plant-baseline.log"
   exit 2

@@ -1,0 +1,131 @@
+//! `shadowvol render --pipeline` and `--frames`: the GPU pipeline is the default, reads nothing
+//! back during timed frames and agrees with the host pipeline; `--backend` means host.
+
+mod common;
+
+use common::run;
+use serde_json::Value;
+
+fn scratch(name: &str) -> String {
+    let dir =
+        std::env::temp_dir().join(format!("shadowvol-render-pipeline-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name).display().to_string()
+}
+
+/// Runs `render ARGS --format json`; `None` (visible skip, a failure under CI) without an
+/// adapter.
+fn render(args: &[&str]) -> Option<Value> {
+    let mut all = vec!["render"];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--format", "json"]);
+    let out = run(&all);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if stderr.contains("no GPU adapter") {
+        common::skip("render (no GPU adapter)", &stderr);
+        return None;
+    }
+    assert!(out.status.success(), "shadowvol {all:?} failed:\n{stderr}");
+    Some(serde_json::from_slice(&out.stdout).expect("JSON on stdout"))
+}
+
+#[test]
+fn gpu_pipeline_is_the_default_and_timed_frames_read_nothing_back() {
+    let png = scratch("gpu.png");
+    let Some(v) = render(&[
+        "hard-book-3",
+        "--size",
+        "96x72",
+        "--frames",
+        "3",
+        "--reference",
+        "--out",
+        &png,
+    ]) else {
+        return;
+    };
+    assert_eq!(v["pipeline"], "gpu", "{v}");
+    assert_eq!(v["backend"], "wgpu");
+    assert_eq!(v["frame_readback_bytes"], 0);
+    assert_eq!(v["frames"]["count"], 3);
+    for k in ["median_ms", "p10_ms", "p90_ms"] {
+        assert!(v["frames"][k].as_f64().unwrap() > 0.0, "{k}: {v}");
+    }
+    assert!(v["frames"]["p10_ms"].as_f64() <= v["frames"]["median_ms"].as_f64());
+    assert!(v["frames"]["median_ms"].as_f64() <= v["frames"]["p90_ms"].as_f64());
+    assert_eq!(v["host_resolved"], 0);
+    assert!(v["uncertain"].as_u64().is_some());
+    assert!(
+        v.get("gpu_timings_ms").is_some(),
+        "the key is part of the contract: {v}"
+    );
+    assert!(v["artifact_pixels"].as_u64().unwrap() <= 96 * 72 * 5 / 10_000);
+    let plan = v["plan"].as_array().unwrap();
+    assert!(
+        plan.iter().any(|e| e["side_quads"].as_u64().unwrap() > 0),
+        "{v}"
+    );
+}
+
+#[test]
+fn backend_means_host_and_both_pipelines_agree() {
+    let (a, b) = (scratch("host.png"), scratch("gpu2.png"));
+    let args = [
+        "hard-double-sided-sheet",
+        "--size",
+        "80x60",
+        "--backdrop",
+        "--frames",
+        "2",
+    ];
+    let Some(host) = render(&[&args[..], &["--backend", "simd", "--out", &a]].concat()) else {
+        return;
+    };
+    assert_eq!(host["pipeline"], "host");
+    assert_eq!(host["backend"], "simd");
+    // 2 frames, every edge of every object and light as an i32.
+    assert!(host["frame_readback_bytes"].as_u64().unwrap() > 0, "{host}");
+    let gpu = render(&[&args[..], &["--pipeline", "gpu", "--out", &b]].concat()).unwrap();
+    assert_eq!(gpu["pipeline"], "gpu");
+    assert_eq!(host["shadow_pixels"], gpu["shadow_pixels"]);
+    for (h, g) in host["plan"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(gpu["plan"].as_array().unwrap())
+    {
+        assert_eq!(h["technique"], g["technique"]);
+        assert_eq!(
+            h["side_quads"], g["side_quads"],
+            "exact mode: the same silhouettes"
+        );
+    }
+    let host_png = image::open(&a).unwrap().to_rgba8();
+    let gpu_png = image::open(&b).unwrap().to_rgba8();
+    let differ = host_png
+        .pixels()
+        .zip(gpu_png.pixels())
+        .filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 3))
+        .count();
+    assert!(differ <= 80 * 60 * 5 / 10_000, "{differ} pixels differ");
+}
+
+#[test]
+fn gpu_pipeline_with_a_backend_is_refused() {
+    let out = run(&[
+        "render",
+        "hard-book-3",
+        "--pipeline",
+        "gpu",
+        "--backend",
+        "simd",
+        "--out",
+        &scratch("x.png"),
+    ]);
+    assert!(!out.status.success());
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("--backend simd selects the host pipeline"),
+        "{e}"
+    );
+}
