@@ -64,7 +64,9 @@ pub const LONG_ABOUT: &str =
     \"pipeline\": \"gpu\" or \"host\", \"frame_readback_bytes\": bytes brought to the host during \
     the --frames frames besides the final image (host: the multiplicities, 4 bytes per edge and \
     light and extraction; gpu: 0), \"frames\": null or {\"count\", \"median_ms\", \"p10_ms\", \
-    \"p90_ms\"}, \"gpu_timings_ms\": per-pass GPU times, null (timestamp queries are not read), \
+    \"p90_ms\"}, \"gpu_timings_ms\": null or {\"extract\", \"sides\", \"caps\", \"stencil\" (sides + \
+    caps), \"lighting\" (pre-pass + lit passes)}, GPU milliseconds from timestamp queries (gpu \
+    pipeline on an adapter with TIMESTAMP_QUERY; the median over --frames, else the final frame), \
     \"uncertain\": exact-mode evaluations the certified filter left undecided (host: (edge, \
     opposite vertex, light) triples; gpu: (triangle, light) pairs), \"host_resolved\": those \
     decided on the host (gpu: 0)}. With the gpu pipeline \"backend\" is \"wgpu\", whose kernels it runs, \
@@ -294,8 +296,9 @@ struct Report<'a> {
     frame_readback_bytes: u64,
     /// The `--frames` frames' times, `null` without them.
     frames: Option<FrameStats>,
-    /// Per-pass GPU times from timestamp queries; `null`: not read.
-    gpu_timings_ms: Option<()>,
+    /// Per-pass GPU times from timestamp queries (the median of the `--frames` frames, else the
+    /// final frame's); `null` for the host pipeline or without timestamp queries.
+    gpu_timings_ms: Option<shadowvol_renderer::resident::GpuTimings>,
     /// Exact-mode evaluations the certified filter left undecided.
     uncertain: u64,
     /// Of those, the ones decided on the host.
@@ -440,7 +443,8 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     };
     let frame = renderer.render(&rscene).map_err(render_error)?;
     frame.save_png(&out_path).map_err(render_error)?;
-    let (frames, frame_readback_bytes) = timed_frames(&mut renderer, &rscene, &scene, args.frames)?;
+    let timed = timed_frames(&mut renderer, &rscene, &scene, args.frames)?;
+    let (frames, frame_readback_bytes) = (timed.stats, timed.readback_bytes);
 
     let want_reference = args.reference || args.diff.is_some();
     let (cmp, reference_ms) = if want_reference {
@@ -490,7 +494,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 pipeline,
                 frame_readback_bytes,
                 frames,
-                gpu_timings_ms: None,
+                gpu_timings_ms: timed.gpu_timings.or(frame.gpu_timings),
                 uncertain: frame.uncertain,
                 host_resolved: frame.host_resolved,
             };
@@ -589,16 +593,45 @@ struct TextReport<'a> {
     frame_readback_bytes: u64,
 }
 
+/// What the `--frames` frames measured.
+#[derive(Debug, Default)]
+struct Timed {
+    stats: Option<FrameStats>,
+    readback_bytes: u64,
+    /// The median of each pass's GPU time, where timestamps were read.
+    gpu_timings: Option<shadowvol_renderer::resident::GpuTimings>,
+}
+
+/// The median of each field over `all` (`None` when empty).
+fn median_timings(
+    all: &[shadowvol_renderer::resident::GpuTimings],
+) -> Option<shadowvol_renderer::resident::GpuTimings> {
+    if all.is_empty() {
+        return None;
+    }
+    let med = |f: fn(&shadowvol_renderer::resident::GpuTimings) -> f64| {
+        let mut v: Vec<f64> = all.iter().map(f).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    Some(shadowvol_renderer::resident::GpuTimings {
+        extract: med(|t| t.extract),
+        sides: med(|t| t.sides),
+        caps: med(|t| t.caps),
+        stencil: med(|t| t.stencil),
+        lighting: med(|t| t.lighting),
+    })
+}
+
 /// `--frames`: `n` frames with the lights on the orbit, timed without reading images back.
-/// Returns their statistics and the bytes read back during them.
 fn timed_frames(
     renderer: &mut Renderer,
     rscene: &RenderScene,
     scene: &shadowvol_scenes::Scene,
     n: u32,
-) -> Result<(Option<FrameStats>, u64), CliError> {
+) -> Result<Timed, CliError> {
     if n == 0 {
-        return Ok((None, 0));
+        return Ok(Timed::default());
     }
     let centre = scene
         .bounds()
@@ -613,15 +646,21 @@ fn timed_frames(
     );
     let mut ms = Vec::with_capacity(n as usize);
     let mut bytes = 0u64;
+    let mut gpu = Vec::new();
     for k in 1..=n {
         moving.lights = orbit_lights(&rscene.lights, centre, k);
         let t = renderer.render_timed(&moving).map_err(render_error)?;
         ms.push(t.total_ms);
         bytes += t.readback_bytes;
+        gpu.extend(t.gpu_timings);
         bar.inc(1);
     }
     bar.finish_and_clear();
-    Ok((FrameStats::of(&mut ms), bytes))
+    Ok(Timed {
+        stats: FrameStats::of(&mut ms),
+        readback_bytes: bytes,
+        gpu_timings: median_timings(&gpu),
+    })
 }
 
 fn write_text(out: &mut dyn Write, r: &TextReport<'_>) -> std::io::Result<()> {

@@ -132,6 +132,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             },
         )?;
         let mut enc = device.create_command_encoder(&Default::default());
+        pass.encode_extract(&mut enc, &resident); // first: it places the vertices
         pass.encode_prepass(
             &mut enc,
             &resident,
@@ -140,7 +141,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &depth_view,
             wgpu::Color::BLACK,
         );
-        pass.encode_extract(&mut enc, &resident);
         pass.encode_stencil(&mut enc, &resident, 0, &depth_view);
         pass.encode_lit(&mut enc, &resident, 0, &color_view, &depth_view);
         queue.submit([enc.finish()]);

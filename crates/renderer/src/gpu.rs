@@ -935,6 +935,7 @@ impl Gpu {
         let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("resident frame"),
         });
+        pass.encode_extract(&mut enc, rs);
         pass.encode_prepass(
             &mut enc,
             rs,
@@ -948,7 +949,6 @@ impl Gpu {
                 a: 1.0,
             },
         );
-        pass.encode_extract(&mut enc, rs);
         for li in 0..lights {
             pass.encode_stencil(&mut enc, rs, li, &depth_view);
             if let Some((_, _, stencil_rb)) = &readbacks {

@@ -73,6 +73,9 @@ pub struct FrameTime {
     /// Bytes brought to the host during the frame: for the host pipeline the multiplicities
     /// every extraction returned (4 bytes per edge and light), for the GPU pipeline 0.
     pub readback_bytes: u64,
+    /// GPU pipeline on a device with timestamp queries: the GPU time of each pass (read after
+    /// the frame; not counted in `readback_bytes`).
+    pub gpu_timings: Option<crate::resident::GpuTimings>,
 }
 
 impl RenderOptions {
@@ -151,6 +154,8 @@ pub struct Frame {
     pub host_resolved: u64,
     /// The pipeline that drew the frame.
     pub pipeline: Pipeline,
+    /// GPU pipeline on a device with timestamp queries: the GPU time of each pass.
+    pub gpu_timings: Option<crate::resident::GpuTimings>,
     /// With [`RenderOptions::keep_volumes`]: every shadow-volume vertex drawn, as triangles,
     /// relative to the camera's eye (`w = 0`: extruded to infinity); empty otherwise.
     pub volumes: Vec<[f32; 4]>,
@@ -326,9 +331,11 @@ impl Renderer {
     pub fn render_timed(&mut self, scene: &RenderScene) -> Result<FrameTime, RenderError> {
         let t0 = Instant::now();
         let (_, readback_bytes) = self.frame(scene, false)?;
+        let total_ms = ms(t0.elapsed());
         Ok(FrameTime {
-            total_ms: ms(t0.elapsed()),
+            total_ms,
             readback_bytes,
+            gpu_timings: self.last_gpu_timings()?,
         })
     }
 
@@ -722,6 +729,7 @@ impl Renderer {
                 uncertain,
                 host_resolved: uncertain,
                 pipeline,
+                gpu_timings: None,
                 volumes: if keep_volumes { volumes } else { Vec::new() },
                 lights: scene.lights.clone(),
                 camera: scene.camera,

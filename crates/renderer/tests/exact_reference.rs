@@ -523,6 +523,7 @@ fn frame_for(case: &Case, size: u32) -> Frame {
         uncertain: 0,
         host_resolved: 0,
         pipeline: shadowvol_renderer::Pipeline::Host,
+        gpu_timings: None,
         volumes: Vec::new(),
         lights: vec![
             Light::new(case.light[0], case.light[1], case.light[2], case.light[3]).unwrap(),

@@ -173,6 +173,7 @@ fn artifacts(
         uncertain: 0,
         host_resolved: 0,
         pipeline: shadowvol_renderer::Pipeline::Host,
+        gpu_timings: None,
         volumes: Vec::new(),
         lights: vec![light],
         camera: case.camera,

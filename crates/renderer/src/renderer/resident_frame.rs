@@ -30,6 +30,18 @@ pub(super) struct ResidentState {
 }
 
 impl Renderer {
+    /// The GPU times of the last GPU-pipeline frame, where the device has timestamp queries.
+    pub(super) fn last_gpu_timings(
+        &self,
+    ) -> Result<Option<crate::resident::GpuTimings>, RenderError> {
+        match (&self.resident.pass, &self.resident.scene) {
+            (Some(pass), Some((rs, _))) if self.options.pipeline == super::Pipeline::Gpu => {
+                pass.read_timings(rs)
+            }
+            _ => Ok(None),
+        }
+    }
+
     /// One frame of the GPU pipeline. Returns the frame (with `readback`) and the bytes read
     /// back besides the final image and the plan's counts: always 0.
     pub(super) fn frame_gpu(
@@ -155,6 +167,7 @@ impl Renderer {
                 uncertain: counts.integer_decided,
                 host_resolved: 0,
                 pipeline,
+                gpu_timings: pass.read_timings(rs)?,
                 volumes: Vec::new(),
                 lights: scene.lights.clone(),
                 camera: scene.camera,

@@ -19,6 +19,11 @@ const R_TOUCH: i32 = 2;
 
 // Object-space positions of all objects, xyz per global vertex id (the extraction's layout).
 @group(0) @binding(1) var<storage, read> r_positions: array<f32>;
+// Camera-relative world positions per global vertex id, written by `resident_vertices`.
+@group(0) @binding(7) var<storage, read> r_world: array<vec4<f32>>;
+// The object of each global vertex (for `resident_vertices`).
+@group(0) @binding(8) var<storage, read> r_vertex_objects: array<u32>;
+@group(2) @binding(0) var<storage, read_write> r_world_out: array<vec4<f32>>;
 // Global edges (a, b, first OV slot, object).
 @group(0) @binding(2) var<storage, read> r_edges: array<vec4<u32>>;
 // Global triangles: canonical global vertex ids and the object.
@@ -31,8 +36,9 @@ const R_TOUCH: i32 = 2;
 // bits), the albedo (f32 bits), (first global triangle, 0, 0, 0).
 @group(0) @binding(6) var<storage, read> r_objects: array<vec4<u32>>;
 
-// The camera-relative world position of global vertex `id` of object `obj`.
-fn rel(obj: u32, id: u32) -> vec3<f32> {
+// The camera-relative world position of global vertex `id` of object `obj`, once per vertex and
+// frame: every draw then reads the same stored value, so shared vertices are bit-identical.
+fn transform(obj: u32, id: u32) -> vec3<f32> {
     let i = id * 3u;
     let p = vec3<f32>(r_positions[i], r_positions[i + 1u], r_positions[i + 2u]);
     let r0 = bitcast<vec4<f32>>(r_objects[obj * 5u]);
@@ -43,6 +49,19 @@ fn rel(obj: u32, id: u32) -> vec3<f32> {
         ((r1.x * p.x + r1.y * p.y) + r1.z * p.z) + r1.w,
         ((r2.x * p.x + r2.y * p.y) + r2.z * p.z) + r2.w,
     );
+}
+
+@compute @workgroup_size(256)
+fn resident_vertices(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let v = gid.x + gid.y * nwg.x * 256u;
+    if v >= arrayLength(&r_world_out) {
+        return;
+    }
+    r_world_out[v] = vec4<f32>(transform(r_vertex_objects[v], v), 1.0);
+}
+
+fn rel(id: u32) -> vec3<f32> {
+    return r_world[id].xyz;
 }
 
 fn extrude(p: vec3<f32>) -> vec4<f32> {
@@ -63,9 +82,9 @@ fn degenerate() -> VolumeOut {
 fn vs_resident_surface(@builtin(vertex_index) vi: u32) -> SurfaceOut {
     let t = vi / 3u;
     let tr = r_tris[t];
-    let p0 = rel(tr.w, tr.x);
-    let p1 = rel(tr.w, tr.y);
-    let p2 = rel(tr.w, tr.z);
+    let p0 = rel(tr.x);
+    let p1 = rel(tr.y);
+    let p2 = rel(tr.z);
     var p = p0;
     let c = vi % 3u;
     if c == 1u {
@@ -84,8 +103,8 @@ fn vs_resident_surface(@builtin(vertex_index) vi: u32) -> SurfaceOut {
 
 fn side_vertex(record: u32, v: u32) -> VolumeOut {
     let er = r_edges[record & ~R_NEGATIVE];
-    var p = rel(er.w, er.y);
-    var q = rel(er.w, er.x);
+    var p = rel(er.y);
+    var q = rel(er.x);
     if (record & R_NEGATIVE) != 0u {
         let t = p;
         p = q;
@@ -133,7 +152,7 @@ fn vs_resident_cap_ccw(@builtin(vertex_index) vi: u32) -> VolumeOut {
         if s != 1 {
             return degenerate();
         }
-        return clip(vec4<f32>(rel(tr.w, tr[k]), 1.0));
+        return clip(vec4<f32>(rel(tr[k]), 1.0));
     }
     if lt.draw.w == 0u {
         return degenerate();
@@ -143,7 +162,7 @@ fn vs_resident_cap_ccw(@builtin(vertex_index) vi: u32) -> VolumeOut {
     if s == 1 && c != 0u {
         c = 3u - c;
     }
-    return clip(extrude(rel(tr.w, tr[c])));
+    return clip(extrude(rel(tr[c])));
 }
 
 // 3 vertices per triangle: the sigma = -1 front cap (drawn with clockwise front faces).
@@ -154,5 +173,5 @@ fn vs_resident_cap_cw(@builtin(vertex_index) vi: u32) -> VolumeOut {
         return degenerate();
     }
     let tr = r_tris[t];
-    return clip(vec4<f32>(rel(tr.w, tr[vi % 3u]), 1.0));
+    return clip(vec4<f32>(rel(tr[vi % 3u]), 1.0));
 }

@@ -26,6 +26,8 @@ pub struct ResidentLayout {
     pub ov_tris: Vec<u32>,
     /// First global triangle of each object; `object_count + 1` entries.
     pub tri_offsets: Vec<u32>,
+    /// The object of each global vertex.
+    pub vertex_objects: Vec<u32>,
 }
 
 impl ResidentLayout {
@@ -77,11 +79,18 @@ impl ResidentLayout {
             }
             tri_offsets.push(tris.len() as u32);
         }
+        let vertex_objects = layout
+            .vertex_offsets
+            .windows(2)
+            .enumerate()
+            .flat_map(|(oi, w)| std::iter::repeat_n(oi as u32, (w[1] - w[0]) as usize))
+            .collect();
         Ok(Self {
             scene: layout,
             tris,
             ov_tris,
             tri_offsets,
+            vertex_objects,
         })
     }
 

@@ -3,7 +3,8 @@
 //!
 //! Per frame the host writes only small inputs ([`ShadowPass::update`]: camera, lights,
 //! transforms, the plan's per-(light, object) technique). [`ShadowPass::encode_extract`] records
-//! one compute pass:
+//! one compute pass, first of the frame: a vertex pass (every vertex to camera-relative world
+//! space, read by every draw, so shared vertices are bit-identical), then:
 //! 1. a triangle pass: one sign per (light, triangle) in the accuracy mode, in the triangle's
 //!    canonical vertex order; exact mode runs the certified filter of the `wgpu` backend and
 //!    decides what it cannot certify with exact integer arithmetic on the `f32` bits
@@ -159,10 +160,15 @@ pub struct ShadowPass {
     formats: PassFormats,
     filter: ExactFilter,
     depth_clamp: bool,
+    timestamps: bool,
     c0: wgpu::BindGroupLayout,
     c1: wgpu::BindGroupLayout,
     d0: wgpu::BindGroupLayout,
     dl: wgpu::BindGroupLayout,
+    v0: wgpu::BindGroupLayout,
+    v2: wgpu::BindGroupLayout,
+    empty: wgpu::BindGroup,
+    vertices: wgpu::ComputePipeline,
     reset: wgpu::ComputePipeline,
     triangles: Vec<wgpu::ComputePipeline>,
     edges: Vec<wgpu::ComputePipeline>,
@@ -232,10 +238,14 @@ fn mode_index(mode: Accuracy) -> usize {
 
 impl ShadowPass {
     /// Features the pass uses when the adapter has them: `DEPTH_CLIP_CONTROL` (depth clamp for
-    /// z-fail volumes) and `SHADER_F64` (the `f64` exact filter). Request them on the device.
+    /// z-fail volumes), `SHADER_F64` (the `f64` exact filter) and `TIMESTAMP_QUERY`
+    /// ([`ShadowPass::read_timings`]). Request them on the device.
     #[must_use]
     pub fn optional_features(adapter: &wgpu::Adapter) -> wgpu::Features {
-        adapter.features() & (wgpu::Features::DEPTH_CLIP_CONTROL | wgpu::Features::SHADER_F64)
+        adapter.features()
+            & (wgpu::Features::DEPTH_CLIP_CONTROL
+                | wgpu::Features::SHADER_F64
+                | wgpu::Features::TIMESTAMP_QUERY)
     }
 
     /// Limits to request on the device: the downlevel defaults, with the adapter's storage
@@ -392,6 +402,7 @@ impl ShadowPass {
                 storage(4, vs, true),
                 storage(5, vs, true),
                 storage(6, vs, true),
+                storage(7, vs, true),
             ],
         });
         let dl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -401,6 +412,42 @@ impl ShadowPass {
         let draw = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("resident draw"),
             source: wgpu::ShaderSource::Wgsl(draw_source().into()),
+        });
+        // The vertex pass (a compute entry of the draw module): object-space positions to
+        // camera-relative world positions, once per vertex and frame.
+        let v0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resident vertices"),
+            entries: &[
+                storage(1, compute, true),
+                storage(6, compute, true),
+                storage(8, compute, true),
+            ],
+        });
+        let v1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resident vertices (unused)"),
+            entries: &[],
+        });
+        let v2 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resident vertices out"),
+            entries: &[storage(0, compute, false)],
+        });
+        let empty = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident vertices (unused)"),
+            layout: &v1,
+            entries: &[],
+        });
+        let v_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("resident vertices"),
+            bind_group_layouts: &[Some(&v0), Some(&v1), Some(&v2)],
+            immediate_size: 0,
+        });
+        let vertices = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("resident_vertices"),
+            layout: Some(&v_layout),
+            module: &draw,
+            entry_point: Some("resident_vertices"),
+            compilation_options: Default::default(),
+            cache: None,
         });
         let d_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("resident draw"),
@@ -580,10 +627,15 @@ impl ShadowPass {
             formats,
             filter,
             depth_clamp,
+            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
             c0,
             c1,
             d0,
             dl,
+            v0,
+            v2,
+            empty,
+            vertices,
             reset,
             triangles,
             edges,
@@ -660,6 +712,28 @@ impl ShadowPass {
             bytemuck::cast_slice(&layout.ov_tris),
             none,
         )?;
+        let vertex_objects = init(
+            "vertex objects",
+            bytemuck::cast_slice(&layout.vertex_objects),
+            none,
+        )?;
+        let world_bytes = 16 * layout.vertex_objects.len().max(1) as u64;
+        if world_bytes > max {
+            return Err(RenderError::InvalidInput(format!(
+                "the scene's world positions take {world_bytes} bytes; the device binds at most {max} (max_storage_buffer_binding_size)"
+            )));
+        }
+        let world = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("world positions"),
+            size: world_bytes,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let world_out = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident vertices out"),
+            layout: &self.v2,
+            entries: &[entry(0, &world)],
+        });
         let uniform = |label: &str, size: u64| {
             self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -676,6 +750,9 @@ impl ShadowPass {
             ovs,
             tris,
             ov_tris,
+            vertex_objects,
+            world,
+            world_out,
             params: uniform("resident params", 16),
             rparams: uniform("resident frame params", 16),
             globals: uniform("resident globals", 96),
@@ -931,6 +1008,16 @@ impl ShadowPass {
                 entry(4, &signs),
                 entry(5, &records),
                 entry(6, &objects_buf),
+                entry(7, &rs.world),
+            ],
+        });
+        let v0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident vertices"),
+            layout: &self.v0,
+            entries: &[
+                entry(1, &rs.positions),
+                entry(6, &objects_buf),
+                entry(8, &rs.vertex_objects),
             ],
         });
         let dl = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -945,8 +1032,24 @@ impl ShadowPass {
                 }),
             }],
         });
+        let queries = self.timestamps.then(|| {
+            let count = 2 * (2 + 3 * slots as u32);
+            let set = self.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("resident timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count,
+            });
+            let resolve = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("resident timestamps resolve"),
+                size: 8 * u64::from(count),
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            (set, resolve, count)
+        });
         Ok(FrameBuffers {
             lights: slots,
+            queries,
             lights_buf,
             technique,
             signs,
@@ -958,11 +1061,13 @@ impl ShadowPass {
             c1,
             d0,
             dl,
+            v0,
         })
     }
 
-    /// Records the extraction compute pass (reset, triangle pass, edge pass) of the frame last
-    /// given to [`ShadowPass::update`].
+    /// Records the frame's compute pass for the inputs last given to [`ShadowPass::update`]: the
+    /// vertex pass (camera-relative world positions, which every draw reads), then the reset,
+    /// triangle and edge passes. Record it before the frame's draws.
     ///
     /// # Panics
     /// Panics if [`ShadowPass::update`] was never called on `rs`.
@@ -983,10 +1088,24 @@ impl ShadowPass {
             let x = groups.min(max_dim);
             (x, groups.div_ceil(x))
         };
+        let slot = TimestampSlot::Extract.index();
         let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("resident extract"),
-            timestamp_writes: None,
+            timestamp_writes: fb.queries.as_ref().map(|(set, _, _)| {
+                wgpu::ComputePassTimestampWrites {
+                    query_set: set,
+                    beginning_of_pass_write_index: Some(slot),
+                    end_of_pass_write_index: Some(slot + 1),
+                }
+            }),
         });
+        // Vertices first: the draws of the frame read their camera-relative positions.
+        pass.set_pipeline(&self.vertices);
+        pass.set_bind_group(0, &fb.v0, &[]);
+        pass.set_bind_group(1, &self.empty, &[]);
+        pass.set_bind_group(2, &rs.world_out, &[]);
+        let (x, y) = grid(rs.layout.vertex_objects.len() as u32);
+        pass.dispatch_workgroups(x, y, 1);
         pass.set_bind_group(0, &fb.c0, &[]);
         pass.set_bind_group(1, &fb.c1, &[]);
         pass.set_pipeline(&self.reset);
@@ -1062,7 +1181,7 @@ impl ShadowPass {
                     store: wgpu::StoreOp::Store,
                 }),
             }),
-            timestamp_writes: None,
+            timestamp_writes: render_ts(fb, TimestampSlot::Prepass),
             occlusion_query_set: None,
             multiview_mask: None,
         });
@@ -1096,39 +1215,63 @@ impl ShadowPass {
             .frame
             .as_ref()
             .expect("ShadowPass::update before encode_stencil");
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("resident stencil"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(0),
-                    store: wgpu::StoreOp::Store,
-                }),
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
         let scissor = rs.state.scissors[light];
-        if scissor.is_some_and(|r| r[2] == 0 || r[3] == 0) {
+        let empty = scissor.is_some_and(|r| r[2] == 0 || r[3] == 0);
+        let offset = (light as u64 * LIGHT_STRIDE) as u32;
+        // Two passes, sides then caps, so that each has its own timestamps; the first clears
+        // the stencil, the second keeps counting into it.
+        let begin = |enc: &mut wgpu::CommandEncoder, label, stencil, slot| {
+            let mut pass = enc
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some(label),
+                    color_attachments: &[],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: depth,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: Some(wgpu::Operations {
+                            load: stencil,
+                            store: wgpu::StoreOp::Store,
+                        }),
+                    }),
+                    timestamp_writes: render_ts(fb, slot),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                })
+                .forget_lifetime();
+            if let Some([x, y, w, h]) = scissor {
+                pass.set_scissor_rect(x, y, w, h);
+            }
+            pass.set_bind_group(0, &fb.d0, &[]);
+            pass.set_bind_group(1, &fb.dl, &[offset]);
+            pass
+        };
+        {
+            let mut pass = begin(
+                enc,
+                "resident sides",
+                wgpu::LoadOp::Clear(0),
+                TimestampSlot::Sides(light),
+            );
+            if !empty {
+                let base = light as u64 * 32;
+                pass.set_pipeline(&self.side_zpass);
+                pass.draw_indirect(&fb.args, base);
+                pass.set_pipeline(&self.side_zfail);
+                pass.draw_indirect(&fb.args, base + 16);
+            }
+        }
+        let mut pass = begin(
+            enc,
+            "resident caps",
+            wgpu::LoadOp::Load,
+            TimestampSlot::Caps(light),
+        );
+        if empty {
             return;
         }
-        if let Some([x, y, w, h]) = scissor {
-            pass.set_scissor_rect(x, y, w, h);
-        }
-        let offset = (light as u64 * LIGHT_STRIDE) as u32;
-        pass.set_bind_group(0, &fb.d0, &[]);
-        pass.set_bind_group(1, &fb.dl, &[offset]);
-        let base = light as u64 * 32;
-        pass.set_pipeline(&self.side_zpass);
-        pass.draw_indirect(&fb.args, base);
-        pass.set_pipeline(&self.side_zfail);
-        pass.draw_indirect(&fb.args, base + 16);
         let objects = rs.layout.object_count();
         let zfail: Vec<usize> = (0..objects)
             .filter(|&o| rs.state.techniques[light * objects + o] == Technique::ZFail)
@@ -1193,7 +1336,7 @@ impl ShadowPass {
                     store: wgpu::StoreOp::Store,
                 }),
             }),
-            timestamp_writes: None,
+            timestamp_writes: render_ts(fb, TimestampSlot::Lit(light)),
             occlusion_query_set: None,
             multiview_mask: None,
         });
@@ -1239,6 +1382,49 @@ impl ShadowPass {
             c.cap_triangles.push(words[k + 2]);
         }
         Ok(c)
+    }
+
+    /// The GPU times of the passes of the last submitted frame, from timestamp queries (this maps
+    /// a buffer: call it after the frame, not between timed frames). `None` when the device has
+    /// no `TIMESTAMP_QUERY` or no frame was recorded.
+    ///
+    /// # Errors
+    /// [`RenderError::Device`] when mapping fails.
+    pub fn read_timings(&self, rs: &ResidentScene) -> Result<Option<GpuTimings>, RenderError> {
+        let Some(fb) = rs.frame.as_ref() else {
+            return Ok(None);
+        };
+        let Some((set, resolve, count)) = &fb.queries else {
+            return Ok(None);
+        };
+        let mut enc = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("resident timestamps"),
+            });
+        enc.resolve_query_set(set, 0..*count, resolve, 0);
+        self.queue.submit([enc.finish()]);
+        let words = read_buffer(&self.device, &self.queue, resolve)?;
+        let ticks: Vec<u64> = words
+            .chunks_exact(2)
+            .map(|w| u64::from(w[0]) | (u64::from(w[1]) << 32))
+            .collect();
+        let period_ms = f64::from(self.queue.get_timestamp_period()) * 1e-6;
+        let span = |slot: TimestampSlot| {
+            let i = slot.index() as usize;
+            ticks[i + 1].saturating_sub(ticks[i]) as f64 * period_ms
+        };
+        let lights = rs.state.lights;
+        let sides: f64 = (0..lights).map(|l| span(TimestampSlot::Sides(l))).sum();
+        let caps: f64 = (0..lights).map(|l| span(TimestampSlot::Caps(l))).sum();
+        let lit: f64 = (0..lights).map(|l| span(TimestampSlot::Lit(l))).sum();
+        Ok(Some(GpuTimings {
+            extract: span(TimestampSlot::Extract),
+            sides,
+            caps,
+            stencil: sides + caps,
+            lighting: span(TimestampSlot::Prepass) + lit,
+        }))
     }
 
     /// Reads back the triangle signs `[light * tri_count + triangle]` of the last submitted frame
@@ -1311,6 +1497,56 @@ fn read_buffer(
     Ok(bytemuck::pod_collect_to_vec(&bytes))
 }
 
+/// Which pass a pair of timestamps belongs to.
+#[derive(Debug, Clone, Copy)]
+enum TimestampSlot {
+    Extract,
+    Prepass,
+    Sides(usize),
+    Caps(usize),
+    Lit(usize),
+}
+
+impl TimestampSlot {
+    fn index(self) -> u32 {
+        2 * match self {
+            TimestampSlot::Extract => 0,
+            TimestampSlot::Prepass => 1,
+            TimestampSlot::Sides(l) => 2 + 3 * l as u32,
+            TimestampSlot::Caps(l) => 3 + 3 * l as u32,
+            TimestampSlot::Lit(l) => 4 + 3 * l as u32,
+        }
+    }
+}
+
+fn render_ts(
+    fb: &FrameBuffers,
+    slot: TimestampSlot,
+) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+    fb.queries
+        .as_ref()
+        .map(|(set, _, _)| wgpu::RenderPassTimestampWrites {
+            query_set: set,
+            beginning_of_pass_write_index: Some(slot.index()),
+            end_of_pass_write_index: Some(slot.index() + 1),
+        })
+}
+
+/// GPU times of one frame's passes, milliseconds, from timestamp queries.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct GpuTimings {
+    /// The extraction compute pass (reset, triangle pass, edge pass).
+    pub extract: f64,
+    /// The side passes of every light.
+    pub sides: f64,
+    /// The cap passes of every light.
+    pub caps: f64,
+    /// Sides and caps: the whole stencil passes.
+    pub stencil: f64,
+    /// The depth pre-pass and every light's lit pass.
+    pub lighting: f64,
+}
+
 /// What the last [`ShadowPass::update`] set, for the draws.
 #[derive(Debug, Clone)]
 struct FrameState {
@@ -1323,6 +1559,9 @@ struct FrameState {
 /// Buffers sized by the number of lights, and the bind groups over them.
 struct FrameBuffers {
     lights: usize,
+    /// With `TIMESTAMP_QUERY`: begin/end of the extraction, the pre-pass, and per light its
+    /// side, cap and lit passes (see `TimestampSlot`), and the buffer they resolve into.
+    queries: Option<(wgpu::QuerySet, wgpu::Buffer, u32)>,
     lights_buf: wgpu::Buffer,
     technique: wgpu::Buffer,
     signs: wgpu::Buffer,
@@ -1334,6 +1573,7 @@ struct FrameBuffers {
     c1: wgpu::BindGroup,
     d0: wgpu::BindGroup,
     dl: wgpu::BindGroup,
+    v0: wgpu::BindGroup,
 }
 
 /// A scene uploaded by [`ShadowPass::prepare`], with its per-frame buffers.
@@ -1345,6 +1585,9 @@ pub struct ResidentScene {
     ovs: wgpu::Buffer,
     tris: wgpu::Buffer,
     ov_tris: wgpu::Buffer,
+    vertex_objects: wgpu::Buffer,
+    world: wgpu::Buffer,
+    world_out: wgpu::BindGroup,
     params: wgpu::Buffer,
     rparams: wgpu::Buffer,
     globals: wgpu::Buffer,
