@@ -121,6 +121,26 @@ pub struct RenderReport {
     pub adapter: Option<String>,
     /// Stage times of the frame.
     pub timings: Option<RenderTimings>,
+    /// `gpu` or `host` (renders before the GPU pipeline: absent).
+    pub pipeline: Option<String>,
+    /// The `--frames` frames' times.
+    pub frames: Option<FrameStats>,
+    /// Bytes brought to the host during the `--frames` frames.
+    pub frame_readback_bytes: Option<u64>,
+}
+
+/// `render`'s `frames`: the `--frames` frames on the light orbit, in ms.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct FrameStats {
+    /// Frames timed.
+    pub count: Option<u64>,
+    /// Median frame time.
+    pub median_ms: Option<f64>,
+    /// 10th percentile.
+    pub p10_ms: Option<f64>,
+    /// 90th percentile.
+    pub p90_ms: Option<f64>,
 }
 
 /// `render`'s `timings`, in ms.

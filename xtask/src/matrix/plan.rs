@@ -26,6 +26,13 @@ pub(super) const LIGHT_SCENE: &str = "sphere-100k";
 /// Scenes rendered against the ray-traced reference for artifact counts: every `hard-*` preset
 /// that `shadowvol scenes` lists (the corpus grows; the matrix follows it), then these.
 pub(super) const RENDER_SCENES_EXTRA: [&str; 1] = ["town"];
+/// Scenes of the frame table: the host pipeline (`simd`) against the GPU pipeline, `--frames`
+/// on the light orbit, exact mode.
+pub(super) const FRAME_SCENES: [&str; 3] = ["sphere-1m", "spheres-100x1k", "town"];
+/// The backend of the frame table's host rows.
+pub(super) const FRAME_HOST_BACKEND: &str = "simd";
+/// The key `backend` of the frame table's GPU-pipeline rows.
+pub(super) const FRAME_GPU_KEY: &str = "gpu-pipeline";
 /// Scenes of the Toy Wars table (closed manifold meshes, which the seeds' algorithms need).
 pub(super) const TOYWARS_SCENES: [&str; 2] = ["bunny", "bunny-subdivided"];
 
@@ -43,6 +50,8 @@ pub(super) struct Plan {
     pub render_size: &'static str,
     /// Scenes of the Toy Wars table.
     pub toywars_scenes: Vec<&'static str>,
+    /// Scenes of the frame table (empty when `simd` is not measured).
+    pub frame_scenes: Vec<&'static str>,
 }
 
 impl Plan {
@@ -64,6 +73,11 @@ impl Plan {
                 .collect(),
             render_size: if o.quick { "160x120" } else { "320x240" },
             toywars_scenes: TOYWARS_SCENES.to_vec(),
+            frame_scenes: if backends.iter().any(|b| b == FRAME_HOST_BACKEND) {
+                FRAME_SCENES.to_vec()
+            } else {
+                Vec::new()
+            },
         }
     }
 
@@ -90,5 +104,6 @@ impl Plan {
             + b
             + self.render_scenes.len() as u64 * b * m
             + self.toywars_scenes.len() as u64
+            + 2 * self.frame_scenes.len() as u64
     }
 }

@@ -89,6 +89,21 @@ pub struct Render {
     /// [`RenderTimings::frame_ms`], when the report had timings.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frame_ms: Option<f64>,
+    /// `gpu` or `host`, when the report said.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pipeline: Option<String>,
+    /// Median of the `--frames` frames (light orbit, re-extracting every frame), ms.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frames_median_ms: Option<f64>,
+    /// 10th percentile of those frames, ms.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frames_p10_ms: Option<f64>,
+    /// 90th percentile of those frames, ms.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frames_p90_ms: Option<f64>,
+    /// Bytes brought to the host during those frames.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frame_readback_bytes: Option<u64>,
     /// Where the image was written.
     pub png: String,
     /// The report's timings as `timing_<stage>` columns.
@@ -108,6 +123,11 @@ impl Render {
             covered_pixels: report.covered_pixels,
             adapter: report.adapter,
             frame_ms: report.timings.as_ref().map(RenderTimings::frame_ms),
+            pipeline: report.pipeline.clone(),
+            frames_median_ms: report.frames.as_ref().and_then(|f| f.median_ms),
+            frames_p10_ms: report.frames.as_ref().and_then(|f| f.p10_ms),
+            frames_p90_ms: report.frames.as_ref().and_then(|f| f.p90_ms),
+            frame_readback_bytes: report.frames.as_ref().and(report.frame_readback_bytes),
             png,
             timing: report
                 .timings
@@ -138,7 +158,7 @@ impl Data {
         let v = Value::Object(fields);
         Ok(match experiment {
             "accuracy" => Self::Accuracy(serde_json::from_value(v)?),
-            "artifacts" | "table1-frame" => Self::Render(serde_json::from_value(v)?),
+            "artifacts" | "table1-frame" | "frames" => Self::Render(serde_json::from_value(v)?),
             "toywars" => Self::Baseline(serde_json::from_value(v)?),
             _ => Self::Bench(serde_json::from_value(v)?),
         })

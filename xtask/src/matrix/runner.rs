@@ -4,8 +4,8 @@
 use super::args::Options;
 use super::cli::{BenchReport, RecordList, RenderReport, SceneRow};
 use super::plan::{
-    Plan, LIGHT_SCENE, RENDER_SCENES_EXTRA, T1_SCENE, T2_SCENES, T3_SCENES, TOYWARS_SCENES,
-    TRI_SCENES,
+    Plan, FRAME_GPU_KEY, FRAME_HOST_BACKEND, LIGHT_SCENE, RENDER_SCENES_EXTRA, T1_SCENE, T2_SCENES,
+    T3_SCENES, TOYWARS_SCENES, TRI_SCENES,
 };
 use super::progress::Progress;
 use super::records::{Accuracy, Baseline, Data, HostInfo, Key, Record, Render, Results};
@@ -363,6 +363,7 @@ impl Matrix {
                 }
             }
         }
+        self.frame_table(plan);
         // The seeds' CPU algorithms against our modes on cpu and simd.
         for s in &plan.toywars_scenes {
             self.progress.step(&format!("toywars: {s}"));
@@ -382,6 +383,69 @@ impl Matrix {
             match self.cli.json::<RecordList<Baseline>>(&args) {
                 Ok(list) => self.push_all("toywars", list, Data::Baseline),
                 Err(e) => self.fail(format!("toywars: {e}")),
+            }
+        }
+    }
+
+    /// The frame table: `render SCENE --frames N` on the host pipeline (`simd`) and on the GPU
+    /// pipeline, exact mode, back to back in the same run.
+    fn frame_table(&mut self, plan: &Plan) {
+        let frames = self.frames();
+        for s in plan.frame_scenes.clone() {
+            for gpu in [false, true] {
+                let key = if gpu {
+                    FRAME_GPU_KEY
+                } else {
+                    FRAME_HOST_BACKEND
+                };
+                self.progress.step(&format!("frames: {s} {key}"));
+                let png = self
+                    .opts
+                    .out
+                    .join("renders")
+                    .join(format!("frames-{s}-{key}.png"));
+                let png_s = png.to_string_lossy().to_string();
+                let mut args = vec![
+                    "render",
+                    s,
+                    "--out",
+                    &png_s,
+                    "--size",
+                    plan.render_size,
+                    "--mode",
+                    "exact",
+                    "--frames",
+                    &frames,
+                    "--format",
+                    "json",
+                ];
+                if gpu {
+                    args.extend(["--pipeline", "gpu"]);
+                } else {
+                    args.extend(["--pipeline", "host", "--backend", FRAME_HOST_BACKEND]);
+                }
+                match self.cli.json::<RenderReport>(&args) {
+                    Ok(report) => {
+                        let rec = Record {
+                            host: self.results.host.clone(),
+                            experiment: "frames".to_owned(),
+                            reused_from: None,
+                            key: Key {
+                                scene: s.to_owned(),
+                                backend: key.to_owned(),
+                                mode: Some("exact".to_owned()),
+                            },
+                            device: report.adapter.clone().unwrap_or_default(),
+                            data: Data::Render(Render::new(
+                                report,
+                                plan.render_size,
+                                png_s.clone(),
+                            )),
+                        };
+                        self.results.records.push(rec);
+                    }
+                    Err(e) => self.fail(format!("frames: {e}")),
+                }
             }
         }
     }

@@ -1,6 +1,8 @@
 //! `tables.md`: the paper's tables redone on this machine, next to the paper's figures.
 
-use super::plan::{LIGHT_SCENE, T1_SCENE, T2_SCENES, T3_SCENES, TRI_SCENES};
+use super::plan::{
+    FRAME_GPU_KEY, FRAME_HOST_BACKEND, LIGHT_SCENE, T1_SCENE, T2_SCENES, T3_SCENES, TRI_SCENES,
+};
 use super::records::{Accuracy, Baseline, Record, Render, Results};
 use std::collections::BTreeSet;
 
@@ -68,6 +70,7 @@ pub(super) fn tables(r: &Results, modes: &[String]) -> String {
     s += &t.accuracy_table();
     s += &t.artifact_table();
     s += &t.scaling_tables();
+    s += &t.frame_table();
     s += "\n## Seed \"Toy Wars\" table: the seeds' CPU algorithms against ours\n\n";
     s += &t.toywars_table();
     s += "\nThe Toy Wars notes (PSP-era hardware, ms):\n\n";
@@ -255,6 +258,74 @@ impl Tables<'_> {
 
     /// Artifact pixels per rendered scene (rows) and mode (columns): one number when every
     /// backend got the same count, else the count of each backend in table order.
+    /// The frame table: host pipeline (`simd`) against GPU pipeline, `--frames` on the light
+    /// orbit, exact mode; empty when the run has no such records.
+    fn frame_table(&self) -> String {
+        let recs: Vec<(&Record, &Render)> = self
+            .r
+            .records
+            .iter()
+            .filter(|r| r.experiment == "frames")
+            .filter_map(|r| Some((r, r.render()?)))
+            .collect();
+        if recs.is_empty() {
+            return String::new();
+        }
+        let mut scenes: Vec<&str> = Vec::new();
+        for (r, _) in &recs {
+            if !scenes.contains(&r.key.scene.as_str()) {
+                scenes.push(&r.key.scene);
+            }
+        }
+        let size = recs.first().map_or("?", |(_, x)| x.size.as_str());
+        let mut s = format!(
+            "\n## Frames: host pipeline against GPU pipeline\n\n`render SCENE --frames N --mode \
+             exact` at {size}, the lights turning 1 degree per frame (every frame re-extracts), \
+             both pipelines back to back: median ms (p10-p90), the GPU pipeline's time as a \
+             ratio of the host's, and the bytes read back during the frames.\n\n"
+        );
+        s += &format!(
+            "| scene | host ({FRAME_HOST_BACKEND}) ms | GPU pipeline ms | gpu / host | read back host / gpu |\n|---|---|---|---|---|\n"
+        );
+        let cell = |x: Option<&Render>| {
+            x.map_or("n/a".to_owned(), |x| {
+                format!(
+                    "{} ({}-{})",
+                    fmt_ms(x.frames_median_ms),
+                    fmt_ms(x.frames_p10_ms),
+                    fmt_ms(x.frames_p90_ms)
+                )
+            })
+        };
+        for sc in scenes {
+            let find = |key: &str| {
+                recs.iter()
+                    .find(|(r, _)| r.key.scene == sc && r.key.backend == key)
+                    .map(|(_, x)| *x)
+            };
+            let (h, g) = (find(FRAME_HOST_BACKEND), find(FRAME_GPU_KEY));
+            let ratio = match (
+                h.and_then(|x| x.frames_median_ms),
+                g.and_then(|x| x.frames_median_ms),
+            ) {
+                (Some(a), Some(b)) if a > 0.0 => format!("{:.2}x", b / a),
+                _ => "n/a".to_owned(),
+            };
+            let bytes = |x: Option<&Render>| {
+                x.and_then(|x| x.frame_readback_bytes)
+                    .map_or("n/a".to_owned(), |n| n.to_string())
+            };
+            s += &format!(
+                "| {sc} | {} | {} | {ratio} | {} / {} |\n",
+                cell(h),
+                cell(g),
+                bytes(h),
+                bytes(g)
+            );
+        }
+        s
+    }
+
     fn artifact_table(&self) -> String {
         let available = &self.r.backends;
         let recs: Vec<(&Record, &Render)> = self

@@ -375,3 +375,48 @@ fn tables_of_a_fixed_record_set() {
     has("| classic | - | 12.5 (n/a-n/a) | 9 | **no** |");
     assert!(!t.contains("## Failures"));
 }
+
+/// A `frames` record of the frame table from a `render --frames` report.
+fn frames_record(backend: &str, pipeline: &str, median: f64, bytes: u64) -> Record {
+    let report: RenderReport = serde_json::from_value(json!({
+        "pipeline": pipeline,
+        "frames": {"count": 10, "median_ms": median, "p10_ms": median * 0.9, "p90_ms": median * 1.5},
+        "frame_readback_bytes": bytes,
+        "adapter": "llvmpipe",
+        "timings": {"total_ms": 3.0, "prepare_ms": 1.0},
+    }))
+    .unwrap();
+    Record {
+        host: host(),
+        experiment: "frames".into(),
+        reused_from: None,
+        key: Key {
+            scene: "sphere-1m".into(),
+            backend: backend.into(),
+            mode: Some("exact".into()),
+        },
+        device: "llvmpipe".into(),
+        data: Data::Render(Render::new(report, "160x120", "f.png".into())),
+    }
+}
+
+#[test]
+fn frame_table_compares_the_pipelines_of_one_run() {
+    let results = Results {
+        host: host(),
+        records: vec![
+            frames_record("simd", "host", 40.0, 4_000_000),
+            frames_record("gpu-pipeline", "gpu", 30.0, 0),
+        ],
+        ..Results::default()
+    };
+    let r = results.records[1].render().unwrap();
+    assert_eq!(r.pipeline.as_deref(), Some("gpu"));
+    assert_eq!((r.frames_median_ms, r.frame_readback_bytes), (Some(30.0), Some(0)));
+    let t = tables(&results, &["exact".to_owned()]);
+    let line = "| sphere-1m | 40.0 (36.0-60.0) | 30.0 (27.0-45.0) | 0.75x | 4000000 / 0 |";
+    assert!(t.lines().any(|l| l == line), "no line {line:?} in\n{t}");
+    // The records round-trip through results.json's shape.
+    let text = serde_json::to_string(&results.records[0]).unwrap();
+    assert!(text.contains("\"frames_median_ms\":40.0"), "{text}");
+}
