@@ -60,6 +60,47 @@ fn resident_vertices(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     r_world_out[v] = vec4<f32>(transform(r_vertex_objects[v], v), 1.0);
 }
 
+// The host pipeline's SurfaceVertex (gpu.rs), 3 per triangle, for `vs_surface`.
+struct SurfaceV {
+    pos: vec4<f32>,
+    normal: vec4<f32>,
+    albedo: vec4<f32>,
+    ids: vec2<u32>,
+    pad: vec2<u32>,
+};
+
+// One chunk of the surface vertices (a binding holds at most max_storage_buffer_binding_size):
+// triangles [first, first + count).
+struct SurfaceChunk {
+    first: u32,
+    count: u32,
+    pad: vec2<u32>,
+};
+
+@group(2) @binding(1) var<storage, read_write> r_surface_out: array<SurfaceV>;
+@group(2) @binding(2) var<uniform> r_chunk: SurfaceChunk;
+
+// Per triangle, its 3 surface vertices in canonical order, with the flat normal, albedo and ids
+// (after `resident_vertices`, from the same stored positions every draw reads).
+@compute @workgroup_size(256)
+fn resident_surfaces(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let k = gid.x + gid.y * nwg.x * 256u;
+    if k >= r_chunk.count || 3u * k + 2u >= arrayLength(&r_surface_out) {
+        return;
+    }
+    let t = r_chunk.first + k;
+    let tr = r_tris[t];
+    let p0 = rel(tr.x);
+    let p1 = rel(tr.y);
+    let p2 = rel(tr.z);
+    let n = vec4<f32>(cross(p1 - p0, p2 - p0), 0.0);
+    let albedo = bitcast<vec4<f32>>(r_objects[tr.w * 5u + 3u]);
+    let ids = vec2<u32>(tr.w + 1u, t - r_objects[tr.w * 5u + 4u].x);
+    r_surface_out[3u * k] = SurfaceV(vec4<f32>(p0, 1.0), n, albedo, ids, vec2<u32>(0u));
+    r_surface_out[3u * k + 1u] = SurfaceV(vec4<f32>(p1, 1.0), n, albedo, ids, vec2<u32>(0u));
+    r_surface_out[3u * k + 2u] = SurfaceV(vec4<f32>(p2, 1.0), n, albedo, ids, vec2<u32>(0u));
+}
+
 fn rel(id: u32) -> vec3<f32> {
     return r_world[id].xyz;
 }

@@ -172,8 +172,13 @@ pub struct ShadowPass {
     reset: wgpu::ComputePipeline,
     triangles: Vec<wgpu::ComputePipeline>,
     edges: Vec<wgpu::ComputePipeline>,
-    prepass: wgpu::RenderPipeline,
-    lit: wgpu::RenderPipeline,
+    /// Pre-pass: `[vertex pulling, vertex buffer]`.
+    prepass: [wgpu::RenderPipeline; 2],
+    /// Lit pass: `[vertex pulling, vertex buffer]`.
+    lit: [wgpu::RenderPipeline; 2],
+    s0: wgpu::BindGroupLayout,
+    s2: wgpu::BindGroupLayout,
+    surfaces: wgpu::ComputePipeline,
     side_zpass: wgpu::RenderPipeline,
     side_zfail: wgpu::RenderPipeline,
     cap_ccw: wgpu::RenderPipeline,
@@ -449,6 +454,31 @@ impl ShadowPass {
             compilation_options: Default::default(),
             cache: None,
         });
+        let s0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resident surfaces"),
+            entries: &[
+                storage(3, compute, true),
+                storage(6, compute, true),
+                storage(7, compute, true),
+            ],
+        });
+        let s2 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resident surfaces out"),
+            entries: &[storage(1, compute, false), uniform(2, compute, false)],
+        });
+        let s_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("resident surfaces"),
+            bind_group_layouts: &[Some(&s0), Some(&v1), Some(&s2)],
+            immediate_size: 0,
+        });
+        let surfaces = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("resident_surfaces"),
+            layout: Some(&s_layout),
+            module: &draw,
+            entry_point: Some("resident_surfaces"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
         let d_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("resident draw"),
             bind_group_layouts: &[Some(&d0), Some(&dl)],
@@ -472,37 +502,53 @@ impl ShadowPass {
                 write_mask: wgpu::ColorWrites::ALL,
             }));
         }
-        let prepass = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("resident prepass"),
-            layout: Some(&d_layout),
-            vertex: wgpu::VertexState {
-                module: &draw,
-                entry_point: Some("vs_resident_surface"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: formats.depth,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: no_stencil.clone(),
-                bias: wgpu::DepthBiasState::default(),
-            }),
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &draw,
-                entry_point: Some(if formats.ids.is_some() {
-                    "fs_prepass"
-                } else {
-                    "fs_prepass_color"
+        let surface_attrs =
+            wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4, 3 => Uint32x2];
+        let surface_layout = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<crate::gpu::SurfaceVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &surface_attrs,
+        })];
+        // Surfaces come from a per-frame vertex buffer the surface pass writes (`vs_surface`,
+        // as in the host pipeline), or, where it would not fit one binding, are pulled from the
+        // storage buffers (`vs_resident_surface`).
+        let make_prepass = |entry: &str, buffers: &[Option<wgpu::VertexBufferLayout<'_>>]| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("resident prepass"),
+                layout: Some(&d_layout),
+                vertex: wgpu::VertexState {
+                    module: &draw,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    buffers,
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: formats.depth,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: no_stencil.clone(),
+                    bias: wgpu::DepthBiasState::default(),
                 }),
-                compilation_options: Default::default(),
-                targets: &prepass_targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &draw,
+                    entry_point: Some(if formats.ids.is_some() {
+                        "fs_prepass"
+                    } else {
+                        "fs_prepass_color"
+                    }),
+                    compilation_options: Default::default(),
+                    targets: &prepass_targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let prepass = [
+            make_prepass("vs_resident_surface", &[]),
+            make_prepass("vs_surface", &surface_layout),
+        ];
         let additive = wgpu::BlendComponent {
             src_factor: wgpu::BlendFactor::One,
             dst_factor: wgpu::BlendFactor::One,
@@ -514,45 +560,51 @@ impl ShadowPass {
             depth_fail_op: wgpu::StencilOperation::Keep,
             pass_op: wgpu::StencilOperation::Keep,
         };
-        let lit = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("resident lit"),
-            layout: Some(&d_layout),
-            vertex: wgpu::VertexState {
-                module: &draw,
-                entry_point: Some("vs_resident_surface"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: formats.depth,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::Equal),
-                stencil: wgpu::StencilState {
-                    front: lit_face,
-                    back: lit_face,
-                    read_mask: 0xff,
-                    write_mask: 0,
+        let make_lit = |entry: &str, buffers: &[Option<wgpu::VertexBufferLayout<'_>>]| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("resident lit"),
+                layout: Some(&d_layout),
+                vertex: wgpu::VertexState {
+                    module: &draw,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    buffers,
                 },
-                bias: wgpu::DepthBiasState::default(),
-            }),
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &draw,
-                entry_point: Some("fs_lit"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: formats.color,
-                    blend: Some(wgpu::BlendState {
-                        color: additive,
-                        alpha: additive,
-                    }),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: formats.depth,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Equal),
+                    stencil: wgpu::StencilState {
+                        front: lit_face,
+                        back: lit_face,
+                        read_mask: 0xff,
+                        write_mask: 0,
+                    },
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &draw,
+                    entry_point: Some("fs_lit"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: formats.color,
+                        blend: Some(wgpu::BlendState {
+                            color: additive,
+                            alpha: additive,
+                        }),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let lit = [
+            make_lit("vs_resident_surface", &[]),
+            make_lit("vs_surface", &surface_layout),
+        ];
         use wgpu::StencilOperation::{DecrementWrap as Dec, IncrementWrap as Inc, Keep};
         let volume = |label: &str,
                       entry: &str,
@@ -641,6 +693,9 @@ impl ShadowPass {
             edges,
             prepass,
             lit,
+            s0,
+            s2,
+            surfaces,
             side_zpass,
             side_zfail,
             cap_ccw,
@@ -734,6 +789,60 @@ impl ShadowPass {
             layout: &self.v2,
             entries: &[entry(0, &world)],
         });
+        // The surface vertices (3 `SurfaceVertex` per triangle) where the buffer fits the device;
+        // the surface pass writes them in chunks that each fit one storage binding.
+        let per_tri = 3 * std::mem::size_of::<crate::gpu::SurfaceVertex>() as u64;
+        let surface_bytes = per_tri * layout.tri_count() as u64;
+        let limits = self.device.limits();
+        let align = u64::from(limits.min_storage_buffer_offset_alignment.max(1));
+        // Triangles per chunk: fits a binding, and chunk offsets stay aligned.
+        let step = align / gcd(align, per_tri);
+        let chunk = (max / per_tri) / step * step;
+        let surface = (surface_bytes > 0 && surface_bytes <= limits.max_buffer_size && chunk > 0)
+            .then(|| {
+                let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("surface vertices"),
+                    size: surface_bytes,
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::VERTEX,
+                    mapped_at_creation: false,
+                });
+                let tris = layout.tri_count() as u64;
+                let chunks = (0..tris.div_ceil(chunk))
+                    .map(|c| {
+                        let first = c * chunk;
+                        let count = chunk.min(tris - first);
+                        let base =
+                            self.device
+                                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                                    label: Some("resident surfaces chunk"),
+                                    contents: bytemuck::cast_slice(&[
+                                        first as u32,
+                                        count as u32,
+                                        0,
+                                        0,
+                                    ]),
+                                    usage: wgpu::BufferUsages::UNIFORM,
+                                });
+                        let group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                            label: Some("resident surfaces out"),
+                            layout: &self.s2,
+                            entries: &[
+                                wgpu::BindGroupEntry {
+                                    binding: 1,
+                                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                        buffer: &buffer,
+                                        offset: first * per_tri,
+                                        size: std::num::NonZeroU64::new(count * per_tri),
+                                    }),
+                                },
+                                entry(2, &base),
+                            ],
+                        });
+                        (group, count as u32)
+                    })
+                    .collect();
+                (buffer, chunks)
+            });
         let uniform = |label: &str, size: u64| {
             self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -753,6 +862,7 @@ impl ShadowPass {
             vertex_objects,
             world,
             world_out,
+            surface,
             params: uniform("resident params", 16),
             rparams: uniform("resident frame params", 16),
             globals: uniform("resident globals", 96),
@@ -1011,6 +1121,15 @@ impl ShadowPass {
                 entry(7, &rs.world),
             ],
         });
+        let s0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident surfaces"),
+            layout: &self.s0,
+            entries: &[
+                entry(3, &rs.tris),
+                entry(6, &objects_buf),
+                entry(7, &rs.world),
+            ],
+        });
         let v0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident vertices"),
             layout: &self.v0,
@@ -1062,6 +1181,7 @@ impl ShadowPass {
             d0,
             dl,
             v0,
+            s0,
         })
     }
 
@@ -1106,6 +1226,15 @@ impl ShadowPass {
         pass.set_bind_group(2, &rs.world_out, &[]);
         let (x, y) = grid(rs.layout.vertex_objects.len() as u32);
         pass.dispatch_workgroups(x, y, 1);
+        if let Some((_, chunks)) = &rs.surface {
+            pass.set_pipeline(&self.surfaces);
+            pass.set_bind_group(0, &fb.s0, &[]);
+            for (out, count) in chunks {
+                pass.set_bind_group(2, out, &[]);
+                let (x, y) = grid(*count);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        }
         pass.set_bind_group(0, &fb.c0, &[]);
         pass.set_bind_group(1, &fb.c1, &[]);
         pass.set_pipeline(&self.reset);
@@ -1187,7 +1316,10 @@ impl ShadowPass {
         });
         let tris = rs.layout.tri_count() as u32;
         if tris > 0 {
-            pass.set_pipeline(&self.prepass);
+            pass.set_pipeline(&self.prepass[usize::from(rs.surface.is_some())]);
+            if let Some((vertices, _)) = &rs.surface {
+                pass.set_vertex_buffer(0, vertices.slice(..));
+            }
             pass.set_bind_group(0, &fb.d0, &[]);
             pass.set_bind_group(1, &fb.dl, &[0]);
             pass.draw(0..tris * 3, 0..1);
@@ -1348,7 +1480,10 @@ impl ShadowPass {
         if let Some([x, y, w, h]) = scissor {
             pass.set_scissor_rect(x, y, w, h);
         }
-        pass.set_pipeline(&self.lit);
+        pass.set_pipeline(&self.lit[usize::from(rs.surface.is_some())]);
+        if let Some((vertices, _)) = &rs.surface {
+            pass.set_vertex_buffer(0, vertices.slice(..));
+        }
         pass.set_stencil_reference(0);
         pass.set_bind_group(0, &fb.d0, &[]);
         pass.set_bind_group(1, &fb.dl, &[(light as u64 * LIGHT_STRIDE) as u32]);
@@ -1468,6 +1603,14 @@ impl ShadowPass {
     }
 }
 
+fn gcd(a: u64, b: u64) -> u64 {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
+}
+
 fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry {
         binding,
@@ -1574,6 +1717,7 @@ struct FrameBuffers {
     d0: wgpu::BindGroup,
     dl: wgpu::BindGroup,
     v0: wgpu::BindGroup,
+    s0: wgpu::BindGroup,
 }
 
 /// A scene uploaded by [`ShadowPass::prepare`], with its per-frame buffers.
@@ -1588,6 +1732,9 @@ pub struct ResidentScene {
     vertex_objects: wgpu::Buffer,
     world: wgpu::Buffer,
     world_out: wgpu::BindGroup,
+    /// The per-frame surface vertex buffer and the bind groups of its chunks with their
+    /// triangle counts (`None`: vertex pulling).
+    surface: Option<(wgpu::Buffer, Vec<(wgpu::BindGroup, u32)>)>,
     params: wgpu::Buffer,
     rparams: wgpu::Buffer,
     globals: wgpu::Buffer,
