@@ -412,7 +412,10 @@ fn frame_table_compares_the_pipelines_of_one_run() {
     };
     let r = results.records[1].render().unwrap();
     assert_eq!(r.pipeline.as_deref(), Some("gpu"));
-    assert_eq!((r.frames_median_ms, r.frame_readback_bytes), (Some(30.0), Some(0)));
+    assert_eq!(
+        (r.frames_median_ms, r.frame_readback_bytes),
+        (Some(30.0), Some(0))
+    );
     let t = tables(&results, &["exact".to_owned()]);
     let line = "| sphere-1m | 40.0 (36.0-60.0) | 30.0 (27.0-45.0) | 0.75x | 4000000 / 0 |";
     assert!(t.lines().any(|l| l == line), "no line {line:?} in\n{t}");
