@@ -405,3 +405,71 @@ fn timed_gpu_frames_read_nothing_back() {
         "the host pipeline brings multiplicities back"
     );
 }
+
+/// A coordinate for the proptest: small integers (coplanar and collinear points, shared
+/// planes with the light) times a power of two from the subnormal range to near `f32::MAX`.
+fn coordinate() -> impl proptest::strategy::Strategy<Value = f32> {
+    use proptest::prelude::*;
+    (
+        -3i32..=3,
+        prop::sample::select(vec![-140i32, -60, -20, 0, 20, 60, 100]),
+    )
+        .prop_map(|(m, e)| m as f32 * 2f32.powi(e))
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::test_runner::Config { cases: 48, ..Default::default() })]
+
+    /// Random triangle soups on a lattice (degenerate by construction: duplicate points, shared
+    /// planes, the light on a vertex or in a plane), one light: the device's exact
+    /// multiplicities equal `cpu`'s, its signs the twin's, with nothing decided on the host.
+    #[test]
+    fn exact_gpu_multiplicities_equal_cpu_on_random_lattice_soups(
+        points in proptest::collection::vec((coordinate(), coordinate(), coordinate()), 4..9),
+        tris in proptest::collection::vec((0usize..8, 0usize..8, 0usize..8), 1..10),
+        light in (coordinate(), coordinate(), coordinate(), proptest::bool::ANY),
+    ) {
+        use std::sync::OnceLock;
+        static GPU: OnceLock<Option<(ShadowPass, wgpu::Device, wgpu::Queue)>> = OnceLock::new();
+        let Some(gpu) = GPU.get_or_init(device).as_ref() else { return Ok(()) };
+        let n = points.len();
+        let positions: Vec<Vec3> = points.iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect();
+        let triangles: Vec<[u32; 3]> = tris
+            .iter()
+            .map(|&(a, b, c)| [(a % n) as u32, (b % n) as u32, (c % n) as u32])
+            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+            .collect();
+        proptest::prop_assume!(!triangles.is_empty());
+        let Ok(mesh) = Mesh::new(positions, triangles) else { return Ok(()) };
+        let Ok(table) = shadowvol_mesh_topology::EdgeTable::build(&mesh) else { return Ok(()) };
+        proptest::prop_assume!(!table.triangles.is_empty());
+        let (lx, ly, lz, directional) = light;
+        let l = if directional {
+            match Light::new(lx, ly, lz, 0.0) { Ok(l) => l, Err(_) => return Ok(()) }
+        } else {
+            Light::point(Vec3::new(lx, ly, lz))
+        };
+        let scene = TopologyScene {
+            objects: vec![SceneObject {
+                name: "soup".into(),
+                table: Arc::new(table),
+                world_from_object: Affine3A::IDENTITY,
+            }],
+        };
+        let lights = [l];
+        let (rs, run) = extract(gpu, &scene, &lights, Accuracy::Exact, &[Technique::ZFail]);
+        proptest::prop_assert_eq!(&run.signs, &run.twin_signs);
+        let mut cpu = shadowvol_cpu::CpuBackend::new();
+        let (want, _) =
+            shadowvol_silhouette::extract_once(&mut cpu, &scene, &lights, Accuracy::Exact).unwrap();
+        let mut want = want.values(0).to_vec();
+        let o = &scene.objects[0];
+        let ol = object_lights(&scene, &lights)[0][0];
+        let touching = volume::touching_triangles(&o.table, ol);
+        if !touching.is_empty() {
+            volume::remove_triangles(&o.table, ol, Accuracy::Exact, &touching, &mut want);
+        }
+        let got = multiplicities(&run.records, rs.layout().scene.edge_count());
+        proptest::prop_assert_eq!(&got[0], &want);
+    }
+}
