@@ -2,7 +2,7 @@
 
 use crate::cmd_render::{parse_light, parse_size, render_error, stage, GroundArg, TechniqueArg};
 use shadowvol::{find_backend, CliError, Format, ModeArg};
-use shadowvol_renderer::RenderScene;
+use shadowvol_renderer::{Pipeline, RenderScene};
 use shadowvol_viewer::controls::VolumeView;
 use shadowvol_viewer::{ViewError, ViewOptions};
 use std::io::Write;
@@ -64,9 +64,15 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
     mode: ModeArg,
 
-    /// Silhouette backend (see `shadowvol backends`).
-    #[arg(long, default_value = "cpu", value_name = "NAME")]
-    backend: String,
+    /// Silhouette backend of the host pipeline (see `shadowvol backends`); giving it selects the
+    /// host pipeline [default with --pipeline host: cpu].
+    #[arg(long, value_name = "NAME")]
+    backend: Option<String>,
+
+    /// gpu: volumes built on the device (the default where the adapter supports it); host: from
+    /// --backend's multiplicities. Showing the volumes (V, --volumes) uses the host pipeline.
+    #[arg(long, value_enum, value_name = "gpu|host")]
+    pipeline: Option<crate::cmd_render::PipelineArg>,
 
     /// Technique at start (T cycles it).
     #[arg(long, value_enum, default_value_t = TechniqueArg::Auto)]
@@ -101,11 +107,19 @@ struct Report {
     median_ms: f64,
     adapter: String,
     screenshot: Option<String>,
+    pipeline: Pipeline,
 }
 
 pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     shadowvol_viewer::check_display().map_err(|e| CliError::Other(e.to_string()))?;
-    let entry = find_backend(&args.backend)?;
+    if args.pipeline == Some(crate::cmd_render::PipelineArg::Gpu) {
+        if let Some(b) = &args.backend {
+            return Err(CliError::Other(format!(
+                "--backend {b} selects the host pipeline; it cannot be combined with --pipeline gpu"
+            )));
+        }
+    }
+    let entry = find_backend(args.backend.as_deref().unwrap_or("cpu"))?;
     let (mut scene, notes) = shadowvol_scenes::Scene::from_name_or_path_with_notes(&args.scene)
         .map_err(|e| CliError::Other(format!("{}: {e}", args.scene)))?;
     for n in &notes {
@@ -128,6 +142,10 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         VolumesArg::Wire => VolumeView::Wire,
     };
     options.title = format!("shadowvol - {}", scene.name);
+    options.pipeline = match (args.pipeline, &args.backend) {
+        (Some(crate::cmd_render::PipelineArg::Host), _) | (None, Some(_)) => Pipeline::Host,
+        _ => Pipeline::Gpu,
+    };
     let report = shadowvol_viewer::view(rscene, backend, options).map_err(|e| match e {
         ViewError::Render(r) => render_error(r),
         other => CliError::Other(other.to_string()),
@@ -141,6 +159,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         median_ms: report.median_ms,
         adapter: report.adapter,
         screenshot: report.screenshot,
+        pipeline: report.pipeline,
     };
     match args.format {
         Format::Json => {
@@ -150,8 +169,12 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         Format::Text => {
             writeln!(
                 out,
-                "{} frames, {:.1} fps, median {:.2} ms per frame, on {}",
-                report.frames, report.fps, report.median_ms, report.adapter
+                "{} frames, {:.1} fps, median {:.2} ms per frame, {} pipeline, on {}",
+                report.frames,
+                report.fps,
+                report.median_ms,
+                report.pipeline.name(),
+                report.adapter
             )?;
             if let Some(s) = &report.screenshot {
                 writeln!(out, "screenshot {s}")?;

@@ -124,6 +124,8 @@ fn view_under_xvfb_matches_render() {
     assert!(out.status.success(), "view failed:\n{stderr}");
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(v["frames"], 5, "{v}");
+    // Both the view and the render below run the GPU pipeline, the default.
+    assert_eq!(v["pipeline"], "gpu", "{v}");
     assert!(v["fps"].as_f64().unwrap() > 0.0 && v["median_ms"].as_f64().unwrap() > 0.0);
     assert!(!v["adapter"].as_str().unwrap().is_empty());
     assert_eq!(

@@ -35,7 +35,9 @@ pub struct ReadmeDoctests;
 pub mod controls;
 mod window;
 
-use shadowvol_renderer::{Accuracy, PlanPolicy, RenderError, RenderOptions, RenderScene, Renderer};
+use shadowvol_renderer::{
+    Accuracy, Pipeline, PlanPolicy, RenderError, RenderOptions, RenderScene, Renderer,
+};
 use shadowvol_silhouette::SilhouetteBackend;
 use std::path::PathBuf;
 
@@ -62,6 +64,11 @@ pub struct ViewOptions {
     pub volumes: controls::VolumeView,
     /// The window title.
     pub title: String,
+    /// Where volumes are built: [`Pipeline::Gpu`] (on the device, nothing read back but the
+    /// image; used when the adapter supports it, else the host pipeline with a warning) or
+    /// [`Pipeline::Host`]. While the volumes are shown (V) frames use the host pipeline, which
+    /// keeps their geometry.
+    pub pipeline: Pipeline,
 }
 
 impl ViewOptions {
@@ -78,6 +85,7 @@ impl ViewOptions {
             window_screenshot: None,
             volumes: controls::VolumeView::Hidden,
             title: "shadowvol".into(),
+            pipeline: Pipeline::Gpu,
         }
     }
 }
@@ -95,6 +103,8 @@ pub struct ViewReport {
     pub adapter: String,
     /// The screenshot written, if any.
     pub screenshot: Option<String>,
+    /// The pipeline of the last frame.
+    pub pipeline: Pipeline,
 }
 
 /// Why the viewer could not run.
@@ -166,8 +176,18 @@ pub fn view(
     render_options.mode = options.mode;
     render_options.policy = options.policy;
     let renderer = Renderer::new(backend, render_options)?;
+    let mut options = options;
+    if options.pipeline == Pipeline::Gpu {
+        if let Some(why) = renderer.gpu_pipeline_unsupported() {
+            eprintln!(
+                "warning: using the host pipeline: the adapter cannot run the GPU pipeline: {why}"
+            );
+            options.pipeline = Pipeline::Host;
+        }
+    }
     let event_loop = winit::event_loop::EventLoop::new()
         .map_err(|e| ViewError::Window(format!("cannot connect to the display: {e}")))?;
+    let pipeline = options.pipeline;
     let mut app = window::App::new(scene, renderer, options);
     event_loop
         .run_app(&mut app)
@@ -181,5 +201,6 @@ pub fn view(
         median_ms: 0.0,
         adapter: String::new(),
         screenshot: None,
+        pipeline,
     }))
 }

@@ -104,6 +104,12 @@ impl App {
         opts.mode = self.options.mode;
         opts.policy = self.policy;
         opts.keep_volumes = self.volumes != VolumeView::Hidden;
+        // Only the host pipeline keeps the volume geometry the overlay draws.
+        opts.pipeline = if opts.keep_volumes {
+            shadowvol_renderer::Pipeline::Host
+        } else {
+            self.options.pipeline
+        };
         self.renderer.set_options(opts);
         let frame = self.renderer.render(&self.scene)?;
 
@@ -297,6 +303,7 @@ impl App {
             median_ms: sorted.get(frames / 2).copied().unwrap_or(0.0),
             adapter: self.renderer.adapter().to_owned(),
             screenshot,
+            pipeline: self.renderer.options().pipeline,
         });
         Ok(())
     }
