@@ -33,6 +33,7 @@ mutants="$(cat <<'LIST'
 wgsl-sign-negated	shaders/silhouette.wgsl	return s0 * parity;	return -s0 * parity;	conformance gpu_lavapipe
 wgsl-robust-rule-dropped	shaders/silhouette.wgsl	if s0 != s1 || s1 != s2 {	if false {	conformance gpu_lavapipe
 wgsl-f32-bound-shrunk	shaders/silhouette.wgsl	const F32_FILTER_EPS: f32 = 0x1p-19f;	const F32_FILTER_EPS: f32 = 0x1p-40f;	conformance gpu_lavapipe
+wgsl-device-exact-dropped	shaders/silhouette.wgsl	f = device_exact(a, b, l, o);	f = UNCERTAIN;	gpu_lavapipe
 wgsl-f64-bound-shrunk	shaders/exact_f64.wgsl	const GPU_F64_FILTER_EPS: f64 = 8e-15lf;	const GPU_F64_FILTER_EPS: f64 = 1e-30lf;	conformance gpu_lavapipe
 opencl-sign-negated	kernels/silhouette.cl	s *= parity;	s *= -parity;	conformance device
 opencl-robust-rule-dropped	kernels/silhouette.cl	s = (s0 == s1 && s1 == s2) ? s0 : 0;	s = s0;	conformance device

@@ -12,9 +12,10 @@
 //   V = L.xyz - L.w * A,  s = sgn( ((A - B) x V) . (O - A) ).
 // MODE (pipeline-overridable): 0 original, 1 robust, 2 ordered, 3 exact.
 //
-// Exact mode uses a certified filter (`exact_filter`). (edge, OV, light) triples it cannot certify
-// contribute 0 here and are appended to `uncertain`; the host decides them exactly and patches
-// `mult` and the compact lists. For devices with SHADER_F64 the host builds this module with the
+// Exact mode uses a certified filter (`exact_filter`). What it cannot certify goes to
+// `device_exact`: by default `orient_int` decides it on the device; otherwise (the module as it
+// stands) the (edge, OV, light) triple contributes 0 here and is appended to `uncertain`, and the
+// host decides it exactly and patches `mult` and the compact lists. For devices with SHADER_F64 the host builds this module with the
 // call marked `@exact-filter` replaced by `filter_f64` and appends shaders/exact_f64.wgsl.
 //
 // WGSL cannot forbid FMA contraction or reassociation; the f32 modes may therefore differ from
@@ -197,6 +198,14 @@ fn exact_filter(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>, o: vec3<f32>) -> i32 {
     return filter_f32(a, b, l, o); // @exact-filter
 }
 
+// What the filter leaves: decided here, or UNCERTAIN to leave it to the host. The host builds the
+// module with the call marked @exact-int switched to `orient_int` (shaders/exact_int.wgsl,
+// integer arithmetic on the f32 bits, exact for every finite input) and that file appended,
+// unless WgpuOptions::exact_on_device is false.
+fn device_exact(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>, o: vec3<f32>) -> i32 {
+    return UNCERTAIN; // @exact-int
+}
+
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn extract(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -224,7 +233,10 @@ fn extract(
             if MODE == 0u {
                 s = sign_f32(a, b, l, o);
             } else if MODE == 3u {
-                let f = exact_filter(a, b, l, o);
+                var f = exact_filter(a, b, l, o);
+                if f == UNCERTAIN {
+                    f = device_exact(a, b, l, o);
+                }
                 if f == UNCERTAIN {
                     let slot = atomicAdd(&counters[light_count], 1u);
                     if slot < params.uncertain_capacity {

@@ -34,6 +34,11 @@ pub struct WgpuOptions {
     /// Use the `f32` exact-mode filter even when the adapter has `SHADER_F64` (default
     /// `false`), for testing both paths on one device.
     pub force_f32_filter: bool,
+    /// Exact mode decides what the filter cannot certify on the device, with `orient_int`'s
+    /// integer arithmetic (default `true`: nothing is resolved on the host and
+    /// [`ExtractStats::uncertain`](shadowvol_silhouette::ExtractStats::uncertain) is 0);
+    /// `false` sends those triples to the host, as the other GPU backends do.
+    pub exact_on_device: bool,
     /// Read back the whole per-edge multiplicity buffer instead of rebuilding the values from the
     /// compact lists (default `false`). Same result, more bytes moved; for checking the device
     /// buffer.
@@ -70,6 +75,7 @@ impl Default for WgpuOptions {
             max_buffer_bytes: None,
             max_workgroups_per_dimension: None,
             min_list_prefix: 256,
+            exact_on_device: true,
         }
     }
 }
@@ -361,7 +367,7 @@ impl WgpuBackend {
             ExactFilter::F32
         };
         let adapter = device.adapter_info();
-        let source = shaders::module_source(filter);
+        let source = shaders::module_source_with(filter, options.exact_on_device);
         let scope = ErrorScopes::push(&device);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("shaders/silhouette.wgsl"),

@@ -24,10 +24,13 @@
 //!   contraction), else robust-math's `f32` filter (`F32_FILTER_EPS`, its range checks, `w` in
 //!   {0, 1} only) plus
 //!   two device guards ([`twin::GPU_F32_INPUT_MAX`], [`twin::GPU_F32_PERM_MIN`]).
-//!   Subnormal inputs are never certified. The `(edge, OV, light)` triples the device cannot
-//!   certify go to an append buffer; the host decides them with `orient_exact`, patches the
-//!   values and lists (on the host and on the device) and counts them in
-//!   [`ExtractStats::uncertain`](shadowvol_silhouette::ExtractStats::uncertain).
+//!   Subnormal inputs are never certified. By default
+//!   ([`WgpuOptions::exact_on_device`]) the `(edge, OV, light)` triples the filter cannot
+//!   certify are decided on the device by [`exact_int::orient_int`]: integer arithmetic on the
+//!   `f32` bits, exact for every finite input, so nothing is resolved on the host and
+//!   [`ExtractStats::uncertain`](shadowvol_silhouette::ExtractStats::uncertain) is 0. With it
+//!   off they go to an append buffer; the host decides them with `orient_exact`, patches the
+//!   values and lists (on the host and on the device) and counts them in `uncertain`.
 //! * Timings: [`ExtractStats::upload`](shadowvol_silhouette::ExtractStats::upload) is the light/parameter upload (and any buffer
 //!   (re)allocation), `compute` is submit-to-completion of the dispatch (with the copies of the
 //!   counts and list prefixes), `readback` zeroing the host result, mapping and any second round

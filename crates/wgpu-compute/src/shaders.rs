@@ -51,6 +51,32 @@ pub fn module_source(filter: ExactFilter) -> String {
     }
 }
 
+const HOST_FALLBACK: &str = "return UNCERTAIN; // @exact-int";
+const INT_FALLBACK: &str = "return orient_int(a, b, l, o); // @exact-int";
+
+/// The module for `filter` as [`module_source`] builds it; with `device_exact`, the marked
+/// fallback of `device_exact` switched to `orient_int` and `shaders/exact_int.wgsl` appended, so
+/// exact mode decides every triple on the device and none goes to the host.
+///
+/// # Panics
+/// Panics if a marker line is missing from the kernel (tests check that each is there once).
+#[must_use]
+pub fn module_source_with(filter: ExactFilter, device_exact: bool) -> String {
+    let s = module_source(filter);
+    if !device_exact {
+        return s;
+    }
+    assert_eq!(
+        s.matches(HOST_FALLBACK).count(),
+        1,
+        "shaders/silhouette.wgsl must contain the marked host fallback exactly once"
+    );
+    let mut s = s.replace(HOST_FALLBACK, INT_FALLBACK);
+    s.push('\n');
+    s.push_str(crate::exact_int::EXACT_INT_WGSL);
+    s
+}
+
 /// The `MODE` value of an accuracy mode.
 #[must_use]
 pub fn mode_value(mode: shadowvol_robust_math::Accuracy) -> u32 {

@@ -184,6 +184,25 @@ pub fn run_kernel(
     mode: Accuracy,
     filter: ExactFilter,
 ) -> KernelOutput {
+    run_kernel_with(layout, lights, light_count, mode, filter, false)
+}
+
+/// [`run_kernel`] for the module of
+/// [`module_source_with`](crate::shaders::module_source_with): with `device_exact`, what the
+/// filter cannot certify is decided by [`orient_int`](crate::exact_int::orient_int) and nothing
+/// is appended to [`KernelOutput::uncertain`].
+///
+/// # Panics
+/// As [`run_kernel`].
+#[must_use]
+pub fn run_kernel_with(
+    layout: &SceneLayout,
+    lights: &[[f32; 4]],
+    light_count: usize,
+    mode: Accuracy,
+    filter: ExactFilter,
+    device_exact: bool,
+) -> KernelOutput {
     assert_eq!(
         lights.len(),
         layout.object_count() * light_count,
@@ -208,6 +227,8 @@ pub fn run_kernel(
                 let o = layout.position(io);
                 let s = match mode {
                     Accuracy::Original => sign_f32(a, b, l, o),
+                    Accuracy::Exact if device_exact => exact_filter(filter, a, b, l, o)
+                        .unwrap_or_else(|| crate::exact_int::orient_int(a, b, l, o)),
                     Accuracy::Exact => exact_filter(filter, a, b, l, o).unwrap_or_else(|| {
                         out.uncertain.push(UncertainRecord {
                             edge: e as u32,

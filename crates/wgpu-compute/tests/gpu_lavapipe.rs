@@ -56,11 +56,44 @@ fn exact_equals_cpu(b: &mut WgpuBackend) -> Vec<(String, u64)> {
     counts
 }
 
+/// The default: exact mode decides on the device what its filter cannot certify
+/// (`orient_int`), with either filter, so nothing goes to the host.
+#[test]
+fn gpu_corpus_exact_identical_to_cpu_decided_on_the_device() {
+    for force_f32_filter in [false, true] {
+        let options = WgpuOptions {
+            force_f32_filter,
+            ..WgpuOptions::default()
+        };
+        assert!(options.exact_on_device);
+        let Some(mut b) = backend(
+            "gpu_corpus_exact_identical_to_cpu_decided_on_the_device",
+            options,
+        ) else {
+            return;
+        };
+        let counts = exact_equals_cpu(&mut b);
+        for (name, n) in &counts {
+            assert_eq!(
+                *n,
+                0,
+                "{name} ({:?} filter): triples decided on the host",
+                b.exact_filter()
+            );
+        }
+        // The same corpus does leave triples to the host without the device fallback, so the
+        // integer path really decided them (checked by the two tests below).
+    }
+}
+
 #[test]
 fn gpu_corpus_exact_identical_to_cpu_with_preferred_filter() {
     let Some(mut b) = backend(
         "gpu_corpus_exact_identical_to_cpu_with_preferred_filter",
-        WgpuOptions::default(),
+        WgpuOptions {
+            exact_on_device: false,
+            ..WgpuOptions::default()
+        },
     ) else {
         return;
     };
@@ -87,6 +120,7 @@ fn gpu_corpus_exact_identical_to_cpu_with_preferred_filter() {
 fn gpu_corpus_exact_identical_to_cpu_with_forced_f32_filter() {
     let options = WgpuOptions {
         force_f32_filter: true,
+        exact_on_device: false,
         ..WgpuOptions::default()
     };
     let Some(mut b) = backend(
@@ -155,9 +189,14 @@ fn gpu_corpus_f32_modes_values_and_closed_chains() {
 
 #[test]
 fn gpu_full_readback_chunking_and_device_buffers_agree() {
+    // The host fallback, so that uncertain records exist and their buffer must grow.
+    let host_fallback = WgpuOptions {
+        exact_on_device: false,
+        ..WgpuOptions::default()
+    };
     let default = backend(
         "gpu_full_readback_chunking_and_device_buffers_agree",
-        WgpuOptions::default(),
+        host_fallback.clone(),
     );
     let Some(mut compact) = default else { return };
     let cases = common::all_cases();
@@ -179,7 +218,7 @@ fn gpu_full_readback_chunking_and_device_buffers_agree() {
         max_workgroups_per_dimension: Some(cap as u32),
         // No prefix in the first round trip: every list comes in the second.
         min_list_prefix: 0,
-        ..WgpuOptions::default()
+        ..host_fallback
     })
     .unwrap();
     for case in cases {

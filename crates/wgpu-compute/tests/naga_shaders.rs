@@ -158,3 +158,25 @@ fn wgsl_constants_equal_the_twin_constants() {
         naga::Literal::F64(GPU_F64_FILTER_EPS)
     );
 }
+
+#[test]
+fn device_exact_modules_validate_and_call_orient_int() {
+    for (filter, caps) in [
+        (ExactFilter::F32, Capabilities::empty()),
+        (ExactFilter::F64, Capabilities::FLOAT64),
+    ] {
+        let src = shaders::module_source_with(filter, true);
+        assert!(src.contains("return orient_int(a, b, l, o); // @exact-int"));
+        assert!(!src.contains("return UNCERTAIN; // @exact-int"));
+        let module = validate("silhouette + exact_int", &src, caps).unwrap();
+        assert!(module
+            .functions
+            .iter()
+            .any(|(_, f)| f.name.as_deref() == Some("orient_int")));
+        // Without the device fallback the module is the host-resolving one.
+        assert_eq!(
+            shaders::module_source_with(filter, false),
+            shaders::module_source(filter)
+        );
+    }
+}
