@@ -8,6 +8,10 @@
 //!    stencil `== 0`, additive Lambert).
 
 use crate::RenderError;
+pub(crate) use targets::{map_read, wait};
+use targets::{padded_row, FrameTargets};
+
+mod targets;
 use bytemuck::{Pod, Zeroable};
 use std::ops::Range;
 
@@ -506,42 +510,8 @@ impl Gpu {
             usage: wgpu::BufferUsages::VERTEX,
         });
 
-        let size = wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        };
-        let tex = |label: &str, format: wgpu::TextureFormat| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            })
-        };
-        let color = tex("color", COLOR_FORMAT);
-        let ids = tex("ids", IDS_FORMAT);
-        let depth = tex("depth-stencil", self.depth_format);
-        let color_view = color.create_view(&Default::default());
-        let ids_view = ids.create_view(&Default::default());
-        let depth_view = depth.create_view(&Default::default());
-
-        let row = |bytes_per_px: u32| (w * bytes_per_px).div_ceil(256) * 256;
-        let readback = |label: &str, bytes_per_px: u32, count: usize| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: u64::from(row(bytes_per_px)) * u64::from(h) * count.max(1) as u64,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            })
-        };
-        let color_rb = readback("color-readback", 4, 1);
-        let ids_rb = readback("ids-readback", 8, 1);
-        let stencil_rb = readback("stencil-readback", 1, input.lights.len());
+        let t = self.frame_targets(w, h, input.lights.len(), input.readback);
+        let (color_view, ids_view, depth_view) = (&t.color_view, &t.ids_view, &t.depth_view);
 
         let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("frame"),
@@ -551,7 +521,7 @@ impl Gpu {
                 label: Some("prepass"),
                 color_attachments: &[
                     Some(wgpu::RenderPassColorAttachment {
-                        view: &color_view,
+                        view: color_view,
                         depth_slice: None,
                         resolve_target: None,
                         ops: wgpu::Operations {
@@ -565,7 +535,7 @@ impl Gpu {
                         },
                     }),
                     Some(wgpu::RenderPassColorAttachment {
-                        view: &ids_view,
+                        view: ids_view,
                         depth_slice: None,
                         resolve_target: None,
                         ops: wgpu::Operations {
@@ -575,7 +545,7 @@ impl Gpu {
                     }),
                 ],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_view,
+                    view: depth_view,
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Clear(1.0),
                         store: wgpu::StoreOp::Store,
@@ -604,7 +574,7 @@ impl Gpu {
                     label: Some("stencil"),
                     color_attachments: &[],
                     depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &depth_view,
+                        view: depth_view,
                         depth_ops: Some(wgpu::Operations {
                             load: wgpu::LoadOp::Load,
                             store: wgpu::StoreOp::Store,
@@ -635,30 +605,12 @@ impl Gpu {
                     }
                 }
             }
-            if input.readback {
-                enc.copy_texture_to_buffer(
-                    wgpu::TexelCopyTextureInfo {
-                        texture: &depth,
-                        mip_level: 0,
-                        origin: wgpu::Origin3d::ZERO,
-                        aspect: wgpu::TextureAspect::StencilOnly,
-                    },
-                    wgpu::TexelCopyBufferInfo {
-                        buffer: &stencil_rb,
-                        layout: wgpu::TexelCopyBufferLayout {
-                            offset: u64::from(row(1)) * u64::from(h) * li as u64,
-                            bytes_per_row: Some(row(1)),
-                            rows_per_image: Some(h),
-                        },
-                    },
-                    size,
-                );
-            }
+            t.copy_stencil(&mut enc, li);
             {
                 let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("lit"),
                     color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &color_view,
+                        view: color_view,
                         depth_slice: None,
                         resolve_target: None,
                         ops: wgpu::Operations {
@@ -667,7 +619,7 @@ impl Gpu {
                         },
                     })],
                     depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &depth_view,
+                        view: depth_view,
                         depth_ops: Some(wgpu::Operations {
                             load: wgpu::LoadOp::Load,
                             store: wgpu::StoreOp::Store,
@@ -694,67 +646,8 @@ impl Gpu {
                 }
             }
         }
-        let copies = if input.readback {
-            vec![(&color, &color_rb, 4), (&ids, &ids_rb, 8)]
-        } else {
-            Vec::new()
-        };
-        for (texture, buffer, bpp) in copies {
-            enc.copy_texture_to_buffer(
-                wgpu::TexelCopyTextureInfo {
-                    texture,
-                    mip_level: 0,
-                    origin: wgpu::Origin3d::ZERO,
-                    aspect: wgpu::TextureAspect::All,
-                },
-                wgpu::TexelCopyBufferInfo {
-                    buffer,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(row(bpp)),
-                        rows_per_image: Some(h),
-                    },
-                },
-                size,
-            );
-        }
-        self.queue.submit([enc.finish()]);
-        if let Some(e) = pollster::block_on(oom.pop()) {
-            return Err(RenderError::Device(format!("out of memory: {e}")));
-        }
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(RenderError::Device(format!("validation: {e}")));
-        }
-        if !input.readback {
-            wait(device)?;
-            return Ok(None);
-        }
-        let color_bytes = self.read(&color_rb, row(4), w * 4, h, 1)?;
-        let ids_bytes = self.read(&ids_rb, row(8), w * 8, h, 1)?;
-        let stencil_bytes = if input.lights.is_empty() {
-            Vec::new()
-        } else {
-            self.read(&stencil_rb, row(1), w, h, input.lights.len())?
-        };
-        let ids: Vec<[u32; 2]> = ids_bytes
-            .chunks_exact(8)
-            .map(|c| {
-                [
-                    u32::from_le_bytes([c[0], c[1], c[2], c[3]]),
-                    u32::from_le_bytes([c[4], c[5], c[6], c[7]]),
-                ]
-            })
-            .collect();
-        let px = (w * h) as usize;
-        let stencil = stencil_bytes
-            .chunks_exact(px.max(1))
-            .map(<[u8]>::to_vec)
-            .collect();
-        Ok(Some(FrameOutput {
-            color: color_bytes,
-            ids,
-            stencil,
-        }))
+        t.copy_color_ids(&mut enc);
+        self.finish(enc, scope, oom, &t)
     }
 
     /// Maps `buffer`, strips row padding and returns `images` images of `w_bytes` × `h` bytes.
@@ -766,32 +659,7 @@ impl Gpu {
         h: u32,
         images: usize,
     ) -> Result<Vec<u8>, RenderError> {
-        let slice = buffer.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        // Bounded like every GPU wait (SHADOWVOL_GPU_TIMEOUT): a hung device is an error.
-        let limit = shadowvol_silhouette::gpu::wait_limit()
-            .map_err(|e| RenderError::Device(e.to_string()))?;
-        self.device
-            .poll(wgpu::PollType::Wait {
-                submission_index: None,
-                timeout: Some(limit),
-            })
-            .map_err(|e| match e {
-                wgpu::PollError::Timeout => RenderError::Device(format!(
-                    "the device did not finish the frame within {}",
-                    shadowvol_silhouette::gpu::describe_wait_limit(limit)
-                )),
-                other => RenderError::Device(format!("poll: {other}")),
-            })?;
-        rx.try_recv()
-            .map_err(|e| RenderError::Device(format!("map_async did not complete: {e}")))?
-            .map_err(|e| RenderError::Device(format!("map_async: {e}")))?;
-        let data = slice
-            .get_mapped_range()
-            .map_err(|e| RenderError::Device(format!("get_mapped_range: {e}")))?;
+        let data = map_read(&self.device, buffer)?;
         let mut out = Vec::with_capacity((w_bytes * h) as usize * images);
         for img in 0..images {
             for y in 0..h as usize {
@@ -799,53 +667,8 @@ impl Gpu {
                 out.extend_from_slice(&data[o..o + w_bytes as usize]);
             }
         }
-        drop(data);
-        buffer.unmap();
         Ok(out)
     }
-}
-
-/// Maps `buffer` (`MAP_READ`, its copies already submitted) and returns its bytes, with the
-/// bounded wait of every GPU read (`SHADOWVOL_GPU_TIMEOUT`).
-pub(crate) fn map_read(
-    device: &wgpu::Device,
-    buffer: &wgpu::Buffer,
-) -> Result<Vec<u8>, RenderError> {
-    let slice = buffer.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    wait(device)?;
-    rx.try_recv()
-        .map_err(|e| RenderError::Device(format!("map_async did not complete: {e}")))?
-        .map_err(|e| RenderError::Device(format!("map_async: {e}")))?;
-    let data = slice
-        .get_mapped_range()
-        .map_err(|e| RenderError::Device(format!("get_mapped_range: {e}")))?;
-    let out = data.to_vec();
-    drop(data);
-    buffer.unmap();
-    Ok(out)
-}
-
-/// Waits for all submitted work, bounded by `SHADOWVOL_GPU_TIMEOUT`: a hung device is an error.
-pub(crate) fn wait(device: &wgpu::Device) -> Result<(), RenderError> {
-    let limit =
-        shadowvol_silhouette::gpu::wait_limit().map_err(|e| RenderError::Device(e.to_string()))?;
-    device
-        .poll(wgpu::PollType::Wait {
-            submission_index: None,
-            timeout: Some(limit),
-        })
-        .map_err(|e| match e {
-            wgpu::PollError::Timeout => RenderError::Device(format!(
-                "the device did not finish the frame within {}",
-                shadowvol_silhouette::gpu::describe_wait_limit(limit)
-            )),
-            other => RenderError::Device(format!("poll: {other}")),
-        })?;
-    Ok(())
 }
 
 impl Gpu {
@@ -893,13 +716,42 @@ impl Gpu {
         let device = &self.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let t = self.frame_targets(w, h, lights, readback);
+        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("resident frame"),
+        });
+        pass.encode_extract(&mut enc, rs);
+        pass.encode_prepass(
+            &mut enc,
+            rs,
+            &t.color_view,
+            Some(&t.ids_view),
+            &t.depth_view,
+            wgpu::Color {
+                r: 0.02,
+                g: 0.02,
+                b: 0.04,
+                a: 1.0,
+            },
+        );
+        for li in 0..lights {
+            pass.encode_stencil(&mut enc, rs, li, &t.depth_view);
+            t.copy_stencil(&mut enc, li);
+            pass.encode_lit(&mut enc, rs, li, &t.color_view, &t.depth_view);
+        }
+        t.copy_color_ids(&mut enc);
+        self.finish(enc, scope, oom, &t)
+    }
+
+    /// The frame's attachments and, with `readback`, the buffers its images are copied to.
+    fn frame_targets(&self, w: u32, h: u32, lights: usize, readback: bool) -> FrameTargets {
         let size = wgpu::Extent3d {
             width: w,
             height: h,
             depth_or_array_layers: 1,
         };
         let tex = |label: &str, format: wgpu::TextureFormat| {
-            device.create_texture(&wgpu::TextureDescriptor {
+            self.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size,
                 mip_level_count: 1,
@@ -913,86 +765,42 @@ impl Gpu {
         let color = tex("color", COLOR_FORMAT);
         let ids = tex("ids", IDS_FORMAT);
         let depth = tex("depth-stencil", self.depth_format);
-        let color_view = color.create_view(&Default::default());
-        let ids_view = ids.create_view(&Default::default());
-        let depth_view = depth.create_view(&Default::default());
-        let row = |bytes_per_px: u32| (w * bytes_per_px).div_ceil(256) * 256;
         let buffer = |label: &str, bytes_per_px: u32, count: usize| {
-            device.create_buffer(&wgpu::BufferDescriptor {
+            self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
-                size: u64::from(row(bytes_per_px)) * u64::from(h) * count.max(1) as u64,
+                size: u64::from(padded_row(w, bytes_per_px)) * u64::from(h) * count.max(1) as u64,
                 usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
                 mapped_at_creation: false,
             })
         };
-        let readbacks = readback.then(|| {
-            (
-                buffer("color-readback", 4, 1),
-                buffer("ids-readback", 8, 1),
-                buffer("stencil-readback", 1, lights),
-            )
-        });
-        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("resident frame"),
-        });
-        pass.encode_extract(&mut enc, rs);
-        pass.encode_prepass(
-            &mut enc,
-            rs,
-            &color_view,
-            Some(&ids_view),
-            &depth_view,
-            wgpu::Color {
-                r: 0.02,
-                g: 0.02,
-                b: 0.04,
-                a: 1.0,
-            },
-        );
-        for li in 0..lights {
-            pass.encode_stencil(&mut enc, rs, li, &depth_view);
-            if let Some((_, _, stencil_rb)) = &readbacks {
-                enc.copy_texture_to_buffer(
-                    wgpu::TexelCopyTextureInfo {
-                        texture: &depth,
-                        mip_level: 0,
-                        origin: wgpu::Origin3d::ZERO,
-                        aspect: wgpu::TextureAspect::StencilOnly,
-                    },
-                    wgpu::TexelCopyBufferInfo {
-                        buffer: stencil_rb,
-                        layout: wgpu::TexelCopyBufferLayout {
-                            offset: u64::from(row(1)) * u64::from(h) * li as u64,
-                            bytes_per_row: Some(row(1)),
-                            rows_per_image: Some(h),
-                        },
-                    },
-                    size,
-                );
-            }
-            pass.encode_lit(&mut enc, rs, li, &color_view, &depth_view);
+        FrameTargets {
+            size,
+            lights,
+            color_view: color.create_view(&Default::default()),
+            ids_view: ids.create_view(&Default::default()),
+            depth_view: depth.create_view(&Default::default()),
+            readbacks: readback.then(|| {
+                [
+                    buffer("color-readback", 4, 1),
+                    buffer("ids-readback", 8, 1),
+                    buffer("stencil-readback", 1, lights),
+                ]
+            }),
+            color,
+            ids,
+            depth,
         }
-        if let Some((color_rb, ids_rb, _)) = &readbacks {
-            for (texture, buffer, bpp) in [(&color, color_rb, 4), (&ids, ids_rb, 8)] {
-                enc.copy_texture_to_buffer(
-                    wgpu::TexelCopyTextureInfo {
-                        texture,
-                        mip_level: 0,
-                        origin: wgpu::Origin3d::ZERO,
-                        aspect: wgpu::TextureAspect::All,
-                    },
-                    wgpu::TexelCopyBufferInfo {
-                        buffer,
-                        layout: wgpu::TexelCopyBufferLayout {
-                            offset: 0,
-                            bytes_per_row: Some(row(bpp)),
-                            rows_per_image: Some(h),
-                        },
-                    },
-                    size,
-                );
-            }
-        }
+    }
+
+    /// Submits `enc`, turns the error scopes into errors, and reads the images back (with
+    /// readback buffers) or waits for the device.
+    fn finish(
+        &self,
+        enc: wgpu::CommandEncoder,
+        scope: wgpu::ErrorScopeGuard,
+        oom: wgpu::ErrorScopeGuard,
+        t: &FrameTargets,
+    ) -> Result<Option<FrameOutput>, RenderError> {
         self.queue.submit([enc.finish()]);
         if let Some(e) = pollster::block_on(oom.pop()) {
             return Err(RenderError::Device(format!("out of memory: {e}")));
@@ -1000,16 +808,17 @@ impl Gpu {
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(RenderError::Device(format!("validation: {e}")));
         }
-        let Some((color_rb, ids_rb, stencil_rb)) = readbacks else {
-            wait(device)?;
+        let Some([color_rb, ids_rb, stencil_rb]) = &t.readbacks else {
+            wait(&self.device)?;
             return Ok(None);
         };
-        let color_bytes = self.read(&color_rb, row(4), w * 4, h, 1)?;
-        let ids_bytes = self.read(&ids_rb, row(8), w * 8, h, 1)?;
-        let stencil_bytes = if lights == 0 {
+        let (w, h) = (t.size.width, t.size.height);
+        let color = self.read(color_rb, padded_row(w, 4), w * 4, h, 1)?;
+        let ids_bytes = self.read(ids_rb, padded_row(w, 8), w * 8, h, 1)?;
+        let stencil_bytes = if t.lights == 0 {
             Vec::new()
         } else {
-            self.read(&stencil_rb, row(1), w, h, lights)?
+            self.read(stencil_rb, padded_row(w, 1), w, h, t.lights)?
         };
         let ids = ids_bytes
             .chunks_exact(8)
@@ -1022,7 +831,7 @@ impl Gpu {
             .collect();
         let px = (w * h) as usize;
         Ok(Some(FrameOutput {
-            color: color_bytes,
+            color,
             ids,
             stencil: stencil_bytes
                 .chunks_exact(px.max(1))
