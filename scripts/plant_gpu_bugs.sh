@@ -50,6 +50,7 @@ resident-back-cap-flipped	crates/renderer/src/resident/draw.wgsl	if s == 1 && c 
 resident-zfail-list-from-front	crates/renderer/src/resident/draw.wgsl	return side_vertex(r_records[lt.draw.x + lt.draw.y - 1u - i], v);	return side_vertex(r_records[lt.draw.x + i], v);	resident
 resident-twin-robust-rule	crates/renderer/src/resident/twin.rs	if s0 == s1 && s1 == s2 {	if true {	resident
 resident-integer-path-zero	crates/renderer/src/resident/extract.wgsl	return orient_int(p0, p1, l, p2);	return 0;	resident
+resident-chunk-offset-dropped	crates/renderer/src/resident/draw.wgsl	let t = r_chunk.first + k;	let t = k;	resident
 LIST
 )"
 

@@ -473,3 +473,164 @@ proptest::proptest! {
         proptest::prop_assert_eq!(&got[0], &want);
     }
 }
+
+/// A device for the pass with `limits` lowered as given, or `None` without an adapter.
+fn device_with(
+    lower: impl FnOnce(&mut wgpu::Limits),
+) -> Option<(ShadowPass, wgpu::Device, wgpu::Queue)> {
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter = pollster::block_on(instance.request_adapter(&Default::default())).ok()?;
+    let mut limits = ShadowPass::required_limits(&adapter).unwrap();
+    lower(&mut limits);
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        required_features: ShadowPass::optional_features(&adapter),
+        required_limits: limits,
+        ..Default::default()
+    }))
+    .unwrap();
+    let formats = PassFormats {
+        color: wgpu::TextureFormat::Rgba8Unorm,
+        ids: None,
+        depth: wgpu::TextureFormat::Depth24PlusStencil8,
+    };
+    let pass = ShadowPass::new(&adapter, &device, &queue, formats).unwrap();
+    Some((pass, device, queue))
+}
+
+/// One frame of a sphere over a floor through the pass, as an application records it; returns
+/// the colour image (RGBA8, `64 x 48`).
+fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> Vec<u8> {
+    let (pass, device, queue) = gpu;
+    let (w, h) = (64u32, 48u32);
+    let sphere = shadowvol_scenes::procedural::icosphere(20_000, 1.0);
+    let floor = common::floor(4.0, 2);
+    let object = |name: &str, mesh: &Mesh| SceneObject {
+        name: name.into(),
+        table: Arc::new(shadowvol_mesh_topology::EdgeTable::build(mesh).unwrap()),
+        world_from_object: Affine3A::IDENTITY,
+    };
+    let scene = TopologyScene {
+        objects: vec![object("floor", &floor), object("sphere", &sphere)],
+    };
+    let mut rs = pass.prepare(&scene).unwrap();
+    let camera = Camera::look_at(Vec3::new(3.0, 4.0, 5.0), Vec3::ZERO);
+    let lights = [Light::point(Vec3::new(1.0, 6.0, 0.5))];
+    pass.update(
+        &mut rs,
+        &PassFrame {
+            camera: &camera,
+            aspect: w as f32 / h as f32,
+            lights: &lights,
+            colors: &[[1.0; 3]],
+            emission: &[],
+            transforms: &[
+                Affine3A::IDENTITY,
+                Affine3A::from_translation(Vec3::Y * 1.5),
+            ],
+            albedo: &[[0.8; 3], [0.9, 0.5, 0.4]],
+            techniques: &[Technique::ZFail, Technique::ZFail],
+            scissors: &[None],
+            ambient: 0.1,
+            mode: Accuracy::Exact,
+            count: false,
+        },
+    )
+    .unwrap();
+    let target = |format, usage| {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    };
+    let color = target(
+        wgpu::TextureFormat::Rgba8Unorm,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    );
+    let depth = target(
+        wgpu::TextureFormat::Depth24PlusStencil8,
+        wgpu::TextureUsages::RENDER_ATTACHMENT,
+    );
+    let (cv, dv) = (
+        color.create_view(&Default::default()),
+        depth.create_view(&Default::default()),
+    );
+    let row = (w * 4).div_ceil(256) * 256;
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: u64::from(row * h),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    pass.encode_extract(&mut enc, &rs);
+    pass.encode_prepass(&mut enc, &rs, &cv, None, &dv, wgpu::Color::BLACK);
+    pass.encode_stencil(&mut enc, &rs, 0, &dv);
+    pass.encode_lit(&mut enc, &rs, 0, &cv, &dv);
+    enc.copy_texture_to_buffer(
+        color.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &staging,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
+        },
+        color.size(),
+    );
+    queue.submit([enc.finish()]);
+    let slice = staging.slice(..);
+    slice.map_async(wgpu::MapMode::Read, |_| {});
+    device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+    let data = slice.get_mapped_range().unwrap();
+    (0..h as usize)
+        .flat_map(|y| data[y * row as usize..y * row as usize + w as usize * 4].to_vec())
+        .collect()
+}
+
+/// The surface vertex buffer written in several chunks (a 1 MiB storage-binding limit against
+/// 3.8 MB of surface vertices), and the vertex-pulling fallback (a 2 MiB buffer limit), draw the
+/// same image as one chunk: the same shadow, pixel for pixel up to shading rounding.
+#[test]
+fn chunked_and_pulled_surfaces_draw_the_same_image() {
+    let Some(one) = device_with(|_| {}) else {
+        assert!(
+            !shadowvol_silhouette::ci::is_ci(),
+            "CI=true but no GPU adapter"
+        );
+        eprintln!("SKIPPED: no GPU adapter");
+        return;
+    };
+    let chunked = device_with(|l| l.max_storage_buffer_binding_size = 1 << 20).unwrap();
+    let pulled = device_with(|l| l.max_buffer_size = 2 << 20).unwrap();
+    let want = embedded_frame(&one);
+    let lit = want.chunks_exact(4).filter(|p| p[0] > 60).count();
+    let dark = want
+        .chunks_exact(4)
+        .filter(|p| p[0] < 40 && p[0] > 0)
+        .count();
+    assert!(
+        lit > 100 && dark > 20,
+        "a lit scene with a shadow: {lit} lit, {dark} dark"
+    );
+    for (name, gpu) in [("chunked", &chunked), ("pulled", &pulled)] {
+        let got = embedded_frame(gpu);
+        let differ = want
+            .chunks_exact(4)
+            .zip(got.chunks_exact(4))
+            .filter(|(a, b)| a.iter().zip(*b).any(|(x, y)| x.abs_diff(*y) > 3))
+            .count();
+        assert_eq!(differ, 0, "{name}: {differ} pixels differ");
+    }
+}
