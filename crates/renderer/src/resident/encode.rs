@@ -1,0 +1,311 @@
+//! Recording a frame into the caller's encoder: the compute pass, the pre-pass, each light's
+//! stencil (sides, caps) and lit passes.
+
+use super::*;
+
+impl ShadowPass {
+    /// Records the frame's compute pass for the inputs last given to [`ShadowPass::update`]: the
+    /// vertex pass (camera-relative world positions, which every draw reads), then the reset,
+    /// triangle and edge passes. Record it before the frame's draws.
+    ///
+    /// # Panics
+    /// Panics if [`ShadowPass::update`] was never called on `rs`.
+    pub fn encode_extract(&self, enc: &mut wgpu::CommandEncoder, rs: &ResidentScene) {
+        let fb = rs
+            .frame
+            .as_ref()
+            .expect("ShadowPass::update before encode_extract");
+        let n_lights = rs.state.lights as u32;
+        let objects = rs.layout.object_count() as u32;
+        let max_dim = self
+            .device
+            .limits()
+            .max_compute_workgroups_per_dimension
+            .max(1);
+        let grid = |items: u32| {
+            let groups = items.div_ceil(WORKGROUP).max(1);
+            let x = groups.min(max_dim);
+            (x, groups.div_ceil(x))
+        };
+        let slot = TimestampSlot::Extract.index();
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("resident extract"),
+            timestamp_writes: fb.queries.as_ref().map(|(set, _, _)| {
+                wgpu::ComputePassTimestampWrites {
+                    query_set: set,
+                    beginning_of_pass_write_index: Some(slot),
+                    end_of_pass_write_index: Some(slot + 1),
+                }
+            }),
+        });
+        // Vertices first: the draws of the frame read their camera-relative positions.
+        pass.set_pipeline(&self.vertices);
+        pass.set_bind_group(0, &fb.v0, &[]);
+        pass.set_bind_group(1, &self.empty, &[]);
+        pass.set_bind_group(2, &rs.world_out, &[]);
+        let (x, y) = grid(rs.layout.vertex_objects.len() as u32);
+        pass.dispatch_workgroups(x, y, 1);
+        if let Some((_, chunks)) = &rs.surface {
+            pass.set_pipeline(&self.surfaces);
+            pass.set_bind_group(0, &fb.s0, &[]);
+            for (out, count) in chunks {
+                pass.set_bind_group(2, out, &[]);
+                let (x, y) = grid(*count);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        }
+        pass.set_bind_group(0, &fb.c0, &[]);
+        pass.set_bind_group(1, &fb.c1, &[]);
+        pass.set_pipeline(&self.reset);
+        let total = n_lights * 8 + 1 + 3 * n_lights * objects;
+        pass.dispatch_workgroups(total.div_ceil(64).max(1), 1, 1);
+        if n_lights == 0 {
+            return;
+        }
+        let mode = mode_index(rs.state.mode);
+        let (x, y) = grid(rs.layout.tri_count() as u32);
+        pass.set_pipeline(&self.triangles[mode]);
+        pass.dispatch_workgroups(x, y, 1);
+        let (x, y) = grid(rs.layout.scene.edge_count() as u32);
+        pass.set_pipeline(&self.edges[mode]);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+
+    /// Records the depth pre-pass (ambient colour, ids when [`PassFormats::ids`] is set), clearing
+    /// colour to `clear`, depth to 1 and stencil to 0.
+    ///
+    /// # Panics
+    /// Panics if [`ShadowPass::update`] was never called on `rs`, or `ids` is given without
+    /// [`PassFormats::ids`] (or missing with it).
+    pub fn encode_prepass(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        rs: &ResidentScene,
+        color: &wgpu::TextureView,
+        ids: Option<&wgpu::TextureView>,
+        depth: &wgpu::TextureView,
+        clear: wgpu::Color,
+    ) {
+        assert_eq!(
+            ids.is_some(),
+            self.formats.ids.is_some(),
+            "ids target matches PassFormats::ids"
+        );
+        let fb = rs
+            .frame
+            .as_ref()
+            .expect("ShadowPass::update before encode_prepass");
+        let mut attachments = vec![Some(wgpu::RenderPassColorAttachment {
+            view: color,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(clear),
+                store: wgpu::StoreOp::Store,
+            },
+        })];
+        if let Some(ids) = ids {
+            attachments.push(Some(wgpu::RenderPassColorAttachment {
+                view: ids,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            }));
+        }
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("resident prepass"),
+            color_attachments: &attachments,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(0),
+                    store: wgpu::StoreOp::Store,
+                }),
+            }),
+            timestamp_writes: render_ts(fb, TimestampSlot::Prepass),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        let tris = rs.layout.tri_count() as u32;
+        if tris > 0 {
+            pass.set_pipeline(&self.prepass[usize::from(rs.surface.is_some())]);
+            if let Some((vertices, _)) = &rs.surface {
+                pass.set_vertex_buffer(0, vertices.slice(..));
+            }
+            pass.set_bind_group(0, &fb.d0, &[]);
+            pass.set_bind_group(1, &fb.dl, &[0]);
+            pass.draw(0..tris * 3, 0..1);
+        }
+    }
+
+    /// Records light `light`'s stencil pass into `depth` (its stencil cleared to 0, depth
+    /// loaded): z-pass sides, z-fail sides, then the caps of its z-fail objects.
+    ///
+    /// # Panics
+    /// Panics if `light` is not a light of the last [`ShadowPass::update`].
+    pub fn encode_stencil(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        rs: &ResidentScene,
+        light: usize,
+        depth: &wgpu::TextureView,
+    ) {
+        assert!(
+            light < rs.state.lights,
+            "light {light} of {}",
+            rs.state.lights
+        );
+        let fb = rs
+            .frame
+            .as_ref()
+            .expect("ShadowPass::update before encode_stencil");
+        let scissor = rs.state.scissors[light];
+        let empty = scissor.is_some_and(|r| r[2] == 0 || r[3] == 0);
+        let offset = (light as u64 * LIGHT_STRIDE) as u32;
+        // Two passes, sides then caps, so that each has its own timestamps; the first clears
+        // the stencil, the second keeps counting into it.
+        let begin = |enc: &mut wgpu::CommandEncoder, label, stencil, slot| {
+            let mut pass = enc
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some(label),
+                    color_attachments: &[],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: depth,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: Some(wgpu::Operations {
+                            load: stencil,
+                            store: wgpu::StoreOp::Store,
+                        }),
+                    }),
+                    timestamp_writes: render_ts(fb, slot),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                })
+                .forget_lifetime();
+            if let Some([x, y, w, h]) = scissor {
+                pass.set_scissor_rect(x, y, w, h);
+            }
+            pass.set_bind_group(0, &fb.d0, &[]);
+            pass.set_bind_group(1, &fb.dl, &[offset]);
+            pass
+        };
+        {
+            let mut pass = begin(
+                enc,
+                "resident sides",
+                wgpu::LoadOp::Clear(0),
+                TimestampSlot::Sides(light),
+            );
+            if !empty {
+                let base = light as u64 * 32;
+                pass.set_pipeline(&self.side_zpass);
+                pass.draw_indirect(&fb.args, base);
+                pass.set_pipeline(&self.side_zfail);
+                pass.draw_indirect(&fb.args, base + 16);
+            }
+        }
+        let mut pass = begin(
+            enc,
+            "resident caps",
+            wgpu::LoadOp::Load,
+            TimestampSlot::Caps(light),
+        );
+        if empty {
+            return;
+        }
+        let objects = rs.layout.object_count();
+        let zfail: Vec<usize> = (0..objects)
+            .filter(|&o| rs.state.techniques[light * objects + o] == Technique::ZFail)
+            .collect();
+        let range = |o: usize| (rs.tri_offsets[o], rs.tri_offsets[o + 1]);
+        pass.set_pipeline(&self.cap_ccw);
+        for &o in &zfail {
+            let (a, b) = range(o);
+            if b > a {
+                pass.draw(a * 6..b * 6, 0..1);
+            }
+        }
+        pass.set_pipeline(&self.cap_cw);
+        for &o in &zfail {
+            let (a, b) = range(o);
+            if b > a {
+                pass.draw(a * 3..b * 3, 0..1);
+            }
+        }
+    }
+
+    /// Records light `light`'s additive lit pass into `color` where the stencil is 0.
+    ///
+    /// # Panics
+    /// Panics if `light` is not a light of the last [`ShadowPass::update`].
+    pub fn encode_lit(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        rs: &ResidentScene,
+        light: usize,
+        color: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+    ) {
+        assert!(
+            light < rs.state.lights,
+            "light {light} of {}",
+            rs.state.lights
+        );
+        let fb = rs
+            .frame
+            .as_ref()
+            .expect("ShadowPass::update before encode_lit");
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("resident lit"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: color,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+            }),
+            timestamp_writes: render_ts(fb, TimestampSlot::Lit(light)),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        let scissor = rs.state.scissors[light];
+        let tris = rs.layout.tri_count() as u32;
+        if tris == 0 || scissor.is_some_and(|r| r[2] == 0 || r[3] == 0) {
+            return;
+        }
+        if let Some([x, y, w, h]) = scissor {
+            pass.set_scissor_rect(x, y, w, h);
+        }
+        pass.set_pipeline(&self.lit[usize::from(rs.surface.is_some())]);
+        if let Some((vertices, _)) = &rs.surface {
+            pass.set_vertex_buffer(0, vertices.slice(..));
+        }
+        pass.set_stencil_reference(0);
+        pass.set_bind_group(0, &fb.d0, &[]);
+        pass.set_bind_group(1, &fb.dl, &[(light as u64 * LIGHT_STRIDE) as u32]);
+        pass.draw(0..tris * 3, 0..1);
+    }
+}

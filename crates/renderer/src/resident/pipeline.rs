@@ -1,0 +1,479 @@
+//! The pass on a device: what it requires of the adapter, and its shader modules, layouts and
+//! pipelines.
+
+use super::*;
+
+impl ShadowPass {
+    /// Features the pass uses when the adapter has them: `DEPTH_CLIP_CONTROL` (depth clamp for
+    /// z-fail volumes), `SHADER_F64` (the `f64` exact filter) and `TIMESTAMP_QUERY`
+    /// ([`ShadowPass::read_timings`]). Request them on the device.
+    #[must_use]
+    pub fn optional_features(adapter: &wgpu::Adapter) -> wgpu::Features {
+        adapter.features()
+            & (wgpu::Features::DEPTH_CLIP_CONTROL
+                | wgpu::Features::SHADER_F64
+                | wgpu::Features::TIMESTAMP_QUERY)
+    }
+
+    /// Limits to request on the device: the downlevel defaults, with the adapter's storage
+    /// buffer counts and sizes (the pass binds up to 10 storage buffers in one stage).
+    ///
+    /// # Errors
+    /// [`RenderError::Unsupported`] naming the limit or capability the adapter lacks.
+    pub fn required_limits(adapter: &wgpu::Adapter) -> Result<wgpu::Limits, RenderError> {
+        let a = adapter.limits();
+        Self::check_adapter(adapter)?;
+        let mut l = wgpu::Limits::downlevel_defaults().using_resolution(a.clone());
+        l.max_storage_buffers_per_shader_stage = a.max_storage_buffers_per_shader_stage;
+        l.max_storage_buffer_binding_size = a.max_storage_buffer_binding_size;
+        l.max_buffer_size = a.max_buffer_size;
+        l.max_compute_workgroups_per_dimension = a.max_compute_workgroups_per_dimension;
+        Ok(l)
+    }
+
+    fn check_adapter(adapter: &wgpu::Adapter) -> Result<(), RenderError> {
+        let down = adapter.get_downlevel_capabilities();
+        for (flag, name) in [
+            (
+                wgpu::DownlevelFlags::VERTEX_STORAGE,
+                "VERTEX_STORAGE (storage buffers in vertex shaders)",
+            ),
+            (
+                wgpu::DownlevelFlags::INDIRECT_EXECUTION,
+                "INDIRECT_EXECUTION (indirect draws)",
+            ),
+            (wgpu::DownlevelFlags::COMPUTE_SHADERS, "COMPUTE_SHADERS"),
+        ] {
+            if !down.flags.contains(flag) {
+                return Err(RenderError::Unsupported(format!(
+                    "the adapter lacks the downlevel capability {name}, which the GPU pipeline needs"
+                )));
+            }
+        }
+        Self::check_limits(&adapter.limits())
+    }
+
+    fn check_limits(l: &wgpu::Limits) -> Result<(), RenderError> {
+        if l.max_storage_buffers_per_shader_stage < STORAGE_BUFFERS {
+            return Err(RenderError::Unsupported(format!(
+                "max_storage_buffers_per_shader_stage is {}; the GPU pipeline needs {STORAGE_BUFFERS}",
+                l.max_storage_buffers_per_shader_stage
+            )));
+        }
+        if l.max_compute_invocations_per_workgroup < WORKGROUP
+            || l.max_compute_workgroup_size_x < WORKGROUP
+        {
+            return Err(RenderError::Unsupported(format!(
+                "the device allows {} invocations per workgroup; the GPU pipeline needs {WORKGROUP}",
+                l.max_compute_invocations_per_workgroup
+            )));
+        }
+        Ok(())
+    }
+
+    /// Builds the pipelines on `device` (opened from `adapter` with
+    /// [`ShadowPass::required_limits`], and ideally [`ShadowPass::optional_features`]).
+    ///
+    /// # Errors
+    /// [`RenderError::Unsupported`] naming the missing capability or limit (vertex storage,
+    /// indirect draws, storage buffers per stage), [`RenderError::Device`] if a shader or
+    /// pipeline fails to build.
+    pub fn new(
+        adapter: &wgpu::Adapter,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        formats: PassFormats,
+    ) -> Result<Self, RenderError> {
+        Self::check_adapter(adapter)?;
+        Self::check_limits(&device.limits())?;
+        if !formats.depth.has_stencil_aspect() {
+            return Err(RenderError::InvalidInput(format!(
+                "depth format {:?} has no stencil aspect",
+                formats.depth
+            )));
+        }
+        let features = device.features();
+        let depth_clamp = features.contains(wgpu::Features::DEPTH_CLIP_CONTROL);
+        let filter = if features.contains(wgpu::Features::SHADER_F64) {
+            ExactFilter::F64
+        } else {
+            ExactFilter::F32
+        };
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let compute = wgpu::ShaderStages::COMPUTE;
+        // Group 0: the wgpu backend's bindings the resident kernels use.
+        let c0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resident extract scene"),
+            entries: &[
+                uniform(0, compute, false),
+                storage(1, compute, true),
+                storage(2, compute, true),
+                storage(3, compute, true),
+                storage(4, compute, true),
+            ],
+        });
+        let c1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resident extract frame"),
+            entries: &[
+                uniform(0, compute, false),
+                storage(1, compute, true),
+                storage(2, compute, true),
+                storage(3, compute, true),
+                storage(4, compute, false),
+                storage(5, compute, false),
+                storage(6, compute, false),
+            ],
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("resident extract"),
+            source: wgpu::ShaderSource::Wgsl(extract_source(filter).into()),
+        });
+        let c_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("resident extract"),
+            bind_group_layouts: &[Some(&c0), Some(&c1)],
+            immediate_size: 0,
+        });
+        let compute_pipeline = |entry: &str, mode: Accuracy| {
+            let constants = [(shaders::MODE_CONSTANT, f64::from(shaders::mode_value(mode)))];
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&c_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    zero_initialize_workgroup_memory: false,
+                },
+                cache: None,
+            })
+        };
+        let reset = compute_pipeline("resident_reset", Accuracy::Original);
+        let triangles = Accuracy::ALL
+            .iter()
+            .map(|&m| compute_pipeline("resident_triangles", m))
+            .collect();
+        let edges = Accuracy::ALL
+            .iter()
+            .map(|&m| compute_pipeline("resident_edges", m))
+            .collect();
+
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let vs = wgpu::ShaderStages::VERTEX;
+        let d0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resident draw"),
+            entries: &[
+                uniform(0, vf, false),
+                storage(1, vs, true),
+                storage(2, vs, true),
+                storage(3, vs, true),
+                storage(4, vs, true),
+                storage(5, vs, true),
+                storage(6, vs, true),
+                storage(7, vs, true),
+            ],
+        });
+        let dl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resident light"),
+            entries: &[uniform(0, vf, true)],
+        });
+        let draw = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("resident draw"),
+            source: wgpu::ShaderSource::Wgsl(draw_source().into()),
+        });
+        // The vertex pass (a compute entry of the draw module): object-space positions to
+        // camera-relative world positions, once per vertex and frame.
+        let v0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resident vertices"),
+            entries: &[
+                storage(1, compute, true),
+                storage(6, compute, true),
+                storage(8, compute, true),
+            ],
+        });
+        let v1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resident vertices (unused)"),
+            entries: &[],
+        });
+        let v2 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resident vertices out"),
+            entries: &[storage(0, compute, false)],
+        });
+        let empty = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident vertices (unused)"),
+            layout: &v1,
+            entries: &[],
+        });
+        let v_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("resident vertices"),
+            bind_group_layouts: &[Some(&v0), Some(&v1), Some(&v2)],
+            immediate_size: 0,
+        });
+        let vertices = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("resident_vertices"),
+            layout: Some(&v_layout),
+            module: &draw,
+            entry_point: Some("resident_vertices"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let s0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resident surfaces"),
+            entries: &[
+                storage(3, compute, true),
+                storage(6, compute, true),
+                storage(7, compute, true),
+            ],
+        });
+        let s2 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("resident surfaces out"),
+            entries: &[storage(1, compute, false), uniform(2, compute, false)],
+        });
+        let s_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("resident surfaces"),
+            bind_group_layouts: &[Some(&s0), Some(&v1), Some(&s2)],
+            immediate_size: 0,
+        });
+        let surfaces = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("resident_surfaces"),
+            layout: Some(&s_layout),
+            module: &draw,
+            entry_point: Some("resident_surfaces"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let d_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("resident draw"),
+            bind_group_layouts: &[Some(&d0), Some(&dl)],
+            immediate_size: 0,
+        });
+        let no_stencil = wgpu::StencilState {
+            front: wgpu::StencilFaceState::IGNORE,
+            back: wgpu::StencilFaceState::IGNORE,
+            read_mask: 0xff,
+            write_mask: 0,
+        };
+        let mut prepass_targets = vec![Some(wgpu::ColorTargetState {
+            format: formats.color,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        if let Some(ids) = formats.ids {
+            prepass_targets.push(Some(wgpu::ColorTargetState {
+                format: ids,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            }));
+        }
+        let surface_attrs =
+            wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4, 3 => Uint32x2];
+        let surface_layout = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<crate::gpu::SurfaceVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &surface_attrs,
+        })];
+        // Surfaces come from a per-frame vertex buffer the surface pass writes (`vs_surface`,
+        // as in the host pipeline), or, where it would not fit one binding, are pulled from the
+        // storage buffers (`vs_resident_surface`).
+        let make_prepass = |entry: &str, buffers: &[Option<wgpu::VertexBufferLayout<'_>>]| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("resident prepass"),
+                layout: Some(&d_layout),
+                vertex: wgpu::VertexState {
+                    module: &draw,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    buffers,
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: formats.depth,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: no_stencil.clone(),
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &draw,
+                    entry_point: Some(if formats.ids.is_some() {
+                        "fs_prepass"
+                    } else {
+                        "fs_prepass_color"
+                    }),
+                    compilation_options: Default::default(),
+                    targets: &prepass_targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let prepass = [
+            make_prepass("vs_resident_surface", &[]),
+            make_prepass("vs_surface", &surface_layout),
+        ];
+        let additive = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let lit_face = wgpu::StencilFaceState {
+            compare: wgpu::CompareFunction::Equal,
+            fail_op: wgpu::StencilOperation::Keep,
+            depth_fail_op: wgpu::StencilOperation::Keep,
+            pass_op: wgpu::StencilOperation::Keep,
+        };
+        let make_lit = |entry: &str, buffers: &[Option<wgpu::VertexBufferLayout<'_>>]| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("resident lit"),
+                layout: Some(&d_layout),
+                vertex: wgpu::VertexState {
+                    module: &draw,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    buffers,
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: formats.depth,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Equal),
+                    stencil: wgpu::StencilState {
+                        front: lit_face,
+                        back: lit_face,
+                        read_mask: 0xff,
+                        write_mask: 0,
+                    },
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &draw,
+                    entry_point: Some("fs_lit"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: formats.color,
+                        blend: Some(wgpu::BlendState {
+                            color: additive,
+                            alpha: additive,
+                        }),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let lit = [
+            make_lit("vs_resident_surface", &[]),
+            make_lit("vs_surface", &surface_layout),
+        ];
+        use wgpu::StencilOperation::{DecrementWrap as Dec, IncrementWrap as Inc, Keep};
+        let volume = |label: &str,
+                      entry: &str,
+                      unclipped_depth: bool,
+                      front_face: wgpu::FrontFace,
+                      front: wgpu::StencilFaceState,
+                      back: wgpu::StencilFaceState| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&d_layout),
+                vertex: wgpu::VertexState {
+                    module: &draw,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState {
+                    front_face,
+                    cull_mode: None,
+                    unclipped_depth,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: formats.depth,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: wgpu::StencilState {
+                        front,
+                        back,
+                        read_mask: 0xff,
+                        write_mask: 0xff,
+                    },
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: None,
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        // The same stencil rules as the host pipeline (see gpu.rs): z-pass counts the faces in
+        // front of the surface with near clipping on; z-fail the faces behind it, with depth
+        // clamp where the device has it.
+        let ccw = wgpu::FrontFace::Ccw;
+        let side_zpass = volume(
+            "resident side zpass",
+            "vs_resident_side_zpass",
+            false,
+            ccw,
+            stencil_face(Inc, Keep),
+            stencil_face(Dec, Keep),
+        );
+        let zfail = |label, entry, face| {
+            volume(
+                label,
+                entry,
+                depth_clamp,
+                face,
+                stencil_face(Keep, Dec),
+                stencil_face(Keep, Inc),
+            )
+        };
+        let side_zfail = zfail("resident side zfail", "vs_resident_side_zfail", ccw);
+        let cap_ccw = zfail("resident cap ccw", "vs_resident_cap_ccw", ccw);
+        let cap_cw = zfail("resident cap cw", "vs_resident_cap_cw", wgpu::FrontFace::Cw);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Device(format!("GPU pipeline creation: {e}")));
+        }
+        Ok(Self {
+            device: device.clone(),
+            queue: queue.clone(),
+            formats,
+            filter,
+            depth_clamp,
+            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            c0,
+            c1,
+            d0,
+            dl,
+            v0,
+            v2,
+            empty,
+            vertices,
+            reset,
+            triangles,
+            edges,
+            prepass,
+            lit,
+            s0,
+            s2,
+            surfaces,
+            side_zpass,
+            side_zfail,
+            cap_ccw,
+            cap_cw,
+        })
+    }
+
+    /// The exact filter the triangle pass runs (`f64` when the device has `SHADER_F64`).
+    #[must_use]
+    pub fn filter(&self) -> ExactFilter {
+        self.filter
+    }
+
+    /// True when z-fail volumes are drawn with depth clamp (`DEPTH_CLIP_CONTROL`).
+    #[must_use]
+    pub fn depth_clamp(&self) -> bool {
+        self.depth_clamp
+    }
+}

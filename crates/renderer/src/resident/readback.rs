@@ -1,0 +1,140 @@
+//! Reading results back after a frame (tests, the final frame's plan counts, timestamps): never
+//! between timed frames.
+
+use super::*;
+
+impl ShadowPass {
+    /// Reads back the counts of the last submitted frame (for tests and the final frame's plan;
+    /// this maps a buffer, so never call it between timed frames).
+    ///
+    /// # Errors
+    /// [`RenderError::Device`] when mapping fails or the device does not finish in time.
+    pub fn read_counts(&self, rs: &ResidentScene) -> Result<PassCounts, RenderError> {
+        let Some(fb) = rs.frame.as_ref() else {
+            return Ok(PassCounts::default());
+        };
+        let words = read_buffer(&self.device, &self.queue, &fb.args)?;
+        let l = rs.state.lights;
+        let objects = rs.layout.object_count();
+        let base = 8 * l;
+        let mut c = PassCounts {
+            integer_decided: u64::from(words[base]),
+            records: (0..l)
+                .map(|li| [words[li * 8 + 1], words[li * 8 + 5]])
+                .collect(),
+            ..PassCounts::default()
+        };
+        for i in 0..l * objects {
+            let k = base + 1 + 3 * i;
+            c.silhouette_edges.push(words[k]);
+            c.side_quads.push(words[k + 1]);
+            c.cap_triangles.push(words[k + 2]);
+        }
+        Ok(c)
+    }
+
+    /// The GPU times of the passes of the last submitted frame, from timestamp queries (this maps
+    /// a buffer: call it after the frame, not between timed frames). `None` when the device has
+    /// no `TIMESTAMP_QUERY` or no frame was recorded.
+    ///
+    /// # Errors
+    /// [`RenderError::Device`] when mapping fails.
+    pub fn read_timings(&self, rs: &ResidentScene) -> Result<Option<GpuTimings>, RenderError> {
+        let Some(fb) = rs.frame.as_ref() else {
+            return Ok(None);
+        };
+        let Some((set, resolve, count)) = &fb.queries else {
+            return Ok(None);
+        };
+        let mut enc = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("resident timestamps"),
+            });
+        enc.resolve_query_set(set, 0..*count, resolve, 0);
+        self.queue.submit([enc.finish()]);
+        let words = read_buffer(&self.device, &self.queue, resolve)?;
+        let ticks: Vec<u64> = words
+            .chunks_exact(2)
+            .map(|w| u64::from(w[0]) | (u64::from(w[1]) << 32))
+            .collect();
+        let period_ms = f64::from(self.queue.get_timestamp_period()) * 1e-6;
+        let span = |slot: TimestampSlot| {
+            let i = slot.index() as usize;
+            ticks[i + 1].saturating_sub(ticks[i]) as f64 * period_ms
+        };
+        let lights = rs.state.lights;
+        let sides: f64 = (0..lights).map(|l| span(TimestampSlot::Sides(l))).sum();
+        let caps: f64 = (0..lights).map(|l| span(TimestampSlot::Caps(l))).sum();
+        let lit: f64 = (0..lights).map(|l| span(TimestampSlot::Lit(l))).sum();
+        Ok(Some(GpuTimings {
+            extract: span(TimestampSlot::Extract),
+            sides,
+            caps,
+            stencil: sides + caps,
+            lighting: span(TimestampSlot::Prepass) + lit,
+        }))
+    }
+
+    /// Reads back the triangle signs `[light * tri_count + triangle]` of the last submitted frame
+    /// (tests only).
+    ///
+    /// # Errors
+    /// [`RenderError::Device`] when mapping fails.
+    pub fn read_signs(&self, rs: &ResidentScene) -> Result<Vec<i32>, RenderError> {
+        let Some(fb) = rs.frame.as_ref() else {
+            return Ok(Vec::new());
+        };
+        let n = rs.state.lights * rs.layout.tri_count();
+        let words = read_buffer(&self.device, &self.queue, &fb.signs)?;
+        Ok(words[..n].iter().map(|&w| w as i32).collect())
+    }
+
+    /// Reads back each light's side records of the last submitted frame, sorted (tests only).
+    ///
+    /// # Errors
+    /// [`RenderError::Device`] when mapping fails.
+    pub fn read_records(&self, rs: &ResidentScene) -> Result<Vec<twin::LightRecords>, RenderError> {
+        let Some(fb) = rs.frame.as_ref() else {
+            return Ok(Vec::new());
+        };
+        let counts = self.read_counts(rs)?;
+        let words = read_buffer(&self.device, &self.queue, &fb.records)?;
+        let cap = rs.layout.capacity();
+        Ok(counts
+            .records
+            .iter()
+            .enumerate()
+            .map(|(li, &[zp, zf])| {
+                let region = &words[li * cap..(li + 1) * cap];
+                let mut zpass = region[..zp as usize].to_vec();
+                let mut zfail = region[cap - zf as usize..].to_vec();
+                zpass.sort_unstable();
+                zfail.sort_unstable();
+                twin::LightRecords { zpass, zfail }
+            })
+            .collect())
+    }
+}
+
+/// Copies `buffer` to a mappable one and reads it as `u32` words.
+fn read_buffer(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+) -> Result<Vec<u32>, RenderError> {
+    let size = buffer.size();
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("resident readback"),
+        size,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("resident readback"),
+    });
+    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    queue.submit([enc.finish()]);
+    let bytes = crate::gpu::map_read(device, &staging)?;
+    Ok(bytemuck::pod_collect_to_vec(&bytes))
+}

@@ -1,0 +1,476 @@
+//! Uploads: the scene once ([`ShadowPass::prepare`]), the small per-frame inputs
+//! ([`ShadowPass::update`]) and the buffers sized by the number of lights.
+
+use super::*;
+
+impl ShadowPass {
+    /// Uploads `scene` once: object-space positions, edges, opposite vertices, triangles. The
+    /// scene's transforms are not used here; each frame gives its own ([`PassFrame::transforms`]).
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] when the scene is too large to index with `u32`, or a buffer
+    /// exceeds the device's `max_storage_buffer_binding_size`.
+    pub fn prepare(&self, scene: &TopologyScene) -> Result<ResidentScene, RenderError> {
+        let layout = ResidentLayout::build(scene)?;
+        let max = self.device.limits().max_storage_buffer_binding_size;
+        let init = |label: &str,
+                    bytes: &[u8],
+                    usage: wgpu::BufferUsages|
+         -> Result<wgpu::Buffer, RenderError> {
+            if bytes.len() as u64 > max {
+                return Err(RenderError::InvalidInput(format!(
+                    "the scene's {label} take {} bytes; the device binds at most {max} (max_storage_buffer_binding_size)",
+                    bytes.len()
+                )));
+            }
+            let padded;
+            let bytes = if bytes.is_empty() {
+                padded = [0u8; 16];
+                &padded[..]
+            } else {
+                bytes
+            };
+            Ok(self
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: bytes,
+                    usage: usage | wgpu::BufferUsages::STORAGE,
+                }))
+        };
+        let none = wgpu::BufferUsages::empty();
+        let positions = init(
+            "positions",
+            bytemuck::cast_slice(&layout.scene.positions),
+            none,
+        )?;
+        let edges = init("edges", bytemuck::cast_slice(&layout.scene.edges), none)?;
+        let ovs = init(
+            "opposite vertices",
+            bytemuck::cast_slice(&layout.scene.ovs),
+            none,
+        )?;
+        let tris = init("triangles", bytemuck::cast_slice(&layout.tris), none)?;
+        let ov_tris = init(
+            "opposite-vertex triangles",
+            bytemuck::cast_slice(&layout.ov_tris),
+            none,
+        )?;
+        let vertex_objects = init(
+            "vertex objects",
+            bytemuck::cast_slice(&layout.vertex_objects),
+            none,
+        )?;
+        let world_bytes = 16 * layout.vertex_objects.len().max(1) as u64;
+        if world_bytes > max {
+            return Err(RenderError::InvalidInput(format!(
+                "the scene's world positions take {world_bytes} bytes; the device binds at most {max} (max_storage_buffer_binding_size)"
+            )));
+        }
+        let world = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("world positions"),
+            size: world_bytes,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let world_out = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident vertices out"),
+            layout: &self.v2,
+            entries: &[entry(0, &world)],
+        });
+        // The surface vertices (3 `SurfaceVertex` per triangle) where the buffer fits the device;
+        // the surface pass writes them in chunks that each fit one storage binding.
+        let per_tri = 3 * std::mem::size_of::<crate::gpu::SurfaceVertex>() as u64;
+        let surface_bytes = per_tri * layout.tri_count() as u64;
+        let limits = self.device.limits();
+        let align = u64::from(limits.min_storage_buffer_offset_alignment.max(1));
+        // Triangles per chunk: fits a binding, and chunk offsets stay aligned.
+        let step = align / gcd(align, per_tri);
+        let chunk = (max / per_tri) / step * step;
+        let surface = (surface_bytes > 0 && surface_bytes <= limits.max_buffer_size && chunk > 0)
+            .then(|| {
+                let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("surface vertices"),
+                    size: surface_bytes,
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::VERTEX,
+                    mapped_at_creation: false,
+                });
+                let tris = layout.tri_count() as u64;
+                let chunks = (0..tris.div_ceil(chunk))
+                    .map(|c| {
+                        let first = c * chunk;
+                        let count = chunk.min(tris - first);
+                        let base =
+                            self.device
+                                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                                    label: Some("resident surfaces chunk"),
+                                    contents: bytemuck::cast_slice(&[
+                                        first as u32,
+                                        count as u32,
+                                        0,
+                                        0,
+                                    ]),
+                                    usage: wgpu::BufferUsages::UNIFORM,
+                                });
+                        let group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                            label: Some("resident surfaces out"),
+                            layout: &self.s2,
+                            entries: &[
+                                wgpu::BindGroupEntry {
+                                    binding: 1,
+                                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                        buffer: &buffer,
+                                        offset: first * per_tri,
+                                        size: std::num::NonZeroU64::new(count * per_tri),
+                                    }),
+                                },
+                                entry(2, &base),
+                            ],
+                        });
+                        (group, count as u32)
+                    })
+                    .collect();
+                (buffer, chunks)
+            });
+        let uniform = |label: &str, size: u64| {
+            self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        Ok(ResidentScene {
+            tri_offsets: layout.tri_offsets.clone(),
+            layout: Arc::new(layout),
+            positions,
+            edges,
+            ovs,
+            tris,
+            ov_tris,
+            vertex_objects,
+            world,
+            world_out,
+            surface,
+            params: uniform("resident params", 16),
+            rparams: uniform("resident frame params", 16),
+            globals: uniform("resident globals", 96),
+            frame: None,
+            state: FrameState {
+                lights: 0,
+                mode: Accuracy::Exact,
+                techniques: Vec::new(),
+                scissors: Vec::new(),
+            },
+        })
+    }
+
+    /// Writes one frame's inputs (object-space lights, techniques, camera-relative transforms,
+    /// per-light uniforms), growing the per-light buffers when there are more lights than before.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] when a slice's length does not match the scene or the lights,
+    /// an object-space light is not finite, or the per-light buffers would exceed the device's
+    /// `max_storage_buffer_binding_size`.
+    pub fn update(&self, rs: &mut ResidentScene, f: &PassFrame<'_>) -> Result<(), RenderError> {
+        let objects = rs.layout.object_count();
+        let n_lights = f.lights.len();
+        let check = |what: &str, got: usize, want: usize| {
+            if got == want {
+                Ok(())
+            } else {
+                Err(RenderError::InvalidInput(format!(
+                    "GPU pipeline frame: {got} {what}, expected {want}"
+                )))
+            }
+        };
+        check("transforms", f.transforms.len(), objects)?;
+        check("albedos", f.albedo.len(), objects)?;
+        check("techniques", f.techniques.len(), objects * n_lights)?;
+        check("light colours", f.colors.len(), n_lights)?;
+        check("scissors", f.scissors.len(), n_lights)?;
+        if !f.emission.is_empty() {
+            check("emissions", f.emission.len(), n_lights)?;
+        }
+        let slots = n_lights.max(1);
+        if rs.frame.as_ref().is_none_or(|b| b.lights < slots) {
+            rs.frame = Some(self.frame_buffers(rs, slots)?);
+        }
+        let fb = rs.frame.as_ref().expect("allocated above");
+        let q = &self.queue;
+        // Object-space lights, [object * light_count + light], through the one shared
+        // conversion (f64, rounded once), as every backend does.
+        let topo = TopologyScene {
+            objects: f
+                .transforms
+                .iter()
+                .enumerate()
+                .map(|(i, &t)| shadowvol_silhouette::SceneObject {
+                    name: format!("object {i}"),
+                    table: Arc::new(shadowvol_mesh_topology::EdgeTable::default()),
+                    world_from_object: t,
+                })
+                .collect(),
+        };
+        let ol = object_lights(&topo, f.lights);
+        let mut lights: Vec<[f32; 4]> = Vec::with_capacity(objects * n_lights);
+        for (oi, row) in ol.iter().enumerate() {
+            for l in row {
+                if !l.iter().all(|v| v.is_finite()) {
+                    return Err(RenderError::InvalidInput(format!(
+                        "object {oi}: the light in object space {l:?} is not finite"
+                    )));
+                }
+                lights.push(*l);
+            }
+        }
+        if lights.is_empty() {
+            lights.push([0.0; 4]);
+        }
+        q.write_buffer(&fb.lights_buf, 0, bytemuck::cast_slice(&lights));
+        let codes: Vec<u32> = f
+            .techniques
+            .iter()
+            .map(|t| match t {
+                Technique::Culled => twin::technique::CULLED,
+                Technique::ZPass => twin::technique::ZPASS,
+                Technique::ZFail => twin::technique::ZFAIL,
+            })
+            .collect();
+        if !codes.is_empty() {
+            q.write_buffer(&fb.technique, 0, bytemuck::cast_slice(&codes));
+        }
+        // Camera-relative transforms composed in f64 and rounded once, so large world
+        // coordinates keep their precision near the eye.
+        let eye = f.camera.eye.as_dvec3();
+        let mut objs: Vec<[u32; 4]> = Vec::with_capacity(objects * 5);
+        for (oi, t) in f.transforms.iter().enumerate() {
+            let d = DAffine3::from_cols(
+                t.matrix3.x_axis.as_dvec3(),
+                t.matrix3.y_axis.as_dvec3(),
+                t.matrix3.z_axis.as_dvec3(),
+                t.translation.as_dvec3() - eye,
+            );
+            let m = d.matrix3;
+            for r in 0..3 {
+                let row = m.row(r);
+                let v = [
+                    row.x as f32,
+                    row.y as f32,
+                    row.z as f32,
+                    d.translation[r] as f32,
+                ];
+                objs.push(v.map(f32::to_bits));
+            }
+            let a = f.albedo[oi];
+            objs.push([a[0], a[1], a[2], 1.0].map(f32::to_bits));
+            objs.push([rs.tri_offsets[oi], 0, 0, 0]);
+        }
+        if objs.is_empty() {
+            objs.push([0; 4]);
+        }
+        q.write_buffer(&fb.objects, 0, bytemuck::cast_slice(&objs));
+        let edge_count = rs.layout.scene.edge_count() as u32;
+        q.write_buffer(
+            &rs.params,
+            0,
+            bytemuck::cast_slice(&[edge_count, n_lights as u32, 0, 0]),
+        );
+        let tri_count = rs.layout.tri_count() as u32;
+        let capacity = rs.layout.capacity() as u32;
+        q.write_buffer(
+            &rs.rparams,
+            0,
+            bytemuck::cast_slice(&[tri_count, objects as u32, capacity, u32::from(f.count)]),
+        );
+        let rel_cam = Camera {
+            eye: glam::Vec3::ZERO,
+            target: f.camera.target - f.camera.eye,
+            ..*f.camera
+        };
+        let mut globals = [0f32; 24];
+        globals[..16].copy_from_slice(&rel_cam.view_proj(f.aspect).to_cols_array());
+        globals[20] = f.ambient;
+        q.write_buffer(&rs.globals, 0, bytemuck::cast_slice(&globals));
+        let mut light_bytes = vec![0u8; slots * LIGHT_STRIDE as usize];
+        for (li, light) in f.lights.iter().enumerate() {
+            let mut l = light.to_array();
+            let w = l[3];
+            l[0] -= f.camera.eye.x * w;
+            l[1] -= f.camera.eye.y * w;
+            l[2] -= f.camera.eye.z * w;
+            let draws = crate::gpu::LightDraws {
+                light: l,
+                color: f.colors[li],
+                scissor: f.scissors[li],
+                emission: f.emission.get(li).copied(),
+                ..Default::default()
+            };
+            let v = crate::gpu::light_uniform(&draws);
+            let draw = [
+                li as u32 * capacity,
+                capacity,
+                li as u32 * tri_count,
+                u32::from(w != 0.0),
+            ];
+            let o = li * LIGHT_STRIDE as usize;
+            light_bytes[o..o + 64].copy_from_slice(bytemuck::cast_slice(&v));
+            light_bytes[o + 64..o + 80].copy_from_slice(bytemuck::cast_slice(&draw));
+        }
+        q.write_buffer(&fb.light_u, 0, &light_bytes);
+        rs.state = FrameState {
+            lights: n_lights,
+            mode: f.mode,
+            techniques: f.techniques.to_vec(),
+            scissors: f.scissors.to_vec(),
+        };
+        Ok(())
+    }
+
+    fn frame_buffers(&self, rs: &ResidentScene, slots: usize) -> Result<FrameBuffers, RenderError> {
+        let objects = rs.layout.object_count().max(1);
+        let max = self.device.limits().max_storage_buffer_binding_size;
+        let sized = |label: &str,
+                     size: u64,
+                     usage: wgpu::BufferUsages|
+         -> Result<wgpu::Buffer, RenderError> {
+            if size > max {
+                return Err(RenderError::InvalidInput(format!(
+                    "the GPU pipeline's {label} for {slots} light(s) take {size} bytes; the device binds at most {max} (max_storage_buffer_binding_size): use fewer lights per frame"
+                )));
+            }
+            Ok(self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage,
+                mapped_at_creation: false,
+            }))
+        };
+        let st = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        let s = slots as u64;
+        let tri = rs.layout.tri_count().max(1) as u64;
+        let lights_buf = sized("object-space lights", 16 * s * objects as u64, st)?;
+        let technique = sized("techniques", 4 * s * objects as u64, st)?;
+        let readable = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        let signs = sized("triangle signs", 4 * s * tri, readable)?;
+        let args = sized(
+            "indirect draws",
+            4 * (8 * s + 1 + 3 * s * objects as u64),
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::INDIRECT
+                | wgpu::BufferUsages::COPY_SRC,
+        )?;
+        let records = sized(
+            "side records",
+            4 * s * rs.layout.capacity() as u64,
+            readable,
+        )?;
+        let objects_buf = sized("objects", 80 * objects as u64, st)?;
+        let light_u = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("resident lights"),
+            size: LIGHT_STRIDE * s,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let c0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident extract scene"),
+            layout: &self.c0,
+            entries: &[
+                entry(0, &rs.params),
+                entry(1, &rs.positions),
+                entry(2, &rs.edges),
+                entry(3, &rs.ovs),
+                entry(4, &lights_buf),
+            ],
+        });
+        let c1 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident extract frame"),
+            layout: &self.c1,
+            entries: &[
+                entry(0, &rs.rparams),
+                entry(1, &rs.tris),
+                entry(2, &rs.ov_tris),
+                entry(3, &technique),
+                entry(4, &signs),
+                entry(5, &args),
+                entry(6, &records),
+            ],
+        });
+        let d0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident draw"),
+            layout: &self.d0,
+            entries: &[
+                entry(0, &rs.globals),
+                entry(1, &rs.positions),
+                entry(2, &rs.edges),
+                entry(3, &rs.tris),
+                entry(4, &signs),
+                entry(5, &records),
+                entry(6, &objects_buf),
+                entry(7, &rs.world),
+            ],
+        });
+        let s0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident surfaces"),
+            layout: &self.s0,
+            entries: &[
+                entry(3, &rs.tris),
+                entry(6, &objects_buf),
+                entry(7, &rs.world),
+            ],
+        });
+        let v0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident vertices"),
+            layout: &self.v0,
+            entries: &[
+                entry(1, &rs.positions),
+                entry(6, &objects_buf),
+                entry(8, &rs.vertex_objects),
+            ],
+        });
+        let dl = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident light"),
+            layout: &self.dl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &light_u,
+                    offset: 0,
+                    size: std::num::NonZeroU64::new(LIGHT_BYTES),
+                }),
+            }],
+        });
+        let queries = self.timestamps.then(|| {
+            let count = 2 * (2 + 3 * slots as u32);
+            let set = self.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("resident timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count,
+            });
+            let resolve = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("resident timestamps resolve"),
+                size: 8 * u64::from(count),
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            (set, resolve, count)
+        });
+        Ok(FrameBuffers {
+            lights: slots,
+            queries,
+            lights_buf,
+            technique,
+            signs,
+            args,
+            records,
+            objects: objects_buf,
+            light_u,
+            c0,
+            c1,
+            d0,
+            dl,
+            v0,
+            s0,
+        })
+    }
+}
