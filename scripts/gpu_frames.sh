@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# The GPU pipeline against the host pipeline on a real GPU, in one run (for a session that is
+# lent a device machine; see docs/GPU.md). Builds the release CLI, then for each scene renders
+# --frames N with the GPU pipeline, the host pipeline on simd and the host pipeline on wgpu,
+# back to back, and writes one JSON report per run plus a summary table.
+#
+#   scripts/gpu_frames.sh [OUT_DIR] [FRAMES]      (defaults: ${OUT:-gpu-frames}, 20)
+set -euo pipefail
+out="${1:-${OUT:-gpu-frames}}"
+frames="${2:-20}"
+root="$(cd "$(dirname "$0")/.." && pwd)"
+mkdir -p "$out"
+cd "$root"
+cargo build --release -p shadowvol
+bin="${CARGO_TARGET_DIR:-$root/target}/release/shadowvol"
+"$bin" backends --format json >"$out/backends.json"
+summary="$out/summary.md"
+echo "| scene | run | median ms | p10 | p90 | read back | extract | sides | caps | lighting |" >"$summary"
+echo "|---|---|---|---|---|---|---|---|---|---|" >>"$summary"
+for scene in sphere-1m spheres-100x1k sphere-100k town; do
+  for run in gpu host-simd host-wgpu; do
+    case $run in
+      gpu) args=(--pipeline gpu) ;;
+      host-simd) args=(--pipeline host --backend simd) ;;
+      host-wgpu) args=(--pipeline host --backend wgpu) ;;
+    esac
+    json="$out/$scene-$run.json"
+    "$bin" render "$scene" --size 1280x720 --mode exact --frames "$frames" "${args[@]}" \
+      --out "$out/$scene-$run.png" --format json >"$json"
+    python3 - "$json" "$scene" "$run" >>"$summary" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+f, g = d["frames"], d["gpu_timings_ms"] or {}
+cell = lambda k: f"{g[k]:.2f}" if k in g else "-"
+print(f"| {sys.argv[2]} | {sys.argv[3]} | {f['median_ms']:.2f} | {f['p10_ms']:.2f} | "
+      f"{f['p90_ms']:.2f} | {d['frame_readback_bytes']} | {cell('extract')} | "
+      f"{cell('sides')} | {cell('caps')} | {cell('lighting')} |")
+PY
+  done
+done
+cat "$summary"
