@@ -155,9 +155,21 @@ pub fn load_gltf_slice_with_notes(
         context: context.to_owned(),
         message,
     };
+    let mut early_notes = Vec::new();
+    let mut bytes = bytes;
     let (json, blob) = if bytes.starts_with(b"glTF") {
         if bytes.len() >= 12 {
             let declared = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize;
+            if declared >= 12 && declared < bytes.len() {
+                // Data after the end of the GLB stream: the spec allows it (the Khronos
+                // validator warns, GLB_EXTRA_DATA); the stream ends where the header says.
+                early_notes.push(format!(
+                    "{source_name}: {} bytes after the end of the GLB stream (its header \
+                     declares {declared}) are ignored",
+                    bytes.len() - declared
+                ));
+                bytes = &bytes[..declared];
+            }
             if declared != bytes.len() {
                 return Err(err(
                     "document",
@@ -180,6 +192,7 @@ pub fn load_gltf_slice_with_notes(
     let mut value: serde_json::Value = serde_json::from_slice(&json)
         .map_err(|e| err("document", format!("not valid JSON: {e}")))?;
     normalize_json(&mut value);
+    early_notes.extend(unknown_enum_values(&mut value, source_name));
     let ext = Extensions::read(&value);
     let json = serde_json::to_vec(&value).map_err(|e| err("document", e.to_string()))?;
     let root = gltf::json::Root::from_slice(&json).map_err(|e| err("document", e.to_string()))?;
@@ -216,6 +229,20 @@ pub fn load_gltf_slice_with_notes(
             }
             data.push(None);
             continue;
+        }
+        if bin && blob.is_none() {
+            // Valid glTF JSON (a buffer without `uri` names the GLB's binary chunk), but a
+            // `.gltf` has no such chunk, so the positions or indices it should hold are missing.
+            return Err(err(
+                "buffers",
+                format!(
+                    "buffer {} has no uri and no GLB binary chunk holds it (a .gltf has none; in \
+                     a .glb only buffer 0 uses it): the {} bytes its positions or indices are read \
+                     from are not in the file",
+                    b.index(),
+                    b.length()
+                ),
+            ));
         }
         let d = gltf::buffer::Data::from_source_and_blob(b.source(), base, &mut blob)
             .map_err(|e| err("buffers", format!("buffer {}: {e}", b.index())))?;
@@ -266,7 +293,7 @@ pub fn load_gltf_slice_with_notes(
         quantization: document
             .extensions_used()
             .any(|e| e == "KHR_mesh_quantization"),
-        notes: Vec::new(),
+        notes: early_notes,
         scene: Scene {
             name: source_name.to_owned(),
             effects: Effects::default(),
@@ -330,6 +357,109 @@ fn normalize_json(value: &mut serde_json::Value) {
             _ => {}
         }
     }
+}
+
+/// Values of enums the spec may extend, which gltf-json refuses although the glTF validator
+/// only warns (VALUE_NOT_IN_LIST): an accessor `type` outside SCALAR..MAT4 that no position or
+/// index reads becomes SCALAR (it is never read; one that is read stays, and is refused by
+/// name), and a KHR_lights_punctual light of an unknown `type` is dropped with the nodes'
+/// references to it (its light is unknown, so it lights nothing). Returns a note per change.
+fn unknown_enum_values(value: &mut serde_json::Value, source_name: &str) -> Vec<String> {
+    use serde_json::Value;
+    const TYPES: [&str; 7] = ["SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4"];
+    const LIGHTS: [&str; 3] = ["directional", "point", "spot"];
+    let mut notes = Vec::new();
+    let Value::Object(root) = value else {
+        return notes;
+    };
+    // Accessors that positions and indices read (directly; sparse and view data follow them).
+    let mut read = std::collections::HashSet::new();
+    if let Some(Value::Array(meshes)) = root.get("meshes") {
+        for m in meshes {
+            for p in m
+                .get("primitives")
+                .and_then(Value::as_array)
+                .into_iter()
+                .flatten()
+            {
+                if let Some(i) = p.get("indices").and_then(Value::as_u64) {
+                    read.insert(i);
+                }
+                if let Some(i) = p.pointer("/attributes/POSITION").and_then(Value::as_u64) {
+                    read.insert(i);
+                }
+            }
+        }
+    }
+    if let Some(Value::Array(accessors)) = root.get_mut("accessors") {
+        for (i, a) in accessors.iter_mut().enumerate() {
+            let Some(t) = a.get("type").and_then(Value::as_str).map(str::to_owned) else {
+                continue;
+            };
+            if !TYPES.contains(&t.as_str()) && !read.contains(&(i as u64)) {
+                a["type"] = Value::from("SCALAR");
+                notes.push(format!(
+                    "{source_name}: accessor {i} has the unknown type {t:?}; nothing reads it"
+                ));
+            }
+        }
+    }
+    let unknown: Vec<usize> = root
+        .get("extensions")
+        .and_then(|e| e.pointer("/KHR_lights_punctual/lights"))
+        .and_then(Value::as_array)
+        .map(|lights| {
+            lights
+                .iter()
+                .enumerate()
+                .filter(|(_, l)| {
+                    l.get("type")
+                        .and_then(Value::as_str)
+                        .is_some_and(|t| !LIGHTS.contains(&t))
+                })
+                .map(|(i, _)| i)
+                .collect()
+        })
+        .unwrap_or_default();
+    if unknown.is_empty() {
+        return notes;
+    }
+    if let Some(Value::Array(lights)) = root
+        .get_mut("extensions")
+        .and_then(|e| e.pointer_mut("/KHR_lights_punctual/lights"))
+    {
+        for &i in unknown.iter().rev() {
+            let t = lights[i]["type"].clone();
+            lights.remove(i);
+            notes.push(format!(
+                "{source_name}: KHR_lights_punctual light {i} has the unknown type {t}; it is \
+                 left out"
+            ));
+        }
+    }
+    // Node references: dropped for the removed lights, renumbered past them.
+    if let Some(Value::Array(nodes)) = root.get_mut("nodes") {
+        for n in nodes {
+            let Some(ext) = n.get_mut("extensions").and_then(Value::as_object_mut) else {
+                continue;
+            };
+            let Some(l) = ext
+                .get("KHR_lights_punctual")
+                .and_then(|k| k.get("light"))
+                .and_then(Value::as_u64)
+            else {
+                continue;
+            };
+            let l = l as usize;
+            if unknown.contains(&l) {
+                ext.remove("KHR_lights_punctual");
+            } else {
+                let shift = unknown.iter().filter(|&&u| u < l).count();
+                ext["KHR_lights_punctual"]["light"] = Value::from(l - shift);
+            }
+        }
+    }
+    notes
 }
 
 /// The extension data that the `gltf` crate's types do not keep (it is read from the JSON).

@@ -7,7 +7,9 @@ use glam::Vec3;
 use serde_json::json;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
-use shadowvol_scenes::{load_gltf, load_gltf_slice, preset, to_glb, Scene};
+use shadowvol_scenes::{
+    load_gltf, load_gltf_slice, load_gltf_slice_with_notes, preset, to_glb, Scene,
+};
 use shadowvol_silhouette::{
     extract_once, invariant, Accuracy, Light, Multiplicities, TopologyScene,
 };
@@ -507,4 +509,132 @@ fn bad_light_emission_is_refused_naming_the_light() {
             "{light}: {msg}"
         );
     }
+}
+
+/// A `.gltf` whose buffer has no `uri` is valid JSON (such a buffer names a GLB's binary chunk,
+/// and the Khronos validator reports no error for it), but the file has no chunk: the loader
+/// says which buffer and why its data is missing (as for the validator's
+/// `root/named_objects.gltf` and `root/unused_objects.gltf`), not the gltf crate's "missing
+/// binary portion of binary glTF".
+#[test]
+fn a_gltf_buffer_without_uri_is_refused_naming_the_missing_data() {
+    let json = r#"{
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [1, 1, 0]}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "buffers": [{"byteLength": 36}]
+    }"#;
+    let e = load_gltf_slice(json.as_bytes(), "no_uri.gltf", None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("buffer 0 has no uri and no GLB binary chunk holds it"),
+        "{e}"
+    );
+    assert!(e.contains("the 36 bytes"), "{e}");
+}
+
+/// A triangle as a GLB, with `extra` merged into the document (for the enum tests).
+fn triangle_gltf(extra: serde_json::Value) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    for v in [0f32, 0., 0., 1., 0., 0., 0., 0., 1.] {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    let mut doc = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [1, 0, 1]}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "buffers": [{"byteLength": 36}]
+    });
+    for (k, v) in extra.as_object().unwrap() {
+        match (doc.get_mut(k), v) {
+            (Some(serde_json::Value::Array(a)), serde_json::Value::Array(more)) => {
+                a.extend(more.iter().cloned());
+            }
+            _ => doc[k] = v.clone(),
+        }
+    }
+    glb(&doc, &bytes)
+}
+
+/// Enum values the spec may extend (the validator warns, VALUE_NOT_IN_LIST): an unread accessor
+/// of an unknown type loads with a note, a read one is refused; a light of an unknown type is
+/// left out with a note, and the nodes that name the lights after it keep theirs.
+#[test]
+fn unknown_enum_values_load_with_notes_where_nothing_reads_them() {
+    let unread = triangle_gltf(serde_json::json!({
+        "accessors": [{"componentType": 5126, "count": 1, "type": "NotaVEC3"}]
+    }));
+    let (scene, notes) = load_gltf_slice_with_notes(&unread, "unread.glb", None).unwrap();
+    assert_eq!(scene.triangle_count(), 1);
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("accessor 1 has the unknown type \"NotaVEC3\"")),
+        "{notes:?}"
+    );
+
+    // The same triangle whose POSITION accessor has the unknown type: refused by name.
+    let read = triangle_gltf(serde_json::json!({
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 1}}]}],
+        "accessors": [{"componentType": 5126, "count": 3, "type": "NotaVEC3"}],
+        "nodes": [{"mesh": 1}],
+        "scenes": [{"nodes": [1]}],
+        "scene": 1
+    }));
+    let e = load_gltf_slice(&read, "read.glb", None).unwrap_err();
+    assert!(e.to_string().contains("accessors[1].type"), "{e}");
+
+    let lights = triangle_gltf(serde_json::json!({
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"type": "area"},
+            {"type": "point", "intensity": 2.0}
+        ]}},
+        "nodes": [
+            {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0, 5, 0]},
+            {"extensions": {"KHR_lights_punctual": {"light": 1}}, "translation": [1, 4, 0]}
+        ],
+        "scenes": [{"nodes": [0, 1, 2]}],
+        "scene": 1
+    }));
+    let (scene, notes) = load_gltf_slice_with_notes(&lights, "lights.glb", None).unwrap();
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("light 0 has the unknown type \"area\"")),
+        "{notes:?}"
+    );
+    assert_eq!(scene.lights.len(), 1, "{:?}", scene.lights);
+    assert_eq!(scene.lights[0].to_array(), [1.0, 4.0, 0.0, 1.0]);
+}
+
+/// Bytes after the end of a GLB stream are ignored with a note (the validator warns,
+/// GLB_EXTRA_DATA); a stream shorter than its header says stays an error.
+#[test]
+fn extra_bytes_after_a_glb_stream_are_ignored_with_a_note() {
+    let mut glb = to_glb(&preset("hard-tetrahedron").unwrap()).unwrap();
+    let want = load_gltf_slice(&glb, "t.glb", None).unwrap();
+    glb.push(0);
+    let (got, notes) = load_gltf_slice_with_notes(&glb, "t.glb", None).unwrap();
+    assert_eq!(got.triangle_count(), want.triangle_count());
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("1 bytes after the end of the GLB stream")),
+        "{notes:?}"
+    );
+    glb.truncate(glb.len() - 2);
+    let e = load_gltf_slice(&glb, "t.glb", None).unwrap_err();
+    assert!(e.to_string().contains("truncated"), "{e}");
 }
