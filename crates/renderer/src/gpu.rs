@@ -11,6 +11,7 @@ use crate::RenderError;
 pub(crate) use targets::{map_read, wait};
 use targets::{padded_row, FrameTargets};
 
+pub(crate) mod states;
 mod targets;
 use bytemuck::{Pod, Zeroable};
 use std::ops::Range;
@@ -142,18 +143,6 @@ pub(crate) fn light_uniform(l: &LightDraws) -> [f32; 16] {
     v
 }
 
-fn stencil_face(
-    pass: wgpu::StencilOperation,
-    depth_fail: wgpu::StencilOperation,
-) -> wgpu::StencilFaceState {
-    wgpu::StencilFaceState {
-        compare: wgpu::CompareFunction::Always,
-        fail_op: wgpu::StencilOperation::Keep,
-        depth_fail_op: depth_fail,
-        pass_op: pass,
-    }
-}
-
 impl Gpu {
     /// Opens the first adapter wgpu finds (any backend; `WGPU_BACKEND` etc. are honoured) and
     /// builds the pipelines.
@@ -232,25 +221,13 @@ impl Gpu {
             bind_group_layouts: &[Some(&globals_bgl), Some(&light_bgl)],
             immediate_size: 0,
         });
-        let surface_attrs =
-            wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4, 3 => Uint32x2];
-        let surface_layout = [Some(wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<SurfaceVertex>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &surface_attrs,
-        })];
+        let surface_layout = [Some(states::surface_layout())];
         let volume_attrs = wgpu::vertex_attr_array![0 => Float32x4];
         let volume_layout = [Some(wgpu::VertexBufferLayout {
             array_stride: 16,
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &volume_attrs,
         })];
-        let no_stencil = wgpu::StencilState {
-            front: wgpu::StencilFaceState::IGNORE,
-            back: wgpu::StencilFaceState::IGNORE,
-            read_mask: 0xff,
-            write_mask: 0,
-        };
         let prepass = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("prepass"),
             layout: Some(&layout),
@@ -261,13 +238,7 @@ impl Gpu {
                 buffers: &surface_layout,
             },
             primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: depth_format,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: no_stencil.clone(),
-                bias: wgpu::DepthBiasState::default(),
-            }),
+            depth_stencil: Some(states::prepass_depth(depth_format)),
             multisample: wgpu::MultisampleState::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
@@ -289,17 +260,6 @@ impl Gpu {
             multiview_mask: None,
             cache: None,
         });
-        let additive = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::One,
-            dst_factor: wgpu::BlendFactor::One,
-            operation: wgpu::BlendOperation::Add,
-        };
-        let lit_face = wgpu::StencilFaceState {
-            compare: wgpu::CompareFunction::Equal,
-            fail_op: wgpu::StencilOperation::Keep,
-            depth_fail_op: wgpu::StencilOperation::Keep,
-            pass_op: wgpu::StencilOperation::Keep,
-        };
         let lit = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("lit"),
             layout: Some(&layout),
@@ -310,18 +270,7 @@ impl Gpu {
                 buffers: &surface_layout,
             },
             primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: depth_format,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::Equal),
-                stencil: wgpu::StencilState {
-                    front: lit_face,
-                    back: lit_face,
-                    read_mask: 0xff,
-                    write_mask: 0,
-                },
-                bias: wgpu::DepthBiasState::default(),
-            }),
+            depth_stencil: Some(states::lit_depth(depth_format)),
             multisample: wgpu::MultisampleState::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
@@ -329,81 +278,58 @@ impl Gpu {
                 compilation_options: Default::default(),
                 targets: &[Some(wgpu::ColorTargetState {
                     format: COLOR_FORMAT,
-                    blend: Some(wgpu::BlendState {
-                        color: additive,
-                        alpha: additive,
-                    }),
+                    blend: Some(states::additive()),
                     write_mask: wgpu::ColorWrites::ALL,
                 })],
             }),
             multiview_mask: None,
             cache: None,
         });
-        use wgpu::StencilOperation::{DecrementWrap as Dec, IncrementWrap as Inc, Keep};
-        let volume_pipeline = |label: &str,
-                               unclipped_depth: bool,
-                               front_face: wgpu::FrontFace,
-                               front: wgpu::StencilFaceState,
-                               back: wgpu::StencilFaceState| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_volume"),
-                    compilation_options: Default::default(),
-                    buffers: &volume_layout,
-                },
-                primitive: wgpu::PrimitiveState {
-                    front_face,
-                    cull_mode: None,
-                    unclipped_depth,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: depth_format,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: wgpu::StencilState {
-                        front,
-                        back,
-                        read_mask: 0xff,
-                        write_mask: 0xff,
+        let volume_pipeline =
+            |label: &str,
+             unclipped_depth: bool,
+             front_face: wgpu::FrontFace,
+             faces: (wgpu::StencilFaceState, wgpu::StencilFaceState)| {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_volume"),
+                        compilation_options: Default::default(),
+                        buffers: &volume_layout,
                     },
-                    bias: wgpu::DepthBiasState::default(),
-                }),
-                multisample: wgpu::MultisampleState::default(),
-                fragment: None,
-                multiview_mask: None,
-                cache: None,
-            })
-        };
+                    primitive: wgpu::PrimitiveState {
+                        front_face,
+                        cull_mode: None,
+                        unclipped_depth,
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(states::volume_depth(depth_format, faces)),
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: None,
+                    multiview_mask: None,
+                    cache: None,
+                })
+            };
         // Z-pass: count the volume faces in front of the surface (front +1, back -1). Near
         // clipping stays on: the count then starts at the near plane, which is exactly what the
         // near-clip volume test proves to be outside the volume (with depth clamp the count
         // would start at the eye instead).
-        let zpass = volume_pipeline(
-            "zpass",
-            false,
-            wgpu::FrontFace::Ccw,
-            stencil_face(Inc, Keep),
-            stencil_face(Dec, Keep),
-        );
+        let zpass = volume_pipeline("zpass", false, wgpu::FrontFace::Ccw, states::zpass_faces());
         // Z-fail: count the faces behind the surface (back +1, front -1); depth clamp where the
         // device has it, so no part of a volume is lost to clipping.
         let zfail_ccw = volume_pipeline(
             "zfail-ccw",
             depth_clamp,
             wgpu::FrontFace::Ccw,
-            stencil_face(Keep, Dec),
-            stencil_face(Keep, Inc),
+            states::zfail_faces(),
         );
         let zfail_cw = volume_pipeline(
             "zfail-cw",
             depth_clamp,
             wgpu::FrontFace::Cw,
-            stencil_face(Keep, Dec),
-            stencil_face(Keep, Inc),
+            states::zfail_faces(),
         );
         if let Some(err) = pollster::block_on(scope.pop()) {
             return Err(RenderError::Device(format!("pipeline creation: {err}")));
@@ -570,27 +496,14 @@ impl Gpu {
         for (li, l) in input.lights.iter().enumerate() {
             let offset = (li as u64 * LIGHT_STRIDE) as u32;
             {
-                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("stencil"),
-                    color_attachments: &[],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: depth_view,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        }),
-                        stencil_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(0),
-                            store: wgpu::StoreOp::Store,
-                        }),
-                    }),
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                if let Some([x, y, sw, sh]) = l.scissor {
-                    pass.set_scissor_rect(x, y, sw, sh);
-                }
+                let mut pass = states::begin_stencil_pass(
+                    &mut enc,
+                    "stencil",
+                    depth_view,
+                    wgpu::LoadOp::Clear(0),
+                    l.scissor,
+                    None,
+                );
                 pass.set_bind_group(0, &globals_bg, &[]);
                 pass.set_bind_group(1, &light_bg, &[offset]);
                 pass.set_vertex_buffer(0, volume_buf.slice(..));
@@ -607,35 +520,9 @@ impl Gpu {
             }
             t.copy_stencil(&mut enc, li);
             {
-                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("lit"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: color_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: depth_view,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        }),
-                        stencil_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        }),
-                    }),
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                if let Some([x, y, sw, sh]) = l.scissor {
-                    pass.set_scissor_rect(x, y, sw, sh);
-                }
+                let mut pass = states::begin_lit_pass(
+                    &mut enc, "lit", color_view, depth_view, l.scissor, None,
+                );
                 if !input.surface.is_empty() && !l.scissor.is_some_and(|r| r[2] == 0 || r[3] == 0) {
                     pass.set_pipeline(&self.lit);
                     pass.set_stencil_reference(0);

@@ -721,11 +721,7 @@ impl Renderer {
                 ambient: scene.ambient,
                 emission: scene.emission.clone(),
                 exposure,
-                scissor_pixels_saved: scissors
-                    .iter()
-                    .flatten()
-                    .map(|r| (width * height - r[2] * r[3]) as usize)
-                    .sum(),
+                scissor_pixels_saved: scissor_pixels_saved(&scissors, width, height),
                 uncertain,
                 host_resolved: uncertain,
                 pipeline,
@@ -903,4 +899,13 @@ fn object_space_lights(
             })
         })
         .collect()
+}
+
+/// Pixels the per-light scissors keep out of the stencil and lit passes, summed over lights.
+fn scissor_pixels_saved(scissors: &[Option<[u32; 4]>], width: u32, height: u32) -> usize {
+    scissors
+        .iter()
+        .flatten()
+        .map(|r| (width * height - r[2] * r[3]) as usize)
+        .sum()
 }

@@ -159,11 +159,7 @@ impl Renderer {
                 ambient: scene.ambient,
                 emission: scene.emission.clone(),
                 exposure,
-                scissor_pixels_saved: scissors
-                    .iter()
-                    .flatten()
-                    .map(|r| (width * height - r[2] * r[3]) as usize)
-                    .sum(),
+                scissor_pixels_saved: super::scissor_pixels_saved(&scissors, width, height),
                 uncertain: counts.integer_decided,
                 host_resolved: 0,
                 pipeline,

@@ -2,6 +2,7 @@
 //! stencil (sides, caps) and lit passes.
 
 use super::*;
+use crate::gpu::states;
 
 impl ShadowPass {
     /// Records the frame's compute pass for the inputs last given to [`ShadowPass::update`]: the
@@ -172,29 +173,15 @@ impl ShadowPass {
         // Two passes, sides then caps, so that each has its own timestamps; the first clears
         // the stencil, the second keeps counting into it.
         let begin = |enc: &mut wgpu::CommandEncoder, label, stencil, slot| {
-            let mut pass = enc
-                .begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some(label),
-                    color_attachments: &[],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: depth,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        }),
-                        stencil_ops: Some(wgpu::Operations {
-                            load: stencil,
-                            store: wgpu::StoreOp::Store,
-                        }),
-                    }),
-                    timestamp_writes: render_ts(fb, slot),
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                })
-                .forget_lifetime();
-            if let Some([x, y, w, h]) = scissor {
-                pass.set_scissor_rect(x, y, w, h);
-            }
+            let mut pass = states::begin_stencil_pass(
+                enc,
+                label,
+                depth,
+                stencil,
+                scissor,
+                render_ts(fb, slot),
+            )
+            .forget_lifetime();
             pass.set_bind_group(0, &fb.d0, &[]);
             pass.set_bind_group(1, &fb.dl, &[offset]);
             pass
@@ -265,39 +252,18 @@ impl ShadowPass {
             .frame
             .as_ref()
             .expect("ShadowPass::update before encode_lit");
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("resident lit"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: color,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                }),
-            }),
-            timestamp_writes: render_ts(fb, TimestampSlot::Lit(light)),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
         let scissor = rs.state.scissors[light];
+        let mut pass = states::begin_lit_pass(
+            enc,
+            "resident lit",
+            color,
+            depth,
+            scissor,
+            render_ts(fb, TimestampSlot::Lit(light)),
+        );
         let tris = rs.layout.tri_count() as u32;
         if tris == 0 || scissor.is_some_and(|r| r[2] == 0 || r[3] == 0) {
             return;
-        }
-        if let Some([x, y, w, h]) = scissor {
-            pass.set_scissor_rect(x, y, w, h);
         }
         pass.set_pipeline(&self.lit[usize::from(rs.surface.is_some())]);
         if let Some((vertices, _)) = &rs.surface {

@@ -229,18 +229,6 @@ fn uniform(binding: u32, stages: wgpu::ShaderStages, dynamic: bool) -> wgpu::Bin
     }
 }
 
-fn stencil_face(
-    pass: wgpu::StencilOperation,
-    depth_fail: wgpu::StencilOperation,
-) -> wgpu::StencilFaceState {
-    wgpu::StencilFaceState {
-        compare: wgpu::CompareFunction::Always,
-        fail_op: wgpu::StencilOperation::Keep,
-        depth_fail_op: depth_fail,
-        pass_op: pass,
-    }
-}
-
 fn mode_index(mode: Accuracy) -> usize {
     shaders::mode_value(mode) as usize
 }

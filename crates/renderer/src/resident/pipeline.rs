@@ -2,6 +2,7 @@
 //! pipelines.
 
 use super::*;
+use crate::gpu::states;
 
 impl ShadowPass {
     /// Features the pass uses when the adapter has them: `DEPTH_CLIP_CONTROL` (depth clamp for
@@ -246,12 +247,6 @@ impl ShadowPass {
             bind_group_layouts: &[Some(&d0), Some(&dl)],
             immediate_size: 0,
         });
-        let no_stencil = wgpu::StencilState {
-            front: wgpu::StencilFaceState::IGNORE,
-            back: wgpu::StencilFaceState::IGNORE,
-            read_mask: 0xff,
-            write_mask: 0,
-        };
         let mut prepass_targets = vec![Some(wgpu::ColorTargetState {
             format: formats.color,
             blend: None,
@@ -264,16 +259,10 @@ impl ShadowPass {
                 write_mask: wgpu::ColorWrites::ALL,
             }));
         }
-        let surface_attrs =
-            wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4, 3 => Uint32x2];
-        let surface_layout = [Some(wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<crate::gpu::SurfaceVertex>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &surface_attrs,
-        })];
-        // Surfaces come from a per-frame vertex buffer the surface pass writes (`vs_surface`,
-        // as in the host pipeline), or, where it would not fit one binding, are pulled from the
-        // storage buffers (`vs_resident_surface`).
+        let surface_layout = [Some(states::surface_layout())];
+        // Surfaces come from the per-frame vertex buffer the surface pass writes (`vs_surface`,
+        // as in the host pipeline), or, where that buffer would exceed `max_buffer_size`, are
+        // pulled from the storage buffers (`vs_resident_surface`).
         let make_prepass = |entry: &str, buffers: &[Option<wgpu::VertexBufferLayout<'_>>]| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some("resident prepass"),
@@ -285,13 +274,7 @@ impl ShadowPass {
                     buffers,
                 },
                 primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: formats.depth,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: no_stencil.clone(),
-                    bias: wgpu::DepthBiasState::default(),
-                }),
+                depth_stencil: Some(states::prepass_depth(formats.depth)),
                 multisample: wgpu::MultisampleState::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &draw,
@@ -311,17 +294,6 @@ impl ShadowPass {
             make_prepass("vs_resident_surface", &[]),
             make_prepass("vs_surface", &surface_layout),
         ];
-        let additive = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::One,
-            dst_factor: wgpu::BlendFactor::One,
-            operation: wgpu::BlendOperation::Add,
-        };
-        let lit_face = wgpu::StencilFaceState {
-            compare: wgpu::CompareFunction::Equal,
-            fail_op: wgpu::StencilOperation::Keep,
-            depth_fail_op: wgpu::StencilOperation::Keep,
-            pass_op: wgpu::StencilOperation::Keep,
-        };
         let make_lit = |entry: &str, buffers: &[Option<wgpu::VertexBufferLayout<'_>>]| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some("resident lit"),
@@ -333,18 +305,7 @@ impl ShadowPass {
                     buffers,
                 },
                 primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: formats.depth,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Equal),
-                    stencil: wgpu::StencilState {
-                        front: lit_face,
-                        back: lit_face,
-                        read_mask: 0xff,
-                        write_mask: 0,
-                    },
-                    bias: wgpu::DepthBiasState::default(),
-                }),
+                depth_stencil: Some(states::lit_depth(formats.depth)),
                 multisample: wgpu::MultisampleState::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &draw,
@@ -352,10 +313,7 @@ impl ShadowPass {
                     compilation_options: Default::default(),
                     targets: &[Some(wgpu::ColorTargetState {
                         format: formats.color,
-                        blend: Some(wgpu::BlendState {
-                            color: additive,
-                            alpha: additive,
-                        }),
+                        blend: Some(states::additive()),
                         write_mask: wgpu::ColorWrites::ALL,
                     })],
                 }),
@@ -367,46 +325,34 @@ impl ShadowPass {
             make_lit("vs_resident_surface", &[]),
             make_lit("vs_surface", &surface_layout),
         ];
-        use wgpu::StencilOperation::{DecrementWrap as Dec, IncrementWrap as Inc, Keep};
-        let volume = |label: &str,
-                      entry: &str,
-                      unclipped_depth: bool,
-                      front_face: wgpu::FrontFace,
-                      front: wgpu::StencilFaceState,
-                      back: wgpu::StencilFaceState| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&d_layout),
-                vertex: wgpu::VertexState {
-                    module: &draw,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState {
-                    front_face,
-                    cull_mode: None,
-                    unclipped_depth,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: formats.depth,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: wgpu::StencilState {
-                        front,
-                        back,
-                        read_mask: 0xff,
-                        write_mask: 0xff,
+        let volume =
+            |label: &str,
+             entry: &str,
+             unclipped_depth: bool,
+             front_face: wgpu::FrontFace,
+             faces: (wgpu::StencilFaceState, wgpu::StencilFaceState)| {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&d_layout),
+                    vertex: wgpu::VertexState {
+                        module: &draw,
+                        entry_point: Some(entry),
+                        compilation_options: Default::default(),
+                        buffers: &[],
                     },
-                    bias: wgpu::DepthBiasState::default(),
-                }),
-                multisample: wgpu::MultisampleState::default(),
-                fragment: None,
-                multiview_mask: None,
-                cache: None,
-            })
-        };
+                    primitive: wgpu::PrimitiveState {
+                        front_face,
+                        cull_mode: None,
+                        unclipped_depth,
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(states::volume_depth(formats.depth, faces)),
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: None,
+                    multiview_mask: None,
+                    cache: None,
+                })
+            };
         // The same stencil rules as the host pipeline (see gpu.rs): z-pass counts the faces in
         // front of the surface with near clipping on; z-fail the faces behind it, with depth
         // clamp where the device has it.
@@ -416,19 +362,10 @@ impl ShadowPass {
             "vs_resident_side_zpass",
             false,
             ccw,
-            stencil_face(Inc, Keep),
-            stencil_face(Dec, Keep),
+            states::zpass_faces(),
         );
-        let zfail = |label, entry, face| {
-            volume(
-                label,
-                entry,
-                depth_clamp,
-                face,
-                stencil_face(Keep, Dec),
-                stencil_face(Keep, Inc),
-            )
-        };
+        let zfail =
+            |label, entry, face| volume(label, entry, depth_clamp, face, states::zfail_faces());
         let side_zfail = zfail("resident side zfail", "vs_resident_side_zfail", ccw);
         let cap_ccw = zfail("resident cap ccw", "vs_resident_cap_ccw", ccw);
         let cap_cw = zfail("resident cap cw", "vs_resident_cap_cw", wgpu::FrontFace::Cw);

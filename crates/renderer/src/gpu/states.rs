@@ -1,0 +1,188 @@
+//! The render states both pipelines share (host: `gpu.rs`, GPU-resident: `resident/pipeline.rs`),
+//! so that they count the stencil and light pixels by the same rules.
+
+/// Surface vertex attributes of [`super::SurfaceVertex`]: position, normal, albedo, ids.
+pub(crate) const SURFACE_ATTRS: [wgpu::VertexAttribute; 4] =
+    wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4, 3 => Uint32x2];
+
+/// The vertex buffer layout of [`super::SurfaceVertex`].
+pub(crate) fn surface_layout() -> wgpu::VertexBufferLayout<'static> {
+    wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<super::SurfaceVertex>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &SURFACE_ATTRS,
+    }
+}
+
+/// A two-sided stencil face that always passes the stencil test and applies `pass` or
+/// `depth_fail`.
+pub(crate) fn stencil_face(
+    pass: wgpu::StencilOperation,
+    depth_fail: wgpu::StencilOperation,
+) -> wgpu::StencilFaceState {
+    wgpu::StencilFaceState {
+        compare: wgpu::CompareFunction::Always,
+        fail_op: wgpu::StencilOperation::Keep,
+        depth_fail_op: depth_fail,
+        pass_op: pass,
+    }
+}
+
+/// Z-pass volume faces: count the faces in front of the surface (front +1, back -1).
+pub(crate) fn zpass_faces() -> (wgpu::StencilFaceState, wgpu::StencilFaceState) {
+    use wgpu::StencilOperation::{DecrementWrap, IncrementWrap, Keep};
+    (
+        stencil_face(IncrementWrap, Keep),
+        stencil_face(DecrementWrap, Keep),
+    )
+}
+
+/// Z-fail volume faces: count the faces behind the surface (back +1, front -1).
+pub(crate) fn zfail_faces() -> (wgpu::StencilFaceState, wgpu::StencilFaceState) {
+    use wgpu::StencilOperation::{DecrementWrap, IncrementWrap, Keep};
+    (
+        stencil_face(Keep, DecrementWrap),
+        stencil_face(Keep, IncrementWrap),
+    )
+}
+
+/// The depth pre-pass: depth `less` with writes, stencil untouched.
+pub(crate) fn prepass_depth(format: wgpu::TextureFormat) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::Less),
+        stencil: wgpu::StencilState {
+            front: wgpu::StencilFaceState::IGNORE,
+            back: wgpu::StencilFaceState::IGNORE,
+            read_mask: 0xff,
+            write_mask: 0,
+        },
+        bias: wgpu::DepthBiasState::default(),
+    }
+}
+
+/// A lit pass: depth `equal` (the pre-pass's surface only), stencil `== reference` (0: lit).
+pub(crate) fn lit_depth(format: wgpu::TextureFormat) -> wgpu::DepthStencilState {
+    let face = wgpu::StencilFaceState {
+        compare: wgpu::CompareFunction::Equal,
+        fail_op: wgpu::StencilOperation::Keep,
+        depth_fail_op: wgpu::StencilOperation::Keep,
+        pass_op: wgpu::StencilOperation::Keep,
+    };
+    wgpu::DepthStencilState {
+        format,
+        depth_write_enabled: Some(false),
+        depth_compare: Some(wgpu::CompareFunction::Equal),
+        stencil: wgpu::StencilState {
+            front: face,
+            back: face,
+            read_mask: 0xff,
+            write_mask: 0,
+        },
+        bias: wgpu::DepthBiasState::default(),
+    }
+}
+
+/// A shadow-volume draw: depth `less` without writes, two-sided stencil `(front, back)`.
+pub(crate) fn volume_depth(
+    format: wgpu::TextureFormat,
+    (front, back): (wgpu::StencilFaceState, wgpu::StencilFaceState),
+) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format,
+        depth_write_enabled: Some(false),
+        depth_compare: Some(wgpu::CompareFunction::Less),
+        stencil: wgpu::StencilState {
+            front,
+            back,
+            read_mask: 0xff,
+            write_mask: 0xff,
+        },
+        bias: wgpu::DepthBiasState::default(),
+    }
+}
+
+/// Additive blending of the lit passes (each light adds its light).
+pub(crate) fn additive() -> wgpu::BlendState {
+    let add = wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    };
+    wgpu::BlendState {
+        color: add,
+        alpha: add,
+    }
+}
+
+/// A stencil pass of one light: no colour, depth loaded (the pre-pass's), the stencil cleared to
+/// 0 or loaded as `stencil` says, limited to `scissor` when given.
+pub(crate) fn begin_stencil_pass<'e>(
+    enc: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    depth: &wgpu::TextureView,
+    stencil: wgpu::LoadOp<u32>,
+    scissor: Option<[u32; 4]>,
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
+    let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(keep()),
+            stencil_ops: Some(wgpu::Operations {
+                load: stencil,
+                store: wgpu::StoreOp::Store,
+            }),
+        }),
+        timestamp_writes,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    if let Some([x, y, w, h]) = scissor {
+        pass.set_scissor_rect(x, y, w, h);
+    }
+    pass
+}
+
+/// A lit pass of one light: colour, depth and stencil loaded, limited to `scissor` when given.
+pub(crate) fn begin_lit_pass<'e>(
+    enc: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    color: &wgpu::TextureView,
+    depth: &wgpu::TextureView,
+    scissor: Option<[u32; 4]>,
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
+    let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: color,
+            depth_slice: None,
+            resolve_target: None,
+            ops: keep(),
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(keep()),
+            stencil_ops: Some(keep()),
+        }),
+        timestamp_writes,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    if let Some([x, y, w, h]) = scissor {
+        pass.set_scissor_rect(x, y, w, h);
+    }
+    pass
+}
+
+/// Load what the attachment holds and store what the pass draws.
+fn keep<V>() -> wgpu::Operations<V> {
+    wgpu::Operations {
+        load: wgpu::LoadOp::Load,
+        store: wgpu::StoreOp::Store,
+    }
+}
