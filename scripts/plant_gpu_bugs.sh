@@ -24,16 +24,19 @@ embedder() {
     shaders/*.wgsl) echo crates/wgpu-compute/src/shaders.rs ;;
     kernels/*.cl) echo crates/opencl/src/lib.rs ;;
     shaders/*.geom) echo crates/vulkan-geometry/src/pipelines.rs ;;
-    crates/renderer/src/resident/*) echo crates/renderer/src/resident/mod.rs ;;
+    crates/renderer/src/resident/*.wgsl) echo crates/renderer/src/resident/mod.rs ;;
+    *.rs) echo "$1" ;;
   esac
 }
 
 # One mutant per line, tab-separated: name, file, original text, planted text, test targets.
 mutants="$(cat <<'LIST'
-wgsl-sign-negated	shaders/silhouette.wgsl	return s0 * parity;	return -s0 * parity;	conformance gpu_lavapipe
+wgsl-sign-negated	shaders/silhouette.wgsl	return vec2<i32>(s0, 0);	return vec2<i32>(-s0, 0);	conformance gpu_lavapipe
+wgsl-parity-dropped	shaders/silhouette.wgsl	m += select(s, -s, (ot & NEGATIVE) != 0u);	m += s;	conformance gpu_lavapipe resident
 wgsl-robust-rule-dropped	shaders/silhouette.wgsl	if s0 != s1 || s1 != s2 {	if false {	conformance gpu_lavapipe
 wgsl-f32-bound-shrunk	shaders/silhouette.wgsl	const F32_FILTER_EPS: f32 = 0x1p-19f;	const F32_FILTER_EPS: f32 = 0x1p-40f;	conformance gpu_lavapipe
-wgsl-device-exact-dropped	shaders/silhouette.wgsl	f = device_exact(a, b, l, o);	f = UNCERTAIN;	gpu_lavapipe
+wgsl-device-exact-dropped	shaders/silhouette.wgsl	return vec2<i32>(device_exact(p0, p1, l, p2), 1);	return vec2<i32>(UNCERTAIN, 1);	gpu_lavapipe
+wgsl-uncertain-light-dropped	shaders/silhouette.wgsl	uncertain[slot] = Uncertain(t, li, 0u, 0u);	uncertain[slot] = Uncertain(t, 0u, 0u, 0u);	gpu_lavapipe
 wgsl-f64-bound-shrunk	shaders/exact_f64.wgsl	const GPU_F64_FILTER_EPS: f64 = 8e-15lf;	const GPU_F64_FILTER_EPS: f64 = 1e-30lf;	conformance gpu_lavapipe
 opencl-sign-negated	kernels/silhouette.cl	s *= parity;	s *= -parity;	conformance device
 opencl-robust-rule-dropped	kernels/silhouette.cl	s = (s0 == s1 && s1 == s2) ? s0 : 0;	s = s0;	conformance device
@@ -43,13 +46,13 @@ glsl-sign-negated	shaders/silhouette_gs.geom	s = t * parity;	s = -t * parity;	co
 glsl-robust-rule-dropped	shaders/silhouette_gs.geom	if (t != t1 || t1 != t2) {	if (false) {	conformance
 glsl-f32-bound-shrunk	shaders/silhouette_gs.geom	precise float bound = 1.9073486328125e-06 * perm;	precise float bound = 1.0e-12 * perm;	conformance
 glsl-f64-bound-shrunk	shaders/silhouette_gs.geom	precise double bound = 1.0e-15LF * perm;	precise double bound = 1.0e-30LF * perm;	conformance
-resident-parity-dropped	crates/renderer/src/resident/extract.wgsl	m += select(s, -s, (ot & NEGATIVE) != 0u);	m += s;	resident
 resident-touch-ignored	crates/renderer/src/resident/extract.wgsl	return l.w != 0.0 && p.x	return false && p.x	resident
 resident-side-flipped	crates/renderer/src/resident/draw.wgsl	if (record & R_NEGATIVE) != 0u {	if (record & R_NEGATIVE) == 0u {	resident
 resident-back-cap-flipped	crates/renderer/src/resident/draw.wgsl	if s == 1 && c != 0u {	if s == -1 && c != 0u {	resident
 resident-zfail-list-from-front	crates/renderer/src/resident/draw.wgsl	return side_vertex(r_records[lt.draw.x + lt.draw.y - 1u - i], v);	return side_vertex(r_records[lt.draw.x + i], v);	resident
-resident-twin-robust-rule	crates/renderer/src/resident/twin.rs	if s0 == s1 && s1 == s2 {	if true {	resident
-resident-integer-path-zero	crates/renderer/src/resident/extract.wgsl	return orient_int(p0, p1, l, p2);	return 0;	resident
+twin-robust-rule	crates/wgpu-compute/src/twin.rs	if s0 == s1 && s1 == s2 { s0 } else { 0 }	if true { s0 } else { 0 }	twin resident
+integer-path-zero	crates/wgpu-compute/src/shaders.rs	"return orient_int(a, b, l, o); // @exact-int"	"return 0; // @exact-int"	gpu_lavapipe resident
+resident-touch-skip-dropped	crates/renderer/src/resident/pipeline.rs	(shaders::TOUCH_SIGNS_CONSTANT, 1.0),	(shaders::TOUCH_SIGNS_CONSTANT, 0.0),	resident
 resident-chunk-offset-dropped	crates/renderer/src/resident/draw.wgsl	let t = r_chunk.first + k;	let t = k;	resident
 LIST
 )"
@@ -61,7 +64,7 @@ tar -C "$root" --exclude=./target --exclude=./.git --exclude=./fuzz/target -cf -
 cd "$scratch"
 
 # The unplanted copy must pass the same tests, or a kill would mean nothing.
-if ! cargo test --workspace --test conformance --test gpu_lavapipe --test device --test resident \
+if ! cargo test --workspace --test conformance --test gpu_lavapipe --test device --test resident --test twin \
   >"$scratch/plant-baseline.log" 2>&1; then
   echo "baseline: the unplanted copy fails its tests; see $scratch/plant-baseline.log"
   exit 2

@@ -1,12 +1,21 @@
-// Silhouette multiplicities for every edge of a prepared scene, for many lights, in one dispatch.
+// Silhouette multiplicities for every edge of a prepared scene, for many lights, in one dispatch
+// per step.
 //
-// Part of shadowvol-wgpu-compute (crates/wgpu-compute). The CPU twin of this kernel is
-// `shadowvol_wgpu_compute::cpu_twin`: keep the two in step.
+// Part of shadowvol-wgpu-compute (crates/wgpu-compute). The CPU twin of these kernels is
+// `shadowvol_wgpu_compute::twin`: keep the two in step. The renderer's GPU-resident pass appends
+// its own kernels to this module and reuses its bindings and functions.
 //
-// One invocation = one global edge (all objects concatenated). It loops over the lights of the
-// dispatch and over the edge's opposite vertices (OVs), sums the signs into m, writes m to
-// `mult[light * edge_count + edge]`, and appends `(edge, m)` to the light's compact silhouette list
-// when m != 0 (atomic append; the list order is unspecified).
+// Two steps (the thesis' method):
+// 1. `triangles` (robust, ordered, exact): one invocation per global triangle; for each light of
+//    the dispatch, the sign of the triangle in its canonical vertex order (ids ascending) goes to
+//    `signs[light * tri_count + triangle]`.
+// 2. `extract`: one invocation per global edge; for each light, m = the sum over the edge's
+//    opposite vertices (OVs) of the parity times the sign of that OV's triangle (`original`: the
+//    naive per-(edge, OV) sign instead, with no triangle step). It writes m to
+//    `mult[light * edge_count + edge]` and appends `(edge, m)` to the light's compact silhouette
+//    list when m != 0 (atomic append; the list order is unspecified).
+// Every triangle is evaluated once, in one order, for all its edges: robust and ordered close
+// their chains by construction.
 //
 // Sign convention (crates/robust-math): for an edge (a, b), a < b, and an OV o,
 //   V = L.xyz - L.w * A,  s = sgn( ((A - B) x V) . (O - A) ).
@@ -14,9 +23,10 @@
 //
 // Exact mode uses a certified filter (`exact_filter`). What it cannot certify goes to
 // `device_exact`: by default `orient_int` decides it on the device; otherwise (the module as it
-// stands) the (edge, OV, light) triple contributes 0 here and is appended to `uncertain`, and the
-// host decides it exactly and patches `mult` and the compact lists. For devices with SHADER_F64 the host builds this module with the
-// call marked `@exact-filter` replaced by `filter_f64` and appends shaders/exact_f64.wgsl.
+// stands) the (triangle, light) pair's sign is 0 here and the pair is appended to `uncertain`;
+// the host decides it exactly and patches `mult` and the compact lists. For devices with
+// SHADER_F64 the host builds this module with the call marked `@exact-filter` replaced by
+// `filter_f64` and appends shaders/exact_f64.wgsl.
 //
 // WGSL cannot forbid FMA contraction or reassociation; the f32 modes may therefore differ from
 // the CPU in the last bits (only exact mode is required to be bit-identical), and the filter
@@ -24,8 +34,16 @@
 
 override MODE: u32 = 0u;
 
+// True in the renderer's resident pass, whose triangle step marks triangles with a vertex exactly
+// at a point light as TOUCH: `edge_multiplicity` skips them in every mode.
+override TOUCH_SIGNS: bool = false;
+
 const WORKGROUP_SIZE: u32 = 256u;
 const UNCERTAIN: i32 = 2;
+// A triangle sign that is not a sign: the triangle touches the light and has no volume.
+const TOUCH: i32 = 2;
+// Set on an `ov_tris` entry for an odd permutation of the canonical order.
+const NEGATIVE: u32 = 0x80000000u;
 
 // robust-math's F32_FILTER_EPS (2^-19), F32_FILTER_MIN (2^-40), F32_FILTER_MAX (2^40).
 const F32_FILTER_EPS: f32 = 0x1p-19f;
@@ -41,16 +59,15 @@ struct Params {
     edge_count: u32,
     light_count: u32,
     uncertain_capacity: u32,
-    _pad: u32,
+    tri_count: u32,
 }
 
-// One record per uncertain (edge, OV, light): global edge, global OV slot (index into `ovs`),
-// light index within this dispatch.
+// One record per uncertain (triangle, light): global triangle, light index within this dispatch.
 struct Uncertain {
-    edge: u32,
-    ov_slot: u32,
+    triangle: u32,
     light: u32,
-    _pad: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -70,6 +87,12 @@ struct Uncertain {
 // Compact lists: light l owns [l * edge_count, (l + 1) * edge_count); entries (edge, bitcast m).
 @group(0) @binding(7) var<storage, read_write> silhouettes: array<vec2<u32>>;
 @group(0) @binding(8) var<storage, read_write> uncertain: array<Uncertain>;
+// Per global triangle: canonical (ascending) global vertex ids and the object index.
+@group(0) @binding(9) var<storage, read> tris: array<vec4<u32>>;
+// Per OV slot: its global triangle, with NEGATIVE set for an odd permutation.
+@group(0) @binding(10) var<storage, read> ov_tris: array<u32>;
+// [light * tri_count + triangle]: -1, 0, 1 (TOUCH in the resident pass).
+@group(0) @binding(11) var<storage, read_write> signs: array<i32>;
 
 fn position(id: u32) -> vec3<f32> {
     let i = id * 3u;
@@ -95,33 +118,6 @@ fn sign_f32(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>, o: vec3<f32>) -> i32 {
     let dy = o.y - a.y;
     let dz = o.z - a.z;
     return sgn((nx * dx + ny * dy) + nz * dz);
-}
-
-// Robust and ordered: the canonical triangle (ids ascending) and the permutation parity.
-fn canonical_sign(ia: u32, ib: u32, io: u32, a: vec3<f32>, b: vec3<f32>, o: vec3<f32>, l: vec4<f32>) -> i32 {
-    var p0 = a;
-    var p1 = b;
-    var p2 = o;
-    var parity = 1;
-    if io < ia {
-        p0 = o;
-        p1 = a;
-        p2 = b;
-    } else if io < ib {
-        p0 = a;
-        p1 = o;
-        p2 = b;
-        parity = -1;
-    }
-    let s0 = sign_f32(p0, p1, l, p2);
-    if MODE == 1u {
-        let s1 = sign_f32(p1, p2, l, p0);
-        let s2 = sign_f32(p2, p0, l, p1);
-        if s0 != s1 || s1 != s2 {
-            return 0;
-        }
-    }
-    return s0 * parity;
 }
 
 fn is_subnormal(x: f32) -> bool {
@@ -206,6 +202,84 @@ fn device_exact(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>, o: vec3<f32>) -> i32 {
     return UNCERTAIN; // @exact-int
 }
 
+// The sign of the canonical triangle (p0, p1, p2) (ids ascending) in the mode (robust, ordered or
+// exact; robust-math's `triangle_sign`), and 1 in y when exact mode needed `device_exact` (the
+// filter could not certify it). x is UNCERTAIN when `device_exact` leaves it to the host.
+fn triangle_sign_traced(p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>, l: vec4<f32>) -> vec2<i32> {
+    if MODE == 3u {
+        let f = exact_filter(p0, p1, l, p2);
+        if f != UNCERTAIN {
+            return vec2<i32>(f, 0);
+        }
+        return vec2<i32>(device_exact(p0, p1, l, p2), 1);
+    }
+    let s0 = sign_f32(p0, p1, l, p2);
+    if MODE == 1u {
+        let s1 = sign_f32(p1, p2, l, p0);
+        let s2 = sign_f32(p2, p0, l, p1);
+        if s0 != s1 || s1 != s2 {
+            return vec2<i32>(0, 0);
+        }
+    }
+    return vec2<i32>(s0, 0);
+}
+
+// m of the edge `rec` (its edges[] record; `ov_end` the next record's first slot) for light `li`:
+// `original` evaluates every (edge, OV) naively; the other modes sum the parity times the signs
+// of the OVs' triangles. TOUCH triangles contribute nothing.
+fn edge_multiplicity(rec: vec4<u32>, ov_end: u32, li: u32) -> i32 {
+    let row = li * params.tri_count;
+    var m = 0;
+    if MODE == 0u {
+        let l = lights[rec.w * params.light_count + li];
+        let a = position(rec.x);
+        let b = position(rec.y);
+        for (var k = rec.z; k < ov_end; k++) {
+            if TOUCH_SIGNS && signs[row + (ov_tris[k] & ~NEGATIVE)] == TOUCH {
+                continue;
+            }
+            m += sign_f32(a, b, l, position(ovs[k]));
+        }
+    } else {
+        for (var k = rec.z; k < ov_end; k++) {
+            let ot = ov_tris[k];
+            let s = signs[row + (ot & ~NEGATIVE)];
+            if s != TOUCH {
+                m += select(s, -s, (ot & NEGATIVE) != 0u);
+            }
+        }
+    }
+    return m;
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn triangles(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let t = (wid.x + wid.y * nwg.x) * WORKGROUP_SIZE + lid;
+    if t >= params.tri_count {
+        return;
+    }
+    let tr = tris[t];
+    let p0 = position(tr.x);
+    let p1 = position(tr.y);
+    let p2 = position(tr.z);
+    let light_count = params.light_count;
+    for (var li = 0u; li < light_count; li++) {
+        var s = triangle_sign_traced(p0, p1, p2, lights[tr.w * light_count + li]).x;
+        if s == UNCERTAIN {
+            let slot = atomicAdd(&counters[light_count], 1u);
+            if slot < params.uncertain_capacity {
+                uncertain[slot] = Uncertain(t, li, 0u, 0u);
+            }
+            s = 0;
+        }
+        signs[li * params.tri_count + t] = s;
+    }
+}
+
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn extract(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -218,38 +292,9 @@ fn extract(
         return;
     }
     let rec = edges[e];
-    let ov_begin = rec.z;
     let ov_end = edges[e + 1u].z;
-    let a = position(rec.x);
-    let b = position(rec.y);
-    let light_count = params.light_count;
-    for (var li = 0u; li < light_count; li++) {
-        let l = lights[rec.w * light_count + li];
-        var m = 0;
-        for (var k = ov_begin; k < ov_end; k++) {
-            let io = ovs[k];
-            let o = position(io);
-            var s = 0;
-            if MODE == 0u {
-                s = sign_f32(a, b, l, o);
-            } else if MODE == 3u {
-                var f = exact_filter(a, b, l, o);
-                if f == UNCERTAIN {
-                    f = device_exact(a, b, l, o);
-                }
-                if f == UNCERTAIN {
-                    let slot = atomicAdd(&counters[light_count], 1u);
-                    if slot < params.uncertain_capacity {
-                        uncertain[slot] = Uncertain(e, k, li, 0u);
-                    }
-                } else {
-                    s = f;
-                }
-            } else {
-                s = canonical_sign(rec.x, rec.y, io, a, b, o, l);
-            }
-            m += s;
-        }
+    for (var li = 0u; li < params.light_count; li++) {
+        let m = edge_multiplicity(rec, ov_end, li);
         mult[li * edge_count + e] = m;
         if m != 0 {
             let slot = atomicAdd(&counters[li], 1u);

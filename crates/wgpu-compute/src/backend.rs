@@ -1,11 +1,11 @@
 //! The wgpu backend: device set-up, prepare (static buffers), extract (dispatch, readback,
 //! host resolution).
 
-use crate::resolve::{finish_batch, BatchOutput, Patch};
+use crate::resolve::{expand_uncertain, finish_batch, BatchOutput, Patch, UncertainTriangle};
 use crate::twin::{pack_lights, ExactFilter};
 use crate::{shaders, NAME};
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::gpu::{SceneLayout, UncertainRecord};
+use shadowvol_silhouette::gpu::{SceneLayout, TriangleLayout};
 use shadowvol_silhouette::{
     check_lights, gpu, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
     PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
@@ -107,6 +107,8 @@ struct StaticBuffers {
     positions: wgpu::Buffer,
     edges: wgpu::Buffer,
     ovs: wgpu::Buffer,
+    tris: wgpu::Buffer,
+    ov_tris: wgpu::Buffer,
 }
 
 /// One batch of the lights of an `extract`: what [`WgpuBackend::run_batch`] uploads and where
@@ -143,6 +145,9 @@ struct Frame {
 struct Prepared {
     scene: TopologyScene,
     layout: SceneLayout,
+    triangles: TriangleLayout,
+    /// [`TriangleLayout::edge_slots`], built the first time the host decides a triangle.
+    edge_slots: Option<Vec<[(u32, u32); 3]>>,
     gpu: Option<StaticBuffers>,
     frame: Option<Frame>,
     /// Lights of the last extract whose results the frame buffers hold: `(first, count)`.
@@ -200,7 +205,10 @@ pub struct WgpuBackend {
     options: WgpuOptions,
     limits: wgpu::Limits,
     bind_group_layout: wgpu::BindGroupLayout,
+    /// The edge step, per mode ([`shaders::mode_value`]).
     pipelines: Vec<wgpu::ComputePipeline>,
+    /// The triangle step, per mode; `None` for `original`, which has none.
+    triangle_pipelines: Vec<Option<wgpu::ComputePipeline>>,
     health: Arc<Health>,
     scenes: PreparedScenes<Prepared>,
 }
@@ -345,14 +353,14 @@ impl WgpuBackend {
             limits.max_compute_workgroups_per_dimension =
                 limits.max_compute_workgroups_per_dimension.min(cap.max(1));
         }
-        if limits.max_storage_buffers_per_shader_stage < 8
+        if limits.max_storage_buffers_per_shader_stage < STORAGE_BUFFERS
             || limits.max_compute_invocations_per_workgroup < shaders::WORKGROUP_SIZE
             || limits.max_compute_workgroup_size_x < shaders::WORKGROUP_SIZE
         {
             return Err(BackendError::Unavailable {
                 backend: NAME,
                 reason: format!(
-                    "the device allows {} storage buffers per stage and {} invocations per workgroup; the kernel needs 8 and {}",
+                    "the device allows {} storage buffers per stage and {} invocations per workgroup; the kernels need {STORAGE_BUFFERS} and {}",
                     limits.max_storage_buffers_per_shader_stage,
                     limits.max_compute_invocations_per_workgroup,
                     shaders::WORKGROUP_SIZE
@@ -382,21 +390,28 @@ impl WgpuBackend {
             bind_group_layouts: &[Some(&bind_group_layout)],
             immediate_size: 0,
         });
+        let pipeline = |entry: &str, mode: Accuracy| {
+            let constants = [(shaders::MODE_CONSTANT, f64::from(shaders::mode_value(mode)))];
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(mode.name()),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    zero_initialize_workgroup_memory: false,
+                },
+                cache: None,
+            })
+        };
         let pipelines = Accuracy::ALL
             .iter()
+            .map(|&mode| pipeline(shaders::ENTRY_POINT, mode))
+            .collect();
+        let triangle_pipelines = Accuracy::ALL
+            .iter()
             .map(|&mode| {
-                let constants = [(shaders::MODE_CONSTANT, f64::from(shaders::mode_value(mode)))];
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(mode.name()),
-                    layout: Some(&pipeline_layout),
-                    module: &module,
-                    entry_point: Some(shaders::ENTRY_POINT),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        zero_initialize_workgroup_memory: false,
-                    },
-                    cache: None,
-                })
+                (mode != Accuracy::Original).then(|| pipeline(shaders::TRIANGLE_ENTRY_POINT, mode))
             })
             .collect();
         if let Some(e) = scope.pop() {
@@ -415,6 +430,7 @@ impl WgpuBackend {
             limits,
             bind_group_layout,
             pipelines,
+            triangle_pipelines,
             health,
             scenes: PreparedScenes::new(NAME),
         };
@@ -555,10 +571,11 @@ impl WgpuBackend {
         Ok(())
     }
 
-    /// Lights per batch for a scene of `edges` edges and `objects` objects.
+    /// Lights per batch for a scene of `edges` edges, `tris` triangles and `objects` objects.
     fn lights_per_batch(
         &self,
         edges: u64,
+        tris: u64,
         objects: u64,
         lights: usize,
     ) -> Result<usize, BackendError> {
@@ -575,6 +592,7 @@ impl WgpuBackend {
         let n = gpu::lights_per_batch(
             &[
                 (storage, list),
+                (storage, tris * 4),
                 (max_buffer, readback),
                 (storage, objects * 16),
             ],
@@ -583,7 +601,8 @@ impl WgpuBackend {
         .min(lights);
         if n == 0 {
             return Err(limit_error(format!(
-                "one light needs a {list}-byte compact list for {edges} edges and {} bytes of object-space lights for {objects} objects, but the device allows storage bindings of {max_binding} bytes and buffers of {max_buffer} bytes",
+                "one light needs a {list}-byte compact list for {edges} edges, {} bytes of triangle signs for {tris} triangles and {} bytes of object-space lights for {objects} objects, but the device allows storage bindings of {max_binding} bytes and buffers of {max_buffer} bytes",
+                tris * 4,
                 objects * 16
             )));
         }
@@ -594,6 +613,7 @@ impl WgpuBackend {
         &self,
         gpu: &StaticBuffers,
         edges: u64,
+        tris: u64,
         objects: u64,
         light_capacity: usize,
         uncertain_capacity: u32,
@@ -634,6 +654,13 @@ impl WgpuBackend {
         let mult = storage("multiplicities", edges * lc * 4, wgpu::BufferUsages::VERTEX);
         let counters_bytes = (lc + 1) * 4;
         let counters = storage("counters", counters_bytes, wgpu::BufferUsages::empty());
+        // The triangle step's signs, `[light * tri_count + triangle]` (kept alive by the bind
+        // group).
+        let signs = storage(
+            "triangle signs",
+            (tris * lc * 4).max(4),
+            wgpu::BufferUsages::empty(),
+        );
         let silhouettes = storage("silhouettes", edges * lc * 8, wgpu::BufferUsages::VERTEX);
         let uncertain = storage("uncertain", uncertain_bytes, wgpu::BufferUsages::empty());
         let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -649,6 +676,9 @@ impl WgpuBackend {
                 entry(6, &counters),
                 entry(7, &silhouettes),
                 entry(8, &uncertain),
+                entry(9, &gpu.tris),
+                entry(10, &gpu.ov_tris),
+                entry(11, &signs),
             ],
         });
         Ok(Frame {
@@ -674,7 +704,10 @@ fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     }
 }
 
-fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 9] {
+/// Storage buffers the kernels bind in one stage.
+const STORAGE_BUFFERS: u32 = 11;
+
+fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 12] {
     let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -704,6 +737,9 @@ fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 9] {
         storage(6, false),
         storage(7, false),
         storage(8, false),
+        storage(9, true),
+        storage(10, true),
+        storage(11, false),
     ]
 }
 
@@ -744,10 +780,16 @@ fn read_pairs(bytes: &[u8]) -> Vec<(u32, i32)> {
     words.chunks_exact(2).map(|w| (w[0], w[1] as i32)).collect()
 }
 
-/// Uncertain records from little-endian `u32` words.
-fn read_records(bytes: &[u8]) -> Vec<UncertainRecord> {
+/// Undecided `(triangle, light)` records (4 little-endian `u32` words each).
+fn read_records(bytes: &[u8]) -> Vec<UncertainTriangle> {
     let words: Vec<u32> = read_u32s(bytes).collect();
-    UncertainRecord::read_all(&words)
+    words
+        .chunks_exact(4)
+        .map(|w| UncertainTriangle {
+            triangle: w[0],
+            light: w[1],
+        })
+        .collect()
 }
 
 fn read_u32s(bytes: &[u8]) -> impl Iterator<Item = u32> + '_ {
@@ -812,6 +854,7 @@ impl SilhouetteBackend for WgpuBackend {
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
         self.check_health()?;
         let layout = SceneLayout::build(scene, NAME)?;
+        let triangles = TriangleLayout::build(scene, &layout, NAME)?;
         let gpu = if layout.edge_count() == 0 {
             None
         } else {
@@ -821,6 +864,10 @@ impl SilhouetteBackend for WgpuBackend {
             self.check_buffer("the positions", positions.len() as u64, true)?;
             self.check_buffer("the edge records", edges.len() as u64, true)?;
             self.check_buffer("the opposite vertices", ovs.len() as u64, true)?;
+            let tris = bytemuck::cast_slice::<[u32; 4], u8>(&triangles.tris);
+            let ov_tris = bytemuck::cast_slice::<u32, u8>(&triangles.ov_tris);
+            self.check_buffer("the triangles", tris.len() as u64, true)?;
+            self.check_buffer("the opposite-vertex triangles", ov_tris.len() as u64, true)?;
             let scope = ErrorScopes::push(&self.device);
             let init = |label: &str, contents: &[u8]| {
                 self.device
@@ -836,6 +883,8 @@ impl SilhouetteBackend for WgpuBackend {
                 positions: init("positions", positions),
                 edges: init("edges", edges),
                 ovs: init("opposite vertices", ovs),
+                tris: init("triangles", tris),
+                ov_tris: init("opposite-vertex triangles", ov_tris),
             };
             if let Some(e) = scope.pop() {
                 return Err(device_error(format!("uploading the scene: {e}")));
@@ -846,6 +895,8 @@ impl SilhouetteBackend for WgpuBackend {
         let id = self.scenes.insert(Prepared {
             scene: scene.clone(),
             layout,
+            triangles,
+            edge_slots: None,
             gpu,
             frame: None,
             last: None,

@@ -3,34 +3,44 @@
 //!
 //! # How it works
 //! * [`SilhouetteBackend::prepare`] concatenates every object of the scene into one
-//!   [`SceneLayout`](shadowvol_silhouette::gpu::SceneLayout) (global vertex ids, an edge record `(a, b, first OV, object)` per edge, CSR
-//!   opposite vertices) and uploads it once.
+//!   [`SceneLayout`](shadowvol_silhouette::gpu::SceneLayout) (global vertex ids, an edge record
+//!   `(a, b, first OV, object)` per edge, CSR opposite vertices) and one
+//!   [`TriangleLayout`](shadowvol_silhouette::gpu::TriangleLayout) (each triangle in canonical
+//!   vertex order, and the triangle and parity of each opposite-vertex slot), and uploads them
+//!   once.
 //! * [`SilhouetteBackend::extract`] uploads only the object-space lights (from
 //!   [`shadowvol_silhouette::object_lights`], an `objects × lights` table) and runs
 //!   `shaders/silhouette.wgsl` once for all objects and up to
-//!   [`WgpuOptions::max_lights_per_batch`] lights. One invocation handles one edge for every
-//!   light; it writes the per-edge multiplicity and appends `(edge, m)` to the light's compact
-//!   silhouette list with an atomic counter. The list lengths and an adaptive prefix of every
-//!   list come back in the same submission (one round trip); longer lists, and with
-//!   [`WgpuOptions::full_readback`] the whole multiplicity buffer, in a second. The device
-//!   buffers stay available through [`WgpuBackend::gpu_results`].
+//!   [`WgpuOptions::max_lights_per_batch`] lights, in two steps (the thesis' method): the
+//!   `triangles` step evaluates one sign per (triangle, light) in the mode, then the `extract`
+//!   step gives each edge, for every light, the sum of its opposite vertices' triangle signs
+//!   times their parities (`original` skips the first step and evaluates each (edge, OV) pair
+//!   naively: it is the baseline). The edge step writes the per-edge multiplicity and appends
+//!   `(edge, m)` to the light's compact silhouette list with an atomic counter. The list lengths
+//!   and an adaptive prefix of every list come back in the same submission (one round trip);
+//!   longer lists, and with [`WgpuOptions::full_readback`] the whole multiplicity buffer, in a
+//!   second. The device buffers stay available through [`WgpuBackend::gpu_results`]. The
+//!   renderer's GPU-resident pass appends its kernels to the same module and calls the same
+//!   functions (`triangle_sign_traced`, `edge_multiplicity`); this backend is the readback
+//!   variant of that code.
 //! * `original`, `robust`, `ordered` evaluate robust-math's `sign_f32` expression operation for
 //!   operation with the canonical-order and parity rules. WGSL cannot forbid FMA contraction, so
 //!   these modes may differ from the CPU in rare last-bit cases; `robust` and `ordered` stay
-//!   consistent (closed chains) either way, because each triangle is still evaluated once, in
-//!   one order, for all its edges.
+//!   consistent (closed chains) either way, because each triangle is evaluated once, in one
+//!   order, for all its edges.
 //! * `exact` runs a certified filter on the device: `f64` when the device has `SHADER_F64`
 //!   (bound [`twin::GPU_F64_FILTER_EPS`] = 8 × robust-math's `F64_FILTER_EPS`, margin for
 //!   contraction), else robust-math's `f32` filter (`F32_FILTER_EPS`, its range checks, `w` in
 //!   {0, 1} only) plus
 //!   two device guards ([`twin::GPU_F32_INPUT_MAX`], [`twin::GPU_F32_PERM_MIN`]).
 //!   Subnormal inputs are never certified. By default
-//!   ([`WgpuOptions::exact_on_device`]) the `(edge, OV, light)` triples the filter cannot
+//!   ([`WgpuOptions::exact_on_device`]) the `(triangle, light)` pairs the filter cannot
 //!   certify are decided on the device by [`exact_int::orient_int`]: integer arithmetic on the
 //!   `f32` bits, exact for every finite input, so nothing is resolved on the host and
 //!   [`ExtractStats::uncertain`](shadowvol_silhouette::ExtractStats::uncertain) is 0. With it
-//!   off they go to an append buffer; the host decides them with `orient_exact`, patches the
-//!   values and lists (on the host and on the device) and counts them in `uncertain`.
+//!   off they go to an append buffer ([`UncertainTriangle`]); the host decides the three
+//!   `(edge, OV, light)` triples of each with `orient_exact`, patches the values and lists (on
+//!   the host and on the device) and counts the triples in `uncertain`.
 //! * Timings: [`ExtractStats::upload`](shadowvol_silhouette::ExtractStats::upload) is the light/parameter upload (and any buffer
 //!   (re)allocation), `compute` is submit-to-completion of the dispatch (with the copies of the
 //!   counts and list prefixes), `readback` zeroing the host result, mapping and any second round
@@ -59,6 +69,7 @@ pub mod shaders;
 pub mod twin;
 
 pub use backend::{GpuResults, WgpuBackend, WgpuOptions};
+pub use resolve::UncertainTriangle;
 pub use twin::ExactFilter;
 
 use shadowvol_silhouette::{BackendError, SilhouetteBackend};

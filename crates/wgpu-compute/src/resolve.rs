@@ -5,13 +5,66 @@ use shadowvol_silhouette::gpu::{resolve_uncertain, SceneLayout, UncertainRecord}
 use shadowvol_silhouette::{BackendError, Multiplicities};
 use std::ops::Range;
 
+/// A `(triangle, light)` pair whose sign the triangle step's exact filter could not certify (with
+/// [`WgpuOptions::exact_on_device`](crate::WgpuOptions::exact_on_device) off). The device counted
+/// the triangle's sign as 0; the host decides the three `(edge, OV, light)` triples it
+/// contributes to.
+///
+/// On the device a record is 4 `u32`s: `triangle`, `light`, 0, 0.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct UncertainTriangle {
+    /// Global triangle (index into
+    /// [`TriangleLayout::tris`](shadowvol_silhouette::gpu::TriangleLayout::tris)).
+    pub triangle: u32,
+    /// Light index within the dispatch (0-based).
+    pub light: u32,
+}
+
+/// The `(edge, OV slot, light)` triples of `pairs`, three per pair, from
+/// [`TriangleLayout::edge_slots`](shadowvol_silhouette::gpu::TriangleLayout::edge_slots).
+///
+/// # Errors
+/// [`BackendError::Device`] for a pair out of range (a malformed device output).
+pub(crate) fn expand_uncertain(
+    pairs: &[UncertainTriangle],
+    edge_slots: &[[(u32, u32); 3]],
+    light_count: usize,
+) -> Result<Vec<UncertainRecord>, BackendError> {
+    let mut out = Vec::with_capacity(3 * pairs.len());
+    for p in pairs {
+        let Some(slots) = edge_slots.get(p.triangle as usize) else {
+            return Err(malformed(p, edge_slots.len(), light_count));
+        };
+        if p.light as usize >= light_count {
+            return Err(malformed(p, edge_slots.len(), light_count));
+        }
+        out.extend(slots.iter().map(|&(edge, ov_slot)| UncertainRecord {
+            edge,
+            ov_slot,
+            light: p.light,
+        }));
+    }
+    Ok(out)
+}
+
+fn malformed(p: &UncertainTriangle, triangles: usize, lights: usize) -> BackendError {
+    BackendError::Device {
+        backend: crate::NAME,
+        message: format!(
+            "malformed kernel output: uncertain record (triangle {}, light {}) out of range \
+             ({triangles} triangles, a {lights}-light batch)",
+            p.triangle, p.light
+        ),
+    }
+}
+
 /// The device output of one dispatch (a batch of lights).
 pub(crate) struct BatchOutput {
     /// Full per-edge values `[light * edge_count + edge]`, when read back.
     pub mult: Option<Vec<i32>>,
     /// Per light, the compact list `(edge, m)`, any order.
     pub lists: Vec<Vec<(u32, i32)>>,
-    /// Uncertain triples.
+    /// Uncertain triples (expanded from the device's undecided triangles).
     pub uncertain: Vec<UncertainRecord>,
 }
 
@@ -127,7 +180,38 @@ pub(crate) fn radix_sort(keys: &mut Vec<u32>) {
 
 #[cfg(test)]
 mod tests {
-    use super::radix_sort;
+    use super::{expand_uncertain, radix_sort, UncertainTriangle};
+
+    #[test]
+    fn out_of_range_pairs_are_errors_not_panics() {
+        let slots = [[(0, 0), (1, 2), (2, 4)]];
+        let ok = expand_uncertain(
+            &[UncertainTriangle {
+                triangle: 0,
+                light: 1,
+            }],
+            &slots,
+            2,
+        )
+        .unwrap();
+        assert_eq!(ok.len(), 3);
+        assert!(ok.iter().all(|r| r.light == 1));
+        assert_eq!(ok[1].edge, 1);
+        assert_eq!(ok[1].ov_slot, 2);
+        for bad in [
+            UncertainTriangle {
+                triangle: 1,
+                light: 0,
+            },
+            UncertainTriangle {
+                triangle: 0,
+                light: 2,
+            },
+        ] {
+            let e = expand_uncertain(&[bad], &slots, 2).unwrap_err().to_string();
+            assert!(e.contains("out of range"), "{e}");
+        }
+    }
 
     #[test]
     fn radix_sort_sorts_like_the_standard_sort() {

@@ -14,12 +14,21 @@ pub const FILES: [(&str, &str); 2] = [
     ("exact_f64.wgsl", EXACT_F64_WGSL),
 ];
 
-/// The kernel's entry point.
+/// The edge step's entry point (every mode).
 pub const ENTRY_POINT: &str = "extract";
 
 /// The pipeline-overridable constant that selects the mode (0 original, 1 robust, 2 ordered,
 /// 3 exact).
 pub const MODE_CONSTANT: &str = "MODE";
+
+/// The entry point of the triangle step (robust, ordered and exact modes), dispatched before
+/// [`ENTRY_POINT`].
+pub const TRIANGLE_ENTRY_POINT: &str = "triangles";
+
+/// The pipeline-overridable constant (a `bool`, default `false`) that makes `edge_multiplicity`
+/// skip triangles the triangle step marked as touching the light (the renderer's resident pass
+/// sets it).
+pub const TOUCH_SIGNS_CONSTANT: &str = "TOUCH_SIGNS";
 
 /// Threads per workgroup (`WORKGROUP_SIZE` in the kernel).
 pub const WORKGROUP_SIZE: u32 = 256;

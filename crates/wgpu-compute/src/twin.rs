@@ -1,9 +1,10 @@
 //! The CPU twin of `shaders/silhouette.wgsl` (and `shaders/exact_f64.wgsl`).
 //!
 //! Each function here mirrors one WGSL function, statement for statement, and [`run_kernel`]
-//! mirrors the kernel's per-edge loop: one "invocation" per global edge of a [`SceneLayout`], lights
-//! in the outer loop, opposite vertices in the inner one, the compact list appended when `m != 0`,
-//! uncertain triples appended in exact mode. When the GPU disagrees with the `cpu` backend, run the
+//! mirrors the two steps: one "invocation" per global triangle of a [`TriangleLayout`] (a sign
+//! per light, undecided pairs appended in exact mode), then one per global edge of a
+//! [`SceneLayout`] (lights in the outer loop, opposite vertices in the inner one, the compact
+//! list appended when `m != 0`). When the GPU disagrees with the `cpu` backend, run the
 //! twin on the same input: if the twin is right, the fault is in the device or the WGSL
 //! translation; if it is wrong too, it is in the algorithm (vello keeps CPU shaders for the same
 //! reason).
@@ -24,10 +25,10 @@
 //! assert!(uncertain <= (scene.total_ovs() * case.lights.len()) as u64);
 //! ```
 
-use crate::resolve::{finish_batch, BatchOutput};
+use crate::resolve::{expand_uncertain, finish_batch, BatchOutput, UncertainTriangle};
 use shadowvol_robust_math::filter::{self, TermsF32};
 use shadowvol_robust_math::{sign_f32, Accuracy, Light, F32_FILTER_EPS, F64_FILTER_EPS};
-use shadowvol_silhouette::gpu::{SceneLayout, UncertainRecord};
+use shadowvol_silhouette::gpu::{SceneLayout, TriangleLayout, NEGATIVE};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, Multiplicities, TopologyScene,
 };
@@ -127,64 +128,126 @@ pub fn exact_filter(
     }
 }
 
-/// Twin of WGSL `canonical_sign` (robust and ordered): sorts the triangle by id, evaluates in that
-/// order, multiplies by the parity. `robust` selects the three-evaluation rule.
+/// Twin of WGSL `triangle_sign_traced`: the sign of the canonical triangle `(p0, p1, p2)` (ids
+/// ascending) in `mode`, and whether exact mode needed the fallback (the filter could not
+/// certify it). The sign is `None` when exact mode leaves it to the host (`device_exact`
+/// false); with `device_exact`, [`orient_int`](crate::exact_int::orient_int) decides it.
+/// `original` evaluates the one order, as `ordered` does (the kernel's edge step does not use it
+/// in that mode; the renderer's caps do).
 #[must_use]
-#[allow(clippy::too_many_arguments)]
-pub fn canonical_sign(
-    robust: bool,
-    ia: u32,
-    ib: u32,
-    io: u32,
-    a: [f32; 3],
-    b: [f32; 3],
-    o: [f32; 3],
+pub fn triangle_sign(
+    mode: Accuracy,
+    filter: ExactFilter,
+    device_exact: bool,
+    [p0, p1, p2]: [[f32; 3]; 3],
     l: [f32; 4],
-) -> i8 {
-    let (p0, p1, p2, parity) = if io < ia {
-        (o, a, b, 1)
-    } else if io < ib {
-        (a, o, b, -1)
-    } else {
-        (a, b, o, 1)
-    };
-    let s0 = sign_f32(p0, p1, l, p2);
-    if robust {
-        let s1 = sign_f32(p1, p2, l, p0);
-        let s2 = sign_f32(p2, p0, l, p1);
-        if s0 != s1 || s1 != s2 {
-            return 0;
+) -> (Option<i8>, bool) {
+    match mode {
+        Accuracy::Exact => match exact_filter(filter, p0, p1, l, p2) {
+            Some(s) => (Some(s), false),
+            None if device_exact => (Some(crate::exact_int::orient_int(p0, p1, l, p2)), true),
+            None => (None, true),
+        },
+        Accuracy::Robust => {
+            let s0 = sign_f32(p0, p1, l, p2);
+            let s1 = sign_f32(p1, p2, l, p0);
+            let s2 = sign_f32(p2, p0, l, p1);
+            (Some(if s0 == s1 && s1 == s2 { s0 } else { 0 }), false)
         }
+        Accuracy::Ordered | Accuracy::Original => (Some(sign_f32(p0, p1, l, p2)), false),
     }
-    s0 * parity
 }
 
-/// What one kernel dispatch produces.
+/// The sign value of a triangle the renderer's resident pass marks as touching the light (a
+/// vertex exactly at the point light): it has no volume. WGSL `TOUCH`.
+pub const TOUCH: i32 = 2;
+
+/// The inputs of one edge step: the scene, its triangles, the triangle step's signs
+/// (`[light * tri_count + triangle]`) and the object-major lights.
+#[derive(Debug, Clone, Copy)]
+pub struct EdgeInputs<'a> {
+    /// Positions, edges and opposite vertices.
+    pub layout: &'a SceneLayout,
+    /// Triangles and the triangle of each opposite-vertex slot.
+    pub triangles: &'a TriangleLayout,
+    /// The triangle step's signs (unused by `original` unless `touch_signs`).
+    pub signs: &'a [i32],
+    /// `lights[object * light_count + light]`, object space.
+    pub lights: &'a [[f32; 4]],
+    /// Lights of the dispatch.
+    pub light_count: usize,
+    /// WGSL `TOUCH_SIGNS`: skip opposite vertices whose triangle's sign is [`TOUCH`].
+    pub touch_signs: bool,
+}
+
+/// Twin of WGSL `edge_multiplicity`: `m` of global edge `e` for light `li`. `original` sums the
+/// naive per-(edge, OV) signs; the other modes sum the parity times the signs of the OVs'
+/// triangles. [`TOUCH`] triangles contribute nothing.
+///
+/// # Panics
+/// Panics if `e`, `li` or the inputs are out of range.
+#[must_use]
+pub fn edge_multiplicity(x: &EdgeInputs<'_>, e: usize, li: usize, mode: Accuracy) -> i32 {
+    let [ia, ib, _, object] = x.layout.edges[e];
+    let row = li * x.triangles.tri_count();
+    let triangle = |k: usize| row + (x.triangles.ov_tris[k] & !NEGATIVE) as usize;
+    let mut m = 0i32;
+    if mode == Accuracy::Original {
+        let l = x.lights[object as usize * x.light_count + li];
+        let (a, b) = (x.layout.position(ia), x.layout.position(ib));
+        for k in x.layout.ov_slots(e) {
+            if x.touch_signs && x.signs[triangle(k)] == TOUCH {
+                continue;
+            }
+            m += i32::from(sign_f32(a, b, l, x.layout.position(x.layout.ovs[k])));
+        }
+    } else {
+        for k in x.layout.ov_slots(e) {
+            let s = x.signs[triangle(k)];
+            if s != TOUCH {
+                m += if x.triangles.ov_tris[k] & NEGATIVE != 0 {
+                    -s
+                } else {
+                    s
+                };
+            }
+        }
+    }
+    m
+}
+
+/// What the kernels' two steps produce for one dispatch.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct KernelOutput {
-    /// `mult[light * edge_count + edge]`, uncertain triples counted as 0.
+    /// The triangle step's `signs[light * tri_count + triangle]` (all 0 in `original`, which has
+    /// no triangle step); undecided triangles are 0.
+    pub signs: Vec<i32>,
+    /// `mult[light * edge_count + edge]`, undecided triangles counted as 0.
     pub mult: Vec<i32>,
     /// Per light, the compact list `(edge, m)` of edges with `m != 0` (here in edge order; on the
     /// device in atomic-append order).
     pub silhouettes: Vec<Vec<(u32, i32)>>,
-    /// Uncertain triples (exact mode only).
-    pub uncertain: Vec<UncertainRecord>,
+    /// `(triangle, light)` pairs left to the host (exact mode without `device_exact` only).
+    pub uncertain: Vec<UncertainTriangle>,
 }
 
-/// Runs the kernel's logic for every edge of `layout`: `lights` is object-major
-/// (`lights[object * light_count + light]`, object-space, from [`object_lights`]).
+/// Runs the kernels' logic for every triangle, then every edge, of `layout`: `lights` is
+/// object-major (`lights[object * light_count + light]`, object-space, from [`object_lights`]).
+/// What the exact filter cannot certify is left to the host (see [`run_kernel_with`]).
 ///
 /// # Panics
-/// Panics if `lights.len() != layout.object_count() * light_count`.
+/// Panics if `lights.len() != layout.object_count() * light_count`, or `triangles` was not built
+/// against `layout`.
 #[must_use]
 pub fn run_kernel(
     layout: &SceneLayout,
+    triangles: &TriangleLayout,
     lights: &[[f32; 4]],
     light_count: usize,
     mode: Accuracy,
     filter: ExactFilter,
 ) -> KernelOutput {
-    run_kernel_with(layout, lights, light_count, mode, filter, false)
+    run_kernel_with(layout, triangles, lights, light_count, mode, filter, false)
 }
 
 /// [`run_kernel`] for the module of
@@ -197,6 +260,7 @@ pub fn run_kernel(
 #[must_use]
 pub fn run_kernel_with(
     layout: &SceneLayout,
+    triangles: &TriangleLayout,
     lights: &[[f32; 4]],
     light_count: usize,
     mode: Accuracy,
@@ -209,40 +273,45 @@ pub fn run_kernel_with(
         "one light per (object, light)"
     );
     let edge_count = layout.edge_count();
+    let tri_count = triangles.tri_count();
     let mut out = KernelOutput {
+        signs: vec![0; tri_count * light_count],
         mult: vec![0; edge_count * light_count],
         silhouettes: vec![Vec::new(); light_count],
         uncertain: Vec::new(),
     };
-    for e in 0..edge_count {
-        // One invocation.
-        let [ia, ib, _, object] = layout.edges[e];
-        let a = layout.position(ia);
-        let b = layout.position(ib);
-        for li in 0..light_count {
-            let l = lights[object as usize * light_count + li];
-            let mut m = 0i32;
-            for k in layout.ov_slots(e) {
-                let io = layout.ovs[k];
-                let o = layout.position(io);
-                let s = match mode {
-                    Accuracy::Original => sign_f32(a, b, l, o),
-                    Accuracy::Exact if device_exact => exact_filter(filter, a, b, l, o)
-                        .unwrap_or_else(|| crate::exact_int::orient_int(a, b, l, o)),
-                    Accuracy::Exact => exact_filter(filter, a, b, l, o).unwrap_or_else(|| {
-                        out.uncertain.push(UncertainRecord {
-                            edge: e as u32,
-                            ov_slot: k as u32,
+    if mode != Accuracy::Original {
+        // The triangle step: one invocation per triangle.
+        for (t, tr) in triangles.tris.iter().enumerate() {
+            let p = [tr[0], tr[1], tr[2]].map(|v| layout.position(v));
+            for li in 0..light_count {
+                let l = lights[tr[3] as usize * light_count + li];
+                let s = match triangle_sign(mode, filter, device_exact, p, l).0 {
+                    Some(s) => s,
+                    None => {
+                        out.uncertain.push(UncertainTriangle {
+                            triangle: t as u32,
                             light: li as u32,
                         });
                         0
-                    }),
-                    Accuracy::Robust | Accuracy::Ordered => {
-                        canonical_sign(mode == Accuracy::Robust, ia, ib, io, a, b, o, l)
                     }
                 };
-                m += i32::from(s);
+                out.signs[li * tri_count + t] = i32::from(s);
             }
+        }
+    }
+    // The edge step: one invocation per edge.
+    let x = EdgeInputs {
+        layout,
+        triangles,
+        signs: &out.signs,
+        lights,
+        light_count,
+        touch_signs: false,
+    };
+    for e in 0..edge_count {
+        for li in 0..light_count {
+            let m = edge_multiplicity(&x, e, li, mode);
             out.mult[li * edge_count + e] = m;
             if m != 0 {
                 out.silhouettes[li].push((e as u32, m));
@@ -265,8 +334,9 @@ pub(crate) fn pack_lights(
 }
 
 /// Extracts like the wgpu backend does, on the CPU: the twin kernel over all lights at once,
-/// then the same host resolution of uncertain triples (with `orient_exact`). Fills `out` and
-/// returns the number of uncertain triples.
+/// then the same host resolution of what exact mode left undecided (with `orient_exact`). Fills
+/// `out` and returns the number of uncertain (edge, OV, light) triples: three per undecided
+/// (triangle, light) pair.
 ///
 /// # Errors
 /// [`BackendError::InvalidInput`] for an empty light list, [`BackendError::Limit`] for scenes
@@ -280,11 +350,17 @@ pub fn extract(
 ) -> Result<u64, BackendError> {
     check_lights(lights)?;
     let layout = SceneLayout::build(scene, crate::NAME)?;
+    let triangles = TriangleLayout::build(scene, &layout, crate::NAME)?;
     let obj_lights = object_lights(scene, lights);
     let packed = pack_lights(&obj_lights, 0, lights.len());
-    let k = run_kernel(&layout, &packed, lights.len(), mode, filter);
+    let k = run_kernel(&layout, &triangles, &packed, lights.len(), mode, filter);
     out.reset(layout.edge_count(), lights.len());
-    let uncertain = k.uncertain.len() as u64;
+    let records = if k.uncertain.is_empty() {
+        Vec::new()
+    } else {
+        expand_uncertain(&k.uncertain, &triangles.edge_slots(&layout), lights.len())?
+    };
+    let uncertain = records.len() as u64;
     let _patch = finish_batch(
         &layout,
         &obj_lights,
@@ -292,7 +368,7 @@ pub fn extract(
         BatchOutput {
             mult: Some(k.mult),
             lists: k.silhouettes,
-            uncertain: k.uncertain,
+            uncertain: records,
         },
         out,
     )?;

@@ -5,7 +5,7 @@ mod common;
 
 use shadowvol_cpu::CpuBackend;
 use shadowvol_robust_math::{orient_exact, orient_filter_f32, Accuracy};
-use shadowvol_silhouette::gpu::SceneLayout;
+use shadowvol_silhouette::gpu::{SceneLayout, TriangleLayout};
 use shadowvol_silhouette::shapes::Rng;
 use shadowvol_silhouette::{extract_once, invariant, object_lights, Multiplicities};
 use shadowvol_wgpu_compute::twin::{self, ExactFilter};
@@ -83,12 +83,22 @@ fn hard_cases_send_triples_to_the_host() {
 fn kernel_records_are_well_formed() {
     for case in common::all_cases() {
         let layout = SceneLayout::build(&case.scene, "wgpu").unwrap();
+        let triangles = TriangleLayout::build(&case.scene, &layout, "wgpu").unwrap();
         let obj = object_lights(&case.scene, &case.lights);
         let n = case.lights.len();
         let packed: Vec<[f32; 4]> = obj.iter().flat_map(|v| v.iter().copied()).collect();
-        let k = twin::run_kernel(&layout, &packed, n, Accuracy::Exact, ExactFilter::F32);
+        let k = twin::run_kernel(
+            &layout,
+            &triangles,
+            &packed,
+            n,
+            Accuracy::Exact,
+            ExactFilter::F32,
+        );
         let e = layout.edge_count();
         assert_eq!(k.mult.len(), e * n);
+        assert_eq!(k.signs.len(), triangles.tri_count() * n);
+        assert!(k.signs.iter().all(|s| (-1..=1).contains(s)));
         for (li, list) in k.silhouettes.iter().enumerate() {
             let nonzero = k.mult[li * e..(li + 1) * e]
                 .iter()
@@ -100,10 +110,12 @@ fn kernel_records_are_well_formed() {
                 .all(|&(edge, m)| k.mult[li * e + edge as usize] == m));
         }
         for r in &k.uncertain {
-            assert!(layout
-                .ov_slots(r.edge as usize)
-                .contains(&(r.ov_slot as usize)));
+            assert!((r.triangle as usize) < triangles.tri_count());
             assert!((r.light as usize) < n);
+            assert_eq!(
+                k.signs[r.light as usize * triangles.tri_count() + r.triangle as usize],
+                0
+            );
         }
     }
 }

@@ -2,8 +2,9 @@
 //
 // Appended to the `wgpu` silhouette backend's module (shaders/silhouette.wgsl, composed by
 // `shadowvol_wgpu_compute::shaders::module_source`) and to shaders/exact_int.wgsl, so it shares
-// their bindings in group 0 (params, positions, edges, ovs, lights: the same SceneLayout), their
-// MODE constant and their sign functions (`sign_f32`, `exact_filter`, `orient_int`). The CPU twin
+// their bindings in group 0 (params, positions, edges, ovs, lights, tris, ov_tris, signs: the
+// same SceneLayout and TriangleLayout), their MODE constant and their functions
+// (`triangle_sign_traced`, `edge_multiplicity`, with TOUCH_SIGNS set). The CPU twin
 // is `shadowvol_renderer::resident::twin`: keep the two in step.
 //
 // 1. `resident_reset`: per light two indirect draw records (z-pass and z-fail sides, 6 vertices
@@ -11,34 +12,27 @@
 // 2. `resident_triangles`: one sign per (light, triangle) in the mode, for the triangle's
 //    canonical vertex order (ids ascending). TOUCH marks a triangle with a vertex exactly at the
 //    point light: it has no volume (no cap, no contribution to any edge).
-// 3. `resident_edges`: per (light, edge), m = sum over the edge's opposite vertices of the
-//    parity times the sign of that triangle (`original`: the naive per-(edge, OV) sign instead),
-//    then |m| side records appended to the light's z-pass list (from the front of its region) or
-//    z-fail list (from the back), by the plan's technique for the edge's object. The append is
-//    aggregated per workgroup: one global atomic per workgroup, light and list.
+// 3. `resident_edges`: per (light, edge), m from the backend's `edge_multiplicity` (the parity
+//    times the sign of each opposite vertex's triangle; `original`: the naive per-(edge, OV)
+//    sign instead), then |m| side records appended to the light's z-pass list (from the front
+//    of its region) or z-fail list (from the back), by the plan's technique for the edge's
+//    object. The append is aggregated per workgroup: one global atomic per workgroup, light and
+//    list.
 
-const TOUCH: i32 = 2;
-const NEGATIVE: u32 = 0x80000000u;
 const RESIDENT_WG: u32 = 256u;
 
 struct ResidentParams {
-    tri_count: u32,
     object_count: u32,
     // Records per light region (at least the opposite-vertex count: sum |m| can't exceed it).
     capacity: u32,
     // Bit 0: count silhouette edges, side quads and cap triangles per (light, object).
     flags: u32,
+    _pad: u32,
 }
 
 @group(1) @binding(0) var<uniform> rp: ResidentParams;
-// Per global triangle: canonical (ascending) global vertex ids and the object index.
-@group(1) @binding(1) var<storage, read> tris: array<vec4<u32>>;
-// Per opposite-vertex slot: its global triangle, with NEGATIVE set for an odd permutation.
-@group(1) @binding(2) var<storage, read> ov_tris: array<u32>;
 // [light * object_count + object]: 0 culled, 1 z-pass, 2 z-fail.
 @group(1) @binding(3) var<storage, read> technique: array<u32>;
-// [light * tri_count + triangle]: -1, 0, 1 or TOUCH.
-@group(1) @binding(4) var<storage, read_write> signs: array<i32>;
 // [light * 8 ..]: z-pass then z-fail DrawIndirectArgs (vertex_count, instance_count, first
 // vertex, first instance); then [light_count * 8]: triangles decided by `orient_int`; then,
 // with flags bit 0, per (light, object): silhouette edges, side quads, cap triangles.
@@ -76,27 +70,6 @@ fn touches(p: vec3<f32>, l: vec4<f32>) -> bool {
     return l.w != 0.0 && p.x * l.w == l.x && p.y * l.w == l.y && p.z * l.w == l.z;
 }
 
-// The sign of the canonical triangle (p0, p1, p2) in the mode (robust-math's `triangle_sign`).
-fn triangle_sign(p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>, l: vec4<f32>) -> i32 {
-    if MODE == 3u {
-        let f = exact_filter(p0, p1, l, p2);
-        if f != UNCERTAIN {
-            return f;
-        }
-        atomicAdd(&args[stats_base()], 1u);
-        return orient_int(p0, p1, l, p2);
-    }
-    let s0 = sign_f32(p0, p1, l, p2);
-    if MODE == 1u {
-        let s1 = sign_f32(p1, p2, l, p0);
-        let s2 = sign_f32(p2, p0, l, p1);
-        if s0 != s1 || s1 != s2 {
-            return 0;
-        }
-    }
-    return s0;
-}
-
 @compute @workgroup_size(RESIDENT_WG)
 fn resident_triangles(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -104,7 +77,7 @@ fn resident_triangles(
     @builtin(local_invocation_index) lid: u32,
 ) {
     let t = (wid.x + wid.y * nwg.x) * RESIDENT_WG + lid;
-    if t >= rp.tri_count {
+    if t >= params.tri_count {
         return;
     }
     let tr = tris[t];
@@ -120,13 +93,17 @@ fn resident_triangles(
             if touches(p0, l) || touches(p1, l) || touches(p2, l) {
                 s = TOUCH;
             } else {
-                s = triangle_sign(p0, p1, p2, l);
+                let traced = triangle_sign_traced(p0, p1, p2, l);
+                s = traced.x;
+                if traced.y != 0 {
+                    atomicAdd(&args[stats_base()], 1u);
+                }
             }
             if (rp.flags & 1u) != 0u && tech == 2u && (s == 1 || s == -1) {
                 atomicAdd(&args[count_slot(li, tr.w) + 2u], 1u);
             }
         }
-        signs[li * rp.tri_count + t] = s;
+        signs[li * params.tri_count + t] = s;
     }
 }
 
@@ -153,26 +130,7 @@ fn resident_edges(
             tech = technique[li * rp.object_count + rec.w];
         }
         if tech != 0u {
-            let row = li * rp.tri_count;
-            if MODE == 0u {
-                let l = lights[rec.w * light_count + li];
-                let a = position(rec.x);
-                let b = position(rec.y);
-                for (var k = rec.z; k < ov_end; k++) {
-                    let t = ov_tris[k] & ~NEGATIVE;
-                    if signs[row + t] != TOUCH {
-                        m += sign_f32(a, b, l, position(ovs[k]));
-                    }
-                }
-            } else {
-                for (var k = rec.z; k < ov_end; k++) {
-                    let ot = ov_tris[k];
-                    let s = signs[row + (ot & ~NEGATIVE)];
-                    if s != TOUCH {
-                        m += select(s, -s, (ot & NEGATIVE) != 0u);
-                    }
-                }
-            }
+            m = edge_multiplicity(rec, ov_end, li);
         }
         let n = u32(abs(m));
         let list = select(0u, 1u, tech == 2u);

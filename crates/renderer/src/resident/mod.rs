@@ -87,9 +87,7 @@ const LIGHT_BYTES: u64 = 80;
 /// the resident kernels.
 #[must_use]
 pub fn extract_source(filter: ExactFilter) -> String {
-    let mut s = shaders::module_source(filter);
-    s.push('\n');
-    s.push_str(shadowvol_wgpu_compute::exact_int::EXACT_INT_WGSL);
+    let mut s = shaders::module_source_with(filter, true);
     s.push('\n');
     s.push_str(EXTRACT_WGSL);
     s

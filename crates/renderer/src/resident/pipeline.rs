@@ -102,7 +102,8 @@ impl ShadowPass {
         };
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let compute = wgpu::ShaderStages::COMPUTE;
-        // Group 0: the wgpu backend's bindings the resident kernels use.
+        // Group 0: the wgpu backend's bindings the resident kernels use (its scene and triangle
+        // layouts, lights and signs).
         let c0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("resident extract scene"),
             entries: &[
@@ -111,16 +112,16 @@ impl ShadowPass {
                 storage(2, compute, true),
                 storage(3, compute, true),
                 storage(4, compute, true),
+                storage(9, compute, true),
+                storage(10, compute, true),
+                storage(11, compute, false),
             ],
         });
         let c1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("resident extract frame"),
             entries: &[
                 uniform(0, compute, false),
-                storage(1, compute, true),
-                storage(2, compute, true),
                 storage(3, compute, true),
-                storage(4, compute, false),
                 storage(5, compute, false),
                 storage(6, compute, false),
             ],
@@ -135,7 +136,10 @@ impl ShadowPass {
             immediate_size: 0,
         });
         let compute_pipeline = |entry: &str, mode: Accuracy| {
-            let constants = [(shaders::MODE_CONSTANT, f64::from(shaders::mode_value(mode)))];
+            let constants = [
+                (shaders::MODE_CONSTANT, f64::from(shaders::mode_value(mode))),
+                (shaders::TOUCH_SIGNS_CONSTANT, 1.0),
+            ];
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
                 layout: Some(&c_layout),

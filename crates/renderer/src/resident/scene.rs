@@ -50,10 +50,14 @@ impl ShadowPass {
             bytemuck::cast_slice(&layout.scene.ovs),
             none,
         )?;
-        let tris = init("triangles", bytemuck::cast_slice(&layout.tris), none)?;
+        let tris = init(
+            "triangles",
+            bytemuck::cast_slice(&layout.triangles.tris),
+            none,
+        )?;
         let ov_tris = init(
             "opposite-vertex triangles",
-            bytemuck::cast_slice(&layout.ov_tris),
+            bytemuck::cast_slice(&layout.triangles.ov_tris),
             none,
         )?;
         let vertex_objects = init(
@@ -141,7 +145,7 @@ impl ShadowPass {
             })
         };
         Ok(ResidentScene {
-            tri_offsets: layout.tri_offsets.clone(),
+            tri_offsets: layout.triangles.tri_offsets.clone(),
             layout: Arc::new(layout),
             positions,
             edges,
@@ -271,17 +275,17 @@ impl ShadowPass {
         }
         q.write_buffer(&fb.objects, 0, bytemuck::cast_slice(&objs));
         let edge_count = rs.layout.scene.edge_count() as u32;
+        let tri_count = rs.layout.tri_count() as u32;
         q.write_buffer(
             &rs.params,
             0,
-            bytemuck::cast_slice(&[edge_count, n_lights as u32, 0, 0]),
+            bytemuck::cast_slice(&[edge_count, n_lights as u32, 0, tri_count]),
         );
-        let tri_count = rs.layout.tri_count() as u32;
         let capacity = rs.layout.capacity() as u32;
         q.write_buffer(
             &rs.rparams,
             0,
-            bytemuck::cast_slice(&[tri_count, objects as u32, capacity, u32::from(f.count)]),
+            bytemuck::cast_slice(&[objects as u32, capacity, u32::from(f.count), 0]),
         );
         let rel_cam = Camera {
             eye: glam::Vec3::ZERO,
@@ -381,6 +385,9 @@ impl ShadowPass {
                 entry(2, &rs.edges),
                 entry(3, &rs.ovs),
                 entry(4, &lights_buf),
+                entry(9, &rs.tris),
+                entry(10, &rs.ov_tris),
+                entry(11, &signs),
             ],
         });
         let c1 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -388,10 +395,7 @@ impl ShadowPass {
             layout: &self.c1,
             entries: &[
                 entry(0, &rs.rparams),
-                entry(1, &rs.tris),
-                entry(2, &rs.ov_tris),
                 entry(3, &technique),
-                entry(4, &signs),
                 entry(5, &args),
                 entry(6, &records),
             ],

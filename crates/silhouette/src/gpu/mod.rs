@@ -3,6 +3,8 @@
 //! * [`SceneLayout`]: the flattened scene every kernel reads (all objects concatenated, global
 //!   vertex ids, one `(a, b, first OV slot, object)` record per edge plus a sentinel, CSR opposite
 //!   vertices);
+//! * [`TriangleLayout`]: the triangles of that scene, for two-step kernels (one sign per
+//!   triangle, then one sum per edge);
 //! * [`mode_code`]: the accuracy-mode code sent to the shaders;
 //! * [`UncertainRecord`]: the `(edge, OV slot, light)` triple a kernel appends when its exact-mode
 //!   filter cannot certify a sign, and [`resolve_uncertain`], the host's exact decision of those
@@ -20,11 +22,13 @@
 mod batches;
 mod layout;
 mod resolve;
+mod triangles;
 mod wait;
 
 pub use batches::{batches, lights_per_batch};
 pub use layout::SceneLayout;
 pub use resolve::{check_batch, resolve_uncertain, UncertainRecord};
+pub use triangles::{TriangleLayout, NEGATIVE};
 pub use wait::{describe_wait_limit, wait_limit, DEFAULT_TIMEOUT, TIMEOUT_ENV};
 
 use shadowvol_robust_math::Accuracy;

@@ -3,6 +3,16 @@
 
 use super::*;
 
+/// What one dispatch brought back, before the host decides its undecided triangles.
+struct DeviceOutput {
+    /// The whole multiplicity buffer, with `full_readback`.
+    mult: Option<Vec<i32>>,
+    /// Per light, the compact list `(edge, m)`.
+    lists: Vec<Vec<(u32, i32)>>,
+    /// Undecided `(triangle, light)` pairs.
+    uncertain: Vec<UncertainTriangle>,
+}
+
 impl WgpuBackend {
     pub(super) fn extract_prepared(
         &self,
@@ -28,7 +38,8 @@ impl WgpuBackend {
         let obj_lights = object_lights(&p.scene, lights);
         let edges = edge_count as u64;
         let objects = p.layout.object_count() as u64;
-        let per_batch = self.lights_per_batch(edges, objects, lights.len())?;
+        let tris = p.triangles.tri_count() as u64;
+        let per_batch = self.lights_per_batch(edges, tris, objects, lights.len())?;
         let needs_new_frame = p
             .frame
             .as_ref()
@@ -36,14 +47,15 @@ impl WgpuBackend {
         if needs_new_frame {
             let capacity = self.options.initial_uncertain_capacity;
             let scope = ErrorScopes::push(&self.device);
-            let frame = self.create_frame(&gpu, edges, objects, per_batch, capacity);
+            let frame = self.create_frame(&gpu, edges, tris, objects, per_batch, capacity);
             if let Some(e) = scope.pop() {
                 return Err(device_error(format!("allocating frame buffers: {e}")));
             }
             p.frame = Some(frame?);
         }
         stats.upload += t_upload.elapsed();
-        let pipeline = &self.pipelines[shaders::mode_value(mode) as usize];
+        let m = shaders::mode_value(mode) as usize;
+        let pipelines = (self.triangle_pipelines[m].as_ref(), &self.pipelines[m]);
         for range in gpu::batches(lights.len(), per_batch) {
             let batch = LightBatch {
                 object_lights: &obj_lights,
@@ -53,7 +65,7 @@ impl WgpuBackend {
                 exact: mode == Accuracy::Exact,
             };
             let scope = ErrorScopes::push(&self.device);
-            let r = self.run_batch(p, &gpu, pipeline, &batch, out, &mut stats);
+            let r = self.run_batch(p, &gpu, pipelines, &batch, out, &mut stats);
             if let Some(e) = scope.pop() {
                 return Err(device_error(e));
             }
@@ -65,12 +77,28 @@ impl WgpuBackend {
         Ok(stats)
     }
 
-    /// Runs one batch of lights: upload, dispatch, readback, host resolution.
+    /// Workgroups `(x, y)` for `items` invocations, folded into a 2-D grid when one dimension
+    /// cannot hold them.
+    fn grid(&self, items: usize, what: &str) -> Result<(u32, u32), BackendError> {
+        let groups = items.div_ceil(shaders::WORKGROUP_SIZE as usize) as u64;
+        let max_dim = u64::from(self.limits.max_compute_workgroups_per_dimension);
+        let gx = groups.min(max_dim).max(1);
+        let gy = groups.div_ceil(gx);
+        if gy > max_dim {
+            return Err(limit_error(format!(
+                "{items} {what} need {groups} workgroups; the device allows {max_dim} x {max_dim}"
+            )));
+        }
+        Ok((gx as u32, gy as u32))
+    }
+
+    /// Runs one batch of lights: upload, the triangle step (except in `original`) and the edge
+    /// step, readback, host resolution.
     fn run_batch(
         &self,
         p: &mut Prepared,
         gpu: &StaticBuffers,
-        pipeline: &wgpu::ComputePipeline,
+        (triangle_pipeline, pipeline): (Option<&wgpu::ComputePipeline>, &wgpu::ComputePipeline),
         batch: &LightBatch<'_>,
         out: &mut Multiplicities,
         stats: &mut ExtractStats,
@@ -79,16 +107,11 @@ impl WgpuBackend {
         let edge_count = p.layout.edge_count();
         let edges = edge_count as u64;
         let objects = p.layout.object_count() as u64;
+        let tri_count = p.triangles.tri_count();
+        let tris = tri_count as u64;
         // ---- compute (repeated with a bigger uncertain buffer if it overflowed)
-        let groups = edge_count.div_ceil(shaders::WORKGROUP_SIZE as usize) as u64;
-        let max_dim = u64::from(self.limits.max_compute_workgroups_per_dimension);
-        let gx = groups.min(max_dim);
-        let gy = groups.div_ceil(gx);
-        if gy > max_dim {
-            return Err(limit_error(format!(
-                "{edge_count} edges need {groups} workgroups; the device allows {max_dim} x {max_dim}"
-            )));
-        }
+        let (gx, gy) = self.grid(edge_count, "edges")?;
+        let (tx, ty) = self.grid(tri_count, "triangles")?;
         // The first round trip brings the counts and the first `k` entries of every list (and
         // `ku` uncertain records); the second, if needed, the rest.
         let (counts, mut chunk, k, ku) = loop {
@@ -98,7 +121,12 @@ impl WgpuBackend {
                 .as_mut()
                 .ok_or_else(|| device_error("no frame buffers"))?;
             // ---- upload: lights and parameters (again after the buffers were regrown)
-            let params = [edge_count as u32, count as u32, frame.uncertain_capacity, 0];
+            let params = [
+                edge_count as u32,
+                count as u32,
+                frame.uncertain_capacity,
+                tri_count as u32,
+            ];
             self.queue
                 .write_buffer(&frame.lights, 0, bytemuck::cast_slice(packed));
             self.queue
@@ -149,9 +177,13 @@ impl WgpuBackend {
                     label: Some("silhouette"),
                     timestamp_writes: None,
                 });
-                pass.set_pipeline(pipeline);
                 pass.set_bind_group(0, &frame.bind_group, &[]);
-                pass.dispatch_workgroups(gx as u32, gy as u32, 1);
+                if let Some(triangles) = triangle_pipeline {
+                    pass.set_pipeline(triangles);
+                    pass.dispatch_workgroups(tx, ty, 1);
+                }
+                pass.set_pipeline(pipeline);
+                pass.dispatch_workgroups(gx, gy, 1);
             }
             encoder.copy_buffer_to_buffer(&frame.counters, 0, staging, 0, counters_bytes);
             if k > 0 {
@@ -187,7 +219,7 @@ impl WgpuBackend {
                 let uncertain = read_records(&b[at..at + n * 16]);
                 (
                     counts,
-                    BatchOutput {
+                    DeviceOutput {
                         mult: None,
                         lists,
                         uncertain,
@@ -204,10 +236,11 @@ impl WgpuBackend {
             let capacity = uncertain.checked_next_power_of_two().unwrap_or(uncertain);
             let light_capacity = frame.light_capacity;
             let staging = frame.staging.take();
-            let mut frame = self.create_frame(gpu, edges, objects, light_capacity, capacity)?;
+            let mut frame =
+                self.create_frame(gpu, edges, tris, objects, light_capacity, capacity)?;
             if frame.uncertain_capacity < uncertain {
                 return Err(limit_error(format!(
-                    "{uncertain} uncertain (edge, OV, light) triples need {} bytes, but the device allows storage bindings of {} bytes; pass fewer lights per call",
+                    "{uncertain} undecided (triangle, light) pairs need {} bytes, but the device allows storage bindings of {} bytes; pass fewer lights per call",
                     u64::from(uncertain) * 16,
                     self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size)
                 )));
@@ -221,7 +254,6 @@ impl WgpuBackend {
             .as_mut()
             .ok_or_else(|| device_error("no frame buffers"))?;
         let uncertain_count = u64::from(counts[count]);
-        stats.uncertain += uncertain_count;
         // Adapt the prefixes to this frame's sizes.
         let grow = |n: u64| (n + n / 4).max(1).next_power_of_two();
         let longest = counts[..count].iter().copied().max().unwrap_or(0);
@@ -319,14 +351,28 @@ impl WgpuBackend {
         }
         stats.readback += t.elapsed();
 
-        // ---- host: exact decisions for uncertain triples, then patch the device copy
+        // ---- host: exact decisions for the undecided triangles' triples, then patch the
+        // device copy
         let t = Instant::now();
-        validate_lists(&chunk, p.layout.edge_count())?;
+        validate_lists(&chunk.lists, p.layout.edge_count())?;
+        let records = if chunk.uncertain.is_empty() {
+            Vec::new()
+        } else {
+            let slots = p
+                .edge_slots
+                .get_or_insert_with(|| p.triangles.edge_slots(&p.layout));
+            expand_uncertain(&chunk.uncertain, slots, count)?
+        };
+        stats.uncertain += records.len() as u64;
         let patch = finish_batch(
             &p.layout,
             batch.object_lights,
             batch.lights.clone(),
-            chunk,
+            BatchOutput {
+                mult: chunk.mult,
+                lists: chunk.lists,
+                uncertain: records,
+            },
             out,
         )?;
         if batch.last {
@@ -371,8 +417,8 @@ impl WgpuBackend {
 
 /// Rejects compact lists that cannot be right (an edge out of range, m = 0), instead of
 /// panicking. Uncertain records are checked by [`resolve_uncertain`](gpu::resolve_uncertain).
-fn validate_lists(chunk: &BatchOutput, edges: usize) -> Result<(), BackendError> {
-    for (li, list) in chunk.lists.iter().enumerate() {
+fn validate_lists(lists: &[Vec<(u32, i32)>], edges: usize) -> Result<(), BackendError> {
+    for (li, list) in lists.iter().enumerate() {
         if let Some(&(e, m)) = list.iter().find(|&&(e, m)| e as usize >= edges || m == 0) {
             return Err(device_error(format!(
                 "the device returned an invalid silhouette entry (edge {e}, m {m}) for light {li}"
