@@ -224,19 +224,22 @@ fn triangle_sign_traced(p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>, l: vec4<f32
     return vec2<i32>(s0, 0);
 }
 
-// m of the edge `rec` (its edges[] record; `ov_end` the next record's first slot) for light `li`:
-// `original` evaluates every (edge, OV) naively; the other modes sum the parity times the signs
-// of the OVs' triangles. TOUCH triangles contribute nothing.
-fn edge_multiplicity(rec: vec4<u32>, ov_end: u32, li: u32) -> i32 {
+// m of the edge `rec` (its edges[] record; `ov_end` the next record's first slot; `a`, `b` its
+// vertices' positions, loaded once by the caller) for light `li`: `original` evaluates every
+// (edge, OV) naively; the other modes sum the parity times the signs of the OVs' triangles.
+// TOUCH triangles contribute nothing.
+fn edge_multiplicity(rec: vec4<u32>, ov_end: u32, li: u32, a: vec3<f32>, b: vec3<f32>) -> i32 {
     let row = li * params.tri_count;
     var m = 0;
     if MODE == 0u {
         let l = lights[rec.w * params.light_count + li];
-        let a = position(rec.x);
-        let b = position(rec.y);
         for (var k = rec.z; k < ov_end; k++) {
-            if TOUCH_SIGNS && signs[row + (ov_tris[k] & ~NEGATIVE)] == TOUCH {
-                continue;
+            // Nested, not `&&`: WGSL's `&&` may be compiled without short-circuit, and the
+            // backend's `original` must not read the sign buffers.
+            if TOUCH_SIGNS {
+                if signs[row + (ov_tris[k] & ~NEGATIVE)] == TOUCH {
+                    continue;
+                }
             }
             m += sign_f32(a, b, l, position(ovs[k]));
         }
@@ -293,8 +296,10 @@ fn extract(
     }
     let rec = edges[e];
     let ov_end = edges[e + 1u].z;
+    let a = position(rec.x);
+    let b = position(rec.y);
     for (var li = 0u; li < params.light_count; li++) {
-        let m = edge_multiplicity(rec, ov_end, li);
+        let m = edge_multiplicity(rec, ov_end, li, a, b);
         mult[li * edge_count + e] = m;
         if m != 0 {
             let slot = atomicAdd(&counters[li], 1u);

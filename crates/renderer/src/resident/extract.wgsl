@@ -117,9 +117,13 @@ fn resident_edges(
     let valid = e < params.edge_count;
     var rec = vec4<u32>(0u);
     var ov_end = 0u;
+    var a = vec3<f32>(0.0);
+    var b = vec3<f32>(0.0);
     if valid {
         rec = edges[e];
         ov_end = edges[e + 1u].z;
+        a = position(rec.x);
+        b = position(rec.y);
     }
     let light_count = params.light_count;
     // Uniform loop: every invocation of the workgroup takes part in the barriers.
@@ -130,7 +134,7 @@ fn resident_edges(
             tech = technique[li * rp.object_count + rec.w];
         }
         if tech != 0u {
-            m = edge_multiplicity(rec, ov_end, li);
+            m = edge_multiplicity(rec, ov_end, li, a, b);
         }
         let n = u32(abs(m));
         let list = select(0u, 1u, tech == 2u);
