@@ -59,7 +59,8 @@ pub const LONG_ABOUT: &str =
     \"default\", \"ground\": null or {\"y\", \"source\": \"scene\", \"auto\" or \"flags\"}, \
     \"exposure\": output per lux for the file's lights, null when all are unit lights, \
     \"scissor_pixels_saved\": pixels kept out of the stencil and lit passes by each light's \
-    scissor, the screen rectangle of its range (each plan entry's \"scissor\": [x, y, w, h] or \
+    scissor, the screen rectangle of its range sphere or spot cone within the scene's bounds \
+    (each plan entry's \"scissor\": [x, y, w, h] or \
     null for the whole image; --no-scissor turns it off, the image is the same), \
     \"pipeline\": \"gpu\" or \"host\", \"frame_readback_bytes\": bytes brought to the host during \
     the --frames frames besides the final image (host: the multiplicities, 4 bytes per edge and \
@@ -211,7 +212,7 @@ pub struct Args {
     exposure: Exposure,
 
     /// Draw every light's stencil and lit passes over the whole image instead of the screen
-    /// rectangle of its range (for comparisons: the image is the same).
+    /// rectangle of its range sphere or spot cone (for comparisons: the image is the same).
     #[arg(long)]
     no_scissor: bool,
 

@@ -126,32 +126,73 @@ impl std::fmt::Display for PlanEntry {
 }
 
 /// The screen rectangle `[x, y, width, height]` (pixels, top-left origin) outside which light
-/// `light` adds nothing: the projection of the bounding box of its range sphere, widened by a
-/// pixel on each side. `None` (the whole image) for a light without a range, a directional
-/// light, or a sphere that reaches behind the near plane. A spot light's cone lies inside its
-/// range sphere, so the same rectangle bounds it. `view_proj` is the `f64` matrix of the
-/// frame ([`crate::Camera::view_proj_f64`]).
+/// `light` adds nothing, widened by a pixel on each side: the projection of the bounding box of
+/// what it can light.
+///
+/// * A point light with a range: its range sphere.
+/// * A spot light: its outer cone (widened by [`SPOT_SCISSOR_MARGIN`]), cut at its range, or
+///   without a range at the farthest corner of `scene_bounds` (the world box `(lo, hi)` of every
+///   receiver: nothing farther can be lit), and within the range sphere.
+///
+/// Either box is clipped to `scene_bounds`, since only receivers are lit.
+///
+/// `None` (the whole image) for a point light without a range, a directional light, or a box
+/// that reaches behind the near plane. `view_proj` is the `f64` matrix of the frame
+/// ([`crate::Camera::view_proj_f64`]).
 #[must_use]
 pub fn light_scissor(
     light: [f32; 4],
     emission: Option<&shadowvol_scenes::Emission>,
+    scene_bounds: (DVec3, DVec3),
     view_proj: glam::DMat4,
     near: f64,
     width: u32,
     height: u32,
 ) -> Option<[u32; 4]> {
-    let range = f64::from(emission?.range?);
+    let emission = emission?;
     if light[3] == 0.0 {
         return None;
     }
     let c = DVec3::new(light[0].into(), light[1].into(), light[2].into()) / f64::from(light[3]);
+    let reach = match (emission.range, &emission.spot) {
+        (Some(r), _) => f64::from(r),
+        (None, Some(_)) => box_corners(scene_bounds.0, scene_bounds.1)
+            .iter()
+            .map(|&p| p.distance(c))
+            .fold(0.0, f64::max),
+        (None, None) => return None,
+    };
+    if !reach.is_finite() {
+        return None;
+    }
+    let (mut lo, mut hi) = (c - DVec3::splat(reach), c + DVec3::splat(reach));
+    if let Some(spot) = &emission.spot {
+        let axis = spot.direction.as_dvec3().normalize_or_zero();
+        // No receiver lies farther along the axis than the scene box's farthest corner.
+        let axial = box_corners(scene_bounds.0, scene_bounds.1)
+            .iter()
+            .map(|&p| (p - c).dot(axis))
+            .fold(0.0, f64::max);
+        let (clo, chi) = cone_box(
+            c,
+            axis,
+            f64::from(spot.outer_cone_angle) + SPOT_SCISSOR_MARGIN,
+            reach,
+            axial,
+        );
+        lo = lo.max(clo);
+        hi = hi.min(chi);
+    }
+    // Only receivers can be lit: clip to the scene's box (to a point when nothing can be lit).
+    lo = lo.max(scene_bounds.0);
+    hi = hi.min(scene_bounds.1).max(lo);
     let (mut x0, mut y0, mut x1, mut y1) = (
         f64::INFINITY,
         f64::INFINITY,
         f64::NEG_INFINITY,
         f64::NEG_INFINITY,
     );
-    for corner in box_corners(c - DVec3::splat(range), c + DVec3::splat(range)) {
+    for corner in box_corners(lo, hi) {
         let p = view_proj * corner.extend(1.0);
         // Clip w is the view depth: a corner at or behind the near plane projects unboundedly.
         if p.w.is_nan() || p.w <= near {
@@ -176,6 +217,95 @@ pub fn light_scissor(
         clamp(y1.ceil() + 1.0, height),
     );
     Some([ax, ay, bx.saturating_sub(ax), by.saturating_sub(ay)])
+}
+
+/// Radians added to a spot light's outer cone angle for its scissor: margin for the shader's `f32`
+/// evaluation of the cone's falloff, which need not reach zero exactly at the outer angle.
+pub const SPOT_SCISSOR_MARGIN: f64 = 1e-3;
+
+/// A bounding box of the points of the cone with apex `apex`, unit axis `axis` and half-angle
+/// `angle` (radians) that lie within `length` of the apex and at most `axial` along the axis.
+/// Below 89.9 degrees it is the box of the cone cut by the plane at `min(length, axial)` along
+/// the axis, within the ball's box; from 89.9 degrees up the box of the half ball on the axis'
+/// side, widened by `length · sin(excess over 90 degrees)`; above π/2 + 2
+/// [`SPOT_SCISSOR_MARGIN`], the ball's box.
+fn cone_box(apex: DVec3, axis: DVec3, angle: f64, length: f64, axial: f64) -> (DVec3, DVec3) {
+    let ball = (apex - DVec3::splat(length), apex + DVec3::splat(length));
+    let axis = axis.normalize_or_zero();
+    if axis == DVec3::ZERO
+        || angle.is_nan()
+        || angle > std::f64::consts::FRAC_PI_2 + 2.0 * SPOT_SCISSOR_MARGIN
+    {
+        return ball;
+    }
+    // sqrt(1 - axis_i²): how far a unit vector perpendicular to the axis reaches along i.
+    let across = (DVec3::ONE - axis * axis).max(DVec3::ZERO).map(f64::sqrt);
+    if angle >= 89.9_f64.to_radians() {
+        // The half ball: along i it reaches `length` on the side the axis points to, and the
+        // rim's `length · across_i` on the other.
+        let slack = length * (angle - std::f64::consts::FRAC_PI_2).max(0.0).sin();
+        let up = DVec3::select(axis.cmpge(DVec3::ZERO), DVec3::ONE, across);
+        let down = DVec3::select(axis.cmple(DVec3::ZERO), DVec3::ONE, across);
+        return (
+            apex - down * length - DVec3::splat(slack),
+            apex + up * length + DVec3::splat(slack),
+        );
+    }
+    let depth = length.min(axial).max(0.0);
+    let centre = apex + axis * depth;
+    // The cap disc of radius r about `centre`, normal `axis`, reaches r · across_i along i.
+    let extent = across * (depth * angle.tan());
+    (
+        apex.min(centre - extent).max(ball.0),
+        apex.max(centre + extent).min(ball.1),
+    )
+}
+
+#[cfg(test)]
+mod cone_tests {
+    use super::*;
+
+    /// Every point of the cone within the sphere and the axial limit lies in the box, for random
+    /// axes, angles, limits and points, hemispheres included.
+    #[test]
+    fn the_cone_box_contains_the_cone() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..2000 {
+            let apex = DVec3::new(rnd() * 4.0 - 2.0, rnd() * 4.0 - 2.0, rnd() * 4.0 - 2.0);
+            let axis =
+                DVec3::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0).normalize();
+            let angle = match (rnd() * 4.0) as u32 {
+                0 => std::f64::consts::FRAC_PI_2 + SPOT_SCISSOR_MARGIN,
+                1 => std::f64::consts::FRAC_PI_2,
+                _ => rnd() * 1.56 + 0.01,
+            };
+            let length = rnd() * 10.0 + 0.1;
+            let axial = rnd() * 12.0 - 1.0;
+            let (lo, hi) = cone_box(apex, axis, angle, length, axial);
+            for _ in 0..50 {
+                let dir =
+                    DVec3::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0).normalize();
+                if dir.dot(axis) < angle.cos() {
+                    continue;
+                }
+                let p = apex + dir * length * rnd().sqrt();
+                if (p - apex).dot(axis) > axial {
+                    continue;
+                }
+                let eps = 1e-9 * (1.0 + length);
+                assert!(
+                    p.cmpge(lo - eps).all() && p.cmple(hi + eps).all(),
+                    "{p} outside {lo}..{hi} (apex {apex}, axis {axis}, angle {angle})"
+                );
+            }
+        }
+    }
 }
 
 /// A plane `n · x + d >= 0` is inside, as `(n, d)`.

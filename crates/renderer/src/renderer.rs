@@ -31,8 +31,8 @@ pub struct RenderOptions {
     pub policy: PlanPolicy,
     /// How lights with an emission map to the image ([`crate::lighting`]).
     pub exposure: Exposure,
-    /// Limit each light's stencil and lit passes to the screen rectangle of its range
-    /// ([`plan::light_scissor`]). The image is the same either way.
+    /// Limit each light's stencil and lit passes to the screen rectangle of its range or spot
+    /// cone ([`plan::light_scissor`]). The image is the same either way.
     pub scissor: bool,
     /// Keep the frame's shadow-volume vertices in [`Frame::volumes`] (for viewers that draw the
     /// volumes themselves; host pipeline only).
@@ -381,6 +381,10 @@ impl Renderer {
         let mut entries = Vec::with_capacity(n_lights * scene.objects.len());
         let bounds: Vec<(DVec3, DVec3)> = self.cache.iter().map(|c| bounds_f64(&c.world)).collect();
         let view_proj = scene.camera.view_proj_f64(aspect);
+        let scene_bounds = bounds.iter().fold(
+            (DVec3::INFINITY, DVec3::NEG_INFINITY),
+            |(lo, hi), &(a, b)| (lo.min(a), hi.max(b)),
+        );
         let scissors: Vec<Option<[u32; 4]>> = scene
             .lights
             .iter()
@@ -391,6 +395,7 @@ impl Renderer {
                         plan::light_scissor(
                             light.to_array(),
                             scene.emission.get(li),
+                            scene_bounds,
                             view_proj,
                             f64::from(scene.camera.near),
                             width,

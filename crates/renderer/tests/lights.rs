@@ -223,6 +223,51 @@ fn casters_the_light_cannot_reach_are_culled() {
     }
 }
 
+/// Renders `s` with and without scissor and checks that the image, and every light's stencil
+/// inside its rectangle, are the same pixel for pixel, that each rectangle is smaller than the
+/// image and that more than `min_saved` pixels were kept out of the passes.
+fn assert_scissor_changes_no_pixel(s: &RenderScene, min_saved: usize) {
+    let mut opts = RenderOptions::new(W, W);
+    opts.exposure = Exposure::Fixed(0.05);
+    let Some(mut r) = renderer_with(opts) else {
+        return;
+    };
+    let with = r.render(s).unwrap();
+    opts.scissor = false;
+    let without = renderer_with(opts).unwrap().render(s).unwrap();
+    assert_eq!(without.scissor_pixels_saved, 0);
+    assert!(
+        with.scissor_pixels_saved > min_saved,
+        "{} {:?}",
+        with.scissor_pixels_saved,
+        with.plan.iter().map(|e| e.scissor).collect::<Vec<_>>()
+    );
+    assert!(with.rgba == without.rgba, "the scissor changed the image");
+    assert!(without.plan.iter().all(|e| e.scissor.is_none()));
+    for li in 0..s.lights.len() {
+        let rect = with
+            .plan
+            .iter()
+            .find(|e| e.light == li)
+            .unwrap()
+            .scissor
+            .unwrap_or_else(|| panic!("light {li} has no scissor"));
+        assert!(rect[2] * rect[3] < W * W, "light {li}: {rect:?}");
+        for y in rect[1]..rect[1] + rect[3] {
+            for x in rect[0]..rect[0] + rect[2] {
+                let i = (y * W + x) as usize;
+                assert_eq!(
+                    with.stencil[li][i], without.stencil[li][i],
+                    "light {li} at ({x}, {y})"
+                );
+            }
+        }
+    }
+    let cmp = reference::compare(&with);
+    assert_eq!(cmp.artifact_pixels, 0, "{cmp:?}");
+    assert_eq!(reference::shading_check(&with, &cmp, 2).mismatched, 0);
+}
+
 /// Scissor: lights with a range draw their stencil and lit passes only over the screen rectangle
 /// of the range sphere. The image and every light's stencil inside the rectangle are the same
 /// pixel for pixel as without it, and the plan reports the rectangle.
@@ -243,46 +288,43 @@ fn the_range_scissor_changes_no_pixel() {
         ..Emission::default()
     });
     s.camera = Camera::look_at(Vec3::new(0.0, 16.0, 11.0), Vec3::ZERO);
-    let mut opts = RenderOptions::new(W, W);
-    opts.exposure = Exposure::Fixed(0.05);
-    let Some(mut r) = renderer_with(opts) else {
-        return;
+    assert_scissor_changes_no_pixel(&s, (W * W / 4) as usize);
+}
+
+/// A spot light without a range is scissored to its cone, cut where the scene's bounds end;
+/// a narrow cone and a hemisphere (outer angle π/2, the sphere's box) alike change no pixel.
+#[test]
+fn the_spot_cone_scissor_changes_no_pixel() {
+    let mut s = scene(spot(0.2, 0.35));
+    s.camera = Camera::look_at(Vec3::new(0.0, 16.0, 11.0), Vec3::ZERO);
+    assert_scissor_changes_no_pixel(&s, (W * W / 4) as usize);
+    // Two lights: a tilted narrow cone with a range, and a hemisphere without one that shines
+    // towards +x, so that only the half of the view beyond its plane can be lit.
+    s.lights = vec![
+        Light::point(Vec3::new(-1.0, 3.0, 0.5)),
+        Light::point(Vec3::new(1.0, 0.8, -0.5)),
+    ];
+    let tilted = SpotCone {
+        direction: Vec3::new(0.4, -1.0, 0.2).normalize(),
+        inner_cone_angle: 0.1,
+        outer_cone_angle: 0.3,
     };
-    let with = r.render(&s).unwrap();
-    opts.scissor = false;
-    let without = renderer_with(opts).unwrap().render(&s).unwrap();
-    assert_eq!(without.scissor_pixels_saved, 0);
-    assert!(
-        with.scissor_pixels_saved > (W * W / 4) as usize,
-        "{} {:?}",
-        with.scissor_pixels_saved,
-        with.plan.iter().map(|e| e.scissor).collect::<Vec<_>>()
-    );
-    assert!(with.rgba == without.rgba, "the scissor changed the image");
-    for (li, rect) in [0usize, 1].map(|li| {
-        (
-            li,
-            with.plan
-                .iter()
-                .find(|e| e.light == li)
-                .unwrap()
-                .scissor
-                .unwrap(),
-        )
-    }) {
-        assert!(rect[2] * rect[3] < W * W, "light {li}: {rect:?}");
-        assert!(without.plan.iter().all(|e| e.scissor.is_none()));
-        for y in rect[1]..rect[1] + rect[3] {
-            for x in rect[0]..rect[0] + rect[2] {
-                let i = (y * W + x) as usize;
-                assert_eq!(
-                    with.stencil[li][i], without.stencil[li][i],
-                    "light {li} at ({x}, {y})"
-                );
-            }
-        }
-    }
-    let cmp = reference::compare(&with);
-    assert_eq!(cmp.artifact_pixels, 0, "{cmp:?}");
-    assert_eq!(reference::shading_check(&with, &cmp, 2).mismatched, 0);
+    s.emission = vec![
+        Emission {
+            intensity: 30.0,
+            range: Some(6.0),
+            spot: Some(tilted),
+            ..Emission::default()
+        },
+        Emission {
+            intensity: 10.0,
+            spot: Some(SpotCone {
+                direction: Vec3::X,
+                inner_cone_angle: 1.0,
+                outer_cone_angle: std::f32::consts::FRAC_PI_2,
+            }),
+            ..Emission::default()
+        },
+    ];
+    assert_scissor_changes_no_pixel(&s, 0);
 }
