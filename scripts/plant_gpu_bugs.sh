@@ -71,10 +71,10 @@ if ! cargo test --workspace --test conformance --test gpu_lavapipe --test device
 fi
 echo "baseline: the unplanted copy passes"
 
-only="${PLANT_ONLY:-}"   # optional: a substring of the mutant names to run
+only="${PLANT_ONLY:-}"   # optional: an extended regex over the mutant names to run
 survived=0
 while IFS=$'\t' read -r name file from to tests; do
-  [ -n "$only" ] && [[ "$name" != *"$only"* ]] && continue
+  [ -n "$only" ] && ! [[ "$name" =~ $only ]] && continue
   cp "$root/$file" "$file"
   count=$(grep -cF -- "$from" "$file" || true)
   if [ "$count" -ne 1 ]; then
