@@ -94,6 +94,11 @@ struct Uncertain {
 // [light * tri_count + triangle]: -1, 0, 1 (TOUCH in the resident pass).
 @group(0) @binding(11) var<storage, read_write> signs: array<i32>;
 
+// The global invocation index of a 1-D dispatch folded into a 2-D grid of workgroups.
+fn flat_index(wid: vec3<u32>, nwg: vec3<u32>, lid: u32) -> u32 {
+    return (wid.x + wid.y * nwg.x) * WORKGROUP_SIZE + lid;
+}
+
 fn position(id: u32) -> vec3<f32> {
     let i = id * 3u;
     return vec3<f32>(positions[i], positions[i + 1u], positions[i + 2u]);
@@ -261,7 +266,7 @@ fn triangles(
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    let t = (wid.x + wid.y * nwg.x) * WORKGROUP_SIZE + lid;
+    let t = flat_index(wid, nwg, lid);
     if t >= params.tri_count {
         return;
     }
@@ -289,7 +294,7 @@ fn extract(
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    let e = (wid.x + wid.y * nwg.x) * WORKGROUP_SIZE + lid;
+    let e = flat_index(wid, nwg, lid);
     let edge_count = params.edge_count;
     if e >= edge_count {
         return;

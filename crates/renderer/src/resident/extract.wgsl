@@ -19,8 +19,6 @@
 //    object. The append is aggregated per workgroup: one global atomic per workgroup, light and
 //    list.
 
-const RESIDENT_WG: u32 = 256u;
-
 struct ResidentParams {
     object_count: u32,
     // Records per light region (at least the opposite-vertex count: sum |m| can't exceed it).
@@ -70,13 +68,13 @@ fn touches(p: vec3<f32>, l: vec4<f32>) -> bool {
     return l.w != 0.0 && p.x * l.w == l.x && p.y * l.w == l.y && p.z * l.w == l.z;
 }
 
-@compute @workgroup_size(RESIDENT_WG)
+@compute @workgroup_size(WORKGROUP_SIZE)
 fn resident_triangles(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    let t = (wid.x + wid.y * nwg.x) * RESIDENT_WG + lid;
+    let t = flat_index(wid, nwg, lid);
     if t >= params.tri_count {
         return;
     }
@@ -107,13 +105,13 @@ fn resident_triangles(
     }
 }
 
-@compute @workgroup_size(RESIDENT_WG)
+@compute @workgroup_size(WORKGROUP_SIZE)
 fn resident_edges(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    let e = (wid.x + wid.y * nwg.x) * RESIDENT_WG + lid;
+    let e = flat_index(wid, nwg, lid);
     let valid = e < params.edge_count;
     var rec = vec4<u32>(0u);
     var ov_end = 0u;

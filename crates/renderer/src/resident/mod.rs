@@ -74,8 +74,9 @@ pub const DRAW_WGSL: &str = include_str!("draw.wgsl");
 /// The renderer's `shader.wgsl` (fragment shaders and the uniforms both pipelines share).
 pub const SHADER_WGSL: &str = include_str!("../shader.wgsl");
 
-/// Threads per workgroup of the triangle and edge passes (`RESIDENT_WG`).
-const WORKGROUP: u32 = 256;
+/// Threads per workgroup of the triangle and edge passes (the `wgpu` backend's
+/// `WORKGROUP_SIZE`, whose module they join).
+const WORKGROUP: u32 = shaders::WORKGROUP_SIZE;
 /// Storage buffers the edge pass binds in one stage.
 const STORAGE_BUFFERS: u32 = 10;
 /// Byte stride of the per-light uniforms (dynamic offsets).
