@@ -407,7 +407,7 @@ impl Gpu {
                 resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                     buffer: &light_buf,
                     offset: 0,
-                    size: std::num::NonZeroU64::new(80),
+                    size: std::num::NonZeroU64::new(96),
                 }),
             }],
         });

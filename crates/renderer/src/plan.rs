@@ -10,11 +10,22 @@
 //!   not meet the object's box. Then no point of the near plane sees the light through the
 //!   object, the camera's near plane is outside the object's shadow volume, and z-pass counts
 //!   are correct. The test is conservative: an intersection it cannot rule out gives z-fail.
+//!   When the box test fails (typically: the light is on or inside the object), z-pass is
+//!   still chosen if no point of the near rectangle lies in the shadow of any of the object's
+//!   triangles, decided triangle by triangle with the exact side of the light
+//!   ([`near_rect_clear_of_shadows`]; objects of at most [`ZPASS_TRIANGLE_TEST_MAX`]
+//!   triangles). This matters when a light lies a hair off a caster's plane: that triangle's
+//!   shadow is almost a half-space, its back cap at infinity is almost a great circle, and
+//!   `f32` clipping can draw the cap's complement, while z-pass needs no caps at all.
 //! * **Z-fail** with caps otherwise; the back cap is dropped for directional lights (all of its
 //!   vertices are the same point at infinity).
+//!
+//! [`choose`] makes this choice for one (light, object) pair.
 
-use glam::{DVec3, DVec4};
+use crate::occlusion::light_side;
+use glam::{DVec3, DVec4, Vec3};
 use serde::Serialize;
+use shadowvol_scenes::Emission;
 
 /// How one (light, object) pair is drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
@@ -426,11 +437,252 @@ pub fn near_clip_volume(near: [DVec3; 4], light: [f32; 4]) -> Option<Vec<Plane>>
     Some(planes)
 }
 
-/// True when the box `(lo, hi)` provably does not meet the convex volume given by its inward
-/// `planes` (some plane has all 8 corners strictly outside, with a relative margin).
+/// Objects with more triangles than this keep z-fail when their box meets the near-clip volume:
+/// [`near_rect_clear_of_shadows`] costs one exact side test per triangle per light, on the host,
+/// every frame.
+pub const ZPASS_TRIANGLE_TEST_MAX: usize = 1 << 18;
+
+/// True when no point of the near-plane rectangle `near` (world space, `f64`) lies in the
+/// shadow of any triangle `triangles` (ids into `world`, the `f32` world positions the volumes
+/// are drawn from) under `light` (world space, homogeneous `f32`): then z-pass counts are
+/// correct for this object whatever its silhouette.
+///
+/// A triangle's shadow lies on the far side of its plane from the light, so the rectangle is
+/// clear of it when each of its corners is strictly on the light's side ([`light_side`], exact),
+/// or, for a light in the plane (a shadow of no volume), strictly off the plane; or when the
+/// triangle lies strictly outside one of the near-clip volume's inward `planes` (see
+/// [`near_clip_volume`]; then no ray from the light to the rectangle passes through it). The
+/// corners' sides are evaluated in `f64` with a relative margin of `10⁻⁹`, so the test is
+/// conservative: a corner near a triangle's plane makes it false.
+///
+/// # Panics
+/// Panics if a triangle's id is out of range of `world`.
 #[must_use]
-pub fn box_outside(lo: DVec3, hi: DVec3, planes: &[Plane]) -> bool {
-    let corners = box_corners(lo, hi);
+pub fn near_rect_clear_of_shadows(
+    world: &[Vec3],
+    triangles: &[[u32; 3]],
+    light: [f32; 4],
+    near: [DVec3; 4],
+    planes: &[Plane],
+) -> bool {
+    triangles.iter().all(|t| {
+        let v = [
+            world[t[0] as usize],
+            world[t[1] as usize],
+            world[t[2] as usize],
+        ];
+        let a = v[0].as_dvec3();
+        let n = (v[1].as_dvec3() - a).cross(v[2].as_dvec3() - a);
+        let nlen = n.length();
+        if !nlen.is_finite() {
+            return false;
+        }
+        // sgn H(a, b, c, X) = −sgn(n · (X − a)) for a point X: the convention of light_side.
+        let side = light_side(v, light);
+        let corners_clear = nlen > 0.0
+            && near.iter().all(|&x| {
+                let h = -n.dot(x - a);
+                let margin = 1e-9 * nlen * (x - a).length();
+                if side == 0 {
+                    h.abs() > margin
+                } else {
+                    h * f64::from(side) > margin
+                }
+            });
+        corners_clear || {
+            let t = [a, v[1].as_dvec3(), v[2].as_dvec3()];
+            points_outside(&t, planes) || triangle_misses_near_clip(t, light, near)
+        }
+    })
+}
+
+/// Separating-axis test between the triangle `t` and the near-clip volume of `light` over the
+/// near rectangle `near` (the pyramid from the light, or for a directional light the rectangle
+/// swept towards it): true when some axis among the triangle's normal, the volume's face
+/// normals and the cross products of their edges has the two strictly apart, with a margin of
+/// `10⁻⁹` relative to the coordinates. Complete for convex polyhedra, so it also separates a
+/// triangle that passes a hair beside the light, which no single face plane does.
+fn triangle_misses_near_clip(t: [DVec3; 3], light: [f32; 4], near: [DVec3; 4]) -> bool {
+    let w = f64::from(light[3]);
+    let lxyz = DVec3::new(light[0].into(), light[1].into(), light[2].into());
+    // The apex: a point, or (directional) a direction the rectangle is swept along.
+    let (apex, directional) = if w == 0.0 {
+        (lxyz, true)
+    } else {
+        (lxyz / w, false)
+    };
+    if !apex.is_finite() {
+        return false;
+    }
+    let scale = t
+        .iter()
+        .chain(near.iter())
+        .fold(0.0f64, |m, p| m.max(p.abs().max_element()))
+        .max(if directional {
+            0.0
+        } else {
+            apex.abs().max_element()
+        })
+        .max(1e-30);
+    let mut volume_edges = Vec::with_capacity(8);
+    let mut axes = Vec::with_capacity(32);
+    for i in 0..4 {
+        let (x, y) = (near[i], near[(i + 1) % 4]);
+        let to_apex = if directional { apex } else { apex - x };
+        volume_edges.push(y - x);
+        if !directional {
+            volume_edges.push(to_apex);
+        }
+        axes.push((y - x).cross(to_apex));
+    }
+    if directional {
+        volume_edges.push(apex);
+    }
+    axes.push((near[1] - near[0]).cross(near[3] - near[0]));
+    let tri_edges = [t[1] - t[0], t[2] - t[1], t[0] - t[2]];
+    axes.push(tri_edges[0].cross(tri_edges[1]));
+    for e in tri_edges {
+        for &f in &volume_edges {
+            axes.push(e.cross(f));
+        }
+    }
+    axes.iter().any(|&u| {
+        let ulen = u.length();
+        if !(ulen > 0.0 && ulen.is_finite()) {
+            return false;
+        }
+        let margin = 1e-9 * ulen * scale;
+        let (tlo, thi) = t
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                let d = u.dot(*p);
+                (lo.min(d), hi.max(d))
+            });
+        let (mut vlo, mut vhi) =
+            near.iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                    let d = u.dot(*p);
+                    (lo.min(d), hi.max(d))
+                });
+        if directional {
+            let d = u.dot(apex);
+            if d > 0.0 {
+                vhi = f64::INFINITY;
+            } else if d < 0.0 {
+                vlo = f64::NEG_INFINITY;
+            }
+        } else {
+            let d = u.dot(apex);
+            vlo = vlo.min(d);
+            vhi = vhi.max(d);
+        }
+        thi < vlo - margin || vhi < tlo - margin
+    })
+}
+
+/// One object as the plan sees it, for [`choose`].
+#[derive(Debug, Clone, Copy)]
+pub struct PlanObject<'a> {
+    /// False for a receiver that casts no shadow.
+    pub casts_shadows: bool,
+    /// World positions (`f32`), as drawn.
+    pub world: &'a [Vec3],
+    /// Triangles, ids into `world`.
+    pub triangles: &'a [[u32; 3]],
+    /// The world box `(lo, hi)` of `world`.
+    pub bounds: (DVec3, DVec3),
+}
+
+/// The view as the plan sees it, for [`choose`]: built once per frame and light.
+#[derive(Debug, Clone, Copy)]
+pub struct PlanView<'a> {
+    /// The view frustum's inward planes ([`frustum_planes`]).
+    pub frustum: &'a [Plane],
+    /// The near-plane rectangle's corners (world space).
+    pub near: [DVec3; 4],
+    /// The near-clip volume of this light ([`near_clip_volume`]); `None` when degenerate.
+    pub near_clip: Option<&'a [Plane]>,
+}
+
+/// The technique for one (light, object) pair under `policy`, and why, in words: culled when
+/// the object casts nothing, has no triangles, is out of the reach of the light's `emission`
+/// (range, cone) or has its shadow outside the frustum; otherwise z-pass where proven safe
+/// (the near-clip volume misses the object's box, or [`near_rect_clear_of_shadows`]), else
+/// z-fail. `light` is the world light (homogeneous `f32`).
+#[must_use]
+pub fn choose(
+    policy: PlanPolicy,
+    light: [f32; 4],
+    emission: Option<&Emission>,
+    object: PlanObject<'_>,
+    view: PlanView<'_>,
+) -> (Technique, String) {
+    let (lo, hi) = object.bounds;
+    if !object.casts_shadows {
+        return (
+            Technique::Culled,
+            "receiver only: casts no shadow".to_owned(),
+        );
+    }
+    if object.world.is_empty() || object.triangles.is_empty() {
+        return (Technique::Culled, "no triangles".to_owned());
+    }
+    if let Some(why) = emission.and_then(|e| e.unreachable(light, lo, hi)) {
+        return (
+            Technique::Culled,
+            format!("{why}: it lights neither the object nor its shadow"),
+        );
+    }
+    if shadow_outside_frustum(lo, hi, light, view.frustum) {
+        return (
+            Technique::Culled,
+            "its shadow volume lies outside the view frustum".to_owned(),
+        );
+    }
+    match policy {
+        PlanPolicy::AlwaysZFail => (Technique::ZFail, "policy: always z-fail".to_owned()),
+        PlanPolicy::AlwaysZPass => (Technique::ZPass, "policy: always z-pass".to_owned()),
+        PlanPolicy::Auto => match view.near_clip {
+            Some(planes) if box_outside(lo, hi, planes) => (
+                Technique::ZPass,
+                "object outside the near-clip volume: camera outside its shadow volume".to_owned(),
+            ),
+            Some(planes)
+                if object.triangles.len() <= ZPASS_TRIANGLE_TEST_MAX
+                    && near_rect_clear_of_shadows(
+                        object.world,
+                        object.triangles,
+                        light,
+                        view.near,
+                        planes,
+                    ) =>
+            {
+                (
+                    Technique::ZPass,
+                    "object meets the near-clip volume, but no triangle's shadow reaches the near plane: camera outside its shadow volume".to_owned(),
+                )
+            }
+            Some(_) => (
+                Technique::ZFail,
+                "object meets the near-clip volume: camera may be inside its shadow volume"
+                    .to_owned(),
+            ),
+            None => (
+                Technique::ZFail,
+                "near-clip volume degenerate (light in or parallel to the near plane)".to_owned(),
+            ),
+        },
+    }
+}
+
+/// True when some inward plane has every point strictly outside it, with a margin of `10⁻⁶`
+/// relative to the points' extent and magnitude.
+fn points_outside(points: &[DVec3], planes: &[Plane]) -> bool {
+    let (lo, hi) = points
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
     let scale = (hi - lo)
         .length()
         .max(lo.abs().max_element())
@@ -439,7 +691,14 @@ pub fn box_outside(lo: DVec3, hi: DVec3, planes: &[Plane]) -> bool {
     let margin = scale * 1e-6;
     planes
         .iter()
-        .any(|&pl| corners.iter().all(|&c| eval(pl, c) < -margin))
+        .any(|&pl| points.iter().all(|&c| eval(pl, c) < -margin))
+}
+
+/// True when the box `(lo, hi)` provably does not meet the convex volume given by its inward
+/// `planes` (some plane has all 8 corners strictly outside, with a relative margin).
+#[must_use]
+pub fn box_outside(lo: DVec3, hi: DVec3, planes: &[Plane]) -> bool {
+    points_outside(&box_corners(lo, hi), planes)
 }
 
 #[cfg(test)]
@@ -493,6 +752,41 @@ mod tests {
             DVec3::new(0.1, -2.8, -3.9),
             &planes
         ));
+    }
+
+    #[test]
+    fn near_rect_clear_of_shadows_decides_triangle_by_triangle() {
+        let near = near_rect();
+        let clear = |tri: [[f32; 3]; 3], light: [f32; 4]| {
+            let world: Vec<Vec3> = tri.iter().map(|&p| Vec3::from_array(p)).collect();
+            let planes = near_clip_volume(near, light).unwrap();
+            near_rect_clear_of_shadows(&world, &[[0, 1, 2]], light, near, &planes)
+        };
+        let across = [[-1.0, -1.0, -5.0], [1.0, -1.0, -5.0], [0.0, 1.0, -5.0]];
+        // Light beyond the triangle: its shadow comes towards the camera and covers the
+        // near rectangle.
+        assert!(!clear(across, [0.0, 0.0, -10.0, 1.0]));
+        assert!(!clear(across, [0.0, 0.0, -1.0, 0.0]));
+        // Light between the triangle and the camera: the shadow goes the other way.
+        assert!(clear(across, [0.0, 0.0, -3.0, 1.0]));
+        assert!(clear(across, [0.0, 0.0, 1.0, 0.0]));
+        // The same with the light given as (w·P, w).
+        assert!(!clear(across, [0.0, 0.0, -20.0, 2.0]));
+        assert!(clear(across, [0.0, 0.0, -6.0, 2.0]));
+        // A light one f32 step off the plane z = -5 of a triangle beside it, the camera on
+        // the far side: the corners are not on the light's side and no face plane of the
+        // near-clip volume separates the triangle (it straddles both axes around the apex),
+        // but its shadow is a sliver in that plane, nowhere near the camera.
+        let beside = [[1.0, -0.1, -5.0], [-0.1, 1.0, -5.0], [1.0, 1.0, -5.0]];
+        let hair = -5.000_000_5_f32;
+        assert!(hair < -5.0);
+        assert!(clear(beside, [0.0, 0.0, hair, 1.0]));
+        // The light exactly in the plane: a shadow of no volume.
+        assert!(clear(beside, [0.0, 0.0, -5.0, 1.0]));
+        // The same hair off, but with the triangle around the apex: the shadow is almost the
+        // whole half-space beyond, camera included.
+        let around = [[-1.0, -1.0, -5.0], [1.0, -1.0, -5.0], [0.0, 1.0, -5.0]];
+        assert!(!clear(around, [0.0, 0.0, hair, 1.0]));
     }
 
     #[test]

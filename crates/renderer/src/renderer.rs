@@ -410,48 +410,22 @@ impl Renderer {
             let ncv = plan::near_clip_volume(near, l);
             for (oi, obj) in scene.objects.iter().enumerate() {
                 let c = &self.cache[oi];
-                let (lo, hi) = bounds[oi];
-                let (technique, reason) = if !obj.casts_shadows {
-                    (
-                        Technique::Culled,
-                        "receiver only: casts no shadow".to_owned(),
-                    )
-                } else if c.world.is_empty() || c.table.triangles.is_empty() {
-                    (Technique::Culled, "no triangles".to_owned())
-                } else if let Some(why) = scene
-                    .emission
-                    .get(li)
-                    .and_then(|e| e.unreachable(l, lo, hi))
-                {
-                    (
-                        Technique::Culled,
-                        format!("{why}: it lights neither the object nor its shadow"),
-                    )
-                } else if plan::shadow_outside_frustum(lo, hi, l, &frustum) {
-                    (
-                        Technique::Culled,
-                        "its shadow volume lies outside the view frustum".to_owned(),
-                    )
-                } else {
-                    match policy {
-                        PlanPolicy::AlwaysZFail => (Technique::ZFail, "policy: always z-fail".to_owned()),
-                        PlanPolicy::AlwaysZPass => (Technique::ZPass, "policy: always z-pass".to_owned()),
-                        PlanPolicy::Auto => match &ncv {
-                            Some(planes) if plan::box_outside(lo, hi, planes) => (
-                                Technique::ZPass,
-                                "object outside the near-clip volume: camera outside its shadow volume".to_owned(),
-                            ),
-                            Some(_) => (
-                                Technique::ZFail,
-                                "object meets the near-clip volume: camera may be inside its shadow volume".to_owned(),
-                            ),
-                            None => (
-                                Technique::ZFail,
-                                "near-clip volume degenerate (light in or parallel to the near plane)".to_owned(),
-                            ),
-                        },
-                    }
-                };
+                let (technique, reason) = plan::choose(
+                    policy,
+                    l,
+                    scene.emission.get(li),
+                    plan::PlanObject {
+                        casts_shadows: obj.casts_shadows,
+                        world: &c.world,
+                        triangles: &c.table.triangles,
+                        bounds: bounds[oi],
+                    },
+                    plan::PlanView {
+                        frustum: &frustum,
+                        near,
+                        near_clip: ncv.as_deref(),
+                    },
+                );
                 entries.push(PlanEntry {
                     light: li,
                     object: oi,

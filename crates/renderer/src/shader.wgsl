@@ -21,6 +21,9 @@ struct LightU {
     // GPU-resident pass only (resident.wgsl): (record region start, region size, first sign of
     // this light, 1 when it has a back cap). Zero in the host pipeline.
     draw: vec4<u32>,
+    // GPU-resident pass only: (first light point of this light, 0, 0, 0), see `r_light_points`.
+    // Zero in the host pipeline.
+    points: vec4<u32>,
 };
 
 @group(0) @binding(0) var<uniform> g: Globals;

@@ -25,11 +25,27 @@ use shadowvol_robust_math::{ov_sign, triangle_sign, Accuracy};
 /// A vertex of shadow-volume geometry: `(x, y, z, w)`, `w = 1` on the caster, `w = 0` at infinity.
 pub type VolumeVertex = [f32; 4];
 
-/// The point at infinity of `p` away from the light `l` (world space).
+/// The point at infinity of `p` away from the light `l` (world space): the direction
+/// `l.w · p − l.xyz`, scaled so that its largest component is ±1, with `w = 0`.
+///
+/// The direction is evaluated in `f64`, where the products of `f32` inputs are exact and the
+/// difference is exact whenever it cancels, and only then rounded to `f32`. So a vertex a hair
+/// (10⁻⁸) from a light still extrudes in the right direction, where `f32` would round the
+/// difference to noise or to zero. `[0, 0, 0, 0]` when `p` is exactly at the light.
 #[must_use]
 #[inline]
 pub fn extrude(p: Vec3, l: [f32; 4]) -> VolumeVertex {
-    [p.x * l[3] - l[0], p.y * l[3] - l[1], p.z * l[3] - l[2], 0.0]
+    let w = f64::from(l[3]);
+    let d = [
+        f64::from(p.x) * w - f64::from(l[0]),
+        f64::from(p.y) * w - f64::from(l[1]),
+        f64::from(p.z) * w - f64::from(l[2]),
+    ];
+    let s = d[0].abs().max(d[1].abs()).max(d[2].abs());
+    if s == 0.0 || !s.is_finite() {
+        return [0.0; 4];
+    }
+    [(d[0] / s) as f32, (d[1] / s) as f32, (d[2] / s) as f32, 0.0]
 }
 
 #[inline]
@@ -160,7 +176,7 @@ pub fn build_caps(
 }
 
 /// The triangles that have a vertex exactly at a point light (object space: `p · w == L.xyz`
-/// in `f32`), as a per-triangle flag; empty when there are none (always for directional lights).
+/// exactly, see [`at_light`]), as a per-triangle flag; empty when there are none (always for directional lights).
 ///
 /// Such a triangle's shadow has no volume (every ray from the light through it lies in its
 /// plane), but the extrusion of its vertex at the light is undefined (`(0, 0, 0, 0)`), and a
@@ -176,9 +192,7 @@ pub fn touching_triangles(table: &EdgeTable, object_light: [f32; 4]) -> Vec<bool
     let at_light: Vec<bool> = table
         .positions
         .iter()
-        .map(|p| {
-            p.x * w == object_light[0] && p.y * w == object_light[1] && p.z * w == object_light[2]
-        })
+        .map(|p| at_light(*p, object_light))
         .collect();
     if !at_light.contains(&true) {
         return Vec::new();
@@ -188,6 +202,17 @@ pub fn touching_triangles(table: &EdgeTable, object_light: [f32; 4]) -> Vec<bool
         .iter()
         .map(|t| t.iter().any(|&v| at_light[v as usize]))
         .collect()
+}
+
+/// True when `p · l.w == l.xyz` exactly (in `f64`, where the products of `f32` values are
+/// exact): the point light is at `p`, not only within an `f32` rounding of it.
+#[must_use]
+#[inline]
+pub fn at_light(p: Vec3, l: [f32; 4]) -> bool {
+    let w = f64::from(l[3]);
+    f64::from(p.x) * w == f64::from(l[0])
+        && f64::from(p.y) * w == f64::from(l[1])
+        && f64::from(p.z) * w == f64::from(l[2])
 }
 
 /// Subtracts, from the multiplicities `m` of one object for one light, the contributions
@@ -307,6 +332,65 @@ mod tests {
                 3 + usize::from(caps.front_ccw.len() + caps.front_cw.len() == 0)
             );
         }
+    }
+
+    /// `x·2^149` as an integer (every finite `f32` is a multiple of `2^-149`).
+    fn scaled(x: f32) -> num_bigint::BigInt {
+        let bits = x.to_bits();
+        let (exp, frac) = ((bits >> 23) & 0xff, bits & 0x7f_ffff);
+        let (m, e) = if exp == 0 {
+            (frac, 0)
+        } else {
+            (frac | 0x80_0000, exp - 1)
+        };
+        let v = num_bigint::BigInt::from(m) << e;
+        if bits >> 31 == 1 {
+            -v
+        } else {
+            v
+        }
+    }
+
+    #[test]
+    fn extrusion_is_directed_a_hair_from_the_light() {
+        use num_traits::{Signed, ToPrimitive, Zero};
+        // Lights (fl(w·P), w) at vertices P: w·P − L.xyz is 10⁻⁸ or less, which f32 rounds to
+        // noise. The reference is the exact integer w·P − L.xyz (scaled by 2^298).
+        for (p, w) in [
+            (Vec3::new(0.3, -0.45, 1.35), 1.1f32),
+            (Vec3::new(2.5, -1.133_975_8, 1.0), 1.3),
+            (Vec3::new(-7.25, 0.001, 3.1), 0.75),
+        ] {
+            let l = [p.x * w, p.y * w, p.z * w, w];
+            let d: Vec<num_bigint::BigInt> = (0..3)
+                .map(|i| scaled(p[i]) * scaled(w) - (scaled(l[i]) << 149))
+                .collect();
+            assert!(d.iter().any(|x| !x.is_zero()), "{p} {w}: not a hair off");
+            let dmax = d.iter().map(|x| x.abs()).max().unwrap();
+            let got = extrude(p, l);
+            assert_eq!(got[3], 0.0);
+            for i in 0..3 {
+                // Ratio to the largest component, as f64 from the exact integers.
+                let want = (&d[i] * num_bigint::BigInt::from(1u64 << 53) / &dmax)
+                    .to_f64()
+                    .unwrap()
+                    / (1u64 << 53) as f64;
+                let scale = got[0].abs().max(got[1].abs()).max(got[2].abs());
+                let have = f64::from(got[i]) / f64::from(scale);
+                assert!(
+                    (have - want).abs() <= 1e-6,
+                    "{p} w {w}: component {i} is {have}, exact {want} ({got:?})"
+                );
+            }
+            assert!(
+                !at_light(p, l),
+                "{p} {w}: w·P is not exact, L.xyz is not at P"
+            );
+        }
+        // Exactly at the light: every product exact.
+        let p = Vec3::new(0.5, 0.25, 2.0);
+        assert!(at_light(p, [1.0, 0.5, 4.0, 2.0]));
+        assert_eq!(extrude(p, [1.0, 0.5, 4.0, 2.0]), [0.0; 4]);
     }
 
     #[test]

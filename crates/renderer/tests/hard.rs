@@ -10,15 +10,17 @@ const SIZE: u32 = 128;
 /// 0.05 % of the image.
 const MAX_ARTIFACTS: usize = (SIZE * SIZE) as usize * 5 / 10_000;
 
-/// Scenes where the exact reference finds that the rasterized volumes are wrong in every
-/// consistent mode (a finding, see docs/RESULTS.md "The exact reference"): a point light one
-/// `f32` rounding off the plane of a fan it lies inside (the cone through the triangle under it
-/// is nearly a half-space; its z-fail back cap at infinity has three vertices within 10⁻⁹ of a
-/// great circle, which `f32` clipping puts on the wrong side; z-pass is right, see
-/// `tilted_fan_in_z_pass_matches_the_exact_reference`), and lights given as `(fl(w·P), w)` a
-/// hair off grid vertices (sides extruded along `V − L` of length ~10⁻⁸). Their counts are
-/// printed, not bounded.
-const RASTER_FINDINGS: [&str; 2] = ["hard-edge-on-tilted-fan", "hard-homogeneous-w"];
+/// (scene, mode) pairs where the mode's own signs cast a different shadow from the exact
+/// geometry's (see docs/RESULTS.md, "The exact reference"): `robust` gives sign 0 to the
+/// triangles a light lies a hair off (the tilted fan's, which shadow half the backdrop, and the
+/// faces around the vertices of `hard-homogeneous-w`), and `ordered` trusts `f32` signs that
+/// are wrong there. The volumes are consistent (closed chains); they bound another shadow.
+/// `exact` on the same scenes is bounded. Their counts are printed, not bounded.
+const MODE_FINDINGS: [(&str, Accuracy); 3] = [
+    ("hard-edge-on-tilted-fan", Accuracy::Robust),
+    ("hard-homogeneous-w", Accuracy::Robust),
+    ("hard-homogeneous-w", Accuracy::Ordered),
+];
 
 fn scenes() -> Vec<(String, RenderScene)> {
     let mut v = vec![
@@ -61,7 +63,7 @@ fn check_mode(mode: Accuracy) -> Vec<(String, usize)> {
             "{mode} on {name}: the exact reference left pixels undecided"
         );
         assert!(
-            cmp.artifact_pixels <= MAX_ARTIFACTS || RASTER_FINDINGS.contains(&name.as_str()),
+            cmp.artifact_pixels <= MAX_ARTIFACTS || MODE_FINDINGS.contains(&(name.as_str(), mode)),
             "{mode} on {name}: {} artifact pixels (max {MAX_ARTIFACTS})\n{}",
             cmp.artifact_pixels,
             frame.explain()
@@ -148,22 +150,30 @@ fn original_cracks_visibly_on_the_edge_on_frustum() {
     );
 }
 
-/// The tilted fan's artifacts come from the z-fail caps, not from the silhouettes or the
-/// reference: with z-pass (the camera is outside the volume there) the raster matches the exact
-/// reference pixel for pixel in `ordered` and `exact`.
+/// The tilted fan: a light one `f32` rounding off the plane of the fan triangle under it. Its
+/// box meets the near-clip volume, but the plan proves triangle by triangle that no shadow
+/// reaches the near plane and picks z-pass, which needs no caps: the back cap of that
+/// triangle at infinity has its vertices within 10⁻⁹ of a great circle, and `f32` clipping
+/// draws its complement (z-fail there shadows the wrong side: 3026 pixels against 8972). So
+/// `ordered` and `exact` match the exact reference pixel for pixel.
 #[test]
-fn tilted_fan_in_z_pass_matches_the_exact_reference() {
+fn tilted_fan_gets_z_pass_and_matches_the_exact_reference() {
     for mode in [Accuracy::Ordered, Accuracy::Exact] {
         let Some(mut r) = common::renderer(SIZE, SIZE, mode) else {
             return;
         };
-        let mut o = r.options();
-        o.policy = shadowvol_renderer::PlanPolicy::AlwaysZPass;
-        r.set_options(o);
         let scene = hard::hard_preset("hard-edge-on-tilted-fan").unwrap();
-        let cmp = reference::compare(&r.render(&scene).unwrap());
+        let frame = r.render(&scene).unwrap();
+        for e in frame.plan.iter().filter(|e| e.object == 0) {
+            assert_eq!(
+                e.technique,
+                shadowvol_renderer::Technique::ZPass,
+                "{mode}: {e}"
+            );
+        }
+        let cmp = reference::compare(&frame);
         println!(
-            "{mode} z-pass tilted fan: {} artifacts, {} shadow, {} reference shadow",
+            "{mode} tilted fan: {} artifacts, {} shadow, {} reference shadow",
             cmp.artifact_pixels, cmp.shadow_pixels, cmp.reference_shadow_pixels
         );
         assert_eq!(cmp.artifact_pixels, 0, "{mode}");

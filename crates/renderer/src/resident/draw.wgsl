@@ -7,7 +7,7 @@
 //
 // Sides: one instance per side record (resident_edges), 6 vertices: the quad (p, q, q_inf) +
 // (p, q_inf, p_inf), with (p, q) = (b, a) for m > 0 and (a, b) for m < 0 (outward, as
-// `volume::build_sides`); x_inf = (L.w x - L.xyz, 0). For a directional light p_inf == q_inf,
+// `volume::build_sides`); x_inf is the direction away from the light (`extrude`). For a directional light p_inf == q_inf,
 // so the second triangle is degenerate and draws nothing, and the side is one triangle.
 // Caps: per triangle of a z-fail object, read its sign; the front cap is the triangle itself in
 // canonical order (sigma = +1 with counter-clockwise front faces, sigma = -1 in the clockwise
@@ -32,6 +32,10 @@ const R_TOUCH: i32 = 2;
 @group(0) @binding(4) var<storage, read> r_signs: array<i32>;
 // [light * capacity + slot] side records from resident_edges.
 @group(0) @binding(5) var<storage, read> r_records: array<u32>;
+// Per (light, object), [2 * (lt.points.x + object)]: the object-space light as the point
+// P = L.xyz / w split into f32 hi and lo, (hi, w) then (lo, 0), or for a directional light
+// (L.xyz, 0) then 0 (`scene::light_points`, in f64 on the host).
+@group(0) @binding(12) var<storage, read> r_light_points: array<vec4<f32>>;
 // Per object, 5 words of 4: rows 0-2 of the camera-relative world-from-object transform (f32
 // bits), the albedo (f32 bits), (first global triangle, 0, 0, 0).
 @group(0) @binding(6) var<storage, read> r_objects: array<vec4<u32>>;
@@ -105,8 +109,28 @@ fn rel(id: u32) -> vec3<f32> {
     return r_world[id].xyz;
 }
 
-fn extrude(p: vec3<f32>) -> vec4<f32> {
-    return vec4<f32>(p * lt.pos.w - lt.pos.xyz, 0.0);
+// The point at infinity of global vertex `id` of object `obj` away from the light: in object
+// space (p - hi) - lo, whose first difference is exact where p is near the light (Sterbenz),
+// then turned by the object's linear part and scaled to a largest component of 1, as the host
+// pipeline's `volume::extrude` (0 when p is at the light).
+fn extrude(id: u32, obj: u32) -> vec4<f32> {
+    let k = 2u * (lt.points.x + obj);
+    let a = r_light_points[k];
+    var d = -a.xyz;
+    if a.w != 0.0 {
+        let i = id * 3u;
+        let p = vec3<f32>(r_positions[i], r_positions[i + 1u], r_positions[i + 2u]);
+        d = (p - a.xyz) - r_light_points[k + 1u].xyz;
+    }
+    let r0 = bitcast<vec4<f32>>(r_objects[obj * 5u]).xyz;
+    let r1 = bitcast<vec4<f32>>(r_objects[obj * 5u + 1u]).xyz;
+    let r2 = bitcast<vec4<f32>>(r_objects[obj * 5u + 2u]).xyz;
+    let wd = vec3<f32>(dot(r0, d), dot(r1, d), dot(r2, d));
+    let m = max(max(abs(wd.x), abs(wd.y)), abs(wd.z));
+    if m == 0.0 {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(wd / m, 0.0);
 }
 
 fn clip(pos: vec4<f32>) -> VolumeOut {
@@ -144,8 +168,8 @@ fn vs_resident_surface(@builtin(vertex_index) vi: u32) -> SurfaceOut {
 
 fn side_vertex(record: u32, v: u32) -> VolumeOut {
     let er = r_edges[record & ~R_NEGATIVE];
-    var p = rel(er.y);
-    var q = rel(er.x);
+    var p = er.y;
+    var q = er.x;
     if (record & R_NEGATIVE) != 0u {
         let t = p;
         p = q;
@@ -153,16 +177,16 @@ fn side_vertex(record: u32, v: u32) -> VolumeOut {
     }
     switch v {
         case 0u, 3u: {
-            return clip(vec4<f32>(p, 1.0));
+            return clip(vec4<f32>(rel(p), 1.0));
         }
         case 1u: {
-            return clip(vec4<f32>(q, 1.0));
+            return clip(vec4<f32>(rel(q), 1.0));
         }
         case 2u, 4u: {
-            return clip(extrude(q));
+            return clip(extrude(q, er.w));
         }
         default: {
-            return clip(extrude(p));
+            return clip(extrude(p, er.w));
         }
     }
 }
@@ -203,7 +227,7 @@ fn vs_resident_cap_ccw(@builtin(vertex_index) vi: u32) -> VolumeOut {
     if s == 1 && c != 0u {
         c = 3u - c;
     }
-    return clip(extrude(rel(tr[c])));
+    return clip(extrude(tr[c], tr.w));
 }
 
 // 3 vertices per triangle: the sigma = -1 front cap (drawn with clockwise front faces).

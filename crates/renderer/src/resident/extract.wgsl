@@ -64,8 +64,48 @@ fn resident_reset(@builtin(global_invocation_id) gid: vec3<u32>) {
     atomicStore(&args[i], v);
 }
 
+// x as (odd integer, exponent): x = odd * 2^exponent, for x != 0 (subnormals included).
+fn odd_part(x: f32) -> vec2<i32> {
+    let b = bitcast<u32>(x);
+    let e = (b >> 23u) & 0xffu;
+    var m = b & 0x7fffffu;
+    var ex = -149;
+    if e != 0u {
+        m = m | 0x800000u;
+        ex = i32(e) - 150;
+    }
+    let tz = countTrailingZeros(m);
+    return vec2<i32>(i32(m >> tz), ex + i32(tz));
+}
+
+// p * w == l exactly (not only after rounding), in integers: the odd parts multiply and the
+// exponents add, with the signs, so no f32 product is formed.
+fn exact_product_is(p: f32, w: f32, l: f32) -> bool {
+    if p == 0.0 || w == 0.0 || l == 0.0 {
+        return (p == 0.0 || w == 0.0) && l == 0.0;
+    }
+    if ((p < 0.0) != (w < 0.0)) != (l < 0.0) {
+        return false;
+    }
+    let a = odd_part(p);
+    let b = odd_part(w);
+    let c = odd_part(l);
+    if a.y + b.y != c.y {
+        return false;
+    }
+    // Odd parts below 2^24: their product fits in u32 when the bit lengths add to at most 32,
+    // and is at least 2^24 (so not c.x) when they add to more than 25.
+    let bits = (32u - countLeadingZeros(u32(a.x))) + (32u - countLeadingZeros(u32(b.x)));
+    if bits > 25u {
+        return false;
+    }
+    return u32(a.x) * u32(b.x) == u32(c.x);
+}
+
+// The vertex is exactly at the point light: p * w == L.xyz exactly (`volume::at_light`).
 fn touches(p: vec3<f32>, l: vec4<f32>) -> bool {
-    return l.w != 0.0 && p.x * l.w == l.x && p.y * l.w == l.y && p.z * l.w == l.z;
+    return l.w != 0.0 && exact_product_is(p.x, l.w, l.x) && exact_product_is(p.y, l.w, l.y)
+        && exact_product_is(p.z, l.w, l.z);
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)

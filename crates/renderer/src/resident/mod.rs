@@ -82,7 +82,7 @@ const STORAGE_BUFFERS: u32 = 10;
 /// Byte stride of the per-light uniforms (dynamic offsets).
 const LIGHT_STRIDE: u64 = 256;
 /// Bytes of one light uniform (`LightU`).
-const LIGHT_BYTES: u64 = 80;
+const LIGHT_BYTES: u64 = 96;
 
 /// The compute module: the `wgpu` backend's kernel for `filter`, the integer exact sign, then
 /// the resident kernels.
@@ -313,6 +313,7 @@ struct FrameBuffers {
     /// side, cap and lit passes (see `TimestampSlot`), and the buffer they resolve into.
     queries: Option<(wgpu::QuerySet, wgpu::Buffer, u32)>,
     lights_buf: wgpu::Buffer,
+    light_points: wgpu::Buffer,
     technique: wgpu::Buffer,
     signs: wgpu::Buffer,
     args: wgpu::Buffer,

@@ -175,6 +175,7 @@ impl ShadowPass {
                 storage(5, vs, true),
                 storage(6, vs, true),
                 storage(7, vs, true),
+                storage(12, vs, true),
             ],
         });
         let dl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

@@ -232,6 +232,8 @@ impl ShadowPass {
             lights.push([0.0; 4]);
         }
         q.write_buffer(&fb.lights_buf, 0, bytemuck::cast_slice(&lights));
+        let points = light_points(&ol, n_lights);
+        q.write_buffer(&fb.light_points, 0, bytemuck::cast_slice(&points));
         let codes: Vec<u32> = f
             .techniques
             .iter()
@@ -320,6 +322,8 @@ impl ShadowPass {
             let o = li * LIGHT_STRIDE as usize;
             light_bytes[o..o + 64].copy_from_slice(bytemuck::cast_slice(&v));
             light_bytes[o + 64..o + 80].copy_from_slice(bytemuck::cast_slice(&draw));
+            let first_point = [(li * objects) as u32, 0, 0, 0];
+            light_bytes[o + 80..o + 96].copy_from_slice(bytemuck::cast_slice(&first_point));
         }
         q.write_buffer(&fb.light_u, 0, &light_bytes);
         rs.state = FrameState {
@@ -354,6 +358,7 @@ impl ShadowPass {
         let s = slots as u64;
         let tri = rs.layout.tri_count().max(1) as u64;
         let lights_buf = sized("object-space lights", 16 * s * objects as u64, st)?;
+        let light_points = sized("light points", 32 * s * objects as u64, st)?;
         let technique = sized("techniques", 4 * s * objects as u64, st)?;
         let readable = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let signs = sized("triangle signs", 4 * s * tri, readable)?;
@@ -412,6 +417,7 @@ impl ShadowPass {
                 entry(5, &records),
                 entry(6, &objects_buf),
                 entry(7, &rs.world),
+                entry(12, &light_points),
             ],
         });
         let s0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -463,6 +469,7 @@ impl ShadowPass {
             lights: slots,
             queries,
             lights_buf,
+            light_points,
             technique,
             signs,
             args,
@@ -477,4 +484,34 @@ impl ShadowPass {
             s0,
         })
     }
+}
+
+/// The draws' extrusion inputs, `[light * object_count + object]`, two `[f32; 4]` each, from the
+/// object-space lights `ol[object][light]`: for a point light (`w > 0`) the point
+/// `P = L.xyz / w`, evaluated in `f64` and split into `f32` `hi` and `lo = P − hi`, as `(hi, w)`
+/// and `(lo, 0)`; for a directional light `(L.xyz, 0)` and zeros. The vertex shader extrudes
+/// object-space vertex `p` along `(p − hi) − lo`, whose first difference is exact where `p`
+/// is near `P` (Sterbenz), so a vertex a hair from the light still extrudes the right way,
+/// where `w·p − L.xyz` in `f32` rounds to noise. At least one pair, so the buffer is never
+/// empty.
+#[must_use]
+pub(crate) fn light_points(ol: &[Vec<[f32; 4]>], n_lights: usize) -> Vec<[f32; 4]> {
+    let objects = ol.len();
+    let mut out = vec![[0.0f32; 4]; 2 * (objects * n_lights).max(1)];
+    for (oi, row) in ol.iter().enumerate() {
+        for (li, l) in row.iter().enumerate().take(n_lights) {
+            let k = 2 * (li * objects + oi);
+            let w = f64::from(l[3]);
+            if w == 0.0 {
+                out[k] = [l[0], l[1], l[2], 0.0];
+                continue;
+            }
+            let p = [l[0], l[1], l[2]].map(|c| f64::from(c) / w);
+            let hi = p.map(|c| c as f32);
+            let lo = [0, 1, 2].map(|i| (p[i] - f64::from(hi[i])) as f32);
+            out[k] = [hi[0], hi[1], hi[2], l[3]];
+            out[k + 1] = [lo[0], lo[1], lo[2], 0.0];
+        }
+    }
+    out
 }

@@ -29,7 +29,7 @@ fn position(layout: &ResidentLayout, id: u32) -> [f32; 3] {
 }
 
 fn touches(p: [f32; 3], l: [f32; 4]) -> bool {
-    l[3] != 0.0 && p[0] * l[3] == l[0] && p[1] * l[3] == l[1] && p[2] * l[3] == l[2]
+    l[3] != 0.0 && crate::volume::at_light(glam::Vec3::from_array(p), l)
 }
 
 /// Twin of `resident_triangles`: `signs[light * tri_count + triangle]` (−1, 0, 1 or [`TOUCH`];
