@@ -46,7 +46,9 @@ glsl-sign-negated	shaders/silhouette_gs.geom	s = t * parity;	s = -t * parity;	co
 glsl-robust-rule-dropped	shaders/silhouette_gs.geom	if (t != t1 || t1 != t2) {	if (false) {	conformance
 glsl-f32-bound-shrunk	shaders/silhouette_gs.geom	precise float bound = 1.9073486328125e-06 * perm;	precise float bound = 1.0e-12 * perm;	conformance
 glsl-f64-bound-shrunk	shaders/silhouette_gs.geom	precise double bound = 1.0e-15LF * perm;	precise double bound = 1.0e-30LF * perm;	conformance
-resident-touch-ignored	crates/renderer/src/resident/extract.wgsl	return l.w != 0.0 && p.x	return false && p.x	resident
+resident-touch-ignored	crates/renderer/src/resident/extract.wgsl	return l.w != 0.0 && exact_product_is(p.x	return false && exact_product_is(p.x	resident
+resident-touch-rounded	crates/renderer/src/resident/extract.wgsl	fn exact_product_is(p: f32, w: f32, l: f32) -> bool {	fn exact_product_is(p: f32, w: f32, l: f32) -> bool { return p * w == l;	resident
+resident-extrude-lo-dropped	crates/renderer/src/resident/draw.wgsl	d = (p - a.xyz) - r_light_points[k + 1u].xyz;	d = p - a.xyz;	resident
 resident-side-flipped	crates/renderer/src/resident/draw.wgsl	if (record & R_NEGATIVE) != 0u {	if (record & R_NEGATIVE) == 0u {	resident
 resident-back-cap-flipped	crates/renderer/src/resident/draw.wgsl	if s == 1 && c != 0u {	if s == -1 && c != 0u {	resident
 resident-zfail-list-from-front	crates/renderer/src/resident/draw.wgsl	return side_vertex(r_records[lt.draw.x + lt.draw.y - 1u - i], v);	return side_vertex(r_records[lt.draw.x + i], v);	resident
