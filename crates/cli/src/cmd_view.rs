@@ -17,10 +17,11 @@ pub const LONG_ABOUT: &str = "Open a window onto SCENE (a preset, a .gltf/.glb s
     shift + left drag move the first light around the scene; 1-4 pick the accuracy mode \
     (original, ordered, robust, exact); T cycles the technique (auto, z-pass, z-fail); V cycles \
     how the volumes show (hidden, translucent, wire: cracks become visible); Esc or Q quits. \
-    The overlay shows fps, frame ms, silhouette edges, the uncertain pairs the host resolved \
-    and each object's technique.\n\n\
-    Each frame is rendered by the headless renderer and copied to the window through the host, \
-    so frame times include that copy.\n\n\
+    The overlay shows fps, frame ms, silhouette edges, the uncertain and host-resolved pairs, \
+    the pipeline and each object's technique.\n\n\
+    The renderer runs on the window's device: in the GPU pipeline it draws each frame into a \
+    texture the window samples, and nothing comes back to the host but the plan's counts. The \
+    host pipeline (and the volume view, V) reads each image back and uploads it.\n\n\
     For automation: --frames N renders N frames, writes the last one's 3D view to --screenshot \
     and prints {\"frames\", \"fps\", \"median_ms\", \"adapter\", \"screenshot\"}, then exits 0. \
     Without a display (DISPLAY and WAYLAND_DISPLAY unset) it exits 1 saying so; xvfb-run \

@@ -75,7 +75,7 @@ pub struct FrameInput<'a> {
 }
 
 /// What comes back from the GPU.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct FrameOutput {
     /// RGBA8, row-major, top row first.
     pub color: Vec<u8>,
@@ -118,7 +118,7 @@ impl std::fmt::Debug for Gpu {
     }
 }
 
-const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+pub(crate) const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 const IDS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
 const LIGHT_STRIDE: u64 = 256;
 
@@ -165,34 +165,73 @@ impl Gpu {
             ))
         })?;
         let info = adapter.get_info();
-        let features = adapter.features();
-        let mut required = wgpu::Features::empty();
-        let depth_clamp = features.contains(wgpu::Features::DEPTH_CLIP_CONTROL);
-        if depth_clamp {
-            required |= wgpu::Features::DEPTH_CLIP_CONTROL;
-        }
-        let depth_format = if features.contains(wgpu::Features::DEPTH32FLOAT_STENCIL8) {
-            required |= wgpu::Features::DEPTH32FLOAT_STENCIL8;
-            wgpu::TextureFormat::Depth32FloatStencil8
-        } else {
-            wgpu::TextureFormat::Depth24PlusStencil8
-        };
-        // The GPU pipeline's limits and features where the adapter has them; otherwise only the
-        // host pipeline runs, and asking for the GPU one names what is missing.
-        let resident = crate::resident::ShadowPass::required_limits(&adapter);
-        required |= crate::resident::ShadowPass::optional_features(&adapter);
-        let limits = match &resident {
-            Ok(l) => l.clone(),
-            Err(_) => wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
-        };
+        let (features, limits) = Self::requirements(&adapter);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("shadowvol-renderer"),
-            required_features: required,
+            required_features: features,
             required_limits: limits,
             ..Default::default()
         }))
         .map_err(|e| RenderError::Device(format!("request_device on {}: {e}", info.name)))?;
+        Self::on_device(adapter, device, queue)
+    }
 
+    /// The features and limits to open a device on `adapter` with, for every pipeline the
+    /// adapter can run: depth clamp and a 32-bit float depth where it has them, and the GPU
+    /// pipeline's limits and features where it has those (otherwise downlevel defaults, and
+    /// only the host pipeline runs).
+    #[must_use]
+    pub fn requirements(adapter: &wgpu::Adapter) -> (wgpu::Features, wgpu::Limits) {
+        let features = adapter.features();
+        let mut required = wgpu::Features::empty();
+        for f in [
+            wgpu::Features::DEPTH_CLIP_CONTROL,
+            wgpu::Features::DEPTH32FLOAT_STENCIL8,
+        ] {
+            if features.contains(f) {
+                required |= f;
+            }
+        }
+        required |= crate::resident::ShadowPass::optional_features(adapter);
+        let limits = crate::resident::ShadowPass::required_limits(adapter).unwrap_or_else(|_| {
+            wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits())
+        });
+        (required, limits)
+    }
+
+    /// The renderer's pipelines on a device the caller opened on `adapter` (for example the
+    /// device of a window, whose surface then shows frames drawn by
+    /// [`crate::Renderer::render_into`] without a copy through the host). Open it with
+    /// [`Gpu::requirements`] to get every pipeline the adapter can run; depth clamp and the
+    /// 32-bit float depth are used when the device has them, and the GPU pipeline runs when
+    /// the device's limits allow it.
+    ///
+    /// # Errors
+    /// [`RenderError::Device`] when a pipeline cannot be created.
+    pub fn on_device(
+        adapter: wgpu::Adapter,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Result<Self, RenderError> {
+        let info = adapter.get_info();
+        let features = device.features();
+        let depth_clamp = features.contains(wgpu::Features::DEPTH_CLIP_CONTROL);
+        let depth_format = if features.contains(wgpu::Features::DEPTH32FLOAT_STENCIL8) {
+            wgpu::TextureFormat::Depth32FloatStencil8
+        } else {
+            wgpu::TextureFormat::Depth24PlusStencil8
+        };
+        let resident = crate::resident::ShadowPass::required_limits(&adapter).and_then(|l| {
+            if l.check_limits(&device.limits()) {
+                Ok(())
+            } else {
+                Err(RenderError::Unsupported(
+                    "the device was opened with lower limits than the GPU pipeline needs \
+                     (open it with Renderer::device_requirements)"
+                        .to_owned(),
+                ))
+            }
+        });
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("shadowvol-renderer shader.wgsl"),
@@ -582,7 +621,9 @@ impl Gpu {
 
     /// Renders one frame of the GPU pipeline (pre-pass, extraction, per light stencil and lit
     /// passes) from the inputs last given to [`crate::resident::ShadowPass::update`]; with
-    /// `readback`, colour, ids and per-light stencil come back, otherwise it only waits.
+    /// `readback`, colour, ids and per-light stencil come back, otherwise it only waits. With
+    /// `into`, the colour goes to that view (the renderer's colour format, the frame's size)
+    /// instead of the renderer's own target.
     ///
     /// # Errors
     /// [`RenderError::InvalidInput`] for a bad size, [`RenderError::Device`] on device errors.
@@ -593,6 +634,7 @@ impl Gpu {
         (w, h): (u32, u32),
         lights: usize,
         readback: bool,
+        into: Option<&wgpu::TextureView>,
     ) -> Result<Option<FrameOutput>, RenderError> {
         let max = self.device.limits().max_texture_dimension_2d;
         if w == 0 || h == 0 || w > max || h > max {
@@ -607,11 +649,12 @@ impl Gpu {
         let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("resident frame"),
         });
+        let color_view = into.unwrap_or(&t.color_view);
         pass.encode_extract(&mut enc, rs);
         pass.encode_prepass(
             &mut enc,
             rs,
-            &t.color_view,
+            color_view,
             Some(&t.ids_view),
             &t.depth_view,
             wgpu::Color {
@@ -624,7 +667,7 @@ impl Gpu {
         for li in 0..lights {
             pass.encode_stencil(&mut enc, rs, li, &t.depth_view);
             t.copy_stencil(&mut enc, li);
-            pass.encode_lit(&mut enc, rs, li, &t.color_view, &t.depth_view);
+            pass.encode_lit(&mut enc, rs, li, color_view, &t.depth_view);
         }
         t.copy_color_ids(&mut enc);
         self.finish(enc, scope, oom, &t)

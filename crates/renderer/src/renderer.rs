@@ -318,8 +318,74 @@ impl Renderer {
     /// invalid mesh, [`RenderError::Backend`] when extraction fails, [`RenderError::Device`] on
     /// GPU failure.
     pub fn render(&mut self, scene: &RenderScene) -> Result<Frame, RenderError> {
-        let (frame, _) = self.frame(scene, true)?;
+        let (frame, _) = self.frame(scene, true, None)?;
         Ok(frame.expect("a frame with readback has its image"))
+    }
+
+    /// Opens the renderer on a device the caller opened on `adapter`, for example a window's,
+    /// so that [`Renderer::render_into`] draws into the caller's textures. Open the device with
+    /// [`Renderer::device_requirements`] for every pipeline the adapter can run.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] for a zero image size, [`RenderError::Device`] when the
+    /// pipelines cannot be created.
+    pub fn on_device(
+        backend: Box<dyn SilhouetteBackend>,
+        options: RenderOptions,
+        adapter: wgpu::Adapter,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Result<Self, RenderError> {
+        if options.width == 0 || options.height == 0 {
+            return Err(RenderError::InvalidInput(format!(
+                "image size {}x{}: both sides must be at least 1",
+                options.width, options.height
+            )));
+        }
+        Ok(Self {
+            gpu: Gpu::on_device(adapter, device, queue)?,
+            backend,
+            options,
+            cache: Vec::new(),
+            changed: Vec::new(),
+            whole: None,
+            resident: resident_frame::ResidentState::default(),
+        })
+    }
+
+    /// The features and limits to open a device on `adapter` with, for
+    /// [`Renderer::on_device`]: depth clamp and 32-bit float depth where the adapter has them,
+    /// and the GPU pipeline's needs where it can run it.
+    #[must_use]
+    pub fn device_requirements(adapter: &wgpu::Adapter) -> (wgpu::Features, wgpu::Limits) {
+        Gpu::requirements(adapter)
+    }
+
+    /// The colour format [`Renderer::render_into`] draws in.
+    pub const COLOR_FORMAT: wgpu::TextureFormat = crate::gpu::COLOR_FORMAT;
+
+    /// Renders `scene` with the GPU pipeline into `color`, a view of a texture on this
+    /// renderer's device in [`Renderer::COLOR_FORMAT`], of the options' size, with
+    /// `RENDER_ATTACHMENT` usage (which the caller can then sample or present). Nothing is read
+    /// back but the plan's counts (a few bytes per light and object); the returned frame has
+    /// the plan, counts and timings, and empty `rgba`, `ids` and `stencil`.
+    ///
+    /// # Errors
+    /// [`RenderError::Unsupported`] unless the options' pipeline is [`Pipeline::Gpu`] and the
+    /// device can run it; otherwise as [`Renderer::render`].
+    pub fn render_into(
+        &mut self,
+        scene: &RenderScene,
+        color: &wgpu::TextureView,
+    ) -> Result<Frame, RenderError> {
+        if self.options.pipeline != Pipeline::Gpu {
+            return Err(RenderError::Unsupported(
+                "render_into draws the GPU pipeline only; set RenderOptions::pipeline to Gpu"
+                    .to_owned(),
+            ));
+        }
+        let (frame, _) = self.frame(scene, false, Some(color))?;
+        Ok(frame.expect("render_into returns its frame"))
     }
 
     /// Renders `scene` like [`Renderer::render`] but reads nothing back (no image, ids or
@@ -330,7 +396,7 @@ impl Renderer {
     /// As [`Renderer::render`].
     pub fn render_timed(&mut self, scene: &RenderScene) -> Result<FrameTime, RenderError> {
         let t0 = Instant::now();
-        let (_, readback_bytes) = self.frame(scene, false)?;
+        let (_, readback_bytes) = self.frame(scene, false, None)?;
         let total_ms = ms(t0.elapsed());
         Ok(FrameTime {
             total_ms,
@@ -339,12 +405,14 @@ impl Renderer {
         })
     }
 
-    /// One frame; with `readback` the image and per-pixel data come back as a [`Frame`].
+    /// One frame; with `readback` the image and per-pixel data come back as a [`Frame`]; with
+    /// `into` (GPU pipeline) the colour goes to that view and a frame without images returns.
     /// Returns the frame and the bytes brought to the host besides the image.
     fn frame(
         &mut self,
         scene: &RenderScene,
         readback: bool,
+        into: Option<&wgpu::TextureView>,
     ) -> Result<(Option<Frame>, u64), RenderError> {
         let t0 = Instant::now();
         scene.camera.validate()?;
@@ -454,6 +522,7 @@ impl Renderer {
                     prepare_time,
                 },
                 readback,
+                into,
             );
         }
 

@@ -1,10 +1,14 @@
 //! `shadowvol view`: a live window onto a scene, rendered with stencil shadow volumes.
 //!
-//! Each frame the headless [`Renderer`] renders the scene (silhouettes from the chosen backend,
-//! the plan, the stencil and lit passes) and the image is shown in a winit window with wgpu,
-//! with an [egui](https://docs.rs/egui) overlay of the frame's figures. The frame still travels
-//! through the host between the renderer's device and the window's (the GPU-resident pass that
-//! would remove this is not built yet), so the viewer's frame times include that copy.
+//! The [`Renderer`](shadowvol_renderer::Renderer) runs on the window's own wgpu device
+//! ([`Renderer::on_device`](shadowvol_renderer::Renderer::on_device)). In the GPU pipeline
+//! (the default) each frame it extracts, builds and draws the volumes on the device straight
+//! into a texture that the window samples onto its surface
+//! ([`Renderer::render_into`](shadowvol_renderer::Renderer::render_into)): nothing travels
+//! through the host but the plan's counts (a few bytes per light and object, for the overlay).
+//! The host pipeline (`--pipeline host`, and while the volumes are shown, V) reads its image
+//! back and uploads it. An
+//! [egui](https://docs.rs/egui) overlay shows the frame's figures.
 //!
 //! Controls: left drag orbits, right (or middle) drag pans, the wheel zooms; the arrow keys or
 //! shift + left drag move the first light around the scene's centre; 1–4 pick the accuracy
@@ -35,9 +39,7 @@ pub struct ReadmeDoctests;
 pub mod controls;
 mod window;
 
-use shadowvol_renderer::{
-    Accuracy, Pipeline, PlanPolicy, RenderError, RenderOptions, RenderScene, Renderer,
-};
+use shadowvol_renderer::{Accuracy, Pipeline, PlanPolicy, RenderError, RenderOptions, RenderScene};
 use shadowvol_silhouette::SilhouetteBackend;
 use std::path::PathBuf;
 
@@ -97,7 +99,8 @@ pub struct ViewReport {
     pub frames: u32,
     /// Frames per second over the whole run (wall time from the first frame's start).
     pub fps: f64,
-    /// Median wall time of one frame (render, copy to the window, overlay, present), ms.
+    /// Median wall time of one frame (render, overlay, present; in the host pipeline also the
+    /// image's copy to the window), ms.
     pub median_ms: f64,
     /// The renderer's GPU adapter.
     pub adapter: String,
@@ -175,20 +178,10 @@ pub fn view(
     let mut render_options = RenderOptions::new(options.width, options.height);
     render_options.mode = options.mode;
     render_options.policy = options.policy;
-    let renderer = Renderer::new(backend, render_options)?;
-    let mut options = options;
-    if options.pipeline == Pipeline::Gpu {
-        if let Some(why) = renderer.gpu_pipeline_unsupported() {
-            eprintln!(
-                "warning: using the host pipeline: the adapter cannot run the GPU pipeline: {why}"
-            );
-            options.pipeline = Pipeline::Host;
-        }
-    }
     let event_loop = winit::event_loop::EventLoop::new()
         .map_err(|e| ViewError::Window(format!("cannot connect to the display: {e}")))?;
     let pipeline = options.pipeline;
-    let mut app = window::App::new(scene, renderer, options);
+    let mut app = window::App::new(scene, backend, render_options, options);
     event_loop
         .run_app(&mut app)
         .map_err(|e| ViewError::Window(format!("event loop: {e}")))?;

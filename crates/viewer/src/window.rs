@@ -1,12 +1,13 @@
-//! The window: winit events, a wgpu surface, the frame blitted to it, the volumes and the egui
-//! overlay on top.
+//! The window: winit events, a wgpu surface, the renderer on the window's device, its frame
+//! sampled onto the surface, the volumes and the egui overlay on top.
 
 use crate::controls::{self, Orbit, VolumeView};
 use crate::{ViewError, ViewOptions, ViewReport};
 use glam::Vec3;
 use shadowvol_renderer::{
-    Camera, Frame, PlanPolicy, RenderOptions, RenderScene, Renderer, Technique,
+    Camera, Frame, Pipeline, PlanPolicy, RenderOptions, RenderScene, Renderer, Technique,
 };
+use shadowvol_silhouette::SilhouetteBackend;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use winit::application::ApplicationHandler;
@@ -18,7 +19,8 @@ use winit::window::{Window, WindowId};
 /// The state of a running viewer.
 pub(crate) struct App {
     scene: RenderScene,
-    renderer: Renderer,
+    /// The backend and options the renderer is opened with once the window's device exists.
+    pending: Option<(Box<dyn SilhouetteBackend>, RenderOptions)>,
     options: ViewOptions,
     orbit: Orbit,
     centre: Vec3,
@@ -43,6 +45,9 @@ struct Drag {
 
 /// Everything that lives on the window's device.
 struct Gfx {
+    /// The renderer, opened on the window's device: in the GPU pipeline it draws straight into
+    /// `frame_texture`.
+    renderer: Renderer,
     window: Arc<Window>,
     surface: wgpu::Surface<'static>,
     device: wgpu::Device,
@@ -53,24 +58,30 @@ struct Gfx {
     tri: wgpu::RenderPipeline,
     wire: wgpu::RenderPipeline,
     volume_layout: wgpu::BindGroupLayout,
-    /// The frame texture and its bind group, remade when the window size changes.
-    frame_texture: Option<(wgpu::Texture, wgpu::BindGroup)>,
+    /// The frame texture (the renderer's colour target, sampled by the blit), its view and bind
+    /// group, remade when the window size changes.
+    frame_texture: Option<(wgpu::Texture, wgpu::TextureView, wgpu::BindGroup)>,
     egui_ctx: egui::Context,
     egui_state: egui_winit::State,
     egui: egui_wgpu::Renderer,
 }
 
 impl App {
-    pub(crate) fn new(scene: RenderScene, renderer: Renderer, options: ViewOptions) -> Self {
+    pub(crate) fn new(
+        scene: RenderScene,
+        backend: Box<dyn SilhouetteBackend>,
+        render_options: RenderOptions,
+        options: ViewOptions,
+    ) -> Self {
         let orbit = Orbit::from_camera(&scene.camera);
         let centre = scene
             .bounds()
             .map_or(scene.camera.target, |(lo, hi)| (lo + hi) * 0.5);
-        let policy = renderer.options().policy;
+        let policy = render_options.policy;
         let volumes = options.volumes;
         Self {
             scene,
-            renderer,
+            pending: Some((backend, render_options)),
             options,
             orbit,
             centre,
@@ -98,7 +109,7 @@ impl App {
         };
         let (w, h) = (gfx.config.width, gfx.config.height);
         self.scene.camera = self.orbit.camera();
-        let mut opts: RenderOptions = self.renderer.options();
+        let mut opts: RenderOptions = gfx.renderer.options();
         opts.width = w;
         opts.height = h;
         opts.mode = self.options.mode;
@@ -106,25 +117,30 @@ impl App {
         opts.keep_volumes = self.volumes != VolumeView::Hidden;
         // Only the host pipeline keeps the volume geometry the overlay draws.
         opts.pipeline = if opts.keep_volumes {
-            shadowvol_renderer::Pipeline::Host
+            Pipeline::Host
         } else {
             self.options.pipeline
         };
-        self.renderer.set_options(opts);
-        let frame = self.renderer.render(&self.scene)?;
+        gfx.renderer.set_options(opts);
+        let last = self
+            .options
+            .frames
+            .is_some_and(|n| self.frame_ms.len() + 1 >= n as usize);
 
         let stale = gfx
             .frame_texture
             .as_ref()
-            .is_none_or(|(t, _)| t.width() != w || t.height() != h);
+            .is_none_or(|(t, _, _)| t.width() != w || t.height() != h);
         if stale {
             let texture = texture_2d(
                 &gfx.device,
                 "frame",
                 w,
                 h,
-                wgpu::TextureFormat::Rgba8Unorm,
-                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                Renderer::COLOR_FORMAT,
+                wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_DST
+                    | wgpu::TextureUsages::RENDER_ATTACHMENT,
             );
             let view = texture.create_view(&Default::default());
             let bind_group = gfx.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -135,19 +151,29 @@ impl App {
                     resource: wgpu::BindingResource::TextureView(&view),
                 }],
             });
-            gfx.frame_texture = Some((texture, bind_group));
+            gfx.frame_texture = Some((texture, view, bind_group));
         }
-        let (texture, blit_bg) = gfx.frame_texture.as_ref().expect("created above");
-        gfx.queue.write_texture(
-            texture.as_image_copy(),
-            &frame.rgba,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(4 * w),
-                rows_per_image: Some(h),
-            },
-            texture.size(),
-        );
+        let (texture, frame_view, blit_bg) = gfx.frame_texture.as_ref().expect("created above");
+        // The GPU pipeline draws into the frame texture on this device; the host pipeline (and
+        // the last automated frame, whose image is the screenshot) reads its image back, which
+        // is then uploaded.
+        let frame =
+            if opts.pipeline == Pipeline::Gpu && !(last && self.options.screenshot.is_some()) {
+                gfx.renderer.render_into(&self.scene, frame_view)?
+            } else {
+                let frame = gfx.renderer.render(&self.scene)?;
+                gfx.queue.write_texture(
+                    texture.as_image_copy(),
+                    &frame.rgba,
+                    wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(4 * w),
+                        rows_per_image: Some(h),
+                    },
+                    texture.size(),
+                );
+                frame
+            };
         let volumes = volume_draw(gfx, &frame, self.volumes, w, h);
 
         let surface_texture = match gfx.surface.get_current_texture() {
@@ -185,10 +211,6 @@ impl App {
         let extra = gfx
             .egui
             .update_buffers(&gfx.device, &gfx.queue, &mut enc, &jobs, &screen);
-        let last = self
-            .options
-            .frames
-            .is_some_and(|n| self.frame_ms.len() + 1 >= n as usize);
         let capture = match (&self.options.window_screenshot, last) {
             (Some(_), true) => Some(texture_2d(
                 &gfx.device,
@@ -279,6 +301,9 @@ impl App {
 
     /// Writes the screenshot and the report after the last automated frame.
     fn finish(&mut self) -> Result<(), ViewError> {
+        let Some(gfx) = self.gfx.as_ref() else {
+            return Ok(());
+        };
         let total = self
             .started
             .map_or(Duration::ZERO, |t| t.elapsed())
@@ -301,9 +326,9 @@ impl App {
                 0.0
             },
             median_ms: sorted.get(frames / 2).copied().unwrap_or(0.0),
-            adapter: self.renderer.adapter().to_owned(),
+            adapter: gfx.renderer.adapter().to_owned(),
             screenshot,
-            pipeline: self.renderer.options().pipeline,
+            pipeline: gfx.renderer.options().pipeline,
         });
         Ok(())
     }
@@ -344,6 +369,8 @@ struct Stats {
     adapter: String,
     edges: usize,
     uncertain: u64,
+    host_resolved: u64,
+    pipeline: Pipeline,
     policy: PlanPolicy,
     volumes: VolumeView,
     techniques: Vec<String>,
@@ -364,6 +391,8 @@ impl Stats {
             adapter: frame.adapter.clone(),
             edges: frame.plan.iter().map(|e| e.silhouette_edges).sum(),
             uncertain: frame.uncertain,
+            host_resolved: frame.host_resolved,
+            pipeline: frame.pipeline,
             policy,
             volumes,
             techniques: frame
@@ -407,8 +436,11 @@ impl Stats {
                 line(
                     ui,
                     format!(
-                        "silhouette edges {} · uncertain pairs {} (host-resolved)",
-                        self.edges, self.uncertain
+                        "silhouette edges {} · uncertain pairs {} · host-resolved {} · {} pipeline",
+                        self.edges,
+                        self.uncertain,
+                        self.host_resolved,
+                        self.pipeline.name()
                     ),
                 );
                 for t in self.techniques.iter().take(6) {
@@ -562,6 +594,7 @@ impl Gfx {
         window: Arc<Window>,
         options: &ViewOptions,
         el: &ActiveEventLoop,
+        (backend, render_options): (Box<dyn SilhouetteBackend>, RenderOptions),
     ) -> Result<Self, ViewError> {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
@@ -575,11 +608,21 @@ impl Gfx {
             ..Default::default()
         }))
         .map_err(|e| ViewError::Gpu(format!("no GPU adapter can present to the window: {e}")))?;
+        let (required_features, required_limits) = Renderer::device_requirements(&adapter);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("shadowvol-viewer"),
+            required_features,
+            required_limits,
             ..Default::default()
         }))
         .map_err(|e| ViewError::Gpu(format!("device: {e}")))?;
+        let renderer = Renderer::on_device(
+            backend,
+            render_options,
+            adapter.clone(),
+            device.clone(),
+            queue.clone(),
+        )?;
         let size = window.inner_size();
         let caps = surface.get_capabilities(&adapter);
         let format = caps
@@ -719,6 +762,7 @@ impl Gfx {
         );
         let egui = egui_wgpu::Renderer::new(&device, format, egui_wgpu::RendererOptions::default());
         Ok(Self {
+            renderer,
             window,
             surface,
             device,
@@ -762,8 +806,19 @@ impl ApplicationHandler for App {
                 return self.fail(el, ViewError::Window(format!("cannot open a window: {e}")))
             }
         };
-        match Gfx::new(window, &self.options, el) {
+        let Some(pending) = self.pending.take() else {
+            return;
+        };
+        match Gfx::new(window, &self.options, el, pending) {
             Ok(g) => {
+                if self.options.pipeline == Pipeline::Gpu {
+                    if let Some(why) = g.renderer.gpu_pipeline_unsupported() {
+                        eprintln!(
+                            "warning: using the host pipeline: the adapter cannot run the GPU pipeline: {why}"
+                        );
+                        self.options.pipeline = Pipeline::Host;
+                    }
+                }
                 g.window.request_redraw();
                 self.gfx = Some(g);
                 self.started = Some(Instant::now());

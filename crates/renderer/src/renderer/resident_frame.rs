@@ -49,6 +49,7 @@ impl Renderer {
         scene: &RenderScene,
         planned: Planned,
         readback: bool,
+        into: Option<&wgpu::TextureView>,
     ) -> Result<(Option<Frame>, u64), RenderError> {
         let RenderOptions {
             width,
@@ -110,16 +111,23 @@ impl Renderer {
                 scissors: &scissors,
                 ambient: scene.ambient,
                 mode,
-                count: readback,
+                count: readback || into.is_some(),
             },
         )?;
         let t_raster = Instant::now();
-        let out =
-            self.gpu
-                .render_resident(pass, rs, (width, height), scene.lights.len(), readback)?;
+        let out = self.gpu.render_resident(
+            pass,
+            rs,
+            (width, height),
+            scene.lights.len(),
+            readback,
+            into,
+        )?;
         let raster_time = t_raster.elapsed();
-        let Some(out) = out else {
-            return Ok((None, 0));
+        let out = match out {
+            Some(out) => out,
+            None if into.is_some() => crate::gpu::FrameOutput::default(),
+            None => return Ok((None, 0)),
         };
         let counts = pass.read_counts(rs)?;
         let n_obj = scene.objects.len();
