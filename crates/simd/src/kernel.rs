@@ -24,7 +24,7 @@ pub(crate) mod signs;
 pub(crate) mod tri_pass;
 
 use crate::lanes::{Arith, Level, F32V};
-use crate::layout::Layout;
+use crate::layout::{Layout, LANES};
 
 /// Gather from the three SoA arrays (`true`) or load 16-byte records and transpose (`false`);
 /// a switch for comparing the two (docs/PERFORMANCE.md).
@@ -131,6 +131,17 @@ fn push_bits(sil: &mut Vec<u32>, mut bits: u32, base: usize) {
         bits &= bits - 1;
         sil.push((base + i) as u32);
     }
+}
+
+/// Stores the first `dst.len()` (< 8: the padded last block of an object) lanes of `m` as
+/// `i32` and returns their non-zero mask.
+#[inline(always)]
+fn store_part<F: F32V>(m: F, dst: &mut [i32]) -> u32 {
+    let mut lanes = [0i32; LANES];
+    let nz = m.store_i32_cached(&mut lanes);
+    let n = dst.len().min(LANES);
+    dst[..n].copy_from_slice(&lanes[..n]);
+    nz & ((1u32 << n) - 1)
 }
 
 /// Where an edge pass ([`edge_pass`], [`original`]) writes the results of one work item.

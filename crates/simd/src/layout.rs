@@ -39,9 +39,13 @@ pub(crate) struct Layout {
     pub tri_count: usize,
     /// Number of edges.
     pub edge_count: usize,
-    /// Per block of [`LANES`] edges: true when the block is full and every edge is manifold.
+    /// Per block of [`LANES`] edges: true when every edge of the block is manifold. The last
+    /// block may be partial: the per-edge arrays below are padded to whole blocks, and the
+    /// kernels keep only the lanes of real edges.
     pub block_fast: Vec<bool>,
-    /// Per edge `a`, `b` and the two OVs (only meaningful in fast blocks; 0 elsewhere).
+    /// Per edge `a`, `b` and the two OVs (only meaningful in fast blocks; 0 elsewhere and in
+    /// the padding, vertex 0 being valid wherever a fast block exists), padded with 0 to a
+    /// multiple of [`LANES`].
     pub ea: Vec<u32>,
     /// See `ea`.
     pub eb: Vec<u32>,
@@ -49,7 +53,8 @@ pub(crate) struct Layout {
     pub eo1: Vec<u32>,
     /// See `ea`.
     pub eo2: Vec<u32>,
-    /// Per edge: the two canonical triangles with parity bits (only meaningful in fast blocks).
+    /// Per edge: the two canonical triangles with parity bits (only meaningful in fast blocks;
+    /// padded with triangle slot 0 like `ea`).
     pub tri_a: Vec<u32>,
     /// Second triangle reference of each edge (see `tri_a`).
     pub tri_b: Vec<u32>,
@@ -216,9 +221,11 @@ impl Layout {
         }
 
         let mut block_fast = Vec::with_capacity(ne.div_ceil(LANES));
-        let (mut ea, mut eb) = (vec![0u32; ne], vec![0u32; ne]);
-        let (mut eo1, mut eo2) = (vec![0u32; ne], vec![0u32; ne]);
-        let (mut tri_a, mut tri_b) = (vec![0u32; ne], vec![0u32; ne]);
+        // Padded to whole blocks, so a partial last block of manifold edges takes the fast path.
+        let ne_padded = ne.div_ceil(LANES) * LANES;
+        let (mut ea, mut eb) = (vec![0u32; ne_padded], vec![0u32; ne_padded]);
+        let (mut eo1, mut eo2) = (vec![0u32; ne_padded], vec![0u32; ne_padded]);
+        let (mut tri_a, mut tri_b) = (vec![0u32; ne_padded], vec![0u32; ne_padded]);
         for e in 0..ne {
             let (s, t) = (
                 table.ov_offsets[e] as usize,
@@ -233,10 +240,8 @@ impl Layout {
         }
         for blk in 0..ne.div_ceil(LANES) {
             let r = blk * LANES..((blk + 1) * LANES).min(ne);
-            let full = r.len() == LANES;
             block_fast.push(
-                full && r
-                    .into_iter()
+                r.into_iter()
                     .all(|e| table.ov_offsets[e + 1] - table.ov_offsets[e] == 2),
             );
         }

@@ -314,3 +314,44 @@ fn reused_output_is_fully_overwritten() {
         assert_eq!(out, reference, "{mode}");
     }
 }
+
+#[test]
+fn many_small_objects_with_partial_blocks_and_one_backend_across_scenes() {
+    // Objects whose edge counts are not multiples of 8 (the last block of each is partial and
+    // manifold, so it takes the padded fast path), many of them with transforms, and one
+    // backend alternating between scenes with different numbers of work items and lights (its
+    // scratch is reused between calls).
+    let small = Arc::new(EdgeTable::build(&uv_sphere_y(5, 7, 1.0)).unwrap());
+    assert_ne!(small.edges.len() % 8, 0);
+    let large = Arc::new(EdgeTable::build(&uv_sphere_y(60, 97, 2.0)).unwrap());
+    let objects: Vec<SceneObject> = (0..37)
+        .map(|i| SceneObject {
+            name: format!("s{i}"),
+            table: Arc::clone(&small),
+            world_from_object: Affine3A::from_rotation_translation(
+                Quat::from_rotation_x(0.1 * i as f32),
+                Vec3::new(3.0 * (i % 6) as f32, 0.5, 3.0 * (i / 6) as f32),
+            ),
+        })
+        .collect();
+    let many = TopologyScene { objects };
+    let one = TopologyScene::single((*large).clone());
+    check_scene("37 small spheres", &many, &lights());
+    let mut simd = SimdBackend::with_level(SimdLevel::detect(), Some(2)).unwrap();
+    let mut cpu = CpuBackend::new();
+    let ids: Vec<_> = [&many, &one]
+        .iter()
+        .map(|s| (simd.prepare(s).unwrap(), cpu.prepare(s).unwrap()))
+        .collect();
+    let ls = lights();
+    for round in 0..6 {
+        let (sid, cid) = ids[round % 2];
+        let lights = if round % 3 == 0 { &ls[..1] } else { &ls[..] };
+        for mode in Accuracy::ALL {
+            let (mut out, mut reference) = (Multiplicities::default(), Multiplicities::default());
+            simd.extract(sid, lights, mode, &mut out).unwrap();
+            cpu.extract(cid, lights, mode, &mut reference).unwrap();
+            assert_eq!(out, reference, "round {round} {mode}");
+        }
+    }
+}

@@ -76,7 +76,10 @@ fn edge_sums(pass: EdgeSums) {
             for (l, row) in out.rows.iter_mut().enumerate() {
                 let base = bases[l / PACK];
                 let s = &signs[base..base + lay.tri_count];
-                let dst = &mut row[e0 - e_start..e0 - e_start + LANES];
+                // The last block may be partial (the reference arrays are padded): `zip` keeps
+                // the real edges only.
+                let end = (e0 - e_start + LANES).min(row.len());
+                let dst = &mut row[e0 - e_start..end];
                 let mut any = 0;
                 for ((d, &t1), &t2) in dst.iter_mut().zip(ta).zip(tb) {
                     let i1 = (t1 & !ODD) as usize;
@@ -168,6 +171,20 @@ unsafe fn sign_bytes_of_block(
     }
 }
 
+/// Stores the first `dst.len()` (< 8: the padded last block of an object) lanes of `m` and
+/// returns the mask of those lanes.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn store_part_epi32(m: std::arch::x86_64::__m256i, dst: &mut [i32]) -> u32 {
+    let mut lanes = [0i32; LANES];
+    // SAFETY: `lanes` is 32 writable bytes; unaligned store; AVX2 present (the callers are
+    // compiled with it).
+    unsafe { std::arch::x86_64::_mm256_storeu_si256(lanes.as_mut_ptr().cast(), m) };
+    let n = dst.len().min(LANES);
+    dst[..n].copy_from_slice(&lanes[..n]);
+    (1u32 << n) - 1
+}
+
 /// [`edge_sums`] with 8 edges per AVX2 vector: per block and pack of four lights, 16 scalar
 /// byte loads fetch the signs of both triangles of 8 edges for all four lights (see [`PACK`]).
 /// Identical results.
@@ -198,9 +215,9 @@ unsafe fn edge_sums_avx2(pass: EdgeSums) {
                 edge_sums_general(lay, e0, e_start, &ps, &mut rest);
                 continue;
             }
-            // SAFETY: fast blocks are full, so e0 + 8 <= tri_a.len() = tri_b.len(); every byte
-            // read is signs[base + slot] with slot < tri_count, and base + tri_count <=
-            // signs.len() (asserted above).
+            // SAFETY: tri_a and tri_b are padded to whole blocks, so e0 + 8 <= tri_a.len() =
+            // tri_b.len(); every byte read is signs[base + slot] with slot < tri_count (the
+            // padding is slot 0), and base + tri_count <= signs.len() (asserted above).
             let (g1, g2, k1, k2) = unsafe {
                 let ta = lay.tri_a.as_ptr().add(e0);
                 let tb = lay.tri_b.as_ptr().add(e0);
@@ -218,14 +235,19 @@ unsafe fn edge_sums_avx2(pass: EdgeSums) {
             let s1 = _mm256_sub_epi32(_mm256_xor_si256(g1, k1), k1);
             let s2 = _mm256_sub_epi32(_mm256_xor_si256(g2, k2), k2);
             let m = _mm256_add_epi32(s1, s2);
-            let dst = &mut out0[e0 - e_start..e0 - e_start + LANES];
-            // SAFETY: `dst` holds 8 i32 (written once, not read back here).
-            unsafe { crate::lanes::stream_i32x8(dst.as_mut_ptr().cast(), m) };
+            let dst = &mut out0[e0 - e_start..];
+            let keep = if dst.len() >= LANES {
+                // SAFETY: `dst` holds 8 i32 (written once, not read back here).
+                unsafe { crate::lanes::stream_i32x8(dst.as_mut_ptr().cast(), m) };
+                0xFF
+            } else {
+                store_part_epi32(m, dst)
+            };
             let zero = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
                 m,
                 _mm256_setzero_si256(),
             ))) as u32;
-            push_bits(sil0, !zero & 0xFF, edge_base + e0);
+            push_bits(sil0, !zero & keep, edge_base + e0);
         }
         _mm_sfence();
         return;
@@ -233,7 +255,8 @@ unsafe fn edge_sums_avx2(pass: EdgeSums) {
     for blk in blocks {
         let e0 = blk * LANES;
         if lay.block_fast[blk] {
-            // SAFETY: fast blocks are full, so e0 + 8 <= tri_a.len() = tri_b.len().
+            // SAFETY: tri_a and tri_b are padded to whole blocks, so e0 + 8 <= tri_a.len() =
+            // tri_b.len().
             let (t1, t2) = unsafe {
                 (
                     _mm256_loadu_si256(lay.tri_a[e0..e0 + LANES].as_ptr().cast()),
@@ -245,8 +268,8 @@ unsafe fn edge_sums_avx2(pass: EdgeSums) {
             for (pack, &base) in bases.iter().enumerate() {
                 // The 16 sign bytes of the block's triangles, as in the one-light loop.
                 // SAFETY: e0 + 8 <= tri_a.len() = tri_b.len(); every byte read is
-                // signs[base + slot] with slot < tri_count, and base + tri_count <= signs.len()
-                // (asserted above).
+                // signs[base + slot] with slot < tri_count (the padding is slot 0), and
+                // base + tri_count <= signs.len() (asserted above).
                 let (g1, g2) = unsafe {
                     sign_bytes_of_block(
                         signs.as_ptr().add(base),
@@ -296,12 +319,17 @@ unsafe fn edge_sums_avx2(pass: EdgeSums) {
                     _mm256_srai_epi32::<24>(m),
                 ];
                 let pack_out = &mut out.rows[pack * PACK..pack * PACK + lights];
+                let mut keep = 0xFF;
                 for (row, dst) in rows.iter().zip(pack_out.iter_mut()) {
-                    let dst = &mut dst[e0 - e_start..e0 - e_start + LANES];
-                    // SAFETY: `dst` holds 8 i32; unaligned store. (Not a streaming store: with
-                    // several lights' rows, half a cache line each per block, those thrash the
-                    // write-combining buffers.)
-                    unsafe { _mm256_storeu_si256(dst.as_mut_ptr().cast(), *row) };
+                    let dst = &mut dst[e0 - e_start..];
+                    if dst.len() >= LANES {
+                        // SAFETY: `dst` holds 8 i32; unaligned store. (Not a streaming store:
+                        // with several lights' rows, half a cache line each per block, those
+                        // thrash the write-combining buffers.)
+                        unsafe { _mm256_storeu_si256(dst.as_mut_ptr().cast(), *row) };
+                    } else {
+                        keep = store_part_epi32(*row, dst);
+                    }
                 }
                 if nz != 0 {
                     // Silhouette edges in this block (rare): the lanes of each light.
@@ -310,7 +338,7 @@ unsafe fn edge_sums_avx2(pass: EdgeSums) {
                             *row,
                             _mm256_setzero_si256(),
                         ))) as u32;
-                        push_bits(&mut out.sil[pack * PACK + j], !z & 0xFF, edge_base + e0);
+                        push_bits(&mut out.sil[pack * PACK + j], !z & keep, edge_base + e0);
                     }
                 }
             }

@@ -2,7 +2,7 @@
 //! (manifold) blocks, with `V`, `A − B` and `N` shared by the two OVs of an edge; the general
 //! (CSR) blocks are scalar.
 
-use super::{dot3, edge_normal, gather, off_plane, push_bits, splat4, sub3, EdgeOut};
+use super::{dot3, edge_normal, gather, off_plane, push_bits, splat4, store_part, sub3, EdgeOut};
 use crate::dispatch::Pass;
 use crate::lanes::{Level, F32V};
 use crate::layout::{Layout, LANES};
@@ -48,7 +48,7 @@ fn edge_original<Lv: Level>(pass: EdgeOriginal) {
     for blk in blocks {
         let e0 = blk * LANES;
         if lay.block_fast[blk] {
-            // Fast blocks are full: e0 + 8 <= edge_count = ea.len() (and eb, eo1, eo2).
+            // ea, eb, eo1 and eo2 are padded to whole blocks: e0 + 8 <= ea.len().
             let idx =
                 |v: &[u32]| -> [u32; LANES] { v[e0..e0 + LANES].try_into().unwrap_or([0; LANES]) };
             let (ia, ib, i1, i2) = (idx(&lay.ea), idx(&lay.eb), idx(&lay.eo1), idx(&lay.eo2));
@@ -67,7 +67,12 @@ fn edge_original<Lv: Level>(pass: EdgeOriginal) {
             for (l, light) in lights.iter().enumerate() {
                 let n = edge_normal(&splat4::<Lv::F>(*light), &a, &e);
                 let m = dot3(&n, &d1).signum0() + dot3(&n, &d2).signum0();
-                let nz = m.store_i32_cached(&mut out.rows[l][e0 - e_start..e0 - e_start + LANES]);
+                let dst = &mut out.rows[l][e0 - e_start..];
+                let nz = if dst.len() >= LANES {
+                    m.store_i32_cached(dst)
+                } else {
+                    store_part(m, dst)
+                };
                 push_bits(&mut out.sil[l], nz, edge_base + e0);
             }
         } else {
@@ -129,7 +134,7 @@ fn edge_original_one<Lv: Level>(
             original_general_block(lay, e0, e_start, &[light], &mut rest);
             continue;
         }
-        // Fast blocks are full: e0 + 8 <= edge_count = ea.len() (and eb, eo1, eo2).
+        // ea, eb, eo1 and eo2 are padded to whole blocks: e0 + 8 <= ea.len().
         let idx =
             |v: &[u32]| -> [u32; LANES] { v[e0..e0 + LANES].try_into().unwrap_or([0; LANES]) };
         // SAFETY: 8 ids each, all vertices of the layout (`Layout::build`).
@@ -147,8 +152,13 @@ fn edge_original_one<Lv: Level>(
         // SAFETY: as above.
         let o2 = unsafe { gather::<Lv>(lay, &idx(&lay.eo2)) };
         let d2 = off_plane(&n, &a, &o2);
-        let nz =
-            (d1.signum0() + d2.signum0()).store_i32(&mut out[e0 - e_start..e0 - e_start + LANES]);
+        let m = d1.signum0() + d2.signum0();
+        let dst = &mut out[e0 - e_start..];
+        let nz = if dst.len() >= LANES {
+            m.store_i32(dst)
+        } else {
+            store_part(m, dst)
+        };
         push_bits(sil, nz, edge_base + e0);
     }
     // Streaming stores (`store_i32`) are weakly ordered: make them visible before the caller
