@@ -9,9 +9,10 @@ use crate::kernel::tri_pass::TriPass;
 use crate::kernel::EdgeOut;
 use crate::layout::{Layout, LANES};
 use crate::SimdLevel;
+use glam::{Affine3A, DAffine3, DVec3};
 use rayon::prelude::*;
 use shadowvol_mesh_topology::EdgeTable;
-use shadowvol_silhouette::{Accuracy, BackendError, Multiplicities, TopologyScene};
+use shadowvol_silhouette::{Accuracy, BackendError, Light, Multiplicities, TopologyScene};
 use std::collections::HashMap;
 use std::ops::Range;
 use std::sync::Arc;
@@ -24,10 +25,52 @@ const BLOCKS_PER_ITEM: usize = 256;
 #[derive(Debug)]
 struct PreparedObject {
     layout: Arc<Layout>,
+    /// Brings world-space lights into the object's frame.
+    to_object: ToObject,
     /// First global edge index.
     edge_base: usize,
     /// First slot of the object's triangles in the per-light sign arrays (multiple of 8).
     tri_base: usize,
+}
+
+/// The object-from-world transform of an object, inverted once when the scene is prepared.
+#[derive(Debug, Clone, Copy)]
+enum ToObject {
+    /// The object's frame is the world's.
+    Identity,
+    /// The inverse of the world-from-object transform, in `f64`.
+    Inverse(DAffine3),
+}
+
+impl ToObject {
+    /// The transform of an object placed by `world_from_object`: the same inverse as
+    /// [`shadowvol_silhouette::object_lights`] computes, so [`ToObject::light`] gives its bits.
+    fn new(world_from_object: &Affine3A) -> Self {
+        if *world_from_object == Affine3A::IDENTITY {
+            return Self::Identity;
+        }
+        let m = DAffine3::from_cols(
+            world_from_object.matrix3.x_axis.as_dvec3(),
+            world_from_object.matrix3.y_axis.as_dvec3(),
+            world_from_object.matrix3.z_axis.as_dvec3(),
+            world_from_object.translation.as_dvec3(),
+        );
+        Self::Inverse(m.inverse())
+    }
+
+    /// `light` in the object's frame, with the operations of
+    /// [`shadowvol_silhouette::object_lights`].
+    fn light(&self, light: &Light) -> [f32; 4] {
+        let [x, y, z, w] = light.to_array();
+        match self {
+            Self::Identity => [x, y, z, w],
+            Self::Inverse(inv) => {
+                let v = DVec3::new(f64::from(x), f64::from(y), f64::from(z));
+                let xyz = inv.matrix3 * v + inv.translation * f64::from(w);
+                [xyz.x as f32, xyz.y as f32, xyz.z as f32, w]
+            }
+        }
+    }
 }
 
 /// A work item: a range of blocks of one object.
@@ -40,30 +83,45 @@ struct Item {
 /// A scene laid out for the kernels, with its work items.
 #[derive(Debug)]
 pub(crate) struct Prepared {
-    /// The scene as prepared (its objects' transforms place the lights in each object's frame).
-    pub(crate) scene: TopologyScene,
     objects: Vec<PreparedObject>,
     total_edges: usize,
     /// Total triangle slots (padded per object).
     total_tri_slots: usize,
     tri_items: Vec<Item>,
     edge_items: Vec<Item>,
+    /// Triangle-slot bounds of the triangle items (0, ..., total_tri_slots).
+    tri_bounds: Vec<usize>,
+    /// Global edge bounds of the edge items (0, ..., total_edges).
+    edge_bounds: Vec<usize>,
+}
+
+/// What one extraction writes besides its output, kept by the backend between calls so that a
+/// call allocates only the silhouette lists it hands over.
+#[derive(Debug, Default)]
+pub(crate) struct Scratch {
+    /// Triangle signs, one byte per triangle slot in each pack of up to four lights (see
+    /// [`PACK`]).
+    signs: Vec<i8>,
+    /// Per edge item and light (item-major): the item's silhouette edges.
+    sil: Vec<Vec<u32>>,
+    /// Per object and light (object-major): the light in the object's frame.
+    lights: Vec<[f32; 4]>,
 }
 
 /// Splits `buf` (`parts` equal light slices of `len`) at the item `bounds` (ascending, from 0
-/// to `len`): result\[item\]\[light\].
-fn split_items<'a, T>(buf: &'a mut [T], len: usize, bounds: &[usize]) -> Vec<Vec<&'a mut [T]>> {
+/// to `len`), item-major: entry `item * parts + light`.
+fn split_rows<'a, T>(buf: &'a mut [T], len: usize, bounds: &[usize]) -> Vec<&'a mut [T]> {
     let items = bounds.len() - 1;
-    let mut res: Vec<Vec<&mut [T]>> = (0..items).map(|_| Vec::new()).collect();
     if len == 0 {
-        return res;
+        return Vec::new();
     }
-    for light in buf.chunks_mut(len) {
-        let mut rest = light;
-        for (i, w) in bounds.windows(2).enumerate() {
-            let (head, tail) = rest.split_at_mut(w[1] - w[0]);
-            res[i].push(head);
-            rest = tail;
+    let mut rests: Vec<&mut [T]> = buf.chunks_mut(len).collect();
+    let mut res = Vec::with_capacity(items * rests.len());
+    for w in bounds.windows(2) {
+        for rest in &mut rests {
+            let (head, tail) = std::mem::take(rest).split_at_mut(w[1] - w[0]);
+            res.push(head);
+            *rest = tail;
         }
     }
     res
@@ -114,6 +172,7 @@ impl Prepared {
             let (ne, nt) = (layout.edge_count, layout.t0.len());
             objects.push(PreparedObject {
                 layout,
+                to_object: ToObject::new(&o.world_from_object),
                 edge_base,
                 tri_base,
             });
@@ -122,128 +181,199 @@ impl Prepared {
         }
         let tri_counts: Vec<usize> = objects.iter().map(|o| o.layout.tri_count).collect();
         let edge_counts: Vec<usize> = objects.iter().map(|o| o.layout.edge_count).collect();
+        let (tri_items, edge_items) = (items_for(&tri_counts), items_for(&edge_counts));
+        let tri_bounds = std::iter::once(0)
+            .chain(
+                tri_items
+                    .iter()
+                    .map(|it| objects[it.object].tri_base + it.blocks.end * LANES),
+            )
+            .collect();
+        let edge_bounds = std::iter::once(0)
+            .chain(edge_items.iter().map(|it| {
+                let o = &objects[it.object];
+                o.edge_base + (it.blocks.end * LANES).min(o.layout.edge_count)
+            }))
+            .collect();
         Ok(Self {
-            scene: scene.clone(),
             objects,
             total_edges: edge_base,
             total_tri_slots: tri_base,
-            tri_items: items_for(&tri_counts),
-            edge_items: items_for(&edge_counts),
+            tri_items,
+            edge_items,
+            tri_bounds,
+            edge_bounds,
         })
-    }
-
-    /// Global edge bounds of the edge items (0, ..., total_edges).
-    fn edge_bounds(&self) -> Vec<usize> {
-        let mut b = vec![0];
-        for it in &self.edge_items {
-            let o = &self.objects[it.object];
-            b.push(o.edge_base + (it.blocks.end * LANES).min(o.layout.edge_count));
-        }
-        b
-    }
-
-    /// Triangle-slot bounds of the triangle items.
-    fn tri_bounds(&self) -> Vec<usize> {
-        let mut b = vec![0];
-        for it in &self.tri_items {
-            b.push(self.objects[it.object].tri_base + it.blocks.end * LANES);
-        }
-        b
     }
 }
 
-/// One extraction of the prepared scene `p` at `level`: `obj_lights[o]` are the lights in
-/// object `o`'s frame, `signs` is the scratch of the triangle signs, `out` receives every
-/// light's multiplicities and silhouette. Returns `ExtractStats::uncertain`: the (edge, OV,
-/// light) pairs decided by the scalar exact predicate.
+/// One extraction of the prepared scene `p` at `level` for the world-space `lights`: `scratch`
+/// is kept between calls, `out` receives every light's
+/// multiplicities and silhouette. Returns `ExtractStats::uncertain`: the (edge, OV, light) pairs
+/// decided by the scalar exact predicate.
 pub(crate) fn run_extract(
     level: SimdLevel,
     p: &Prepared,
-    signs: &mut Vec<i8>,
-    obj_lights: &[Vec<[f32; 4]>],
+    scratch: &mut Scratch,
+    lights: &[Light],
     mode: Accuracy,
     out: &mut Multiplicities,
 ) -> u64 {
-    let nl = obj_lights.first().map_or(0, Vec::len);
+    let nl = lights.len();
     let ne = p.total_edges;
     if out.edge_count() != ne || out.light_count() != nl {
         out.reset(ne, nl);
     }
+    if nl == 0 {
+        return 0;
+    }
+    let slots = p.total_tri_slots;
+    let packs = nl.div_ceil(PACK);
+    scratch.lights.clear();
+    for o in &p.objects {
+        scratch
+            .lights
+            .extend(lights.iter().map(|l| o.to_object.light(l)));
+    }
+    let obj_lights = |object: usize| &scratch.lights[object * nl..(object + 1) * nl];
     let mut uncertain = 0u64;
     if mode != Accuracy::Original {
         // Phase 1: one sign per (canonical triangle, light).
         // One byte per triangle slot in each pack of up to `PACK` lights.
-        let slots = p.total_tri_slots;
-        let packs = nl.div_ceil(PACK);
+        let signs = &mut scratch.signs;
         signs.clear();
         signs.resize(slots * packs, 0);
-        let parts = split_items(signs, slots, &p.tri_bounds());
-        uncertain = p
-            .tri_items
-            .par_iter()
-            .zip(parts)
-            .map(|(it, mut dst)| {
-                let lay = &p.objects[it.object].layout;
-                let pass = TriPass {
-                    lay,
-                    blocks: it.blocks.clone(),
-                    lights: &obj_lights[it.object],
-                    mode,
-                    out: &mut dst,
-                };
-                dispatch::run(level, pass)
-            })
-            .sum();
+        let mut parts = split_rows(signs, slots, &p.tri_bounds);
+        if !parts.is_empty() {
+            uncertain = p
+                .tri_items
+                .par_iter()
+                .zip(parts.par_chunks_mut(packs))
+                .map(|(it, dst)| {
+                    let o = &p.objects[it.object];
+                    let pass = TriPass {
+                        lay: &o.layout,
+                        blocks: it.blocks.clone(),
+                        lights: obj_lights(it.object),
+                        mode,
+                        out: dst,
+                    };
+                    dispatch::run(level, pass)
+                })
+                .sum();
+        }
     }
     // Phase 2: one pass over all edges of all objects.
-    let signs: &[i8] = signs;
-    let slots = p.total_tri_slots;
-    let parts = split_items(out.all_values_mut(), ne, &p.edge_bounds());
-    let lists: Vec<Vec<Vec<u32>>> = p
-        .edge_items
-        .par_iter()
-        .zip(parts)
-        .map(|(it, mut dst)| {
-            let o = &p.objects[it.object];
-            let mut sil = vec![Vec::new(); nl];
-            let out = EdgeOut {
-                rows: &mut dst,
-                sil: &mut sil,
-                edge_base: o.edge_base,
-            };
-            if mode == Accuracy::Original {
-                let pass = EdgeOriginal {
-                    lay: &o.layout,
-                    blocks: it.blocks.clone(),
-                    lights: &obj_lights[it.object],
-                    out,
+    let items = p.edge_items.len();
+    let sil = &mut scratch.sil;
+    sil.resize_with(items * nl, Vec::new);
+    for s in sil.iter_mut() {
+        s.clear();
+    }
+    let mut rows = split_rows(out.all_values_mut(), ne, &p.edge_bounds);
+    if !rows.is_empty() {
+        let signs: &[i8] = &scratch.signs;
+        p.edge_items
+            .par_iter()
+            .zip(rows.par_chunks_mut(nl))
+            .zip(sil.par_chunks_mut(nl))
+            .for_each(|((it, rows), sil)| {
+                let o = &p.objects[it.object];
+                let out = EdgeOut {
+                    rows,
+                    sil,
+                    edge_base: o.edge_base,
                 };
-                dispatch::run(level, pass);
-            } else {
-                let bases: Vec<usize> = (0..nl.div_ceil(PACK))
-                    .map(|pack| pack * slots + o.tri_base)
-                    .collect();
-                let pass = EdgeSums {
-                    lay: &o.layout,
-                    blocks: it.blocks.clone(),
-                    signs: PackedSigns {
-                        all: signs,
-                        bases: &bases,
-                    },
-                    out,
-                };
-                dispatch::run(level, pass);
-            }
-            sil
-        })
-        .collect();
+                if mode == Accuracy::Original {
+                    let pass = EdgeOriginal {
+                        lay: &o.layout,
+                        blocks: it.blocks.clone(),
+                        lights: obj_lights(it.object),
+                        out,
+                    };
+                    dispatch::run(level, pass);
+                } else {
+                    // Per pack of lights, where the object's slot 0 is (up to 64 lights on the
+                    // stack).
+                    let mut small = [0usize; 16];
+                    let mut large = Vec::new();
+                    let bases: &mut [usize] = if packs <= small.len() {
+                        &mut small[..packs]
+                    } else {
+                        large.resize(packs, 0);
+                        &mut large
+                    };
+                    for (pack, b) in bases.iter_mut().enumerate() {
+                        *b = pack * slots + o.tri_base;
+                    }
+                    let pass = EdgeSums {
+                        lay: &o.layout,
+                        blocks: it.blocks.clone(),
+                        signs: PackedSigns { all: signs, bases },
+                        out,
+                    };
+                    dispatch::run(level, pass);
+                }
+            });
+    }
+    drop(rows);
     for l in 0..nl {
-        let total = lists.iter().map(|s| s[l].len()).sum();
-        let mut all = Vec::with_capacity(total);
-        for s in &lists {
-            all.extend_from_slice(&s[l]);
+        let lists = || (0..items).map(|i| &sil[i * nl + l]);
+        let mut all = Vec::with_capacity(lists().map(Vec::len).sum());
+        for s in lists() {
+            all.extend_from_slice(s);
         }
         out.set_silhouette(l, all);
     }
     uncertain * 3
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ToObject;
+    use glam::{Affine3A, Quat, Vec3};
+    use shadowvol_mesh_topology::EdgeTable;
+    use shadowvol_silhouette::{object_lights, shapes, Light, SceneObject, TopologyScene};
+    use std::sync::Arc;
+
+    #[test]
+    fn object_lights_match_the_shared_transform_bit_for_bit() {
+        let table = Arc::new(EdgeTable::build(&shapes::tetrahedron(1.0)).unwrap());
+        let transforms = [
+            Affine3A::IDENTITY,
+            Affine3A::from_translation(Vec3::new(3.0, 1.0, -6.0)),
+            Affine3A::from_scale_rotation_translation(
+                Vec3::new(1.3, 0.7, 2.1),
+                Quat::from_euler(glam::EulerRot::XYZ, 0.3, -1.1, 2.5),
+                Vec3::new(-0.1, 1e3, 7.25),
+            ),
+            Affine3A::from_rotation_translation(
+                Quat::from_rotation_y(0.1),
+                Vec3::new(1e-3, -2.0, 0.5),
+            ),
+        ];
+        let objects = transforms
+            .iter()
+            .enumerate()
+            .map(|(i, &world_from_object)| SceneObject {
+                name: format!("o{i}"),
+                table: Arc::clone(&table),
+                world_from_object,
+            })
+            .collect();
+        let scene = TopologyScene { objects };
+        let lights = [
+            Light::point(Vec3::new(-18.0, 64.0, 15.0)),
+            Light::point(Vec3::new(0.1, -0.3, 1e-4)),
+            Light::directional(Vec3::new(-0.3, 1.0, 0.45)),
+        ];
+        let reference = object_lights(&scene, &lights);
+        for (o, want) in scene.objects.iter().zip(&reference) {
+            let xf = ToObject::new(&o.world_from_object);
+            for (light, want) in lights.iter().zip(want) {
+                let got = xf.light(light);
+                assert_eq!(got.map(f32::to_bits), want.map(f32::to_bits), "{}", o.name);
+            }
+        }
+    }
 }

@@ -47,10 +47,10 @@ mod layout;
 
 pub use floor::MemoryFloor;
 
-use extract::{run_extract, Prepared};
+use extract::{run_extract, Prepared, Scratch};
 use shadowvol_silhouette::{
-    check_lights, object_lights, Accuracy, BackendError, BackendInfo, ExtractStats, Light,
-    Multiplicities, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
+    check_lights, Accuracy, BackendError, BackendInfo, ExtractStats, Light, Multiplicities,
+    PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
 use std::time::Instant;
 
@@ -158,9 +158,9 @@ pub struct SimdBackend {
     level: SimdLevel,
     pool: Option<rayon::ThreadPool>,
     scenes: PreparedScenes<Prepared>,
-    /// Scratch: triangle signs, one byte per triangle slot in each pack of up to four lights
-    /// (see `kernel::signs::PACK`).
-    signs: Vec<i8>,
+    /// What an extraction keeps between calls (triangle signs, per-item silhouette lists, the
+    /// lights in each object's frame).
+    scratch: Scratch,
 }
 
 impl SimdBackend {
@@ -193,7 +193,7 @@ impl SimdBackend {
             level,
             pool,
             scenes: PreparedScenes::new(NAME),
-            signs: Vec::new(),
+            scratch: Scratch::default(),
         })
     }
 
@@ -250,12 +250,11 @@ impl SilhouetteBackend for SimdBackend {
         let p = self.scenes.get(id)?;
         check_lights(lights)?;
         let start = Instant::now();
-        let obj_lights = object_lights(&p.scene, lights);
         let level = self.level;
-        let signs = &mut self.signs;
+        let scratch = &mut self.scratch;
         let uncertain = match &self.pool {
-            Some(pool) => pool.install(|| run_extract(level, p, signs, &obj_lights, mode, out)),
-            None => run_extract(level, p, signs, &obj_lights, mode, out),
+            Some(pool) => pool.install(|| run_extract(level, p, scratch, lights, mode, out)),
+            None => run_extract(level, p, scratch, lights, mode, out),
         };
         Ok(ExtractStats {
             compute: start.elapsed(),
