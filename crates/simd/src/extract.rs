@@ -208,9 +208,8 @@ impl Prepared {
 }
 
 /// One extraction of the prepared scene `p` at `level` for the world-space `lights`: `scratch`
-/// is kept between calls, `out` receives every light's
-/// multiplicities and silhouette. Returns `ExtractStats::uncertain`: the (edge, OV, light) pairs
-/// decided by the scalar exact predicate.
+/// is kept between calls, `out` receives every light's multiplicities and silhouette. Returns
+/// `ExtractStats::uncertain`: the (edge, OV, light) pairs decided by the scalar exact predicate.
 pub(crate) fn run_extract(
     level: SimdLevel,
     p: &Prepared,
