@@ -69,141 +69,14 @@ pub use lighting::Exposure;
 pub use plan::{PlanEntry, PlanPolicy, SilhouetteSource, Technique};
 pub use renderer::{Frame, FrameTime, Pipeline, RenderOptions, Renderer, Timings};
 pub use shadowvol_robust_math::{Accuracy, Light};
+/// The one camera type of the workspace (defined in `shadowvol-scenes`, which files and presets
+/// fill in).
+pub use shadowvol_scenes::{Camera, InvalidCamera};
 
-use glam::{Affine3A, DMat4, DVec3, Mat4, Vec3};
+use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::{Mesh, MeshError};
 use shadowvol_silhouette::BackendError;
 use std::sync::Arc;
-
-/// A pinhole camera (right-handed, `y` up by default) with an infinite far plane.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Camera {
-    /// Eye position (world units).
-    pub eye: Vec3,
-    /// A point the camera looks at.
-    pub target: Vec3,
-    /// Up direction (need not be orthogonal to the view direction, must not be parallel to it).
-    pub up: Vec3,
-    /// Vertical field of view, radians, in `(0, π)`.
-    pub fov_y: f32,
-    /// Near-plane distance (world units, `> 0`). There is no far plane.
-    pub near: f32,
-}
-
-impl Camera {
-    /// A camera at `eye` looking at `target`, `y` up, 45° vertical field of view, near plane at
-    /// 1/1000 of the eye-target distance.
-    #[must_use]
-    pub fn look_at(eye: Vec3, target: Vec3) -> Self {
-        let d = (target - eye).length().max(1e-6);
-        let up = if (target - eye).normalize_or_zero().abs().y > 0.999 {
-            Vec3::Z
-        } else {
-            Vec3::Y
-        };
-        Self {
-            eye,
-            target,
-            up,
-            fov_y: 45f32.to_radians(),
-            near: d * 1e-3,
-        }
-    }
-
-    /// Checks that the camera is usable.
-    ///
-    /// # Errors
-    /// [`RenderError::InvalidInput`] naming the bad field.
-    pub fn validate(&self) -> Result<(), RenderError> {
-        let finite = self.eye.is_finite()
-            && self.target.is_finite()
-            && self.up.is_finite()
-            && self.fov_y.is_finite()
-            && self.near.is_finite();
-        if !finite {
-            return Err(RenderError::InvalidInput(format!(
-                "camera has a non-finite component: {self:?}"
-            )));
-        }
-        if self.eye == self.target {
-            return Err(RenderError::InvalidInput(
-                "camera eye equals its target".into(),
-            ));
-        }
-        if (self.target - self.eye).cross(self.up).length_squared() == 0.0 {
-            return Err(RenderError::InvalidInput(
-                "camera up is parallel to the view direction".into(),
-            ));
-        }
-        if !(self.fov_y > 0.0 && self.fov_y < std::f32::consts::PI) {
-            return Err(RenderError::InvalidInput(format!(
-                "camera fov_y is {} rad; it must be in (0, π)",
-                self.fov_y
-            )));
-        }
-        if self.near <= 0.0 {
-            return Err(RenderError::InvalidInput(format!(
-                "camera near is {}; it must be > 0",
-                self.near
-            )));
-        }
-        Ok(())
-    }
-
-    /// View matrix (world → camera), `f32`.
-    #[must_use]
-    pub fn view(&self) -> Mat4 {
-        glam::camera::rh::view::look_at_mat4(self.eye, self.target, self.up)
-    }
-
-    /// Projection with an infinite far plane and depth range `[0, 1]` (points with `w = 0` map
-    /// to depth exactly 1), `f32`.
-    #[must_use]
-    pub fn projection(&self, aspect: f32) -> Mat4 {
-        glam::camera::rh::proj::directx::perspective_infinite(self.fov_y, aspect, self.near)
-    }
-
-    /// `projection * view`, the matrix every pass uses.
-    #[must_use]
-    pub fn view_proj(&self, aspect: f32) -> Mat4 {
-        self.projection(aspect) * self.view()
-    }
-
-    /// The same matrices in `f64` (for the reference and the plan).
-    #[must_use]
-    pub fn view_proj_f64(&self, aspect: f64) -> DMat4 {
-        let v = glam::dcamera::rh::view::look_at_mat4(
-            self.eye.as_dvec3(),
-            self.target.as_dvec3(),
-            self.up.as_dvec3(),
-        );
-        glam::dcamera::rh::proj::directx::perspective_infinite(
-            f64::from(self.fov_y),
-            aspect,
-            f64::from(self.near),
-        ) * v
-    }
-
-    /// The four corners of the near-plane rectangle in world space (`f64`), counter-clockwise
-    /// as seen from the eye: bottom-left, bottom-right, top-right, top-left.
-    #[must_use]
-    pub fn near_corners(&self, aspect: f64) -> [DVec3; 4] {
-        let eye = self.eye.as_dvec3();
-        let f = (self.target.as_dvec3() - eye).normalize();
-        let r = f.cross(self.up.as_dvec3()).normalize();
-        let u = r.cross(f);
-        let n = f64::from(self.near);
-        let h = n * (f64::from(self.fov_y) * 0.5).tan();
-        let w = h * aspect;
-        let c = eye + f * n;
-        [
-            c - r * w - u * h,
-            c + r * w - u * h,
-            c + r * w + u * h,
-            c - r * w + u * h,
-        ]
-    }
-}
 
 /// One object to render: a mesh (object space), where it is, and its colour.
 #[derive(Debug, Clone)]
@@ -303,13 +176,7 @@ impl RenderScene {
             objects: Vec::new(),
             lights: scene.lights.clone(),
             emission: scene.emission.clone(),
-            camera: Camera {
-                eye: cam.eye,
-                target: cam.target,
-                up: cam.up,
-                fov_y: cam.fov_y,
-                near: cam.near,
-            },
+            camera: cam,
             ambient: scene.effects.ambient.clamp(0.0, 1.0),
         };
         out.objects.append(&mut objects);
@@ -403,4 +270,10 @@ pub enum RenderError {
         /// What failed.
         message: String,
     },
+}
+
+impl From<InvalidCamera> for RenderError {
+    fn from(e: InvalidCamera) -> Self {
+        RenderError::InvalidInput(e.0)
+    }
 }

@@ -45,7 +45,9 @@ pub use emission::{Emission, SpotCone};
 pub use glb_write::{export_glb, to_glb};
 pub use gltf_load::{load_gltf, load_gltf_mesh, load_gltf_slice, load_gltf_slice_with_notes};
 pub use presets::{is_preset, preset, preset_names, presets, PresetInfo};
-pub use scene::{apply_f32, mesh_bounds, transformed, Camera, Effects, Object, Scene};
+pub use scene::{
+    apply_f32, mesh_bounds, transformed, Camera, Effects, InvalidCamera, Object, Scene,
+};
 
 use shadowvol_mesh_topology::MeshError;
 

@@ -196,14 +196,7 @@ fn cases() -> Vec<Case> {
             continue;
         }
         let s = shadowvol_scenes::preset(&name).unwrap();
-        let Some(c) = s.camera else { continue };
-        let camera = RefCamera {
-            eye: c.eye,
-            target: c.target,
-            up: c.up,
-            fov_y: c.fov_y,
-            near: c.near,
-        };
+        let Some(camera) = s.camera else { continue };
         let objects = s
             .objects
             .iter()
