@@ -271,21 +271,21 @@ impl Renderer {
         backend: Box<dyn SilhouetteBackend>,
         options: RenderOptions,
     ) -> Result<Self, RenderError> {
-        if options.width == 0 || options.height == 0 {
-            return Err(RenderError::InvalidInput(format!(
-                "image size {}x{}: both sides must be at least 1",
-                options.width, options.height
-            )));
-        }
-        Ok(Self {
-            gpu: Gpu::new()?,
+        check_size(&options)?;
+        Ok(Self::with_gpu(Gpu::new()?, backend, options))
+    }
+
+    /// A renderer over `gpu`, with empty caches.
+    fn with_gpu(gpu: Gpu, backend: Box<dyn SilhouetteBackend>, options: RenderOptions) -> Self {
+        Self {
+            gpu,
             backend,
             options,
             cache: Vec::new(),
             changed: Vec::new(),
             whole: None,
             resident: resident_frame::ResidentState::default(),
-        })
+        }
     }
 
     /// The options in effect.
@@ -337,21 +337,12 @@ impl Renderer {
         device: wgpu::Device,
         queue: wgpu::Queue,
     ) -> Result<Self, RenderError> {
-        if options.width == 0 || options.height == 0 {
-            return Err(RenderError::InvalidInput(format!(
-                "image size {}x{}: both sides must be at least 1",
-                options.width, options.height
-            )));
-        }
-        Ok(Self {
-            gpu: Gpu::on_device(adapter, device, queue)?,
+        check_size(&options)?;
+        Ok(Self::with_gpu(
+            Gpu::on_device(adapter, device, queue)?,
             backend,
             options,
-            cache: Vec::new(),
-            changed: Vec::new(),
-            whole: None,
-            resident: resident_frame::ResidentState::default(),
-        })
+        ))
     }
 
     /// The features and limits to open a device on `adapter` with, for
@@ -695,6 +686,17 @@ impl Renderer {
 }
 
 /// World positions of the welded vertices: the object transform applied in `f32` once.
+/// A zero image size is an input error (before any device is opened).
+fn check_size(options: &RenderOptions) -> Result<(), RenderError> {
+    if options.width == 0 || options.height == 0 {
+        return Err(RenderError::InvalidInput(format!(
+            "image size {}x{}: both sides must be at least 1",
+            options.width, options.height
+        )));
+    }
+    Ok(())
+}
+
 fn world_positions(table: &EdgeTable, t: Affine3A) -> Vec<Vec3> {
     table
         .positions
