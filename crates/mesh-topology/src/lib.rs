@@ -826,6 +826,38 @@ mod tests {
         assert_eq!(w.compact_of_input, vec![0, 1, 0, 1, 2]);
     }
 
+    /// Linear probing wraps from the table's last slot to slot 0 (a table of 16 slots for up
+    /// to 8 vertices): keys that hash to slot 15 and to slot 0 collide across the wrap.
+    #[test]
+    fn weld_probing_wraps_around_the_table() {
+        let find = |slot: usize, n: usize| -> Vec<Vec3> {
+            (0..)
+                .map(|i| Vec3::new(i as f32, 0.5, -2.0))
+                .filter(|&p| weld_hash(weld_key(p), 4) == slot)
+                .take(n)
+                .collect()
+        };
+        let (last, first) = (find(15, 3), find(0, 2));
+        let p = vec![
+            last[0], last[1], first[0], last[2], last[0], first[1], last[1], first[0],
+        ];
+        assert_eq!(p.len(), 8, "8 vertices: 16 slots");
+        let w = weld(&p);
+        // The reference: a group is named by its first index, compact ids in order of names.
+        let names: Vec<u32> = (0..p.len())
+            .map(|i| (0..=i).find(|&j| p[j] == p[i]).unwrap() as u32)
+            .collect();
+        let mut distinct = names.clone();
+        distinct.sort_unstable();
+        distinct.dedup();
+        assert_eq!(w.names, distinct);
+        assert_eq!(w.names, vec![0, 1, 2, 3, 5]);
+        for (i, &c) in w.compact_of_input.iter().enumerate() {
+            assert_eq!(w.names[c as usize], names[i], "vertex {i}");
+            assert_eq!(w.positions[c as usize], p[i]);
+        }
+    }
+
     #[test]
     fn nonmanifold_book() {
         // Spine (0,1) shared by 4 pages.

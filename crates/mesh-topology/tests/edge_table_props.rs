@@ -179,6 +179,15 @@ proptest! {
         prop_assert_eq!(m.positions.len(), a.positions.len() + b.positions.len());
         prop_assert_eq!(m.triangles.len(), a.triangles.len() + b.triangles.len());
         prop_assert!(m.validate().is_ok());
+        // `a` unchanged, then `b` with its indices offset by `a`'s vertex count.
+        let base = a.positions.len() as u32;
+        prop_assert_eq!(&m.positions[..a.positions.len()], &a.positions[..]);
+        prop_assert_eq!(&m.positions[a.positions.len()..], &b.positions[..]);
+        prop_assert_eq!(&m.triangles[..a.triangles.len()], &a.triangles[..]);
+        for (got, t) in m.triangles[a.triangles.len()..].iter().zip(&b.triangles) {
+            prop_assert_eq!(*got, [t[0] + base, t[1] + base, t[2] + base]);
+            prop_assert_eq!(got.map(|v| m.positions[v as usize]), t.map(|v| b.positions[v as usize]));
+        }
         let table = EdgeTable::build(&m).unwrap();
         check_table(&m, &table);
     }
@@ -307,4 +316,57 @@ fn empty_mesh_gives_empty_table() {
     assert_eq!(t.edges.len(), 0);
     assert_eq!(t.ov_offsets, vec![0]);
     assert_eq!(t.stats, Default::default());
+}
+
+#[test]
+fn counts_and_streamed_bytes_of_a_tetrahedron() {
+    let mesh = Mesh::new(
+        vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+        vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+    )
+    .unwrap();
+    assert_eq!(mesh.triangle_count(), 4);
+    let t = EdgeTable::build(&mesh).unwrap();
+    assert_eq!(t.edge_count(), 6);
+    assert_eq!(t.edge_count(), t.edges.len());
+    // One pass reads the edge records, offsets, OVs and positions: their sizes in memory.
+    use std::mem::size_of_val;
+    let want = size_of_val(&t.edges[..]) + size_of_val(&t.ov_offsets[..]);
+    let want = want + size_of_val(&t.ovs[..]) + size_of_val(&t.positions[..]);
+    assert_eq!(t.streamed_bytes(), want);
+    // 6 edges x 8 + 7 offsets x 4 + 12 OVs x 4 + 4 positions x 12.
+    assert_eq!(t.streamed_bytes(), 48 + 28 + 48 + 48);
+    check_table(&mesh, &t);
+}
+
+#[test]
+fn index_limits_are_exact_and_named() {
+    let limit = u64::from(u32::MAX) - 1;
+    // 3 x triangles = 2^32 - 1 is one entry too many; one triangle less fits.
+    let t = u64::from(u32::MAX) / 3;
+    assert_eq!(3 * t, u64::from(u32::MAX));
+    assert_eq!(
+        EdgeTable::check_size(t, 3),
+        Err(MeshError::TooLarge {
+            what: "edge entries (3 x triangles)",
+            count: 3 * t,
+            limit,
+        })
+    );
+    assert!(!matches!(
+        EdgeTable::check_size(t - 1, 3),
+        Err(MeshError::TooLarge { .. })
+    ));
+    assert_eq!(
+        EdgeTable::check_size(1, u64::from(u32::MAX)),
+        Err(MeshError::TooLarge {
+            what: "vertices",
+            count: u64::from(u32::MAX),
+            limit,
+        })
+    );
+    assert!(!matches!(
+        EdgeTable::check_size(1, limit),
+        Err(MeshError::TooLarge { .. })
+    ));
 }
