@@ -370,3 +370,17 @@ fn index_limits_are_exact_and_named() {
         Err(MeshError::TooLarge { .. })
     ));
 }
+
+#[test]
+fn append_refuses_only_beyond_u32() {
+    // 2 x 70 000 vertices fit easily (the product of the two counts would not).
+    let strip = |n: u32| Mesh {
+        positions: (0..n).map(|i| Vec3::new(i as f32, 0.0, 0.0)).collect(),
+        triangles: vec![[0, 1, n - 1]],
+    };
+    let mut m = strip(70_000);
+    m.append(&strip(70_000)).unwrap();
+    assert_eq!(m.positions.len(), 140_000);
+    assert_eq!(m.triangles, vec![[0, 1, 69_999], [70_000, 70_001, 139_999]]);
+    assert!(m.validate().is_ok());
+}
