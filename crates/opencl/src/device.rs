@@ -1,13 +1,24 @@
-//! Finding OpenCL platforms and devices, and choosing one.
+//! Starting the backend: finding OpenCL platforms and devices and choosing one, the start-up
+//! options, and creating the context, queue and kernel, checked by a self-test run. Errors name
+//! what is missing.
 
+use crate::backend::OpenClBackend;
+use crate::pipeline::{build_program, KernelSource, GROUP, KERNEL_ENV, KERNEL_NAME, KERNEL_SOURCE};
 use crate::NAME;
+use opencl3::command_queue::CommandQueue;
+use opencl3::context::Context;
 use opencl3::device::{
     Device, CL_DEVICE_TYPE_ACCELERATOR, CL_DEVICE_TYPE_ALL, CL_DEVICE_TYPE_CPU, CL_DEVICE_TYPE_GPU,
 };
 use opencl3::error_codes::{ClError, CL_PLATFORM_NOT_FOUND_KHR, DLOPEN_RUNTIME_LOAD_FAILED};
+use opencl3::kernel::Kernel;
 use opencl3::platform::get_platforms;
 use opencl3::types::cl_device_id;
+use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::BackendError;
+use shadowvol_silhouette::{Multiplicities, PreparedScenes, SilhouetteBackend, TopologyScene};
+use std::mem::ManuallyDrop;
+use std::num::NonZeroUsize;
 
 /// The environment variable that selects the device explicitly.
 ///
@@ -233,6 +244,189 @@ pub fn select_device(
                 listing()
             ))
         })
+}
+
+/// How to start an [`OpenClBackend`].
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct OpenClOptions {
+    /// Device selector in the [`DEVICE_ENV`] format; `None` picks the first GPU, else the first
+    /// CPU device.
+    pub device: Option<String>,
+    /// The kernel source.
+    pub kernel: KernelSource,
+    /// Use the `f32` filter in exact mode even when the device has `cl_khr_fp64`.
+    pub force_f32_filter: bool,
+    /// At most this many lights per kernel launch. `None` (the default) lets only the device's
+    /// limits split the lights (see [`OpenClBackend`]); a small value forces an `extract` into
+    /// several launches, for tests. The result does not depend on it.
+    pub max_lights_per_batch: Option<NonZeroUsize>,
+}
+
+impl OpenClOptions {
+    /// Options from the environment: [`DEVICE_ENV`] for the device and [`KERNEL_ENV`] for the
+    /// kernel path (both optional).
+    #[must_use]
+    pub fn from_env() -> Self {
+        let non_empty = |v: String| (!v.trim().is_empty()).then_some(v);
+        Self {
+            device: std::env::var(DEVICE_ENV).ok().and_then(non_empty),
+            kernel: std::env::var(KERNEL_ENV)
+                .ok()
+                .and_then(non_empty)
+                .map_or(KernelSource::Builtin, |p| KernelSource::Path(p.into())),
+            force_f32_filter: false,
+            max_lights_per_batch: None,
+        }
+    }
+}
+
+pub(crate) fn device_error(what: &str, e: ClError) -> BackendError {
+    BackendError::Device {
+        backend: NAME,
+        message: format!("{what}: {e} ({})", e.0),
+    }
+}
+
+impl OpenClBackend {
+    /// Starts the backend on the default device (first GPU, else first CPU) with the built-in
+    /// kernel, ignoring the environment.
+    ///
+    /// # Errors
+    /// As [`OpenClBackend::with_options`].
+    pub fn new() -> Result<Self, BackendError> {
+        Self::with_options(OpenClOptions::default())
+    }
+
+    /// Starts the backend: finds the device, creates a context and queue, builds the kernel and
+    /// runs it once on a tetrahedron (a self-test, waited for within
+    /// [`shadowvol_silhouette::gpu::wait_limit`]).
+    ///
+    /// # Errors
+    /// [`BackendError::Unavailable`] when there is no ICD loader, platform or (matching) device,
+    /// or the kernel file cannot be read; [`BackendError::Build`] with the compiler's log when
+    /// the kernel does not build; [`BackendError::Device`] when the driver fails or the self-test
+    /// does not finish within the limit; [`BackendError::InvalidInput`] when
+    /// `SHADOWVOL_GPU_TIMEOUT` is set but is not a positive number of seconds.
+    pub fn with_options(options: OpenClOptions) -> Result<Self, BackendError> {
+        // Some drivers (PoCL 3.1) crash when threads enumerate and initialise devices at once.
+        let _guard = INIT_LOCK
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let devices = list_devices_locked()?;
+        let device = select_device(&devices, options.device.as_deref())?;
+        let (source, origin) = match &options.kernel {
+            KernelSource::Builtin => (
+                KERNEL_SOURCE.to_owned(),
+                "kernels/silhouette.cl (built in)".to_owned(),
+            ),
+            KernelSource::Path(p) => (
+                std::fs::read_to_string(p).map_err(|e| BackendError::Unavailable {
+                    backend: NAME,
+                    reason: format!("cannot read kernel source {}: {e}", p.display()),
+                })?,
+                p.display().to_string(),
+            ),
+            KernelSource::Text(t) => (t.clone(), "kernel source text".to_owned()),
+        };
+        let dev = Device::new(device.id);
+        let max_alloc = dev.max_mem_alloc_size().unwrap_or(128 << 20);
+        let context = Context::from_device(&dev).map_err(|e| {
+            device_error(&format!("creating a context on {}", device.describe()), e)
+        })?;
+        #[allow(deprecated)] // clCreateCommandQueue: also works on OpenCL 1.2 platforms.
+        let queue = CommandQueue::create_default(&context, 0)
+            .map_err(|e| device_error("creating a command queue", e))?;
+        let use_f64 = device.fp64 && !options.force_f32_filter;
+        let build_options = if use_f64 {
+            "-DSHADOWVOL_EXACT_F64=1"
+        } else {
+            ""
+        };
+        let program = build_program(&context, &device, &source, build_options, &origin)?;
+        let kernel = Kernel::create(&program, KERNEL_NAME).map_err(|e| BackendError::Build {
+            backend: NAME,
+            what: origin.clone(),
+            log: format!("the program has no kernel {KERNEL_NAME:?}: {e} ({})", e.0),
+        })?;
+        // A fixed work-group size where the kernel allows it, so that the warm-up below compiles
+        // the same variant that later runs use (PoCL compiles per work-group size at the first
+        // enqueue; without the warm-up the first extract would report that as compute time).
+        let fixed_group = Device::new(device.id)
+            .max_work_group_size()
+            .is_ok_and(|n| n >= GROUP)
+            && kernel
+                .get_work_group_size(device.id)
+                .is_ok_and(|n| n >= GROUP);
+        let mut backend = Self {
+            device,
+            use_f64,
+            kernel_origin: origin,
+            max_alloc,
+            max_lights_per_batch: options.max_lights_per_batch,
+            last_batches: 0,
+            fixed_group,
+            kernel: ManuallyDrop::new(kernel),
+            program: ManuallyDrop::new(program),
+            queue: ManuallyDrop::new(queue),
+            context: ManuallyDrop::new(context),
+            scenes: ManuallyDrop::new(PreparedScenes::new(NAME)),
+            pending: None,
+        };
+        backend.warm_up()?;
+        Ok(backend)
+    }
+
+    /// Runs the kernel once on a tetrahedron in exact mode and checks the result against the
+    /// scalar definition: compiles the driver's work-group variant and proves the device works.
+    fn warm_up(&mut self) -> Result<(), BackendError> {
+        let mesh = shadowvol_mesh_topology::Mesh {
+            positions: vec![
+                glam::Vec3::ZERO,
+                glam::Vec3::X,
+                glam::Vec3::Y,
+                glam::Vec3::Z,
+            ],
+            triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+        };
+        let table = shadowvol_mesh_topology::EdgeTable::build(&mesh)
+            .map_err(|e| BackendError::InvalidInput(format!("warm-up mesh: {e}")))?;
+        let light = Light::point(glam::Vec3::new(2.0, 3.0, 5.0));
+        let mut want = vec![0i32; table.edges.len()];
+        for (e, w) in want.iter_mut().enumerate() {
+            let [a, b] = table.edges[e];
+            *w = table
+                .ovs_of(e)
+                .iter()
+                .map(|&o| {
+                    i32::from(shadowvol_robust_math::ov_sign(
+                        Accuracy::Exact,
+                        &table.positions,
+                        a,
+                        b,
+                        o,
+                        light.to_array(),
+                    ))
+                })
+                .sum();
+        }
+        let scene = TopologyScene::single(table);
+        let id = self.prepare(&scene)?;
+        let mut out = Multiplicities::default();
+        let result = self.extract(id, &[light], Accuracy::Exact, &mut out);
+        self.release(id);
+        result?;
+        if out.values(0) != want.as_slice() {
+            return Err(BackendError::Device {
+                backend: NAME,
+                message: format!(
+                    "self-test failed on {}: the kernel gave {:?} for a tetrahedron, expected {want:?}",
+                    self.device.describe(),
+                    out.values(0)
+                ),
+            });
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]

@@ -1,13 +1,20 @@
-//! The host side of an extraction: the kernel's light buffer, and turning the kernel's compact
-//! lists and uncertain records into [`Multiplicities`]. The scene itself is the shared
-//! [`SceneLayout`].
+//! What an extraction puts on the device: the device buffers of a prepared scene (the shared
+//! [`SceneLayout`] uploaded once, and the per-frame buffers grown on demand), the kernel's light
+//! buffer, and how many lights fit one launch within the device's largest allocation.
 //!
-//! Both the device path and the [CPU twin](crate::twin) use exactly this code, so a difference
-//! between them can only come from the kernel itself.
+//! Both the device path and the [CPU twin](crate::twin) flatten the lights with exactly this
+//! code, so a difference between them can only come from the kernel itself.
 
-use shadowvol_silhouette::gpu::{check_batch, resolve_uncertain, SceneLayout, UncertainRecord};
-use shadowvol_silhouette::{BackendError, Multiplicities};
+use crate::backend::OpenClBackend;
+use crate::device::device_error;
+use crate::NAME;
+use opencl3::context::Context;
+use opencl3::memory::{Buffer, CL_MEM_COPY_HOST_PTR, CL_MEM_READ_WRITE};
+use opencl3::types::cl_mem_flags;
+use shadowvol_silhouette::gpu::{SceneLayout, UncertainRecord};
+use shadowvol_silhouette::{BackendError, TopologyScene};
 use std::ops::Range;
+use std::ptr;
 
 /// Object-space lights flattened for the kernel: 4 `f32` per (object, light), index
 /// `object * lights + light`.
@@ -42,126 +49,127 @@ pub fn flat_light_batch(
     Ok(flat)
 }
 
-/// What one kernel run produced, as read back from the device (or produced by the twin).
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct KernelOutput {
-    /// `counts[0]`: uncertain records appended (possibly more than stored);
-    /// `counts[1]`: silhouette entries appended.
-    pub counts: Vec<u32>,
-    /// The compact silhouette list of all lights: `(light * edges + edge, m)` pairs, any order.
-    pub silhouettes: Vec<(u32, i32)>,
-    /// The records the filter could not certify.
-    pub uncertain: Vec<UncertainRecord>,
+/// Device buffers of one prepared scene.
+pub(crate) struct Prepared {
+    pub(crate) scene: TopologyScene,
+    pub(crate) layout: SceneLayout,
+    pub(crate) pos: Buffer<f32>,
+    pub(crate) edges: Buffer<u32>,
+    pub(crate) ovs: Buffer<u32>,
+    /// Per-frame buffers, grown on demand: (buffer, capacity in elements).
+    pub(crate) lights: Option<(Buffer<f32>, usize)>,
+    pub(crate) counts: Option<(Buffer<u32>, usize)>,
+    pub(crate) sil: Option<(Buffer<i32>, usize)>,
+    pub(crate) unc: Option<(Buffer<u32>, usize)>,
+    pub(crate) unc_records: usize,
 }
 
-/// Fills `out` from a kernel run over all `lights`: scatters the compact list, decides the
-/// uncertain records with [`resolve_uncertain`] and adds them, and sets the per-light compact
-/// silhouette lists. The same as [`finish_batch`] over `0..lights` after resetting `out`.
-///
-/// # Errors
-/// [`BackendError::Device`] when the kernel's output is malformed (an index, slot or light out
-/// of range, an edge listed twice, or fewer records than counted): a device or driver fault.
-/// [`BackendError::InvalidInput`] when `object_lights` has fewer than `lights` lights per object.
-pub fn finish(
-    layout: &SceneLayout,
-    object_lights: &[Vec<[f32; 4]>],
-    lights: usize,
-    output: KernelOutput,
-    out: &mut Multiplicities,
-    backend: &'static str,
-) -> Result<(), BackendError> {
-    out.reset(layout.edge_count(), lights);
-    finish_batch(layout, object_lights, 0..lights, output, out, backend)
+/// Creates a buffer holding a copy of `data` (at least one element: OpenCL has no empty buffers).
+pub(crate) fn upload<T: Copy + Default>(
+    context: &Context,
+    flags: cl_mem_flags,
+    data: &[T],
+    what: &str,
+) -> Result<Buffer<T>, BackendError> {
+    let one = [T::default()];
+    let data = if data.is_empty() { &one[..] } else { data };
+    // SAFETY: `data` is valid for `data.len()` elements; COPY_HOST_PTR copies it before return.
+    unsafe {
+        Buffer::<T>::create(
+            context,
+            flags | CL_MEM_COPY_HOST_PTR,
+            data.len(),
+            data.as_ptr().cast_mut().cast(),
+        )
+    }
+    .map_err(|e| device_error(&format!("uploading {what} ({} elements)", data.len()), e))
 }
 
-/// Fills the rows of the lights `batch` of `out` from one kernel launch over those lights:
-/// scatters the compact list, decides the uncertain records with [`resolve_uncertain`] and adds them,
-/// and sets those lights' compact silhouette lists. Other rows are left as they are.
-///
-/// The launch numbers its lights from 0: light `l` of `output` (in its silhouette indices
-/// `l * edges + edge` and its uncertain records) is light `batch.start + l` of `out` and of
-/// `object_lights` (all lights of the extraction, per object). The rows of `batch` must be zero
-/// (as [`Multiplicities::reset`] leaves them).
-///
-/// # Errors
-/// [`BackendError::Device`] when the kernel's output is malformed (an index, slot or light out
-/// of range, an edge listed twice, or fewer records than counted): a device or driver fault.
-/// [`BackendError::InvalidInput`] when `out` does not have the layout's edges and at least
-/// `batch.end` lights, or an object of `object_lights` has fewer than `batch.end` lights.
-pub fn finish_batch(
-    layout: &SceneLayout,
-    object_lights: &[Vec<[f32; 4]>],
-    batch: Range<usize>,
-    output: KernelOutput,
-    out: &mut Multiplicities,
-    backend: &'static str,
+/// Makes sure `slot` holds a read-write buffer of at least `len` elements.
+pub(crate) fn ensure<T>(
+    context: &Context,
+    slot: &mut Option<(Buffer<T>, usize)>,
+    len: usize,
+    what: &str,
 ) -> Result<(), BackendError> {
-    let edges = layout.edge_count();
-    let lights = batch.len();
-    check_batch(edges, object_lights, &batch, out)?;
-    let bad = |what: String| BackendError::Device {
-        backend,
-        message: format!("malformed kernel output: {what}"),
-    };
-    let KernelOutput {
-        counts,
-        silhouettes,
-        uncertain,
-    } = output;
-    let counted = |i: usize| counts.get(i).copied().unwrap_or(0) as usize;
-    if counted(0) != uncertain.len() || counted(1) != silhouettes.len() {
-        return Err(bad(format!(
-            "{} uncertain records and {} silhouette entries counted, {} and {} read back",
-            counted(0),
-            counted(1),
-            uncertain.len(),
-            silhouettes.len()
-        )));
-    }
-    let mut lists: Vec<Vec<u32>> = vec![Vec::new(); lights];
-    {
-        let values = &mut out.all_values_mut()[batch.start * edges..batch.end * edges];
-        for &(index, m) in &silhouettes {
-            let slot = values.get_mut(index as usize).ok_or_else(|| {
-                bad(format!(
-                    "silhouette index {index} out of range ({edges} edges x {lights} lights)"
-                ))
-            })?;
-            if *slot != 0 || m == 0 {
-                return Err(bad(format!(
-                    "silhouette index {index} listed twice or with m = 0"
-                )));
-            }
-            *slot = m;
-            let (l, e) = (index as usize / edges, index as usize % edges);
-            lists[l].push(e as u32);
-        }
-    }
-    if uncertain.is_empty() {
-        for (l, list) in lists.into_iter().enumerate() {
-            out.set_silhouette(batch.start + l, list);
-        }
+    let len = len.max(1);
+    if slot.as_ref().is_some_and(|(_, cap)| *cap >= len) {
         return Ok(());
     }
-    resolve_uncertain(
-        layout,
-        object_lights,
-        batch.clone(),
-        &uncertain,
-        out,
-        backend,
-    )?;
-    // Host decisions may add or remove silhouette edges: rebuild the batch's lists from the
-    // values.
-    for l in batch {
-        let list = out
-            .values(l)
-            .iter()
-            .enumerate()
-            .filter(|(_, &m)| m != 0)
-            .map(|(e, _)| e as u32)
-            .collect();
-        out.set_silhouette(l, list);
-    }
+    // SAFETY: no host pointer; the buffer is written by the device or by enqueued writes.
+    let buf = unsafe { Buffer::<T>::create(context, CL_MEM_READ_WRITE, len, ptr::null_mut()) }
+        .map_err(|e| device_error(&format!("allocating {what} ({len} elements)"), e))?;
+    *slot = Some((buf, len));
     Ok(())
+}
+
+impl OpenClBackend {
+    /// The most records the uncertain-record buffer (12 bytes each) may hold: the device's
+    /// largest allocation, at least 1.
+    pub(crate) fn max_uncertain_records(&self) -> usize {
+        usize::try_from(self.max_alloc / (UncertainRecord::WORDS as u64 * 4))
+            .unwrap_or(usize::MAX)
+            .max(1)
+    }
+
+    /// Lights per kernel launch for a scene of `edges` edges (at least 1), `objects` objects
+    /// and `ovs` opposite-vertex slots: as many as the silhouette list (8 bytes per edge and
+    /// light) and the light buffer (16 bytes per object and light) allow within the device's
+    /// largest allocation, with `light * edges + edge` and the uncertain-record counter (at most
+    /// one per OV slot and light) within `u32`, and at most
+    /// [`OpenClOptions::max_lights_per_batch`](crate::OpenClOptions::max_lights_per_batch).
+    ///
+    /// # Errors
+    /// [`BackendError::Limit`] with the numbers when not even one light fits.
+    pub(crate) fn lights_per_batch(
+        &self,
+        edges: usize,
+        objects: usize,
+        ovs: usize,
+    ) -> Result<usize, BackendError> {
+        let sil = 8 * edges as u64;
+        let light = 16 * objects as u64;
+        let index = u64::from(u32::MAX);
+        let n = shadowvol_silhouette::gpu::lights_per_batch(
+            &[
+                (self.max_alloc, sil),
+                (self.max_alloc, light),
+                (index, edges as u64),
+                (index, ovs as u64),
+            ],
+            self.max_lights_per_batch,
+        );
+        if n == 0 {
+            return Err(BackendError::Limit {
+                backend: NAME,
+                message: format!(
+                    "one light alone does not fit a kernel launch: its silhouette list needs \
+                     {sil} bytes for {edges} edges and its light buffer {light} bytes for \
+                     {objects} objects, but the device's largest allocation is {} bytes; split \
+                     the scene",
+                    self.max_alloc
+                ),
+            });
+        }
+        Ok(n)
+    }
+
+    pub(crate) fn check_alloc(
+        &self,
+        what: &str,
+        bytes: usize,
+        hint: &str,
+    ) -> Result<(), BackendError> {
+        if bytes as u64 > self.max_alloc {
+            return Err(BackendError::Limit {
+                backend: NAME,
+                message: format!(
+                    "{what} needs {bytes} bytes, more than the device's largest allocation \
+                     ({} bytes){hint}",
+                    self.max_alloc
+                ),
+            });
+        }
+        Ok(())
+    }
 }

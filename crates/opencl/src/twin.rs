@@ -6,7 +6,8 @@
 //! [`TwinBackend`] runs it behind the [`SilhouetteBackend`] trait, through the same layout
 //! ([`SceneLayout`]) and host finishing ([`finish`]) as the device path.
 
-use crate::layout::{finish, flat_lights, KernelOutput};
+use crate::layout::flat_lights;
+use crate::resolve::{finish, KernelOutput};
 use shadowvol_robust_math::filter::{self, TermsF32};
 use shadowvol_robust_math::{orient_filter_f64, Accuracy, Light, F32_FILTER_EPS};
 use shadowvol_silhouette::gpu::{

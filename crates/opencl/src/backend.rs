@@ -1,0 +1,225 @@
+//! [`OpenClBackend`]: the backend type, its accessors, its release on drop, and the
+//! [`SilhouetteBackend`] implementation (`prepare` uploads the scene, `extract` runs the light
+//! batches of [`crate::dispatch`]).
+
+use crate::device::DeviceDesc;
+use crate::dispatch::{Batch, Pending};
+use crate::layout::{upload, Prepared};
+use crate::{wait, NAME};
+use opencl3::command_queue::CommandQueue;
+use opencl3::context::Context;
+use opencl3::kernel::Kernel;
+use opencl3::memory::CL_MEM_READ_ONLY;
+use opencl3::program::Program;
+use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::gpu::{self, SceneLayout};
+use shadowvol_silhouette::{
+    check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
+    PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
+};
+use std::mem::ManuallyDrop;
+use std::num::NonZeroUsize;
+use std::time::Instant;
+
+/// The OpenCL backend. See the crate documentation.
+///
+/// An `extract` runs one kernel launch per batch of lights: as many lights as fit the device's
+/// largest allocation (`CL_DEVICE_MAX_MEM_ALLOC_SIZE`: the silhouette list takes 8 bytes per
+/// edge and light, the light buffer 16 bytes per object and light) and the kernel's 32-bit
+/// indices, and at most [`OpenClOptions::max_lights_per_batch`](crate::OpenClOptions::max_lights_per_batch). Usually that is all of them;
+/// the result is the same however they are split.
+pub struct OpenClBackend {
+    pub(crate) device: DeviceDesc,
+    pub(crate) use_f64: bool,
+    pub(crate) kernel_origin: String,
+    /// `CL_DEVICE_MAX_MEM_ALLOC_SIZE`, bytes.
+    pub(crate) max_alloc: u64,
+    pub(crate) max_lights_per_batch: Option<NonZeroUsize>,
+    /// Light batches (kernel launches, not counting reruns after the uncertain-record buffer
+    /// grew) of the last `extract`.
+    pub(crate) last_batches: usize,
+    /// Launch with a fixed work-group size of [`GROUP`](crate::pipeline::GROUP) × 1.
+    pub(crate) fixed_group: bool,
+    // Released by `Drop` (scenes, kernel, program, queue, then the context), or leaked while
+    // abandoned work has not ended.
+    pub(crate) kernel: ManuallyDrop<Kernel>,
+    pub(crate) program: ManuallyDrop<Program>,
+    pub(crate) queue: ManuallyDrop<CommandQueue>,
+    pub(crate) context: ManuallyDrop<Context>,
+    pub(crate) scenes: ManuallyDrop<PreparedScenes<Prepared>>,
+    /// Work abandoned by a wait that gave up; the next `extract` waits for it first.
+    pub(crate) pending: Option<Pending>,
+}
+
+impl Drop for OpenClBackend {
+    /// Never waits for the device. When abandoned work has still not ended, everything it may
+    /// use is leaked rather than released: the host memory it may read or write, and the
+    /// buffers, kernel, program, queue and context (OpenCL would keep them alive until the work
+    /// ends anyway, but a driver may block in a release while a kernel hangs). Otherwise they
+    /// are released as usual.
+    fn drop(&mut self) {
+        if let Some(p) = self.pending.take() {
+            if !wait::has_ended(&p.last) {
+                std::mem::forget(p);
+                return;
+            }
+        }
+        // SAFETY: each field is dropped once, here, and not used afterwards.
+        unsafe {
+            ManuallyDrop::drop(&mut self.scenes);
+            ManuallyDrop::drop(&mut self.kernel);
+            ManuallyDrop::drop(&mut self.program);
+            ManuallyDrop::drop(&mut self.queue);
+            ManuallyDrop::drop(&mut self.context);
+        }
+    }
+}
+
+impl std::fmt::Debug for OpenClBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("OpenClBackend")
+            .field("device", &self.device.describe())
+            .field("exact_filter", &if self.use_f64 { "f64" } else { "f32" })
+            .field("kernel", &self.kernel_origin)
+            .field("scenes", &self.scenes.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl OpenClBackend {
+    /// The device in use.
+    #[must_use]
+    pub fn device(&self) -> &DeviceDesc {
+        &self.device
+    }
+
+    /// True when exact mode filters in `f64` on the device, false for the `f32` filter.
+    #[must_use]
+    pub fn uses_f64_filter(&self) -> bool {
+        self.use_f64
+    }
+
+    /// How many light batches (kernel launches, not counting reruns after the uncertain-record
+    /// buffer grew) the last `extract` ran; for tests of the light splitting.
+    #[doc(hidden)]
+    #[must_use]
+    pub fn batches_of_last_extract_for_tests(&self) -> usize {
+        self.last_batches
+    }
+
+    /// Pretends the device's largest allocation is `bytes` from now on (checks and batch sizes
+    /// only; nothing is allocated differently), so that tests can reach the device limits.
+    #[doc(hidden)]
+    pub fn set_max_alloc_for_tests(&mut self, bytes: u64) {
+        self.max_alloc = bytes;
+    }
+}
+
+impl SilhouetteBackend for OpenClBackend {
+    fn info(&self) -> BackendInfo {
+        BackendInfo {
+            name: NAME,
+            device: self.device.describe(),
+            modes: Accuracy::ALL.to_vec(),
+            max_lights: None,
+            details: vec![
+                ("platform".to_owned(), self.device.platform_name.clone()),
+                (
+                    "platform_version".to_owned(),
+                    self.device.platform_version.clone(),
+                ),
+                ("device_type".to_owned(), self.device.device_type.to_owned()),
+                ("driver".to_owned(), self.device.driver_version.clone()),
+                (
+                    "exact_filter".to_owned(),
+                    if self.use_f64 {
+                        "f64 (cl_khr_fp64)"
+                    } else {
+                        "f32"
+                    }
+                    .to_owned(),
+                ),
+                ("kernel".to_owned(), self.kernel_origin.clone()),
+            ],
+        }
+    }
+
+    fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
+        let layout = SceneLayout::build(scene, NAME)?;
+        let edge_words = layout.edges.as_flattened();
+        let hint = "; split the scene";
+        self.check_alloc("the position buffer", layout.positions.len() * 4, hint)?;
+        self.check_alloc("the edge buffer", edge_words.len() * 4, hint)?;
+        self.check_alloc("the OV buffer", layout.ovs.len() * 4, hint)?;
+        let ro = CL_MEM_READ_ONLY;
+        let prepared = Prepared {
+            pos: upload(&self.context, ro, &layout.positions, "positions")?,
+            edges: upload(&self.context, ro, edge_words, "edges")?,
+            ovs: upload(&self.context, ro, &layout.ovs, "opposite vertices")?,
+            scene: scene.clone(),
+            layout,
+            lights: None,
+            counts: None,
+            sil: None,
+            unc: None,
+            unc_records: 0,
+        };
+        Ok(self.scenes.insert(prepared))
+    }
+
+    fn extract(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        let limit = gpu::wait_limit()?;
+        self.scenes.get(id)?;
+        check_lights(lights)?;
+        self.settle(limit)?;
+        self.last_batches = 0;
+        let p = self.scenes.get(id)?;
+        let num_lights = lights.len();
+        let edges = p.layout.edge_count();
+        if edges == 0 {
+            out.reset(0, num_lights);
+            return Ok(ExtractStats::default());
+        }
+        let mut per_launch =
+            self.lights_per_batch(edges, p.layout.object_count(), p.layout.ovs.len())?;
+        // Per-frame host preparation (object-space lights) counts as upload.
+        let prep_start = Instant::now();
+        let obj_lights = object_lights(&p.scene, lights);
+        out.reset(edges, num_lights);
+        let mut stats = ExtractStats {
+            upload: prep_start.elapsed(),
+            ..ExtractStats::default()
+        };
+        let mut first = 0;
+        while first < num_lights {
+            let batch = first..(first + per_launch).min(num_lights);
+            match self.extract_batch(
+                id,
+                &obj_lights,
+                batch.clone(),
+                mode,
+                limit,
+                out,
+                &mut stats,
+            )? {
+                Batch::Done => {
+                    first = batch.end;
+                    self.last_batches += 1;
+                }
+                // Only returned for batches of two or more lights.
+                Batch::TooManyUncertain => per_launch = batch.len() / 2,
+            }
+        }
+        Ok(stats)
+    }
+
+    fn release(&mut self, id: PreparedId) {
+        self.scenes.remove(id);
+    }
+}
