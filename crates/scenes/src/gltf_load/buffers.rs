@@ -1,0 +1,344 @@
+//! Buffer data: which buffers are loaded, `EXT_meshopt_compression` views decoded, data URIs,
+//! and the bytes of an accessor (dense, zero-filled or sparse) checked against its view and
+//! buffer.
+
+use super::document::Extensions;
+use super::nodes::Loader;
+use crate::SceneError;
+use std::collections::HashMap;
+
+/// The buffers that positions and indices read: the buffers of their views (and sparse views),
+/// or, for `EXT_meshopt_compression` views, the buffer of the compressed source.
+pub(super) fn needed_buffers(
+    document: &gltf::Document,
+    ext: &Extensions,
+) -> std::collections::HashSet<usize> {
+    let mut out = std::collections::HashSet::new();
+    let mut add = |v: gltf::buffer::View| {
+        match ext
+            .meshopt
+            .get(&v.index())
+            .and_then(|e| e.get("buffer"))
+            .and_then(|b| b.as_u64())
+        {
+            Some(src) => out.insert(src as usize),
+            None => out.insert(v.buffer().index()),
+        };
+    };
+    for mesh in document.meshes() {
+        for prim in mesh.primitives() {
+            for acc in [prim.get(&gltf::Semantic::Positions), prim.indices()]
+                .into_iter()
+                .flatten()
+            {
+                if let Some(v) = acc.view() {
+                    add(v);
+                }
+                if let Some(s) = acc.sparse() {
+                    add(s.indices().view());
+                    add(s.values().view());
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Decodes the `EXT_meshopt_compression` views that positions and indices read (views of
+/// other attributes are left alone). Errors are `(context, message)`.
+pub(super) fn decode_meshopt_views(
+    document: &gltf::Document,
+    ext: &Extensions,
+    buffers: &[Option<&[u8]>],
+) -> Result<HashMap<usize, Vec<u8>>, (String, String)> {
+    let mut wanted = std::collections::HashSet::new();
+    let mut want = |acc: gltf::Accessor| {
+        if let Some(v) = acc.view() {
+            wanted.insert(v.index());
+        }
+        if let Some(s) = acc.sparse() {
+            wanted.insert(s.indices().view().index());
+            wanted.insert(s.values().view().index());
+        }
+    };
+    for mesh in document.meshes() {
+        for prim in mesh.primitives() {
+            if let Some(a) = prim.get(&gltf::Semantic::Positions) {
+                want(a);
+            }
+            if let Some(a) = prim.indices() {
+                want(a);
+            }
+        }
+    }
+    let mut out = HashMap::new();
+    for view in document.views().filter(|v| wanted.contains(&v.index())) {
+        let Some(e) = ext.meshopt.get(&view.index()) else {
+            continue;
+        };
+        let ctx = format!("buffer view {}, EXT_meshopt_compression", view.index());
+        let bad = |m: String| (ctx.clone(), m);
+        let uint = |k: &str| -> Result<Option<usize>, (String, String)> {
+            match e.get(k) {
+                None => Ok(None),
+                Some(v) => v
+                    .as_u64()
+                    .and_then(|x| usize::try_from(x).ok())
+                    .map(Some)
+                    .ok_or_else(|| {
+                        bad(format!("\"{k}\" must be a non-negative integer, found {v}"))
+                    }),
+            }
+        };
+        let need = |k: &str| uint(k)?.ok_or_else(|| bad(format!("\"{k}\" is missing")));
+        let name = |k: &str, default: Option<&str>| -> Result<String, (String, String)> {
+            match e.get(k) {
+                None => default
+                    .map(str::to_owned)
+                    .ok_or_else(|| bad(format!("\"{k}\" is missing"))),
+                Some(serde_json::Value::String(s)) => Ok(s.clone()),
+                Some(v) => Err(bad(format!("\"{k}\" must be a string, found {v}"))),
+            }
+        };
+        let src_index = need("buffer")?;
+        let offset = uint("byteOffset")?.unwrap_or(0);
+        let length = need("byteLength")?;
+        let stride = need("byteStride")?;
+        let count = need("count")?;
+        let mode_name = name("mode", None)?;
+        let filter_name = name("filter", Some("NONE"))?;
+        let mode = crate::meshopt_view::Mode::from_name(&mode_name)
+            .ok_or_else(|| bad(format!("unknown mode {mode_name:?}")))?;
+        let filter = crate::meshopt_view::Filter::from_name(&filter_name)
+            .ok_or_else(|| bad(format!("unknown filter {filter_name:?}")))?;
+        let src = match buffers.get(src_index) {
+            Some(Some(b)) => *b,
+            Some(None) => {
+                return Err(bad(format!(
+                    "source buffer {src_index} is a fallback buffer without data"
+                )))
+            }
+            None => return Err(bad(format!("source buffer {src_index} does not exist"))),
+        };
+        let encoded = offset
+            .checked_add(length)
+            .filter(|&end| end <= src.len())
+            .map(|end| &src[offset..end])
+            .ok_or_else(|| {
+                bad(format!(
+                    "source range byteOffset {offset}, byteLength {length} runs past the end of \
+                     buffer {src_index} ({} bytes)",
+                    src.len()
+                ))
+            })?;
+        if count.checked_mul(stride) != Some(view.length()) {
+            return Err(bad(format!(
+                "count {count} x byteStride {stride} does not equal the view's byteLength {}",
+                view.length()
+            )));
+        }
+        let bytes =
+            crate::meshopt_view::decode(encoded, count, stride, mode, filter).map_err(bad)?;
+        out.insert(view.index(), bytes);
+    }
+    Ok(out)
+}
+
+/// `%XX` escapes decoded to bytes (anything else kept as is), as the gltf crate decodes relative
+/// URIs.
+pub(super) fn percent_decode(uri: &str) -> Vec<u8> {
+    let b = uri.as_bytes();
+    let hex = |c: u8| (c as char).to_digit(16);
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    out
+}
+
+impl Loader<'_> {
+    /// The accessor's elements, tightly packed (`count * size` bytes), with bounds checks and
+    /// sparse substitution.
+    pub(super) fn accessor_bytes(
+        &self,
+        alabel: &str,
+        acc: &gltf::Accessor,
+    ) -> Result<Vec<u8>, SceneError> {
+        let count = acc.count();
+        let size = acc.size();
+        if count == 0 {
+            return Err(self.err(alabel.to_owned(), "count is 0 (at least 1 element needed)"));
+        }
+        let total = count
+            .checked_mul(size)
+            .ok_or_else(|| self.err(alabel.to_owned(), format!("count {count} overflows")))?;
+        // A view-less accessor is zeros of any declared count: its size is not bounded by the
+        // file, so it is checked against the memory budget before it is allocated.
+        if acc.view().is_none() && total as u64 > shadowvol_mesh_topology::MEMORY_CHECK_THRESHOLD {
+            if let Some((available, source)) = shadowvol_mesh_topology::available_memory() {
+                if total as u64 > available {
+                    return Err(self.err(
+                        alabel.to_owned(),
+                        format!(
+                            "{count} elements without a bufferView need {total} bytes, more than \
+                             the {available} bytes available ({source})"
+                        ),
+                    ));
+                }
+            }
+        }
+        let mut out = match acc.view() {
+            None => {
+                let mut v = Vec::new();
+                v.try_reserve_exact(total).map_err(|_| {
+                    self.err(
+                        alabel.to_owned(),
+                        format!(
+                            "{count} elements without a bufferView: cannot allocate {total} bytes"
+                        ),
+                    )
+                })?;
+                v.resize(total, 0u8);
+                v
+            }
+            Some(view) => {
+                let stride = view.stride().unwrap_or(size);
+                if stride < size {
+                    return Err(self.err(
+                        alabel.to_owned(),
+                        format!(
+                            "buffer view {} has byteStride {stride}, smaller than the element \
+                             size {size}",
+                            view.index()
+                        ),
+                    ));
+                }
+                let data = self.view_bytes(alabel, &view)?;
+                let needed = acc
+                    .offset()
+                    .checked_add((count - 1).saturating_mul(stride))
+                    .and_then(|x| x.checked_add(size));
+                match needed {
+                    Some(needed) if needed <= data.len() => {}
+                    _ => {
+                        return Err(self.err(
+                            alabel.to_owned(),
+                            format!(
+                                "{count} elements of {size} bytes (stride {stride}, byteOffset \
+                                 {}) run past the end of buffer view {} ({} bytes)",
+                                acc.offset(),
+                                view.index(),
+                                data.len()
+                            ),
+                        ))
+                    }
+                }
+                let mut v = Vec::with_capacity(total);
+                for i in 0..count {
+                    let s = acc.offset() + i * stride;
+                    v.extend_from_slice(&data[s..s + size]);
+                }
+                v
+            }
+        };
+        if let Some(sparse) = acc.sparse() {
+            let n = sparse.count();
+            let idx = sparse.indices();
+            let isize = match idx.index_type() {
+                gltf::accessor::sparse::IndexType::U8 => 1,
+                gltf::accessor::sparse::IndexType::U16 => 2,
+                gltf::accessor::sparse::IndexType::U32 => 4,
+            };
+            let slabel = format!("{alabel}, sparse");
+            let idata = self.view_bytes(&slabel, &idx.view())?;
+            let vdata = self.view_bytes(&slabel, &sparse.values().view())?;
+            let ioff = idx.offset();
+            let voff = sparse.values().offset();
+            let ifits = n
+                .checked_mul(isize)
+                .and_then(|x| x.checked_add(ioff))
+                .is_some_and(|e| e <= idata.len());
+            let vfits = n
+                .checked_mul(size)
+                .and_then(|x| x.checked_add(voff))
+                .is_some_and(|e| e <= vdata.len());
+            if !ifits || !vfits {
+                return Err(self.err(
+                    slabel,
+                    format!("{n} sparse indices or values run past the end of their buffer views"),
+                ));
+            }
+            for k in 0..n {
+                let c = &idata[ioff + k * isize..ioff + (k + 1) * isize];
+                let target = match isize {
+                    1 => usize::from(c[0]),
+                    2 => usize::from(u16::from_le_bytes([c[0], c[1]])),
+                    _ => u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize,
+                };
+                if target >= count {
+                    return Err(self.err(
+                        slabel,
+                        format!(
+                            "sparse index {k} targets element {target}, but the accessor has \
+                             {count}"
+                        ),
+                    ));
+                }
+                out[target * size..(target + 1) * size]
+                    .copy_from_slice(&vdata[voff + k * size..voff + (k + 1) * size]);
+            }
+        }
+        Ok(out)
+    }
+
+    fn view_bytes(&self, alabel: &str, view: &gltf::buffer::View) -> Result<&[u8], SceneError> {
+        if let Some(d) = self.decoded.get(&view.index()) {
+            return Ok(d);
+        }
+        let buf = match self.buffers.get(view.buffer().index()) {
+            Some(Some(b)) => *b,
+            Some(None) => {
+                return Err(self.err(
+                    alabel.to_owned(),
+                    format!(
+                        "buffer view {} is in buffer {}, an EXT_meshopt_compression fallback \
+                         without data, but the view is not compressed",
+                        view.index(),
+                        view.buffer().index()
+                    ),
+                ))
+            }
+            None => {
+                return Err(self.err(
+                    alabel.to_owned(),
+                    format!("buffer {} is missing", view.buffer().index()),
+                ))
+            }
+        };
+        let end = view.offset().checked_add(view.length());
+        match end {
+            Some(end) if end <= buf.len() => Ok(&buf[view.offset()..end]),
+            _ => Err(self.err(
+                alabel.to_owned(),
+                format!(
+                    "buffer view {} (byteOffset {}, byteLength {}) runs past the end of buffer {} \
+                     ({} bytes)",
+                    view.index(),
+                    view.offset(),
+                    view.length(),
+                    view.buffer().index(),
+                    buf.len()
+                ),
+            )),
+        }
+    }
+}

@@ -1,0 +1,323 @@
+//! glTF 2.0 loading (`.gltf` with external or embedded buffers, and `.glb`).
+//!
+//! What is read:
+//!
+//! * **Nodes** of the scene named by `scene`, else of the first scene, else every root node,
+//!   visited depth first in order: a node, then its children in order. Each node with a mesh becomes one
+//!   [`Object`](crate::Object) whose transform is the node's world transform, composed in `f32`
+//!   (`parent * local`, glTF's `matrix` or `T * R * S`). This order is the vertex numbering of
+//!   the CLI contract: depth-first node order, then primitive order, then accessor order.
+//! * **Meshes**: all primitives of a mesh are concatenated, in order, into one [`Mesh`]. Nodes
+//!   that use the same mesh share one `Arc<Mesh>`. Modes `TRIANGLES`, `TRIANGLE_STRIP` and
+//!   `TRIANGLE_FAN` are read (strips and fans are turned into triangle lists); points and lines,
+//!   and primitives without `POSITION`, are skipped with a note (see
+//!   [`load_gltf_slice_with_notes`]), and a node whose mesh is left without triangles is skipped
+//!   too. Non-indexed primitives use their vertices in order. Only `POSITION` and the indices
+//!   (`UNSIGNED_BYTE`, `_SHORT`, `_INT`) are read. Skins and morph targets are not applied: a
+//!   skinned or morphed mesh is read at its base `POSITION`s, under its node's transform.
+//! * **Accessors**, to the spec: an accessor without `bufferView` is zero-filled; a sparse
+//!   accessor's values replace those of its base (a view, or zeros).
+//! * **`KHR_mesh_quantization`** (when in `extensionsUsed`): `POSITION` may also be `BYTE`,
+//!   `UNSIGNED_BYTE`, `SHORT` or `UNSIGNED_SHORT`. Integers are read as their value; normalized
+//!   ones are decoded by the spec's formulas in `f32`, correctly rounded: `c / 255`, `c / 65535`,
+//!   `max(c / 127, -1)`, `max(c / 32767, -1)`. The node transform (where exporters put the
+//!   dequantization scale and offset) is then applied in `f32` as for float positions: exact
+//!   results are exact for these `f32` world positions, not for the real numbers a quantizer
+//!   had in mind.
+//! * **`EXT_meshopt_compression`**: compressed buffer views read by positions and indices are
+//!   decoded with meshoptimizer (the `meshopt` crate; see [`crate::meshopt_view`]); a fallback
+//!   buffer (no data) is never read. Decoding is lossless: a compressed file gives exactly the
+//!   vertex data of the same file uncompressed (the index codec may rotate a triangle's
+//!   corners, keeping its winding).
+//! * **`KHR_draco_mesh_compression`** is not supported (there is no maintained Rust decoder): a
+//!   file that requires it is refused with an error saying so; a file that only uses it reads
+//!   the uncompressed fallback accessors.
+//! * **Cameras**: the first node with a perspective camera (depth-first order) becomes the scene
+//!   camera: eye at the node's origin, looking down its `-Z`, up its `+Y`. A `"target"` in the
+//!   node's extras (written by [`crate::export_glb`]) sets the target point exactly.
+//! * **Lights** (`KHR_lights_punctual`): a point light at the node's origin (`w = 1`); a
+//!   directional light towards the node's `+Z` axis (the light shines down `-Z`; `w = 0`, the
+//!   direction is the `f32` third column of the world matrix, not renormalised). A **spot** light
+//!   is treated as a point light at its position: shadow volumes of a spot light are those of a
+//!   point light, the cone only limits what is lit. Each light's colour, intensity (candela,
+//!   lux for directional lights), `range` and cone angles become its [`crate::Emission`]
+//!   (the spot's axis is the node's `-Z`, normalised).
+//!
+//! Parsing goes through the `gltf` crate's types without its validation, plus checks of our own:
+//! the crate's serde types refuse files the spec calls valid (an integer written as `1.0`, an
+//! animation channel target without `node`), and its validation refuses every required extension
+//! it does not implement (`KHR_mesh_quantization`, `EXT_meshopt_compression`) and primitives
+//! without `POSITION`. So the JSON is first normalised (integral numbers become integers,
+//! `animations`, which are not read, are dropped), then the crate's structural validation runs
+//! with those findings left out, and required extensions are checked against what is read here
+//! (material and texture extensions do not change geometry and are accepted).
+//!
+//! The `gltf` crate does not check what accessors contain, so this module validates it: every
+//! accessor must be in its buffer view and buffer, have a count above 0 and the right type;
+//! positions must be finite, indices in range, and index counts must make whole triangles. Every
+//! error names the file and the node, mesh, primitive and accessor.
+
+mod buffers;
+mod document;
+mod mesh;
+mod nodes;
+
+use crate::scene::{file_name, Effects, Scene};
+use crate::SceneError;
+use buffers::{decode_meshopt_views, needed_buffers, percent_decode};
+use document::{
+    check_required_extensions, normalize_json, unknown_enum_values, validate, Extensions,
+};
+use glam::Affine3A;
+use nodes::Loader;
+use shadowvol_mesh_topology::Mesh;
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Loads a `.gltf` or `.glb` file as a [`Scene`] with its objects kept separate.
+///
+/// # Errors
+/// [`SceneError::Io`] if the file cannot be read, [`SceneError::Gltf`] naming the file and the
+/// node/mesh/primitive/accessor for anything malformed (see the module documentation).
+pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+    load_gltf_with_notes(path).map(|(s, _)| s)
+}
+
+/// As [`load_gltf`], and also returns the notes about what was skipped (see
+/// [`load_gltf_slice_with_notes`]).
+///
+/// # Errors
+/// As [`load_gltf`].
+pub fn load_gltf_with_notes(path: impl AsRef<Path>) -> Result<(Scene, Vec<String>), SceneError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
+    let base = path.parent().map(|p| {
+        if p.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            p
+        }
+    });
+    let name = path.display().to_string();
+    let is_glb = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    if is_glb && !bytes.starts_with(b"glTF") {
+        let head = &bytes[..bytes.len().min(4)];
+        return Err(SceneError::Gltf {
+            file: name,
+            context: "document".to_owned(),
+            message: format!(
+                "not a binary glTF file: it starts with {:?}, a .glb starts with \"glTF\"",
+                String::from_utf8_lossy(head)
+            ),
+        });
+    }
+    load_gltf_slice_with_notes(&bytes, &name, base).map(|(mut s, notes)| {
+        s.name = file_name(path);
+        (s, notes)
+    })
+}
+
+/// Loads a `.gltf` or `.glb` file flattened into one world-space mesh: node transforms applied
+/// in `f32`, vertices numbered in depth-first node order, then primitive order, then accessor
+/// order (the CLI contract). Same as `load_gltf(path)?.baked_mesh()`.
+///
+/// # Errors
+/// As [`load_gltf`], plus [`SceneError::Mesh`] if the merged mesh is too large.
+pub fn load_gltf_mesh(path: impl AsRef<Path>) -> Result<Mesh, SceneError> {
+    load_gltf(path)?.baked_mesh()
+}
+
+/// Loads glTF from bytes (JSON text or GLB). `source_name` is used in messages; `base` is the
+/// directory that relative buffer URIs are resolved against (`None`: only embedded buffers).
+///
+/// # Errors
+/// [`SceneError::Gltf`] naming `source_name` and the element at fault.
+pub fn load_gltf_slice(
+    bytes: &[u8],
+    source_name: &str,
+    base: Option<&Path>,
+) -> Result<Scene, SceneError> {
+    load_gltf_slice_with_notes(bytes, source_name, base).map(|(s, _)| s)
+}
+
+/// As [`load_gltf_slice`], and also returns the notes about what was skipped: primitives that
+/// are not triangles (points, lines) or have no `POSITION`, and nodes whose mesh is left without
+/// triangles. Each note names the file and the node, mesh and primitive.
+///
+/// # Errors
+/// As [`load_gltf_slice`].
+pub fn load_gltf_slice_with_notes(
+    bytes: &[u8],
+    source_name: &str,
+    base: Option<&Path>,
+) -> Result<(Scene, Vec<String>), SceneError> {
+    let err = |context: &str, message: String| SceneError::Gltf {
+        file: source_name.to_owned(),
+        context: context.to_owned(),
+        message,
+    };
+    let mut early_notes = Vec::new();
+    let mut bytes = bytes;
+    let (json, blob) = if bytes.starts_with(b"glTF") {
+        if bytes.len() >= 12 {
+            let declared = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize;
+            if declared >= 12 && declared < bytes.len() {
+                // Data after the end of the GLB stream: the spec allows it (the Khronos
+                // validator warns, GLB_EXTRA_DATA); the stream ends where the header says.
+                early_notes.push(format!(
+                    "{source_name}: {} bytes after the end of the GLB stream (its header \
+                     declares {declared}) are ignored",
+                    bytes.len() - declared
+                ));
+                bytes = &bytes[..declared];
+            }
+            if declared != bytes.len() {
+                return Err(err(
+                    "document",
+                    format!(
+                        "GLB header declares {declared} bytes but the file has {} (truncated or \
+                         corrupted)",
+                        bytes.len()
+                    ),
+                ));
+            }
+        }
+        let glb = gltf::Glb::from_slice(bytes).map_err(|e| err("document", e.to_string()))?;
+        (
+            glb.json.into_owned(),
+            glb.bin.map(std::borrow::Cow::into_owned),
+        )
+    } else {
+        (bytes.to_vec(), None)
+    };
+    let mut value: serde_json::Value = serde_json::from_slice(&json)
+        .map_err(|e| err("document", format!("not valid JSON: {e}")))?;
+    normalize_json(&mut value);
+    early_notes.extend(unknown_enum_values(&mut value, source_name));
+    let ext = Extensions::read(&value);
+    let json = serde_json::to_vec(&value).map_err(|e| err("document", e.to_string()))?;
+    let root = gltf::json::Root::from_slice(&json).map_err(|e| err("document", e.to_string()))?;
+    let document = gltf::Document::from_json_without_validation(root);
+    validate(&document).map_err(|m| err("document", m))?;
+    check_required_extensions(&document).map_err(|m| err("document", m))?;
+    // `import_buffers` unwraps the percent-decoding of relative URIs (it panics when the decoded
+    // bytes are not UTF-8): check them first.
+    for b in document.buffers() {
+        if let gltf::buffer::Source::Uri(uri) = b.source() {
+            if !uri.contains(':') && std::str::from_utf8(&percent_decode(uri)).is_err() {
+                return Err(err(
+                    "buffers",
+                    format!(
+                        "buffer {}: uri {uri:?} percent-decodes to bytes that are not UTF-8",
+                        b.index()
+                    ),
+                ));
+            }
+        }
+    }
+    // Only the buffers that positions and indices read are loaded (others may be placeholders
+    // without data, or URIs this loader cannot resolve, which is valid glTF). An
+    // EXT_meshopt_compression fallback buffer has no data; its views are decoded instead.
+    let needed = needed_buffers(&document, &ext);
+    let mut blob = blob;
+    let mut data: Vec<Option<Vec<u8>>> = Vec::with_capacity(document.buffers().len());
+    for b in document.buffers() {
+        let bin = matches!(b.source(), gltf::buffer::Source::Bin);
+        if !needed.contains(&b.index()) || (ext.fallback.contains(&b.index()) && bin) {
+            if bin && b.index() == 0 {
+                // The GLB's BIN chunk belongs to buffer 0 only.
+                blob = None;
+            }
+            data.push(None);
+            continue;
+        }
+        if bin && blob.is_none() {
+            // Valid glTF JSON (a buffer without `uri` names the GLB's binary chunk), but a
+            // `.gltf` has no such chunk, so the positions or indices it should hold are missing.
+            return Err(err(
+                "buffers",
+                format!(
+                    "buffer {} has no uri and no GLB binary chunk holds it (a .gltf has none; in \
+                     a .glb only buffer 0 uses it): the {} bytes its positions or indices are read \
+                     from are not in the file",
+                    b.index(),
+                    b.length()
+                ),
+            ));
+        }
+        let d = gltf::buffer::Data::from_source_and_blob(b.source(), base, &mut blob)
+            .map_err(|e| err("buffers", format!("buffer {}: {e}", b.index())))?;
+        // Data shorter than byteLength is refused; data longer than it (beyond the up to 3
+        // padding bytes a GLB BIN chunk may carry) is a lie about the length too. Views are then
+        // checked against the declared length only.
+        if d.0.len() < b.length() || d.0.len() > b.length() + 3 {
+            return Err(err(
+                "buffers",
+                format!(
+                    "buffer {}: its data holds {} bytes but byteLength declares {} (a data URI, \
+                     file or GLB chunk must match byteLength)",
+                    b.index(),
+                    d.0.len(),
+                    b.length()
+                ),
+            ));
+        }
+        let mut d = d.0;
+        d.truncate(b.length());
+        data.push(Some(d));
+    }
+    let buffers: Vec<Option<&[u8]>> = data.iter().map(Option::as_deref).collect();
+    let decoded = decode_meshopt_views(&document, &ext, &buffers).map_err(|(c, m)| err(&c, m))?;
+
+    let roots: Vec<gltf::Node> = match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
+        Some(s) => s.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; document.nodes().len()];
+            for n in document.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            document.nodes().filter(|n| !is_child[n.index()]).collect()
+        }
+    };
+
+    let mut loader = Loader {
+        source_name,
+        buffers: &buffers,
+        decoded: &decoded,
+        meshes: HashMap::new(),
+        visited: vec![false; document.nodes().len()],
+        quantization: document
+            .extensions_used()
+            .any(|e| e == "KHR_mesh_quantization"),
+        notes: early_notes,
+        scene: Scene {
+            name: source_name.to_owned(),
+            effects: Effects::default(),
+            ..Scene::default()
+        },
+    };
+    // Depth-first, pre-order, with an explicit stack (deep hierarchies must not overflow).
+    let mut stack: Vec<(gltf::Node, Affine3A)> = roots
+        .into_iter()
+        .rev()
+        .map(|n| (n, Affine3A::IDENTITY))
+        .collect();
+    while let Some((node, parent)) = stack.pop() {
+        let world = loader.visit(&node, parent)?;
+        let children: Vec<gltf::Node> = node.children().collect();
+        for c in children.into_iter().rev() {
+            stack.push((c, world));
+        }
+    }
+    Ok((loader.scene, loader.notes))
+}

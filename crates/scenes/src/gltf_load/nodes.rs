@@ -1,0 +1,182 @@
+//! The node walk: each node's world transform, its mesh as an object, and the scene camera
+//! and lights (`KHR_lights_punctual`) it carries.
+
+use crate::scene::{Camera, Object, Scene};
+use crate::SceneError;
+use glam::{Affine3A, Mat4, Vec3};
+use shadowvol_mesh_topology::Mesh;
+use shadowvol_robust_math::Light;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// One load in progress: the file's buffers, the meshes read so far and the scene being built.
+pub(super) struct Loader<'a> {
+    pub(super) source_name: &'a str,
+    /// Buffer data by index; `None` for an `EXT_meshopt_compression` fallback buffer.
+    pub(super) buffers: &'a [Option<&'a [u8]>],
+    /// Decoded `EXT_meshopt_compression` views by view index.
+    pub(super) decoded: &'a HashMap<usize, Vec<u8>>,
+    pub(super) meshes: HashMap<usize, Arc<Mesh>>,
+    pub(super) visited: Vec<bool>,
+    /// `KHR_mesh_quantization` is in `extensionsUsed`: integer positions are allowed.
+    pub(super) quantization: bool,
+    pub(super) notes: Vec<String>,
+    pub(super) scene: Scene,
+}
+
+fn node_label(node: &gltf::Node) -> String {
+    match node.name() {
+        Some(n) => format!("node {} '{n}'", node.index()),
+        None => format!("node {}", node.index()),
+    }
+}
+impl Loader<'_> {
+    pub(super) fn err(&self, context: String, message: impl Into<String>) -> SceneError {
+        SceneError::Gltf {
+            file: self.source_name.to_owned(),
+            context,
+            message: message.into(),
+        }
+    }
+
+    /// Handles one node; returns its world transform.
+    pub(super) fn visit(
+        &mut self,
+        node: &gltf::Node,
+        parent: Affine3A,
+    ) -> Result<Affine3A, SceneError> {
+        let label = node_label(node);
+        if std::mem::replace(&mut self.visited[node.index()], true) {
+            return Err(self.err(
+                label,
+                "is reached twice from the scene (the node hierarchy must be a forest: no \
+                 cycles, no node with two parents)",
+            ));
+        }
+        let m = Mat4::from_cols_array_2d(&node.transform().matrix());
+        if !m.is_finite() {
+            return Err(self.err(label, "transform has a NaN or infinite entry"));
+        }
+        let row3 = m.row(3);
+        if row3 != glam::Vec4::new(0.0, 0.0, 0.0, 1.0) {
+            return Err(self.err(
+                label,
+                format!("matrix is not affine: its last row is {row3}, expected (0, 0, 0, 1)"),
+            ));
+        }
+        let local = Affine3A::from_mat4(m);
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(self.err(label, "world transform overflows f32"));
+        }
+
+        if let Some(mesh) = node.mesh() {
+            let det = world.matrix3.determinant();
+            if !det.is_normal() {
+                return Err(self.err(
+                    label,
+                    format!(
+                        "world transform of the mesh is singular or degenerate (determinant \
+                         {det:e}): a zero scale flattens the object, and lights cannot be \
+                         brought into its frame"
+                    ),
+                ));
+            }
+            let shared = match self.meshes.get(&mesh.index()) {
+                Some(m) => Arc::clone(m),
+                None => {
+                    let m = Arc::new(self.read_mesh(&label, &mesh)?);
+                    self.meshes.insert(mesh.index(), Arc::clone(&m));
+                    m
+                }
+            };
+            let name = node
+                .name()
+                .or(mesh.name())
+                .map_or_else(|| format!("node{}", node.index()), str::to_owned);
+            if shared.triangles.is_empty() {
+                self.notes.push(format!(
+                    "{}: {label}: mesh {} has no triangles, the node is skipped",
+                    self.source_name,
+                    mesh.index()
+                ));
+            } else {
+                self.scene.objects.push(Object {
+                    name,
+                    mesh: shared,
+                    transform: world,
+                });
+            }
+        }
+
+        if let Some(light) = node.light() {
+            let l = match light.kind() {
+                gltf::khr_lights_punctual::Kind::Directional => {
+                    let z = world.matrix3.z_axis;
+                    Light::new(z.x, z.y, z.z, 0.0)
+                }
+                gltf::khr_lights_punctual::Kind::Point
+                | gltf::khr_lights_punctual::Kind::Spot { .. } => {
+                    let t = world.translation;
+                    Light::new(t.x, t.y, t.z, 1.0)
+                }
+            }
+            .map_err(|e| {
+                self.err(
+                    format!("{label}, light {}", light.index()),
+                    format!("invalid light: {e}"),
+                )
+            })?;
+            let emission = crate::emission::from_gltf(&light, &world)
+                .map_err(|m| self.err(format!("{label}, light {}", light.index()), m))?;
+            self.scene.lights.push(l);
+            self.scene.emission.push(emission);
+        }
+
+        if let (Some(cam), None) = (node.camera(), self.scene.camera) {
+            if let gltf::camera::Projection::Perspective(p) = cam.projection() {
+                let eye = Vec3::from(world.translation);
+                let forward = -Vec3::from(world.matrix3.z_axis);
+                let up = Vec3::from(world.matrix3.y_axis);
+                let target = extras_vec3(node.extras(), "target")
+                    .unwrap_or(eye + forward.normalize_or(Vec3::NEG_Z));
+                let camera = Camera {
+                    eye,
+                    target,
+                    up: up.normalize_or(Vec3::Y),
+                    fov_y: p.yfov(),
+                    near: p.znear(),
+                };
+                let ok = camera.eye.is_finite()
+                    && camera.target.is_finite()
+                    && camera.fov_y.is_finite()
+                    && camera.fov_y > 0.0
+                    && camera.near.is_finite()
+                    && camera.near > 0.0
+                    && camera.target != camera.eye;
+                if !ok {
+                    return Err(self.err(
+                        format!("{label}, camera {}", cam.index()),
+                        "camera is degenerate (needs finite eye and target apart, yfov > 0, \
+                         znear > 0)",
+                    ));
+                }
+                self.scene.camera = Some(camera);
+            }
+        }
+        Ok(world)
+    }
+}
+
+/// Reads `extras[key]` as a finite `[x, y, z]`.
+fn extras_vec3(extras: &gltf::json::Extras, key: &str) -> Option<Vec3> {
+    let raw = extras.as_ref()?;
+    let v: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
+    let a = v.get(key)?.as_array()?;
+    if a.len() != 3 {
+        return None;
+    }
+    let f = |i: usize| a[i].as_f64().map(|x| x as f32);
+    let p = Vec3::new(f(0)?, f(1)?, f(2)?);
+    p.is_finite().then_some(p)
+}
