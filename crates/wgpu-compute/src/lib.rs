@@ -63,12 +63,17 @@
 //! ```
 
 mod backend;
+mod device;
+mod dispatch;
 pub mod exact_int;
+mod layout;
+mod pipeline;
 mod resolve;
 pub mod shaders;
 pub mod twin;
 
-pub use backend::{GpuResults, WgpuBackend, WgpuOptions};
+pub use backend::{GpuResults, WgpuBackend};
+pub use device::WgpuOptions;
 pub use resolve::UncertainTriangle;
 pub use twin::ExactFilter;
 

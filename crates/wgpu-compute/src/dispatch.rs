@@ -1,7 +1,33 @@
 //! One `extract` on the device: the batches of lights, each uploaded, dispatched, read back and
 //! resolved on the host, and the host's exact decisions patched into the device buffers.
 
-use super::*;
+use crate::backend::WgpuBackend;
+use crate::device::{device_error, limit_error, wait_error, ErrorScopes};
+use crate::layout::{Frame, Prepared, StaticBuffers};
+use crate::resolve::{expand_uncertain, finish_batch, BatchOutput, Patch, UncertainTriangle};
+use crate::shaders;
+use crate::twin::pack_lights;
+use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::{
+    check_lights, gpu, object_lights, BackendError, ExtractStats, Multiplicities,
+};
+use std::sync::{Arc, Mutex, PoisonError};
+use std::time::Instant;
+
+/// One batch of the lights of an `extract`: what [`WgpuBackend::run_batch`] uploads and where
+/// its rows of the result go.
+struct LightBatch<'a> {
+    /// Every light of the extraction, per object (object space).
+    object_lights: &'a [Vec<[f32; 4]>],
+    /// The batch's lights packed object-major, as uploaded.
+    packed: Vec<[f32; 4]>,
+    /// The batch's lights within the extraction.
+    lights: std::ops::Range<usize>,
+    /// Whether this is the extraction's last batch (its device buffers stay readable).
+    last: bool,
+    /// Exact mode: uncertain records are read back and resolved.
+    exact: bool,
+}
 
 /// What one dispatch brought back, before the host decides its undecided triangles.
 struct DeviceOutput {
@@ -14,7 +40,7 @@ struct DeviceOutput {
 }
 
 impl WgpuBackend {
-    pub(super) fn extract_prepared(
+    pub(crate) fn extract_prepared(
         &self,
         p: &mut Prepared,
         lights: &[Light],
@@ -382,7 +408,7 @@ impl WgpuBackend {
         Ok(())
     }
 
-    /// Writes the host's exact decisions into the device buffers, so that [`GpuResults`] is final.
+    /// Writes the host's exact decisions into the device buffers, so that [`GpuResults`](crate::GpuResults) is final.
     fn apply_patch(&self, frame: &Frame, edges: u64, patch: &Patch) {
         if patch.mult.is_empty() && patch.lists.is_empty() {
             return;
@@ -426,4 +452,77 @@ fn validate_lists(lists: &[Vec<(u32, i32)>], edges: usize) -> Result<(), Backend
         }
     }
     Ok(())
+}
+
+impl WgpuBackend {
+    fn wait(&self, index: wgpu::SubmissionIndex) -> Result<(), BackendError> {
+        let limit = gpu::wait_limit()?;
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(index),
+                timeout: Some(limit),
+            })
+            .map_err(|e| wait_error("waiting for the device", &e, limit))?;
+        self.check_health()
+    }
+
+    /// Maps `buffer[0..size]` for reading and hands the bytes to `f`.
+    fn read_mapped<T>(
+        &self,
+        buffer: &wgpu::Buffer,
+        size: u64,
+        f: impl FnOnce(&[u8]) -> T,
+    ) -> Result<T, BackendError> {
+        let slot = Arc::new(Mutex::new(None));
+        let s = Arc::clone(&slot);
+        buffer.map_async(wgpu::MapMode::Read, 0..size, move |r| {
+            *s.lock().unwrap_or_else(PoisonError::into_inner) = Some(r);
+        });
+        let limit = gpu::wait_limit()?;
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: Some(limit),
+            })
+            .map_err(|e| wait_error("waiting for a buffer mapping", &e, limit))?;
+        self.check_health()?;
+        let state = slot.lock().unwrap_or_else(PoisonError::into_inner).take();
+        match state {
+            Some(Ok(())) => {}
+            Some(Err(e)) => return Err(device_error(format!("mapping a readback buffer: {e}"))),
+            None => return Err(device_error("a readback mapping did not complete")),
+        }
+        let result = {
+            let view = buffer
+                .get_mapped_range(0..size)
+                .map_err(|e| device_error(format!("reading a mapped buffer: {e}")))?;
+            f(&view)
+        };
+        buffer.unmap();
+        Ok(result)
+    }
+}
+
+/// Compact-list entries `(edge, m)` from little-endian `u32` pairs.
+fn read_pairs(bytes: &[u8]) -> Vec<(u32, i32)> {
+    let words: Vec<u32> = read_u32s(bytes).collect();
+    words.chunks_exact(2).map(|w| (w[0], w[1] as i32)).collect()
+}
+
+/// Undecided `(triangle, light)` records (4 little-endian `u32` words each).
+fn read_records(bytes: &[u8]) -> Vec<UncertainTriangle> {
+    let words: Vec<u32> = read_u32s(bytes).collect();
+    words
+        .chunks_exact(4)
+        .map(|w| UncertainTriangle {
+            triangle: w[0],
+            light: w[1],
+        })
+        .collect()
+}
+
+fn read_u32s(bytes: &[u8]) -> impl Iterator<Item = u32> + '_ {
+    bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
 }

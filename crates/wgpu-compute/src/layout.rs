@@ -1,0 +1,194 @@
+//! What a prepared scene keeps on the device: the static buffers uploaded once, the per-frame
+//! buffers (lights in, results out) and their bind group, and how many lights fit one dispatch
+//! within the device's buffer limits.
+
+use crate::backend::WgpuBackend;
+use crate::device::limit_error;
+use crate::pipeline::entry;
+use shadowvol_silhouette::gpu::{self, SceneLayout, TriangleLayout};
+use shadowvol_silhouette::{BackendError, TopologyScene};
+
+/// Buffers uploaded once per prepared scene (cheap to clone: wgpu buffers are shared handles).
+#[derive(Clone)]
+pub(crate) struct StaticBuffers {
+    pub(crate) positions: wgpu::Buffer,
+    pub(crate) edges: wgpu::Buffer,
+    pub(crate) ovs: wgpu::Buffer,
+    pub(crate) tris: wgpu::Buffer,
+    pub(crate) ov_tris: wgpu::Buffer,
+}
+
+/// Per-frame buffers (lights in, results out), reused between frames while they are big enough.
+pub(crate) struct Frame {
+    pub(crate) light_capacity: usize,
+    pub(crate) uncertain_capacity: u32,
+    pub(crate) params: wgpu::Buffer,
+    pub(crate) lights: wgpu::Buffer,
+    pub(crate) mult: wgpu::Buffer,
+    pub(crate) counters: wgpu::Buffer,
+    /// Counts and list prefixes, mapped right after the dispatch.
+    pub(crate) staging: Option<wgpu::Buffer>,
+    pub(crate) silhouettes: wgpu::Buffer,
+    pub(crate) uncertain: wgpu::Buffer,
+    pub(crate) readback: Option<wgpu::Buffer>,
+    pub(crate) bind_group: wgpu::BindGroup,
+}
+
+pub(crate) struct Prepared {
+    pub(crate) scene: TopologyScene,
+    pub(crate) layout: SceneLayout,
+    pub(crate) triangles: TriangleLayout,
+    /// [`TriangleLayout::edge_slots`], built the first time the host decides a triangle.
+    pub(crate) edge_slots: Option<Vec<[(u32, u32); 3]>>,
+    pub(crate) gpu: Option<StaticBuffers>,
+    pub(crate) frame: Option<Frame>,
+    /// Lights of the last extract whose results the frame buffers hold: `(first, count)`.
+    pub(crate) last: Option<(usize, usize)>,
+    /// Compact-list entries per light copied with the counts (adapted per frame).
+    pub(crate) list_prefix: u64,
+    /// Uncertain records copied with the counts (adapted per frame).
+    pub(crate) uncertain_prefix: u64,
+}
+
+impl WgpuBackend {
+    pub(crate) fn check_buffer(
+        &self,
+        what: &str,
+        bytes: u64,
+        binding: bool,
+    ) -> Result<(), BackendError> {
+        let max_binding = self.limits.max_storage_buffer_binding_size;
+        let max_buffer = self.limits.max_buffer_size;
+        if bytes > max_buffer || (binding && bytes > max_binding) {
+            return Err(limit_error(format!(
+                "{what} needs {bytes} bytes, but the device allows buffers of {max_buffer} bytes and storage bindings of {max_binding} bytes"
+            )));
+        }
+        Ok(())
+    }
+
+    /// Lights per batch for a scene of `edges` edges, `tris` triangles and `objects` objects.
+    pub(crate) fn lights_per_batch(
+        &self,
+        edges: u64,
+        tris: u64,
+        objects: u64,
+        lights: usize,
+    ) -> Result<usize, BackendError> {
+        let max_binding = self.limits.max_storage_buffer_binding_size;
+        let max_buffer = self.limits.max_buffer_size;
+        let list = edges * 8;
+        let readback = list
+            + if self.options.full_readback {
+                edges * 4
+            } else {
+                0
+            };
+        let storage = max_binding.min(max_buffer);
+        let n = gpu::lights_per_batch(
+            &[
+                (storage, list),
+                (storage, tris * 4),
+                (max_buffer, readback),
+                (storage, objects * 16),
+            ],
+            self.options.max_lights_per_batch,
+        )
+        .min(lights);
+        if n == 0 {
+            return Err(limit_error(format!(
+                "one light needs a {list}-byte compact list for {edges} edges, {} bytes of triangle signs for {tris} triangles and {} bytes of object-space lights for {objects} objects, but the device allows storage bindings of {max_binding} bytes and buffers of {max_buffer} bytes",
+                tris * 4,
+                objects * 16
+            )));
+        }
+        Ok(n)
+    }
+
+    pub(crate) fn create_frame(
+        &self,
+        gpu: &StaticBuffers,
+        edges: u64,
+        tris: u64,
+        objects: u64,
+        light_capacity: usize,
+        uncertain_capacity: u32,
+    ) -> Result<Frame, BackendError> {
+        let lc = light_capacity as u64;
+        // As many records as the limits allow, at most the capacity asked for.
+        let max_records = (self
+            .limits
+            .max_storage_buffer_binding_size
+            .min(self.limits.max_buffer_size)
+            / 16)
+            .min(u64::from(u32::MAX)) as u32;
+        let uncertain_capacity = uncertain_capacity.min(max_records).max(1);
+        let uncertain_bytes = u64::from(uncertain_capacity) * 16;
+        self.check_buffer("the uncertain-triple buffer", uncertain_bytes, true)?;
+        let storage = |label: &str, size: u64, extra: wgpu::BufferUsages| {
+            self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC
+                    | extra,
+                mapped_at_creation: false,
+            })
+        };
+        let params = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("params"),
+            size: 16,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let lights = storage(
+            "object lights",
+            objects * lc * 16,
+            wgpu::BufferUsages::empty(),
+        );
+        let mult = storage("multiplicities", edges * lc * 4, wgpu::BufferUsages::VERTEX);
+        let counters_bytes = (lc + 1) * 4;
+        let counters = storage("counters", counters_bytes, wgpu::BufferUsages::empty());
+        // The triangle step's signs, `[light * tri_count + triangle]` (kept alive by the bind
+        // group).
+        let signs = storage(
+            "triangle signs",
+            (tris * lc * 4).max(4),
+            wgpu::BufferUsages::empty(),
+        );
+        let silhouettes = storage("silhouettes", edges * lc * 8, wgpu::BufferUsages::VERTEX);
+        let uncertain = storage("uncertain", uncertain_bytes, wgpu::BufferUsages::empty());
+        let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("silhouette"),
+            layout: &self.bind_group_layout,
+            entries: &[
+                entry(0, &params),
+                entry(1, &gpu.positions),
+                entry(2, &gpu.edges),
+                entry(3, &gpu.ovs),
+                entry(4, &lights),
+                entry(5, &mult),
+                entry(6, &counters),
+                entry(7, &silhouettes),
+                entry(8, &uncertain),
+                entry(9, &gpu.tris),
+                entry(10, &gpu.ov_tris),
+                entry(11, &signs),
+            ],
+        });
+        Ok(Frame {
+            light_capacity,
+            uncertain_capacity,
+            params,
+            lights,
+            mult,
+            counters,
+            staging: None,
+            silhouettes,
+            uncertain,
+            readback: None,
+            bind_group,
+        })
+    }
+}
