@@ -33,8 +33,10 @@
 //! ```
 
 mod backend;
-mod context;
-mod pipelines;
+mod device;
+mod dispatch;
+mod layout;
+mod pipeline;
 mod render;
 pub mod twin;
 
@@ -47,7 +49,7 @@ pub const NAME: &str = "vulkan";
 #[doc = include_str!("../README.md")]
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
-pub use context::{VulkanOptions, VALIDATION_ENV};
+pub use device::{VulkanOptions, VALIDATION_ENV};
 pub use render::{Camera, RenderStats, ShadowMask, StencilTechnique};
 
 use shadowvol_silhouette::{BackendError, SilhouetteBackend};

@@ -20,9 +20,10 @@
 //! Side quads: for edge `(A, B)` with multiplicity `m`, `|m|` copies of `A, B, A∞, B∞` (reversed
 //! for `m < 0`), `X∞ = (X * L.w - L.xyz, 0)`; see [`crate::twin::side_quad`].
 
-use crate::backend::{host_barrier, VulkanBackend};
-use crate::context::{device_err, Buffer, Context};
-use crate::pipelines::Push;
+use crate::backend::VulkanBackend;
+use crate::device::{device_err, Buffer, Context};
+use crate::dispatch::host_barrier;
+use crate::pipeline::Push;
 use crate::twin::{touches_light, MODE_PRECOMPUTED};
 use ash::vk;
 use glam::{DMat4, DVec3, DVec4, Vec3};

@@ -1,6 +1,6 @@
 //! Shader modules, descriptor layout, render passes and the three graphics pipelines.
 
-use crate::context::{device_err, unavailable, Context};
+use crate::device::{device_err, unavailable, Context};
 use ash::vk;
 use shadowvol_silhouette::BackendError;
 

@@ -342,7 +342,7 @@ impl Context {
     }
 
     /// Makes sure no earlier submission is still running. After a timeout the context is
-    /// poisoned: this waits for the late submission up to [`wait_limit`] once more; if its
+    /// poisoned: this waits for the late submission up to [`wait_limit`](gpu::wait_limit) once more; if its
     /// fence has signalled by then the context recovers (everything the late work touched is
     /// rewritten before the next submission reads it), otherwise this fails.
     ///
@@ -377,7 +377,7 @@ impl Context {
         }
     }
 
-    /// Records with `record`, submits, and waits for completion, at most [`wait_limit`].
+    /// Records with `record`, submits, and waits for completion, at most [`wait_limit`](gpu::wait_limit).
     ///
     /// On a timeout the context becomes pending (see [`Context::ensure_idle`]) and the error is
     /// a [`BackendError::Device`] naming the limit and `SHADOWVOL_GPU_TIMEOUT`.
@@ -421,7 +421,7 @@ impl Context {
     }
 
     /// Before destroying anything: true when no submission is running, waiting for a pending
-    /// one at most [`wait_limit`] (the default limit when `SHADOWVOL_GPU_TIMEOUT` is
+    /// one at most [`wait_limit`](gpu::wait_limit) (the default limit when `SHADOWVOL_GPU_TIMEOUT` is
     /// invalid). False when the work is still running; the context is then abandoned (its
     /// handles will be leaked) and later calls return false at once.
     pub fn idle_for_destruction(&self) -> bool {

@@ -1,0 +1,307 @@
+//! One `extract` on the device: the light batches, each uploaded, drawn through the geometry
+//! shader with rasterisation discarded, waited for within the limit and read back, with the
+//! uncertain pairs decided on the host (`gpu::resolve_uncertain`).
+
+use crate::backend::VulkanBackend;
+use crate::device::Buffer;
+use crate::layout::{Prepared, UNCERTAIN_HEADER};
+use crate::pipeline::Push;
+use crate::NAME;
+use ash::vk;
+use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::gpu::{self, UncertainRecord};
+use shadowvol_silhouette::{
+    check_lights, object_lights, BackendError, ExtractStats, Multiplicities, PreparedId,
+};
+use std::ops::Range;
+use std::time::Instant;
+
+impl VulkanBackend {
+    /// Makes the light, multiplicity and uncertain buffers large enough for the lights
+    /// `lights` (indices into each object's list in `obj_lights`), writes those lights and zeroes
+    /// the uncertain counters. The caller keeps the batch within [`Self::lights_per_batch`].
+    pub(crate) fn upload_lights(
+        &mut self,
+        id: PreparedId,
+        obj_lights: &[Vec<[f32; 4]>],
+        lights: Range<usize>,
+    ) -> Result<(), BackendError> {
+        let max_range = self.ctx.caps.max_storage_buffer_range;
+        let ctx = &self.ctx;
+        let p = self.prepared.get_mut(id)?;
+        let edges = p.ds.layout.edge_count();
+        let light_count = lights.len();
+        let slots = edges
+            .checked_mul(light_count)
+            .filter(|&s| u32::try_from(s).is_ok() && (s as u64) * 4 <= max_range)
+            .ok_or_else(|| BackendError::Limit {
+                backend: NAME,
+                message: format!(
+                    "{edges} edges x {light_count} lights do not fit one result buffer (at most \
+                     {} multiplicities, maxStorageBufferRange {max_range} bytes)",
+                    (max_range / 4).min(u64::from(u32::MAX))
+                ),
+            })?;
+        let mut bits: Vec<[u32; 4]> = Vec::with_capacity(obj_lights.len() * light_count);
+        for per_object in obj_lights {
+            let batch = per_object.get(lights.clone()).ok_or_else(|| {
+                BackendError::InvalidInput(format!(
+                    "lights {lights:?} are out of range: an object has {} lights",
+                    per_object.len()
+                ))
+            })?;
+            bits.extend(batch.iter().map(|l| l.map(f32::to_bits)));
+        }
+        let light_bytes: &[u8] = bytemuck::cast_slice(&bits);
+        if light_bytes.len() as u64 > max_range {
+            return Err(BackendError::Limit {
+                backend: NAME,
+                message: format!(
+                    "{light_count} lights for {} objects need {} bytes, more than one light \
+                     buffer holds (maxStorageBufferRange {max_range} bytes)",
+                    obj_lights.len(),
+                    light_bytes.len()
+                ),
+            });
+        }
+        let mut changed = false;
+        if (light_bytes.len() as u64) > p.lights.size {
+            let new = Buffer::new(
+                ctx,
+                light_bytes.len() as u64,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+            )?;
+            std::mem::replace(&mut p.lights, new).destroy(ctx);
+            changed = true;
+        }
+        p.lights.write(0, light_bytes);
+        if (slots as u64) * 4 > p.mult.size {
+            let new =
+                Buffer::host_read(ctx, slots as u64 * 4, vk::BufferUsageFlags::STORAGE_BUFFER)?;
+            std::mem::replace(&mut p.mult, new).destroy(ctx);
+            changed = true;
+        }
+        if changed {
+            p.write_set(ctx);
+        }
+        p.uncertain.write(0, &[0u8; UNCERTAIN_HEADER]);
+        Ok(())
+    }
+
+    /// Grows the uncertain buffer to hold `records` records (contents are discarded).
+    fn grow_uncertain(&mut self, id: PreparedId, records: u32) -> Result<(), BackendError> {
+        let ctx = &self.ctx;
+        let p = self.prepared.get_mut(id)?;
+        let bytes = UNCERTAIN_HEADER as u64 + 16 * u64::from(records);
+        if bytes > ctx.caps.max_storage_buffer_range {
+            return Err(BackendError::Limit {
+                backend: NAME,
+                message: format!(
+                    "{records} uncertain pairs do not fit one storage buffer \
+                     (maxStorageBufferRange {} bytes)",
+                    ctx.caps.max_storage_buffer_range
+                ),
+            });
+        }
+        let new = Buffer::host_read(ctx, bytes, vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        std::mem::replace(&mut p.uncertain, new).destroy(ctx);
+        p.uncertain_capacity = records;
+        p.write_set(ctx);
+        p.uncertain.write(0, &[0u8; UNCERTAIN_HEADER]);
+        Ok(())
+    }
+
+    /// Reads the uncertain buffer's header: (appended count, clamped-emission count).
+    pub(crate) fn uncertain_header(p: &Prepared) -> (u32, u32) {
+        let mut h = [0u8; 8];
+        p.uncertain.read(0, &mut h);
+        (
+            u32::from_le_bytes([h[0], h[1], h[2], h[3]]),
+            u32::from_le_bytes([h[4], h[5], h[6], h[7]]),
+        )
+    }
+
+    /// Records the extraction draw (rasteriser discard) into `cmd`.
+    fn record_extract(&self, p: &Prepared, cmd: vk::CommandBuffer, push: &Push, lights: u32) {
+        let d = &self.ctx.device;
+        let edges = p.ds.layout.edge_count() as u32;
+        // SAFETY: all handles are live; the command buffer is recording.
+        unsafe {
+            d.cmd_begin_render_pass(
+                cmd,
+                &vk::RenderPassBeginInfo::default()
+                    .render_pass(self.pipes.extract_pass)
+                    .framebuffer(self.pipes.extract_fb)
+                    .render_area(vk::Rect2D {
+                        offset: vk::Offset2D { x: 0, y: 0 },
+                        extent: vk::Extent2D {
+                            width: 1,
+                            height: 1,
+                        },
+                    }),
+                vk::SubpassContents::INLINE,
+            );
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipes.extract);
+            d.cmd_set_viewport(
+                cmd,
+                0,
+                &[vk::Viewport {
+                    x: 0.0,
+                    y: 0.0,
+                    width: 1.0,
+                    height: 1.0,
+                    min_depth: 0.0,
+                    max_depth: 1.0,
+                }],
+            );
+            d.cmd_set_scissor(
+                cmd,
+                0,
+                &[vk::Rect2D {
+                    offset: vk::Offset2D { x: 0, y: 0 },
+                    extent: vk::Extent2D {
+                        width: 1,
+                        height: 1,
+                    },
+                }],
+            );
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.pipes.layout,
+                0,
+                &[p.set],
+                &[],
+            );
+            d.cmd_push_constants(
+                cmd,
+                self.pipes.layout,
+                vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::GEOMETRY,
+                0,
+                bytemuck::bytes_of(push),
+            );
+            d.cmd_draw(cmd, edges, lights, 0, 0);
+            d.cmd_end_render_pass(cmd);
+            host_barrier(d, cmd);
+        }
+    }
+
+    /// Runs the GS over every (edge, light), in batches of at most [`Self::lights_per_batch`]
+    /// lights, host-resolves uncertain pairs, and fills `out` (light-major). The stats add up
+    /// over the batches.
+    pub(crate) fn extract_impl(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        check_lights(lights)?;
+        self.settle()?;
+        self.last_passes = 0;
+        let mut stats = ExtractStats::default();
+        let t = Instant::now();
+        let obj_lights = object_lights(&self.scene(id)?.scene, lights);
+        stats.upload = t.elapsed();
+
+        let edges = self.scene(id)?.ds.layout.edge_count();
+        out.reset(edges, lights.len());
+        if edges == 0 || lights.is_empty() {
+            return Ok(stats);
+        }
+        let per_pass = self.lights_per_batch(edges, obj_lights.len())?;
+        let mut first = 0;
+        while first < lights.len() {
+            let batch = first..(first + per_pass).min(lights.len());
+            first = batch.end;
+            self.extract_batch(id, &obj_lights, batch, mode, out, &mut stats)?;
+            self.last_passes += 1;
+        }
+        // The compact silhouette lists are built on the host from m; counted as readback.
+        let t = Instant::now();
+        out.rebuild_silhouettes();
+        stats.readback += t.elapsed();
+        Ok(stats)
+    }
+
+    /// One pass over the lights `batch`: uploads them, draws, reads the multiplicities into
+    /// their rows of `out` and resolves their uncertain pairs, adding the times to `stats`.
+    fn extract_batch(
+        &mut self,
+        id: PreparedId,
+        obj_lights: &[Vec<[f32; 4]>],
+        batch: Range<usize>,
+        mode: Accuracy,
+        out: &mut Multiplicities,
+        stats: &mut ExtractStats,
+    ) -> Result<(), BackendError> {
+        let t = Instant::now();
+        self.upload_lights(id, obj_lights, batch.clone())?;
+        stats.upload += t.elapsed();
+
+        let edges = self.scene(id)?.ds.layout.edge_count();
+        let light_count = batch.len() as u32;
+        let t = Instant::now();
+        let mut count;
+        loop {
+            let p = self.scene(id)?;
+            let push = Push {
+                mode: gpu::mode_code(mode),
+                edge_count: edges as u32,
+                light_count,
+                uncertain_capacity: p.uncertain_capacity,
+                emit: 0,
+                pass: 0,
+            };
+            self.ctx
+                .submit_and_wait(|_, cmd| self.record_extract(p, cmd, &push, light_count))?;
+            (count, _) = Self::uncertain_header(p);
+            if count <= p.uncertain_capacity {
+                break;
+            }
+            // Too many uncertain pairs for the buffer: grow it and run again.
+            self.grow_uncertain(id, count.next_power_of_two())?;
+        }
+        stats.compute += t.elapsed();
+
+        let t = Instant::now();
+        let p = self.scene(id)?;
+        let rows = &mut out.all_values_mut()[batch.start * edges..batch.end * edges];
+        p.mult.read(0, bytemuck::cast_slice_mut(rows));
+        let mut words = vec![0u32; UncertainRecord::WORDS * count as usize];
+        if count > 0 {
+            p.uncertain
+                .read(UNCERTAIN_HEADER, bytemuck::cast_slice_mut(&mut words));
+        }
+        let records = UncertainRecord::read_all(&words);
+        stats.readback += t.elapsed();
+
+        let t = Instant::now();
+        stats.uncertain += u64::from(count);
+        gpu::resolve_uncertain(&p.ds.layout, obj_lights, batch, &records, out, NAME)?;
+        stats.host_resolve += t.elapsed();
+        Ok(())
+    }
+}
+
+/// Makes shader and transfer writes visible to the host.
+///
+/// # Safety
+/// `cmd` must be recording, outside a render pass.
+pub(crate) unsafe fn host_barrier(d: &ash::Device, cmd: vk::CommandBuffer) {
+    let barrier = vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(vk::AccessFlags::HOST_READ);
+    // SAFETY: guaranteed by the caller.
+    unsafe {
+        d.cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::GEOMETRY_SHADER | vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::HOST,
+            vk::DependencyFlags::empty(),
+            &[barrier],
+            &[],
+            &[],
+        );
+    }
+}
