@@ -22,8 +22,8 @@ export CI=true
 embedder() {
   case "$1" in
     shaders/*.wgsl) echo crates/wgpu-compute/src/shaders.rs ;;
-    kernels/*.cl) echo crates/opencl/src/lib.rs ;;
-    shaders/*.geom) echo crates/vulkan-geometry/src/pipelines.rs ;;
+    kernels/*.cl) echo crates/opencl/src/pipeline.rs ;;
+    shaders/*.geom) echo crates/vulkan-geometry/src/pipeline.rs ;;
     crates/renderer/src/resident/*.wgsl) echo crates/renderer/src/resident/mod.rs ;;
     *.rs) echo "$1" ;;
   esac
