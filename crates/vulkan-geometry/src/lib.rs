@@ -50,7 +50,7 @@ pub const NAME: &str = "vulkan";
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
 pub use device::{VulkanOptions, VALIDATION_ENV};
-pub use render::{Camera, RenderStats, ShadowMask, StencilTechnique};
+pub use render::{RenderStats, ShadowMask, StencilTechnique, ViewProjection};
 
 use shadowvol_silhouette::{BackendError, SilhouetteBackend};
 

@@ -15,7 +15,7 @@
 //! the triangle's sign in the mode (robust: 0 when its three evaluations disagree, exactly like
 //! its sides; original uses ordered's sign), so sides and caps close every prism.
 //! Sides are extruded to infinity (`w = 0`) and drawn with depth clamp where the device has it,
-//! and the projection of [`Camera::look_at`] has an infinite far plane, so no side is clipped.
+//! and the projection of [`ViewProjection::look_at`] has an infinite far plane, so no side is clipped.
 //!
 //! Side quads: for edge `(A, B)` with multiplicity `m`, `|m|` copies of `A, B, A∞, B∞` (reversed
 //! for `m < 0`), `X∞ = (X * L.w - L.xyz, 0)`; see [`crate::twin::side_quad`].
@@ -31,16 +31,18 @@ use shadowvol_robust_math::{orient_exact, Accuracy, Light};
 use shadowvol_silhouette::{object_lights, BackendError, ExtractStats, Multiplicities, PreparedId};
 use std::time::{Duration, Instant};
 
-/// A pinhole camera: the clip-from-world matrix in `f64` (Vulkan clip space: depth in `[0, 1]`,
-/// `y` down in framebuffer rows). The render path composes it with each object's transform in
-/// `f64` and rounds once.
+/// The clip-from-world matrix of a pinhole camera, in `f64` (Vulkan clip space: depth in
+/// `[0, 1]`, `y` down in framebuffer rows). The render path composes it with each object's
+/// transform in `f64` and rounds once. The camera itself (eye, target, field of view) is the
+/// workspace's one `Camera` type, `shadowvol_scenes::Camera`; this is only its matrix in this
+/// crate's clip conventions.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Camera {
+pub struct ViewProjection {
     /// Clip-from-world matrix.
     pub view_proj: DMat4,
 }
 
-impl Camera {
+impl ViewProjection {
     /// A right-handed look-at camera with an infinite far plane: depth 0 at `near`, 1 at
     /// infinity; `up` appears at the top of the image (row 0).
     ///
@@ -268,7 +270,7 @@ impl VulkanBackend {
         &mut self,
         id: PreparedId,
         light: Light,
-        camera: &Camera,
+        camera: &ViewProjection,
         width: u32,
         height: u32,
         mode: Accuracy,
@@ -304,7 +306,7 @@ impl VulkanBackend {
         &mut self,
         id: PreparedId,
         light: Light,
-        camera: &Camera,
+        camera: &ViewProjection,
         (width, height): (u32, u32),
         mode: Accuracy,
         technique: StencilTechnique,
@@ -452,7 +454,7 @@ impl VulkanBackend {
         id: PreparedId,
         target: &Target,
         (stencil_buf, depth_buf): (&Buffer, &Buffer),
-        camera: &Camera,
+        camera: &ViewProjection,
         (width, height): (u32, u32),
         (mode_code, technique): (u32, StencilTechnique),
     ) -> Result<(), BackendError> {

@@ -7,7 +7,7 @@ use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
     corpus, BackendError, Multiplicities, SilhouetteBackend, TopologyScene,
 };
-use shadowvol_vulkan_geometry::{Camera, VulkanOptions};
+use shadowvol_vulkan_geometry::{ViewProjection, VulkanOptions};
 
 #[test]
 fn bad_input_is_an_error() {
@@ -35,7 +35,7 @@ fn bad_input_is_an_error() {
         "{e}"
     );
 
-    let cam = Camera::look_at(
+    let cam = ViewProjection::look_at(
         Vec3::new(3.0, 2.0, 4.0),
         Vec3::ZERO,
         Vec3::Y,

@@ -14,7 +14,7 @@ use shadowvol_silhouette::{
     extract_once, gpu::TIMEOUT_ENV, invariant, shapes::uv_sphere_y, Accuracy, BackendError, Light,
     Multiplicities, PreparedId, SilhouetteBackend, TopologyScene,
 };
-use shadowvol_vulkan_geometry::{Camera, VulkanBackend, VulkanOptions};
+use shadowvol_vulkan_geometry::{ViewProjection, VulkanBackend, VulkanOptions};
 use std::time::{Duration, Instant};
 
 const TINY: &str = "0.000001";
@@ -94,7 +94,7 @@ fn tiny_wait_limit_times_out_refuses_work_then_recovers() {
     eprintln!("second extract: {e}");
 
     // Rendering is refused the same way (it must not touch buffers the late work uses).
-    let camera = Camera::look_at(
+    let camera = ViewProjection::look_at(
         glam::Vec3::new(3.0, 2.5, 4.0),
         glam::Vec3::ZERO,
         glam::Vec3::Y,

@@ -10,7 +10,7 @@ use shadowvol_renderer::reference::compare;
 use shadowvol_renderer::{plan, Camera as RefCamera, Frame, Timings};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{SceneObject, SilhouetteBackend, TopologyScene};
-use shadowvol_vulkan_geometry::{Camera, ShadowMask, StencilTechnique, VulkanOptions};
+use shadowvol_vulkan_geometry::{ShadowMask, StencilTechnique, ViewProjection, VulkanOptions};
 use std::sync::Arc;
 
 const W: u32 = 128;
@@ -76,9 +76,9 @@ impl Case {
             .collect()
     }
 
-    fn vk_camera(&self) -> Camera {
+    fn vk_camera(&self) -> ViewProjection {
         let c = self.camera;
-        Camera::look_at(c.eye, c.target, c.up, c.fov_y, W as f32 / H as f32, c.near)
+        ViewProjection::look_at(c.eye, c.target, c.up, c.fov_y, W as f32 / H as f32, c.near)
     }
 
     /// z-pass is only valid when the near-clip volume (near rectangle + light) meets no caster.
@@ -119,7 +119,7 @@ fn intersect(t: &[DVec3; 3], o: DVec3, d: DVec3) -> Option<f64> {
 /// Per pixel `[object + 1, triangle]` of the closest triangle along the pixel-centre ray (brute
 /// force in `f64`: the scenes are small); `[0, 0]` for background. The depth pre-pass draws no
 /// ids, so this ray cast names the visible triangle for the reference.
-fn pixel_ids(cam: &Camera, tris: &[Vec<[Vec3; 3]>]) -> Vec<[u32; 2]> {
+fn pixel_ids(cam: &ViewProjection, tris: &[Vec<[Vec3; 3]>]) -> Vec<[u32; 2]> {
     let dt: Vec<Vec<[DVec3; 3]>> = tris
         .iter()
         .map(|o| o.iter().map(|t| t.map(|p| p.as_dvec3())).collect())

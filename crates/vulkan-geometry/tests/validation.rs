@@ -8,7 +8,7 @@ mod common;
 use glam::Vec3;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy, SilhouetteBackend};
-use shadowvol_vulkan_geometry::{Camera, StencilTechnique, VulkanOptions};
+use shadowvol_vulkan_geometry::{StencilTechnique, ViewProjection, VulkanOptions};
 
 #[test]
 fn corpus_and_render_under_validation_layers() {
@@ -41,7 +41,7 @@ fn corpus_and_render_under_validation_layers() {
     let case = &cases[0];
     let scene = case.scene().unwrap();
     let id = vk.prepare(&scene).unwrap();
-    let cam = Camera::look_at(
+    let cam = ViewProjection::look_at(
         Vec3::new(3.0, 2.5, 4.0),
         Vec3::splat(0.3),
         Vec3::Y,
