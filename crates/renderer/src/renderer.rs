@@ -33,7 +33,7 @@ pub struct RenderOptions {
     /// How lights with an emission map to the image ([`crate::lighting`]).
     pub exposure: Exposure,
     /// Limit each light's stencil and lit passes to the screen rectangle of its range or spot
-    /// cone ([`plan::light_scissor`]). The image is the same either way.
+    /// cone ([`crate::plan::light_scissor`]). The image is the same either way.
     pub scissor: bool,
     /// Keep the frame's shadow-volume vertices in [`Frame::volumes`] (for viewers that draw the
     /// volumes themselves; host pipeline only).
