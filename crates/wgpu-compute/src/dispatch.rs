@@ -29,6 +29,15 @@ struct LightBatch<'a> {
     exact: bool,
 }
 
+/// What the first round trip of a batch brought back: the counts (per light, then the
+/// uncertain records), and the first `k` list entries and `ku` records.
+struct FirstTrip {
+    counts: Vec<u32>,
+    chunk: DeviceOutput,
+    k: u64,
+    ku: u64,
+}
+
 /// What one dispatch brought back, before the host decides its undecided triangles.
 struct DeviceOutput {
     /// The whole multiplicity buffer, with `full_readback`.
@@ -118,17 +127,47 @@ impl WgpuBackend {
         Ok((gx as u32, gy as u32))
     }
 
-    /// Runs one batch of lights: upload, the triangle step (except in `original`) and the edge
-    /// step, readback, host resolution.
+    /// Runs one batch of lights: the first round trip (upload, the triangle step except in
+    /// `original`, the edge step, the counts and list prefixes back), the second (the rest of
+    /// long lists and of the uncertain records), and the host's exact decisions.
     fn run_batch(
+        &self,
+        p: &mut Prepared,
+        gpu: &StaticBuffers,
+        pipelines: (Option<&wgpu::ComputePipeline>, &wgpu::ComputePipeline),
+        batch: &LightBatch<'_>,
+        out: &mut Multiplicities,
+        stats: &mut ExtractStats,
+    ) -> Result<(), BackendError> {
+        let count = batch.lights.len();
+        let first = self.first_round_trip(p, gpu, pipelines, batch, stats)?;
+        let counts = &first.counts;
+        let uncertain_count = u64::from(counts[count]);
+        // Adapt the prefixes to this frame's sizes.
+        let grow = |n: u64| (n + n / 4).max(1).next_power_of_two();
+        let longest = counts[..count].iter().copied().max().unwrap_or(0);
+        p.list_prefix = grow(u64::from(longest)).max(u64::from(self.options.min_list_prefix));
+        p.uncertain_prefix = grow(uncertain_count).max(u64::from(self.options.min_list_prefix));
+
+        let frame = p
+            .frame
+            .as_mut()
+            .ok_or_else(|| device_error("no frame buffers"))?;
+        let chunk = self.second_round_trip(frame, p.layout.edge_count(), count, first, stats)?;
+        self.resolve_batch(p, batch, chunk, out, stats)
+    }
+
+    /// Uploads the batch's lights, dispatches the triangle and edge steps and brings back the
+    /// counts, the first `k` entries of every list and `ku` uncertain records; dispatches again
+    /// with a bigger uncertain buffer when the records overflowed it.
+    fn first_round_trip(
         &self,
         p: &mut Prepared,
         gpu: &StaticBuffers,
         (triangle_pipeline, pipeline): (Option<&wgpu::ComputePipeline>, &wgpu::ComputePipeline),
         batch: &LightBatch<'_>,
-        out: &mut Multiplicities,
         stats: &mut ExtractStats,
-    ) -> Result<(), BackendError> {
+    ) -> Result<FirstTrip, BackendError> {
         let (packed, count, exact) = (&batch.packed[..], batch.lights.len(), batch.exact);
         let edge_count = p.layout.edge_count();
         let edges = edge_count as u64;
@@ -140,7 +179,7 @@ impl WgpuBackend {
         let (tx, ty) = self.grid(tri_count, "triangles")?;
         // The first round trip brings the counts and the first `k` entries of every list (and
         // `ku` uncertain records); the second, if needed, the rest.
-        let (counts, mut chunk, k, ku) = loop {
+        let first = loop {
             let t = Instant::now();
             let frame = p
                 .frame
@@ -255,7 +294,12 @@ impl WgpuBackend {
             stats.readback += t.elapsed();
             let uncertain = counts[count];
             if uncertain <= frame.uncertain_capacity {
-                break (counts, chunk, k, ku);
+                break FirstTrip {
+                    counts,
+                    chunk,
+                    k,
+                    ku,
+                };
             }
             // Overflow: grow the uncertain buffer and run the dispatch again.
             let t = Instant::now();
@@ -275,19 +319,27 @@ impl WgpuBackend {
             p.frame = Some(frame);
             stats.upload += t.elapsed();
         };
-        let frame = p
-            .frame
-            .as_mut()
-            .ok_or_else(|| device_error("no frame buffers"))?;
-        let uncertain_count = u64::from(counts[count]);
-        // Adapt the prefixes to this frame's sizes.
-        let grow = |n: u64| (n + n / 4).max(1).next_power_of_two();
-        let longest = counts[..count].iter().copied().max().unwrap_or(0);
-        p.list_prefix = grow(u64::from(longest)).max(u64::from(self.options.min_list_prefix));
-        p.uncertain_prefix = grow(uncertain_count).max(u64::from(self.options.min_list_prefix));
+        Ok(first)
+    }
 
-        // ---- readback, second round trip: the rest of long lists and of the uncertain
-        // records, and with `full_readback` the whole multiplicity buffer
+    /// Brings back what the first round trip left: the rest of long lists and of the uncertain
+    /// records, and with `full_readback` the whole multiplicity buffer.
+    fn second_round_trip(
+        &self,
+        frame: &mut Frame,
+        edge_count: usize,
+        count: usize,
+        first: FirstTrip,
+        stats: &mut ExtractStats,
+    ) -> Result<DeviceOutput, BackendError> {
+        let FirstTrip {
+            counts,
+            mut chunk,
+            k,
+            ku,
+        } = first;
+        let edges = edge_count as u64;
+        let uncertain_count = u64::from(counts[count]);
         let t = Instant::now();
         let rest: Vec<(usize, u64, u64)> = counts[..count]
             .iter()
@@ -377,8 +429,21 @@ impl WgpuBackend {
         }
         stats.readback += t.elapsed();
 
-        // ---- host: exact decisions for the undecided triangles' triples, then patch the
-        // device copy
+        Ok(chunk)
+    }
+
+    /// The host's exact decisions for the undecided triangles' triples, the batch's rows of
+    /// `out`, and (last batch) the patch of the device copy.
+    fn resolve_batch(
+        &self,
+        p: &mut Prepared,
+        batch: &LightBatch<'_>,
+        chunk: DeviceOutput,
+        out: &mut Multiplicities,
+        stats: &mut ExtractStats,
+    ) -> Result<(), BackendError> {
+        let count = batch.lights.len();
+        let edges = p.layout.edge_count() as u64;
         let t = Instant::now();
         validate_lists(&chunk.lists, p.layout.edge_count())?;
         let records = if chunk.uncertain.is_empty() {
@@ -402,6 +467,10 @@ impl WgpuBackend {
             out,
         )?;
         if batch.last {
+            let frame = p
+                .frame
+                .as_ref()
+                .ok_or_else(|| device_error("no frame buffers"))?;
             self.apply_patch(frame, edges, &patch);
         }
         stats.host_resolve += t.elapsed();
