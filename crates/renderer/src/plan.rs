@@ -787,6 +787,50 @@ mod tests {
         // whole half-space beyond, camera included.
         let around = [[-1.0, -1.0, -5.0], [1.0, -1.0, -5.0], [0.0, 1.0, -5.0]];
         assert!(!clear(around, [0.0, 0.0, hair, 1.0]));
+        // A light 10⁻¹⁰ above a triangle it lies over, closer than any margin, and the near
+        // rectangle above both: only the exact side of the light proves the rectangle clear
+        // (the triangle and the near-clip volume touch at the apex, no axis parts them).
+        let above = [
+            DVec3::new(-1.0, -1.0, 3.0),
+            DVec3::new(1.0, -1.0, 3.0),
+            DVec3::new(1.0, 1.0, 3.0),
+            DVec3::new(-1.0, 1.0, 3.0),
+        ];
+        let flat = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]];
+        let world: Vec<Vec3> = flat.iter().map(|&p| Vec3::from_array(p)).collect();
+        for (lz, want) in [(1e-10f32, true), (-1e-10, false)] {
+            let light = [0.0, 0.25, lz, 1.0];
+            let planes = near_clip_volume(above, light).unwrap();
+            assert!(!triangle_misses_near_clip(
+                [0, 1, 2].map(|i| world[i].as_dvec3()),
+                light,
+                above
+            ));
+            assert_eq!(
+                near_rect_clear_of_shadows(&world, &[[0, 1, 2]], light, above, &planes),
+                want,
+                "light z {lz}"
+            );
+        }
+    }
+
+    #[test]
+    fn points_outside_keeps_a_relative_margin() {
+        let planes = [DVec4::new(0.0, 0.0, 1.0, 0.0)]; // inside: z >= 0
+        let at = |z: f64, spread: f64| {
+            [
+                DVec3::new(-spread, -spread, z),
+                DVec3::new(spread, -spread, z),
+                DVec3::new(0.0, spread, z),
+            ]
+        };
+        assert!(points_outside(&at(-1.0, 1.0), &planes));
+        // 10⁻⁷ below the plane at scale 1: within the 10⁻⁶ margin, so not proven outside.
+        assert!(!points_outside(&at(-1e-7, 1.0), &planes));
+        // The margin scales with the points' extent (here |hi − lo| ≈ 283): 2·10⁻⁴ below is
+        // inside it, 10⁻³ below is not.
+        assert!(!points_outside(&at(-2e-4, 100.0), &planes));
+        assert!(points_outside(&at(-1e-3, 100.0), &planes));
     }
 
     #[test]
