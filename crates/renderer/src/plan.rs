@@ -787,9 +787,10 @@ mod tests {
         // whole half-space beyond, camera included.
         let around = [[-1.0, -1.0, -5.0], [1.0, -1.0, -5.0], [0.0, 1.0, -5.0]];
         assert!(!clear(around, [0.0, 0.0, hair, 1.0]));
-        // A light 10⁻¹⁰ above a triangle it lies over, closer than any margin, and the near
-        // rectangle above both: only the exact side of the light proves the rectangle clear
-        // (the triangle and the near-clip volume touch at the apex, no axis parts them).
+        // A light 10⁻¹⁰ above a triangle it lies over (or exactly on it), closer than any
+        // margin, and the near rectangle above both: only the exact side of the light proves
+        // the rectangle clear (the triangle and the near-clip volume touch at the apex, no
+        // axis parts them); 10⁻¹⁰ below, the shadow takes in the rectangle.
         let above = [
             DVec3::new(-1.0, -1.0, 3.0),
             DVec3::new(1.0, -1.0, 3.0),
@@ -798,7 +799,8 @@ mod tests {
         ];
         let flat = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]];
         let world: Vec<Vec3> = flat.iter().map(|&p| Vec3::from_array(p)).collect();
-        for (lz, want) in [(1e-10f32, true), (-1e-10, false)] {
+        // 0: the light exactly on the triangle, whose shadow then has no volume.
+        for (lz, want) in [(1e-10f32, true), (-1e-10, false), (0.0, true)] {
             let light = [0.0, 0.25, lz, 1.0];
             let planes = near_clip_volume(above, light).unwrap();
             assert!(!triangle_misses_near_clip(
