@@ -817,6 +817,53 @@ mod tests {
     }
 
     #[test]
+    fn near_clip_planes_pass_through_the_light_and_the_rectangle() {
+        // An off-axis, non-square rectangle, so that no symmetry hides a wrong plane.
+        let near = [
+            DVec3::new(0.3, -0.2, -1.0),
+            DVec3::new(2.1, -0.1, -1.2),
+            DVec3::new(2.0, 0.9, -1.25),
+            DVec3::new(0.2, 0.8, -1.05),
+        ];
+        let on = |pl: Plane, p: DVec3| eval(pl, p).abs() < 1e-9;
+        // A point light: the rectangle's plane holds the 4 corners, side plane i the light and
+        // corners i, i + 1; the centroid of the 5 vertices is strictly inside every plane.
+        let lp = DVec3::new(-3.0, 4.0, -9.0);
+        let planes = near_clip_volume(near, [-3.0, 4.0, -9.0, 1.0]).unwrap();
+        assert_eq!(planes.len(), 5);
+        assert!(near.iter().all(|&c| on(planes[0], c)));
+        for i in 0..4 {
+            let pl = planes[i + 1];
+            assert!(
+                on(pl, lp) && on(pl, near[i]) && on(pl, near[(i + 1) % 4]),
+                "plane {i}"
+            );
+        }
+        let centroid = (near.iter().copied().sum::<DVec3>() + lp) / 5.0;
+        assert!(planes.iter().all(|&pl| eval(pl, centroid) > 0.0));
+        // The same light as (w·P, w).
+        let planes_w = near_clip_volume(near, [-6.0, 8.0, -18.0, 2.0]).unwrap();
+        for (a, b) in planes.iter().zip(&planes_w) {
+            assert!((*a - *b).abs().max_element() < 1e-12);
+        }
+        // A directional light: the side planes hold corners i, i + 1 and are parallel to the
+        // direction; a point a step from the rectangle's centre towards the light is inside.
+        let d = Vec3::new(0.2, -0.3, -1.0).as_dvec3(); // the f32 light the function sees
+        let planes = near_clip_volume(near, [0.2, -0.3, -1.0, 0.0]).unwrap();
+        assert!(near.iter().all(|&c| on(planes[0], c)));
+        for i in 0..4 {
+            let pl = planes[i + 1];
+            assert!(on(pl, near[i]) && on(pl, near[(i + 1) % 4]), "plane {i}");
+            assert!(
+                pl.truncate().dot(d).abs() < 1e-9,
+                "plane {i} along the light"
+            );
+        }
+        let centre = near.iter().copied().sum::<DVec3>() / 4.0;
+        assert!(planes.iter().all(|&pl| eval(pl, centre + d * 0.1) > 0.0));
+    }
+
+    #[test]
     fn points_outside_keeps_a_relative_margin() {
         let planes = [DVec4::new(0.0, 0.0, 1.0, 0.0)]; // inside: z >= 0
         let at = |z: f64, spread: f64| {
