@@ -465,6 +465,7 @@ pub fn near_rect_clear_of_shadows(
     near: [DVec3; 4],
     planes: &[Plane],
 ) -> bool {
+    let hull = NearClipHull::new(light, near);
     triangles.iter().all(|t| {
         let v = [
             world[t[0] as usize],
@@ -491,62 +492,86 @@ pub fn near_rect_clear_of_shadows(
             });
         corners_clear || {
             let t = [a, v[1].as_dvec3(), v[2].as_dvec3()];
-            points_outside(&t, planes) || triangle_misses_near_clip(t, light, near)
+            points_outside(&t, planes)
+                || hull
+                    .as_ref()
+                    .is_some_and(|h| triangle_misses_near_clip(t, h))
         }
     })
 }
 
-/// Separating-axis test between the triangle `t` and the near-clip volume of `light` over the
-/// near rectangle `near` (the pyramid from the light, or for a directional light the rectangle
-/// swept towards it): true when some axis among the triangle's normal, the volume's face
-/// normals and the cross products of their edges has the two strictly apart, with a margin of
-/// `10⁻⁹` relative to the coordinates. Complete for convex polyhedra, so it also separates a
-/// triangle that passes a hair beside the light, which no single face plane does.
-fn triangle_misses_near_clip(t: [DVec3; 3], light: [f32; 4], near: [DVec3; 4]) -> bool {
-    let w = f64::from(light[3]);
-    let lxyz = DVec3::new(light[0].into(), light[1].into(), light[2].into());
-    // The apex: a point, or (directional) a direction the rectangle is swept along.
-    let (apex, directional) = if w == 0.0 {
-        (lxyz, true)
-    } else {
-        (lxyz / w, false)
-    };
-    if !apex.is_finite() {
-        return false;
+/// The near-clip volume of one light as the separating-axis test needs it: its apex (a point,
+/// or for a directional light the direction the rectangle is swept along), its edges and face
+/// normals, and the largest coordinate. Built once per light and object, not per triangle.
+struct NearClipHull {
+    apex: DVec3,
+    directional: bool,
+    near: [DVec3; 4],
+    edges: Vec<DVec3>,
+    face_axes: Vec<DVec3>,
+    scale: f64,
+}
+
+impl NearClipHull {
+    /// `None` when the light's point is not finite (then nothing is proven separate).
+    fn new(light: [f32; 4], near: [DVec3; 4]) -> Option<Self> {
+        let w = f64::from(light[3]);
+        let lxyz = DVec3::new(light[0].into(), light[1].into(), light[2].into());
+        let (apex, directional) = if w == 0.0 {
+            (lxyz, true)
+        } else {
+            (lxyz / w, false)
+        };
+        if !apex.is_finite() {
+            return None;
+        }
+        let scale = near
+            .iter()
+            .fold(0.0f64, |m, p| m.max(p.abs().max_element()))
+            .max(if directional {
+                0.0
+            } else {
+                apex.abs().max_element()
+            });
+        let mut edges = Vec::with_capacity(8);
+        let mut face_axes = Vec::with_capacity(5);
+        for i in 0..4 {
+            let (x, y) = (near[i], near[(i + 1) % 4]);
+            let to_apex = if directional { apex } else { apex - x };
+            edges.push(y - x);
+            if !directional {
+                edges.push(to_apex);
+            }
+            face_axes.push((y - x).cross(to_apex));
+        }
+        if directional {
+            edges.push(apex);
+        }
+        face_axes.push((near[1] - near[0]).cross(near[3] - near[0]));
+        Some(Self {
+            apex,
+            directional,
+            near,
+            edges,
+            face_axes,
+            scale,
+        })
     }
+}
+
+/// Separating-axis test between the triangle `t` and the near-clip volume `hull` (the pyramid
+/// from the light over the near rectangle, or for a directional light the rectangle swept
+/// towards it): true when some axis among the volume's face normals, the triangle's normal and
+/// the cross products of their edges has the two strictly apart, with a margin of `10⁻⁹`
+/// relative to the coordinates. Complete for convex polyhedra, so it also separates a triangle
+/// that passes a hair beside the light, which no single face plane does.
+fn triangle_misses_near_clip(t: [DVec3; 3], hull: &NearClipHull) -> bool {
     let scale = t
         .iter()
-        .chain(near.iter())
-        .fold(0.0f64, |m, p| m.max(p.abs().max_element()))
-        .max(if directional {
-            0.0
-        } else {
-            apex.abs().max_element()
-        })
+        .fold(hull.scale, |m, p| m.max(p.abs().max_element()))
         .max(1e-30);
-    let mut volume_edges = Vec::with_capacity(8);
-    let mut axes = Vec::with_capacity(32);
-    for i in 0..4 {
-        let (x, y) = (near[i], near[(i + 1) % 4]);
-        let to_apex = if directional { apex } else { apex - x };
-        volume_edges.push(y - x);
-        if !directional {
-            volume_edges.push(to_apex);
-        }
-        axes.push((y - x).cross(to_apex));
-    }
-    if directional {
-        volume_edges.push(apex);
-    }
-    axes.push((near[1] - near[0]).cross(near[3] - near[0]));
     let tri_edges = [t[1] - t[0], t[2] - t[1], t[0] - t[2]];
-    axes.push(tri_edges[0].cross(tri_edges[1]));
-    for e in tri_edges {
-        for &f in &volume_edges {
-            axes.push(e.cross(f));
-        }
-    }
-    axes.iter().any(|&u| {
+    let separates = |u: DVec3| {
         let ulen = u.length();
         if !(ulen > 0.0 && ulen.is_finite()) {
             return false;
@@ -559,25 +584,30 @@ fn triangle_misses_near_clip(t: [DVec3; 3], light: [f32; 4], near: [DVec3; 4]) -
                 (lo.min(d), hi.max(d))
             });
         let (mut vlo, mut vhi) =
-            near.iter()
+            hull.near
+                .iter()
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
                     let d = u.dot(*p);
                     (lo.min(d), hi.max(d))
                 });
-        if directional {
-            let d = u.dot(apex);
+        let d = u.dot(hull.apex);
+        if hull.directional {
             if d > 0.0 {
                 vhi = f64::INFINITY;
             } else if d < 0.0 {
                 vlo = f64::NEG_INFINITY;
             }
         } else {
-            let d = u.dot(apex);
             vlo = vlo.min(d);
             vhi = vhi.max(d);
         }
         thi < vlo - margin || vhi < tlo - margin
-    })
+    };
+    hull.face_axes.iter().any(|&u| separates(u))
+        || separates(tri_edges[0].cross(tri_edges[1]))
+        || tri_edges
+            .iter()
+            .any(|&e| hull.edges.iter().any(|&f| separates(e.cross(f))))
 }
 
 /// One object as the plan sees it, for [`choose`].
@@ -805,8 +835,7 @@ mod tests {
             let planes = near_clip_volume(above, light).unwrap();
             assert!(!triangle_misses_near_clip(
                 [0, 1, 2].map(|i| world[i].as_dvec3()),
-                light,
-                above
+                &NearClipHull::new(light, above).unwrap()
             ));
             assert_eq!(
                 near_rect_clear_of_shadows(&world, &[[0, 1, 2]], light, above, &planes),
