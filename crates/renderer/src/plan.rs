@@ -912,6 +912,30 @@ mod tests {
     }
 
     #[test]
+    fn separating_axis_keeps_a_relative_margin() {
+        // A large triangle parallel to the near plane, just on the camera's side of it: only
+        // the near plane's normal can part it from the pyramid of the light at z = −10 over
+        // the rectangle at z = −1. The margin is 10⁻⁹ of |axis| · the largest coordinate (20
+        // here), so a gap of 5·10⁻¹⁰ of the scale is not trusted and 10⁻⁶ is; the same holds
+        // with everything scaled by 2^±20, since the margin is relative.
+        for s in [1.0, 2f64.powi(20), 2f64.powi(-20)] {
+            let near = near_rect().map(|p| p * s);
+            let hull = NearClipHull::new([0.0, 0.0, (-10.0 * s) as f32, 1.0], near).unwrap();
+            let tri = |gap: f64| {
+                let z = s * (-1.0 + 20.0 * gap);
+                [
+                    DVec3::new(-20.0 * s, -20.0 * s, z),
+                    DVec3::new(20.0 * s, -20.0 * s, z),
+                    DVec3::new(0.0, 20.0 * s, z),
+                ]
+            };
+            assert!(!triangle_misses_near_clip(tri(5e-10), &hull), "scale {s}");
+            assert!(triangle_misses_near_clip(tri(1e-6), &hull), "scale {s}");
+            assert!(!triangle_misses_near_clip(tri(0.0), &hull), "scale {s}");
+        }
+    }
+
+    #[test]
     fn frustum_culls_shadow_behind_the_camera() {
         let eye = DVec3::ZERO;
         let planes = frustum_planes(eye, near_rect());
