@@ -1,11 +1,11 @@
 //! The OpenCL backend on a real OpenCL platform (PoCL in CI), against the `cpu` reference.
 //!
-//! Without a platform these tests print a visible `SKIPPED` line and pass, except under
-//! `CI=true`, where a missing platform fails the run.
+//! Without a platform each test is ignored with the reason (`ignored (opencl backend unavailable: ...)`),
+//! except under `CI=true`, where a missing platform fails it (`shadowvol_test_support::skip`).
 
 mod common;
 
-use common::{all_cases, in_ci, start};
+use common::{all_cases, start};
 use shadowvol_cpu::CpuBackend;
 use shadowvol_opencl::twin::TwinBackend;
 use shadowvol_opencl::{
@@ -14,6 +14,19 @@ use shadowvol_opencl::{
 use shadowvol_silhouette::{
     extract_once, invariant, Accuracy, BackendError, Light, Multiplicities, SilhouetteBackend,
 };
+use shadowvol_test_support::{main, skip, Outcome};
+
+main!(
+    conformance_exact_with_device_default_filter,
+    conformance_exact_with_forced_f32_filter,
+    pocl_has_fp64_so_both_exact_paths_are_covered,
+    broken_kernel_reports_the_compiler_log,
+    kernel_without_entry_point_is_a_build_error,
+    kernel_loads_from_a_path,
+    device_selection_by_index_and_name,
+    bad_calls_are_errors,
+    prepared_scene_is_reused_across_calls_light_counts_and_modes,
+);
 
 fn options(force_f32_filter: bool) -> OpenClOptions {
     OpenClOptions {
@@ -25,10 +38,8 @@ fn options(force_f32_filter: bool) -> OpenClOptions {
 /// Every case, every mode: exact identical to cpu (and the uncertain count equal to the twin's
 /// with the same filter), robust and ordered closed, and (with contraction off) the f32 modes
 /// identical to cpu too.
-fn conformance(force_f32_filter: bool, test: &str) {
-    let Some(mut cl) = start(options(force_f32_filter), test) else {
-        return;
-    };
+fn conformance(force_f32_filter: bool, test: &str) -> Outcome {
+    let mut cl = start(options(force_f32_filter))?;
     let use_f64 = cl.uses_f64_filter();
     assert_eq!(use_f64, !force_f32_filter && cl.device().fp64);
     eprintln!("{test}: {} (f64 filter: {use_f64})", cl.info().device);
@@ -90,26 +101,19 @@ fn conformance(force_f32_filter: bool, test: &str) {
     }
     // The extra cases include pairs no filter can certify (light in a face plane).
     assert!(total_uncertain > 4096, "{total_uncertain} uncertain pairs");
+    Ok(())
 }
 
-#[test]
-fn conformance_exact_with_device_default_filter() {
-    conformance(false, "conformance_exact_with_device_default_filter");
+fn conformance_exact_with_device_default_filter() -> Outcome {
+    conformance(false, "conformance_exact_with_device_default_filter")
 }
 
-#[test]
-fn conformance_exact_with_forced_f32_filter() {
-    conformance(true, "conformance_exact_with_forced_f32_filter");
+fn conformance_exact_with_forced_f32_filter() -> Outcome {
+    conformance(true, "conformance_exact_with_forced_f32_filter")
 }
 
-#[test]
-fn pocl_has_fp64_so_both_exact_paths_are_covered() {
-    let Some(cl) = start(
-        options(false),
-        "pocl_has_fp64_so_both_exact_paths_are_covered",
-    ) else {
-        return;
-    };
+fn pocl_has_fp64_so_both_exact_paths_are_covered() -> Outcome {
+    let cl = start(options(false))?;
     if cl
         .device()
         .platform_name
@@ -126,26 +130,20 @@ fn pocl_has_fp64_so_both_exact_paths_are_covered() {
             cl.uses_f64_filter()
         );
     }
+    Ok(())
 }
 
-#[test]
-fn broken_kernel_reports_the_compiler_log() {
+fn broken_kernel_reports_the_compiler_log() -> Outcome {
     let opts = OpenClOptions {
         kernel: KernelSource::Text(
             "__kernel void silhouette(__global int* x) { x[0] = undeclared_thing + ; }".into(),
         ),
         ..OpenClOptions::from_env()
     };
-    let Some(err) = (match OpenClBackend::with_options(opts) {
+    let err = match OpenClBackend::with_options(opts) {
         Ok(_) => panic!("a broken kernel must not build"),
-        Err(e @ BackendError::Unavailable { .. }) => {
-            assert!(!in_ci(), "CI=true but OpenCL is unavailable: {e}");
-            eprintln!("SKIPPED broken_kernel_reports_the_compiler_log: {e}");
-            None
-        }
-        Err(e) => Some(e),
-    }) else {
-        return;
+        Err(e @ BackendError::Unavailable { .. }) => return Err(skip(e)),
+        Err(e) => e,
     };
     match &err {
         BackendError::Build { what, log, .. } => {
@@ -160,34 +158,29 @@ fn broken_kernel_reports_the_compiler_log() {
     }
     // The message shown to users carries the log.
     assert!(err.to_string().contains("undeclared_thing"));
+    Ok(())
 }
 
-#[test]
-fn kernel_without_entry_point_is_a_build_error() {
+fn kernel_without_entry_point_is_a_build_error() -> Outcome {
     let opts = OpenClOptions {
         kernel: KernelSource::Text("__kernel void other(__global int* x) { x[0] = 1; }".into()),
         ..OpenClOptions::from_env()
     };
     match OpenClBackend::with_options(opts) {
         Err(BackendError::Build { log, .. }) => assert!(log.contains("silhouette"), "{log}"),
-        Err(e @ BackendError::Unavailable { .. }) => {
-            assert!(!in_ci(), "CI=true but OpenCL is unavailable: {e}");
-            eprintln!("SKIPPED kernel_without_entry_point_is_a_build_error: {e}");
-        }
+        Err(e @ BackendError::Unavailable { .. }) => return Err(skip(e)),
         other => panic!("expected BackendError::Build, got {other:?}"),
     }
+    Ok(())
 }
 
-#[test]
-fn kernel_loads_from_a_path() {
+fn kernel_loads_from_a_path() -> Outcome {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../kernels/silhouette.cl");
     let opts = OpenClOptions {
         kernel: KernelSource::Path(path.clone()),
         ..OpenClOptions::from_env()
     };
-    let Some(mut cl) = start(opts, "kernel_loads_from_a_path") else {
-        return;
-    };
+    let mut cl = start(opts)?;
     assert!(cl
         .info()
         .details
@@ -210,18 +203,11 @@ fn kernel_loads_from_a_path() {
     };
     let err = OpenClBackend::with_options(missing).unwrap_err();
     assert!(err.to_string().contains("no-such-kernel.cl"), "{err}");
+    Ok(())
 }
 
-#[test]
-fn device_selection_by_index_and_name() {
-    let devices = match list_devices() {
-        Ok(d) => d,
-        Err(e) => {
-            assert!(!in_ci(), "CI=true but OpenCL is unavailable: {e}");
-            eprintln!("SKIPPED device_selection_by_index_and_name: {e}");
-            return;
-        }
-    };
+fn device_selection_by_index_and_name() -> Outcome {
+    let devices = list_devices().map_err(skip)?;
     let first = &devices[0];
     let by_index = select_device(
         &devices,
@@ -249,27 +235,20 @@ fn device_selection_by_index_and_name() {
             other => panic!("selector {bad:?}: expected Unavailable, got {other:?}"),
         }
     }
-    let Some(cl) = start(
-        OpenClOptions {
-            device: Some("0:0".into()),
-            ..OpenClOptions::default()
-        },
-        "select 0:0",
-    ) else {
-        return;
-    };
+    let cl = start(OpenClOptions {
+        device: Some("0:0".into()),
+        ..OpenClOptions::default()
+    })?;
     let info = cl.info();
     assert!(
         info.device.contains(&devices[0].platform_name)
             && info.device.contains(&devices[0].device_name)
     );
+    Ok(())
 }
 
-#[test]
-fn bad_calls_are_errors() {
-    let Some(mut cl) = start(options(false), "bad_calls_are_errors") else {
-        return;
-    };
+fn bad_calls_are_errors() -> Outcome {
+    let mut cl = start(options(false))?;
     let case = &all_cases()[0];
     let id = cl.prepare(&case.scene).unwrap();
     let mut out = Multiplicities::default();
@@ -282,13 +261,11 @@ fn bad_calls_are_errors() {
         cl.extract(id, &case.lights, Accuracy::Exact, &mut out),
         Err(BackendError::UnknownScene { .. })
     ));
+    Ok(())
 }
 
-#[test]
-fn prepared_scene_is_reused_across_calls_light_counts_and_modes() {
-    let Some(mut cl) = start(options(false), "prepared_scene_is_reused") else {
-        return;
-    };
+fn prepared_scene_is_reused_across_calls_light_counts_and_modes() -> Outcome {
+    let mut cl = start(options(false))?;
     let mut cpu = CpuBackend::new();
     let cases = all_cases();
     let case = cases
@@ -316,4 +293,5 @@ fn prepared_scene_is_reused_across_calls_light_counts_and_modes() {
             assert!(stats.compute > std::time::Duration::ZERO);
         }
     }
+    Ok(())
 }

@@ -4,8 +4,8 @@
 //! vertices in `robust` and `ordered`, the uncertain count equal to one launch's, and the
 //! statistics summed over the launches. Only a light that does not fit alone is a `Limit` error.
 //!
-//! Without an OpenCL platform these tests print a visible `SKIPPED` line and pass, except under
-//! `CI=true`, where a missing platform fails the run.
+//! Without an OpenCL platform each test is ignored with the reason, except under `CI=true`,
+//! where a missing platform fails it (`shadowvol_test_support::skip`).
 
 mod common;
 
@@ -18,8 +18,16 @@ use shadowvol_silhouette::{
     corpus, extract_once, invariant, Accuracy, BackendError, ExtractStats, Light, Multiplicities,
     SceneObject, SilhouetteBackend, TopologyScene,
 };
+use shadowvol_test_support::{main, Outcome};
 use std::num::NonZeroUsize;
 use std::sync::Arc;
+
+main!(
+    corpus_split_into_light_batches_matches_one_launch_and_cpu,
+    uncertain_records_resolve_into_their_own_light_across_batches,
+    allocation_limit_splits_lights_and_refuses_only_a_light_that_does_not_fit,
+    too_many_uncertain_records_split_the_batch_further,
+);
 
 /// Bytes of one uncertain record in the device buffer.
 const RECORD_BYTES: u64 = (shadowvol_silhouette::gpu::UncertainRecord::WORDS * 4) as u64;
@@ -68,12 +76,8 @@ fn check_split(
         .unwrap_or_else(|e| panic!("{what}: {e}"));
 }
 
-#[test]
-fn corpus_split_into_light_batches_matches_one_launch_and_cpu() {
-    let test = "corpus_split_into_light_batches_matches_one_launch_and_cpu";
-    let Some(mut whole) = start(OpenClOptions::from_env(), test) else {
-        return;
-    };
+fn corpus_split_into_light_batches_matches_one_launch_and_cpu() -> Outcome {
+    let mut whole = start(OpenClOptions::from_env())?;
     let mut cpu = CpuBackend::new();
     let cases: Vec<_> = corpus::cases()
         .into_iter()
@@ -85,9 +89,7 @@ fn corpus_split_into_light_batches_matches_one_launch_and_cpu() {
     );
     let mut split_runs = 0;
     for n_per in [1, 2, 3] {
-        let Some(mut cl) = start(per_launch(n_per), test) else {
-            return;
-        };
+        let mut cl = start(per_launch(n_per))?;
         for case in &cases {
             let scene = case.scene().unwrap();
             let n = case.lights.len();
@@ -116,6 +118,7 @@ fn corpus_split_into_light_batches_matches_one_launch_and_cpu() {
         }
     }
     assert!(split_runs > 0, "no extraction was actually split");
+    Ok(())
 }
 
 /// Uncertain records of a later batch land in that batch's lights: every case with two or more
@@ -123,12 +126,8 @@ fn corpus_split_into_light_batches_matches_one_launch_and_cpu() {
 /// one light per launch, in the given and the reversed light order, equal to `cpu`. The test
 /// also checks that uncertain records do come from batches after the first (so a wrong batch
 /// offset in their resolution would be caught).
-#[test]
-fn uncertain_records_resolve_into_their_own_light_across_batches() {
-    let test = "uncertain_records_resolve_into_their_own_light_across_batches";
-    let Some(mut cl) = start(per_launch(1), test) else {
-        return;
-    };
+fn uncertain_records_resolve_into_their_own_light_across_batches() -> Outcome {
+    let mut cl = start(per_launch(1))?;
     let mut cpu = CpuBackend::new();
     let mut uncertain_after_first = 0;
     for case in common::all_cases().iter().filter(|c| c.lights.len() >= 2) {
@@ -164,6 +163,7 @@ fn uncertain_records_resolve_into_their_own_light_across_batches() {
         uncertain_after_first > 0,
         "no uncertain record came from a batch after the first: the offset is not exercised"
     );
+    Ok(())
 }
 
 /// A grid in the plane z = x with every light in that plane: every (edge, OV, light) is
@@ -190,15 +190,9 @@ fn in_plane_scene() -> (TopologyScene, Vec<Light>) {
 /// two lights' silhouette lists, an extraction takes ceil(n / 2) launches and equals one launch;
 /// just below one light's list it is a `Limit` error with the numbers, and the backend works
 /// again afterwards.
-#[test]
-fn allocation_limit_splits_lights_and_refuses_only_a_light_that_does_not_fit() {
-    let test = "allocation_limit_splits_lights_and_refuses_only_a_light_that_does_not_fit";
-    let (Some(mut cl), Some(mut whole)) = (
-        start(OpenClOptions::from_env(), test),
-        start(OpenClOptions::from_env(), test),
-    ) else {
-        return;
-    };
+fn allocation_limit_splits_lights_and_refuses_only_a_light_that_does_not_fit() -> Outcome {
+    let mut cl = start(OpenClOptions::from_env())?;
+    let mut whole = start(OpenClOptions::from_env())?;
     let mut cpu = CpuBackend::new();
     let (mut checked, mut refused) = (0, 0);
     for case in corpus::cases().iter().filter(|c| c.lights.len() >= 3) {
@@ -294,20 +288,15 @@ fn allocation_limit_splits_lights_and_refuses_only_a_light_that_does_not_fit() {
         checked > 0 && refused < checked,
         "{checked} checked, {refused} refused"
     );
+    Ok(())
 }
 
 /// Exact mode's uncertain records count against the allocation limit too: when a batch's
 /// records do not fit, the batch is split further (down to one light per launch) with the same
 /// result; when one light's records alone do not fit, it is a `Limit` error naming them.
-#[test]
-fn too_many_uncertain_records_split_the_batch_further() {
-    let test = "too_many_uncertain_records_split_the_batch_further";
-    let (Some(mut cl), Some(mut whole)) = (
-        start(OpenClOptions::from_env(), test),
-        start(OpenClOptions::from_env(), test),
-    ) else {
-        return;
-    };
+fn too_many_uncertain_records_split_the_batch_further() -> Outcome {
+    let mut cl = start(OpenClOptions::from_env())?;
+    let mut whole = start(OpenClOptions::from_env())?;
     let mut cpu = CpuBackend::new();
     let (scene, lights) = in_plane_scene();
     let edges = scene.total_edges() as u64;
@@ -364,4 +353,5 @@ fn too_many_uncertain_records_split_the_batch_further() {
     let (want, _) = extract_once(&mut cpu, &scene, &lights, Accuracy::Exact).unwrap();
     assert_eq!(invariant::first_difference(&again, &want), None);
     cl.release(id);
+    Ok(())
 }

@@ -9,8 +9,8 @@
 //! between calls (no extraction is running on the test's side then; PoCL's worker threads
 //! do not read the environment while they run a kernel).
 //!
-//! Without an OpenCL platform the test prints a visible `SKIPPED` line and passes, except under
-//! `CI=true`.
+//! Without an OpenCL platform the test is ignored with the reason, except under `CI=true`, where
+//! it fails (`shadowvol_test_support::skip`).
 
 use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::EdgeTable;
@@ -19,11 +19,10 @@ use shadowvol_silhouette::{
     extract_once, gpu::TIMEOUT_ENV, shapes, Accuracy, BackendError, Light, Multiplicities,
     PreparedId, SilhouetteBackend, TopologyScene,
 };
+use shadowvol_test_support::{main, Outcome};
 use std::time::{Duration, Instant};
 
-fn in_ci() -> bool {
-    shadowvol_silhouette::ci::is_ci()
-}
+main!(a_device_that_does_not_finish_in_time_is_an_error_and_the_backend_recovers);
 
 /// The attempts: (rings of the UV sphere, limit in seconds). The first limit is far below what
 /// the kernel needs on 1.6·10^5 triangles with eight lights on PoCL (tens of milliseconds) and
@@ -102,18 +101,8 @@ fn time_out(cl: &mut OpenClBackend) -> (PreparedId, TopologyScene, &'static str,
     panic!("no extraction timed out, with {TIMEOUT_ENV} down to 1e-6 (see ATTEMPTS)");
 }
 
-#[test]
-fn a_device_that_does_not_finish_in_time_is_an_error_and_the_backend_recovers() {
-    let mut cl = match OpenClBackend::new() {
-        Ok(b) => b,
-        Err(e @ BackendError::Unavailable { .. }) => {
-            assert!(!in_ci(), "CI=true but OpenCL is unavailable: {e}");
-            eprintln!("SKIPPED timeout test: {e}");
-            println!("SKIPPED timeout test: {e}");
-            return;
-        }
-        Err(e) => panic!("the OpenCL backend failed to start: {e}"),
-    };
+fn a_device_that_does_not_finish_in_time_is_an_error_and_the_backend_recovers() -> Outcome {
+    let mut cl = shadowvol_test_support::started("OpenCL", OpenClBackend::new())?;
     let lights = lights();
 
     // 1. The timeout: a Device error naming the variable and its value.
@@ -186,4 +175,5 @@ fn a_device_that_does_not_finish_in_time_is_an_error_and_the_backend_recovers() 
     // Let the abandoned kernel end before the process exits (the driver's exit-time destructors
     // should not race its worker threads).
     std::thread::sleep(kernel_time * 2 + Duration::from_millis(100));
+    Ok(())
 }

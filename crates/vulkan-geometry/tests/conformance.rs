@@ -7,9 +7,16 @@ mod values;
 
 use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy, SilhouetteBackend};
+use shadowvol_test_support::{main, Outcome};
 use shadowvol_vulkan_geometry::twin::{extract_twin, DeviceFilter};
 use shadowvol_vulkan_geometry::{VulkanBackend, VulkanOptions};
 use values::Rule;
+
+main!(
+    corpus_on_vulkan_f64_filter,
+    corpus_on_vulkan_f32_filter,
+    twin_matches_cpu_on_corpus
+);
 
 fn run_corpus(vk: &mut VulkanBackend, test: &str) {
     let mut cpu = CpuBackend::new();
@@ -63,30 +70,24 @@ fn run_corpus(vk: &mut VulkanBackend, test: &str) {
     );
 }
 
-#[test]
-fn corpus_on_vulkan_f64_filter() {
-    let Some(mut vk) = common::backend(VulkanOptions::default(), "corpus_on_vulkan_f64_filter")
-    else {
-        return;
-    };
+fn corpus_on_vulkan_f64_filter() -> Outcome {
+    let mut vk = common::backend(VulkanOptions::default())?;
     run_corpus(&mut vk, "default filter");
+    Ok(())
 }
 
-#[test]
-fn corpus_on_vulkan_f32_filter() {
+fn corpus_on_vulkan_f32_filter() -> Outcome {
     let opts = VulkanOptions {
         force_f32_filter: true,
         ..VulkanOptions::default()
     };
-    let Some(mut vk) = common::backend(opts, "corpus_on_vulkan_f32_filter") else {
-        return;
-    };
+    let mut vk = common::backend(opts)?;
     assert_eq!(vk.filter(), DeviceFilter::F32);
     run_corpus(&mut vk, "f32 filter");
+    Ok(())
 }
 
-#[test]
-fn twin_matches_cpu_on_corpus() {
+fn twin_matches_cpu_on_corpus() -> Outcome {
     let mut cpu = CpuBackend::new();
     for case in corpus::cases() {
         let scene = case.scene().unwrap();
@@ -103,4 +104,5 @@ fn twin_matches_cpu_on_corpus() {
             }
         }
     }
+    Ok(())
 }

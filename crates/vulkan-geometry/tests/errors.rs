@@ -7,13 +7,16 @@ use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
     corpus, BackendError, Multiplicities, SilhouetteBackend, TopologyScene,
 };
+use shadowvol_test_support::{main, Outcome};
 use shadowvol_vulkan_geometry::{ViewProjection, VulkanOptions};
 
-#[test]
-fn bad_input_is_an_error() {
-    let Some(mut vk) = common::backend(VulkanOptions::default(), "bad_input_is_an_error") else {
-        return;
-    };
+main!(
+    bad_input_is_an_error,
+    many_lights_in_one_call_match_one_light_at_a_time
+);
+
+fn bad_input_is_an_error() -> Outcome {
+    let mut vk = common::backend(VulkanOptions::default())?;
     let case = &corpus::cases()[0];
     let scene = case.scene().unwrap();
     let id = vk.prepare(&scene).unwrap();
@@ -77,13 +80,11 @@ fn bad_input_is_an_error() {
         .render_shadow_mask(empty, Light::point(Vec3::ONE), &cam, 8, 8, Accuracy::Exact)
         .unwrap();
     assert!(mask.shadowed.iter().all(|&s| !s));
+    Ok(())
 }
 
-#[test]
-fn many_lights_in_one_call_match_one_light_at_a_time() {
-    let Some(mut vk) = common::backend(VulkanOptions::default(), "many_lights_in_one_call") else {
-        return;
-    };
+fn many_lights_in_one_call_match_one_light_at_a_time() -> Outcome {
+    let mut vk = common::backend(VulkanOptions::default())?;
     for case in corpus::cases() {
         let scene = case.scene().unwrap();
         let id = vk.prepare(&scene).unwrap();
@@ -103,4 +104,5 @@ fn many_lights_in_one_call_match_one_light_at_a_time() {
         }
         vk.release(id);
     }
+    Ok(())
 }

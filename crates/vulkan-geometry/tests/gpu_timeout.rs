@@ -14,8 +14,11 @@ use shadowvol_silhouette::{
     extract_once, gpu::TIMEOUT_ENV, invariant, shapes::uv_sphere_y, Accuracy, BackendError, Light,
     Multiplicities, PreparedId, SilhouetteBackend, TopologyScene,
 };
+use shadowvol_test_support::{main, Outcome};
 use shadowvol_vulkan_geometry::{ViewProjection, VulkanBackend, VulkanOptions};
 use std::time::{Duration, Instant};
+
+main!(tiny_wait_limit_times_out_refuses_work_then_recovers);
 
 const TINY: &str = "0.000001";
 
@@ -76,12 +79,9 @@ fn provoke_timeout(vk: &mut VulkanBackend) -> (PreparedId, TopologyScene) {
     panic!("no extraction timed out under {TIMEOUT_ENV}={TINY}: the limit is not applied");
 }
 
-#[test]
-fn tiny_wait_limit_times_out_refuses_work_then_recovers() {
+fn tiny_wait_limit_times_out_refuses_work_then_recovers() -> Outcome {
     std::env::remove_var(TIMEOUT_ENV);
-    let Some(mut vk) = common::backend(VulkanOptions::from_env(), "tiny_wait_limit") else {
-        return;
-    };
+    let mut vk = common::backend(VulkanOptions::from_env())?;
     let (id, scene) = provoke_timeout(&mut vk);
 
     // The submission is (almost certainly) still running: new work is refused with a clear
@@ -179,4 +179,5 @@ fn tiny_wait_limit_times_out_refuses_work_then_recovers() {
     // The leaked device still runs the late work on the driver's threads; let it finish before
     // the process exits (exit-time destructors of the driver must not race it).
     std::thread::sleep(full_time + Duration::from_millis(200));
+    Ok(())
 }

@@ -8,15 +8,17 @@ use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{
     corpus, extract_once, invariant, Accuracy, Multiplicities, SilhouetteBackend,
 };
+use shadowvol_test_support::{main, Outcome};
 use shadowvol_vulkan_geometry::VulkanOptions;
 use std::num::NonZeroUsize;
 
-#[test]
-fn corpus_split_into_light_batches_matches_one_pass_and_cpu() {
-    let Some(mut whole) = common::backend(VulkanOptions::from_env(), "light batches (one pass)")
-    else {
-        return;
-    };
+main!(
+    corpus_split_into_light_batches_matches_one_pass_and_cpu,
+    uncertain_pairs_resolve_into_their_own_light_across_batches
+);
+
+fn corpus_split_into_light_batches_matches_one_pass_and_cpu() -> Outcome {
+    let mut whole = common::backend(VulkanOptions::from_env())?;
     let mut cpu = CpuBackend::new();
     let cases: Vec<_> = corpus::cases()
         .into_iter()
@@ -32,9 +34,7 @@ fn corpus_split_into_light_batches_matches_one_pass_and_cpu() {
             max_lights_per_batch: NonZeroUsize::new(per_pass),
             ..VulkanOptions::from_env()
         };
-        let Some(mut vk) = common::backend(opts, "light batches") else {
-            return;
-        };
+        let mut vk = common::backend(opts)?;
         for case in &cases {
             let scene = case.scene().unwrap();
             let n = case.lights.len();
@@ -77,19 +77,17 @@ fn corpus_split_into_light_batches_matches_one_pass_and_cpu() {
         );
     }
     assert!(split_runs > 0, "no extraction was actually split");
+    Ok(())
 }
 
 /// Uncertain pairs of a later batch land in that batch's lights: a case whose exact mode needs
 /// host resolution for several lights, one light per pass.
-#[test]
-fn uncertain_pairs_resolve_into_their_own_light_across_batches() {
+fn uncertain_pairs_resolve_into_their_own_light_across_batches() -> Outcome {
     let opts = VulkanOptions {
         max_lights_per_batch: NonZeroUsize::new(1),
         ..VulkanOptions::from_env()
     };
-    let Some(mut vk) = common::backend(opts, "uncertain across batches") else {
-        return;
-    };
+    let mut vk = common::backend(opts)?;
     let mut cpu = CpuBackend::new();
     let mut uncertain_in_split = 0;
     for case in corpus::cases().iter().filter(|c| c.lights.len() >= 2) {
@@ -113,4 +111,5 @@ fn uncertain_pairs_resolve_into_their_own_light_across_batches() {
         uncertain_in_split > 0,
         "the corpus should need host resolution somewhere (degenerate lights)"
     );
+    Ok(())
 }

@@ -10,8 +10,14 @@ use shadowvol_renderer::reference::compare;
 use shadowvol_renderer::{plan, Camera as RefCamera, Frame, Timings};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{SceneObject, SilhouetteBackend, TopologyScene};
+use shadowvol_test_support::{main, Outcome};
 use shadowvol_vulkan_geometry::{ShadowMask, StencilTechnique, ViewProjection, VulkanOptions};
 use std::sync::Arc;
+
+main!(
+    gs_shadow_mask_matches_ray_traced_reference,
+    wrong_light_mask_is_detected
+);
 
 const W: u32 = 128;
 const H: u32 = 128;
@@ -249,14 +255,8 @@ fn cases() -> Vec<Case> {
     v
 }
 
-#[test]
-fn gs_shadow_mask_matches_ray_traced_reference() {
-    let Some(mut vk) = common::backend(
-        VulkanOptions::from_env(),
-        "gs_shadow_mask_matches_ray_traced_reference",
-    ) else {
-        return;
-    };
+fn gs_shadow_mask_matches_ray_traced_reference() -> Outcome {
+    let mut vk = common::backend(VulkanOptions::from_env())?;
     let cases = cases();
     assert!(cases.len() >= 2, "no hard-* scenes found");
     let (mut checked, mut skipped, mut shadowed_somewhere) = (0, 0, false);
@@ -336,15 +336,12 @@ fn gs_shadow_mask_matches_ray_traced_reference() {
         shadowed_somewhere,
         "no reference shadow anywhere: the comparison would be vacuous"
     );
+    Ok(())
 }
 
 /// The metric is not vacuous: a mask rendered for the wrong light is caught.
-#[test]
-fn wrong_light_mask_is_detected() {
-    let Some(mut vk) = common::backend(VulkanOptions::from_env(), "wrong_light_mask_is_detected")
-    else {
-        return;
-    };
+fn wrong_light_mask_is_detected() -> Outcome {
+    let mut vk = common::backend(VulkanOptions::from_env())?;
     let case = cases().pop().unwrap();
     let cam = case.vk_camera();
     let ids = pixel_ids(&cam, &case.world_triangles());
@@ -357,4 +354,5 @@ fn wrong_light_mask_is_detected() {
         bad as f64 / f64::from(W * H) > MAX_ARTIFACT_FRACTION,
         "a mask for another light passed the check ({bad} artifact pixels)"
     );
+    Ok(())
 }

@@ -1,24 +1,27 @@
 //! The corpus and a render under `VK_LAYER_KHRONOS_validation`: no validation message allowed.
 //!
 //! Needs the layer (Debian/Ubuntu: `apt-get install vulkan-validationlayers`). Without it the
-//! test fails under `CI=true` and prints a visible SKIPPED line otherwise.
+//! test fails under `CI=true` and is ignored with the reason otherwise.
 
 mod common;
 
 use glam::Vec3;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy, SilhouetteBackend};
+use shadowvol_test_support::{main, Outcome};
 use shadowvol_vulkan_geometry::{StencilTechnique, ViewProjection, VulkanOptions};
 
-#[test]
-fn corpus_and_render_under_validation_layers() {
+main!(
+    corpus_and_render_under_validation_layers,
+    validation_layer_reports_misuse
+);
+
+fn corpus_and_render_under_validation_layers() -> Outcome {
     let opts = VulkanOptions {
         validation: true,
         ..VulkanOptions::default()
     };
-    let Some(mut vk) = common::backend(opts, "corpus_and_render_under_validation_layers") else {
-        return;
-    };
+    let mut vk = common::backend(opts)?;
     assert!(vk.validation_enabled());
     let mut cpu = CpuBackend::new();
     let cases = corpus::cases();
@@ -64,19 +67,18 @@ fn corpus_and_render_under_validation_layers() {
         "validation messages:\n{}",
         messages.join("\n")
     );
+    Ok(())
 }
 
 /// The layer reports real misuse: a deliberately wrong call produces a message, so an empty log
 /// above means something.
-#[test]
-fn validation_layer_reports_misuse() {
+fn validation_layer_reports_misuse() -> Outcome {
     let opts = VulkanOptions {
         validation: true,
         ..VulkanOptions::default()
     };
-    let Some(vk) = common::backend(opts, "validation_layer_reports_misuse") else {
-        return;
-    };
+    let vk = common::backend(opts)?;
     assert!(vk.provoke_validation_error_for_tests());
     assert!(!vk.validation_messages().is_empty());
+    Ok(())
 }

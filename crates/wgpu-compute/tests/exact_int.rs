@@ -6,16 +6,31 @@
 //!   inputs, with point (`w = 1`), directional (`w = 0`) and general-`w` lights;
 //! * naga validates the WGSL module alone and composed with a test entry point;
 //! * `gpu_*`: on a real wgpu device the WGSL gives exactly the twin's results. Without an adapter
-//!   the device test prints `SKIPPED (no wgpu adapter)` and passes, except under `CI=true`, where
-//!   it fails.
+//!   the device test is ignored with the reason (`ignored (wgpu backend unavailable: ...)`), except under
+//!   `CI=true`, where it fails (`shadowvol_test_support::skip`).
+
+mod common;
 
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 use num_bigint::BigInt;
 use proptest::prelude::*;
 use shadowvol_robust_math::orient_exact;
-use shadowvol_silhouette::SilhouetteBackend;
+use shadowvol_test_support::{main, Outcome};
 use shadowvol_wgpu_compute::exact_int::{mul32, orient_int, EXACT_INT_WGSL};
 use shadowvol_wgpu_compute::{WgpuBackend, WgpuOptions};
+
+main!(
+    twin_equals_orient_exact_and_big_integers_on_the_adversarial_set,
+    constructed_degenerate_inputs_are_zero_and_one_ulp_off_mostly_not,
+    special_values_every_combination_on_a_pattern,
+    prop_mul32_is_the_64_bit_product,
+    prop_twin_equals_orient_exact_on_wild_inputs,
+    prop_twin_is_zero_on_degenerate_and_exact_one_ulp_off,
+    prop_twin_flips_under_odd_and_keeps_under_even_permutations,
+    naga_validates_exact_int_wgsl_alone_without_capabilities,
+    naga_validates_the_composed_test_kernel,
+    gpu_orient_int_equals_twin_and_orient_exact,
+);
 
 /// One input `(A, B, L, O)`.
 type Input = ([f32; 3], [f32; 3], [f32; 4], [f32; 3]);
@@ -451,7 +466,6 @@ fn adversarial_set() -> (Vec<Input>, usize) {
 
 // ---- CPU tests --------------------------------------------------------------------------------
 
-#[test]
 fn twin_equals_orient_exact_and_big_integers_on_the_adversarial_set() {
     let (inputs, adversarial) = adversarial_set();
     let mut counts = [0usize; 3];
@@ -474,7 +488,6 @@ fn twin_equals_orient_exact_and_big_integers_on_the_adversarial_set() {
     assert!(counts[0] > 200 && counts[2] > 200);
 }
 
-#[test]
 fn constructed_degenerate_inputs_are_zero_and_one_ulp_off_mostly_not() {
     let mut r = Rng(7);
     let (mut built, mut nonzero_near, mut near) = (0, 0, 0);
@@ -497,7 +510,6 @@ fn constructed_degenerate_inputs_are_zero_and_one_ulp_off_mostly_not() {
     assert!(nonzero_near * 2 > near);
 }
 
-#[test]
 fn special_values_every_combination_on_a_pattern() {
     // Every special value in every slot, against two base inputs.
     let bases: [Input; 2] = [
@@ -585,13 +597,11 @@ fn degenerate() -> impl Strategy<Value = Degenerate> {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(3000))]
 
-    #[test]
     fn prop_mul32_is_the_64_bit_product(a in any::<u32>(), b in any::<u32>()) {
         let [lo, hi] = mul32(a, b);
         prop_assert_eq!(u64::from(lo) | (u64::from(hi) << 32), u64::from(a) * u64::from(b));
     }
 
-    #[test]
     fn prop_twin_equals_orient_exact_on_wild_inputs(
         a in [component(), component(), component()],
         b in [component(), component(), component()],
@@ -602,7 +612,6 @@ proptest! {
         check((a, b, [l[0], l[1], l[2], w], o));
     }
 
-    #[test]
     fn prop_twin_is_zero_on_degenerate_and_exact_one_ulp_off(
         d in degenerate(),
         i in 0usize..13,
@@ -616,7 +625,6 @@ proptest! {
         }
     }
 
-    #[test]
     fn prop_twin_flips_under_odd_and_keeps_under_even_permutations(
         a in [component(), component(), component()],
         b in [component(), component(), component()],
@@ -699,7 +707,6 @@ fn xi_main(@builtin(global_invocation_id) gid: vec3<u32>) {{
     )
 }
 
-#[test]
 fn naga_validates_exact_int_wgsl_alone_without_capabilities() {
     let on_disk = std::fs::read_to_string(
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shaders/exact_int.wgsl"),
@@ -732,7 +739,6 @@ fn naga_validates_exact_int_wgsl_alone_without_capabilities() {
     assert!(float_ops.is_empty(), "float arithmetic: {float_ops:#?}");
 }
 
-#[test]
 fn naga_validates_the_composed_test_kernel() {
     let (m, info) = validate("exact_int.wgsl + test entry point", &test_kernel());
     assert_eq!(m.entry_points.len(), 1);
@@ -740,22 +746,6 @@ fn naga_validates_the_composed_test_kernel() {
 }
 
 // ---- device ----------------------------------------------------------------------------------
-
-fn backend(test: &str) -> Option<WgpuBackend> {
-    match WgpuBackend::new(WgpuOptions::default()) {
-        Ok(b) => {
-            eprintln!("{test}: running on {}", b.info().device);
-            Some(b)
-        }
-        Err(e) => {
-            if shadowvol_silhouette::ci::is_ci() {
-                panic!("{test}: CI=true, but the wgpu backend is unavailable: {e}");
-            }
-            eprintln!("{test}: SKIPPED (no wgpu adapter): {e}");
-            None
-        }
-    }
-}
 
 /// Runs the test kernel on `inputs` and returns the device's `orient_int` results.
 fn run_on_device(b: &WgpuBackend, inputs: &[Input]) -> Vec<i32> {
@@ -833,11 +823,11 @@ fn run_on_device(b: &WgpuBackend, inputs: &[Input]) -> Vec<i32> {
     bytemuck::cast_slice::<u8, i32>(&v).to_vec()
 }
 
-#[test]
-fn gpu_orient_int_equals_twin_and_orient_exact() {
-    let Some(b) = backend("gpu_orient_int_equals_twin_and_orient_exact") else {
-        return;
-    };
+fn gpu_orient_int_equals_twin_and_orient_exact() -> Outcome {
+    let b = common::backend(
+        "gpu_orient_int_equals_twin_and_orient_exact",
+        WgpuOptions::default(),
+    )?;
     let (mut inputs, adversarial) = adversarial_set();
     // The special-value pattern too, in every slot.
     for i in 0..13 {
@@ -876,4 +866,5 @@ fn gpu_orient_int_equals_twin_and_orient_exact() {
         inputs.len(),
         &mismatches[..mismatches.len().min(8)]
     );
+    Ok(())
 }

@@ -1,34 +1,32 @@
 //! Device tests (Mesa lavapipe in CI, any wgpu adapter elsewhere). Every test is named `gpu_*`.
-//! Without an adapter they print `SKIPPED (no wgpu adapter)` and pass, except under `CI=true`,
-//! where a missing adapter fails the run.
+//! Without an adapter each is ignored with the reason (`ignored (wgpu backend unavailable:
+//! ...)`), except under `CI=true`, where a missing adapter fails it
+//! (`shadowvol_test_support::skip`).
 
 mod common;
 #[path = "../../../tests/support/values.rs"]
 mod values;
 
+use common::backend;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_robust_math::Accuracy;
 use shadowvol_silhouette::{
     extract_once, invariant, BackendError, Light, Multiplicities, SilhouetteBackend, TopologyScene,
 };
+use shadowvol_test_support::{main, Outcome};
 use shadowvol_wgpu_compute::{ExactFilter, WgpuBackend, WgpuOptions};
 use values::Rule;
 
-fn backend(test: &str, options: WgpuOptions) -> Option<WgpuBackend> {
-    match WgpuBackend::new(options) {
-        Ok(b) => {
-            eprintln!("{test}: running on {}", b.info().device);
-            Some(b)
-        }
-        Err(e) => {
-            if shadowvol_silhouette::ci::is_ci() {
-                panic!("{test}: CI=true, but the wgpu backend is unavailable: {e}");
-            }
-            eprintln!("{test}: SKIPPED (no wgpu adapter): {e}");
-            None
-        }
-    }
-}
+main!(
+    gpu_corpus_exact_identical_to_cpu_decided_on_the_device,
+    gpu_corpus_exact_identical_to_cpu_with_preferred_filter,
+    gpu_corpus_exact_identical_to_cpu_with_forced_f32_filter,
+    gpu_corpus_f32_modes_values_and_closed_chains,
+    gpu_full_readback_chunking_and_device_buffers_agree,
+    gpu_errors_are_reported_not_panics,
+    gpu_buffer_limits_chunk_lights_or_refuse_with_numbers,
+    gpu_lost_device_is_an_error_not_a_panic
+);
 
 fn cpu_result(scene: &TopologyScene, lights: &[Light], mode: Accuracy) -> Multiplicities {
     extract_once(&mut CpuBackend::new(), scene, lights, mode)
@@ -58,20 +56,17 @@ fn exact_equals_cpu(b: &mut WgpuBackend) -> Vec<(String, u64)> {
 
 /// The default: exact mode decides on the device what its filter cannot certify
 /// (`orient_int`), with either filter, so nothing goes to the host.
-#[test]
-fn gpu_corpus_exact_identical_to_cpu_decided_on_the_device() {
+fn gpu_corpus_exact_identical_to_cpu_decided_on_the_device() -> Outcome {
     for force_f32_filter in [false, true] {
         let options = WgpuOptions {
             force_f32_filter,
             ..WgpuOptions::default()
         };
         assert!(options.exact_on_device);
-        let Some(mut b) = backend(
+        let mut b = backend(
             "gpu_corpus_exact_identical_to_cpu_decided_on_the_device",
             options,
-        ) else {
-            return;
-        };
+        )?;
         let counts = exact_equals_cpu(&mut b);
         for (name, n) in &counts {
             assert_eq!(
@@ -84,19 +79,17 @@ fn gpu_corpus_exact_identical_to_cpu_decided_on_the_device() {
         // The same corpus does leave triples to the host without the device fallback, so the
         // integer path really decided them (checked by the two tests below).
     }
+    Ok(())
 }
 
-#[test]
-fn gpu_corpus_exact_identical_to_cpu_with_preferred_filter() {
-    let Some(mut b) = backend(
+fn gpu_corpus_exact_identical_to_cpu_with_preferred_filter() -> Outcome {
+    let mut b = backend(
         "gpu_corpus_exact_identical_to_cpu_with_preferred_filter",
         WgpuOptions {
             exact_on_device: false,
             ..WgpuOptions::default()
         },
-    ) else {
-        return;
-    };
+    )?;
     // SHADER_F64 is requested whenever the adapter has it.
     let f64_device = b.device().features().contains(wgpu::Features::SHADER_F64);
     assert_eq!(b.exact_filter() == ExactFilter::F64, f64_device);
@@ -114,21 +107,19 @@ fn gpu_corpus_exact_identical_to_cpu_with_preferred_filter() {
         let n = counts.iter().find(|(c, _)| c == name).unwrap().1;
         assert!(n > 0, "{name}: no uncertain triples");
     }
+    Ok(())
 }
 
-#[test]
-fn gpu_corpus_exact_identical_to_cpu_with_forced_f32_filter() {
+fn gpu_corpus_exact_identical_to_cpu_with_forced_f32_filter() -> Outcome {
     let options = WgpuOptions {
         force_f32_filter: true,
         exact_on_device: false,
         ..WgpuOptions::default()
     };
-    let Some(mut b) = backend(
+    let mut b = backend(
         "gpu_corpus_exact_identical_to_cpu_with_forced_f32_filter",
         options,
-    ) else {
-        return;
-    };
+    )?;
     assert_eq!(b.exact_filter(), ExactFilter::F32);
     assert!(!b.device().features().contains(wgpu::Features::SHADER_F64));
     let counts = exact_equals_cpu(&mut b);
@@ -141,16 +132,14 @@ fn gpu_corpus_exact_identical_to_cpu_with_forced_f32_filter() {
         let n = counts.iter().find(|(c, _)| c == name).unwrap().1;
         assert!(n > 0, "{name}: the f32 filter certified out-of-range input");
     }
+    Ok(())
 }
 
-#[test]
-fn gpu_corpus_f32_modes_values_and_closed_chains() {
-    let Some(mut b) = backend(
+fn gpu_corpus_f32_modes_values_and_closed_chains() -> Outcome {
+    let mut b = backend(
         "gpu_corpus_f32_modes_values_and_closed_chains",
         WgpuOptions::default(),
-    ) else {
-        return;
-    };
+    )?;
     let rule = Rule::for_device("wgpu", &b.info().device);
     eprintln!("f32 modes compared by the {} rule", rule.name());
     for case in common::all_cases() {
@@ -185,20 +174,19 @@ fn gpu_corpus_f32_modes_values_and_closed_chains() {
             }
         }
     }
+    Ok(())
 }
 
-#[test]
-fn gpu_full_readback_chunking_and_device_buffers_agree() {
+fn gpu_full_readback_chunking_and_device_buffers_agree() -> Outcome {
     // The host fallback, so that uncertain records exist and their buffer must grow.
     let host_fallback = WgpuOptions {
         exact_on_device: false,
         ..WgpuOptions::default()
     };
-    let default = backend(
+    let mut compact = backend(
         "gpu_full_readback_chunking_and_device_buffers_agree",
         host_fallback.clone(),
-    );
-    let Some(mut compact) = default else { return };
+    )?;
     let cases = common::all_cases();
     // The smallest per-dimension cap that still holds the largest case: every case with more
     // workgroups than the cap runs on the 2-D workgroup fold.
@@ -267,6 +255,7 @@ fn gpu_full_readback_chunking_and_device_buffers_agree() {
             assert!(full.gpu_results(id).is_none());
         }
     }
+    Ok(())
 }
 
 /// Reads the device result buffers back (test helper).
@@ -305,11 +294,8 @@ fn read_results(
     (mult, counts, lists)
 }
 
-#[test]
-fn gpu_errors_are_reported_not_panics() {
-    let Some(mut b) = backend("gpu_errors_are_reported_not_panics", WgpuOptions::default()) else {
-        return;
-    };
+fn gpu_errors_are_reported_not_panics() -> Outcome {
+    let mut b = backend("gpu_errors_are_reported_not_panics", WgpuOptions::default())?;
     let case = &common::all_cases()[0];
     let mut m = Multiplicities::default();
     let released = b.prepare(&case.scene).unwrap();
@@ -346,16 +332,14 @@ fn gpu_errors_are_reported_not_panics() {
         .details
         .iter()
         .any(|(k, v)| k == "exact_filter" && v == b.exact_filter().name()));
+    Ok(())
 }
 
-#[test]
-fn gpu_buffer_limits_chunk_lights_or_refuse_with_numbers() {
-    let Some(mut unlimited) = backend(
+fn gpu_buffer_limits_chunk_lights_or_refuse_with_numbers() -> Outcome {
+    let mut unlimited = backend(
         "gpu_buffer_limits_chunk_lights_or_refuse_with_numbers",
         WgpuOptions::default(),
-    ) else {
-        return;
-    };
+    )?;
     let case = common::all_cases()
         .into_iter()
         .find(|c| c.name == "many-objects-transformed")
@@ -397,16 +381,14 @@ fn gpu_buffer_limits_chunk_lights_or_refuse_with_numbers() {
         assert_eq!(res.light_count, 2 - lights.len() % 2);
         assert_eq!(res.first_light + res.light_count, lights.len());
     }
+    Ok(())
 }
 
-#[test]
-fn gpu_lost_device_is_an_error_not_a_panic() {
-    let Some(mut b) = backend(
+fn gpu_lost_device_is_an_error_not_a_panic() -> Outcome {
+    let mut b = backend(
         "gpu_lost_device_is_an_error_not_a_panic",
         WgpuOptions::default(),
-    ) else {
-        return;
-    };
+    )?;
     let case = &common::all_cases()[0];
     let id = b.prepare(&case.scene).unwrap();
     let mut m = Multiplicities::default();
@@ -424,4 +406,5 @@ fn gpu_lost_device_is_an_error_not_a_panic() {
         b.prepare(&case.scene),
         Err(BackendError::Device { .. })
     ));
+    Ok(())
 }

@@ -1,7 +1,10 @@
 //! A wait that runs past `SHADOWVOL_GPU_TIMEOUT` is a device error naming the limit, never a
 //! hang or a panic; with the limit lifted, the same backend goes on and matches `cpu`.
 //!
-//! Its own test binary: it sets a process-wide environment variable.
+//! Its own test binary: it sets a process-wide environment variable. Without an adapter it is
+//! ignored with the reason, except under `CI=true`, where it fails.
+
+mod common;
 
 use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::EdgeTable;
@@ -10,21 +13,16 @@ use shadowvol_silhouette::{
     extract_once, gpu::TIMEOUT_ENV, shapes, BackendError, Light, Multiplicities, SilhouetteBackend,
     TopologyScene,
 };
-use shadowvol_wgpu_compute::{WgpuBackend, WgpuOptions};
+use shadowvol_test_support::{main, Outcome};
+use shadowvol_wgpu_compute::WgpuOptions;
 
-#[test]
-fn gpu_wait_past_the_limit_is_a_device_error_and_the_backend_recovers() {
-    let mut b = match WgpuBackend::new(WgpuOptions::default()) {
-        Ok(b) => b,
-        Err(e) => {
-            assert!(
-                !shadowvol_silhouette::ci::is_ci(),
-                "CI=true, but the wgpu backend is unavailable: {e}"
-            );
-            eprintln!("SKIPPED (no wgpu adapter): {e}");
-            return;
-        }
-    };
+main!(gpu_wait_past_the_limit_is_a_device_error_and_the_backend_recovers);
+
+fn gpu_wait_past_the_limit_is_a_device_error_and_the_backend_recovers() -> Outcome {
+    let mut b = common::backend(
+        "gpu_wait_past_the_limit_is_a_device_error_and_the_backend_recovers",
+        WgpuOptions::default(),
+    )?;
     let lights: Vec<Light> = (0..8)
         .map(|i| Light::point(glam::Vec3::new(3.0 + i as f32, 2.0, -1.5 * i as f32)))
         .collect();
@@ -68,4 +66,5 @@ fn gpu_wait_past_the_limit_is_a_device_error_and_the_backend_recovers() {
     b.extract(id, &lights, Accuracy::Exact, &mut got)
         .expect("the backend recovers once the limit is lifted");
     assert_eq!(got, expected);
+    Ok(())
 }

@@ -6,27 +6,14 @@
 use glam::{Affine3A, Quat, Vec3};
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use shadowvol_opencl::{OpenClBackend, OpenClOptions};
-use shadowvol_silhouette::{corpus, shapes, BackendError, Light, SceneObject, TopologyScene};
+use shadowvol_silhouette::{corpus, shapes, Light, SceneObject, TopologyScene};
+use shadowvol_test_support::Skip;
 use std::sync::Arc;
 
-/// True under `CI=true` (or `CI=1`), where a missing OpenCL platform fails the tests.
-pub fn in_ci() -> bool {
-    shadowvol_silhouette::ci::is_ci()
-}
-
-/// Starts the backend with `options`, or skips (visibly: a `SKIPPED` line) when OpenCL is
-/// unavailable here; under `CI=true` that fails instead.
-pub fn start(options: OpenClOptions, test: &str) -> Option<OpenClBackend> {
-    match OpenClBackend::with_options(options) {
-        Ok(b) => Some(b),
-        Err(e @ BackendError::Unavailable { .. }) => {
-            assert!(!in_ci(), "CI=true but OpenCL is unavailable: {e}");
-            eprintln!("SKIPPED {test}: {e}");
-            println!("SKIPPED {test}: {e}");
-            None
-        }
-        Err(e) => panic!("{test}: the OpenCL backend failed to start: {e}"),
-    }
+/// Starts the backend with `options`, or a visible skip ([`shadowvol_test_support::skip`]:
+/// `ignored (opencl backend unavailable: ...)`; a failure under CI) when OpenCL is unavailable here.
+pub fn start(options: OpenClOptions) -> Result<OpenClBackend, Skip> {
+    shadowvol_test_support::started("OpenCL", OpenClBackend::with_options(options))
 }
 
 /// A named scene with its lights.

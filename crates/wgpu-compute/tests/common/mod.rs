@@ -6,8 +6,24 @@
 
 use glam::{Affine3A, DVec3, Quat, Vec3};
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
+use shadowvol_silhouette::SilhouetteBackend;
 use shadowvol_silhouette::{corpus, shapes, Light, SceneObject, TopologyScene};
+use shadowvol_test_support::Skip;
+use shadowvol_wgpu_compute::{WgpuBackend, WgpuOptions};
 use std::sync::Arc;
+
+/// Starts the backend with `options` (naming its device for `test` on stderr), or a visible skip
+/// (`ignored (wgpu backend unavailable: ...)`; a failure under CI, see
+/// [`shadowvol_test_support::skip`]) when it cannot start here.
+pub fn backend(test: &str, options: WgpuOptions) -> Result<WgpuBackend, Skip> {
+    match WgpuBackend::new(options) {
+        Ok(b) => {
+            eprintln!("{test}: running on {}", b.info().device);
+            Ok(b)
+        }
+        Err(e) => Err(shadowvol_test_support::skip(e)),
+    }
+}
 
 /// A named scene with its lights.
 pub struct Case {
