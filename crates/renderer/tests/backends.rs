@@ -4,12 +4,12 @@ mod common;
 
 use shadowvol_renderer::{hard, RenderOptions, Renderer};
 use shadowvol_robust_math::Accuracy;
+use shadowvol_test_support::{main, Outcome};
 
-#[test]
-fn simd_and_cpu_give_identical_stencils_in_exact_mode() {
-    let Some(mut cpu) = common::renderer(96, 96, Accuracy::Exact) else {
-        return;
-    };
+main!(simd_and_cpu_give_identical_stencils_in_exact_mode);
+
+fn simd_and_cpu_give_identical_stencils_in_exact_mode() -> Outcome {
+    let mut cpu = common::renderer(96, 96, Accuracy::Exact)?;
     let simd = shadowvol_simd::create_backend().expect("the simd backend always starts");
     let mut simd = Renderer::new(simd, RenderOptions::new(96, 96)).unwrap();
     let scenes = [
@@ -28,4 +28,5 @@ fn simd_and_cpu_give_identical_stencils_in_exact_mode() {
             "the scene has shadows"
         );
     }
+    Ok(())
 }

@@ -4,12 +4,12 @@ mod common;
 use glam::Vec3;
 use shadowvol_renderer::{reference, Camera, PlanPolicy, Technique};
 use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_test_support::{main, Outcome};
 
-#[test]
-fn box_on_floor_matches_reference_zpass_and_zfail() {
-    let Some(mut r) = common::renderer(128, 128, Accuracy::Exact) else {
-        return;
-    };
+main!(box_on_floor_matches_reference_zpass_and_zfail);
+
+fn box_on_floor_matches_reference_zpass_and_zfail() -> Outcome {
+    let mut r = common::renderer(128, 128, Accuracy::Exact)?;
     let scene = common::box_on_floor(
         Light::point(Vec3::new(1.5, 6.0, 1.0)),
         Camera::look_at(Vec3::new(4.0, 5.0, 7.0), Vec3::new(0.0, 0.5, 0.0)),
@@ -48,4 +48,5 @@ fn box_on_floor_matches_reference_zpass_and_zfail() {
             assert!(frame.plan.iter().all(|e| e.technique == Technique::ZPass));
         }
     }
+    Ok(())
 }

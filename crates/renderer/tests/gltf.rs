@@ -6,13 +6,13 @@ use glam::{Affine3A, Quat, Vec3};
 use shadowvol_renderer::{reference, RenderScene, Technique};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_scenes::{Camera, Effects, Object, Scene};
+use shadowvol_test_support::{main, Outcome};
 use std::sync::Arc;
 
-#[test]
-fn glb_scene_with_lights_and_camera_matches_the_reference() {
-    let Some(mut r) = common::renderer(128, 96, Accuracy::Exact) else {
-        return;
-    };
+main!(glb_scene_with_lights_and_camera_matches_the_reference);
+
+fn glb_scene_with_lights_and_camera_matches_the_reference() -> Outcome {
+    let mut r = common::renderer(128, 96, Accuracy::Exact)?;
     let cube = Arc::new(common::cuboid(Vec3::splat(-0.5), Vec3::splat(0.5)));
     let scene = Scene {
         name: "glb-test".into(),
@@ -91,4 +91,5 @@ fn glb_scene_with_lights_and_camera_matches_the_reference() {
         cmp.artifact_pixels,
         frame.explain()
     );
+    Ok(())
 }

@@ -12,6 +12,17 @@ use shadowvol_renderer::{
 };
 use shadowvol_robust_math::Light;
 use shadowvol_scenes::{Emission, SpotCone};
+use shadowvol_test_support::{main, Outcome, Skip};
+
+main!(
+    a_spot_cone_only_removes_light_outside_it,
+    range_cuts_the_light_off_at_its_distance,
+    colour_and_intensity_scale_the_light,
+    auto_exposure_is_independent_of_units,
+    casters_the_light_cannot_reach_are_culled,
+    the_range_scissor_changes_no_pixel,
+    the_spot_cone_scissor_changes_no_pixel
+);
 
 const W: u32 = 96;
 
@@ -25,16 +36,16 @@ fn scene(emission: Emission) -> RenderScene {
     s
 }
 
-fn render(scene: &RenderScene, exposure: Exposure) -> Option<Frame> {
+fn render(scene: &RenderScene, exposure: Exposure) -> Result<Frame, Skip> {
     let mut opts = RenderOptions::new(W, W);
     opts.exposure = exposure;
     let mut r = renderer_with(opts)?;
-    Some(r.render(scene).expect("render"))
+    Ok(r.render(scene).expect("render"))
 }
 
 /// Renders, and checks shadows against the ray-traced reference and every agreeing pixel's
 /// colour against the lighting model.
-fn checked(scene: &RenderScene, exposure: Exposure) -> Option<Frame> {
+fn checked(scene: &RenderScene, exposure: Exposure) -> Result<Frame, Skip> {
     let frame = render(scene, exposure)?;
     let cmp = reference::compare(&frame);
     assert_eq!(cmp.artifact_pixels, 0, "shadow artifacts: {cmp:?}");
@@ -44,7 +55,7 @@ fn checked(scene: &RenderScene, exposure: Exposure) -> Option<Frame> {
         shading.mismatched, 0,
         "colours off the lighting model: {shading:?}"
     );
-    Some(frame)
+    Ok(frame)
 }
 
 /// Per pixel, the sum of the three channels.
@@ -67,18 +78,15 @@ fn spot(inner: f32, outer: f32) -> Emission {
     }
 }
 
-#[test]
-fn a_spot_cone_only_removes_light_outside_it() {
+fn a_spot_cone_only_removes_light_outside_it() -> Outcome {
     let x = Exposure::Fixed(0.05);
-    let Some(wide) = checked(
+    let wide = checked(
         &scene(Emission {
             intensity: 30.0,
             ..Emission::default()
         }),
         x,
-    ) else {
-        return;
-    };
+    )?;
     let narrow = checked(&scene(spot(0.2, 0.35)), x).unwrap();
     let (a, b) = (brightness(&wide), brightness(&narrow));
     let darker = a.iter().zip(&b).filter(|(a, b)| b < a).count();
@@ -93,18 +101,16 @@ fn a_spot_cone_only_removes_light_outside_it() {
     let c = brightness(&soft);
     assert!(c.iter().zip(&b).all(|(c, b)| c <= b));
     assert!(c.iter().zip(&b).filter(|(c, b)| c < b).count() > 50);
+    Ok(())
 }
 
-#[test]
-fn range_cuts_the_light_off_at_its_distance() {
+fn range_cuts_the_light_off_at_its_distance() -> Outcome {
     let x = Exposure::Fixed(0.05);
     let base = Emission {
         intensity: 30.0,
         ..Emission::default()
     };
-    let Some(unbounded) = checked(&scene(base), x) else {
-        return;
-    };
+    let unbounded = checked(&scene(base), x)?;
     let ranged = checked(
         &scene(Emission {
             range: Some(7.0),
@@ -116,18 +122,16 @@ fn range_cuts_the_light_off_at_its_distance() {
     let (a, b) = (brightness(&unbounded), brightness(&ranged));
     assert!(a.iter().zip(&b).all(|(a, b)| b <= a));
     assert!(a.iter().zip(&b).filter(|(a, b)| b < a).count() > (W * W / 4) as usize);
+    Ok(())
 }
 
-#[test]
-fn colour_and_intensity_scale_the_light() {
+fn colour_and_intensity_scale_the_light() -> Outcome {
     let x = Exposure::Fixed(0.05);
     let white = Emission {
         intensity: 20.0,
         ..Emission::default()
     };
-    let Some(w) = checked(&scene(white), x) else {
-        return;
-    };
+    let w = checked(&scene(white), x)?;
     let red = checked(
         &scene(Emission {
             color: [1.0, 0.0, 0.0],
@@ -166,12 +170,12 @@ fn colour_and_intensity_scale_the_light() {
         }
     }
     assert!(lit > (W * W / 8) as usize, "only {lit} lit pixels compared");
+    Ok(())
 }
 
 /// Auto exposure keeps a file's units out of the picture: the same light at a thousand times
 /// the candela gives the same image, and not a burnt-out one.
-#[test]
-fn auto_exposure_is_independent_of_units() {
+fn auto_exposure_is_independent_of_units() -> Outcome {
     let a = Emission {
         intensity: 1.0,
         ..Emission::default()
@@ -180,20 +184,18 @@ fn auto_exposure_is_independent_of_units() {
         intensity: 1000.0,
         ..Emission::default()
     };
-    let Some(fa) = checked(&scene(a), Exposure::Auto) else {
-        return;
-    };
+    let fa = checked(&scene(a), Exposure::Auto)?;
     let fb = checked(&scene(b), Exposure::Auto).unwrap();
     let (x, y) = (brightness(&fa), brightness(&fb));
     assert!(x.iter().zip(&y).all(|(x, y)| x.abs_diff(*y) <= 3));
     let burnt = fb.rgba.chunks(4).filter(|p| p[0] == 255).count();
     assert!(burnt < (W * W / 100) as usize, "{burnt} burnt-out pixels");
+    Ok(())
 }
 
 /// A caster outside the cone or beyond the range is culled with the reason, and the image is
 /// the reference's: its shadow would not have been lit anyway.
-#[test]
-fn casters_the_light_cannot_reach_are_culled() {
+fn casters_the_light_cannot_reach_are_culled() -> Outcome {
     let x = Exposure::Fixed(0.05);
     for (emission, why) in [
         (spot(0.05, 0.1), "outside the spot light's cone"),
@@ -208,9 +210,7 @@ fn casters_the_light_cannot_reach_are_culled() {
     ] {
         let mut s = scene(emission);
         s.lights = vec![Light::point(Vec3::new(-4.0, 1.0, 0.0))];
-        let Some(frame) = checked(&s, x) else {
-            return;
-        };
+        let frame = checked(&s, x)?;
         let box_entry = frame.plan.iter().find(|e| e.object_name == "box").unwrap();
         assert_eq!(box_entry.technique, Technique::Culled, "{box_entry:?}");
         assert!(box_entry.reason.contains(why), "{}", box_entry.reason);
@@ -221,17 +221,16 @@ fn casters_the_light_cannot_reach_are_culled() {
             .unwrap();
         assert_ne!(floor.technique, Technique::Culled, "{floor:?}");
     }
+    Ok(())
 }
 
 /// Renders `s` with and without scissor and checks that the image, and every light's stencil
 /// inside its rectangle, are the same pixel for pixel, that each rectangle is smaller than the
 /// image and that more than `min_saved` pixels were kept out of the passes.
-fn assert_scissor_changes_no_pixel(s: &RenderScene, min_saved: usize) {
+fn assert_scissor_changes_no_pixel(s: &RenderScene, min_saved: usize) -> Outcome {
     let mut opts = RenderOptions::new(W, W);
     opts.exposure = Exposure::Fixed(0.05);
-    let Some(mut r) = renderer_with(opts) else {
-        return;
-    };
+    let mut r = renderer_with(opts)?;
     let with = r.render(s).unwrap();
     opts.scissor = false;
     let without = renderer_with(opts).unwrap().render(s).unwrap();
@@ -266,13 +265,13 @@ fn assert_scissor_changes_no_pixel(s: &RenderScene, min_saved: usize) {
     let cmp = reference::compare(&with);
     assert_eq!(cmp.artifact_pixels, 0, "{cmp:?}");
     assert_eq!(reference::shading_check(&with, &cmp, 2).mismatched, 0);
+    Ok(())
 }
 
 /// Scissor: lights with a range draw their stencil and lit passes only over the screen rectangle
 /// of the range sphere. The image and every light's stencil inside the rectangle are the same
 /// pixel for pixel as without it, and the plan reports the rectangle.
-#[test]
-fn the_range_scissor_changes_no_pixel() {
+fn the_range_scissor_changes_no_pixel() -> Outcome {
     let mut s = scene(Emission {
         intensity: 30.0,
         range: Some(2.5),
@@ -288,16 +287,16 @@ fn the_range_scissor_changes_no_pixel() {
         ..Emission::default()
     });
     s.camera = Camera::look_at(Vec3::new(0.0, 16.0, 11.0), Vec3::ZERO);
-    assert_scissor_changes_no_pixel(&s, (W * W / 4) as usize);
+    assert_scissor_changes_no_pixel(&s, (W * W / 4) as usize)?;
+    Ok(())
 }
 
 /// A spot light without a range is scissored to its cone, cut where the scene's bounds end;
 /// a narrow cone and a hemisphere (outer angle π/2, the sphere's box) alike change no pixel.
-#[test]
-fn the_spot_cone_scissor_changes_no_pixel() {
+fn the_spot_cone_scissor_changes_no_pixel() -> Outcome {
     let mut s = scene(spot(0.2, 0.35));
     s.camera = Camera::look_at(Vec3::new(0.0, 16.0, 11.0), Vec3::ZERO);
-    assert_scissor_changes_no_pixel(&s, (W * W / 4) as usize);
+    assert_scissor_changes_no_pixel(&s, (W * W / 4) as usize)?;
     // Two lights: a tilted narrow cone with a range, and a hemisphere without one that shines
     // towards +x, so that only the half of the view beyond its plane can be lit.
     s.lights = vec![
@@ -326,5 +325,6 @@ fn the_spot_cone_scissor_changes_no_pixel() {
             ..Emission::default()
         },
     ];
-    assert_scissor_changes_no_pixel(&s, 0);
+    assert_scissor_changes_no_pixel(&s, 0)?;
+    Ok(())
 }

@@ -13,8 +13,18 @@ use shadowvol_silhouette::{
     BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId, SilhouetteBackend,
     TopologyScene,
 };
+use shadowvol_test_support::{main, Outcome};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
+
+main!(
+    camera_inside_a_shadow_volume_gets_zfail_and_a_correct_image,
+    camera_outside_gets_zpass,
+    directional_light_has_no_back_cap,
+    off_screen_caster_is_culled_unless_its_shadow_reaches_the_view,
+    static_light_reuses_silhouettes_and_a_moving_one_re_extracts,
+    many_objects_several_lights_match_the_reference
+);
 
 fn entry<'a>(
     frame: &'a shadowvol_renderer::Frame,
@@ -41,11 +51,8 @@ fn camera_in_shadow() -> Camera {
     c
 }
 
-#[test]
-fn camera_inside_a_shadow_volume_gets_zfail_and_a_correct_image() {
-    let Some(mut r) = common::renderer(128, 128, Accuracy::Exact) else {
-        return;
-    };
+fn camera_inside_a_shadow_volume_gets_zfail_and_a_correct_image() -> Outcome {
+    let mut r = common::renderer(128, 128, Accuracy::Exact)?;
     let scene = common::box_on_floor(Light::point(Vec3::new(0.0, 6.0, 0.0)), camera_in_shadow());
     let frame = r.render(&scene).unwrap();
     assert_eq!(
@@ -76,13 +83,11 @@ fn camera_inside_a_shadow_volume_gets_zfail_and_a_correct_image() {
         "z-pass inside the volume: {} artifacts",
         wrong.artifact_pixels
     );
+    Ok(())
 }
 
-#[test]
-fn camera_outside_gets_zpass() {
-    let Some(mut r) = common::renderer(128, 128, Accuracy::Exact) else {
-        return;
-    };
+fn camera_outside_gets_zpass() -> Outcome {
+    let mut r = common::renderer(128, 128, Accuracy::Exact)?;
     let scene = common::box_on_floor(
         Light::point(Vec3::new(1.5, 6.0, 1.0)),
         Camera::look_at(Vec3::new(4.0, 5.0, 7.0), Vec3::new(0.0, 0.5, 0.0)),
@@ -106,13 +111,11 @@ fn camera_outside_gets_zpass() {
         differ <= 2,
         "z-pass and z-fail shadow masks differ in {differ} pixels"
     );
+    Ok(())
 }
 
-#[test]
-fn directional_light_has_no_back_cap() {
-    let Some(mut r) = common::renderer(128, 128, Accuracy::Exact) else {
-        return;
-    };
+fn directional_light_has_no_back_cap() -> Outcome {
+    let mut r = common::renderer(128, 128, Accuracy::Exact)?;
     let scene = common::box_on_floor(
         Light::directional(Vec3::new(-0.3, 1.0, -0.1)),
         camera_in_shadow(),
@@ -124,13 +127,11 @@ fn directional_light_has_no_back_cap() {
     let cmp = reference::compare(&frame);
     assert!(cmp.reference_shadow_pixels > 300);
     assert_eq!(cmp.artifact_pixels, 0);
+    Ok(())
 }
 
-#[test]
-fn off_screen_caster_is_culled_unless_its_shadow_reaches_the_view() {
-    let Some(mut r) = common::renderer(128, 128, Accuracy::Exact) else {
-        return;
-    };
+fn off_screen_caster_is_culled_unless_its_shadow_reaches_the_view() -> Outcome {
+    let mut r = common::renderer(128, 128, Accuracy::Exact)?;
     let light = Light::point(Vec3::new(0.0, 6.0, 0.0));
     let camera = Camera::look_at(Vec3::new(0.0, 4.0, 6.0), Vec3::new(0.0, 0.0, 0.0));
     let mut scene = common::box_on_floor(light, camera);
@@ -166,6 +167,7 @@ fn off_screen_caster_is_culled_unless_its_shadow_reaches_the_view() {
     scene.objects.pop();
     let without = reference::compare(&r.render(&scene).unwrap());
     assert!(cmp.reference_shadow_pixels > without.reference_shadow_pixels + 20);
+    Ok(())
 }
 
 /// A real backend (the scalar CPU one) that counts its `extract` calls.
@@ -198,8 +200,7 @@ impl SilhouetteBackend for Counting {
     }
 }
 
-#[test]
-fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() {
+fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() -> Outcome {
     let extracts = Arc::new(AtomicUsize::new(0));
     let lights = Arc::new(AtomicUsize::new(0));
     let backend = Counting {
@@ -207,15 +208,8 @@ fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() {
         extracts: extracts.clone(),
         lights: lights.clone(),
     };
-    let mut r = match Renderer::new(Box::new(backend), RenderOptions::new(96, 96)) {
-        Ok(r) => r,
-        Err(e) => {
-            // Same policy as common::renderer.
-            assert!(!shadowvol_silhouette::ci::is_ci(), "CI=true but: {e}");
-            eprintln!("SKIPPED: {e}");
-            return;
-        }
-    };
+    // Same policy as common::renderer.
+    let mut r = common::started(Renderer::new(Box::new(backend), RenderOptions::new(96, 96)))?;
     let camera = Camera::look_at(Vec3::new(4.0, 5.0, 7.0), Vec3::new(0.0, 0.5, 0.0));
     let mut scene = common::box_on_floor(Light::point(Vec3::new(1.5, 6.0, 1.0)), camera);
     scene
@@ -297,13 +291,11 @@ fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() {
         .plan
         .iter()
         .all(|e| e.silhouette == SilhouetteSource::Extracted));
+    Ok(())
 }
 
-#[test]
-fn many_objects_several_lights_match_the_reference() {
-    let Some(mut r) = common::renderer(128, 128, Accuracy::Exact) else {
-        return;
-    };
+fn many_objects_several_lights_match_the_reference() -> Outcome {
+    let mut r = common::renderer(128, 128, Accuracy::Exact)?;
     let mut scene = RenderScene {
         objects: vec![RenderObject::new(
             "floor",
@@ -352,4 +344,5 @@ fn many_objects_several_lights_match_the_reference() {
             cmp.artifact_pixels
         );
     }
+    Ok(())
 }

@@ -8,22 +8,30 @@ use shadowvol_renderer::resident::{twin, PassFormats, PassFrame, ResidentScene, 
 use shadowvol_renderer::{hard, reference, volume, Camera, Pipeline, RenderOptions, Technique};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{corpus, object_lights, SceneObject, TopologyScene};
+use shadowvol_test_support::{main, skip, Outcome, Skip};
 use std::sync::Arc;
 
-/// A device with the pass, or `None` (visible skip) without an adapter; under `CI=true` a
-/// missing adapter fails.
-fn device() -> Option<(ShadowPass, wgpu::Device, wgpu::Queue)> {
+main!(
+    exact_multiplicities_equal_cpu_bit_for_bit_on_the_corpus_with_no_host_resolution,
+    every_mode_matches_its_twin_and_the_consistent_modes_close_their_chains,
+    exact_mode_decides_subnormal_and_huge_inputs_on_the_device,
+    gpu_pipeline_matches_the_host_pipeline_and_the_reference_on_hard_scenes,
+    timed_gpu_frames_read_nothing_back,
+    exact_gpu_multiplicities_equal_cpu_on_random_lattice_soups,
+    chunked_and_pulled_surfaces_draw_the_same_image
+);
+
+/// A device with the pass, or a visible skip without an adapter; under `CI=true` a missing
+/// adapter fails ([`shadowvol_test_support::skip`]).
+fn device() -> Result<(ShadowPass, wgpu::Device, wgpu::Queue), Skip> {
     let instance =
         wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     let adapter = match pollster::block_on(instance.request_adapter(&Default::default())) {
         Ok(a) => a,
         Err(e) => {
-            assert!(
-                !shadowvol_silhouette::ci::is_ci(),
-                "CI=true but no GPU adapter: {e}"
-            );
-            eprintln!("SKIPPED: no GPU adapter ({e}); install Mesa lavapipe to run this test");
-            return None;
+            return Err(skip(format!(
+                "no GPU adapter ({e}); install Mesa lavapipe to run this test"
+            )))
         }
     };
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
@@ -38,7 +46,14 @@ fn device() -> Option<(ShadowPass, wgpu::Device, wgpu::Queue)> {
         depth: wgpu::TextureFormat::Depth24PlusStencil8,
     };
     let pass = ShadowPass::new(&adapter, &device, &queue, formats).unwrap();
-    Some((pass, device, queue))
+    Ok((pass, device, queue))
+}
+
+/// One [`device`] for the whole process (the proptest's cases share it).
+fn shared_device() -> Result<&'static (ShadowPass, wgpu::Device, wgpu::Queue), Skip> {
+    use std::sync::OnceLock;
+    static GPU: OnceLock<Result<(ShadowPass, wgpu::Device, wgpu::Queue), Skip>> = OnceLock::new();
+    GPU.get_or_init(device).as_ref().map_err(Clone::clone)
 }
 
 /// The scene's objects in object space (transforms are per-frame inputs of the pass).
@@ -155,9 +170,8 @@ fn mixed_techniques(lights: usize, objects: usize) -> Vec<Technique> {
         .collect()
 }
 
-#[test]
-fn exact_multiplicities_equal_cpu_bit_for_bit_on_the_corpus_with_no_host_resolution() {
-    let Some(gpu) = device() else { return };
+fn exact_multiplicities_equal_cpu_bit_for_bit_on_the_corpus_with_no_host_resolution() -> Outcome {
+    let gpu = device()?;
     let mut cpu = shadowvol_cpu::CpuBackend::new();
     let mut integer_total = 0;
     for case in corpus::cases() {
@@ -204,11 +218,11 @@ fn exact_multiplicities_equal_cpu_bit_for_bit_on_the_corpus_with_no_host_resolut
     }
     // The corpus has degenerate cases the filter cannot certify: the integer path is exercised.
     assert!(integer_total > 0, "no triangle reached the integer path");
+    Ok(())
 }
 
-#[test]
-fn every_mode_matches_its_twin_and_the_consistent_modes_close_their_chains() {
-    let Some(gpu) = device() else { return };
+fn every_mode_matches_its_twin_and_the_consistent_modes_close_their_chains() -> Outcome {
+    let gpu = device()?;
     for mode in Accuracy::ALL {
         let mut original_cracked = false;
         for case in corpus::cases() {
@@ -250,13 +264,13 @@ fn every_mode_matches_its_twin_and_the_consistent_modes_close_their_chains() {
             );
         }
     }
+    Ok(())
 }
 
 /// Subnormal and near-`f32::MAX` coordinates: the filter certifies none of them, the integer
 /// path decides them on the device, equal to `cpu`.
-#[test]
-fn exact_mode_decides_subnormal_and_huge_inputs_on_the_device() {
-    let Some(gpu) = device() else { return };
+fn exact_mode_decides_subnormal_and_huge_inputs_on_the_device() -> Outcome {
+    let gpu = device()?;
     let mut cpu = shadowvol_cpu::CpuBackend::new();
     let tet = |s: f32| {
         Mesh::new(
@@ -305,6 +319,7 @@ fn exact_mode_decides_subnormal_and_huge_inputs_on_the_device() {
             );
         }
     }
+    Ok(())
 }
 
 const SIZE: u32 = 128;
@@ -319,18 +334,15 @@ const FINDINGS: [(&str, Accuracy); 3] = [
     ("hard-homogeneous-w", Accuracy::Ordered),
 ];
 
-#[test]
-fn gpu_pipeline_matches_the_host_pipeline_and_the_reference_on_hard_scenes() {
+fn gpu_pipeline_matches_the_host_pipeline_and_the_reference_on_hard_scenes() -> Outcome {
     let mut opts = RenderOptions::new(SIZE, SIZE);
-    let Some(mut host) = common::renderer_with(opts) else {
-        return;
-    };
+    let mut host = common::renderer_with(opts)?;
     opts.pipeline = Pipeline::Gpu;
     let mut gpu = common::renderer_with(opts).unwrap();
     if let Some(why) = gpu.gpu_pipeline_unsupported() {
-        assert!(!shadowvol_silhouette::ci::is_ci(), "CI=true: {why}");
-        eprintln!("SKIPPED: the adapter cannot run the GPU pipeline: {why}");
-        return;
+        return Err(skip(format!(
+            "the adapter cannot run the GPU pipeline: {why}"
+        )));
     }
     let mut report = String::new();
     for mode in [Accuracy::Robust, Accuracy::Ordered, Accuracy::Exact] {
@@ -384,17 +396,17 @@ fn gpu_pipeline_matches_the_host_pipeline_and_the_reference_on_hard_scenes() {
         }
     }
     eprintln!("{report}");
+    Ok(())
 }
 
-#[test]
-fn timed_gpu_frames_read_nothing_back() {
+fn timed_gpu_frames_read_nothing_back() -> Outcome {
     let mut opts = RenderOptions::new(64, 64);
     opts.pipeline = Pipeline::Gpu;
-    let Some(mut r) = common::renderer_with(opts) else {
-        return;
-    };
-    if r.gpu_pipeline_unsupported().is_some() {
-        return;
+    let mut r = common::renderer_with(opts)?;
+    if let Some(why) = r.gpu_pipeline_unsupported() {
+        return Err(skip(format!(
+            "the adapter cannot run the GPU pipeline: {why}"
+        )));
     }
     let scene = common::box_on_floor(
         Light::point(Vec3::new(1.0, 5.0, 1.0)),
@@ -409,6 +421,7 @@ fn timed_gpu_frames_read_nothing_back() {
         t.readback_bytes > 0,
         "the host pipeline brings multiplicities back"
     );
+    Ok(())
 }
 
 /// A coordinate for the proptest: small integers (coplanar and collinear points, shared
@@ -425,18 +438,13 @@ fn coordinate() -> impl proptest::strategy::Strategy<Value = f32> {
 proptest::proptest! {
     #![proptest_config(proptest::test_runner::Config { cases: 48, ..Default::default() })]
 
-    /// Random triangle soups on a lattice (degenerate by construction: duplicate points, shared
-    /// planes, the light on a vertex or in a plane), one light: the device's exact
-    /// multiplicities equal `cpu`'s, its signs the twin's, with nothing decided on the host.
-    #[test]
-    fn exact_gpu_multiplicities_equal_cpu_on_random_lattice_soups(
+    /// The cases of [`exact_gpu_multiplicities_equal_cpu_on_random_lattice_soups`].
+    fn lattice_soup_cases(
         points in proptest::collection::vec((coordinate(), coordinate(), coordinate()), 4..9),
         tris in proptest::collection::vec((0usize..8, 0usize..8, 0usize..8), 1..10),
         light in (coordinate(), coordinate(), coordinate(), proptest::bool::ANY),
     ) {
-        use std::sync::OnceLock;
-        static GPU: OnceLock<Option<(ShadowPass, wgpu::Device, wgpu::Queue)>> = OnceLock::new();
-        let Some(gpu) = GPU.get_or_init(device).as_ref() else { return Ok(()) };
+        let gpu = shared_device().expect("checked before the cases run");
         let n = points.len();
         let positions: Vec<Vec3> = points.iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect();
         let triangles: Vec<[u32; 3]> = tris
@@ -477,6 +485,15 @@ proptest::proptest! {
         let got = multiplicities(&run.records, rs.layout().scene.edge_count());
         proptest::prop_assert_eq!(&got[0], &want);
     }
+}
+
+/// Random triangle soups on a lattice (degenerate by construction: duplicate points, shared
+/// planes, the light on a vertex or in a plane), one light: the device's exact multiplicities
+/// equal `cpu`'s, its signs the twin's, with nothing decided on the host.
+fn exact_gpu_multiplicities_equal_cpu_on_random_lattice_soups() -> Outcome {
+    shared_device()?;
+    lattice_soup_cases();
+    Ok(())
 }
 
 /// A device for the pass with `limits` lowered as given, or `None` without an adapter.
@@ -607,16 +624,8 @@ fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> Vec<u8> {
 /// The surface vertex buffer written in several chunks (a 1 MiB storage-binding limit against
 /// 3.8 MB of surface vertices), and the vertex-pulling fallback (a 2 MiB buffer limit), draw the
 /// same image as one chunk: the same shadow, pixel for pixel up to shading rounding.
-#[test]
-fn chunked_and_pulled_surfaces_draw_the_same_image() {
-    let Some(one) = device_with(|_| {}) else {
-        assert!(
-            !shadowvol_silhouette::ci::is_ci(),
-            "CI=true but no GPU adapter"
-        );
-        eprintln!("SKIPPED: no GPU adapter");
-        return;
-    };
+fn chunked_and_pulled_surfaces_draw_the_same_image() -> Outcome {
+    let one = device_with(|_| {}).ok_or_else(|| skip("no GPU adapter"))?;
     let chunked = device_with(|l| l.max_storage_buffer_binding_size = 1 << 20).unwrap();
     let pulled = device_with(|l| l.max_buffer_size = 2 << 20).unwrap();
     let want = embedded_frame(&one);
@@ -638,4 +647,5 @@ fn chunked_and_pulled_surfaces_draw_the_same_image() {
             .count();
         assert_eq!(differ, 0, "{name}: {differ} pixels differ");
     }
+    Ok(())
 }

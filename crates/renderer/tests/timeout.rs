@@ -8,12 +8,12 @@ use glam::Vec3;
 use shadowvol_renderer::{reference, RenderError};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::gpu::TIMEOUT_ENV;
+use shadowvol_test_support::{main, Outcome};
 
-#[test]
-fn frame_past_the_wait_limit_is_a_device_error_and_the_renderer_recovers() {
-    let Some(mut r) = common::renderer(512, 512, Accuracy::Exact) else {
-        return;
-    };
+main!(frame_past_the_wait_limit_is_a_device_error_and_the_renderer_recovers);
+
+fn frame_past_the_wait_limit_is_a_device_error_and_the_renderer_recovers() -> Outcome {
+    let mut r = common::renderer(512, 512, Accuracy::Exact)?;
     let scene = common::box_on_floor(
         Light::point(Vec3::new(0.5, 6.0, 0.3)),
         shadowvol_renderer::Camera::look_at(Vec3::new(4.0, 3.0, 5.0), Vec3::ZERO),
@@ -41,4 +41,5 @@ fn frame_past_the_wait_limit_is_a_device_error_and_the_renderer_recovers() {
         .expect("renders again with the default limit");
     let cmp = reference::compare(&frame);
     assert_eq!(cmp.artifact_pixels, 0, "{}", frame.explain());
+    Ok(())
 }

@@ -5,28 +5,33 @@ use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::Mesh;
 use shadowvol_renderer::{Camera, RenderError, RenderObject, RenderOptions, RenderScene, Renderer};
 use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_test_support::Skip;
 use std::sync::Arc;
 
-/// A renderer on the `cpu` backend, or `None` (visible skip) without a GPU adapter.
-/// Under `CI=true` a missing adapter fails the test.
-pub fn renderer(width: u32, height: u32, mode: Accuracy) -> Option<Renderer> {
+/// A renderer on the `cpu` backend, or a visible skip without a GPU adapter (see [`started`]).
+pub fn renderer(width: u32, height: u32, mode: Accuracy) -> Result<Renderer, Skip> {
     let mut opts = RenderOptions::new(width, height);
     opts.mode = mode;
     renderer_with(opts)
 }
 
-/// A renderer on the `cpu` backend with `opts`, or `None` as [`renderer`].
-pub fn renderer_with(opts: RenderOptions) -> Option<Renderer> {
-    match Renderer::new(Box::new(shadowvol_cpu::CpuBackend::new()), opts) {
-        Ok(r) => Some(r),
-        Err(RenderError::NoAdapter(why)) => {
-            assert!(
-                !shadowvol_silhouette::ci::is_ci(),
-                "CI=true but no GPU adapter: {why}"
-            );
-            eprintln!("SKIPPED: no GPU adapter ({why}); install Mesa lavapipe to run this test");
-            None
-        }
+/// A renderer on the `cpu` backend with `opts`, or a skip as [`renderer`].
+pub fn renderer_with(opts: RenderOptions) -> Result<Renderer, Skip> {
+    started(Renderer::new(
+        Box::new(shadowvol_cpu::CpuBackend::new()),
+        opts,
+    ))
+}
+
+/// The renderer `result`, or a visible skip ([`shadowvol_test_support::skip`]: `ignored (no GPU
+/// adapter ...)`, a failure under CI) on [`RenderError::NoAdapter`]. Any other error fails the
+/// test.
+pub fn started(result: Result<Renderer, RenderError>) -> Result<Renderer, Skip> {
+    match result {
+        Ok(r) => Ok(r),
+        Err(RenderError::NoAdapter(why)) => Err(shadowvol_test_support::skip(format!(
+            "no GPU adapter ({why}); install Mesa lavapipe to run this test"
+        ))),
         Err(e) => panic!("renderer failed to start: {e}"),
     }
 }
