@@ -14,9 +14,21 @@
 mod common;
 
 use serde_json::Value;
+use shadowvol_test_support::{main, Outcome};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
+
+main!(
+    malformed_inputs_fail_clearly_fast_and_without_panic,
+    subnormal_coordinates_are_accepted_and_exact_on_every_backend,
+    meshes_beyond_u32_indices_are_refused_without_allocating,
+    memory_estimate_refuses_big_tables_with_the_numbers,
+    opencl_kernel_build_failure_is_an_error_not_a_panic,
+    oversized_device_buffers_are_a_limit_error_or_work,
+    backend_auto_is_accepted_by_every_command_and_warns_on_fallback,
+    ten_million_triangles_run_through_simd_and_match_cpu
+);
 
 const BIN: &str = env!("CARGO_BIN_EXE_shadowvol");
 
@@ -77,8 +89,7 @@ fn json_ok(args: &[&str]) -> Value {
 }
 
 /// The backends `shadowvol backends` reports as available here, in registry order.
-#[test]
-fn malformed_inputs_fail_clearly_fast_and_without_panic() {
+fn malformed_inputs_fail_clearly_fast_and_without_panic() -> Outcome {
     // (file, parts the message must contain besides the file name and "error:").
     let cases: Vec<(PathBuf, &[&str])> = vec![
         // Truncated or garbage files.
@@ -263,6 +274,7 @@ fn malformed_inputs_fail_clearly_fast_and_without_panic() {
         slowest = slowest.max(took);
     }
     eprintln!("{} malformed files, slowest {slowest:?}", cases.len());
+    Ok(())
 }
 
 /// `x` as OBJ text that parses back to exactly `x` (Rust prints the shortest round-trip form).
@@ -348,8 +360,7 @@ fn lights_of(args: &[&str]) -> Value {
     v["lights"].clone()
 }
 
-#[test]
-fn subnormal_coordinates_are_accepted_and_exact_on_every_backend() {
+fn subnormal_coordinates_are_accepted_and_exact_on_every_backend() -> Outcome {
     let (text, lights) = subnormal_obj(false);
     let path = write_tmp("subnormal.obj", &text);
     let p = path.to_str().unwrap();
@@ -396,10 +407,10 @@ fn subnormal_coordinates_are_accepted_and_exact_on_every_backend() {
         );
         eprintln!("{backend}: exact == cpu on subnormal coordinates");
     }
+    Ok(())
 }
 
-#[test]
-fn meshes_beyond_u32_indices_are_refused_without_allocating() {
+fn meshes_beyond_u32_indices_are_refused_without_allocating() -> Outcome {
     use shadowvol_mesh_topology::{EdgeTable, MeshError};
     // 2^31 triangles (6.4e9 edge entries) and 2^32 vertices: refused from the counts alone.
     let e = EdgeTable::check_size(1 << 31, 3).unwrap_err();
@@ -411,10 +422,10 @@ fn meshes_beyond_u32_indices_are_refused_without_allocating() {
     );
     let e = EdgeTable::check_size(1, 1 << 32).unwrap_err();
     assert!(e.to_string().contains("vertices is 4294967296"), "{e}");
+    Ok(())
 }
 
-#[test]
-fn memory_estimate_refuses_big_tables_with_the_numbers() {
+fn memory_estimate_refuses_big_tables_with_the_numbers() -> Outcome {
     // The bunny needs 749,648 bytes by the estimate (3,674 triangles, 1,839 vertices).
     let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bunny.obj");
     let b = bunny.to_str().unwrap();
@@ -443,16 +454,11 @@ fn memory_estimate_refuses_big_tables_with_the_numbers() {
         );
         assert!(out.status.success(), "{}", stderr(&out));
     }
+    Ok(())
 }
 
-#[test]
-fn opencl_kernel_build_failure_is_an_error_not_a_panic() {
-    if !common::available_backends().iter().any(|b| b == "opencl") {
-        return common::skip(
-            "opencl_kernel_build_failure_is_an_error_not_a_panic",
-            "no opencl",
-        );
-    }
+fn opencl_kernel_build_failure_is_an_error_not_a_panic() -> Outcome {
+    common::backend_available("opencl")?;
     let bad = write_tmp(
         "broken.cl",
         "__kernel void silhouette(__global int* x) { this is not C; }\n",
@@ -491,22 +497,18 @@ fn opencl_kernel_build_failure_is_an_error_not_a_panic() {
         row["reason"].as_str().unwrap().contains("failed to build"),
         "{row}"
     );
+    Ok(())
 }
 
-#[test]
-fn oversized_device_buffers_are_a_limit_error_or_work() {
+fn oversized_device_buffers_are_a_limit_error_or_work() -> Outcome {
     // 150,000 edges x 240 lights x 4 bytes = 144 MB of multiplicities: more than lavapipe's
     // 128 MiB maxStorageBufferRange. A backend either splits the lights or refuses with the
     // numbers (BackendError::Limit, exit 1); it never panics.
-    let available = common::available_backends();
     let lights: Vec<String> = (0..240)
         .map(|i| format!("--light={},5,{},1", i % 17 - 8, i / 17))
         .collect();
     for backend in ["vulkan"] {
-        if !available.iter().any(|b| b == backend) {
-            common::skip(backend, "not available here");
-            continue;
-        }
+        common::backend_available(backend)?;
         let mut args = vec![
             "silhouette",
             "sphere-100k",
@@ -528,10 +530,10 @@ fn oversized_device_buffers_are_a_limit_error_or_work() {
         }
         eprintln!("{backend}: {took:?}: {}", msg.trim());
     }
+    Ok(())
 }
 
-#[test]
-fn backend_auto_is_accepted_by_every_command_and_warns_on_fallback() {
+fn backend_auto_is_accepted_by_every_command_and_warns_on_fallback() -> Outcome {
     let (out, _) = run(&[
         "silhouette",
         "bunny",
@@ -621,10 +623,10 @@ fn backend_auto_is_accepted_by_every_command_and_warns_on_fallback() {
     ]);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("or auto"), "{}", stderr(&out));
+    Ok(())
 }
 
-#[test]
-fn ten_million_triangles_run_through_simd_and_match_cpu() {
+fn ten_million_triangles_run_through_simd_and_match_cpu() -> Outcome {
     use shadowvol_robust_math::{Accuracy, Light};
     use shadowvol_silhouette::{extract_once, invariant};
     // The unlisted `sphere-10m` preset: one icosphere of 10^7 triangles (5,000,002 vertices,
@@ -661,4 +663,5 @@ fn ten_million_triangles_run_through_simd_and_match_cpu() {
         assert!(m.values(l) == reference.values(l), "light {l}: simd != cpu");
     }
     eprintln!("sphere-10m on simd and cpu: {:?}", t.elapsed());
+    Ok(())
 }

@@ -8,9 +8,18 @@ mod common;
 
 use common::{run, BIN};
 use serde_json::Value;
+use shadowvol_test_support::{main, Outcome, Skip};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+main!(
+    every_kind_of_obj_renders_with_a_default_light_and_ground,
+    gltf_files_without_lights_or_camera_render,
+    no_flags_at_all_writes_stem_png_in_the_current_directory,
+    flags_override_the_defaults,
+    json_report_has_the_contract_keys
+);
 
 /// The size of the compared renders: large enough for a few thousand shadow pixels.
 const SIZE: &str = "160x160";
@@ -23,15 +32,6 @@ fn scratch(name: &str) -> PathBuf {
     ));
     std::fs::create_dir_all(&dir).unwrap();
     dir
-}
-
-/// `true` when the render could not find a GPU adapter and the test may skip (never under CI).
-fn no_adapter(stderr: &str) -> bool {
-    if stderr.contains("no GPU adapter") {
-        common::skip("render (no GPU adapter)", stderr);
-        return true;
-    }
-    false
 }
 
 /// An OBJ text from positions and faces (1-based on output).
@@ -203,8 +203,8 @@ fn real(name: &str) -> String {
 }
 
 /// Renders `file` with only `--size`, `--reference` and `--format json`, and checks the
-/// result; `None` when there is no GPU adapter (outside CI).
-fn render_checked(file: &str, out_dir: &Path) -> Option<Value> {
+/// result; a skip when there is no GPU adapter (a failure under CI).
+fn render_checked(file: &str, out_dir: &Path) -> Result<Value, Skip> {
     let out_png = out_dir.join("out.png");
     let args = [
         "render",
@@ -219,8 +219,8 @@ fn render_checked(file: &str, out_dir: &Path) -> Option<Value> {
     ];
     let out = run(&args);
     let stderr = String::from_utf8_lossy(&out.stderr);
-    if !out.status.success() && no_adapter(&stderr) {
-        return None;
+    if !out.status.success() {
+        common::no_adapter("render", &stderr)?;
     }
     assert!(out.status.success(), "render {file} failed:\n{stderr}");
     let v: Value = serde_json::from_slice(&out.stdout).expect("JSON");
@@ -258,11 +258,10 @@ fn render_checked(file: &str, out_dir: &Path) -> Option<Value> {
         "{file}: {shadow} shadow pixels, {artifacts} artifact, {} boundary, {} undecidable",
         v["boundary_pixels"], v["undecidable_pixels"]
     );
-    Some(v)
+    Ok(v)
 }
 
-#[test]
-fn every_kind_of_obj_renders_with_a_default_light_and_ground() {
+fn every_kind_of_obj_renders_with_a_default_light_and_ground() -> Outcome {
     let dir = scratch("obj");
     let meshes = [
         ("scan", scan()),
@@ -274,28 +273,24 @@ fn every_kind_of_obj_renders_with_a_default_light_and_ground() {
     for (name, text) in meshes {
         let path = dir.join(format!("{name}.obj"));
         std::fs::write(&path, text).unwrap();
-        if render_checked(path.to_str().unwrap(), &dir).is_none() {
-            return;
-        }
+        render_checked(path.to_str().unwrap(), &dir)?;
     }
-    render_checked(&real("reference.obj"), &dir);
+    render_checked(&real("reference.obj"), &dir)?;
     std::fs::remove_dir_all(&dir).ok();
+    Ok(())
 }
 
-#[test]
-fn gltf_files_without_lights_or_camera_render() {
+fn gltf_files_without_lights_or_camera_render() -> Outcome {
     let dir = scratch("gltf");
     for f in ["obj2gltf.glb", "gltfpack.glb", "gltfpack-c.glb"] {
-        if render_checked(&real(f), &dir).is_none() {
-            return;
-        }
+        render_checked(&real(f), &dir)?;
     }
     std::fs::remove_dir_all(&dir).ok();
+    Ok(())
 }
 
 /// With no flag at all, the PNG goes to `STEM.png` in the current directory.
-#[test]
-fn no_flags_at_all_writes_stem_png_in_the_current_directory() {
+fn no_flags_at_all_writes_stem_png_in_the_current_directory() -> Outcome {
     let dir = scratch("bare");
     std::fs::write(dir.join("part.obj"), cad_bracket()).unwrap();
     let out = Command::new(BIN)
@@ -304,8 +299,8 @@ fn no_flags_at_all_writes_stem_png_in_the_current_directory() {
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
-    if !out.status.success() && no_adapter(&stderr) {
-        return;
+    if !out.status.success() {
+        common::no_adapter("render", &stderr)?;
     }
     assert!(out.status.success(), "{stderr}");
     let text = String::from_utf8_lossy(&out.stdout);
@@ -314,12 +309,12 @@ fn no_flags_at_all_writes_stem_png_in_the_current_directory() {
     assert!(text.contains("nothing lies below the casters"), "{text}");
     assert_eq!(&std::fs::read(dir.join("part.png")).unwrap()[1..4], b"PNG");
     std::fs::remove_dir_all(&dir).ok();
+    Ok(())
 }
 
 /// `--light` replaces the default, `--ground off` removes the plane, and a preset keeps its own
 /// receivers under `auto`.
-#[test]
-fn flags_override_the_defaults() {
+fn flags_override_the_defaults() -> Outcome {
     let dir = scratch("flags");
     let path = dir.join("box.obj");
     std::fs::write(&path, quad_box()).unwrap();
@@ -338,8 +333,8 @@ fn flags_override_the_defaults() {
     args.extend(["--light", "1,10,2,1", "--ground", "off"]);
     let out = run(&args);
     let stderr = String::from_utf8_lossy(&out.stderr);
-    if !out.status.success() && no_adapter(&stderr) {
-        return;
+    if !out.status.success() {
+        common::no_adapter("render", &stderr)?;
     }
     let v: Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(v["lights_source"], "flags");
@@ -375,4 +370,64 @@ fn flags_override_the_defaults() {
     assert!(v["ground"].is_null(), "{v}");
     assert_eq!(v["lights_source"], "file");
     std::fs::remove_dir_all(&dir).ok();
+    Ok(())
+}
+
+/// `shadowvol render --format json` keeps the contract's keys; `--diff` writes a PNG. (On the
+/// binary, so that it can skip visibly without an adapter: a unit test cannot.)
+fn json_report_has_the_contract_keys() -> Outcome {
+    let dir = std::env::temp_dir().join(format!("shadowvol-cli-render-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out_png = dir.join("r.png");
+    let diff_png = dir.join("d.png");
+    let out = run(&[
+        "render",
+        "hard-double-sided-sheet",
+        "--out",
+        out_png.to_str().unwrap(),
+        "--size",
+        "64x48",
+        "--backdrop",
+        "--diff",
+        diff_png.to_str().unwrap(),
+        "--format",
+        "json",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() {
+        common::no_adapter("render", &stderr)?;
+    }
+    assert!(out.status.success(), "{stderr}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for key in ["artifact_pixels", "shadow_pixels", "plan", "timings"] {
+        assert!(v.get(key).is_some(), "missing {key}: {v}");
+    }
+    assert!(v["artifact_pixels"].as_u64().is_some());
+    assert!(v["geometric_artifact_pixels"].as_u64().is_some());
+    assert!(v["undecidable_pixels"].as_u64().is_some());
+    assert!(v["boundary_pixels"].as_u64().is_some());
+    assert!(v["shadow_pixels"].as_u64().unwrap() > 0);
+    let plan = v["plan"].as_array().unwrap();
+    assert!(!plan.is_empty());
+    for key in [
+        "light",
+        "object",
+        "technique",
+        "silhouette",
+        "side_quads",
+        "reason",
+    ] {
+        assert!(plan[0].get(key).is_some(), "plan entry without {key}");
+    }
+    for key in ["silhouette_ms", "side_building_ms", "raster_ms"] {
+        assert!(
+            v["timings"][key].as_f64().is_some(),
+            "timings without {key}"
+        );
+    }
+    let png = std::fs::read(&out_png).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    assert_eq!(&std::fs::read(&diff_png).unwrap()[1..4], b"PNG");
+    std::fs::remove_dir_all(&dir).ok();
+    Ok(())
 }

@@ -5,6 +5,13 @@ mod common;
 
 use common::run;
 use serde_json::Value;
+use shadowvol_test_support::{main, Outcome, Skip};
+
+main!(
+    gpu_pipeline_is_the_default_and_timed_frames_read_nothing_back,
+    backend_means_host_and_both_pipelines_agree,
+    gpu_pipeline_with_a_backend_is_refused
+);
 
 fn scratch(name: &str) -> String {
     let dir =
@@ -13,26 +20,21 @@ fn scratch(name: &str) -> String {
     dir.join(name).display().to_string()
 }
 
-/// Runs `render ARGS --format json`; `None` (visible skip, a failure under CI) without an
-/// adapter.
-fn render(args: &[&str]) -> Option<Value> {
+/// Runs `render ARGS --format json`; a visible skip (a failure under CI) without an adapter.
+fn render(args: &[&str]) -> Result<Value, Skip> {
     let mut all = vec!["render"];
     all.extend_from_slice(args);
     all.extend_from_slice(&["--format", "json"]);
     let out = run(&all);
     let stderr = String::from_utf8_lossy(&out.stderr);
-    if stderr.contains("no GPU adapter") {
-        common::skip("render (no GPU adapter)", &stderr);
-        return None;
-    }
+    common::no_adapter("render", &stderr)?;
     assert!(out.status.success(), "shadowvol {all:?} failed:\n{stderr}");
-    Some(serde_json::from_slice(&out.stdout).expect("JSON on stdout"))
+    Ok(serde_json::from_slice(&out.stdout).expect("JSON on stdout"))
 }
 
-#[test]
-fn gpu_pipeline_is_the_default_and_timed_frames_read_nothing_back() {
+fn gpu_pipeline_is_the_default_and_timed_frames_read_nothing_back() -> Outcome {
     let png = scratch("gpu.png");
-    let Some(v) = render(&[
+    let v = render(&[
         "hard-book-3",
         "--size",
         "96x72",
@@ -41,9 +43,7 @@ fn gpu_pipeline_is_the_default_and_timed_frames_read_nothing_back() {
         "--reference",
         "--out",
         &png,
-    ]) else {
-        return;
-    };
+    ])?;
     assert_eq!(v["pipeline"], "gpu", "{v}");
     assert_eq!(v["backend"], "wgpu");
     assert_eq!(v["frame_readback_bytes"], 0);
@@ -65,10 +65,10 @@ fn gpu_pipeline_is_the_default_and_timed_frames_read_nothing_back() {
         plan.iter().any(|e| e["side_quads"].as_u64().unwrap() > 0),
         "{v}"
     );
+    Ok(())
 }
 
-#[test]
-fn backend_means_host_and_both_pipelines_agree() {
+fn backend_means_host_and_both_pipelines_agree() -> Outcome {
     let (a, b) = (scratch("host.png"), scratch("gpu2.png"));
     let args = [
         "hard-double-sided-sheet",
@@ -78,9 +78,7 @@ fn backend_means_host_and_both_pipelines_agree() {
         "--frames",
         "2",
     ];
-    let Some(host) = render(&[&args[..], &["--backend", "simd", "--out", &a]].concat()) else {
-        return;
-    };
+    let host = render(&[&args[..], &["--backend", "simd", "--out", &a]].concat())?;
     assert_eq!(host["pipeline"], "host");
     assert_eq!(host["backend"], "simd");
     // 2 frames, every edge of every object and light as an i32.
@@ -108,10 +106,10 @@ fn backend_means_host_and_both_pipelines_agree() {
         .filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 3))
         .count();
     assert!(differ <= 80 * 60 * 5 / 10_000, "{differ} pixels differ");
+    Ok(())
 }
 
-#[test]
-fn gpu_pipeline_with_a_backend_is_refused() {
+fn gpu_pipeline_with_a_backend_is_refused() -> Outcome {
     let out = run(&[
         "render",
         "hard-book-3",
@@ -128,4 +126,5 @@ fn gpu_pipeline_with_a_backend_is_refused() {
         e.contains("--backend simd selects the host pipeline"),
         "{e}"
     );
+    Ok(())
 }

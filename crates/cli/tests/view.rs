@@ -5,9 +5,15 @@
 mod common;
 
 use common::BIN;
+use shadowvol_test_support::{main, skip, Outcome, Skip};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
+
+main!(
+    view_under_xvfb_matches_render,
+    view_without_a_display_exits_1_naming_the_variables
+);
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("shadowvol-view-{}-{name}", std::process::id()));
@@ -35,9 +41,9 @@ impl Drop for Xvfb {
     }
 }
 
-/// Starts Xvfb on a free display, or `None` (a visible skip) when it is not installed; under
-/// CI a missing Xvfb fails the test.
-fn xvfb() -> Option<Xvfb> {
+/// Starts Xvfb on a free display, or a visible skip when it is not installed; under CI a
+/// missing Xvfb fails the test ([`shadowvol_test_support::skip`]).
+fn xvfb() -> Result<Xvfb, Skip> {
     let found = Command::new("Xvfb")
         .arg("-help")
         .stdout(Stdio::null())
@@ -45,11 +51,7 @@ fn xvfb() -> Option<Xvfb> {
         .status()
         .is_ok();
     if !found {
-        common::skip(
-            "the viewer under Xvfb",
-            "Xvfb is not installed (Debian: apt-get install xvfb)",
-        );
-        return None;
+        return Err(skip("Xvfb is not installed (Debian: apt-get install xvfb)"));
     }
     for n in 0..20 {
         let num = 60 + (std::process::id() as usize + n * 7) % 400;
@@ -77,7 +79,7 @@ fn xvfb() -> Option<Xvfb> {
         let t = Instant::now();
         while t.elapsed() < Duration::from_secs(10) {
             if socket.exists() {
-                return Some(x);
+                return Ok(x);
             }
             std::thread::sleep(Duration::from_millis(50));
         }
@@ -91,11 +93,8 @@ fn rgba(path: &Path) -> image::RgbaImage {
         .to_rgba8()
 }
 
-#[test]
-fn view_under_xvfb_matches_render() {
-    let Some(x) = xvfb() else {
-        return;
-    };
+fn view_under_xvfb_matches_render() -> Outcome {
+    let x = xvfb()?;
     let dir = scratch("xvfb");
     let shot = dir.join("shot.png");
     let out = Command::new(BIN)
@@ -117,9 +116,8 @@ fn view_under_xvfb_matches_render() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!stderr.contains("panicked"), "{stderr}");
-    if !out.status.success() && stderr.contains("no GPU adapter") {
-        common::skip("view (no GPU adapter)", &stderr);
-        return;
+    if !out.status.success() {
+        common::no_adapter("view", &stderr)?;
     }
     assert!(out.status.success(), "view failed:\n{stderr}");
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
@@ -167,10 +165,10 @@ fn view_under_xvfb_matches_render() {
         "no shadow in the screenshot ({dark} dark pixels)"
     );
     std::fs::remove_dir_all(&dir).ok();
+    Ok(())
 }
 
-#[test]
-fn view_without_a_display_exits_1_naming_the_variables() {
+fn view_without_a_display_exits_1_naming_the_variables() -> Outcome {
     let out = Command::new(BIN)
         .env_remove("DISPLAY")
         .env_remove("WAYLAND_DISPLAY")
@@ -184,4 +182,5 @@ fn view_without_a_display_exits_1_naming_the_variables() {
         "{stderr}"
     );
     assert!(!stderr.contains("panicked"));
+    Ok(())
 }

@@ -3,6 +3,7 @@
 #![allow(dead_code)] // each test binary uses a subset
 
 use serde_json::Value;
+use shadowvol_test_support::Skip;
 use std::process::{Command, Output};
 
 /// The `shadowvol` binary built for these tests.
@@ -56,6 +57,8 @@ pub fn available_backends() -> Vec<String> {
 
 /// A skip: fails the test under CI (`shadowvol_silhouette::ci::is_ci`), otherwise prints a
 /// `SKIPPED` line with the reason (on stdout and stderr, so it shows with or without capture).
+/// Only for tests on the standard harness that loop over [`available_backends`]; a test that
+/// skips as a whole returns a [`Skip`] instead ([`shadowvol_test_support::skip`]).
 pub fn skip(what: &str, why: &str) {
     assert!(
         !shadowvol_silhouette::ci::is_ci(),
@@ -63,4 +66,36 @@ pub fn skip(what: &str, why: &str) {
     );
     eprintln!("SKIPPED {what}: {why}");
     println!("SKIPPED {what}: {why}");
+}
+
+/// Whether `backend` is available: `Ok`, or a visible skip naming the reason `shadowvol
+/// backends` gives (a failure under CI, see [`shadowvol_test_support::skip`]).
+pub fn backend_available(backend: &str) -> Result<(), Skip> {
+    let rows = json_of(&["backends", "--format", "json"]);
+    let row = rows
+        .as_array()
+        .expect("an array")
+        .iter()
+        .find(|r| r["name"] == backend)
+        .unwrap_or_else(|| panic!("`shadowvol backends` does not list {backend}"));
+    if row["available"] == Value::Bool(true) {
+        Ok(())
+    } else {
+        Err(shadowvol_test_support::skip(format!(
+            "backend {backend} unavailable: {}",
+            row["reason"]
+        )))
+    }
+}
+
+/// A visible skip ([`shadowvol_test_support::skip`]: ignored with the reason, a failure under
+/// CI) when a command's `stderr` says it found no GPU adapter; `what` names the command.
+pub fn no_adapter(what: &str, stderr: &str) -> Result<(), Skip> {
+    match stderr.lines().find(|l| l.contains("no GPU adapter")) {
+        Some(line) => Err(shadowvol_test_support::skip(format!(
+            "{what}: {}",
+            line.trim()
+        ))),
+        None => Ok(()),
+    }
 }
