@@ -259,13 +259,16 @@ pub fn run(args: &[String]) -> Result<(), String> {
     println!("xtask steps: {passed} passed, {failed} failed, {skipped} skipped");
     if counts.binaries > 0 {
         println!(
-            "({} test binaries; ignored tests are visible skips, listed above with their reason)",
+            "({} test binaries; ignored tests are visible skips, listed with their reason)",
             counts.binaries
         );
         println!(
             "tests: {} passed, {} failed, {} skipped",
             counts.passed, counts.failed, counts.ignored
         );
+        for (name, why) in &counts.skips {
+            println!("  skipped {name}: {why}");
+        }
     }
     if failed == 0 {
         Ok(())
@@ -299,18 +302,38 @@ fn cargo_step(root: &Path, args: &[&str], env: &[(&str, &str)]) -> Outcome {
     }
 }
 
-/// Totals of the `test result:` lines of every test binary.
-#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+/// Totals of the `test result:` lines of every test binary, and the ignored tests by name.
+#[derive(Debug, Default, Clone, PartialEq, Eq)]
 struct TestCounts {
     binaries: u64,
     passed: u64,
     failed: u64,
     ignored: u64,
+    /// `(test, reason)` of every ignored test: a visible skip (libtest-mimic prints
+    /// `test NAME ... ignored (REASON)`, libtest `test NAME ... ignored, REASON`).
+    skips: Vec<(String, String)>,
 }
 
 impl TestCounts {
-    /// Adds one libtest summary line (`test result: ok. 3 passed; 0 failed; 1 ignored; ...`).
+    /// Adds one line of a test binary's output: an ignored test's line, or a summary line
+    /// (`test result: ok. 3 passed; 0 failed; 1 ignored; ...`); other lines are left alone.
     fn add_line(&mut self, line: &str) {
+        if let Some((name, outcome)) = line
+            .trim()
+            .strip_prefix("test ")
+            .and_then(|r| r.split_once(" ... "))
+        {
+            if let Some(why) = outcome.trim().strip_prefix("ignored") {
+                let why = why.trim();
+                let why = why
+                    .strip_prefix('(')
+                    .and_then(|w| w.strip_suffix(')'))
+                    .or_else(|| why.strip_prefix(", "))
+                    .unwrap_or(why);
+                self.skips.push((name.trim().to_owned(), why.to_owned()));
+            }
+            return;
+        }
         let Some(rest) = line.trim().strip_prefix("test result: ") else {
             return;
         };
@@ -659,6 +682,9 @@ mod tests {
         let mut c = TestCounts::default();
         c.add_line("test result: ok. 74 passed; 0 failed; 288 ignored; 0 measured; 0 filtered out; finished in 0.01s");
         c.add_line("running 3 tests");
+        c.add_line("test a_test   ... ignored (opencl backend unavailable: no platform)");
+        c.add_line("test b_test ... ignored, needs the assets");
+        c.add_line("test c_test ... ok");
         c.add_line(
             "test result: FAILED. 1 passed; 2 failed; 0 ignored; 0 measured; 0 filtered out",
         );
@@ -668,7 +694,14 @@ mod tests {
                 binaries: 2,
                 passed: 75,
                 failed: 2,
-                ignored: 288
+                ignored: 288,
+                skips: vec![
+                    (
+                        "a_test".into(),
+                        "opencl backend unavailable: no platform".into()
+                    ),
+                    ("b_test".into(), "needs the assets".into()),
+                ],
             }
         );
     }
