@@ -10,10 +10,11 @@ use crate::NAME;
 use ash::vk;
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
-    BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId, PreparedScenes,
-    SilhouetteBackend, TopologyScene,
+    check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
+    PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
 use std::num::NonZeroUsize;
+use std::time::Instant;
 
 /// Frees device objects (see [`VulkanBackend::retire`]).
 type Cleanup = Box<dyn FnOnce(&Context)>;
@@ -293,7 +294,16 @@ impl SilhouetteBackend for VulkanBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
-        self.extract_impl(id, lights, mode, out)
+        check_lights(lights)?;
+        self.settle()?;
+        self.last_passes = 0;
+        let mut stats = ExtractStats::default();
+        let t = Instant::now();
+        let obj_lights = object_lights(&self.scene(id)?.scene, lights);
+        stats.upload = t.elapsed();
+        out.reset(self.scene(id)?.ds.layout.edge_count(), lights.len());
+        self.extract_batches(id, &obj_lights, mode, out, &mut stats)?;
+        Ok(stats)
     }
 
     fn release(&mut self, id: PreparedId) {

@@ -8,11 +8,9 @@ use crate::layout::{Prepared, UNCERTAIN_HEADER};
 use crate::pipeline::Push;
 use crate::NAME;
 use ash::vk;
-use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_robust_math::Accuracy;
 use shadowvol_silhouette::gpu::{self, UncertainRecord};
-use shadowvol_silhouette::{
-    check_lights, object_lights, BackendError, ExtractStats, Multiplicities, PreparedId,
-};
+use shadowvol_silhouette::{BackendError, ExtractStats, Multiplicities, PreparedId};
 use std::ops::Range;
 use std::time::Instant;
 
@@ -142,37 +140,11 @@ impl VulkanBackend {
                 vk::SubpassContents::INLINE,
             );
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipes.extract);
-            d.cmd_set_viewport(
-                cmd,
-                0,
-                &[vk::Viewport {
-                    x: 0.0,
-                    y: 0.0,
-                    width: 1.0,
-                    height: 1.0,
-                    min_depth: 0.0,
-                    max_depth: 1.0,
-                }],
-            );
-            d.cmd_set_scissor(
-                cmd,
-                0,
-                &[vk::Rect2D {
-                    offset: vk::Offset2D { x: 0, y: 0 },
-                    extent: vk::Extent2D {
-                        width: 1,
-                        height: 1,
-                    },
-                }],
-            );
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                self.pipes.layout,
-                0,
-                &[p.set],
-                &[],
-            );
+            let extent = vk::Extent2D {
+                width: 1,
+                height: 1,
+            };
+            begin_draws(d, cmd, extent, self.pipes.layout, p.set);
             d.cmd_push_constants(
                 cmd,
                 self.pipes.layout,
@@ -186,42 +158,35 @@ impl VulkanBackend {
         }
     }
 
-    /// Runs the GS over every (edge, light), in batches of at most [`Self::lights_per_batch`]
-    /// lights, host-resolves uncertain pairs, and fills `out` (light-major). The stats add up
-    /// over the batches.
-    pub(crate) fn extract_impl(
+    /// Runs the GS over every (edge, light) of the object-space lights `obj_lights` into `out`
+    /// (reset by the caller to the scene's edges and the lights), in batches of at most
+    /// [`Self::lights_per_batch`] lights, host-resolves the uncertain pairs and builds the
+    /// compact silhouette lists; the times of every batch add to `stats`.
+    pub(crate) fn extract_batches(
         &mut self,
         id: PreparedId,
-        lights: &[Light],
+        obj_lights: &[Vec<[f32; 4]>],
         mode: Accuracy,
         out: &mut Multiplicities,
-    ) -> Result<ExtractStats, BackendError> {
-        check_lights(lights)?;
-        self.settle()?;
-        self.last_passes = 0;
-        let mut stats = ExtractStats::default();
-        let t = Instant::now();
-        let obj_lights = object_lights(&self.scene(id)?.scene, lights);
-        stats.upload = t.elapsed();
-
-        let edges = self.scene(id)?.ds.layout.edge_count();
-        out.reset(edges, lights.len());
-        if edges == 0 || lights.is_empty() {
-            return Ok(stats);
+        stats: &mut ExtractStats,
+    ) -> Result<(), BackendError> {
+        let (edges, lights) = (out.edge_count(), out.light_count());
+        if edges == 0 || lights == 0 {
+            return Ok(());
         }
         let per_pass = self.lights_per_batch(edges, obj_lights.len())?;
         let mut first = 0;
-        while first < lights.len() {
-            let batch = first..(first + per_pass).min(lights.len());
+        while first < lights {
+            let batch = first..(first + per_pass).min(lights);
             first = batch.end;
-            self.extract_batch(id, &obj_lights, batch, mode, out, &mut stats)?;
+            self.extract_batch(id, obj_lights, batch, mode, out, stats)?;
             self.last_passes += 1;
         }
         // The compact silhouette lists are built on the host from m; counted as readback.
         let t = Instant::now();
         out.rebuild_silhouettes();
         stats.readback += t.elapsed();
-        Ok(stats)
+        Ok(())
     }
 
     /// One pass over the lights `batch`: uploads them, draws, reads the multiplicities into
@@ -281,6 +246,38 @@ impl VulkanBackend {
         gpu::resolve_uncertain(&p.ds.layout, obj_lights, batch, &records, out, NAME)?;
         stats.host_resolve += t.elapsed();
         Ok(())
+    }
+}
+
+/// Sets the dynamic viewport (depth 0 to 1) and scissor of `cmd` to the whole `extent` and binds
+/// the scene's descriptor set `set` (set 0 of `layout`) for the draws that follow.
+///
+/// # Safety
+/// `cmd` must be recording; `layout` and `set` must be live.
+pub(crate) unsafe fn begin_draws(
+    d: &ash::Device,
+    cmd: vk::CommandBuffer,
+    extent: vk::Extent2D,
+    layout: vk::PipelineLayout,
+    set: vk::DescriptorSet,
+) {
+    let viewport = vk::Viewport {
+        x: 0.0,
+        y: 0.0,
+        width: extent.width as f32,
+        height: extent.height as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    };
+    let scissor = vk::Rect2D {
+        offset: vk::Offset2D { x: 0, y: 0 },
+        extent,
+    };
+    // SAFETY: guaranteed by the caller.
+    unsafe {
+        d.cmd_set_viewport(cmd, 0, &[viewport]);
+        d.cmd_set_scissor(cmd, 0, &[scissor]);
+        d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, layout, 0, &[set], &[]);
     }
 }
 

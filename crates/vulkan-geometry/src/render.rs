@@ -22,13 +22,15 @@
 
 use crate::backend::VulkanBackend;
 use crate::device::{device_err, Buffer, Context};
-use crate::dispatch::host_barrier;
+use crate::dispatch::{begin_draws, host_barrier};
 use crate::pipeline::Push;
 use crate::twin::{touches_light, MODE_PRECOMPUTED};
 use ash::vk;
 use glam::{DMat4, DVec3, DVec4, Vec3};
 use shadowvol_robust_math::{orient_exact, Accuracy, Light};
-use shadowvol_silhouette::{object_lights, BackendError, ExtractStats, Multiplicities, PreparedId};
+use shadowvol_silhouette::{
+    object_lights, BackendError, ExtractStats, Multiplicities, PreparedId, SilhouetteBackend,
+};
 use std::time::{Duration, Instant};
 
 /// The clip-from-world matrix of a pinhole camera, in `f64` (Vulkan clip space: depth in
@@ -321,7 +323,7 @@ impl VulkanBackend {
         let mut stats = RenderStats::default();
         let mode_code = if mode == Accuracy::Exact {
             let mut m = Multiplicities::default();
-            stats.extract = Some(self.extract_impl(id, &[light], mode, &mut m)?);
+            stats.extract = Some(self.extract(id, &[light], mode, &mut m)?);
             let p = self.scene(id)?;
             let l = object_lights(&p.scene, &[light]);
             let ds = &p.ds;
@@ -512,34 +514,7 @@ impl VulkanBackend {
                         .clear_values(&clear),
                     vk::SubpassContents::INLINE,
                 );
-                d.cmd_set_viewport(
-                    cmd,
-                    0,
-                    &[vk::Viewport {
-                        x: 0.0,
-                        y: 0.0,
-                        width: width as f32,
-                        height: height as f32,
-                        min_depth: 0.0,
-                        max_depth: 1.0,
-                    }],
-                );
-                d.cmd_set_scissor(
-                    cmd,
-                    0,
-                    &[vk::Rect2D {
-                        offset: vk::Offset2D { x: 0, y: 0 },
-                        extent,
-                    }],
-                );
-                d.cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::GRAPHICS,
-                    self.pipes.layout,
-                    0,
-                    &[p.set],
-                    &[],
-                );
+                begin_draws(d, cmd, extent, self.pipes.layout, p.set);
                 d.cmd_push_constants(cmd, self.pipes.layout, stages, 0, bytemuck::bytes_of(&push));
                 if corners > 0 {
                     d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipes.depth);
