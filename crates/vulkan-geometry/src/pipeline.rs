@@ -243,31 +243,16 @@ impl Pipelines {
                 .map_err(|e| device_err("vkCreateRenderPass", e))?;
         }
 
-        let entry = c"main";
-        let gs_stages = [
+        let stage = |flags, module| {
             vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::VERTEX)
-                .module(vs_edge)
-                .name(entry),
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::GEOMETRY)
-                .module(gs)
-                .name(entry),
-        ];
-        let extract_stages = [
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::VERTEX)
-                .module(vs_edge)
-                .name(entry),
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::GEOMETRY)
-                .module(gs_extract)
-                .name(entry),
-        ];
-        let depth_stages = [vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::VERTEX)
-            .module(vs_depth)
-            .name(entry)];
+                .stage(flags)
+                .module(module)
+                .name(c"main")
+        };
+        let (vertex, geometry) = (vk::ShaderStageFlags::VERTEX, vk::ShaderStageFlags::GEOMETRY);
+        let gs_stages = [stage(vertex, vs_edge), stage(geometry, gs)];
+        let extract_stages = [stage(vertex, vs_edge), stage(geometry, gs_extract)];
+        let depth_stages = [stage(vertex, vs_depth)];
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
         let points = vk::PipelineInputAssemblyStateCreateInfo::default()
             .topology(vk::PrimitiveTopology::POINT_LIST);
@@ -313,99 +298,61 @@ impl Pipelines {
                 .write_mask(0xff)
                 .reference(0)
         };
+        // A stencil pass over the sides: depth test `less` without writes, the two-sided
+        // stencil counting by `(pass, depth_fail)` of the front and of the back faces.
+        let counting = |(front_pass, front_fail), (back_pass, back_fail)| {
+            vk::PipelineDepthStencilStateCreateInfo::default()
+                .depth_test_enable(true)
+                .depth_write_enable(false)
+                .depth_compare_op(vk::CompareOp::LESS)
+                .stencil_test_enable(true)
+                .front(stencil_op(front_pass, front_fail))
+                .back(stencil_op(back_pass, back_fail))
+        };
+        let (inc, dec, keep) = (
+            vk::StencilOp::INCREMENT_AND_WRAP,
+            vk::StencilOp::DECREMENT_AND_WRAP,
+            vk::StencilOp::KEEP,
+        );
         // z-pass: count the sides in front of the visible surface, +1 front, -1 back (wrapping).
-        let stencil_state = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(true)
-            .depth_write_enable(false)
-            .depth_compare_op(vk::CompareOp::LESS)
-            .stencil_test_enable(true)
-            .front(stencil_op(
-                vk::StencilOp::INCREMENT_AND_WRAP,
-                vk::StencilOp::KEEP,
-            ))
-            .back(stencil_op(
-                vk::StencilOp::DECREMENT_AND_WRAP,
-                vk::StencilOp::KEEP,
-            ));
+        let stencil_state = counting((inc, keep), (dec, keep));
         // z-fail (Carmack's reverse): count the faces behind the visible surface.
-        let zfail_state = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(true)
-            .depth_write_enable(false)
-            .depth_compare_op(vk::CompareOp::LESS)
-            .stencil_test_enable(true)
-            .front(stencil_op(
-                vk::StencilOp::KEEP,
-                vk::StencilOp::DECREMENT_AND_WRAP,
-            ))
-            .back(stencil_op(
-                vk::StencilOp::KEEP,
-                vk::StencilOp::INCREMENT_AND_WRAP,
-            ));
+        let zfail_state = counting((keep, dec), (keep, inc));
+        // The states every pipeline shares; each sets its stages, assembly and rasterisation
+        // (and depth-stencil state, except extraction) on top.
+        let (layout, render_pass) = (self.layout, self.render_pass);
+        let shared = || {
+            vk::GraphicsPipelineCreateInfo::default()
+                .vertex_input_state(&vertex_input)
+                .viewport_state(&viewport_state)
+                .multisample_state(&multisample)
+                .color_blend_state(&blend)
+                .dynamic_state(&dynamic)
+                .layout(layout)
+                .render_pass(render_pass)
+                .subpass(0)
+        };
+        let sides = || shared().stages(&gs_stages).input_assembly_state(&points);
         let infos = [
-            vk::GraphicsPipelineCreateInfo::default()
+            shared()
                 .stages(&extract_stages)
-                .vertex_input_state(&vertex_input)
                 .input_assembly_state(&points)
-                .viewport_state(&viewport_state)
                 .rasterization_state(&raster_discard)
-                .multisample_state(&multisample)
-                .color_blend_state(&blend)
-                .dynamic_state(&dynamic)
-                .layout(self.layout)
-                .render_pass(self.extract_pass)
-                .subpass(0),
-            vk::GraphicsPipelineCreateInfo::default()
+                .render_pass(self.extract_pass),
+            shared()
                 .stages(&depth_stages)
-                .vertex_input_state(&vertex_input)
                 .input_assembly_state(&triangles)
-                .viewport_state(&viewport_state)
                 .rasterization_state(&raster)
-                .multisample_state(&multisample)
-                .depth_stencil_state(&depth_write)
-                .color_blend_state(&blend)
-                .dynamic_state(&dynamic)
-                .layout(self.layout)
-                .render_pass(self.render_pass)
-                .subpass(0),
-            vk::GraphicsPipelineCreateInfo::default()
-                .stages(&gs_stages)
-                .vertex_input_state(&vertex_input)
-                .input_assembly_state(&points)
-                .viewport_state(&viewport_state)
+                .depth_stencil_state(&depth_write),
+            sides()
                 .rasterization_state(&raster)
-                .multisample_state(&multisample)
-                .depth_stencil_state(&stencil_state)
-                .color_blend_state(&blend)
-                .dynamic_state(&dynamic)
-                .layout(self.layout)
-                .render_pass(self.render_pass)
-                .subpass(0),
-            vk::GraphicsPipelineCreateInfo::default()
-                .stages(&gs_stages)
-                .vertex_input_state(&vertex_input)
-                .input_assembly_state(&points)
-                .viewport_state(&viewport_state)
+                .depth_stencil_state(&stencil_state),
+            sides()
                 .rasterization_state(&raster)
-                .multisample_state(&multisample)
-                .depth_stencil_state(&zfail_state)
-                .color_blend_state(&blend)
-                .dynamic_state(&dynamic)
-                .layout(self.layout)
-                .render_pass(self.render_pass)
-                .subpass(0),
-            vk::GraphicsPipelineCreateInfo::default()
-                .stages(&gs_stages)
-                .vertex_input_state(&vertex_input)
-                .input_assembly_state(&points)
-                .viewport_state(&viewport_state)
+                .depth_stencil_state(&zfail_state),
+            sides()
                 .rasterization_state(&raster_caps)
-                .multisample_state(&multisample)
-                .depth_stencil_state(&zfail_state)
-                .color_blend_state(&blend)
-                .dynamic_state(&dynamic)
-                .layout(self.layout)
-                .render_pass(self.render_pass)
-                .subpass(0),
+                .depth_stencil_state(&zfail_state),
         ];
         // SAFETY: every pointer in `infos` refers to locals that outlive the call.
         let created =
