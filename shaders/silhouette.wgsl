@@ -94,14 +94,40 @@ struct Uncertain {
 // [light * tri_count + triangle]: -1, 0, 1 (TOUCH in the resident pass).
 @group(0) @binding(11) var<storage, read_write> signs: array<i32>;
 
+// The builtins of one invocation of a triangle or edge kernel (every kernel of the module and of
+// the renderer's resident pass takes them so).
+struct Invocation {
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+}
+
 // The global invocation index of a 1-D dispatch folded into a 2-D grid of workgroups.
-fn flat_index(wid: vec3<u32>, nwg: vec3<u32>, lid: u32) -> u32 {
-    return (wid.x + wid.y * nwg.x) * WORKGROUP_SIZE + lid;
+fn flat_index(inv: Invocation) -> u32 {
+    return (inv.wid.x + inv.wid.y * inv.nwg.x) * WORKGROUP_SIZE + inv.lid;
 }
 
 fn position(id: u32) -> vec3<f32> {
     let i = id * 3u;
     return vec3<f32>(positions[i], positions[i + 1u], positions[i + 2u]);
+}
+
+// Light `li` of the dispatch in object `obj`'s space.
+fn object_light(obj: u32, li: u32) -> vec4<f32> {
+    return lights[obj * params.light_count + li];
+}
+
+// Global triangle `t`: its canonical (ascending) vertices' positions and its object.
+struct Triangle {
+    p0: vec3<f32>,
+    p1: vec3<f32>,
+    p2: vec3<f32>,
+    object: u32,
+}
+
+fn load_triangle(t: u32) -> Triangle {
+    let tr = tris[t];
+    return Triangle(position(tr.x), position(tr.y), position(tr.z), tr.w);
 }
 
 fn sgn(x: f32) -> i32 {
@@ -207,10 +233,14 @@ fn device_exact(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>, o: vec3<f32>) -> i32 {
     return UNCERTAIN; // @exact-int
 }
 
-// The sign of the canonical triangle (p0, p1, p2) (ids ascending) in the mode (robust, ordered or
-// exact; robust-math's `triangle_sign`), and 1 in y when exact mode needed `device_exact` (the
-// filter could not certify it). x is UNCERTAIN when `device_exact` leaves it to the host.
-fn triangle_sign_traced(p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>, l: vec4<f32>) -> vec2<i32> {
+// The sign of the canonical triangle `tri` (ids ascending) for light `l` in the mode (robust,
+// ordered or exact; robust-math's `triangle_sign`), and 1 in y when exact mode needed
+// `device_exact` (the filter could not certify it). x is UNCERTAIN when `device_exact` leaves it
+// to the host.
+fn triangle_sign_traced(tri: Triangle, l: vec4<f32>) -> vec2<i32> {
+    let p0 = tri.p0;
+    let p1 = tri.p1;
+    let p2 = tri.p2;
     if MODE == 3u {
         let f = exact_filter(p0, p1, l, p2);
         if f != UNCERTAIN {
@@ -237,7 +267,7 @@ fn edge_multiplicity(rec: vec4<u32>, ov_end: u32, li: u32, a: vec3<f32>, b: vec3
     let row = li * params.tri_count;
     var m = 0;
     if MODE == 0u {
-        let l = lights[rec.w * params.light_count + li];
+        let l = object_light(rec.w, li);
         for (var k = rec.z; k < ov_end; k++) {
             // Nested, not `&&`: WGSL's `&&` may be compiled without short-circuit, and the
             // backend's `original` must not read the sign buffers.
@@ -261,22 +291,15 @@ fn edge_multiplicity(rec: vec4<u32>, ov_end: u32, li: u32, a: vec3<f32>, b: vec3
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)
-fn triangles(
-    @builtin(workgroup_id) wid: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) lid: u32,
-) {
-    let t = flat_index(wid, nwg, lid);
+fn triangles(inv: Invocation) {
+    let t = flat_index(inv);
     if t >= params.tri_count {
         return;
     }
-    let tr = tris[t];
-    let p0 = position(tr.x);
-    let p1 = position(tr.y);
-    let p2 = position(tr.z);
+    let tri = load_triangle(t);
     let light_count = params.light_count;
     for (var li = 0u; li < light_count; li++) {
-        var s = triangle_sign_traced(p0, p1, p2, lights[tr.w * light_count + li]).x;
+        var s = triangle_sign_traced(tri, object_light(tri.object, li)).x;
         if s == UNCERTAIN {
             let slot = atomicAdd(&counters[light_count], 1u);
             if slot < params.uncertain_capacity {
@@ -289,12 +312,8 @@ fn triangles(
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)
-fn extract(
-    @builtin(workgroup_id) wid: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) lid: u32,
-) {
-    let e = flat_index(wid, nwg, lid);
+fn extract(inv: Invocation) {
+    let e = flat_index(inv);
     let edge_count = params.edge_count;
     if e >= edge_count {
         return;

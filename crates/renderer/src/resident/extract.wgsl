@@ -4,8 +4,8 @@
 // `shadowvol_wgpu_compute::shaders::module_source`) and to shaders/exact_int.wgsl, so it shares
 // their bindings in group 0 (params, positions, edges, ovs, lights, tris, ov_tris, signs: the
 // same SceneLayout and TriangleLayout), their MODE constant and their functions
-// (`triangle_sign_traced`, `edge_multiplicity`, with TOUCH_SIGNS set). The CPU twin
-// is `shadowvol_renderer::resident::twin`: keep the two in step.
+// (`Invocation`, `load_triangle`, `triangle_sign_traced`, `edge_multiplicity`, with TOUCH_SIGNS
+// set). The CPU twin is `shadowvol_renderer::resident::twin`: keep the two in step.
 //
 // 1. `resident_reset`: per light two indirect draw records (z-pass and z-fail sides, 6 vertices
 //    per instance, 0 instances) and the statistics, zeroed.
@@ -109,36 +109,28 @@ fn touches(p: vec3<f32>, l: vec4<f32>) -> bool {
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)
-fn resident_triangles(
-    @builtin(workgroup_id) wid: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) lid: u32,
-) {
-    let t = flat_index(wid, nwg, lid);
+fn resident_triangles(inv: Invocation) {
+    let t = flat_index(inv);
     if t >= params.tri_count {
         return;
     }
-    let tr = tris[t];
-    let p0 = position(tr.x);
-    let p1 = position(tr.y);
-    let p2 = position(tr.z);
-    let light_count = params.light_count;
-    for (var li = 0u; li < light_count; li++) {
-        let tech = technique[li * rp.object_count + tr.w];
+    let tri = load_triangle(t);
+    for (var li = 0u; li < params.light_count; li++) {
+        let tech = technique[li * rp.object_count + tri.object];
         var s = 0;
         if tech != 0u {
-            let l = lights[tr.w * light_count + li];
-            if touches(p0, l) || touches(p1, l) || touches(p2, l) {
+            let l = object_light(tri.object, li);
+            if touches(tri.p0, l) || touches(tri.p1, l) || touches(tri.p2, l) {
                 s = TOUCH;
             } else {
-                let traced = triangle_sign_traced(p0, p1, p2, l);
+                let traced = triangle_sign_traced(tri, l);
                 s = traced.x;
                 if traced.y != 0 {
                     atomicAdd(&args[stats_base()], 1u);
                 }
             }
             if (rp.flags & 1u) != 0u && tech == 2u && (s == 1 || s == -1) {
-                atomicAdd(&args[count_slot(li, tr.w) + 2u], 1u);
+                atomicAdd(&args[count_slot(li, tri.object) + 2u], 1u);
             }
         }
         signs[li * params.tri_count + t] = s;
@@ -146,12 +138,9 @@ fn resident_triangles(
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)
-fn resident_edges(
-    @builtin(workgroup_id) wid: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) lid: u32,
-) {
-    let e = flat_index(wid, nwg, lid);
+fn resident_edges(inv: Invocation) {
+    let e = flat_index(inv);
+    let lid = inv.lid;
     let valid = e < params.edge_count;
     var rec = vec4<u32>(0u);
     var ov_end = 0u;
