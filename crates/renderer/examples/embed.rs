@@ -10,7 +10,7 @@
 
 use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
-use shadowvol_renderer::resident::{PassFormats, PassFrame, ShadowPass};
+use shadowvol_renderer::resident::{texture_2d, PassFormats, PassFrame, ShadowPass};
 use shadowvol_renderer::{Camera, RenderError, Technique};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{SceneObject, TopologyScene};
@@ -82,27 +82,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut resident = pass.prepare(&scene)?;
 
     // 3. The application's targets.
-    let target = |format, usage| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: None,
-            size: wgpu::Extent3d {
-                width: W,
-                height: H,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage,
-            view_formats: &[],
-        })
-    };
-    let color = target(
+    let color = texture_2d(
+        &device,
+        "color",
+        W,
+        H,
         formats.color,
         wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
     );
-    let depth = target(formats.depth, wgpu::TextureUsages::RENDER_ATTACHMENT);
+    let depth = texture_2d(
+        &device,
+        "depth",
+        W,
+        H,
+        formats.depth,
+        wgpu::TextureUsages::RENDER_ATTACHMENT,
+    );
     let color_view = color.create_view(&Default::default());
     let depth_view = depth.create_view(&Default::default());
 

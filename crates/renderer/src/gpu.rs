@@ -11,9 +11,11 @@ use crate::RenderError;
 pub(crate) use targets::{map_read, wait};
 use targets::{padded_row, FrameTargets};
 
+pub(crate) mod pipelines;
 pub(crate) mod states;
 mod targets;
 use bytemuck::{Pod, Zeroable};
+use pipelines::{color_target, uniform};
 use std::ops::Range;
 
 /// Vertex of the visible surfaces (non-indexed; flat triangle data repeated on its 3 vertices).
@@ -237,29 +239,11 @@ impl Gpu {
             label: Some("shadowvol-renderer shader.wgsl"),
             source: wgpu::ShaderSource::Wgsl(include_str!("shader.wgsl").into()),
         });
-        let uniform_entry = |dynamic: bool| wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: dynamic,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let globals_bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("globals"),
-            entries: &[uniform_entry(false)],
-        });
-        let light_bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("light"),
-            entries: &[uniform_entry(true)],
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("renderer"),
-            bind_group_layouts: &[Some(&globals_bgl), Some(&light_bgl)],
-            immediate_size: 0,
-        });
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let globals_bgl =
+            pipelines::bind_group_layout(&device, "globals", &[uniform(0, vf, false)]);
+        let light_bgl = pipelines::bind_group_layout(&device, "light", &[uniform(0, vf, true)]);
+        let layout = pipelines::pipeline_layout(&device, "renderer", &[&globals_bgl, &light_bgl]);
         let surface_layout = [Some(states::surface_layout())];
         let volume_attrs = wgpu::vertex_attr_array![0 => Float32x4];
         let volume_layout = [Some(wgpu::VertexBufferLayout {
@@ -267,90 +251,33 @@ impl Gpu {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &volume_attrs,
         })];
-        let prepass = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("prepass"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_surface"),
-                compilation_options: Default::default(),
-                buffers: &surface_layout,
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(states::prepass_depth(depth_format)),
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_prepass"),
-                compilation_options: Default::default(),
-                targets: &[
-                    Some(wgpu::ColorTargetState {
-                        format: COLOR_FORMAT,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    }),
-                    Some(wgpu::ColorTargetState {
-                        format: IDS_FORMAT,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    }),
-                ],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let lit = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("lit"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_surface"),
-                compilation_options: Default::default(),
-                buffers: &surface_layout,
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(states::lit_depth(depth_format)),
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_lit"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: COLOR_FORMAT,
-                    blend: Some(states::additive()),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let volume_pipeline =
-            |label: &str,
-             unclipped_depth: bool,
-             front_face: wgpu::FrontFace,
-             faces: (wgpu::StencilFaceState, wgpu::StencilFaceState)| {
-                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(&layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("vs_volume"),
-                        compilation_options: Default::default(),
-                        buffers: &volume_layout,
-                    },
-                    primitive: wgpu::PrimitiveState {
-                        front_face,
-                        cull_mode: None,
-                        unclipped_depth,
-                        ..Default::default()
-                    },
-                    depth_stencil: Some(states::volume_depth(depth_format, faces)),
-                    multisample: wgpu::MultisampleState::default(),
-                    fragment: None,
-                    multiview_mask: None,
-                    cache: None,
-                })
-            };
+        let make = pipelines::RenderPipelines {
+            device: &device,
+            layout: &layout,
+            module: &module,
+            depth: depth_format,
+        };
+        let prepass = make.prepass(
+            "prepass",
+            "vs_surface",
+            &surface_layout,
+            "fs_prepass",
+            &[
+                color_target(COLOR_FORMAT, None),
+                color_target(IDS_FORMAT, None),
+            ],
+        );
+        let lit = make.lit("lit", "vs_surface", &surface_layout, COLOR_FORMAT);
+        let volume_pipeline = |label, unclipped_depth, front_face, faces| {
+            make.volume(
+                label,
+                "vs_volume",
+                &volume_layout,
+                unclipped_depth,
+                front_face,
+                faces,
+            )
+        };
         // Z-pass: count the volume faces in front of the surface (front +1, back -1). Near
         // clipping stays on: the count then starts at the near plane, which is exactly what the
         // near-clip volume test proves to be outside the volume (with depth clamp the count
@@ -391,6 +318,18 @@ impl Gpu {
         })
     }
 
+    /// [`RenderError::InvalidInput`] unless both sides of a `w` x `h` image are in
+    /// `1..=max_texture_dimension_2d`.
+    fn check_size(&self, w: u32, h: u32) -> Result<(), RenderError> {
+        let max = self.device.limits().max_texture_dimension_2d;
+        if w == 0 || h == 0 || w > max || h > max {
+            return Err(RenderError::InvalidInput(format!(
+                "image size {w}x{h}: each side must be in 1..={max}"
+            )));
+        }
+        Ok(())
+    }
+
     /// Renders one frame and reads back colour, ids and per-light stencil.
     ///
     /// # Errors
@@ -398,12 +337,7 @@ impl Gpu {
     /// validation or device errors.
     pub fn render(&self, input: &FrameInput<'_>) -> Result<Option<FrameOutput>, RenderError> {
         let (w, h) = (input.width, input.height);
-        let max = self.device.limits().max_texture_dimension_2d;
-        if w == 0 || h == 0 || w > max || h > max {
-            return Err(RenderError::InvalidInput(format!(
-                "image size {w}x{h}: each side must be in 1..={max}"
-            )));
-        }
+        self.check_size(w, h)?;
         let device = &self.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
@@ -482,48 +416,17 @@ impl Gpu {
             label: Some("frame"),
         });
         {
-            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("prepass"),
-                color_attachments: &[
-                    Some(wgpu::RenderPassColorAttachment {
-                        view: color_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color {
-                                r: 0.02,
-                                g: 0.02,
-                                b: 0.04,
-                                a: 1.0,
-                            }),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    }),
-                    Some(wgpu::RenderPassColorAttachment {
-                        view: ids_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    }),
-                ],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let background = wgpu::Color {
+                r: 0.02,
+                g: 0.02,
+                b: 0.04,
+                a: 1.0,
+            };
+            let color = [
+                states::cleared(color_view, background),
+                states::cleared(ids_view, wgpu::Color::TRANSPARENT),
+            ];
+            let mut pass = states::begin_prepass(&mut enc, "prepass", &color, depth_view, None);
             if !input.surface.is_empty() {
                 pass.set_pipeline(&self.prepass);
                 pass.set_bind_group(0, &globals_bg, &[]);
@@ -636,12 +539,7 @@ impl Gpu {
         readback: bool,
         into: Option<&wgpu::TextureView>,
     ) -> Result<Option<FrameOutput>, RenderError> {
-        let max = self.device.limits().max_texture_dimension_2d;
-        if w == 0 || h == 0 || w > max || h > max {
-            return Err(RenderError::InvalidInput(format!(
-                "image size {w}x{h}: each side must be in 1..={max}"
-            )));
-        }
+        self.check_size(w, h)?;
         let device = &self.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
@@ -681,16 +579,8 @@ impl Gpu {
             depth_or_array_layers: 1,
         };
         let tex = |label: &str, format: wgpu::TextureFormat| {
-            self.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            })
+            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+            crate::resident::texture_2d(&self.device, label, w, h, format, usage)
         };
         let color = tex("color", COLOR_FORMAT);
         let ids = tex("ids", IDS_FORMAT);

@@ -4,6 +4,7 @@
 use crate::controls::{self, Orbit, VolumeView};
 use crate::{ViewError, ViewOptions, ViewReport};
 use glam::Vec3;
+use shadowvol_renderer::resident::texture_2d;
 use shadowvol_renderer::{
     Camera, Frame, Pipeline, PlanPolicy, RenderOptions, RenderScene, Renderer, Technique,
 };
@@ -452,31 +453,6 @@ impl Stats {
                 line(ui, self.adapter.clone());
             });
     }
-}
-
-/// A `w × h` 2D texture with one mip level.
-fn texture_2d(
-    device: &wgpu::Device,
-    label: &str,
-    w: u32,
-    h: u32,
-    format: wgpu::TextureFormat,
-    usage: wgpu::TextureUsages,
-) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage,
-        view_formats: &[],
-    })
 }
 
 /// Maps a window capture and writes it as an RGBA PNG (BGRA surfaces swizzled).

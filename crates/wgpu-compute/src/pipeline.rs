@@ -42,17 +42,14 @@ pub(crate) fn create_pipelines(
     });
     let pipeline = |entry: &str, mode: Accuracy| {
         let constants = [(shaders::MODE_CONSTANT, f64::from(shaders::mode_value(mode)))];
-        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(mode.name()),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some(entry),
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants: &constants,
-                zero_initialize_workgroup_memory: false,
-            },
-            cache: None,
-        })
+        shaders::compute_pipeline(
+            device,
+            mode.name(),
+            &pipeline_layout,
+            &module,
+            entry,
+            &constants,
+        )
     };
     let pipelines = Accuracy::ALL
         .iter()

@@ -86,6 +86,31 @@ pub fn module_source_with(filter: ExactFilter, device_exact: bool) -> String {
     s
 }
 
+/// The compute pipeline of `entry` in `module` under `layout`, with the pipeline-overridable
+/// `constants` set. Workgroup memory is not zero-initialised: the kernels write their workgroup
+/// variables before reading them.
+#[must_use]
+pub fn compute_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            zero_initialize_workgroup_memory: false,
+        },
+        cache: None,
+    })
+}
+
 /// The `MODE` value of an accuracy mode.
 #[must_use]
 pub fn mode_value(mode: shadowvol_robust_math::Accuracy) -> u32 {

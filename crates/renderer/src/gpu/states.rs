@@ -116,6 +116,44 @@ pub(crate) fn additive() -> wgpu::BlendState {
     }
 }
 
+/// A colour attachment cleared to `clear` and stored.
+pub(crate) fn cleared(
+    view: &wgpu::TextureView,
+    clear: wgpu::Color,
+) -> Option<wgpu::RenderPassColorAttachment<'_>> {
+    Some(wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations {
+            load: wgpu::LoadOp::Clear(clear),
+            store: wgpu::StoreOp::Store,
+        },
+    })
+}
+
+/// The pre-pass: the colour attachments `color`, depth cleared to 1 and stencil to 0.
+pub(crate) fn begin_prepass<'e>(
+    enc: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    color: &[Option<wgpu::RenderPassColorAttachment<'_>>],
+    depth: &wgpu::TextureView,
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
+    let depth = wgpu::RenderPassDepthStencilAttachment {
+        view: depth,
+        depth_ops: Some(wgpu::Operations {
+            load: wgpu::LoadOp::Clear(1.0),
+            store: wgpu::StoreOp::Store,
+        }),
+        stencil_ops: Some(wgpu::Operations {
+            load: wgpu::LoadOp::Clear(0),
+            store: wgpu::StoreOp::Store,
+        }),
+    };
+    begin_pass(enc, label, color, depth, None, timestamp_writes)
+}
+
 /// A stencil pass of one light: no colour, depth loaded (the pre-pass's), the stencil cleared to
 /// 0 or loaded as `stencil` says, limited to `scissor` when given.
 pub(crate) fn begin_stencil_pass<'e>(
@@ -126,25 +164,15 @@ pub(crate) fn begin_stencil_pass<'e>(
     scissor: Option<[u32; 4]>,
     timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
 ) -> wgpu::RenderPass<'e> {
-    let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some(label),
-        color_attachments: &[],
-        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: depth,
-            depth_ops: Some(keep()),
-            stencil_ops: Some(wgpu::Operations {
-                load: stencil,
-                store: wgpu::StoreOp::Store,
-            }),
+    let depth = wgpu::RenderPassDepthStencilAttachment {
+        view: depth,
+        depth_ops: Some(keep()),
+        stencil_ops: Some(wgpu::Operations {
+            load: stencil,
+            store: wgpu::StoreOp::Store,
         }),
-        timestamp_writes,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    });
-    if let Some([x, y, w, h]) = scissor {
-        pass.set_scissor_rect(x, y, w, h);
-    }
-    pass
+    };
+    begin_pass(enc, label, &[], depth, scissor, timestamp_writes)
 }
 
 /// A lit pass of one light: colour, depth and stencil loaded, limited to `scissor` when given.
@@ -156,19 +184,33 @@ pub(crate) fn begin_lit_pass<'e>(
     scissor: Option<[u32; 4]>,
     timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
 ) -> wgpu::RenderPass<'e> {
+    let color = [Some(wgpu::RenderPassColorAttachment {
+        view: color,
+        depth_slice: None,
+        resolve_target: None,
+        ops: keep(),
+    })];
+    let depth = wgpu::RenderPassDepthStencilAttachment {
+        view: depth,
+        depth_ops: Some(keep()),
+        stencil_ops: Some(keep()),
+    };
+    begin_pass(enc, label, &color, depth, scissor, timestamp_writes)
+}
+
+/// A pass over `color` and `depth`, limited to `scissor` when given.
+fn begin_pass<'e>(
+    enc: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    color: &[Option<wgpu::RenderPassColorAttachment<'_>>],
+    depth: wgpu::RenderPassDepthStencilAttachment<'_>,
+    scissor: Option<[u32; 4]>,
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
     let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: color,
-            depth_slice: None,
-            resolve_target: None,
-            ops: keep(),
-        })],
-        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: depth,
-            depth_ops: Some(keep()),
-            stencil_ops: Some(keep()),
-        }),
+        color_attachments: color,
+        depth_stencil_attachment: Some(depth),
         timestamp_writes,
         occlusion_query_set: None,
         multiview_mask: None,

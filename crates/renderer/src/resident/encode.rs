@@ -96,44 +96,17 @@ impl ShadowPass {
             .frame
             .as_ref()
             .expect("ShadowPass::update before encode_prepass");
-        let mut attachments = vec![Some(wgpu::RenderPassColorAttachment {
-            view: color,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(clear),
-                store: wgpu::StoreOp::Store,
-            },
-        })];
+        let mut attachments = vec![states::cleared(color, clear)];
         if let Some(ids) = ids {
-            attachments.push(Some(wgpu::RenderPassColorAttachment {
-                view: ids,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            }));
+            attachments.push(states::cleared(ids, wgpu::Color::TRANSPARENT));
         }
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("resident prepass"),
-            color_attachments: &attachments,
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(0),
-                    store: wgpu::StoreOp::Store,
-                }),
-            }),
-            timestamp_writes: render_ts(fb, TimestampSlot::Prepass),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = states::begin_prepass(
+            enc,
+            "resident prepass",
+            &attachments,
+            depth,
+            render_ts(fb, TimestampSlot::Prepass),
+        );
         let tris = rs.layout.tri_count() as u32;
         if tris > 0 {
             pass.set_pipeline(&self.prepass[usize::from(rs.surface.is_some())]);
@@ -158,16 +131,7 @@ impl ShadowPass {
         light: usize,
         depth: &wgpu::TextureView,
     ) {
-        assert!(
-            light < rs.state.lights,
-            "light {light} of {}",
-            rs.state.lights
-        );
-        let fb = rs
-            .frame
-            .as_ref()
-            .expect("ShadowPass::update before encode_stencil");
-        let scissor = rs.state.scissors[light];
+        let (fb, scissor) = light_frame(rs, light, "encode_stencil");
         let empty = scissor.is_some_and(|r| r[2] == 0 || r[3] == 0);
         let offset = (light as u64 * LIGHT_STRIDE) as u32;
         // Two passes, sides then caps, so that each has its own timestamps; the first clears
@@ -243,16 +207,7 @@ impl ShadowPass {
         color: &wgpu::TextureView,
         depth: &wgpu::TextureView,
     ) {
-        assert!(
-            light < rs.state.lights,
-            "light {light} of {}",
-            rs.state.lights
-        );
-        let fb = rs
-            .frame
-            .as_ref()
-            .expect("ShadowPass::update before encode_lit");
-        let scissor = rs.state.scissors[light];
+        let (fb, scissor) = light_frame(rs, light, "encode_lit");
         let mut pass = states::begin_lit_pass(
             enc,
             "resident lit",
@@ -274,4 +229,26 @@ impl ShadowPass {
         pass.set_bind_group(1, &fb.dl, &[(light as u64 * LIGHT_STRIDE) as u32]);
         pass.draw(0..tris * 3, 0..1);
     }
+}
+
+/// The frame buffers of the last [`ShadowPass::update`] of `rs` and the scissor of its light
+/// `light`, for the encoder `encoder`.
+///
+/// # Panics
+/// Panics if `light` is not a light of that update, or if there was none.
+fn light_frame<'r>(
+    rs: &'r ResidentScene,
+    light: usize,
+    encoder: &str,
+) -> (&'r FrameBuffers, Option<[u32; 4]>) {
+    assert!(
+        light < rs.state.lights,
+        "light {light} of {}",
+        rs.state.lights
+    );
+    let fb = rs
+        .frame
+        .as_ref()
+        .unwrap_or_else(|| panic!("ShadowPass::update before {encoder}"));
+    (fb, rs.state.scissors[light])
 }

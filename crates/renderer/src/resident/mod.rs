@@ -100,6 +100,33 @@ pub fn draw_source() -> String {
     format!("{SHADER_WGSL}\n{DRAW_WGSL}")
 }
 
+/// A `w` x `h` 2-D texture with one mip level and one sample: an attachment the pass (or the
+/// host pipeline) draws into, or any other 2-D target of the application.
+#[must_use]
+pub fn texture_2d(
+    device: &wgpu::Device,
+    label: &str,
+    w: u32,
+    h: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
+
 /// The attachment formats the pass draws into.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PassFormats {
@@ -195,36 +222,6 @@ impl std::fmt::Debug for ShadowPass {
             .field("filter", &self.filter)
             .field("depth_clamp", &self.depth_clamp)
             .finish_non_exhaustive()
-    }
-}
-
-fn storage(
-    binding: u32,
-    stages: wgpu::ShaderStages,
-    read_only: bool,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: stages,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-fn uniform(binding: u32, stages: wgpu::ShaderStages, dynamic: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: stages,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: dynamic,
-            min_binding_size: None,
-        },
-        count: None,
     }
 }
 

@@ -2,6 +2,9 @@
 //! pipelines.
 
 use super::*;
+use crate::gpu::pipelines::{
+    bind_group_layout, color_target, pipeline_layout, storage, uniform, RenderPipelines,
+};
 use crate::gpu::states;
 
 impl ShadowPass {
@@ -104,9 +107,10 @@ impl ShadowPass {
         let compute = wgpu::ShaderStages::COMPUTE;
         // Group 0: the wgpu backend's bindings the resident kernels use (its scene and triangle
         // layouts, lights and signs).
-        let c0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("resident extract scene"),
-            entries: &[
+        let c0 = bind_group_layout(
+            device,
+            "resident extract scene",
+            &[
                 uniform(0, compute, false),
                 storage(1, compute, true),
                 storage(2, compute, true),
@@ -116,41 +120,28 @@ impl ShadowPass {
                 storage(10, compute, true),
                 storage(11, compute, false),
             ],
-        });
-        let c1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("resident extract frame"),
-            entries: &[
+        );
+        let c1 = bind_group_layout(
+            device,
+            "resident extract frame",
+            &[
                 uniform(0, compute, false),
                 storage(3, compute, true),
                 storage(5, compute, false),
                 storage(6, compute, false),
             ],
-        });
+        );
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("resident extract"),
             source: wgpu::ShaderSource::Wgsl(extract_source(filter).into()),
         });
-        let c_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("resident extract"),
-            bind_group_layouts: &[Some(&c0), Some(&c1)],
-            immediate_size: 0,
-        });
+        let c_layout = pipeline_layout(device, "resident extract", &[&c0, &c1]);
         let compute_pipeline = |entry: &str, mode: Accuracy| {
             let constants = [
                 (shaders::MODE_CONSTANT, f64::from(shaders::mode_value(mode))),
                 (shaders::TOUCH_SIGNS_CONSTANT, 1.0),
             ];
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&c_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &constants,
-                    zero_initialize_workgroup_memory: false,
-                },
-                cache: None,
-            })
+            shaders::compute_pipeline(device, entry, &c_layout, &module, entry, &constants)
         };
         let reset = compute_pipeline("resident_reset", Accuracy::Original);
         let triangles = Accuracy::ALL
@@ -164,9 +155,10 @@ impl ShadowPass {
 
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let vs = wgpu::ShaderStages::VERTEX;
-        let d0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("resident draw"),
-            entries: &[
+        let d0 = bind_group_layout(
+            device,
+            "resident draw",
+            &[
                 uniform(0, vf, false),
                 storage(1, vs, true),
                 storage(2, vs, true),
@@ -177,200 +169,110 @@ impl ShadowPass {
                 storage(7, vs, true),
                 storage(12, vs, true),
             ],
-        });
-        let dl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("resident light"),
-            entries: &[uniform(0, vf, true)],
-        });
+        );
+        let dl = bind_group_layout(device, "resident light", &[uniform(0, vf, true)]);
         let draw = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("resident draw"),
             source: wgpu::ShaderSource::Wgsl(draw_source().into()),
         });
-        // The vertex pass (a compute entry of the draw module): object-space positions to
-        // camera-relative world positions, once per vertex and frame.
-        let v0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("resident vertices"),
-            entries: &[
+        // The vertex and surface passes (compute entries of the draw module, no constants):
+        // object-space positions to camera-relative world positions, once per vertex and frame,
+        // and the surface vertices from them.
+        let draw_compute = |label: &str, entry: &str, groups: &[&wgpu::BindGroupLayout]| {
+            let layout = pipeline_layout(device, label, groups);
+            shaders::compute_pipeline(device, entry, &layout, &draw, entry, &[])
+        };
+        let v0 = bind_group_layout(
+            device,
+            "resident vertices",
+            &[
                 storage(1, compute, true),
                 storage(6, compute, true),
                 storage(8, compute, true),
             ],
-        });
-        let v1 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("resident vertices (unused)"),
-            entries: &[],
-        });
-        let v2 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("resident vertices out"),
-            entries: &[storage(0, compute, false)],
-        });
+        );
+        let v1 = bind_group_layout(device, "resident vertices (unused)", &[]);
+        let v2 = bind_group_layout(
+            device,
+            "resident vertices out",
+            &[storage(0, compute, false)],
+        );
         let empty = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident vertices (unused)"),
             layout: &v1,
             entries: &[],
         });
-        let v_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("resident vertices"),
-            bind_group_layouts: &[Some(&v0), Some(&v1), Some(&v2)],
-            immediate_size: 0,
-        });
-        let vertices = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("resident_vertices"),
-            layout: Some(&v_layout),
-            module: &draw,
-            entry_point: Some("resident_vertices"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let s0 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("resident surfaces"),
-            entries: &[
+        let vertices = draw_compute("resident vertices", "resident_vertices", &[&v0, &v1, &v2]);
+        let s0 = bind_group_layout(
+            device,
+            "resident surfaces",
+            &[
                 storage(3, compute, true),
                 storage(6, compute, true),
                 storage(7, compute, true),
             ],
-        });
-        let s2 = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("resident surfaces out"),
-            entries: &[storage(1, compute, false), uniform(2, compute, false)],
-        });
-        let s_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("resident surfaces"),
-            bind_group_layouts: &[Some(&s0), Some(&v1), Some(&s2)],
-            immediate_size: 0,
-        });
-        let surfaces = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("resident_surfaces"),
-            layout: Some(&s_layout),
+        );
+        let s2 = bind_group_layout(
+            device,
+            "resident surfaces out",
+            &[storage(1, compute, false), uniform(2, compute, false)],
+        );
+        let surfaces = draw_compute("resident surfaces", "resident_surfaces", &[&s0, &v1, &s2]);
+        let d_layout = pipeline_layout(device, "resident draw", &[&d0, &dl]);
+        let make = RenderPipelines {
+            device,
+            layout: &d_layout,
             module: &draw,
-            entry_point: Some("resident_surfaces"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let d_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("resident draw"),
-            bind_group_layouts: &[Some(&d0), Some(&dl)],
-            immediate_size: 0,
-        });
-        let mut prepass_targets = vec![Some(wgpu::ColorTargetState {
-            format: formats.color,
-            blend: None,
-            write_mask: wgpu::ColorWrites::ALL,
-        })];
+            depth: formats.depth,
+        };
+        let mut prepass_targets = vec![color_target(formats.color, None)];
         if let Some(ids) = formats.ids {
-            prepass_targets.push(Some(wgpu::ColorTargetState {
-                format: ids,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            }));
+            prepass_targets.push(color_target(ids, None));
         }
+        let prepass_fs = if formats.ids.is_some() {
+            "fs_prepass"
+        } else {
+            "fs_prepass_color"
+        };
         let surface_layout = [Some(states::surface_layout())];
         // Surfaces come from the per-frame vertex buffer the surface pass writes (`vs_surface`,
         // as in the host pipeline), or, where that buffer would exceed `max_buffer_size`, are
         // pulled from the storage buffers (`vs_resident_surface`).
-        let make_prepass = |entry: &str, buffers: &[Option<wgpu::VertexBufferLayout<'_>>]| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("resident prepass"),
-                layout: Some(&d_layout),
-                vertex: wgpu::VertexState {
-                    module: &draw,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    buffers,
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(states::prepass_depth(formats.depth)),
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &draw,
-                    entry_point: Some(if formats.ids.is_some() {
-                        "fs_prepass"
-                    } else {
-                        "fs_prepass_color"
-                    }),
-                    compilation_options: Default::default(),
-                    targets: &prepass_targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        };
         let prepass = [
-            make_prepass("vs_resident_surface", &[]),
-            make_prepass("vs_surface", &surface_layout),
+            make.prepass(
+                "resident prepass",
+                "vs_resident_surface",
+                &[],
+                prepass_fs,
+                &prepass_targets,
+            ),
+            make.prepass(
+                "resident prepass",
+                "vs_surface",
+                &surface_layout,
+                prepass_fs,
+                &prepass_targets,
+            ),
         ];
-        let make_lit = |entry: &str, buffers: &[Option<wgpu::VertexBufferLayout<'_>>]| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("resident lit"),
-                layout: Some(&d_layout),
-                vertex: wgpu::VertexState {
-                    module: &draw,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    buffers,
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(states::lit_depth(formats.depth)),
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &draw,
-                    entry_point: Some("fs_lit"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: formats.color,
-                        blend: Some(states::additive()),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        };
         let lit = [
-            make_lit("vs_resident_surface", &[]),
-            make_lit("vs_surface", &surface_layout),
+            make.lit("resident lit", "vs_resident_surface", &[], formats.color),
+            make.lit("resident lit", "vs_surface", &surface_layout, formats.color),
         ];
-        let volume =
-            |label: &str,
-             entry: &str,
-             unclipped_depth: bool,
-             front_face: wgpu::FrontFace,
-             faces: (wgpu::StencilFaceState, wgpu::StencilFaceState)| {
-                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(&d_layout),
-                    vertex: wgpu::VertexState {
-                        module: &draw,
-                        entry_point: Some(entry),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: wgpu::PrimitiveState {
-                        front_face,
-                        cull_mode: None,
-                        unclipped_depth,
-                        ..Default::default()
-                    },
-                    depth_stencil: Some(states::volume_depth(formats.depth, faces)),
-                    multisample: wgpu::MultisampleState::default(),
-                    fragment: None,
-                    multiview_mask: None,
-                    cache: None,
-                })
-            };
         // The same stencil rules as the host pipeline (see gpu.rs): z-pass counts the faces in
         // front of the surface with near clipping on; z-fail the faces behind it, with depth
         // clamp where the device has it.
         let ccw = wgpu::FrontFace::Ccw;
-        let side_zpass = volume(
+        let side_zpass = make.volume(
             "resident side zpass",
             "vs_resident_side_zpass",
+            &[],
             false,
             ccw,
             states::zpass_faces(),
         );
-        let zfail =
-            |label, entry, face| volume(label, entry, depth_clamp, face, states::zfail_faces());
+        let zfail = |label, entry, face| {
+            make.volume(label, entry, &[], depth_clamp, face, states::zfail_faces())
+        };
         let side_zfail = zfail("resident side zfail", "vs_resident_side_zfail", ccw);
         let cap_ccw = zfail("resident cap ccw", "vs_resident_cap_ccw", ccw);
         let cap_cw = zfail("resident cap cw", "vs_resident_cap_cw", wgpu::FrontFace::Cw);
