@@ -169,12 +169,7 @@ impl<'a> ClosedMesh<'a> {
         let mut edge_tris = vec![[NO_NEIGHBOR; 2]; table.edges.len()];
         // Direction of each triangle's traversal of its edges: +1 for a -> b.
         let mut dir = vec![0i8; table.edges.len()];
-        for (t, (tri, te)) in table
-            .triangles
-            .iter()
-            .zip(&table.connectivity.tri_edges)
-            .enumerate()
-        {
+        for (t, tri, te) in table.triangles_with_edges() {
             for i in 0..3 {
                 let e = te[i] as usize;
                 let forward = tri[i] == table.edges[e][0];

@@ -610,6 +610,17 @@ impl EdgeTable {
         self.edges.len()
     }
 
+    /// Every kept triangle in order as `(t, triangle, edges)`: its index, its vertices (compact
+    /// ids, original winding) and [`Connectivity::tri_edges`]`[t]`, the indices into
+    /// [`EdgeTable::edges`] of its edges `(v0, v1)`, `(v1, v2)`, `(v2, v0)`.
+    pub fn triangles_with_edges(&self) -> impl Iterator<Item = (usize, &[u32; 3], &[u32; 3])> {
+        self.triangles
+            .iter()
+            .zip(&self.connectivity.tri_edges)
+            .enumerate()
+            .map(|(t, (tri, te))| (t, tri, te))
+    }
+
     /// The opposite vertices (compact ids) of edge `e`.
     ///
     /// # Panics

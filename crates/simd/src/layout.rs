@@ -196,12 +196,7 @@ impl Layout {
         let ne = table.edges.len();
         let mut fill: Vec<u32> = table.ov_offsets[..ne].to_vec();
         let mut ov_tri = vec![0u32; table.ovs.len()];
-        for (t, (tri, te)) in table
-            .triangles
-            .iter()
-            .zip(&table.connectivity.tri_edges)
-            .enumerate()
-        {
+        for (t, tri, te) in table.triangles_with_edges() {
             for i in 0..3 {
                 let e = te[i] as usize;
                 let o = tri[(i + 2) % 3];
