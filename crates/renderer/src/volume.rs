@@ -254,14 +254,9 @@ mod tests {
     use super::*;
     use shadowvol_mesh_topology::Mesh;
 
-    /// The side quad of a single triangle's edge must have its outward normal pointing away
-    /// from the triangle's interior (checked with the prism of one triangle under a light).
-    #[test]
-    fn side_orientation_is_outward() {
-        let mesh = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();
-        let table = EdgeTable::build(&mesh).unwrap();
-        let light = [0.2, 0.2, 5.0, 1.0];
-        let m: Vec<i32> = table
+    /// Every edge's multiplicity under `light` in `mode`: the sum of its (edge, OV) signs.
+    fn naive_multiplicities(table: &EdgeTable, mode: Accuracy, light: [f32; 4]) -> Vec<i32> {
+        table
             .edges
             .iter()
             .enumerate()
@@ -269,10 +264,20 @@ mod tests {
                 table
                     .ovs_of(e)
                     .iter()
-                    .map(|&o| i32::from(ov_sign(Accuracy::Exact, &table.positions, a, b, o, light)))
+                    .map(|&o| i32::from(ov_sign(mode, &table.positions, a, b, o, light)))
                     .sum()
             })
-            .collect();
+            .collect()
+    }
+
+    /// The side quad of a single triangle's edge must have its outward normal pointing away
+    /// from the triangle's interior (checked with the prism of one triangle under a light).
+    #[test]
+    fn side_orientation_is_outward() {
+        let mesh = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();
+        let table = EdgeTable::build(&mesh).unwrap();
+        let light = [0.2, 0.2, 5.0, 1.0];
+        let m = naive_multiplicities(&table, Accuracy::Exact, light);
         let mut out = Vec::new();
         let n = build_sides(&table.edges, &m, &table.positions, light, &mut out);
         assert_eq!(n, 3);
@@ -306,18 +311,7 @@ mod tests {
         let flags = touching_triangles(&table, l);
         assert_eq!(flags.iter().filter(|&&f| f).count(), 3);
         for mode in Accuracy::ALL {
-            let mut m: Vec<i32> = table
-                .edges
-                .iter()
-                .enumerate()
-                .map(|(e, &[a, b])| {
-                    table
-                        .ovs_of(e)
-                        .iter()
-                        .map(|&o| i32::from(ov_sign(mode, &table.positions, a, b, o, l)))
-                        .sum()
-                })
-                .collect();
+            let mut m = naive_multiplicities(&table, mode, l);
             remove_triangles(&table, l, mode, &flags, &mut m);
             let mut out = Vec::new();
             build_sides(&table.edges, &m, &table.positions, l, &mut out);

@@ -192,6 +192,19 @@ fn grid_objects(prefix: &str, mesh: &Arc<Mesh>, cols: u32, rows: u32, spacing: f
     objects
 }
 
+/// A scene named `name` of `objects` standing on the ground plane y = 0.
+fn on_ground(name: String, objects: Vec<Object>) -> Scene {
+    Scene {
+        name,
+        objects,
+        effects: Effects {
+            ground_y: Some(0.0),
+            ..Effects::default()
+        },
+        ..Scene::default()
+    }
+}
+
 fn framed(mut scene: Scene, lights: Vec<Light>, from: Vec3) -> Scene {
     scene.lights = lights;
     if let Some((lo, hi)) = scene.bounds() {
@@ -203,15 +216,7 @@ fn framed(mut scene: Scene, lights: Vec<Light>, from: Vec3) -> Scene {
 fn bunnies(name: &str) -> Scene {
     let mesh = Arc::new(loop_subdivide_levels(&bunny(), BUNNY_LEVELS));
     // The bunny spans about 10 x 9.7 x 7.5 units, standing on y = 0.
-    let scene = Scene {
-        name: name.to_owned(),
-        objects: grid_objects("bunny", &mesh, 5, 2, 12.0),
-        effects: Effects {
-            ground_y: Some(0.0),
-            ..Effects::default()
-        },
-        ..Scene::default()
-    };
+    let scene = on_ground(name.to_owned(), grid_objects("bunny", &mesh, 5, 2, 12.0));
     framed(
         scene,
         vec![Light::point(Vec3::new(-20.0, 40.0, 25.0))],
@@ -227,15 +232,7 @@ fn single_bunny(name: &str, levels: u32) -> Scene {
     } else {
         loop_subdivide_levels(&base, levels)
     });
-    let scene = Scene {
-        name: name.to_owned(),
-        objects: grid_objects("bunny", &mesh, 1, 1, 12.0),
-        effects: Effects {
-            ground_y: Some(0.0),
-            ..Effects::default()
-        },
-        ..Scene::default()
-    };
+    let scene = on_ground(name.to_owned(), grid_objects("bunny", &mesh, 1, 1, 12.0));
     framed(
         scene,
         vec![Light::point(Vec3::new(-8.0, 25.0, 12.0))],
@@ -254,15 +251,7 @@ fn sphere_grid(name: &str, triangles: usize, cols: u32, rows: u32) -> Scene {
         })
         .collect();
     let extent = 3.0 * cols.max(rows) as f32;
-    let scene = Scene {
-        name: name.to_owned(),
-        objects,
-        effects: Effects {
-            ground_y: Some(0.0),
-            ..Effects::default()
-        },
-        ..Scene::default()
-    };
+    let scene = on_ground(name.to_owned(), objects);
     framed(
         scene,
         vec![Light::point(Vec3::new(
@@ -276,19 +265,14 @@ fn sphere_grid(name: &str, triangles: usize, cols: u32, rows: u32) -> Scene {
 
 fn town_scene() -> Scene {
     let mesh = Arc::new(town(&TownParams::default()));
-    let scene = Scene {
-        name: "town".to_owned(),
-        objects: vec![Object {
+    let scene = on_ground(
+        "town".to_owned(),
+        vec![Object {
             name: "town".to_owned(),
             mesh,
             transform: Affine3A::IDENTITY,
         }],
-        effects: Effects {
-            ground_y: Some(0.0),
-            ..Effects::default()
-        },
-        ..Scene::default()
-    };
+    );
     // The sun exactly along +Y: every wall triangle is exactly parallel to the light.
     framed(
         scene,

@@ -84,13 +84,13 @@ fn single(
     lights: Vec<Light>,
     original_cracks: bool,
 ) -> CorpusCase {
-    CorpusCase {
+    multi(
         name,
         description,
-        objects: vec![(mesh, Affine3A::IDENTITY)],
+        vec![(mesh, Affine3A::IDENTITY)],
         lights,
         original_cracks,
-    }
+    )
 }
 
 fn multi(
