@@ -10,7 +10,10 @@
 //!
 //! Criterion reports absolute times; `docs/PERFORMANCE.md` uses `shadowvol bench` for the ratios.
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use criterion::measurement::WallTime;
+use criterion::{
+    criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
+};
 use glam::Vec3;
 use shadowvol_cpu::baselines::{Baseline, ClosedMesh};
 use shadowvol_cpu::CpuBackend;
@@ -31,6 +34,16 @@ fn light() -> Light {
     Light::point(Vec3::new(2.3, 3.1, -1.7))
 }
 
+/// A benchmark group of 10 samples, 300 ms warm-up and 2 s of measurement.
+fn short_group(c: &mut Criterion, name: impl Into<String>) -> BenchmarkGroup<'_, WallTime> {
+    let mut group = c.benchmark_group(name);
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(2));
+    group
+}
+
 fn bench_backend(
     c: &mut Criterion,
     group_name: &str,
@@ -38,11 +51,7 @@ fn bench_backend(
     modes: &[Accuracy],
 ) {
     for &mode in modes {
-        let mut group = c.benchmark_group(format!("{group_name}/{mode}"));
-        group
-            .sample_size(10)
-            .warm_up_time(Duration::from_millis(300))
-            .measurement_time(Duration::from_secs(2));
+        let mut group = short_group(c, format!("{group_name}/{mode}"));
         for n in SIZES {
             let s = scene(n);
             let mut backend = make();
@@ -87,11 +96,7 @@ fn extract(c: &mut Criterion) {
 }
 
 fn floor(c: &mut Criterion) {
-    let mut group = c.benchmark_group("floor");
-    group
-        .sample_size(10)
-        .warm_up_time(Duration::from_millis(300))
-        .measurement_time(Duration::from_secs(2));
+    let mut group = short_group(c, "floor");
     for n in SIZES {
         let s = scene(n);
         let mut f = MemoryFloor::new(&s, 1);
@@ -113,11 +118,7 @@ fn baselines(c: &mut Criterion) {
         Baseline::FastHash { columns: 8 },
         Baseline::Classic,
     ] {
-        let mut group = c.benchmark_group(format!("baseline/{}", which.name()));
-        group
-            .sample_size(10)
-            .warm_up_time(Duration::from_millis(300))
-            .measurement_time(Duration::from_secs(2));
+        let mut group = short_group(c, format!("baseline/{}", which.name()));
         for n in SIZES {
             // The classic list is quadratic in the silhouette length: stop at 10^5.
             if which == Baseline::Classic && n > 100_000 {

@@ -2,6 +2,7 @@
 //! to our accuracy modes on the `cpu` and `simd` backends, with the same statistics as
 //! `shadowvol bench`.
 
+use crate::cmd_bench::percentiles;
 use serde::Serialize;
 use shadowvol::{find_backend, CliError, Format};
 use shadowvol_cpu::baselines::{Baseline, ClosedMesh};
@@ -10,7 +11,7 @@ use shadowvol_robust_math::Accuracy;
 use shadowvol_silhouette::{object_lights, Multiplicities, SilhouetteBackend, TopologyScene};
 use std::collections::BTreeSet;
 use std::io::Write;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// The long help of the subcommand.
 pub const LONG_ABOUT: &str = "Time the seeds' CPU silhouette algorithms on a scene: the \
@@ -75,19 +76,6 @@ struct Record {
 #[derive(Debug, Serialize)]
 struct Output {
     records: Vec<Record>,
-}
-
-/// `(median, p10, p90)` in milliseconds, nearest-rank (as `shadowvol bench`).
-fn percentiles(samples: &mut [Duration]) -> (f64, f64, f64) {
-    if samples.is_empty() {
-        return (0.0, 0.0, 0.0);
-    }
-    samples.sort_unstable();
-    let at = |q: f64| {
-        let i = ((samples.len() - 1) as f64 * q).round() as usize;
-        samples[i].as_secs_f64() * 1e3
-    };
-    (at(0.5), at(0.1), at(0.9))
 }
 
 /// The seeds' algorithms, in table order.

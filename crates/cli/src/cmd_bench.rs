@@ -151,7 +151,7 @@ fn ms(d: Duration) -> f64 {
 }
 
 /// `(median, p10, p90)` in milliseconds (nearest-rank percentiles).
-fn percentiles(samples: &mut [Duration]) -> (f64, f64, f64) {
+pub(crate) fn percentiles(samples: &mut [Duration]) -> (f64, f64, f64) {
     if samples.is_empty() {
         return (0.0, 0.0, 0.0);
     }

@@ -3,7 +3,7 @@
 use super::plan::{
     FRAME_GPU_KEY, FRAME_HOST_BACKEND, LIGHT_SCENE, T1_SCENE, T2_SCENES, T3_SCENES, TRI_SCENES,
 };
-use super::records::{Accuracy, Baseline, Record, Render, Results};
+use super::records::{Accuracy, Record, Render, Results};
 use std::collections::BTreeSet;
 
 /// Table 1 of the paper: FPS robust / original, 2013 hardware (GPU columns: GF650Ti, AMD7950,
@@ -112,7 +112,21 @@ struct Tables<'a> {
     modes: &'a [String],
 }
 
-impl Tables<'_> {
+impl<'a> Tables<'a> {
+    /// The records of `experiment` with their measurement `data` (those that have one).
+    fn records<T>(
+        &self,
+        experiment: &str,
+        data: fn(&'a Record) -> Option<&'a T>,
+    ) -> Vec<(&'a Record, &'a T)> {
+        self.r
+            .records
+            .iter()
+            .filter(|r| r.experiment == experiment)
+            .filter_map(|r| Some((r, data(r)?)))
+            .collect()
+    }
+
     fn header(&self) -> String {
         let r = self.r;
         let h = &r.host;
@@ -261,22 +275,11 @@ impl Tables<'_> {
     /// The frame table: host pipeline (`simd`) against GPU pipeline, `--frames` on the light
     /// orbit, exact mode; empty when the run has no such records.
     fn frame_table(&self) -> String {
-        let recs: Vec<(&Record, &Render)> = self
-            .r
-            .records
-            .iter()
-            .filter(|r| r.experiment == "frames")
-            .filter_map(|r| Some((r, r.render()?)))
-            .collect();
+        let recs = self.records("frames", Record::render);
         if recs.is_empty() {
             return String::new();
         }
-        let mut scenes: Vec<&str> = Vec::new();
-        for (r, _) in &recs {
-            if !scenes.contains(&r.key.scene.as_str()) {
-                scenes.push(&r.key.scene);
-            }
-        }
+        let scenes = scenes_of(&recs);
         let size = recs.first().map_or("?", |(_, x)| x.size.as_str());
         let mut s = format!(
             "\n## Frames: host pipeline against GPU pipeline\n\n`render SCENE --frames N --mode \
@@ -328,19 +331,8 @@ impl Tables<'_> {
 
     fn artifact_table(&self) -> String {
         let available = &self.r.backends;
-        let recs: Vec<(&Record, &Render)> = self
-            .r
-            .records
-            .iter()
-            .filter(|r| r.experiment == "artifacts")
-            .filter_map(|r| Some((r, r.render()?)))
-            .collect();
-        let mut scenes: Vec<&str> = Vec::new();
-        for (r, _) in &recs {
-            if !scenes.contains(&r.key.scene.as_str()) {
-                scenes.push(&r.key.scene);
-            }
-        }
+        let recs = self.records("artifacts", Record::render);
+        let scenes = scenes_of(&recs);
         let size = recs.first().map_or("?", |(_, x)| x.size.as_str());
         let mut s = format!(
             "\nArtifact pixels per rendered scene ({size} pixels, `--backdrop` behind the hard-* \
@@ -425,13 +417,7 @@ impl Tables<'_> {
     /// One row per algorithm (the seeds' and ours per backend and mode), one column group per
     /// scene: median ms (p10-p90), silhouette edges, and whether the edge set equals exact's.
     fn toywars_table(&self) -> String {
-        let recs: Vec<(&Record, &Baseline)> = self
-            .r
-            .records
-            .iter()
-            .filter(|r| r.experiment == "toywars")
-            .filter_map(|r| Some((r, r.baseline()?)))
-            .collect();
+        let recs = self.records("toywars", Record::baseline);
         if recs.is_empty() {
             return "No data in this run (see Failures).\n".into();
         }
@@ -500,4 +486,15 @@ fn total(values: impl Iterator<Item = u64>) -> String {
     } else {
         v.iter().sum::<u64>().to_string()
     }
+}
+
+/// The scenes of `recs`, each once, in the order they first appear.
+fn scenes_of<'a, T>(recs: &[(&'a Record, &T)]) -> Vec<&'a str> {
+    let mut scenes: Vec<&str> = Vec::new();
+    for (r, _) in recs {
+        if !scenes.contains(&r.key.scene.as_str()) {
+            scenes.push(&r.key.scene);
+        }
+    }
+    scenes
 }
