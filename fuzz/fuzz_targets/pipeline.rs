@@ -5,9 +5,10 @@ use arbitrary::Arbitrary;
 use glam::Vec3;
 use libfuzzer_sys::fuzz_target;
 use shadowvol_cpu::CpuBackend;
-use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{extract_once, invariant, TopologyScene};
+
+mod common;
 
 #[derive(Arbitrary, Debug)]
 struct Input {
@@ -32,16 +33,7 @@ fuzz_target!(|input: Input| {
         .iter()
         .map(|(i, j)| Vec3::new(coord(i[0], j[0]), coord(i[1], j[1]), coord(i[2], j[2])))
         .collect();
-    let n = positions.len() as u32;
-    let triangles: Vec<[u32; 3]> = input
-        .triangles
-        .iter()
-        .map(|t| t.map(|x| u32::from(x) % n))
-        .collect();
-    let Ok(mesh) = Mesh::new(positions, triangles) else {
-        return;
-    };
-    let Ok(table) = EdgeTable::build(&mesh) else {
+    let Some(table) = common::edge_table(positions, &input.triangles) else {
         return;
     };
     let l = input.light;
