@@ -353,20 +353,9 @@ fn flags_override_the_defaults() -> Outcome {
     assert_eq!(v["lights_source"], "default");
 
     // A hard-* preset declares no ground and keeps none under auto; its lights are the file's.
-    let v: Value = serde_json::from_slice(
-        &run(&[
-            "render",
-            "hard-book-3",
-            "--out",
-            png.to_str().unwrap(),
-            "--size",
-            "48x48",
-            "--format",
-            "json",
-        ])
-        .stdout,
-    )
-    .expect("JSON");
+    let mut args = base.to_vec();
+    args[1] = "hard-book-3";
+    let v: Value = serde_json::from_slice(&run(&args).stdout).expect("JSON");
     assert!(v["ground"].is_null(), "{v}");
     assert_eq!(v["lights_source"], "file");
     std::fs::remove_dir_all(&dir).ok();

@@ -385,12 +385,7 @@ pub fn shadow_outside_frustum(lo: DVec3, hi: DVec3, light: [f32; 4], planes: &[P
         f64::from(light[3]),
     );
     let corners = box_corners(lo, hi);
-    let scale = (hi - lo)
-        .length()
-        .max(lo.abs().max_element())
-        .max(hi.abs().max_element())
-        .max(1e-30);
-    let margin = scale * 1e-6;
+    let margin = relative_margin(lo, hi);
     planes.iter().any(|&pl| {
         corners.iter().all(|&c| {
             let dir = c * l.w - l.truncate();
@@ -705,6 +700,18 @@ pub fn choose(
     }
 }
 
+/// The margin a point must clear a plane by to count as outside: `10⁻⁶` of the larger of the
+/// box `lo..hi`'s diagonal and its coordinates' magnitude (at least `10⁻³⁶`), so it scales with
+/// both the extent and the rounding error of coordinates far from the origin.
+fn relative_margin(lo: DVec3, hi: DVec3) -> f64 {
+    (hi - lo)
+        .length()
+        .max(lo.abs().max_element())
+        .max(hi.abs().max_element())
+        .max(1e-30)
+        * 1e-6
+}
+
 /// True when some inward plane has every point strictly outside it, with a margin of `10⁻⁶`
 /// relative to the points' extent and magnitude.
 fn points_outside(points: &[DVec3], planes: &[Plane]) -> bool {
@@ -713,12 +720,7 @@ fn points_outside(points: &[DVec3], planes: &[Plane]) -> bool {
         .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
             (lo.min(p), hi.max(p))
         });
-    let scale = (hi - lo)
-        .length()
-        .max(lo.abs().max_element())
-        .max(hi.abs().max_element())
-        .max(1e-30);
-    let margin = scale * 1e-6;
+    let margin = relative_margin(lo, hi);
     planes
         .iter()
         .any(|&pl| points.iter().all(|&c| eval(pl, c) < -margin))

@@ -21,22 +21,26 @@ main!(
     chunked_and_pulled_surfaces_draw_the_same_image
 );
 
-/// A device with the pass, or a visible skip without an adapter; under `CI=true` a missing
-/// adapter fails ([`shadowvol_test_support::skip`]).
-fn device() -> Result<(ShadowPass, wgpu::Device, wgpu::Queue), Skip> {
+/// The first adapter, or a visible skip without one; under `CI=true` a missing adapter fails
+/// ([`shadowvol_test_support::skip`]).
+fn adapter() -> Result<wgpu::Adapter, Skip> {
     let instance =
         wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = match pollster::block_on(instance.request_adapter(&Default::default())) {
-        Ok(a) => a,
-        Err(e) => {
-            return Err(skip(format!(
-                "no GPU adapter ({e}); install Mesa lavapipe to run this test"
-            )))
-        }
-    };
+    pollster::block_on(instance.request_adapter(&Default::default())).map_err(|e| {
+        skip(format!(
+            "no GPU adapter ({e}); install Mesa lavapipe to run this test"
+        ))
+    })
+}
+
+/// A device on `adapter` with the pass's optional features and `limits`, and the pass on it.
+fn open_pass(
+    adapter: &wgpu::Adapter,
+    limits: wgpu::Limits,
+) -> (ShadowPass, wgpu::Device, wgpu::Queue) {
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        required_features: ShadowPass::optional_features(&adapter),
-        required_limits: ShadowPass::required_limits(&adapter).unwrap(),
+        required_features: ShadowPass::optional_features(adapter),
+        required_limits: limits,
         ..Default::default()
     }))
     .unwrap();
@@ -45,8 +49,15 @@ fn device() -> Result<(ShadowPass, wgpu::Device, wgpu::Queue), Skip> {
         ids: None,
         depth: wgpu::TextureFormat::Depth24PlusStencil8,
     };
-    let pass = ShadowPass::new(&adapter, &device, &queue, formats).unwrap();
-    Ok((pass, device, queue))
+    let pass = ShadowPass::new(adapter, &device, &queue, formats).unwrap();
+    (pass, device, queue)
+}
+
+/// A device with the pass and its required limits, or a visible skip without an adapter.
+fn device() -> Result<(ShadowPass, wgpu::Device, wgpu::Queue), Skip> {
+    let adapter = adapter()?;
+    let limits = ShadowPass::required_limits(&adapter).unwrap();
+    Ok(open_pass(&adapter, limits))
 }
 
 /// One [`device`] for the whole process (the proptest's cases share it).
@@ -496,28 +507,15 @@ fn exact_gpu_multiplicities_equal_cpu_on_random_lattice_soups() -> Outcome {
     Ok(())
 }
 
-/// A device for the pass with `limits` lowered as given, or `None` without an adapter.
+/// A device for the pass with its required limits lowered by `lower`, or a visible skip
+/// without an adapter.
 fn device_with(
     lower: impl FnOnce(&mut wgpu::Limits),
-) -> Option<(ShadowPass, wgpu::Device, wgpu::Queue)> {
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = pollster::block_on(instance.request_adapter(&Default::default())).ok()?;
+) -> Result<(ShadowPass, wgpu::Device, wgpu::Queue), Skip> {
+    let adapter = adapter()?;
     let mut limits = ShadowPass::required_limits(&adapter).unwrap();
     lower(&mut limits);
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        required_features: ShadowPass::optional_features(&adapter),
-        required_limits: limits,
-        ..Default::default()
-    }))
-    .unwrap();
-    let formats = PassFormats {
-        color: wgpu::TextureFormat::Rgba8Unorm,
-        ids: None,
-        depth: wgpu::TextureFormat::Depth24PlusStencil8,
-    };
-    let pass = ShadowPass::new(&adapter, &device, &queue, formats).unwrap();
-    Some((pass, device, queue))
+    Ok(open_pass(&adapter, limits))
 }
 
 /// One frame of a sphere over a floor through the pass, as an application records it; returns
@@ -625,9 +623,9 @@ fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> Vec<u8> {
 /// 3.8 MB of surface vertices), and the vertex-pulling fallback (a 2 MiB buffer limit), draw the
 /// same image as one chunk: the same shadow, pixel for pixel up to shading rounding.
 fn chunked_and_pulled_surfaces_draw_the_same_image() -> Outcome {
-    let one = device_with(|_| {}).ok_or_else(|| skip("no GPU adapter"))?;
-    let chunked = device_with(|l| l.max_storage_buffer_binding_size = 1 << 20).unwrap();
-    let pulled = device_with(|l| l.max_buffer_size = 2 << 20).unwrap();
+    let one = device_with(|_| {})?;
+    let chunked = device_with(|l| l.max_storage_buffer_binding_size = 1 << 20)?;
+    let pulled = device_with(|l| l.max_buffer_size = 2 << 20)?;
     let want = embedded_frame(&one);
     let lit = want.chunks_exact(4).filter(|p| p[0] > 60).count();
     let dark = want
