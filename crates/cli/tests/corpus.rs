@@ -5,8 +5,9 @@
 //!
 //! This checks the OBJ writer/reader round trip on hard coordinates (1e4 offsets, tiny offsets
 //! off a plane), the edge naming of the JSON (welded names, `a < b`, sorted, only `m != 0`),
-//! `open_vertices`, and `exact` on every available backend through the CLI.
+//! `open_vertices`, and `exact` on every backend through the CLI, one trial per backend (`::BACKEND`).
 
+#[macro_use]
 mod common;
 
 use glam::Affine3A;
@@ -16,7 +17,7 @@ use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy};
 use std::path::PathBuf;
 use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_shadowvol");
+use common::BIN;
 
 fn json(args: &[String]) -> Value {
     let out = Command::new(BIN)
@@ -31,11 +32,20 @@ fn json(args: &[String]) -> Value {
     serde_json::from_slice(&out.stdout).expect("JSON")
 }
 
-#[test]
-fn corpus_cases_through_the_cli_match_the_library() {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli-corpus");
+fn main() {
+    shadowvol_test_support::run(per_backend!(corpus_cases_through_the_cli_match_the_library))
+}
+
+/// Every exportable corpus case through `shadowvol silhouette --backend BACKEND`: on `cpu` in
+/// every mode, elsewhere in `exact` (the only mode whose values must match across backends).
+fn corpus_cases_through_the_cli_match_the_library(backend: &str) {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-corpus-{backend}"));
     std::fs::create_dir_all(&dir).unwrap();
-    let backends = common::available_backends();
+    let modes: &[Accuracy] = if backend == "cpu" {
+        &Accuracy::ALL
+    } else {
+        &[Accuracy::Exact]
+    };
     let mut exported = 0;
     for case in corpus::cases() {
         if case.objects.len() != 1 || case.objects[0].1 != Affine3A::IDENTITY {
@@ -64,70 +74,43 @@ fn corpus_cases_through_the_cli_match_the_library() {
                 format!("--light={x},{y},{z},{w}")
             })
             .collect();
-        for mode in Accuracy::ALL {
+        for &mode in modes {
             let mut cpu = CpuBackend::new();
             let (reference, _) = extract_once(&mut cpu, &scene, &case.lights, mode).unwrap();
-            let runs: Vec<&str> = if mode == Accuracy::Exact {
-                backends.iter().map(String::as_str).collect()
-            } else {
-                vec!["cpu"]
-            };
-            for backend in runs {
-                let mut args: Vec<String> = vec![
-                    "silhouette".into(),
-                    path.to_str().unwrap().into(),
-                    "--format".into(),
-                    "json".into(),
-                    "--mode".into(),
-                    mode.name().into(),
-                    "--backend".into(),
-                    backend.into(),
-                ];
-                args.extend(light_args.iter().cloned());
-                let v = json(&args);
-                let what = format!("{} {mode} {backend}", case.name);
-                assert_eq!(v["mesh"]["vertices"], mesh.positions.len(), "{what}");
-                assert_eq!(v["mesh"]["edges"], table.edges.len(), "{what}");
-                let lights = v["lights"].as_array().unwrap();
-                assert_eq!(lights.len(), case.lights.len(), "{what}");
-                for (l, got) in lights.iter().enumerate() {
-                    let want: Vec<(u64, u64, i64)> = reference
-                        .values(l)
-                        .iter()
-                        .enumerate()
-                        .filter(|(_, &m)| m != 0)
-                        .map(|(e, &m)| {
-                            let (a, b) = table.edge_names(e);
-                            (u64::from(a), u64::from(b), i64::from(m))
-                        })
-                        .collect();
-                    let edges: Vec<(u64, u64, i64)> = got["edges"]
-                        .as_array()
-                        .unwrap()
-                        .iter()
-                        .map(|e| {
-                            (
-                                e[0].as_u64().unwrap(),
-                                e[1].as_u64().unwrap(),
-                                e[2].as_i64().unwrap(),
-                            )
-                        })
-                        .collect();
-                    assert!(
-                        edges
-                            .windows(2)
-                            .all(|w| (w[0].0, w[0].1) < (w[1].0, w[1].1)),
-                        "{what}: sorted by (a, b)"
-                    );
-                    assert!(edges.iter().all(|e| e.0 < e.1 && e.2 != 0), "{what}");
-                    if backend == "cpu" || mode == Accuracy::Exact {
-                        assert_eq!(edges, want, "{what} light {l}");
-                    }
-                    let open = invariant::open_vertices_scene(&scene, &reference, l);
-                    assert_eq!(got["open_vertices"], open, "{what} light {l}");
-                    if mode.is_consistent() {
-                        assert_eq!(open, 0, "{what} light {l}");
-                    }
+            let mut args: Vec<String> = vec![
+                "silhouette".into(),
+                path.to_str().unwrap().into(),
+                "--format".into(),
+                "json".into(),
+                "--mode".into(),
+                mode.name().into(),
+                "--backend".into(),
+                backend.into(),
+            ];
+            args.extend(light_args.iter().cloned());
+            let v = json(&args);
+            let what = format!("{} {mode} {backend}", case.name);
+            assert_eq!(v["mesh"]["vertices"], mesh.positions.len(), "{what}");
+            assert_eq!(v["mesh"]["edges"], table.edges.len(), "{what}");
+            let lights = v["lights"].as_array().unwrap();
+            assert_eq!(lights.len(), case.lights.len(), "{what}");
+            for (l, got) in lights.iter().enumerate() {
+                let want = common::nonzero_edges(table, reference.values(l));
+                let edges = common::edges_of(got);
+                assert!(
+                    edges
+                        .windows(2)
+                        .all(|w| (w[0].0, w[0].1) < (w[1].0, w[1].1)),
+                    "{what}: sorted by (a, b)"
+                );
+                assert!(edges.iter().all(|e| e.0 < e.1 && e.2 != 0), "{what}");
+                if backend == "cpu" || mode == Accuracy::Exact {
+                    assert_eq!(edges, want, "{what} light {l}");
+                }
+                let open = invariant::open_vertices_scene(&scene, &reference, l);
+                assert_eq!(got["open_vertices"], open, "{what} light {l}");
+                if mode.is_consistent() {
+                    assert_eq!(open, 0, "{what} light {l}");
                 }
             }
         }

@@ -1,6 +1,7 @@
-//! Determinism of `shadowvol silhouette --format json` (issue 10): the same input gives
+//! Determinism of `shadowvol silhouette --format json`: the same input gives
 //! byte-identical JSON across runs, across thread counts (`RAYON_NUM_THREADS=1` and `2` on
-//! `simd`, in every mode) and across backends in exact mode.
+//! `simd`, in every mode) and across backends in exact mode, one trial per backend
+//! (`::BACKEND`).
 //!
 //! Only the fields that describe the run rather than the result are cut out before comparing,
 //! on the raw bytes: `"timings"` (durations, and the count of pairs a device's filter could not
@@ -9,9 +10,22 @@
 //! lights as printed, every `[a, b, m]`, open vertices, key order, number formatting) must match
 //! byte for byte.
 
+#[macro_use]
+mod common;
+
 use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_shadowvol");
+fn main() {
+    let mut trials = shadowvol_test_support::trials![
+        cut_removes_exactly_the_member,
+        simd_gives_the_same_bytes_with_one_and_two_threads_in_every_mode,
+    ];
+    trials.extend(per_backend!(same_input_same_bytes_across_runs));
+    trials.extend(per_backend!(same_bytes_as_cpu_in_exact_mode, |b| b != "cpu"));
+    shadowvol_test_support::run(trials)
+}
+
+use common::BIN;
 
 /// Scenes with degenerate and near-degenerate configurations, several objects, and the bunny.
 const SCENES: [&str; 6] = [
@@ -94,22 +108,6 @@ fn without(json: &str, keys: &[&str]) -> String {
     s
 }
 
-/// The backends that can start here.
-fn available() -> Vec<String> {
-    let out = Command::new(BIN)
-        .args(["backends", "--format", "json"])
-        .output()
-        .unwrap();
-    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    rows.as_array()
-        .unwrap()
-        .iter()
-        .filter(|r| r["available"] == true)
-        .map(|r| r["name"].as_str().unwrap().to_owned())
-        .collect()
-}
-
-#[test]
 fn cut_removes_exactly_the_member() {
     let j = r#"{"backend":"simd","mode":"exact","lights":[{"edges":[[0,1,2]]}],"device":"x, 2 threads","timings":{"a":1.5,"uncertain":0}}"#;
     assert_eq!(
@@ -118,19 +116,16 @@ fn cut_removes_exactly_the_member() {
     );
 }
 
-#[test]
-fn same_input_same_bytes_across_runs_on_every_backend() {
-    for backend in available() {
-        for scene in ["hard-book-4", "bunny"] {
-            let args = ["--backend", backend.as_str(), "--mode", "exact"];
-            let a = without(&silhouette(scene, &args, &[]), &["timings"]);
-            let b = without(&silhouette(scene, &args, &[]), &["timings"]);
-            assert_eq!(a, b, "{backend} {scene}: two runs differ");
-        }
+/// Two runs of `exact` on `backend` give the same bytes.
+fn same_input_same_bytes_across_runs(backend: &str) {
+    for scene in ["hard-book-4", "bunny"] {
+        let args = ["--backend", backend, "--mode", "exact"];
+        let a = without(&silhouette(scene, &args, &[]), &["timings"]);
+        let b = without(&silhouette(scene, &args, &[]), &["timings"]);
+        assert_eq!(a, b, "{backend} {scene}: two runs differ");
     }
 }
 
-#[test]
 fn simd_gives_the_same_bytes_with_one_and_two_threads_in_every_mode() {
     for scene in ["bunny-subdivided", "hard-offset-1e4-sphere", "hard-book-5"] {
         for mode in ["original", "robust", "ordered", "exact"] {
@@ -148,22 +143,17 @@ fn simd_gives_the_same_bytes_with_one_and_two_threads_in_every_mode() {
     }
 }
 
-#[test]
-fn every_backend_gives_the_same_bytes_in_exact_mode() {
-    let backends = available();
-    assert!(backends.iter().any(|b| b == "cpu"));
+/// `exact` on `backend` gives the same bytes as on `cpu`, apart from the run's description.
+fn same_bytes_as_cpu_in_exact_mode(backend: &str) {
     for scene in SCENES {
         let reference = without(
             &silhouette(scene, &["--backend", "cpu", "--mode", "exact"], &[]),
             &["backend", "device", "timings"],
         );
-        for backend in backends.iter().filter(|b| *b != "cpu") {
-            let got = without(
-                &silhouette(scene, &["--backend", backend, "--mode", "exact"], &[]),
-                &["backend", "device", "timings"],
-            );
-            assert_eq!(got, reference, "{scene}: {backend} differs from cpu");
-        }
-        eprintln!("{scene}: {} backends identical", backends.len());
+        let got = without(
+            &silhouette(scene, &["--backend", backend, "--mode", "exact"], &[]),
+            &["backend", "device", "timings"],
+        );
+        assert_eq!(got, reference, "{scene}: {backend} differs from cpu");
     }
 }

@@ -3,8 +3,10 @@
 #![allow(dead_code)] // each test binary uses a subset
 
 use serde_json::Value;
-use shadowvol_test_support::Skip;
+use shadowvol_mesh_topology::EdgeTable;
+use shadowvol_test_support::{trial, Skip, Trial};
 use std::process::{Command, Output};
+use std::sync::OnceLock;
 
 /// The `shadowvol` binary built for these tests.
 pub const BIN: &str = env!("CARGO_BIN_EXE_shadowvol");
@@ -35,46 +37,95 @@ pub fn json_of(args: &[&str]) -> Value {
     serde_json::from_slice(&out.stdout).expect("valid JSON on stdout")
 }
 
-/// The backends that `shadowvol backends` reports available, by name.
-///
-/// Under CI (`shadowvol_silhouette::ci::is_ci`: `CI=true`, `CI=True`, `CI=1`) every backend it
-/// lists must be available, so that a test looping over these never quietly tests fewer: an
-/// unavailable one fails the test with its reason. Elsewhere each missing one is named on a
-/// visible `SKIPPED` line.
-pub fn available_backends() -> Vec<String> {
-    let rows = json_of(&["backends", "--format", "json"]);
-    let mut available = Vec::new();
-    for r in rows.as_array().expect("an array") {
-        let name = r["name"].as_str().expect("a name").to_owned();
-        if r["available"] == Value::Bool(true) {
-            available.push(name);
-        } else {
-            skip(&format!("backend {name}"), &r["reason"].to_string());
-        }
-    }
-    available
+/// The rows of `shadowvol backends --format json`, read once per test binary.
+fn backend_rows() -> &'static [Value] {
+    static ROWS: OnceLock<Vec<Value>> = OnceLock::new();
+    ROWS.get_or_init(|| {
+        json_of(&["backends", "--format", "json"])
+            .as_array()
+            .expect("an array")
+            .clone()
+    })
 }
 
-/// A skip: fails the test under CI (`shadowvol_silhouette::ci::is_ci`), otherwise prints a
-/// `SKIPPED` line with the reason (on stdout and stderr, so it shows with or without capture).
-/// Only for tests on the standard harness that loop over [`available_backends`]; a test that
-/// skips as a whole returns a [`Skip`] instead ([`shadowvol_test_support::skip`]).
-pub fn skip(what: &str, why: &str) {
-    assert!(
-        !shadowvol_silhouette::ci::is_ci(),
-        "{what} is unavailable, and CI is set, so this fails: {why}"
-    );
-    eprintln!("SKIPPED {what}: {why}");
-    println!("SKIPPED {what}: {why}");
+/// Every backend that `shadowvol backends` lists, available or not, in its order.
+pub fn backend_names() -> Vec<String> {
+    backend_rows()
+        .iter()
+        .map(|r| r["name"].as_str().expect("a name").to_owned())
+        .collect()
+}
+
+/// One trial per listed backend that `keep` accepts, named `NAME::BACKEND`, each running
+/// `test(backend)` once [`backend_available`] says the backend can start. So a backend that
+/// cannot start here shows as `ignored (<reason>)` under its own name (a failure under CI),
+/// instead of a loop over the available ones quietly testing fewer.
+pub fn per_backend(name: &str, keep: fn(&str) -> bool, test: fn(&str)) -> Vec<Trial> {
+    backend_names()
+        .into_iter()
+        .filter(|b| keep(b))
+        .map(|b| {
+            trial(format!("{name}::{b}"), move || -> Result<(), Skip> {
+                backend_available(&b)?;
+                test(&b);
+                Ok(())
+            })
+        })
+        .collect()
+}
+
+/// [`per_backend`] trials of the test function `test` (`fn(&str)`), named after it:
+/// `per_backend!(test)` for every backend, `per_backend!(test, keep)` for those `keep` accepts.
+#[allow(unused_macros)] // each test binary uses a subset
+macro_rules! per_backend {
+    ($test:ident) => {
+        common::per_backend(::std::stringify!($test), |_| true, $test)
+    };
+    ($test:ident, $keep:expr) => {
+        common::per_backend(::std::stringify!($test), $keep, $test)
+    };
+}
+
+/// The `[a, b, m]` rows of a light in a `silhouette` report, as `(a, b, m)`.
+///
+/// # Panics
+///
+/// If a row is not three integers.
+pub fn edges_of(light: &Value) -> Vec<(u64, u64, i64)> {
+    light["edges"]
+        .as_array()
+        .expect("edges is an array")
+        .iter()
+        .map(|e| {
+            let e = e.as_array().expect("an edge is an array");
+            assert_eq!(e.len(), 3, "edges are [a, b, m]");
+            (
+                e[0].as_u64().unwrap(),
+                e[1].as_u64().unwrap(),
+                e[2].as_i64().unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// The rows a report must list for one light: each edge of `table` with `m != 0` in `values`
+/// (indexed by edge), named by its welded vertices, in the table's order.
+pub fn nonzero_edges(table: &EdgeTable, values: &[i32]) -> Vec<(u64, u64, i64)> {
+    values
+        .iter()
+        .enumerate()
+        .filter(|(_, &m)| m != 0)
+        .map(|(e, &m)| {
+            let (a, b) = table.edge_names(e);
+            (u64::from(a), u64::from(b), i64::from(m))
+        })
+        .collect()
 }
 
 /// Whether `backend` is available: `Ok`, or a visible skip naming the reason `shadowvol
 /// backends` gives (a failure under CI, see [`shadowvol_test_support::skip`]).
 pub fn backend_available(backend: &str) -> Result<(), Skip> {
-    let rows = json_of(&["backends", "--format", "json"]);
-    let row = rows
-        .as_array()
-        .expect("an array")
+    let row = backend_rows()
         .iter()
         .find(|r| r["name"] == backend)
         .unwrap_or_else(|| panic!("`shadowvol backends` does not list {backend}"));
