@@ -175,7 +175,7 @@ fn missing_files_and_unknown_formats_are_clear() {
     );
 }
 
-/// Regressions from fuzzing and the reliability corpus (issue 10): inputs that used to panic
+/// Regressions from fuzzing and the reliability corpus: inputs that used to panic
 /// inside the gltf crates, or to load although they lie about their data.
 #[test]
 fn fuzz_regressions_are_errors_not_panics() {
