@@ -33,7 +33,7 @@ struct LightBatch<'a> {
 /// uncertain records), and the first `k` list entries and `ku` records.
 struct FirstTrip {
     counts: Vec<u32>,
-    chunk: DeviceOutput,
+    output: DeviceOutput,
     k: u64,
     ku: u64,
 }
@@ -153,8 +153,8 @@ impl WgpuBackend {
             .frame
             .as_mut()
             .ok_or_else(|| device_error("no frame buffers"))?;
-        let chunk = self.second_round_trip(frame, p.layout.edge_count(), count, first, stats)?;
-        self.resolve_batch(p, batch, chunk, out, stats)
+        let output = self.second_round_trip(frame, p.layout.edge_count(), count, first, stats)?;
+        self.resolve_batch(p, batch, output, out, stats)
     }
 
     /// Uploads the batch's lights, dispatches the triangle and edge steps and brings back the
@@ -270,7 +270,7 @@ impl WgpuBackend {
             stats.compute += t.elapsed();
             // ---- readback, first round trip
             let t = Instant::now();
-            let (counts, chunk) = self.read_mapped(staging, staging_bytes, |b| {
+            let (counts, output) = self.read_mapped(staging, staging_bytes, |b| {
                 let counts: Vec<u32> = read_u32s(&b[..counters_bytes as usize]).collect();
                 let lists = (0..count)
                     .map(|li| {
@@ -296,7 +296,7 @@ impl WgpuBackend {
             if uncertain <= frame.uncertain_capacity {
                 break FirstTrip {
                     counts,
-                    chunk,
+                    output,
                     k,
                     ku,
                 };
@@ -334,7 +334,7 @@ impl WgpuBackend {
     ) -> Result<DeviceOutput, BackendError> {
         let FirstTrip {
             counts,
-            mut chunk,
+            mut output,
             k,
             ku,
         } = first;
@@ -410,14 +410,14 @@ impl WgpuBackend {
                 let mut at = 0usize;
                 for &(li, _, n) in &rest {
                     let b = n as usize * 8;
-                    chunk.lists[li].extend(read_pairs(&bytes[at..at + b]));
+                    output.lists[li].extend(read_pairs(&bytes[at..at + b]));
                     at += b;
                 }
                 let b = uncertain_bytes as usize;
-                chunk.uncertain.extend(read_records(&bytes[at..at + b]));
+                output.uncertain.extend(read_records(&bytes[at..at + b]));
                 at += b;
                 if mult_bytes > 0 {
-                    chunk.mult = Some(
+                    output.mult = Some(
                         read_u32s(&bytes[at..at + mult_bytes as usize])
                             .map(|w| w as i32)
                             .collect(),
@@ -425,11 +425,11 @@ impl WgpuBackend {
                 }
             })?;
         } else if self.options.full_readback {
-            chunk.mult = Some(vec![0; edge_count * count]);
+            output.mult = Some(vec![0; edge_count * count]);
         }
         stats.readback += t.elapsed();
 
-        Ok(chunk)
+        Ok(output)
     }
 
     /// The host's exact decisions for the undecided triangles' triples, the batch's rows of
@@ -438,21 +438,21 @@ impl WgpuBackend {
         &self,
         p: &mut Prepared,
         batch: &LightBatch<'_>,
-        chunk: DeviceOutput,
+        output: DeviceOutput,
         out: &mut Multiplicities,
         stats: &mut ExtractStats,
     ) -> Result<(), BackendError> {
         let count = batch.lights.len();
         let edges = p.layout.edge_count() as u64;
         let t = Instant::now();
-        validate_lists(&chunk.lists, p.layout.edge_count())?;
-        let records = if chunk.uncertain.is_empty() {
+        validate_lists(&output.lists, p.layout.edge_count())?;
+        let records = if output.uncertain.is_empty() {
             Vec::new()
         } else {
             let slots = p
                 .edge_slots
                 .get_or_insert_with(|| p.triangles.edge_slots(&p.layout));
-            expand_uncertain(&chunk.uncertain, slots, count)?
+            expand_uncertain(&output.uncertain, slots, count)?
         };
         stats.uncertain += records.len() as u64;
         let patch = finish_batch(
@@ -460,8 +460,8 @@ impl WgpuBackend {
             batch.object_lights,
             batch.lights.clone(),
             BatchOutput {
-                mult: chunk.mult,
-                lists: chunk.lists,
+                mult: output.mult,
+                lists: output.lists,
                 uncertain: records,
             },
             out,

@@ -71,9 +71,9 @@ pub(crate) struct BatchOutput {
 /// What the host changed: the device buffers must be patched the same way.
 #[derive(Debug, Default)]
 pub(crate) struct Patch {
-    /// `(light within chunk, edge, final m)` for every edge an uncertain triple touched.
+    /// `(light within the batch, edge, final m)` for every edge an uncertain triple touched.
     pub mult: Vec<(u32, u32, i32)>,
-    /// `(light within chunk, final compact list)` for every light whose list changed.
+    /// `(light within the batch, final compact list)` for every light whose list changed.
     pub lists: Vec<(u32, Vec<(u32, i32)>)>,
 }
 
@@ -87,7 +87,7 @@ pub(crate) fn finish_batch(
     layout: &SceneLayout,
     object_lights: &[Vec<[f32; 4]>],
     batch: Range<usize>,
-    chunk: BatchOutput,
+    output: BatchOutput,
     out: &mut Multiplicities,
 ) -> Result<Patch, BackendError> {
     let first = batch.start;
@@ -96,7 +96,7 @@ pub(crate) fn finish_batch(
         mult,
         mut lists,
         mut uncertain,
-    } = chunk;
+    } = output;
     for (li, list) in lists.iter().enumerate() {
         let values = out.values_mut(first + li);
         match &mult {
