@@ -1167,4 +1167,157 @@ mod tests {
             &planes
         ));
     }
+
+    /// A small xorshift generator of uniform numbers in `[0, 1)`.
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// Whether `p` is in the view frustum of a camera at `eye` with near rectangle `near`
+    /// (a parallelogram, corners in order), by the definition: the ray from the eye through `p`
+    /// crosses the rectangle at or before `p`. Solved directly: the ray's parameter `t` at the
+    /// rectangle's plane must be in `(0, 1]`, and the crossing's coordinates along the
+    /// rectangle's two edges in `[0, 1]`.
+    fn in_frustum(eye: DVec3, near: [DVec3; 4], p: DVec3) -> bool {
+        let (u, v) = (near[1] - near[0], near[3] - near[0]);
+        let n = u.cross(v);
+        let t = (near[0] - eye).dot(n) / (p - eye).dot(n);
+        if !(t > 0.0 && t <= 1.0) {
+            return false; // behind the eye, or between the eye and the near plane
+        }
+        let q = eye + (p - eye) * t - near[0];
+        let (a, b) = (q.dot(u) / u.length_squared(), q.dot(v) / v.length_squared());
+        (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b)
+    }
+
+    /// An off-axis camera's five planes: each is unit length, the side planes hold the eye and
+    /// their edge of the near rectangle, the near plane holds all four corners, and a point is
+    /// inside all five exactly when it is in the frustum by definition.
+    #[test]
+    fn frustum_planes_bound_exactly_the_frustum() {
+        let eye = DVec3::new(0.3, 1.2, 4.0);
+        let (f, r) = (
+            DVec3::new(-0.1, -0.3, -1.0).normalize(),
+            DVec3::new(1.0, 0.0, -0.1),
+        );
+        let r = (r - f * r.dot(f)).normalize();
+        let up = r.cross(f);
+        let c = eye + f * 0.5;
+        let near = [
+            c - r * 0.4 - up * 0.25,
+            c + r * 0.4 - up * 0.25,
+            c + r * 0.4 + up * 0.25,
+            c - r * 0.4 + up * 0.25,
+        ];
+        let planes = frustum_planes(eye, near);
+        assert_eq!(planes.len(), 5);
+        for (i, &pl) in planes.iter().enumerate() {
+            assert!(
+                (pl.truncate().length() - 1.0).abs() < 1e-12,
+                "plane {i} not unit"
+            );
+            let on: Vec<DVec3> = if i < 4 {
+                vec![eye, near[i], near[(i + 1) % 4]]
+            } else {
+                near.to_vec()
+            };
+            for p in on {
+                assert!(eval(pl, p).abs() < 1e-12, "plane {i} misses {p}");
+            }
+        }
+        let mut rnd = uniform(0x9e37_79b9_7f4a_7c15);
+        let (mut inside, mut outside) = (0, 0);
+        for _ in 0..20_000 {
+            let p = eye + DVec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * 12.0;
+            let want = in_frustum(eye, near, p);
+            let got = planes.iter().all(|&pl| eval(pl, p) >= 0.0);
+            assert_eq!(got, want, "{p}");
+            if want {
+                inside += 1;
+            } else {
+                outside += 1;
+            }
+        }
+        assert!(
+            inside > 100 && outside > 100,
+            "{inside} inside, {outside} outside"
+        );
+    }
+
+    /// Whenever `shadow_outside_frustum` culls a box's shadow, no point of the shadow (the box
+    /// and every point behind it as seen from the light, sampled to 50 light-distances) is in
+    /// the frustum by definition; and it culls some of the random cases, at every scale.
+    #[test]
+    fn a_culled_shadow_never_reaches_the_frustum() {
+        let eye = DVec3::ZERO;
+        let mut rnd = uniform(0x2545_f491_4f6c_dd1d);
+        for scale in [1.0, 2f64.powi(20), 2f64.powi(-20)] {
+            let near = near_rect().map(|p| p * scale);
+            let planes = frustum_planes(eye, near);
+            let mut culled = 0;
+            for case in 0..3000 {
+                let centre = DVec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * 16.0 * scale;
+                let half = DVec3::new(rnd(), rnd(), rnd()) * scale;
+                let (lo, hi) = (centre - half, centre + half);
+                let at = DVec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * 16.0 * scale;
+                let light = if case % 4 == 0 {
+                    [at.x as f32, at.y as f32, at.z as f32, 0.0] // directional, towards `at`
+                } else {
+                    [at.x as f32, at.y as f32, at.z as f32, 1.0]
+                };
+                if !shadow_outside_frustum(lo, hi, light, &planes) {
+                    continue;
+                }
+                culled += 1;
+                let l = DVec4::from(light.map(f64::from));
+                for _ in 0..200 {
+                    let p = lo + (hi - lo) * DVec3::new(rnd(), rnd(), rnd());
+                    // Away from the light: from a point light through p, or against a
+                    // directional light's direction.
+                    let away = if l.w == 0.0 {
+                        -l.truncate()
+                    } else {
+                        p - l.truncate()
+                    };
+                    let q = p + away * (rnd() * 50.0);
+                    assert!(
+                        !in_frustum(eye, near, p) && !in_frustum(eye, near, q),
+                        "culled, but {q} of the shadow of {lo}..{hi} under {light:?} is in view"
+                    );
+                }
+            }
+            assert!(culled > 100, "scale {scale}: only {culled} culled");
+        }
+    }
+
+    /// A box whose nearest corner is `10⁻⁹` of the scale inside the near plane is in view, so
+    /// its shadow is not culled; `10⁻⁵` behind the plane it is (the margin is `10⁻⁶` of the
+    /// scale), at scales 1 and 2^±20.
+    #[test]
+    fn culling_keeps_a_relative_margin() {
+        for scale in [1.0, 2f64.powi(20), 2f64.powi(-20)] {
+            let planes = frustum_planes(DVec3::ZERO, near_rect().map(|p| p * scale));
+            let light = [0.0, 0.0, (-10.0 * scale) as f32, 1.0];
+            let box_at = |gap: f64| {
+                let lo = DVec3::new(-0.1, -0.1, -1.0 - gap) * scale;
+                (lo, DVec3::new(0.1, 0.1, 0.5) * scale)
+            };
+            let (lo, hi) = box_at(1e-9);
+            assert!(
+                !shadow_outside_frustum(lo, hi, light, &planes),
+                "scale {scale}"
+            );
+            let (lo, hi) = box_at(-1e-5);
+            assert!(
+                shadow_outside_frustum(lo, hi, light, &planes),
+                "scale {scale}"
+            );
+        }
+    }
 }
