@@ -1320,4 +1320,46 @@ mod tests {
             );
         }
     }
+
+    /// The text names of the techniques are the JSON's (serde's kebab-case), and a plan line
+    /// says the technique, the caps, the silhouette's source and the counts.
+    #[test]
+    fn plan_lines_name_what_is_drawn() {
+        for t in [Technique::Culled, Technique::ZPass, Technique::ZFail] {
+            assert_eq!(serde_json::to_value(t).unwrap(), t.name());
+        }
+        let entry = PlanEntry {
+            light: 1,
+            object: 2,
+            object_name: "box".into(),
+            technique: Technique::ZFail,
+            back_cap: true,
+            silhouette: SilhouetteSource::Reused,
+            silhouette_edges: 7,
+            side_quads: 9,
+            cap_triangles: 24,
+            reason: "the camera may be in its shadow".into(),
+            scissor: None,
+        };
+        assert_eq!(
+            entry.to_string(),
+            "light 1 x object 2 (box): z-fail with front and back caps; silhouette reused from \
+             last frame; 7 edges, 9 side quads, 24 cap triangles; the camera may be in its shadow"
+        );
+        let directional = PlanEntry {
+            back_cap: false,
+            ..entry.clone()
+        };
+        assert!(directional
+            .to_string()
+            .contains("z-fail with front cap only (directional light)"));
+        let culled = PlanEntry {
+            technique: Technique::Culled,
+            silhouette: SilhouetteSource::Skipped,
+            ..entry
+        };
+        assert!(culled
+            .to_string()
+            .contains("(box): culled; silhouette skipped;"));
+    }
 }
