@@ -3,7 +3,7 @@
 //! batches of [`crate::dispatch`]).
 
 use crate::device::DeviceDesc;
-use crate::dispatch::{Batch, Pending};
+use crate::dispatch::{Batch, Extraction, Pending};
 use crate::layout::{upload, Prepared};
 use crate::{wait, NAME};
 use opencl3::command_queue::CommandQueue;
@@ -196,18 +196,16 @@ impl SilhouetteBackend for OpenClBackend {
             upload: prep_start.elapsed(),
             ..ExtractStats::default()
         };
+        let job = Extraction {
+            id,
+            obj_lights: &obj_lights,
+            mode,
+            limit,
+        };
         let mut first = 0;
         while first < num_lights {
             let batch = first..(first + per_launch).min(num_lights);
-            match self.extract_batch(
-                id,
-                &obj_lights,
-                batch.clone(),
-                mode,
-                limit,
-                out,
-                &mut stats,
-            )? {
+            match self.extract_batch(&job, batch.clone(), out, &mut stats)? {
                 Batch::Done => {
                     first = batch.end;
                     self.last_batches += 1;

@@ -26,6 +26,19 @@ use std::time::{Duration, Instant};
 /// Initial capacity of the uncertain-record buffer (records); it grows when a run needs more.
 const INITIAL_UNCERTAIN_CAPACITY: usize = 4096;
 
+/// What every batch of one `extract` call shares: the prepared scene, the object-space lights
+/// of all the call's lights (per object), the accuracy mode, and the bound on each wait.
+pub(crate) struct Extraction<'a> {
+    /// The prepared scene.
+    pub(crate) id: PreparedId,
+    /// Per object, every light of the call in that object's space.
+    pub(crate) obj_lights: &'a [Vec<[f32; 4]>],
+    /// The accuracy mode.
+    pub(crate) mode: Accuracy,
+    /// The longest any single wait for the device may take.
+    pub(crate) limit: Duration,
+}
+
 /// Device work that a wait gave up on (it timed out or a command failed before the rest ended),
 /// with the host memory its commands may still read or write.
 pub(crate) struct Pending {
@@ -254,11 +267,11 @@ impl OpenClBackend {
         Ok((upload, compute, t.elapsed()))
     }
 
-    /// One kernel launch over the lights `batch` of `obj_lights` (rerun while the
+    /// One kernel launch over the lights `batch` of `job.obj_lights` (rerun while the
     /// uncertain-record buffer grows): uploads their object-space lights, runs the kernel, reads
     /// back the silhouette list and uncertain records, and fills the batch's rows of `out`
     /// (already reset to the scene's edges and all lights), adding the times and the uncertain
-    /// count to `stats`. Every wait is bounded by `limit`, as in [`OpenClBackend::run_once`].
+    /// count to `stats`. Every wait is bounded by `job.limit`, as in [`OpenClBackend::run_once`].
     ///
     /// Returns [`Batch::TooManyUncertain`] instead when the batch has two or more lights and its
     /// uncertain records need more than the device's largest allocation.
@@ -267,17 +280,19 @@ impl OpenClBackend {
     /// [`BackendError::Device`] when a command fails, a wait times out, or the output is
     /// malformed; [`BackendError::Limit`] when the uncertain records of a single light do not
     /// fit the device's largest allocation.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn extract_batch(
         &mut self,
-        id: PreparedId,
-        obj_lights: &[Vec<[f32; 4]>],
+        job: &Extraction<'_>,
         batch: Range<usize>,
-        mode: Accuracy,
-        limit: Duration,
         out: &mut Multiplicities,
         stats: &mut ExtractStats,
     ) -> Result<Batch, BackendError> {
+        let &Extraction {
+            id,
+            obj_lights,
+            mode,
+            limit,
+        } = job;
         let t = Instant::now();
         let num_lights = batch.len();
         let mut flat_l = flat_light_batch(obj_lights, batch.clone())?;

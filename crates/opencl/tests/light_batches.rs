@@ -57,12 +57,10 @@ fn one_launch(
     r
 }
 
-/// `got` (split) against one launch of `whole` and, in exact mode, against `cpu`
+/// `got` and its stats (split) against one launch of `whole` and, in exact mode, against `cpu`
 /// ([`invariant::check_split_batches`]).
-#[allow(clippy::too_many_arguments)]
 fn check_split(
-    got: &Multiplicities,
-    stats: &ExtractStats,
+    (got, stats): (&Multiplicities, &ExtractStats),
     whole: &mut OpenClBackend,
     cpu: &mut CpuBackend,
     scene: &TopologyScene,
@@ -110,7 +108,13 @@ fn corpus_split_into_light_batches_matches_one_launch_and_cpu() -> Outcome {
                     );
                     split_runs += usize::from(n > n_per);
                     check_split(
-                        &got, &stats, &mut whole, &mut cpu, &scene, lights, mode, &what,
+                        (&got, &stats),
+                        &mut whole,
+                        &mut cpu,
+                        &scene,
+                        lights,
+                        mode,
+                        &what,
                     );
                 }
             }
@@ -244,8 +248,7 @@ fn allocation_limit_splits_lights_and_refuses_only_a_light_that_does_not_fit() -
                 assert_eq!(launches, n.div_ceil(2), "{what}");
             }
             check_split(
-                &got,
-                &stats,
+                (&got, &stats),
                 &mut whole,
                 &mut cpu,
                 &scene,
@@ -327,8 +330,7 @@ fn too_many_uncertain_records_split_the_batch_further() -> Outcome {
     assert_eq!(cl.batches_of_last_extract_for_tests(), lights.len());
     assert_eq!(stats.uncertain, per_light.iter().sum::<u64>());
     check_split(
-        &got,
-        &stats,
+        (&got, &stats),
         &mut whole,
         &mut cpu,
         &scene,
