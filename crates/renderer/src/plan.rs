@@ -319,207 +319,6 @@ mod cone_tests {
     }
 }
 
-#[cfg(test)]
-mod scissor_tests {
-    use super::*;
-    use glam::DMat4;
-    use shadowvol_scenes::SpotCone;
-
-    const W: u32 = 160;
-    const H: u32 = 120;
-    const NEAR: f64 = 0.1;
-
-    fn view_proj(eye: DVec3) -> DMat4 {
-        glam::dcamera::rh::proj::directx::perspective(
-            60f64.to_radians(),
-            f64::from(W) / f64::from(H),
-            NEAR,
-            100.0,
-        ) * glam::dcamera::rh::view::look_at_mat4(eye, DVec3::ZERO, DVec3::Y)
-    }
-
-    /// Where world point `p` lands in the image (column, row, in pixels; row 0 at the top), or
-    /// `None` behind the near plane.
-    fn pixel(vp: DMat4, p: DVec3) -> Option<(f64, f64)> {
-        let c = vp * p.extend(1.0);
-        (c.w > NEAR).then(|| {
-            (
-                (c.x / c.w * 0.5 + 0.5) * f64::from(W),
-                (0.5 - c.y / c.w * 0.5) * f64::from(H),
-            )
-        })
-    }
-
-    fn emission(range: Option<f32>, spot: Option<(Vec3, f32)>) -> Emission {
-        Emission {
-            range,
-            spot: spot.map(|(direction, outer)| SpotCone {
-                direction,
-                inner_cone_angle: outer * 0.8,
-                outer_cone_angle: outer,
-            }),
-            ..Emission::default()
-        }
-    }
-
-    /// Every point of `bounds` that the light reaches by glTF's definition
-    /// (`Emission::attenuation > 0`, written independently of the scissor) lands inside the
-    /// scissor rectangle; returns the scissor and the box of those points' pixels.
-    fn check_contains(
-        light: [f32; 4],
-        e: &Emission,
-        bounds: (DVec3, DVec3),
-        eye: DVec3,
-    ) -> ([u32; 4], [f64; 4]) {
-        let vp = view_proj(eye);
-        let r = light_scissor(light, Some(e), bounds, vp, NEAR, W, H).expect("a scissor");
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut rnd = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let (lo, hi) = bounds;
-        let mut lit = [
-            f64::INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NEG_INFINITY,
-        ];
-        let samples = (0..40_000)
-            .map(|_| lo + (hi - lo) * DVec3::new(rnd(), rnd(), rnd()))
-            .chain(box_corners(lo, hi));
-        for p in samples {
-            if e.attenuation(light, p) <= 0.0 {
-                continue;
-            }
-            let (x, y) = pixel(vp, p).expect("in front of the camera");
-            if !(0.0..f64::from(W)).contains(&x) || !(0.0..f64::from(H)).contains(&y) {
-                continue; // off screen: the scissor is clamped to the image
-            }
-            let (col, row) = (x.floor() as u32, y.floor() as u32);
-            assert!(
-                (r[0]..r[0] + r[2]).contains(&col) && (r[1]..r[1] + r[3]).contains(&row),
-                "lit point {p} at pixel ({col}, {row}) outside the scissor {r:?}"
-            );
-            lit = [lit[0].min(x), lit[1].min(y), lit[2].max(x), lit[3].max(y)];
-        }
-        assert!(
-            lit[0] < lit[2],
-            "no lit point on screen: the case tests nothing"
-        );
-        (r, lit)
-    }
-
-    fn area(r: [u32; 4]) -> u32 {
-        r[2] * r[3]
-    }
-
-    #[test]
-    fn a_range_light_covering_the_box_is_scissored_to_the_box() {
-        // The range reaches past the whole box, so what is lit is the box itself: the scissor
-        // is its projection, widened by one pixel, to the pixel.
-        let bounds = (DVec3::new(-1.0, 0.0, -1.0), DVec3::new(1.0, 1.0, 1.0));
-        let light = [0.3, 2.0, 0.2, 1.0];
-        let (r, lit) = check_contains(
-            light,
-            &emission(Some(50.0), None),
-            bounds,
-            DVec3::new(1.0, 3.0, 6.0),
-        );
-        assert_eq!(
-            r,
-            [
-                (lit[0].floor() - 1.0) as u32,
-                (lit[1].floor() - 1.0) as u32,
-                (lit[2].ceil() + 1.0) as u32 - (lit[0].floor() - 1.0) as u32,
-                (lit[3].ceil() + 1.0) as u32 - (lit[1].floor() - 1.0) as u32,
-            ],
-            "scissor {r:?} against the box's pixels {lit:?}"
-        );
-    }
-
-    #[test]
-    fn range_and_cone_scissors_hold_every_lit_point_and_save_pixels() {
-        let bounds = (DVec3::new(-3.0, -0.1, -3.0), DVec3::new(3.0, 1.0, 3.0));
-        let eye = DVec3::new(0.5, 4.0, 7.0);
-        let light = [0.4, 1.5, -0.3, 1.0];
-        let down = Vec3::new(0.1, -1.0, 0.2).normalize();
-        let whole = check_contains(light, &emission(Some(1e3), None), bounds, eye).0;
-        for (what, e, at_most) in [
-            ("range ball", emission(Some(1.2), None), 0.5),
-            ("cone, no range", emission(None, Some((down, 0.35))), 0.5),
-            (
-                "cone within a range",
-                emission(Some(1.4), Some((down, 0.5))),
-                0.5,
-            ),
-            (
-                "half-space cone",
-                emission(None, Some((down, std::f32::consts::FRAC_PI_2))),
-                1.0,
-            ),
-            ("sideways cone", emission(None, Some((Vec3::X, 0.3))), 0.6),
-        ] {
-            let (r, _) = check_contains(light, &e, bounds, eye);
-            assert!(
-                f64::from(area(r)) <= at_most * f64::from(area(whole)),
-                "{what}: scissor {r:?} saves too little against the box's {whole:?}"
-            );
-        }
-    }
-
-    #[test]
-    fn no_scissor_where_nothing_bounds_the_light() {
-        let bounds = (DVec3::splat(-1.0), DVec3::splat(1.0));
-        let vp = view_proj(DVec3::new(0.0, 2.0, 5.0));
-        let scissor =
-            |light: [f32; 4], e: Option<&Emission>| light_scissor(light, e, bounds, vp, NEAR, W, H);
-        let ranged = emission(Some(2.0), None);
-        assert_eq!(scissor([0.0, 1.0, 0.0, 1.0], None), None, "no emission");
-        assert_eq!(
-            scissor([0.0, 1.0, 0.0, 0.0], Some(&ranged)),
-            None,
-            "directional"
-        );
-        assert_eq!(
-            scissor([0.0, 1.0, 0.0, 1.0], Some(&emission(None, None))),
-            None,
-            "a point light without a range"
-        );
-        assert_eq!(
-            scissor(
-                [0.0, 1.0, 0.0, 1.0],
-                Some(&emission(Some(f32::INFINITY), None))
-            ),
-            None,
-            "an infinite range"
-        );
-        // The camera inside the lit box: its corners straddle the near plane.
-        let inside = view_proj(DVec3::new(0.0, 0.5, 0.5));
-        assert_eq!(
-            light_scissor(
-                [0.0, 0.5, 0.0, 1.0],
-                Some(&ranged),
-                bounds,
-                inside,
-                NEAR,
-                W,
-                H
-            ),
-            None,
-            "the box reaches behind the near plane"
-        );
-        // A homogeneous point light (w = 2) is at xyz / w: its scissor is the one at (0, 1, 0).
-        assert_eq!(
-            scissor([0.0, 2.0, 0.0, 2.0], Some(&ranged)),
-            scissor([0.0, 1.0, 0.0, 1.0], Some(&ranged))
-        );
-        assert!(scissor([0.0, 1.0, 0.0, 1.0], Some(&ranged)).is_some());
-    }
-}
-
 /// A plane `n · x + d >= 0` is inside, as `(n, d)`.
 pub type Plane = DVec4;
 
@@ -1361,5 +1160,206 @@ mod tests {
         assert!(culled
             .to_string()
             .contains("(box): culled; silhouette skipped;"));
+    }
+}
+
+#[cfg(test)]
+mod scissor_tests {
+    use super::*;
+    use glam::DMat4;
+    use shadowvol_scenes::SpotCone;
+
+    const W: u32 = 160;
+    const H: u32 = 120;
+    const NEAR: f64 = 0.1;
+
+    fn view_proj(eye: DVec3) -> DMat4 {
+        glam::dcamera::rh::proj::directx::perspective(
+            60f64.to_radians(),
+            f64::from(W) / f64::from(H),
+            NEAR,
+            100.0,
+        ) * glam::dcamera::rh::view::look_at_mat4(eye, DVec3::ZERO, DVec3::Y)
+    }
+
+    /// Where world point `p` lands in the image (column, row, in pixels; row 0 at the top), or
+    /// `None` behind the near plane.
+    fn pixel(vp: DMat4, p: DVec3) -> Option<(f64, f64)> {
+        let c = vp * p.extend(1.0);
+        (c.w > NEAR).then(|| {
+            (
+                (c.x / c.w * 0.5 + 0.5) * f64::from(W),
+                (0.5 - c.y / c.w * 0.5) * f64::from(H),
+            )
+        })
+    }
+
+    fn emission(range: Option<f32>, spot: Option<(Vec3, f32)>) -> Emission {
+        Emission {
+            range,
+            spot: spot.map(|(direction, outer)| SpotCone {
+                direction,
+                inner_cone_angle: outer * 0.8,
+                outer_cone_angle: outer,
+            }),
+            ..Emission::default()
+        }
+    }
+
+    /// Every point of `bounds` that the light reaches by glTF's definition
+    /// (`Emission::attenuation > 0`, written independently of the scissor) lands inside the
+    /// scissor rectangle; returns the scissor and the box of those points' pixels.
+    fn check_contains(
+        light: [f32; 4],
+        e: &Emission,
+        bounds: (DVec3, DVec3),
+        eye: DVec3,
+    ) -> ([u32; 4], [f64; 4]) {
+        let vp = view_proj(eye);
+        let r = light_scissor(light, Some(e), bounds, vp, NEAR, W, H).expect("a scissor");
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (lo, hi) = bounds;
+        let mut lit = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        let samples = (0..40_000)
+            .map(|_| lo + (hi - lo) * DVec3::new(rnd(), rnd(), rnd()))
+            .chain(box_corners(lo, hi));
+        for p in samples {
+            if e.attenuation(light, p) <= 0.0 {
+                continue;
+            }
+            let (x, y) = pixel(vp, p).expect("in front of the camera");
+            if !(0.0..f64::from(W)).contains(&x) || !(0.0..f64::from(H)).contains(&y) {
+                continue; // off screen: the scissor is clamped to the image
+            }
+            let (col, row) = (x.floor() as u32, y.floor() as u32);
+            assert!(
+                (r[0]..r[0] + r[2]).contains(&col) && (r[1]..r[1] + r[3]).contains(&row),
+                "lit point {p} at pixel ({col}, {row}) outside the scissor {r:?}"
+            );
+            lit = [lit[0].min(x), lit[1].min(y), lit[2].max(x), lit[3].max(y)];
+        }
+        assert!(
+            lit[0] < lit[2],
+            "no lit point on screen: the case tests nothing"
+        );
+        (r, lit)
+    }
+
+    fn area(r: [u32; 4]) -> u32 {
+        r[2] * r[3]
+    }
+
+    #[test]
+    fn a_range_light_covering_the_box_is_scissored_to_the_box() {
+        // The range reaches past the whole box, so what is lit is the box itself: the scissor
+        // is its projection, widened by one pixel, to the pixel.
+        let bounds = (DVec3::new(-1.0, 0.0, -1.0), DVec3::new(1.0, 1.0, 1.0));
+        let light = [0.3, 2.0, 0.2, 1.0];
+        let (r, lit) = check_contains(
+            light,
+            &emission(Some(50.0), None),
+            bounds,
+            DVec3::new(1.0, 3.0, 6.0),
+        );
+        assert_eq!(
+            r,
+            [
+                (lit[0].floor() - 1.0) as u32,
+                (lit[1].floor() - 1.0) as u32,
+                (lit[2].ceil() + 1.0) as u32 - (lit[0].floor() - 1.0) as u32,
+                (lit[3].ceil() + 1.0) as u32 - (lit[1].floor() - 1.0) as u32,
+            ],
+            "scissor {r:?} against the box's pixels {lit:?}"
+        );
+    }
+
+    #[test]
+    fn range_and_cone_scissors_hold_every_lit_point_and_save_pixels() {
+        let bounds = (DVec3::new(-3.0, -0.1, -3.0), DVec3::new(3.0, 1.0, 3.0));
+        let eye = DVec3::new(0.5, 4.0, 7.0);
+        let light = [0.4, 1.5, -0.3, 1.0];
+        let down = Vec3::new(0.1, -1.0, 0.2).normalize();
+        let whole = check_contains(light, &emission(Some(1e3), None), bounds, eye).0;
+        for (what, e, at_most) in [
+            ("range ball", emission(Some(1.2), None), 0.5),
+            ("cone, no range", emission(None, Some((down, 0.35))), 0.5),
+            (
+                "cone within a range",
+                emission(Some(1.4), Some((down, 0.5))),
+                0.5,
+            ),
+            (
+                "half-space cone",
+                emission(None, Some((down, std::f32::consts::FRAC_PI_2))),
+                1.0,
+            ),
+            ("sideways cone", emission(None, Some((Vec3::X, 0.3))), 0.6),
+        ] {
+            let (r, _) = check_contains(light, &e, bounds, eye);
+            assert!(
+                f64::from(area(r)) <= at_most * f64::from(area(whole)),
+                "{what}: scissor {r:?} saves too little against the box's {whole:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn no_scissor_where_nothing_bounds_the_light() {
+        let bounds = (DVec3::splat(-1.0), DVec3::splat(1.0));
+        let vp = view_proj(DVec3::new(0.0, 2.0, 5.0));
+        let scissor =
+            |light: [f32; 4], e: Option<&Emission>| light_scissor(light, e, bounds, vp, NEAR, W, H);
+        let ranged = emission(Some(2.0), None);
+        assert_eq!(scissor([0.0, 1.0, 0.0, 1.0], None), None, "no emission");
+        assert_eq!(
+            scissor([0.0, 1.0, 0.0, 0.0], Some(&ranged)),
+            None,
+            "directional"
+        );
+        assert_eq!(
+            scissor([0.0, 1.0, 0.0, 1.0], Some(&emission(None, None))),
+            None,
+            "a point light without a range"
+        );
+        assert_eq!(
+            scissor(
+                [0.0, 1.0, 0.0, 1.0],
+                Some(&emission(Some(f32::INFINITY), None))
+            ),
+            None,
+            "an infinite range"
+        );
+        // The camera inside the lit box: its corners straddle the near plane.
+        let inside = view_proj(DVec3::new(0.0, 0.5, 0.5));
+        assert_eq!(
+            light_scissor(
+                [0.0, 0.5, 0.0, 1.0],
+                Some(&ranged),
+                bounds,
+                inside,
+                NEAR,
+                W,
+                H
+            ),
+            None,
+            "the box reaches behind the near plane"
+        );
+        // A homogeneous point light (w = 2) is at xyz / w: its scissor is the one at (0, 1, 0).
+        assert_eq!(
+            scissor([0.0, 2.0, 0.0, 2.0], Some(&ranged)),
+            scissor([0.0, 1.0, 0.0, 1.0], Some(&ranged))
+        );
+        assert!(scissor([0.0, 1.0, 0.0, 1.0], Some(&ranged)).is_some());
     }
 }
