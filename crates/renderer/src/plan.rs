@@ -1051,7 +1051,8 @@ mod tests {
 
     /// Whenever `shadow_outside_frustum` culls a box's shadow, no point of the shadow (the box
     /// and every point behind it as seen from the light, sampled to 50 light-distances) is in
-    /// the frustum by definition; and it culls some of the random cases, at every scale.
+    /// the frustum by definition; and it culls some of the random cases, at every scale. The
+    /// lights are directional, point lights, and point lights written with `w = 2`.
     #[test]
     fn a_culled_shadow_never_reaches_the_frustum() {
         let eye = DVec3::ZERO;
@@ -1065,10 +1066,10 @@ mod tests {
                 let half = DVec3::new(rnd(), rnd(), rnd()) * scale;
                 let (lo, hi) = (centre - half, centre + half);
                 let at = DVec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * 16.0 * scale;
-                let light = if case % 4 == 0 {
-                    [at.x as f32, at.y as f32, at.z as f32, 0.0] // directional, towards `at`
-                } else {
-                    [at.x as f32, at.y as f32, at.z as f32, 1.0]
+                let light = match case % 4 {
+                    0 => [at.x as f32, at.y as f32, at.z as f32, 0.0], // directional, towards `at`
+                    1 => [2.0 * at.x as f32, 2.0 * at.y as f32, 2.0 * at.z as f32, 2.0], // at `at`
+                    _ => [at.x as f32, at.y as f32, at.z as f32, 1.0],
                 };
                 if !shadow_outside_frustum(lo, hi, light, &planes) {
                     continue;
@@ -1082,7 +1083,7 @@ mod tests {
                     let away = if l.w == 0.0 {
                         -l.truncate()
                     } else {
-                        p - l.truncate()
+                        p - l.truncate() / l.w
                     };
                     let q = p + away * (rnd() * 50.0);
                     assert!(
@@ -1093,6 +1094,18 @@ mod tests {
             }
             assert!(culled > 100, "scale {scale}: only {culled} culled");
         }
+    }
+
+    /// A light in the near plane, or a directional light parallel to it, leaves no volume
+    /// between the light and the rectangle: `near_clip_volume` refuses it rather than return a
+    /// plane through its own inside point.
+    #[test]
+    fn a_flat_near_clip_volume_is_refused() {
+        assert_eq!(near_clip_volume(near_rect(), [3.0, 0.5, -1.0, 1.0]), None);
+        assert_eq!(near_clip_volume(near_rect(), [6.0, 1.0, -2.0, 2.0]), None);
+        assert_eq!(near_clip_volume(near_rect(), [1.0, 2.0, 0.0, 0.0]), None);
+        assert!(near_clip_volume(near_rect(), [3.0, 0.5, 1.0, 1.0]).is_some());
+        assert!(near_clip_volume(near_rect(), [1.0, 2.0, 1.0, 0.0]).is_some());
     }
 
     /// A box whose nearest corner is `10⁻⁹` of the scale inside the near plane is in view, so
@@ -1173,13 +1186,14 @@ mod scissor_tests {
     const H: u32 = 120;
     const NEAR: f64 = 0.1;
 
-    fn view_proj(eye: DVec3) -> DMat4 {
+    /// A camera at `eye` looking at `target`.
+    fn view_proj(eye: DVec3, target: DVec3) -> DMat4 {
         glam::dcamera::rh::proj::directx::perspective(
             60f64.to_radians(),
             f64::from(W) / f64::from(H),
             NEAR,
             100.0,
-        ) * glam::dcamera::rh::view::look_at_mat4(eye, DVec3::ZERO, DVec3::Y)
+        ) * glam::dcamera::rh::view::look_at_mat4(eye, target, DVec3::Y)
     }
 
     /// Where world point `p` lands in the image (column, row, in pixels; row 0 at the top), or
@@ -1213,9 +1227,9 @@ mod scissor_tests {
         light: [f32; 4],
         e: &Emission,
         bounds: (DVec3, DVec3),
-        eye: DVec3,
+        (eye, target): (DVec3, DVec3),
     ) -> ([u32; 4], [f64; 4]) {
-        let vp = view_proj(eye);
+        let vp = view_proj(eye, target);
         let r = light_scissor(light, Some(e), bounds, vp, NEAR, W, H).expect("a scissor");
         let mut state = 0x2545_f491_4f6c_dd1du64;
         let mut rnd = || {
@@ -1270,7 +1284,7 @@ mod scissor_tests {
             light,
             &emission(Some(50.0), None),
             bounds,
-            DVec3::new(1.0, 3.0, 6.0),
+            (DVec3::new(1.0, 3.0, 6.0), DVec3::ZERO),
         );
         assert_eq!(
             r,
@@ -1284,40 +1298,49 @@ mod scissor_tests {
         );
     }
 
+    /// Range balls and cones, at the origin and moved far from it (so that a scissor which
+    /// mixed up the light's position with a direction would show).
     #[test]
     fn range_and_cone_scissors_hold_every_lit_point_and_save_pixels() {
-        let bounds = (DVec3::new(-3.0, -0.1, -3.0), DVec3::new(3.0, 1.0, 3.0));
-        let eye = DVec3::new(0.5, 4.0, 7.0);
-        let light = [0.4, 1.5, -0.3, 1.0];
         let down = Vec3::new(0.1, -1.0, 0.2).normalize();
-        let whole = check_contains(light, &emission(Some(1e3), None), bounds, eye).0;
-        for (what, e, at_most) in [
-            ("range ball", emission(Some(1.2), None), 0.5),
-            ("cone, no range", emission(None, Some((down, 0.35))), 0.5),
-            (
-                "cone within a range",
-                emission(Some(1.4), Some((down, 0.5))),
-                0.5,
-            ),
-            (
-                "half-space cone",
-                emission(None, Some((down, std::f32::consts::FRAC_PI_2))),
-                1.0,
-            ),
-            ("sideways cone", emission(None, Some((Vec3::X, 0.3))), 0.6),
-        ] {
-            let (r, _) = check_contains(light, &e, bounds, eye);
-            assert!(
-                f64::from(area(r)) <= at_most * f64::from(area(whole)),
-                "{what}: scissor {r:?} saves too little against the box's {whole:?}"
+        for offset in [DVec3::ZERO, DVec3::new(40.0, 3.0, -25.0)] {
+            let bounds = (
+                DVec3::new(-3.0, -0.1, -3.0) + offset,
+                DVec3::new(3.0, 1.0, 3.0) + offset,
             );
+            let camera = (DVec3::new(0.5, 4.0, 7.0) + offset, offset);
+            let at = DVec3::new(0.4, 1.5, -0.3) + offset;
+            let light = [at.x as f32, at.y as f32, at.z as f32, 1.0];
+            let whole = check_contains(light, &emission(Some(1e3), None), bounds, camera).0;
+            for (what, e, at_most) in [
+                ("range ball", emission(Some(1.2), None), 0.5),
+                ("cone, no range", emission(None, Some((down, 0.35))), 0.5),
+                (
+                    "cone within a range",
+                    emission(Some(1.4), Some((down, 0.5))),
+                    0.5,
+                ),
+                (
+                    "half-space cone",
+                    emission(None, Some((down, std::f32::consts::FRAC_PI_2))),
+                    1.0,
+                ),
+                ("sideways cone", emission(None, Some((Vec3::X, 0.3))), 0.6),
+            ] {
+                let (r, _) = check_contains(light, &e, bounds, camera);
+                assert!(
+                    f64::from(area(r)) <= at_most * f64::from(area(whole)),
+                    "{what} at {offset}: scissor {r:?} saves too little against the box's \
+                     {whole:?}"
+                );
+            }
         }
     }
 
     #[test]
     fn no_scissor_where_nothing_bounds_the_light() {
         let bounds = (DVec3::splat(-1.0), DVec3::splat(1.0));
-        let vp = view_proj(DVec3::new(0.0, 2.0, 5.0));
+        let vp = view_proj(DVec3::new(0.0, 2.0, 5.0), DVec3::ZERO);
         let scissor =
             |light: [f32; 4], e: Option<&Emission>| light_scissor(light, e, bounds, vp, NEAR, W, H);
         let ranged = emission(Some(2.0), None);
@@ -1341,7 +1364,7 @@ mod scissor_tests {
             "an infinite range"
         );
         // The camera inside the lit box: its corners straddle the near plane.
-        let inside = view_proj(DVec3::new(0.0, 0.5, 0.5));
+        let inside = view_proj(DVec3::new(0.0, 0.5, 0.5), DVec3::ZERO);
         assert_eq!(
             light_scissor(
                 [0.0, 0.5, 0.0, 1.0],
