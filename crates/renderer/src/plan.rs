@@ -958,6 +958,12 @@ mod tests {
             light,
             &planes
         ));
+        // A box between the eye and the near plane, a light beside it a little farther: the
+        // shadow reaches into view, whether the light is written with w = 1 or w = 2.
+        let (lo, hi) = (DVec3::new(-0.1, -0.1, -0.9), DVec3::new(0.1, 0.1, -0.5));
+        for light in [[3.0, 0.0, -0.6, 1.0], [6.0, 0.0, -1.2, 2.0]] {
+            assert!(!shadow_outside_frustum(lo, hi, light, &planes), "{light:?}");
+        }
         // A box in view is never culled.
         assert!(!shadow_outside_frustum(
             DVec3::new(-0.5, -0.5, -4.0),
