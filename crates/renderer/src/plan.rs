@@ -272,6 +272,18 @@ fn cone_box(apex: DVec3, axis: DVec3, angle: f64, length: f64, axial: f64) -> (D
     )
 }
 
+/// A small xorshift generator of uniform numbers in `[0, 1)`, for the tests' random cases.
+#[cfg(test)]
+fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 #[cfg(test)]
 mod cone_tests {
     use super::*;
@@ -280,13 +292,7 @@ mod cone_tests {
     /// axes, angles, limits and points, hemispheres included.
     #[test]
     fn the_cone_box_contains_the_cone() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut rnd = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = uniform(0x9e37_79b9_7f4a_7c15);
         for _ in 0..2000 {
             let apex = DVec3::new(rnd() * 4.0 - 2.0, rnd() * 4.0 - 2.0, rnd() * 4.0 - 2.0);
             let axis =
@@ -973,17 +979,6 @@ mod tests {
         ));
     }
 
-    /// A small xorshift generator of uniform numbers in `[0, 1)`.
-    fn uniform(seed: u64) -> impl FnMut() -> f64 {
-        let mut state = seed;
-        move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
-
     /// Whether `p` is in the view frustum of a camera at `eye` with near rectangle `near`
     /// (a parallelogram, corners in order), by the definition: the ray from the eye through `p`
     /// crosses the rectangle at or before `p`. Solved directly: the ray's parameter `t` at the
@@ -1237,13 +1232,7 @@ mod scissor_tests {
     ) -> ([u32; 4], [f64; 4]) {
         let vp = view_proj(eye, target);
         let r = light_scissor(light, Some(e), bounds, vp, NEAR, W, H).expect("a scissor");
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut rnd = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = uniform(0x2545_f491_4f6c_dd1d);
         let (lo, hi) = bounds;
         let mut lit = [
             f64::INFINITY,
