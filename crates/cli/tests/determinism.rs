@@ -13,7 +13,9 @@
 #[macro_use]
 mod common;
 
+use common::BIN;
 use std::process::Command;
+use std::sync::OnceLock;
 
 fn main() {
     let mut trials = shadowvol_test_support::trials![
@@ -24,8 +26,6 @@ fn main() {
     trials.extend(per_backend!(same_bytes_as_cpu_in_exact_mode, |b| b != "cpu"));
     shadowvol_test_support::run(trials)
 }
-
-use common::BIN;
 
 /// Scenes with degenerate and near-degenerate configurations, several objects, and the bunny.
 const SCENES: [&str; 6] = [
@@ -143,17 +143,25 @@ fn simd_gives_the_same_bytes_with_one_and_two_threads_in_every_mode() {
     }
 }
 
+/// The `exact` report of each of [`SCENES`] on `backend`, without the run's description.
+fn exact_reports(backend: &str) -> Vec<String> {
+    SCENES
+        .iter()
+        .map(|scene| {
+            without(
+                &silhouette(scene, &["--backend", backend, "--mode", "exact"], &[]),
+                &["backend", "device", "timings"],
+            )
+        })
+        .collect()
+}
+
 /// `exact` on `backend` gives the same bytes as on `cpu`, apart from the run's description.
+/// The `cpu` reports are computed once for all the trials.
 fn same_bytes_as_cpu_in_exact_mode(backend: &str) {
-    for scene in SCENES {
-        let reference = without(
-            &silhouette(scene, &["--backend", "cpu", "--mode", "exact"], &[]),
-            &["backend", "device", "timings"],
-        );
-        let got = without(
-            &silhouette(scene, &["--backend", backend, "--mode", "exact"], &[]),
-            &["backend", "device", "timings"],
-        );
-        assert_eq!(got, reference, "{scene}: {backend} differs from cpu");
+    static CPU: OnceLock<Vec<String>> = OnceLock::new();
+    let reference = CPU.get_or_init(|| exact_reports("cpu"));
+    for ((scene, got), want) in SCENES.iter().zip(exact_reports(backend)).zip(reference) {
+        assert_eq!(&got, want, "{scene}: {backend} differs from cpu");
     }
 }

@@ -389,8 +389,14 @@ fn subnormal_lights(backend: &str, flushed: bool) -> Value {
     lights_of(&args)
 }
 
+/// `subnormal_lights("cpu", false)`, computed once for all the trials.
+fn subnormal_cpu() -> &'static Value {
+    static CPU: std::sync::OnceLock<Value> = std::sync::OnceLock::new();
+    CPU.get_or_init(|| subnormal_lights("cpu", false))
+}
+
 fn subnormal_coordinates_are_accepted_and_exact_on_cpu() {
-    let cpu = subnormal_lights("cpu", false);
+    let cpu = subnormal_cpu();
     let arr = cpu.as_array().unwrap();
     assert_eq!(arr.len(), subnormal_obj(false).1.len());
     for l in arr {
@@ -415,8 +421,8 @@ fn subnormal_coordinates_are_accepted_and_exact_on_cpu() {
 /// `subnormal_coordinates_are_accepted_and_exact_on_cpu` shows depends on the subnormal bits).
 fn subnormal_coordinates_are_exact_like_cpu(backend: &str) {
     assert_eq!(
-        subnormal_lights(backend, false),
-        subnormal_lights("cpu", false),
+        &subnormal_lights(backend, false),
+        subnormal_cpu(),
         "{backend}: exact result differs from cpu on subnormal input"
     );
 }
