@@ -13,8 +13,12 @@
 //!    link or malformed doc comment fails; `-D warnings` is added to any `RUSTDOCFLAGS` set).
 //! 5. **test**: `cargo test --workspace` (with `CI=true`, the conformance tests fail for a backend
 //!    that cannot start instead of skipping it).
-//! 6. **shaders**: `cargo xtask shaders --check` (the committed SPIR-V matches the GLSL).
-//! 7. **fuzz**: each fuzz target (`fuzz/`, its own workspace) built and run for [`FUZZ_SECONDS`]
+//! 6. **example**: `cargo run -p shadowvol-renderer --example embed -- OUT --check`: the
+//!    embedding example renders on its own device and its image's shadows are checked against the
+//!    ray-traced reference. Without a wgpu adapter it warns (a visible skip), under `CI=true` it
+//!    fails.
+//! 7. **shaders**: `cargo xtask shaders --check` (the committed SPIR-V matches the GLSL).
+//! 8. **fuzz**: each fuzz target (`fuzz/`, its own workspace) built and run for [`FUZZ_SECONDS`]
 //!    seconds on its seed corpus with `cargo fuzz run --dev --sanitizer none` (stable Rust is
 //!    enough). A missing `cargo-fuzz` is installed with `cargo install` under CI or as root;
 //!    otherwise the targets are only `cargo check`ed and the step says what to install and
@@ -42,8 +46,8 @@ const APT_PACKAGES: &[&str] = &[
 ];
 
 /// The steps, in the order they run (the names `--skip` takes).
-const STEPS: [&str; 7] = [
-    "drivers", "fmt", "clippy", "docs", "test", "shaders", "fuzz",
+const STEPS: [&str; 8] = [
+    "drivers", "fmt", "clippy", "docs", "test", "example", "shaders", "fuzz",
 ];
 
 /// Seconds each fuzz target runs in the `fuzz` step: enough to load and run its seeds and some
@@ -91,6 +95,9 @@ Runs, in order, and prints a summary:
   clippy   cargo clippy --workspace --all-targets -- -D warnings
   docs     RUSTDOCFLAGS=\"-D warnings\" cargo doc --workspace --no-deps
   test     cargo test --workspace [CARGO_TEST_ARGS]
+  example  cargo run -p shadowvol-renderer --example embed -- OUT --check: the embedding
+           example on its own device, its shadows checked against the ray-traced
+           reference (a warning without a wgpu adapter; a failure under CI=true)
   shaders  cargo xtask shaders --check
   fuzz     build and run each fuzz target a few seconds on its seeds (cargo fuzz run
            --dev --sanitizer none); cargo-fuzz is installed with cargo install when
@@ -99,7 +106,8 @@ Runs, in order, and prints a summary:
 
 Options:
   --no-drivers   same as --skip drivers
-  --skip STEP    skip a step (drivers, fmt, clippy, docs, test, shaders, fuzz); repeatable
+  --skip STEP    skip a step (drivers, fmt, clippy, docs, test, example, shaders, fuzz);
+                 repeatable
   -p PACKAGE     clippy, docs and test only PACKAGE instead of --workspace; repeatable
 
 Environment:
@@ -219,6 +227,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
         }
         cargo_test_step(&root, &a, &mut counts)
     });
+    step("example", &mut || embed_example(&root, ci));
     step(
         "shaders",
         &mut || match crate::shaders::run(&["--check".to_owned()]) {
@@ -299,6 +308,59 @@ fn cargo_step(root: &Path, args: &[&str], env: &[(&str, &str)]) -> Outcome {
         Ok(s) if s.success() => Outcome::Passed,
         Ok(s) => Outcome::Failed(format!("`{line}` failed ({s})")),
         Err(e) => Outcome::Failed(format!("cannot run `{line}`: {e}")),
+    }
+}
+
+/// The `example` step: the embedding example, run as a user runs it, with `--check`.
+fn embed_example(root: &Path, ci: bool) -> Outcome {
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map_or_else(|| root.join("target"), std::path::PathBuf::from);
+    let out = target.join("embed-example.png");
+    let out = out.to_string_lossy();
+    let args = [
+        "run",
+        "-p",
+        "shadowvol-renderer",
+        "--example",
+        "embed",
+        "--",
+        &out,
+        "--check",
+    ];
+    let line = format!("cargo {}", args.join(" "));
+    println!("$ {line}");
+    let output = match Command::new(crate::cargo())
+        .current_dir(root)
+        .args(args)
+        .output()
+    {
+        Ok(o) => o,
+        Err(e) => return Outcome::Failed(format!("cannot run `{line}`: {e}")),
+    };
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    print!("{stdout}");
+    eprint!("{stderr}");
+    example_outcome(output.status.success(), &stderr, ci, &line)
+}
+
+/// How the example's exit reads: a missing adapter is a warning outside CI (the GPU tests skip
+/// visibly for the same reason), every other failure fails the step.
+fn example_outcome(success: bool, stderr: &str, ci: bool, line: &str) -> Outcome {
+    if success {
+        return Outcome::Passed;
+    }
+    let no_adapter = stderr.lines().find(|l| l.contains("no GPU adapter"));
+    match no_adapter {
+        Some(why) if !ci => Outcome::Warned(format!(
+            "the embed example did not run ({}); install a Vulkan driver: {}",
+            why.trim(),
+            install_command()
+        )),
+        _ => Outcome::Failed(format!(
+            "`{line}` failed: {}",
+            stderr.lines().last().unwrap_or("").trim()
+        )),
     }
 }
 
@@ -628,7 +690,7 @@ fn fuzz(root: &Path, ci: bool) -> Outcome {
 
 #[cfg(test)]
 mod tests {
-    use super::{rustdocflags, TestCounts, FUZZ_TARGETS, STEPS, USAGE};
+    use super::{example_outcome, rustdocflags, Outcome, TestCounts, FUZZ_TARGETS, STEPS, USAGE};
 
     #[test]
     fn every_fuzz_target_is_run_and_its_seeds_exist() {
@@ -663,6 +725,28 @@ mod tests {
             rustdocflags(Some("--cfg docsrs")),
             "--cfg docsrs -D warnings"
         );
+    }
+
+    #[test]
+    fn the_example_skips_only_for_a_missing_adapter_and_never_under_ci() {
+        let no_gpu = "embed: no GPU adapter: no adapter found\n";
+        assert!(matches!(
+            example_outcome(true, "", true, "x"),
+            Outcome::Passed
+        ));
+        assert!(matches!(
+            example_outcome(false, no_gpu, false, "x"),
+            Outcome::Warned(w) if w.contains("no GPU adapter") && w.contains("apt-get")
+        ));
+        assert!(matches!(
+            example_outcome(false, no_gpu, true, "x"),
+            Outcome::Failed(_)
+        ));
+        let artifacts = "embed: 900 artifact pixels against the reference: over 0.05 %\n";
+        assert!(matches!(
+            example_outcome(false, artifacts, false, "x"),
+            Outcome::Failed(e) if e.contains("900 artifact pixels")
+        ));
     }
 
     #[test]

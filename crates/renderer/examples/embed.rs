@@ -3,15 +3,19 @@
 //! The application owns the device, the colour and depth-stencil targets and the command
 //! encoder; the pass uploads a scene once, and each frame takes only small inputs (camera,
 //! lights, transforms, the plan's techniques). Nothing is read back during a frame; here the
-//! image is read once at the end to write `embed.png`.
+//! image is read once at the end to write the PNG.
 //!
-//! Run with `cargo run -p shadowvol-renderer --example embed` (needs a wgpu adapter, for example
-//! Mesa's lavapipe).
+//! Run with `cargo run -p shadowvol-renderer --example embed -- [OUT.png] [--check]` (needs a
+//! wgpu adapter, for example Mesa's lavapipe). `OUT.png` defaults to `embed.png`. With `--check`
+//! the example also reads back the pre-pass ids and the stencil of the last frame and compares
+//! its shadows with the ray-traced reference ([`shadowvol_renderer::reference`]); it fails when
+//! more than 0.05 % of the pixels are artifacts. `cargo xtask test` runs it that way.
 
 use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use shadowvol_renderer::resident::{texture_2d, PassFormats, PassFrame, ShadowPass};
-use shadowvol_renderer::{Camera, RenderError, Technique};
+use shadowvol_renderer::volume::canonical_triangle;
+use shadowvol_renderer::{reference, Camera, Frame, Pipeline, RenderError, Technique, Timings};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{SceneObject, TopologyScene};
 use std::sync::Arc;
@@ -19,7 +23,36 @@ use std::sync::Arc;
 const W: u32 = 320;
 const H: u32 = 240;
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// The largest fraction of artifact pixels `--check` accepts (DESIGN's 0.05 %).
+const MAX_ARTIFACT_FRACTION: f64 = 0.0005;
+
+const USAGE: &str = "usage: embed [OUT.png] [--check]";
+
+fn main() -> std::process::ExitCode {
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("embed: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
+    let mut out = String::from("embed.png");
+    let mut check = false;
+    for a in std::env::args().skip(1) {
+        match a.as_str() {
+            "--check" => check = true,
+            "-h" | "--help" => {
+                println!("{USAGE}");
+                return Ok(());
+            }
+            _ if a.starts_with('-') => return Err(format!("unknown option {a}\n{USAGE}").into()),
+            _ => out = a,
+        }
+    }
+
     // 1. The application's device, opened with what the pass needs.
     let instance =
         wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
@@ -32,7 +65,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }))?;
     let formats = PassFormats {
         color: wgpu::TextureFormat::Rgba8Unorm,
-        ids: None,
+        // Only the check needs the pre-pass ids; an application leaves this `None`.
+        ids: check.then_some(wgpu::TextureFormat::Rg32Uint),
         depth: wgpu::TextureFormat::Depth24PlusStencil8,
     };
     let pass = ShadowPass::new(&adapter, &device, &queue, formats)?;
@@ -96,16 +130,31 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         W,
         H,
         formats.depth,
-        wgpu::TextureUsages::RENDER_ATTACHMENT,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
     );
+    let ids = formats.ids.map(|f| {
+        texture_2d(
+            &device,
+            "ids",
+            W,
+            H,
+            f,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        )
+    });
     let color_view = color.create_view(&Default::default());
+    let ids_view = ids.as_ref().map(|t| t.create_view(&Default::default()));
     let depth_view = depth.create_view(&Default::default());
 
     // 4. Frames: the box spins, the light stays; every frame re-extracts on the device.
     let camera = Camera::look_at(Vec3::new(4.0, 5.0, 7.0), Vec3::new(0.0, 0.5, 0.0));
     let lights = [Light::point(Vec3::new(1.5, 6.0, 1.0))];
+    let colors = [[0.9, 0.85, 0.8]];
+    let albedo = [[0.8, 0.8, 0.8], [0.9, 0.4, 0.3]];
+    let ambient = 0.15;
+    let mut transforms = [Affine3A::IDENTITY; 2];
     for frame in 0..30 {
-        let spin = Affine3A::from_translation(Vec3::new(-0.5, 0.6, -0.5))
+        transforms[1] = Affine3A::from_translation(Vec3::new(-0.5, 0.6, -0.5))
             * Affine3A::from_rotation_y(frame as f32 * 0.05);
         pass.update(
             &mut resident,
@@ -113,15 +162,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 camera: &camera,
                 aspect: W as f32 / H as f32,
                 lights: &lights,
-                colors: &[[0.9, 0.85, 0.8]],
+                colors: &colors,
                 emission: &[],
-                transforms: &[Affine3A::IDENTITY, spin],
-                albedo: &[[0.8, 0.8, 0.8], [0.9, 0.4, 0.3]],
+                transforms: &transforms,
+                albedo: &albedo,
                 // The camera is outside both volumes here; an application would run the plan
                 // (`shadowvol_renderer::plan`) to choose.
                 techniques: &[Technique::ZFail, Technique::ZFail],
                 scissors: &[None],
-                ambient: 0.15,
+                ambient,
                 mode: Accuracy::Exact,
                 count: false,
             },
@@ -132,7 +181,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &mut enc,
             &resident,
             &color_view,
-            None,
+            ids_view.as_ref(),
             &depth_view,
             wgpu::Color::BLACK,
         );
@@ -142,38 +191,144 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
 
     // 5. Once, at the end: the image to a PNG.
-    let row = (W * 4).div_ceil(256) * 256;
+    let rgba = read_texture(&device, &queue, &color, wgpu::TextureAspect::All, 4)?;
+    image::RgbaImage::from_raw(W, H, rgba.clone())
+        .ok_or("image size")?
+        .save(&out)?;
+    println!("wrote {out} ({W}x{H}) on {}", adapter.get_info().name);
+    if !check {
+        return Ok(());
+    }
+
+    // 6. `--check` only: the last frame's shadows against the ray-traced reference. The
+    // reference takes the same `f32` world positions the device drew, the pre-pass ids (which
+    // triangle each pixel shows) and the stencil (0 = lit).
+    let ids = ids.as_ref().expect("made with --check");
+    let ids = read_texture(&device, &queue, ids, wgpu::TextureAspect::All, 8)?
+        .chunks_exact(8)
+        .map(|c| {
+            [
+                u32::from_le_bytes([c[0], c[1], c[2], c[3]]),
+                u32::from_le_bytes([c[4], c[5], c[6], c[7]]),
+            ]
+        })
+        .collect();
+    let stencil = read_texture(&device, &queue, &depth, wgpu::TextureAspect::StencilOnly, 1)?;
+    let triangles = scene
+        .objects
+        .iter()
+        .zip(&transforms)
+        .map(|(o, t)| {
+            let world: Vec<Vec3> = o
+                .table
+                .positions
+                .iter()
+                .map(|&p| t.transform_point3(p))
+                .collect();
+            o.table
+                .triangles
+                .iter()
+                .map(|&tri| canonical_triangle(tri).map(|k| world[k as usize]))
+                .collect()
+        })
+        .collect();
+    let frame = Frame {
+        width: W,
+        height: H,
+        rgba,
+        ids,
+        stencil: vec![stencil],
+        triangles,
+        casts_shadows: vec![true; 2],
+        albedo: albedo.to_vec(),
+        light_color: colors.to_vec(),
+        ambient,
+        emission: Vec::new(),
+        exposure: None,
+        scissor_pixels_saved: 0,
+        uncertain: 0,
+        host_resolved: 0,
+        pipeline: Pipeline::Gpu,
+        gpu_timings: None,
+        volumes: Vec::new(),
+        lights: lights.to_vec(),
+        camera,
+        plan: Vec::new(),
+        timings: Timings::default(),
+        mode: Accuracy::Exact,
+        adapter: adapter.get_info().name,
+        depth_clamp: pass.depth_clamp(),
+    };
+    let cmp = reference::compare(&frame);
+    let fraction = cmp.artifact_fraction((W * H) as usize);
+    println!(
+        "reference: {} artifact pixels ({:.4} %), {} undecidable, shadow pixels {} (reference {})",
+        cmp.artifact_pixels,
+        fraction * 100.0,
+        cmp.undecidable_pixels,
+        cmp.shadow_pixels,
+        cmp.reference_shadow_pixels
+    );
+    if cmp.reference_shadow_pixels < 200 {
+        return Err(format!(
+            "the scene shows too little shadow to check ({} reference shadow pixels)",
+            cmp.reference_shadow_pixels
+        )
+        .into());
+    }
+    if fraction > MAX_ARTIFACT_FRACTION {
+        return Err(format!(
+            "{} artifact pixels against the reference: over {} % of {W}x{H}",
+            cmp.artifact_pixels,
+            MAX_ARTIFACT_FRACTION * 100.0
+        )
+        .into());
+    }
+    Ok(())
+}
+
+/// Copies one aspect of a 2-D texture (`bpp` bytes per pixel) to the host, rows unpadded.
+fn read_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    aspect: wgpu::TextureAspect,
+    bpp: u32,
+) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
+    let (w, h) = (texture.width(), texture.height());
+    let row =
+        (w * bpp).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let staging = device.create_buffer(&wgpu::BufferDescriptor {
         label: None,
-        size: u64::from(row * H),
+        size: u64::from(row * h),
         usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
         mapped_at_creation: false,
     });
     let mut enc = device.create_command_encoder(&Default::default());
     enc.copy_texture_to_buffer(
-        color.as_image_copy(),
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect,
+        },
         wgpu::TexelCopyBufferInfo {
             buffer: &staging,
             layout: wgpu::TexelCopyBufferLayout {
                 offset: 0,
                 bytes_per_row: Some(row),
-                rows_per_image: Some(H),
+                rows_per_image: Some(h),
             },
         },
-        color.size(),
+        texture.size(),
     );
     queue.submit([enc.finish()]);
     let slice = staging.slice(..);
     slice.map_async(wgpu::MapMode::Read, |_| {});
     device.poll(wgpu::PollType::wait_indefinitely())?;
     let data = slice.get_mapped_range()?;
-    let mut rgba = Vec::with_capacity((W * H * 4) as usize);
-    for y in 0..H as usize {
-        rgba.extend_from_slice(&data[y * row as usize..y * row as usize + W as usize * 4]);
-    }
-    image::RgbaImage::from_raw(W, H, rgba)
-        .ok_or("image size")?
-        .save("embed.png")?;
-    println!("wrote embed.png ({W}x{H}) on {}", adapter.get_info().name);
-    Ok(())
+    let (row, used) = (row as usize, (w * bpp) as usize);
+    Ok((0..h as usize)
+        .flat_map(|y| data[y * row..y * row + used].to_vec())
+        .collect())
 }
