@@ -253,7 +253,7 @@ fn results_json_of_a_real_run_round_trips() {
     for r in &results.records {
         let ok = match r.experiment.as_str() {
             "accuracy" => r.accuracy().is_some(),
-            "artifacts" | "table1-frame" => r.render().is_some(),
+            "artifacts" | "table1-frame" | "frames" => r.render().is_some(),
             "toywars" => r.baseline().is_some(),
             _ => r.bench().is_some(),
         };
