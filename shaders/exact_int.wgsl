@@ -27,6 +27,11 @@
 // the same value as `orient_exact`, for every finite input (subnormals, zeros, f32::MAX, any w).
 // For NaN or infinite inputs the result is unspecified, but every index stays in bounds.
 
+// Pipeline-overridable: true leaves `orient_int` out of the pipeline (the host's fallback line
+// returns UNCERTAIN first), so a kernel that reaches it only for rare pairs can run it in a
+// separate dispatch: compiled in, it slows the whole kernel even where no invocation reaches it.
+override DEFER_INT: bool = false;
+
 const XI_LIMBS: u32 = 35u;
 // Index of the pseudo-input "exact 1" (mantissa 1, exponent field 150) in the decoded arrays.
 const XI_ONE: u32 = 13u;

@@ -61,7 +61,13 @@ pub fn module_source(filter: ExactFilter) -> String {
 }
 
 const HOST_FALLBACK: &str = "return UNCERTAIN; // @exact-int";
-const INT_FALLBACK: &str = "return orient_int(a, b, l, o); // @exact-int";
+/// Name of the override constant of `shaders/exact_int.wgsl` that leaves the integer fallback out
+/// of a pipeline: with `DEFER_INT` true, `device_exact` returns `UNCERTAIN` and the compiler drops
+/// `orient_int` from that pipeline (the GPU pipeline's triangle pass runs it in a dispatch of its
+/// own, only for the pairs the filter leaves).
+pub const DEFER_INT_CONSTANT: &str = "DEFER_INT";
+const INT_FALLBACK: &str =
+    "if DEFER_INT { return UNCERTAIN; } return orient_int(a, b, l, o); // @exact-int";
 
 /// The module for `filter` as [`module_source`] builds it; with `device_exact`, the marked
 /// fallback of `device_exact` switched to `orient_int` and `shaders/exact_int.wgsl` appended, so

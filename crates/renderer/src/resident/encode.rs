@@ -7,7 +7,9 @@ use crate::gpu::states;
 impl ShadowPass {
     /// Records the frame's compute pass for the inputs last given to [`ShadowPass::update`]: the
     /// vertex pass (camera-relative world positions, which every draw reads), then the reset,
-    /// triangle and edge passes. Record it before the frame's draws.
+    /// triangle and edge passes (in exact mode, between the last two, the dispatch that decides
+    /// the pairs the filter left, with no workgroup when there are none). Record it before the
+    /// frame's draws.
     ///
     /// # Panics
     /// Panics if [`ShadowPass::update`] was never called on `rs`.
@@ -67,6 +69,15 @@ impl ShadowPass {
         let (x, y) = grid(rs.layout.tri_count() as u32);
         pass.set_pipeline(&self.triangles[mode]);
         pass.dispatch_workgroups(x, y, 1);
+        if rs.state.mode == Accuracy::Exact {
+            let (args, out) = &rs.pending_dispatch;
+            pass.set_pipeline(&self.pending_args);
+            pass.set_bind_group(2, out, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+            pass.set_pipeline(&self.pending);
+            pass.set_bind_group(2, &self.empty, &[]);
+            pass.dispatch_workgroups_indirect(args, 0);
+        }
         let (x, y) = grid(rs.layout.scene.edge_count() as u32);
         pass.set_pipeline(&self.edges[mode]);
         pass.dispatch_workgroups(x, y, 1);

@@ -12,6 +12,12 @@
 // 2. `resident_triangles`: one sign per (light, triangle) in the mode, for the triangle's
 //    canonical vertex order (ids ascending). TOUCH marks a triangle with a vertex exactly at the
 //    point light: it has no volume (no cap, no contribution to any edge).
+//    In exact mode this pipeline is built with DEFER_INT: a pair the certified filter leaves is
+//    marked PENDING, and
+// 2b. `resident_pending_args` writes the indirect dispatch of `resident_pending`: the triangle
+//    grid when any pair is pending, else no workgroup; `resident_pending` decides each PENDING
+//    pair with `orient_int` (the same `triangle_sign_traced`, DEFER_INT off), so the integer
+//    code runs, and is compiled, only where the filter needs it.
 // 3. `resident_edges`: per (light, edge), m from the backend's `edge_multiplicity` (the parity
 //    times the sign of each opposite vertex's triangle; `original`: the naive per-(edge, OV)
 //    sign instead), then |m| side records appended to the light's z-pass list (from the front
@@ -37,6 +43,14 @@ struct ResidentParams {
 @group(1) @binding(5) var<storage, read_write> args: array<atomic<u32>>;
 // [light * capacity + slot]: global edge, NEGATIVE set when m < 0.
 @group(1) @binding(6) var<storage, read_write> records: array<u32>;
+
+// The indirect dispatch `resident_pending_args` writes (group 2 of that entry only).
+@group(2) @binding(0) var<storage, read_write> pending_dispatch: array<u32, 3>;
+
+// A (light, triangle) sign the deferred triangle pass left to `resident_pending`.
+const PENDING: i32 = 3;
+// Workgroups per dimension of the pending dispatch (the device's limit).
+override PENDING_GROUPS_X: u32 = 65535u;
 
 var<workgroup> wg_count: array<atomic<u32>, 2>;
 var<workgroup> wg_base: array<u32, 2>;
@@ -124,7 +138,7 @@ fn resident_triangles(inv: Invocation) {
                 s = TOUCH;
             } else {
                 let traced = triangle_sign_traced(tri, l);
-                s = traced.x;
+                s = select(traced.x, PENDING, traced.x == UNCERTAIN);
                 if traced.y != 0 {
                     atomicAdd(&args[stats_base()], 1u);
                 }
@@ -134,6 +148,37 @@ fn resident_triangles(inv: Invocation) {
             }
         }
         signs[li * params.tri_count + t] = s;
+    }
+}
+
+@compute @workgroup_size(1)
+fn resident_pending_args() {
+    let groups = max((params.tri_count + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE, 1u);
+    let x = min(groups, PENDING_GROUPS_X);
+    let any = atomicLoad(&args[stats_base()]) != 0u;
+    pending_dispatch[0] = select(0u, x, any);
+    pending_dispatch[1] = (groups + x - 1u) / x;
+    pending_dispatch[2] = 1u;
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn resident_pending(inv: Invocation) {
+    let t = flat_index(inv);
+    if t >= params.tri_count {
+        return;
+    }
+    let tri = load_triangle(t);
+    for (var li = 0u; li < params.light_count; li++) {
+        let k = li * params.tri_count + t;
+        if signs[k] != PENDING {
+            continue;
+        }
+        let s = triangle_sign_traced(tri, object_light(tri.object, li)).x;
+        signs[k] = s;
+        let tech = technique[li * rp.object_count + tri.object];
+        if (rp.flags & 1u) != 0u && tech == 2u && (s == 1 || s == -1) {
+            atomicAdd(&args[count_slot(li, tri.object) + 2u], 1u);
+        }
     }
 }
 

@@ -7,8 +7,10 @@
 //! space, read by every draw, so shared vertices are bit-identical), then:
 //! 1. a triangle pass: one sign per (light, triangle) in the accuracy mode, in the triangle's
 //!    canonical vertex order; exact mode runs the certified filter of the `wgpu` backend and
-//!    decides what it cannot certify with exact integer arithmetic on the `f32` bits
-//!    (`shaders/exact_int.wgsl`), so no triple goes to the host;
+//!    marks what it cannot certify as pending, and a second dispatch, sized on the device (no
+//!    workgroup when nothing is pending), decides those pairs with exact integer arithmetic on
+//!    the `f32` bits (`shaders/exact_int.wgsl`), so no triple goes to the host and the integer
+//!    code is not compiled into the triangle pass, where it would slow every triangle;
 //! 2. an edge pass: each edge sums the parity-signed signs of its opposite vertices' triangles
 //!    into `m` (`original`: the naive per-(edge, opposite vertex) sign, the baseline) and appends
 //!    `|m|` side records to the light's z-pass or z-fail list; the list lengths are the instance
@@ -201,6 +203,10 @@ pub struct ShadowPass {
     vertices: wgpu::ComputePipeline,
     reset: wgpu::ComputePipeline,
     triangles: Vec<wgpu::ComputePipeline>,
+    /// Exact mode: writes the indirect arguments of [`ShadowPass::pending`].
+    pending_args: wgpu::ComputePipeline,
+    /// Exact mode: decides the pairs the triangle pass's filter left, with `orient_int`.
+    pending: wgpu::ComputePipeline,
     edges: Vec<wgpu::ComputePipeline>,
     /// Pre-pass: `[vertex pulling, vertex buffer]`.
     prepass: [wgpu::RenderPipeline; 2],
@@ -337,6 +343,9 @@ pub struct ResidentScene {
     vertex_objects: wgpu::Buffer,
     world: wgpu::Buffer,
     world_out: wgpu::BindGroup,
+    /// The indirect arguments of the pending dispatch (`STORAGE | INDIRECT`) and the bind group
+    /// through which `resident_pending_args` writes them.
+    pending_dispatch: (wgpu::Buffer, wgpu::BindGroup),
     /// The per-frame surface vertex buffer and the bind groups of its chunks with their
     /// triangle counts (`None`: vertex pulling).
     surface: Option<(wgpu::Buffer, Vec<(wgpu::BindGroup, u32)>)>,

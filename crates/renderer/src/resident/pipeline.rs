@@ -136,21 +136,44 @@ impl ShadowPass {
             source: wgpu::ShaderSource::Wgsl(extract_source(filter).into()),
         });
         let c_layout = pipeline_layout(device, "resident extract", &[&c0, &c1]);
-        let compute_pipeline = |entry: &str, mode: Accuracy| {
-            let constants = [
-                (shaders::MODE_CONSTANT, f64::from(shaders::mode_value(mode))),
-                (shaders::TOUCH_SIGNS_CONSTANT, 1.0),
-            ];
-            shaders::compute_pipeline(device, entry, &c_layout, &module, entry, &constants)
-        };
-        let reset = compute_pipeline("resident_reset", Accuracy::Original);
+        let v1 = bind_group_layout(device, "resident vertices (unused)", &[]);
+        let v2 = bind_group_layout(
+            device,
+            "resident vertices out",
+            &[storage(0, compute, false)],
+        );
+        // Group 2: the pending dispatch's arguments (written by one entry, read as indirect
+        // arguments by the next, so never bound while they are read).
+        let args_layout = pipeline_layout(device, "resident pending args", &[&c0, &c1, &v2]);
+        let pending_layout = pipeline_layout(device, "resident pending", &[&c0, &c1, &v1]);
+        let max_x = device.limits().max_compute_workgroups_per_dimension.max(1);
+        let compute_pipeline =
+            |entry: &str, layout: &wgpu::PipelineLayout, mode: Accuracy, defer: bool| {
+                let constants = [
+                    (shaders::MODE_CONSTANT, f64::from(shaders::mode_value(mode))),
+                    (shaders::TOUCH_SIGNS_CONSTANT, 1.0),
+                    (shaders::DEFER_INT_CONSTANT, f64::from(u8::from(defer))),
+                    ("PENDING_GROUPS_X", f64::from(max_x)),
+                ];
+                shaders::compute_pipeline(device, entry, layout, &module, entry, &constants)
+            };
+        let reset = compute_pipeline("resident_reset", &c_layout, Accuracy::Original, false);
+        // Exact mode's triangle pass leaves `orient_int` out (DEFER_INT); `pending` decides what
+        // its filter leaves.
         let triangles = Accuracy::ALL
             .iter()
-            .map(|&m| compute_pipeline("resident_triangles", m))
+            .map(|&m| compute_pipeline("resident_triangles", &c_layout, m, m == Accuracy::Exact))
             .collect();
+        let pending_args = compute_pipeline(
+            "resident_pending_args",
+            &args_layout,
+            Accuracy::Exact,
+            false,
+        );
+        let pending = compute_pipeline("resident_pending", &pending_layout, Accuracy::Exact, false);
         let edges = Accuracy::ALL
             .iter()
-            .map(|&m| compute_pipeline("resident_edges", m))
+            .map(|&m| compute_pipeline("resident_edges", &c_layout, m, false))
             .collect();
 
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
@@ -190,12 +213,6 @@ impl ShadowPass {
                 storage(6, compute, true),
                 storage(8, compute, true),
             ],
-        );
-        let v1 = bind_group_layout(device, "resident vertices (unused)", &[]);
-        let v2 = bind_group_layout(
-            device,
-            "resident vertices out",
-            &[storage(0, compute, false)],
         );
         let empty = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident vertices (unused)"),
@@ -296,6 +313,8 @@ impl ShadowPass {
             vertices,
             reset,
             triangles,
+            pending_args,
+            pending,
             edges,
             prepass,
             lit,

@@ -93,7 +93,8 @@ impl ShadowPass {
     /// Reads back each light's side records of the last submitted frame, sorted (tests only).
     ///
     /// # Errors
-    /// [`RenderError::Device`] when mapping fails.
+    /// [`RenderError::Device`] when mapping fails, or when the counts the device wrote exceed a
+    /// light's record region.
     pub fn read_records(&self, rs: &ResidentScene) -> Result<Vec<twin::LightRecords>, RenderError> {
         let Some(fb) = rs.frame.as_ref() else {
             return Ok(Vec::new());
@@ -101,19 +102,25 @@ impl ShadowPass {
         let counts = self.read_counts(rs)?;
         let words = read_buffer(&self.device, &self.queue, &fb.records)?;
         let cap = rs.layout.capacity();
-        Ok(counts
+        counts
             .records
             .iter()
             .enumerate()
             .map(|(li, &[zp, zf])| {
+                let (zp, zf) = (zp as usize, zf as usize);
+                if zp + zf > cap {
+                    return Err(RenderError::Device(format!(
+                        "light {li}: {zp} z-pass and {zf} z-fail side records exceed the region of {cap}"
+                    )));
+                }
                 let region = &words[li * cap..(li + 1) * cap];
-                let mut zpass = region[..zp as usize].to_vec();
-                let mut zfail = region[cap - zf as usize..].to_vec();
+                let mut zpass = region[..zp].to_vec();
+                let mut zfail = region[cap - zf..].to_vec();
                 zpass.sort_unstable();
                 zfail.sort_unstable();
-                twin::LightRecords { zpass, zfail }
+                Ok(twin::LightRecords { zpass, zfail })
             })
-            .collect())
+            .collect()
     }
 }
 

@@ -82,6 +82,17 @@ impl ShadowPass {
             layout: &self.v2,
             entries: &[entry(0, &world)],
         });
+        let dispatch = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("resident pending dispatch"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+            mapped_at_creation: false,
+        });
+        let pending_out = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident pending dispatch"),
+            layout: &self.v2,
+            entries: &[entry(0, &dispatch)],
+        });
         // The surface vertices (3 `SurfaceVertex` per triangle) where the buffer fits the device;
         // the surface pass writes them in chunks that each fit one storage binding.
         let per_tri = 3 * std::mem::size_of::<crate::gpu::SurfaceVertex>() as u64;
@@ -155,6 +166,7 @@ impl ShadowPass {
             vertex_objects,
             world,
             world_out,
+            pending_dispatch: (dispatch, pending_out),
             surface,
             params: uniform("resident params", 16),
             rparams: uniform("resident frame params", 16),

@@ -32,8 +32,10 @@ fn touches(p: [f32; 3], l: [f32; 4]) -> bool {
     l[3] != 0.0 && crate::volume::at_light(glam::Vec3::from_array(p), l)
 }
 
-/// Twin of `resident_triangles`: `signs[light * tri_count + triangle]` (−1, 0, 1 or [`TOUCH`];
-/// 0 for culled objects) and the number of (triangle, light) pairs decided by the integer path.
+/// Twin of `resident_triangles` followed, in exact mode, by `resident_pending` (which decides
+/// with the integer path the pairs the triangle pass's filter marked pending):
+/// `signs[light * tri_count + triangle]` (−1, 0, 1 or [`TOUCH`]; 0 for culled objects) and the
+/// number of (triangle, light) pairs decided by the integer path.
 ///
 /// `lights[object * light_count + light]` are the object-space lights, `techniques[light *
 /// object_count + object]` the [`technique`] codes.
