@@ -53,7 +53,9 @@ resident-side-flipped	crates/renderer/src/resident/draw.wgsl	if (record & R_NEGA
 resident-back-cap-flipped	crates/renderer/src/resident/draw.wgsl	if s == 1 && c != 0u {	if s == -1 && c != 0u {	resident
 resident-zfail-list-from-front	crates/renderer/src/resident/draw.wgsl	return side_vertex(r_records[lt.draw.x + lt.draw.y - 1u - i], v);	return side_vertex(r_records[lt.draw.x + i], v);	resident
 twin-robust-rule	crates/wgpu-compute/src/twin.rs	if s0 == s1 && s1 == s2 { s0 } else { 0 }	if true { s0 } else { 0 }	twin resident
-integer-path-zero	crates/wgpu-compute/src/shaders.rs	"return orient_int(a, b, l, o); // @exact-int"	"return 0; // @exact-int"	gpu_lavapipe resident
+integer-path-zero	crates/wgpu-compute/src/shaders.rs	return orient_int(a, b, l, o); // @exact-int"	return 0; // @exact-int"	gpu_lavapipe resident
+resident-pending-never-dispatched	crates/renderer/src/resident/extract.wgsl	pending_dispatch[0] = select(0u, x, any);	pending_dispatch[0] = 0u;	resident
+resident-pending-sign-dropped	crates/renderer/src/resident/extract.wgsl	signs[k] = s;	signs[k] = 0;	resident
 resident-touch-skip-dropped	crates/renderer/src/resident/pipeline.rs	(shaders::TOUCH_SIGNS_CONSTANT, 1.0),	(shaders::TOUCH_SIGNS_CONSTANT, 0.0),	resident
 resident-chunk-offset-dropped	crates/renderer/src/resident/draw.wgsl	let t = r_chunk.first + k;	let t = k;	resident
 LIST
