@@ -192,9 +192,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
 
     // 5. Once, at the end: the image to a PNG.
     let rgba = read_texture(&device, &queue, &color, wgpu::TextureAspect::All, 4)?;
-    image::RgbaImage::from_raw(W, H, rgba.clone())
-        .ok_or("image size")?
-        .save(&out)?;
+    image::save_buffer(&out, &rgba, W, H, image::ExtendedColorType::Rgba8)?;
     println!("wrote {out} ({W}x{H}) on {}", adapter.get_info().name);
     if !check {
         return Ok(());

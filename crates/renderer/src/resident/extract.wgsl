@@ -63,6 +63,13 @@ fn count_slot(li: u32, obj: u32) -> u32 {
     return stats_base() + 1u + 3u * (li * rp.object_count + obj);
 }
 
+// With flags bit 0: counts a decided front cap of a z-fail object (technique 2).
+fn count_cap(li: u32, obj: u32, tech: u32, s: i32) {
+    if (rp.flags & 1u) != 0u && tech == 2u && (s == 1 || s == -1) {
+        atomicAdd(&args[count_slot(li, obj) + 2u], 1u);
+    }
+}
+
 @compute @workgroup_size(64)
 fn resident_reset(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
@@ -143,9 +150,7 @@ fn resident_triangles(inv: Invocation) {
                     atomicAdd(&args[stats_base()], 1u);
                 }
             }
-            if (rp.flags & 1u) != 0u && tech == 2u && (s == 1 || s == -1) {
-                atomicAdd(&args[count_slot(li, tri.object) + 2u], 1u);
-            }
+            count_cap(li, tri.object, tech, s);
         }
         signs[li * params.tri_count + t] = s;
     }
@@ -175,10 +180,7 @@ fn resident_pending(inv: Invocation) {
         }
         let s = triangle_sign_traced(tri, object_light(tri.object, li)).x;
         signs[k] = s;
-        let tech = technique[li * rp.object_count + tri.object];
-        if (rp.flags & 1u) != 0u && tech == 2u && (s == 1 || s == -1) {
-            atomicAdd(&args[count_slot(li, tri.object) + 2u], 1u);
-        }
+        count_cap(li, tri.object, technique[li * rp.object_count + tri.object], s);
     }
 }
 

@@ -137,9 +137,10 @@ impl ShadowPass {
         });
         let c_layout = pipeline_layout(device, "resident extract", &[&c0, &c1]);
         let v1 = bind_group_layout(device, "resident vertices (unused)", &[]);
+        // Group 2 of the vertex pass (its output) and of the pending-arguments entry.
         let v2 = bind_group_layout(
             device,
-            "resident vertices out",
+            "resident group 2: one read-write buffer",
             &[storage(0, compute, false)],
         );
         // Group 2: the pending dispatch's arguments (written by one entry, read as indirect
