@@ -402,6 +402,10 @@ fn gpu_pipeline_matches_the_host_pipeline_and_the_reference_on_hard_scenes() -> 
                         eh.side_quads, eg.side_quads,
                         "{mode} {name}: {eh:?} vs {eg:?}"
                     );
+                    assert_eq!(
+                        eh.cap_triangles, eg.cap_triangles,
+                        "{mode} {name}: {eh:?} vs {eg:?}"
+                    );
                 }
             }
         }
