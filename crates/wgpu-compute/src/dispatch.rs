@@ -196,14 +196,19 @@ impl WgpuBackend {
                 .write_buffer(&frame.lights, 0, bytemuck::cast_slice(packed));
             self.queue
                 .write_buffer(&frame.params, 0, bytemuck::cast_slice(&params));
-            let k = p.list_prefix.min(edges);
+            let counters_bytes = (count as u64 + 1) * 4;
+            let lists_at = counters_bytes.next_multiple_of(8);
+            // The prefixes shrink to keep the staging buffer within the buffer limit; the second
+            // round trip brings what they leave.
+            let room = self.limits.max_buffer_size.saturating_sub(lists_at);
+            let k = p.list_prefix.min(edges).min(room / (count as u64 * 8).max(1));
             let ku = if exact {
-                p.uncertain_prefix.min(u64::from(frame.uncertain_capacity))
+                p.uncertain_prefix
+                    .min(u64::from(frame.uncertain_capacity))
+                    .min((room - count as u64 * k * 8) / 16)
             } else {
                 0
             };
-            let counters_bytes = (count as u64 + 1) * 4;
-            let lists_at = counters_bytes.next_multiple_of(8);
             let uncertain_at = lists_at + count as u64 * k * 8;
             let staging_bytes = uncertain_at + ku * 16;
             if frame
