@@ -9,6 +9,8 @@
 // 1. `triangles` (robust, ordered, exact): one invocation per global triangle; for each light of
 //    the dispatch, the sign of the triangle in its canonical vertex order (ids ascending) goes to
 //    `signs[light * tri_count + triangle]`.
+//    In exact mode with the integer fallback deferred, `resolve_uncertain` then decides the
+//    pairs the filter left, on the device, before the edge step.
 // 2. `extract`: one invocation per global edge; for each light, m = the sum over the edge's
 //    opposite vertices (OVs) of the parity times the sign of that OV's triangle (`original`: the
 //    naive per-(edge, OV) sign instead, with no triangle step). It writes m to
@@ -22,7 +24,8 @@
 // MODE (pipeline-overridable): 0 original, 1 robust, 2 ordered, 3 exact.
 //
 // Exact mode uses a certified filter (`exact_filter`). What it cannot certify goes to
-// `device_exact`: by default `orient_int` decides it on the device; otherwise (the module as it
+// `device_exact`: by default `orient_int` decides it on the device (inline, or, with DEFER_INT,
+// in `resolve_uncertain` over the appended pairs); otherwise (the module as it
 // stands) the (triangle, light) pair's sign is 0 here and the pair is appended to `uncertain`;
 // the host decides it exactly and patches `mult` and the compact lists. For devices with
 // SHADER_F64 the host builds this module with the call marked `@exact-filter` replaced by
@@ -308,6 +311,23 @@ fn triangles(inv: Invocation) {
             s = 0;
         }
         signs[li * params.tri_count + t] = s;
+    }
+}
+
+// Exact mode with the integer fallback deferred (the triangle step built with DEFER_INT): decides
+// each (triangle, light) pair the step appended to `uncertain` with the same
+// `triangle_sign_traced`, `orient_int` compiled in, and writes its sign. A grid-stride loop, so
+// the host sizes the grid from the list's capacity; records past the capacity are not read (the
+// host then grows the list and runs the dispatch again).
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn resolve_uncertain(inv: Invocation) {
+    let n = min(atomicLoad(&counters[params.light_count]), params.uncertain_capacity);
+    let stride = inv.nwg.x * inv.nwg.y * WORKGROUP_SIZE;
+    for (var i = flat_index(inv); i < n; i += stride) {
+        let r = uncertain[i];
+        let tri = load_triangle(r.triangle);
+        let s = triangle_sign_traced(tri, object_light(tri.object, r.light)).x;
+        signs[r.light * params.tri_count + r.triangle] = s;
     }
 }
 

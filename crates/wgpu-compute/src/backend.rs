@@ -4,6 +4,7 @@
 
 use crate::device::{device_error, ErrorScopes, Health, WgpuOptions};
 use crate::layout::{Prepared, StaticBuffers};
+use crate::pipeline::Pipelines;
 use crate::twin::ExactFilter;
 use crate::{shaders, NAME};
 use shadowvol_robust_math::{Accuracy, Light};
@@ -23,7 +24,10 @@ use wgpu::util::DeviceExt;
 ///
 /// * `multiplicities`: `array<i32>`, `m` at `l * E + edge` (global edge index);
 /// * `counters`: `array<u32>`, the length of light `l`'s compact list at `l`; the entry at
-///   `light_count` is the raw number of uncertain triples of the dispatch;
+///   `light_count` is the raw number of `(triangle, light)` pairs the exact filter left in the
+///   dispatch (decided on the device by the resolution step, or by the host with
+///   [`WgpuOptions::exact_on_device`](crate::WgpuOptions::exact_on_device) off; 0 when the
+///   integer fallback ran inline);
 /// * `silhouettes`: `array<vec2<u32>>`, light `l`'s compact list at `l * E .. l * E + counters[l]`,
 ///   entries `(edge, bitcast<u32>(m))` in unspecified order, only `m != 0`;
 /// * `edges`: `array<vec4<u32>>`, `(a, b, first OV slot, object)` with global vertex ids
@@ -61,11 +65,7 @@ pub struct WgpuBackend {
     pub(crate) filter: ExactFilter,
     pub(crate) options: WgpuOptions,
     pub(crate) limits: wgpu::Limits,
-    pub(crate) bind_group_layout: wgpu::BindGroupLayout,
-    /// The edge step, per mode ([`shaders::mode_value`]).
-    pub(crate) pipelines: Vec<wgpu::ComputePipeline>,
-    /// The triangle step, per mode; `None` for `original`, which has none.
-    pub(crate) triangle_pipelines: Vec<Option<wgpu::ComputePipeline>>,
+    pub(crate) pipelines: Pipelines,
     pub(crate) health: Arc<Health>,
     pub(crate) scenes: PreparedScenes<Prepared>,
 }
@@ -239,6 +239,7 @@ impl SilhouetteBackend for WgpuBackend {
             last: None,
             list_prefix: u64::from(self.options.min_list_prefix),
             uncertain_prefix: u64::from(self.options.min_list_prefix),
+            inline_exact: false,
         });
         Ok(id)
     }

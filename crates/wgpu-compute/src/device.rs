@@ -29,7 +29,8 @@ pub struct WgpuOptions {
     /// `false`), for testing both paths on one device.
     pub force_f32_filter: bool,
     /// Exact mode decides what the filter cannot certify on the device, with `orient_int`'s
-    /// integer arithmetic (default `true`: nothing is resolved on the host and
+    /// integer arithmetic, in a dispatch of its own over the undecided pairs (default `true`:
+    /// nothing is resolved on the host and
     /// [`ExtractStats::uncertain`](shadowvol_silhouette::ExtractStats::uncertain) is 0);
     /// `false` sends those triples to the host, as the other GPU backends do.
     pub exact_on_device: bool,
@@ -41,8 +42,10 @@ pub struct WgpuOptions {
     /// split the lights). More lights are processed in several batches with the same result;
     /// the buffer limits may lower it further.
     pub max_lights_per_batch: Option<NonZeroUsize>,
-    /// Initial capacity of the uncertain-triple buffer (default 4096); it grows (and the
-    /// dispatch is repeated) when a dispatch overflows it.
+    /// Initial capacity of the uncertain-pair list (default 4096); it grows (and the dispatch
+    /// is repeated) when a dispatch overflows it. Where it cannot grow enough (the storage
+    /// binding limit), exact mode on the device runs `orient_int` inline in the triangle step
+    /// from then on for that scene, and the host fallback returns [`BackendError::Limit`].
     pub initial_uncertain_capacity: u32,
     /// A cap, in bytes, on every buffer and storage binding, below the device's own limits (a
     /// memory budget; default `None`). Scenes whose static buffers exceed it are refused with
@@ -244,8 +247,7 @@ impl WgpuBackend {
             ExactFilter::F32
         };
         let adapter = device.adapter_info();
-        let (bind_group_layout, pipelines, triangle_pipelines) =
-            create_pipelines(&device, filter, options.exact_on_device)?;
+        let pipelines = create_pipelines(&device, filter, options.exact_on_device)?;
         let backend = Self {
             device,
             queue,
@@ -253,9 +255,7 @@ impl WgpuBackend {
             filter,
             options,
             limits,
-            bind_group_layout,
             pipelines,
-            triangle_pipelines,
             health,
             scenes: PreparedScenes::new(NAME),
         };

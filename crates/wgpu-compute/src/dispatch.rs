@@ -4,6 +4,7 @@
 use crate::backend::WgpuBackend;
 use crate::device::{device_error, limit_error, wait_error, ErrorScopes};
 use crate::layout::{Frame, Prepared, StaticBuffers};
+use crate::pipeline::DeferredExact;
 use crate::resolve::{expand_uncertain, finish_batch, BatchOutput, Patch, UncertainTriangle};
 use crate::shaders;
 use crate::twin::pack_lights;
@@ -13,6 +14,10 @@ use shadowvol_silhouette::{
 };
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;
+
+/// Most workgroups of the grid-stride resolution of exact mode's uncertain list (262,144
+/// invocations).
+const RESOLVE_MAX_GROUPS: u32 = 1024;
 
 /// One batch of the lights of an `extract`: what [`WgpuBackend::run_batch`] uploads and where
 /// its rows of the result go.
@@ -25,8 +30,19 @@ struct LightBatch<'a> {
     lights: std::ops::Range<usize>,
     /// Whether this is the extraction's last batch (its device buffers stay readable).
     last: bool,
-    /// Exact mode: uncertain records are read back and resolved.
-    exact: bool,
+    /// Exact mode with the host fallback: uncertain records are read back and resolved.
+    host_resolves: bool,
+}
+
+/// The pipelines of one `extract`'s mode.
+#[derive(Clone, Copy)]
+struct Steps<'a> {
+    /// The triangle step (`None` in `original`).
+    triangles: Option<&'a wgpu::ComputePipeline>,
+    /// The edge step.
+    edges: &'a wgpu::ComputePipeline,
+    /// Exact mode with `exact_on_device`: the deferred resolution and the inline fallback.
+    deferred: Option<&'a DeferredExact>,
 }
 
 /// What the first round trip of a batch brought back: the counts (per light, then the
@@ -36,6 +52,9 @@ struct FirstTrip {
     output: DeviceOutput,
     k: u64,
     ku: u64,
+    /// Uncertain records the host decides: all of them with the host fallback, else none (the
+    /// device decided them).
+    host_records: u64,
 }
 
 /// What one dispatch brought back, before the host decides its undecided triangles.
@@ -90,17 +109,22 @@ impl WgpuBackend {
         }
         stats.upload += t_upload.elapsed();
         let m = shaders::mode_value(mode) as usize;
-        let pipelines = (self.triangle_pipelines[m].as_ref(), &self.pipelines[m]);
+        let exact = mode == Accuracy::Exact;
+        let steps = Steps {
+            triangles: self.pipelines.triangles[m].as_ref(),
+            edges: &self.pipelines.edges[m],
+            deferred: self.pipelines.deferred.as_ref().filter(|_| exact),
+        };
         for range in gpu::batches(lights.len(), per_batch) {
             let batch = LightBatch {
                 object_lights: &obj_lights,
                 packed: pack_lights(&obj_lights, range.start, range.len()),
                 last: range.end == lights.len(),
                 lights: range,
-                exact: mode == Accuracy::Exact,
+                host_resolves: exact && steps.deferred.is_none(),
             };
             let scope = ErrorScopes::push(&self.device);
-            let r = self.run_batch(p, &gpu, pipelines, &batch, out, &mut stats);
+            let r = self.run_batch(p, &gpu, steps, &batch, out, &mut stats);
             if let Some(e) = scope.pop() {
                 return Err(device_error(e));
             }
@@ -134,15 +158,15 @@ impl WgpuBackend {
         &self,
         p: &mut Prepared,
         gpu: &StaticBuffers,
-        pipelines: (Option<&wgpu::ComputePipeline>, &wgpu::ComputePipeline),
+        steps: Steps<'_>,
         batch: &LightBatch<'_>,
         out: &mut Multiplicities,
         stats: &mut ExtractStats,
     ) -> Result<(), BackendError> {
         let count = batch.lights.len();
-        let first = self.first_round_trip(p, gpu, pipelines, batch, stats)?;
+        let first = self.first_round_trip(p, gpu, steps, batch, stats)?;
         let counts = &first.counts;
-        let uncertain_count = u64::from(counts[count]);
+        let uncertain_count = first.host_records;
         // Adapt the prefixes to this frame's sizes.
         let grow = |n: u64| (n + n / 4).max(1).next_power_of_two();
         let longest = counts[..count].iter().copied().max().unwrap_or(0);
@@ -157,18 +181,21 @@ impl WgpuBackend {
         self.resolve_batch(p, batch, output, out, stats)
     }
 
-    /// Uploads the batch's lights, dispatches the triangle and edge steps and brings back the
+    /// Uploads the batch's lights, dispatches the triangle step (and, in exact mode on the
+    /// device, the resolution of what its filter left) and the edge step, and brings back the
     /// counts, the first `k` entries of every list and `ku` uncertain records; dispatches again
-    /// with a bigger uncertain buffer when the records overflowed it.
+    /// with a bigger uncertain buffer when the records overflowed it, or, on the device, with the
+    /// integer fallback inline when the buffer cannot grow enough.
     fn first_round_trip(
         &self,
         p: &mut Prepared,
         gpu: &StaticBuffers,
-        (triangle_pipeline, pipeline): (Option<&wgpu::ComputePipeline>, &wgpu::ComputePipeline),
+        steps: Steps<'_>,
         batch: &LightBatch<'_>,
         stats: &mut ExtractStats,
     ) -> Result<FirstTrip, BackendError> {
-        let (packed, count, exact) = (&batch.packed[..], batch.lights.len(), batch.exact);
+        let (packed, count) = (&batch.packed[..], batch.lights.len());
+        let host_resolves = batch.host_resolves;
         let edge_count = p.layout.edge_count();
         let edges = edge_count as u64;
         let objects = p.layout.object_count() as u64;
@@ -201,8 +228,11 @@ impl WgpuBackend {
             // The prefixes shrink to keep the staging buffer within the buffer limit; the second
             // round trip brings what they leave.
             let room = self.limits.max_buffer_size.saturating_sub(lists_at);
-            let k = p.list_prefix.min(edges).min(room / (count as u64 * 8).max(1));
-            let ku = if exact {
+            let k = p
+                .list_prefix
+                .min(edges)
+                .min(room / (count as u64 * 8).max(1));
+            let ku = if host_resolves {
                 p.uncertain_prefix
                     .min(u64::from(frame.uncertain_capacity))
                     .min((room - count as u64 * k * 8) / 16)
@@ -236,6 +266,15 @@ impl WgpuBackend {
             stats.upload += t.elapsed();
             // ---- compute
             let t = Instant::now();
+            // One invocation per record the list holds, up to a grid that fills a large GPU.
+            let records = frame
+                .uncertain_capacity
+                .min(RESOLVE_MAX_GROUPS * shaders::WORKGROUP_SIZE);
+            let resolve_grid = self.grid(records as usize, "uncertain records")?;
+            let inline = match steps.deferred {
+                Some(d) if p.inline_exact => Some(d.inline_triangles(&self.device)?),
+                _ => None,
+            };
             let mut encoder = self
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -248,11 +287,25 @@ impl WgpuBackend {
                     timestamp_writes: None,
                 });
                 pass.set_bind_group(0, &frame.bind_group, &[]);
-                if let Some(triangles) = triangle_pipeline {
-                    pass.set_pipeline(triangles);
-                    pass.dispatch_workgroups(tx, ty, 1);
+                match (inline, steps.deferred, steps.triangles) {
+                    (Some(inline), _, _) => {
+                        pass.set_pipeline(inline);
+                        pass.dispatch_workgroups(tx, ty, 1);
+                    }
+                    (None, Some(d), Some(triangles)) => {
+                        pass.set_pipeline(triangles);
+                        pass.dispatch_workgroups(tx, ty, 1);
+                        let (rx, ry) = resolve_grid;
+                        pass.set_pipeline(&d.resolve);
+                        pass.dispatch_workgroups(rx, ry, 1);
+                    }
+                    (None, _, Some(triangles)) => {
+                        pass.set_pipeline(triangles);
+                        pass.dispatch_workgroups(tx, ty, 1);
+                    }
+                    (None, _, None) => {}
                 }
-                pass.set_pipeline(pipeline);
+                pass.set_pipeline(steps.edges);
                 pass.dispatch_workgroups(gx, gy, 1);
             }
             encoder.copy_buffer_to_buffer(&frame.counters, 0, staging, 0, counters_bytes);
@@ -300,6 +353,11 @@ impl WgpuBackend {
             let uncertain = counts[count];
             if uncertain <= frame.uncertain_capacity {
                 break FirstTrip {
+                    host_records: if host_resolves {
+                        u64::from(uncertain)
+                    } else {
+                        0
+                    },
                     counts,
                     output,
                     k,
@@ -313,7 +371,11 @@ impl WgpuBackend {
             let staging = frame.staging.take();
             let mut frame =
                 self.create_frame(gpu, edges, tris, objects, light_capacity, capacity)?;
-            if frame.uncertain_capacity < uncertain {
+            if frame.uncertain_capacity < uncertain && steps.deferred.is_some() {
+                // Decided on the device all the same, with the integer fallback inline: slower
+                // per triangle, but no list. This prepared scene keeps it from now on.
+                p.inline_exact = true;
+            } else if frame.uncertain_capacity < uncertain {
                 return Err(limit_error(format!(
                     "{uncertain} undecided (triangle, light) pairs need {} bytes, but the device allows storage bindings of {} bytes; pass fewer lights per call",
                     u64::from(uncertain) * 16,
@@ -342,9 +404,10 @@ impl WgpuBackend {
             mut output,
             k,
             ku,
+            host_records,
         } = first;
         let edges = edge_count as u64;
-        let uncertain_count = u64::from(counts[count]);
+        let uncertain_count = host_records;
         let t = Instant::now();
         let rest: Vec<(usize, u64, u64)> = counts[..count]
             .iter()

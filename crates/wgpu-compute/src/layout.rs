@@ -48,6 +48,9 @@ pub(crate) struct Prepared {
     pub(crate) list_prefix: u64,
     /// Uncertain records copied with the counts (adapted per frame).
     pub(crate) uncertain_prefix: u64,
+    /// Exact mode on the device runs the triangle step with the integer fallback inline, since a
+    /// batch's undecided pairs did not fit the largest uncertain list the device binds.
+    pub(crate) inline_exact: bool,
 }
 
 impl WgpuBackend {
@@ -161,7 +164,7 @@ impl WgpuBackend {
         let uncertain = storage("uncertain", uncertain_bytes, wgpu::BufferUsages::empty());
         let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("silhouette"),
-            layout: &self.bind_group_layout,
+            layout: &self.pipelines.bind_group_layout,
             entries: &[
                 entry(0, &params),
                 entry(1, &gpu.positions),

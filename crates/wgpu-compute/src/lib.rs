@@ -37,7 +37,11 @@
 //!   ([`WgpuOptions::exact_on_device`]) the `(triangle, light)` pairs the filter cannot
 //!   certify are decided on the device by [`exact_int::orient_int`]: integer arithmetic on the
 //!   `f32` bits, exact for every finite input, so nothing is resolved on the host and
-//!   [`ExtractStats::uncertain`](shadowvol_silhouette::ExtractStats::uncertain) is 0. With it
+//!   [`ExtractStats::uncertain`](shadowvol_silhouette::ExtractStats::uncertain) is 0. The
+//!   triangle step appends those pairs to a list and a dispatch of their own
+//!   ([`shaders::RESOLVE_ENTRY_POINT`]) decides them, since `orient_int` compiled into the
+//!   triangle step slows every invocation; a batch whose pairs would not fit the largest list
+//!   the device binds runs the triangle step with `orient_int` inline instead. With it
 //!   off they go to an append buffer ([`UncertainTriangle`]); the host decides the three
 //!   `(edge, OV, light)` triples of each with `orient_exact`, patches the values and lists (on
 //!   the host and on the device) and counts the triples in `uncertain`.

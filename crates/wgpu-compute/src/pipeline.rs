@@ -1,19 +1,91 @@
 //! The compute pipelines: the composed WGSL module ([`crate::shaders`]), the bind-group layout
-//! shared by both steps, and one pipeline per mode for the edge step and the triangle step.
+//! shared by every step, one pipeline per mode for the edge step and the triangle step, and
+//! exact mode's on-device resolution of what its filter leaves.
 
 use crate::device::ErrorScopes;
 use crate::twin::ExactFilter;
 use crate::{shaders, NAME};
 use shadowvol_robust_math::Accuracy;
 use shadowvol_silhouette::BackendError;
+use std::sync::OnceLock;
 
-/// The bind-group layout, the edge-step pipelines per mode ([`shaders::mode_value`]) and the
-/// triangle-step pipelines per mode (`None` for `original`, which has no triangle step).
-pub(crate) type Pipelines = (
-    wgpu::BindGroupLayout,
-    Vec<wgpu::ComputePipeline>,
-    Vec<Option<wgpu::ComputePipeline>>,
-);
+/// The bind-group layout and the compute pipelines of every mode.
+pub(crate) struct Pipelines {
+    pub(crate) bind_group_layout: wgpu::BindGroupLayout,
+    /// The edge step, per mode ([`shaders::mode_value`]).
+    pub(crate) edges: Vec<wgpu::ComputePipeline>,
+    /// The triangle step, per mode; `None` for `original`, which has none. With
+    /// `exact_on_device`, exact mode's is built with `DEFER_INT` (see [`DeferredExact`]).
+    pub(crate) triangles: Vec<Option<wgpu::ComputePipeline>>,
+    /// With `exact_on_device`: what decides on the device the pairs the filter leaves.
+    pub(crate) deferred: Option<DeferredExact>,
+}
+
+/// Exact mode's integer fallback in a dispatch of its own. Compiled into the triangle step,
+/// `orient_int` slows every invocation, even where none reaches it; so exact mode's triangle
+/// step appends what its filter leaves to the uncertain list, and `resolve` decides those pairs.
+/// The triangle step with the fallback inline serves the batches whose list would not fit the
+/// device's storage-binding limit; it is compiled on first need (rare, and on a CPU driver such
+/// as lavapipe an `orient_int` pipeline takes tens of milliseconds to build).
+pub(crate) struct DeferredExact {
+    /// [`shaders::RESOLVE_ENTRY_POINT`], exact mode.
+    pub(crate) resolve: wgpu::ComputePipeline,
+    /// [`shaders::TRIANGLE_ENTRY_POINT`], exact mode, `orient_int` inline, once built.
+    inline_triangles: OnceLock<wgpu::ComputePipeline>,
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
+}
+
+impl DeferredExact {
+    /// The triangle step with `orient_int` inline, built on the first call.
+    ///
+    /// # Errors
+    /// [`BackendError::Build`] with the captured errors when the pipeline fails.
+    pub(crate) fn inline_triangles(
+        &self,
+        device: &wgpu::Device,
+    ) -> Result<&wgpu::ComputePipeline, BackendError> {
+        if let Some(p) = self.inline_triangles.get() {
+            return Ok(p);
+        }
+        let scope = ErrorScopes::push(device);
+        let built = build(
+            device,
+            &self.layout,
+            &self.module,
+            shaders::TRIANGLE_ENTRY_POINT,
+            Accuracy::Exact,
+            Some(false),
+        );
+        if let Some(e) = scope.pop() {
+            return Err(BackendError::Build {
+                backend: NAME,
+                what: "shaders/silhouette.wgsl (exact triangle step, integer fallback inline)"
+                    .to_string(),
+                log: e,
+            });
+        }
+        Ok(self.inline_triangles.get_or_init(|| built))
+    }
+}
+
+/// One pipeline of the module: `entry` in `mode`, with `DEFER_INT` set where the module has it
+/// (`defer_int` is `None` for the module without the device fallback, which has no such
+/// constant).
+fn build(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    mode: Accuracy,
+    defer_int: Option<bool>,
+) -> wgpu::ComputePipeline {
+    let mut constants = vec![(shaders::MODE_CONSTANT, f64::from(shaders::mode_value(mode)))];
+    if let Some(defer) = defer_int {
+        constants.push((shaders::DEFER_INT_CONSTANT, f64::from(u8::from(defer))));
+    }
+    shaders::compute_pipeline(device, mode.name(), layout, module, entry, &constants)
+}
 
 /// Compiles the module for `filter` (with the on-device exact fallback when `exact_on_device`)
 /// and builds the bind-group layout and the pipelines of every mode.
@@ -40,27 +112,25 @@ pub(crate) fn create_pipelines(
         bind_group_layouts: &[Some(&bind_group_layout)],
         immediate_size: 0,
     });
-    let pipeline = |entry: &str, mode: Accuracy| {
-        let constants = [(shaders::MODE_CONSTANT, f64::from(shaders::mode_value(mode)))];
-        shaders::compute_pipeline(
-            device,
-            mode.name(),
-            &pipeline_layout,
-            &module,
-            entry,
-            &constants,
-        )
+    let pipeline = |entry: &str, mode: Accuracy, defer_int: bool| {
+        let defer_int = exact_on_device.then_some(defer_int);
+        build(device, &pipeline_layout, &module, entry, mode, defer_int)
     };
-    let pipelines = Accuracy::ALL
+    let edges = Accuracy::ALL
         .iter()
-        .map(|&mode| pipeline(shaders::ENTRY_POINT, mode))
+        .map(|&mode| pipeline(shaders::ENTRY_POINT, mode, false))
         .collect();
-    let triangle_pipelines = Accuracy::ALL
+    let triangles = Accuracy::ALL
         .iter()
         .map(|&mode| {
-            (mode != Accuracy::Original).then(|| pipeline(shaders::TRIANGLE_ENTRY_POINT, mode))
+            (mode != Accuracy::Original).then(|| {
+                let defer = exact_on_device && mode == Accuracy::Exact;
+                pipeline(shaders::TRIANGLE_ENTRY_POINT, mode, defer)
+            })
         })
         .collect();
+    let resolve =
+        exact_on_device.then(|| pipeline(shaders::RESOLVE_ENTRY_POINT, Accuracy::Exact, false));
     if let Some(e) = scope.pop() {
         return Err(BackendError::Build {
             backend: NAME,
@@ -68,7 +138,17 @@ pub(crate) fn create_pipelines(
             log: e,
         });
     }
-    Ok((bind_group_layout, pipelines, triangle_pipelines))
+    Ok(Pipelines {
+        bind_group_layout,
+        edges,
+        triangles,
+        deferred: resolve.map(|resolve| DeferredExact {
+            resolve,
+            inline_triangles: OnceLock::new(),
+            module,
+            layout: pipeline_layout,
+        }),
+    })
 }
 
 pub(crate) fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {

@@ -229,6 +229,9 @@ pub struct KernelOutput {
     pub silhouettes: Vec<Vec<(u32, i32)>>,
     /// `(triangle, light)` pairs left to the host (exact mode without `device_exact` only).
     pub uncertain: Vec<UncertainTriangle>,
+    /// `(triangle, light)` pairs the filter left that `resolve_uncertain` decided on the device
+    /// (exact mode with `device_exact`), in append order here.
+    pub resolved: Vec<UncertainTriangle>,
 }
 
 /// Runs the kernels' logic for every triangle, then every edge, of `layout`: `lights` is
@@ -251,9 +254,12 @@ pub fn run_kernel(
 }
 
 /// [`run_kernel`] for the module of
-/// [`module_source_with`](crate::shaders::module_source_with): with `device_exact`, what the
-/// filter cannot certify is decided by [`orient_int`](crate::exact_int::orient_int) and nothing
-/// is appended to [`KernelOutput::uncertain`].
+/// [`module_source_with`](crate::shaders::module_source_with): with `device_exact`, the backend's
+/// exact pipelines. The triangle step (built with `DEFER_INT`) appends what the filter cannot
+/// certify, with sign 0; `resolve_uncertain` then decides each appended pair with
+/// [`orient_int`](crate::exact_int::orient_int) ([`KernelOutput::resolved`]), and nothing is left
+/// in [`KernelOutput::uncertain`]. The inline fallback pipeline gives the same signs with no
+/// list.
 ///
 /// # Panics
 /// As [`run_kernel`].
@@ -279,6 +285,7 @@ pub fn run_kernel_with(
         mult: vec![0; edge_count * light_count],
         silhouettes: vec![Vec::new(); light_count],
         uncertain: Vec::new(),
+        resolved: Vec::new(),
     };
     if mode != Accuracy::Original {
         // The triangle step: one invocation per triangle.
@@ -286,7 +293,7 @@ pub fn run_kernel_with(
             let p = [tr[0], tr[1], tr[2]].map(|v| layout.position(v));
             for li in 0..light_count {
                 let l = lights[tr[3] as usize * light_count + li];
-                let s = match triangle_sign(mode, filter, device_exact, p, l).0 {
+                let s = match triangle_sign(mode, filter, false, p, l).0 {
                     Some(s) => s,
                     None => {
                         out.uncertain.push(UncertainTriangle {
@@ -299,6 +306,18 @@ pub fn run_kernel_with(
                 out.signs[li * tri_count + t] = i32::from(s);
             }
         }
+    }
+    if device_exact {
+        // `resolve_uncertain`: one invocation per appended pair.
+        for r in &out.uncertain {
+            let tr = triangles.tris[r.triangle as usize];
+            let p = [tr[0], tr[1], tr[2]].map(|v| layout.position(v));
+            let l = lights[tr[3] as usize * light_count + r.light as usize];
+            let s = triangle_sign(mode, filter, true, p, l).0;
+            out.signs[r.light as usize * tri_count + r.triangle as usize] =
+                i32::from(s.expect("the integer path decides every pair"));
+        }
+        out.resolved = std::mem::take(&mut out.uncertain);
     }
     // The edge step: one invocation per edge.
     let x = EdgeInputs {

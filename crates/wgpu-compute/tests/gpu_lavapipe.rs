@@ -19,6 +19,7 @@ use values::Rule;
 
 main!(
     gpu_corpus_exact_identical_to_cpu_decided_on_the_device,
+    gpu_exact_on_device_regrows_its_list_or_decides_inline,
     gpu_corpus_exact_identical_to_cpu_with_preferred_filter,
     gpu_corpus_exact_identical_to_cpu_with_forced_f32_filter,
     gpu_corpus_f32_modes_values_and_closed_chains,
@@ -76,8 +77,106 @@ fn gpu_corpus_exact_identical_to_cpu_decided_on_the_device() -> Outcome {
                 b.exact_filter()
             );
         }
-        // The same corpus does leave triples to the host without the device fallback, so the
-        // integer path really decided them (checked by the two tests below).
+        // The filter leaves pairs on these cases (the two tests below: the host decides them
+        // without the device fallback); here the device's resolution step decided them.
+        for name in [
+            "light-in-face-plane",
+            "flat-grid-grazing",
+            "subnormal-coordinates",
+        ] {
+            let case = common::all_cases()
+                .into_iter()
+                .find(|c| c.name == name)
+                .unwrap();
+            let id = b.prepare(&case.scene).unwrap();
+            let mut m = Multiplicities::default();
+            b.extract(id, &case.lights, Accuracy::Exact, &mut m)
+                .unwrap();
+            let res = b.gpu_results(id).unwrap();
+            let (_, counts, _) = read_results(&b, &res);
+            assert!(
+                counts[res.light_count] > 0,
+                "{name} ({:?} filter): no pair was left to the resolution step",
+                b.exact_filter()
+            );
+            b.release(id);
+        }
+    }
+    Ok(())
+}
+
+/// Exact mode on the device with a one-record uncertain list: the list grows and the dispatch
+/// is repeated, with the same results. Where the undecided pairs cannot fit the largest list
+/// the device binds (a memory cap here), the host fallback refuses the batch and the device
+/// path decides it with the integer fallback inline.
+fn gpu_exact_on_device_regrows_its_list_or_decides_inline() -> Outcome {
+    let name = "gpu_exact_on_device_regrows_its_list_or_decides_inline";
+    let mut b = backend(
+        name,
+        WgpuOptions {
+            initial_uncertain_capacity: 1,
+            max_lights_per_batch: std::num::NonZeroUsize::new(2),
+            ..WgpuOptions::default()
+        },
+    )?;
+    let counts = exact_equals_cpu(&mut b);
+    assert!(counts.iter().all(|(_, n)| *n == 0), "{counts:?}");
+
+    // Every pair of a light with w = 0.5 is left by the f32 filter (w not in {0, 1}).
+    let case = common::all_cases()
+        .into_iter()
+        .find(|c| c.name == "many-objects-transformed")
+        .unwrap();
+    let lights: Vec<Light> = case
+        .lights
+        .iter()
+        .map(|&l| {
+            let v = l.to_vec4();
+            if v.w == 0.0 {
+                return l;
+            }
+            // The same point, written with w = 0.5.
+            let h = v * (0.5 / v.w);
+            Light::new(h.x, h.y, h.z, h.w).unwrap()
+        })
+        .collect();
+    assert!(lights.iter().any(|l| l.to_vec4().w == 0.5));
+    let edges = case.scene.total_edges() as u64;
+    let tris = case.scene.total_triangles() as u64;
+    // The cap of the buffer-limit test: two lights' compact lists per dispatch, and an
+    // uncertain list of E + 1 records, fewer than the 2 T pairs of a batch.
+    let cap = (edges + 1) * 16;
+    assert!(edges + 1 < 2 * tris, "the list would hold the batch");
+    let capped = |exact_on_device| WgpuOptions {
+        max_buffer_bytes: Some(cap),
+        force_f32_filter: true,
+        exact_on_device,
+        ..WgpuOptions::default()
+    };
+    let mut host = WgpuBackend::new(capped(false)).unwrap();
+    match extract_once(&mut host, &case.scene, &lights, Accuracy::Exact) {
+        Err(BackendError::Limit { message, .. }) => {
+            assert!(message.contains("undecided"), "{message}");
+        }
+        Err(e) => panic!("expected a limit error, got {e}"),
+        Ok((_, stats)) => panic!("expected a limit error, got a result with {stats:?}"),
+    }
+    let mut device = WgpuBackend::new(capped(true)).unwrap();
+    let expected = cpu_result(&case.scene, &lights, Accuracy::Exact);
+    let id = device.prepare(&case.scene).unwrap();
+    // Twice: the second frame starts with the inline fallback.
+    for frame in 0..2 {
+        let mut got = Multiplicities::default();
+        let stats = device
+            .extract(id, &lights, Accuracy::Exact, &mut got)
+            .unwrap();
+        assert_eq!(
+            invariant::first_difference(&got, &expected),
+            None,
+            "frame {frame}: (light, edge, wgpu, cpu)"
+        );
+        assert_eq!(got, expected, "frame {frame}");
+        assert_eq!(stats.uncertain, 0, "frame {frame}");
     }
     Ok(())
 }

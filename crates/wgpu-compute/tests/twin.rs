@@ -40,6 +40,51 @@ fn twin_equals_cpu_in_every_mode_with_both_filters() {
     }
 }
 
+/// The backend's exact pipelines on the device: the triangle step appends exactly the pairs it
+/// would leave to the host, `resolve_uncertain` decides them, and the values equal `cpu`'s.
+#[test]
+fn deferred_resolution_decides_every_pair_the_host_would() {
+    let mut cpu = CpuBackend::new();
+    let mut resolved = 0;
+    for case in common::all_cases() {
+        let (expected, _) =
+            extract_once(&mut cpu, &case.scene, &case.lights, Accuracy::Exact).unwrap();
+        let layout = SceneLayout::build(&case.scene, "wgpu").unwrap();
+        let triangles = TriangleLayout::build(&case.scene, &layout, "wgpu").unwrap();
+        let obj = object_lights(&case.scene, &case.lights);
+        let n = case.lights.len();
+        let packed: Vec<[f32; 4]> = obj.iter().flat_map(|v| v.iter().copied()).collect();
+        for filter in [ExactFilter::F64, ExactFilter::F32] {
+            let run = |device_exact| {
+                twin::run_kernel_with(
+                    &layout,
+                    &triangles,
+                    &packed,
+                    n,
+                    Accuracy::Exact,
+                    filter,
+                    device_exact,
+                )
+            };
+            let (host, device) = (run(false), run(true));
+            assert!(device.uncertain.is_empty(), "{}", case.name);
+            assert_eq!(device.resolved, host.uncertain, "{} {filter:?}", case.name);
+            resolved += device.resolved.len();
+            let e = layout.edge_count();
+            for l in 0..n {
+                assert_eq!(
+                    &device.mult[l * e..(l + 1) * e],
+                    expected.values(l),
+                    "{} {filter:?} light {l}",
+                    case.name
+                );
+            }
+            assert_eq!(device.silhouettes.len(), n);
+        }
+    }
+    assert!(resolved > 0, "no case left a pair to the resolution step");
+}
+
 #[test]
 fn hard_cases_send_triples_to_the_host() {
     // Exact zeros with a non-zero permanent can never be certified; subnormal inputs never are;
