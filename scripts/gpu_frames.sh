@@ -2,7 +2,9 @@
 # The GPU pipeline against the host pipeline on a real GPU, in one run (for a session that is
 # lent a device machine; see docs/GPU.md). Builds the release CLI, then for each scene renders
 # --frames N with the GPU pipeline, the host pipeline on simd and the host pipeline on wgpu,
-# back to back, and writes one JSON report per run plus a summary table.
+# back to back, and writes one JSON report per run plus a summary table. Then times the `wgpu`
+# silhouette backend alone on sphere-1m in every mode (`bench`), which shows what exact mode's
+# certified filter and its integer dispatch cost on the device.
 #
 #   scripts/gpu_frames.sh [OUT_DIR] [FRAMES]      (defaults: ${OUT:-gpu-frames}, 20)
 set -euo pipefail
@@ -38,4 +40,15 @@ print(f"| {sys.argv[2]} | {sys.argv[3]} | {f['median_ms']:.2f} | {f['p10_ms']:.2
 PY
   done
 done
+echo >>"$summary"
+echo "| bench sphere-1m, wgpu | median ms | p10 | p90 | compute ms | uncertain |" >>"$summary"
+echo "|---|---|---|---|---|---|" >>"$summary"
+"$bin" bench --scene sphere-1m --backend wgpu --mode original,robust,ordered,exact \
+  --frames "$((frames * 5))" --format json >"$out/bench-wgpu.json"
+python3 - "$out/bench-wgpu.json" >>"$summary" <<'PY'
+import json, sys
+for r in json.load(open(sys.argv[1]))["records"]:
+    print(f"| {r['mode']} | {r['median_ms']:.3f} | {r['p10_ms']:.3f} | {r['p90_ms']:.3f} | "
+          f"{r['compute_ms']:.3f} | {r['uncertain']} |")
+PY
 cat "$summary"
