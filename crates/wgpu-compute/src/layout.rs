@@ -127,7 +127,7 @@ impl WgpuBackend {
             .min(u64::from(u32::MAX)) as u32;
         let uncertain_capacity = uncertain_capacity.min(max_records).max(1);
         let uncertain_bytes = u64::from(uncertain_capacity) * 16;
-        self.check_buffer("the uncertain-triple buffer", uncertain_bytes, true)?;
+        self.check_buffer("the uncertain-pair list", uncertain_bytes, true)?;
         let storage = |label: &str, size: u64, extra: wgpu::BufferUsages| {
             self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
