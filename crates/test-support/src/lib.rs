@@ -114,12 +114,31 @@ impl IntoOutcome for Outcome {
 
 /// A libtest-mimic trial named `name` that runs `test`: `Ok` (or `()`) passes, `Err(Skip)` is
 /// ignored with its reason, a panic fails.
+///
+/// The test runs on a thread of its own, named after the trial, which is joined before the trial
+/// reports. Joining waits for the thread's thread-local destructors, which a driver may have
+/// registered; libtest-mimic's scoped worker threads are not waited for that far, and a driver's
+/// destructor (Mesa's) still running on one of them while the process exits can corrupt the
+/// heap.
+///
+/// # Panics
+///
+/// When `test` panics (the panic is passed on, so the trial fails with its message), or when the
+/// thread cannot be spawned.
 pub fn trial<R: IntoOutcome>(
     name: impl Into<String>,
     test: impl FnOnce() -> R + Send + 'static,
 ) -> Trial {
+    let name = name.into();
+    let thread = name.clone();
     Trial::ignorable_test(name, move || {
-        Ok(match test().into_outcome() {
+        let outcome = std::thread::Builder::new()
+            .name(thread.clone())
+            .spawn(move || test().into_outcome())
+            .unwrap_or_else(|e| panic!("cannot start the thread of trial {thread}: {e}"))
+            .join()
+            .unwrap_or_else(|payload| std::panic::resume_unwind(payload));
+        Ok(match outcome {
             Ok(()) => libtest_mimic::Completion::Completed,
             Err(s) => libtest_mimic::Completion::ignored_with(s.reason),
         })
