@@ -84,10 +84,7 @@ fn gpu_corpus_exact_identical_to_cpu_decided_on_the_device() -> Outcome {
             "flat-grid-grazing",
             "subnormal-coordinates",
         ] {
-            let case = common::all_cases()
-                .into_iter()
-                .find(|c| c.name == name)
-                .unwrap();
+            let case = common::case(name);
             let id = b.prepare(&case.scene).unwrap();
             let mut m = Multiplicities::default();
             b.extract(id, &case.lights, Accuracy::Exact, &mut m)
@@ -123,10 +120,7 @@ fn gpu_exact_on_device_regrows_its_list_or_decides_inline() -> Outcome {
     assert!(counts.iter().all(|(_, n)| *n == 0), "{counts:?}");
 
     // Every pair of a light with w = 0.5 is left by the f32 filter (w not in {0, 1}).
-    let case = common::all_cases()
-        .into_iter()
-        .find(|c| c.name == "many-objects-transformed")
-        .unwrap();
+    let case = common::case("many-objects-transformed");
     let lights: Vec<Light> = case
         .lights
         .iter()
@@ -439,10 +433,7 @@ fn gpu_buffer_limits_chunk_lights_or_refuse_with_numbers() -> Outcome {
         "gpu_buffer_limits_chunk_lights_or_refuse_with_numbers",
         WgpuOptions::default(),
     )?;
-    let case = common::all_cases()
-        .into_iter()
-        .find(|c| c.name == "many-objects-transformed")
-        .unwrap();
+    let case = common::case("many-objects-transformed");
     let edges = case.scene.total_edges() as u64;
     // The edge records ((E + 1) x 16 bytes) are the largest static buffer: a cap below them
     // refuses the scene, naming the sizes.

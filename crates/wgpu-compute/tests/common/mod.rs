@@ -181,6 +181,17 @@ pub fn extra_cases() -> Vec<Case> {
     ]
 }
 
+/// The case of [`all_cases`] called `name`.
+///
+/// # Panics
+/// When there is none.
+pub fn case(name: &str) -> Case {
+    all_cases()
+        .into_iter()
+        .find(|c| c.name == name)
+        .unwrap_or_else(|| panic!("no test case {name}"))
+}
+
 /// The conformance corpus followed by [`extra_cases`].
 pub fn all_cases() -> Vec<Case> {
     let mut cases: Vec<Case> = corpus::cases()
