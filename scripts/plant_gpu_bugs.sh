@@ -59,7 +59,7 @@ resident-pending-sign-dropped	crates/renderer/src/resident/extract.wgsl	signs[k]
 resident-touch-skip-dropped	crates/renderer/src/resident/pipeline.rs	(shaders::TOUCH_SIGNS_CONSTANT, 1.0),	(shaders::TOUCH_SIGNS_CONSTANT, 0.0),	resident
 resident-chunk-offset-dropped	crates/renderer/src/resident/draw.wgsl	let t = r_chunk.first + k;	let t = k;	resident
 wgsl-resolve-sign-dropped	shaders/silhouette.wgsl	signs[r.light * params.tri_count + r.triangle] = s;	signs[r.light * params.tri_count + r.triangle] = 0;	gpu_lavapipe
-dispatch-inline-fallback-dropped	crates/wgpu-compute/src/dispatch.rs	if frame.uncertain_capacity < uncertain && steps.deferred.is_some() {	if frame.uncertain_capacity < uncertain && steps.deferred.is_some() && false {	gpu_lavapipe
+dispatch-inline-fallback-dropped	crates/wgpu-compute/src/dispatch.rs	if steps.deferred.is_none() {	if true {	gpu_lavapipe
 twin-resolve-skipped	crates/wgpu-compute/src/twin.rs	for r in &out.uncertain {	for r in out.uncertain.iter().take(0) {	twin
 LIST
 )"

@@ -266,14 +266,18 @@ impl WgpuBackend {
             stats.upload += t.elapsed();
             // ---- compute
             let t = Instant::now();
-            // One invocation per record the list holds, up to a grid that fills a large GPU.
-            let records = frame
-                .uncertain_capacity
-                .min(RESOLVE_MAX_GROUPS * shaders::WORKGROUP_SIZE);
-            let resolve_grid = self.grid(records as usize, "uncertain records")?;
-            let inline = match steps.deferred {
-                Some(d) if p.inline_exact => Some(d.inline_triangles(&self.device)?),
-                _ => None,
+            // Exact mode on the device: the integer fallback inline, or the resolution of the
+            // list over one invocation per record it holds, up to a grid that fills a large GPU.
+            let (triangles, resolve) = match steps.deferred {
+                Some(d) if p.inline_exact => (Some(d.inline_triangles(&self.device)?), None),
+                Some(d) => {
+                    let records = frame
+                        .uncertain_capacity
+                        .min(RESOLVE_MAX_GROUPS * shaders::WORKGROUP_SIZE);
+                    let grid = self.grid(records as usize, "uncertain records")?;
+                    (steps.triangles, Some((&d.resolve, grid)))
+                }
+                None => (steps.triangles, None),
             };
             let mut encoder = self
                 .device
@@ -287,23 +291,13 @@ impl WgpuBackend {
                     timestamp_writes: None,
                 });
                 pass.set_bind_group(0, &frame.bind_group, &[]);
-                match (inline, steps.deferred, steps.triangles) {
-                    (Some(inline), _, _) => {
-                        pass.set_pipeline(inline);
-                        pass.dispatch_workgroups(tx, ty, 1);
-                    }
-                    (None, Some(d), Some(triangles)) => {
-                        pass.set_pipeline(triangles);
-                        pass.dispatch_workgroups(tx, ty, 1);
-                        let (rx, ry) = resolve_grid;
-                        pass.set_pipeline(&d.resolve);
-                        pass.dispatch_workgroups(rx, ry, 1);
-                    }
-                    (None, _, Some(triangles)) => {
-                        pass.set_pipeline(triangles);
-                        pass.dispatch_workgroups(tx, ty, 1);
-                    }
-                    (None, _, None) => {}
+                if let Some(triangles) = triangles {
+                    pass.set_pipeline(triangles);
+                    pass.dispatch_workgroups(tx, ty, 1);
+                }
+                if let Some((resolve, (rx, ry))) = resolve {
+                    pass.set_pipeline(resolve);
+                    pass.dispatch_workgroups(rx, ry, 1);
                 }
                 pass.set_pipeline(steps.edges);
                 pass.dispatch_workgroups(gx, gy, 1);
@@ -364,6 +358,20 @@ impl WgpuBackend {
                     ku,
                 };
             }
+            if uncertain > self.max_uncertain_records() {
+                if steps.deferred.is_none() {
+                    return Err(limit_error(format!(
+                        "{uncertain} undecided (triangle, light) pairs need {} bytes, but the device allows storage bindings of {} bytes; pass fewer lights per call",
+                        u64::from(uncertain) * 16,
+                        self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size)
+                    )));
+                }
+                // Decided on the device all the same, with the integer fallback inline: slower
+                // per triangle, but no list, so the frame keeps its buffers. This prepared scene
+                // keeps the fallback inline from now on.
+                p.inline_exact = true;
+                continue;
+            }
             // Overflow: grow the uncertain buffer and run the dispatch again.
             let t = Instant::now();
             let capacity = uncertain.checked_next_power_of_two().unwrap_or(uncertain);
@@ -371,17 +379,6 @@ impl WgpuBackend {
             let staging = frame.staging.take();
             let mut frame =
                 self.create_frame(gpu, edges, tris, objects, light_capacity, capacity)?;
-            if frame.uncertain_capacity < uncertain && steps.deferred.is_some() {
-                // Decided on the device all the same, with the integer fallback inline: slower
-                // per triangle, but no list. This prepared scene keeps it from now on.
-                p.inline_exact = true;
-            } else if frame.uncertain_capacity < uncertain {
-                return Err(limit_error(format!(
-                    "{uncertain} undecided (triangle, light) pairs need {} bytes, but the device allows storage bindings of {} bytes; pass fewer lights per call",
-                    u64::from(uncertain) * 16,
-                    self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size)
-                )));
-            }
             frame.staging = staging;
             p.frame = Some(frame);
             stats.upload += t.elapsed();

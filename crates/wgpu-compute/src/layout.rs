@@ -108,6 +108,16 @@ impl WgpuBackend {
         Ok(n)
     }
 
+    /// The most uncertain-pair records (16 bytes each) one storage binding can hold.
+    pub(crate) fn max_uncertain_records(&self) -> u32 {
+        (self
+            .limits
+            .max_storage_buffer_binding_size
+            .min(self.limits.max_buffer_size)
+            / 16)
+            .min(u64::from(u32::MAX)) as u32
+    }
+
     pub(crate) fn create_frame(
         &self,
         gpu: &StaticBuffers,
@@ -119,13 +129,7 @@ impl WgpuBackend {
     ) -> Result<Frame, BackendError> {
         let lc = light_capacity as u64;
         // As many records as the limits allow, at most the capacity asked for.
-        let max_records = (self
-            .limits
-            .max_storage_buffer_binding_size
-            .min(self.limits.max_buffer_size)
-            / 16)
-            .min(u64::from(u32::MAX)) as u32;
-        let uncertain_capacity = uncertain_capacity.min(max_records).max(1);
+        let uncertain_capacity = uncertain_capacity.min(self.max_uncertain_records()).max(1);
         let uncertain_bytes = u64::from(uncertain_capacity) * 16;
         self.check_buffer("the uncertain-pair list", uncertain_bytes, true)?;
         let storage = |label: &str, size: u64, extra: wgpu::BufferUsages| {
