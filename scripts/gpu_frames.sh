@@ -7,14 +7,22 @@
 # certified filter and its integer dispatch cost on the device.
 #
 #   scripts/gpu_frames.sh [OUT_DIR] [FRAMES]      (defaults: ${OUT:-gpu-frames}, 20)
+#
+# SHADOWVOL_BIN=PATH runs that binary instead of building one (a lent machine has no cargo:
+# scripts/gpu_prepare.sh builds it here and scripts/gpu_device.sh runs this script there).
 set -euo pipefail
 out="${1:-${OUT:-gpu-frames}}"
 frames="${2:-20}"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 mkdir -p "$out"
+out="$(cd "$out" && pwd)"
 cd "$root"
-cargo build --release -p shadowvol
-bin="${CARGO_TARGET_DIR:-$root/target}/release/shadowvol"
+if [ -n "${SHADOWVOL_BIN:-}" ]; then
+  bin="$SHADOWVOL_BIN"
+else
+  cargo build --release -p shadowvol
+  bin="${CARGO_TARGET_DIR:-$root/target}/release/shadowvol"
+fi
 "$bin" backends --format json >"$out/backends.json"
 summary="$out/summary.md"
 echo "| scene | run | median ms | p10 | p90 | read back | extract | sides | caps | lighting |" >"$summary"
