@@ -28,8 +28,8 @@ pub const AFTER_HELP: &str =
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// The mesh: a .obj file (v and f statements; polygons are fanned), a .gltf/.glb file (node
-    /// transforms applied in f32; all objects merged into one mesh; quantized and
-    /// meshopt-compressed files too), a .stl file (ASCII or binary), a .ply file (ASCII or
+    /// transforms applied in f32; all objects merged into one mesh; quantized, meshopt- and
+    /// Draco-compressed files too), a .stl file (ASCII or binary), a .ply file (ASCII or
     /// binary) or a scene preset name (`shadowvol scenes`). `shadowvol --help` lists what each
     /// format reads.
     #[arg(value_name = "MESH")]

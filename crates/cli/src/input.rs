@@ -26,7 +26,8 @@ pub struct Input {
 /// The input formats every subcommand accepts, for `--help`.
 pub const INPUT_FORMATS: &str = "Input formats (by extension, case-insensitive): .gltf/.glb \
     (glTF 2.0: node transforms, KHR_lights_punctual, cameras, KHR_mesh_quantization, \
-    EXT_meshopt_compression, sparse accessors; points and lines are skipped with a note), .obj \
+    EXT_meshopt_compression, KHR_draco_mesh_compression, sparse accessors; points and lines are \
+    skipped with a note), .obj \
     (v and f; polygons fanned), .stl (ASCII or binary; a triangle soup, welded by exact \
     position), .ply (ASCII or binary little/big-endian; vertex x, y, z and face vertex_indices, \
     polygons fanned, other properties ignored), or a preset name (`shadowvol scenes`).";

@@ -86,6 +86,14 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
 }
 
 fn main() -> ExitCode {
+    // A panic inside a guarded third-party decoder (Draco, on a corrupted stream) is caught by
+    // the loader and reported as an error below; its panic message would only be noise.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if !shadowvol_scenes::in_guarded_decoder() {
+            default_hook(info);
+        }
+    }));
     // Usage errors exit with code 2 inside clap, with its message; --help and --version exit 0.
     let cli = Cli::parse();
     let stdout = std::io::stdout();

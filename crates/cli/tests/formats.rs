@@ -1,7 +1,8 @@
 //! `shadowvol silhouette` on STL, PLY and quantized/compressed glTF from real exporters
 //! (`crates/scenes/tests/data/real/`): the JSON lists the OBJ's exact silhouette edge for edge,
 //! compared by position (the vertex numbering differs between formats); `--help` names the
-//! formats; a glTF of lines only is refused with the skipped primitive named.
+//! formats; a glTF of lines only is refused with the skipped primitive named; Draco-compressed
+//! glTF gives the JSON of the same file decoded by Google's decoder.
 
 mod common;
 
@@ -97,6 +98,36 @@ fn stl_ply_and_compressed_gltf_give_the_obj_silhouette_by_position() {
 }
 
 #[test]
+fn draco_gltf_gives_the_silhouettes_of_googles_decoding() {
+    // The scene's own four lights (KHR_lights_punctual survives the Draco transcoding).
+    for (f, reference) in [
+        ("draco.glb", "draco-decoded.glb"),
+        ("scene-draco.glb", "scene-draco-decoded.glb"),
+    ] {
+        let args = |file: &str| -> Vec<String> {
+            let mut a = vec!["silhouette".to_owned(), real(file)];
+            if !file.starts_with("scene") {
+                a.push("--light=9000,20000,-3000,1".to_owned());
+            }
+            a.extend(["--mode", "exact", "--format", "json"].map(str::to_owned));
+            a
+        };
+        let run_json = |file: &str| {
+            let a = args(file);
+            json_of(&a.iter().map(String::as_str).collect::<Vec<_>>())
+        };
+        let (d, r) = (run_json(f), run_json(reference));
+        assert!(d.get("notes").is_none(), "{f}");
+        assert!(!d["lights"].as_array().unwrap().is_empty(), "{f}");
+        assert_eq!(
+            d["lights"], r["lights"],
+            "{f}: every light's edges and open vertices"
+        );
+        assert_eq!(d["mesh"]["edges"], r["mesh"]["edges"], "{f}");
+    }
+}
+
+#[test]
 fn help_lists_the_input_formats() {
     let out = run(&["--help"]);
     let text = String::from_utf8_lossy(&out.stdout);
@@ -108,6 +139,7 @@ fn help_lists_the_input_formats() {
         ".ply",
         "KHR_mesh_quantization",
         "EXT_meshopt_compression",
+        "KHR_draco_mesh_compression",
     ] {
         assert!(text.contains(ext), "--help does not name {ext}:\n{text}");
     }

@@ -196,8 +196,35 @@ fn malformed_inputs_fail_clearly_fast_and_without_panic() -> Outcome {
             malformed("required_extension.gltf"),
             &[
                 "extensionsRequired[0]",
-                "KHR_draco_mesh_compression",
+                "EXT_mesh_gpu_instancing",
                 "is required but not supported",
+            ],
+        ),
+        // A Draco stream with one flipped bit (the decoder panics; the loader reports it) and
+        // one cut short.
+        (
+            malformed("draco_corrupted.glb"),
+            &[
+                "primitive 0, KHR_draco_mesh_compression",
+                "cannot be decoded",
+                "the stream is corrupted",
+            ],
+        ),
+        (
+            malformed("draco_cut.glb"),
+            &[
+                "primitive 0, KHR_draco_mesh_compression",
+                "(702 bytes) cannot be decoded",
+            ],
+        ),
+        // Fuzz regression (draco_decode crash-13fa6078): a header count of about 2.6e18 made the
+        // decoder allocate that many entries and abort.
+        (
+            malformed("draco_huge_counts.glb"),
+            &[
+                "primitive 0, KHR_draco_mesh_compression",
+                "declares 2666130979403333631 encoded vertices",
+                "POSITION accessor declares count 292",
             ],
         ),
         // OBJ faces with < 3 indices, indices beyond u32, relative indices off the start.

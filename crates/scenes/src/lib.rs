@@ -43,7 +43,9 @@ pub mod stl;
 
 pub use emission::{Emission, SpotCone};
 pub use glb_write::{export_glb, to_glb};
-pub use gltf_load::{load_gltf, load_gltf_mesh, load_gltf_slice, load_gltf_slice_with_notes};
+pub use gltf_load::{
+    in_guarded_decoder, load_gltf, load_gltf_mesh, load_gltf_slice, load_gltf_slice_with_notes,
+};
 pub use presets::{is_preset, preset, preset_names, presets, PresetInfo};
 pub use scene::{
     apply_f32, mesh_bounds, transformed, Camera, Effects, InvalidCamera, Object, Scene,

@@ -1,7 +1,9 @@
 //! The real-exporter corpus (`tests/data/real/`, made by `make.sh` with obj2gltf, gltfpack,
 //! glTF Transform, trimesh and plyfile from one OBJ): every file gives the OBJ's triangles by
 //! position, and the OBJ's exact silhouettes edge for edge by position (cpu backend); the
-//! meshopt-compressed files give the uncompressed quantized file's triangles and silhouettes.
+//! meshopt-compressed files give the uncompressed quantized file's triangles and silhouettes;
+//! the Draco-compressed files give, vertex for vertex and triangle for triangle, what Google's
+//! own decoder gives (its `-decoded.glb` twins, written by `make_draco.mjs`).
 
 use glam::Vec3;
 use shadowvol_cpu::CpuBackend;
@@ -162,6 +164,91 @@ fn meshopt_compressed_files_decode_to_the_uncompressed_quantized_file() {
     }
 }
 
+/// glTF Transform's Draco encodings of `obj2gltf.glb` (edgebreaker at the default speed,
+/// sequential, edgebreaker at speed 0: the strongest predictions), each with the same file as
+/// decoded by Google's decoder (draco3dgltf).
+const DRACO: [(&str, &str); 3] = [
+    ("draco.glb", "draco-decoded.glb"),
+    ("draco-sequential.glb", "draco-sequential-decoded.glb"),
+    ("draco-speed0.glb", "draco-speed0-decoded.glb"),
+];
+
+#[test]
+fn draco_files_decode_exactly_as_googles_decoder_decodes_them() {
+    let obj = load("reference.obj");
+    let lights = lights(&obj);
+    let bits = |m: &Mesh| -> Vec<[u32; 3]> {
+        m.positions
+            .iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect()
+    };
+    // Draco quantizes positions to 14 bits of the mesh's extent: each decoded vertex lies within
+    // half a step (per axis) of a vertex of the OBJ.
+    let (lo, hi) = obj
+        .positions
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    let step = (hi - lo).max_element() / 16383.0;
+    for (name, reference) in DRACO {
+        let m = load(name);
+        let r = load(reference);
+        assert_eq!(m.triangles.len(), 557, "{name}");
+        assert_eq!(bits(&m), bits(&r), "{name}: positions, bit for bit");
+        assert_eq!(m.triangles, r.triangles, "{name}: triangles, in order");
+        assert_eq!(
+            silhouettes_by_position(&m, &lights),
+            silhouettes_by_position(&r, &lights),
+            "{name}: silhouettes"
+        );
+        for (i, p) in m.positions.iter().enumerate() {
+            let d = obj
+                .positions
+                .iter()
+                .map(|q| (*p - *q).abs().max_element())
+                .fold(f32::INFINITY, f32::min);
+            assert!(
+                d <= 0.5001 * step,
+                "{name}: vertex {i} is {d} from the OBJ's"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_draco_scene_of_several_objects_decodes_as_googles_decoder_decodes_it() {
+    // `shadowvol scene export hard-multi-object-transforms` (four objects under their own
+    // transforms, a non-manifold book among them, four lights), through glTF Transform's `draco`.
+    let load_scene = |name: &str| {
+        let (scene, notes) = Scene::load_with_notes(data(name)).unwrap_or_else(|e| panic!("{e}"));
+        assert!(notes.is_empty(), "{name}: {notes:?}");
+        scene
+    };
+    let d = load_scene("scene-draco.glb");
+    let r = load_scene("scene-draco-decoded.glb");
+    assert_eq!(d.objects.len(), 4);
+    assert_eq!(d.objects.len(), r.objects.len());
+    for (a, b) in d.objects.iter().zip(&r.objects) {
+        assert_eq!(a.transform, b.transform, "{}", a.name);
+        assert_eq!(a.mesh.triangles, b.mesh.triangles, "{}", a.name);
+        let bits = |m: &Mesh| -> Vec<[u32; 3]> {
+            m.positions
+                .iter()
+                .map(|p| p.to_array().map(f32::to_bits))
+                .collect()
+        };
+        assert_eq!(bits(&a.mesh), bits(&b.mesh), "{}", a.name);
+    }
+    assert_eq!(d.lights.len(), 4);
+    assert_eq!(d.lights, r.lights);
+    let (dm, rm) = (d.baked_mesh().unwrap(), r.baked_mesh().unwrap());
+    let sil = silhouettes_by_position(&dm, &d.lights);
+    assert!(sil.iter().all(|s| !s.is_empty()));
+    assert_eq!(sil, silhouettes_by_position(&rm, &r.lights));
+}
+
 #[test]
 fn the_corpus_uses_what_it_is_meant_to_test() {
     let json = |name: &str| -> serde_json::Value {
@@ -183,6 +270,26 @@ fn the_corpus_uses_what_it_is_meant_to_test() {
             c["buffers"][1]["extensions"]["EXT_meshopt_compression"]["fallback"],
             true
         );
+    }
+    // Draco: required, accessors without data, the stream's header names its method
+    // (byte 8: 0 sequential, 1 edgebreaker); the decoded twins carry no Draco.
+    for ((name, reference), method) in DRACO.into_iter().zip([1u8, 0, 1]) {
+        let d = json(name);
+        assert_eq!(d["extensionsRequired"][0], "KHR_draco_mesh_compression");
+        let prim = &d["meshes"][0]["primitives"][0];
+        let view = prim["extensions"]["KHR_draco_mesh_compression"]["bufferView"]
+            .as_u64()
+            .unwrap() as usize;
+        let pos = prim["attributes"]["POSITION"].as_u64().unwrap() as usize;
+        assert!(d["accessors"][pos].get("bufferView").is_none(), "{name}");
+        let b = std::fs::read(data(name)).unwrap();
+        let n = u32::from_le_bytes([b[12], b[13], b[14], b[15]]) as usize;
+        let start =
+            20 + n + 8 + d["bufferViews"][view]["byteOffset"].as_u64().unwrap_or(0) as usize;
+        assert_eq!(&b[start..start + 5], b"DRACO", "{name}");
+        assert_eq!(b[start + 8], method, "{name}: encoder method");
+        let r = json(reference);
+        assert!(r.get("extensionsUsed").is_none(), "{reference}");
     }
     let s = json("sparse.glb");
     assert!(s["accessors"][0].get("bufferView").is_none());

@@ -8,7 +8,8 @@ use crate::SceneError;
 use std::collections::HashMap;
 
 /// The buffers that positions and indices read: the buffers of their views (and sparse views),
-/// or, for `EXT_meshopt_compression` views, the buffer of the compressed source.
+/// or, for `EXT_meshopt_compression` views, the buffer of the compressed source; for a
+/// `KHR_draco_mesh_compression` primitive, only the buffer of its Draco stream's view.
 pub(super) fn needed_buffers(
     document: &gltf::Document,
     ext: &Extensions,
@@ -25,8 +26,16 @@ pub(super) fn needed_buffers(
             None => out.insert(v.buffer().index()),
         };
     };
+    let views: Vec<gltf::buffer::View> = document.views().collect();
     for mesh in document.meshes() {
         for prim in mesh.primitives() {
+            if let Some(e) = ext.draco.get(&(mesh.index(), prim.index())) {
+                let view = e.get("bufferView").and_then(serde_json::Value::as_u64);
+                if let Some(v) = view.and_then(|v| views.get(usize::try_from(v).ok()?)) {
+                    add(v.clone());
+                }
+                continue;
+            }
             for acc in [prim.get(&gltf::Semantic::Positions), prim.indices()]
                 .into_iter()
                 .flatten()
@@ -63,6 +72,9 @@ pub(super) fn decode_meshopt_views(
     };
     for mesh in document.meshes() {
         for prim in mesh.primitives() {
+            if ext.draco.contains_key(&(mesh.index(), prim.index())) {
+                continue;
+            }
             if let Some(a) = prim.get(&gltf::Semantic::Positions) {
                 want(a);
             }
@@ -300,7 +312,11 @@ impl Loader<'_> {
         Ok(out)
     }
 
-    fn view_bytes(&self, alabel: &str, view: &gltf::buffer::View) -> Result<&[u8], SceneError> {
+    pub(super) fn view_bytes(
+        &self,
+        alabel: &str,
+        view: &gltf::buffer::View,
+    ) -> Result<&[u8], SceneError> {
         if let Some(d) = self.decoded.get(&view.index()) {
             return Ok(d);
         }

@@ -156,6 +156,8 @@ pub(super) struct Extensions {
     pub(super) fallback: Vec<usize>,
     /// `EXT_meshopt_compression` objects of buffer views, by view index.
     pub(super) meshopt: HashMap<usize, serde_json::Value>,
+    /// `KHR_draco_mesh_compression` objects of primitives, by (mesh, primitive) index.
+    pub(super) draco: HashMap<(usize, usize), serde_json::Value>,
 }
 
 impl Extensions {
@@ -168,7 +170,17 @@ impl Extensions {
                 .cloned()
                 .unwrap_or_default()
         };
+        let mut draco = HashMap::new();
+        for (m, mesh) in list("meshes").iter().enumerate() {
+            let prims = mesh.get("primitives").and_then(|p| p.as_array());
+            for (p, prim) in prims.into_iter().flatten().enumerate() {
+                if let Some(e) = prim.pointer("/extensions/KHR_draco_mesh_compression") {
+                    draco.insert((m, p), e.clone());
+                }
+            }
+        }
         Self {
+            draco,
             fallback: list("buffers")
                 .iter()
                 .enumerate()
@@ -193,7 +205,10 @@ pub(super) fn check_required_extensions(document: &gltf::Document) -> Result<(),
     for (i, ext) in document.extensions_required().enumerate() {
         let ok = matches!(
             ext,
-            "KHR_lights_punctual" | "KHR_mesh_quantization" | "EXT_meshopt_compression"
+            "KHR_lights_punctual"
+                | "KHR_mesh_quantization"
+                | "EXT_meshopt_compression"
+                | "KHR_draco_mesh_compression"
         ) || ext.starts_with("KHR_materials_")
             || ext.starts_with("KHR_texture_")
             || ext.starts_with("EXT_texture_")
@@ -201,21 +216,12 @@ pub(super) fn check_required_extensions(document: &gltf::Document) -> Result<(),
         if ok {
             continue;
         }
-        return Err(if ext == "KHR_draco_mesh_compression" {
-            format!(
-                "extensionsRequired[{i}]: extension KHR_draco_mesh_compression is required but \
-                 not supported (there is no maintained Rust Draco decoder): re-export the file \
-                 without Draco, for example with meshopt compression \
-                 (`gltfpack -i in.glb -o out.glb -c`)"
-            )
-        } else {
-            format!(
-                "extensionsRequired[{i}]: extension {ext} is required but not supported \
-                 (supported: KHR_lights_punctual, KHR_mesh_quantization, \
-                 EXT_meshopt_compression, and material and texture extensions, which do not \
-                 change geometry)"
-            )
-        });
+        return Err(format!(
+            "extensionsRequired[{i}]: extension {ext} is required but not supported \
+             (supported: KHR_lights_punctual, KHR_mesh_quantization, EXT_meshopt_compression, \
+             KHR_draco_mesh_compression, and material and texture extensions, which do not \
+             change geometry)"
+        ));
     }
     Ok(())
 }

@@ -33,6 +33,7 @@ impl Loader<'_> {
                 ));
                 continue;
             }
+            let draco = self.draco.get(&(mesh.index(), prim.index()));
             let Some(pos_acc) = prim.get(&gltf::Semantic::Positions) else {
                 self.notes.push(format!(
                     "{}: {label}: no POSITION attribute, the primitive is skipped",
@@ -40,16 +41,27 @@ impl Loader<'_> {
                 ));
                 continue;
             };
-            let positions = self.read_positions(&label, &pos_acc)?;
-            let n = positions.len();
-            let indices: Vec<u32> = match prim.indices() {
-                Some(acc) => self.read_indices(&label, &acc, n)?,
-                None => (0..n as u32).collect(),
+            let (positions, indices, idx_label) = match draco {
+                // The Draco stream replaces the accessors' data (they have none, or a fallback).
+                Some(ext) => {
+                    let (p, i) = self.read_draco(&label, &prim, ext)?;
+                    (p, i, format!("{label}, KHR_draco_mesh_compression"))
+                }
+                None => {
+                    let positions = self.read_positions(&label, &pos_acc)?;
+                    let n = positions.len();
+                    let indices: Vec<u32> = match prim.indices() {
+                        Some(acc) => self.read_indices(&label, &acc, n)?,
+                        None => (0..n as u32).collect(),
+                    };
+                    let idx_label = prim.indices().map_or_else(
+                        || format!("{label} (non-indexed)"),
+                        |a| format!("{label}, accessor {} (indices)", a.index()),
+                    );
+                    (positions, indices, idx_label)
+                }
             };
-            let idx_label = prim.indices().map_or_else(
-                || format!("{label} (non-indexed)"),
-                |a| format!("{label}, accessor {} (indices)", a.index()),
-            );
+            let n = positions.len();
             let tris = assemble(mode, &indices).map_err(|m| self.err(idx_label, m))?;
             let base = out.positions.len() as u64;
             if base + n as u64 >= u64::from(u32::MAX) {

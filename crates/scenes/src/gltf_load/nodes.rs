@@ -12,6 +12,9 @@ use std::sync::Arc;
 /// One load in progress: the file's buffers, the meshes read so far and the scene being built.
 pub(super) struct Loader<'a> {
     pub(super) source_name: &'a str,
+    pub(super) document: &'a gltf::Document,
+    /// `KHR_draco_mesh_compression` objects of primitives, by (mesh, primitive) index.
+    pub(super) draco: &'a HashMap<(usize, usize), serde_json::Value>,
     /// Buffer data by index; `None` for an `EXT_meshopt_compression` fallback buffer.
     pub(super) buffers: &'a [Option<&'a [u8]>],
     /// Decoded `EXT_meshopt_compression` views by view index.

@@ -72,8 +72,58 @@ write_json("uri_longer_claim.gltf", doc(byte_length=4096))
 write_json("uri_shorter_claim.gltf", doc(byte_length=8))
 # A required extension this loader does not implement.
 write_json("required_extension.gltf", doc(extra={
-    "extensionsUsed": ["KHR_draco_mesh_compression"],
-    "extensionsRequired": ["KHR_draco_mesh_compression"]}))
+    "extensionsUsed": ["EXT_mesh_gpu_instancing"],
+    "extensionsRequired": ["EXT_mesh_gpu_instancing"]}))
+
+
+def draco_variant(name, edit):
+    """The real corpus' draco.glb (one buffer holding only its Draco stream, one view) with
+    edit(json, view, stream) applied; edit returns the new stream bytes."""
+    data = open("../../../../scenes/tests/data/real/draco.glb", "rb").read()
+    n = struct.unpack_from("<I", data, 12)[0]
+    j = json.loads(data[20:20 + n])
+    view = j["bufferViews"][j["meshes"][0]["primitives"][0]["extensions"]["KHR_draco_mesh_compression"]["bufferView"]]
+    start = 20 + n + 8 + view.get("byteOffset", 0)
+    stream = bytearray(data[start:start + view["byteLength"]])
+    stream = edit(j, view, stream)
+    if view["byteLength"] == len(data) - start or view["byteLength"] > len(stream):
+        view["byteLength"] = min(view["byteLength"], len(stream))
+    j["buffers"][0]["byteLength"] = len(stream)
+    bin_chunk = bytes(stream) + b"\0" * (-len(stream) % 4)
+    js = json.dumps(j, separators=(",", ":")).encode()
+    js += b" " * (-len(js) % 4)
+    out = (struct.pack("<III", 0x46546C67, 2, 28 + len(js) + len(bin_chunk))
+           + struct.pack("<II", len(js), 0x4E4F534A) + js
+           + struct.pack("<II", len(bin_chunk), 0x004E4942) + bin_chunk)
+    write(name, out, "wb")
+
+
+def corrupt(j, view, stream):
+    # One flipped bit in the edgebreaker symbols: draco-oxide indexes out of bounds (a panic
+    # the loader catches).
+    stream[24] ^= 0x01
+    return stream
+
+
+def cut(j, view, stream):
+    # The stream's view cut to half its length: the decoder runs out of data.
+    view["byteLength"] //= 2
+    return stream
+
+
+def huge_counts(j, view, stream):
+    # Fuzz regression (draco_decode, crash-13fa6078): the edgebreaker header's encoded-vertex
+    # count (the varint after the traversal byte at offset 11) made about 2.6e18; the decoder
+    # allocated a table of that many entries and aborted.
+    assert stream[12:14] == bytes([164, 2]), "292 encoded vertices expected"
+    stream[12:14] = bytes([255] * 8 + [164, 2])
+    view["byteLength"] = len(stream)
+    return stream
+
+
+draco_variant("draco_corrupted.glb", corrupt)
+draco_variant("draco_cut.glb", cut)
+draco_variant("draco_huge_counts.glb", huge_counts)
 # f32 overflow: a node translation of 1e39 (JSON number beyond f32), and a finite scale that
 # takes finite positions past f32's range in the world transform.
 write_json("overflow_translation.gltf", doc(translation=[1e39, 0, 0]))

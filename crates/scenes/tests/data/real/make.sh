@@ -7,6 +7,11 @@
 #   gltfpack-cc.glb         gltfpack -cc (the same, higher compression level)
 #   gltfpack-noq.glb        gltfpack -noq (float positions, no quantization)
 #   sparse.glb              glTF Transform: POSITION as a sparse accessor without bufferView
+#   draco*.glb              glTF Transform `draco` (Google's encoder): default (edgebreaker),
+#                           --method sequential, --encode-speed 0 --decode-speed 0
+#   draco*-decoded.glb      make_draco.mjs: each decoded by Google's decoder (draco3dgltf)
+#   scene-draco.glb         `shadowvol scene export hard-multi-object-transforms` through
+#                           glTF Transform `draco`; scene-draco-decoded.glb its decoded twin
 #   reference-*.stl         trimesh: ASCII and binary STL
 #   reference-*.ply         plyfile: ASCII, binary little-endian (with quads), binary big-endian
 # The npm and PyPI packages are installed into a temporary folder (nothing is installed here).
@@ -19,7 +24,8 @@ trap 'rm -rf "$tmp"' EXIT
 
 (cd "$tmp" && npm init -y >/dev/null &&
   npm install --silent obj2gltf@3.2.0 gltfpack@1.3.0 @gltf-transform/cli@4.5.1 \
-    @gltf-transform/core@4.5.1 gltf-validator@2.0.0-dev.3.10 >/dev/null)
+    @gltf-transform/core@4.5.1 @gltf-transform/extensions@4.5.1 draco3dgltf@1.5.7 \
+    gltf-validator@2.0.0-dev.3.10 >/dev/null)
 python3 -m venv "$tmp/py"
 "$tmp/py/bin/pip" install --quiet numpy==2.4.6 trimesh==5.2.0 plyfile==1.1.5
 bin="$tmp/node_modules/.bin"
@@ -33,6 +39,17 @@ python3 make_reference.py "$repo/assets/bunny.obj" reference.obj
 "$bin/gltfpack" -i obj2gltf.glb -o gltfpack-noq.glb -noq >/dev/null
 cp make_sparse.mjs "$tmp/"
 node "$tmp/make_sparse.mjs" obj2gltf.glb sparse.glb 2>/dev/null
+"$bin/gltf-transform" draco obj2gltf.glb draco.glb >/dev/null
+"$bin/gltf-transform" draco obj2gltf.glb draco-sequential.glb --method sequential >/dev/null
+"$bin/gltf-transform" draco obj2gltf.glb draco-speed0.glb --encode-speed 0 --decode-speed 0 \
+  >/dev/null
+cp make_draco.mjs "$tmp/"
+(cd "$repo" && cargo run -q --release -p shadowvol -- scene export hard-multi-object-transforms \
+  "$tmp/scene.glb" >/dev/null)
+"$bin/gltf-transform" draco "$tmp/scene.glb" scene-draco.glb >/dev/null
+for f in draco draco-sequential draco-speed0 scene-draco; do
+  node "$tmp/make_draco.mjs" "$f.glb" "$f-decoded.glb"
+done
 "$tmp/py/bin/python" make_stl_ply.py . 2>/dev/null
 
 # Every glTF file must be free of errors for the Khronos validator.
