@@ -15,10 +15,11 @@ seeds() {
     obj_loader) echo "$D $M ../assets" ;;
     gltf_loader) echo "$D $M $D/real" ;;
     stl_loader | ply_loader) echo "$D/real" ;;
+    draco_decode) echo "seeds/draco_decode" ;;
     *) echo "" ;;
   esac
 }
-for t in obj_loader gltf_loader stl_loader ply_loader meshopt_decode topology exact_predicate \
+for t in obj_loader gltf_loader stl_loader ply_loader meshopt_decode draco_decode topology exact_predicate \
   pipeline simd_differential; do
   mkdir -p corpus/$t
   echo "=== $t: ${secs} s from $(date -u +%H:%M:%S)"

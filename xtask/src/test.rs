@@ -79,6 +79,7 @@ const FUZZ_TARGETS: &[(&str, &[&str])] = &[
     ("stl_loader", &["../crates/scenes/tests/data/real"]),
     ("ply_loader", &["../crates/scenes/tests/data/real"]),
     ("meshopt_decode", &[]),
+    ("draco_decode", &["seeds/draco_decode"]),
     ("topology", &[]),
     ("exact_predicate", &[]),
     ("pipeline", &[]),

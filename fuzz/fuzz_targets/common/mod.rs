@@ -5,6 +5,7 @@ use shadowvol_mesh_topology::{EdgeTable, Mesh};
 
 /// The edge table of the mesh of `positions` and `triangles`, each index taken modulo the
 /// vertex count, or `None` where the mesh or its table is refused. `positions` is not empty.
+#[allow(dead_code)]
 pub fn edge_table(positions: Vec<Vec3>, triangles: &[[u8; 3]]) -> Option<EdgeTable> {
     let n = positions.len() as u32;
     let triangles = triangles
@@ -12,4 +13,21 @@ pub fn edge_table(positions: Vec<Vec3>, triangles: &[[u8; 3]]) -> Option<EdgeTab
         .map(|t| t.map(|x| u32::from(x) % n))
         .collect();
     EdgeTable::build(&Mesh::new(positions, triangles).ok()?).ok()
+}
+
+/// Lets the loader catch the panics of the third-party decoder it guards (Draco, on a corrupted
+/// stream; it reports them as errors): libFuzzer's panic hook aborts on every panic, caught or
+/// not, so it is wrapped to stay silent while `shadowvol_scenes::in_guarded_decoder()` holds. Any
+/// other panic still aborts, as a crash.
+#[allow(dead_code)]
+pub fn tolerate_guarded_panics() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let abort = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !shadowvol_scenes::in_guarded_decoder() {
+                abort(info);
+            }
+        }));
+    });
 }
