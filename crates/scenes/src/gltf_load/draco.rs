@@ -136,6 +136,65 @@ fn skip_metadata(
     block(r, varint, 0)
 }
 
+/// A decoded Draco mesh: the positions of the POSITION attribute, one per point, and the faces
+/// as point indices (not yet checked against the point count).
+struct Decoded {
+    positions: Vec<Vec3>,
+    faces: Vec<[usize; 3]>,
+}
+
+/// Why [`decode`] gave no mesh.
+enum Failure {
+    /// The decoder's own error.
+    Decoder(String),
+    /// No attribute has the id that `attributes.POSITION` names; the ids present.
+    NoPosition(String),
+    /// The attribute is not 3 components of F32: its component count and type.
+    NotVec3F32(usize, String),
+}
+
+/// Decodes `bytes` and reads the attribute `position_id` and the faces. Called under
+/// `catch_unwind`: the decoder, and the mesh it returns, may panic on a corrupted stream.
+fn decode(bytes: &[u8], position_id: usize) -> Result<Decoded, Failure> {
+    let mesh = draco_oxide_decoder::Decoder::new()
+        .decode_mesh(bytes)
+        .map_err(|e| Failure::Decoder(e.to_string()))?;
+    let attr = mesh
+        .attributes
+        .iter()
+        .find(|a| a.get_id().as_usize() == position_id)
+        .ok_or_else(|| {
+            Failure::NoPosition(
+                mesh.attributes
+                    .iter()
+                    .map(|a| a.get_id().as_usize().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            )
+        })?;
+    if attr.get_component_type() != ComponentDataType::F32 || attr.get_num_components() != 3 {
+        return Err(Failure::NotVec3F32(
+            attr.get_num_components(),
+            format!("{:?}", attr.get_component_type()),
+        ));
+    }
+    let n = attr.len();
+    let mut positions = Vec::new();
+    positions
+        .try_reserve_exact(n)
+        .map_err(|_| Failure::Decoder(format!("{n} decoded points: cannot allocate them")))?;
+    for i in 0..n {
+        let v: NdVector<3, f32> = attr.get(PointIdx::from(i));
+        positions.push(Vec3::new(*v.get(0), *v.get(1), *v.get(2)));
+    }
+    let faces = mesh
+        .get_faces()
+        .iter()
+        .map(|f| f.map(usize::from))
+        .collect();
+    Ok(Decoded { positions, faces })
+}
+
 impl Loader<'_> {
     /// Positions (one per decoded point) and the decoded faces flattened into an index list, of
     /// the primitive whose `KHR_draco_mesh_compression` object is `ext`. `label` names the
@@ -176,14 +235,26 @@ impl Loader<'_> {
             ))
         };
         // draco-oxide returns errors for the malformed streams it checks, but it can still panic
-        // (an index out of bounds) on a corrupted one: that is caught and reported as an error.
+        // (an index out of bounds) on a corrupted one: the decoding and every read of its
+        // result run under catch_unwind, and a panic is reported as an error.
         GUARDED.with(|g| g.set(true));
-        let decoded =
-            std::panic::catch_unwind(|| draco_oxide_decoder::Decoder::new().decode_mesh(bytes));
+        let decoded = std::panic::catch_unwind(|| decode(bytes, position_id));
         GUARDED.with(|g| g.set(false));
-        let mesh = match decoded {
-            Ok(Ok(mesh)) => mesh,
-            Ok(Err(e)) => return Err(cannot(e.to_string())),
+        let Decoded { positions, faces } = match decoded {
+            Ok(Ok(d)) => d,
+            Ok(Err(Failure::Decoder(e))) => return Err(cannot(e)),
+            Ok(Err(Failure::NoPosition(ids))) => {
+                return Err(err(format!(
+                    "attributes.POSITION names Draco attribute {position_id}, but the stream \
+                     holds attributes [{ids}]"
+                )))
+            }
+            Ok(Err(Failure::NotVec3F32(n, ty))) => {
+                return Err(err(format!(
+                    "Draco attribute {position_id} (POSITION) decodes to {n} components of \
+                     {ty}; positions need 3 of F32"
+                )))
+            }
             Err(payload) => {
                 let what = payload
                     .downcast_ref::<&str>()
@@ -195,33 +266,7 @@ impl Loader<'_> {
                 )));
             }
         };
-        let ids = || {
-            mesh.attributes
-                .iter()
-                .map(|a| a.get_id().as_usize().to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let attr = mesh
-            .attributes
-            .iter()
-            .find(|a| a.get_id().as_usize() == position_id)
-            .ok_or_else(|| {
-                err(format!(
-                    "attributes.POSITION names Draco attribute {position_id}, but the stream \
-                     holds attributes [{}]",
-                    ids()
-                ))
-            })?;
-        if attr.get_component_type() != ComponentDataType::F32 || attr.get_num_components() != 3 {
-            return Err(err(format!(
-                "Draco attribute {position_id} (POSITION) decodes to {} components of {:?}; \
-                 positions need 3 of F32",
-                attr.get_num_components(),
-                attr.get_component_type()
-            )));
-        }
-        let points = attr.len();
+        let points = positions.len();
         if let Some(acc) = prim.get(&gltf::Semantic::Positions) {
             if acc.count() != points {
                 return Err(err(format!(
@@ -232,18 +277,10 @@ impl Loader<'_> {
                 )));
             }
         }
-        let mut positions = Vec::new();
-        positions.try_reserve_exact(points).map_err(|_| {
-            err(format!(
-                "{points} decoded points: cannot allocate their positions"
-            ))
-        })?;
-        for i in 0..points {
-            let v: NdVector<3, f32> = attr.get(PointIdx::from(i));
-            let p = [*v.get(0), *v.get(1), *v.get(2)];
+        for (i, p) in positions.iter().enumerate() {
             if let Some((axis, value)) = ['x', 'y', 'z']
                 .into_iter()
-                .zip(p)
+                .zip(p.to_array())
                 .find(|(_, c)| !c.is_finite())
             {
                 return Err(err(format!(
@@ -251,9 +288,7 @@ impl Loader<'_> {
                      finite"
                 )));
             }
-            positions.push(Vec3::from_array(p));
         }
-        let faces = mesh.get_faces();
         if let Some(acc) = prim.indices() {
             if Some(acc.count()) != faces.len().checked_mul(3) {
                 return Err(err(format!(
@@ -276,7 +311,6 @@ impl Loader<'_> {
             })?;
         for (f, face) in faces.iter().enumerate() {
             for &c in face {
-                let c = usize::from(c);
                 if c >= points {
                     return Err(err(format!(
                         "decoded triangle {f} refers to point {c}, but the stream has {points}"
