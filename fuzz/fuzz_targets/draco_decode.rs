@@ -13,25 +13,7 @@ fn glb(stream: &[u8], points: u32, indices: u32) -> Vec<u8> {
         r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_draco_mesh_compression"],"extensionsRequired":["KHR_draco_mesh_compression"],"nodes":[{{"mesh":0}}],"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1,"extensions":{{"KHR_draco_mesh_compression":{{"bufferView":0,"attributes":{{"POSITION":0}}}}}}}}]}}],"buffers":[{{"byteLength":{n}}}],"bufferViews":[{{"buffer":0,"byteLength":{n}}}],"accessors":[{{"componentType":5126,"type":"VEC3","count":{points}}},{{"componentType":5125,"type":"SCALAR","count":{indices}}}]}}"#,
         n = stream.len()
     );
-    let mut js = doc.into_bytes();
-    js.resize(js.len().next_multiple_of(4), b' ');
-    let mut bin = stream.to_vec();
-    bin.resize(bin.len().next_multiple_of(4), 0);
-    let mut out = Vec::with_capacity(28 + js.len() + bin.len());
-    for w in [
-        0x4654_6C67u32,
-        2,
-        (28 + js.len() + bin.len()) as u32,
-        js.len() as u32,
-        0x4E4F_534A,
-    ] {
-        out.extend_from_slice(&w.to_le_bytes());
-    }
-    out.extend_from_slice(&js);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(&0x004E_4942u32.to_le_bytes());
-    out.extend_from_slice(&bin);
-    out
+    shadowvol_scenes::glb_container(doc.as_bytes(), Some(stream)).expect("a small GLB")
 }
 
 fuzz_target!(|data: &[u8]| {

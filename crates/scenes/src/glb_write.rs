@@ -167,28 +167,61 @@ pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, SceneError> {
         doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
         doc["extensions"] = json!({"KHR_lights_punctual": {"lights": lights}});
     }
-    let mut json_bytes = serde_json::to_vec(&doc).map_err(|e| SceneError::Export {
+    let json_bytes = serde_json::to_vec(&doc).map_err(|e| SceneError::Export {
         message: format!("JSON encoding failed: {e}"),
     })?;
-    while !json_bytes.len().is_multiple_of(4) {
-        json_bytes.push(b' ');
-    }
-    let has_bin = !bin.is_empty();
-    let total = 12 + 8 + json_bytes.len() + if has_bin { 8 + bin.len() } else { 0 };
-    let total32 = u32::try_from(total).map_err(|_| SceneError::Export {
-        message: format!("the scene needs {total} bytes, but GLB is limited to 4 GiB"),
-    })?;
+    glb_container(&json_bytes, (!bin.is_empty()).then_some(&bin))
+}
+
+/// Frames a glTF JSON document and an optional binary chunk as a GLB 2.0 container: the
+/// 12-byte header, the `JSON` chunk padded with spaces and the `BIN` chunk (when `bin` is
+/// `Some`, even if empty) padded with zeros, each to 4 bytes. The JSON is not checked.
+///
+/// # Errors
+/// [`SceneError::Export`] if the container would exceed the 4 GiB a GLB header can declare.
+pub fn glb_container(json: &[u8], bin: Option<&[u8]>) -> Result<Vec<u8>, SceneError> {
+    let pad = |n: usize| n.next_multiple_of(4);
+    let total = 12 + 8 + pad(json.len()) + bin.map_or(0, |b| 8 + pad(b.len()));
+    let too_big = || SceneError::Export {
+        message: format!("the GLB needs {total} bytes, but GLB is limited to 4 GiB"),
+    };
+    let total32 = u32::try_from(total).map_err(|_| too_big())?;
     let mut out = Vec::with_capacity(total);
     out.extend_from_slice(&0x4654_6C67u32.to_le_bytes()); // "glTF"
     out.extend_from_slice(&2u32.to_le_bytes());
     out.extend_from_slice(&total32.to_le_bytes());
-    out.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
+    out.extend_from_slice(&(pad(json.len()) as u32).to_le_bytes());
     out.extend_from_slice(&0x4E4F_534Au32.to_le_bytes()); // "JSON"
-    out.extend_from_slice(&json_bytes);
-    if has_bin {
-        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(json);
+    out.resize(out.len() + pad(json.len()) - json.len(), b' ');
+    if let Some(bin) = bin {
+        out.extend_from_slice(&(pad(bin.len()) as u32).to_le_bytes());
         out.extend_from_slice(&0x004E_4942u32.to_le_bytes()); // "BIN\0"
-        out.extend_from_slice(&bin);
+        out.extend_from_slice(bin);
+        out.resize(out.len() + pad(bin.len()) - bin.len(), 0);
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::glb_container;
+
+    #[test]
+    fn the_container_pads_both_chunks_and_parses_back() {
+        let json = br#"{"asset":{"version":"2.0"}}"#; // 27 bytes
+        let out = glb_container(json, Some(&[1, 2, 3, 4, 5])).unwrap();
+        let word = |i: usize| u32::from_le_bytes(out[i..i + 4].try_into().unwrap()) as usize;
+        assert_eq!(&out[..4], b"glTF");
+        assert_eq!(word(8), out.len());
+        assert_eq!(word(12), 28, "JSON padded to 4 with spaces");
+        assert_eq!(&out[20 + 27..20 + 28], b" ");
+        assert_eq!(word(48), 8, "BIN padded to 4 with zeros");
+        assert_eq!(&out[56..64], &[1, 2, 3, 4, 5, 0, 0, 0]);
+        let glb = gltf::Glb::from_slice(&out).unwrap();
+        assert_eq!(glb.bin.as_deref(), Some(&[1u8, 2, 3, 4, 5, 0, 0, 0][..]));
+        let bare = glb_container(json, None).unwrap();
+        assert_eq!(bare.len(), 20 + 28);
+        assert!(gltf::Glb::from_slice(&bare).unwrap().bin.is_none());
+    }
 }

@@ -42,7 +42,7 @@ pub mod staging;
 pub mod stl;
 
 pub use emission::{Emission, SpotCone};
-pub use glb_write::{export_glb, to_glb};
+pub use glb_write::{export_glb, glb_container, to_glb};
 pub use gltf_load::{
     in_guarded_decoder, load_gltf, load_gltf_mesh, load_gltf_slice, load_gltf_slice_with_notes,
 };
