@@ -37,6 +37,9 @@
 //!   `attributes.POSITION` names, dequantized to `f32` by the decoder, bit for bit as Google's
 //!   decoder does (tested on glTF Transform's encodings); the decoded faces, flattened, are the
 //!   primitive's indices, assembled by its mode. The accessors must declare the decoded counts.
+//!   The vertex numbering is the decoder's point order: Google's own where the stream holds
+//!   positions only; where other attributes (normals, texture coordinates) split points at
+//!   seams, the same points and triangles in another order.
 //!   Exact results are exact for these `f32` positions, as for quantized ones. Before
 //!   decoding, the stream header's counts are checked against the accessors and the memory
 //!   available (the decoder sizes its tables from them). A stream that does not decode is an

@@ -12,6 +12,8 @@
 #   draco*-decoded.glb      make_draco.mjs: each decoded by Google's decoder (draco3dgltf)
 #   scene-draco.glb         `shadowvol scene export hard-multi-object-transforms` through
 #                           glTF Transform `draco`; scene-draco-decoded.glb its decoded twin
+#   uv-sphere-draco.glb     make_uv_sphere.py (POSITION, NORMAL, TEXCOORD_0 with seams) through
+#                           glTF Transform `draco`; uv-sphere-draco-decoded.glb its decoded twin
 #   reference-*.stl         trimesh: ASCII and binary STL
 #   reference-*.ply         plyfile: ASCII, binary little-endian (with quads), binary big-endian
 # The npm and PyPI packages are installed into a temporary folder (nothing is installed here).
@@ -47,7 +49,9 @@ cp make_draco.mjs "$tmp/"
 (cd "$repo" && cargo run -q --release -p shadowvol -- scene export hard-multi-object-transforms \
   "$tmp/scene.glb" >/dev/null)
 "$bin/gltf-transform" draco "$tmp/scene.glb" scene-draco.glb >/dev/null
-for f in draco draco-sequential draco-speed0 scene-draco; do
+python3 make_uv_sphere.py "$tmp/uv-sphere.glb"
+"$bin/gltf-transform" draco "$tmp/uv-sphere.glb" uv-sphere-draco.glb >/dev/null
+for f in draco draco-sequential draco-speed0 scene-draco uv-sphere-draco; do
   node "$tmp/make_draco.mjs" "$f.glb" "$f-decoded.glb"
 done
 "$tmp/py/bin/python" make_stl_ply.py . 2>/dev/null
