@@ -156,6 +156,17 @@ pub(super) fn decode_meshopt_views(
     Ok(out)
 }
 
+/// The bytes available and where that number comes from, when an allocation of `needed` bytes
+/// that the file does not bound (zeros of a declared count, a decoder's declared tables) is
+/// larger than [`shadowvol_mesh_topology::MEMORY_CHECK_THRESHOLD`] and than what is available
+/// ([`shadowvol_mesh_topology::available_memory`]); `None` when it may go ahead.
+pub(super) fn memory_shortfall(needed: u64) -> Option<(u64, String)> {
+    if needed <= shadowvol_mesh_topology::MEMORY_CHECK_THRESHOLD {
+        return None;
+    }
+    shadowvol_mesh_topology::available_memory().filter(|(available, _)| needed > *available)
+}
+
 /// `%XX` escapes decoded to bytes (anything else kept as is), as the gltf crate decodes relative
 /// URIs.
 pub(super) fn percent_decode(uri: &str) -> Vec<u8> {
@@ -195,17 +206,15 @@ impl Loader<'_> {
             .ok_or_else(|| self.err(alabel.to_owned(), format!("count {count} overflows")))?;
         // A view-less accessor is zeros of any declared count: its size is not bounded by the
         // file, so it is checked against the memory budget before it is allocated.
-        if acc.view().is_none() && total as u64 > shadowvol_mesh_topology::MEMORY_CHECK_THRESHOLD {
-            if let Some((available, source)) = shadowvol_mesh_topology::available_memory() {
-                if total as u64 > available {
-                    return Err(self.err(
-                        alabel.to_owned(),
-                        format!(
-                            "{count} elements without a bufferView need {total} bytes, more than \
-                             the {available} bytes available ({source})"
-                        ),
-                    ));
-                }
+        if acc.view().is_none() {
+            if let Some((available, source)) = memory_shortfall(total as u64) {
+                return Err(self.err(
+                    alabel.to_owned(),
+                    format!(
+                        "{count} elements without a bufferView need {total} bytes, more than the \
+                         {available} bytes available ({source})"
+                    ),
+                ));
             }
         }
         let mut out = match acc.view() {

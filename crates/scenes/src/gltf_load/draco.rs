@@ -3,9 +3,12 @@
 //! workspace carries it with allocation bounds, `third_party/README.md`). Its header counts are
 //! checked first, and its panics are caught.
 
+use super::buffers::memory_shortfall;
 use super::nodes::Loader;
 use crate::SceneError;
 use draco_oxide_core::attribute::ComponentDataType;
+use draco_oxide_core::bit_coder::Reader;
+use draco_oxide_core::codec::header::EncoderMethod;
 use draco_oxide_core::types::{NdVector, PointIdx, Vector};
 use glam::Vec3;
 use std::cell::Cell;
@@ -46,26 +49,11 @@ const BYTES_PER_POINT: u64 = 64;
 /// Reads the header, the metadata (skipped) and the connectivity counts of a Draco mesh stream.
 /// `Err` is a message for a stream whose header does not parse (the decoder would refuse it too).
 fn declared_counts(bytes: &[u8]) -> Result<Declared, String> {
-    use draco_oxide_core::bit_coder::Reader;
-    use draco_oxide_core::codec::header::EncoderMethod;
     let mut r = Reader::new(bytes);
     let header = draco_oxide_decoder::header::decode_header(&mut r).map_err(|e| e.to_string())?;
-    let varint = |r: &mut Reader<'_>| -> Result<u64, String> {
-        // At most 10 bytes of 7 bits: a longer varint overflows u64.
-        let mut value = 0u64;
-        for i in 0..10 {
-            let byte = r.read_u8().map_err(|e| e.to_string())?;
-            value |= u64::from(byte & 0x7F) << (7 * i);
-            if byte & 0x80 == 0 {
-                return Ok(value);
-            }
-        }
-        Err("a varint longer than 10 bytes".to_owned())
-    };
     if header.metadata {
-        skip_metadata(&mut r, &varint)?;
+        skip_metadata(&mut r)?;
     }
-    let byte = |r: &mut Reader<'_>| r.read_u8().map_err(|e| e.to_string());
     Ok(match header.encoder_method {
         EncoderMethod::Sequential => {
             let faces = varint(&mut r)?;
@@ -96,44 +84,57 @@ fn declared_counts(bytes: &[u8]) -> Result<Declared, String> {
     })
 }
 
-/// Skips the metadata section: per-attribute blocks, then the geometry block, each a list of
-/// name/value entries and nested named blocks (at most 1000 deep, as Google's decoder allows).
-fn skip_metadata(
-    r: &mut draco_oxide_core::bit_coder::Reader<'_>,
-    varint: &dyn Fn(&mut draco_oxide_core::bit_coder::Reader<'_>) -> Result<u64, String>,
-) -> Result<(), String> {
-    fn block(
-        r: &mut draco_oxide_core::bit_coder::Reader<'_>,
-        varint: &dyn Fn(&mut draco_oxide_core::bit_coder::Reader<'_>) -> Result<u64, String>,
-        level: usize,
-    ) -> Result<(), String> {
-        if level > 1000 {
-            return Err("metadata nested more than 1000 deep".to_owned());
+/// One byte of the stream.
+fn byte(r: &mut Reader<'_>) -> Result<u8, String> {
+    r.read_u8().map_err(|e| e.to_string())
+}
+
+/// A LEB128 varint: at most 10 bytes of 7 bits, since a longer one overflows `u64`.
+fn varint(r: &mut Reader<'_>) -> Result<u64, String> {
+    let mut value = 0u64;
+    for i in 0..10 {
+        let b = byte(r)?;
+        value |= u64::from(b & 0x7F) << (7 * i);
+        if b & 0x80 == 0 {
+            return Ok(value);
         }
-        let skip = |r: &mut draco_oxide_core::bit_coder::Reader<'_>, n: u64| {
-            let n = usize::try_from(n).map_err(|_| "metadata runs past the stream".to_owned())?;
-            r.read_bytes(n).map(|_| ()).map_err(|e| e.to_string())
-        };
-        let name = |r: &mut draco_oxide_core::bit_coder::Reader<'_>| {
-            let n = r.read_u8().map_err(|e| e.to_string())?;
-            skip(r, u64::from(n))
-        };
-        for _ in 0..varint(r)? {
-            name(r)?;
-            let size = varint(r)?;
-            skip(r, size)?;
-        }
-        for _ in 0..varint(r)? {
-            name(r)?;
-            block(r, varint, level + 1)?;
-        }
-        Ok(())
     }
+    Err("a varint longer than 10 bytes".to_owned())
+}
+
+/// Skips `n` bytes.
+fn skip(r: &mut Reader<'_>, n: u64) -> Result<(), String> {
+    let n = usize::try_from(n).map_err(|_| "metadata runs past the stream".to_owned())?;
+    r.read_bytes(n).map(|_| ()).map_err(|e| e.to_string())
+}
+
+/// Skips the metadata section: per-attribute blocks, then the geometry block.
+fn skip_metadata(r: &mut Reader<'_>) -> Result<(), String> {
     for _ in 0..varint(r)? {
         varint(r)?;
-        block(r, varint, 0)?;
+        skip_metadata_block(r, 0)?;
     }
-    block(r, varint, 0)
+    skip_metadata_block(r, 0)
+}
+
+/// Skips one metadata block: a list of name/value entries, then nested named blocks (at most
+/// 1000 deep, as Google's decoder allows). A name is a u8 length and its bytes.
+fn skip_metadata_block(r: &mut Reader<'_>, level: usize) -> Result<(), String> {
+    if level > 1000 {
+        return Err("metadata nested more than 1000 deep".to_owned());
+    }
+    for _ in 0..varint(r)? {
+        let name = byte(r)?;
+        skip(r, u64::from(name))?;
+        let size = varint(r)?;
+        skip(r, size)?;
+    }
+    for _ in 0..varint(r)? {
+        let name = byte(r)?;
+        skip(r, u64::from(name))?;
+        skip_metadata_block(r, level + 1)?;
+    }
+    Ok(())
 }
 
 /// A decoded Draco mesh: the positions of the POSITION attribute, one per point, and the faces
@@ -198,12 +199,13 @@ fn decode(bytes: &[u8], position_id: usize) -> Result<Decoded, Failure> {
 impl Loader<'_> {
     /// Positions (one per decoded point) and the decoded faces flattened into an index list, of
     /// the primitive whose `KHR_draco_mesh_compression` object is `ext`. `label` names the
-    /// primitive. The primitive's `POSITION` accessor (and `indices`, if any) must declare the
+    /// primitive. Its `POSITION` accessor `pos_acc` (and `indices`, if any) must declare the
     /// decoded counts, as the extension requires.
     pub(super) fn read_draco(
         &self,
         label: &str,
         prim: &gltf::Primitive,
+        pos_acc: &gltf::Accessor,
         ext: &serde_json::Value,
     ) -> Result<(Vec<Vec3>, Vec<u32>), SceneError> {
         let dlabel = format!("{label}, KHR_draco_mesh_compression");
@@ -227,7 +229,7 @@ impl Loader<'_> {
             ))
         })?;
         let bytes = self.view_bytes(&dlabel, &view)?;
-        self.check_declared(&dlabel, prim, bytes, view_index)?;
+        self.check_declared(&dlabel, prim, pos_acc.count() as u64, bytes, view_index)?;
         let cannot = |why: String| {
             err(format!(
                 "the Draco stream in buffer view {view_index} ({} bytes) cannot be decoded: {why}",
@@ -267,15 +269,13 @@ impl Loader<'_> {
             }
         };
         let points = positions.len();
-        if let Some(acc) = prim.get(&gltf::Semantic::Positions) {
-            if acc.count() != points {
-                return Err(err(format!(
-                    "the stream decodes {points} points, but the POSITION accessor {} declares \
-                     count {}",
-                    acc.index(),
-                    acc.count()
-                )));
-            }
+        if pos_acc.count() != points {
+            return Err(err(format!(
+                "the stream decodes {points} points, but the POSITION accessor {} declares count \
+                 {}",
+                pos_acc.index(),
+                pos_acc.count()
+            )));
         }
         for (i, p) in positions.iter().enumerate() {
             if let Some((axis, value)) = ['x', 'y', 'z']
@@ -323,11 +323,13 @@ impl Loader<'_> {
     }
 
     /// Refuses a stream whose header declares counts that disagree with the primitive's
-    /// accessors, or that no memory holds, before the decoder allocates for them.
+    /// accessors (`points`: its POSITION count), or that no memory holds, before the decoder
+    /// allocates for them.
     fn check_declared(
         &self,
         dlabel: &str,
         prim: &gltf::Primitive,
+        points: u64,
         bytes: &[u8],
         view_index: usize,
     ) -> Result<(), SceneError> {
@@ -338,9 +340,6 @@ impl Loader<'_> {
                 bytes.len()
             ))
         })?;
-        let points = prim
-            .get(&gltf::Semantic::Positions)
-            .map_or(0, |a| a.count() as u64);
         let disagree = |what: String| {
             err(format!(
                 "the Draco stream in buffer view {view_index} declares {what}: the stream is \
@@ -378,16 +377,12 @@ impl Loader<'_> {
             .faces
             .saturating_mul(BYTES_PER_FACE)
             .saturating_add(points.saturating_mul(BYTES_PER_POINT));
-        if need > shadowvol_mesh_topology::MEMORY_CHECK_THRESHOLD {
-            if let Some((available, source)) = shadowvol_mesh_topology::available_memory() {
-                if need > available {
-                    return Err(err(format!(
-                        "decoding {} triangles and {points} points needs about {need} bytes, \
-                         more than the {available} bytes available ({source})",
-                        d.faces
-                    )));
-                }
-            }
+        if let Some((available, source)) = memory_shortfall(need) {
+            return Err(err(format!(
+                "decoding {} triangles and {points} points needs about {need} bytes, more than \
+                 the {available} bytes available ({source})",
+                d.faces
+            )));
         }
         Ok(())
     }

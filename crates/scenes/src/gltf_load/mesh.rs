@@ -44,7 +44,7 @@ impl Loader<'_> {
             let (positions, indices, idx_label) = match draco {
                 // The Draco stream replaces the accessors' data (they have none, or a fallback).
                 Some(ext) => {
-                    let (p, i) = self.read_draco(&label, &prim, ext)?;
+                    let (p, i) = self.read_draco(&label, &prim, &pos_acc, ext)?;
                     (p, i, format!("{label}, KHR_draco_mesh_compression"))
                 }
                 None => {
