@@ -32,12 +32,6 @@ pub const F64_FILTER_EPS: f64 = 1.0e-15;
 /// above 2^-120, far above the absolute error (a few 2^-150) of a subnormal last product.
 pub const F32_FILTER_EPS: f32 = 1.0 / 524_288.0;
 
-/// Smallest magnitude (other than zero) the `f32` filter accepts for differences; below it,
-/// products could leave the normal `f32` range, and the filter reports "uncertain".
-pub const F32_FILTER_MIN: f32 = 1.0 / 1_099_511_627_776.0; // 2^-40
-/// Largest magnitude the `f32` filter accepts for differences (2^40).
-pub const F32_FILTER_MAX: f32 = 1_099_511_627_776.0;
-
 use crate::filter::{
     certify_f32, certify_f64, det_perm_f64, sign_of_f64, w_is_exact_f32, TermsF32,
 };

@@ -21,7 +21,11 @@
 //! assert_eq!(certify_f64(det, perm, F64_FILTER_EPS), Some(1));
 //! ```
 
-use crate::exact::{F32_FILTER_MAX, F32_FILTER_MIN};
+/// Smallest magnitude (other than zero) the `f32` filter accepts for differences; below it,
+/// products could leave the normal `f32` range, and the filter reports "uncertain".
+pub const F32_FILTER_MIN: f32 = 1.0 / 1_099_511_627_776.0; // 2^-40
+/// Largest magnitude the `f32` filter accepts for differences (2^40).
+pub const F32_FILTER_MAX: f32 = 1_099_511_627_776.0;
 
 /// The sign of `x`: `1`, `-1`, or `0` for zero and NaN.
 #[must_use]

@@ -42,8 +42,9 @@ mod light;
 
 pub use exact::{
     orient_exact, orient_exact_expansion, orient_filter_f32, orient_filter_f64, F32_FILTER_EPS,
-    F32_FILTER_MAX, F32_FILTER_MIN, F64_FILTER_EPS,
+    F64_FILTER_EPS,
 };
+pub use filter::{F32_FILTER_MAX, F32_FILTER_MIN};
 pub use light::{Light, LightError};
 
 use glam::Vec3;
