@@ -32,6 +32,7 @@
 pub mod emission;
 mod glb_write;
 pub mod gltf_load;
+mod load;
 pub mod meshopt_view;
 pub mod obj;
 pub mod ply;

@@ -1,0 +1,89 @@
+//! Opening a scene: the file loaders chosen by extension, and presets by name.
+
+use crate::scene::{file_name, Object, Scene};
+use crate::SceneError;
+use glam::Affine3A;
+use std::path::Path;
+use std::sync::Arc;
+
+impl Scene {
+    /// Loads a scene file: `.gltf` or `.glb` (objects, lights, camera), or `.obj`, `.stl`,
+    /// `.ply` (one object, identity transform, no lights or camera). Extensions are
+    /// case-insensitive.
+    ///
+    /// # Errors
+    /// [`SceneError::UnsupportedFormat`] for another extension, otherwise any error of the
+    /// loader, naming the file and what in it is wrong.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, SceneError> {
+        Self::load_with_notes(path).map(|(s, _)| s)
+    }
+
+    /// As [`Scene::load`], and also returns notes about what the loader skipped (glTF
+    /// primitives that are not triangles or have no positions; none for the other formats).
+    ///
+    /// # Errors
+    /// As [`Scene::load`].
+    pub fn load_with_notes(path: impl AsRef<Path>) -> Result<(Self, Vec<String>), SceneError> {
+        let path = path.as_ref();
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("gltf" | "glb") => crate::gltf_load::load_gltf_with_notes(path),
+            Some(ext @ ("obj" | "stl" | "ply")) => {
+                let mesh = match ext {
+                    "obj" => crate::obj::load_obj(path)?,
+                    "stl" => crate::stl::load_stl(path)?,
+                    _ => crate::ply::load_ply(path)?,
+                };
+                let name = file_name(path);
+                let scene = Self {
+                    objects: vec![Object {
+                        name: name.clone(),
+                        mesh: Arc::new(mesh),
+                        transform: Affine3A::IDENTITY,
+                    }],
+                    name,
+                    ..Self::default()
+                };
+                Ok((scene, Vec::new()))
+            }
+            _ => Err(SceneError::UnsupportedFormat {
+                path: path.display().to_string(),
+            }),
+        }
+    }
+
+    /// A preset if `s` is a preset name (see [`crate::preset_names`]), otherwise a file path
+    /// loaded with [`Scene::load`].
+    ///
+    /// # Errors
+    /// As [`Scene::load`]; for a string that is neither a preset nor has a known extension,
+    /// [`SceneError::UnknownPreset`] listing the preset names.
+    pub fn from_name_or_path(s: &str) -> Result<Self, SceneError> {
+        Self::from_name_or_path_with_notes(s).map(|(s, _)| s)
+    }
+
+    /// As [`Scene::from_name_or_path`], and also returns the loader's notes (see
+    /// [`Scene::load_with_notes`]; none for a preset).
+    ///
+    /// # Errors
+    /// As [`Scene::from_name_or_path`].
+    pub fn from_name_or_path_with_notes(s: &str) -> Result<(Self, Vec<String>), SceneError> {
+        if crate::presets::is_preset(s) {
+            return crate::preset(s).map(|p| (p, Vec::new()));
+        }
+        let path = Path::new(s);
+        let known_ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .is_some_and(|e| matches!(e.as_str(), "gltf" | "glb" | "obj" | "stl" | "ply"));
+        if known_ext {
+            Self::load_with_notes(path)
+        } else {
+            crate::preset(s).map(|p| (p, Vec::new()))
+        }
+    }
+}
