@@ -5,7 +5,6 @@
 //! that may be missing is an `Option` or has a default. The measurements of `bench`, `accuracy`
 //! and `baselines` are the types of [`super::records`], flattened into a [`CliRecord`].
 
-use super::records::Bench;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
@@ -30,14 +29,15 @@ pub struct SceneRow {
     pub name: String,
 }
 
-/// `shadowvol bench --format json`.
+/// `shadowvol bench --format json`, with its measurements read as `T` (the matrix's
+/// [`super::records::Bench`]).
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(default)]
-pub struct BenchReport {
+pub struct BenchReport<T> {
     /// Time to stream the bytes the extraction must touch (the first light count's), in ms.
     pub floor_ms: Option<f64>,
     /// One record per (backend, mode, light count).
-    pub records: Vec<CliRecord<Bench>>,
+    pub records: Vec<CliRecord<T>>,
     /// How the binary was built.
     pub host: BenchHost,
 }

@@ -8,7 +8,7 @@ use super::plan::{
     T3_SCENES, TOYWARS_SCENES, TRI_SCENES,
 };
 use super::progress::Progress;
-use super::records::{Accuracy, Baseline, Data, HostInfo, Key, Record, Render, Results};
+use super::records::{Accuracy, Baseline, Bench, Data, HostInfo, Key, Record, Render, Results};
 use serde::de::DeserializeOwned;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -127,7 +127,7 @@ pub(super) fn scene_names(cli: &Cli) -> Result<Vec<String>, String> {
 /// Asks the release CLI what it was built with (target features, profile) and which SIMD
 /// level the `simd` backend picks at run time, with one tiny `bench` run; adds them to `host`.
 pub(super) fn probe_build(cli: &Cli, host: &mut HostInfo) {
-    let probe: Result<BenchReport, String> = cli.json(&[
+    let probe: Result<BenchReport<Bench>, String> = cli.json(&[
         "bench",
         "--scene",
         "hard-tetrahedron",
@@ -261,7 +261,7 @@ impl Matrix {
     /// One `shadowvol bench` call with `args`; its records are stored under `experiment`.
     fn bench_call(&mut self, experiment: &str, args: &[String]) -> Result<(), String> {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        let mut report: BenchReport = self.cli.json(&args)?;
+        let mut report: BenchReport<Bench> = self.cli.json(&args)?;
         // Every record of the call carries the run's floor (the first light count's).
         for r in &mut report.records {
             r.data.floor_ms = report.floor_ms;

@@ -65,7 +65,7 @@ fn carries_every_field(raw: &Value, rec: &Record, added: &[&str]) {
 #[test]
 fn bench_json_of_the_cli_parses() {
     let raw = value(BENCH_JSON);
-    let report: BenchReport = serde_json::from_str(BENCH_JSON).unwrap();
+    let report: BenchReport<Bench> = serde_json::from_str(BENCH_JSON).unwrap();
     assert_eq!(report.floor_ms, raw["floor_ms"].as_f64());
     let features: Vec<String> =
         serde_json::from_value(raw["host"]["compile_target_features"].clone()).unwrap();
@@ -181,7 +181,7 @@ fn added_fields_are_accepted_and_missing_ones_are_none() {
     raw["new_top_level"] = json!({"a": 1});
     raw["records"][0]["new_field"] = json!([1, 2]);
     raw["host"]["new_host_field"] = json!("x");
-    let report: BenchReport = serde_json::from_value(raw).unwrap();
+    let report: BenchReport<Bench> = serde_json::from_value(raw).unwrap();
     assert_eq!(report.records[0].data.extra["new_field"], json!([1, 2]));
 
     let mut raw = value(RENDER_JSON);
@@ -202,11 +202,11 @@ fn added_fields_are_accepted_and_missing_ones_are_none() {
 
 #[test]
 fn a_wrong_shape_is_an_error_naming_the_field() {
-    let e = serde_json::from_value::<BenchReport>(json!({"records": [{"scene": 1}]}))
+    let e = serde_json::from_value::<BenchReport<Bench>>(json!({"records": [{"scene": 1}]}))
         .unwrap_err()
         .to_string();
     assert!(e.contains("invalid type"), "{e}");
-    let e = serde_json::from_str::<BenchReport>(r#"{"records": [{"backend": "cpu"}]}"#)
+    let e = serde_json::from_str::<BenchReport<Bench>>(r#"{"records": [{"backend": "cpu"}]}"#)
         .unwrap_err()
         .to_string();
     assert!(e.contains("missing field `scene`"), "{e}");
