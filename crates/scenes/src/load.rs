@@ -74,16 +74,10 @@ impl Scene {
         if crate::presets::is_preset(s) {
             return crate::preset(s).map(|p| (p, Vec::new()));
         }
-        let path = Path::new(s);
-        let known_ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase)
-            .is_some_and(|e| matches!(e.as_str(), "gltf" | "glb" | "obj" | "stl" | "ply"));
-        if known_ext {
-            Self::load_with_notes(path)
-        } else {
-            crate::preset(s).map(|p| (p, Vec::new()))
+        // `load_with_notes` refuses an unknown extension before reading anything.
+        match Self::load_with_notes(s) {
+            Err(SceneError::UnsupportedFormat { .. }) => crate::preset(s).map(|p| (p, Vec::new())),
+            loaded => loaded,
         }
     }
 }
