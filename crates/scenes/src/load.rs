@@ -19,7 +19,8 @@ impl Scene {
     }
 
     /// As [`Scene::load`], and also returns notes about what the loader skipped (glTF
-    /// primitives that are not triangles or have no positions; none for the other formats).
+    /// primitives that are not triangles or have no positions; OBJ lines, points, curves and
+    /// surfaces; none for STL and PLY).
     ///
     /// # Errors
     /// As [`Scene::load`].
@@ -32,10 +33,10 @@ impl Scene {
         match ext.as_deref() {
             Some("gltf" | "glb") => crate::gltf_load::load_gltf_with_notes(path),
             Some(ext @ ("obj" | "stl" | "ply")) => {
-                let mesh = match ext {
-                    "obj" => crate::obj::load_obj(path)?,
-                    "stl" => crate::stl::load_stl(path)?,
-                    _ => crate::ply::load_ply(path)?,
+                let (mesh, notes) = match ext {
+                    "obj" => crate::obj::load_obj_with_notes(path)?,
+                    "stl" => (crate::stl::load_stl(path)?, Vec::new()),
+                    _ => (crate::ply::load_ply(path)?, Vec::new()),
                 };
                 let name = file_name(path);
                 let scene = Self {
@@ -47,7 +48,7 @@ impl Scene {
                     name,
                     ..Self::default()
                 };
-                Ok((scene, Vec::new()))
+                Ok((scene, notes))
             }
             _ => Err(SceneError::UnsupportedFormat {
                 path: path.display().to_string(),

@@ -15,6 +15,8 @@
 //!   the file.
 //! * Everything else (`vt`, `vn`, `o`, `g`, `s`, `usemtl`, `mtllib`, `l`, `p`, comments, unknown
 //!   statements) is skipped. A line ending in `\` continues on the next line.
+//!   [`parse_obj_with_notes`] also returns a note for the geometry that is skipped (lines `l`,
+//!   points `p`, free-form `curv`, `curv2` and `surf`), since none of it can cast a shadow.
 //!
 //! Vertex numbers in messages are 0-based, as in the rest of shadowvol (the CLI's JSON names
 //! vertices by 0-based input index); the OBJ (1-based) number is given next to it.
@@ -75,6 +77,14 @@ pub enum LoadError {
 /// [`LoadError::Io`] if the file cannot be read, [`LoadError::Parse`] naming `file:line` for
 /// malformed content, [`LoadError::Mesh`] if the mesh is too large for `u32` indices.
 pub fn load_obj(path: impl AsRef<Path>) -> Result<Mesh, LoadError> {
+    load_obj_with_notes(path).map(|(mesh, _)| mesh)
+}
+
+/// As [`load_obj`], and also returns the notes of [`parse_obj_with_notes`].
+///
+/// # Errors
+/// As [`load_obj`].
+pub fn load_obj_with_notes(path: impl AsRef<Path>) -> Result<(Mesh, Vec<String>), LoadError> {
     let path = path.as_ref();
     let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
         path: path.to_path_buf(),
@@ -83,7 +93,7 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Mesh, LoadError> {
     // Invalid UTF-8 becomes U+FFFD; if it sits in a `v` or `f` statement, the number that holds
     // it is reported as malformed at its line, elsewhere (comments, names) it does no harm.
     let text = String::from_utf8_lossy(&bytes);
-    parse_obj(&text, &path.display().to_string())
+    parse_obj_with_notes(&text, &path.display().to_string())
 }
 
 /// Parses OBJ text. `source_name` is used in error messages (usually the file name).
@@ -92,8 +102,42 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Mesh, LoadError> {
 /// [`LoadError::Parse`] naming `source_name:line` for malformed content, [`LoadError::Mesh`] if
 /// the mesh is too large for `u32` indices.
 pub fn parse_obj(text: &str, source_name: &str) -> Result<Mesh, LoadError> {
+    Parser::new(source_name).run(text).map(|(mesh, _)| mesh)
+}
+
+/// As [`parse_obj`], and also returns one note per kind of geometry statement that was skipped
+/// (`l`, `p`, `curv`, `curv2`, `surf`), with its count and first line, for example
+/// `"wire.obj: 2 line (l) statements skipped, the first at line 5: only faces (f) cast shadows"`.
+///
+/// ```
+/// use shadowvol_scenes::obj::parse_obj_with_notes;
+///
+/// let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nl 1 2\nl 2 3\n";
+/// let (mesh, notes) = parse_obj_with_notes(text, "wire.obj").unwrap();
+/// assert_eq!(mesh.triangles.len(), 1);
+/// assert_eq!(
+///     notes,
+///     ["wire.obj: 2 line (l) statements skipped, the first at line 5: only faces (f) cast shadows"]
+/// );
+/// ```
+///
+/// # Errors
+/// As [`parse_obj`].
+pub fn parse_obj_with_notes(
+    text: &str,
+    source_name: &str,
+) -> Result<(Mesh, Vec<String>), LoadError> {
     Parser::new(source_name).run(text)
 }
+
+/// The geometry statements that are read but cannot cast a shadow: (keyword, what it is).
+const SKIPPED_GEOMETRY: [(&str, &str); 5] = [
+    ("l", "line"),
+    ("p", "point"),
+    ("curv", "curve"),
+    ("curv2", "2D curve"),
+    ("surf", "surface"),
+];
 
 /// A positive face index that referred past the vertices defined so far; checked at the end.
 struct ForwardRef {
@@ -107,6 +151,8 @@ struct Parser<'a> {
     triangles: Vec<[u32; 3]>,
     forward: Vec<ForwardRef>,
     corners: Vec<u32>,
+    /// Per entry of [`SKIPPED_GEOMETRY`]: how many statements, and the first one's line.
+    skipped: [(usize, usize); SKIPPED_GEOMETRY.len()],
 }
 
 impl<'a> Parser<'a> {
@@ -117,6 +163,7 @@ impl<'a> Parser<'a> {
             triangles: Vec::new(),
             forward: Vec::new(),
             corners: Vec::new(),
+            skipped: [(0, 0); SKIPPED_GEOMETRY.len()],
         }
     }
 
@@ -128,7 +175,7 @@ impl<'a> Parser<'a> {
         }
     }
 
-    fn run(mut self, text: &str) -> Result<Mesh, LoadError> {
+    fn run(mut self, text: &str) -> Result<(Mesh, Vec<String>), LoadError> {
         let mut pending = String::new();
         let mut pending_line = 0;
         for (i, raw) in text.lines().enumerate() {
@@ -164,10 +211,24 @@ impl<'a> Parser<'a> {
                 ),
             ));
         }
-        Mesh::new(self.positions, self.triangles).map_err(|error| LoadError::Mesh {
+        let notes = SKIPPED_GEOMETRY
+            .iter()
+            .zip(self.skipped)
+            .filter(|(_, (count, _))| *count > 0)
+            .map(|((keyword, what), (count, first))| {
+                let plural = if count == 1 { "" } else { "s" };
+                format!(
+                    "{}: {count} {what} ({keyword}) statement{plural} skipped, the first at line \
+                     {first}: only faces (f) cast shadows",
+                    self.source_name
+                )
+            })
+            .collect();
+        let mesh = Mesh::new(self.positions, self.triangles).map_err(|error| LoadError::Mesh {
             source_name: self.source_name.to_owned(),
             error,
-        })
+        })?;
+        Ok((mesh, notes))
     }
 
     fn statement(&mut self, line: &str, line_no: usize) -> Result<(), LoadError> {
@@ -176,7 +237,17 @@ impl<'a> Parser<'a> {
         match tokens.next() {
             Some("v") => self.vertex(tokens, line_no),
             Some("f") | Some("fo") => self.face(tokens, line_no),
-            _ => Ok(()),
+            Some(keyword) => {
+                if let Some(k) = SKIPPED_GEOMETRY.iter().position(|(kw, _)| *kw == keyword) {
+                    let (count, first) = &mut self.skipped[k];
+                    if *count == 0 {
+                        *first = line_no;
+                    }
+                    *count += 1;
+                }
+                Ok(())
+            }
+            None => Ok(()),
         }
     }
 
@@ -351,6 +422,33 @@ mod tests {
         .unwrap();
         assert_eq!(m.positions, vec![Vec3::ZERO, Vec3::X, Vec3::Y]);
         assert_eq!(m.triangles, vec![[0, 1, 2]]);
+    }
+
+    #[test]
+    fn skipped_geometry_is_noted_with_count_and_first_line() {
+        let text = format!(
+            "{TRI}vt 0 0\nusemtl m\np 1\nf 1 2 3\nl 1 2\nl 2 3 \\\n 1\ncurv 0 1 1 2\nl 3 1\n"
+        );
+        let (mesh, notes) = parse_obj_with_notes(&text, "t.obj").unwrap();
+        assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+        assert_eq!(
+            notes,
+            [
+                "t.obj: 3 line (l) statements skipped, the first at line 8: only faces (f) cast \
+                 shadows",
+                "t.obj: 1 point (p) statement skipped, the first at line 6: only faces (f) cast \
+                 shadows",
+                "t.obj: 1 curve (curv) statement skipped, the first at line 11: only faces (f) \
+                 cast shadows",
+            ]
+        );
+        // Texture coordinates, materials and unknown statements are not geometry: no note.
+        let (_, notes) = parse_obj_with_notes(
+            &format!("{TRI}vt 0 0\nvn 0 0 1\ns 1\nxyz 1\nf 1 2 3\n"),
+            "t.obj",
+        )
+        .unwrap();
+        assert!(notes.is_empty(), "{notes:?}");
     }
 
     #[test]
