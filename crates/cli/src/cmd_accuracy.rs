@@ -92,8 +92,10 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let mut cpu = CpuBackend::new();
     let mut records = Vec::new();
     for name in &scenes {
-        let scene = shadowvol_scenes::Scene::from_name_or_path(name)
-            .map_err(|e| CliError::Other(e.to_string()))?;
+        let (scene, notes) = shadowvol::load_scene(name)?;
+        for n in &notes {
+            eprintln!("note: {n}");
+        }
         if scene.lights.is_empty() {
             return Err(CliError::Usage(format!(
                 "{name}: the scene defines no lights, so there is nothing to measure"

@@ -165,8 +165,10 @@ fn run_baseline(
 }
 
 pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
-    let scene = shadowvol_scenes::Scene::from_name_or_path(&args.scene)
-        .map_err(|e| CliError::Other(format!("scene {:?}: {e}", args.scene)))?;
+    let (scene, notes) = shadowvol::load_scene(&args.scene)?;
+    for n in &notes {
+        eprintln!("note: {n}");
+    }
     if scene.lights.is_empty() {
         return Err(CliError::Usage(format!(
             "scene {:?} defines no lights, so there is nothing to time",
@@ -175,7 +177,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     }
     let topo = scene
         .topology()
-        .map_err(|e| CliError::Other(format!("scene {:?}: {e}", args.scene)))?;
+        .map_err(|e| CliError::Other(format!("{}: {e}", args.scene)))?;
     let lights = &scene.lights;
     let common = Common {
         scene: &scene.name,

@@ -169,7 +169,16 @@ fn median_ms(samples: &mut [Duration]) -> f64 {
 
 /// The lights of the run: the scene's own, cycled and extended with point lights on a ring
 /// around the scene's bounding box when more are asked for.
-fn bench_lights(scene_lights: &[Light], topo: &TopologyScene, n: Option<u32>) -> Vec<Light> {
+///
+/// # Errors
+/// [`CliError::Other`] when a ring light's position is beyond the `f32` range (a scene whose
+/// coordinates come within a few bounding radii of `f32::MAX`).
+fn bench_lights(
+    scene_arg: &str,
+    scene_lights: &[Light],
+    topo: &TopologyScene,
+    n: Option<u32>,
+) -> Result<Vec<Light>, CliError> {
     let n = n.map_or(scene_lights.len().max(1), |n| n as usize);
     let mut lights: Vec<Light> = scene_lights.iter().take(n).copied().collect();
     if lights.len() < n {
@@ -184,16 +193,24 @@ fn bench_lights(scene_lights: &[Light], topo: &TopologyScene, n: Option<u32>) ->
         if lo.x > hi.x {
             (lo, hi) = (glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0));
         }
-        let centre = (lo + hi) * 0.5;
-        let radius = ((hi - lo).length() * 0.5).max(1e-3);
+        let (centre, radius) = shadowvol_scenes::box_centre_radius(lo, hi);
+        let radius = radius.max(1e-3);
         let extra = n - lights.len();
         for k in 0..extra {
             let a = std::f32::consts::TAU * (k as f32 + 0.37) / extra as f32;
             let p = centre + radius * glam::Vec3::new(2.0 * a.cos(), 1.3, 2.0 * a.sin());
-            lights.push(Light::point(p));
+            lights.push(Light::new(p.x, p.y, p.z, 1.0).map_err(|e| {
+                shadowvol::bounds_too_large(
+                    scene_arg,
+                    lo,
+                    hi,
+                    "the ring of generated lights",
+                    &format!("{e}; give the scene its own lights"),
+                )
+            })?);
         }
     }
-    lights
+    Ok(lights)
 }
 
 fn host() -> Host {
@@ -339,11 +356,13 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     {
         return Err(CliError::Usage(format!("--lights lists {n} twice")));
     }
-    let scene = shadowvol_scenes::Scene::from_name_or_path(&args.scene)
-        .map_err(|e| CliError::Other(format!("scene {:?}: {e}", args.scene)))?;
+    let (scene, notes) = shadowvol::load_scene(&args.scene)?;
+    for n in &notes {
+        eprintln!("note: {n}");
+    }
     let topo = scene
         .topology()
-        .map_err(|e| CliError::Other(format!("scene {:?}: {e}", args.scene)))?;
+        .map_err(|e| CliError::Other(format!("{}: {e}", args.scene)))?;
     let counts: Vec<Option<u32>> = if args.lights.is_empty() {
         vec![None]
     } else {
@@ -351,8 +370,8 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     };
     let light_sets: Vec<Vec<Light>> = counts
         .iter()
-        .map(|&n| bench_lights(&scene.lights, &topo, n))
-        .collect();
+        .map(|&n| bench_lights(&args.scene, &scene.lights, &topo, n))
+        .collect::<Result<_, _>>()?;
     // (mode, light set) in the order of the records.
     let combos: Vec<(Accuracy, usize)> = modes
         .iter()
@@ -639,7 +658,7 @@ mod tests {
     fn extra_lights_are_generated_around_the_scene() {
         let scene = shadowvol_scenes::preset("spheres-100x1k").unwrap();
         let topo = scene.topology().unwrap();
-        let lights = bench_lights(&scene.lights, &topo, Some(4));
+        let lights = bench_lights("test", &scene.lights, &topo, Some(4)).unwrap();
         assert_eq!(lights.len(), 4);
         for (i, l) in lights.iter().enumerate() {
             if i < scene.lights.len() {

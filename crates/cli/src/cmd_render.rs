@@ -400,8 +400,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         }
     }
     let entry = find_backend(args.backend.as_deref().unwrap_or("cpu"))?;
-    let (mut scene, notes) = shadowvol_scenes::Scene::from_name_or_path_with_notes(&args.scene)
-        .map_err(|e| CliError::Other(format!("{}: {e}", args.scene)))?;
+    let (mut scene, notes) = shadowvol::load_scene(&args.scene)?;
     for n in &notes {
         eprintln!("note: {n}");
     }
@@ -532,6 +531,18 @@ pub(crate) fn stage(
     lights: &[shadowvol_robust_math::Light],
     ground: GroundArg,
 ) -> Result<(LightsSource, Option<Ground>), CliError> {
+    let camera = scene.camera_or_default().ok_or_else(|| {
+        CliError::Other(format!(
+            "{scene_arg}: no vertices, nothing to render or light"
+        ))
+    })?;
+    let too_large = |what: &str| {
+        let (lo, hi) = scene.bounds().unwrap_or_default();
+        shadowvol::bounds_too_large(scene_arg, lo, hi, what, "scale the model down")
+    };
+    if camera.validate().is_err() {
+        return Err(too_large("a camera that frames them"));
+    }
     let lights_source = if !lights.is_empty() {
         scene.lights = lights.to_vec();
         scene.emission.clear();
@@ -539,12 +550,10 @@ pub(crate) fn stage(
     } else if !scene.lights.is_empty() {
         LightsSource::File
     } else {
-        let camera = scene.camera_or_default().ok_or_else(|| {
-            CliError::Other(format!(
-                "{scene_arg}: no vertices, nothing to render or light"
-            ))
-        })?;
-        scene.lights.extend(scene.key_light(&camera));
+        let key = scene
+            .key_light(&camera)
+            .ok_or_else(|| too_large("the default key light (give --light)"))?;
+        scene.lights.push(key);
         scene.emission.clear();
         LightsSource::Default
     };

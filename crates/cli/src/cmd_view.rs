@@ -121,8 +121,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         }
     }
     let entry = find_backend(args.backend.as_deref().unwrap_or("cpu"))?;
-    let (mut scene, notes) = shadowvol_scenes::Scene::from_name_or_path_with_notes(&args.scene)
-        .map_err(|e| CliError::Other(format!("{}: {e}", args.scene)))?;
+    let (mut scene, notes) = shadowvol::load_scene(&args.scene)?;
     for n in &notes {
         eprintln!("note: {n}");
     }

@@ -18,8 +18,8 @@ pub struct Input {
     /// Used when no `--light` is given.
     pub lights: Vec<Light>,
     /// What the loader skipped, one sentence each naming the file and element (glTF primitives
-    /// that are not triangles or have no positions, nodes left without triangles); empty for
-    /// the other formats and presets.
+    /// that are not triangles or have no positions, nodes left without triangles; OBJ lines,
+    /// points, curves and surfaces); empty for STL, PLY and presets.
     pub notes: Vec<String>,
 }
 
@@ -28,7 +28,7 @@ pub const INPUT_FORMATS: &str = "Input formats (by extension, case-insensitive):
     (glTF 2.0: node transforms, KHR_lights_punctual, cameras, KHR_mesh_quantization, \
     EXT_meshopt_compression, KHR_draco_mesh_compression, sparse accessors; points and lines are \
     skipped with a note), .obj \
-    (v and f; polygons fanned), .stl (ASCII or binary; a triangle soup, welded by exact \
+    (v and f; polygons fanned; l, p, curv and surf are skipped with a note), .stl (ASCII or binary; a triangle soup, welded by exact \
     position), .ply (ASCII or binary little/big-endian; vertex x, y, z and face vertex_indices, \
     polygons fanned, other properties ignored), or a preset name (`shadowvol scenes`).";
 
@@ -42,25 +42,39 @@ pub const INPUT_FORMATS: &str = "Input formats (by extension, case-insensitive):
 /// accessor or vertex), an unsupported extension, or an unknown preset name;
 /// [`CliError::Other`] for an input without triangles (an empty or garbage file).
 pub fn load_input(path_or_name: &str) -> Result<Input, CliError> {
-    let (scene, notes) = Scene::from_name_or_path_with_notes(path_or_name)?;
+    let (scene, notes) = load_scene(path_or_name)?;
     let mesh = scene.baked_mesh()?;
-    if mesh.triangles.is_empty() {
-        let skipped = if notes.is_empty() {
-            String::new()
-        } else {
-            format!(" ({})", notes.join("; "))
-        };
-        return Err(CliError::Other(format!(
-            "{path_or_name}: no triangles found, nothing can cast a shadow{}{skipped}",
-            not_text_hint(path_or_name)
-        )));
-    }
     Ok(Input {
         name: path_or_name.to_owned(),
         mesh,
         lights: scene.lights.clone(),
         notes,
     })
+}
+
+/// Loads `path_or_name` (a file of [`INPUT_FORMATS`] or a preset) through
+/// [`Scene::from_name_or_path_with_notes`], and refuses a scene without a triangle, since nothing
+/// in it can cast a shadow. Returns the scene and the loader's notes (what it skipped), which the
+/// caller reports.
+///
+/// # Errors
+/// [`CliError::Scene`] as [`load_input`]; [`CliError::Other`] for a scene without triangles, naming
+/// `path_or_name`, with the notes and, for a file that is not UTF-8 text, where its first invalid
+/// byte is.
+pub fn load_scene(path_or_name: &str) -> Result<(Scene, Vec<String>), CliError> {
+    let (scene, notes) = Scene::from_name_or_path_with_notes(path_or_name)?;
+    if scene.triangle_count() > 0 {
+        return Ok((scene, notes));
+    }
+    let skipped = if notes.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", notes.join("; "))
+    };
+    Err(CliError::Other(format!(
+        "{path_or_name}: no triangles found, nothing can cast a shadow{}{skipped}",
+        not_text_hint(path_or_name)
+    )))
 }
 
 /// For a file that is not UTF-8 text (a binary or garbage file given as `.obj`), where the
@@ -78,4 +92,23 @@ fn not_text_hint(path: &str) -> String {
         }
         _ => String::new(),
     }
+}
+
+/// The error for a scene whose world-space bounds `lo`..`hi` are too large for `what` (a camera
+/// that frames them, a ring of generated lights) in `f32`: it names `scene_arg`, prints the bounds
+/// in scientific notation so a reader sees the magnitude, and ends with `hint`, the way out.
+#[must_use]
+pub fn bounds_too_large(
+    scene_arg: &str,
+    lo: glam::Vec3,
+    hi: glam::Vec3,
+    what: &str,
+    hint: &str,
+) -> CliError {
+    let v = |p: glam::Vec3| format!("[{:e}, {:e}, {:e}]", p.x, p.y, p.z);
+    CliError::Other(format!(
+        "{scene_arg}: the scene's bounds ({} to {}) are too large for {what} in f32; {hint}",
+        v(lo),
+        v(hi)
+    ))
 }

@@ -29,7 +29,7 @@ pub mod registry;
 pub mod report;
 
 pub use error::CliError;
-pub use input::{load_input, Input, INPUT_FORMATS};
+pub use input::{bounds_too_large, load_input, load_scene, Input, INPUT_FORMATS};
 pub use registry::{backend_names, backends, find_backend, BackendEntry};
 
 use shadowvol_robust_math::Accuracy;

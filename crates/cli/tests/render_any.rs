@@ -18,7 +18,9 @@ main!(
     gltf_files_without_lights_or_camera_render,
     no_flags_at_all_writes_stem_png_in_the_current_directory,
     flags_override_the_defaults,
-    json_report_has_the_contract_keys
+    json_report_has_the_contract_keys,
+    files_without_triangles_are_refused_and_skipped_geometry_is_noted,
+    coordinates_near_the_f32_limit_render_or_fail_clearly
 );
 
 /// The size of the compared renders: large enough for a few thousand shadow pixels.
@@ -417,6 +419,152 @@ fn json_report_has_the_contract_keys() -> Outcome {
     let png = std::fs::read(&out_png).unwrap();
     assert_eq!(&png[1..4], b"PNG");
     assert_eq!(&std::fs::read(&diff_png).unwrap()[1..4], b"PNG");
+    std::fs::remove_dir_all(&dir).ok();
+    Ok(())
+}
+
+/// A file with only lines and points is an error (no PNG), the same as `silhouette`'s; a file
+/// with faces and lines renders, with a note for the lines, which `silhouette` reports too.
+fn files_without_triangles_are_refused_and_skipped_geometry_is_noted() -> Outcome {
+    let dir = scratch("wire");
+    let wire = dir.join("wire.obj");
+    std::fs::write(&wire, "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\np 3\n").unwrap();
+    let wire = wire.to_str().unwrap();
+    let png = dir.join("wire.png");
+    let first_error = |out: &std::process::Output| {
+        assert_eq!(out.status.code(), Some(1), "{out:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        stderr
+            .lines()
+            .find(|l| l.starts_with("error: "))
+            .unwrap_or_else(|| panic!("no error line in:\n{stderr}"))
+            .to_owned()
+    };
+    let rendered = first_error(&run(&["render", wire, "--out", png.to_str().unwrap()]));
+    for part in [
+        "wire.obj: no triangles found",
+        "2 line (l) statements skipped, the first at line 4",
+        "1 point (p) statement skipped, the first at line 6",
+    ] {
+        assert!(rendered.contains(part), "expected {part:?} in: {rendered}");
+    }
+    assert!(
+        !png.exists(),
+        "a PNG was written for a file with no triangles"
+    );
+    let extracted = first_error(&run(&["silhouette", wire, "--light", "0,0,5,1"]));
+    assert_eq!(rendered, extracted, "render and silhouette disagree");
+
+    let mixed = dir.join("mixed.obj");
+    std::fs::write(&mixed, format!("{}l 1 2\n", cad_bracket())).unwrap();
+    let mixed = mixed.to_str().unwrap();
+    let note = "mixed.obj: 1 line (l) statement skipped";
+    let v = common::json_of(&[
+        "silhouette",
+        mixed,
+        "--light",
+        "0,0,50,1",
+        "--format",
+        "json",
+    ]);
+    let notes = v["notes"].as_array().expect("notes in the silhouette JSON");
+    assert!(
+        notes.iter().any(|n| n.as_str().unwrap().contains(note)),
+        "{notes:?}"
+    );
+    let out = run(&[
+        "render",
+        mixed,
+        "--out",
+        png.to_str().unwrap(),
+        "--size",
+        "64x64",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() {
+        common::no_adapter("render", &stderr)?;
+    }
+    assert!(out.status.success(), "render {mixed} failed:\n{stderr}");
+    assert!(
+        stderr
+            .lines()
+            .any(|l| l.starts_with("note: ") && l.contains(note)),
+        "no note for the skipped line in:\n{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+    Ok(())
+}
+
+/// Coordinates near `f32::MAX` are valid positions, but no camera frames them and no ring of
+/// generated lights fits around them: `render` and `bench` say so and exit 1 (they used to panic
+/// on a non-finite light). Far from the origin but small, a model still renders.
+fn coordinates_near_the_f32_limit_render_or_fail_clearly() -> Outcome {
+    let dir = scratch("huge");
+    let tetrahedron = |s: &str| {
+        format!(
+            "v -{s} -{s} -{s}\nv {s} -{s} -{s}\nv 0 {s} -{s}\nv 0 0 {s}\n\
+             f 1 2 3\nf 1 2 4\nf 2 3 4\nf 3 1 4\n"
+        )
+    };
+    let big = dir.join("big.obj");
+    std::fs::write(&big, tetrahedron("3e38")).unwrap();
+    let big = big.to_str().unwrap();
+    let png = dir.join("big.png");
+    let refused = |args: &[&str], what: &str| {
+        let out = run(args);
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(!stderr.contains("panicked"), "{args:?} panicked:\n{stderr}");
+        assert_eq!(out.status.code(), Some(1), "{args:?}:\n{stderr}");
+        let line = stderr.lines().find(|l| l.starts_with("error: ")).unwrap();
+        for part in [
+            "big.obj: the scene's bounds ([-3e38, -3e38, -3e38] to",
+            what,
+        ] {
+            assert!(line.contains(part), "expected {part:?} in: {line}");
+        }
+        assert_eq!(line.matches("big.obj").count(), 1, "{line}");
+    };
+    let out = png.to_str().unwrap();
+    for pipeline in ["gpu", "host"] {
+        refused(
+            &["render", big, "--out", out, "--pipeline", pipeline],
+            "too large for a camera that frames them in f32",
+        );
+    }
+    assert!(!png.exists(), "a PNG was written for an unframable scene");
+    refused(
+        &["bench", "--scene", big, "--backend", "cpu", "--lights", "2"],
+        "too large for the ring of generated lights in f32",
+    );
+
+    // A triangle 1e23 wide at 1e30 from the origin: framing and lighting stay finite.
+    let far = dir.join("far.obj");
+    std::fs::write(
+        &far,
+        "v 1e30 1e30 1e30\nv 1.0000001e30 1e30 1e30\nv 1e30 1.0000001e30 1e30\nf 1 2 3\n",
+    )
+    .unwrap();
+    let far_png = dir.join("far.png");
+    let args = [
+        "render",
+        far.to_str().unwrap(),
+        "--out",
+        far_png.to_str().unwrap(),
+        "--size",
+        "64x64",
+        "--pipeline",
+        "host",
+        "--backend",
+        "cpu",
+    ];
+    let out = run(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{args:?} panicked:\n{stderr}");
+    if !out.status.success() {
+        common::no_adapter("render", &stderr)?;
+    }
+    assert!(out.status.success(), "{args:?} failed:\n{stderr}");
+    assert!(far_png.exists(), "no PNG for the far triangle");
     std::fs::remove_dir_all(&dir).ok();
     Ok(())
 }

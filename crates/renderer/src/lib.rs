@@ -181,8 +181,8 @@ impl RenderScene {
         };
         out.objects.append(&mut objects);
         if let (Some(y), Some((lo, hi))) = (scene.effects.ground_y, out.bounds()) {
-            let c = (lo + hi) * 0.5;
-            let half = (hi - lo).length().max(1e-3) * 3.0;
+            let (c, r) = shadowvol_scenes::box_centre_radius(lo, hi);
+            let half = (2.0 * r).max(1e-3) * 3.0;
             out.objects.push(RenderObject::receiver_plane(
                 "ground",
                 Vec3::new(c.x, y, c.z),
@@ -200,8 +200,8 @@ impl RenderScene {
         let (Some(light), Some((lo, hi))) = (self.lights.first(), self.bounds()) else {
             return;
         };
-        let c = (lo + hi) * 0.5;
-        let r = ((hi - lo).length() * 0.5).max(1e-3);
+        let (c, r) = shadowvol_scenes::box_centre_radius(lo, hi);
+        let r = r.max(1e-3);
         let l = light.to_array();
         let away = if l[3] == 0.0 {
             -Vec3::new(l[0], l[1], l[2])

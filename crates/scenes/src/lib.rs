@@ -49,7 +49,8 @@ pub use gltf_load::{
 };
 pub use presets::{is_preset, preset, preset_names, presets, PresetInfo};
 pub use scene::{
-    apply_f32, mesh_bounds, transformed, Camera, Effects, InvalidCamera, Object, Scene,
+    apply_f32, box_centre_radius, mesh_bounds, transformed, Camera, Effects, InvalidCamera, Object,
+    Scene,
 };
 
 use shadowvol_mesh_topology::MeshError;

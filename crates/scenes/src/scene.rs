@@ -163,8 +163,8 @@ impl Camera {
     /// (pointing from the box centre towards the eye), with a 45° vertical field of view.
     #[must_use]
     pub fn framing(min: Vec3, max: Vec3, from: Vec3) -> Self {
-        let centre = (min + max) * 0.5;
-        let radius = ((max - min).length() * 0.5).max(1e-3);
+        let (centre, radius) = box_centre_radius(min, max);
+        let radius = radius.max(1e-3);
         let fov_y = 45f32.to_radians();
         let distance = radius / (fov_y * 0.5).sin() * 1.05;
         let dir = from
@@ -375,6 +375,25 @@ pub fn mesh_bounds(mesh: &Mesh) -> Option<(Vec3, Vec3)> {
             .iter()
             .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))),
     )
+}
+
+/// The centre and half the diagonal of the box `[lo, hi]`, computed so that neither overflows
+/// while the result fits in `f32`: the centre as `lo / 2 + hi / 2` and the half diagonal in
+/// `f64` (an `f32` [`Vec3::length`] overflows for extents beyond about 1.8e19). The half
+/// diagonal is infinite only when it exceeds `f32::MAX`.
+///
+/// ```
+/// use glam::Vec3;
+/// // The extent, 6e38, is beyond f32::MAX: `hi - lo` would be infinite.
+/// let (c, r) = shadowvol_scenes::box_centre_radius(Vec3::new(-3e38, 0.0, 0.0), Vec3::new(3e38, 0.0, 0.0));
+/// assert_eq!(c, Vec3::ZERO);
+/// assert_eq!(r, 3e38);
+/// ```
+#[must_use]
+pub fn box_centre_radius(lo: Vec3, hi: Vec3) -> (Vec3, f32) {
+    let centre = lo * 0.5 + hi * 0.5;
+    let radius = (hi.as_dvec3() - lo.as_dvec3()).length() * 0.5;
+    (centre, radius as f32)
 }
 
 pub(crate) fn file_name(path: &Path) -> String {

@@ -27,12 +27,13 @@ impl Scene {
     /// lies along `normalize(-0.7 r + 1.6 y - 0.3 f)` from the centre. A camera looking
     /// straight down uses its `up` vector for forward.
     ///
-    /// `None` for a scene without vertices.
+    /// `None` for a scene without vertices, and for one so large that the light's position is
+    /// beyond the `f32` range (coordinates within a few bounding radii of `f32::MAX`).
     #[must_use]
     pub fn key_light(&self, camera: &Camera) -> Option<Light> {
         let (lo, hi) = self.bounds()?;
-        let centre = (lo + hi) * 0.5;
-        let radius = ((hi - lo).length() * 0.5).max(1e-3);
+        let (centre, radius) = crate::box_centre_radius(lo, hi);
+        let radius = radius.max(1e-3);
         let view = camera.target - camera.eye;
         let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z).try_normalize();
         let forward = flat(view)
@@ -40,7 +41,8 @@ impl Scene {
             .unwrap_or(Vec3::NEG_Z);
         let right = forward.cross(Vec3::Y);
         let dir = (-0.7 * right + 1.6 * Vec3::Y - 0.3 * forward).normalize();
-        Some(Light::point(centre + dir * (KEY_LIGHT_DISTANCE * radius)))
+        let p = centre + dir * (KEY_LIGHT_DISTANCE * radius);
+        Light::new(p.x, p.y, p.z, 1.0).ok()
     }
 
     /// The index of an object that serves as the scene's floor: among two or more objects, a
@@ -92,7 +94,8 @@ impl Scene {
     #[must_use]
     pub fn ground_y_below(&self) -> Option<f32> {
         let (lo, hi) = self.bounds()?;
-        let gap = (GROUND_GAP * (hi - lo).length()).max(f32::EPSILON * lo.y.abs());
+        let gap =
+            (GROUND_GAP * 2.0 * crate::box_centre_radius(lo, hi).1).max(f32::EPSILON * lo.y.abs());
         Some(lo.y - gap)
     }
 

@@ -104,6 +104,22 @@ impl Loader<'_> {
                     mesh.index()
                 ));
             } else {
+                // A finite transform can still scale finite positions past f32's range.
+                let overflow = shared.positions.iter().enumerate().find_map(|(v, &p)| {
+                    let w = crate::scene::apply_f32(&world, p).to_array();
+                    (0..3).find(|&k| !w[k].is_finite()).map(|k| (v, k, w[k]))
+                });
+                if let Some((v, k, value)) = overflow {
+                    let axis = ['x', 'y', 'z'][k];
+                    return Err(self.err(
+                        format!("{label}, mesh {}", mesh.index()),
+                        format!(
+                            "vertex {v}: in world space, coordinate {axis} is {value}, but \
+                             positions must be finite (the world transform takes it past the \
+                             f32 range)"
+                        ),
+                    ));
+                }
                 self.scene.objects.push(Object {
                     name,
                     mesh: shared,
