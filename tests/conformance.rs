@@ -254,12 +254,10 @@ fn check(
 fn bunny_case() -> Case {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/bunny.obj");
     let input = shadowvol::load_input(path).unwrap_or_else(|e| panic!("{e}"));
-    let table = shadowvol_mesh_topology::EdgeTable::build(&input.mesh)
-        .unwrap_or_else(|e| panic!("{path}: {e}"));
     let light = |x, y, z, w| Light::new(x, y, z, w).expect("finite light");
     Case {
         name: "asset-bunny",
-        scene: TopologyScene::single(table),
+        scene: TopologyScene::one("bunny", input.table),
         lights: vec![
             light(0.0, 0.3, 0.5, 1.0),
             light(1.0, 1.0, 1.0, 0.0),

@@ -29,9 +29,7 @@ fuzz_target!(|data: &[u8]| {
     }
     match shadowvol_scenes::load_gltf_slice(&glb(stream, points, indices), "fuzz.glb", None) {
         Ok(scene) => {
-            for o in &scene.objects {
-                o.mesh.validate().expect("a loaded Draco mesh must validate");
-            }
+            common::check_loaded(&scene, "a loaded Draco scene");
         }
         Err(e) => {
             let m = e.to_string();

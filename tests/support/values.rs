@@ -220,7 +220,7 @@ pub struct Reference {
 /// Computes the [`Reference`] of `mode` on `scene` for `lights`.
 #[must_use]
 pub fn reference(scene: &TopologyScene, lights: &[Light], mode: Accuracy) -> Reference {
-    let obj_lights = object_lights(scene, lights);
+    let obj_lights = object_lights(scene.transforms(), lights);
     let mut r = Reference {
         values: Vec::new(),
         certified: Vec::new(),
@@ -332,7 +332,7 @@ pub fn check(
 /// before its exact fallback) leaves undecided, counted by their exact sign: `[-1, 0, +1]`.
 #[must_use]
 pub fn fallback_signs(scene: &TopologyScene, lights: &[Light]) -> [usize; 3] {
-    let obj_lights = object_lights(scene, lights);
+    let obj_lights = object_lights(scene.transforms(), lights);
     let mut counts = [0; 3];
     for (obj, object) in scene.objects.iter().enumerate() {
         let t = &object.table;

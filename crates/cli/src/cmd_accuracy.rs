@@ -101,17 +101,16 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 "{name}: the scene defines no lights, so there is nothing to measure"
             )));
         }
-        let topo = scene
-            .topology()
-            .map_err(|e| CliError::Other(e.to_string()))?;
-        let (exact, _, _) = extract(&mut cpu, &topo, &scene.lights, Accuracy::Exact)?;
+        let topo = &scene.geometry;
+        let scene_lights = scene.light_positions();
+        let (exact, _, _) = extract(&mut cpu, topo, &scene_lights, Accuracy::Exact)?;
         for &m in &args.mode {
             let mode = Accuracy::from(m);
-            let (got, uncertain, ms) = extract(backend.as_mut(), &topo, &scene.lights, mode)?;
+            let (got, uncertain, ms) = extract(backend.as_mut(), topo, &scene_lights, mode)?;
             let (same, _, _) = if mode == Accuracy::Exact {
                 (exact.clone(), 0, 0.0)
             } else {
-                extract(&mut cpu, &topo, &scene.lights, mode)?
+                extract(&mut cpu, topo, &scene_lights, mode)?
             };
             let lights = scene.lights.len();
             records.push(Record {

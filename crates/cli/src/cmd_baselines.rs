@@ -175,13 +175,11 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
             args.scene
         )));
     }
-    let topo = scene
-        .topology()
-        .map_err(|e| CliError::Other(format!("{}: {e}", args.scene)))?;
-    let lights = &scene.lights;
+    let topo = &scene.geometry;
+    let lights = &scene.light_positions();
     let common = Common {
         scene: &scene.name,
-        topo: &topo,
+        topo,
         lights: lights.len(),
         frames: args.frames,
         warmup: args.warmup,
@@ -189,14 +187,14 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
 
     // The reference: the cpu backend in exact mode.
     let mut cpu = CpuBackend::new();
-    let id = cpu.prepare(&topo)?;
+    let id = cpu.prepare(topo)?;
     let mut exact_m = Multiplicities::default();
     cpu.extract(id, lights, Accuracy::Exact, &mut exact_m)?;
     cpu.release(id);
     let exact = edge_set(&exact_m);
 
     let mut records = Vec::new();
-    let obj_lights = object_lights(&topo, lights);
+    let obj_lights = object_lights(topo.transforms(), lights);
     let offsets = topo.edge_offsets();
     let meshes: Result<Vec<ClosedMesh<'_>>, String> = topo
         .objects

@@ -360,9 +360,8 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     for n in &notes {
         eprintln!("note: {n}");
     }
-    let topo = scene
-        .topology()
-        .map_err(|e| CliError::Other(format!("{}: {e}", args.scene)))?;
+    let topo = &scene.geometry;
+    let scene_lights = scene.light_positions();
     let counts: Vec<Option<u32>> = if args.lights.is_empty() {
         vec![None]
     } else {
@@ -370,7 +369,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     };
     let light_sets: Vec<Vec<Light>> = counts
         .iter()
-        .map(|&n| bench_lights(&args.scene, &scene.lights, &topo, n))
+        .map(|&n| bench_lights(&args.scene, &scene_lights, topo, n))
         .collect::<Result<_, _>>()?;
     // (mode, light set) in the order of the records.
     let combos: Vec<(Accuracy, usize)> = modes
@@ -657,12 +656,12 @@ mod tests {
     #[test]
     fn extra_lights_are_generated_around_the_scene() {
         let scene = shadowvol_scenes::preset("spheres-100x1k").unwrap();
-        let topo = scene.topology().unwrap();
-        let lights = bench_lights("test", &scene.lights, &topo, Some(4)).unwrap();
+        let scene_lights = scene.light_positions();
+        let lights = bench_lights("test", &scene_lights, &scene.geometry, Some(4)).unwrap();
         assert_eq!(lights.len(), 4);
         for (i, l) in lights.iter().enumerate() {
-            if i < scene.lights.len() {
-                assert_eq!(*l, scene.lights[i]);
+            if i < scene_lights.len() {
+                assert_eq!(*l, scene_lights[i]);
             }
         }
         // Distinct positions.

@@ -74,7 +74,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         let scene = shadowvol_scenes::preset(&info.name)?;
         rows.push(Row {
             name: info.name,
-            objects: scene.objects.len(),
+            objects: scene.geometry.objects.len(),
             triangles: scene.triangle_count(),
             lights: scene.lights.len(),
             description: info.description,
@@ -144,7 +144,7 @@ pub fn run_scene(args: &SceneArgs, out: &mut dyn Write) -> Result<(), CliError> 
                 name: name.clone(),
                 path: path.display().to_string(),
                 bytes: bytes.len(),
-                objects: scene.objects.len(),
+                objects: scene.geometry.objects.len(),
                 triangles: scene.triangle_count(),
                 lights: scene.lights.len(),
             };

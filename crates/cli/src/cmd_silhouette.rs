@@ -85,7 +85,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     }
     let mut backend = entry.start()?;
     let mode = Accuracy::from(args.mode);
-    let report = silhouette_report(backend.as_mut(), &input.mesh, &lights, mode)?;
+    let report = silhouette_report(backend.as_mut(), &input.table, &lights, mode)?;
     match args.format {
         Format::Json => {
             let mut json = serde_json::to_value(&report).map_err(|e| CliError::Output(e.into()))?;

@@ -2,7 +2,7 @@
 
 use crate::cmd_render::{parse_light, parse_size, render_error, stage, GroundArg, TechniqueArg};
 use shadowvol::{find_backend, CliError, Format, ModeArg};
-use shadowvol_renderer::{Pipeline, RenderScene};
+use shadowvol_renderer::Pipeline;
 use shadowvol_viewer::controls::VolumeView;
 use shadowvol_viewer::{ViewError, ViewOptions};
 use std::io::Write;
@@ -126,8 +126,8 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         eprintln!("note: {n}");
     }
     stage(&mut scene, &args.scene, &args.lights, args.ground)?;
-    let rscene = RenderScene::from_scene(&scene).map_err(render_error)?;
-    let backend = entry.start()?;
+    // The host pipeline's backend is started only if the viewer needs it (V, --pipeline host).
+    let backend = Box::new(move || entry.start());
     let mut options = ViewOptions::new(args.size.0, args.size.1);
     options.mode = args.mode.into();
     options.policy = args.technique.into();
@@ -146,7 +146,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         (Some(crate::cmd_render::PipelineArg::Host), _) | (None, Some(_)) => Pipeline::Host,
         _ => Pipeline::Gpu,
     };
-    let report = shadowvol_viewer::view(rscene, backend, options).map_err(|e| match e {
+    let report = shadowvol_viewer::view(scene, backend, options).map_err(|e| match e {
         ViewError::Render(r) => render_error(r),
         other => CliError::Other(other.to_string()),
     })?;

@@ -1,19 +1,22 @@
-//! Turning a command-line mesh argument into a mesh: the one entry point for every subcommand.
+//! Turning a command-line mesh argument into a scene or one edge table: the one entry point for
+//! every subcommand.
 
 use crate::CliError;
-use shadowvol_mesh_topology::Mesh;
+use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_robust_math::Light;
 use shadowvol_scenes::Scene;
+use std::sync::Arc;
 
-/// A loaded input: one mesh (object transforms already applied in `f32` on the host) and the
-/// lights the input itself defines, if any.
+/// A loaded input: one edge table (object transforms already applied in `f32` on the host) and
+/// the lights the input itself defines, if any.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Input {
     /// How to name the input in messages and reports (the path or preset name as given).
     pub name: String,
-    /// The mesh, in world space: all objects baked into one, vertices numbered object by object
-    /// (for glTF: depth-first node order, then primitive order, then accessor order).
-    pub mesh: Mesh,
+    /// The welded table in world space: all objects baked into one, vertices named by input
+    /// index object by object (for glTF: depth-first node order, then primitive order, then
+    /// accessor order).
+    pub table: Arc<EdgeTable>,
     /// Lights defined by the input (glTF `KHR_lights_punctual`, preset lights; none for OBJ).
     /// Used when no `--light` is given.
     pub lights: Vec<Light>,
@@ -34,8 +37,8 @@ pub const INPUT_FORMATS: &str = "Input formats (by extension, case-insensitive):
 
 /// Loads `path_or_name`: a `.obj`, `.gltf`, `.glb`, `.stl` or `.ply` file (case-insensitive
 /// extension) or a scene preset name (`shadowvol scenes` lists them), through
-/// [`Scene::from_name_or_path_with_notes`]. Several objects are baked into one world-space mesh with
-/// [`Scene::baked_mesh`] (transforms applied in `f32` on the host).
+/// [`Scene::from_name_or_path_with_notes`]. Several objects are baked into one world-space table
+/// with [`Scene::baked_table`] (transforms applied in `f32` on the host).
 ///
 /// # Errors
 /// [`CliError::Scene`] for an unreadable or malformed file (naming the file and the line,
@@ -43,11 +46,10 @@ pub const INPUT_FORMATS: &str = "Input formats (by extension, case-insensitive):
 /// [`CliError::Other`] for an input without triangles (an empty or garbage file).
 pub fn load_input(path_or_name: &str) -> Result<Input, CliError> {
     let (scene, notes) = load_scene(path_or_name)?;
-    let mesh = scene.baked_mesh()?;
     Ok(Input {
         name: path_or_name.to_owned(),
-        mesh,
-        lights: scene.lights.clone(),
+        table: scene.baked_table()?,
+        lights: scene.light_positions(),
         notes,
     })
 }

@@ -86,3 +86,19 @@ impl From<Accuracy> for ModeArg {
         }
     }
 }
+
+/// The environment variable that turns Mesa's Vulkan device-select layer off.
+pub const NODEVICE_SELECT: &str = "NODEVICE_SELECT";
+
+/// On a machine without a display (`DISPLAY` and `WAYLAND_DISPLAY` unset or empty), turns off
+/// Mesa's Vulkan device-select layer (`NODEVICE_SELECT=1`, unless the variable is set already).
+/// The layer, an implicit Vulkan layer of Debian's mesa-vulkan-drivers, orders the GPUs by the
+/// one the display uses; without a display it has nothing to order by, and its attempt to
+/// connect to Wayland prints `error: XDG_RUNTIME_DIR is invalid or not set in the environment.`
+/// although nothing failed. Call it first in `main`, before any thread or Vulkan instance.
+pub fn quiet_without_display() {
+    let set = |v: &str| std::env::var_os(v).is_some_and(|s| !s.is_empty());
+    if !set("DISPLAY") && !set("WAYLAND_DISPLAY") && std::env::var_os(NODEVICE_SELECT).is_none() {
+        std::env::set_var(NODEVICE_SELECT, "1");
+    }
+}

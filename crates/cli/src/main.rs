@@ -86,6 +86,7 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
 }
 
 fn main() -> ExitCode {
+    shadowvol::quiet_without_display();
     // A panic inside a guarded third-party decoder (Draco, on a corrupted stream) is caught by
     // the loader and reported as an error below; its panic message would only be noise.
     let default_hook = std::panic::take_hook();

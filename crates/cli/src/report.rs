@@ -14,9 +14,10 @@
 
 use crate::CliError;
 use serde::Serialize;
-use shadowvol_mesh_topology::{EdgeTable, Mesh, MeshError, MeshStats};
+use shadowvol_mesh_topology::{EdgeTable, MeshStats};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{invariant, SilhouetteBackend, TopologyScene};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Mesh statistics as reported. The first six fields are the contract; the rest are additions.
@@ -109,15 +110,15 @@ fn ms(d: Duration) -> f64 {
     d.as_nanos() as f64 / 1e6
 }
 
-/// Builds the edge table of `mesh`, runs `backend` once for all `lights` in `mode`, checks the
-/// shape of the result and returns the report.
+/// Runs `backend` once on `table` for all `lights` in `mode`, checks the shape of the result
+/// and returns the report.
 ///
 /// # Errors
 /// [`CliError::Usage`] for an empty light list, [`CliError::Backend`] from the backend,
-/// [`CliError::Other`] for an invalid mesh or a result of the wrong shape.
+/// [`CliError::Other`] for a result of the wrong shape.
 pub fn silhouette_report(
     backend: &mut dyn SilhouetteBackend,
-    mesh: &Mesh,
+    table: &Arc<EdgeTable>,
     lights: &[Light],
     mode: Accuracy,
 ) -> Result<SilhouetteReport, CliError> {
@@ -126,14 +127,8 @@ pub fn silhouette_report(
             "no light given: add --light X,Y,Z,W (w = 1 point, w = 0 directional)".to_owned(),
         ));
     }
-    let table = EdgeTable::build(mesh).map_err(|e| match e {
-        MeshError::OutOfMemory { .. } | MeshError::TooLarge { .. } => {
-            CliError::Other(format!("mesh too large: {e}"))
-        }
-        _ => CliError::Other(format!("invalid mesh: {e}")),
-    })?;
     let stats = table.stats;
-    let scene = TopologyScene::single(table);
+    let scene = TopologyScene::one("mesh", Arc::clone(table));
     let start = Instant::now();
     let id = backend.prepare(&scene)?;
     let prepare = start.elapsed();

@@ -23,12 +23,19 @@ fn real(name: &str) -> String {
 type EdgeByPosition = ([u32; 3], [u32; 3], i64);
 
 fn edges_by_position(file: &str, json: &Value) -> Vec<EdgeByPosition> {
-    let mesh = shadowvol_scenes::Scene::load(file)
+    let table = shadowvol_scenes::Scene::load(file)
         .unwrap()
-        .baked_mesh()
+        .baked_table()
         .unwrap();
+    // The JSON names a vertex by the smallest input index of its weld group.
+    let by_name: std::collections::HashMap<u64, glam::Vec3> = table
+        .vertex_names
+        .iter()
+        .zip(&table.positions)
+        .map(|(&n, &p)| (u64::from(n), p))
+        .collect();
     let key = |i: u64| {
-        let p = mesh.positions[i as usize];
+        let p = by_name[&i];
         [
             (p.x + 0.0).to_bits(),
             (p.y + 0.0).to_bits(),

@@ -20,7 +20,8 @@ main!(
     flags_override_the_defaults,
     json_report_has_the_contract_keys,
     files_without_triangles_are_refused_and_skipped_geometry_is_noted,
-    coordinates_near_the_f32_limit_render_or_fail_clearly
+    coordinates_near_the_f32_limit_render_or_fail_clearly,
+    a_render_without_a_display_prints_no_error_line
 );
 
 /// The size of the compared renders: large enough for a few thousand shadow pixels.
@@ -410,12 +411,37 @@ fn json_report_has_the_contract_keys() -> Outcome {
     ] {
         assert!(plan[0].get(key).is_some(), "plan entry without {key}");
     }
-    for key in ["silhouette_ms", "side_building_ms", "raster_ms"] {
+    assert!(
+        v["timings"]["raster_ms"].as_f64().is_some(),
+        "timings without raster_ms"
+    );
+    // Host-side times exist where the host does the work: on the GPU pipeline extraction and
+    // volumes run on the device, and no backend runs.
+    let host = v["pipeline"] == "host";
+    for key in ["silhouette_ms", "side_building_ms"] {
+        let t = &v["timings"][key];
         assert!(
-            v["timings"][key].as_f64().is_some(),
-            "timings without {key}"
+            if host {
+                t.as_f64().is_some()
+            } else {
+                t.is_null()
+            },
+            "{} pipeline: timings.{key} is {t}",
+            v["pipeline"]
         );
     }
+    assert_eq!(
+        v["backend"].is_null(),
+        !host,
+        "backend on the {} pipeline",
+        v["pipeline"]
+    );
+    let unit = if host {
+        "edge-opposite-vertex-light"
+    } else {
+        "triangle-light"
+    };
+    assert_eq!(v["uncertain_unit"], unit);
     let png = std::fs::read(&out_png).unwrap();
     assert_eq!(&png[1..4], b"PNG");
     assert_eq!(&std::fs::read(&diff_png).unwrap()[1..4], b"PNG");
@@ -566,5 +592,30 @@ fn coordinates_near_the_f32_limit_render_or_fail_clearly() -> Outcome {
     assert!(out.status.success(), "{args:?} failed:\n{stderr}");
     assert!(far_png.exists(), "no PNG for the far triangle");
     std::fs::remove_dir_all(&dir).ok();
+    Ok(())
+}
+
+/// Without a display (no `DISPLAY`, no `WAYLAND_DISPLAY`), a render that succeeds prints no line
+/// starting with `error`: Mesa's device-select layer used to print
+/// `error: XDG_RUNTIME_DIR is invalid or not set in the environment.` twice while probing for a
+/// display.
+fn a_render_without_a_display_prints_no_error_line() -> Outcome {
+    let png = scratch("quiet").join("quiet.png");
+    let out = std::process::Command::new(common::BIN)
+        .args(["render", "hard-tetrahedron", "--size", "48x48", "--out"])
+        .arg(&png)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("XDG_RUNTIME_DIR")
+        .env_remove("NODEVICE_SELECT")
+        .output()
+        .expect("run shadowvol");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() {
+        common::no_adapter("render", &stderr)?;
+    }
+    assert!(out.status.success(), "{stderr}");
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+    assert!(errors.is_empty(), "a successful render printed: {errors:?}");
     Ok(())
 }

@@ -6,7 +6,6 @@ mod common;
 use common::{json_of, run};
 use serde_json::Value;
 use shadowvol_cpu::CpuBackend;
-use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_silhouette::{extract_once, Accuracy, TopologyScene};
 use std::path::PathBuf;
 
@@ -39,7 +38,7 @@ fn scenes_json_lists_every_preset_with_its_size() {
         // checked in crates/scenes/tests/presets.rs).
         if info.name.starts_with("hard-") || info.name == "spheres-100x1k" {
             let s = shadowvol_scenes::preset(&info.name).unwrap();
-            assert_eq!(row["objects"], s.objects.len());
+            assert_eq!(row["objects"], s.geometry.objects.len());
             assert_eq!(row["triangles"], s.triangle_count());
             assert_eq!(row["lights"], s.lights.len());
         }
@@ -55,12 +54,11 @@ fn scenes_json_lists_every_preset_with_its_size() {
 /// Exact silhouette of a preset's baked mesh, computed here with the cpu backend, as
 /// `[a, b, m]` triples named by input vertex index.
 fn reference_edges(name: &str, light: [f32; 4]) -> Vec<[i64; 3]> {
-    let mesh = shadowvol_scenes::preset(name)
+    let table = shadowvol_scenes::preset(name)
         .unwrap()
-        .baked_mesh()
+        .baked_table()
         .unwrap();
-    let table = EdgeTable::build(&mesh).unwrap();
-    let scene = TopologyScene::single(table);
+    let scene = TopologyScene::one("baked", table);
     let l = shadowvol_silhouette::Light::new(light[0], light[1], light[2], light[3]).unwrap();
     let (m, _) = extract_once(&mut CpuBackend::new(), &scene, &[l], Accuracy::Exact).unwrap();
     let t = &scene.objects[0].table;
@@ -99,7 +97,10 @@ fn exported_glb_and_preset_name_give_the_reference_silhouette() {
     assert_eq!(summary["objects"], 4);
     let loaded = shadowvol_scenes::load_gltf(&path).unwrap();
     let original = shadowvol_scenes::preset(name).unwrap();
-    assert_eq!(loaded.baked_mesh().unwrap(), original.baked_mesh().unwrap());
+    assert_eq!(
+        loaded.baked_table().unwrap(),
+        original.baked_table().unwrap()
+    );
 
     let light = "0.5,3,2,1";
     let from_glb = json_of(&["silhouette", p, "--light", light, "--format", "json"]);

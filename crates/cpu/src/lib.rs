@@ -110,7 +110,7 @@ impl SilhouetteBackend for CpuBackend {
         let scene = self.scenes.get(id)?;
         check_lights(lights)?;
         let start = Instant::now();
-        let obj_lights = object_lights(scene, lights);
+        let obj_lights = object_lights(scene.transforms(), lights);
         let offsets = scene.edge_offsets();
         out.reset(scene.total_edges(), lights.len());
         for (i, (o, per_light)) in scene.objects.iter().zip(&obj_lights).enumerate() {

@@ -203,7 +203,7 @@ fn corpus_reaches_the_exact_fallback_and_exact_zeros() {
     let (mut uncertain, mut zeros, mut total) = (0usize, 0usize, 0usize);
     for case in corpus::cases() {
         let scene = case.scene().unwrap();
-        let lights = object_lights(&scene, &case.lights);
+        let lights = object_lights(scene.transforms(), &case.lights);
         for (object, per_light) in scene.objects.iter().zip(&lights) {
             let t = &object.table;
             for &l in per_light {

@@ -86,9 +86,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!("wrote the baked scene to {path}");
         return Ok(());
     }
-    let individual = scene.topology()?;
-    let baked = scene.baked()?.topology()?;
-    let lights = scene.lights.clone();
+    let individual = scene.geometry.clone();
+    let baked = scene.baked()?.geometry;
+    let lights = scene.light_positions();
     let mut cl = OpenClBackend::with_options(shadowvol_opencl::OpenClOptions::from_env())?;
     println!("device: {}", cl.info().device);
     println!(

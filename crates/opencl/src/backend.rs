@@ -190,7 +190,7 @@ impl SilhouetteBackend for OpenClBackend {
             self.lights_per_batch(edges, p.layout.object_count(), p.layout.ovs.len())?;
         // Per-frame host preparation (object-space lights) counts as upload.
         let prep_start = Instant::now();
-        let obj_lights = object_lights(&p.scene, lights);
+        let obj_lights = object_lights(p.scene.transforms(), lights);
         out.reset(edges, num_lights);
         let mut stats = ExtractStats {
             upload: prep_start.elapsed(),

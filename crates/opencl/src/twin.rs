@@ -243,7 +243,7 @@ impl SilhouetteBackend for TwinBackend {
         let (scene, layout) = self.scenes.get(id)?;
         check_lights(lights)?;
         let start = Instant::now();
-        let obj_lights = object_lights(scene, lights);
+        let obj_lights = object_lights(scene.transforms(), lights);
         let flat_l = flat_lights(&obj_lights);
         let output = run_kernel(layout, &flat_l, lights.len(), mode, self.use_f64);
         let uncertain = u64::from(output.counts[0]);

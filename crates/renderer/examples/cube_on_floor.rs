@@ -7,9 +7,9 @@
 
 use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::Mesh;
-use shadowvol_renderer::{reference, Camera, RenderObject, RenderOptions, RenderScene, Renderer};
+use shadowvol_renderer::{Camera, RenderOptions, Renderer, Scene};
 use shadowvol_robust_math::{Accuracy, Light};
-use std::sync::Arc;
+use shadowvol_scenes::Receiver;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = std::env::args()
@@ -35,31 +35,36 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             [1, 7, 5],
         ],
     )?;
-    let scene = RenderScene {
-        objects: vec![
-            RenderObject::receiver_plane("floor", Vec3::ZERO, Vec3::Y, 6.0),
-            RenderObject::new(
-                "cube",
-                Arc::new(cube),
-                Affine3A::from_translation(Vec3::new(-0.5, 0.7, -0.5)),
-            ),
-        ],
-        lights: vec![
-            Light::point(Vec3::new(1.5, 6.0, 1.0)),
-            Light::directional(Vec3::new(-1.0, 2.0, 0.5)),
-        ],
-        emission: Vec::new(),
-        camera: Camera::look_at(Vec3::new(4.0, 5.0, 7.0), Vec3::new(0.0, 0.5, 0.0)),
-        ambient: 0.15,
-    };
+    // The scene model: the cube's edge table placed by a transform, a floor that receives
+    // shadows but casts none, two unit lights, a camera.
+    let mut scene = Scene::new("cube on floor");
+    let table = scene.add_mesh("cube", &cube)?;
+    scene.add_object(
+        "cube",
+        table,
+        Affine3A::from_translation(Vec3::new(-0.5, 0.7, -0.5)),
+    );
+    scene
+        .receivers
+        .push(Receiver::plane("floor", Vec3::ZERO, Vec3::Y, 6.0));
+    scene.add_unit_lights([
+        Light::point(Vec3::new(1.5, 6.0, 1.0)),
+        Light::directional(Vec3::new(-1.0, 2.0, 0.5)),
+    ]);
+    scene.camera = Some(Camera::look_at(
+        Vec3::new(4.0, 5.0, 7.0),
+        Vec3::new(0.0, 0.5, 0.0),
+    ));
+    scene.effects.ambient = 0.15;
     let mut options = RenderOptions::new(256, 256);
     options.mode = Accuracy::Exact;
+    // The host pipeline over the scalar CPU backend (`Renderer::gpu` runs no backend at all).
     let backend = Box::new(shadowvol_cpu::CpuBackend::new());
-    let mut renderer = Renderer::new(backend, options)?;
+    let mut renderer = Renderer::host(backend, options)?;
     let frame = renderer.render(&scene)?;
     frame.save_png(&out)?;
-    print!("{}", frame.explain());
-    let cmp = reference::compare(&frame);
+    print!("{}", frame.report.explain());
+    let cmp = shadowvol_reference::compare(&frame.shot(&scene)?);
     println!(
         "{out}: {} shadow pixels, {} artifact pixels against the ray-traced reference",
         cmp.shadow_pixels, cmp.artifact_pixels
@@ -68,7 +73,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let again = renderer.render(&scene)?;
     println!(
         "second frame: silhouette {:.3} ms (reused)",
-        again.timings.silhouette_ms
+        again.report.timings.silhouette_ms.unwrap_or_default()
     );
     Ok(())
 }

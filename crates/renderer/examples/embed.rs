@@ -8,17 +8,15 @@
 //! Run with `cargo run -p shadowvol-renderer --example embed -- [OUT.png] [--check]` (needs a
 //! wgpu adapter, for example Mesa's lavapipe). `OUT.png` defaults to `embed.png`. With `--check`
 //! the example also reads back the pre-pass ids and the stencil of the last frame and compares
-//! its shadows with the ray-traced reference ([`shadowvol_renderer::reference`]); it fails when
+//! its shadows with the ray-traced reference (`shadowvol_reference`); it fails when
 //! more than 0.05 % of the pixels are artifacts. `cargo xtask test` runs it that way.
 
 use glam::{Affine3A, Vec3};
-use shadowvol_mesh_topology::{EdgeTable, Mesh};
+use shadowvol_mesh_topology::Mesh;
+use shadowvol_reference::Shot;
 use shadowvol_renderer::resident::{texture_2d, PassFormats, PassFrame, ShadowPass};
-use shadowvol_renderer::volume::canonical_triangle;
-use shadowvol_renderer::{reference, Camera, Frame, Pipeline, RenderError, Technique, Timings};
+use shadowvol_renderer::{Camera, RenderDevice, Scene, Technique};
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::{SceneObject, TopologyScene};
-use std::sync::Arc;
 
 const W: u32 = 320;
 const H: u32 = 240;
@@ -54,10 +52,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     }
 
     // 1. The application's device, opened with what the pass needs.
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = pollster::block_on(instance.request_adapter(&Default::default()))
-        .map_err(|e| RenderError::NoAdapter(e.to_string()))?;
+    let adapter = RenderDevice::headless_adapter()?;
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         required_features: ShadowPass::optional_features(&adapter),
         required_limits: ShadowPass::required_limits(&adapter)?,
@@ -100,19 +95,13 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             [3, 7, 5],
         ],
     )?;
-    let object = |name: &str, mesh: &Mesh| -> Result<SceneObject, RenderError> {
-        Ok(SceneObject {
-            name: name.to_owned(),
-            table: Arc::new(EdgeTable::build(mesh).map_err(|source| RenderError::Mesh {
-                object: name.to_owned(),
-                source,
-            })?),
-            world_from_object: Affine3A::IDENTITY,
-        })
-    };
-    let scene = TopologyScene {
-        objects: vec![object("floor", &floor)?, object("box", &cube)?],
-    };
+    let mut scene = Scene::new("embed");
+    for (name, mesh) in [("floor", &floor), ("box", &cube)] {
+        let table = scene.add_mesh(name, mesh)?;
+        scene.add_object(name, table, Affine3A::IDENTITY);
+    }
+    scene.add_unit_lights([Light::point(Vec3::new(1.5, 6.0, 1.0))]);
+    scene.effects.ambient = 0.15;
     let mut resident = pass.prepare(&scene)?;
 
     // 3. The application's targets.
@@ -146,12 +135,11 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let ids_view = ids.as_ref().map(|t| t.create_view(&Default::default()));
     let depth_view = depth.create_view(&Default::default());
 
-    // 4. Frames: the box spins, the light stays; every frame re-extracts on the device.
+    // 4. Frames: the box spins, the light stays; every frame re-extracts on the device. Only
+    // small inputs change: the box's transform.
     let camera = Camera::look_at(Vec3::new(4.0, 5.0, 7.0), Vec3::new(0.0, 0.5, 0.0));
-    let lights = [Light::point(Vec3::new(1.5, 6.0, 1.0))];
     let colors = [[0.9, 0.85, 0.8]];
-    let albedo = [[0.8, 0.8, 0.8], [0.9, 0.4, 0.3]];
-    let ambient = 0.15;
+    let albedo: Vec<[f32; 3]> = scene.surfaces().map(|s| s.albedo).collect();
     let mut transforms = [Affine3A::IDENTITY; 2];
     for frame in 0..30 {
         transforms[1] = Affine3A::from_translation(Vec3::new(-0.5, 0.6, -0.5))
@@ -161,16 +149,15 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             &PassFrame {
                 camera: &camera,
                 aspect: W as f32 / H as f32,
-                lights: &lights,
+                lights: &scene.lights,
                 colors: &colors,
-                emission: &[],
                 transforms: &transforms,
                 albedo: &albedo,
                 // The camera is outside both volumes here; an application would run the plan
                 // (`shadowvol_renderer::plan`) to choose.
                 techniques: &[Technique::ZFail, Technique::ZFail],
                 scissors: &[None],
-                ambient,
+                ambient: scene.effects.ambient,
                 mode: Accuracy::Exact,
                 count: false,
             },
@@ -199,65 +186,33 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     }
 
     // 6. `--check` only: the last frame's shadows against the ray-traced reference. The
-    // reference takes the same `f32` world positions the device drew, the pre-pass ids (which
-    // triangle each pixel shows) and the stencil (0 = lit).
-    let ids = ids.as_ref().expect("made with --check");
-    let ids = read_texture(&device, &queue, ids, wgpu::TextureAspect::All, 8)?
-        .chunks_exact(8)
-        .map(|c| {
-            [
-                u32::from_le_bytes([c[0], c[1], c[2], c[3]]),
-                u32::from_le_bytes([c[4], c[5], c[6], c[7]]),
-            ]
-        })
-        .collect();
-    let stencil = read_texture(&device, &queue, &depth, wgpu::TextureAspect::StencilOnly, 1)?;
-    let triangles = scene
-        .objects
-        .iter()
-        .zip(&transforms)
-        .map(|(o, t)| {
-            let world: Vec<Vec3> = o
-                .table
-                .positions
-                .iter()
-                .map(|&p| t.transform_point3(p))
-                .collect();
-            o.table
-                .triangles
-                .iter()
-                .map(|&tri| canonical_triangle(tri).map(|k| world[k as usize]))
-                .collect()
-        })
-        .collect();
-    let frame = Frame {
-        width: W,
-        height: H,
-        rgba,
-        ids,
-        stencil: vec![stencil],
-        triangles,
-        casts_shadows: vec![true; 2],
-        albedo: albedo.to_vec(),
-        light_color: colors.to_vec(),
-        ambient,
-        emission: Vec::new(),
-        exposure: None,
-        scissor_pixels_saved: 0,
-        uncertain: 0,
-        host_resolved: 0,
-        pipeline: Pipeline::Gpu,
-        gpu_timings: None,
-        volumes: Vec::new(),
-        lights: lights.to_vec(),
-        camera,
-        plan: Vec::new(),
-        timings: Timings::default(),
-        mode: Accuracy::Exact,
-        adapter: adapter.get_info().name,
-        depth_clamp: pass.depth_clamp(),
-    };
-    let cmp = reference::compare(&frame);
+    // reference reads the scene model (where the box stood in the last frame) and the pixels:
+    // the pre-pass ids (which triangle each pixel shows) and the stencil (0 = lit).
+    let ids: Vec<[u32; 2]> = read_texture(
+        &device,
+        &queue,
+        ids_texture(&ids)?,
+        wgpu::TextureAspect::All,
+        8,
+    )?
+    .chunks_exact(8)
+    .map(|c| {
+        [
+            u32::from_le_bytes([c[0], c[1], c[2], c[3]]),
+            u32::from_le_bytes([c[4], c[5], c[6], c[7]]),
+        ]
+    })
+    .collect();
+    let stencil = vec![read_texture(
+        &device,
+        &queue,
+        &depth,
+        wgpu::TextureAspect::StencilOnly,
+        1,
+    )?];
+    scene.geometry.objects[1].world_from_object = transforms[1];
+    let shot = Shot::new(&scene, camera, W, H, &rgba, &ids, &stencil, &colors);
+    let cmp = shadowvol_reference::compare(&shot);
     let fraction = cmp.artifact_fraction((W * H) as usize);
     println!(
         "reference: {} artifact pixels ({:.4} %), {} undecidable, shadow pixels {} (reference {})",
@@ -283,6 +238,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .into());
     }
     Ok(())
+}
+
+/// The ids texture, made with `--check`.
+fn ids_texture(ids: &Option<wgpu::Texture>) -> Result<&wgpu::Texture, String> {
+    ids.as_ref()
+        .ok_or_else(|| "no ids texture: made with --check only".to_owned())
 }
 
 /// Copies one aspect of a 2-D texture (`bpp` bytes per pixel) to the host, rows unpadded.

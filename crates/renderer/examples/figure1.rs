@@ -11,7 +11,7 @@
 //! `figure1.md` / `figure1.json` with the counts. `cargo xtask figures` runs this.
 
 use image::{Rgba, RgbaImage};
-use shadowvol_renderer::{hard, reference, RenderOptions, RenderScene, Renderer};
+use shadowvol_renderer::{hard, RenderOptions, Renderer, Scene};
 use shadowvol_robust_math::Accuracy;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -54,11 +54,11 @@ fn run() -> Result<(), String> {
     let out = out.ok_or("usage: figure1 OUT_DIR [--size N] [--scenes a,b]")?;
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
 
-    let mut scenes: Vec<(&str, &str, RenderScene)> = vec![
+    let mut scenes: Vec<(&str, &str, Scene)> = vec![
         (
             "edge-on-frustum",
             "truncated cone, point light exactly at the apex of its side planes",
-            hard::edge_on_frustum(),
+            hard::edge_on_frustum().map_err(|e| e.to_string())?,
         ),
         (
             "bunny-1e4",
@@ -68,7 +68,7 @@ fn run() -> Result<(), String> {
         (
             "uv-sphere-pole",
             "UV sphere, point light on the axis where one quad band's planes meet it",
-            hard::uv_sphere_pole(2000),
+            hard::uv_sphere_pole(2000).map_err(|e| e.to_string())?,
         ),
         (
             "town",
@@ -81,8 +81,9 @@ fn run() -> Result<(), String> {
     }
     let backend = Box::new(shadowvol_cpu::CpuBackend::new());
     let mut renderer =
-        Renderer::new(backend, RenderOptions::new(size, size)).map_err(|e| e.to_string())?;
-    eprintln!("adapter: {}", renderer.adapter());
+        Renderer::host(backend, RenderOptions::new(size, size)).map_err(|e| e.to_string())?;
+    let adapter = renderer.device().description.clone();
+    eprintln!("adapter: {adapter}");
 
     let caption = 14u32;
     let gap = 4u32;
@@ -101,8 +102,7 @@ fn run() -> Result<(), String> {
     );
     let _ = writeln!(
         md,
-        "Image size {size}x{size}, silhouettes on the `cpu` backend, adapter: {}.\n",
-        renderer.adapter()
+        "Image size {size}x{size}, silhouettes on the `cpu` backend, adapter: {adapter}.\n",
     );
     md.push_str("| scene | what | original | robust | exact |\n|---|---|---|---|---|\n");
     let mut json = Vec::new();
@@ -113,17 +113,18 @@ fn run() -> Result<(), String> {
         for (mi, mode) in MODES.iter().enumerate() {
             let mut o = renderer.options();
             o.mode = *mode;
-            renderer.set_options(o);
+            renderer.set_options(o).unwrap();
             let frame = renderer
                 .render(scene)
                 .map_err(|e| format!("{name} {mode}: {e}"))?;
-            let cmp = reference::compare(&frame);
+            let shot = frame.shot(scene).map_err(|e| e.to_string())?;
+            let cmp = shadowvol_reference::compare(&shot);
             eprintln!(
                 "{name:16} {mode:8}: {:6} artifact pixels ({} differing), raster {:.0} ms, silhouette {:.0} ms",
-                cmp.artifact_pixels, cmp.differing_pixels, frame.timings.raster_ms, frame.timings.silhouette_ms
+                cmp.artifact_pixels, cmp.differing_pixels, frame.report.timings.raster_ms, frame.report.timings.silhouette_ms.unwrap_or_default()
             );
             let x = gap + mi as u32 * (size + gap);
-            paste(&mut block, &frame.image(), x, gap);
+            paste(&mut block, &shot.image(), x, gap);
             text(
                 &mut block,
                 &format!("{mode} {}", cmp.artifact_pixels),
@@ -133,7 +134,7 @@ fn run() -> Result<(), String> {
             );
             paste(
                 &mut block,
-                &reference::diff_image(&frame, &cmp),
+                &shadowvol_reference::diff_image(&shot, &cmp),
                 x,
                 2 * gap + size + caption,
             );

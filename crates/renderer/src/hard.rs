@@ -1,7 +1,7 @@
 //! Hard scenes for the renderer: the four scenes of our Figure 1 (and the tests).
 //!
-//! Each is a [`RenderScene`] with a receiver-only ground or backdrop so that the shadow and its
-//! artifacts are visible:
+//! Each is a [`Scene`] with a receiver ground or backdrop so that the shadow and its artifacts
+//! are visible:
 //! * [`edge_on_frustum`]: a truncated cone whose side faces all point at the light (the light
 //!   sits on the cone's apex), so every side triangle is edge-on to the light: `f32` signs of
 //!   its three edges disagree at random in `original`;
@@ -11,11 +11,11 @@
 //!   one band of quads meet the axis, so that whole band is edge-on;
 //! * [`town`]: the `town` preset with a sun exactly parallel to half of its walls.
 
-use crate::{Camera, RenderError, RenderObject, RenderScene};
-use glam::{Affine3A, Vec3};
+use crate::{Camera, RenderError};
+use glam::Vec3;
 use shadowvol_mesh_topology::Mesh;
 use shadowvol_robust_math::Light;
-use std::sync::Arc;
+use shadowvol_scenes::Scene;
 
 /// A truncated cone around `+Y`: `segments` sides, bottom radius `r0` at `y = 0`, top radius
 /// `r1` at `y = h`, closed by fan caps. Its apex (where the side planes meet) is at
@@ -51,37 +51,37 @@ pub fn frustum_mesh(segments: u32, r0: f32, r1: f32, h: f32) -> Mesh {
     }
 }
 
-fn ground(scene: &mut RenderScene, y: f32) {
-    if let Some((lo, hi)) = scene.bounds() {
-        let c = (lo + hi) * 0.5;
-        let half = (hi - lo).length().max(1e-3) * 3.0;
-        scene.objects.push(RenderObject::receiver_plane(
-            "ground",
-            Vec3::new(c.x, y, c.z),
-            Vec3::Y,
-            half,
-        ));
-    }
+/// A scene of `mesh` named `name` at the identity, lit by `light`, seen from `camera`, with the
+/// ambient of the figures (0.15) and a ground at `ground_y`.
+fn figure_scene(
+    name: &str,
+    mesh: &Mesh,
+    light: Light,
+    camera: Camera,
+    ground_y: f32,
+) -> Result<Scene, RenderError> {
+    let mut scene =
+        Scene::single(name, mesh).map_err(|e| RenderError::InvalidInput(e.to_string()))?;
+    scene.add_unit_lights([light]);
+    scene.camera = Some(camera);
+    scene.effects.ambient = 0.15;
+    scene.set_ground(Some(ground_y));
+    Ok(scene)
 }
 
 /// The edge-on frustum: 64 sides, the light exactly on the apex of the side planes, a ground
 /// below.
-#[must_use]
-pub fn edge_on_frustum() -> RenderScene {
-    let mesh = frustum_mesh(64, 1.0, 0.5, 1.0);
-    let mut scene = RenderScene {
-        objects: vec![RenderObject::new(
-            "frustum",
-            Arc::new(mesh),
-            Affine3A::IDENTITY,
-        )],
-        lights: vec![Light::point(Vec3::new(0.0, 2.0, 0.0))],
-        emission: Vec::new(),
-        camera: Camera::look_at(Vec3::new(2.6, 3.4, 4.2), Vec3::new(0.0, -0.6, 0.0)),
-        ambient: 0.15,
-    };
-    ground(&mut scene, -1.2);
-    scene
+///
+/// # Errors
+/// Never in practice (the mesh is valid).
+pub fn edge_on_frustum() -> Result<Scene, RenderError> {
+    figure_scene(
+        "frustum",
+        &frustum_mesh(64, 1.0, 0.5, 1.0),
+        Light::point(Vec3::new(0.0, 2.0, 0.0)),
+        Camera::look_at(Vec3::new(2.6, 3.4, 4.2), Vec3::new(0.0, -0.6, 0.0)),
+        -1.2,
+    )
 }
 
 /// The bunny with `offset` added to every vertex (in the mesh), a light above and to the side,
@@ -89,7 +89,7 @@ pub fn edge_on_frustum() -> RenderScene {
 ///
 /// # Errors
 /// Never in practice (the bundled bunny is valid).
-pub fn bunny_offset(offset: f32) -> Result<RenderScene, RenderError> {
+pub fn bunny_offset(offset: f32) -> Result<Scene, RenderError> {
     let mut mesh = shadowvol_scenes::presets::bunny();
     let (lo, hi) = shadowvol_scenes::mesh_bounds(&mesh)
         .ok_or_else(|| RenderError::InvalidInput("empty bunny".into()))?;
@@ -100,29 +100,25 @@ pub fn bunny_offset(offset: f32) -> Result<RenderScene, RenderError> {
     }
     let (lo, hi) = (lo + shift, hi + shift);
     let c = (lo + hi) * 0.5;
-    let mut scene = RenderScene {
-        objects: vec![RenderObject::new(
-            "bunny",
-            Arc::new(mesh),
-            Affine3A::IDENTITY,
-        )],
-        lights: vec![Light::point(c + Vec3::new(-1.2, 0.9, 0.3) * size)],
-        emission: Vec::new(),
-        camera: Camera::look_at(
+    figure_scene(
+        "bunny",
+        &mesh,
+        Light::point(c + Vec3::new(-1.2, 0.9, 0.3) * size),
+        Camera::look_at(
             c + Vec3::new(0.5, 0.55, 1.0) * size * 1.3,
             c - Vec3::Y * size * 0.1,
         ),
-        ambient: 0.15,
-    };
-    ground(&mut scene, lo.y);
-    Ok(scene)
+        lo.y,
+    )
 }
 
 /// A UV sphere of about `triangles` triangles, radius 1, with a point light on its axis above the
 /// north pole, exactly (to `f32`) where the planes of one band of quads (a third of the way to
 /// the equator) meet the axis: that whole band is edge-on to the light.
-#[must_use]
-pub fn uv_sphere_pole(triangles: usize) -> RenderScene {
+///
+/// # Errors
+/// Never in practice (the sphere is valid).
+pub fn uv_sphere_pole(triangles: usize) -> Result<Scene, RenderError> {
     let mesh = shadowvol_scenes::procedural::uv_sphere(triangles, 1.0);
     // The band just below the north-pole fan: find the vertex rings by height.
     let mut ys: Vec<f32> = mesh.positions.iter().map(|p| p.y).collect();
@@ -141,19 +137,13 @@ pub fn uv_sphere_pole(triangles: usize) -> RenderScene {
     } else {
         2.0
     };
-    let mut scene = RenderScene {
-        objects: vec![RenderObject::new(
-            "sphere",
-            Arc::new(mesh),
-            Affine3A::IDENTITY,
-        )],
-        lights: vec![Light::point(Vec3::new(0.0, light_y, 0.0))],
-        emission: Vec::new(),
-        camera: Camera::look_at(Vec3::new(2.4, 2.6, 3.6), Vec3::new(0.0, -0.8, 0.0)),
-        ambient: 0.15,
-    };
-    ground(&mut scene, -1.6);
-    scene
+    figure_scene(
+        "sphere",
+        &mesh,
+        Light::point(Vec3::new(0.0, light_y, 0.0)),
+        Camera::look_at(Vec3::new(2.4, 2.6, 3.6), Vec3::new(0.0, -0.8, 0.0)),
+        -1.6,
+    )
 }
 
 /// The `town` preset with its ground plane, lit by a sun in the `XY` plane, direction `(1, 2, 0)`
@@ -163,12 +153,12 @@ pub fn uv_sphere_pole(triangles: usize) -> RenderScene {
 ///
 /// # Errors
 /// [`RenderError::InvalidInput`] if the preset cannot be built.
-pub fn town() -> Result<RenderScene, RenderError> {
-    let s =
+pub fn town() -> Result<Scene, RenderError> {
+    let mut s =
         shadowvol_scenes::preset("town").map_err(|e| RenderError::InvalidInput(e.to_string()))?;
-    let mut r = RenderScene::from_scene(&s)?;
-    r.lights = vec![Light::directional(Vec3::new(1.0, 2.0, 0.0))];
-    Ok(r)
+    s.lights.clear();
+    s.add_unit_lights([Light::directional(Vec3::new(1.0, 2.0, 0.0))]);
+    Ok(s)
 }
 
 /// The `hard-*` preset `name` of the scenes crate, with a receiver-only backdrop behind it (seen
@@ -176,13 +166,13 @@ pub fn town() -> Result<RenderScene, RenderError> {
 ///
 /// # Errors
 /// [`RenderError::InvalidInput`] for an unknown name.
-pub fn hard_preset(name: &str) -> Result<RenderScene, RenderError> {
-    let s = shadowvol_scenes::preset(name).map_err(|e| RenderError::InvalidInput(e.to_string()))?;
-    let mut r = RenderScene::from_scene(&s)?;
-    if s.effects.ground_y.is_none() {
-        r.add_backdrop();
+pub fn hard_preset(name: &str) -> Result<Scene, RenderError> {
+    let mut s =
+        shadowvol_scenes::preset(name).map_err(|e| RenderError::InvalidInput(e.to_string()))?;
+    if s.ground_y().is_none() {
+        s.add_backdrop();
     }
-    Ok(r)
+    Ok(s)
 }
 
 /// The names of the scenes crate's `hard-*` presets.

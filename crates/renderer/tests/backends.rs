@@ -11,9 +11,9 @@ main!(simd_and_cpu_give_identical_stencils_in_exact_mode);
 fn simd_and_cpu_give_identical_stencils_in_exact_mode() -> Outcome {
     let mut cpu = common::renderer(96, 96, Accuracy::Exact)?;
     let simd = shadowvol_simd::create_backend().expect("the simd backend always starts");
-    let mut simd = Renderer::new(simd, RenderOptions::new(96, 96)).unwrap();
+    let mut simd = Renderer::host(simd, RenderOptions::new(96, 96)).unwrap();
     let scenes = [
-        hard::edge_on_frustum(),
+        hard::edge_on_frustum().unwrap(),
         hard::bunny_offset(1e4).unwrap(),
         hard::hard_preset("hard-multi-object-transforms").unwrap(),
         hard::hard_preset("hard-book-4").unwrap(),
@@ -21,10 +21,24 @@ fn simd_and_cpu_give_identical_stencils_in_exact_mode() -> Outcome {
     for scene in &scenes {
         let a = cpu.render(scene).unwrap();
         let b = simd.render(scene).unwrap();
-        assert_eq!(a.stencil, b.stencil, "{}", a.explain());
-        assert_eq!(a.rgba, b.rgba);
+        assert_eq!(
+            a.image.as_ref().unwrap().stencil,
+            b.image.as_ref().unwrap().stencil,
+            "{}",
+            a.report.explain()
+        );
+        assert_eq!(
+            a.image.as_ref().unwrap().rgba,
+            b.image.as_ref().unwrap().rgba
+        );
         assert!(
-            a.stencil.iter().flatten().any(|&s| s != 0),
+            a.image
+                .as_ref()
+                .unwrap()
+                .stencil
+                .iter()
+                .flatten()
+                .any(|&s| s != 0),
             "the scene has shadows"
         );
     }

@@ -2,7 +2,7 @@
 mod common;
 
 use glam::Vec3;
-use shadowvol_renderer::{reference, Camera, PlanPolicy, Technique};
+use shadowvol_renderer::{Camera, PlanPolicy, Technique};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_test_support::{main, Outcome};
 
@@ -21,10 +21,10 @@ fn box_on_floor_matches_reference_zpass_and_zfail() -> Outcome {
     ] {
         let mut o = r.options();
         o.policy = policy;
-        r.set_options(o);
+        r.set_options(o).unwrap();
         let frame = r.render(&scene).unwrap();
-        let cmp = reference::compare(&frame);
-        println!("{policy:?}: {}", frame.explain());
+        let cmp = common::compare(&frame, &scene);
+        println!("{policy:?}: {}", frame.report.explain());
         println!(
             "artifacts {} differing {} shadow {} ref shadow {} covered {}",
             cmp.artifact_pixels,
@@ -36,7 +36,7 @@ fn box_on_floor_matches_reference_zpass_and_zfail() -> Outcome {
         frame
             .save_png(format!("/tmp/sv_box_{policy:?}.png"))
             .unwrap();
-        reference::diff_image(&frame, &cmp)
+        shadowvol_reference::diff_image(&frame.shot(&scene).unwrap(), &cmp)
             .save(format!("/tmp/sv_box_{policy:?}_diff.png"))
             .unwrap();
         assert!(
@@ -45,7 +45,11 @@ fn box_on_floor_matches_reference_zpass_and_zfail() -> Outcome {
         );
         assert_eq!(cmp.artifact_pixels, 0, "{policy:?}");
         if policy == PlanPolicy::Auto {
-            assert!(frame.plan.iter().all(|e| e.technique == Technique::ZPass));
+            assert!(frame
+                .report
+                .plan
+                .iter()
+                .all(|e| e.technique == Technique::ZPass));
         }
     }
     Ok(())

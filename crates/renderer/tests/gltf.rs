@@ -1,59 +1,49 @@
 //! A glTF scene (objects with node transforms, KHR_lights_punctual lights, a camera) rendered
-//! through `RenderScene::from_scene` and checked against the reference.
+//! as loaded (the renderer borrows the scene model) and checked against the reference.
 mod common;
 
 use glam::{Affine3A, Quat, Vec3};
-use shadowvol_renderer::{reference, RenderScene, Technique};
+use shadowvol_renderer::Technique;
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_scenes::{Camera, Effects, Object, Scene};
+use shadowvol_scenes::{Camera, Effects, Scene};
 use shadowvol_test_support::{main, Outcome};
-use std::sync::Arc;
 
 main!(glb_scene_with_lights_and_camera_matches_the_reference);
 
 fn glb_scene_with_lights_and_camera_matches_the_reference() -> Outcome {
     let mut r = common::renderer(128, 96, Accuracy::Exact)?;
-    let cube = Arc::new(common::cuboid(Vec3::splat(-0.5), Vec3::splat(0.5)));
-    let scene = Scene {
-        name: "glb-test".into(),
-        objects: vec![
-            Object {
-                name: "floor".into(),
-                mesh: Arc::new(common::floor(5.0, 2)),
-                transform: Affine3A::IDENTITY,
-            },
-            Object {
-                name: "cube-a".into(),
-                mesh: cube.clone(),
-                transform: Affine3A::from_rotation_translation(
-                    Quat::from_rotation_y(0.5),
-                    Vec3::new(-1.0, 1.0, 0.0),
-                ),
-            },
-            Object {
-                name: "cube-b".into(),
-                mesh: cube,
-                transform: Affine3A::from_scale_rotation_translation(
-                    Vec3::splat(0.7),
-                    Quat::from_rotation_x(0.4),
-                    Vec3::new(1.2, 1.5, 0.5),
-                ),
-            },
-        ],
-        emission: Vec::new(),
-        lights: vec![
+    let mut scene = common::scene_of(
+        vec![("floor", common::floor(5.0, 2), Affine3A::IDENTITY)],
+        &[
             Light::point(Vec3::new(0.5, 5.0, 2.0)),
             Light::directional(Vec3::new(-0.3, 1.0, 0.4)),
         ],
-        camera: Some(Camera {
+        Camera {
             eye: Vec3::new(3.0, 4.0, 6.0),
             target: Vec3::new(0.0, 0.5, 0.0),
             up: Vec3::Y,
             fov_y: 50f32.to_radians(),
             near: 0.05,
-        }),
-        effects: Effects::default(),
-    };
+        },
+        Effects::default().ambient,
+    );
+    let cube = scene
+        .add_mesh("cube", &common::cuboid(Vec3::splat(-0.5), Vec3::splat(0.5)))
+        .unwrap();
+    scene.add_object(
+        "cube-a",
+        cube.clone(),
+        Affine3A::from_rotation_translation(Quat::from_rotation_y(0.5), Vec3::new(-1.0, 1.0, 0.0)),
+    );
+    scene.add_object(
+        "cube-b",
+        cube,
+        Affine3A::from_scale_rotation_translation(
+            Vec3::splat(0.7),
+            Quat::from_rotation_x(0.4),
+            Vec3::new(1.2, 1.5, 0.5),
+        ),
+    );
     let dir = std::env::temp_dir().join(format!("shadowvol-renderer-gltf-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("scene.glb");
@@ -70,16 +60,19 @@ fn glb_scene_with_lights_and_camera_matches_the_reference() -> Outcome {
         "the camera survives the round trip"
     );
 
-    let rs = RenderScene::from_scene(&loaded).unwrap();
-    assert_eq!(rs.objects.len(), 3);
-    let frame = r.render(&rs).unwrap();
-    assert_eq!(frame.plan.len(), 6);
+    assert_eq!(loaded.surfaces().len(), 3);
+    let frame = r.render(&loaded).unwrap();
+    assert_eq!(frame.report.plan.len(), 6);
     assert!(
-        frame.plan.iter().all(|e| e.technique != Technique::Culled),
+        frame
+            .report
+            .plan
+            .iter()
+            .all(|e| e.technique != Technique::Culled),
         "{}",
-        frame.explain()
+        frame.report.explain()
     );
-    let cmp = reference::compare(&frame);
+    let cmp = common::compare(&frame, &loaded);
     assert!(
         cmp.reference_shadow_pixels > 300,
         "{}",
@@ -89,7 +82,7 @@ fn glb_scene_with_lights_and_camera_matches_the_reference() -> Outcome {
         cmp.artifact_pixels <= 1,
         "{} artifacts\n{}",
         cmp.artifact_pixels,
-        frame.explain()
+        frame.report.explain()
     );
     Ok(())
 }

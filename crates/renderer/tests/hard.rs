@@ -3,7 +3,7 @@
 //! frustum (and elsewhere).
 mod common;
 
-use shadowvol_renderer::{hard, reference, RenderScene};
+use shadowvol_renderer::{hard, Scene};
 use shadowvol_robust_math::Accuracy;
 use shadowvol_test_support::{main, Outcome, Skip};
 
@@ -31,11 +31,17 @@ const MODE_FINDINGS: [(&str, Accuracy); 3] = [
     ("hard-homogeneous-w", Accuracy::Ordered),
 ];
 
-fn scenes() -> Vec<(String, RenderScene)> {
+fn scenes() -> Vec<(String, Scene)> {
     let mut v = vec![
-        ("edge-on-frustum".to_owned(), hard::edge_on_frustum()),
+        (
+            "edge-on-frustum".to_owned(),
+            hard::edge_on_frustum().unwrap(),
+        ),
         ("bunny-1e4".to_owned(), hard::bunny_offset(1e4).unwrap()),
-        ("uv-sphere-pole".to_owned(), hard::uv_sphere_pole(2000)),
+        (
+            "uv-sphere-pole".to_owned(),
+            hard::uv_sphere_pole(2000).unwrap(),
+        ),
     ];
     let names = hard::hard_preset_names();
     assert!(names.len() >= 10, "the hard-* presets: {names:?}");
@@ -55,7 +61,7 @@ fn check_mode(mode: Accuracy) -> Result<Vec<(String, usize)>, Skip> {
     let mut report = String::new();
     for (name, scene) in scenes() {
         let frame = r.render(&scene).unwrap();
-        let cmp = reference::compare(&frame);
+        let cmp = common::compare(&frame, &scene);
         total_shadow += cmp.reference_shadow_pixels;
         report.push_str(&format!(
             "{name}: {} artifacts ({} geometric), {} boundary, {} undecidable, {} reference shadow pixels\n",
@@ -73,7 +79,7 @@ fn check_mode(mode: Accuracy) -> Result<Vec<(String, usize)>, Skip> {
             cmp.artifact_pixels <= MAX_ARTIFACTS || MODE_FINDINGS.contains(&(name.as_str(), mode)),
             "{mode} on {name}: {} artifact pixels (max {MAX_ARTIFACTS})\n{}",
             cmp.artifact_pixels,
-            frame.explain()
+            frame.report.explain()
         );
         geometric.push((name, cmp.geometric_artifact_pixels));
     }
@@ -115,12 +121,12 @@ fn ordered_has_no_artifacts_on_hard_scenes() -> Outcome {
 
 fn original_cracks_visibly_on_the_edge_on_frustum() -> Outcome {
     let mut r = common::renderer(SIZE, SIZE, Accuracy::Original)?;
-    let scene = hard::edge_on_frustum();
-    let original = reference::compare(&r.render(&scene).unwrap());
+    let scene = hard::edge_on_frustum().unwrap();
+    let original = common::compare(&r.render(&scene).unwrap(), &scene);
     let mut o = r.options();
     o.mode = Accuracy::Exact;
-    r.set_options(o);
-    let exact = reference::compare(&r.render(&scene).unwrap());
+    r.set_options(o).unwrap();
+    let exact = common::compare(&r.render(&scene).unwrap(), &scene);
     println!(
         "edge-on frustum: original {} artifacts, exact {}",
         original.artifact_pixels, exact.artifact_pixels
@@ -135,13 +141,14 @@ fn original_cracks_visibly_on_the_edge_on_frustum() -> Outcome {
     // Scenes whose silhouettes crack in original: counted on the presets too.
     let mut cracked = 0;
     o.mode = Accuracy::Original;
-    r.set_options(o);
+    r.set_options(o).unwrap();
     for name in [
         "hard-offset-1e4-sphere",
         "hard-double-sided-sheet",
         "hard-directional-parallel",
     ] {
-        let c = reference::compare(&r.render(&hard::hard_preset(name).unwrap()).unwrap());
+        let scene = hard::hard_preset(name).unwrap();
+        let c = common::compare(&r.render(&scene).unwrap(), &scene);
         println!("{name}: original {} artifacts", c.artifact_pixels);
         cracked += usize::from(c.artifact_pixels > MAX_ARTIFACTS);
     }
@@ -163,14 +170,14 @@ fn tilted_fan_gets_z_pass_and_matches_the_exact_reference() -> Outcome {
         let mut r = common::renderer(SIZE, SIZE, mode)?;
         let scene = hard::hard_preset("hard-edge-on-tilted-fan").unwrap();
         let frame = r.render(&scene).unwrap();
-        for e in frame.plan.iter().filter(|e| e.object == 0) {
+        for e in frame.report.plan.iter().filter(|e| e.object == 0) {
             assert_eq!(
                 e.technique,
                 shadowvol_renderer::Technique::ZPass,
                 "{mode}: {e}"
             );
         }
-        let cmp = reference::compare(&frame);
+        let cmp = common::compare(&frame, &scene);
         println!(
             "{mode} tilted fan: {} artifacts, {} shadow, {} reference shadow",
             cmp.artifact_pixels, cmp.shadow_pixels, cmp.reference_shadow_pixels

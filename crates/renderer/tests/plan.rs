@@ -5,8 +5,7 @@ mod common;
 use glam::{Affine3A, Vec3};
 use shadowvol_cpu::CpuBackend;
 use shadowvol_renderer::{
-    reference, Camera, PlanPolicy, RenderObject, RenderOptions, RenderScene, Renderer,
-    SilhouetteSource, Technique,
+    Camera, PlanPolicy, RenderOptions, Renderer, Scene, SilhouetteSource, Technique,
 };
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
@@ -32,6 +31,7 @@ fn entry<'a>(
     name: &str,
 ) -> &'a shadowvol_renderer::PlanEntry {
     frame
+        .report
         .plan
         .iter()
         .find(|e| e.light == light && e.object_name == name)
@@ -41,7 +41,7 @@ fn entry<'a>(
 fn with_policy(r: &mut Renderer, policy: PlanPolicy) {
     let mut o = r.options();
     o.policy = policy;
-    r.set_options(o);
+    r.set_options(o).unwrap();
 }
 
 /// A camera standing on the floor under the box, in its shadow, looking out sideways.
@@ -59,11 +59,11 @@ fn camera_inside_a_shadow_volume_gets_zfail_and_a_correct_image() -> Outcome {
         entry(&frame, 0, "box").technique,
         Technique::ZFail,
         "{}",
-        frame.explain()
+        frame.report.explain()
     );
     assert!(entry(&frame, 0, "box").back_cap);
     assert!(entry(&frame, 0, "box").cap_triangles > 0);
-    let cmp = reference::compare(&frame);
+    let cmp = common::compare(&frame, &scene);
     assert!(
         cmp.reference_shadow_pixels > 500,
         "the camera sees shadow: {}",
@@ -73,11 +73,11 @@ fn camera_inside_a_shadow_volume_gets_zfail_and_a_correct_image() -> Outcome {
         cmp.covered_pixels - cmp.reference_shadow_pixels > 500,
         "and lit floor"
     );
-    assert_eq!(cmp.artifact_pixels, 0, "{}", frame.explain());
+    assert_eq!(cmp.artifact_pixels, 0, "{}", frame.report.explain());
 
     // The same view forced to z-pass is wrong: the test can tell.
     with_policy(&mut r, PlanPolicy::AlwaysZPass);
-    let wrong = reference::compare(&r.render(&scene).unwrap());
+    let wrong = common::compare(&r.render(&scene).unwrap(), &scene);
     assert!(
         wrong.artifact_pixels > 1000,
         "z-pass inside the volume: {} artifacts",
@@ -94,18 +94,28 @@ fn camera_outside_gets_zpass() -> Outcome {
     );
     let frame = r.render(&scene).unwrap();
     assert!(
-        frame.plan.iter().all(|e| e.technique == Technique::ZPass),
+        frame
+            .report
+            .plan
+            .iter()
+            .all(|e| e.technique == Technique::ZPass),
         "{}",
-        frame.explain()
+        frame.report.explain()
     );
-    let cmp = reference::compare(&frame);
+    let cmp = common::compare(&frame, &scene);
     assert!(cmp.reference_shadow_pixels > 200);
     assert_eq!(cmp.artifact_pixels, 0);
     // z-fail everywhere gives the same shadow.
     with_policy(&mut r, PlanPolicy::AlwaysZFail);
     let zfail = r.render(&scene).unwrap();
-    let a: Vec<bool> = frame.stencil[0].iter().map(|&s| s != 0).collect();
-    let b: Vec<bool> = zfail.stencil[0].iter().map(|&s| s != 0).collect();
+    let a: Vec<bool> = frame.image.as_ref().unwrap().stencil[0]
+        .iter()
+        .map(|&s| s != 0)
+        .collect();
+    let b: Vec<bool> = zfail.image.as_ref().unwrap().stencil[0]
+        .iter()
+        .map(|&s| s != 0)
+        .collect();
     let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
     assert!(
         differ <= 2,
@@ -122,9 +132,9 @@ fn directional_light_has_no_back_cap() -> Outcome {
     );
     let frame = r.render(&scene).unwrap();
     let e = entry(&frame, 0, "box");
-    assert_eq!(e.technique, Technique::ZFail, "{}", frame.explain());
+    assert_eq!(e.technique, Technique::ZFail, "{}", frame.report.explain());
     assert!(!e.back_cap);
-    let cmp = reference::compare(&frame);
+    let cmp = common::compare(&frame, &scene);
     assert!(cmp.reference_shadow_pixels > 300);
     assert_eq!(cmp.artifact_pixels, 0);
     Ok(())
@@ -136,36 +146,50 @@ fn off_screen_caster_is_culled_unless_its_shadow_reaches_the_view() -> Outcome {
     let camera = Camera::look_at(Vec3::new(0.0, 4.0, 6.0), Vec3::new(0.0, 0.0, 0.0));
     let mut scene = common::box_on_floor(light, camera);
     // Far behind the camera, with the light in front of it: its shadow goes further away.
-    scene.objects.push(RenderObject::new(
+    add(
+        &mut scene,
         "behind",
-        Arc::new(common::cuboid(Vec3::splat(-0.5), Vec3::splat(0.5))),
+        common::cuboid(Vec3::splat(-0.5), Vec3::splat(0.5)),
         Affine3A::from_translation(Vec3::new(0.0, 3.0, 14.0)),
-    ));
+    );
     // Off to the side and out of view, but its shadow falls on the visible floor.
-    scene.objects.push(RenderObject::new(
+    add(
+        &mut scene,
         "side",
-        Arc::new(common::cuboid(Vec3::splat(-0.3), Vec3::splat(0.3))),
+        common::cuboid(Vec3::splat(-0.3), Vec3::splat(0.3)),
         Affine3A::from_translation(Vec3::new(-0.6, 4.5, 0.3)),
-    ));
+    );
     let frame = r.render(&scene).unwrap();
     let behind = entry(&frame, 0, "behind");
-    assert_eq!(behind.technique, Technique::Culled, "{}", frame.explain());
+    assert_eq!(
+        behind.technique,
+        Technique::Culled,
+        "{}",
+        frame.report.explain()
+    );
     assert_eq!(behind.silhouette, SilhouetteSource::Skipped);
     assert_ne!(
         entry(&frame, 0, "side").technique,
         Technique::Culled,
         "{}",
-        frame.explain()
+        frame.report.explain()
     );
     assert_ne!(entry(&frame, 0, "box").technique, Technique::Culled);
-    let cmp = reference::compare(&frame);
-    assert_eq!(cmp.artifact_pixels, 0, "{}", frame.explain());
+    let cmp = common::compare(&frame, &scene);
+    assert_eq!(cmp.artifact_pixels, 0, "{}", frame.report.explain());
     // The side caster really is off-screen and its shadow really is visible: without it the
     // shadowed area shrinks.
-    let side_ids = frame.ids.iter().filter(|id| id[0] == 4).count();
+    let side_ids = frame
+        .image
+        .as_ref()
+        .unwrap()
+        .ids
+        .iter()
+        .filter(|id| id[0] == 4)
+        .count();
     assert_eq!(side_ids, 0, "the side caster must be off-screen");
-    scene.objects.pop();
-    let without = reference::compare(&r.render(&scene).unwrap());
+    scene.geometry.objects.pop();
+    let without = common::compare(&r.render(&scene).unwrap(), &scene);
     assert!(cmp.reference_shadow_pixels > without.reference_shadow_pixels + 20);
     Ok(())
 }
@@ -209,14 +233,16 @@ fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() -> Outcome {
         lights: lights.clone(),
     };
     // Same policy as common::renderer.
-    let mut r = common::started(Renderer::new(Box::new(backend), RenderOptions::new(96, 96)))?;
+    let mut r = common::started(Renderer::host(
+        Box::new(backend),
+        RenderOptions::new(96, 96),
+    ))?;
     let camera = Camera::look_at(Vec3::new(4.0, 5.0, 7.0), Vec3::new(0.0, 0.5, 0.0));
     let mut scene = common::box_on_floor(Light::point(Vec3::new(1.5, 6.0, 1.0)), camera);
-    scene
-        .lights
-        .push(Light::directional(Vec3::new(-0.5, 1.0, 0.3)));
+    scene.add_unit_lights([Light::directional(Vec3::new(-0.5, 1.0, 0.3))]);
     let first = r.render(&scene).unwrap();
     assert!(first
+        .report
         .plan
         .iter()
         .all(|e| e.silhouette == SilhouetteSource::Extracted));
@@ -230,19 +256,23 @@ fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() -> Outcome {
     let second = r.render(&scene).unwrap();
     assert!(
         second
+            .report
             .plan
             .iter()
             .all(|e| e.silhouette == SilhouetteSource::Reused),
         "{}",
-        second.explain()
+        second.report.explain()
     );
     assert_eq!(extracts.load(Ordering::SeqCst), 2);
-    assert_eq!(second.rgba, first.rgba);
+    assert_eq!(
+        second.image.as_ref().unwrap().rgba,
+        first.image.as_ref().unwrap().rgba
+    );
 
     // Light 0 moves: only light 0 is re-extracted, for both objects.
-    scene.lights[0] = Light::point(Vec3::new(-1.0, 6.0, 1.5));
+    scene.lights[0].light = Light::point(Vec3::new(-1.0, 6.0, 1.5));
     let third = r.render(&scene).unwrap();
-    for e in &third.plan {
+    for e in &third.report.plan {
         let expected = if e.light == 0 {
             SilhouetteSource::Extracted
         } else {
@@ -253,12 +283,13 @@ fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() -> Outcome {
     // No object moved: one call over the whole scene, for light 0 only.
     assert_eq!(extracts.load(Ordering::SeqCst), 3, "one batched call");
     assert_eq!(lights.load(Ordering::SeqCst), 5, "for light 0 only");
-    assert_eq!(reference::compare(&third).artifact_pixels, 0);
+    assert_eq!(common::compare(&third, &scene).artifact_pixels, 0);
 
     // The box moves: only the box is re-extracted, for both lights.
-    scene.objects[1].world_from_object = Affine3A::from_translation(Vec3::new(0.7, 0.8, 0.0));
+    scene.geometry.objects[1].world_from_object =
+        Affine3A::from_translation(Vec3::new(0.7, 0.8, 0.0));
     let fourth = r.render(&scene).unwrap();
-    for e in &fourth.plan {
+    for e in &fourth.report.plan {
         let expected = if e.object_name == "box" {
             SilhouetteSource::Extracted
         } else {
@@ -268,26 +299,27 @@ fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() -> Outcome {
     }
     assert_eq!(extracts.load(Ordering::SeqCst), 4, "one call for the box");
     assert_eq!(lights.load(Ordering::SeqCst), 7, "with both lights");
-    assert_eq!(reference::compare(&fourth).artifact_pixels, 0);
+    assert_eq!(common::compare(&fourth, &scene).artifact_pixels, 0);
 
     // Both lights move, nothing else: one batched call again, and the image equals a fresh
     // renderer's (the batched multiplicities are the per-object ones).
-    scene.lights[0] = Light::point(Vec3::new(0.5, 5.0, -1.0));
-    scene.lights[1] = Light::directional(Vec3::new(0.5, 1.0, -0.2));
+    scene.lights[0].light = Light::point(Vec3::new(0.5, 5.0, -1.0));
+    scene.lights[1].light = Light::directional(Vec3::new(0.5, 1.0, -0.2));
     let moved = r.render(&scene).unwrap();
     assert_eq!(extracts.load(Ordering::SeqCst), 5);
     assert_eq!(lights.load(Ordering::SeqCst), 9);
-    let mut fresh = Renderer::new(Box::new(CpuBackend::new()), RenderOptions::new(96, 96)).unwrap();
+    let mut fresh =
+        Renderer::host(Box::new(CpuBackend::new()), RenderOptions::new(96, 96)).unwrap();
     let fresh = fresh.render(&scene).unwrap();
-    assert_eq!(moved.stencil, fresh.stencil);
-    assert_eq!(moved.rgba, fresh.rgba);
+    assert_eq!(moved.image, fresh.image);
 
     // Switching the mode invalidates everything.
     let mut o = r.options();
     o.mode = Accuracy::Robust;
-    r.set_options(o);
+    r.set_options(o).unwrap();
     let fifth = r.render(&scene).unwrap();
     assert!(fifth
+        .report
         .plan
         .iter()
         .all(|e| e.silhouette == SilhouetteSource::Extracted));
@@ -296,25 +328,25 @@ fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() -> Outcome {
 
 fn many_objects_several_lights_match_the_reference() -> Outcome {
     let mut r = common::renderer(128, 128, Accuracy::Exact)?;
-    let mut scene = RenderScene {
-        objects: vec![RenderObject::new(
-            "floor",
-            Arc::new(common::floor(6.0, 6)),
-            Affine3A::IDENTITY,
-        )],
-        lights: vec![
+    let mut scene = common::scene_of(
+        vec![("floor", common::floor(6.0, 6), Affine3A::IDENTITY)],
+        &[
             Light::point(Vec3::new(2.0, 7.0, 1.0)),
             Light::point(Vec3::new(-3.0, 5.0, -1.0)),
             Light::directional(Vec3::new(0.4, 1.0, -0.3)),
         ],
-        emission: Vec::new(),
-        camera: Camera::look_at(Vec3::new(5.0, 7.0, 8.0), Vec3::ZERO),
-        ambient: 0.1,
-    };
-    let cube = Arc::new(common::cuboid(Vec3::splat(-0.35), Vec3::splat(0.35)));
+        Camera::look_at(Vec3::new(5.0, 7.0, 8.0), Vec3::ZERO),
+        0.1,
+    );
+    let cube = scene
+        .add_mesh(
+            "cube",
+            &common::cuboid(Vec3::splat(-0.35), Vec3::splat(0.35)),
+        )
+        .unwrap();
     for i in 0..3 {
         for j in 0..3 {
-            scene.objects.push(RenderObject::new(
+            scene.add_object(
                 format!("cube{i}{j}"),
                 cube.clone(),
                 Affine3A::from_rotation_translation(
@@ -325,14 +357,14 @@ fn many_objects_several_lights_match_the_reference() -> Outcome {
                         j as f32 * 1.6 - 1.6,
                     ),
                 ),
-            ));
+            );
         }
     }
     for policy in [PlanPolicy::Auto, PlanPolicy::AlwaysZFail] {
         with_policy(&mut r, policy);
         let frame = r.render(&scene).unwrap();
-        assert_eq!(frame.plan.len(), 3 * 10);
-        let cmp = reference::compare(&frame);
+        assert_eq!(frame.report.plan.len(), 3 * 10);
+        let cmp = common::compare(&frame, &scene);
         assert!(
             cmp.reference_shadow_pixels > 1000,
             "{}",
@@ -345,4 +377,10 @@ fn many_objects_several_lights_match_the_reference() -> Outcome {
         );
     }
     Ok(())
+}
+
+/// Adds `mesh` to `scene` as an object of its own.
+fn add(scene: &mut Scene, name: &str, mesh: shadowvol_mesh_topology::Mesh, t: Affine3A) {
+    let table = scene.add_mesh(name, &mesh).unwrap();
+    scene.add_object(name, table, t);
 }

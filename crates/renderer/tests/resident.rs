@@ -4,9 +4,14 @@ mod common;
 
 use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::Mesh;
-use shadowvol_renderer::resident::{twin, PassFormats, PassFrame, ResidentScene, ShadowPass};
-use shadowvol_renderer::{hard, reference, volume, Camera, Pipeline, RenderOptions, Technique};
+use shadowvol_renderer::resident::{
+    twin, PassFormats, PassFrame, ResidentLayout, ResidentScene, ShadowPass,
+};
+use shadowvol_renderer::{
+    hard, volume, Camera, HostPipeline, Pipeline, RenderOptions, Scene, Technique,
+};
 use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_scenes::SceneLight;
 use shadowvol_silhouette::{corpus, object_lights, SceneObject, TopologyScene};
 use shadowvol_test_support::{main, skip, Outcome, Skip};
 use std::sync::Arc;
@@ -24,13 +29,8 @@ main!(
 /// The first adapter, or a visible skip without one; under `CI=true` a missing adapter fails
 /// ([`shadowvol_test_support::skip`]).
 fn adapter() -> Result<wgpu::Adapter, Skip> {
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    pollster::block_on(instance.request_adapter(&Default::default())).map_err(|e| {
-        skip(format!(
-            "no GPU adapter ({e}); install Mesa lavapipe to run this test"
-        ))
-    })
+    shadowvol_renderer::RenderDevice::headless_adapter()
+        .map_err(|e| skip(format!("{e}; install Mesa lavapipe to run this test")))
 }
 
 /// A device on `adapter` with the pass's optional features and `limits`, and the pass on it.
@@ -67,18 +67,9 @@ fn shared_device() -> Result<&'static (ShadowPass, wgpu::Device, wgpu::Queue), S
     GPU.get_or_init(device).as_ref().map_err(Clone::clone)
 }
 
-/// The scene's objects in object space (transforms are per-frame inputs of the pass).
-fn object_space(scene: &TopologyScene) -> TopologyScene {
-    TopologyScene {
-        objects: scene
-            .objects
-            .iter()
-            .map(|o| SceneObject {
-                world_from_object: Affine3A::IDENTITY,
-                ..o.clone()
-            })
-            .collect(),
-    }
+/// Unit lights.
+fn unit(lights: &[Light]) -> Vec<SceneLight> {
+    lights.iter().map(|&l| SceneLight::unit(l)).collect()
 }
 
 /// What one extraction on the device gave, and what the twin gives for the same input.
@@ -99,7 +90,10 @@ fn extract(
     techniques: &[Technique],
 ) -> (ResidentScene, Run) {
     let (pass, device, queue) = gpu;
-    let mut rs = pass.prepare(&object_space(scene)).unwrap();
+    // The layout is object space; the transforms are per-frame inputs of the pass.
+    let mut rs = pass
+        .prepare_layout(ResidentLayout::build(scene).unwrap())
+        .unwrap();
     let n_obj = scene.objects.len();
     let transforms: Vec<Affine3A> = scene.objects.iter().map(|o| o.world_from_object).collect();
     let camera = Camera::look_at(Vec3::new(5.0, 4.0, 6.0), Vec3::ZERO);
@@ -108,9 +102,8 @@ fn extract(
         &PassFrame {
             camera: &camera,
             aspect: 1.0,
-            lights,
+            lights: &unit(lights),
             colors: &vec![[1.0; 3]; lights.len()],
-            emission: &[],
             transforms: &transforms,
             albedo: &vec![[1.0; 3]; n_obj],
             techniques,
@@ -127,7 +120,10 @@ fn extract(
     let signs = pass.read_signs(&rs).unwrap();
     let records = pass.read_records(&rs).unwrap();
     let integer = pass.read_counts(&rs).unwrap().integer_decided;
-    let ol: Vec<[f32; 4]> = object_lights(scene, lights).into_iter().flatten().collect();
+    let ol: Vec<[f32; 4]> = object_lights(scene.transforms(), lights)
+        .into_iter()
+        .flatten()
+        .collect();
     let codes: Vec<u32> = techniques
         .iter()
         .map(|t| match t {
@@ -194,7 +190,7 @@ fn exact_multiplicities_equal_cpu_bit_for_bit_on_the_corpus_with_no_host_resolut
             shadowvol_silhouette::extract_once(&mut cpu, &scene, &case.lights, Accuracy::Exact)
                 .unwrap();
         let got = multiplicities(&run.records, rs.layout().scene.edge_count());
-        let ol = object_lights(&scene, &case.lights);
+        let ol = object_lights(scene.transforms(), &case.lights);
         let offsets = scene.edge_offsets();
         for (li, m) in got.iter().enumerate() {
             // The host pipeline's multiplicities: the backend's, less the triangles touching a
@@ -348,39 +344,33 @@ const FINDINGS: [(&str, Accuracy); 3] = [
 fn gpu_pipeline_matches_the_host_pipeline_and_the_reference_on_hard_scenes() -> Outcome {
     let mut opts = RenderOptions::new(SIZE, SIZE);
     let mut host = common::renderer_with(opts)?;
-    opts.pipeline = Pipeline::Gpu;
-    let mut gpu = common::renderer_with(opts).unwrap();
-    if let Some(why) = gpu.gpu_pipeline_unsupported() {
-        return Err(skip(format!(
-            "the adapter cannot run the GPU pipeline: {why}"
-        )));
-    }
+    let mut gpu = common::gpu_renderer(opts)?;
     let mut report = String::new();
     for mode in [Accuracy::Robust, Accuracy::Ordered, Accuracy::Exact] {
         opts.mode = mode;
-        opts.pipeline = Pipeline::Host;
-        host.set_options(opts);
-        opts.pipeline = Pipeline::Gpu;
-        gpu.set_options(opts);
+        host.set_options(opts).unwrap();
+        gpu.set_options(opts).unwrap();
         for name in hard::hard_preset_names() {
             let scene = hard::hard_preset(&name).unwrap();
             let h = host.render(&scene).unwrap();
             let g = gpu.render(&scene).unwrap();
-            assert_eq!(g.pipeline, Pipeline::Gpu);
-            assert_eq!(g.host_resolved, 0, "{name} {mode}");
+            assert_eq!(g.report.pipeline, Pipeline::Gpu);
+            assert_eq!(g.report.host_resolved, 0, "{name} {mode}");
             // The images: pixels where a channel differs by more than rounding (the pipelines
             // compute positions and normals in f32 in different orders).
             let differ = h
+                .read_image()
+                .unwrap()
                 .rgba
                 .chunks_exact(4)
-                .zip(g.rgba.chunks_exact(4))
+                .zip(g.image.as_ref().unwrap().rgba.chunks_exact(4))
                 .filter(|(a, b)| a.iter().zip(*b).any(|(x, y)| x.abs_diff(*y) > 3))
                 .count();
-            let cmp = reference::compare(&g);
+            let cmp = common::compare(&g, &scene);
             report.push_str(&format!(
                 "{mode} {name}: {differ} pixels differ from host, {} artifacts (host {})\n",
                 cmp.artifact_pixels,
-                reference::compare(&h).artifact_pixels
+                common::compare(&h, &scene).artifact_pixels
             ));
             if FINDINGS.contains(&(name.as_str(), mode)) {
                 continue;
@@ -395,7 +385,7 @@ fn gpu_pipeline_matches_the_host_pipeline_and_the_reference_on_hard_scenes() -> 
                 cmp.artifact_pixels
             );
             // The plan's counts come from the device: the same silhouettes as the host's.
-            for (eh, eg) in h.plan.iter().zip(&g.plan) {
+            for (eh, eg) in h.report.plan.iter().zip(&g.report.plan) {
                 assert_eq!(eh.technique, eg.technique, "{mode} {name}");
                 if mode == Accuracy::Exact {
                     assert_eq!(
@@ -415,22 +405,16 @@ fn gpu_pipeline_matches_the_host_pipeline_and_the_reference_on_hard_scenes() -> 
 }
 
 fn timed_gpu_frames_read_nothing_back() -> Outcome {
-    let mut opts = RenderOptions::new(64, 64);
-    opts.pipeline = Pipeline::Gpu;
-    let mut r = common::renderer_with(opts)?;
-    if let Some(why) = r.gpu_pipeline_unsupported() {
-        return Err(skip(format!(
-            "the adapter cannot run the GPU pipeline: {why}"
-        )));
-    }
+    let mut r = common::gpu_renderer(RenderOptions::new(64, 64))?;
     let scene = common::box_on_floor(
         Light::point(Vec3::new(1.0, 5.0, 1.0)),
         Camera::look_at(Vec3::new(4.0, 4.0, 6.0), Vec3::ZERO),
     );
     let t = r.render_timed(&scene).unwrap();
     assert_eq!(t.readback_bytes, 0);
-    opts.pipeline = Pipeline::Host;
-    r.set_options(opts);
+    r.set_pipeline(Box::new(HostPipeline::new(Box::new(
+        shadowvol_cpu::CpuBackend::new(),
+    ))));
     let t = r.render_timed(&scene).unwrap();
     assert!(
         t.readback_bytes > 0,
@@ -492,7 +476,7 @@ proptest::proptest! {
             shadowvol_silhouette::extract_once(&mut cpu, &scene, &lights, Accuracy::Exact).unwrap();
         let mut want = want.values(0).to_vec();
         let o = &scene.objects[0];
-        let ol = object_lights(&scene, &lights)[0][0];
+        let ol = object_lights(scene.transforms(), &lights)[0][0];
         let touching = volume::touching_triangles(&o.table, ol);
         if !touching.is_empty() {
             volume::remove_triangles(&o.table, ol, Accuracy::Exact, &touching, &mut want);
@@ -529,14 +513,11 @@ fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> Vec<u8> {
     let (w, h) = (64u32, 48u32);
     let sphere = shadowvol_scenes::procedural::icosphere(20_000, 1.0);
     let floor = common::floor(4.0, 2);
-    let object = |name: &str, mesh: &Mesh| SceneObject {
-        name: name.into(),
-        table: Arc::new(shadowvol_mesh_topology::EdgeTable::build(mesh).unwrap()),
-        world_from_object: Affine3A::IDENTITY,
-    };
-    let scene = TopologyScene {
-        objects: vec![object("floor", &floor), object("sphere", &sphere)],
-    };
+    let mut scene = Scene::new("embedded");
+    for (name, mesh) in [("floor", &floor), ("sphere", &sphere)] {
+        let table = scene.add_mesh(name, mesh).unwrap();
+        scene.add_object(name, table, Affine3A::IDENTITY);
+    }
     let mut rs = pass.prepare(&scene).unwrap();
     let camera = Camera::look_at(Vec3::new(3.0, 4.0, 5.0), Vec3::ZERO);
     let lights = [Light::point(Vec3::new(1.0, 6.0, 0.5))];
@@ -545,9 +526,8 @@ fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> Vec<u8> {
         &PassFrame {
             camera: &camera,
             aspect: w as f32 / h as f32,
-            lights: &lights,
+            lights: &unit(&lights),
             colors: &[[1.0; 3]],
-            emission: &[],
             transforms: &[
                 Affine3A::IDENTITY,
                 Affine3A::from_translation(Vec3::Y * 1.5),

@@ -5,7 +5,7 @@
 mod common;
 
 use glam::Vec3;
-use shadowvol_renderer::{reference, RenderError};
+use shadowvol_renderer::RenderError;
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::gpu::TIMEOUT_ENV;
 use shadowvol_test_support::{main, Outcome};
@@ -39,7 +39,7 @@ fn frame_past_the_wait_limit_is_a_device_error_and_the_renderer_recovers() -> Ou
     let frame = r
         .render(&scene)
         .expect("renders again with the default limit");
-    let cmp = reference::compare(&frame);
-    assert_eq!(cmp.artifact_pixels, 0, "{}", frame.explain());
+    let cmp = common::compare(&frame, &scene);
+    assert_eq!(cmp.artifact_pixels, 0, "{}", frame.report.explain());
     Ok(())
 }

@@ -10,7 +10,7 @@ fn main() -> Result<(), shadowvol_scenes::SceneError> {
         println!(
             "{:28} {:4} objects {:9} triangles {:2} lights  {:8.1} ms  {}",
             info.name,
-            scene.objects.len(),
+            scene.geometry.objects.len(),
             scene.triangle_count(),
             scene.lights.len(),
             dt.as_secs_f64() * 1e3,

@@ -1,6 +1,7 @@
 //! Writing a [`Scene`] as binary glTF 2.0 (`.glb`), so other tools can open it.
 //!
-//! Layout: one buffer (the GLB `BIN` chunk); per distinct mesh (`Arc::ptr_eq`) one glTF mesh
+//! Layout: one buffer (the GLB `BIN` chunk); per distinct edge table (`Arc::ptr_eq`) one glTF mesh
+//! of its welded positions and kept triangles
 //! with one `TRIANGLES` primitive (`POSITION` as `VEC3`/`FLOAT` with `min`/`max`, indices as
 //! `UNSIGNED_INT`); per object one node referencing that mesh with its transform as a column-major
 //! `matrix` (omitted for the identity). Every `f32` is written through `f64`, so the JSON numbers
@@ -10,11 +11,11 @@
 //! loader reads the vector back bit for bit. The camera is a perspective camera on a node with a
 //! look-at matrix and the exact target in its extras.
 
-use crate::scene::{mesh_bounds, Scene};
+use crate::scene::{points_bounds, Scene};
 use crate::SceneError;
 use glam::{Affine3A, Vec3};
 use serde_json::{json, Value};
-use shadowvol_mesh_topology::Mesh;
+use shadowvol_mesh_topology::EdgeTable;
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -58,15 +59,15 @@ pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, SceneError> {
     let mut views = Vec::new();
     let mut accessors = Vec::new();
     let mut meshes = Vec::new();
-    let mut mesh_ids: HashMap<*const Mesh, usize> = HashMap::new();
+    let mut mesh_ids: HashMap<*const EdgeTable, usize> = HashMap::new();
     let mut nodes = Vec::new();
 
-    for o in &scene.objects {
-        let key = std::sync::Arc::as_ptr(&o.mesh);
+    for o in &scene.geometry.objects {
+        let key = std::sync::Arc::as_ptr(&o.table);
         let mesh_id = if let Some(&id) = mesh_ids.get(&key) {
             id
         } else {
-            let m = &*o.mesh;
+            let m = &*o.table;
             if m.positions.is_empty() || m.triangles.is_empty() {
                 return Err(SceneError::Export {
                     message: format!(
@@ -85,7 +86,7 @@ pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, SceneError> {
             bin.extend_from_slice(bytemuck::cast_slice(&m.triangles));
             views.push(json!({"buffer": 0, "byteOffset": offset,
                 "byteLength": bin.len() - offset, "target": 34963}));
-            let (lo, hi) = mesh_bounds(m).unwrap_or((Vec3::ZERO, Vec3::ZERO));
+            let (lo, hi) = points_bounds(&m.positions).unwrap_or((Vec3::ZERO, Vec3::ZERO));
             let pos_acc = accessors.len();
             accessors.push(json!({"bufferView": pos_view, "componentType": 5126,
                 "count": m.positions.len(), "type": "VEC3", "min": v3(lo), "max": v3(hi)}));
@@ -99,15 +100,15 @@ pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, SceneError> {
             id
         };
         let mut node = json!({"name": o.name, "mesh": mesh_id});
-        if o.transform != Affine3A::IDENTITY {
-            node["matrix"] = matrix(&o.transform);
+        if o.world_from_object != Affine3A::IDENTITY {
+            node["matrix"] = matrix(&o.world_from_object);
         }
         nodes.push(node);
     }
 
     let mut lights = Vec::new();
     for (i, l) in scene.lights.iter().enumerate() {
-        let [x, y, z, w] = l.to_array();
+        let [x, y, z, w] = l.light.to_array();
         let name = format!("light{i}");
         if w == 0.0 {
             let d = Vec3::new(x, y, z);

@@ -1,11 +1,14 @@
 //! Scenes for shadowvol: loaders (glTF 2.0, OBJ, STL, PLY), procedural meshes, and the paper's presets.
 //!
-//! * [`Scene`]: objects (a shared [`Mesh`](shadowvol_mesh_topology::Mesh) and a world transform),
-//!   lights, a camera and the [`Effects`] the scene calls for. Load one with [`Scene::load`]
-//!   (`.gltf`, `.glb`, `.obj`, `.stl`, `.ply`), build a preset with [`preset`], or either with
-//!   [`Scene::from_name_or_path`]. [`Scene::topology`] gives the backends'
-//!   [`TopologyScene`](shadowvol_silhouette::TopologyScene) (instances share one edge table);
-//!   [`Scene::baked_mesh`] merges everything into one world-space mesh, transforms applied in
+//! * [`Scene`]: the one scene model. Its [`geometry`](Scene::geometry) holds the casters: shared
+//!   meshes, each welded once into an [`EdgeTable`](shadowvol_mesh_topology::EdgeTable), and the
+//!   objects (instances) that place them with a world transform; it is the
+//!   [`TopologyScene`](shadowvol_silhouette::TopologyScene) backends prepare, borrowed, never
+//!   converted. Beside it: [`Receiver`]s (a ground, a backdrop), [`SceneLight`]s (each light
+//!   with its [`Emission`]), a camera and the [`Effects`] the scene calls for. Load one with
+//!   [`Scene::load`] (`.gltf`, `.glb`, `.obj`, `.stl`, `.ply`), build a preset with [`preset`],
+//!   or either with [`Scene::from_name_or_path`]. [`Scene::surfaces`] lists what is drawn;
+//!   [`Scene::baked_table`] merges everything into one world-space table, transforms applied in
 //!   `f32` on the host.
 //! * [`gltf_load`]: glTF loading with node transforms, shared meshes, cameras and
 //!   `KHR_lights_punctual`, validating accessor contents; [`obj`], [`stl`], [`ply`]: OBJ, STL
@@ -21,14 +24,16 @@
 //! use shadowvol_scenes::{preset, Scene};
 //!
 //! let scene = preset("spheres-100x1k")?;
-//! assert_eq!(scene.objects.len(), 100);
+//! assert_eq!(scene.geometry.objects.len(), 100);
 //! assert_eq!(scene.triangle_count(), 100 * 1_000);
-//! let topology = scene.topology()?; // one shared edge table for the 100 instances
-//! assert_eq!(topology.objects.len(), 100);
-//! assert_eq!(scene.baked_mesh()?.triangles.len(), 100_000);
+//! // One edge table, shared by the 100 instances.
+//! let first = &scene.geometry.objects[0].table;
+//! assert!(scene.geometry.objects.iter().all(|o| std::sync::Arc::ptr_eq(&o.table, first)));
+//! assert_eq!(scene.baked_table()?.triangles.len(), 100_000);
 //! # Ok::<(), shadowvol_scenes::SceneError>(())
 //! ```
 
+mod camera;
 pub mod emission;
 mod glb_write;
 pub mod gltf_load;
@@ -42,6 +47,7 @@ mod scene;
 pub mod staging;
 pub mod stl;
 
+pub use camera::{box_centre_radius, Camera, InvalidCamera};
 pub use emission::{Emission, SpotCone};
 pub use glb_write::{export_glb, glb_container, to_glb};
 pub use gltf_load::{
@@ -49,8 +55,8 @@ pub use gltf_load::{
 };
 pub use presets::{is_preset, preset, preset_names, presets, PresetInfo};
 pub use scene::{
-    apply_f32, box_centre_radius, mesh_bounds, transformed, Camera, Effects, InvalidCamera, Object,
-    Scene,
+    apply_f32, mesh_bounds, points_bounds, transformed, Effects, Receiver, Scene, SceneLight,
+    Surface, BACKDROP, CASTER_ALBEDO, GROUND, RECEIVER_ALBEDO,
 };
 
 use shadowvol_mesh_topology::MeshError;

@@ -1,10 +1,8 @@
 //! Opening a scene: the file loaders chosen by extension, and presets by name.
 
-use crate::scene::{file_name, Object, Scene};
+use crate::scene::{file_name, Scene};
 use crate::SceneError;
-use glam::Affine3A;
 use std::path::Path;
-use std::sync::Arc;
 
 impl Scene {
     /// Loads a scene file: `.gltf` or `.glb` (objects, lights, camera), or `.obj`, `.stl`,
@@ -39,15 +37,14 @@ impl Scene {
                     _ => (crate::ply::load_ply(path)?, Vec::new()),
                 };
                 let name = file_name(path);
-                let scene = Self {
-                    objects: vec![Object {
-                        name: name.clone(),
-                        mesh: Arc::new(mesh),
-                        transform: Affine3A::IDENTITY,
-                    }],
-                    name,
-                    ..Self::default()
-                };
+                // The table names the file alone: the loader's own errors already did.
+                let scene = Self::single(name, &mesh).map_err(|e| match e {
+                    SceneError::Mesh { source, .. } => SceneError::Mesh {
+                        what: path.display().to_string(),
+                        source,
+                    },
+                    e => e,
+                })?;
                 Ok((scene, notes))
             }
             _ => Err(SceneError::UnsupportedFormat {

@@ -1,7 +1,8 @@
 //! The paper's scenes as presets (names as in DESIGN.md), generated lazily on request.
 
 use crate::procedural::{icosphere, loop_subdivide_levels, town, TownParams};
-use crate::scene::{Camera, Effects, Object, Scene};
+use crate::scene::Scene;
+use crate::Camera;
 use crate::SceneError;
 use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::Mesh;
@@ -142,27 +143,27 @@ pub fn is_preset(name: &str) -> bool {
 /// [`SceneError::UnknownPreset`] listing the known names.
 pub fn preset(name: &str) -> Result<Scene, SceneError> {
     let scene = match name {
-        "bunnies-10-individual" => bunnies(name),
-        "bunnies-10-baked" => bunnies(name).baked()?,
-        "spheres-10-individual" => sphere_grid(name, SPHERE_10_TRIANGLES, 5, 2),
-        "spheres-10-baked" => sphere_grid(name, SPHERE_10_TRIANGLES, 5, 2).baked()?,
-        "sphere-1m" => sphere_grid(name, 1_000_000, 1, 1),
-        "sphere-100k" => sphere_grid(name, 100_000, 1, 1),
-        "spheres-100x10k" => sphere_grid(name, 10_000, 10, 10),
-        "spheres-100x1k" => sphere_grid(name, 1_000, 10, 10),
-        "sphere-10k" => sphere_grid(name, 10_000, 1, 1),
-        "sphere-1k" => sphere_grid(name, 1_000, 1, 1),
-        "bunny" => single_bunny(name, 0),
-        "bunny-subdivided" => single_bunny(name, BUNNY_LEVELS),
-        "town" => town_scene(),
+        "bunnies-10-individual" => bunnies(name)?,
+        "bunnies-10-baked" => bunnies(name)?.baked()?,
+        "spheres-10-individual" => sphere_grid(name, SPHERE_10_TRIANGLES, 5, 2)?,
+        "spheres-10-baked" => sphere_grid(name, SPHERE_10_TRIANGLES, 5, 2)?.baked()?,
+        "sphere-1m" => sphere_grid(name, 1_000_000, 1, 1)?,
+        "sphere-100k" => sphere_grid(name, 100_000, 1, 1)?,
+        "spheres-100x10k" => sphere_grid(name, 10_000, 10, 10)?,
+        "spheres-100x1k" => sphere_grid(name, 1_000, 10, 10)?,
+        "sphere-10k" => sphere_grid(name, 10_000, 1, 1)?,
+        "sphere-1k" => sphere_grid(name, 1_000, 1, 1)?,
+        "bunny" => single_bunny(name, 0)?,
+        "bunny-subdivided" => single_bunny(name, BUNNY_LEVELS)?,
+        "town" => town_scene()?,
         // Unlisted (so `shadowvol scenes` does not generate it): the 10^7-triangle limit test.
-        "sphere-10m" => sphere_grid(name, 10_000_000, 1, 1),
+        "sphere-10m" => sphere_grid(name, 10_000_000, 1, 1)?,
         _ => match name.strip_prefix("hard-").and_then(|case| {
             shadowvol_silhouette::corpus::cases()
                 .into_iter()
                 .find(|c| c.name == case)
         }) {
-            Some(case) => hard_scene(name, &case),
+            Some(case) => hard_scene(name, &case)?,
             None => {
                 return Err(SceneError::UnknownPreset {
                     name: name.to_owned(),
@@ -175,84 +176,81 @@ pub fn preset(name: &str) -> Result<Scene, SceneError> {
 }
 
 /// `cols × rows` instances of `mesh` (footprint `spacing`) on the `XZ` plane, centred at the
-/// origin, translated only (translations are small integers: exact in `f32`).
-fn grid_objects(prefix: &str, mesh: &Arc<Mesh>, cols: u32, rows: u32, spacing: f32) -> Vec<Object> {
-    let mut objects = Vec::with_capacity((cols * rows) as usize);
+/// origin at height `y`, translated only (translations are small integers: exact in `f32`).
+fn grid_objects(
+    scene: &mut Scene,
+    prefix: &str,
+    mesh: &Mesh,
+    (cols, rows): (u32, u32),
+    spacing: f32,
+    y: f32,
+) -> Result<(), SceneError> {
+    let table = scene.add_mesh(prefix, mesh)?;
     for r in 0..rows {
         for c in 0..cols {
             let x = (c as f32 - (cols - 1) as f32 * 0.5) * spacing;
             let z = (r as f32 - (rows - 1) as f32 * 0.5) * spacing;
-            objects.push(Object {
-                name: format!("{prefix}{}", r * cols + c),
-                mesh: Arc::clone(mesh),
-                transform: Affine3A::from_translation(Vec3::new(x, 0.0, z)),
-            });
+            scene.add_object(
+                format!("{prefix}{}", r * cols + c),
+                Arc::clone(&table),
+                Affine3A::from_translation(Vec3::new(x, y, z)),
+            );
         }
     }
-    objects
+    Ok(())
 }
 
-/// A scene named `name` of `objects` standing on the ground plane y = 0.
-fn on_ground(name: String, objects: Vec<Object>) -> Scene {
-    Scene {
-        name,
-        objects,
-        effects: Effects {
-            ground_y: Some(0.0),
-            ..Effects::default()
-        },
-        ..Scene::default()
-    }
+/// Places the ground at y = 0 under the objects, the `lights` and a camera framing the
+/// objects from `from`.
+fn on_ground_framed(mut scene: Scene, lights: Vec<Light>, from: Vec3) -> Scene {
+    scene.set_ground(Some(0.0));
+    framed(scene, lights, from)
 }
 
 fn framed(mut scene: Scene, lights: Vec<Light>, from: Vec3) -> Scene {
-    scene.lights = lights;
+    scene.add_unit_lights(lights);
     if let Some((lo, hi)) = scene.bounds() {
         scene.camera = Some(Camera::framing(lo, hi, from));
     }
     scene
 }
 
-fn bunnies(name: &str) -> Scene {
-    let mesh = Arc::new(loop_subdivide_levels(&bunny(), BUNNY_LEVELS));
+fn bunnies(name: &str) -> Result<Scene, SceneError> {
+    let mesh = loop_subdivide_levels(&bunny(), BUNNY_LEVELS);
     // The bunny spans about 10 x 9.7 x 7.5 units, standing on y = 0.
-    let scene = on_ground(name.to_owned(), grid_objects("bunny", &mesh, 5, 2, 12.0));
-    framed(
+    let mut scene = Scene::new(name);
+    grid_objects(&mut scene, "bunny", &mesh, (5, 2), 12.0, 0.0)?;
+    Ok(on_ground_framed(
         scene,
         vec![Light::point(Vec3::new(-20.0, 40.0, 25.0))],
         Vec3::new(0.4, 0.6, 1.0),
-    )
+    ))
 }
 
 /// One bunny (`levels` Loop subdivisions) standing on the ground, lit from above and to the side.
-fn single_bunny(name: &str, levels: u32) -> Scene {
+fn single_bunny(name: &str, levels: u32) -> Result<Scene, SceneError> {
     let base = bunny();
-    let mesh = Arc::new(if levels == 0 {
+    let mesh = if levels == 0 {
         base
     } else {
         loop_subdivide_levels(&base, levels)
-    });
-    let scene = on_ground(name.to_owned(), grid_objects("bunny", &mesh, 1, 1, 12.0));
-    framed(
+    };
+    let mut scene = Scene::new(name);
+    grid_objects(&mut scene, "bunny", &mesh, (1, 1), 12.0, 0.0)?;
+    Ok(on_ground_framed(
         scene,
         vec![Light::point(Vec3::new(-8.0, 25.0, 12.0))],
         Vec3::new(0.4, 0.6, 1.0),
-    )
+    ))
 }
 
-fn sphere_grid(name: &str, triangles: usize, cols: u32, rows: u32) -> Scene {
-    let mesh = Arc::new(icosphere(triangles, 1.0));
+fn sphere_grid(name: &str, triangles: usize, cols: u32, rows: u32) -> Result<Scene, SceneError> {
+    let mesh = icosphere(triangles, 1.0);
     // Spheres of radius 1 stand on y = 0 (centre at y = 1), 3 units apart.
-    let objects = grid_objects("sphere", &mesh, cols, rows, 3.0)
-        .into_iter()
-        .map(|mut o| {
-            o.transform.translation.y = 1.0;
-            o
-        })
-        .collect();
+    let mut scene = Scene::new(name);
+    grid_objects(&mut scene, "sphere", &mesh, (cols, rows), 3.0, 1.0)?;
     let extent = 3.0 * cols.max(rows) as f32;
-    let scene = on_ground(name.to_owned(), objects);
-    framed(
+    Ok(on_ground_framed(
         scene,
         vec![Light::point(Vec3::new(
             -0.6 * extent,
@@ -260,42 +258,30 @@ fn sphere_grid(name: &str, triangles: usize, cols: u32, rows: u32) -> Scene {
             0.5 * extent,
         ))],
         Vec3::new(0.4, 0.7, 1.0),
-    )
+    ))
 }
 
-fn town_scene() -> Scene {
-    let mesh = Arc::new(town(&TownParams::default()));
-    let scene = on_ground(
-        "town".to_owned(),
-        vec![Object {
-            name: "town".to_owned(),
-            mesh,
-            transform: Affine3A::IDENTITY,
-        }],
-    );
+fn town_scene() -> Result<Scene, SceneError> {
+    let mut scene = Scene::new("town");
+    let table = scene.add_mesh("town", &town(&TownParams::default()))?;
+    scene.add_object("town", table, Affine3A::IDENTITY);
     // The sun exactly along +Y: every wall triangle is exactly parallel to the light.
-    framed(
+    Ok(on_ground_framed(
         scene,
         vec![Light::directional(Vec3::Y)],
         Vec3::new(0.5, 0.8, 1.0),
-    )
+    ))
 }
 
-fn hard_scene(name: &str, case: &shadowvol_silhouette::corpus::CorpusCase) -> Scene {
-    let objects = case
-        .objects
-        .iter()
-        .enumerate()
-        .map(|(i, (mesh, t))| Object {
-            name: format!("{}#{i}", case.name),
-            mesh: Arc::new(mesh.clone()),
-            transform: *t,
-        })
-        .collect();
-    let scene = Scene {
-        name: name.to_owned(),
-        objects,
-        ..Scene::default()
-    };
-    framed(scene, case.lights.clone(), Vec3::new(0.6, 0.5, 1.0))
+fn hard_scene(
+    name: &str,
+    case: &shadowvol_silhouette::corpus::CorpusCase,
+) -> Result<Scene, SceneError> {
+    let mut scene = Scene::new(name);
+    for (i, (mesh, t)) in case.objects.iter().enumerate() {
+        let what = format!("{}#{i}", case.name);
+        let table = scene.add_mesh(&what, mesh)?;
+        scene.add_object(what, table, *t);
+    }
+    Ok(framed(scene, case.lights.clone(), Vec3::new(0.6, 0.5, 1.0)))
 }

@@ -1,187 +1,121 @@
-//! The scene model: objects (a shared mesh and a transform), lights, a camera and the effects the
-//! scene calls for.
+//! The scene model: shared meshes with their edge tables and the instances that place them
+//! (a [`TopologyScene`], what backends prepare), receivers, lights with their emission, a camera
+//! and the effects the scene calls for.
+//!
+//! Loaders and presets build it once; everything after borrows it: backends prepare
+//! [`Scene::geometry`], the renderer's pipelines and plan read [`Scene::surfaces`] and
+//! [`Scene::lights`], and the reference reads the same views.
 
-use crate::{Emission, SceneError};
-use glam::{Affine3A, DMat4, DVec3, Mat4, Vec3};
+use crate::{Camera, Emission, SceneError};
+use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use shadowvol_robust_math::Light;
 use shadowvol_silhouette::{SceneObject, TopologyScene};
-use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 
-/// One object: a mesh in its own frame, placed in the world by `transform`.
-///
-/// Several objects may share one mesh (`Arc::ptr_eq`); [`Scene::topology`] then builds its edge
-/// table once.
-#[derive(Debug, Clone)]
-pub struct Object {
-    /// A name for messages and reports (the glTF node name, or a generated one).
-    pub name: String,
-    /// The mesh in object space.
-    pub mesh: Arc<Mesh>,
-    /// World-from-object transform (`f32`, affine, expected to be invertible).
-    pub transform: Affine3A,
-}
+/// Diffuse colour of every caster (linear RGB): a light grey.
+pub const CASTER_ALBEDO: [f32; 3] = [0.8, 0.8, 0.8];
 
-/// A pinhole camera in world space (right-handed, `y` up by default) with an infinite far
-/// plane (shadow volumes need it): the one camera of the workspace, which files and presets fill
-/// in and the renderer, the reference and the viewer use.
+/// Diffuse colour of the receivers a scene adds ([`Scene::set_ground`], [`Scene::add_backdrop`]):
+/// a warm grey, so that they read apart from the casters.
+pub const RECEIVER_ALBEDO: [f32; 3] = [0.75, 0.72, 0.65];
+
+/// The name of the ground receiver ([`Scene::set_ground`]).
+pub const GROUND: &str = "ground";
+
+/// The name of the backdrop receiver ([`Scene::add_backdrop`]).
+pub const BACKDROP: &str = "backdrop";
+
+/// A light and what it emits.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Camera {
-    /// Eye position (world units).
-    pub eye: Vec3,
-    /// A point the camera looks at.
-    pub target: Vec3,
-    /// Up direction (need not be orthogonal to the view direction, must not be parallel to it).
-    pub up: Vec3,
-    /// Vertical field of view, radians, in `(0, π)`.
-    pub fov_y: f32,
-    /// Near-plane distance (world units, `> 0`). There is no far plane.
-    pub near: f32,
+pub struct SceneLight {
+    /// Where it is, homogeneous (`w = 1` point, `w = 0` directional towards the light): the
+    /// light every silhouette predicate receives.
+    pub light: Light,
+    /// glTF `KHR_lights_punctual` colour, intensity, range and cone; `None` for a unit light
+    /// (white, no falloff: presets, `--light`, the default key light).
+    pub emission: Option<Emission>,
 }
 
-/// Why a camera cannot be used (what [`Camera::validate`] found), in words.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("{0}")]
-pub struct InvalidCamera(pub String);
-
-impl Camera {
-    /// A camera at `eye` looking at `target`, `y` up, 45° vertical field of view, near plane at
-    /// 1/1000 of the eye-target distance.
+impl SceneLight {
+    /// A unit light (no [`Emission`]).
     #[must_use]
-    pub fn look_at(eye: Vec3, target: Vec3) -> Self {
-        let d = (target - eye).length().max(1e-6);
-        let up = if (target - eye).normalize_or_zero().abs().y > 0.999 {
-            Vec3::Z
-        } else {
-            Vec3::Y
-        };
+    pub fn unit(light: Light) -> Self {
         Self {
-            eye,
-            target,
-            up,
-            fov_y: 45f32.to_radians(),
-            near: d * 1e-3,
+            light,
+            emission: None,
         }
     }
+}
 
-    /// Checks that the camera is usable: finite, eye apart from target, `up` not along the
-    /// view direction, `fov_y` in `(0, π)`, `near > 0`.
+/// A surface that is drawn and lit but casts no shadow and has no silhouette: a ground plane or
+/// a backdrop. World space (no transform).
+#[derive(Debug, Clone)]
+pub struct Receiver {
+    /// A name for the plan and messages ([`GROUND`], [`BACKDROP`]).
+    pub name: String,
+    /// Its triangles, welded, in world space.
+    pub table: Arc<EdgeTable>,
+    /// Diffuse colour, linear RGB in `[0, 1]`.
+    pub albedo: [f32; 3],
+}
+
+impl Receiver {
+    /// A square of two triangles centred at `centre`, facing `normal`, of half-size `half`.
     ///
-    /// # Errors
-    /// [`InvalidCamera`] naming the bad field.
-    pub fn validate(&self) -> Result<(), InvalidCamera> {
-        let finite = self.eye.is_finite()
-            && self.target.is_finite()
-            && self.up.is_finite()
-            && self.fov_y.is_finite()
-            && self.near.is_finite();
-        if !finite {
-            return Err(InvalidCamera(format!(
-                "camera has a non-finite component: {self:?}"
-            )));
-        }
-        if self.eye == self.target {
-            return Err(InvalidCamera("camera eye equals its target".into()));
-        }
-        if (self.target - self.eye).cross(self.up).length_squared() == 0.0 {
-            return Err(InvalidCamera(
-                "camera up is parallel to the view direction".into(),
-            ));
-        }
-        if !(self.fov_y > 0.0 && self.fov_y < std::f32::consts::PI) {
-            return Err(InvalidCamera(format!(
-                "camera fov_y is {} rad; it must be in (0, π)",
-                self.fov_y
-            )));
-        }
-        if self.near <= 0.0 {
-            return Err(InvalidCamera(format!(
-                "camera near is {}; it must be > 0",
-                self.near
-            )));
-        }
-        Ok(())
-    }
-
-    /// View matrix (world → camera), `f32`.
+    /// # Panics
+    /// Never for finite inputs: four distinct finite corners always make a table.
     #[must_use]
-    pub fn view(&self) -> Mat4 {
-        glam::camera::rh::view::look_at_mat4(self.eye, self.target, self.up)
-    }
-
-    /// Projection with an infinite far plane and depth range `[0, 1]` (points with `w = 0` map
-    /// to depth exactly 1), `f32`.
-    #[must_use]
-    pub fn projection(&self, aspect: f32) -> Mat4 {
-        glam::camera::rh::proj::directx::perspective_infinite(self.fov_y, aspect, self.near)
-    }
-
-    /// `projection * view`, the matrix every pass uses.
-    #[must_use]
-    pub fn view_proj(&self, aspect: f32) -> Mat4 {
-        self.projection(aspect) * self.view()
-    }
-
-    /// The same matrices in `f64` (for the reference and the plan).
-    #[must_use]
-    pub fn view_proj_f64(&self, aspect: f64) -> DMat4 {
-        let v = glam::dcamera::rh::view::look_at_mat4(
-            self.eye.as_dvec3(),
-            self.target.as_dvec3(),
-            self.up.as_dvec3(),
-        );
-        glam::dcamera::rh::proj::directx::perspective_infinite(
-            f64::from(self.fov_y),
-            aspect,
-            f64::from(self.near),
-        ) * v
-    }
-
-    /// The four corners of the near-plane rectangle in world space (`f64`), counter-clockwise
-    /// as seen from the eye: bottom-left, bottom-right, top-right, top-left.
-    #[must_use]
-    pub fn near_corners(&self, aspect: f64) -> [DVec3; 4] {
-        let eye = self.eye.as_dvec3();
-        let f = (self.target.as_dvec3() - eye).normalize();
-        let r = f.cross(self.up.as_dvec3()).normalize();
-        let u = r.cross(f);
-        let n = f64::from(self.near);
-        let h = n * (f64::from(self.fov_y) * 0.5).tan();
-        let w = h * aspect;
-        let c = eye + f * n;
-        [
-            c - r * w - u * h,
-            c + r * w - u * h,
-            c + r * w + u * h,
-            c - r * w + u * h,
-        ]
-    }
-
-    /// A camera that sees the axis-aligned box `[min, max]` whole, from the direction `from`
-    /// (pointing from the box centre towards the eye), with a 45° vertical field of view.
-    #[must_use]
-    pub fn framing(min: Vec3, max: Vec3, from: Vec3) -> Self {
-        let (centre, radius) = box_centre_radius(min, max);
-        let radius = radius.max(1e-3);
-        let fov_y = 45f32.to_radians();
-        let distance = radius / (fov_y * 0.5).sin() * 1.05;
-        let dir = from
-            .try_normalize()
-            .unwrap_or(Vec3::new(0.3, 0.5, 1.0).normalize());
-        let up = if dir.cross(Vec3::Y).length_squared() < 1e-6 {
-            Vec3::Z
-        } else {
-            Vec3::Y
+    pub fn plane(name: &str, centre: Vec3, normal: Vec3, half: f32) -> Self {
+        let n = normal.normalize_or(Vec3::Y);
+        let helper = if n.y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
+        let u = n.cross(helper).normalize() * half;
+        let v = n.cross(u);
+        let mesh = Mesh {
+            positions: vec![
+                centre - u - v,
+                centre + u - v,
+                centre + u + v,
+                centre - u + v,
+            ],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
         };
         Self {
-            eye: centre + dir * distance,
-            target: centre,
-            up,
-            fov_y,
-            near: (distance - radius).max(distance * 1e-3) * 0.5,
+            name: name.to_owned(),
+            table: Arc::new(EdgeTable::build(&mesh).expect("a finite square")),
+            albedo: RECEIVER_ALBEDO,
         }
+    }
+}
+
+/// One drawn surface of a scene, as [`Scene::surfaces`] lists them: the casters in
+/// [`Scene::geometry`] order, then the receivers. Its index in that list is the object id of
+/// the renderer's per-pixel ids and of the plan.
+#[derive(Debug, Clone, Copy)]
+pub struct Surface<'a> {
+    /// The object's or receiver's name.
+    pub name: &'a str,
+    /// Its welded triangles in object space.
+    pub table: &'a Arc<EdgeTable>,
+    /// World from object (the identity for receivers).
+    pub world_from_object: Affine3A,
+    /// Diffuse colour, linear RGB.
+    pub albedo: [f32; 3],
+    /// False for receivers, and for every object when [`Effects::shadows`] is off.
+    pub casts_shadows: bool,
+}
+
+impl Surface<'_> {
+    /// The table's positions in world space, each transformed in `f32` with [`apply_f32`]: the
+    /// positions every pipeline draws and the reference casts against.
+    #[must_use]
+    pub fn world_positions(&self) -> Vec<Vec3> {
+        self.table
+            .positions
+            .iter()
+            .map(|&p| apply_f32(&self.world_from_object, p))
+            .collect()
     }
 }
 
@@ -194,10 +128,6 @@ pub struct Effects {
     pub ambient: f32,
     /// The objects never move: silhouettes can be cached while the lights stand still.
     pub static_geometry: bool,
-    /// Height of a horizontal receiver plane (`y = ground_y`, facing `+Y`) the renderer should
-    /// draw under the objects so shadows have somewhere to fall. It is not an object: it casts
-    /// nothing and is not part of silhouette extraction. `None`: no receiver plane.
-    pub ground_y: Option<f32>,
 }
 
 impl Default for Effects {
@@ -206,27 +136,28 @@ impl Default for Effects {
             shadows: true,
             ambient: 0.2,
             static_geometry: true,
-            ground_y: None,
         }
     }
 }
 
-/// A scene: objects, lights, an optional camera and the effects it calls for.
+/// A scene: shared meshes with their edge tables placed by instances, receivers, lights, an
+/// optional camera and the effects it calls for.
 ///
 /// Load one from a file with [`Scene::load`], build a preset with [`crate::preset`], or either
-/// with [`Scene::from_name_or_path`].
+/// with [`Scene::from_name_or_path`]; build one by hand with [`Scene::add_mesh`] and
+/// [`Scene::add_object`].
 #[derive(Debug, Clone, Default)]
 pub struct Scene {
     /// A name for reports (the preset name or the file name).
     pub name: String,
-    /// The objects, in order (glTF: depth-first node order).
-    pub objects: Vec<Object>,
-    /// Lights in world space (homogeneous: `w = 1` point, `w = 0` directional towards the light).
-    pub lights: Vec<Light>,
-    /// What each light emits (glTF `KHR_lights_punctual` colour, intensity, range, cone): empty,
-    /// or one per light in the order of `lights`. Empty means the renderer's unit lights (white,
-    /// no falloff; presets and `--light`).
-    pub emission: Vec<Emission>,
+    /// The casters: each object (instance) an edge table in object space and its
+    /// world-from-object transform; instances of one mesh share one `Arc<EdgeTable>`. Objects
+    /// are in file order (glTF: depth-first node order). This is what backends prepare.
+    pub geometry: TopologyScene,
+    /// Surfaces that receive shadows but cast none (ground, backdrop), drawn after the casters.
+    pub receivers: Vec<Receiver>,
+    /// The lights, each with its emission.
+    pub lights: Vec<SceneLight>,
     /// The camera, if the scene has one.
     pub camera: Option<Camera>,
     /// What the renderer should simulate.
@@ -234,104 +165,324 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Total number of input triangles over all objects (instances counted each time).
+    /// An empty scene named `name`.
+    #[must_use]
+    pub fn new(name: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            ..Self::default()
+        }
+    }
+
+    /// Welds `mesh` and builds its edge table, to be placed by [`Scene::add_object`] (once per
+    /// instance).
+    ///
+    /// # Errors
+    /// [`SceneError::Mesh`] naming `what` if the mesh is invalid (non-finite position, index
+    /// out of range) or too large for the available memory.
+    pub fn add_mesh(&mut self, what: &str, mesh: &Mesh) -> Result<Arc<EdgeTable>, SceneError> {
+        EdgeTable::build(mesh)
+            .map(Arc::new)
+            .map_err(|source| SceneError::Mesh {
+                what: what.to_owned(),
+                source,
+            })
+    }
+
+    /// Adds an object: `table` (from [`Scene::add_mesh`], possibly shared) placed by
+    /// `transform` (world from object, invertible).
+    pub fn add_object(
+        &mut self,
+        name: impl Into<String>,
+        table: Arc<EdgeTable>,
+        transform: Affine3A,
+    ) {
+        self.geometry.objects.push(SceneObject {
+            name: name.into(),
+            table,
+            world_from_object: transform,
+        });
+    }
+
+    /// A scene of one object, `mesh` at the identity, named `name`.
+    ///
+    /// # Errors
+    /// As [`Scene::add_mesh`].
+    pub fn single(name: impl Into<String>, mesh: &Mesh) -> Result<Self, SceneError> {
+        let mut scene = Self::new(name);
+        let table = scene.add_mesh(&scene.name.clone(), mesh)?;
+        scene.add_object(scene.name.clone(), table, Affine3A::IDENTITY);
+        Ok(scene)
+    }
+
+    /// Adds unit lights (no [`Emission`]).
+    pub fn add_unit_lights(&mut self, lights: impl IntoIterator<Item = Light>) {
+        self.lights.extend(lights.into_iter().map(SceneLight::unit));
+    }
+
+    /// The lights' homogeneous positions, in order: what silhouette backends take.
+    #[must_use]
+    pub fn light_positions(&self) -> Vec<Light> {
+        self.lights.iter().map(|l| l.light).collect()
+    }
+
+    /// Every drawn surface: the casters in [`Scene::geometry`] order, then the receivers. The
+    /// position in this list is the surface's object id.
+    pub fn surfaces(&self) -> impl ExactSizeIterator<Item = Surface<'_>> + Clone + '_ {
+        let casts = self.effects.shadows;
+        let n = self.geometry.objects.len();
+        (0..n + self.receivers.len()).map(move |i| match self.geometry.objects.get(i) {
+            Some(o) => Surface {
+                name: &o.name,
+                table: &o.table,
+                world_from_object: o.world_from_object,
+                albedo: CASTER_ALBEDO,
+                casts_shadows: casts,
+            },
+            None => {
+                let r = &self.receivers[i - n];
+                Surface {
+                    name: &r.name,
+                    table: &r.table,
+                    world_from_object: Affine3A::IDENTITY,
+                    albedo: r.albedo,
+                    casts_shadows: false,
+                }
+            }
+        })
+    }
+
+    /// Every surface ([`Scene::surfaces`] order) as a topology: the casters with their
+    /// transforms, then the receivers at the identity. The tables are shared, not copied; what
+    /// a renderer lays out once to draw every surface.
+    #[must_use]
+    pub fn surface_geometry(&self) -> TopologyScene {
+        TopologyScene {
+            objects: self
+                .surfaces()
+                .map(|s| SceneObject {
+                    name: s.name.to_owned(),
+                    table: Arc::clone(s.table),
+                    world_from_object: s.world_from_object,
+                })
+                .collect(),
+        }
+    }
+
+    /// Total number of input triangles over all objects (instances counted each time;
+    /// receivers not counted).
     #[must_use]
     pub fn triangle_count(&self) -> usize {
-        self.objects.iter().map(|o| o.mesh.triangles.len()).sum()
+        self.geometry
+            .objects
+            .iter()
+            .map(|o| o.table.stats.triangles)
+            .sum()
     }
 
     /// Total number of input vertices over all objects (instances counted each time).
     #[must_use]
     pub fn vertex_count(&self) -> usize {
-        self.objects.iter().map(|o| o.mesh.positions.len()).sum()
+        self.geometry
+            .objects
+            .iter()
+            .map(|o| o.table.stats.vertices)
+            .sum()
     }
 
-    /// The topology scene backends prepare: one [`SceneObject`] per object, with the object's
-    /// transform. Objects that share a mesh (`Arc::ptr_eq`) share one `Arc<EdgeTable>`.
-    ///
-    /// # Errors
-    /// [`SceneError::Mesh`] naming the object if its mesh is invalid (non-finite position,
-    /// index out of range, too large).
-    pub fn topology(&self) -> Result<TopologyScene, SceneError> {
-        let mut tables: HashMap<*const Mesh, Arc<EdgeTable>> = HashMap::new();
-        let mut objects = Vec::with_capacity(self.objects.len());
-        for (i, o) in self.objects.iter().enumerate() {
-            let key = Arc::as_ptr(&o.mesh);
-            let table = match tables.get(&key) {
-                Some(t) => Arc::clone(t),
-                None => {
-                    let t =
-                        Arc::new(
-                            EdgeTable::build(&o.mesh).map_err(|source| SceneError::Mesh {
-                                what: format!("object {i} '{}'", o.name),
-                                source,
-                            })?,
-                        );
-                    tables.insert(key, Arc::clone(&t));
-                    t
-                }
-            };
-            objects.push(SceneObject {
-                name: o.name.clone(),
-                table,
-                world_from_object: o.transform,
-            });
+    /// The height of the ground receiver, if the scene has one.
+    #[must_use]
+    pub fn ground_y(&self) -> Option<f32> {
+        self.receivers
+            .iter()
+            .find(|r| r.name == GROUND)
+            .and_then(|r| r.table.positions.first())
+            .map(|p| p.y)
+    }
+
+    /// Sets the ground: `Some(y)` places a horizontal receiver plane at height `y` (facing
+    /// `+Y`) under the casters (centred on their vertices' world bounds, three bounding
+    /// diameters across); `None` removes it. It is not
+    /// an object: it casts nothing and is not part of silhouette extraction.
+    pub fn set_ground(&mut self, y: Option<f32>) {
+        self.receivers.retain(|r| r.name != GROUND);
+        let casters = self
+            .geometry
+            .objects
+            .iter()
+            .filter_map(|o| world_bounds(&o.table.positions, o.world_from_object))
+            .reduce(|(lo, hi), (l, h)| (lo.min(l), hi.max(h)));
+        if let (Some(y), Some((lo, hi))) = (y, casters) {
+            let (c, r) = crate::box_centre_radius(lo, hi);
+            let half = (2.0 * r).max(1e-3) * 3.0;
+            self.receivers.push(Receiver::plane(
+                GROUND,
+                Vec3::new(c.x, y, c.z),
+                Vec3::Y,
+                half,
+            ));
         }
-        Ok(TopologyScene { objects })
     }
 
-    /// All objects merged into one world-space mesh: each object's transform is applied to its
-    /// positions in `f32` on the host (with [`apply_f32`]), and the objects are concatenated in
-    /// order, so vertex `i` of object `k` gets index `(vertices of objects before k) + i`.
-    ///
-    /// # Errors
-    /// [`SceneError::Mesh`] if the result is too large for `u32` indexing or a mesh is invalid.
-    pub fn baked_mesh(&self) -> Result<Mesh, SceneError> {
-        let mut out = Mesh {
-            positions: Vec::with_capacity(self.vertex_count()),
-            triangles: Vec::with_capacity(self.triangle_count()),
+    /// Adds a receiver plane behind the scene as seen from the first light, so that shadows
+    /// have somewhere to fall (used for the `hard-*` scenes, which have no ground). Does
+    /// nothing without lights or vertices.
+    pub fn add_backdrop(&mut self) {
+        let (Some(light), Some((lo, hi))) = (self.lights.first(), self.surface_bounds()) else {
+            return;
         };
-        for (i, o) in self.objects.iter().enumerate() {
-            let moved = transformed(&o.mesh, &o.transform);
-            out.append(&moved).map_err(|source| SceneError::Mesh {
-                what: format!("baking object {i} '{}'", o.name),
-                source,
-            })?;
+        let (c, r) = crate::box_centre_radius(lo, hi);
+        let r = r.max(1e-3);
+        let l = light.light.to_array();
+        let away = if l[3] == 0.0 {
+            -Vec3::new(l[0], l[1], l[2])
+        } else {
+            c - Vec3::new(l[0], l[1], l[2]) / l[3]
+        };
+        let away = away.normalize_or(Vec3::NEG_Y);
+        self.receivers.push(Receiver::plane(
+            BACKDROP,
+            c + away * (r * 1.5),
+            -away,
+            r * 6.0,
+        ));
+    }
+
+    /// World-space bounds `(min, max)` of every surface's vertices (casters and receivers),
+    /// each transformed in `f32`; `None` without vertices.
+    #[must_use]
+    pub fn surface_bounds(&self) -> Option<(Vec3, Vec3)> {
+        self.surfaces()
+            .filter_map(|s| world_bounds(&s.table.positions, s.world_from_object))
+            .reduce(|(lo, hi), (l, h)| (lo.min(l), hi.max(h)))
+    }
+
+    /// All objects merged into one world-space edge table: each object's transform applied to
+    /// its welded positions in `f32` (with [`apply_f32`]), the objects concatenated in order
+    /// and welded again. Vertex names (and [`EdgeTable::vertex_names`]) are *input* indices in
+    /// the concatenation of the objects' input vertices, so vertex `i` of object `k` is named
+    /// `(input vertices of objects before k) + i`, exactly as if the input meshes had been
+    /// transformed and concatenated before welding (the CLI's numbering). Triangle sources are
+    /// input triangle indices in the same way. One object at the identity is returned as is.
+    ///
+    /// # Errors
+    /// [`SceneError::Mesh`] if the result is too large for `u32` indexing or for the memory.
+    pub fn baked_table(&self) -> Result<Arc<EdgeTable>, SceneError> {
+        if let [o] = self.geometry.objects.as_slice() {
+            if o.world_from_object == Affine3A::IDENTITY {
+                return Ok(Arc::clone(&o.table));
+            }
         }
-        out.validate().map_err(|source| SceneError::Mesh {
-            what: format!("baked mesh of scene '{}'", self.name),
+        let what = || format!("baked mesh of scene '{}'", self.name);
+        let welded: usize = self
+            .geometry
+            .objects
+            .iter()
+            .map(|o| o.table.positions.len())
+            .sum();
+        let kept: usize = self
+            .geometry
+            .objects
+            .iter()
+            .map(|o| o.table.triangles.len())
+            .sum();
+        let mut mesh = Mesh {
+            positions: Vec::with_capacity(welded),
+            triangles: Vec::with_capacity(kept),
+        };
+        // Per vertex of `mesh`: its input name; per triangle: its input index.
+        let mut names: Vec<u32> = Vec::with_capacity(welded);
+        let mut sources: Vec<u32> = Vec::with_capacity(kept);
+        let (mut input_vertices, mut input_triangles, mut degenerate) = (0u64, 0u64, 0usize);
+        for o in &self.geometry.objects {
+            let t = &o.table;
+            let base = mesh.positions.len() as u32;
+            let offset =
+                u32::try_from(input_vertices).map_err(|_| too_large(what(), input_vertices))?;
+            let tri_offset =
+                u32::try_from(input_triangles).map_err(|_| too_large(what(), input_triangles))?;
+            mesh.positions.extend(
+                t.positions
+                    .iter()
+                    .map(|&p| apply_f32(&o.world_from_object, p)),
+            );
+            names.extend(t.vertex_names.iter().map(|&n| offset + n));
+            mesh.triangles
+                .extend(t.triangles.iter().map(|tri| tri.map(|v| base + v)));
+            sources.extend(t.triangle_sources.iter().map(|&s| tri_offset + s));
+            input_vertices += t.stats.vertices as u64;
+            input_triangles += t.stats.triangles as u64;
+            degenerate += t.stats.degenerate_triangles;
+        }
+        if u32::try_from(input_vertices).is_err() || u32::try_from(input_triangles).is_err() {
+            return Err(too_large(what(), input_vertices.max(input_triangles)));
+        }
+        let mut baked = EdgeTable::build(&mesh).map_err(|source| SceneError::Mesh {
+            what: what(),
             source,
         })?;
-        Ok(out)
+        // Names grow with the vertex index of `mesh` (within an object compact ids follow names,
+        // and objects follow each other), so a group's smallest index carries its smallest name.
+        for n in &mut baked.vertex_names {
+            *n = names[*n as usize];
+        }
+        for s in &mut baked.triangle_sources {
+            *s = sources[*s as usize];
+        }
+        baked.stats.vertices = input_vertices as usize;
+        baked.stats.triangles = input_triangles as usize;
+        baked.stats.degenerate_triangles += degenerate;
+        Ok(Arc::new(baked))
     }
 
-    /// This scene with all objects baked into one object (identity transform), keeping lights,
-    /// camera and effects.
+    /// This scene with all objects baked into one object (identity transform, see
+    /// [`Scene::baked_table`]), keeping receivers, lights, camera and effects.
     ///
     /// # Errors
-    /// As [`Scene::baked_mesh`].
+    /// As [`Scene::baked_table`].
     pub fn baked(&self) -> Result<Self, SceneError> {
+        let table = self.baked_table()?;
+        let mut geometry = TopologyScene::default();
+        geometry.objects.push(SceneObject {
+            name: format!("{} (baked)", self.name),
+            table,
+            world_from_object: Affine3A::IDENTITY,
+        });
         Ok(Self {
-            name: self.name.clone(),
-            objects: vec![Object {
-                name: format!("{} (baked)", self.name),
-                mesh: Arc::new(self.baked_mesh()?),
-                transform: Affine3A::IDENTITY,
-            }],
-            lights: self.lights.clone(),
-            emission: self.emission.clone(),
-            camera: self.camera,
-            effects: self.effects,
+            geometry,
+            ..self.clone()
         })
     }
 
     /// World-space axis-aligned bounds `(min, max)` of all objects' vertices (each object's
-    /// corners transformed), or `None` for a scene without vertices.
+    /// box corners transformed), or `None` for a scene without vertices. Receivers are not
+    /// included.
     #[must_use]
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
-        (0..self.objects.len())
+        (0..self.geometry.objects.len())
             .filter_map(|i| self.object_bounds(i))
             .reduce(|(lo, hi), (l, h)| (lo.min(l), hi.max(h)))
+    }
+
+    /// World-space bounds of object `i` (its table's box corners transformed), `None` when it
+    /// has no vertices or there is no object `i`.
+    #[must_use]
+    pub fn object_bounds(&self, i: usize) -> Option<(Vec3, Vec3)> {
+        let o = self.geometry.objects.get(i)?;
+        let (lo, hi) = points_bounds(&o.table.positions)?;
+        let mut min = Vec3::splat(f32::INFINITY);
+        let mut max = Vec3::splat(f32::NEG_INFINITY);
+        for k in 0..8 {
+            let c = Vec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            );
+            let w = o.world_from_object.transform_point3(c);
+            min = min.min(w);
+            max = max.max(w);
+        }
+        Some((min, max))
     }
 
     /// The scene's camera, or one framing its bounds (from `+x+y+z`-ish) when it has none.
@@ -345,8 +496,30 @@ impl Scene {
     }
 }
 
+/// Input vertices or triangles of a bake beyond `u32` numbering.
+fn too_large(what: String, count: u64) -> SceneError {
+    SceneError::Mesh {
+        what,
+        source: shadowvol_mesh_topology::MeshError::TooLarge {
+            what: "input vertices or triangles",
+            count,
+            limit: u64::from(u32::MAX),
+        },
+    }
+}
+
+/// Bounds of `points` transformed by `t` in `f32`; `None` for no points.
+fn world_bounds(points: &[Vec3], t: Affine3A) -> Option<(Vec3, Vec3)> {
+    let first = apply_f32(&t, *points.first()?);
+    Some(points.iter().fold((first, first), |(lo, hi), &p| {
+        let w = apply_f32(&t, p);
+        (lo.min(w), hi.max(w))
+    }))
+}
+
 /// Applies a world-from-object transform to one point in `f32`: the one definition used by
-/// [`Scene::baked_mesh`] and the glTF loader, so baked positions are reproducible bit for bit.
+/// [`Scene::baked_table`], the glTF loader, the renderer and the reference, so world positions
+/// are reproducible bit for bit.
 #[inline]
 #[must_use]
 pub fn apply_f32(t: &Affine3A, p: Vec3) -> Vec3 {
@@ -369,31 +542,18 @@ pub fn transformed(mesh: &Mesh, t: &Affine3A) -> Mesh {
 /// Axis-aligned bounds of a mesh's positions, `None` when it has none.
 #[must_use]
 pub fn mesh_bounds(mesh: &Mesh) -> Option<(Vec3, Vec3)> {
-    let first = *mesh.positions.first()?;
+    points_bounds(&mesh.positions)
+}
+
+/// Axis-aligned bounds of `points`, `None` when empty.
+#[must_use]
+pub fn points_bounds(points: &[Vec3]) -> Option<(Vec3, Vec3)> {
+    let first = *points.first()?;
     Some(
-        mesh.positions
+        points
             .iter()
             .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))),
     )
-}
-
-/// The centre and half the diagonal of the box `[lo, hi]`, computed so that neither overflows
-/// while the result fits in `f32`: the centre as `lo / 2 + hi / 2` and the half diagonal in
-/// `f64` (an `f32` [`Vec3::length`] overflows for extents beyond about 1.8e19). The half
-/// diagonal is infinite only when it exceeds `f32::MAX`.
-///
-/// ```
-/// use glam::Vec3;
-/// // The extent, 6e38, is beyond f32::MAX: `hi - lo` would be infinite.
-/// let (c, r) = shadowvol_scenes::box_centre_radius(Vec3::new(-3e38, 0.0, 0.0), Vec3::new(3e38, 0.0, 0.0));
-/// assert_eq!(c, Vec3::ZERO);
-/// assert_eq!(r, 3e38);
-/// ```
-#[must_use]
-pub fn box_centre_radius(lo: Vec3, hi: Vec3) -> (Vec3, f32) {
-    let centre = lo * 0.5 + hi * 0.5;
-    let radius = (hi.as_dvec3() - lo.as_dvec3()).length() * 0.5;
-    (centre, radius as f32)
 }
 
 pub(crate) fn file_name(path: &Path) -> String {

@@ -5,7 +5,8 @@
 //! convention). They are deterministic functions of the scene, so the same file always renders
 //! the same way.
 
-use crate::scene::{mesh_bounds, Camera, Scene};
+use crate::scene::Scene;
+use crate::Camera;
 use glam::Vec3;
 use shadowvol_robust_math::Light;
 
@@ -51,16 +52,16 @@ impl Scene {
     /// such object.
     #[must_use]
     pub fn floor_object(&self) -> Option<usize> {
-        if self.objects.len() < 2 {
+        if self.geometry.objects.len() < 2 {
             return None;
         }
         let (lo, hi) = self.bounds()?;
         let extent = (hi.x - lo.x).max(hi.z - lo.z).max(f32::MIN_POSITIVE);
-        let world: Vec<Option<(Vec3, Vec3)>> = (0..self.objects.len())
+        let world: Vec<Option<(Vec3, Vec3)>> = (0..self.geometry.objects.len())
             .map(|i| self.object_bounds(i))
             .collect();
         let tol = 0.02 * extent;
-        (0..self.objects.len()).find(|&i| {
+        (0..self.geometry.objects.len()).find(|&i| {
             let Some((flo, fhi)) = world[i] else {
                 return false;
             };
@@ -78,12 +79,12 @@ impl Scene {
     }
 
     /// The height of a ground plane to add when nothing lies below the casters: `None` when
-    /// the scene already has a ground (`effects.ground_y`) or a [`Scene::floor_object`], or has
+    /// the scene already has a ground ([`Scene::ground_y`]) or a [`Scene::floor_object`], or has
     /// no vertices; otherwise the lowest world-space `y` minus [`GROUND_GAP`] of the bounds'
     /// diagonal. A single-object scene (every OBJ, STL or PLY file) always gets one.
     #[must_use]
     pub fn auto_ground_y(&self) -> Option<f32> {
-        if self.effects.ground_y.is_some() || self.floor_object().is_some() {
+        if self.ground_y().is_some() || self.floor_object().is_some() {
             return None;
         }
         self.ground_y_below()
@@ -98,54 +99,23 @@ impl Scene {
             (GROUND_GAP * 2.0 * crate::box_centre_radius(lo, hi).1).max(f32::EPSILON * lo.y.abs());
         Some(lo.y - gap)
     }
-
-    /// World-space bounds of object `i` (its mesh's box corners transformed), `None` when it
-    /// has no vertices or there is no object `i`.
-    #[must_use]
-    pub fn object_bounds(&self, i: usize) -> Option<(Vec3, Vec3)> {
-        let o = self.objects.get(i)?;
-        let (lo, hi) = mesh_bounds(&o.mesh)?;
-        let mut min = Vec3::splat(f32::INFINITY);
-        let mut max = Vec3::splat(f32::NEG_INFINITY);
-        for k in 0..8 {
-            let c = Vec3::new(
-                if k & 1 == 0 { lo.x } else { hi.x },
-                if k & 2 == 0 { lo.y } else { hi.y },
-                if k & 4 == 0 { lo.z } else { hi.z },
-            );
-            let w = o.transform.transform_point3(c);
-            min = min.min(w);
-            max = max.max(w);
-        }
-        Some((min, max))
-    }
 }
 
 #[cfg(test)]
 mod tests {
-    use crate::scene::{Camera, Object, Scene};
+    use crate::scene::Scene;
+    use crate::Camera;
     use glam::{Affine3A, Vec3};
-    use shadowvol_mesh_topology::Mesh;
-    use std::sync::Arc;
-
-    fn cube(lo: Vec3, hi: Vec3) -> Arc<Mesh> {
-        Arc::new(shadowvol_silhouette::shapes::cuboid(lo, hi))
-    }
 
     fn scene(objects: &[(Vec3, Vec3)]) -> Scene {
-        Scene {
-            name: "t".into(),
-            objects: objects
-                .iter()
-                .enumerate()
-                .map(|(i, &(lo, hi))| Object {
-                    name: format!("o{i}"),
-                    mesh: cube(lo, hi),
-                    transform: Affine3A::IDENTITY,
-                })
-                .collect(),
-            ..Scene::default()
+        let mut s = Scene::new("t");
+        for (i, &(lo, hi)) in objects.iter().enumerate() {
+            let t = s
+                .add_mesh("cube", &shadowvol_silhouette::shapes::cuboid(lo, hi))
+                .unwrap();
+            s.add_object(format!("o{i}"), t, Affine3A::IDENTITY);
         }
+        s
     }
 
     #[test]
@@ -169,7 +139,7 @@ mod tests {
         assert!(s.auto_ground_y().is_some());
         // A scene that declares its ground keeps it.
         let mut s = scene(&[caster]);
-        s.effects.ground_y = Some(-3.0);
+        s.set_ground(Some(-3.0));
         assert_eq!(s.auto_ground_y(), None);
     }
 

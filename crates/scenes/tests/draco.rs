@@ -11,7 +11,7 @@ mod draco_common;
 use draco_common::{doc, real, stream_of};
 
 use serde_json::json;
-use shadowvol_mesh_topology::Mesh;
+
 use shadowvol_scenes::{load_gltf_slice, Scene};
 
 /// The Draco stream of `draco.glb`, its decoded point count and its triangle count.
@@ -19,9 +19,12 @@ fn stream() -> (Vec<u8>, u64, u64) {
     stream_of("draco.glb")
 }
 
-fn load(d: &serde_json::Value, bin: &[u8]) -> Result<Mesh, String> {
+fn load(
+    d: &serde_json::Value,
+    bin: &[u8],
+) -> Result<std::sync::Arc<shadowvol_mesh_topology::EdgeTable>, String> {
     load_gltf_slice(&glb(d, bin), "t.glb", None)
-        .and_then(|s| s.baked_mesh())
+        .and_then(|s| s.baked_table())
         .map_err(|e| e.to_string())
 }
 
@@ -37,7 +40,7 @@ fn the_stream_replaces_the_accessors_data_under_the_node_transform() {
     let (s, points, tris) = stream();
     let file = Scene::load(real("draco.glb"))
         .unwrap()
-        .baked_mesh()
+        .baked_table()
         .unwrap();
     let m = load(&doc(&s, points, tris), &s).unwrap();
     assert_eq!(m.triangles, file.triangles);

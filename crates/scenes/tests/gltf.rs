@@ -35,18 +35,23 @@ fn round_trip(name: &str) {
     let loaded = load_gltf(&path).unwrap();
     std::fs::remove_file(&path).ok();
 
-    assert_eq!(loaded.objects.len(), original.objects.len(), "{name}");
-    for (a, b) in original.objects.iter().zip(&loaded.objects) {
+    let (o0, o1) = (&original.geometry.objects, &loaded.geometry.objects);
+    assert_eq!(o1.len(), o0.len(), "{name}");
+    for (a, b) in o0.iter().zip(o1) {
         assert_eq!(a.name, b.name);
-        assert_eq!(a.transform, b.transform, "{name}: {}", a.name);
-        assert_eq!(*a.mesh, *b.mesh, "{name}: mesh of {}", a.name);
+        assert_eq!(
+            a.world_from_object, b.world_from_object,
+            "{name}: {}",
+            a.name
+        );
+        same_geometry(&a.table, &b.table, &format!("{name}: mesh of {}", a.name));
     }
     // Instances that shared a mesh still share one (and only those).
-    for (i, a) in original.objects.iter().enumerate() {
-        for (j, b) in original.objects.iter().enumerate().skip(i + 1) {
+    for (i, a) in o0.iter().enumerate() {
+        for (j, b) in o0.iter().enumerate().skip(i + 1) {
             assert_eq!(
-                Arc::ptr_eq(&a.mesh, &b.mesh),
-                Arc::ptr_eq(&loaded.objects[i].mesh, &loaded.objects[j].mesh),
+                Arc::ptr_eq(&a.table, &b.table),
+                Arc::ptr_eq(&o1[i].table, &o1[j].table),
                 "{name}: sharing of objects {i} and {j}"
             );
         }
@@ -54,7 +59,7 @@ fn round_trip(name: &str) {
     // glTF has no homogeneous lights: a point light with w other than 1 is written at xyz / w
     // (rounded once in f32) with w = 1; w = 0 (directional) and w = 1 are kept bit for bit.
     let representable: Vec<Light> = original
-        .lights
+        .light_positions()
         .iter()
         .map(|l| {
             let [x, y, z, w] = l.to_array();
@@ -65,35 +70,51 @@ fn round_trip(name: &str) {
             }
         })
         .collect();
-    assert_eq!(loaded.lights, representable, "{name}: lights");
+    assert_eq!(loaded.light_positions(), representable, "{name}: lights");
     let (c0, c1) = (original.camera.unwrap(), loaded.camera.unwrap());
     assert_eq!(c0.target, c1.target);
     assert!((c0.eye - c1.eye).length() <= 1e-4 * c0.eye.length().max(1.0));
     assert_eq!(c0.fov_y, c1.fov_y);
     assert_eq!(c0.near, c1.near);
 
-    let (t0, t1) = (original.topology().unwrap(), loaded.topology().unwrap());
-    for (a, b) in t0.objects.iter().zip(&t1.objects) {
-        assert_eq!(a.table.stats, b.table.stats, "{name}: stats of {}", a.name);
-    }
-    let mut lights = original.lights.clone();
+    let (t0, t1) = (&original.geometry, &loaded.geometry);
+    let mut lights = original.light_positions();
     lights.push(Light::point(Vec3::new(0.25, 30.0, -0.5)));
     for mode in [Accuracy::Exact, Accuracy::Original] {
         let (m0, m1) = (
-            silhouettes(&t0, &lights, mode),
-            silhouettes(&t1, &lights, mode),
+            silhouettes(t0, &lights, mode),
+            silhouettes(t1, &lights, mode),
         );
         assert_eq!(m0.all_values(), m1.all_values(), "{name}: {mode:?}");
         for l in 0..lights.len() {
             assert_eq!(m0.silhouette(l), m1.silhouette(l));
             if mode == Accuracy::Exact {
-                assert_eq!(invariant::open_vertices_scene(&t1, &m1, l), 0, "{name}");
+                assert_eq!(invariant::open_vertices_scene(t1, &m1, l), 0, "{name}");
             }
         }
     }
-    // The flattened (baked) meshes agree too.
-    let (b0, b1) = (original.baked_mesh().unwrap(), loaded.baked_mesh().unwrap());
-    assert_eq!(b0, b1);
+    // The flattened (baked) tables agree too.
+    let (b0, b1) = (
+        original.baked_table().unwrap(),
+        loaded.baked_table().unwrap(),
+    );
+    same_geometry(&b0, &b1, &format!("{name}: baked"));
+}
+
+/// The export writes welded tables, so a reloaded table has the same positions, triangles,
+/// edges and opposite vertices (what silhouettes and images depend on); the input numbering
+/// (vertex names, triangle sources, input counts) is the welded one.
+fn same_geometry(a: &EdgeTable, b: &EdgeTable, what: &str) {
+    assert_eq!(a.positions, b.positions, "{what}: positions");
+    assert_eq!(a.triangles, b.triangles, "{what}: triangles");
+    assert_eq!(a.edges, b.edges, "{what}: edges");
+    assert_eq!(a.ov_offsets, b.ov_offsets, "{what}: ov_offsets");
+    assert_eq!(a.ovs, b.ovs, "{what}: ovs");
+    assert_eq!(
+        b.stats.vertices, a.stats.welded_vertices,
+        "{what}: vertices"
+    );
+    assert_eq!(b.stats.degenerate_triangles, 0, "{what}: degenerate");
 }
 
 #[test]
@@ -140,7 +161,7 @@ fn glb_is_well_formed() {
     );
     // And the gltf crate, with its full validation (POSITION min/max included), accepts it.
     let gltf = gltf::Gltf::from_slice(&glb).unwrap();
-    assert_eq!(gltf.meshes().count(), scene.objects.len());
+    assert_eq!(gltf.meshes().count(), scene.geometry.objects.len());
 }
 
 struct Bin {
@@ -294,14 +315,15 @@ fn edge_map(scene: &TopologyScene, m: &Multiplicities, l: usize) -> BTreeMap<(u3
 #[test]
 fn nested_transforms_match_the_hand_flattened_mesh() {
     let scene = load_gltf_slice(&nested_glb(), "nested.glb", None).unwrap();
-    let names: Vec<_> = scene.objects.iter().map(|o| o.name.as_str()).collect();
+    let objects = &scene.geometry.objects;
+    let names: Vec<_> = objects.iter().map(|o| o.name.as_str()).collect();
     assert_eq!(names, ["a", "c", "d"], "depth-first node order");
     assert!(
-        Arc::ptr_eq(&scene.objects[0].mesh, &scene.objects[1].mesh),
+        Arc::ptr_eq(&objects[0].table, &objects[1].table),
         "mesh 0 is shared"
     );
     assert_eq!(
-        scene.lights,
+        scene.light_positions(),
         vec![
             Light::point(Vec3::new(16.0, 40.0, 14.0)),
             Light::directional(Vec3::Y)
@@ -319,19 +341,19 @@ fn nested_transforms_match_the_hand_flattened_mesh() {
         )
     );
 
-    let flat = hand_flattened();
-    let baked = scene.baked_mesh().unwrap();
+    let flat = EdgeTable::build(&hand_flattened()).unwrap();
+    let baked = scene.baked_table().unwrap();
     assert_eq!(
-        baked, flat,
+        *baked, flat,
         "numbering and f32 positions follow the CLI contract"
     );
 
     // Exact silhouettes: the flattened mesh, the loaded scene baked, and the loaded scene with
     // its objects kept separate (lights brought into object space) all agree.
-    let flat_scene = TopologyScene::single(EdgeTable::build(&flat).unwrap());
-    let baked_scene = TopologyScene::single(EdgeTable::build(&baked).unwrap());
-    let objects = scene.topology().unwrap();
-    let mut lights = scene.lights.clone();
+    let flat_scene = TopologyScene::single(flat);
+    let baked_scene = TopologyScene::single((*baked).clone());
+    let objects = &scene.geometry;
+    let mut lights = scene.light_positions();
     lights.extend([
         Light::point(Vec3::new(12.0, 6.0, 0.0)), // at a vertex of object a
         Light::point(Vec3::new(15.0, 6.0, 0.0)), // in the plane of a's quad, on an edge line
@@ -340,17 +362,17 @@ fn nested_transforms_match_the_hand_flattened_mesh() {
     ]);
     let mf = silhouettes(&flat_scene, &lights, Accuracy::Exact);
     let mb = silhouettes(&baked_scene, &lights, Accuracy::Exact);
-    let mo = silhouettes(&objects, &lights, Accuracy::Exact);
+    let mo = silhouettes(objects, &lights, Accuracy::Exact);
     assert_eq!(mf.all_values(), mb.all_values());
     for l in 0..lights.len() {
         let fm = edge_map(&flat_scene, &mf, l);
         assert!(!fm.is_empty(), "light {l} has a silhouette");
         assert_eq!(
             fm,
-            edge_map(&objects, &mo, l),
+            edge_map(objects, &mo, l),
             "light {l}: per-object vs flattened"
         );
-        assert_eq!(invariant::open_vertices_scene(&objects, &mo, l), 0);
+        assert_eq!(invariant::open_vertices_scene(objects, &mo, l), 0);
     }
 }
 
@@ -370,7 +392,7 @@ fn gltf_text_with_external_buffer_loads_like_the_glb() {
     let a = Scene::load(&path).unwrap();
     let b = load_gltf_slice(&bytes, "nested.glb", None).unwrap();
     std::fs::remove_dir_all(&dir).ok();
-    assert_eq!(a.baked_mesh().unwrap(), b.baked_mesh().unwrap());
+    assert_eq!(a.baked_table().unwrap(), b.baked_table().unwrap());
     assert_eq!(a.lights, b.lights);
     assert_eq!(a.name, "nested.gltf");
 }
@@ -418,22 +440,20 @@ fn sparse_strided_and_fan_accessors_are_read() {
     });
     // No "scenes": every root node is visited in index order.
     let scene = load_gltf_slice(&glb(&doc, &data), "sparse.glb", None).unwrap();
-    let mesh = scene.baked_mesh().unwrap();
-    assert_eq!(
-        mesh.positions,
-        [
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 10.0],
-            [5.0, 0.0, 10.0],
-            [0.0, 5.0, 10.0],
-            [0.0, 0.0, 15.0],
-        ]
-        .map(Vec3::from_array)
-    );
-    assert_eq!(mesh.triangles, [[0, 1, 2], [0, 2, 3], [4, 5, 6]]);
+    let baked = scene.baked_table().unwrap();
+    let positions = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 10.0],
+        [5.0, 0.0, 10.0],
+        [0.0, 5.0, 10.0],
+        [0.0, 0.0, 15.0],
+    ]
+    .map(Vec3::from_array);
+    let expected = Mesh::new(positions.to_vec(), vec![[0, 1, 2], [0, 2, 3], [4, 5, 6]]).unwrap();
+    assert_eq!(*baked, EdgeTable::build(&expected).unwrap());
 }
 
 /// A tetrahedron and one light of `light` (a KHR_lights_punctual light object) at a node that
@@ -473,8 +493,8 @@ fn light_emission_is_read() {
                       "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}});
     let s = load_gltf_slice(&lit_glb(spot), "spot.glb", None).unwrap();
     assert_eq!(s.lights.len(), 1);
-    assert_eq!(s.lights[0].to_array(), [1.0, 8.0, 2.0, 1.0]);
-    let e = s.emission[0];
+    assert_eq!(s.lights[0].light.to_array(), [1.0, 8.0, 2.0, 1.0]);
+    let e = s.lights[0].emission.unwrap();
     assert_eq!(e.color, [1.0, 0.5, 0.25]);
     assert_eq!(e.intensity, 40.0);
     assert_eq!(e.range, Some(12.5));
@@ -483,10 +503,13 @@ fn light_emission_is_read() {
     assert!((cone.direction - Vec3::NEG_Y).length() < 1e-6, "{cone:?}");
 
     let s = load_gltf_slice(&lit_glb(json!({"type": "point"})), "p.glb", None).unwrap();
-    assert_eq!(s.emission, vec![shadowvol_scenes::Emission::default()]);
+    assert_eq!(
+        s.lights[0].emission,
+        Some(shadowvol_scenes::Emission::default())
+    );
     // The spec's default outer cone is π/4, inner 0.
     let s = load_gltf_slice(&lit_glb(json!({"type": "spot", "spot": {}})), "s.glb", None).unwrap();
-    let cone = s.emission[0].spot.unwrap();
+    let cone = s.lights[0].emission.unwrap().spot.unwrap();
     assert_eq!(cone.inner_cone_angle, 0.0);
     assert!((cone.outer_cone_angle - std::f32::consts::FRAC_PI_4).abs() < 1e-6);
 }
@@ -616,7 +639,7 @@ fn unknown_enum_values_load_with_notes_where_nothing_reads_them() {
         "{notes:?}"
     );
     assert_eq!(scene.lights.len(), 1, "{:?}", scene.lights);
-    assert_eq!(scene.lights[0].to_array(), [1.0, 4.0, 0.0, 1.0]);
+    assert_eq!(scene.lights[0].light.to_array(), [1.0, 4.0, 0.0, 1.0]);
 }
 
 /// Bytes after the end of a GLB stream are ignored with a note (the validator warns,

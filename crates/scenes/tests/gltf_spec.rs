@@ -113,7 +113,7 @@ fn quantized_positions_decode_by_the_spec_then_take_the_node_transform_in_f32() 
         let doc = quantized_doc(ty, normalized, size, true);
         let scene = load_gltf_slice(&glb(&doc, &quantized_bin(&raw, size)), "q.glb", None)
             .unwrap_or_else(|e| panic!("{ty} {normalized}: {e}"));
-        let mesh = scene.baked_mesh().unwrap();
+        let mesh = scene.baked_table().unwrap();
         let expected: Vec<Vec3> = raw
             .iter()
             .map(|p| {
@@ -195,7 +195,7 @@ fn meshopt_compressed_views_decode_to_the_uncompressed_data_and_fallbacks_are_no
     });
     let mesh = load_gltf_slice(&glb(&doc, &bin), "c.glb", None)
         .unwrap()
-        .baked_mesh()
+        .baked_table()
         .unwrap();
     let expected: Vec<Vec3> = bytemuck::cast_slice::<u8, [f32; 3]>(&pos)
         .iter()
@@ -258,7 +258,7 @@ fn sparse_accessor_over_a_base_view_replaces_only_its_elements() {
     });
     let mesh = load_gltf_slice(&glb(&doc, &bin), "s.glb", None)
         .unwrap()
-        .baked_mesh()
+        .baked_table()
         .unwrap();
     assert_eq!(
         mesh.positions,
@@ -301,8 +301,11 @@ fn integers_written_as_floats_and_animations_without_node_targets_are_valid() {
     });
     let scene = load_gltf_slice(&glb(&doc, &bin), "f.glb", None).unwrap();
     // "scene": 1 picks the second scene: only node 1.
-    assert_eq!(scene.objects.len(), 1);
-    assert_eq!(scene.objects[0].transform.translation.y, 2.0);
+    assert_eq!(scene.geometry.objects.len(), 1);
+    assert_eq!(
+        scene.geometry.objects[0].world_from_object.translation.y,
+        2.0
+    );
     // A fractional index is still an error.
     let mut d = doc.clone();
     d["accessors"][0]["count"] = json!(4.5);
@@ -338,11 +341,14 @@ fn non_triangle_primitives_and_primitives_without_positions_are_skipped_with_not
     });
     let (scene, notes) = load_gltf_slice_with_notes(&glb(&doc, &bin), "m.glb", None).unwrap();
     assert_eq!(
-        scene.objects.len(),
+        scene.geometry.objects.len(),
         1,
         "the node left without triangles is skipped"
     );
-    assert_eq!(scene.objects[0].mesh.triangles, [[0, 1, 2], [0, 2, 3]]);
+    assert_eq!(
+        scene.geometry.objects[0].table.triangles,
+        [[0, 1, 2], [0, 2, 3]]
+    );
     assert_eq!(notes.len(), 5, "{notes:#?}");
     let has = |parts: &[&str]| notes.iter().any(|n| parts.iter().all(|p| n.contains(p)));
     assert!(has(&[

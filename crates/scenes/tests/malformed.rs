@@ -14,7 +14,7 @@ fn message(name: &str) -> String {
     let err = match Scene::load(data(name)) {
         Ok(s) => panic!(
             "{name} loaded ({} objects) but should fail",
-            s.objects.len()
+            s.geometry.objects.len()
         ),
         Err(e) => e,
     };
@@ -75,7 +75,7 @@ fn zero_count_is_rejected() {
 fn non_triangle_modes_are_skipped_with_a_note_and_partial_triangles_rejected() {
     // Lines are valid glTF, but cast no shadow: skipped, with a note naming them.
     let (scene, notes) = Scene::load_with_notes(data("lines_mode.gltf")).unwrap();
-    assert!(scene.objects.is_empty());
+    assert!(scene.geometry.objects.is_empty());
     assert_has(
         &notes.join("\n"),
         &[
@@ -111,7 +111,7 @@ fn wrong_types_are_rejected_and_missing_positions_skipped() {
     assert_has(&m, &["accessor 0 (POSITION)", "must be VEC3 of FLOAT"]);
     // A primitive without POSITION is valid glTF with nothing to cast: skipped, with a note.
     let (scene, notes) = Scene::load_with_notes(data("missing_position.gltf")).unwrap();
-    assert!(scene.objects.is_empty());
+    assert!(scene.geometry.objects.is_empty());
     assert_has(
         &notes.join("\n"),
         &["primitive 0", "no POSITION", "skipped"],
@@ -185,7 +185,7 @@ fn fuzz_regressions_are_errors_not_panics() {
     let with_uri = |uri: &str| format!("{}{uri}{}", &base[..uri_at], &base[uri_end..]);
     let load = |text: &str| {
         shadowvol_scenes::load_gltf_slice(text.as_bytes(), "regression.gltf", None)
-            .map(|s| s.objects.len())
+            .map(|s| s.geometry.objects.len())
             .unwrap_err()
             .to_string()
     };

@@ -1,5 +1,6 @@
 //! Every preset has the size DESIGN.md gives it, lights, a camera, and a valid topology.
 
+use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_scenes::presets::{BUNNY_LEVELS, SPHERE_10_TRIANGLES};
 use shadowvol_scenes::{is_preset, preset, presets, Scene};
 use std::sync::Arc;
@@ -39,18 +40,18 @@ fn instanced_presets_match_their_sizes() {
     for &(name, objects, per) in GRIDS {
         let scene = preset(name).unwrap();
         assert_eq!(scene.name, name);
-        assert_eq!(scene.objects.len(), objects, "{name}");
-        for o in &scene.objects {
-            assert_eq!(o.mesh.triangles.len(), per, "{name}: {}", o.name);
+        assert_eq!(scene.geometry.objects.len(), objects, "{name}");
+        for o in &scene.geometry.objects {
+            assert_eq!(o.table.triangles.len(), per, "{name}: {}", o.name);
             assert!(
-                Arc::ptr_eq(&o.mesh, &scene.objects[0].mesh),
+                Arc::ptr_eq(&o.table, &scene.geometry.objects[0].table),
                 "{name}: one shared mesh"
             );
         }
         assert_eq!(scene.triangle_count(), objects * per);
         common_checks(&scene);
         // Objects do not overlap: their world bounds are disjoint boxes in x/z.
-        let topo = scene.topology().unwrap();
+        let topo = &scene.geometry;
         assert_eq!(topo.objects.len(), objects);
         assert!(topo
             .objects
@@ -78,7 +79,7 @@ fn paper_table_2_scenes_have_about_650k_triangles() {
         ("spheres-10-baked", 1),
     ] {
         let scene = preset(name).unwrap();
-        assert_eq!(scene.objects.len(), objects, "{name}");
+        assert_eq!(scene.geometry.objects.len(), objects, "{name}");
         let n = scene.triangle_count();
         // Bunnies: 10 * 3,674 * 16 = 587,840 (two Loop levels, -9.6 % from 6.5e5).
         assert!(within(n, 650_000, 0.10), "{name}: {n}");
@@ -91,15 +92,15 @@ fn baked_presets_equal_their_individual_scenes_baked() {
     for base in ["bunnies-10", "spheres-10"] {
         let individual = preset(&format!("{base}-individual")).unwrap();
         let baked = preset(&format!("{base}-baked")).unwrap();
-        assert_eq!(*baked.objects[0].mesh, individual.baked_mesh().unwrap());
+        assert_eq!(
+            *baked.geometry.objects[0].table,
+            *individual.baked_table().unwrap()
+        );
         assert_eq!(baked.lights, individual.lights);
-        let stats = baked.topology().unwrap().objects[0].table.stats;
+        let stats = baked.geometry.objects[0].table.stats;
         assert_eq!(stats.triangles, individual.triangle_count());
         // The instances stand apart: baking merges no vertices.
-        assert_eq!(
-            stats.welded_vertices,
-            individual.topology().unwrap().total_vertices()
-        );
+        assert_eq!(stats.welded_vertices, individual.geometry.total_vertices());
     }
 }
 
@@ -109,7 +110,7 @@ fn town_matches_its_size_and_sun() {
     let n = scene.triangle_count();
     assert!(within(n, 570_000, 0.02), "town: {n}");
     assert_eq!(scene.lights.len(), 1);
-    let [x, y, z, w] = scene.lights[0].to_array();
+    let [x, y, z, w] = scene.lights[0].light.to_array();
     assert_eq!((x, z, w), (0.0, 0.0, 0.0), "sun exactly along an axis");
     assert!(y > 0.0);
     common_checks(&scene);
@@ -122,12 +123,12 @@ fn hard_presets_are_the_corpus_cases() {
         let name = format!("hard-{}", case.name);
         assert!(is_preset(&name));
         let scene = preset(&name).unwrap();
-        assert_eq!(scene.objects.len(), case.objects.len());
-        for (o, (mesh, t)) in scene.objects.iter().zip(&case.objects) {
-            assert_eq!(*o.mesh, *mesh);
-            assert_eq!(o.transform, *t);
+        assert_eq!(scene.geometry.objects.len(), case.objects.len());
+        for (o, (mesh, t)) in scene.geometry.objects.iter().zip(&case.objects) {
+            assert_eq!(*o.table, EdgeTable::build(mesh).unwrap());
+            assert_eq!(o.world_from_object, *t);
         }
-        assert_eq!(scene.lights, case.lights);
+        assert_eq!(scene.light_positions(), case.lights);
         common_checks(&scene);
     }
     let listed = presets()
@@ -164,5 +165,5 @@ fn every_listed_preset_builds_and_names_resolve() {
     assert!(!is_preset("hard-no-such-case"));
     assert!(preset("hard-no-such-case").is_err());
     let s = Scene::from_name_or_path("spheres-100x1k").unwrap();
-    assert_eq!(s.objects.len(), 100);
+    assert_eq!(s.geometry.objects.len(), 100);
 }

@@ -8,10 +8,11 @@
 
 use glam::Vec3;
 use shadowvol_cpu::CpuBackend;
-use shadowvol_mesh_topology::{EdgeTable, Mesh};
+use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_scenes::Scene;
 use shadowvol_silhouette::{extract_once, Accuracy, Light, TopologyScene};
 use std::path::PathBuf;
+use std::sync::Arc;
 
 fn data(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -19,10 +20,10 @@ fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
-fn load(name: &str) -> Mesh {
+fn load(name: &str) -> Arc<EdgeTable> {
     let (scene, notes) = Scene::load_with_notes(data(name)).unwrap_or_else(|e| panic!("{e}"));
     assert!(notes.is_empty(), "{name}: {notes:?}");
-    scene.baked_mesh().unwrap()
+    scene.baked_table().unwrap()
 }
 
 /// The weld key of a position: its coordinates' bits, `-0` as `+0`.
@@ -35,7 +36,7 @@ fn key(p: Vec3) -> [u32; 3] {
 }
 
 /// Triangles as position triples, rotated so the smallest key comes first (winding kept), sorted.
-fn triangles_by_position(m: &Mesh) -> Vec<[[u32; 3]; 3]> {
+fn triangles_by_position(m: &EdgeTable) -> Vec<[[u32; 3]; 3]> {
     let mut out: Vec<[[u32; 3]; 3]> = m
         .triangles
         .iter()
@@ -54,8 +55,8 @@ fn triangles_by_position(m: &Mesh) -> Vec<[[u32; 3]; 3]> {
 /// A silhouette edge by position: (smaller key, larger key, multiplicity from the first).
 type EdgeByPosition = ([u32; 3], [u32; 3], i32);
 
-fn silhouettes_by_position(m: &Mesh, lights: &[Light]) -> Vec<Vec<EdgeByPosition>> {
-    let table = EdgeTable::build(m).unwrap();
+fn silhouettes_by_position(m: &EdgeTable, lights: &[Light]) -> Vec<Vec<EdgeByPosition>> {
+    let table = m.clone();
     let positions = table.positions.clone();
     let edges = table.edges.clone();
     let scene = TopologyScene::single(table);
@@ -82,7 +83,7 @@ fn silhouettes_by_position(m: &Mesh, lights: &[Light]) -> Vec<Vec<EdgeByPosition
         .collect()
 }
 
-fn lights(reference: &Mesh) -> Vec<Light> {
+fn lights(reference: &EdgeTable) -> Vec<Light> {
     let p = reference.positions[0];
     vec![
         Light::point(Vec3::new(9000.0, 20000.0, 9000.0)),
@@ -178,7 +179,7 @@ const DRACO: [(&str, &str); 3] = [
 fn draco_files_decode_exactly_as_googles_decoder_decodes_them() {
     let obj = load("reference.obj");
     let lights = lights(&obj);
-    let bits = |m: &Mesh| -> Vec<[u32; 3]> {
+    let bits = |m: &EdgeTable| -> Vec<[u32; 3]> {
         m.positions
             .iter()
             .map(|p| p.to_array().map(f32::to_bits))
@@ -229,25 +230,25 @@ fn a_draco_scene_of_several_objects_decodes_as_googles_decoder_decodes_it() {
     };
     let d = load_scene("scene-draco.glb");
     let r = load_scene("scene-draco-decoded.glb");
-    assert_eq!(d.objects.len(), 4);
-    assert_eq!(d.objects.len(), r.objects.len());
-    for (a, b) in d.objects.iter().zip(&r.objects) {
-        assert_eq!(a.transform, b.transform, "{}", a.name);
-        assert_eq!(a.mesh.triangles, b.mesh.triangles, "{}", a.name);
-        let bits = |m: &Mesh| -> Vec<[u32; 3]> {
+    assert_eq!(d.geometry.objects.len(), 4);
+    assert_eq!(d.geometry.objects.len(), r.geometry.objects.len());
+    for (a, b) in d.geometry.objects.iter().zip(&r.geometry.objects) {
+        assert_eq!(a.world_from_object, b.world_from_object, "{}", a.name);
+        assert_eq!(a.table.triangles, b.table.triangles, "{}", a.name);
+        let bits = |m: &EdgeTable| -> Vec<[u32; 3]> {
             m.positions
                 .iter()
                 .map(|p| p.to_array().map(f32::to_bits))
                 .collect()
         };
-        assert_eq!(bits(&a.mesh), bits(&b.mesh), "{}", a.name);
+        assert_eq!(bits(&a.table), bits(&b.table), "{}", a.name);
     }
     assert_eq!(d.lights.len(), 4);
     assert_eq!(d.lights, r.lights);
-    let (dm, rm) = (d.baked_mesh().unwrap(), r.baked_mesh().unwrap());
-    let sil = silhouettes_by_position(&dm, &d.lights);
+    let (dm, rm) = (d.baked_table().unwrap(), r.baked_table().unwrap());
+    let sil = silhouettes_by_position(&dm, &d.light_positions());
     assert!(sil.iter().all(|s| !s.is_empty()));
-    assert_eq!(sil, silhouettes_by_position(&rm, &r.lights));
+    assert_eq!(sil, silhouettes_by_position(&rm, &r.light_positions()));
 }
 
 #[test]
@@ -258,7 +259,7 @@ fn a_draco_mesh_with_attribute_seams_gives_googles_geometry_in_its_own_point_ord
     // same triangles and the same exact silhouettes by position.
     let d = load("uv-sphere-draco.glb");
     let r = load("uv-sphere-draco-decoded.glb");
-    let sorted_bits = |m: &Mesh| {
+    let sorted_bits = |m: &EdgeTable| {
         let mut v: Vec<[u32; 3]> = m
             .positions
             .iter()

@@ -40,7 +40,7 @@ pub mod shapes;
 
 pub use multiplicities::{ExtractStats, Multiplicities};
 pub use prepared::{check_lights, PreparedScenes};
-pub use scene::{object_lights, SceneObject, TopologyScene};
+pub use scene::{object_light, object_lights, SceneObject, TopologyScene};
 pub use shadowvol_robust_math::{Accuracy, Light};
 
 use std::time::Duration;

@@ -27,10 +27,22 @@ impl TopologyScene {
     /// A scene of one object with the identity transform.
     #[must_use]
     pub fn single(table: EdgeTable) -> Self {
+        Self::one("mesh", Arc::new(table))
+    }
+
+    /// The objects' world-from-object transforms, in order (the input of [`object_lights`]).
+    pub fn transforms(&self) -> impl Iterator<Item = Affine3A> + '_ {
+        self.objects.iter().map(|o| o.world_from_object)
+    }
+
+    /// A scene of one object, `table` named `name` at the identity: how a renderer prepares one
+    /// object on its own and brings the light into its space per frame.
+    #[must_use]
+    pub fn one(name: &str, table: Arc<EdgeTable>) -> Self {
         Self {
             objects: vec![SceneObject {
-                name: "mesh".to_owned(),
-                table: Arc::new(table),
+                name: name.to_owned(),
+                table,
                 world_from_object: Affine3A::IDENTITY,
             }],
         }
@@ -82,39 +94,57 @@ impl TopologyScene {
     }
 }
 
-/// Object-space lights: `result[object][light]` as `[x, y, z, w]` in `f32`.
+/// One light in the space of an object placed by `world_from_object`, as `[x, y, z, w]` in `f32`.
 ///
-/// The light is transformed by the inverse of the object's transform in `f64` and rounded to
-/// `f32` once. Every backend uses this function, so all of them evaluate the predicate on the
-/// same `f32` inputs and exact mode agrees bit for bit. For the identity transform the light is
-/// returned unchanged. `w` is preserved exactly (affine transforms).
+/// The light is transformed by the inverse of the transform in `f64` and rounded to `f32` once.
+/// Every backend and both render pipelines use this function, so all of them evaluate the
+/// predicate on the same `f32` inputs and exact mode agrees bit for bit. For the identity
+/// transform the light is returned unchanged. `w` is preserved exactly (affine transforms).
+/// The transform must be invertible; a singular one gives non-finite coordinates.
 #[must_use]
-pub fn object_lights(scene: &TopologyScene, lights: &[Light]) -> Vec<Vec<[f32; 4]>> {
-    scene
-        .objects
-        .iter()
-        .map(|o| {
-            if o.world_from_object == Affine3A::IDENTITY {
+pub fn object_light(world_from_object: Affine3A, light: Light) -> [f32; 4] {
+    if world_from_object == Affine3A::IDENTITY {
+        return light.to_array();
+    }
+    through(&to_f64(world_from_object).inverse(), light)
+}
+
+/// Object-space lights: `result[object][light]` is [`object_light`] of each transform (in the
+/// order given, for example [`TopologyScene::transforms`]) and each light.
+#[must_use]
+pub fn object_lights(
+    transforms: impl IntoIterator<Item = Affine3A>,
+    lights: &[Light],
+) -> Vec<Vec<[f32; 4]>> {
+    transforms
+        .into_iter()
+        .map(|t| {
+            if t == Affine3A::IDENTITY {
                 return lights.iter().map(|l| l.to_array()).collect();
             }
-            let m = DAffine3::from_cols(
-                o.world_from_object.matrix3.x_axis.as_dvec3(),
-                o.world_from_object.matrix3.y_axis.as_dvec3(),
-                o.world_from_object.matrix3.z_axis.as_dvec3(),
-                o.world_from_object.translation.as_dvec3(),
-            );
-            let inv = m.inverse();
-            lights
-                .iter()
-                .map(|l| {
-                    let [x, y, z, w] = l.to_array();
-                    let v = DVec3::new(f64::from(x), f64::from(y), f64::from(z));
-                    let xyz = inv.matrix3 * v + inv.translation * f64::from(w);
-                    [xyz.x as f32, xyz.y as f32, xyz.z as f32, w]
-                })
-                .collect()
+            // One inverse per object, shared by its lights.
+            let inv = to_f64(t).inverse();
+            lights.iter().map(|&l| through(&inv, l)).collect()
         })
         .collect()
+}
+
+/// Homogeneous `light` through the object-from-world transform `inv`, rounded to `f32` once.
+fn through(inv: &DAffine3, light: Light) -> [f32; 4] {
+    let [x, y, z, w] = light.to_array();
+    let v = DVec3::new(f64::from(x), f64::from(y), f64::from(z));
+    let xyz = inv.matrix3 * v + inv.translation * f64::from(w);
+    [xyz.x as f32, xyz.y as f32, xyz.z as f32, w]
+}
+
+/// `t` in `f64` (exact: every `f32` is an `f64`).
+fn to_f64(t: Affine3A) -> DAffine3 {
+    DAffine3::from_cols(
+        t.matrix3.x_axis.as_dvec3(),
+        t.matrix3.y_axis.as_dvec3(),
+        t.matrix3.z_axis.as_dvec3(),
+        t.translation.as_dvec3(),
+    )
 }
 
 #[cfg(test)]
@@ -190,7 +220,15 @@ mod tests {
             Light::new(1e-3, 2e-3, 4e-3, 1e-3).unwrap(),
         ];
         let scene = scene_of(&transforms);
-        let got = object_lights(&scene, &lights);
+        let got = object_lights(scene.transforms(), &lights);
+        for (o, t) in transforms.iter().enumerate() {
+            for (i, l) in lights.iter().enumerate() {
+                assert_eq!(
+                    got[o][i].map(f32::to_bits),
+                    object_light(*t, *l).map(f32::to_bits)
+                );
+            }
+        }
         for (o, t) in transforms.iter().enumerate() {
             for (i, l) in lights.iter().enumerate() {
                 let l = l.to_array();
@@ -220,7 +258,7 @@ mod tests {
     #[test]
     fn identity_transform_returns_the_light_unchanged() {
         let lights = [Light::new(0.1, f32::MIN_POSITIVE, -3.0, 0.0).unwrap()];
-        let got = object_lights(&scene_of(&[Affine3A::IDENTITY]), &lights);
+        let got = object_lights(scene_of(&[Affine3A::IDENTITY]).transforms(), &lights);
         assert_eq!(
             got[0][0].map(f32::to_bits),
             lights[0].to_array().map(f32::to_bits)

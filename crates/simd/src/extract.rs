@@ -366,7 +366,7 @@ mod tests {
             Light::point(Vec3::new(0.1, -0.3, 1e-4)),
             Light::directional(Vec3::new(-0.3, 1.0, 0.45)),
         ];
-        let reference = object_lights(&scene, &lights);
+        let reference = object_lights(scene.transforms(), &lights);
         for (o, want) in scene.objects.iter().zip(&reference) {
             let xf = ToObject::new(&o.world_from_object);
             for (light, want) in lights.iter().zip(want) {

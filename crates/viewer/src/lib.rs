@@ -1,14 +1,14 @@
 //! `shadowvol view`: a live window onto a scene, rendered with stencil shadow volumes.
 //!
 //! The [`Renderer`](shadowvol_renderer::Renderer) runs on the window's own wgpu device
-//! ([`Renderer::on_device`](shadowvol_renderer::Renderer::on_device)). In the GPU pipeline
-//! (the default) each frame it extracts, builds and draws the volumes on the device straight
-//! into a texture that the window samples onto its surface
-//! ([`Renderer::render_into`](shadowvol_renderer::Renderer::render_into)): nothing travels
-//! through the host but the plan's counts (a few bytes per light and object, for the overlay).
-//! The host pipeline (`--pipeline host`, and while the volumes are shown, V) reads its image
-//! back and uploads it. An
-//! [egui](https://docs.rs/egui) overlay shows the frame's figures.
+//! ([`RenderDevice::on_device`](shadowvol_renderer::RenderDevice::on_device)) and draws each
+//! frame straight into a texture that the window samples onto its surface
+//! ([`Renderer::render_into`](shadowvol_renderer::Renderer::render_into)). In the GPU pipeline
+//! (the default) it extracts, builds and draws the volumes on the device: nothing travels
+//! through the host but the plan's counts (a few bytes per light and surface, for the overlay).
+//! The host pipeline (`--pipeline host`, and while the volumes are shown, V) brings the
+//! multiplicities back and uploads the volumes; its silhouette backend is started the first time
+//! it is needed. An [egui](https://docs.rs/egui) overlay shows the frame's figures.
 //!
 //! Controls: left drag orbits, right (or middle) drag pans, the wheel zooms; the arrow keys or
 //! shift + left drag move the first light around the scene's centre; 1–4 pick the accuracy
@@ -21,14 +21,15 @@
 //!
 //! ```no_run
 //! use shadowvol_viewer::{view, ViewOptions};
-//! let scene = shadowvol_renderer::hard::edge_on_frustum();
-//! let backend = Box::new(shadowvol_cpu::CpuBackend::new());
+//! let scene = shadowvol_renderer::hard::edge_on_frustum()?;
 //! let mut options = ViewOptions::new(640, 480);
 //! options.frames = Some(10);
 //! options.screenshot = Some("view.png".into());
+//! // The host pipeline's backend, started only if the host pipeline is used (V).
+//! let backend = Box::new(|| Ok(Box::new(shadowvol_cpu::CpuBackend::new()) as _));
 //! let report = view(scene, backend, options)?;
 //! println!("{:.1} fps on {}", report.fps, report.adapter);
-//! # Ok::<(), shadowvol_viewer::ViewError>(())
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 /// The README's code, compiled as a doctest.
@@ -36,12 +37,19 @@
 #[doc = include_str!("../README.md")]
 pub struct ReadmeDoctests;
 
+mod app;
 pub mod controls;
-mod window;
+mod gfx;
+mod overlay;
 
-use shadowvol_renderer::{Accuracy, Pipeline, PlanPolicy, RenderError, RenderOptions, RenderScene};
-use shadowvol_silhouette::SilhouetteBackend;
+use shadowvol_renderer::{Accuracy, Pipeline, PlanPolicy, RenderError, RenderOptions, Scene};
+use shadowvol_silhouette::{BackendError, SilhouetteBackend};
 use std::path::PathBuf;
+
+/// Starts the silhouette backend of the host pipeline (for example a registry entry's
+/// `start`); the viewer calls it the first time it needs the host pipeline, so a viewer that
+/// stays on the GPU pipeline starts no backend.
+pub type BackendStarter = Box<dyn FnMut() -> Result<Box<dyn SilhouetteBackend>, BackendError>>;
 
 /// What to open and how.
 #[derive(Debug, Clone, PartialEq)]
@@ -152,17 +160,19 @@ pub fn check_display() -> Result<(), ViewError> {
     Ok(())
 }
 
-/// Opens a window onto `scene`, with silhouettes from `backend`, and runs until the user closes
-/// it or, with [`ViewOptions::frames`], until that many frames are shown.
+/// Opens a window onto `scene`, with the host pipeline's silhouettes from the backend `backend`
+/// starts, and runs until the user closes it or, with [`ViewOptions::frames`], until that many
+/// frames are shown.
 ///
 /// # Errors
 /// [`ViewError::NoDisplay`] without a display (checked before anything opens),
-/// [`ViewError::Options`] for a zero size or `frames = Some(0)`, [`ViewError::Window`] when the
-/// event loop or window cannot be created, [`ViewError::Gpu`] when no adapter can present to it,
-/// [`ViewError::Render`] when the renderer fails to start or to render a frame.
+/// [`ViewError::Options`] for a zero size, `frames = Some(0)` or a scene without vertices,
+/// [`ViewError::Window`] when the event loop or window cannot be created, [`ViewError::Gpu`]
+/// when no adapter can present to it, [`ViewError::Render`] when the renderer or the backend
+/// fails to start or to render a frame.
 pub fn view(
-    scene: RenderScene,
-    backend: Box<dyn SilhouetteBackend>,
+    scene: Scene,
+    backend: BackendStarter,
     options: ViewOptions,
 ) -> Result<ViewReport, ViewError> {
     if options.width == 0 || options.height == 0 {
@@ -174,6 +184,9 @@ pub fn view(
     if options.frames == Some(0) {
         return Err(ViewError::Options("frames must be at least 1".into()));
     }
+    let camera = scene
+        .camera_or_default()
+        .ok_or_else(|| ViewError::Options(format!("scene {:?} has nothing to show", scene.name)))?;
     check_display()?;
     let mut render_options = RenderOptions::new(options.width, options.height);
     render_options.mode = options.mode;
@@ -181,7 +194,7 @@ pub fn view(
     let event_loop = winit::event_loop::EventLoop::new()
         .map_err(|e| ViewError::Window(format!("cannot connect to the display: {e}")))?;
     let pipeline = options.pipeline;
-    let mut app = window::App::new(scene, backend, render_options, options);
+    let mut app = app::App::new(scene, camera, backend, render_options, options);
     event_loop
         .run_app(&mut app)
         .map_err(|e| ViewError::Window(format!("event loop: {e}")))?;

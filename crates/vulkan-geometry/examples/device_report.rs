@@ -6,11 +6,10 @@
 
 use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{
-    corpus, extract_once, invariant, Accuracy, ExtractStats, Multiplicities, SceneObject,
-    SilhouetteBackend, TopologyScene,
+    corpus, extract_once, invariant, Accuracy, ExtractStats, Multiplicities, SilhouetteBackend,
+    TopologyScene,
 };
 use shadowvol_vulkan_geometry::{VulkanBackend, VulkanOptions};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 fn corpus_report(vk: &mut VulkanBackend, label: &str) -> bool {
@@ -102,19 +101,8 @@ fn main() {
     let mut cpu = CpuBackend::new();
     for name in presets {
         let s = shadowvol_scenes::preset(&name).expect("preset");
-        let scene = TopologyScene {
-            objects: s
-                .objects
-                .iter()
-                .map(|o| SceneObject {
-                    name: o.name.clone(),
-                    table: Arc::new(
-                        shadowvol_mesh_topology::EdgeTable::build(&o.mesh).expect("mesh"),
-                    ),
-                    world_from_object: o.transform,
-                })
-                .collect(),
-        };
+        let scene = &s.geometry;
+        let lights = s.light_positions();
         println!(
             "{name}: {} objects, {} triangles, {} edges, {} lights",
             scene.objects.len(),
@@ -123,8 +111,8 @@ fn main() {
             s.lights.len()
         );
         for mode in Accuracy::ALL {
-            let (vt, vs) = time(&mut vk, &scene, &s.lights, mode, 15);
-            let (ct, _) = time(&mut cpu, &scene, &s.lights, mode, 3);
+            let (vt, vs) = time(&mut vk, scene, &lights, mode, 15);
+            let (ct, _) = time(&mut cpu, scene, &lights, mode, 3);
             println!(
                 "  {mode:8} vulkan median {:8.3} ms (upload {:.3}, compute {:.3}, readback {:.3}, host resolve {:.3} ms, {} uncertain) | cpu {:8.3} ms | cpu/vulkan {:.1}x",
                 vt.as_secs_f64() * 1e3,

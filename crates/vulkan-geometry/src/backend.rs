@@ -299,7 +299,7 @@ impl SilhouetteBackend for VulkanBackend {
         self.last_passes = 0;
         let mut stats = ExtractStats::default();
         let t = Instant::now();
-        let obj_lights = object_lights(&self.scene(id)?.scene, lights);
+        let obj_lights = object_lights(self.scene(id)?.scene.transforms(), lights);
         stats.upload = t.elapsed();
         out.reset(self.scene(id)?.ds.layout.edge_count(), lights.len());
         self.extract_batches(id, &obj_lights, mode, out, &mut stats)?;

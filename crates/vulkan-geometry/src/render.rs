@@ -325,7 +325,7 @@ impl VulkanBackend {
             let mut m = Multiplicities::default();
             stats.extract = Some(self.extract(id, &[light], mode, &mut m)?);
             let p = self.scene(id)?;
-            let l = object_lights(&p.scene, &[light]);
+            let l = object_lights(p.scene.transforms(), &[light]);
             let ds = &p.ds;
             let pos = |v: u32| ds.layout.position(v);
             let touch: Vec<bool> = (0..ds.layout.vertex_count() as u32)
@@ -367,7 +367,7 @@ impl VulkanBackend {
             }
             MODE_PRECOMPUTED
         } else {
-            let obj_lights = object_lights(&self.scene(id)?.scene, &[light]);
+            let obj_lights = object_lights(self.scene(id)?.scene.transforms(), &[light]);
             self.upload_lights(id, &obj_lights, 0..1)?;
             shadowvol_silhouette::gpu::mode_code(mode)
         };

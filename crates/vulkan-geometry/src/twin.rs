@@ -261,7 +261,7 @@ pub fn extract_twin(
 ) -> Result<(Multiplicities, u64), BackendError> {
     check_lights(lights)?;
     let ds = DeviceScene::build(scene)?;
-    let obj_lights = object_lights(scene, lights);
+    let obj_lights = object_lights(scene.transforms(), lights);
     let mut out = Multiplicities::zeroed(ds.layout.edge_count(), lights.len());
     let mut records = Vec::new();
     let edges = ds.layout.edge_count().max(1);

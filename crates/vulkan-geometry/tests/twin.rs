@@ -92,7 +92,7 @@ fn open_lateral_vertices(
     lights: &[shadowvol_silhouette::Light],
 ) -> usize {
     let ds = DeviceScene::build(scene).unwrap();
-    let obj_lights = object_lights(scene, lights);
+    let obj_lights = object_lights(scene.transforms(), lights);
     let mut sum: HashMap<(u32, [u32; 3]), i64> = HashMap::new();
     for (e, &mult) in m.iter().enumerate().take(ds.layout.edge_count()) {
         if mult == 0 {

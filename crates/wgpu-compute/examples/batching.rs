@@ -45,8 +45,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if baked {
             scene = scene.baked()?;
         }
-        let topo = scene.topology()?;
-        let lights = scene.lights.clone();
+        let topo = &scene.geometry;
+        let lights = scene.light_positions();
         let id = backend.prepare(&topo)?;
         let mut out = Multiplicities::default();
         for mode in Accuracy::ALL {

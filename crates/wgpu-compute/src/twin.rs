@@ -370,7 +370,7 @@ pub fn extract(
     check_lights(lights)?;
     let layout = SceneLayout::build(scene, crate::NAME)?;
     let triangles = TriangleLayout::build(scene, &layout, crate::NAME)?;
-    let obj_lights = object_lights(scene, lights);
+    let obj_lights = object_lights(scene.transforms(), lights);
     let packed = pack_lights(&obj_lights, 0, lights.len());
     let k = run_kernel(&layout, &triangles, &packed, lights.len(), mode, filter);
     out.reset(layout.edge_count(), lights.len());

@@ -51,7 +51,7 @@ fn deferred_resolution_decides_every_pair_the_host_would() {
             extract_once(&mut cpu, &case.scene, &case.lights, Accuracy::Exact).unwrap();
         let layout = SceneLayout::build(&case.scene, "wgpu").unwrap();
         let triangles = TriangleLayout::build(&case.scene, &layout, "wgpu").unwrap();
-        let obj = object_lights(&case.scene, &case.lights);
+        let obj = object_lights(case.scene.transforms(), &case.lights);
         let n = case.lights.len();
         let packed: Vec<[f32; 4]> = obj.iter().flat_map(|v| v.iter().copied()).collect();
         for filter in [ExactFilter::F64, ExactFilter::F32] {
@@ -129,7 +129,7 @@ fn kernel_records_are_well_formed() {
     for case in common::all_cases() {
         let layout = SceneLayout::build(&case.scene, "wgpu").unwrap();
         let triangles = TriangleLayout::build(&case.scene, &layout, "wgpu").unwrap();
-        let obj = object_lights(&case.scene, &case.lights);
+        let obj = object_lights(case.scene.transforms(), &case.lights);
         let n = case.lights.len();
         let packed: Vec<[f32; 4]> = obj.iter().flat_map(|v| v.iter().copied()).collect();
         let k = twin::run_kernel(

@@ -31,3 +31,23 @@ pub fn tolerate_guarded_panics() {
         }));
     });
 }
+
+/// Checks what a loaded scene promises: every object's table has finite positions, triangles
+/// that index them, and edges within range. `what` names the loader in the message.
+#[allow(dead_code)]
+pub fn check_loaded(scene: &shadowvol_scenes::Scene, what: &str) {
+    for o in &scene.geometry.objects {
+        let t = &o.table;
+        let n = t.positions.len();
+        assert!(
+            t.positions.iter().all(|p| p.is_finite()),
+            "{what}: object {:?} has a non-finite position",
+            o.name
+        );
+        assert!(
+            t.triangles.iter().flatten().chain(t.edges.iter().flatten()).all(|&v| (v as usize) < n),
+            "{what}: object {:?} indexes past its {n} positions",
+            o.name
+        );
+    }
+}

@@ -11,7 +11,7 @@ use shadowvol_silhouette::{object_lights, Light, Multiplicities, TopologyScene};
 /// with the big-integer oracle only (no `shadowvol-robust-math` predicate involved) on the
 /// object-space `f32` lights every backend receives.
 pub fn reference(scene: &TopologyScene, lights: &[Light]) -> Vec<Vec<i32>> {
-    let obj_lights = object_lights(scene, lights);
+    let obj_lights = object_lights(scene.transforms(), lights);
     (0..lights.len())
         .map(|l| {
             scene

@@ -2,7 +2,7 @@
 //! stencil (sides, caps) and lit passes.
 
 use super::*;
-use crate::gpu::states;
+use crate::raster::states;
 
 impl ShadowPass {
     /// Records the frame's compute pass for the inputs last given to [`ShadowPass::update`]: the

@@ -50,6 +50,15 @@ impl ResidentLayout {
         })
     }
 
+    /// Flattens every surface of `scene` ([`shadowvol_scenes::Scene::surface_geometry`]:
+    /// casters, then receivers).
+    ///
+    /// # Errors
+    /// As [`ResidentLayout::build`].
+    pub fn of_scene(scene: &shadowvol_scenes::Scene) -> Result<Self, RenderError> {
+        Self::build(&scene.surface_geometry())
+    }
+
     /// Number of triangles (all objects).
     #[must_use]
     pub fn tri_count(&self) -> usize {

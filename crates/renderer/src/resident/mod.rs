@@ -62,8 +62,9 @@ pub use layout::ResidentLayout;
 use crate::plan::Technique;
 use crate::{Camera, RenderError};
 use glam::{Affine3A, DAffine3};
-use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::{object_lights, TopologyScene};
+use shadowvol_robust_math::Accuracy;
+use shadowvol_scenes::SceneLight;
+use shadowvol_silhouette::object_light;
 use shadowvol_wgpu_compute::shaders;
 use shadowvol_wgpu_compute::twin::ExactFilter;
 use std::sync::Arc;
@@ -102,32 +103,7 @@ pub fn draw_source() -> String {
     format!("{SHADER_WGSL}\n{DRAW_WGSL}")
 }
 
-/// A `w` x `h` 2-D texture with one mip level and one sample: an attachment the pass (or the
-/// host pipeline) draws into, or any other 2-D target of the application.
-#[must_use]
-pub fn texture_2d(
-    device: &wgpu::Device,
-    label: &str,
-    w: u32,
-    h: u32,
-    format: wgpu::TextureFormat,
-    usage: wgpu::TextureUsages,
-) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage,
-        view_formats: &[],
-    })
-}
+pub use crate::raster::texture_2d;
 
 /// The attachment formats the pass draws into.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -147,15 +123,14 @@ pub struct PassFrame<'a> {
     pub camera: &'a Camera,
     /// Width / height of the target.
     pub aspect: f32,
-    /// World lights.
-    pub lights: &'a [Light],
+    /// World lights, each with its emission.
+    pub lights: &'a [SceneLight],
     /// Per light: linear RGB colour times gain of its lit pass.
     pub colors: &'a [[f32; 3]],
-    /// Per light: what it emits (empty: unit lights).
-    pub emission: &'a [shadowvol_scenes::Emission],
-    /// Per object: world from object (the scene's objects, in [`ShadowPass::prepare`] order).
+    /// Per surface: world from object ([`shadowvol_scenes::Scene::surfaces`] order, as
+    /// [`ShadowPass::prepare`] laid them out).
     pub transforms: &'a [Affine3A],
-    /// Per object: albedo.
+    /// Per surface: albedo.
     pub albedo: &'a [[f32; 3]],
     /// Per (light, object), light-major: the plan's technique.
     pub techniques: &'a [Technique],

@@ -2,10 +2,10 @@
 //! pipelines.
 
 use super::*;
-use crate::gpu::pipelines::{
+use crate::raster::pipelines::{
     bind_group_layout, color_target, pipeline_layout, storage, uniform, RenderPipelines,
 };
-use crate::gpu::states;
+use crate::raster::states;
 
 impl ShadowPass {
     /// Features the pass uses when the adapter has them: `DEPTH_CLIP_CONTROL` (depth clamp for

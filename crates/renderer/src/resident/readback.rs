@@ -142,6 +142,6 @@ fn read_buffer(
     });
     enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
     queue.submit([enc.finish()]);
-    let bytes = crate::gpu::map_read(device, &staging)?;
+    let bytes = crate::raster::map_read(device, &staging)?;
     Ok(bytemuck::pod_collect_to_vec(&bytes))
 }

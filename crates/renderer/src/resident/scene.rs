@@ -4,14 +4,22 @@
 use super::*;
 
 impl ShadowPass {
-    /// Uploads `scene` once: object-space positions, edges, opposite vertices, triangles. The
-    /// scene's transforms are not used here; each frame gives its own ([`PassFrame::transforms`]).
+    /// Uploads `scene` once: every surface's ([`shadowvol_scenes::Scene::surfaces`], casters
+    /// then receivers) object-space positions, edges, opposite vertices and triangles. The
+    /// transforms are not used here; each frame gives its own ([`PassFrame::transforms`]).
     ///
     /// # Errors
     /// [`RenderError::InvalidInput`] when the scene is too large to index with `u32`, or a buffer
     /// exceeds the device's `max_storage_buffer_binding_size`.
-    pub fn prepare(&self, scene: &TopologyScene) -> Result<ResidentScene, RenderError> {
-        let layout = ResidentLayout::build(scene)?;
+    pub fn prepare(&self, scene: &shadowvol_scenes::Scene) -> Result<ResidentScene, RenderError> {
+        self.prepare_layout(ResidentLayout::of_scene(scene)?)
+    }
+
+    /// Uploads a laid-out scene ([`ResidentLayout::build`] of any topology).
+    ///
+    /// # Errors
+    /// As [`ShadowPass::prepare`].
+    pub fn prepare_layout(&self, layout: ResidentLayout) -> Result<ResidentScene, RenderError> {
         let max = self.device.limits().max_storage_buffer_binding_size;
         let init = |label: &str,
                     bytes: &[u8],
@@ -95,7 +103,7 @@ impl ShadowPass {
         });
         // The surface vertices (3 `SurfaceVertex` per triangle) where the buffer fits the device;
         // the surface pass writes them in chunks that each fit one storage binding.
-        let per_tri = 3 * std::mem::size_of::<crate::gpu::SurfaceVertex>() as u64;
+        let per_tri = 3 * std::mem::size_of::<crate::raster::SurfaceVertex>() as u64;
         let surface_bytes = per_tri * layout.tri_count() as u64;
         let limits = self.device.limits();
         let align = u64::from(limits.min_storage_buffer_offset_alignment.max(1));
@@ -205,9 +213,6 @@ impl ShadowPass {
         check("techniques", f.techniques.len(), objects * n_lights)?;
         check("light colours", f.colors.len(), n_lights)?;
         check("scissors", f.scissors.len(), n_lights)?;
-        if !f.emission.is_empty() {
-            check("emissions", f.emission.len(), n_lights)?;
-        }
         let slots = n_lights.max(1);
         if rs.frame.as_ref().is_none_or(|b| b.lights < slots) {
             rs.frame = Some(self.frame_buffers(rs, slots)?);
@@ -216,35 +221,23 @@ impl ShadowPass {
         let q = &self.queue;
         // Object-space lights, [object * light_count + light], through the one shared
         // conversion (f64, rounded once), as every backend does.
-        let topo = TopologyScene {
-            objects: f
-                .transforms
-                .iter()
-                .enumerate()
-                .map(|(i, &t)| shadowvol_silhouette::SceneObject {
-                    name: format!("object {i}"),
-                    table: Arc::new(shadowvol_mesh_topology::EdgeTable::default()),
-                    world_from_object: t,
-                })
-                .collect(),
-        };
-        let ol = object_lights(&topo, f.lights);
         let mut lights: Vec<[f32; 4]> = Vec::with_capacity(objects * n_lights);
-        for (oi, row) in ol.iter().enumerate() {
-            for l in row {
+        for (oi, &t) in f.transforms.iter().enumerate() {
+            for light in f.lights {
+                let l = object_light(t, light.light);
                 if !l.iter().all(|v| v.is_finite()) {
                     return Err(RenderError::InvalidInput(format!(
                         "object {oi}: the light in object space {l:?} is not finite"
                     )));
                 }
-                lights.push(*l);
+                lights.push(l);
             }
         }
         if lights.is_empty() {
             lights.push([0.0; 4]);
         }
         q.write_buffer(&fb.lights_buf, 0, bytemuck::cast_slice(&lights));
-        let points = light_points(&ol, n_lights);
+        let points = light_points(&lights, objects, n_lights);
         q.write_buffer(&fb.light_points, 0, bytemuck::cast_slice(&points));
         let codes: Vec<u32> = f
             .techniques
@@ -312,19 +305,12 @@ impl ShadowPass {
         q.write_buffer(&rs.globals, 0, bytemuck::cast_slice(&globals));
         let mut light_bytes = vec![0u8; slots * LIGHT_STRIDE as usize];
         for (li, light) in f.lights.iter().enumerate() {
-            let mut l = light.to_array();
+            let mut l = light.light.to_array();
             let w = l[3];
             l[0] -= f.camera.eye.x * w;
             l[1] -= f.camera.eye.y * w;
             l[2] -= f.camera.eye.z * w;
-            let draws = crate::gpu::LightDraws {
-                light: l,
-                color: f.colors[li],
-                scissor: f.scissors[li],
-                emission: f.emission.get(li).copied(),
-                ..Default::default()
-            };
-            let v = crate::gpu::light_uniform(&draws);
+            let v = crate::raster::light_uniform(l, f.colors[li], light.emission.as_ref());
             let draw = [
                 li as u32 * capacity,
                 capacity,
@@ -499,7 +485,7 @@ impl ShadowPass {
 }
 
 /// The draws' extrusion inputs, `[light * object_count + object]`, two `[f32; 4]` each, from the
-/// object-space lights `ol[object][light]`: for a point light (`w > 0`) the point
+/// object-space lights `ol[object * n_lights + light]` of `objects` objects: for a point light (`w > 0`) the point
 /// `P = L.xyz / w`, evaluated in `f64` and split into `f32` `hi` and `lo = P − hi`, as `(hi, w)`
 /// and `(lo, 0)`; for a directional light `(L.xyz, 0)` and zeros. The vertex shader extrudes
 /// object-space vertex `p` along `(p − hi) − lo`, whose first difference is exact where `p`
@@ -507,11 +493,11 @@ impl ShadowPass {
 /// where `w·p − L.xyz` in `f32` rounds to noise. At least one pair, so the buffer is never
 /// empty.
 #[must_use]
-pub(crate) fn light_points(ol: &[Vec<[f32; 4]>], n_lights: usize) -> Vec<[f32; 4]> {
-    let objects = ol.len();
+pub(crate) fn light_points(ol: &[[f32; 4]], objects: usize, n_lights: usize) -> Vec<[f32; 4]> {
     let mut out = vec![[0.0f32; 4]; 2 * (objects * n_lights).max(1)];
-    for (oi, row) in ol.iter().enumerate() {
-        for (li, l) in row.iter().enumerate().take(n_lights) {
+    for oi in 0..objects {
+        for li in 0..n_lights {
+            let l = &ol[oi * n_lights + li];
             let k = 2 * (li * objects + oi);
             let w = f64::from(l[3]);
             if w == 0.0 {

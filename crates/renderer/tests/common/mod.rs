@@ -3,10 +3,10 @@
 
 use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::Mesh;
-use shadowvol_renderer::{Camera, RenderError, RenderObject, RenderOptions, RenderScene, Renderer};
+use shadowvol_reference::Comparison;
+use shadowvol_renderer::{Camera, Frame, RenderError, RenderOptions, Renderer, Scene};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_test_support::Skip;
-use std::sync::Arc;
 
 /// A renderer on the `cpu` backend, or a visible skip without a GPU adapter (see [`started`]).
 pub fn renderer(width: u32, height: u32, mode: Accuracy) -> Result<Renderer, Skip> {
@@ -17,10 +17,45 @@ pub fn renderer(width: u32, height: u32, mode: Accuracy) -> Result<Renderer, Ski
 
 /// A renderer on the `cpu` backend with `opts`, or a skip as [`renderer`].
 pub fn renderer_with(opts: RenderOptions) -> Result<Renderer, Skip> {
-    started(Renderer::new(
+    started(Renderer::host(
         Box::new(shadowvol_cpu::CpuBackend::new()),
         opts,
     ))
+}
+
+/// A renderer on the GPU pipeline with `opts`, or a visible skip without an adapter or when
+/// the adapter cannot run the GPU pipeline (a failure under CI).
+pub fn gpu_renderer(opts: RenderOptions) -> Result<Renderer, Skip> {
+    match Renderer::gpu(opts) {
+        Err(RenderError::Unsupported(why)) => Err(shadowvol_test_support::skip(format!(
+            "the adapter cannot run the GPU pipeline: {why}"
+        ))),
+        other => started(other),
+    }
+}
+
+/// The reference's comparison of `frame`, a render of `scene`.
+pub fn compare(frame: &Frame, scene: &Scene) -> Comparison {
+    shadowvol_reference::compare(&frame.shot(scene).expect("a frame read back"))
+}
+
+/// A scene of `objects` (name, mesh, world transform; each its own table), lit by unit
+/// `lights`, seen from `camera`, with ambient `ambient`.
+pub fn scene_of(
+    objects: Vec<(&str, Mesh, Affine3A)>,
+    lights: &[Light],
+    camera: Camera,
+    ambient: f32,
+) -> Scene {
+    let mut scene = Scene::new("test");
+    for (name, mesh, t) in objects {
+        let table = scene.add_mesh(name, &mesh).expect("valid mesh");
+        scene.add_object(name, table, t);
+    }
+    scene.add_unit_lights(lights.iter().copied());
+    scene.camera = Some(camera);
+    scene.effects.ambient = ambient;
+    scene
 }
 
 /// The renderer `result`, or a visible skip ([`shadowvol_test_support::skip`]: `ignored (no GPU
@@ -66,19 +101,18 @@ pub fn floor(s: f32, n: u32) -> Mesh {
 }
 
 /// A floor and a box standing above it, one light.
-pub fn box_on_floor(light: Light, camera: Camera) -> RenderScene {
-    RenderScene {
-        objects: vec![
-            RenderObject::new("floor", Arc::new(floor(6.0, 4)), Affine3A::IDENTITY),
-            RenderObject::new(
+pub fn box_on_floor(light: Light, camera: Camera) -> Scene {
+    scene_of(
+        vec![
+            ("floor", floor(6.0, 4), Affine3A::IDENTITY),
+            (
                 "box",
-                Arc::new(cuboid(Vec3::new(-0.5, 0.0, -0.5), Vec3::new(0.5, 1.0, 0.5))),
+                cuboid(Vec3::new(-0.5, 0.0, -0.5), Vec3::new(0.5, 1.0, 0.5)),
                 Affine3A::from_translation(Vec3::new(0.0, 0.8, 0.0)),
             ),
         ],
-        lights: vec![light],
-        emission: Vec::new(),
+        &[light],
         camera,
-        ambient: 0.15,
-    }
+        0.15,
+    )
 }

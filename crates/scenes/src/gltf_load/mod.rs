@@ -4,11 +4,13 @@
 //!
 //! * **Nodes** of the scene named by `scene`, else of the first scene, else every root node,
 //!   visited depth first in order: a node, then its children in order. Each node with a mesh becomes one
-//!   [`Object`](crate::Object) whose transform is the node's world transform, composed in `f32`
+//!   object of [`Scene::geometry`](crate::Scene::geometry) whose transform is the node's world
+//!   transform, composed in `f32`
 //!   (`parent * local`, glTF's `matrix` or `T * R * S`). This order is the vertex numbering of
 //!   the CLI contract: depth-first node order, then primitive order, then accessor order.
-//! * **Meshes**: all primitives of a mesh are concatenated, in order, into one [`Mesh`]. Nodes
-//!   that use the same mesh share one `Arc<Mesh>`. Modes `TRIANGLES`, `TRIANGLE_STRIP` and
+//! * **Meshes**: all primitives of a mesh are concatenated, in order, into one mesh, welded into
+//!   one edge table. Nodes
+//!   that use the same mesh share one `Arc<EdgeTable>`. Modes `TRIANGLES`, `TRIANGLE_STRIP` and
 //!   `TRIANGLE_FAN` are read (strips and fans are turned into triangle lists); points and lines,
 //!   and primitives without `POSITION`, are skipped with a note (see
 //!   [`load_gltf_slice_with_notes`]), and a node whose mesh is left without triangles is skipped
@@ -86,7 +88,7 @@ use document::{
 pub use draco::in_guarded_decoder;
 use glam::Affine3A;
 use nodes::Loader;
-use shadowvol_mesh_topology::Mesh;
+
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -140,12 +142,15 @@ pub fn load_gltf_with_notes(path: impl AsRef<Path>) -> Result<(Scene, Vec<String
 
 /// Loads a `.gltf` or `.glb` file flattened into one world-space mesh: node transforms applied
 /// in `f32`, vertices numbered in depth-first node order, then primitive order, then accessor
-/// order (the CLI contract). Same as `load_gltf(path)?.baked_mesh()`.
+/// order (the CLI contract), welded into one edge table. Same as
+/// `load_gltf(path)?.baked_table()`.
 ///
 /// # Errors
 /// As [`load_gltf`], plus [`SceneError::Mesh`] if the merged mesh is too large.
-pub fn load_gltf_mesh(path: impl AsRef<Path>) -> Result<Mesh, SceneError> {
-    load_gltf(path)?.baked_mesh()
+pub fn load_gltf_mesh(
+    path: impl AsRef<Path>,
+) -> Result<std::sync::Arc<shadowvol_mesh_topology::EdgeTable>, SceneError> {
+    load_gltf(path)?.baked_table()
 }
 
 /// Loads glTF from bytes (JSON text or GLB). `source_name` is used in messages; `base` is the

@@ -1,10 +1,11 @@
 //! The node walk: each node's world transform, its mesh as an object, and the scene camera
 //! and lights (`KHR_lights_punctual`) it carries.
 
-use crate::scene::{Camera, Object, Scene};
+use crate::scene::{Scene, SceneLight};
+use crate::Camera;
 use crate::SceneError;
 use glam::{Affine3A, Mat4, Vec3};
-use shadowvol_mesh_topology::Mesh;
+use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_robust_math::Light;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -19,7 +20,8 @@ pub(super) struct Loader<'a> {
     pub(super) buffers: &'a [Option<&'a [u8]>],
     /// Decoded `EXT_meshopt_compression` views by view index.
     pub(super) decoded: &'a HashMap<usize, Vec<u8>>,
-    pub(super) meshes: HashMap<usize, Arc<Mesh>>,
+    /// Edge tables of the meshes read so far, by mesh index (instances share them).
+    pub(super) meshes: HashMap<usize, Arc<EdgeTable>>,
     pub(super) visited: Vec<bool>,
     /// `KHR_mesh_quantization` is in `extensionsUsed`: integer positions are allowed.
     pub(super) quantization: bool,
@@ -86,18 +88,22 @@ impl Loader<'_> {
                 ));
             }
             let shared = match self.meshes.get(&mesh.index()) {
-                Some(m) => Arc::clone(m),
+                Some(t) => Arc::clone(t),
                 None => {
-                    let m = Arc::new(self.read_mesh(&label, &mesh)?);
-                    self.meshes.insert(mesh.index(), Arc::clone(&m));
-                    m
+                    let m = self.read_mesh(&label, &mesh)?;
+                    let t = Arc::new(EdgeTable::build(&m).map_err(|source| SceneError::Mesh {
+                        what: format!("{}: {label}, mesh {}", self.source_name, mesh.index()),
+                        source,
+                    })?);
+                    self.meshes.insert(mesh.index(), Arc::clone(&t));
+                    t
                 }
             };
             let name = node
                 .name()
                 .or(mesh.name())
                 .map_or_else(|| format!("node{}", node.index()), str::to_owned);
-            if shared.triangles.is_empty() {
+            if shared.stats.triangles == 0 {
                 self.notes.push(format!(
                     "{}: {label}: mesh {} has no triangles, the node is skipped",
                     self.source_name,
@@ -120,11 +126,7 @@ impl Loader<'_> {
                         ),
                     ));
                 }
-                self.scene.objects.push(Object {
-                    name,
-                    mesh: shared,
-                    transform: world,
-                });
+                self.scene.add_object(name, shared, world);
             }
         }
 
@@ -148,8 +150,10 @@ impl Loader<'_> {
             })?;
             let emission = crate::emission::from_gltf(&light, &world)
                 .map_err(|m| self.err(format!("{label}, light {}", light.index()), m))?;
-            self.scene.lights.push(l);
-            self.scene.emission.push(emission);
+            self.scene.lights.push(SceneLight {
+                light: l,
+                emission: Some(emission),
+            });
         }
 
         if let (Some(cam), None) = (node.camera(), self.scene.camera) {

@@ -138,7 +138,7 @@ mod tests {
             Light::point(glam::Vec3::new(0.3, 2.0, 0.1)),
             Light::directional(glam::Vec3::new(1.0, 0.5, 0.0)),
         ];
-        let ol = object_lights(&scene, &lights);
+        let ol = object_lights(scene.transforms(), &lights);
         // A batch over the second light only: its records name light 0 of the batch.
         let records: Vec<UncertainRecord> = (0..layout.edge_count())
             .flat_map(|e| {
@@ -167,7 +167,7 @@ mod tests {
     fn malformed_records_are_device_errors() {
         let scene = scene();
         let layout = SceneLayout::build(&scene, "t").unwrap();
-        let ol = object_lights(&scene, &[Light::point(glam::Vec3::Y * 3.0)]);
+        let ol = object_lights(scene.transforms(), &[Light::point(glam::Vec3::Y * 3.0)]);
         let mut out = Multiplicities::zeroed(layout.edge_count(), 1);
         let wrong_slot = layout.ov_slots(1).start as u32;
         for r in [

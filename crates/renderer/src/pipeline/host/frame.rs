@@ -1,12 +1,13 @@
-//! The host pipeline's steps of a frame: the plan (shared with the GPU pipeline), the
-//! silhouettes from the backend (reused where nothing moved), and the volumes built from them.
+//! The host pipeline's steps of a frame: the silhouettes from the backend (reused where nothing
+//! moved), and the volumes built from them.
 
-use super::{bounds_f64, object_space_lights, LightCache, RenderOptions, Renderer};
-use crate::gpu::LightDraws;
-use crate::plan::{self, PlanEntry, SilhouetteSource, Technique};
-use crate::volume::{build_caps, build_sides, remove_triangles, touching_triangles};
-use crate::{RenderError, RenderScene};
-use glam::DVec3;
+use super::raster::LightDraws;
+use super::volume::{build_caps, build_sides, remove_triangles, touching_triangles};
+use super::{HostPipeline, LightCache};
+use crate::pipeline::FrameInputs;
+use crate::plan::{PlanEntry, SilhouetteSource, Technique};
+use crate::RenderError;
+use glam::Affine3A;
 use shadowvol_robust_math::Light;
 use shadowvol_silhouette::Multiplicities;
 use std::time::{Duration, Instant};
@@ -21,94 +22,16 @@ pub(super) struct Extracted {
     pub readback_bytes: u64,
 }
 
-/// One light's scissor rectangle, `None` for the whole image.
-pub(super) type Scissor = Option<[u32; 4]>;
+/// `light` in the space of object `name` placed by `transform`, through
+/// [`shadowvol_silhouette::object_light`] (the one shared conversion).
+fn object_space_light(name: &str, transform: Affine3A, light: Light) -> Result<Light, RenderError> {
+    let l = shadowvol_silhouette::object_light(transform, light);
+    Light::try_from(l).map_err(|e| {
+        RenderError::InvalidInput(format!("object {name:?}: light in object space {l:?}: {e}"))
+    })
+}
 
-impl Renderer {
-    /// The plan: per (light, object) the technique and why ([`plan::choose`]), in
-    /// `light * object_count + object` order, and each light's scissor rectangle.
-    pub(super) fn plan_frame(
-        &self,
-        scene: &RenderScene,
-        aspect: f64,
-    ) -> (Vec<PlanEntry>, Vec<Scissor>) {
-        let RenderOptions {
-            width,
-            height,
-            policy,
-            scissor,
-            ..
-        } = self.options;
-        let n_lights = scene.lights.len();
-        let near = scene.camera.near_corners(aspect);
-        let frustum = plan::frustum_planes(scene.camera.eye.as_dvec3(), near);
-        let mut entries = Vec::with_capacity(n_lights * scene.objects.len());
-        let bounds: Vec<(DVec3, DVec3)> = self.cache.iter().map(|c| bounds_f64(&c.world)).collect();
-        let view_proj = scene.camera.view_proj_f64(aspect);
-        let scene_bounds = bounds.iter().fold(
-            (DVec3::INFINITY, DVec3::NEG_INFINITY),
-            |(lo, hi), &(a, b)| (lo.min(a), hi.max(b)),
-        );
-        let scissors: Vec<Option<[u32; 4]>> = scene
-            .lights
-            .iter()
-            .enumerate()
-            .map(|(li, light)| {
-                scissor
-                    .then(|| {
-                        plan::light_scissor(
-                            light.to_array(),
-                            scene.emission.get(li),
-                            scene_bounds,
-                            view_proj,
-                            f64::from(scene.camera.near),
-                            width,
-                            height,
-                        )
-                    })
-                    .flatten()
-            })
-            .collect();
-        for (li, light) in scene.lights.iter().enumerate() {
-            let l = light.to_array();
-            let ncv = plan::near_clip_volume(near, l);
-            for (oi, obj) in scene.objects.iter().enumerate() {
-                let c = &self.cache[oi];
-                let (technique, reason) = plan::choose(
-                    policy,
-                    l,
-                    scene.emission.get(li),
-                    plan::PlanObject {
-                        casts_shadows: obj.casts_shadows,
-                        world: &c.world,
-                        triangles: &c.table.triangles,
-                        bounds: bounds[oi],
-                    },
-                    plan::PlanView {
-                        frustum: &frustum,
-                        near,
-                        near_clip: ncv.as_deref(),
-                    },
-                );
-                entries.push(PlanEntry {
-                    light: li,
-                    object: oi,
-                    object_name: obj.name.clone(),
-                    technique,
-                    back_cap: technique == Technique::ZFail && !light.is_directional(),
-                    silhouette: SilhouetteSource::Skipped,
-                    silhouette_edges: 0,
-                    side_quads: 0,
-                    cap_triangles: 0,
-                    reason,
-                    scissor: scissors[li],
-                });
-            }
-        }
-
-        (entries, scissors)
-    }
-
+impl HostPipeline {
     /// The silhouettes of every (light, object) the plan draws, from the cache where neither
     /// the light nor the object moved (nor the mode changed), else from the backend: one call
     /// over the whole scene when several still objects need new ones, else per object. Marks
@@ -119,12 +42,15 @@ impl Renderer {
     /// that is not finite in an object's space.
     pub(super) fn extract_silhouettes(
         &mut self,
-        scene: &RenderScene,
+        frame: &FrameInputs<'_>,
         entries: &mut [PlanEntry],
     ) -> Result<Extracted, RenderError> {
-        let mode = self.options.mode;
+        let scene = frame.scene;
+        let mode = frame.mode;
         let n_lights = scene.lights.len();
-        let n_obj = scene.objects.len();
+        // Plan entries cover every surface; only casters (the first ones) are extracted.
+        let n_surfaces = frame.world.surfaces().len();
+        let n_obj = self.objects.len();
         let mut silhouette_time = Duration::ZERO;
         let mut m_buf = Multiplicities::default();
         let mut uncertain = 0u64;
@@ -132,17 +58,17 @@ impl Renderer {
         let mut stale_by_obj: Vec<Vec<usize>> = Vec::with_capacity(n_obj);
         for oi in 0..n_obj {
             let needed: Vec<usize> = (0..n_lights)
-                .filter(|&li| entries[li * n_obj + oi].technique != Technique::Culled)
+                .filter(|&li| entries[li * n_surfaces + oi].technique != Technique::Culled)
                 .collect();
             let stale: Vec<usize> = needed
             .iter()
             .copied()
             .filter(|&li| {
-                !matches!(&self.cache[oi].lights[li], Some(c) if c.light == scene.lights[li] && c.mode == mode)
+                !matches!(&self.objects[oi].lights[li], Some(c) if c.light == scene.lights[li].light && c.mode == mode)
             })
             .collect();
             for &li in &needed {
-                entries[li * n_obj + oi].silhouette = if stale.contains(&li) {
+                entries[li * n_surfaces + oi].silhouette = if stale.contains(&li) {
                     SilhouetteSource::Extracted
                 } else {
                     SilhouetteSource::Reused
@@ -158,7 +84,7 @@ impl Renderer {
         let batch: Vec<usize> = (0..n_obj)
             .filter(|&oi| !stale_by_obj[oi].is_empty())
             .collect();
-        if batch.len() >= 2 && !self.changed.iter().any(|&c| c) {
+        if batch.len() >= 2 && !frame.changes.any() {
             let mut union: Vec<usize> = batch
                 .iter()
                 .flat_map(|&oi| stale_by_obj[oi].iter().copied())
@@ -166,7 +92,7 @@ impl Renderer {
             union.sort_unstable();
             union.dedup();
             let whole = self.whole_scene(scene)?;
-            let lights: Vec<Light> = union.iter().map(|&li| scene.lights[li]).collect();
+            let lights: Vec<Light> = union.iter().map(|&li| scene.lights[li].light).collect();
             let t = Instant::now();
             uncertain += self
                 .backend
@@ -174,34 +100,31 @@ impl Renderer {
                 .uncertain;
             silhouette_time += t.elapsed();
             readback_bytes += 4 * (m_buf.edge_count() * m_buf.light_count()) as u64;
-            let offsets: Vec<usize> = std::iter::once(0)
-                .chain(self.cache.iter().scan(0, |acc, c| {
-                    *acc += c.table.edges.len();
-                    Some(*acc)
-                }))
-                .collect();
+            let offsets = scene.geometry.edge_offsets();
             for &oi in &batch {
                 for (k, &li) in union.iter().enumerate() {
-                    self.cache[oi].lights[li] = Some(LightCache {
-                        light: scene.lights[li],
+                    self.objects[oi].lights[li] = Some(LightCache {
+                        light: scene.lights[li].light,
                         mode,
                         m: m_buf.values(k)[offsets[oi]..offsets[oi + 1]].to_vec(),
                     });
-                    if entries[li * n_obj + oi].technique != Technique::Culled {
-                        entries[li * n_obj + oi].silhouette = SilhouetteSource::Extracted;
+                    if entries[li * n_surfaces + oi].technique != Technique::Culled {
+                        entries[li * n_surfaces + oi].silhouette = SilhouetteSource::Extracted;
                     }
                 }
                 stale_by_obj[oi].clear();
             }
         }
-        for (oi, obj) in scene.objects.iter().enumerate() {
+        for (oi, obj) in scene.geometry.objects.iter().enumerate() {
             let stale = &stale_by_obj[oi];
             if stale.is_empty() {
                 continue;
             }
-            let c = &self.cache[oi];
-            let stale_lights: Vec<Light> = stale.iter().map(|&li| scene.lights[li]).collect();
-            let obj_lights = object_space_lights(&obj.name, &c.table, c.transform, &stale_lights)?;
+            let c = &self.objects[oi];
+            let obj_lights = stale
+                .iter()
+                .map(|&li| object_space_light(&obj.name, c.transform, scene.lights[li].light))
+                .collect::<Result<Vec<Light>, RenderError>>()?;
             let t = Instant::now();
             uncertain += self
                 .backend
@@ -209,10 +132,10 @@ impl Renderer {
                 .uncertain;
             silhouette_time += t.elapsed();
             readback_bytes += 4 * (m_buf.edge_count() * m_buf.light_count()) as u64;
-            let c = &mut self.cache[oi];
+            let c = &mut self.objects[oi];
             for (k, &li) in stale.iter().enumerate() {
                 c.lights[li] = Some(LightCache {
-                    light: scene.lights[li],
+                    light: scene.lights[li].light,
                     mode,
                     m: m_buf.values(k).to_vec(),
                 });
@@ -235,37 +158,38 @@ impl Renderer {
     /// [`RenderError::InvalidInput`] for a light that is not finite in an object's space.
     pub(super) fn build_volumes(
         &self,
-        scene: &RenderScene,
+        frame: &FrameInputs<'_>,
         entries: &mut [PlanEntry],
-        colors: &[[f32; 3]],
-        scissors: &[Scissor],
     ) -> Result<(Vec<[f32; 4]>, Vec<LightDraws>), RenderError> {
-        let mode = self.options.mode;
+        let scene = frame.scene;
+        let mode = frame.mode;
         let n_lights = scene.lights.len();
+        let n_surfaces = frame.world.surfaces().len();
         let mut volumes: Vec<[f32; 4]> = Vec::new();
         let mut draws = Vec::with_capacity(n_lights);
-        for (li, light) in scene.lights.iter().enumerate() {
+        for (li, scene_light) in scene.lights.iter().enumerate() {
+            let light = &scene_light.light;
             let l = light.to_array();
             let mut d = LightDraws {
                 light: l,
-                color: colors[li],
-                scissor: scissors[li],
-                emission: scene.emission.get(li).copied(),
+                color: frame.light_colors[li],
+                scissor: frame.scissors[li],
+                emission: scene_light.emission,
                 ..LightDraws::default()
             };
             let mut zfail_objects = Vec::new();
             // Z-pass sides first, then z-fail sides + back caps + ccw caps, then cw caps.
             let start = volumes.len() as u32;
-            for (oi, obj) in scene.objects.iter().enumerate() {
-                let e = &mut entries[li * scene.objects.len() + oi];
+            for (oi, obj) in scene.geometry.objects.iter().enumerate() {
+                let e = &mut entries[li * n_surfaces + oi];
                 if e.technique == Technique::Culled {
                     continue;
                 }
-                let c = &self.cache[oi];
+                let c = &self.objects[oi];
+                let world = &frame.world.surfaces()[oi].positions;
                 let m = &c.lights[li].as_ref().expect("extracted above").m;
                 e.silhouette_edges = m.iter().filter(|&&v| v != 0).count();
-                let ol =
-                    object_space_lights(&obj.name, &c.table, c.transform, &[*light])?[0].to_array();
+                let ol = object_space_light(&obj.name, c.transform, *light)?.to_array();
                 let touching = touching_triangles(&c.table, ol);
                 let mut m = m.clone();
                 if !touching.is_empty() {
@@ -274,7 +198,7 @@ impl Renderer {
                         .push_str("; triangles touching the light are drawn without a volume");
                 }
                 if e.technique == Technique::ZPass {
-                    e.side_quads = build_sides(&c.table.edges, &m, &c.world, l, &mut volumes);
+                    e.side_quads = build_sides(&c.table.edges, &m, world, l, &mut volumes);
                 } else {
                     zfail_objects.push((oi, ol, touching, m));
                 }
@@ -283,10 +207,11 @@ impl Renderer {
             let start = volumes.len() as u32;
             let mut cw_caps = Vec::new();
             for (oi, ol, touching, m) in &zfail_objects {
-                let e = &mut entries[li * scene.objects.len() + *oi];
-                let c = &self.cache[*oi];
-                e.side_quads = build_sides(&c.table.edges, m, &c.world, l, &mut volumes);
-                let caps = build_caps(&c.table, *ol, &c.world, l, mode, e.back_cap, touching);
+                let e = &mut entries[li * n_surfaces + *oi];
+                let c = &self.objects[*oi];
+                let world = &frame.world.surfaces()[*oi].positions;
+                e.side_quads = build_sides(&c.table.edges, m, world, l, &mut volumes);
+                let caps = build_caps(&c.table, *ol, world, l, mode, e.back_cap, touching);
                 e.cap_triangles =
                     (caps.front_ccw.len() + caps.front_cw.len() + caps.back.len()) / 3;
                 volumes.extend_from_slice(&caps.back);

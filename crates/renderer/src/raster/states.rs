@@ -1,5 +1,5 @@
-//! The render states both pipelines share (host: `gpu.rs`, GPU-resident: `resident/pipeline.rs`),
-//! so that they count the stencil and light pixels by the same rules.
+//! The render states every pipeline shares (the host pipeline's raster, the resident pass), so
+//! that they count the stencil and light pixels by the same rules.
 
 /// Surface vertex attributes of [`super::SurfaceVertex`]: position, normal, albedo, ids.
 pub(crate) const SURFACE_ATTRS: [wgpu::VertexAttribute; 4] =

@@ -5,10 +5,12 @@
 
 use glam::{DVec3, Vec3};
 use num_bigint::BigInt;
-use shadowvol_renderer::occlusion::{light_side, Caster, Crossing, ShadowRay};
-use shadowvol_renderer::reference::{self, PixelState};
-use shadowvol_renderer::{Camera, Frame, Light, Timings};
-use shadowvol_robust_math::Accuracy;
+use shadowvol_mesh_topology::Mesh;
+use shadowvol_reference::occlusion::{light_side, Caster, Crossing, ShadowRay};
+use shadowvol_reference::{self as reference, PixelState, Shot};
+use shadowvol_robust_math::Light;
+use shadowvol_scenes::{Camera, Receiver, Scene, SceneLight};
+use std::sync::Arc;
 
 // ---------------------------------------------------------------------------------------------
 // Exact rationals, just what the oracle needs.
@@ -496,6 +498,34 @@ fn lights_in_a_casters_plane_never_block_it() {
 // The whole reference on a frame built by hand (no GPU needed): a ground triangle fills the view
 // and the casters of the cases above hang over it.
 
+/// A frame by hand: the case's casters as one object, the ground as a receiver (surface 1, so
+/// every pixel's id is `[2, 0]`), one unit light, and the raster's per-pixel data.
+#[derive(Clone)]
+struct Frame {
+    scene: Scene,
+    camera: Camera,
+    size: u32,
+    rgba: Vec<u8>,
+    ids: Vec<[u32; 2]>,
+    stencil: Vec<Vec<u8>>,
+    colors: Vec<[f32; 3]>,
+}
+
+impl Frame {
+    fn shot(&self) -> Shot<'_> {
+        Shot::new(
+            &self.scene,
+            self.camera,
+            self.size,
+            self.size,
+            &self.rgba,
+            &self.ids,
+            &self.stencil,
+            &self.colors,
+        )
+    }
+}
+
 fn frame_for(case: &Case, size: u32) -> Frame {
     let ground = [v(-40.0, -40.0, 0.0), v(40.0, -40.0, 0.0), v(0.0, 60.0, 0.0)];
     let camera = Camera {
@@ -505,35 +535,31 @@ fn frame_for(case: &Case, size: u32) -> Frame {
         fov_y: 60f32.to_radians(),
         near: 0.01,
     };
+    let soup = |tris: &[[Vec3; 3]]| Mesh {
+        positions: tris.iter().flatten().copied().collect(),
+        triangles: (0..tris.len() as u32)
+            .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+            .collect(),
+    };
+    let mut scene = Scene::single("casters", &soup(&case.casters)).unwrap();
+    scene.receivers.push(Receiver {
+        name: "ground".into(),
+        table: Arc::new(shadowvol_mesh_topology::EdgeTable::build(&soup(&[ground])).unwrap()),
+        albedo: [1.0; 3],
+    });
+    scene.lights.push(SceneLight::unit(
+        Light::new(case.light[0], case.light[1], case.light[2], case.light[3]).unwrap(),
+    ));
+    scene.effects.ambient = 0.0;
     let n = (size * size) as usize;
     Frame {
-        width: size,
-        height: size,
-        rgba: vec![0; n * 4],
-        ids: vec![[1, 0]; n],
-        stencil: vec![vec![0; n]],
-        triangles: vec![vec![ground], case.casters.clone()],
-        casts_shadows: vec![false, true],
-        albedo: vec![[1.0; 3], [1.0; 3]],
-        light_color: vec![[1.0; 3]],
-        ambient: 0.0,
-        emission: Vec::new(),
-        exposure: None,
-        scissor_pixels_saved: 0,
-        uncertain: 0,
-        host_resolved: 0,
-        pipeline: shadowvol_renderer::Pipeline::Host,
-        gpu_timings: None,
-        volumes: Vec::new(),
-        lights: vec![
-            Light::new(case.light[0], case.light[1], case.light[2], case.light[3]).unwrap(),
-        ],
+        scene,
         camera,
-        plan: Vec::new(),
-        timings: Timings::default(),
-        mode: Accuracy::Exact,
-        adapter: "none".into(),
-        depth_clamp: false,
+        size,
+        rgba: vec![0; n * 4],
+        ids: vec![[2, 0]; n],
+        stencil: vec![vec![0; n]],
+        colors: vec![[1.0; 3]],
     }
 }
 
@@ -542,14 +568,15 @@ fn reference_states_match_the_oracle_per_pixel() {
     let mut both = 0;
     for case in all_cases(0.0) {
         let frame = frame_for(&case, 48);
-        let points = reference::surface_points(&frame);
-        let states = reference::reference_states_geometric(&frame, &points);
+        let shot = frame.shot();
+        let points = reference::surface_points(&shot);
+        let states = reference::reference_states_geometric(&shot, &points);
         let (mut lit, mut unlit) = (0, 0);
         for (i, p) in points.iter().enumerate() {
             let sp = p.expect("the ground covers the view");
             let state = states[0][i];
             assert_ne!(state, PixelState::Uncertain, "{}: pixel {i}", case.name);
-            if !reference::faces_light_geometric(&frame, &sp, 0) {
+            if !reference::faces_light_geometric(&shot, &sp, 0) {
                 assert_eq!(state, PixelState::Unlit);
                 continue;
             }
@@ -571,7 +598,7 @@ fn reference_states_match_the_oracle_per_pixel() {
         }
         // (The small blocker a hair before the light covers the light's whole view cone.)
         both += usize::from(lit > 0 && unlit > 0);
-        check_counts(&case, frame, &states[0]);
+        check_counts(&case, frame.clone(), &states[0]);
     }
     assert!(both >= 9, "only {both} cases show lit and shadowed pixels");
 }
@@ -580,12 +607,12 @@ fn reference_states_match_the_oracle_per_pixel() {
 /// nothing is an artifact, a boundary or undecidable; one raster pixel flipped inside a uniform
 /// region is one artifact, one flipped next to a reference boundary is one boundary pixel.
 fn check_counts(case: &Case, mut frame: Frame, states: &[PixelState]) {
-    let w = frame.width as usize;
+    let w = frame.size as usize;
     frame.stencil[0] = states
         .iter()
         .map(|&s| u8::from(s != PixelState::Lit))
         .collect();
-    let cmp = reference::compare(&frame);
+    let cmp = reference::compare(&frame.shot());
     assert_eq!(
         (
             cmp.artifact_pixels,
@@ -614,7 +641,7 @@ fn check_counts(case: &Case, mut frame: Frame, states: &[PixelState]) {
         let mut f = frame.clone();
         f.stencil[0][a] = 1;
         f.stencil[0][b] = 1;
-        let cmp = reference::compare(&f);
+        let cmp = reference::compare(&f.shot());
         assert_eq!(
             (
                 cmp.artifact_pixels,

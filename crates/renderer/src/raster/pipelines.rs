@@ -1,5 +1,5 @@
-//! The descriptors both pipelines build their layouts and render pipelines from (host:
-//! `gpu.rs`, GPU-resident: `resident/pipeline.rs`), over the render states of [`super::states`].
+//! The descriptors every pipeline builds its layouts and render pipelines from (the host
+//! pipeline's raster, the resident pass), over the render states of [`super::states`].
 
 use super::states;
 

@@ -1,0 +1,121 @@
+//! `render --frames N`: the lights on a fixed orbit, each frame timed without readback.
+
+use super::render_error;
+use shadowvol::CliError;
+use shadowvol_renderer::{Renderer, Scene};
+use shadowvol_robust_math::Light;
+
+/// Times of the `--frames` frames.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub(crate) struct FrameStats {
+    pub(super) count: usize,
+    pub(super) median_ms: f64,
+    pub(super) p10_ms: f64,
+    pub(super) p90_ms: f64,
+}
+
+impl FrameStats {
+    /// Median, p10 and p90 (nearest rank) of `ms`; `None` when empty.
+    pub(super) fn of(ms: &mut [f64]) -> Option<Self> {
+        if ms.is_empty() {
+            return None;
+        }
+        ms.sort_by(f64::total_cmp);
+        let at = |q: f64| ms[((ms.len() - 1) as f64 * q).round() as usize];
+        Some(Self {
+            count: ms.len(),
+            median_ms: at(0.5),
+            p10_ms: at(0.1),
+            p90_ms: at(0.9),
+        })
+    }
+}
+
+/// Light `l` in orbit frame `k`: turned by `k` degrees about the vertical axis through
+/// `centre` (a point light moves, a directional light turns).
+fn orbit_light(l: Light, centre: glam::Vec3, k: u32) -> Light {
+    let rot = glam::Quat::from_rotation_y((k as f32).to_radians());
+    if l.is_directional() {
+        Light::directional(rot * l.to_vec4().truncate())
+    } else {
+        Light::point(centre + rot * (l.to_vec4().truncate() - centre))
+    }
+}
+
+/// What the `--frames` frames measured.
+#[derive(Debug, Default)]
+pub(super) struct Timed {
+    pub(super) stats: Option<FrameStats>,
+    pub(super) readback_bytes: u64,
+    /// The median of each pass's GPU time, where timestamps were read.
+    pub(super) gpu_timings: Option<shadowvol_renderer::resident::GpuTimings>,
+}
+
+/// The median of each field over `all` (`None` when empty).
+fn median_timings(
+    all: &[shadowvol_renderer::resident::GpuTimings],
+) -> Option<shadowvol_renderer::resident::GpuTimings> {
+    if all.is_empty() {
+        return None;
+    }
+    let med = |f: fn(&shadowvol_renderer::resident::GpuTimings) -> f64| {
+        let mut v: Vec<f64> = all.iter().map(f).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    Some(shadowvol_renderer::resident::GpuTimings {
+        extract: med(|t| t.extract),
+        sides: med(|t| t.sides),
+        caps: med(|t| t.caps),
+        stencil: med(|t| t.stencil),
+        lighting: med(|t| t.lighting),
+    })
+}
+
+/// `--frames`: `n` frames with the lights of `scene` on the orbit, timed without reading
+/// images back; the scene's lights are put back afterwards.
+pub(super) fn timed_frames(
+    renderer: &mut Renderer,
+    scene: &mut Scene,
+    n: u32,
+) -> Result<Timed, CliError> {
+    if n == 0 {
+        return Ok(Timed::default());
+    }
+    let centre = scene
+        .bounds()
+        .map_or(glam::Vec3::ZERO, |(lo, hi)| (lo + hi) * 0.5);
+    let lights = scene.lights.clone();
+    let bar = indicatif::ProgressBar::new(u64::from(n));
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} frames",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let mut ms = Vec::with_capacity(n as usize);
+    let mut bytes = 0u64;
+    let mut gpu = Vec::new();
+    let mut run = |scene: &mut Scene| -> Result<(), CliError> {
+        for k in 1..=n {
+            for (l, start) in scene.lights.iter_mut().zip(&lights) {
+                l.light = orbit_light(start.light, centre, k);
+            }
+            let t = renderer.render_timed(scene).map_err(render_error)?;
+            ms.push(t.total_ms);
+            bytes += t.readback_bytes;
+            gpu.extend(t.gpu_timings);
+            bar.inc(1);
+        }
+        Ok(())
+    };
+    let result = run(scene);
+    bar.finish_and_clear();
+    scene.lights.clone_from(&lights);
+    result?;
+    Ok(Timed {
+        stats: FrameStats::of(&mut ms),
+        readback_bytes: bytes,
+        gpu_timings: median_timings(&gpu),
+    })
+}

@@ -1,0 +1,282 @@
+//! The host pipeline: any [`SilhouetteBackend`] extracts the multiplicities, which come back to
+//! the host; the host builds side quads and caps from them and uploads them with the surfaces.
+//! Silhouettes are kept per (object, light) and reused while neither moved.
+
+mod frame;
+mod raster;
+pub mod volume;
+
+use super::{FrameInputs, PassReport, Pipeline, ShadowPipeline};
+use crate::frame::UncertainUnit;
+use crate::plan::PlanEntry;
+use crate::raster::{Attachments, SurfaceVertex};
+use crate::{Camera, RenderDevice, RenderError};
+use glam::{Affine3A, Vec3};
+use raster::{HostRaster, RasterInput};
+use shadowvol_mesh_topology::EdgeTable;
+use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_scenes::Scene;
+use shadowvol_silhouette::{PreparedId, SilhouetteBackend, TopologyScene};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use volume::canonical_triangle;
+
+/// One light's silhouette of one object, as last extracted.
+struct LightCache {
+    light: Light,
+    mode: Accuracy,
+    m: Vec<i32>,
+}
+
+/// One caster as the backend knows it: its table prepared on its own (object space, identity
+/// transform: a moved object keeps it) and its silhouettes.
+struct ObjectCache {
+    table: Arc<EdgeTable>,
+    prepared: PreparedId,
+    transform: Affine3A,
+    lights: Vec<Option<LightCache>>,
+}
+
+/// The host pipeline. See the [module documentation](self).
+pub struct HostPipeline {
+    backend: Box<dyn SilhouetteBackend>,
+    name: String,
+    objects: Vec<ObjectCache>,
+    /// The whole geometry prepared at once (real transforms), with the (table, transform) of
+    /// each object it was prepared for: one `extract` serves every still object.
+    whole: Option<(PreparedId, Vec<(Arc<EdgeTable>, Affine3A)>)>,
+    raster: Option<HostRaster>,
+    keep_volumes: bool,
+    volumes: Vec<[f32; 4]>,
+}
+
+impl std::fmt::Debug for HostPipeline {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("HostPipeline")
+            .field("backend", &self.name)
+            .field("objects", &self.objects.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl HostPipeline {
+    /// The host pipeline over `backend`.
+    #[must_use]
+    pub fn new(backend: Box<dyn SilhouetteBackend>) -> Self {
+        let name = backend.info().name.to_string();
+        Self {
+            backend,
+            name,
+            objects: Vec::new(),
+            whole: None,
+            raster: None,
+            keep_volumes: false,
+            volumes: Vec::new(),
+        }
+    }
+
+    /// Keeps each frame's shadow-volume vertices for [`ShadowPipeline::volumes`] (for viewers
+    /// that draw the volumes themselves).
+    #[must_use]
+    pub fn keep_volumes(mut self, keep: bool) -> Self {
+        self.keep_volumes = keep;
+        self
+    }
+
+    /// Prepares every caster of `scene` that is new or has another table on its own, and
+    /// forgets the silhouettes of moved ones.
+    fn sync_objects(&mut self, scene: &Scene) -> Result<(), RenderError> {
+        let objects = &scene.geometry.objects;
+        while self.objects.len() > objects.len() {
+            let c = self.objects.pop().expect("non-empty");
+            self.backend.release(c.prepared);
+        }
+        for (oi, o) in objects.iter().enumerate() {
+            if !self
+                .objects
+                .get(oi)
+                .is_some_and(|c| Arc::ptr_eq(&c.table, &o.table))
+            {
+                let prepared = self
+                    .backend
+                    .prepare(&TopologyScene::one(&o.name, Arc::clone(&o.table)))?;
+                let entry = ObjectCache {
+                    table: Arc::clone(&o.table),
+                    prepared,
+                    transform: o.world_from_object,
+                    lights: Vec::new(),
+                };
+                if oi < self.objects.len() {
+                    let old = std::mem::replace(&mut self.objects[oi], entry);
+                    self.backend.release(old.prepared);
+                } else {
+                    self.objects.push(entry);
+                }
+            }
+            let c = &mut self.objects[oi];
+            if c.transform != o.world_from_object {
+                c.transform = o.world_from_object;
+                c.lights.clear();
+            }
+            c.lights.resize_with(scene.lights.len(), || None);
+        }
+        Ok(())
+    }
+
+    /// The whole geometry prepared on the backend, prepared again only when an object's table
+    /// or transform differs from the last preparation.
+    fn whole_scene(&mut self, scene: &Scene) -> Result<PreparedId, RenderError> {
+        let objects = &scene.geometry.objects;
+        if let Some((id, key)) = &self.whole {
+            let current = key.len() == objects.len()
+                && key
+                    .iter()
+                    .zip(objects)
+                    .all(|((t, x), o)| Arc::ptr_eq(t, &o.table) && *x == o.world_from_object);
+            if current {
+                return Ok(*id);
+            }
+        }
+        if let Some((id, _)) = self.whole.take() {
+            self.backend.release(id);
+        }
+        let id = self.backend.prepare(&scene.geometry)?;
+        let key = objects
+            .iter()
+            .map(|o| (Arc::clone(&o.table), o.world_from_object))
+            .collect();
+        self.whole = Some((id, key));
+        Ok(id)
+    }
+}
+
+impl ShadowPipeline for HostPipeline {
+    fn kind(&self) -> Pipeline {
+        Pipeline::Host
+    }
+
+    fn backend(&self) -> Option<&str> {
+        Some(&self.name)
+    }
+
+    fn uncertain_unit(&self) -> UncertainUnit {
+        UncertainUnit::EdgeOppositeVertexLight
+    }
+
+    fn prepare(&mut self, device: &RenderDevice, scene: &Scene) -> Result<(), RenderError> {
+        if self.raster.is_none() {
+            self.raster = Some(HostRaster::new(device)?);
+        }
+        self.sync_objects(scene)
+    }
+
+    fn record(
+        &mut self,
+        device: &RenderDevice,
+        frame: &FrameInputs<'_>,
+        plan: &mut [PlanEntry],
+        target: &Attachments<'_>,
+        enc: &mut wgpu::CommandEncoder,
+    ) -> Result<PassReport, RenderError> {
+        self.sync_objects(frame.scene)?;
+        let extracted = self.extract_silhouettes(frame, plan)?;
+
+        let t_build = Instant::now();
+        let (mut volumes, mut draws) = self.build_volumes(frame, plan)?;
+        // Camera-relative coordinates for the GPU: every finite vertex (surface and volume) is
+        // shifted by the same f32 subtraction, so shared vertices stay bit-identical and depth
+        // precision no longer suffers from large world coordinates (the 1e4-offset scenes).
+        // Extrusion directions (w = 0) do not depend on the origin.
+        let origin = frame.camera.eye;
+        for v in &mut volumes {
+            if v[3] != 0.0 {
+                v[0] -= origin.x;
+                v[1] -= origin.y;
+                v[2] -= origin.z;
+            }
+        }
+        for d in &mut draws {
+            let w = d.light[3];
+            d.light[0] -= origin.x * w;
+            d.light[1] -= origin.y * w;
+            d.light[2] -= origin.z * w;
+        }
+        let build_time = t_build.elapsed();
+
+        let surface = surface_vertices(frame, origin);
+        let (w, h) = frame.size;
+        let aspect = (f64::from(w) / f64::from(h)) as f32;
+        let raster = self.raster.as_ref().ok_or_else(|| {
+            RenderError::InvalidInput("the host pipeline records before prepare".to_owned())
+        })?;
+        raster.record(
+            &device.device,
+            enc,
+            target,
+            &RasterInput {
+                view_proj: Camera {
+                    eye: Vec3::ZERO,
+                    target: frame.camera.target - origin,
+                    ..*frame.camera
+                }
+                .view_proj(aspect)
+                .to_cols_array(),
+                eye: [0.0; 3],
+                ambient: frame.scene.effects.ambient.clamp(0.0, 1.0),
+                surface: &surface,
+                volumes: &volumes,
+                lights: &draws,
+            },
+        )?;
+        self.volumes = if self.keep_volumes {
+            volumes
+        } else {
+            Vec::new()
+        };
+        Ok(PassReport {
+            silhouette_ms: Some(ms(extracted.time)),
+            side_building_ms: Some(ms(build_time)),
+            uncertain: extracted.uncertain,
+            host_resolved: extracted.uncertain,
+            readback_bytes: extracted.readback_bytes,
+            gpu_timings: None,
+        })
+    }
+
+    fn volumes(&self) -> &[[f32; 4]] {
+        &self.volumes
+    }
+}
+
+/// Every surface's triangles in canonical order, camera-relative, with flat normals, albedo
+/// and ids `[surface + 1, triangle]`.
+fn surface_vertices(frame: &FrameInputs<'_>, origin: Vec3) -> Vec<SurfaceVertex> {
+    let mut surface = Vec::new();
+    for (oi, (s, w)) in frame
+        .scene
+        .surfaces()
+        .zip(frame.world.surfaces())
+        .enumerate()
+    {
+        for (ti, t) in s.table.triangles.iter().enumerate() {
+            let k = canonical_triangle(*t);
+            let p = k.map(|k| w.positions[k as usize]);
+            let n = (p[1] - p[0]).cross(p[2] - p[0]);
+            for v in p {
+                let v = v - origin;
+                surface.push(SurfaceVertex {
+                    pos: [v.x, v.y, v.z, 1.0],
+                    normal: [n.x, n.y, n.z, 0.0],
+                    albedo: [s.albedo[0], s.albedo[1], s.albedo[2], 1.0],
+                    ids: [oi as u32 + 1, ti as u32],
+                    pad: [0; 2],
+                });
+            }
+        }
+    }
+    surface
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}

@@ -1,0 +1,293 @@
+//! The host pipeline's raster: the surfaces and the volumes the host built, drawn from vertex
+//! buffers uploaded each frame, with the render states every pipeline shares.
+//!
+//! Passes of a frame:
+//! 1. pre-pass: colour = ambient × albedo, ids (surface + 1, triangle), depth (less, write);
+//! 2. per light: stencil pass (stencil cleared to 0; two-sided, wrapping; depth test `less`,
+//!    no depth write) over z-pass volumes and z-fail volumes; the stencil's copy where the frame
+//!    is read back; a lit pass (depth `equal`, stencil `== 0`, additive Lambert).
+
+use crate::raster::pipelines::{self, color_target, uniform};
+use crate::raster::{
+    light_uniform, states, Attachments, SurfaceVertex, BACKGROUND, COLOR_FORMAT, IDS_FORMAT,
+    LIGHT_STRIDE,
+};
+use crate::{RenderDevice, RenderError};
+use bytemuck::Zeroable;
+use shadowvol_scenes::Emission;
+use std::ops::Range;
+
+/// The draws of one light, as vertex ranges into the frame's volume vertex buffer.
+#[derive(Debug, Clone, Default)]
+pub(super) struct LightDraws {
+    /// Camera-relative light `(x, y, z, w)`.
+    pub light: [f32; 4],
+    /// Light colour times gain (linear RGB).
+    pub color: [f32; 3],
+    /// Scissor `[x, y, width, height]` of its stencil and lit passes (`None`: whole image).
+    pub scissor: Option<[u32; 4]>,
+    /// What it emits: range and cone attenuation in the lit pass (`None`: a unit light).
+    pub emission: Option<Emission>,
+    /// Z-pass sides (counter-clockwise front faces).
+    pub zpass: Range<u32>,
+    /// Z-fail sides and back caps and `σ = +1` front caps (counter-clockwise front faces).
+    pub zfail_ccw: Range<u32>,
+    /// Z-fail `σ = −1` front caps (clockwise front faces).
+    pub zfail_cw: Range<u32>,
+}
+
+/// Everything the raster needs for one frame.
+#[derive(Debug, Clone)]
+pub(super) struct RasterInput<'a> {
+    /// Column-major `projection * view` of the camera at the origin.
+    pub view_proj: [f32; 16],
+    /// Eye position (the origin of the camera-relative coordinates).
+    pub eye: [f32; 3],
+    /// Ambient factor.
+    pub ambient: f32,
+    /// Surface triangles (3 vertices each).
+    pub surface: &'a [SurfaceVertex],
+    /// All volume vertices of all lights.
+    pub volumes: &'a [[f32; 4]],
+    /// Per-light draws.
+    pub lights: &'a [LightDraws],
+}
+
+/// The host pipeline's render pipelines on one device.
+pub(super) struct HostRaster {
+    globals_bgl: wgpu::BindGroupLayout,
+    light_bgl: wgpu::BindGroupLayout,
+    prepass: wgpu::RenderPipeline,
+    lit: wgpu::RenderPipeline,
+    zpass: wgpu::RenderPipeline,
+    zfail_ccw: wgpu::RenderPipeline,
+    zfail_cw: wgpu::RenderPipeline,
+}
+
+impl HostRaster {
+    /// The pipelines on `rd`: depth clamp for the z-fail volumes where the device has it.
+    ///
+    /// # Errors
+    /// [`RenderError::Device`] when a pipeline cannot be created.
+    pub(super) fn new(rd: &RenderDevice) -> Result<Self, RenderError> {
+        let device = &rd.device;
+        let depth_format = rd.depth_format;
+        let depth_clamp = rd.depth_clamp;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("shadowvol-renderer shader.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("../../shader.wgsl").into()),
+        });
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let globals_bgl = pipelines::bind_group_layout(device, "globals", &[uniform(0, vf, false)]);
+        let light_bgl = pipelines::bind_group_layout(device, "light", &[uniform(0, vf, true)]);
+        let layout = pipelines::pipeline_layout(device, "renderer", &[&globals_bgl, &light_bgl]);
+        let surface_layout = [Some(states::surface_layout())];
+        let volume_attrs = wgpu::vertex_attr_array![0 => Float32x4];
+        let volume_layout = [Some(wgpu::VertexBufferLayout {
+            array_stride: 16,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &volume_attrs,
+        })];
+        let make = pipelines::RenderPipelines {
+            device,
+            layout: &layout,
+            module: &module,
+            depth: depth_format,
+        };
+        let prepass = make.prepass(
+            "prepass",
+            "vs_surface",
+            &surface_layout,
+            "fs_prepass",
+            &[
+                color_target(COLOR_FORMAT, None),
+                color_target(IDS_FORMAT, None),
+            ],
+        );
+        let lit = make.lit("lit", "vs_surface", &surface_layout, COLOR_FORMAT);
+        let volume_pipeline = |label, unclipped_depth, front_face, faces| {
+            make.volume(
+                label,
+                "vs_volume",
+                &volume_layout,
+                unclipped_depth,
+                front_face,
+                faces,
+            )
+        };
+        // Z-pass: count the volume faces in front of the surface (front +1, back -1). Near
+        // clipping stays on: the count then starts at the near plane, which is exactly what the
+        // near-clip volume test proves to be outside the volume (with depth clamp the count
+        // would start at the eye instead).
+        let zpass = volume_pipeline("zpass", false, wgpu::FrontFace::Ccw, states::zpass_faces());
+        // Z-fail: count the faces behind the surface (back +1, front -1); depth clamp where the
+        // device has it, so no part of a volume is lost to clipping.
+        let zfail_ccw = volume_pipeline(
+            "zfail-ccw",
+            depth_clamp,
+            wgpu::FrontFace::Ccw,
+            states::zfail_faces(),
+        );
+        let zfail_cw = volume_pipeline(
+            "zfail-cw",
+            depth_clamp,
+            wgpu::FrontFace::Cw,
+            states::zfail_faces(),
+        );
+        if let Some(err) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Device(format!("pipeline creation: {err}")));
+        }
+        Ok(Self {
+            globals_bgl,
+            light_bgl,
+            prepass,
+            lit,
+            zpass,
+            zfail_ccw,
+            zfail_cw,
+        })
+    }
+
+    /// Records one frame into `enc` and `target`: buffers for `input` are created and filled
+    /// here, the passes recorded.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] when `target` has no ids attachment.
+    pub(super) fn record(
+        &self,
+        device: &wgpu::Device,
+        enc: &mut wgpu::CommandEncoder,
+        target: &Attachments<'_>,
+        input: &RasterInput<'_>,
+    ) -> Result<(), RenderError> {
+        use wgpu::util::DeviceExt;
+
+        let mut globals = [0f32; 24];
+        globals[..16].copy_from_slice(&input.view_proj);
+        globals[16..19].copy_from_slice(&input.eye);
+        globals[20] = input.ambient;
+        let globals_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("globals"),
+            contents: bytemuck::cast_slice(&globals),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let n_lights = input.lights.len().max(1);
+        let mut light_bytes = vec![0u8; n_lights * LIGHT_STRIDE as usize];
+        for (i, l) in input.lights.iter().enumerate() {
+            let v = light_uniform(l.light, l.color, l.emission.as_ref());
+            let o = i * LIGHT_STRIDE as usize;
+            light_bytes[o..o + v.len() * 4].copy_from_slice(bytemuck::cast_slice(&v));
+        }
+        let light_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lights"),
+            contents: &light_bytes,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let globals_bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("globals"),
+            layout: &self.globals_bgl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: globals_buf.as_entire_binding(),
+            }],
+        });
+        let light_bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("light"),
+            layout: &self.light_bgl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &light_buf,
+                    offset: 0,
+                    size: std::num::NonZeroU64::new(96),
+                }),
+            }],
+        });
+        let padded_surface;
+        let surface: &[SurfaceVertex] = if input.surface.is_empty() {
+            padded_surface = [SurfaceVertex::zeroed()];
+            &padded_surface
+        } else {
+            input.surface
+        };
+        let surface_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("surface"),
+            contents: bytemuck::cast_slice(surface),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let padded_vol;
+        let volumes: &[[f32; 4]] = if input.volumes.is_empty() {
+            padded_vol = [[0f32; 4]];
+            &padded_vol
+        } else {
+            input.volumes
+        };
+        let volume_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("volumes"),
+            contents: bytemuck::cast_slice(volumes),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+
+        let (color_view, depth_view) = (target.color, target.depth_stencil);
+        let ids_view = target.ids.ok_or_else(|| {
+            RenderError::InvalidInput(
+                "the host pipeline draws surface ids: give it an ids attachment".to_owned(),
+            )
+        })?;
+        {
+            let color = [
+                states::cleared(color_view, BACKGROUND),
+                states::cleared(ids_view, wgpu::Color::TRANSPARENT),
+            ];
+            let mut pass = states::begin_prepass(enc, "prepass", &color, depth_view, None);
+            if !input.surface.is_empty() {
+                pass.set_pipeline(&self.prepass);
+                pass.set_bind_group(0, &globals_bg, &[]);
+                pass.set_bind_group(1, &light_bg, &[0]);
+                pass.set_vertex_buffer(0, surface_buf.slice(..));
+                pass.draw(0..input.surface.len() as u32, 0..1);
+            }
+        }
+        for (li, l) in input.lights.iter().enumerate() {
+            let offset = (li as u64 * LIGHT_STRIDE) as u32;
+            {
+                let mut pass = states::begin_stencil_pass(
+                    enc,
+                    "stencil",
+                    depth_view,
+                    wgpu::LoadOp::Clear(0),
+                    l.scissor,
+                    None,
+                );
+                pass.set_bind_group(0, &globals_bg, &[]);
+                pass.set_bind_group(1, &light_bg, &[offset]);
+                pass.set_vertex_buffer(0, volume_buf.slice(..));
+                for (pipe, range) in [
+                    (&self.zpass, &l.zpass),
+                    (&self.zfail_ccw, &l.zfail_ccw),
+                    (&self.zfail_cw, &l.zfail_cw),
+                ] {
+                    if !range.is_empty() && !l.scissor.is_some_and(|r| r[2] == 0 || r[3] == 0) {
+                        pass.set_pipeline(pipe);
+                        pass.draw(range.clone(), 0..1);
+                    }
+                }
+            }
+            target.after_stencil(enc, li);
+            {
+                let mut pass =
+                    states::begin_lit_pass(enc, "lit", color_view, depth_view, l.scissor, None);
+                if !input.surface.is_empty() && !l.scissor.is_some_and(|r| r[2] == 0 || r[3] == 0) {
+                    pass.set_pipeline(&self.lit);
+                    pass.set_stencil_reference(0);
+                    pass.set_bind_group(0, &globals_bg, &[]);
+                    pass.set_bind_group(1, &light_bg, &[offset]);
+                    pass.set_vertex_buffer(0, surface_buf.slice(..));
+                    pass.draw(0..input.surface.len() as u32, 0..1);
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,159 @@
+//! The ways a frame can be shadowed, behind one trait.
+//!
+//! A [`ShadowPipeline`] prepares a scene once ([`ShadowPipeline::prepare`]: upload, lay out),
+//! and per frame records the depth pre-pass, each light's shadow pass and its lit pass into the
+//! caller's command encoder and attachments ([`ShadowPipeline::record`]), returning a
+//! [`PassReport`] of one shape, which [`ShadowPipeline::finish`] completes once the frame was
+//! submitted and has finished on the device. Below the pipelines, and shared by all of them:
+//! the plan ([`crate::plan`]), the world positions ([`crate::world`]) and the raster states
+//! ([`crate::raster`]). No pipeline imports another.
+//!
+//! * [`HostPipeline`] wraps any [`SilhouetteBackend`](shadowvol_silhouette::SilhouetteBackend):
+//!   the multiplicities come back to the host, which builds the volumes and uploads them.
+//! * [`GpuPipeline`] wraps the resident pass ([`crate::resident::ShadowPass`]): extraction,
+//!   sides and caps on the device, nothing read back; it starts no silhouette backend.
+
+mod gpu;
+mod host;
+
+pub use gpu::GpuPipeline;
+pub use host::{volume, HostPipeline};
+
+use crate::frame::UncertainUnit;
+use crate::plan::{PlanEntry, Scissor};
+use crate::raster::Attachments;
+use crate::resident::GpuTimings;
+use crate::world::{World, WorldChanges};
+use crate::{Accuracy, Camera, RenderDevice, RenderError};
+use shadowvol_scenes::Scene;
+
+/// Which pipeline drew a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Pipeline {
+    /// [`HostPipeline`]: the backend's multiplicities come back to the host, which builds sides
+    /// and caps and uploads them (any backend).
+    Host,
+    /// [`GpuPipeline`]: extraction, sides and caps on the renderer's device; nothing is read
+    /// back during a frame, and no backend runs.
+    Gpu,
+}
+
+impl Pipeline {
+    /// `"host"` or `"gpu"`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Pipeline::Host => "host",
+            Pipeline::Gpu => "gpu",
+        }
+    }
+}
+
+/// One frame's inputs: the scene (borrowed, never converted), where its surfaces are, and the
+/// small per-frame values the renderer computed from it.
+#[derive(Debug, Clone, Copy)]
+pub struct FrameInputs<'a> {
+    /// The scene: surfaces, transforms, lights with their emission, ambient.
+    pub scene: &'a Scene,
+    /// The surfaces' world positions and boxes.
+    pub world: &'a World,
+    /// What moved since the last frame.
+    pub changes: &'a WorldChanges,
+    /// The camera.
+    pub camera: &'a Camera,
+    /// The attachments' size, `(width, height)`.
+    pub size: (u32, u32),
+    /// The accuracy mode of signs and multiplicities.
+    pub mode: Accuracy,
+    /// Per light: its scissor.
+    pub scissors: &'a [Scissor],
+    /// Per light: the colour times gain of its lit pass.
+    pub light_colors: &'a [[f32; 3]],
+    /// Fill the plan's counts (silhouette edges, side quads, cap triangles). The GPU pipeline
+    /// pays for them with atomics and a read after the frame, so timed frames leave it off.
+    pub count: bool,
+}
+
+/// What a pipeline reports of one frame, the same shape for every pipeline.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PassReport {
+    /// Time in the backend's `extract`, milliseconds; `None` when no backend ran.
+    pub silhouette_ms: Option<f64>,
+    /// Time building volumes on the host, milliseconds; `None` when built on the device.
+    pub side_building_ms: Option<f64>,
+    /// Exact mode's evaluations the certified filter could not decide
+    /// ([`ShadowPipeline::uncertain_unit`]).
+    pub uncertain: u64,
+    /// Of those, the ones decided on the host.
+    pub host_resolved: u64,
+    /// Bytes brought to the host during the frame besides the image and the counts.
+    pub readback_bytes: u64,
+    /// GPU time of each pass, where the device has timestamp queries.
+    pub gpu_timings: Option<GpuTimings>,
+}
+
+/// A way to shadow a frame. See the [module documentation](self).
+pub trait ShadowPipeline {
+    /// Which pipeline this is.
+    fn kind(&self) -> Pipeline;
+
+    /// The registry name of the silhouette backend it runs, `None` when it runs none.
+    fn backend(&self) -> Option<&str>;
+
+    /// What [`PassReport::uncertain`] counts in this pipeline.
+    fn uncertain_unit(&self) -> UncertainUnit;
+
+    /// True when its volumes are drawn with depth clamp on `device`.
+    fn depth_clamp(&self, device: &RenderDevice) -> bool {
+        device.depth_clamp
+    }
+
+    /// Prepares `scene` (uploads and lays out its surfaces) on `device`. Called before the
+    /// first frame and whenever the surfaces change ([`WorldChanges::surfaces`]); a moved
+    /// surface only changes the per-frame inputs.
+    ///
+    /// # Errors
+    /// [`RenderError::Backend`] when the backend's `prepare` fails, [`RenderError::InvalidInput`]
+    /// or [`RenderError::Unsupported`] when the scene does not fit the device.
+    fn prepare(&mut self, device: &RenderDevice, scene: &Scene) -> Result<(), RenderError>;
+
+    /// Records one frame into `enc`: the pre-pass (colour = ambient × albedo, ids, depth), then
+    /// per light its shadow pass into the stencil of `target`, [`Attachments::after_stencil`],
+    /// and its lit pass (stencil == 0). Fills each plan entry's silhouette source and, with
+    /// [`FrameInputs::count`], the counts it knows now.
+    ///
+    /// # Errors
+    /// [`RenderError::Backend`] when extraction fails, [`RenderError::InvalidInput`] for a
+    /// light that is not finite in an object's space.
+    fn record(
+        &mut self,
+        device: &RenderDevice,
+        frame: &FrameInputs<'_>,
+        plan: &mut [PlanEntry],
+        target: &Attachments<'_>,
+        enc: &mut wgpu::CommandEncoder,
+    ) -> Result<PassReport, RenderError>;
+
+    /// After the frame's submission finished: fills what only the device knows (the GPU
+    /// pipeline's counts, when the frame counted them, and its timestamps).
+    ///
+    /// # Errors
+    /// [`RenderError::Device`] when reading them back fails.
+    fn finish(
+        &mut self,
+        device: &RenderDevice,
+        frame: &FrameInputs<'_>,
+        plan: &mut [PlanEntry],
+        report: &mut PassReport,
+    ) -> Result<(), RenderError> {
+        let _ = (device, frame, plan, report);
+        Ok(())
+    }
+
+    /// The shadow-volume vertices of the last frame, camera-relative, as triangles (`w = 0`:
+    /// at infinity), for viewers that draw the volumes; empty unless the pipeline keeps them.
+    fn volumes(&self) -> &[[f32; 4]] {
+        &[]
+    }
+}

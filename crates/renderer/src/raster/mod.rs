@@ -1,0 +1,98 @@
+//! What every pipeline draws with: the surface vertex and light uniform layouts, the render
+//! states and pipeline descriptors, the frame's attachments and their readback, and the bounded
+//! waits every GPU read goes through. Shared code below the pipelines: the host and GPU
+//! pipelines (and the resident pass) build on it, and neither imports the other.
+
+pub(crate) mod pipelines;
+pub(crate) mod states;
+mod targets;
+
+pub use targets::Attachments;
+pub(crate) use targets::{map_read, FrameTargets};
+
+use bytemuck::{Pod, Zeroable};
+use shadowvol_scenes::Emission;
+
+/// The colour format of every frame (linear RGBA8).
+pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+/// The format of the per-pixel surface ids, `[surface + 1, triangle]`.
+pub const IDS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
+
+/// Byte stride of the per-light uniforms (dynamic offsets).
+pub(crate) const LIGHT_STRIDE: u64 = 256;
+
+/// The clear colour behind the scene.
+pub(crate) const BACKGROUND: wgpu::Color = wgpu::Color {
+    r: 0.02,
+    g: 0.02,
+    b: 0.04,
+    a: 1.0,
+};
+
+/// Vertex of the visible surfaces (non-indexed; flat triangle data repeated on its 3 vertices).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct SurfaceVertex {
+    /// Camera-relative world position, `w = 1`.
+    pub pos: [f32; 4],
+    /// Geometric normal of the triangle in canonical order (`w` unused).
+    pub normal: [f32; 4],
+    /// Albedo (`a` unused).
+    pub albedo: [f32; 4],
+    /// `[surface + 1, triangle index within the surface]`.
+    pub ids: [u32; 2],
+    /// Padding.
+    pub pad: [u32; 2],
+}
+
+/// The shader's `LightU` for a light at `light` (camera-relative, homogeneous) of linear
+/// `color` (times gain): position, colour, then `emit = (inverse square 0/1, 1 / range or 0,
+/// cone scale, cone offset)` and `spot = (axis, 1 for a cone)` (see `fs_lit`). A unit light
+/// (`emission` `None`) and a directional light have no falloff.
+#[must_use]
+pub fn light_uniform(light: [f32; 4], color: [f32; 3], emission: Option<&Emission>) -> [f32; 16] {
+    let mut v = [0f32; 16];
+    v[..4].copy_from_slice(&light);
+    v[4..7].copy_from_slice(&color);
+    v[7] = 1.0;
+    if let (Some(e), true) = (emission, light[3] != 0.0) {
+        v[8] = 1.0;
+        v[9] = e.range.map_or(0.0, |r| 1.0 / r);
+        if let Some(s) = e.spot {
+            let (scale, offset) = s.scale_offset();
+            v[10] = scale;
+            v[11] = offset;
+            v[12..15].copy_from_slice(&s.direction.normalize().to_array());
+            v[15] = 1.0;
+        }
+    }
+    v
+}
+
+/// A `w` x `h` 2-D texture with one mip level and one sample: an attachment a pipeline draws
+/// into, or any other 2-D target of the application.
+#[must_use]
+pub fn texture_2d(
+    device: &wgpu::Device,
+    label: &str,
+    w: u32,
+    h: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}

@@ -1,0 +1,298 @@
+//! Frame targets and readback: the attachments of one frame, the buffers its images are copied
+//! to, and the bounded waits and maps every GPU read goes through.
+
+use crate::RenderError;
+
+/// Maps `buffer` (`MAP_READ`, its copies already submitted) and returns its bytes, with the
+/// bounded wait of every GPU read (`SHADOWVOL_GPU_TIMEOUT`).
+pub(crate) fn map_read(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+) -> Result<Vec<u8>, RenderError> {
+    let slice = buffer.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    wait(device)?;
+    rx.try_recv()
+        .map_err(|e| RenderError::Device(format!("map_async did not complete: {e}")))?
+        .map_err(|e| RenderError::Device(format!("map_async: {e}")))?;
+    let data = slice
+        .get_mapped_range()
+        .map_err(|e| RenderError::Device(format!("get_mapped_range: {e}")))?;
+    let out = data.to_vec();
+    drop(data);
+    buffer.unmap();
+    Ok(out)
+}
+
+/// Waits for all submitted work, bounded by `SHADOWVOL_GPU_TIMEOUT`: a hung device is an error.
+pub(crate) fn wait(device: &wgpu::Device) -> Result<(), RenderError> {
+    let limit =
+        shadowvol_silhouette::gpu::wait_limit().map_err(|e| RenderError::Device(e.to_string()))?;
+    device
+        .poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: Some(limit),
+        })
+        .map_err(|e| match e {
+            wgpu::PollError::Timeout => RenderError::Device(format!(
+                "the device did not finish the frame within {}",
+                shadowvol_silhouette::gpu::describe_wait_limit(limit)
+            )),
+            other => RenderError::Device(format!("poll: {other}")),
+        })?;
+    Ok(())
+}
+
+/// Bytes of one image row in a readback buffer: `w` pixels of `bytes_per_px`, padded to 256.
+fn padded_row(w: u32, bytes_per_px: u32) -> u32 {
+    (w * bytes_per_px).div_ceil(256) * 256
+}
+
+/// What a pipeline draws one frame into: the colour attachment, the optional ids attachment
+/// (`[surface + 1, triangle]`, [`super::IDS_FORMAT`]), the depth-stencil attachment, and, when
+/// the frame is read back, where each light's stencil is copied after its stencil pass.
+#[derive(Clone, Copy)]
+pub struct Attachments<'a> {
+    /// The colour target of the pre-pass and the lit passes.
+    pub color: &'a wgpu::TextureView,
+    /// The ids target of the pre-pass, if any.
+    pub ids: Option<&'a wgpu::TextureView>,
+    /// The depth-stencil attachment (a format with a stencil aspect).
+    pub depth_stencil: &'a wgpu::TextureView,
+    readback: Option<&'a FrameTargets>,
+}
+
+impl std::fmt::Debug for Attachments<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Attachments")
+            .field("ids", &self.ids.is_some())
+            .field("readback", &self.readback.is_some())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'a> Attachments<'a> {
+    /// The caller's own views: nothing is copied back.
+    #[must_use]
+    pub fn new(
+        color: &'a wgpu::TextureView,
+        ids: Option<&'a wgpu::TextureView>,
+        depth_stencil: &'a wgpu::TextureView,
+    ) -> Self {
+        Self {
+            color,
+            ids,
+            depth_stencil,
+            readback: None,
+        }
+    }
+
+    /// Records the copy of light `light`'s stencil (its shadow state, which the reference
+    /// compares) where the frame is read back; nothing otherwise. A pipeline calls it after each
+    /// light's stencil pass, before the next light's clears it.
+    pub fn after_stencil(&self, enc: &mut wgpu::CommandEncoder, light: usize) {
+        if let Some(t) = self.readback {
+            t.copy_stencil(enc, light);
+        }
+    }
+}
+
+/// One frame's own attachments and readback buffers (`[colour, ids, stencil per light]`).
+pub(crate) struct FrameTargets {
+    size: wgpu::Extent3d,
+    lights: usize,
+    color: wgpu::Texture,
+    ids: wgpu::Texture,
+    depth: wgpu::Texture,
+    color_view: wgpu::TextureView,
+    ids_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+    readbacks: Option<[wgpu::Buffer; 3]>,
+}
+
+impl FrameTargets {
+    /// The attachments of a `w` x `h` frame of `lights` lights and, with `readback`, the
+    /// buffers its images are copied to.
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        depth_format: wgpu::TextureFormat,
+        (w, h): (u32, u32),
+        lights: usize,
+        readback: bool,
+    ) -> Self {
+        let size = wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        };
+        let tex = |label: &str, format: wgpu::TextureFormat| {
+            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+            super::texture_2d(device, label, w, h, format, usage)
+        };
+        let color = tex("color", super::COLOR_FORMAT);
+        let ids = tex("ids", super::IDS_FORMAT);
+        let depth = tex("depth-stencil", depth_format);
+        let buffer = |label: &str, bytes_per_px: u32, count: usize| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: u64::from(padded_row(w, bytes_per_px)) * u64::from(h) * count.max(1) as u64,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            })
+        };
+        Self {
+            size,
+            lights,
+            color_view: color.create_view(&Default::default()),
+            ids_view: ids.create_view(&Default::default()),
+            depth_view: depth.create_view(&Default::default()),
+            readbacks: readback.then(|| {
+                [
+                    buffer("color-readback", 4, 1),
+                    buffer("ids-readback", 8, 1),
+                    buffer("stencil-readback", 1, lights),
+                ]
+            }),
+            color,
+            ids,
+            depth,
+        }
+    }
+
+    /// Whether these targets serve a frame of `size` and `lights` lights, read back or not.
+    pub(crate) fn fits(&self, (w, h): (u32, u32), lights: usize, readback: bool) -> bool {
+        self.size.width == w
+            && self.size.height == h
+            && self.lights == lights
+            && self.readbacks.is_some() == readback
+    }
+
+    /// The attachments a pipeline draws into: these targets' own, or `color` instead of the
+    /// own colour target.
+    pub(crate) fn attachments<'a>(
+        &'a self,
+        color: Option<&'a wgpu::TextureView>,
+    ) -> Attachments<'a> {
+        Attachments {
+            color: color.unwrap_or(&self.color_view),
+            ids: Some(&self.ids_view),
+            depth_stencil: &self.depth_view,
+            readback: self.readbacks.is_some().then_some(self),
+        }
+    }
+
+    /// Reads the frame back after its submission: colour, ids and each light's stencil, or
+    /// `None` (after waiting for the device) when the targets have no readback buffers.
+    pub(crate) fn read(
+        &self,
+        device: &wgpu::Device,
+    ) -> Result<Option<crate::FrameImage>, RenderError> {
+        let Some([color_rb, ids_rb, stencil_rb]) = &self.readbacks else {
+            wait(device)?;
+            return Ok(None);
+        };
+        let (w, h) = (self.size.width, self.size.height);
+        let rgba = read_rows(device, color_rb, padded_row(w, 4), w * 4, h, 1)?;
+        let ids_bytes = read_rows(device, ids_rb, padded_row(w, 8), w * 8, h, 1)?;
+        let stencil_bytes = if self.lights == 0 {
+            Vec::new()
+        } else {
+            read_rows(device, stencil_rb, padded_row(w, 1), w, h, self.lights)?
+        };
+        let ids = ids_bytes
+            .chunks_exact(8)
+            .map(|c| {
+                [
+                    u32::from_le_bytes([c[0], c[1], c[2], c[3]]),
+                    u32::from_le_bytes([c[4], c[5], c[6], c[7]]),
+                ]
+            })
+            .collect();
+        let px = (w * h) as usize;
+        Ok(Some(crate::FrameImage {
+            width: w,
+            height: h,
+            rgba,
+            ids,
+            stencil: stencil_bytes
+                .chunks_exact(px.max(1))
+                .map(<[u8]>::to_vec)
+                .collect(),
+        }))
+    }
+
+    fn copy(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        texture: &wgpu::Texture,
+        aspect: wgpu::TextureAspect,
+        buffer: &wgpu::Buffer,
+        bytes_per_px: u32,
+        image: u64,
+    ) {
+        let row = padded_row(self.size.width, bytes_per_px);
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: u64::from(row) * u64::from(self.size.height) * image,
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(self.size.height),
+                },
+            },
+            self.size,
+        );
+    }
+
+    /// With readback: copies the stencil aspect (light `light`'s shadow state) to its slot.
+    fn copy_stencil(&self, enc: &mut wgpu::CommandEncoder, light: usize) {
+        if let Some([_, _, stencil]) = &self.readbacks {
+            self.copy(
+                enc,
+                &self.depth,
+                wgpu::TextureAspect::StencilOnly,
+                stencil,
+                1,
+                light as u64,
+            );
+        }
+    }
+
+    /// With readback: copies the colour and ids images (the colour of these targets, so not
+    /// after a frame drawn into another colour view).
+    pub(crate) fn copy_color_ids(&self, enc: &mut wgpu::CommandEncoder) {
+        if let Some([color, ids, _]) = &self.readbacks {
+            self.copy(enc, &self.color, wgpu::TextureAspect::All, color, 4, 0);
+            self.copy(enc, &self.ids, wgpu::TextureAspect::All, ids, 8, 0);
+        }
+    }
+}
+
+/// Maps `buffer`, strips row padding and returns `images` images of `w_bytes` × `h` bytes.
+fn read_rows(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+    padded_row: u32,
+    w_bytes: u32,
+    h: u32,
+    images: usize,
+) -> Result<Vec<u8>, RenderError> {
+    let data = map_read(device, buffer)?;
+    let mut out = Vec::with_capacity((w_bytes * h) as usize * images);
+    for img in 0..images {
+        for y in 0..h as usize {
+            let o = (img * h as usize + y) * padded_row as usize;
+            out.extend_from_slice(&data[o..o + w_bytes as usize]);
+        }
+    }
+    Ok(out)
+}
