@@ -22,13 +22,13 @@
 //! a check misses it.
 //!
 //! A backend that cannot start is a visible skip (`ignored (<backend> unavailable: reason)`),
-//! except under CI (`shadowvol_silhouette::ci::is_ci`: `CI=true`, `CI=True`, `CI=1`): then each
+//! except under CI (`shadowvol_test_support::ci::is_ci`: `CI=true`, `CI=True`, `CI=1`): then each
 //! of its tests fails with the reason, a backend whose cargo feature is off included. Tests
 //! listed in [`EXPECTED_FAILURES`] show `[xfail]` before their name; they pass when their check
 //! fails and fail when it passes, so the list can't go stale.
 //!
 //! Backends come only from `shadowvol::backends()`; cases only from
-//! `shadowvol_silhouette::corpus::cases()`.
+//! `shadowvol_test_support::corpus::cases()`.
 
 use libtest_mimic::{Arguments, Completion, Failed, Trial};
 #[path = "support/values.rs"]
@@ -38,9 +38,10 @@ use shadowvol::BackendEntry;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_robust_math::Accuracy;
 use shadowvol_silhouette::{
-    corpus, extract_once, invariant, BackendError, ExtractStats, Light, Multiplicities,
-    SilhouetteBackend, TopologyScene,
+    extract_once, invariant, BackendError, ExtractStats, Light, Multiplicities, SilhouetteBackend,
+    TopologyScene,
 };
+use shadowvol_test_support::corpus;
 use std::collections::HashMap;
 use std::sync::mpsc::{self, Receiver, Sender};
 use std::sync::{Arc, Mutex, OnceLock};
@@ -75,7 +76,7 @@ enum Started {
 }
 
 fn is_ci() -> bool {
-    shadowvol_silhouette::ci::is_ci()
+    shadowvol_test_support::ci::is_ci()
 }
 
 fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {

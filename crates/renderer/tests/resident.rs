@@ -7,7 +7,8 @@ use shadowvol_mesh_topology::Mesh;
 use shadowvol_renderer::resident::{twin, PassFormats, PassFrame, ResidentScene, ShadowPass};
 use shadowvol_renderer::{hard, reference, volume, Camera, Pipeline, RenderOptions, Technique};
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::{corpus, object_lights, SceneObject, TopologyScene};
+use shadowvol_silhouette::{object_lights, SceneObject, TopologyScene};
+use shadowvol_test_support::corpus;
 use shadowvol_test_support::{main, skip, Outcome, Skip};
 use std::sync::Arc;
 

@@ -129,7 +129,7 @@ mod tests {
     use std::sync::Arc;
 
     fn cube(lo: Vec3, hi: Vec3) -> Arc<Mesh> {
-        Arc::new(shadowvol_silhouette::shapes::cuboid(lo, hi))
+        Arc::new(crate::shapes::cuboid(lo, hi))
     }
 
     fn scene(objects: &[(Vec3, Vec3)]) -> Scene {

@@ -7,9 +7,9 @@
 
 use glam::Vec3;
 use shadowvol_mesh_topology::EdgeTable;
-use shadowvol_silhouette::shapes::uv_sphere_y;
 use shadowvol_silhouette::{Accuracy, Light, Multiplicities, SilhouetteBackend, TopologyScene};
 use shadowvol_simd::{MemoryFloor, SimdBackend, SimdLevel};
+use shadowvol_test_support::shapes::uv_sphere_y;
 use std::time::Duration;
 
 fn median(mut v: Vec<Duration>) -> f64 {

@@ -28,7 +28,8 @@
 //! operations on the same inputs).
 //!
 //! ```
-//! use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy};
+//! use shadowvol_silhouette::{extract_once, invariant, Accuracy};
+//! use shadowvol_test_support::corpus;
 //!
 //! let case = &corpus::cases()[0];
 //! let scene = case.scene().unwrap();

@@ -6,9 +6,10 @@
 
 use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{
-    corpus, extract_once, invariant, Accuracy, ExtractStats, Multiplicities, SceneObject,
+    extract_once, invariant, Accuracy, ExtractStats, Multiplicities, SceneObject,
     SilhouetteBackend, TopologyScene,
 };
+use shadowvol_test_support::corpus;
 use shadowvol_vulkan_geometry::{VulkanBackend, VulkanOptions};
 use std::sync::Arc;
 use std::time::{Duration, Instant};

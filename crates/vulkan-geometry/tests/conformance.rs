@@ -6,7 +6,8 @@ mod common;
 mod values;
 
 use shadowvol_cpu::CpuBackend;
-use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy, SilhouetteBackend};
+use shadowvol_silhouette::{extract_once, invariant, Accuracy, SilhouetteBackend};
+use shadowvol_test_support::corpus;
 use shadowvol_test_support::{main, Outcome};
 use shadowvol_vulkan_geometry::twin::{extract_twin, DeviceFilter};
 use shadowvol_vulkan_geometry::{VulkanBackend, VulkanOptions};
