@@ -345,7 +345,11 @@ fn main() {
         });
         let rule = match &started {
             Started::Yes { device, .. } => {
-                let rule = Rule::for_device(entry.name, device);
+                let rule = if entry.host {
+                    Rule::BitExact
+                } else {
+                    Rule::for_device(device)
+                };
                 eprintln!(
                     "  {:>7}: available: {device} (f32 modes: {} rule)",
                     entry.name,

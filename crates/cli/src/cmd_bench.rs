@@ -2,7 +2,7 @@
 //! measured memory floor.
 
 use serde::Serialize;
-use shadowvol::{find_backend, CliError, Format, ModeArg};
+use shadowvol::{find_backend, CliError, Format, MemoryFloor, ModeArg};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{Multiplicities, TopologyScene};
 use std::io::Write;
@@ -247,75 +247,7 @@ fn host() -> Host {
     }
 }
 
-/// One pass over the minimum traffic (see [`LONG_ABOUT`]).
-#[cfg(feature = "simd")]
-struct Floor(shadowvol_simd::MemoryFloor);
-
-#[cfg(feature = "simd")]
-impl Floor {
-    fn new(scene: &TopologyScene, lights: usize) -> Self {
-        Self(shadowvol_simd::MemoryFloor::new(scene, lights))
-    }
-    fn bytes(&self) -> (usize, usize) {
-        (self.0.bytes_read(), self.0.bytes_written())
-    }
-    fn run_once(&mut self) -> Duration {
-        self.0.run_once()
-    }
-}
-
-/// Without the `simd` backend compiled in: the same traffic, on all cores with std threads.
-#[cfg(not(feature = "simd"))]
-struct Floor {
-    input: Vec<u64>,
-    output: Vec<u32>,
-}
-
-#[cfg(not(feature = "simd"))]
-impl Floor {
-    fn new(scene: &TopologyScene, lights: usize) -> Self {
-        let words: usize = scene
-            .objects
-            .iter()
-            .map(|o| o.table.edges.len() * 2 + o.table.ovs.len() + o.table.positions.len() * 3)
-            .sum();
-        Self {
-            input: (0..words.div_ceil(2) as u64).collect(),
-            output: vec![0; scene.total_edges() * lights],
-        }
-    }
-    fn bytes(&self) -> (usize, usize) {
-        (self.input.len() * 8, self.output.len() * 4)
-    }
-    fn run_once(&mut self) -> Duration {
-        let start = Instant::now();
-        let threads = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
-        let ic = self.input.len().div_ceil(threads).max(1);
-        let oc = self.output.len().div_ceil(threads).max(1);
-        let input = &self.input;
-        let sum: u64 = std::thread::scope(|s| {
-            let handles: Vec<_> = self
-                .output
-                .chunks_mut(oc)
-                .enumerate()
-                .map(|(t, out)| {
-                    s.spawn(move || {
-                        let part =
-                            &input[(t * ic).min(input.len())..((t + 1) * ic).min(input.len())];
-                        let v = part.iter().fold(0u64, |a, &b| a.wrapping_add(b));
-                        out.fill(v as u32);
-                        v
-                    })
-                })
-                .collect();
-            handles.into_iter().map(|h| h.join().unwrap_or(0)).sum()
-        });
-        std::hint::black_box(sum);
-        start.elapsed()
-    }
-}
-
-fn floor_samples(floor: &mut Floor, warmup: u32, frames: u32, into: &mut Vec<Duration>) {
+fn floor_samples(floor: &mut MemoryFloor, warmup: u32, frames: u32, into: &mut Vec<Duration>) {
     for _ in 0..warmup {
         floor.run_once();
     }
@@ -397,11 +329,11 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     );
 
     // The floors, before and after the backends (same run, same threads); median of both.
-    let mut floors: Vec<(Floor, Vec<Duration>)> = light_sets
+    let mut floors: Vec<(MemoryFloor, Vec<Duration>)> = light_sets
         .iter()
-        .map(|l| (Floor::new(&topo, l.len()), Vec::new()))
+        .map(|l| (MemoryFloor::new(&topo, l.len()), Vec::new()))
         .collect();
-    let run_floors = |floors: &mut Vec<(Floor, Vec<Duration>)>| {
+    let run_floors = |floors: &mut Vec<(MemoryFloor, Vec<Duration>)>| {
         for (floor, times) in floors.iter_mut() {
             bar.set_message("memory floor");
             floor_samples(floor, args.warmup, args.frames, times);
@@ -526,7 +458,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         .zip(&light_sets)
         .map(|((floor, times), lights)| {
             let (floor_ms, p10, p90) = percentiles(times);
-            let (bytes_read, bytes_written) = floor.bytes();
+            let (bytes_read, bytes_written) = (floor.bytes_read(), floor.bytes_written());
             FloorRecord {
                 lights: lights.len(),
                 floor_ms,

@@ -41,12 +41,9 @@
 
 mod dispatch;
 mod extract;
-pub mod floor;
 mod kernel;
 mod lanes;
 mod layout;
-
-pub use floor::MemoryFloor;
 
 use extract::{run_extract, Prepared, Scratch};
 use shadowvol_silhouette::{

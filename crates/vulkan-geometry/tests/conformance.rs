@@ -24,7 +24,7 @@ fn run_corpus(vk: &mut VulkanBackend, test: &str) {
     let cases = corpus::cases();
     assert!(!cases.is_empty());
     let mut uncertain = 0;
-    let rule = Rule::for_device("vulkan", &vk.info().device);
+    let rule = Rule::for_device(&vk.info().device);
     eprintln!("{test}: f32 modes compared by the {} rule", rule.name());
     for case in &cases {
         let scene = case.scene().unwrap();
