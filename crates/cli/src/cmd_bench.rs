@@ -2,7 +2,7 @@
 //! measured memory floor.
 
 use serde::Serialize;
-use shadowvol::{find_backend, BackendEntry, CliError, Format, MemoryFloor, ModeArg};
+use shadowvol::{find_backend, BackendEntry, CliError, Format, MemoryFloor};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{Multiplicities, SilhouetteBackend, TopologyScene};
 use std::io::Write;
@@ -51,8 +51,8 @@ pub struct Args {
     #[arg(long, value_delimiter = ',', default_value = "cpu,simd")]
     backend: Vec<String>,
     /// Accuracy modes to time, comma-separated.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [ModeArg::Original, ModeArg::Robust, ModeArg::Ordered, ModeArg::Exact])]
-    mode: Vec<ModeArg>,
+    #[arg(long, value_parser = shadowvol::mode_parser(), value_delimiter = ',', default_values = ["original", "robust", "ordered", "exact"])]
+    mode: Vec<Accuracy>,
     /// Timed frames per (backend, mode).
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
@@ -289,7 +289,7 @@ impl Setup {
             .iter()
             .map(|b| find_backend(b))
             .collect::<Result<Vec<_>, _>>()?;
-        let modes: Vec<Accuracy> = args.mode.iter().map(|&m| m.into()).collect();
+        let modes = &args.mode;
         if modes.is_empty() || entries.is_empty() {
             return Err(CliError::Usage(
                 "give at least one backend and one mode".to_owned(),
