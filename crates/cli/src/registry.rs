@@ -9,9 +9,8 @@
 //! ```
 //!
 //! add it as an optional dependency behind a cargo feature of the same name as the backend in
-//! `crates/cli/Cargo.toml` (and pass the feature through in `tests/Cargo.toml` and
-//! `benches/Cargo.toml`), and add one `backend!` line to [`backends`], saying whether it runs on
-//! the host or on a device.
+//! `crates/cli/Cargo.toml` (and pass the feature through in `tests/Cargo.toml`), and add one
+//! `backend!` line to [`backends`], saying whether it runs on the host or on a device.
 //!
 //! `--backend auto` ([`AUTO`]) is resolved here too, by [`find_backend`]: [`choose_auto`] picks
 //! the first backend of [`AUTO_GPU_ORDER`] that runs on a hardware GPU ([`cpu_emulated`] tells
