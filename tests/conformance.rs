@@ -22,13 +22,13 @@
 //! a check misses it.
 //!
 //! A backend that cannot start is a visible skip (`ignored (<backend> unavailable: reason)`),
-//! except under CI (`shadowvol_silhouette::ci::is_ci`: `CI=true`, `CI=True`, `CI=1`): then each
+//! except under CI (`shadowvol_test_support::ci::is_ci`: `CI=true`, `CI=True`, `CI=1`): then each
 //! of its tests fails with the reason, a backend whose cargo feature is off included. Tests
 //! listed in [`EXPECTED_FAILURES`] show `[xfail]` before their name; they pass when their check
 //! fails and fail when it passes, so the list can't go stale.
 //!
 //! Backends come only from `shadowvol::backends()`; cases only from
-//! `shadowvol_silhouette::corpus::cases()`.
+//! `shadowvol_test_support::corpus::cases()`.
 
 use libtest_mimic::{Arguments, Completion, Failed, Trial};
 #[path = "support/values.rs"]
@@ -38,9 +38,10 @@ use shadowvol::BackendEntry;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_robust_math::Accuracy;
 use shadowvol_silhouette::{
-    corpus, extract_once, invariant, BackendError, ExtractStats, Light, Multiplicities,
-    SilhouetteBackend, TopologyScene,
+    extract_once, invariant, BackendError, ExtractStats, Light, Multiplicities, SilhouetteBackend,
+    TopologyScene,
 };
+use shadowvol_test_support::corpus;
 use std::collections::HashMap;
 use std::sync::mpsc::{self, Receiver, Sender};
 use std::sync::{Arc, Mutex, OnceLock};
@@ -75,7 +76,7 @@ enum Started {
 }
 
 fn is_ci() -> bool {
-    shadowvol_silhouette::ci::is_ci()
+    shadowvol_test_support::ci::is_ci()
 }
 
 fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
@@ -297,9 +298,8 @@ fn empty_cases() -> Vec<Case> {
     .collect()
 }
 
-fn main() {
-    let args = Arguments::from_args();
-    let ci = is_ci();
+/// Every case: the corpus, the bunny, and the empty scenes.
+fn all_cases() -> Vec<Case> {
     let mut cases: Vec<Case> = corpus::cases()
         .into_iter()
         .map(|c| Case {
@@ -312,9 +312,265 @@ fn main() {
         .collect();
     cases.push(bunny_case());
     cases.extend(empty_cases());
-    let cases = Arc::new(cases);
-    let references: References = Arc::new(cases.iter().map(|_| Default::default()).collect());
+    cases
+}
+
+/// Waits for the worker of `entry` to say whether its backend started; a backend still starting
+/// after [`START_TIMEOUT`] counts as unavailable and its thread is no longer joined at the end.
+/// Prints what it found.
+fn wait_started(
+    entry: &BackendEntry,
+    rx: &Receiver<Started>,
+    handles: &mut Vec<(&'static str, std::thread::JoinHandle<()>)>,
+) -> (Started, Option<Rule>) {
+    let started = rx.recv_timeout(START_TIMEOUT).unwrap_or_else(|_| {
+        // Still starting: it can't be joined at the end without waiting on its driver.
+        handles.retain(|(n, _)| *n != entry.name);
+        Started::No(format!(
+            "did not start within {} s",
+            START_TIMEOUT.as_secs()
+        ))
+    });
+    let rule = match &started {
+        Started::Yes { device, .. } => {
+            let rule = if entry.host {
+                Rule::BitExact
+            } else {
+                Rule::for_device(device)
+            };
+            eprintln!(
+                "  {:>7}: available: {device} (f32 modes: {} rule)",
+                entry.name,
+                rule.name()
+            );
+            Some(rule)
+        }
+        Started::NotCompiled(r) | Started::No(r) => {
+            eprintln!("  {:>7}: UNAVAILABLE: {r}", entry.name);
+            None
+        }
+    };
+    (started, rule)
+}
+
+/// The name of the trial of `backend` on `case` in `mode`. The rule that applies is part of the
+/// name: `oracle` for exact (always bit for bit against the big-integer oracle), `bit-exact` or
+/// `certified` for the f32 modes (see `support/values.rs`); none when the backend did not start.
+fn trial_name(backend: &str, case: &str, mode: Accuracy, rule: Option<Rule>) -> String {
+    match rule {
+        Some(_) if mode == Accuracy::Exact => {
+            format!("conformance::{backend}::{case}::{mode}::oracle")
+        }
+        Some(r) => format!("conformance::{backend}::{case}::{mode}::{}", r.name()),
+        None => format!("conformance::{backend}::{case}::{mode}"),
+    }
+}
+
+/// What every trial of the run shares.
+struct Shared {
+    cases: Arc<Vec<Case>>,
+    references: References,
+    notes: Notes,
+    ci: bool,
+}
+
+/// The trial `name` of `backend` (as it `started`) on case `ci_idx` in `mode`: skipped or failed
+/// when the backend did not start, otherwise a job for its worker whose result is checked.
+fn backend_trial(
+    shared: &Shared,
+    name: String,
+    (backend, started, rule): (&'static str, &Started, Option<Rule>),
+    (ci_idx, mode): (usize, Accuracy),
+    xfail_reason: Option<&'static str>,
+) -> Trial {
+    match started {
+        Started::NotCompiled(reason) if !shared.ci => {
+            let why = format!("{backend}: {reason}");
+            Trial::ignorable_test(name, move || Ok(Completion::ignored_with(why)))
+        }
+        Started::No(reason) if !shared.ci => {
+            let why = format!("{backend} unavailable: {reason}");
+            Trial::ignorable_test(name, move || Ok(Completion::ignored_with(why)))
+        }
+        Started::No(reason) | Started::NotCompiled(reason) => {
+            let why = format!("{backend} unavailable (CI is set, so this fails): {reason}");
+            Trial::test(name, move || Err(Failed::from(why)))
+        }
+        Started::Yes { jobs, .. } => {
+            let jobs = jobs.clone();
+            let cases = Arc::clone(&shared.cases);
+            let notes = Arc::clone(&shared.notes);
+            let references = Arc::clone(&shared.references);
+            let rule = rule.expect("a started backend has a rule");
+            Trial::test(name, move || {
+                let (tx, rx) = mpsc::channel();
+                jobs.send(Job {
+                    case: ci_idx,
+                    mode,
+                    reply: tx,
+                })
+                .map_err(|_| "the backend's worker thread is gone")?;
+                let outcome = rx
+                    .recv()
+                    .map_err(|_| "the backend's worker thread died".to_owned())
+                    .and_then(|r| r)
+                    .and_then(|(m, stats)| {
+                        if stats.uncertain > 0 {
+                            notes.lock().unwrap().push(format!(
+                                "{backend:>7} {:<24} {mode:<8} {} (edge, vertex, light) evaluations not certified on the device, decided on the host",
+                                cases[ci_idx].name, stats.uncertain
+                            ));
+                        }
+                        let case = &cases[ci_idx];
+                        let reference = references[ci_idx][mode_index(mode)]
+                            .get_or_init(|| values::reference(&case.scene, &case.lights, mode));
+                        check(backend, case, mode, rule, reference, &m, &notes)
+                    });
+                match (outcome, xfail_reason) {
+                    (Ok(()), None) => Ok(()),
+                    (Err(e), None) => Err(e.into()),
+                    (Err(_), Some(_)) => Ok(()),
+                    (Ok(()), Some(why)) => Err(format!(
+                        "listed in EXPECTED_FAILURES ({why}) but passed: remove it from the list"
+                    )
+                    .into()),
+                }
+            })
+        }
+    }
+}
+
+/// The checks must be able to fail: corrupts a correct result in each checked way, under both
+/// rules and in every mode, and fails if a check misses it.
+fn checks_detect_corruption(cases: &[Case]) -> Result<(), Failed> {
+    let case = cases
+        .iter()
+        .find(|c| c.scene.total_edges() > 0)
+        .ok_or("no case with edges")?;
     let notes: Notes = Arc::default();
+    let mut cpu = CpuBackend::new();
+    for (mode, rule) in Accuracy::ALL
+        .into_iter()
+        .flat_map(|m| [(m, Rule::BitExact), (m, Rule::Certified)])
+    {
+        let reference = values::reference(&case.scene, &case.lights, mode);
+        let (good, _) =
+            extract_once(&mut cpu, &case.scene, &case.lights, mode).map_err(|e| e.to_string())?;
+        check("self-test", case, mode, rule, &reference, &good, &notes)?;
+        let corrupt = |bad: &Multiplicities, what: &str| {
+            if check("self-test", case, mode, rule, &reference, bad, &notes).is_ok() {
+                Err(format!(
+                    "{mode}, {} rule: {what} went unnoticed",
+                    rule.name()
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        // A changed multiplicity (with its list kept consistent).
+        let mut bad = good.clone();
+        bad.values_mut(0)[0] += 1;
+        bad.rebuild_silhouettes();
+        corrupt(&bad, "a changed multiplicity")?;
+        // Every sign negated, and every sign 0: both close every chain.
+        let mut bad = good.clone();
+        bad.all_values_mut().iter_mut().for_each(|m| *m = -*m);
+        bad.rebuild_silhouettes();
+        corrupt(&bad, "a negated result")?;
+        let bad = Multiplicities::zeroed(good.edge_count(), good.light_count());
+        corrupt(&bad, "an all-zero result")?;
+        // A compact list that does not match the values.
+        let mut bad = good.clone();
+        bad.set_silhouette(0, vec![]);
+        if good.silhouette(0).is_empty() {
+            bad.set_silhouette(0, vec![0]);
+        }
+        corrupt(&bad, "an inconsistent compact list")?;
+        // A result of the wrong shape.
+        let bad = Multiplicities::zeroed(case.scene.total_edges() + 1, case.lights.len());
+        corrupt(&bad, "a wrongly sized result")?;
+    }
+    Ok(())
+}
+
+/// The trials about the run itself: the expected-failure list names real tests (of
+/// `known_names`), the checks detect corruption, the corpus reaches the exact fallback with both
+/// signs, and the corpus is not empty.
+fn self_trials(cases: &Arc<Vec<Case>>, known_names: &[String]) -> Vec<Trial> {
+    let stale: Vec<&str> = EXPECTED_FAILURES
+        .iter()
+        .map(|(n, _)| *n)
+        .filter(|n| !known_names.iter().any(|k| k == n))
+        .collect();
+    let self_test_cases = Arc::clone(cases);
+    // The corpus must make the exact fallback answer both signs, so that exact mode's trials
+    // check the fallback of every backend (and of `cpu`) against the oracle, not only zeros.
+    let fallback_cases = Arc::clone(cases);
+    let case_count = cases.len();
+    vec![
+        Trial::test("conformance::expected_failures_exist", move || {
+            if stale.is_empty() {
+                Ok(())
+            } else {
+                Err(format!("EXPECTED_FAILURES names unknown tests: {stale:?}").into())
+            }
+        }),
+        Trial::test("conformance::checks_detect_corruption", move || {
+            checks_detect_corruption(&self_test_cases)
+        }),
+        Trial::test(
+            "conformance::corpus_reaches_exact_fallback_with_both_signs",
+            move || {
+                let mut total = [0; 3];
+                for c in fallback_cases.iter() {
+                    let n = values::fallback_signs(&c.scene, &c.lights);
+                    (0..3).for_each(|i| total[i] += n[i]);
+                }
+                if total[0] > 0 && total[2] > 0 {
+                    Ok(())
+                } else {
+                    Err(format!(
+                        "pairs left to the exact fallback by sign [-1, 0, +1]: {total:?}; \
+                         the corpus needs both non-zero answers"
+                    )
+                    .into())
+                }
+            },
+        ),
+        Trial::test("conformance::corpus_not_empty", move || {
+            if case_count > 0 {
+                Ok(())
+            } else {
+                Err("the conformance corpus is empty".into())
+            }
+        }),
+    ]
+}
+
+/// Prints what the run reported without asserting it.
+fn print_notes(notes: &Notes) {
+    let mut notes = notes.lock().map(|n| n.clone()).unwrap_or_default();
+    if !notes.is_empty() {
+        notes.sort();
+        eprintln!(
+            "\nreported, not asserted (original's open vertices: it is the baseline; what the certified rule compared):"
+        );
+        for n in notes {
+            eprintln!("  {n}");
+        }
+    }
+}
+
+fn main() {
+    let args = Arguments::from_args();
+    let ci = is_ci();
+    let cases = Arc::new(all_cases());
+    let shared = Shared {
+        references: Arc::new(cases.iter().map(|_| Default::default()).collect()),
+        notes: Arc::default(),
+        cases: Arc::clone(&cases),
+        ci,
+    };
 
     // Start every backend in parallel, then wait for each to report.
     let entries = shadowvol::backends();
@@ -332,110 +588,19 @@ fn main() {
     let mut workers = Vec::new();
     eprintln!("conformance: {} corpus cases, CI={ci}", cases.len());
     for (entry, rx) in starting {
-        let started = rx.recv_timeout(START_TIMEOUT).unwrap_or_else(|_| {
-            // Still starting: it can't be joined at the end without waiting on its driver.
-            handles.retain(|(n, _)| *n != entry.name);
-            Started::No(format!(
-                "did not start within {} s",
-                START_TIMEOUT.as_secs()
-            ))
-        });
-        let rule = match &started {
-            Started::Yes { device, .. } => {
-                let rule = Rule::for_device(entry.name, device);
-                eprintln!(
-                    "  {:>7}: available: {device} (f32 modes: {} rule)",
-                    entry.name,
-                    rule.name()
-                );
-                Some(rule)
-            }
-            Started::NotCompiled(r) | Started::No(r) => {
-                eprintln!("  {:>7}: UNAVAILABLE: {r}", entry.name);
-                None
-            }
-        };
+        let (started, rule) = wait_started(&entry, &rx, &mut handles);
         for (ci_idx, case) in cases.iter().enumerate() {
             for mode in Accuracy::ALL {
-                // The rule that applies is part of the name: `oracle` for exact (always bit for
-                // bit against the big-integer oracle), `bit-exact` or `certified` for the f32
-                // modes (see `support/values.rs`).
-                let name = match rule {
-                    Some(_) if mode == Accuracy::Exact => {
-                        format!("conformance::{}::{}::{mode}::oracle", entry.name, case.name)
-                    }
-                    Some(r) => format!(
-                        "conformance::{}::{}::{mode}::{}",
-                        entry.name,
-                        case.name,
-                        r.name()
-                    ),
-                    None => format!("conformance::{}::{}::{mode}", entry.name, case.name),
-                };
+                let name = trial_name(entry.name, case.name, mode, rule);
                 known_names.push(name.clone());
                 let xfail = EXPECTED_FAILURES.iter().find(|(n, _)| *n == name);
-                let trial = match &started {
-                    Started::NotCompiled(reason) if !ci => {
-                        let why = format!("{}: {reason}", entry.name);
-                        Trial::ignorable_test(name, move || Ok(Completion::ignored_with(why)))
-                    }
-                    Started::No(reason) if !ci => {
-                        let why = format!("{} unavailable: {reason}", entry.name);
-                        Trial::ignorable_test(name, move || Ok(Completion::ignored_with(why)))
-                    }
-                    Started::No(reason) | Started::NotCompiled(reason) => {
-                        let why = format!(
-                            "{} unavailable (CI is set, so this fails): {reason}",
-                            entry.name
-                        );
-                        Trial::test(name, move || Err(Failed::from(why)))
-                    }
-                    Started::Yes { jobs, .. } => {
-                        let jobs = jobs.clone();
-                        let cases = Arc::clone(&cases);
-                        let notes = Arc::clone(&notes);
-                        let references = Arc::clone(&references);
-                        let rule = rule.expect("a started backend has a rule");
-                        let backend = entry.name;
-                        let xfail_reason = xfail.map(|(_, why)| *why);
-                        Trial::test(name, move || {
-                            let (tx, rx) = mpsc::channel();
-                            jobs.send(Job {
-                                case: ci_idx,
-                                mode,
-                                reply: tx,
-                            })
-                            .map_err(|_| "the backend's worker thread is gone")?;
-                            let outcome = rx
-                                .recv()
-                                .map_err(|_| "the backend's worker thread died".to_owned())
-                                .and_then(|r| r)
-                                .and_then(|(m, stats)| {
-                                    if stats.uncertain > 0 {
-                                        notes.lock().unwrap().push(format!(
-                                            "{backend:>7} {:<24} {mode:<8} {} (edge, vertex, light) evaluations not certified on the device, decided on the host",
-                                            cases[ci_idx].name, stats.uncertain
-                                        ));
-                                    }
-                                    let case = &cases[ci_idx];
-                                    let reference = references[ci_idx][mode_index(mode)]
-                                        .get_or_init(|| {
-                                            values::reference(&case.scene, &case.lights, mode)
-                                        });
-                                    check(backend, case, mode, rule, reference, &m, &notes)
-                                });
-                            match (outcome, xfail_reason) {
-                                (Ok(()), None) => Ok(()),
-                                (Err(e), None) => Err(e.into()),
-                                (Err(_), Some(_)) => Ok(()),
-                                (Ok(()), Some(why)) => Err(format!(
-                                    "listed in EXPECTED_FAILURES ({why}) but passed: remove it from the list"
-                                )
-                                .into()),
-                            }
-                        })
-                    }
-                };
+                let trial = backend_trial(
+                    &shared,
+                    name,
+                    (entry.name, &started, rule),
+                    (ci_idx, mode),
+                    xfail.map(|(_, why)| *why),
+                );
                 trials.push(if xfail.is_some() {
                     trial.with_kind("xfail")
                 } else {
@@ -445,107 +610,7 @@ fn main() {
         }
         workers.push(started);
     }
-    // The expected-failure list must name real tests.
-    let stale: Vec<&str> = EXPECTED_FAILURES
-        .iter()
-        .map(|(n, _)| *n)
-        .filter(|n| !known_names.iter().any(|k| k == n))
-        .collect();
-    trials.push(Trial::test(
-        "conformance::expected_failures_exist",
-        move || {
-            if stale.is_empty() {
-                Ok(())
-            } else {
-                Err(format!("EXPECTED_FAILURES names unknown tests: {stale:?}").into())
-            }
-        },
-    ));
-    // The checks must be able to fail: corrupt a correct result in each checked way.
-    let self_test_cases = Arc::clone(&cases);
-    trials.push(Trial::test(
-        "conformance::checks_detect_corruption",
-        move || {
-            let case = self_test_cases
-                .iter()
-                .find(|c| c.scene.total_edges() > 0)
-                .ok_or("no case with edges")?;
-            let notes: Notes = Arc::default();
-            let mut cpu = CpuBackend::new();
-            for (mode, rule) in Accuracy::ALL
-                .into_iter()
-                .flat_map(|m| [(m, Rule::BitExact), (m, Rule::Certified)])
-            {
-                let reference = values::reference(&case.scene, &case.lights, mode);
-                let (good, _) = extract_once(&mut cpu, &case.scene, &case.lights, mode)
-                    .map_err(|e| e.to_string())?;
-                check("self-test", case, mode, rule, &reference, &good, &notes)?;
-                let corrupt = |bad: &Multiplicities, what: &str| {
-                    if check("self-test", case, mode, rule, &reference, bad, &notes).is_ok() {
-                        Err(format!(
-                            "{mode}, {} rule: {what} went unnoticed",
-                            rule.name()
-                        ))
-                    } else {
-                        Ok(())
-                    }
-                };
-                // A changed multiplicity (with its list kept consistent).
-                let mut bad = good.clone();
-                bad.values_mut(0)[0] += 1;
-                bad.rebuild_silhouettes();
-                corrupt(&bad, "a changed multiplicity")?;
-                // Every sign negated, and every sign 0: both close every chain.
-                let mut bad = good.clone();
-                bad.all_values_mut().iter_mut().for_each(|m| *m = -*m);
-                bad.rebuild_silhouettes();
-                corrupt(&bad, "a negated result")?;
-                let bad = Multiplicities::zeroed(good.edge_count(), good.light_count());
-                corrupt(&bad, "an all-zero result")?;
-                // A compact list that does not match the values.
-                let mut bad = good.clone();
-                bad.set_silhouette(0, vec![]);
-                if good.silhouette(0).is_empty() {
-                    bad.set_silhouette(0, vec![0]);
-                }
-                corrupt(&bad, "an inconsistent compact list")?;
-                // A result of the wrong shape.
-                let bad = Multiplicities::zeroed(case.scene.total_edges() + 1, case.lights.len());
-                corrupt(&bad, "a wrongly sized result")?;
-            }
-            Ok(())
-        },
-    ));
-    // The corpus must make the exact fallback answer both signs, so that exact mode's trials
-    // check the fallback of every backend (and of `cpu`) against the oracle, not only zeros.
-    let fallback_cases = Arc::clone(&cases);
-    trials.push(Trial::test(
-        "conformance::corpus_reaches_exact_fallback_with_both_signs",
-        move || {
-            let mut total = [0; 3];
-            for c in fallback_cases.iter() {
-                let n = values::fallback_signs(&c.scene, &c.lights);
-                (0..3).for_each(|i| total[i] += n[i]);
-            }
-            if total[0] > 0 && total[2] > 0 {
-                Ok(())
-            } else {
-                Err(format!(
-                    "pairs left to the exact fallback by sign [-1, 0, +1]: {total:?}; \
-                     the corpus needs both non-zero answers"
-                )
-                .into())
-            }
-        },
-    ));
-    let case_count = cases.len();
-    trials.push(Trial::test("conformance::corpus_not_empty", move || {
-        if case_count > 0 {
-            Ok(())
-        } else {
-            Err("the conformance corpus is empty".into())
-        }
-    }));
+    trials.extend(self_trials(&cases, &known_names));
 
     let conclusion = libtest_mimic::run(&args, trials);
     drop(workers); // closes the job channels so the worker threads end
@@ -553,16 +618,6 @@ fn main() {
         eprintln!("conformance: backend shutdown failed: {e}");
         std::process::exit(101);
     }
-    let notes = notes.lock().map(|n| n.clone()).unwrap_or_default();
-    if !notes.is_empty() {
-        let mut notes = notes;
-        notes.sort();
-        eprintln!(
-            "\nreported, not asserted (original's open vertices: it is the baseline; what the certified rule compared):"
-        );
-        for n in notes {
-            eprintln!("  {n}");
-        }
-    }
+    print_notes(&shared.notes);
     conclusion.exit();
 }

@@ -4,7 +4,7 @@
 //! test per (backend, corpus case, accuracy mode), named
 //! `conformance::<backend>::<case>::<mode>::<rule>` (the rule is in `conformance.rs`),
 //! generated from the backend registry (`shadowvol::backends()`) and the shared corpus
-//! (`shadowvol_silhouette::corpus::cases()`). Run them with
+//! (`shadowvol_test_support::corpus::cases()`). Run them with
 //!
 //! ```text
 //! cargo test -p shadowvol-tests                      # all backends (features on by default)

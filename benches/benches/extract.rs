@@ -1,25 +1,26 @@
-//! Silhouette extraction kernels at 10^3 .. 10^6 triangles (icospheres from
-//! `shadowvol_scenes::procedural`): the scalar `cpu` reference, the `simd` backend in every
-//! mode (at its detected level, and at the `wide` compile-time level), the seeds' baselines, and
-//! the memory floor for the same scene.
+//! Silhouette extraction at 10^3 .. 10^6 triangles (icospheres from
+//! `shadowvol_scenes::procedural`): every backend of the registry (`shadowvol::backends()`) that
+//! starts here, in every mode; the `simd` backend also at the `wide` compile-time level; the
+//! seeds' baselines; and the memory floor (`shadowvol::MemoryFloor`) for the same scene.
 //!
 //! ```text
 //! cargo bench -p shadowvol-benches --bench extract
 //! cargo bench -p shadowvol-benches --bench extract -- 'simd/ordered'   # a filter
 //! ```
 //!
-//! Criterion reports absolute times; `docs/PERFORMANCE.md` uses `shadowvol bench` for the ratios.
+//! A backend that can't start here is skipped with a line on stderr saying why. Criterion
+//! reports absolute times; `shadowvol bench` gives the ratios (backend / floor, mode / original).
 
 use criterion::measurement::WallTime;
 use criterion::{
     criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
 };
 use glam::Vec3;
+use shadowvol::MemoryFloor;
 use shadowvol_cpu::baselines::{Baseline, ClosedMesh};
-use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_silhouette::{Accuracy, Light, Multiplicities, SilhouetteBackend, TopologyScene};
-use shadowvol_simd::{MemoryFloor, SimdBackend, SimdLevel};
+use shadowvol_simd::{SimdBackend, SimdLevel};
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -44,17 +45,11 @@ fn short_group(c: &mut Criterion, name: impl Into<String>) -> BenchmarkGroup<'_,
     group
 }
 
-fn bench_backend(
-    c: &mut Criterion,
-    group_name: &str,
-    make: &dyn Fn() -> Box<dyn SilhouetteBackend>,
-    modes: &[Accuracy],
-) {
-    for &mode in modes {
+fn bench_backend(c: &mut Criterion, group_name: &str, backend: &mut dyn SilhouetteBackend) {
+    for mode in Accuracy::ALL {
         let mut group = short_group(c, format!("{group_name}/{mode}"));
         for n in SIZES {
             let s = scene(n);
-            let mut backend = make();
             let id = backend.prepare(&s).expect("prepare");
             let mut out = Multiplicities::default();
             group.throughput(Throughput::Elements(s.total_triangles() as u64));
@@ -66,32 +61,24 @@ fn bench_backend(
                     black_box(out.silhouette(0).len())
                 });
             });
+            backend.release(id);
         }
         group.finish();
     }
 }
 
+/// Every registered backend that starts, then `simd` at the `wide` level when the detected level
+/// is another.
 fn extract(c: &mut Criterion) {
-    bench_backend(
-        c,
-        "cpu",
-        &|| Box::new(CpuBackend::new()),
-        &[Accuracy::Original, Accuracy::Exact],
-    );
-    let detected = SimdLevel::detect();
-    bench_backend(
-        c,
-        "simd",
-        &|| Box::new(SimdBackend::with_level(detected, None).expect("simd")),
-        &Accuracy::ALL,
-    );
-    if detected != SimdLevel::Wide {
-        bench_backend(
-            c,
-            "simd-wide",
-            &|| Box::new(SimdBackend::with_level(SimdLevel::Wide, None).expect("simd")),
-            &[Accuracy::Original, Accuracy::Exact],
-        );
+    for entry in shadowvol::backends() {
+        match entry.start() {
+            Ok(mut backend) => bench_backend(c, entry.name, backend.as_mut()),
+            Err(e) => eprintln!("extract: skipping {}: {e}", entry.name),
+        }
+    }
+    if SimdLevel::detect() != SimdLevel::Wide {
+        let mut wide = SimdBackend::with_level(SimdLevel::Wide, None).expect("simd");
+        bench_backend(c, "simd-wide", &mut wide);
     }
 }
 

@@ -35,12 +35,12 @@ pub enum Rule {
 }
 
 impl Rule {
-    /// The rule for `backend` running on `device` (the backend's `info().device`).
+    /// The rule for a device backend running on `device` (the backend's `info().device`). A host
+    /// backend (the registry's `host`, such as `cpu` and `simd`) is always [`Rule::BitExact`].
     #[must_use]
-    pub fn for_device(backend: &str, device: &str) -> Rule {
+    pub fn for_device(device: &str) -> Rule {
         let d = device.to_ascii_lowercase();
-        if matches!(backend, "cpu" | "simd")
-            || d.contains("llvmpipe")
+        if d.contains("llvmpipe")
             || d.contains("lavapipe")
             || d.contains("pocl")
             || d.contains("portable computing language")

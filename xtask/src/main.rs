@@ -5,7 +5,7 @@
 //! [`next_value`].
 //!
 //! ```text
-//! cargo xtask test            drivers check/install, fmt, clippy, workspace tests, SPIR-V check
+//! cargo xtask test            drivers, fmt, sizes, clippy, docs, workspace tests, SPIR-V check
 //! cargo xtask matrix          the paper's experiment matrix on every available backend
 //! cargo xtask shaders         regenerate the committed SPIR-V (--check: verify it)
 //! ```
@@ -13,10 +13,12 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+mod ci;
 mod figures;
 mod matrix;
 mod plots;
 mod shaders;
+mod size;
 mod test;
 
 /// A subcommand's entry point: its arguments (after the subcommand name) to a result whose error
@@ -27,7 +29,7 @@ type RunFn = fn(&[String]) -> Result<(), String>;
 const COMMANDS: &[(&str, &str, RunFn)] = &[
     (
         "test",
-        "drivers check/install, fmt, clippy, workspace tests, SPIR-V check; summary",
+        "drivers check/install, fmt, sizes, clippy, workspace tests, SPIR-V check; summary",
         test::run,
     ),
     (

@@ -328,7 +328,7 @@ fn accuracy_cost(path: &Path, records: &[Record]) -> PlotResult {
         for r in mine {
             if r.experiment == "artifacts" {
                 bad += r.render().and_then(|x| x.artifact_pixels).unwrap_or(0);
-            } else if let (true, Some(a)) = (r.experiment == "accuracy", r.accuracy()) {
+            } else if let (true, Some(a)) = (r.experiment == "accuracy", r.mode_errors()) {
                 bad += a.open_vertices.unwrap_or(0);
                 signs += a.sign_diff_vs_exact.unwrap_or(0);
             }

@@ -8,17 +8,19 @@
 //!    when we are not root, the exact command is printed and the run goes on (the GPU backends
 //!    then skip visibly), unless `CI=true`, where a missing driver is a failure.
 //! 2. **fmt**: `cargo fmt --all -- --check`.
-//! 3. **clippy**: `cargo clippy --workspace --all-targets -- -D warnings`.
-//! 4. **docs**: `RUSTDOCFLAGS=-D warnings cargo doc --workspace --no-deps` (a broken intra-doc
+//! 3. **size**: no file over 800 lines before its tests, no function body over 120 lines
+//!    ([`crate::size`]); each offender is printed as `path:line`.
+//! 4. **clippy**: `cargo clippy --workspace --all-targets -- -D warnings`.
+//! 5. **docs**: `RUSTDOCFLAGS=-D warnings cargo doc --workspace --no-deps` (a broken intra-doc
 //!    link or malformed doc comment fails; `-D warnings` is added to any `RUSTDOCFLAGS` set).
-//! 5. **test**: `cargo test --workspace` (with `CI=true`, the conformance tests fail for a backend
+//! 6. **test**: `cargo test --workspace` (with `CI=true`, the conformance tests fail for a backend
 //!    that cannot start instead of skipping it).
-//! 6. **example**: `cargo run -p shadowvol-renderer --example embed -- OUT --check`: the
+//! 7. **example**: `cargo run -p shadowvol-renderer --example embed -- OUT --check`: the
 //!    embedding example renders on its own device and its image's shadows are checked against the
 //!    ray-traced reference. Without a wgpu adapter it warns (a visible skip), under `CI=true` it
 //!    fails.
-//! 7. **shaders**: `cargo xtask shaders --check` (the committed SPIR-V matches the GLSL).
-//! 8. **fuzz**: each fuzz target (`fuzz/`, its own workspace) built and run for [`FUZZ_SECONDS`]
+//! 8. **shaders**: `cargo xtask shaders --check` (the committed SPIR-V matches the GLSL).
+//! 9. **fuzz**: each fuzz target (`fuzz/`, its own workspace) built and run for [`FUZZ_SECONDS`]
 //!    seconds on its seed corpus with `cargo fuzz run --dev --sanitizer none` (stable Rust is
 //!    enough). A missing `cargo-fuzz` is installed with `cargo install` under CI or as root;
 //!    otherwise the targets are only `cargo check`ed and the step says what to install and
@@ -46,8 +48,8 @@ const APT_PACKAGES: &[&str] = &[
 ];
 
 /// The steps, in the order they run (the names `--skip` takes).
-const STEPS: [&str; 8] = [
-    "drivers", "fmt", "clippy", "docs", "test", "example", "shaders", "fuzz",
+const STEPS: [&str; 9] = [
+    "drivers", "fmt", "size", "clippy", "docs", "test", "example", "shaders", "fuzz",
 ];
 
 /// Seconds each fuzz target runs in the `fuzz` step: enough to load and run its seeds and some
@@ -93,6 +95,8 @@ Runs, in order, and prints a summary:
   drivers  check Vulkan loader + lavapipe, OpenCL loader + PoCL, glslangValidator;
            install them with apt-get when missing and running as root
   fmt      cargo fmt --all -- --check
+  size     no file over 800 lines before its tests, no function body over 120 lines
+           (crates/*/src, xtask/src, tests, benches); prints each offender as path:line
   clippy   cargo clippy --workspace --all-targets -- -D warnings
   docs     RUSTDOCFLAGS=\"-D warnings\" cargo doc --workspace --no-deps
   test     cargo test --workspace [CARGO_TEST_ARGS]
@@ -107,13 +111,13 @@ Runs, in order, and prints a summary:
 
 Options:
   --no-drivers   same as --skip drivers
-  --skip STEP    skip a step (drivers, fmt, clippy, docs, test, example, shaders, fuzz);
+  --skip STEP    skip a step (drivers, fmt, size, clippy, docs, test, example, shaders, fuzz);
                  repeatable
   -p PACKAGE     clippy, docs and test only PACKAGE instead of --workspace; repeatable
 
 Environment:
   CI=true        a missing driver, and a backend that cannot start, fail instead of skipping
-                 (CI=1 and any case of true mean the same: shadowvol_silhouette::ci)
+                 (CI=1 and any case of true mean the same, as in every test)
 ";
 
 /// Outcome of one step.
@@ -128,10 +132,6 @@ struct Step {
     name: &'static str,
     outcome: Outcome,
     time: Duration,
-}
-
-fn is_ci() -> bool {
-    shadowvol_silhouette::ci::is_ci()
 }
 
 /// Runs `cargo xtask test`.
@@ -167,7 +167,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
         }
     }
     let root = crate::project_root();
-    let ci = is_ci();
+    let ci = crate::ci::is_ci();
     println!("xtask test: workspace {}, CI={ci}", root.display());
 
     // `--workspace`, or `-p A -p B` when packages were named.
@@ -204,6 +204,10 @@ pub fn run(args: &[String]) -> Result<(), String> {
     step("fmt", &mut || {
         cargo_step(&root, &["fmt", "--all", "--", "--check"], &[])
     });
+    step("size", &mut || match crate::size::check(&root) {
+        Ok(()) => Outcome::Passed,
+        Err(e) => Outcome::Failed(e),
+    });
     step("clippy", &mut || {
         let mut a = vec!["clippy"];
         a.extend(&scope);
@@ -238,9 +242,20 @@ pub fn run(args: &[String]) -> Result<(), String> {
     );
     step("fuzz", &mut || fuzz(&root, ci));
 
+    let failed = print_summary(&steps, &counts);
+    if failed == 0 {
+        Ok(())
+    } else {
+        Err(format!("{failed} step(s) failed"))
+    }
+}
+
+/// Prints each step's outcome and time, the step counts, and the test counts with every skip
+/// and its reason; returns the number of failed steps.
+fn print_summary(steps: &[Step], counts: &TestCounts) -> usize {
     println!("\n==> summary");
     let mut failed = 0;
-    for s in &steps {
+    for s in steps {
         let (word, detail) = match &s.outcome {
             Outcome::Passed => ("ok", String::new()),
             Outcome::Warned(w) => ("WARN", w.clone()),
@@ -280,11 +295,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
             println!("  skipped {name}: {why}");
         }
     }
-    if failed == 0 {
-        Ok(())
-    } else {
-        Err(format!("{failed} step(s) failed"))
-    }
+    failed
 }
 
 /// `RUSTDOCFLAGS` for the docs step: the caller's, then `-D warnings`.

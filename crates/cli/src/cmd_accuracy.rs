@@ -7,7 +7,7 @@
 //! pays the backend start-up once.
 
 use serde::Serialize;
-use shadowvol::{find_backend, CliError, Format, ModeArg};
+use shadowvol::{find_backend, CliError, Format};
 use shadowvol_cpu::CpuBackend;
 use shadowvol_robust_math::Accuracy;
 use shadowvol_silhouette::{invariant, Multiplicities, SilhouetteBackend};
@@ -35,8 +35,8 @@ pub struct Args {
     #[arg(long, default_value = "cpu")]
     backend: String,
     /// Accuracy modes, comma-separated.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [ModeArg::Original, ModeArg::Robust, ModeArg::Ordered, ModeArg::Exact])]
-    mode: Vec<ModeArg>,
+    #[arg(long, value_parser = shadowvol::mode_parser(), value_delimiter = ',', default_values = ["original", "robust", "ordered", "exact"])]
+    mode: Vec<Accuracy>,
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
@@ -104,8 +104,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         let topo = &scene.geometry;
         let scene_lights = scene.light_positions();
         let (exact, _, _) = extract(&mut cpu, topo, &scene_lights, Accuracy::Exact)?;
-        for &m in &args.mode {
-            let mode = Accuracy::from(m);
+        for &mode in &args.mode {
             let (got, uncertain, ms) = extract(backend.as_mut(), topo, &scene_lights, mode)?;
             let (same, _, _) = if mode == Accuracy::Exact {
                 (exact.clone(), 0, 0.0)

@@ -4,7 +4,7 @@
 
 use crate::cmd_bench::percentiles;
 use serde::Serialize;
-use shadowvol::{find_backend, CliError, Format};
+use shadowvol::{backends, CliError, Format};
 use shadowvol_cpu::baselines::{Baseline, ClosedMesh};
 use shadowvol_cpu::CpuBackend;
 use shadowvol_robust_math::Accuracy;
@@ -226,9 +226,9 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         records.push(rec);
     }
 
-    // Our modes on the cpu and simd backends (from the registry).
-    for name in ["cpu", "simd"] {
-        let entry = find_backend(name)?;
+    // Our modes on the host backends of the registry (cpu, simd).
+    for entry in backends().into_iter().filter(|e| e.host) {
+        let name = entry.name;
         let mut backend = match entry.start() {
             Ok(b) => b,
             Err(e) => {

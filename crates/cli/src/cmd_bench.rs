@@ -2,9 +2,9 @@
 //! measured memory floor.
 
 use serde::Serialize;
-use shadowvol::{find_backend, CliError, Format, ModeArg};
+use shadowvol::{find_backend, BackendEntry, CliError, Format, MemoryFloor};
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::{Multiplicities, TopologyScene};
+use shadowvol_silhouette::{Multiplicities, SilhouetteBackend, TopologyScene};
 use std::io::Write;
 use std::time::{Duration, Instant};
 
@@ -51,8 +51,8 @@ pub struct Args {
     #[arg(long, value_delimiter = ',', default_value = "cpu,simd")]
     backend: Vec<String>,
     /// Accuracy modes to time, comma-separated.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [ModeArg::Original, ModeArg::Robust, ModeArg::Ordered, ModeArg::Exact])]
-    mode: Vec<ModeArg>,
+    #[arg(long, value_parser = shadowvol::mode_parser(), value_delimiter = ',', default_values = ["original", "robust", "ordered", "exact"])]
+    mode: Vec<Accuracy>,
     /// Timed frames per (backend, mode).
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
@@ -247,75 +247,7 @@ fn host() -> Host {
     }
 }
 
-/// One pass over the minimum traffic (see [`LONG_ABOUT`]).
-#[cfg(feature = "simd")]
-struct Floor(shadowvol_simd::MemoryFloor);
-
-#[cfg(feature = "simd")]
-impl Floor {
-    fn new(scene: &TopologyScene, lights: usize) -> Self {
-        Self(shadowvol_simd::MemoryFloor::new(scene, lights))
-    }
-    fn bytes(&self) -> (usize, usize) {
-        (self.0.bytes_read(), self.0.bytes_written())
-    }
-    fn run_once(&mut self) -> Duration {
-        self.0.run_once()
-    }
-}
-
-/// Without the `simd` backend compiled in: the same traffic, on all cores with std threads.
-#[cfg(not(feature = "simd"))]
-struct Floor {
-    input: Vec<u64>,
-    output: Vec<u32>,
-}
-
-#[cfg(not(feature = "simd"))]
-impl Floor {
-    fn new(scene: &TopologyScene, lights: usize) -> Self {
-        let words: usize = scene
-            .objects
-            .iter()
-            .map(|o| o.table.edges.len() * 2 + o.table.ovs.len() + o.table.positions.len() * 3)
-            .sum();
-        Self {
-            input: (0..words.div_ceil(2) as u64).collect(),
-            output: vec![0; scene.total_edges() * lights],
-        }
-    }
-    fn bytes(&self) -> (usize, usize) {
-        (self.input.len() * 8, self.output.len() * 4)
-    }
-    fn run_once(&mut self) -> Duration {
-        let start = Instant::now();
-        let threads = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
-        let ic = self.input.len().div_ceil(threads).max(1);
-        let oc = self.output.len().div_ceil(threads).max(1);
-        let input = &self.input;
-        let sum: u64 = std::thread::scope(|s| {
-            let handles: Vec<_> = self
-                .output
-                .chunks_mut(oc)
-                .enumerate()
-                .map(|(t, out)| {
-                    s.spawn(move || {
-                        let part =
-                            &input[(t * ic).min(input.len())..((t + 1) * ic).min(input.len())];
-                        let v = part.iter().fold(0u64, |a, &b| a.wrapping_add(b));
-                        out.fill(v as u32);
-                        v
-                    })
-                })
-                .collect();
-            handles.into_iter().map(|h| h.join().unwrap_or(0)).sum()
-        });
-        std::hint::black_box(sum);
-        start.elapsed()
-    }
-}
-
-fn floor_samples(floor: &mut Floor, warmup: u32, frames: u32, into: &mut Vec<Duration>) {
+fn floor_samples(floor: &mut MemoryFloor, warmup: u32, frames: u32, into: &mut Vec<Duration>) {
     for _ in 0..warmup {
         floor.run_once();
     }
@@ -335,48 +267,86 @@ struct Samples {
     uncertain: u64,
 }
 
+/// What the command line names, resolved and loaded before any timing.
+struct Setup {
+    entries: Vec<BackendEntry>,
+    scene_name: String,
+    topo: TopologyScene,
+    light_sets: Vec<Vec<Light>>,
+    /// (mode, index into `light_sets`) in the order of the records.
+    combos: Vec<(Accuracy, usize)>,
+}
+
+impl Setup {
+    /// Resolves the backends, modes and light counts of `args` and loads the scene.
+    ///
+    /// # Errors
+    /// [`CliError::Usage`] for an unknown backend, no backend or mode, or a light count given
+    /// twice; the scene's load errors.
+    fn new(args: &Args) -> Result<Self, CliError> {
+        let entries = args
+            .backend
+            .iter()
+            .map(|b| find_backend(b))
+            .collect::<Result<Vec<_>, _>>()?;
+        let modes = &args.mode;
+        if modes.is_empty() || entries.is_empty() {
+            return Err(CliError::Usage(
+                "give at least one backend and one mode".to_owned(),
+            ));
+        }
+        if let Some(n) = args
+            .lights
+            .iter()
+            .enumerate()
+            .find_map(|(i, n)| args.lights[..i].contains(n).then_some(n))
+        {
+            return Err(CliError::Usage(format!("--lights lists {n} twice")));
+        }
+        let (scene, notes) = shadowvol::load_scene(&args.scene)?;
+        for n in &notes {
+            eprintln!("note: {n}");
+        }
+        let scene_lights = scene.light_positions();
+        let topo = scene.geometry;
+        let counts: Vec<Option<u32>> = if args.lights.is_empty() {
+            vec![None]
+        } else {
+            args.lights.iter().map(|&n| Some(n)).collect()
+        };
+        let light_sets: Vec<Vec<Light>> = counts
+            .iter()
+            .map(|&n| bench_lights(&args.scene, &scene_lights, &topo, n))
+            .collect::<Result<_, _>>()?;
+        let combos = modes
+            .iter()
+            .flat_map(|&m| (0..light_sets.len()).map(move |k| (m, k)))
+            .collect();
+        Ok(Self {
+            entries,
+            scene_name: scene.name,
+            topo,
+            light_sets,
+            combos,
+        })
+    }
+}
+
+/// The progress bar of a run: `total` frames.
+fn progress_bar(total: u64) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(total);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} {msg}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
+
 pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     // Resolve everything named on the command line before any timing.
-    let entries = args
-        .backend
-        .iter()
-        .map(|b| find_backend(b))
-        .collect::<Result<Vec<_>, _>>()?;
-    let modes: Vec<Accuracy> = args.mode.iter().map(|&m| m.into()).collect();
-    if modes.is_empty() || entries.is_empty() {
-        return Err(CliError::Usage(
-            "give at least one backend and one mode".to_owned(),
-        ));
-    }
-    if let Some(n) = args
-        .lights
-        .iter()
-        .enumerate()
-        .find_map(|(i, n)| args.lights[..i].contains(n).then_some(n))
-    {
-        return Err(CliError::Usage(format!("--lights lists {n} twice")));
-    }
-    let (scene, notes) = shadowvol::load_scene(&args.scene)?;
-    for n in &notes {
-        eprintln!("note: {n}");
-    }
-    let topo = &scene.geometry;
-    let scene_lights = scene.light_positions();
-    let counts: Vec<Option<u32>> = if args.lights.is_empty() {
-        vec![None]
-    } else {
-        args.lights.iter().map(|&n| Some(n)).collect()
-    };
-    let light_sets: Vec<Vec<Light>> = counts
-        .iter()
-        .map(|&n| bench_lights(&args.scene, &scene_lights, topo, n))
-        .collect::<Result<_, _>>()?;
-    // (mode, light set) in the order of the records.
-    let combos: Vec<(Accuracy, usize)> = modes
-        .iter()
-        .flat_map(|&m| (0..light_sets.len()).map(move |k| (m, k)))
-        .collect();
-
+    let setup = Setup::new(args)?;
     // Frames per floor, and per (backend, mode, light count): the interleaved schedule adds one
     // untimed frame per turn.
     let per = u64::from(args.warmup + args.frames);
@@ -385,22 +355,18 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
             Schedule::Interleaved => u64::from(args.frames.div_ceil(TURN_FRAMES)),
             Schedule::Sequential => 0,
         };
-    let bar = indicatif::ProgressBar::new(
-        per_combo * (entries.len() * combos.len()) as u64 + per * 2 * light_sets.len() as u64,
-    );
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} {msg}",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    let bar = progress_bar(
+        per_combo * (setup.entries.len() * setup.combos.len()) as u64
+            + per * 2 * setup.light_sets.len() as u64,
     );
 
     // The floors, before and after the backends (same run, same threads); median of both.
-    let mut floors: Vec<(Floor, Vec<Duration>)> = light_sets
+    let mut floors: Vec<(MemoryFloor, Vec<Duration>)> = setup
+        .light_sets
         .iter()
-        .map(|l| (Floor::new(&topo, l.len()), Vec::new()))
+        .map(|l| (MemoryFloor::new(&setup.topo, l.len()), Vec::new()))
         .collect();
-    let run_floors = |floors: &mut Vec<(Floor, Vec<Duration>)>| {
+    let run_floors = |floors: &mut Vec<(MemoryFloor, Vec<Duration>)>| {
         for (floor, times) in floors.iter_mut() {
             bar.set_message("memory floor");
             floor_samples(floor, args.warmup, args.frames, times);
@@ -410,90 +376,90 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     run_floors(&mut floors);
 
     let mut records = Vec::new();
-    for entry in &entries {
+    for entry in &setup.entries {
         let mut backend = match entry.start() {
             Ok(b) => b,
             Err(e) if args.skip_unavailable => {
                 bar.suspend(|| eprintln!("warning: skipping {}: {e}", entry.name));
-                bar.inc(per_combo * combos.len() as u64);
+                bar.inc(per_combo * setup.combos.len() as u64);
                 continue;
             }
             Err(e) => return Err(e.into()),
         };
-        let info = backend.info();
-        if let Some(mode) = modes.iter().find(|m| !info.modes.contains(m)) {
-            return Err(CliError::Other(format!(
-                "backend {} does not support mode {mode}",
-                entry.name
-            )));
+        records.extend(bench_backend(args, &setup, entry, backend.as_mut(), &bar)?);
+    }
+    run_floors(&mut floors);
+    bar.finish_and_clear();
+
+    let report = report(args, floors, &setup.light_sets, records);
+    match args.format {
+        Format::Json => {
+            serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
+            writeln!(out)?;
         }
-        let details: serde_json::Map<String, serde_json::Value> = info
-            .details
-            .iter()
-            .map(|(k, v)| (k.clone(), serde_json::Value::String(v.clone())))
-            .collect();
-        bar.set_message(format!("{}: prepare", entry.name));
-        let id = backend.prepare(&topo)?;
-        // One output per light set, so that interleaving never resizes it inside a timed frame.
-        let mut results: Vec<Multiplicities> = light_sets
-            .iter()
-            .map(|_| Multiplicities::default())
-            .collect();
-        let mut samples: Vec<Samples> = combos.iter().map(|_| Samples::default()).collect();
-        let mut frame = |c: usize, timed: bool| -> Result<(), CliError> {
-            let (mode, k) = combos[c];
-            let t = Instant::now();
-            let stats = backend.extract(id, &light_sets[k], mode, &mut results[k])?;
-            let wall = t.elapsed();
-            bar.inc(1);
-            if timed {
-                let s = &mut samples[c];
-                s.frame.push(wall);
-                s.upload.push(stats.upload);
-                s.compute.push(stats.compute);
-                s.readback.push(stats.readback);
-                s.host.push(stats.host_resolve);
-                s.uncertain = stats.uncertain;
-            }
-            Ok(())
-        };
-        match args.schedule {
-            Schedule::Sequential => {
-                for (c, (mode, _)) in combos.iter().enumerate() {
-                    bar.set_message(format!("{} {mode}", entry.name));
-                    for i in 0..args.warmup + args.frames {
-                        frame(c, i >= args.warmup)?;
-                    }
-                }
-            }
-            Schedule::Interleaved => {
-                for (c, (mode, _)) in combos.iter().enumerate() {
-                    bar.set_message(format!("{} {mode}: warm-up", entry.name));
-                    for _ in 0..args.warmup {
-                        frame(c, false)?;
-                    }
-                }
-                bar.set_message(format!("{}: interleaved frames", entry.name));
-                // Turns of TURN_FRAMES timed frames per combination, each turn after one
-                // untimed frame that brings its data back into the caches (as a sequential run
-                // keeps them), so the turns compare the same steady state.
-                let mut done = 0;
-                while done < args.frames {
-                    let n = TURN_FRAMES.min(args.frames - done);
-                    for c in 0..combos.len() {
-                        frame(c, false)?;
-                        for _ in 0..n {
-                            frame(c, true)?;
-                        }
-                    }
-                    done += n;
-                }
-            }
+        Format::Text => print_text(&report, out)?,
+    }
+    Ok(())
+}
+
+/// Times every (mode, light count) of `setup` on the started `backend` of `entry`, in the order
+/// of `args.schedule`; one record per (mode, light count), its floor still to be filled in.
+///
+/// # Errors
+/// A mode the backend does not support, or the backend's own error from `prepare` or `extract`.
+fn bench_backend(
+    args: &Args,
+    setup: &Setup,
+    entry: &BackendEntry,
+    backend: &mut dyn SilhouetteBackend,
+    bar: &indicatif::ProgressBar,
+) -> Result<Vec<Record>, CliError> {
+    let (combos, light_sets, topo) = (&setup.combos, &setup.light_sets, &setup.topo);
+    let info = backend.info();
+    if let Some((mode, _)) = combos.iter().find(|(m, _)| !info.modes.contains(m)) {
+        return Err(CliError::Other(format!(
+            "backend {} does not support mode {mode}",
+            entry.name
+        )));
+    }
+    let details: serde_json::Map<String, serde_json::Value> = info
+        .details
+        .iter()
+        .map(|(k, v)| (k.clone(), serde_json::Value::String(v.clone())))
+        .collect();
+    bar.set_message(format!("{}: prepare", entry.name));
+    let id = backend.prepare(topo)?;
+    // One output per light set, so that interleaving never resizes it inside a timed frame.
+    let mut results: Vec<Multiplicities> = light_sets
+        .iter()
+        .map(|_| Multiplicities::default())
+        .collect();
+    let mut samples: Vec<Samples> = combos.iter().map(|_| Samples::default()).collect();
+    let mut frame = |c: usize, timed: bool| -> Result<(), CliError> {
+        let (mode, k) = combos[c];
+        let t = Instant::now();
+        let stats = backend.extract(id, &light_sets[k], mode, &mut results[k])?;
+        let wall = t.elapsed();
+        bar.inc(1);
+        if timed {
+            let s = &mut samples[c];
+            s.frame.push(wall);
+            s.upload.push(stats.upload);
+            s.compute.push(stats.compute);
+            s.readback.push(stats.readback);
+            s.host.push(stats.host_resolve);
+            s.uncertain = stats.uncertain;
         }
-        for (&(mode, k), s) in combos.iter().zip(&mut samples) {
+        Ok(())
+    };
+    run_schedule(args, entry.name, combos, bar, &mut frame)?;
+    let records = combos
+        .iter()
+        .zip(&mut samples)
+        .map(|(&(mode, k), s)| {
             let (median, p10, p90) = percentiles(&mut s.frame);
-            records.push(Record {
-                scene: scene.name.clone(),
+            Record {
+                scene: setup.scene_name.clone(),
                 backend: entry.name.to_owned(),
                 mode: mode.name(),
                 triangles: topo.total_triangles(),
@@ -513,26 +479,81 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 floor_ratio: 0.0,
                 device: info.device.clone(),
                 details: details.clone(),
-            });
-        }
-        backend.release(id);
-    }
-    run_floors(&mut floors);
-    bar.finish_and_clear();
+            }
+        })
+        .collect();
+    backend.release(id);
+    Ok(records)
+}
 
+/// Runs the warm-up and timed frames of every combination of one backend: `frame(c, timed)`
+/// runs one frame of combination `c`.
+///
+/// # Errors
+/// The first error of `frame`.
+fn run_schedule(
+    args: &Args,
+    backend: &str,
+    combos: &[(Accuracy, usize)],
+    bar: &indicatif::ProgressBar,
+    frame: &mut dyn FnMut(usize, bool) -> Result<(), CliError>,
+) -> Result<(), CliError> {
+    match args.schedule {
+        Schedule::Sequential => {
+            for (c, (mode, _)) in combos.iter().enumerate() {
+                bar.set_message(format!("{backend} {mode}"));
+                for i in 0..args.warmup + args.frames {
+                    frame(c, i >= args.warmup)?;
+                }
+            }
+        }
+        Schedule::Interleaved => {
+            for (c, (mode, _)) in combos.iter().enumerate() {
+                bar.set_message(format!("{backend} {mode}: warm-up"));
+                for _ in 0..args.warmup {
+                    frame(c, false)?;
+                }
+            }
+            bar.set_message(format!("{backend}: interleaved frames"));
+            // Turns of TURN_FRAMES timed frames per combination, each turn after one untimed
+            // frame that brings its data back into the caches (as a sequential run keeps them),
+            // so the turns compare the same steady state.
+            let mut done = 0;
+            while done < args.frames {
+                let n = TURN_FRAMES.min(args.frames - done);
+                for c in 0..combos.len() {
+                    frame(c, false)?;
+                    for _ in 0..n {
+                        frame(c, true)?;
+                    }
+                }
+                done += n;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The report: each light count's floor from its samples, each record's floor and ratio, and
+/// the host.
+fn report(
+    args: &Args,
+    mut floors: Vec<(MemoryFloor, Vec<Duration>)>,
+    light_sets: &[Vec<Light>],
+    mut records: Vec<Record>,
+) -> Report {
     let floor_records: Vec<FloorRecord> = floors
         .iter_mut()
-        .zip(&light_sets)
+        .zip(light_sets)
         .map(|((floor, times), lights)| {
             let (floor_ms, p10, p90) = percentiles(times);
-            let (bytes_read, bytes_written) = floor.bytes();
             FloorRecord {
                 lights: lights.len(),
                 floor_ms,
                 floor_p10_ms: p10,
                 floor_p90_ms: p90,
-                floor_bytes_read: bytes_read,
-                floor_bytes_written: bytes_written,
+                floor_bytes_read: floor.bytes_read(),
+                floor_bytes_written: floor.bytes_written(),
             }
         })
         .collect();
@@ -545,7 +566,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         r.floor_ratio = if f > 0.0 { r.median_ms / f } else { 0.0 };
     }
     let first = &floor_records[0];
-    let report = Report {
+    Report {
         floor_ms: first.floor_ms,
         floor_p10_ms: first.floor_p10_ms,
         floor_p90_ms: first.floor_p90_ms,
@@ -558,15 +579,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         floors: floor_records,
         records,
         host: host(),
-    };
-    match args.format {
-        Format::Json => {
-            serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
-            writeln!(out)?;
-        }
-        Format::Text => print_text(&report, out)?,
     }
-    Ok(())
 }
 
 fn print_text(r: &Report, out: &mut dyn Write) -> Result<(), CliError> {

@@ -1,7 +1,7 @@
 //! `shadowvol silhouette`: silhouette edges of a mesh for one or more lights.
 
 use shadowvol::report::{silhouette_report, SilhouetteReport};
-use shadowvol::{find_backend, load_input, CliError, Format, ModeArg};
+use shadowvol::{find_backend, load_input, CliError, Format};
 use shadowvol_robust_math::{Accuracy, Light};
 use std::io::Write;
 
@@ -47,8 +47,8 @@ pub struct Args {
     lights: Vec<Light>,
 
     /// Accuracy mode.
-    #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
-    mode: ModeArg,
+    #[arg(long, value_parser = shadowvol::mode_parser(), default_value = "exact")]
+    mode: Accuracy,
 
     /// Backend to run on (see `shadowvol backends`), or `auto`: the first backend on a hardware
     /// GPU, else `simd`, with a warning naming what was skipped.
@@ -84,7 +84,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         )));
     }
     let mut backend = entry.start()?;
-    let mode = Accuracy::from(args.mode);
+    let mode = args.mode;
     let report = silhouette_report(backend.as_mut(), &input.table, &lights, mode)?;
     match args.format {
         Format::Json => {

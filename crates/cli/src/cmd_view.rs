@@ -1,8 +1,9 @@
 //! `shadowvol view`: a live window onto a scene or mesh (see `shadowvol_viewer`).
 
 use crate::cmd_render::{parse_light, parse_size, render_error, stage, GroundArg, TechniqueArg};
-use shadowvol::{find_backend, CliError, Format, ModeArg};
+use shadowvol::{find_backend, CliError, Format};
 use shadowvol_renderer::Pipeline;
+use shadowvol_robust_math::Accuracy;
 use shadowvol_viewer::controls::VolumeView;
 use shadowvol_viewer::{ViewError, ViewOptions};
 use std::io::Write;
@@ -62,8 +63,8 @@ pub struct Args {
     size: (u32, u32),
 
     /// Accuracy mode at start (keys 1-4 switch it).
-    #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
-    mode: ModeArg,
+    #[arg(long, value_parser = shadowvol::mode_parser(), default_value = "exact")]
+    mode: Accuracy,
 
     /// Silhouette backend of the host pipeline (see `shadowvol backends`); giving it selects the
     /// host pipeline [default with --pipeline host: cpu].
@@ -129,7 +130,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     // The host pipeline's backend is started only if the viewer needs it (V, --pipeline host).
     let backend = Box::new(move || entry.start());
     let mut options = ViewOptions::new(args.size.0, args.size.1);
-    options.mode = args.mode.into();
+    options.mode = args.mode;
     options.policy = args.technique.into();
     options.frames = args.frames;
     options.screenshot.clone_from(&args.screenshot);

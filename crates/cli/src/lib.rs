@@ -6,10 +6,15 @@
 //! * [`backends`]: **the** backend registry. Every tool that iterates over backends uses this list
 //!   and nothing else. Adding a backend means one new crate and one line in
 //!   [`registry`](registry::backends).
+//! * [`MemoryFloor`]: **the** memory floor (`floor_ms`): the time to stream the bytes any
+//!   extraction must touch, measured in the same run as the backends by `shadowvol bench` and by
+//!   the criterion benches.
 //! * [`load_input`]: the one function that turns a command-line mesh argument (`.obj`, `.gltf`,
 //!   `.glb`, `.stl`, `.ply` or a preset name; [`INPUT_FORMATS`] describes them) into one world-space [`Mesh`] and the input's own lights.
 //! * [`report`]: the silhouette report that `shadowvol silhouette --format json` prints (the JSON
 //!   contract of DESIGN.md).
+//! * [`mode_parser`]: the values of `--mode`, parsed straight into [`Accuracy`] (the one type
+//!   of the accuracy mode; there is no command-line copy of it).
 //! * [`CliError`]: errors with their exit codes (2 for usage, 1 for everything else).
 //!
 //! ```
@@ -24,11 +29,13 @@
 //! [`Mesh`]: shadowvol_mesh_topology::Mesh
 
 pub mod error;
+pub mod floor;
 pub mod input;
 pub mod registry;
 pub mod report;
 
 pub use error::CliError;
+pub use floor::MemoryFloor;
 pub use input::{bounds_too_large, load_input, load_scene, Input, INPUT_FORMATS};
 pub use registry::{backend_names, backends, find_backend, BackendEntry};
 
@@ -49,42 +56,32 @@ pub enum Format {
     Json,
 }
 
-/// An accuracy mode as given on the command line (`--mode`).
-///
-/// Converts into [`Accuracy`]; kept separate so that the command line can document each value.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum ModeArg {
-    /// Kim et al. 2008 as stated: each (edge, opposite vertex) in f32 on its own; can crack.
-    Original,
-    /// Pečiva et al. 2013: the three sides of each triangle in f32; disagreement counts 0.
-    Robust,
-    /// One f32 evaluation per triangle in canonical vertex order; consistent, 1/3 of robust.
-    Ordered,
-    /// The exact sign of the determinant; consistent, correct, identical on every backend.
-    #[default]
-    Exact,
-}
-
-impl From<ModeArg> for Accuracy {
-    fn from(m: ModeArg) -> Self {
-        match m {
-            ModeArg::Original => Accuracy::Original,
-            ModeArg::Robust => Accuracy::Robust,
-            ModeArg::Ordered => Accuracy::Ordered,
-            ModeArg::Exact => Accuracy::Exact,
-        }
-    }
-}
-
-impl From<Accuracy> for ModeArg {
-    fn from(m: Accuracy) -> Self {
-        match m {
-            Accuracy::Original => ModeArg::Original,
-            Accuracy::Robust => ModeArg::Robust,
-            Accuracy::Ordered => ModeArg::Ordered,
-            Accuracy::Exact => ModeArg::Exact,
-        }
-    }
+/// The values of `--mode`: every [`Accuracy`] by its name, each with its help text, parsed into
+/// [`Accuracy`]. Use it as `#[arg(long, value_parser = shadowvol::mode_parser())]` on a field of
+/// type `Accuracy` (or `Vec<Accuracy>` with a delimiter).
+#[must_use]
+pub fn mode_parser() -> impl clap::builder::TypedValueParser<Value = Accuracy> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new(Accuracy::ALL.map(|mode| {
+        PossibleValue::new(mode.name()).help(match mode {
+            Accuracy::Original => {
+                "Kim et al. 2008 as stated: each (edge, opposite vertex) in f32 on its own; can \
+                 crack"
+            }
+            Accuracy::Robust => {
+                "Pečiva et al. 2013: the three sides of each triangle in f32; disagreement counts 0"
+            }
+            Accuracy::Ordered => {
+                "One f32 evaluation per triangle in canonical vertex order; consistent, 1/3 of \
+                 robust"
+            }
+            Accuracy::Exact => {
+                "The exact sign of the determinant; consistent, correct, identical on every \
+                 backend"
+            }
+        })
+    }))
+    .try_map(|name| name.parse::<Accuracy>())
 }
 
 /// The environment variable that turns Mesa's Vulkan device-select layer off.

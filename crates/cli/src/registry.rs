@@ -10,7 +10,7 @@
 //!
 //! add it as an optional dependency behind a cargo feature of the same name as the backend in
 //! `crates/cli/Cargo.toml` (and pass the feature through in `tests/Cargo.toml`), and add one
-//! `backend!` line to [`backends`].
+//! `backend!` line to [`backends`], saying whether it runs on the host or on a device.
 //!
 //! `--backend auto` ([`AUTO`]) is resolved here too, by [`find_backend`]: [`choose_auto`] picks
 //! the first backend of [`AUTO_GPU_ORDER`] that runs on a hardware GPU ([`cpu_emulated`] tells
@@ -39,6 +39,10 @@ pub struct BackendEntry {
     /// Whether the backend's cargo feature is on in this build. When it is off, `create` only
     /// reports that.
     pub compiled: bool,
+    /// Whether it evaluates on the host CPU in Rust (`cpu`, `simd`) rather than on a device:
+    /// then its `f32` modes are the reference operations bit for bit (no contraction), and it is
+    /// never a GPU for `--backend auto`.
+    pub host: bool,
 }
 
 impl BackendEntry {
@@ -70,11 +74,17 @@ fn create_cpu() -> Result<Box<dyn SilhouetteBackend>, BackendError> {
     Ok(Box::new(CpuBackend::new()))
 }
 
-/// One registry line: `backend!("name", crate_name)`. The entry calls
-/// `crate_name::create_backend()` when the cargo feature `name` is on, and otherwise reports
-/// that the backend is not compiled in.
+/// One registry line: `backend!("name", crate_name, host)` or `backend!("name", crate_name,
+/// device)`. The entry calls `crate_name::create_backend()` when the cargo feature `name` is on,
+/// and otherwise reports that the backend is not compiled in.
 macro_rules! backend {
-    ($name:literal, $krate:ident) => {{
+    ($name:literal, $krate:ident, host) => {
+        backend!(@entry $name, $krate, true)
+    };
+    ($name:literal, $krate:ident, device) => {
+        backend!(@entry $name, $krate, false)
+    };
+    (@entry $name:literal, $krate:ident, $host:expr) => {{
         #[cfg(feature = $name)]
         fn create() -> Result<Box<dyn SilhouetteBackend>, BackendError> {
             $krate::create_backend()
@@ -94,6 +104,7 @@ macro_rules! backend {
             name: $name,
             create,
             compiled: cfg!(feature = $name),
+            host: $host,
         }
     }};
 }
@@ -109,11 +120,12 @@ pub fn backends() -> Vec<BackendEntry> {
             name: "cpu",
             create: create_cpu,
             compiled: true,
+            host: true,
         },
-        backend!("simd", shadowvol_simd),
-        backend!("wgpu", shadowvol_wgpu_compute),
-        backend!("opencl", shadowvol_opencl),
-        backend!("vulkan", shadowvol_vulkan_geometry),
+        backend!("simd", shadowvol_simd, host),
+        backend!("wgpu", shadowvol_wgpu_compute, device),
+        backend!("opencl", shadowvol_opencl, device),
+        backend!("vulkan", shadowvol_vulkan_geometry, device),
     ]
 }
 
@@ -138,13 +150,14 @@ pub const AUTO_START_TIMEOUT: Duration = Duration::from_secs(30);
 
 /// If `info` describes a device that is emulated on the CPU (Mesa llvmpipe/lavapipe/softpipe,
 /// SwiftShader, PoCL, WARP, or any device whose reported type is CPU), the reason in words;
-/// `None` for a hardware GPU (and for the `cpu` and `simd` backends, which are not devices).
+/// `None` for a hardware GPU (and for the [`BackendEntry::host`] backends, which are not
+/// devices).
 ///
 /// It reads the `device_type` detail where a backend reports one (`opencl`), wgpu's device
 /// type in [`BackendInfo::device`] (`"(Vulkan, Cpu; ..."`), and known software driver names.
 #[must_use]
 pub fn cpu_emulated(info: &BackendInfo) -> Option<String> {
-    if matches!(info.name, "cpu" | "simd") {
+    if backends().iter().any(|e| e.host && e.name == info.name) {
         return None;
     }
     for (k, v) in &info.details {
@@ -405,6 +418,16 @@ mod tests {
     fn cpu_always_starts() {
         let cpu = find_backend("cpu").unwrap().start().unwrap();
         assert_eq!(cpu.info().name, "cpu");
+    }
+
+    #[test]
+    fn host_backends_are_cpu_and_simd() {
+        let host: Vec<_> = backends()
+            .into_iter()
+            .filter(|e| e.host)
+            .map(|e| e.name)
+            .collect();
+        assert_eq!(host, ["cpu", "simd"]);
     }
 
     #[test]

@@ -486,7 +486,7 @@ fn unavailable_backend_exits_1_with_its_reason() {
 
 fn presets_load_with_their_own_lights() {
     // `hard-<case>` presets carry the corpus case's lights; without --light they are used.
-    let case = shadowvol_silhouette::corpus::case("tetrahedron").expect("corpus case");
+    let case = shadowvol_test_support::corpus::case("tetrahedron").expect("corpus case");
     let scene = case.scene().unwrap();
     let v = json_of(&["silhouette", "hard-tetrahedron", "--format", "json"]);
     let lights = v["lights"].as_array().unwrap();

@@ -12,7 +12,8 @@ mod common;
 
 use glam::Affine3A;
 use shadowvol_cpu::CpuBackend;
-use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy};
+use shadowvol_silhouette::{extract_once, invariant, Accuracy};
+use shadowvol_test_support::corpus;
 use std::path::PathBuf;
 
 fn main() {

@@ -3,7 +3,8 @@
 //!
 //! ```
 //! use shadowvol_cpu::CpuBackend;
-//! use shadowvol_silhouette::{corpus, extract_once, Accuracy, invariant};
+//! use shadowvol_silhouette::{extract_once, Accuracy, invariant};
+//! use shadowvol_test_support::corpus;
 //!
 //! let case = &corpus::cases()[0];
 //! let scene = case.scene().unwrap();

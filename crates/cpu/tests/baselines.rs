@@ -6,10 +6,10 @@ use shadowvol_cpu::baselines::{Baseline, BaselineError, ClosedMesh};
 use shadowvol_cpu::extract_table;
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use shadowvol_robust_math::Accuracy;
-use shadowvol_silhouette::shapes::uv_sphere_y;
+use shadowvol_test_support::shapes::uv_sphere_y;
 
 fn tetrahedron() -> Mesh {
-    shadowvol_silhouette::shapes::tetrahedron(1.0)
+    shadowvol_test_support::shapes::tetrahedron(1.0)
 }
 
 /// UV sphere of radius 1, outward winding, poles as fans (pole valence = `segments`).

@@ -6,8 +6,9 @@ mod common;
 
 use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{
-    corpus, extract_once, invariant, Accuracy, BackendError, Multiplicities, SilhouetteBackend,
+    extract_once, invariant, Accuracy, BackendError, Multiplicities, SilhouetteBackend,
 };
+use shadowvol_test_support::corpus;
 
 #[test]
 fn exact_equals_the_big_integer_oracle_on_every_case_and_light() {

@@ -12,9 +12,8 @@
 
 use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_opencl::OpenClBackend;
-use shadowvol_silhouette::{
-    shapes, Accuracy, Light, Multiplicities, SilhouetteBackend, TopologyScene,
-};
+use shadowvol_silhouette::{Accuracy, Light, Multiplicities, SilhouetteBackend, TopologyScene};
+use shadowvol_test_support::shapes;
 use std::time::{Duration, Instant};
 
 fn ms(d: Duration) -> f64 {

@@ -46,7 +46,8 @@
 //! # Example
 //! ```no_run
 //! use shadowvol_opencl::OpenClBackend;
-//! use shadowvol_silhouette::{corpus, extract_once, Accuracy, SilhouetteBackend};
+//! use shadowvol_silhouette::{extract_once, Accuracy, SilhouetteBackend};
+//! use shadowvol_test_support::corpus;
 //!
 //! let mut cl = OpenClBackend::new()?; // BackendError::Unavailable says what is missing
 //! println!("{}", cl.info().device);

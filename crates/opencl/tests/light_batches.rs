@@ -15,9 +15,10 @@ use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_opencl::{OpenClBackend, OpenClOptions};
 use shadowvol_silhouette::{
-    corpus, extract_once, invariant, Accuracy, BackendError, ExtractStats, Light, Multiplicities,
+    extract_once, invariant, Accuracy, BackendError, ExtractStats, Light, Multiplicities,
     SceneObject, SilhouetteBackend, TopologyScene,
 };
+use shadowvol_test_support::corpus;
 use shadowvol_test_support::{main, Outcome};
 use std::num::NonZeroUsize;
 use std::sync::Arc;

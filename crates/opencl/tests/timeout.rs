@@ -16,9 +16,10 @@ use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_opencl::OpenClBackend;
 use shadowvol_silhouette::{
-    extract_once, gpu::TIMEOUT_ENV, shapes, Accuracy, BackendError, Light, Multiplicities,
-    PreparedId, SilhouetteBackend, TopologyScene,
+    extract_once, gpu::TIMEOUT_ENV, Accuracy, BackendError, Light, Multiplicities, PreparedId,
+    SilhouetteBackend, TopologyScene,
 };
+use shadowvol_test_support::shapes;
 use shadowvol_test_support::{main, Outcome};
 use std::time::{Duration, Instant};
 

@@ -12,7 +12,8 @@ use shadowvol_renderer::{
 };
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_scenes::SceneLight;
-use shadowvol_silhouette::{corpus, object_lights, SceneObject, TopologyScene};
+use shadowvol_silhouette::{object_lights, SceneObject, TopologyScene};
+use shadowvol_test_support::corpus;
 use shadowvol_test_support::{main, skip, Outcome, Skip};
 use std::sync::Arc;
 

@@ -16,9 +16,13 @@
 //! * [`export_glb`]: writes any scene as binary glTF that other tools can open.
 //! * [`procedural`]: UV spheres and icospheres with an exact triangle count, Loop subdivision,
 //!   the "town".
+//! * [`shapes`]: small exact shapes (tetrahedron, box, planar grid, ...), bit-identical on every
+//!   platform, and the deterministic [`Rng`](shapes::Rng).
+//! * [`hard`]: the hard cases (edge-on triangles, lights at vertices, non-manifold books, ...)
+//!   that the conformance tests run on every backend.
 //! * [`presets`](mod@presets): `bunnies-10-individual`, `bunnies-10-baked`, `spheres-10-individual`,
 //!   `spheres-10-baked`, `sphere-1m`, `sphere-100k`, `spheres-100x10k`, `spheres-100x1k`,
-//!   `town` and `hard-<case>` for every case of the conformance corpus.
+//!   `town` and `hard-<case>` for every case of [`hard::cases`].
 //!
 //! ```
 //! use shadowvol_scenes::{preset, Scene};
@@ -37,6 +41,7 @@ mod camera;
 pub mod emission;
 mod glb_write;
 pub mod gltf_load;
+pub mod hard;
 mod load;
 pub mod meshopt_view;
 pub mod obj;
@@ -44,6 +49,7 @@ pub mod ply;
 pub mod presets;
 pub mod procedural;
 mod scene;
+pub mod shapes;
 pub mod staging;
 pub mod stl;
 

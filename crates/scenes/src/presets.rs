@@ -1,5 +1,6 @@
 //! The paper's scenes as presets (names as in DESIGN.md), generated lazily on request.
 
+use crate::hard::{self, HardCase};
 use crate::procedural::{icosphere, loop_subdivide_levels, town, TownParams};
 use crate::scene::Scene;
 use crate::Camera;
@@ -98,8 +99,7 @@ const FIXED: &[Fixed] = &[
     },
 ];
 
-/// Every preset: the fixed ones, then `hard-<case>` for each case of
-/// [`shadowvol_silhouette::corpus::cases`].
+/// Every preset: the fixed ones, then `hard-<case>` for each case of [`hard::cases`].
 #[must_use]
 pub fn presets() -> Vec<PresetInfo> {
     let mut v: Vec<PresetInfo> = FIXED
@@ -109,7 +109,7 @@ pub fn presets() -> Vec<PresetInfo> {
             description: f.description.to_owned(),
         })
         .collect();
-    for case in shadowvol_silhouette::corpus::cases() {
+    for case in hard::cases() {
         v.push(PresetInfo {
             name: format!("hard-{}", case.name),
             description: case.description.to_owned(),
@@ -130,11 +130,8 @@ pub fn is_preset(name: &str) -> bool {
     if FIXED.iter().any(|p| p.name == name) {
         return true;
     }
-    name.strip_prefix("hard-").is_some_and(|case| {
-        shadowvol_silhouette::corpus::cases()
-            .iter()
-            .any(|c| c.name == case)
-    })
+    name.strip_prefix("hard-")
+        .is_some_and(|case| hard::cases().iter().any(|c| c.name == case))
 }
 
 /// Builds the preset `name` (generation happens here, on request).
@@ -158,11 +155,10 @@ pub fn preset(name: &str) -> Result<Scene, SceneError> {
         "town" => town_scene()?,
         // Unlisted (so `shadowvol scenes` does not generate it): the 10^7-triangle limit test.
         "sphere-10m" => sphere_grid(name, 10_000_000, 1, 1)?,
-        _ => match name.strip_prefix("hard-").and_then(|case| {
-            shadowvol_silhouette::corpus::cases()
-                .into_iter()
-                .find(|c| c.name == case)
-        }) {
+        _ => match name
+            .strip_prefix("hard-")
+            .and_then(|case| hard::cases().into_iter().find(|c| c.name == case))
+        {
             Some(case) => hard_scene(name, &case)?,
             None => {
                 return Err(SceneError::UnknownPreset {
@@ -273,10 +269,7 @@ fn town_scene() -> Result<Scene, SceneError> {
     ))
 }
 
-fn hard_scene(
-    name: &str,
-    case: &shadowvol_silhouette::corpus::CorpusCase,
-) -> Result<Scene, SceneError> {
+fn hard_scene(name: &str, case: &HardCase) -> Result<Scene, SceneError> {
     let mut scene = Scene::new(name);
     for (i, (mesh, t)) in case.objects.iter().enumerate() {
         let what = format!("{}#{i}", case.name);

@@ -110,9 +110,7 @@ mod tests {
     fn scene(objects: &[(Vec3, Vec3)]) -> Scene {
         let mut s = Scene::new("t");
         for (i, &(lo, hi)) in objects.iter().enumerate() {
-            let t = s
-                .add_mesh("cube", &shadowvol_silhouette::shapes::cuboid(lo, hi))
-                .unwrap();
+            let t = s.add_mesh("cube", &crate::shapes::cuboid(lo, hi)).unwrap();
             s.add_object(format!("o{i}"), t, Affine3A::IDENTITY);
         }
         s

@@ -117,8 +117,8 @@ fn town_matches_its_size_and_sun() {
 }
 
 #[test]
-fn hard_presets_are_the_corpus_cases() {
-    let cases = shadowvol_silhouette::corpus::cases();
+fn hard_presets_are_the_hard_cases() {
+    let cases = shadowvol_scenes::hard::cases();
     for case in &cases {
         let name = format!("hard-{}", case.name);
         assert!(is_preset(&name));

@@ -4,11 +4,8 @@
 //!   per frame: the multiplicity of every edge for every light, in one call.
 //! * [`Multiplicities`]: the per-edge, per-light result plus a compact silhouette list.
 //! * [`invariant`]: the closed-chain check (`open_vertices`) and comparisons between results.
-//! * [`corpus`]: the hard cases every backend must pass.
-//! * [`ci`]: whether this is a CI run (`CI`), read the same way by every test and tool.
 //! * [`gpu`]: what the GPU backends share (scene layout, mode codes, uncertain records and their
 //!   exact resolution, wait limits, light batches).
-//! * [`shapes`]: [`shapes::uv_sphere_y`], a closed test sphere shared by the backends' tests.
 //! * [`PreparedScenes`] and [`check_lights`]: the prepared-scene store and light-list check
 //!   every backend shares.
 //! * [`object_lights`]: the one place where world lights become object-space `f32` lights, so
@@ -29,14 +26,11 @@
 //! assert_eq!(invariant::open_vertices_scene(&scene, &m, 0), 0);
 //! ```
 
-pub mod ci;
-pub mod corpus;
 pub mod gpu;
 pub mod invariant;
 mod multiplicities;
 mod prepared;
 mod scene;
-pub mod shapes;
 
 pub use multiplicities::{ExtractStats, Multiplicities};
 pub use prepared::{check_lights, PreparedScenes};

@@ -264,3 +264,47 @@ fn check_split_batches_catches_each_property() {
         Ok(())
     );
 }
+
+/// `check_split_batches` accepts equal results and names each broken property.
+#[test]
+fn check_split_batches_names_what_differs_on_a_corpus_case() {
+    let case = shadowvol_test_support::corpus::case("book-4").expect("corpus case");
+    let scene = case.scene().unwrap();
+    let (edges, lights) = (scene.total_edges(), 2);
+    // Zero multiplicities: every chain is trivially closed.
+    let mut one = Multiplicities::zeroed(edges, lights);
+    one.rebuild_silhouettes();
+    let stats = ExtractStats {
+        compute: Duration::from_micros(5),
+        ..ExtractStats::default()
+    };
+    let check = |got: &Multiplicities, s: &ExtractStats, mode| {
+        check_split_batches(&scene, mode, (got, s), (&one, &stats), Some(&one))
+    };
+    assert_eq!(check(&one, &stats, Accuracy::Robust), Ok(()));
+
+    let mut other = one.clone();
+    other.values_mut(1)[3] = 1;
+    other.rebuild_silhouettes();
+    let e = check(&other, &stats, Accuracy::Robust).unwrap_err();
+    assert!(e.contains("differs from one batch"), "{e}");
+
+    let mut stale = one.clone();
+    stale.values_mut(0)[0] = 1;
+    let e = check(&stale, &stats, Accuracy::Robust).unwrap_err();
+    assert!(e.contains("compact silhouette lists"), "{e}");
+
+    let more = ExtractStats {
+        uncertain: 2,
+        ..stats
+    };
+    let e = check(&one, &more, Accuracy::Exact).unwrap_err();
+    assert!(e.contains("uncertain: 2 split, 0"), "{e}");
+
+    let e = check(&one, &ExtractStats::default(), Accuracy::Original).unwrap_err();
+    assert!(e.contains("implausible times"), "{e}");
+
+    let wrong = Multiplicities::zeroed(edges, 1);
+    let e = check(&wrong, &stats, Accuracy::Ordered).unwrap_err();
+    assert!(e.contains("expected 2 x"), "{e}");
+}

@@ -11,11 +11,11 @@
 
 use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::EdgeTable;
-use shadowvol_silhouette::shapes::uv_sphere_y;
 use shadowvol_silhouette::{
     Accuracy, Light, Multiplicities, SceneObject, SilhouetteBackend, TopologyScene,
 };
 use shadowvol_simd::{SimdBackend, SimdLevel};
+use shadowvol_test_support::shapes::uv_sphere_y;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 

@@ -332,7 +332,8 @@ mod tests {
     use super::ToObject;
     use glam::{Affine3A, Quat, Vec3};
     use shadowvol_mesh_topology::EdgeTable;
-    use shadowvol_silhouette::{object_lights, shapes, Light, SceneObject, TopologyScene};
+    use shadowvol_silhouette::{object_lights, Light, SceneObject, TopologyScene};
+    use shadowvol_test_support::shapes;
     use std::sync::Arc;
 
     #[test]

@@ -107,52 +107,9 @@ impl Layout {
     /// Lays out `table`. Checks every index against the vertex count, so the kernels may rely
     /// on it.
     pub(crate) fn build(table: &EdgeTable) -> Result<Self, LayoutError> {
+        check_table(table)?;
         let nv = table.positions.len();
-        if nv >= i32::MAX as usize || table.triangles.len() >= (ODD as usize) - LANES {
-            return Err(LayoutError(format!(
-                "{nv} vertices / {} triangles exceed the 2^31 limit of the layout",
-                table.triangles.len()
-            )));
-        }
-        if table.ov_offsets.len() != table.edges.len() + 1
-            || table.ov_offsets.last().copied().unwrap_or(0) as usize != table.ovs.len()
-            || table.connectivity.tri_edges.len() != table.triangles.len()
-        {
-            return Err(LayoutError(
-                "edge table is inconsistent (offsets, OVs and connectivity disagree)".to_owned(),
-            ));
-        }
-        let in_range = |v: u32| (v as usize) < nv;
-        if !table.triangles.iter().flatten().all(|&v| in_range(v))
-            || !table.edges.iter().flatten().all(|&v| in_range(v))
-            || !table.ovs.iter().all(|&v| in_range(v))
-        {
-            return Err(LayoutError(format!(
-                "edge table refers to a vertex id >= its {nv} positions"
-            )));
-        }
-        // Storage order of the vertices: order of first reference when walking the edges (and
-        // their OVs) in table order, so the vertices one block of edges touches sit close
-        // together in memory (a Cuthill-McKee-like renumbering). Only where positions are
-        // *stored* changes; canonical order and parity below still use the table's ids.
-        let mut st = vec![u32::MAX; nv];
-        let mut next = 0u32;
-        let mut place = |v: u32, st: &mut Vec<u32>| {
-            if st[v as usize] == u32::MAX {
-                st[v as usize] = next;
-                next += 1;
-            }
-        };
-        for (e, &[a, b]) in table.edges.iter().enumerate() {
-            place(a, &mut st);
-            place(b, &mut st);
-            for &o in table.ovs_of(e) {
-                place(o, &mut st);
-            }
-        }
-        for v in 0..nv as u32 {
-            place(v, &mut st);
-        }
+        let st = storage_order(table);
         let mut stored = vec![zero_record(); nv];
         for (v, p) in table.positions.iter().enumerate() {
             stored[st[v] as usize] = [p.x, p.y, p.z, 0.0];
@@ -190,31 +147,148 @@ impl Layout {
             v
         };
         let (t0, t1, t2) = (column(0), column(1), column(2));
-
-        // For each (edge, OV) entry, its triangle: OVs of an edge are listed in ascending
-        // triangle order, so filling per edge while walking triangles in order reproduces it.
+        let ov_tri = ov_triangles(table, &slot)?;
         let ne = table.edges.len();
-        let mut fill: Vec<u32> = table.ov_offsets[..ne].to_vec();
-        let mut ov_tri = vec![0u32; table.ovs.len()];
-        for (t, tri, te) in table.triangles_with_edges() {
-            for i in 0..3 {
-                let e = te[i] as usize;
-                let o = tri[(i + 2) % 3];
-                let [a, b] = *table.edges.get(e).ok_or_else(|| {
-                    LayoutError(format!("triangle {t} refers to edge {e} out of range"))
-                })?;
-                let k = fill[e] as usize;
-                if k >= table.ov_offsets[e + 1] as usize || table.ovs[k] != o {
-                    return Err(LayoutError(format!(
-                        "edge {e}: opposite vertex list does not match triangle {t}"
-                    )));
-                }
-                fill[e] += 1;
-                let odd = if a < o && o < b { ODD } else { 0 };
-                ov_tri[k] = slot[t] | odd;
-            }
-        }
+        let manifold = ManifoldEdges::new(table, &st, &ov_tri);
+        Ok(Self {
+            xs,
+            ys,
+            zs,
+            xyz,
+            t0,
+            t1,
+            t2,
+            tri_count,
+            edge_count: ne,
+            block_fast: manifold.block_fast,
+            ea: manifold.ea,
+            eb: manifold.eb,
+            eo1: manifold.eo1,
+            eo2: manifold.eo2,
+            tri_a: manifold.tri_a,
+            tri_b: manifold.tri_b,
+            edges: table.edges.iter().map(|&[a, b]| [sv(a), sv(b)]).collect(),
+            ov_offsets: table.ov_offsets.clone(),
+            ovs: table.ovs.iter().map(|&o| sv(o)).collect(),
+            ov_tri,
+            coords_in_filter_range,
+        })
+    }
 
+    /// Position of the vertex stored at index `v` (all index arrays of the layout hold storage
+    /// indices) as an array.
+    #[inline(always)]
+    pub(crate) fn pos(&self, v: u32) -> [f32; 3] {
+        let v = v as usize;
+        [self.xs[v], self.ys[v], self.zs[v]]
+    }
+}
+
+/// Checks that `table` fits the layout's index range and is consistent (offsets, OVs and
+/// connectivity agree, every vertex id is in range), so the kernels may rely on it.
+fn check_table(table: &EdgeTable) -> Result<(), LayoutError> {
+    let nv = table.positions.len();
+    if nv >= i32::MAX as usize || table.triangles.len() >= (ODD as usize) - LANES {
+        return Err(LayoutError(format!(
+            "{nv} vertices / {} triangles exceed the 2^31 limit of the layout",
+            table.triangles.len()
+        )));
+    }
+    if table.ov_offsets.len() != table.edges.len() + 1
+        || table.ov_offsets.last().copied().unwrap_or(0) as usize != table.ovs.len()
+        || table.connectivity.tri_edges.len() != table.triangles.len()
+    {
+        return Err(LayoutError(
+            "edge table is inconsistent (offsets, OVs and connectivity disagree)".to_owned(),
+        ));
+    }
+    let in_range = |v: u32| (v as usize) < nv;
+    if !table.triangles.iter().flatten().all(|&v| in_range(v))
+        || !table.edges.iter().flatten().all(|&v| in_range(v))
+        || !table.ovs.iter().all(|&v| in_range(v))
+    {
+        return Err(LayoutError(format!(
+            "edge table refers to a vertex id >= its {nv} positions"
+        )));
+    }
+    Ok(())
+}
+
+/// The storage index of each vertex: order of first reference when walking the edges (and their
+/// OVs) in table order, so the vertices one block of edges touches sit close together in memory
+/// (a Cuthill-McKee-like renumbering). Only where positions are *stored* changes; canonical
+/// order and parity still use the table's ids.
+fn storage_order(table: &EdgeTable) -> Vec<u32> {
+    let nv = table.positions.len();
+    let mut st = vec![u32::MAX; nv];
+    let mut next = 0u32;
+    let mut place = |v: u32, st: &mut Vec<u32>| {
+        if st[v as usize] == u32::MAX {
+            st[v as usize] = next;
+            next += 1;
+        }
+    };
+    for (e, &[a, b]) in table.edges.iter().enumerate() {
+        place(a, &mut st);
+        place(b, &mut st);
+        for &o in table.ovs_of(e) {
+            place(o, &mut st);
+        }
+    }
+    for v in 0..nv as u32 {
+        place(v, &mut st);
+    }
+    st
+}
+
+/// For each (edge, OV) entry, its triangle's slot (`slot[t]` for table triangle `t`), with
+/// [`ODD`] set when the OV lies between the edge's ends. OVs of an edge are listed in ascending
+/// triangle order, so filling per edge while walking triangles in order reproduces it; a table
+/// where it does not is an error.
+fn ov_triangles(table: &EdgeTable, slot: &[u32]) -> Result<Vec<u32>, LayoutError> {
+    let ne = table.edges.len();
+    let mut fill: Vec<u32> = table.ov_offsets[..ne].to_vec();
+    let mut ov_tri = vec![0u32; table.ovs.len()];
+    for (t, tri, te) in table.triangles_with_edges() {
+        for i in 0..3 {
+            let e = te[i] as usize;
+            let o = tri[(i + 2) % 3];
+            let [a, b] = *table.edges.get(e).ok_or_else(|| {
+                LayoutError(format!("triangle {t} refers to edge {e} out of range"))
+            })?;
+            let k = fill[e] as usize;
+            if k >= table.ov_offsets[e + 1] as usize || table.ovs[k] != o {
+                return Err(LayoutError(format!(
+                    "edge {e}: opposite vertex list does not match triangle {t}"
+                )));
+            }
+            fill[e] += 1;
+            let odd = if a < o && o < b { ODD } else { 0 };
+            ov_tri[k] = slot[t] | odd;
+        }
+    }
+    Ok(ov_tri)
+}
+
+/// The fast path's columns: for each two-OV (manifold) edge its ends, OVs (storage indices) and
+/// OV triangles; zeros elsewhere and in the padding to whole blocks. A block is fast when all its
+/// edges are manifold.
+struct ManifoldEdges {
+    block_fast: Vec<bool>,
+    ea: Vec<u32>,
+    eb: Vec<u32>,
+    eo1: Vec<u32>,
+    eo2: Vec<u32>,
+    tri_a: Vec<u32>,
+    tri_b: Vec<u32>,
+}
+
+impl ManifoldEdges {
+    /// The columns of `table`, with vertices at their storage index `st` and the OV triangles
+    /// `ov_tri` of [`ov_triangles`].
+    fn new(table: &EdgeTable, st: &[u32], ov_tri: &[u32]) -> Self {
+        let sv = |v: u32| st[v as usize];
+        let ne = table.edges.len();
         let mut block_fast = Vec::with_capacity(ne.div_ceil(LANES));
         // Padded to whole blocks, so a partial last block of manifold edges takes the fast path.
         let ne_padded = ne.div_ceil(LANES) * LANES;
@@ -240,16 +314,7 @@ impl Layout {
                     .all(|e| table.ov_offsets[e + 1] - table.ov_offsets[e] == 2),
             );
         }
-        Ok(Self {
-            xs,
-            ys,
-            zs,
-            xyz,
-            t0,
-            t1,
-            t2,
-            tri_count,
-            edge_count: ne,
+        Self {
             block_fast,
             ea,
             eb,
@@ -257,19 +322,6 @@ impl Layout {
             eo2,
             tri_a,
             tri_b,
-            edges: table.edges.iter().map(|&[a, b]| [sv(a), sv(b)]).collect(),
-            ov_offsets: table.ov_offsets.clone(),
-            ovs: table.ovs.iter().map(|&o| sv(o)).collect(),
-            ov_tri,
-            coords_in_filter_range,
-        })
-    }
-
-    /// Position of the vertex stored at index `v` (all index arrays of the layout hold storage
-    /// indices) as an array.
-    #[inline(always)]
-    pub(crate) fn pos(&self, v: u32) -> [f32; 3] {
-        let v = v as usize;
-        [self.xs[v], self.ys[v], self.zs[v]]
+        }
     }
 }

@@ -28,7 +28,8 @@
 //! operations on the same inputs).
 //!
 //! ```
-//! use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy};
+//! use shadowvol_silhouette::{extract_once, invariant, Accuracy};
+//! use shadowvol_test_support::corpus;
 //!
 //! let case = &corpus::cases()[0];
 //! let scene = case.scene().unwrap();
@@ -40,12 +41,9 @@
 
 mod dispatch;
 mod extract;
-pub mod floor;
 mod kernel;
 mod lanes;
 mod layout;
-
-pub use floor::MemoryFloor;
 
 use extract::{run_extract, Prepared, Scratch};
 use shadowvol_silhouette::{

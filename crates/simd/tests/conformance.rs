@@ -12,10 +12,11 @@ use glam::{Affine3A, Quat, Vec3};
 use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use shadowvol_silhouette::{
-    corpus, extract_once, invariant, shapes::uv_sphere_y, Accuracy, Light, Multiplicities,
-    SceneObject, SilhouetteBackend, TopologyScene,
+    extract_once, invariant, Accuracy, Light, Multiplicities, SceneObject, SilhouetteBackend,
+    TopologyScene,
 };
 use shadowvol_simd::{SimdBackend, SimdLevel};
+use shadowvol_test_support::{corpus, shapes::uv_sphere_y};
 use std::sync::Arc;
 
 fn levels() -> Vec<SimdLevel> {

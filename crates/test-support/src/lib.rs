@@ -1,9 +1,14 @@
-//! Visible skips for the workspace's integration tests.
+//! Fixtures for the workspace's tests (dev-only, not published).
+//!
+//! * [`corpus`]: the conformance corpus, the hard cases every backend must pass;
+//! * [`shapes`]: the test shapes ([`shapes::uv_sphere_y`] and the exact shapes tests share);
+//! * [`ci`]: whether this is a CI run, read one way by every test;
+//! * visible skips and per-backend trials, below.
 //!
 //! A test that needs something the machine may lack (a GPU adapter, an OpenCL platform, a
 //! Vulkan driver, a display, a tool) returns an [`Outcome`]: `Ok(())` when it ran, or
 //! `Err(`[`Skip`]`)` when it could not. [`skip`] is the only way to make a [`Skip`], and under CI
-//! ([`shadowvol_silhouette::ci::is_ci`]: `CI=true`, `CI=True`, `CI=1`) it panics instead, so in
+//! ([`ci::is_ci`]: `CI=true`, `CI=True`, `CI=1`) it panics instead, so in
 //! CI every skip is a failure. Elsewhere the test binary, built with [`main!`] on
 //! [libtest-mimic](libtest_mimic) (`harness = false`), reports it as
 //! `test name ... ignored (<reason>)`, never as `ok`.
@@ -27,7 +32,12 @@
 //! filters as with the standard harness. A function left out of the list is dead code, which
 //! `cargo clippy --all-targets -- -D warnings` rejects. A panicking test fails (libtest-mimic
 //! catches the panic); there is no `#[should_panic]`: assert on the error or on a
-//! `std::panic::catch_unwind` result instead.
+//! `std::panic::catch_unwind` result instead. [`per_backend`] makes one trial per backend, so
+//! that a backend that can't start shows as a skip under its own name.
+
+pub mod ci;
+pub mod corpus;
+pub mod shapes;
 
 use shadowvol_silhouette::BackendError;
 use std::fmt;
@@ -63,17 +73,17 @@ pub type Outcome = Result<(), Skip>;
 ///
 /// # Panics
 ///
-/// Under CI ([`shadowvol_silhouette::ci::is_ci`]), with a message naming the reason: CI requires
+/// Under CI ([`ci::is_ci`]), with a message naming the reason: CI requires
 /// every backend and tool, so there a skip fails the test.
 #[must_use]
 #[track_caller]
 pub fn skip(reason: impl fmt::Display) -> Skip {
     let reason = reason.to_string();
     assert!(
-        !shadowvol_silhouette::ci::is_ci(),
+        !ci::is_ci(),
         "this test would be skipped ({reason}), but CI is set ({}=true) and CI requires \
          every backend and tool, so it fails",
-        shadowvol_silhouette::ci::CI_ENV
+        ci::CI_ENV
     );
     Skip { reason }
 }
@@ -145,6 +155,40 @@ pub fn trial<R: IntoOutcome>(
     })
 }
 
+/// One trial per backend of `backends`, named `NAME::BACKEND`, each running `test(backend)`.
+///
+/// A backend that can't start here then shows as `ignored (<reason>)` under its own name (a
+/// failure under CI) when `test` returns a [`skip`], instead of a loop over the available
+/// backends quietly testing fewer. The list comes from the caller (the backend registry, or the
+/// CLI's `shadowvol backends`), never from a list of its own.
+///
+/// ```no_run
+/// use shadowvol_test_support::{per_backend, run, skip, Outcome};
+///
+/// fn starts(backend: &str) -> Outcome {
+///     if backend == "missing" {
+///         return Err(skip("no driver"));
+///     }
+///     Ok(())
+/// }
+///
+/// run(per_backend("starts", ["cpu", "missing"], starts));
+/// ```
+pub fn per_backend<R: IntoOutcome>(
+    name: &str,
+    backends: impl IntoIterator<Item = impl Into<String>>,
+    test: impl Fn(&str) -> R + Clone + Send + 'static,
+) -> Vec<Trial> {
+    backends
+        .into_iter()
+        .map(|b| {
+            let backend: String = b.into();
+            let test = test.clone();
+            trial(format!("{name}::{backend}"), move || test(&backend))
+        })
+        .collect()
+}
+
 /// Runs `trials` with the command line's arguments (filters, `--ignored`, `--test-threads`, ...)
 /// and exits with the run's status.
 pub fn run(trials: Vec<Trial>) -> ! {
@@ -170,3 +214,8 @@ macro_rules! main {
         }
     };
 }
+
+/// The README's example, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -6,9 +6,10 @@
 
 use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{
-    corpus, extract_once, invariant, Accuracy, ExtractStats, Multiplicities, SilhouetteBackend,
+    extract_once, invariant, Accuracy, ExtractStats, Multiplicities, SilhouetteBackend,
     TopologyScene,
 };
+use shadowvol_test_support::corpus;
 use shadowvol_vulkan_geometry::{VulkanBackend, VulkanOptions};
 use std::time::{Duration, Instant};
 

@@ -22,7 +22,8 @@
 //! [`BackendError::Device`] (see the README's "Wait limit and timeouts").
 //!
 //! ```no_run
-//! use shadowvol_silhouette::{corpus, extract_once, Accuracy};
+//! use shadowvol_silhouette::{extract_once, Accuracy};
+//! use shadowvol_test_support::corpus;
 //!
 //! let case = &corpus::cases()[0];
 //! let scene = case.scene()?;

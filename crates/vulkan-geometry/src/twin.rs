@@ -6,7 +6,8 @@
 //!
 //! ```
 //! use shadowvol_vulkan_geometry::twin::{extract_twin, DeviceFilter};
-//! use shadowvol_silhouette::{corpus, Accuracy};
+//! use shadowvol_silhouette::Accuracy;
+//! use shadowvol_test_support::corpus;
 //!
 //! let case = &corpus::cases()[0];
 //! let scene = case.scene().unwrap();

@@ -6,7 +6,8 @@ mod common;
 mod values;
 
 use shadowvol_cpu::CpuBackend;
-use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy, SilhouetteBackend};
+use shadowvol_silhouette::{extract_once, invariant, Accuracy, SilhouetteBackend};
+use shadowvol_test_support::corpus;
 use shadowvol_test_support::{main, Outcome};
 use shadowvol_vulkan_geometry::twin::{extract_twin, DeviceFilter};
 use shadowvol_vulkan_geometry::{VulkanBackend, VulkanOptions};
@@ -23,7 +24,7 @@ fn run_corpus(vk: &mut VulkanBackend, test: &str) {
     let cases = corpus::cases();
     assert!(!cases.is_empty());
     let mut uncertain = 0;
-    let rule = Rule::for_device("vulkan", &vk.info().device);
+    let rule = Rule::for_device(&vk.info().device);
     eprintln!("{test}: f32 modes compared by the {} rule", rule.name());
     for case in &cases {
         let scene = case.scene().unwrap();

@@ -4,9 +4,8 @@ mod common;
 
 use glam::Vec3;
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::{
-    corpus, BackendError, Multiplicities, SilhouetteBackend, TopologyScene,
-};
+use shadowvol_silhouette::{BackendError, Multiplicities, SilhouetteBackend, TopologyScene};
+use shadowvol_test_support::corpus;
 use shadowvol_test_support::{main, Outcome};
 use shadowvol_vulkan_geometry::{ViewProjection, VulkanOptions};
 

@@ -11,9 +11,10 @@ mod common;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_silhouette::{
-    extract_once, gpu::TIMEOUT_ENV, invariant, shapes::uv_sphere_y, Accuracy, BackendError, Light,
-    Multiplicities, PreparedId, SilhouetteBackend, TopologyScene,
+    extract_once, gpu::TIMEOUT_ENV, invariant, Accuracy, BackendError, Light, Multiplicities,
+    PreparedId, SilhouetteBackend, TopologyScene,
 };
+use shadowvol_test_support::shapes::uv_sphere_y;
 use shadowvol_test_support::{main, Outcome};
 use shadowvol_vulkan_geometry::{ViewProjection, VulkanBackend, VulkanOptions};
 use std::time::{Duration, Instant};

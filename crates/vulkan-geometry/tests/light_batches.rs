@@ -5,9 +5,8 @@
 mod common;
 
 use shadowvol_cpu::CpuBackend;
-use shadowvol_silhouette::{
-    corpus, extract_once, invariant, Accuracy, Multiplicities, SilhouetteBackend,
-};
+use shadowvol_silhouette::{extract_once, invariant, Accuracy, Multiplicities, SilhouetteBackend};
+use shadowvol_test_support::corpus;
 use shadowvol_test_support::{main, Outcome};
 use shadowvol_vulkan_geometry::VulkanOptions;
 use std::num::NonZeroUsize;

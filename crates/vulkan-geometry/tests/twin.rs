@@ -3,8 +3,9 @@
 
 use glam::Vec3;
 use shadowvol_robust_math::{orient_exact, orient_filter_f32, Accuracy};
-use shadowvol_silhouette::shapes::Rng;
-use shadowvol_silhouette::{corpus, invariant, object_lights};
+use shadowvol_silhouette::{invariant, object_lights};
+use shadowvol_test_support::corpus;
+use shadowvol_test_support::shapes::Rng;
 use shadowvol_vulkan_geometry::twin::{
     device_filter_f32, extract_twin, side_quad, DeviceFilter, DeviceScene,
 };

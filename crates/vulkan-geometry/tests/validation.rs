@@ -7,7 +7,8 @@ mod common;
 
 use glam::Vec3;
 use shadowvol_cpu::CpuBackend;
-use shadowvol_silhouette::{corpus, extract_once, invariant, Accuracy, SilhouetteBackend};
+use shadowvol_silhouette::{extract_once, invariant, Accuracy, SilhouetteBackend};
+use shadowvol_test_support::corpus;
 use shadowvol_test_support::{main, Outcome};
 use shadowvol_vulkan_geometry::{StencilTechnique, ViewProjection, VulkanOptions};
 

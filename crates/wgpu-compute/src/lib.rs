@@ -55,7 +55,8 @@
 //!
 //! ```no_run
 //! // Needs a wgpu adapter (for example Mesa lavapipe: `apt install mesa-vulkan-drivers`).
-//! use shadowvol_silhouette::{corpus, extract_once, Accuracy, SilhouetteBackend};
+//! use shadowvol_silhouette::{extract_once, Accuracy, SilhouetteBackend};
+//! use shadowvol_test_support::corpus;
 //!
 //! let mut backend = shadowvol_wgpu_compute::create_backend()?;
 //! println!("{}", backend.info().device);

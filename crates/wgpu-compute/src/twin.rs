@@ -14,7 +14,8 @@
 //! exact mode, whose filters certify only signs that hold with contraction too.
 //!
 //! ```
-//! use shadowvol_silhouette::{corpus, Accuracy, Multiplicities};
+//! use shadowvol_silhouette::{Accuracy, Multiplicities};
+//! use shadowvol_test_support::corpus;
 //! use shadowvol_wgpu_compute::twin::{self, ExactFilter};
 //!
 //! let case = &corpus::cases()[0];

@@ -233,7 +233,7 @@ fn gpu_corpus_f32_modes_values_and_closed_chains() -> Outcome {
         "gpu_corpus_f32_modes_values_and_closed_chains",
         WgpuOptions::default(),
     )?;
-    let rule = Rule::for_device("wgpu", &b.info().device);
+    let rule = Rule::for_device(&b.info().device);
     eprintln!("f32 modes compared by the {} rule", rule.name());
     for case in common::all_cases() {
         // One prepare for all modes: later frames read the lists with adapted prefixes.

@@ -10,9 +10,10 @@ use shadowvol_cpu::CpuBackend;
 use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_robust_math::Accuracy;
 use shadowvol_silhouette::{
-    extract_once, gpu::TIMEOUT_ENV, shapes, BackendError, Light, Multiplicities, SilhouetteBackend,
+    extract_once, gpu::TIMEOUT_ENV, BackendError, Light, Multiplicities, SilhouetteBackend,
     TopologyScene,
 };
+use shadowvol_test_support::shapes;
 use shadowvol_test_support::{main, Outcome};
 use shadowvol_wgpu_compute::WgpuOptions;
 

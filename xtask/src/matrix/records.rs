@@ -31,10 +31,11 @@ pub struct Bench {
     pub extra: Map<String, Value>,
 }
 
-/// One `accuracy` measurement: one (scene, backend, mode) against `exact`.
+/// One `accuracy` measurement: what one mode gets wrong on one (scene, backend), against
+/// `exact`. (Not named after the command: `Accuracy` names the mode everywhere else.)
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
-pub struct Accuracy {
+pub struct ModeErrors {
     /// Lights of the scene.
     pub lights: Option<u64>,
     /// Vertices where the silhouette chain does not close, over all lights.
@@ -144,8 +145,8 @@ impl Render {
 pub enum Data {
     /// `bench`: tables 1-3, time against triangles and lights.
     Bench(Bench),
-    /// `accuracy`.
-    Accuracy(Accuracy),
+    /// `accuracy`: what each mode gets wrong.
+    ModeErrors(ModeErrors),
     /// `render`: frame times and artifact counts.
     Render(Render),
     /// `baselines`: the Toy Wars table.
@@ -157,7 +158,7 @@ impl Data {
     fn parse(experiment: &str, fields: Map<String, Value>) -> serde_json::Result<Self> {
         let v = Value::Object(fields);
         Ok(match experiment {
-            "accuracy" => Self::Accuracy(serde_json::from_value(v)?),
+            "accuracy" => Self::ModeErrors(serde_json::from_value(v)?),
             "artifacts" | "table1-frame" | "frames" => Self::Render(serde_json::from_value(v)?),
             "toywars" => Self::Baseline(serde_json::from_value(v)?),
             _ => Self::Bench(serde_json::from_value(v)?),
@@ -169,7 +170,7 @@ impl Data {
         let extra = match self {
             Self::Bench(b) => &mut b.extra,
             Self::Baseline(b) => &mut b.extra,
-            Self::Accuracy(a) => &mut a.extra,
+            Self::ModeErrors(a) => &mut a.extra,
             Self::Render(r) => &mut r.timing,
         };
         for (k, v) in columns {
@@ -293,11 +294,11 @@ impl Record {
         }
     }
 
-    /// The `accuracy` measurement, if that is what this is.
+    /// The `accuracy` measurement (what a mode gets wrong), if that is what this is.
     #[must_use]
-    pub fn accuracy(&self) -> Option<&Accuracy> {
+    pub fn mode_errors(&self) -> Option<&ModeErrors> {
         match &self.data {
-            Data::Accuracy(a) => Some(a),
+            Data::ModeErrors(a) => Some(a),
             _ => None,
         }
     }

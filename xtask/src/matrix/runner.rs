@@ -8,7 +8,7 @@ use super::plan::{
     T3_SCENES, TOYWARS_SCENES, TRI_SCENES,
 };
 use super::progress::Progress;
-use super::records::{Accuracy, Baseline, Bench, Data, HostInfo, Key, Record, Render, Results};
+use super::records::{Baseline, Bench, Data, HostInfo, Key, ModeErrors, Record, Render, Results};
 use serde::de::DeserializeOwned;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -351,8 +351,8 @@ impl Matrix {
                 "--format",
                 "json",
             ];
-            match self.cli.json::<RecordList<Accuracy>>(&args) {
-                Ok(list) => self.push_all("accuracy", list, Data::Accuracy),
+            match self.cli.json::<RecordList<ModeErrors>>(&args) {
+                Ok(list) => self.push_all("accuracy", list, Data::ModeErrors),
                 Err(e) => self.fail(format!("accuracy: {e}")),
             }
         }

@@ -3,7 +3,7 @@
 use super::plan::{
     FRAME_GPU_KEY, FRAME_HOST_BACKEND, LIGHT_SCENE, T1_SCENE, T2_SCENES, T3_SCENES, TRI_SCENES,
 };
-use super::records::{Accuracy, Record, Render, Results};
+use super::records::{ModeErrors, Record, Render, Results};
 use std::collections::BTreeSet;
 
 /// Table 1 of the paper: FPS robust / original, 2013 hardware (GPU columns: GF650Ti, AMD7950,
@@ -245,14 +245,15 @@ impl<'a> Tables<'a> {
                     (Some(x), Some(o)) if o > 0.0 => format!("{:.2}", x / o),
                     _ => "n/a".into(),
                 };
-                let acc: Vec<&Accuracy> = r
+                let acc: Vec<&ModeErrors> = r
                     .records
                     .iter()
                     .filter(|x| x.is("accuracy", None, b, m))
-                    .filter_map(Record::accuracy)
+                    .filter_map(Record::mode_errors)
                     .collect();
-                let acc_sum =
-                    |f: fn(&Accuracy) -> Option<u64>| total(acc.iter().map(|a| f(a).unwrap_or(0)));
+                let acc_sum = |f: fn(&ModeErrors) -> Option<u64>| {
+                    total(acc.iter().map(|a| f(a).unwrap_or(0)))
+                };
                 let art = total(
                     r.records
                         .iter()

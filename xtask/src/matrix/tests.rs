@@ -4,7 +4,7 @@
 
 use super::cli::{BenchReport, CliRecord, RecordList, RenderReport, RenderTimings};
 use super::csv::to_csv;
-use super::records::{Accuracy, Baseline, Bench, Data, HostInfo, Key, Record, Render, Results};
+use super::records::{Baseline, Bench, Data, HostInfo, Key, ModeErrors, Record, Render, Results};
 use super::tables::tables;
 use serde_json::{json, Map, Value};
 
@@ -114,7 +114,7 @@ fn bench_json_of_the_cli_parses() {
 #[test]
 fn accuracy_and_baselines_json_of_the_cli_parse() {
     let raw = value(ACCURACY_JSON);
-    let list: RecordList<Accuracy> = serde_json::from_str(ACCURACY_JSON).unwrap();
+    let list: RecordList<ModeErrors> = serde_json::from_str(ACCURACY_JSON).unwrap();
     assert_eq!(list.records.len(), 2);
     for (r, v) in list
         .records
@@ -125,7 +125,7 @@ fn accuracy_and_baselines_json_of_the_cli_parse() {
         assert_eq!(r.data.sign_diff_vs_exact, v["sign_diff_vs_exact"].as_u64());
         assert_eq!(r.data.uncertain, v["uncertain"].as_u64());
         assert!(r.data.open_vertices.is_some() && r.device.is_none());
-        let rec = Record::from_cli("accuracy", r, Data::Accuracy, "the cpu", &host());
+        let rec = Record::from_cli("accuracy", r, Data::ModeErrors, "the cpu", &host());
         assert_eq!(rec.device, "the cpu");
         carries_every_field(v, &rec, &["experiment", "device"]);
     }
@@ -252,7 +252,7 @@ fn results_json_of_a_real_run_round_trips() {
     // Each experiment holds its kind of measurement.
     for r in &results.records {
         let ok = match r.experiment.as_str() {
-            "accuracy" => r.accuracy().is_some(),
+            "accuracy" => r.mode_errors().is_some(),
             "artifacts" | "table1-frame" | "frames" => r.render().is_some(),
             "toywars" => r.baseline().is_some(),
             _ => r.bench().is_some(),

@@ -8,7 +8,7 @@ mod stage;
 pub(crate) use stage::stage;
 
 use report::{Report, TextReport, Timings};
-use shadowvol::{find_backend, CliError, Format, ModeArg};
+use shadowvol::{find_backend, CliError, Format};
 use shadowvol_renderer::{
     Exposure, GpuPipeline, HostPipeline, PlanPolicy, RenderDevice, RenderError, RenderOptions,
     Renderer, ShadowPipeline,
@@ -171,8 +171,8 @@ pub struct Args {
     size: (u32, u32),
 
     /// Accuracy mode of silhouettes and caps.
-    #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
-    mode: ModeArg,
+    #[arg(long, value_parser = shadowvol::mode_parser(), default_value = "exact")]
+    mode: Accuracy,
 
     /// Silhouette backend of the host pipeline (see `shadowvol backends`), or `auto`: the first
     /// backend on a hardware GPU, else `simd`, with a warning naming what was skipped. Giving it
@@ -291,7 +291,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     }
     let out_path = stage::out_path(args);
     let mut options = RenderOptions::new(args.size.0, args.size.1);
-    options.mode = Accuracy::from(args.mode);
+    options.mode = args.mode;
     options.exposure = args.exposure;
     options.scissor = !args.no_scissor;
     options.policy = args.technique.into();

@@ -4,7 +4,7 @@
 
 use serde_json::Value;
 use shadowvol_mesh_topology::EdgeTable;
-use shadowvol_test_support::{trial, Skip, Trial};
+use shadowvol_test_support::{Skip, Trial};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
 
@@ -56,22 +56,16 @@ pub fn backend_names() -> Vec<String> {
         .collect()
 }
 
-/// One trial per listed backend that `keep` accepts, named `NAME::BACKEND`, each running
-/// `test(backend)` once [`backend_available`] says the backend can start. So a backend that
-/// cannot start here shows as `ignored (<reason>)` under its own name (a failure under CI),
-/// instead of a loop over the available ones quietly testing fewer.
+/// One trial per listed backend that `keep` accepts, named `NAME::BACKEND`
+/// ([`shadowvol_test_support::per_backend`]), each running `test(backend)` once
+/// [`backend_available`] says the backend can start.
 pub fn per_backend(name: &str, keep: fn(&str) -> bool, test: fn(&str)) -> Vec<Trial> {
-    backend_names()
-        .into_iter()
-        .filter(|b| keep(b))
-        .map(|b| {
-            trial(format!("{name}::{b}"), move || -> Result<(), Skip> {
-                backend_available(&b)?;
-                test(&b);
-                Ok(())
-            })
-        })
-        .collect()
+    let names = backend_names().into_iter().filter(|b| keep(b));
+    shadowvol_test_support::per_backend(name, names, move |b| -> Result<(), Skip> {
+        backend_available(b)?;
+        test(b);
+        Ok(())
+    })
 }
 
 /// [`per_backend`] trials of the test function `test` (`fn(&str)`), named after it:

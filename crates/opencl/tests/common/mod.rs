@@ -6,8 +6,9 @@
 use glam::{Affine3A, Quat, Vec3};
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use shadowvol_opencl::{OpenClBackend, OpenClOptions};
-use shadowvol_silhouette::{corpus, shapes, Light, SceneObject, TopologyScene};
+use shadowvol_silhouette::{Light, SceneObject, TopologyScene};
 use shadowvol_test_support::Skip;
+use shadowvol_test_support::{corpus, shapes};
 use std::sync::Arc;
 
 /// Starts the backend with `options`, or a visible skip ([`shadowvol_test_support::skip`]:

@@ -73,7 +73,7 @@ pub fn started(result: Result<Renderer, RenderError>) -> Result<Renderer, Skip> 
 
 /// An axis-aligned box `lo..hi` as 12 triangles (closed, outward winding).
 pub fn cuboid(lo: Vec3, hi: Vec3) -> Mesh {
-    shadowvol_silhouette::shapes::cuboid(lo, hi)
+    shadowvol_test_support::shapes::cuboid(lo, hi)
 }
 
 /// A square floor at `y = 0`, half-size `s`, split into `n × n` cells.

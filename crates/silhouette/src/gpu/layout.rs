@@ -137,7 +137,7 @@ impl SceneLayout {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shapes;
+    use shadowvol_test_support::shapes;
 
     #[test]
     fn objects_are_concatenated_with_global_ids() {

@@ -122,9 +122,10 @@ pub fn resolve_uncertain(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{object_lights, shapes, TopologyScene};
+    use crate::{object_lights, TopologyScene};
     use shadowvol_mesh_topology::EdgeTable;
     use shadowvol_robust_math::{ov_sign, Accuracy, Light};
+    use shadowvol_test_support::shapes;
 
     fn scene() -> TopologyScene {
         TopologyScene::single(EdgeTable::build(&shapes::uv_sphere_y(5, 6, 1.0)).unwrap())

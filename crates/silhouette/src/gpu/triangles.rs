@@ -127,7 +127,7 @@ impl TriangleLayout {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shapes;
+    use shadowvol_test_support::shapes;
 
     #[test]
     fn every_slot_names_its_triangle_and_parity() {

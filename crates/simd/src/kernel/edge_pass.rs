@@ -201,54 +201,9 @@ unsafe fn edge_sums_avx2(pass: EdgeSums) {
     let e_start = pass.check();
     let (lay, blocks, ps, mut out) = (pass.lay, pass.blocks, pass.signs, pass.out);
     let (signs, bases, edge_base) = (ps.all, ps.bases, out.edge_base);
-    if let ([base], [out0], [sil0]) = (bases, &mut *out.rows, &mut *out.sil) {
-        // One light (the common case): the loop below without the pack and lane loops.
-        for blk in blocks.clone() {
-            let e0 = blk * LANES;
-            if !lay.block_fast[blk] {
-                let mut one = [&mut **out0];
-                let mut rest = EdgeOut {
-                    rows: &mut one,
-                    sil: std::slice::from_mut(sil0),
-                    edge_base,
-                };
-                edge_sums_general(lay, e0, e_start, &ps, &mut rest);
-                continue;
-            }
-            // SAFETY: tri_a and tri_b are padded to whole blocks, so e0 + 8 <= tri_a.len() =
-            // tri_b.len(); every byte read is signs[base + slot] with slot < tri_count (the
-            // padding is slot 0), and base + tri_count <= signs.len() (asserted above).
-            let (g1, g2, k1, k2) = unsafe {
-                let ta = lay.tri_a.as_ptr().add(e0);
-                let tb = lay.tri_b.as_ptr().add(e0);
-                let t1 = _mm256_loadu_si256(ta.cast());
-                let t2 = _mm256_loadu_si256(tb.cast());
-                let (g1, g2) = sign_bytes_of_block(signs.as_ptr().add(*base), ta, tb);
-                (
-                    g1,
-                    g2,
-                    _mm256_srai_epi32::<31>(t1),
-                    _mm256_srai_epi32::<31>(t2),
-                )
-            };
-            // The loads sign-extended each byte already.
-            let s1 = _mm256_sub_epi32(_mm256_xor_si256(g1, k1), k1);
-            let s2 = _mm256_sub_epi32(_mm256_xor_si256(g2, k2), k2);
-            let m = _mm256_add_epi32(s1, s2);
-            let dst = &mut out0[e0 - e_start..];
-            let keep = if dst.len() >= LANES {
-                // SAFETY: `dst` holds 8 i32 (written once, not read back here).
-                unsafe { crate::lanes::stream_i32x8(dst.as_mut_ptr().cast(), m) };
-                0xFF
-            } else {
-                store_part_epi32(m, dst)
-            };
-            let zero = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
-                m,
-                _mm256_setzero_si256(),
-            ))) as u32;
-            push_bits(sil0, !zero & keep, edge_base + e0);
-        }
+    if let ([_], [out0], [sil0]) = (bases, &mut *out.rows, &mut *out.sil) {
+        // SAFETY: AVX2 is enabled here, as the callee needs.
+        unsafe { one_light_avx2(lay, blocks, &ps, out0, sil0, edge_base) };
         _mm_sfence();
         return;
     }
@@ -349,4 +304,72 @@ unsafe fn edge_sums_avx2(pass: EdgeSums) {
     // The streaming stores above are weakly ordered: make them visible before the caller
     // (another thread, after rayon's join) reads the output.
     _mm_sfence();
+}
+
+/// The one-light case of [`edge_sums_avx2`] (the common case): its loop without the pack and
+/// lane loops. The light's signs are at `ps.all[ps.bases[0]..]`; the multiplicities of the
+/// edges of `blocks` go to `out0` with streaming stores (the caller fences them), the
+/// silhouette edges to `sil0`.
+///
+/// # Safety
+/// The CPU must support AVX2; the slices are as [`EdgeSums::check`] asserts.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn one_light_avx2(
+    lay: &Layout,
+    blocks: Range<usize>,
+    ps: &PackedSigns,
+    out0: &mut [i32],
+    sil0: &mut Vec<u32>,
+    edge_base: usize,
+) {
+    use std::arch::x86_64::*;
+    let (signs, base, e_start) = (ps.all, ps.bases[0], blocks.start * LANES);
+    for blk in blocks {
+        let e0 = blk * LANES;
+        if !lay.block_fast[blk] {
+            let mut one = [&mut *out0];
+            let mut rest = EdgeOut {
+                rows: &mut one,
+                sil: std::slice::from_mut(sil0),
+                edge_base,
+            };
+            edge_sums_general(lay, e0, e_start, ps, &mut rest);
+            continue;
+        }
+        // SAFETY: tri_a and tri_b are padded to whole blocks, so e0 + 8 <= tri_a.len() =
+        // tri_b.len(); every byte read is signs[base + slot] with slot < tri_count (the
+        // padding is slot 0), and base + tri_count <= signs.len() (`EdgeSums::check`).
+        let (g1, g2, k1, k2) = unsafe {
+            let ta = lay.tri_a.as_ptr().add(e0);
+            let tb = lay.tri_b.as_ptr().add(e0);
+            let t1 = _mm256_loadu_si256(ta.cast());
+            let t2 = _mm256_loadu_si256(tb.cast());
+            let (g1, g2) = sign_bytes_of_block(signs.as_ptr().add(base), ta, tb);
+            (
+                g1,
+                g2,
+                _mm256_srai_epi32::<31>(t1),
+                _mm256_srai_epi32::<31>(t2),
+            )
+        };
+        // The loads sign-extended each byte already.
+        let s1 = _mm256_sub_epi32(_mm256_xor_si256(g1, k1), k1);
+        let s2 = _mm256_sub_epi32(_mm256_xor_si256(g2, k2), k2);
+        let m = _mm256_add_epi32(s1, s2);
+        let dst = &mut out0[e0 - e_start..];
+        let keep = if dst.len() >= LANES {
+            // SAFETY: `dst` holds 8 i32 (written once, not read back here).
+            unsafe { crate::lanes::stream_i32x8(dst.as_mut_ptr().cast(), m) };
+            0xFF
+        } else {
+            store_part_epi32(m, dst)
+        };
+        let zero = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
+            m,
+            _mm256_setzero_si256(),
+        ))) as u32;
+        push_bits(sil0, !zero & keep, edge_base + e0);
+    }
 }

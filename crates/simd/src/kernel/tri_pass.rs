@@ -58,7 +58,6 @@ fn tri_signs<Lv: Level>(pass: TriPass) -> u64 {
             && out.len() == lights.len().div_ceil(PACK)
             && out.iter().all(|o| o.len() == blocks.len() * LANES)
     );
-    let several = lights.len() > 1;
     // One light: its lanes made once per call rather than once per block (no allocation).
     let one32 = match lights {
         [light] => Some(splat4::<Lv::F>(*light)),
@@ -71,19 +70,8 @@ fn tri_signs<Lv: Level>(pass: TriPass) -> u64 {
         _ => None,
     };
     // The f32 stage of each light (exact mode), decided once per call.
-    let mut stage_buf = [F32Stage::Skip; 8];
-    let stage_vec: Vec<F32Stage>;
-    let stages: &[F32Stage] = if mode != Accuracy::Exact {
-        &[]
-    } else if lights.len() <= stage_buf.len() {
-        for (s, light) in stage_buf.iter_mut().zip(lights) {
-            *s = f32_stage(lay, light);
-        }
-        &stage_buf[..lights.len()]
-    } else {
-        stage_vec = lights.iter().map(|light| f32_stage(lay, light)).collect();
-        &stage_vec
-    };
+    let (mut stage_buf, mut stage_spill) = ([F32Stage::Skip; 8], Vec::new());
+    let stages = f32_stages(lay, lights, mode, &mut stage_buf, &mut stage_spill);
     for blk in blocks {
         let t = blk * LANES;
         let valid: u32 = if t + LANES <= lay.tri_count {
@@ -93,45 +81,13 @@ fn tri_signs<Lv: Level>(pass: TriPass) -> u64 {
         };
         let dst = (blk - b0) * LANES;
         if let (Accuracy::Ordered | Accuracy::Original, 0xFF, Some(lv)) = (mode, valid, one32) {
-            // One light, a full block (the common case): `plane`'s operations with fewer vectors
-            // live (O is loaded once N exists), and the 8 signs stored as 8 consecutive bytes
-            // (one byte per slot).
-            // SAFETY: as below.
-            let (a, b) = unsafe {
-                (
-                    gather::<Lv>(lay, &lay.t0[t..]),
-                    gather::<Lv>(lay, &lay.t1[t..]),
-                )
-            };
-            let e = sub3(&a, &b);
-            let n = edge_normal(&lv, &a, &e);
-            // SAFETY: as below.
-            let o = unsafe { gather::<Lv>(lay, &lay.t2[t..]) };
-            let m = off_plane(&n, &a, &o).signum0().to_i32();
-            for (byte, s) in out[0][dst..dst + LANES].iter_mut().zip(m) {
-                *byte = s as i8;
-            }
+            ordered_one_full::<Lv>(lay, t, &lv, &mut out[0][dst..dst + LANES]);
             continue;
         }
         if let (Accuracy::Exact, 0xFF, Some(lv), [F32Stage::Unchecked]) =
             (mode, valid, one32, stages)
         {
-            // One light, a full block, no range check: as the ordered path above, `O` is
-            // loaded only once the products exist (fewer vectors live).
-            // SAFETY: as below.
-            let (a, b) = unsafe {
-                (
-                    gather::<Lv>(lay, &lay.t0[t..]),
-                    gather::<Lv>(lay, &lay.t1[t..]),
-                )
-            };
-            let (pq, bad) = f32_products::<Lv::F, false>(&a, &b, &lv);
-            // SAFETY: as below.
-            let o = unsafe { gather::<Lv>(lay, &lay.t2[t..]) };
-            let (mut pos, mut neg, unc) = f32_decide::<Lv::F, false>(&pq, &a, &o, bad);
-            uncertain +=
-                Fallback::<Lv>::new(lay, t).decide(&lights[0], one64, unc, &mut pos, &mut neg);
-            write_one(out, dst, pos, neg);
+            uncertain += exact_one_full::<Lv>(lay, t, &lv, &lights[0], one64, out, dst);
             continue;
         }
         // SAFETY: `t + 8 <= t0.len()` (asserted above), and the layout's ids are in range.
@@ -142,97 +98,255 @@ fn tri_signs<Lv: Level>(pass: TriPass) -> u64 {
                 gather::<Lv>(lay, &lay.t2[t..]),
             )
         };
+        let block = Block {
+            t,
+            dst,
+            valid,
+            a,
+            b,
+            o,
+        };
         match mode {
-            Accuracy::Ordered | Accuracy::Original => {
-                // `plane`'s operations with `A − B` and `O − A` made once for all lights.
-                let (e, d) = (sub3(&a, &b), sub3(&o, &a));
-                if several {
-                    // Each pack's sign bytes built in registers, one store.
-                    for (pack, chunk) in lights.chunks(PACK).enumerate() {
-                        let mut acc = [0u32; LANES];
-                        for (k, light) in chunk.iter().enumerate() {
-                            let n = edge_normal(&splat4(*light), &a, &e);
-                            dot3(&n, &d).or_sign_bits(&mut acc, k as u32);
-                        }
-                        write_pack(out, pack, dst, &acc, valid);
-                    }
-                } else {
-                    // One light, a partial block.
-                    let n = edge_normal(&splat4(lights[0]), &a, &e);
-                    let (pos, neg) = dot3(&n, &d).sign_bits();
-                    write_one(out, dst, pos & valid, neg & valid);
-                }
-            }
-            Accuracy::Robust if several => {
-                // Each pack's sign bytes built in registers, one store.
-                for (pack, chunk) in lights.chunks(PACK).enumerate() {
-                    let mut acc = [0u32; LANES];
-                    for (k, light) in chunk.iter().enumerate() {
-                        let lv = splat4(*light);
-                        let sa = plane(&a, &b, &lv, &o);
-                        let sb = plane(&b, &o, &lv, &a);
-                        let sc = plane(&o, &a, &lv, &b);
-                        sa.or_sign_bits3(sb, sc, &mut acc, k as u32);
-                    }
-                    write_pack(out, pack, dst, &acc, valid);
-                }
-            }
-            Accuracy::Robust => {
-                // One light.
-                let lv = splat4(lights[0]);
-                let (pa, na) = plane(&a, &b, &lv, &o).sign_bits();
-                let (pb, nb) = plane(&b, &o, &lv, &a).sign_bits();
-                let (pc, nc) = plane(&o, &a, &lv, &b).sign_bits();
-                write_one(out, dst, pa & pb & pc & valid, na & nb & nc & valid);
-            }
+            Accuracy::Ordered | Accuracy::Original => ordered::<Lv>(&block, lights, out),
+            Accuracy::Robust => robust::<Lv>(&block, lights, out),
             Accuracy::Exact if one32.is_none() => {
-                // Several lights: each pack's sign bytes built in registers, one store. The
-                // block's points are widened to f64 (by `fallback`) only when some lane needs
-                // the f64 filter.
-                let mut fallback = Fallback::<Lv>::new(lay, t);
-                for (pack, chunk) in lights.chunks(PACK).enumerate() {
-                    let mut acc = [0u32; LANES];
-                    for (k, light) in chunk.iter().enumerate() {
-                        // 1. The f32 filter on all 8 lanes; the sign of `det` is its decision
-                        // in every lane that is not uncertain.
-                        let lv32 = splat4(*light);
-                        let (det, unc32) = match stages[pack * PACK + k] {
-                            F32Stage::Skip => (Lv::F::splat(0.0), 0xFF),
-                            F32Stage::Checked => filter_f32_det::<Lv::F, true>(&a, &b, &lv32, &o),
-                            F32Stage::Unchecked => {
-                                filter_f32_det::<Lv::F, false>(&a, &b, &lv32, &o)
-                            }
-                        };
-                        det.or_sign_bits(&mut acc, k as u32);
-                        let unc = unc32 & valid;
-                        if unc != 0 {
-                            // 2, 3. The uncertain lanes (rare): their bits replaced.
-                            let (mut pos, mut neg) = (0, 0);
-                            uncertain += fallback.decide(light, one64, unc, &mut pos, &mut neg);
-                            set_sign_bits(&mut acc, k, unc, pos, neg);
-                        }
-                    }
-                    write_pack(out, pack, dst, &acc, valid);
-                }
+                uncertain += exact_packs::<Lv>(lay, &block, (lights, stages), one64, out);
             }
             Accuracy::Exact => {
                 // One light (the arm above takes several), where the one-light path above does
                 // not apply (a partial block, a light needing the range check, or `w` other
                 // than 0 and 1).
                 if let (Some(lv32), [light], [stage]) = (one32, lights, stages) {
-                    // 1. The f32 filter on all 8 lanes.
-                    let (mut pos, mut neg, unc32) = match stage {
-                        F32Stage::Skip => (0, 0, 0xFF),
-                        F32Stage::Checked => filter_f32::<Lv::F, true>(&a, &b, &lv32, &o),
-                        F32Stage::Unchecked => filter_f32::<Lv::F, false>(&a, &b, &lv32, &o),
-                    };
-                    let unc = unc32 & valid;
-                    uncertain +=
-                        Fallback::<Lv>::new(lay, t).decide(light, one64, unc, &mut pos, &mut neg);
-                    write_one(out, dst, pos & valid, neg & valid);
+                    uncertain += exact_one::<Lv>(lay, &block, (&lv32, light, *stage), one64, out);
                 }
             }
         }
     }
+    uncertain
+}
+
+/// The `f32` filter's stage of each light in exact mode (none in the other modes): in `buf` for
+/// up to 8 lights, in `spill` beyond, so that the common case allocates nothing.
+#[inline(always)]
+fn f32_stages<'s>(
+    lay: &Layout,
+    lights: &[[f32; 4]],
+    mode: Accuracy,
+    buf: &'s mut [F32Stage; 8],
+    spill: &'s mut Vec<F32Stage>,
+) -> &'s [F32Stage] {
+    if mode != Accuracy::Exact {
+        &[]
+    } else if lights.len() <= buf.len() {
+        for (s, light) in buf.iter_mut().zip(lights) {
+            *s = f32_stage(lay, light);
+        }
+        &buf[..lights.len()]
+    } else {
+        spill.extend(lights.iter().map(|light| f32_stage(lay, light)));
+        spill
+    }
+}
+
+/// One block of 8 canonical triangles: its first slot `t`, where its sign bytes go (`dst`), the
+/// lanes that are triangles (`valid`), and its corners.
+struct Block<F> {
+    t: usize,
+    dst: usize,
+    valid: u32,
+    a: [F; 3],
+    b: [F; 3],
+    o: [F; 3],
+}
+
+/// `ordered` with one light on a full block (the common case): `plane`'s operations with fewer
+/// vectors live (O is loaded once N exists), and the 8 signs stored as 8 consecutive bytes
+/// (one byte per slot) into `out`.
+#[inline(always)]
+fn ordered_one_full<Lv: Level>(lay: &Layout, t: usize, lv: &[Lv::F; 4], out: &mut [i8]) {
+    // SAFETY: `t + 8 <= t0.len()` (asserted by `tri_signs`), and the layout's ids are in range.
+    let (a, b) = unsafe {
+        (
+            gather::<Lv>(lay, &lay.t0[t..]),
+            gather::<Lv>(lay, &lay.t1[t..]),
+        )
+    };
+    let e = sub3(&a, &b);
+    let n = edge_normal(lv, &a, &e);
+    // SAFETY: as above.
+    let o = unsafe { gather::<Lv>(lay, &lay.t2[t..]) };
+    let m = off_plane(&n, &a, &o).signum0().to_i32();
+    for (byte, s) in out.iter_mut().zip(m) {
+        *byte = s as i8;
+    }
+}
+
+/// `exact` with one light (`lv`, `light`, `one64`) on a full block, without the range check: as
+/// [`ordered_one_full`], `O` is loaded only once the products exist (fewer vectors live).
+/// Returns the evaluations decided by the scalar exact predicate.
+#[inline(always)]
+fn exact_one_full<Lv: Level>(
+    lay: &Layout,
+    t: usize,
+    lv: &[Lv::F; 4],
+    light: &[f32; 4],
+    one64: Option<[Lv::D; 4]>,
+    out: &mut [&mut [i8]],
+    dst: usize,
+) -> u64 {
+    // SAFETY: `t + 8 <= t0.len()` (asserted by `tri_signs`), and the layout's ids are in range.
+    let (a, b) = unsafe {
+        (
+            gather::<Lv>(lay, &lay.t0[t..]),
+            gather::<Lv>(lay, &lay.t1[t..]),
+        )
+    };
+    let (pq, bad) = f32_products::<Lv::F, false>(&a, &b, lv);
+    // SAFETY: as above.
+    let o = unsafe { gather::<Lv>(lay, &lay.t2[t..]) };
+    let (mut pos, mut neg, unc) = f32_decide::<Lv::F, false>(&pq, &a, &o, bad);
+    let uncertain = Fallback::<Lv>::new(lay, t).decide(light, one64, unc, &mut pos, &mut neg);
+    write_one(out, dst, pos, neg);
+    uncertain
+}
+
+/// `ordered` (and `original`, evaluated as `ordered`): `plane`'s operations with `A − B` and
+/// `O − A` made once for all lights.
+#[inline(always)]
+fn ordered<Lv: Level>(block: &Block<Lv::F>, lights: &[[f32; 4]], out: &mut [&mut [i8]]) {
+    let Block {
+        dst,
+        valid,
+        a,
+        b,
+        o,
+        ..
+    } = block;
+    let (e, d) = (sub3(a, b), sub3(o, a));
+    if lights.len() > 1 {
+        // Each pack's sign bytes built in registers, one store.
+        for (pack, chunk) in lights.chunks(PACK).enumerate() {
+            let mut acc = [0u32; LANES];
+            for (k, light) in chunk.iter().enumerate() {
+                let n = edge_normal(&splat4(*light), a, &e);
+                dot3(&n, &d).or_sign_bits(&mut acc, k as u32);
+            }
+            write_pack(out, pack, *dst, &acc, *valid);
+        }
+    } else {
+        // One light, a partial block.
+        let n = edge_normal(&splat4(lights[0]), a, &e);
+        let (pos, neg) = dot3(&n, &d).sign_bits();
+        write_one(out, *dst, pos & valid, neg & valid);
+    }
+}
+
+/// `robust`: the three sides of each triangle; the sign where all three agree, else 0.
+#[inline(always)]
+fn robust<Lv: Level>(block: &Block<Lv::F>, lights: &[[f32; 4]], out: &mut [&mut [i8]]) {
+    let Block {
+        dst,
+        valid,
+        a,
+        b,
+        o,
+        ..
+    } = block;
+    if lights.len() > 1 {
+        // Each pack's sign bytes built in registers, one store.
+        for (pack, chunk) in lights.chunks(PACK).enumerate() {
+            let mut acc = [0u32; LANES];
+            for (k, light) in chunk.iter().enumerate() {
+                let lv = splat4(*light);
+                let sa = plane(a, b, &lv, o);
+                let sb = plane(b, o, &lv, a);
+                let sc = plane(o, a, &lv, b);
+                sa.or_sign_bits3(sb, sc, &mut acc, k as u32);
+            }
+            write_pack(out, pack, *dst, &acc, *valid);
+        }
+    } else {
+        // One light.
+        let lv = splat4(lights[0]);
+        let (pa, na) = plane(a, b, &lv, o).sign_bits();
+        let (pb, nb) = plane(b, o, &lv, a).sign_bits();
+        let (pc, nc) = plane(o, a, &lv, b).sign_bits();
+        write_one(out, *dst, pa & pb & pc & valid, na & nb & nc & valid);
+    }
+}
+
+/// `exact` with several lights (and their `stages`): each pack's sign bytes built in registers,
+/// one store. The block's points are widened to f64 (by `fallback`) only when some lane needs
+/// the f64 filter. Returns the evaluations decided by the scalar exact predicate.
+#[inline(always)]
+fn exact_packs<Lv: Level>(
+    lay: &Layout,
+    block: &Block<Lv::F>,
+    (lights, stages): (&[[f32; 4]], &[F32Stage]),
+    one64: Option<[Lv::D; 4]>,
+    out: &mut [&mut [i8]],
+) -> u64 {
+    let Block {
+        t,
+        dst,
+        valid,
+        a,
+        b,
+        o,
+    } = block;
+    let mut uncertain = 0;
+    let mut fallback = Fallback::<Lv>::new(lay, *t);
+    for (pack, chunk) in lights.chunks(PACK).enumerate() {
+        let mut acc = [0u32; LANES];
+        for (k, light) in chunk.iter().enumerate() {
+            // 1. The f32 filter on all 8 lanes; the sign of `det` is its decision in every lane
+            // that is not uncertain.
+            let lv32 = splat4(*light);
+            let (det, unc32) = match stages[pack * PACK + k] {
+                F32Stage::Skip => (Lv::F::splat(0.0), 0xFF),
+                F32Stage::Checked => filter_f32_det::<Lv::F, true>(a, b, &lv32, o),
+                F32Stage::Unchecked => filter_f32_det::<Lv::F, false>(a, b, &lv32, o),
+            };
+            det.or_sign_bits(&mut acc, k as u32);
+            let unc = unc32 & valid;
+            if unc != 0 {
+                // 2, 3. The uncertain lanes (rare): their bits replaced.
+                let (mut pos, mut neg) = (0, 0);
+                uncertain += fallback.decide(light, one64, unc, &mut pos, &mut neg);
+                set_sign_bits(&mut acc, k, unc, pos, neg);
+            }
+        }
+        write_pack(out, pack, *dst, &acc, *valid);
+    }
+    uncertain
+}
+
+/// `exact` with one light (`lv32`, `light`, `stage`) on a block the one-light fast path does not
+/// take. Returns the evaluations decided by the scalar exact predicate.
+#[inline(always)]
+fn exact_one<Lv: Level>(
+    lay: &Layout,
+    block: &Block<Lv::F>,
+    (lv32, light, stage): (&[Lv::F; 4], &[f32; 4], F32Stage),
+    one64: Option<[Lv::D; 4]>,
+    out: &mut [&mut [i8]],
+) -> u64 {
+    let Block {
+        t,
+        dst,
+        valid,
+        a,
+        b,
+        o,
+    } = block;
+    // 1. The f32 filter on all 8 lanes.
+    let (mut pos, mut neg, unc32) = match stage {
+        F32Stage::Skip => (0, 0, 0xFF),
+        F32Stage::Checked => filter_f32::<Lv::F, true>(a, b, lv32, o),
+        F32Stage::Unchecked => filter_f32::<Lv::F, false>(a, b, lv32, o),
+    };
+    let unc = unc32 & valid;
+    let uncertain = Fallback::<Lv>::new(lay, *t).decide(light, one64, unc, &mut pos, &mut neg);
+    write_one(out, *dst, pos & valid, neg & valid);
     uncertain
 }

@@ -7,8 +7,9 @@
 use glam::{Affine3A, DVec3, Quat, Vec3};
 use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use shadowvol_silhouette::SilhouetteBackend;
-use shadowvol_silhouette::{corpus, shapes, Light, SceneObject, TopologyScene};
+use shadowvol_silhouette::{Light, SceneObject, TopologyScene};
 use shadowvol_test_support::Skip;
+use shadowvol_test_support::{corpus, shapes};
 use shadowvol_wgpu_compute::{WgpuBackend, WgpuOptions};
 use std::sync::Arc;
 

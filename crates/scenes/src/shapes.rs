@@ -1,17 +1,26 @@
-//! Small procedural meshes for the conformance corpus, and [`uv_sphere_y`] and [`cuboid`] for
-//! tests and benchmarks.
+//! Small exact shapes: the building blocks of the `hard-*` presets ([`crate::hard`]) and of
+//! tests and examples that need a closed box, a tetrahedron or a planar grid.
 //!
-//! The corpus shapes (crate-private) are computed with `+ - * /` and `sqrt` only (IEEE correctly
-//! rounded), in `f64` and rounded to `f32` once, so the corpus is bit-identical on every
-//! platform: no `sin`/`cos` from the system's math library, whose last bits may differ between
-//! machines. [`uv_sphere_y`] is the exception: it uses `f32` `sin`/`cos`, which is fine where a
-//! test compares backends on the same mesh built in the same process.
+//! Every shape is computed with `+ - * /` and `sqrt` only (IEEE correctly rounded), in `f64` and
+//! rounded to `f32` once, so it is bit-identical on every platform: no `sin`/`cos` from the
+//! system's math library, whose last bits may differ between machines. [`Rng`] is the
+//! deterministic generator the presets' random soups use, with the same sequence everywhere.
+//!
+//! ```
+//! use shadowvol_scenes::shapes::{cuboid, tetrahedron};
+//! use glam::Vec3;
+//!
+//! let t = tetrahedron(1.0);
+//! assert_eq!((t.positions.len(), t.triangles.len()), (4, 4));
+//! let b = cuboid(Vec3::ZERO, Vec3::ONE);
+//! assert_eq!((b.positions.len(), b.triangles.len()), (8, 12));
+//! ```
 
 use glam::{DVec3, Vec3};
 use shadowvol_mesh_topology::Mesh;
 
 /// `(sin x, cos x)` by Taylor series after reduction to `[-pi, pi]`; deterministic, accurate to
-/// about 1e-15 (plenty: the corpus only needs reproducible, reasonable shapes).
+/// about 1e-15 (plenty: the shapes only need to be reproducible and reasonable).
 pub(crate) fn sin_cos(x: f64) -> (f64, f64) {
     let tau = std::f64::consts::TAU;
     let mut r = x - (x / tau).round() * tau;
@@ -35,11 +44,11 @@ pub(crate) fn f32v(p: DVec3) -> Vec3 {
     p.as_vec3()
 }
 
-/// A deterministic generator (splitmix64) for the corpus and the backends' randomised tests:
-/// the same seed gives the same sequence on every platform.
+/// A deterministic generator (splitmix64) for the `hard-*` presets' soups and for randomised
+/// tests: the same seed gives the same sequence on every platform.
 ///
 /// ```
-/// use shadowvol_silhouette::shapes::Rng;
+/// use shadowvol_scenes::shapes::Rng;
 /// let mut a = Rng::new(7);
 /// let x = a.unit();
 /// assert!((-1.0..1.0).contains(&x));
@@ -82,7 +91,7 @@ impl Rng {
 /// closed mesh (4 vertices, 6 edges, 4 triangles), exact in `f32` for power-of-two scales.
 ///
 /// ```
-/// let t = shadowvol_silhouette::shapes::tetrahedron(2.0);
+/// let t = shadowvol_scenes::shapes::tetrahedron(2.0);
 /// assert_eq!((t.positions.len(), t.triangles.len()), (4, 4));
 /// ```
 #[must_use]
@@ -133,69 +142,6 @@ pub(crate) fn uv_sphere(center: DVec3, radius: f64, rings: u32, segments: u32) -
     Mesh {
         positions,
         triangles,
-    }
-}
-
-/// A closed UV sphere of `radius` around the origin with its poles on the y axis, for tests and
-/// benchmarks: `rings` latitude bands, `segments` longitudes, poles as fans of `segments`
-/// triangles (vertex 0 = north pole at `+radius` y, last vertex = south pole), outward
-/// (counter-clockwise seen from outside) winding. It has `2 + (rings - 1) * segments` vertices
-/// and `2 * (rings - 1) * segments` triangles, every edge shared by exactly two of them.
-///
-/// Ring vertices are `radius * (sin θ cos φ, cos θ, sin θ sin φ)` with `θ = π r / rings`,
-/// `φ = 2π s / segments`, evaluated in `f32` with the standard library's `sin`/`cos` (so the last
-/// bits may differ between platforms; the conformance corpus uses the deterministic shapes of
-/// this module instead).
-///
-/// ```
-/// use shadowvol_mesh_topology::EdgeTable;
-/// use shadowvol_silhouette::shapes::uv_sphere_y;
-///
-/// let sphere = uv_sphere_y(9, 7, 1.0);
-/// assert_eq!(sphere.triangles.len(), 2 * 8 * 7);
-/// let table = EdgeTable::build(&sphere).unwrap();
-/// assert_eq!(table.stats.edges, table.stats.manifold_edges);
-/// ```
-///
-/// # Panics
-/// When `rings < 2` or `segments < 3` (no closed sphere).
-#[must_use]
-pub fn uv_sphere_y(rings: u32, segments: u32, radius: f32) -> Mesh {
-    assert!(
-        rings >= 2 && segments >= 3,
-        "uv_sphere_y needs rings >= 2 and segments >= 3, got {rings} x {segments}"
-    );
-    let mut p = vec![Vec3::new(0.0, radius, 0.0)];
-    for r in 1..rings {
-        let th = std::f32::consts::PI * r as f32 / rings as f32;
-        for s in 0..segments {
-            let ph = std::f32::consts::TAU * s as f32 / segments as f32;
-            p.push(radius * Vec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin()));
-        }
-    }
-    p.push(Vec3::new(0.0, -radius, 0.0));
-    let south = (p.len() - 1) as u32;
-    let ring = |r: u32, s: u32| 1 + (r - 1) * segments + (s % segments);
-    let mut t = Vec::new();
-    for s in 0..segments {
-        t.push([0, ring(1, s + 1), ring(1, s)]);
-        t.push([south, ring(rings - 1, s), ring(rings - 1, s + 1)]);
-    }
-    for r in 1..rings - 1 {
-        for s in 0..segments {
-            let (a, b, c, d) = (
-                ring(r, s),
-                ring(r, s + 1),
-                ring(r + 1, s),
-                ring(r + 1, s + 1),
-            );
-            t.push([a, b, d]);
-            t.push([a, d, c]);
-        }
-    }
-    Mesh {
-        positions: p,
-        triangles: t,
     }
 }
 
@@ -374,36 +320,6 @@ mod tests {
         assert_eq!(t.stats.edges, t.stats.manifold_edges);
         assert_eq!(t.stats.degenerate_triangles, 0);
         assert_eq!(m.triangles.len(), 2 * 8 * 5);
-    }
-
-    #[test]
-    fn uv_sphere_y_is_closed_outward_and_on_the_sphere() {
-        let m = uv_sphere_y(6, 9, 1.5);
-        m.validate().unwrap();
-        assert_eq!(m.positions.len(), 2 + 5 * 9);
-        assert_eq!(m.triangles.len(), 2 * 5 * 9);
-        assert_eq!(m.positions[0], Vec3::new(0.0, 1.5, 0.0));
-        assert_eq!(
-            m.positions[m.positions.len() - 1],
-            Vec3::new(0.0, -1.5, 0.0)
-        );
-        for p in &m.positions {
-            assert!((p.length() - 1.5).abs() < 1e-5, "{p}");
-        }
-        for t in &m.triangles {
-            let [a, b, c] = t.map(|i| m.positions[i as usize]);
-            let outward = (b - a).cross(c - a).dot(a + b + c);
-            assert!(outward > 0.0, "{t:?} winds inward");
-        }
-        let t = shadowvol_mesh_topology::EdgeTable::build(&m).unwrap();
-        assert_eq!(t.stats.edges, t.stats.manifold_edges);
-        assert_eq!(t.stats.degenerate_triangles, 0);
-    }
-
-    #[test]
-    #[should_panic(expected = "rings >= 2")]
-    fn uv_sphere_y_rejects_one_ring() {
-        let _ = uv_sphere_y(1, 8, 1.0);
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! The conformance corpus: hard cases every backend must pass.
+//! The hard cases behind the `hard-<case>` presets: small scenes whose lights hit degeneracies.
 //!
 //! Each case is a small scene (one or more objects, at most a few thousand triangles) with
 //! lights chosen to hit degeneracies: lights in the plane of faces (edge-on triangles), at a
@@ -7,41 +7,34 @@
 //! triangles, duplicate vertices that weld, triangle soups around the light, UV-sphere poles
 //! on the light's axis, and objects with non-identity transforms.
 //!
-//! Conformance tests run every backend on every case and light and check that `exact` equals
-//! the CPU reference (and an independent big-integer oracle) edge for edge, and that the
-//! consistent modes (`robust`, `ordered`, `exact`) have no open vertices. Cases marked
-//! [`CorpusCase::original_cracks`] show the problem the paper solves: `original` opens the
-//! silhouette chain there.
-//!
-//! The meshes are generated with basic IEEE operations only (see `shapes.rs`), so the corpus is
+//! [`preset`](crate::preset)`("hard-<case>")` frames each case with a camera; the conformance
+//! tests (the workspace's test-support crate) run every backend on every case. The meshes are
+//! built from [`shapes`](mod@crate::shapes), with basic IEEE operations only, so every case is
 //! bit-identical on every platform.
 //!
 //! ```
-//! use shadowvol_silhouette::corpus;
+//! use shadowvol_scenes::hard;
 //!
-//! let cases = corpus::cases();
-//! assert!(cases.iter().any(|c| c.original_cracks));
+//! let cases = hard::cases();
 //! for case in &cases {
-//!     let scene = case.scene().unwrap();
-//!     assert!(scene.total_triangles() <= 5000, "{} is small", case.name);
+//!     let triangles: usize = case.objects.iter().map(|(m, _)| m.triangles.len()).sum();
+//!     assert!(triangles <= 5000, "{} is small", case.name);
 //!     assert!(!case.lights.is_empty());
 //! }
-//! assert!(corpus::case("book-4").is_some());
+//! assert!(hard::case("book-4").is_some());
 //! ```
 
 use crate::shapes::{
-    book, cuboid, cuboid_unwelded, f32v, merge, plane_fan, plane_grid, uv_sphere, Rng,
+    self, book, cuboid, cuboid_unwelded, f32v, merge, plane_fan, plane_grid, uv_sphere, Rng,
 };
-use crate::{shapes, SceneObject, TopologyScene};
 use glam::{Affine3A, DVec3, Quat, Vec3};
-use shadowvol_mesh_topology::{EdgeTable, Mesh, MeshError};
+use shadowvol_mesh_topology::Mesh;
 use shadowvol_robust_math::Light;
-use std::sync::Arc;
 
 /// One hard case.
 #[derive(Debug, Clone)]
-pub struct CorpusCase {
-    /// Short name, used in test names and reports.
+pub struct HardCase {
+    /// Short name (the preset is `hard-<name>`), used in test names and reports.
     pub name: &'static str,
     /// What it exercises.
     pub description: &'static str,
@@ -49,32 +42,6 @@ pub struct CorpusCase {
     pub objects: Vec<(Mesh, Affine3A)>,
     /// Lights in world space.
     pub lights: Vec<Light>,
-    /// True when `original` is known to open the chain (`open_vertices > 0`) for at least one
-    /// light of this case: the baseline's cracks. Verified by the CPU backend's tests; cases
-    /// marked `false` may still crack, they are just not relied on to.
-    pub original_cracks: bool,
-}
-
-impl CorpusCase {
-    /// Builds the topology scene of this case.
-    ///
-    /// # Errors
-    /// A [`MeshError`] if a mesh is invalid (never for the built-in cases).
-    pub fn scene(&self) -> Result<TopologyScene, MeshError> {
-        let objects = self
-            .objects
-            .iter()
-            .enumerate()
-            .map(|(i, (mesh, t))| {
-                Ok(SceneObject {
-                    name: format!("{}#{i}", self.name),
-                    table: Arc::new(EdgeTable::build(mesh)?),
-                    world_from_object: *t,
-                })
-            })
-            .collect::<Result<Vec<_>, MeshError>>()?;
-        Ok(TopologyScene { objects })
-    }
 }
 
 fn single(
@@ -82,15 +49,8 @@ fn single(
     description: &'static str,
     mesh: Mesh,
     lights: Vec<Light>,
-    original_cracks: bool,
-) -> CorpusCase {
-    multi(
-        name,
-        description,
-        vec![(mesh, Affine3A::IDENTITY)],
-        lights,
-        original_cracks,
-    )
+) -> HardCase {
+    multi(name, description, vec![(mesh, Affine3A::IDENTITY)], lights)
 }
 
 fn multi(
@@ -98,14 +58,12 @@ fn multi(
     description: &'static str,
     objects: Vec<(Mesh, Affine3A)>,
     lights: Vec<Light>,
-    original_cracks: bool,
-) -> CorpusCase {
-    CorpusCase {
+) -> HardCase {
+    HardCase {
         name,
         description,
         objects,
         lights,
-        original_cracks,
     }
 }
 
@@ -131,7 +89,7 @@ fn tilted(u: f64, v: f64) -> DVec3 {
     TILT_ORIGIN + u * TILT_U + v * TILT_V
 }
 
-fn edge_on_tilted_grid() -> CorpusCase {
+fn edge_on_tilted_grid() -> HardCase {
     // 24 x 24 quads of size 0.25 on the tilted plane, rounded to f32 (so only nearly coplanar),
     // with a bump of a few 1e-7 on some vertices.
     let mesh = plane_grid(
@@ -164,11 +122,10 @@ fn edge_on_tilted_grid() -> CorpusCase {
         "a tilted (non-axis-aligned) 24x24 grid of nearly coplanar triangles, lights in its plane",
         mesh,
         lights,
-        true,
     )
 }
 
-fn edge_on_tilted_fan() -> CorpusCase {
+fn edge_on_tilted_fan() -> HardCase {
     let mesh = plane_fan(tilted(1.0, 1.0), TILT_U, TILT_V, 1.5, 64);
     let lights = vec![
         point_v(f32v(tilted(6.0, 2.5))),
@@ -181,11 +138,10 @@ fn edge_on_tilted_fan() -> CorpusCase {
         "a tilted fan of 64 nearly coplanar triangles, lights in its plane (outside, inside, far)",
         mesh,
         lights,
-        true,
     )
 }
 
-fn edge_on_axis_grid() -> CorpusCase {
+fn edge_on_axis_grid() -> HardCase {
     // Exactly coplanar (z = 0.5): every determinant is exactly 0 for lights in z = 0.5.
     let mesh = plane_grid(
         DVec3::new(-1.0, -1.0, 0.5),
@@ -205,11 +161,10 @@ fn edge_on_axis_grid() -> CorpusCase {
             directional(1.0, 2.0, 0.0),
             point(0.2, 0.3, 2.0),
         ],
-        false,
     )
 }
 
-fn light_at_vertex() -> CorpusCase {
+fn light_at_vertex() -> HardCase {
     let sphere = uv_sphere(DVec3::new(0.1, -0.2, 0.3), 1.0, 12, 16);
     let v0 = sphere.positions[2 + 16 * 3 + 5];
     let v1 = sphere.positions[2 + 16 * 7 + 11];
@@ -225,11 +180,10 @@ fn light_at_vertex() -> CorpusCase {
             point(0.0, 0.0, 0.0),
             point(1.0, 0.0, 0.0),
         ],
-        true,
     )
 }
 
-fn light_on_edge_line() -> CorpusCase {
+fn light_on_edge_line() -> HardCase {
     // Integer boxes: lights exactly on the lines through box edges (beyond and between ends),
     // and on the line of a face diagonal.
     let mesh = merge(
@@ -247,11 +201,10 @@ fn light_on_edge_line() -> CorpusCase {
             point(4.0, 6.0, 0.0),  // line of the face diagonal (0,0,0)-(2,3,0)
             point(5.0, 1.0, -4.0), // line of the second box's edge along z
         ],
-        false,
     )
 }
 
-fn offset_1e4_sphere() -> CorpusCase {
+fn offset_1e4_sphere() -> HardCase {
     let center = DVec3::new(1.0e4, -1.0e4, 1.0e4);
     let sphere = uv_sphere(center, 1.0, 20, 32);
     let near = |d: DVec3| point_v(f32v(center + d));
@@ -269,13 +222,10 @@ fn offset_1e4_sphere() -> CorpusCase {
             near(DVec3::new(0.0, 0.0, 1.0) + DVec3::new(5.0, 3.0, 0.0)), // in the pole's tangent plane
             Light::directional(Vec3::new(1.0, 1.0, 0.0)),
         ],
-        // No longer cracks in `original`: `sign_f32` evaluates `N·(O − A)`, whose differences
-        // are exact this close together; the paper's expanded `N·O − N·A` did crack here.
-        false,
     )
 }
 
-fn offset_1e4_grid() -> CorpusCase {
+fn offset_1e4_grid() -> HardCase {
     let origin = DVec3::new(1.0e4, 1.0e4, -1.0e4);
     let mesh = plane_grid(origin, TILT_U * 0.1, TILT_V * 0.1, 20, 20, |_, _| 0.0);
     let lights = vec![
@@ -290,12 +240,10 @@ fn offset_1e4_grid() -> CorpusCase {
         "a tilted grid 1e4 from the origin (rounded far off its plane), lights in and near its plane",
         mesh,
         lights,
-        // Closed in `original` too since `sign_f32` evaluates `N·(O − A)` (see the sphere above).
-        false,
     )
 }
 
-fn book_case(name: &'static str, description: &'static str, pages: usize) -> CorpusCase {
+fn book_case(name: &'static str, description: &'static str, pages: usize) -> HardCase {
     // Integer spine (0,0,0)-(1,2,3); integer page vertices, so "in the plane" is exact.
     let all = [
         Vec3::new(2.0, 0.0, 1.0),
@@ -320,11 +268,10 @@ fn book_case(name: &'static str, description: &'static str, pages: usize) -> Cor
             directional(1.0, 2.0, 3.0),            // parallel to the spine
             point(0.5, 1.0, 1.5),                  // on the spine, between its ends
         ],
-        false,
     )
 }
 
-fn double_sided_sheet() -> CorpusCase {
+fn double_sided_sheet() -> HardCase {
     // A curved sheet whose every triangle also appears with reversed winding: once sharing the
     // vertices, once on a separate copy of the vertices that welding merges.
     let sheet = plane_grid(
@@ -359,11 +306,10 @@ fn double_sided_sheet() -> CorpusCase {
             directional(1.0, 0.5, 0.0),
             point(0.2, 0.2, 0.1),
         ],
-        true,
     )
 }
 
-fn zero_area_collinear() -> CorpusCase {
+fn zero_area_collinear() -> HardCase {
     let mut positions = vec![
         Vec3::new(0.0, 0.0, 0.0),
         Vec3::new(1.0, 0.0, 0.0),
@@ -413,11 +359,10 @@ fn zero_area_collinear() -> CorpusCase {
             directional(1.0, 2.0, 3.0), // parallel to the tilted line
             point(0.0, 0.0, 0.0),       // at a vertex
         ],
-        true,
     )
 }
 
-fn welded_duplicates() -> CorpusCase {
+fn welded_duplicates() -> HardCase {
     let mesh = merge(
         cuboid_unwelded(Vec3::ZERO, Vec3::new(1.0, 2.0, 0.5)),
         &cuboid_unwelded(Vec3::new(-1.0, -1.0, -1.0), Vec3::new(-0.5, 0.0, 0.0)),
@@ -433,11 +378,10 @@ fn welded_duplicates() -> CorpusCase {
             directional(0.0, 0.0, 1.0),
             point(0.0, 0.0, 0.0), // at a welded vertex
         ],
-        false,
     )
 }
 
-fn soup_near_light() -> CorpusCase {
+fn soup_near_light() -> HardCase {
     let light = Vec3::new(0.125, 0.25, -0.375);
     let mut rng = Rng::new(0x5eed);
     let mut positions = Vec::new();
@@ -490,11 +434,10 @@ fn soup_near_light() -> CorpusCase {
             point_v(light + Vec3::new(0.0, 0.0, 1.0 / 64.0)),
             directional(0.0, 1.0, 0.0),
         ],
-        true,
     )
 }
 
-fn uv_sphere_poles() -> CorpusCase {
+fn uv_sphere_poles() -> HardCase {
     let mesh = uv_sphere(DVec3::ZERO, 1.0, 16, 24);
     single(
         "uv-sphere-poles",
@@ -508,11 +451,10 @@ fn uv_sphere_poles() -> CorpusCase {
             directional(0.0, 0.0, 1.0),
             directional(0.0, 0.0, -1.0),
         ],
-        false,
     )
 }
 
-fn directional_parallel() -> CorpusCase {
+fn directional_parallel() -> HardCase {
     let mesh = merge(
         merge(
             cuboid(Vec3::new(-1.0, -1.0, -1.0), Vec3::new(1.0, 0.5, 2.0)),
@@ -539,11 +481,10 @@ fn directional_parallel() -> CorpusCase {
             Light::directional(f32v(TILT_U)),
             Light::directional(f32v(TILT_U - TILT_V)),
         ],
-        true,
     )
 }
 
-fn multi_object_transforms() -> CorpusCase {
+fn multi_object_transforms() -> HardCase {
     // Rotation from a rational quaternion (normalised with sqrt only: deterministic).
     let rot_a = Quat::from_xyzw(1.0, 2.0, 3.0, 4.0).normalize();
     let rot_b = Quat::from_xyzw(-2.0, 1.0, 0.5, 3.0).normalize();
@@ -601,11 +542,10 @@ fn multi_object_transforms() -> CorpusCase {
             point_v(in_grid_plane),
             directional(0.3, -0.4, 1.0),
         ],
-        true,
     )
 }
 
-fn homogeneous_w() -> CorpusCase {
+fn homogeneous_w() -> HardCase {
     // Point lights with w != 1 (the point xyz / w): at a vertex and in the plane of faces, each
     // written as (fl(w * P), w). Then `L.xyz - w * A` cancels to (almost) 0 in f32 for the vertex
     // A = P, although w * A is not exact: the case that an f32 filter must not certify.
@@ -633,7 +573,6 @@ fn homogeneous_w() -> CorpusCase {
         "a tilted grid and a sphere with point lights given with w != 1 (xyz = w * P): at vertices and in the plane",
         mesh,
         lights,
-        false,
     )
 }
 
@@ -647,7 +586,7 @@ fn homogeneous_w() -> CorpusCase {
 /// plane the determinant is about `2^e` times its permanent, far below the `f64` filter's bound
 /// (`1e-15`, about `2^-50`), so the exact fallback decides each pair, and its answers are `+1`
 /// and `-1`. In `f32` the step vanishes in `L.y - A.y`, so the `f32` modes see an in-plane light.
-fn off_plane(name: &'static str, k: i32, offsets: &[i32]) -> CorpusCase {
+fn off_plane(name: &'static str, k: i32, offsets: &[i32]) -> HardCase {
     let s = 2f32.powi(k);
     let p = |x: f32, y: f32, z: f32| Vec3::new(x * s, y * s, z * s);
     let mesh = Mesh {
@@ -671,13 +610,12 @@ fn off_plane(name: &'static str, k: i32, offsets: &[i32]) -> CorpusCase {
         "a flat sheet with point lights beside it in its plane and a tiny step off it: the f64 filter leaves them undecided, the exact answers are +1 and -1",
         mesh,
         lights,
-        false,
     )
 }
 
-/// All cases of the corpus, in a fixed order.
+/// All hard cases, in a fixed order (the order of the `hard-*` presets).
 #[must_use]
-pub fn cases() -> Vec<CorpusCase> {
+pub fn cases() -> Vec<HardCase> {
     vec![
         single(
             "tetrahedron",
@@ -687,7 +625,6 @@ pub fn cases() -> Vec<CorpusCase> {
                 Light::point(Vec3::new(2.0, 3.0, 5.0)),
                 Light::directional(Vec3::new(1.0, 2.0, 3.0)),
             ],
-            false,
         ),
         edge_on_tilted_grid(),
         edge_on_tilted_fan(),
@@ -715,6 +652,6 @@ pub fn cases() -> Vec<CorpusCase> {
 
 /// The case called `name`, if any.
 #[must_use]
-pub fn case(name: &str) -> Option<CorpusCase> {
+pub fn case(name: &str) -> Option<HardCase> {
     cases().into_iter().find(|c| c.name == name)
 }

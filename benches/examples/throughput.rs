@@ -1,15 +1,18 @@
-//! Quick throughput check: a UV sphere of about `N` triangles (default 10^6), every mode, every
-//! supported level, 1 and 4 lights, against the measured memory floor.
+//! Quick throughput check of the `simd` backend: a UV sphere of about `N` triangles (default
+//! 10^6), every mode, every supported SIMD level, 1 and 4 lights, against the measured memory
+//! floor (`shadowvol::MemoryFloor`, the floor `shadowvol bench` reports).
 //!
 //! ```text
-//! cargo run --release -p shadowvol-simd --example throughput -- 1000000
+//! cargo run --release -p shadowvol-benches --example throughput -- 1000000
+//! LEVEL=avx2 THREADS=1 MODE=exact LIGHTS=1,4 cargo run --release -p shadowvol-benches --example throughput
 //! ```
 
 use glam::Vec3;
+use shadowvol::MemoryFloor;
 use shadowvol_mesh_topology::EdgeTable;
-use shadowvol_silhouette::shapes::uv_sphere_y;
 use shadowvol_silhouette::{Accuracy, Light, Multiplicities, SilhouetteBackend, TopologyScene};
-use shadowvol_simd::{MemoryFloor, SimdBackend, SimdLevel};
+use shadowvol_simd::{SimdBackend, SimdLevel};
+use shadowvol_test_support::shapes::uv_sphere_y;
 use std::time::Duration;
 
 fn median(mut v: Vec<Duration>) -> f64 {

@@ -1,8 +1,9 @@
 //! Whether this run is a CI run, read one way everywhere.
 //!
-//! Under CI every backend must start: a test, or `cargo xtask test`, that finds a driver missing
-//! fails instead of skipping. Every test and tool of the workspace asks [`is_ci`], so `CI=1`,
-//! `CI=True` and `CI=true` behave the same everywhere.
+//! Under CI every backend must start: a test that finds a driver missing fails instead of
+//! skipping ([`skip`](crate::skip) panics). Every test of the workspace asks [`is_ci`], and
+//! `cargo xtask test` reads the variable the same way, so `CI=1`, `CI=True` and `CI=true` behave
+//! the same everywhere.
 
 /// The environment variable CI services set.
 pub const CI_ENV: &str = "CI";
@@ -11,7 +12,7 @@ pub const CI_ENV: &str = "CI";
 /// (surrounding white space ignored).
 ///
 /// ```
-/// use shadowvol_silhouette::ci::means_ci;
+/// use shadowvol_test_support::ci::means_ci;
 /// for v in ["true", "True", "TRUE", "1", " true "] {
 ///     assert!(means_ci(v), "{v}");
 /// }

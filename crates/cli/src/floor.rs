@@ -3,11 +3,34 @@
 //! Any silhouette extraction reads every edge record (`a, b`: 8 bytes), every opposite vertex
 //! (4 bytes), every position (12 bytes), and writes one `i32` per edge and light. [`MemoryFloor`]
 //! holds buffers of exactly those sizes and times one pass that sums the inputs with 8-lane
-//! `u32` vectors and writes the output, split over the same rayon threads as the backend. The
-//! output is written with streaming (non-temporal) stores on x86-64, as the `simd` backend's
-//! one-light kernels write theirs, so that neither side pays for reading the output's cache lines
-//! before writing them. The `shadowvol bench` command reports it as `floor_ms`, measured in the
-//! same run as the backends.
+//! `u32` vectors and writes the output, split over rayon's global pool (the threads the `simd`
+//! backend runs on). The output is written with streaming (non-temporal) stores on x86-64, as
+//! the `simd` backend's one-light kernels write theirs, so that neither side pays for reading the
+//! output's cache lines before writing them.
+//!
+//! This is the one floor: `shadowvol bench` reports it as `floor_ms`, measured in the same run as
+//! the backends, and the criterion benches (`benches/`) and `cargo xtask matrix` (through
+//! `shadowvol bench`) use it too.
+//!
+//! ```
+//! use shadowvol::MemoryFloor;
+//! use shadowvol_mesh_topology::{EdgeTable, Mesh};
+//! use shadowvol_silhouette::TopologyScene;
+//! use glam::Vec3;
+//!
+//! let tetrahedron = Mesh::new(
+//!     vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+//!     vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+//! )?;
+//! let scene = TopologyScene::single(EdgeTable::build(&tetrahedron)?);
+//! let mut floor = MemoryFloor::new(&scene, 2);
+//! // 6 edges (8 bytes), 12 opposite vertices (4 bytes), 4 positions (12 bytes) read; 6 edges x 2
+//! // lights x 4 bytes written.
+//! assert_eq!(floor.bytes_read(), 6 * 8 + 12 * 4 + 4 * 12);
+//! assert_eq!(floor.bytes_written(), 6 * 2 * 4);
+//! let _pass = floor.run_once();
+//! # Ok::<(), shadowvol_mesh_topology::MeshError>(())
+//! ```
 
 use rayon::prelude::*;
 use shadowvol_silhouette::TopologyScene;
