@@ -119,7 +119,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 lights,
                 edges: topo.total_edges(),
                 open_vertices: (0..lights)
-                    .map(|l| invariant::open_vertices_scene(&topo, &got, l))
+                    .map(|l| invariant::open_vertices_scene(topo, &got, l))
                     .sum(),
                 sign_diff_vs_exact: (0..lights)
                     .map(|l| invariant::differing_signs(&got, &exact, l))

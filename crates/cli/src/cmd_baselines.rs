@@ -244,7 +244,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
             .iter()
             .map(|(k, v)| (k.clone(), serde_json::Value::String(v.clone())))
             .collect();
-        let id = backend.prepare(&topo)?;
+        let id = backend.prepare(topo)?;
         let mut m = Multiplicities::default();
         for mode in Accuracy::ALL {
             let mut rec = common.record(name.to_owned(), Some(mode.name()), "backend");

@@ -721,11 +721,11 @@ fn ten_million_triangles_run_through_simd_and_match_cpu() -> Outcome {
     ];
     let mut simd = shadowvol::find_backend("simd").unwrap().start().unwrap();
     assert_eq!(simd.info().name, "simd", "the simd backend runs here");
-    let (m, _) = extract_once(simd.as_mut(), &topo, &lights, Accuracy::Exact).unwrap();
+    let (m, _) = extract_once(simd.as_mut(), topo, &lights, Accuracy::Exact).unwrap();
     let mut cpu = shadowvol::find_backend("cpu").unwrap().start().unwrap();
-    let (reference, _) = extract_once(cpu.as_mut(), &topo, &lights, Accuracy::Exact).unwrap();
+    let (reference, _) = extract_once(cpu.as_mut(), topo, &lights, Accuracy::Exact).unwrap();
     for l in 0..lights.len() {
-        assert_eq!(invariant::open_vertices_scene(&topo, &m, l), 0, "light {l}");
+        assert_eq!(invariant::open_vertices_scene(topo, &m, l), 0, "light {l}");
         let sil = m.silhouette(l);
         assert!(
             sil.len() > 1000,

@@ -13,7 +13,7 @@ pub struct Comparison {
     /// Pixels whose state differs from the reference for some light and that lie more than one
     /// pixel from a reference boundary of that light.
     pub artifact_pixels: usize,
-    /// `artifact_pixels` with the geometric facing ([`faces_light_geometric`]): lit means the
+    /// `artifact_pixels` with the geometric facing ([`crate::faces_light_geometric`]): lit means the
     /// light reaches a surface with `cos θ > 0`, however dimly, without the 1/255 visibility
     /// threshold. DESIGN.md's definition read literally; differences here that are not in
     /// `artifact_pixels` are invisible in the 8-bit image.

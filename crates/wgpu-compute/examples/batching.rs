@@ -47,7 +47,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let topo = &scene.geometry;
         let lights = scene.light_positions();
-        let id = backend.prepare(&topo)?;
+        let id = backend.prepare(topo)?;
         let mut out = Multiplicities::default();
         for mode in Accuracy::ALL {
             for _ in 0..3 {

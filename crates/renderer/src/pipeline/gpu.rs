@@ -11,7 +11,10 @@ use crate::resident::{PassFormats, PassFrame, ResidentScene, ShadowPass};
 use crate::{RenderDevice, RenderError};
 use glam::Affine3A;
 
-/// The GPU pipeline. See the [module documentation](self).
+/// The GPU pipeline: the plan's techniques go to the resident pass
+/// ([`crate::resident::ShadowPass`]), which extracts, builds and draws the volumes on the device
+/// in the frame's command encoder. The host writes only small per-frame inputs; no silhouette
+/// backend runs.
 #[derive(Debug, Default)]
 pub struct GpuPipeline {
     pass: Option<ShadowPass>,

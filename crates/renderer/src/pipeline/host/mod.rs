@@ -37,14 +37,19 @@ struct ObjectCache {
     lights: Vec<Option<LightCache>>,
 }
 
-/// The host pipeline. See the [module documentation](self).
+/// What the whole geometry was prepared for: each object's table and transform.
+type PreparedKey = Vec<(Arc<EdgeTable>, Affine3A)>;
+
+/// The host pipeline: any [`SilhouetteBackend`] extracts the multiplicities, which come back to
+/// the host; the host builds side quads and caps from them and uploads them with the surfaces.
+/// Silhouettes are kept per (object, light) and reused while neither moved.
 pub struct HostPipeline {
     backend: Box<dyn SilhouetteBackend>,
     name: String,
     objects: Vec<ObjectCache>,
     /// The whole geometry prepared at once (real transforms), with the (table, transform) of
     /// each object it was prepared for: one `extract` serves every still object.
-    whole: Option<(PreparedId, Vec<(Arc<EdgeTable>, Affine3A)>)>,
+    whole: Option<(PreparedId, PreparedKey)>,
     raster: Option<HostRaster>,
     keep_volumes: bool,
     volumes: Vec<[f32; 4]>,
