@@ -14,6 +14,7 @@
 use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::Mesh;
 use shadowvol_reference::Shot;
+use shadowvol_renderer::raster::read_texture;
 use shadowvol_renderer::resident::{texture_2d, PassFormats, PassFrame, ShadowPass};
 use shadowvol_renderer::{Camera, RenderDevice, Scene, Technique};
 use shadowvol_robust_math::{Accuracy, Light};
@@ -244,50 +245,4 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
 fn ids_texture(ids: &Option<wgpu::Texture>) -> Result<&wgpu::Texture, String> {
     ids.as_ref()
         .ok_or_else(|| "no ids texture: made with --check only".to_owned())
-}
-
-/// Copies one aspect of a 2-D texture (`bpp` bytes per pixel) to the host, rows unpadded.
-fn read_texture(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    texture: &wgpu::Texture,
-    aspect: wgpu::TextureAspect,
-    bpp: u32,
-) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
-    let (w, h) = (texture.width(), texture.height());
-    let row =
-        (w * bpp).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    let staging = device.create_buffer(&wgpu::BufferDescriptor {
-        label: None,
-        size: u64::from(row * h),
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let mut enc = device.create_command_encoder(&Default::default());
-    enc.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo {
-            texture,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect,
-        },
-        wgpu::TexelCopyBufferInfo {
-            buffer: &staging,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: Some(h),
-            },
-        },
-        texture.size(),
-    );
-    queue.submit([enc.finish()]);
-    let slice = staging.slice(..);
-    slice.map_async(wgpu::MapMode::Read, |_| {});
-    device.poll(wgpu::PollType::wait_indefinitely())?;
-    let data = slice.get_mapped_range()?;
-    let (row, used) = (row as usize, (w * bpp) as usize);
-    Ok((0..h as usize)
-        .flat_map(|y| data[y * row..y * row + used].to_vec())
-        .collect())
 }

@@ -113,11 +113,8 @@ impl ExposureMeter {
         aspect: f64,
         exposure: Exposure,
     ) -> Option<f32> {
-        if scene.lights.iter().all(|l| l.emission.is_none()) {
-            return None;
-        }
-        if let Exposure::Fixed(x) = exposure {
-            return Some(x);
+        if let Some(x) = unmetered(scene, exposure) {
+            return x;
         }
         if changes.any() {
             self.bvh = None;
@@ -186,6 +183,18 @@ fn view_samples(bvh: &Bvh, camera: &Camera, aspect: f64) -> Vec<(DVec3, DVec3)> 
     out
 }
 
+/// The factor when nothing needs measuring: `Some(None)` when no light has an emission,
+/// `Some(Some(x))` for [`Exposure::Fixed`]; `None` otherwise.
+fn unmetered(scene: &Scene, exposure: Exposure) -> Option<Option<f32>> {
+    if scene.lights.iter().all(|l| l.emission.is_none()) {
+        return Some(None);
+    }
+    match exposure {
+        Exposure::Fixed(x) => Some(Some(x)),
+        Exposure::Auto => None,
+    }
+}
+
 /// The exposure factor (output per lux) when nothing lit is in view: the brightest light's
 /// nominal illuminance at the centre of `bounds`, the surfaces' world box (for example
 /// [`Scene::surface_bounds`]; intensity over distance², lux for directional lights; range and
@@ -197,11 +206,8 @@ pub fn exposure_factor(
     bounds: Option<(glam::Vec3, glam::Vec3)>,
     exposure: Exposure,
 ) -> Option<f32> {
-    if scene.lights.iter().all(|l| l.emission.is_none()) {
-        return None;
-    }
-    if let Exposure::Fixed(x) = exposure {
-        return Some(x);
+    if let Some(x) = unmetered(scene, exposure) {
+        return x;
     }
     let centre = bounds.map_or(glam::DVec3::ZERO, |(lo, hi)| ((lo + hi) * 0.5).as_dvec3());
     let nominal = scene

@@ -4,8 +4,9 @@ mod common;
 
 use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::Mesh;
+use shadowvol_renderer::raster::read_texture;
 use shadowvol_renderer::resident::{
-    twin, PassFormats, PassFrame, ResidentLayout, ResidentScene, ShadowPass,
+    texture_2d, twin, PassFormats, PassFrame, ResidentLayout, ResidentScene, ShadowPass,
 };
 use shadowvol_renderer::{
     hard, volume, Camera, HostPipeline, Pipeline, RenderOptions, Scene, Technique,
@@ -542,27 +543,14 @@ fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> Vec<u8> {
         },
     )
     .unwrap();
-    let target = |format, usage| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: None,
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage,
-            view_formats: &[],
-        })
-    };
+    let target = |label, format, usage| texture_2d(device, label, w, h, format, usage);
     let color = target(
+        "color",
         wgpu::TextureFormat::Rgba8Unorm,
         wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
     );
     let depth = target(
+        "depth",
         wgpu::TextureFormat::Depth24PlusStencil8,
         wgpu::TextureUsages::RENDER_ATTACHMENT,
     );
@@ -570,38 +558,13 @@ fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> Vec<u8> {
         color.create_view(&Default::default()),
         depth.create_view(&Default::default()),
     );
-    let row = (w * 4).div_ceil(256) * 256;
-    let staging = device.create_buffer(&wgpu::BufferDescriptor {
-        label: None,
-        size: u64::from(row * h),
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
     let mut enc = device.create_command_encoder(&Default::default());
     pass.encode_extract(&mut enc, &rs);
     pass.encode_prepass(&mut enc, &rs, &cv, None, &dv, wgpu::Color::BLACK);
     pass.encode_stencil(&mut enc, &rs, 0, &dv);
     pass.encode_lit(&mut enc, &rs, 0, &cv, &dv);
-    enc.copy_texture_to_buffer(
-        color.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &staging,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: Some(h),
-            },
-        },
-        color.size(),
-    );
     queue.submit([enc.finish()]);
-    let slice = staging.slice(..);
-    slice.map_async(wgpu::MapMode::Read, |_| {});
-    device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
-    let data = slice.get_mapped_range().unwrap();
-    (0..h as usize)
-        .flat_map(|y| data[y * row as usize..y * row as usize + w as usize * 4].to_vec())
-        .collect()
+    read_texture(device, queue, &color, wgpu::TextureAspect::All, 4).unwrap()
 }
 
 /// The surface vertex buffer written in several chunks (a 1 MiB storage-binding limit against

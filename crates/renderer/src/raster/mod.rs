@@ -7,8 +7,8 @@ pub(crate) mod pipelines;
 pub(crate) mod states;
 mod targets;
 
-pub use targets::Attachments;
 pub(crate) use targets::{map_read, FrameTargets};
+pub use targets::{read_texture, Attachments};
 
 use bytemuck::{Pod, Zeroable};
 use shadowvol_scenes::Emission;

@@ -296,3 +296,46 @@ fn read_rows(
     }
     Ok(out)
 }
+
+/// Copies one aspect of a 2-D texture on `device` (`bytes_per_px` bytes per pixel: 4 for RGBA8,
+/// 8 for the ids, 1 for the stencil aspect) to the host, rows unpadded, top row first, with the
+/// bounded wait of every GPU read (`SHADOWVOL_GPU_TIMEOUT`). The texture needs `COPY_SRC`.
+///
+/// # Errors
+/// [`RenderError::Device`] when the copy or the map fails or the device does not finish in time.
+pub fn read_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    aspect: wgpu::TextureAspect,
+    bytes_per_px: u32,
+) -> Result<Vec<u8>, RenderError> {
+    let (w, h) = (texture.width(), texture.height());
+    let row = padded_row(w, bytes_per_px);
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("texture readback"),
+        size: u64::from(row) * u64::from(h),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    enc.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &staging,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
+        },
+        texture.size(),
+    );
+    queue.submit([enc.finish()]);
+    read_rows(device, &staging, row, w * bytes_per_px, h, 1)
+}
