@@ -4,7 +4,9 @@ mod common;
 
 use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::Mesh;
-use shadowvol_renderer::resident::{twin, PassFormats, PassFrame, ResidentScene, ShadowPass};
+use shadowvol_renderer::resident::{
+    technique, twin, LightRecords, PassFormats, PassFrame, ResidentScene, ShadowPass,
+};
 use shadowvol_renderer::{hard, reference, volume, Camera, Pipeline, RenderOptions, Technique};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{corpus, object_lights, SceneObject, TopologyScene};
@@ -84,9 +86,9 @@ fn object_space(scene: &TopologyScene) -> TopologyScene {
 /// What one extraction on the device gave, and what the twin gives for the same input.
 struct Run {
     signs: Vec<i32>,
-    records: Vec<twin::LightRecords>,
+    records: Vec<LightRecords>,
     twin_signs: Vec<i32>,
-    twin_records: Vec<twin::LightRecords>,
+    twin_records: Vec<LightRecords>,
     twin_integer: u64,
     integer: u64,
 }
@@ -131,14 +133,14 @@ fn extract(
     let codes: Vec<u32> = techniques
         .iter()
         .map(|t| match t {
-            Technique::Culled => twin::technique::CULLED,
-            Technique::ZPass => twin::technique::ZPASS,
-            Technique::ZFail => twin::technique::ZFAIL,
+            Technique::Culled => technique::CULLED,
+            Technique::ZPass => technique::ZPASS,
+            Technique::ZFail => technique::ZFAIL,
         })
         .collect();
     let layout = rs.layout();
     let (twin_signs, twin_integer) =
-        twin::triangle_signs(layout, &ol, lights.len(), &codes, mode, pass.filter());
+        twin::triangle_signs(layout, &ol, lights.len(), &codes, mode, pass.exact_filter());
     let (_, twin_records) =
         twin::side_records(layout, &twin_signs, &ol, lights.len(), &codes, mode);
     (
@@ -155,7 +157,7 @@ fn extract(
 }
 
 /// Per light, the multiplicity of every global edge from the side records.
-fn multiplicities(records: &[twin::LightRecords], edges: usize) -> Vec<Vec<i32>> {
+fn multiplicities(records: &[LightRecords], edges: usize) -> Vec<Vec<i32>> {
     records
         .iter()
         .map(|r| {

@@ -63,9 +63,9 @@ use crate::plan::Technique;
 use crate::{Camera, RenderError};
 use glam::{Affine3A, DAffine3};
 use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::gpu::{mode_code, ExactFilter};
 use shadowvol_silhouette::{object_lights, TopologyScene};
 use shadowvol_wgpu_compute::shaders;
-use shadowvol_wgpu_compute::twin::ExactFilter;
 use std::sync::Arc;
 use wgpu::util::DeviceExt;
 
@@ -185,6 +185,28 @@ pub struct PassCounts {
     pub records: Vec<[u32; 2]>,
 }
 
+/// Per-(light, object) technique codes of the pass, as uploaded: the edge's or triangle's object
+/// is skipped (culled), its sides go to the z-pass list, or to the z-fail list (and it gets
+/// caps).
+pub mod technique {
+    /// Culled: no sign, no record.
+    pub const CULLED: u32 = 0;
+    /// Z-pass sides.
+    pub const ZPASS: u32 = 1;
+    /// Z-fail sides and caps.
+    pub const ZFAIL: u32 = 2;
+}
+
+/// The side records of one light, from [`ShadowPass::read_records`]: global edge ids,
+/// [`layout::NEGATIVE`] set when `m < 0`, each edge `|m|` times; sorted.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct LightRecords {
+    /// Records of z-pass objects.
+    pub zpass: Vec<u32>,
+    /// Records of z-fail objects.
+    pub zfail: Vec<u32>,
+}
+
 /// The pipelines of the pass on one device.
 pub struct ShadowPass {
     device: wgpu::Device,
@@ -231,8 +253,10 @@ impl std::fmt::Debug for ShadowPass {
     }
 }
 
+/// The index of `mode`'s pipeline in the per-mode pipeline lists (built in [`Accuracy::ALL`]
+/// order, which is the order of the mode codes).
 fn mode_index(mode: Accuracy) -> usize {
-    shaders::mode_value(mode) as usize
+    mode_code(mode) as usize
 }
 
 fn gcd(a: u64, b: u64) -> u64 {
@@ -367,7 +391,7 @@ impl std::fmt::Debug for ResidentScene {
 }
 
 impl ResidentScene {
-    /// The uploaded layout (for the CPU twin).
+    /// The uploaded layout (what the CPU twin reads in tests).
     #[must_use]
     pub fn layout(&self) -> &ResidentLayout {
         &self.layout
