@@ -97,8 +97,6 @@ while IFS=$'\t' read -r name file from to tests; do
     g() { glslangValidator -V --target-env vulkan1.1 "$@" shaders/silhouette_gs.geom >/dev/null; }
     g -o shaders/silhouette_gs.geom.spv
     g -DSHADOWVOL_NO_F64 -o shaders/silhouette_gs.f32.geom.spv
-    g -DSHADOWVOL_EXTRACT_ONLY -o shaders/silhouette_gs.extract.geom.spv
-    g -DSHADOWVOL_EXTRACT_ONLY -DSHADOWVOL_NO_F64 -o shaders/silhouette_gs.extract.f32.geom.spv
   fi
   args=()
   for t in $tests; do args+=(--test "$t"); done
