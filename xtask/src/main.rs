@@ -14,6 +14,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 mod figures;
+mod gpu_crates;
 mod matrix;
 mod plots;
 mod shaders;

@@ -18,7 +18,9 @@
 //!    ray-traced reference. Without a wgpu adapter it warns (a visible skip), under `CI=true` it
 //!    fails.
 //! 7. **shaders**: `cargo xtask shaders --check` (the committed SPIR-V matches the GLSL).
-//! 8. **fuzz**: each fuzz target (`fuzz/`, its own workspace) built and run for [`FUZZ_SECONDS`]
+//! 8. **gpu-crates**: every GPU backend crate has the core files and at most two of its own
+//!    ([`crate::gpu_crates`]).
+//! 9. **fuzz**: each fuzz target (`fuzz/`, its own workspace) built and run for [`FUZZ_SECONDS`]
 //!    seconds on its seed corpus with `cargo fuzz run --dev --sanitizer none` (stable Rust is
 //!    enough). A missing `cargo-fuzz` is installed with `cargo install` under CI or as root;
 //!    otherwise the targets are only `cargo check`ed and the step says what to install and
@@ -46,8 +48,16 @@ const APT_PACKAGES: &[&str] = &[
 ];
 
 /// The steps, in the order they run (the names `--skip` takes).
-const STEPS: [&str; 8] = [
-    "drivers", "fmt", "clippy", "docs", "test", "example", "shaders", "fuzz",
+const STEPS: [&str; 9] = [
+    "drivers",
+    "fmt",
+    "clippy",
+    "docs",
+    "test",
+    "example",
+    "shaders",
+    "gpu-crates",
+    "fuzz",
 ];
 
 /// Seconds each fuzz target runs in the `fuzz` step: enough to load and run its seeds and some
@@ -100,6 +110,9 @@ Runs, in order, and prints a summary:
            example on its own device, its shadows checked against the ray-traced
            reference (a warning without a wgpu adapter; a failure under CI=true)
   shaders  cargo xtask shaders --check
+  gpu-crates  every GPU backend crate (wgpu-compute, vulkan-geometry, opencl) has the
+           core files (lib, backend, device, layout, pipeline, dispatch, resolve, twin)
+           and at most two files of its own in src/
   fuzz     build and run each fuzz target a few seconds on its seeds (cargo fuzz run
            --dev --sanitizer none); cargo-fuzz is installed with cargo install when
            missing under CI or as root; otherwise the targets are only checked and the
@@ -107,8 +120,8 @@ Runs, in order, and prints a summary:
 
 Options:
   --no-drivers   same as --skip drivers
-  --skip STEP    skip a step (drivers, fmt, clippy, docs, test, example, shaders, fuzz);
-                 repeatable
+  --skip STEP    skip a step (drivers, fmt, clippy, docs, test, example, shaders,
+                 gpu-crates, fuzz); repeatable
   -p PACKAGE     clippy, docs and test only PACKAGE instead of --workspace; repeatable
 
 Environment:
@@ -236,11 +249,31 @@ pub fn run(args: &[String]) -> Result<(), String> {
             Err(e) => Outcome::Failed(e),
         },
     );
+    step(
+        "gpu-crates",
+        &mut || match crate::gpu_crates::check(&root) {
+            Ok(report) => {
+                println!("{report}");
+                Outcome::Passed
+            }
+            Err(e) => Outcome::Failed(e),
+        },
+    );
     step("fuzz", &mut || fuzz(&root, ci));
 
+    let failed = summary(&steps, &counts);
+    if failed == 0 {
+        Ok(())
+    } else {
+        Err(format!("{failed} step(s) failed"))
+    }
+}
+
+/// Prints the steps' outcomes and the test counts; returns the number of failed steps.
+fn summary(steps: &[Step], counts: &TestCounts) -> usize {
     println!("\n==> summary");
     let mut failed = 0;
-    for s in &steps {
+    for s in steps {
         let (word, detail) = match &s.outcome {
             Outcome::Passed => ("ok", String::new()),
             Outcome::Warned(w) => ("WARN", w.clone()),
@@ -252,7 +285,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
         };
         let first_line = detail.lines().next().unwrap_or("");
         println!(
-            "  {:8} {:8} {:>8.1} s  {first_line}",
+            "  {:10} {:8} {:>8.1} s  {first_line}",
             s.name,
             word,
             s.time.as_secs_f64()
@@ -280,11 +313,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
             println!("  skipped {name}: {why}");
         }
     }
-    if failed == 0 {
-        Ok(())
-    } else {
-        Err(format!("{failed} step(s) failed"))
-    }
+    failed
 }
 
 /// `RUSTDOCFLAGS` for the docs step: the caller's, then `-D warnings`.
