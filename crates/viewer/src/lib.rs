@@ -37,6 +37,7 @@
 pub struct ReadmeDoctests;
 
 pub mod controls;
+pub mod shaders;
 mod window;
 
 use shadowvol_renderer::{Accuracy, Pipeline, PlanPolicy, RenderError, RenderOptions, RenderScene};

@@ -25,8 +25,9 @@
 //! bit.
 //!
 //! The shaders are the `wgpu` silhouette backend's module (same bindings, sign functions and
-//! filter) with `extract.wgsl` appended, and the renderer's `shader.wgsl` with `draw.wgsl`
-//! appended. [`twin`] is the CPU port of the new kernels.
+//! filter) with `shaders/resident_extract.wgsl` appended, and the renderer's
+//! `shaders/render_raster.wgsl` with `shaders/resident_draw.wgsl` appended. [`twin`] is the CPU
+//! port of the new kernels.
 //!
 //! ```no_run
 //! # fn main() -> Result<(), shadowvol_renderer::RenderError> {
@@ -69,12 +70,13 @@ use shadowvol_wgpu_compute::shaders;
 use std::sync::Arc;
 use wgpu::util::DeviceExt;
 
-/// `resident/extract.wgsl`: the triangle, edge and reset kernels.
-pub const EXTRACT_WGSL: &str = include_str!("extract.wgsl");
-/// `resident/draw.wgsl`: the vertex-pulling shaders of the surfaces, sides and caps.
-pub const DRAW_WGSL: &str = include_str!("draw.wgsl");
-/// The renderer's `shader.wgsl` (fragment shaders and the uniforms both pipelines share).
-pub const SHADER_WGSL: &str = include_str!("../shader.wgsl");
+/// `shaders/resident_extract.wgsl`: the triangle, edge and reset kernels.
+pub const EXTRACT_WGSL: &str = include_str!("../../../../shaders/resident_extract.wgsl");
+/// `shaders/resident_draw.wgsl`: the vertex-pulling shaders of the surfaces, sides and caps.
+pub const DRAW_WGSL: &str = include_str!("../../../../shaders/resident_draw.wgsl");
+/// `shaders/render_raster.wgsl`: the renderer's raster shaders (fragment shaders and the
+/// uniforms both pipelines share).
+pub const SHADER_WGSL: &str = include_str!("../../../../shaders/render_raster.wgsl");
 
 /// Threads per workgroup of the triangle and edge passes (the `wgpu` backend's
 /// `WORKGROUP_SIZE`, whose module they join).
@@ -96,7 +98,7 @@ pub fn extract_source(filter: ExactFilter) -> String {
     s
 }
 
-/// The draw module: the renderer's `shader.wgsl`, then the resident vertex shaders.
+/// The draw module: the renderer's `render_raster.wgsl`, then the resident vertex shaders.
 #[must_use]
 pub fn draw_source() -> String {
     format!("{SHADER_WGSL}\n{DRAW_WGSL}")

@@ -1,4 +1,4 @@
-//! The CPU twin of `resident/extract.wgsl`, for tests: the triangle pass and the edge
+//! The CPU twin of `shaders/resident_extract.wgsl`, for tests: the triangle pass and the edge
 //! pass, statement for statement, on a [`ResidentLayout`], with the `wgpu` backend's twins of
 //! the functions they share (`triangle_sign`, `edge_multiplicity` of
 //! [`shadowvol_wgpu_compute::twin`]). The pass never calls it.
