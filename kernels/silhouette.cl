@@ -31,6 +31,7 @@
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #endif
 
+// The mode codes of shadowvol_silhouette::gpu::mode_code.
 #define MODE_ORIGINAL 0u
 #define MODE_ROBUST 1u
 #define MODE_ORDERED 2u

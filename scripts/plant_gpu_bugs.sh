@@ -21,10 +21,11 @@ export CI=true
 # would not be seen as changed: touching the embedding file rebuilds the crate.
 embedder() {
   case "$1" in
+    shaders/resident_*.wgsl | shaders/render_*.wgsl) echo crates/renderer/src/resident/mod.rs ;;
+    shaders/viewer_*.wgsl) echo crates/viewer/src/shaders.rs ;;
     shaders/*.wgsl) echo crates/wgpu-compute/src/shaders.rs ;;
     kernels/*.cl) echo crates/opencl/src/pipeline.rs ;;
     shaders/*.geom) echo crates/vulkan-geometry/src/pipeline.rs ;;
-    crates/renderer/src/resident/*.wgsl) echo crates/renderer/src/resident/mod.rs ;;
     *.rs) echo "$1" ;;
   esac
 }
@@ -46,18 +47,18 @@ glsl-sign-negated	shaders/silhouette_gs.geom	s = t * parity;	s = -t * parity;	co
 glsl-robust-rule-dropped	shaders/silhouette_gs.geom	if (t != t1 || t1 != t2) {	if (false) {	conformance
 glsl-f32-bound-shrunk	shaders/silhouette_gs.geom	precise float bound = 1.9073486328125e-06 * perm;	precise float bound = 1.0e-12 * perm;	conformance
 glsl-f64-bound-shrunk	shaders/silhouette_gs.geom	precise double bound = 1.0e-15LF * perm;	precise double bound = 1.0e-30LF * perm;	conformance
-resident-touch-ignored	crates/renderer/src/resident/extract.wgsl	return l.w != 0.0 && exact_product_is(p.x	return false && exact_product_is(p.x	resident
-resident-touch-rounded	crates/renderer/src/resident/extract.wgsl	fn exact_product_is(p: f32, w: f32, l: f32) -> bool {	fn exact_product_is(p: f32, w: f32, l: f32) -> bool { return p * w == l;	resident
-resident-extrude-lo-dropped	crates/renderer/src/resident/draw.wgsl	d = (p - a.xyz) - r_light_points[k + 1u].xyz;	d = p - a.xyz;	resident
-resident-side-flipped	crates/renderer/src/resident/draw.wgsl	if (record & R_NEGATIVE) != 0u {	if (record & R_NEGATIVE) == 0u {	resident
-resident-back-cap-flipped	crates/renderer/src/resident/draw.wgsl	if s == 1 && c != 0u {	if s == -1 && c != 0u {	resident
-resident-zfail-list-from-front	crates/renderer/src/resident/draw.wgsl	return side_vertex(r_records[lt.draw.x + lt.draw.y - 1u - i], v);	return side_vertex(r_records[lt.draw.x + i], v);	resident
+resident-touch-ignored	shaders/resident_extract.wgsl	return l.w != 0.0 && exact_product_is(p.x	return false && exact_product_is(p.x	resident
+resident-touch-rounded	shaders/resident_extract.wgsl	fn exact_product_is(p: f32, w: f32, l: f32) -> bool {	fn exact_product_is(p: f32, w: f32, l: f32) -> bool { return p * w == l;	resident
+resident-extrude-lo-dropped	shaders/resident_draw.wgsl	d = (p - a.xyz) - r_light_points[k + 1u].xyz;	d = p - a.xyz;	resident
+resident-side-flipped	shaders/resident_draw.wgsl	if (record & R_NEGATIVE) != 0u {	if (record & R_NEGATIVE) == 0u {	resident
+resident-back-cap-flipped	shaders/resident_draw.wgsl	if s == 1 && c != 0u {	if s == -1 && c != 0u {	resident
+resident-zfail-list-from-front	shaders/resident_draw.wgsl	return side_vertex(r_records[lt.draw.x + lt.draw.y - 1u - i], v);	return side_vertex(r_records[lt.draw.x + i], v);	resident
 twin-robust-rule	crates/wgpu-compute/src/twin.rs	if s0 == s1 && s1 == s2 { s0 } else { 0 }	if true { s0 } else { 0 }	twin resident
 integer-path-zero	crates/wgpu-compute/src/shaders.rs	return orient_int(a, b, l, o); // @exact-int"	return 0; // @exact-int"	gpu_lavapipe resident
-resident-pending-never-dispatched	crates/renderer/src/resident/extract.wgsl	pending_dispatch[0] = select(0u, x, any);	pending_dispatch[0] = 0u;	resident
-resident-pending-sign-dropped	crates/renderer/src/resident/extract.wgsl	signs[k] = s;	signs[k] = 0;	resident
+resident-pending-never-dispatched	shaders/resident_extract.wgsl	pending_dispatch[0] = select(0u, x, any);	pending_dispatch[0] = 0u;	resident
+resident-pending-sign-dropped	shaders/resident_extract.wgsl	signs[k] = s;	signs[k] = 0;	resident
 resident-touch-skip-dropped	crates/renderer/src/resident/pipeline.rs	(shaders::TOUCH_SIGNS_CONSTANT, 1.0),	(shaders::TOUCH_SIGNS_CONSTANT, 0.0),	resident
-resident-chunk-offset-dropped	crates/renderer/src/resident/draw.wgsl	let t = r_chunk.first + k;	let t = k;	resident
+resident-chunk-offset-dropped	shaders/resident_draw.wgsl	let t = r_chunk.first + k;	let t = k;	resident
 wgsl-resolve-sign-dropped	shaders/silhouette.wgsl	signs[r.light * params.tri_count + r.triangle] = s;	signs[r.light * params.tri_count + r.triangle] = 0;	gpu_lavapipe
 dispatch-inline-fallback-dropped	crates/wgpu-compute/src/dispatch.rs	if steps.deferred.is_none() {	if true {	gpu_lavapipe
 twin-resolve-skipped	crates/wgpu-compute/src/twin.rs	for r in &out.uncertain {	for r in out.uncertain.iter().take(0) {	twin
@@ -97,8 +98,6 @@ while IFS=$'\t' read -r name file from to tests; do
     g() { glslangValidator -V --target-env vulkan1.1 "$@" shaders/silhouette_gs.geom >/dev/null; }
     g -o shaders/silhouette_gs.geom.spv
     g -DSHADOWVOL_NO_F64 -o shaders/silhouette_gs.f32.geom.spv
-    g -DSHADOWVOL_EXTRACT_ONLY -o shaders/silhouette_gs.extract.geom.spv
-    g -DSHADOWVOL_EXTRACT_ONLY -DSHADOWVOL_NO_F64 -o shaders/silhouette_gs.extract.f32.geom.spv
   fi
   args=()
   for t in $tests; do args+=(--test "$t"); done

@@ -1,7 +1,7 @@
 // Exact sign of det4(A, B, L, O) = | A 1 ; B 1 ; L ; O 1 | with u32 integer arithmetic only.
 //
-// Part of shadowvol-wgpu-compute. The CPU twin is crates/wgpu-compute/src/exact_int.rs
-// (`exact_int::orient_int`): keep the two in step, statement for statement.
+// Part of shadowvol-wgpu-compute. The CPU twin is `orient_int` in
+// crates/wgpu-compute/src/twin.rs: keep the two in step, statement for statement.
 //
 // Why integers: WGSL compilers may contract (FMA) and reassociate float math, so no float
 // operation here may influence the result. Every input is read as its bit pattern; every

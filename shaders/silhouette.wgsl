@@ -52,9 +52,9 @@ const NEGATIVE: u32 = 0x80000000u;
 const F32_FILTER_EPS: f32 = 0x1p-19f;
 const F32_FILTER_MIN: f32 = 0x1p-40f;
 const F32_FILTER_MAX: f32 = 0x1p40f;
-// GPU-only guards of the f32 filter (see `cpu_twin::filter_f32`): every input magnitude at most
-// 2^39 (so no difference or product can overflow), and a non-zero permanent at least 2^-60 (so
-// flushing a subnormal intermediate to zero moves det by far less than the bound).
+// GPU-only guards of the f32 filter (`shaders::GPU_F32_INPUT_MAX`, `GPU_F32_PERM_MIN`): every input
+// magnitude at most 2^39 (so no difference or product can overflow), and a non-zero permanent at
+// least 2^-60 (so flushing a subnormal intermediate to zero moves det by far less than the bound).
 const F32_INPUT_MAX_BITS: u32 = 0x53000000u; // bits of 2^39
 const F32_PERM_MIN: f32 = 0x1p-60f;
 

@@ -13,4 +13,12 @@
 //!                                                    # (CI=1 and CI=True alike)
 //! ```
 //!
+//! `shaders.rs` (also `harness = false`) validates every shader source in `shaders/` as the
+//! crates build it: the WGSL modules with naga, the GLSL stages with `glslangValidator` and the
+//! definitions of each committed SPIR-V file. It needs no GPU:
+//!
+//! ```text
+//! cargo test -p shadowvol-tests --test shaders
+//! ```
+//!
 //! This library itself is empty; it exists so that the package can carry the backend features.

@@ -15,6 +15,7 @@ use std::process::ExitCode;
 
 mod ci;
 mod figures;
+mod gpu_crates;
 mod matrix;
 mod plots;
 mod shaders;

@@ -4,7 +4,7 @@
 //! --target-env vulkan1.1` to the file of the same name plus `.spv` (for example
 //! `shaders/silhouette_gs.geom` → `shaders/silhouette_gs.geom.spv`). [`VARIANTS`] lists the extra
 //! outputs compiled from the same source with preprocessor definitions (the f32-only geometry
-//! shader for devices without `shaderFloat64`, and the extraction-only geometry shaders).
+//! shader for devices without `shaderFloat64`).
 //!
 //! With `--check` nothing is written: each shader is compiled into a temporary folder and the
 //! command fails, listing the files, when a committed `.spv` is missing or differs from a fresh
@@ -14,23 +14,11 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// Extra outputs: (source file name in `shaders/`, output file name, `-D` definitions).
-pub const VARIANTS: &[(&str, &str, &[&str])] = &[
-    (
-        "silhouette_gs.geom",
-        "silhouette_gs.f32.geom.spv",
-        &["SHADOWVOL_NO_F64"],
-    ),
-    (
-        "silhouette_gs.geom",
-        "silhouette_gs.extract.geom.spv",
-        &["SHADOWVOL_EXTRACT_ONLY"],
-    ),
-    (
-        "silhouette_gs.geom",
-        "silhouette_gs.extract.f32.geom.spv",
-        &["SHADOWVOL_EXTRACT_ONLY", "SHADOWVOL_NO_F64"],
-    ),
-];
+pub const VARIANTS: &[(&str, &str, &[&str])] = &[(
+    "silhouette_gs.geom",
+    "silhouette_gs.f32.geom.spv",
+    &["SHADOWVOL_NO_F64"],
+)];
 
 /// GLSL stages compiled by this command, by file extension.
 pub const STAGES: &[&str] = &["vert", "geom", "frag", "comp"];

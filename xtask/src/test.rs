@@ -20,7 +20,9 @@
 //!    ray-traced reference. Without a wgpu adapter it warns (a visible skip), under `CI=true` it
 //!    fails.
 //! 8. **shaders**: `cargo xtask shaders --check` (the committed SPIR-V matches the GLSL).
-//! 9. **fuzz**: each fuzz target (`fuzz/`, its own workspace) built and run for [`FUZZ_SECONDS`]
+//! 9. **gpu-crates**: every GPU backend crate has the core files and at most two of its own
+//!    ([`crate::gpu_crates`]).
+//! 10. **fuzz**: each fuzz target (`fuzz/`, its own workspace) built and run for [`FUZZ_SECONDS`]
 //!    seconds on its seed corpus with `cargo fuzz run --dev --sanitizer none` (stable Rust is
 //!    enough). A missing `cargo-fuzz` is installed with `cargo install` under CI or as root;
 //!    otherwise the targets are only `cargo check`ed and the step says what to install and
@@ -48,8 +50,17 @@ const APT_PACKAGES: &[&str] = &[
 ];
 
 /// The steps, in the order they run (the names `--skip` takes).
-const STEPS: [&str; 9] = [
-    "drivers", "fmt", "size", "clippy", "docs", "test", "example", "shaders", "fuzz",
+const STEPS: [&str; 10] = [
+    "drivers",
+    "fmt",
+    "size",
+    "clippy",
+    "docs",
+    "test",
+    "example",
+    "shaders",
+    "gpu-crates",
+    "fuzz",
 ];
 
 /// Seconds each fuzz target runs in the `fuzz` step: enough to load and run its seeds and some
@@ -104,6 +115,9 @@ Runs, in order, and prints a summary:
            example on its own device, its shadows checked against the ray-traced
            reference (a warning without a wgpu adapter; a failure under CI=true)
   shaders  cargo xtask shaders --check
+  gpu-crates  every GPU backend crate (wgpu-compute, vulkan-geometry, opencl) has the
+           core files (lib, backend, device, layout, pipeline, dispatch, resolve, twin)
+           and at most two files of its own in src/
   fuzz     build and run each fuzz target a few seconds on its seeds (cargo fuzz run
            --dev --sanitizer none); cargo-fuzz is installed with cargo install when
            missing under CI or as root; otherwise the targets are only checked and the
@@ -111,8 +125,8 @@ Runs, in order, and prints a summary:
 
 Options:
   --no-drivers   same as --skip drivers
-  --skip STEP    skip a step (drivers, fmt, size, clippy, docs, test, example, shaders, fuzz);
-                 repeatable
+  --skip STEP    skip a step (drivers, fmt, size, clippy, docs, test, example, shaders,
+                 gpu-crates, fuzz); repeatable
   -p PACKAGE     clippy, docs and test only PACKAGE instead of --workspace; repeatable
 
 Environment:
@@ -240,6 +254,16 @@ pub fn run(args: &[String]) -> Result<(), String> {
             Err(e) => Outcome::Failed(e),
         },
     );
+    step(
+        "gpu-crates",
+        &mut || match crate::gpu_crates::check(&root) {
+            Ok(report) => {
+                println!("{report}");
+                Outcome::Passed
+            }
+            Err(e) => Outcome::Failed(e),
+        },
+    );
     step("fuzz", &mut || fuzz(&root, ci));
 
     let failed = print_summary(&steps, &counts);
@@ -267,7 +291,7 @@ fn print_summary(steps: &[Step], counts: &TestCounts) -> usize {
         };
         let first_line = detail.lines().next().unwrap_or("");
         println!(
-            "  {:8} {:8} {:>8.1} s  {first_line}",
+            "  {:10} {:8} {:>8.1} s  {first_line}",
             s.name,
             word,
             s.time.as_secs_f64()

@@ -12,7 +12,7 @@ use opencl3::kernel::Kernel;
 use opencl3::memory::CL_MEM_READ_ONLY;
 use opencl3::program::Program;
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::gpu::{self, SceneLayout};
+use shadowvol_silhouette::gpu::{self, ExactFilter, SceneLayout};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
     PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
@@ -30,7 +30,8 @@ use std::time::Instant;
 /// the result is the same however they are split.
 pub struct OpenClBackend {
     pub(crate) device: DeviceDesc,
-    pub(crate) use_f64: bool,
+    /// The exact filter the kernel was built with.
+    pub(crate) filter: ExactFilter,
     pub(crate) kernel_origin: String,
     /// `CL_DEVICE_MAX_MEM_ALLOC_SIZE`, bytes.
     pub(crate) max_alloc: u64,
@@ -79,7 +80,7 @@ impl std::fmt::Debug for OpenClBackend {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("OpenClBackend")
             .field("device", &self.device.describe())
-            .field("exact_filter", &if self.use_f64 { "f64" } else { "f32" })
+            .field("exact_filter", &self.filter.name())
             .field("kernel", &self.kernel_origin)
             .field("scenes", &self.scenes.len())
             .finish_non_exhaustive()
@@ -93,10 +94,12 @@ impl OpenClBackend {
         &self.device
     }
 
-    /// True when exact mode filters in `f64` on the device, false for the `f32` filter.
+    /// The exact-mode filter the kernel was built with: `F64` when the device has
+    /// `cl_khr_fp64` (and it was not disabled with
+    /// [`OpenClOptions::force_f32_filter`](crate::OpenClOptions::force_f32_filter)), else `F32`.
     #[must_use]
-    pub fn uses_f64_filter(&self) -> bool {
-        self.use_f64
+    pub fn exact_filter(&self) -> ExactFilter {
+        self.filter
     }
 
     /// How many light batches (kernel launches, not counting reruns after the uncertain-record
@@ -132,10 +135,9 @@ impl SilhouetteBackend for OpenClBackend {
                 ("driver".to_owned(), self.device.driver_version.clone()),
                 (
                     "exact_filter".to_owned(),
-                    if self.use_f64 {
-                        "f64 (cl_khr_fp64)"
-                    } else {
-                        "f32"
+                    match self.filter {
+                        ExactFilter::F64 => "f64 (cl_khr_fp64)",
+                        ExactFilter::F32 => "f32",
                     }
                     .to_owned(),
                 ),

@@ -15,6 +15,7 @@ use opencl3::kernel::Kernel;
 use opencl3::platform::get_platforms;
 use opencl3::types::cl_device_id;
 use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::gpu::ExactFilter;
 use shadowvol_silhouette::BackendError;
 use shadowvol_silhouette::{Multiplicities, PreparedScenes, SilhouetteBackend, TopologyScene};
 use std::mem::ManuallyDrop;
@@ -336,11 +337,10 @@ impl OpenClBackend {
         #[allow(deprecated)] // clCreateCommandQueue: also works on OpenCL 1.2 platforms.
         let queue = CommandQueue::create_default(&context, 0)
             .map_err(|e| device_error("creating a command queue", e))?;
-        let use_f64 = device.fp64 && !options.force_f32_filter;
-        let build_options = if use_f64 {
-            "-DSHADOWVOL_EXACT_F64=1"
-        } else {
-            ""
+        let filter = ExactFilter::for_device(device.fp64, options.force_f32_filter);
+        let build_options = match filter {
+            ExactFilter::F64 => "-DSHADOWVOL_EXACT_F64=1",
+            ExactFilter::F32 => "",
         };
         let program = build_program(&context, &device, &source, build_options, &origin)?;
         let kernel = Kernel::create(&program, KERNEL_NAME).map_err(|e| BackendError::Build {
@@ -359,7 +359,7 @@ impl OpenClBackend {
                 .is_ok_and(|n| n >= GROUP);
         let mut backend = Self {
             device,
-            use_f64,
+            filter,
             kernel_origin: origin,
             max_alloc,
             max_lights_per_batch: options.max_lights_per_batch,

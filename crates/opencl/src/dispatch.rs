@@ -296,44 +296,95 @@ impl OpenClBackend {
         let t = Instant::now();
         let num_lights = batch.len();
         let mut flat_l = flat_light_batch(obj_lights, batch.clone())?;
+        let edges = self.ensure_buffers(id, flat_l.len(), num_lights, mode)?;
+        stats.upload += t.elapsed();
+        let Some(counts) = self.run_until_records_fit(job, &batch, &mut flat_l, stats)? else {
+            return Ok(Batch::TooManyUncertain);
+        };
+        let t = Instant::now();
+        let (raw_sil, raw_unc) = self.read_lists(id, &counts, edges * num_lights, limit)?;
+        stats.readback += t.elapsed();
+        let t = Instant::now();
+        let output = KernelOutput {
+            silhouettes: raw_sil
+                .chunks_exact(2)
+                .map(|c| (c[0] as u32, c[1]))
+                .collect(),
+            uncertain: UncertainRecord::read_all(&raw_unc),
+            counts,
+        };
+        stats.uncertain += output.uncertain.len() as u64;
+        let p = self.scenes.get(id)?;
+        finish_batch(&p.layout, obj_lights, batch, output, out, NAME)?;
+        stats.host_resolve += t.elapsed();
+        Ok(Batch::Done)
+    }
+
+    /// Makes the per-frame buffers of scene `id` large enough for a launch of `num_lights`
+    /// lights (`light_floats` floats of lights) in `mode`: lights, counters, silhouette list,
+    /// and uncertain records (exact mode starts with room for
+    /// [`INITIAL_UNCERTAIN_CAPACITY`] records). Returns the scene's edge count.
+    fn ensure_buffers(
+        &mut self,
+        id: PreparedId,
+        light_floats: usize,
+        num_lights: usize,
+        mode: Accuracy,
+    ) -> Result<usize, BackendError> {
         let max_records = self.max_uncertain_records();
-        let edges = {
-            let ctx = &self.context;
-            let p = self.scenes.get_mut(id)?;
-            let edges = p.layout.edge_count();
-            ensure(ctx, &mut p.lights, flat_l.len(), "the light buffer")?;
-            ensure(ctx, &mut p.counts, 2, "the counters")?;
+        let ctx = &self.context;
+        let p = self.scenes.get_mut(id)?;
+        let edges = p.layout.edge_count();
+        ensure(ctx, &mut p.lights, light_floats, "the light buffer")?;
+        ensure(ctx, &mut p.counts, 2, "the counters")?;
+        ensure(
+            ctx,
+            &mut p.sil,
+            2 * edges * num_lights,
+            "the silhouette lists",
+        )?;
+        let initial = INITIAL_UNCERTAIN_CAPACITY.min(max_records);
+        if mode == Accuracy::Exact && p.unc_records < initial {
             ensure(
                 ctx,
-                &mut p.sil,
-                2 * edges * num_lights,
-                "the silhouette lists",
+                &mut p.unc,
+                UncertainRecord::WORDS * initial,
+                "the uncertain records",
             )?;
-            let initial = INITIAL_UNCERTAIN_CAPACITY.min(max_records);
-            if mode == Accuracy::Exact && p.unc_records < initial {
-                ensure(
-                    ctx,
-                    &mut p.unc,
-                    UncertainRecord::WORDS * initial,
-                    "the uncertain records",
-                )?;
-                p.unc_records = initial;
-            } else if p.unc.is_none() {
-                ensure(
-                    ctx,
-                    &mut p.unc,
-                    UncertainRecord::WORDS,
-                    "the uncertain records",
-                )?;
-                p.unc_records = 1;
-            }
-            edges
-        };
-        stats.upload += t.elapsed();
+            p.unc_records = initial;
+        } else if p.unc.is_none() {
+            ensure(
+                ctx,
+                &mut p.unc,
+                UncertainRecord::WORDS,
+                "the uncertain records",
+            )?;
+            p.unc_records = 1;
+        }
+        Ok(edges)
+    }
+
+    /// Runs the launch of the lights `batch` until its uncertain records fit the buffer, growing
+    /// the buffer between runs, adding the times to `stats`, and returns the two counters
+    /// (uncertain records, silhouette entries). `None` when the batch has two or more lights
+    /// and its records need more than the device's largest allocation (the caller splits it).
+    ///
+    /// # Errors
+    /// As [`OpenClBackend::run_once`]; [`BackendError::Limit`] when the records of a single
+    /// light do not fit the device's largest allocation.
+    fn run_until_records_fit(
+        &mut self,
+        job: &Extraction<'_>,
+        batch: &Range<usize>,
+        flat_l: &mut Vec<f32>,
+        stats: &mut ExtractStats,
+    ) -> Result<Option<Vec<u32>>, BackendError> {
+        let (id, num_lights) = (job.id, batch.len());
+        let max_records = self.max_uncertain_records();
         let mut counts = vec![0u32; 2];
         loop {
             let (up, comp, read) =
-                self.run_once(id, &mut flat_l, &mut counts, num_lights, mode, limit)?;
+                self.run_once(id, flat_l, &mut counts, num_lights, job.mode, job.limit)?;
             stats.upload += up;
             stats.compute += comp;
             stats.readback += read;
@@ -342,11 +393,11 @@ impl OpenClBackend {
             // (The buffer never exceeds the largest allocation; the `min` matters only when
             // tests lower the pretended limit after the buffer grew.)
             if needed <= p.unc_records.min(max_records) {
-                break;
+                return Ok(Some(counts));
             }
             if needed > max_records {
                 if num_lights > 1 {
-                    return Ok(Batch::TooManyUncertain);
+                    return Ok(None);
                 }
                 return Err(BackendError::Limit {
                     backend: NAME,
@@ -372,11 +423,21 @@ impl OpenClBackend {
             )?;
             p.unc_records = records;
         }
-        let t = Instant::now();
+    }
+
+    /// Reads back the silhouette list and the uncertain records the `counts` name (at most
+    /// `max_entries` list entries: one per (edge, light)), as raw words, with one bounded wait.
+    fn read_lists(
+        &mut self,
+        id: PreparedId,
+        counts: &[u32],
+        max_entries: usize,
+        limit: Duration,
+    ) -> Result<(Vec<i32>, Vec<u32>), BackendError> {
         let p = self.scenes.get(id)?;
         // At most one entry per (edge, light): a larger count is a device fault, caught by
         // `finish_batch` when fewer entries than counted come back.
-        let mut raw_sil = vec![0i32; 2 * (counts[1] as usize).min(edges * num_lights)];
+        let mut raw_sil = vec![0i32; 2 * (counts[1] as usize).min(max_entries)];
         let mut raw_unc = vec![0u32; UncertainRecord::WORDS * counts[0] as usize];
         let mut events = Vec::with_capacity(2);
         let (sil_buf, _) = p.sil.as_ref().expect("ensured");
@@ -411,21 +472,7 @@ impl OpenClBackend {
                 Box::new(std::mem::take(&mut raw_unc)),
             ]
         })?;
-        stats.readback += t.elapsed();
-        let t = Instant::now();
-        let output = KernelOutput {
-            silhouettes: raw_sil
-                .chunks_exact(2)
-                .map(|c| (c[0] as u32, c[1]))
-                .collect(),
-            uncertain: UncertainRecord::read_all(&raw_unc),
-            counts,
-        };
-        stats.uncertain += output.uncertain.len() as u64;
-        let p = self.scenes.get(id)?;
-        finish_batch(&p.layout, obj_lights, batch, output, out, NAME)?;
-        stats.host_resolve += t.elapsed();
-        Ok(Batch::Done)
+        Ok((raw_sil, raw_unc))
     }
 }
 

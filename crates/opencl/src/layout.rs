@@ -1,9 +1,6 @@
 //! What an extraction puts on the device: the device buffers of a prepared scene (the shared
 //! [`SceneLayout`] uploaded once, and the per-frame buffers grown on demand), the kernel's light
 //! buffer, and how many lights fit one launch within the device's largest allocation.
-//!
-//! Both the device path and the [CPU twin](crate::twin) flatten the lights with exactly this
-//! code, so a difference between them can only come from the kernel itself.
 
 use crate::backend::OpenClBackend;
 use crate::device::device_error;
@@ -16,19 +13,8 @@ use shadowvol_silhouette::{BackendError, TopologyScene};
 use std::ops::Range;
 use std::ptr;
 
-/// Object-space lights flattened for the kernel: 4 `f32` per (object, light), index
-/// `object * lights + light`.
-#[must_use]
-pub fn flat_lights(object_lights: &[Vec<[f32; 4]>]) -> Vec<f32> {
-    object_lights
-        .iter()
-        .flat_map(|per_object| per_object.iter().flatten().copied())
-        .collect()
-}
-
 /// The lights `batch` of `object_lights` flattened for one kernel launch: 4 `f32` per (object,
-/// light of the batch), index `object * batch.len() + (light - batch.start)`. The whole range
-/// gives [`flat_lights`].
+/// light of the batch), index `object * batch.len() + (light - batch.start)`.
 ///
 /// # Errors
 /// [`BackendError::InvalidInput`] when `batch` is not a range of every object's lights.

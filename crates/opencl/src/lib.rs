@@ -19,11 +19,12 @@
 //!   expression exactly as written (`#pragma OPENCL FP_CONTRACT OFF`), with the canonical order
 //!   and parity rules. `exact` runs a certified filter on the device (the `f64` filter of
 //!   `orient_filter_f64` when the device has `cl_khr_fp64`, otherwise the `f32` filter of
-//!   `orient_filter_f32`); the (edge, OV, light) triples it cannot certify are appended to a
+//!   `orient_filter_f32`: [`ExactFilter`](shadowvol_silhouette::gpu::ExactFilter), as on the other
+//!   GPU backends); the (edge, OV, light) triples it cannot certify are appended to a
 //!   buffer and decided on the host with `orient_exact`, so exact results are bit-identical to the
 //!   `cpu` backend. [`ExtractStats::uncertain`](shadowvol_silhouette::ExtractStats::uncertain) counts them.
 //! * **A CPU twin.** [`twin`] is the kernel's logic in Rust, loop for loop, run through the same
-//!   layout and host code.
+//!   layout and host code, for tests (the backend never calls it).
 //! * **Bounded waits.** Nothing waits for the device without a limit (no `clFinish`, no blocking
 //!   reads or writes): every command is enqueued non-blocking and its event waited for within
 //!   [`shadowvol_silhouette::gpu::wait_limit`] (`SHADOWVOL_GPU_TIMEOUT` seconds, default 600; read

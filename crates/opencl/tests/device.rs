@@ -7,10 +7,11 @@ mod common;
 
 use common::{all_cases, start};
 use shadowvol_cpu::CpuBackend;
-use shadowvol_opencl::twin::TwinBackend;
+use shadowvol_opencl::twin;
 use shadowvol_opencl::{
     list_devices, select_device, KernelSource, OpenClBackend, OpenClOptions, DEVICE_ENV,
 };
+use shadowvol_silhouette::gpu::ExactFilter;
 use shadowvol_silhouette::{
     extract_once, invariant, Accuracy, BackendError, Light, Multiplicities, SilhouetteBackend,
 };
@@ -40,18 +41,22 @@ fn options(force_f32_filter: bool) -> OpenClOptions {
 /// identical to cpu too.
 fn conformance(force_f32_filter: bool, test: &str) -> Outcome {
     let mut cl = start(options(force_f32_filter))?;
-    let use_f64 = cl.uses_f64_filter();
-    assert_eq!(use_f64, !force_f32_filter && cl.device().fp64);
-    eprintln!("{test}: {} (f64 filter: {use_f64})", cl.info().device);
+    let filter = cl.exact_filter();
+    assert_eq!(
+        filter == ExactFilter::F64,
+        !force_f32_filter && cl.device().fp64
+    );
+    eprintln!("{test}: {} ({filter:?} filter)", cl.info().device);
     let mut cpu = CpuBackend::new();
-    let mut twin = TwinBackend::new(use_f64);
     let mut total_uncertain = 0;
     for case in all_cases() {
         for mode in Accuracy::ALL {
             let (want, _) = extract_once(&mut cpu, &case.scene, &case.lights, mode).unwrap();
             let (got, stats) = extract_once(&mut cl, &case.scene, &case.lights, mode)
                 .unwrap_or_else(|e| panic!("{} {mode}: {e}", case.name));
-            let (_, twin_stats) = extract_once(&mut twin, &case.scene, &case.lights, mode).unwrap();
+            let mut twin_m = Multiplicities::default();
+            let twin_uncertain =
+                twin::extract(&case.scene, &case.lights, mode, filter, &mut twin_m).unwrap();
             assert!(
                 got.silhouettes_consistent(),
                 "{} {mode}: compact lists",
@@ -68,7 +73,7 @@ fn conformance(force_f32_filter: bool, test: &str) -> Outcome {
                         case.name
                     );
                     assert_eq!(
-                        stats.uncertain, twin_stats.uncertain,
+                        stats.uncertain, twin_uncertain,
                         "{} exact: uncertain count of the device filter vs its twin",
                         case.name
                     );
@@ -119,15 +124,16 @@ fn pocl_has_fp64_so_both_exact_paths_are_covered() -> Outcome {
         .platform_name
         .contains("Portable Computing Language")
     {
-        assert!(
-            cl.uses_f64_filter(),
+        assert_eq!(
+            cl.exact_filter(),
+            ExactFilter::F64,
             "PoCL reports cl_khr_fp64; the f64 path must be used"
         );
     } else {
         eprintln!(
-            "not PoCL ({}); f64 filter: {}",
+            "not PoCL ({}); exact filter: {:?}",
             cl.info().device,
-            cl.uses_f64_filter()
+            cl.exact_filter()
         );
     }
     Ok(())

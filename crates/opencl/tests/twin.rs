@@ -5,23 +5,24 @@ mod common;
 
 use common::{all_cases, Lcg};
 use shadowvol_cpu::CpuBackend;
-use shadowvol_opencl::twin::{self, TwinBackend, UNCERTAIN};
+use shadowvol_opencl::twin;
 use shadowvol_robust_math::{orient_exact, orient_filter_f32, orient_filter_f64, sign_f32};
-use shadowvol_silhouette::{extract_once, invariant, Accuracy};
+use shadowvol_silhouette::gpu::ExactFilter;
+use shadowvol_silhouette::{extract_once, invariant, Accuracy, Multiplicities};
 
 #[test]
 fn twin_equals_cpu_in_every_mode_on_every_case() {
     let mut cpu = CpuBackend::new();
-    for use_f64 in [true, false] {
-        let mut tw = TwinBackend::new(use_f64);
+    for filter in [ExactFilter::F64, ExactFilter::F32] {
         for case in all_cases() {
             for mode in Accuracy::ALL {
                 let (want, _) = extract_once(&mut cpu, &case.scene, &case.lights, mode).unwrap();
-                let (got, _) = extract_once(&mut tw, &case.scene, &case.lights, mode).unwrap();
+                let mut got = Multiplicities::default();
+                twin::extract(&case.scene, &case.lights, mode, filter, &mut got).unwrap();
                 assert_eq!(
                     invariant::first_difference(&want, &got),
                     None,
-                    "{} {mode} (f64 filter: {use_f64}): (light, edge, cpu, twin)",
+                    "{} {mode} ({filter:?} filter): (light, edge, cpu, twin)",
                     case.name
                 );
                 assert!(got.silhouettes_consistent(), "{} {mode}", case.name);
@@ -38,10 +39,11 @@ fn twin_exact_mode_resolves_uncertain_pairs_on_the_host() {
         .into_iter()
         .find(|c| c.name == "flat-in-plane")
         .unwrap();
-    for use_f64 in [true, false] {
-        let mut tw = TwinBackend::new(use_f64);
-        let (m, stats) = extract_once(&mut tw, &case.scene, &case.lights, Accuracy::Exact).unwrap();
-        assert_eq!(stats.uncertain as usize, case.scene.total_ovs());
+    for filter in [ExactFilter::F64, ExactFilter::F32] {
+        let mut m = Multiplicities::default();
+        let uncertain =
+            twin::extract(&case.scene, &case.lights, Accuracy::Exact, filter, &mut m).unwrap();
+        assert_eq!(uncertain as usize, case.scene.total_ovs());
         assert!(m.all_values().iter().all(|&v| v == 0));
     }
 }
@@ -92,22 +94,22 @@ fn twin_filters_certify_only_correct_signs_and_match_robust_math() {
         if l[3] == 0.0 && l[..3].iter().all(|&x| x == 0.0) {
             continue;
         }
-        let exact = i32::from(orient_exact(a, b, l, o));
+        let exact = orient_exact(a, b, l, o);
         let s32 = twin::filter_f32(a, b, l, o);
         let s64 = twin::filter_f64(a, b, l, o);
         // Certified signs are always the exact sign.
-        if s32 != UNCERTAIN {
-            assert_eq!(s32, exact, "f32 filter at {a:?} {b:?} {l:?} {o:?}");
+        if let Some(s) = s32 {
+            assert_eq!(s, exact, "f32 filter at {a:?} {b:?} {l:?} {o:?}");
             f32_certified += 1;
         }
-        if s64 != UNCERTAIN {
-            assert_eq!(s64, exact, "f64 filter at {a:?} {b:?} {l:?} {o:?}");
+        if let Some(s) = s64 {
+            assert_eq!(s, exact, "f64 filter at {a:?} {b:?} {l:?} {o:?}");
             f64_certified += 1;
         }
         // Inputs here are normal and moderate, so the kernel's extra flush-to-zero guards never
         // fire: the decisions are exactly robust-math's filters.
-        let rm32 = orient_filter_f32(a, b, l, o).map_or(UNCERTAIN, i32::from);
-        let rm64 = orient_filter_f64(a, b, l, o).map_or(UNCERTAIN, i32::from);
+        let rm32 = orient_filter_f32(a, b, l, o);
+        let rm64 = orient_filter_f64(a, b, l, o);
         assert_eq!(s32, rm32, "f32 filter decision at {a:?} {b:?} {l:?} {o:?}");
         assert_eq!(s64, rm64, "f64 filter decision at {a:?} {b:?} {l:?} {o:?}");
         assert_eq!(twin::sign_f32(a, b, l, o), i32::from(sign_f32(a, b, l, o)));
@@ -130,12 +132,12 @@ fn twin_guards_subnormal_and_underflowing_inputs() {
     let b = [1.0, 0.0, 0.0];
     let o = [0.0, 1.0, tiny];
     let l = [0.3, 0.3, 2.0, 1.0];
-    assert_eq!(twin::filter_f32(a, b, l, o), UNCERTAIN);
-    assert_eq!(twin::filter_f64(a, b, l, o), UNCERTAIN);
+    assert_eq!(twin::filter_f32(a, b, l, o), None);
+    assert_eq!(twin::filter_f64(a, b, l, o), None);
     // w * a underflows: uncertain in the f32 filter.
     let a2 = [1e-30, 0.0, 0.0];
     let l2 = [0.0, 0.3, 2.0, 1e-10];
-    assert_eq!(twin::filter_f32(a2, b, l2, [0.0, 1.0, 0.0]), UNCERTAIN);
+    assert_eq!(twin::filter_f32(a2, b, l2, [0.0, 1.0, 0.0]), None);
     // The host still decides them exactly: on a mesh with subnormal coordinates the twin's exact
     // mode sends pairs to the host and agrees with cpu.
     let mesh = shadowvol_mesh_topology::Mesh {
@@ -153,17 +155,12 @@ fn twin_guards_subnormal_and_underflowing_inputs() {
     let lights = [shadowvol_silhouette::Light::point(glam::Vec3::new(
         0.3, 0.2, 0.0,
     ))];
-    for use_f64 in [true, false] {
-        let (got, stats) = extract_once(
-            &mut TwinBackend::new(use_f64),
-            &scene,
-            &lights,
-            Accuracy::Exact,
-        )
-        .unwrap();
+    for filter in [ExactFilter::F64, ExactFilter::F32] {
+        let mut got = Multiplicities::default();
+        let uncertain = twin::extract(&scene, &lights, Accuracy::Exact, filter, &mut got).unwrap();
         let (want, _) =
             extract_once(&mut CpuBackend::new(), &scene, &lights, Accuracy::Exact).unwrap();
-        assert!(stats.uncertain > 0);
+        assert!(uncertain > 0);
         assert_eq!(got, want);
     }
 }
@@ -185,8 +182,8 @@ fn f32_filter_never_certifies_general_w() {
     );
     let got = twin::filter_f32(a, b, l, o);
     assert!(
-        got == UNCERTAIN || got == i32::from(want),
-        "f32 filter certified {got}, exact sign is {want}"
+        got.is_none() || got == Some(want),
+        "f32 filter certified {got:?}, exact sign is {want}"
     );
-    assert_eq!(got, UNCERTAIN, "general w must go to the host");
+    assert_eq!(got, None, "general w must go to the host");
 }

@@ -6,7 +6,8 @@ use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::Mesh;
 use shadowvol_renderer::raster::read_texture;
 use shadowvol_renderer::resident::{
-    texture_2d, twin, PassFormats, PassFrame, ResidentLayout, ResidentScene, ShadowPass,
+    technique, texture_2d, twin, LightRecords, PassFormats, PassFrame, ResidentLayout,
+    ResidentScene, ShadowPass,
 };
 use shadowvol_renderer::{
     hard, volume, Camera, HostPipeline, Pipeline, RenderOptions, Scene, Technique,
@@ -77,9 +78,9 @@ fn unit(lights: &[Light]) -> Vec<SceneLight> {
 /// What one extraction on the device gave, and what the twin gives for the same input.
 struct Run {
     signs: Vec<i32>,
-    records: Vec<twin::LightRecords>,
+    records: Vec<LightRecords>,
     twin_signs: Vec<i32>,
-    twin_records: Vec<twin::LightRecords>,
+    twin_records: Vec<LightRecords>,
     twin_integer: u64,
     integer: u64,
 }
@@ -129,14 +130,14 @@ fn extract(
     let codes: Vec<u32> = techniques
         .iter()
         .map(|t| match t {
-            Technique::Culled => twin::technique::CULLED,
-            Technique::ZPass => twin::technique::ZPASS,
-            Technique::ZFail => twin::technique::ZFAIL,
+            Technique::Culled => technique::CULLED,
+            Technique::ZPass => technique::ZPASS,
+            Technique::ZFail => technique::ZFAIL,
         })
         .collect();
     let layout = rs.layout();
     let (twin_signs, twin_integer) =
-        twin::triangle_signs(layout, &ol, lights.len(), &codes, mode, pass.filter());
+        twin::triangle_signs(layout, &ol, lights.len(), &codes, mode, pass.exact_filter());
     let (_, twin_records) =
         twin::side_records(layout, &twin_signs, &ol, lights.len(), &codes, mode);
     (
@@ -153,7 +154,7 @@ fn extract(
 }
 
 /// Per light, the multiplicity of every global edge from the side records.
-fn multiplicities(records: &[twin::LightRecords], edges: usize) -> Vec<Vec<i32>> {
+fn multiplicities(records: &[LightRecords], edges: usize) -> Vec<Vec<i32>> {
     records
         .iter()
         .map(|r| {

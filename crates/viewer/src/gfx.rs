@@ -159,8 +159,8 @@ impl Gfx {
                 count: None,
             }],
         });
-        let blit_module = device.create_shader_module(wgpu::include_wgsl!("blit.wgsl"));
-        let volume_module = device.create_shader_module(wgpu::include_wgsl!("volumes.wgsl"));
+        let blit_module = crate::shaders::blit_module(&device);
+        let volume_module = crate::shaders::volumes_module(&device);
         let layout = |bgl: &wgpu::BindGroupLayout| {
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: None,

@@ -41,6 +41,7 @@ mod app;
 pub mod controls;
 mod gfx;
 mod overlay;
+pub mod shaders;
 
 use shadowvol_renderer::{Accuracy, Pipeline, PlanPolicy, RenderError, RenderOptions, Scene};
 use shadowvol_silhouette::{BackendError, SilhouetteBackend};

@@ -83,7 +83,7 @@ fn main() {
     };
     println!("device: {}", vk.info().device);
     println!("details: {:?}", vk.info().details);
-    let label = format!("{} filter", vk.filter().name());
+    let label = format!("{} filter", vk.exact_filter().name());
     let mut ok = corpus_report(&mut vk, &label);
     let mut vk32 = VulkanBackend::new(VulkanOptions {
         force_f32_filter: true,

@@ -3,12 +3,12 @@
 //! (`prepare` creates the scene's buffers, `extract` runs [`crate::dispatch`]).
 
 use crate::device::{device_err, Buffer, Context, VulkanOptions};
-use crate::layout::{BufferGuard, Prepared, INITIAL_UNCERTAIN, UNCERTAIN_HEADER, XFORM_BYTES};
+use crate::layout::{BufferGuard, Prepared, INITIAL_UNCERTAIN, UNCERTAIN_HEADER};
 use crate::pipeline::{Pipelines, BINDINGS};
-use crate::twin::{DeviceFilter, DeviceScene};
 use crate::NAME;
 use ash::vk;
 use shadowvol_robust_math::{Accuracy, Light};
+use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
     PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
@@ -37,9 +37,6 @@ type Cleanup = Box<dyn FnOnce(&Context)>;
 /// refuses new work with [`BackendError::Device`] until that work's fence signals (each later
 /// call waits for it up to the limit again and recovers when it has finished), and dropping the
 /// backend leaks the device instead of destroying it under running work.
-///
-/// [`VulkanBackend::render_shadow_mask`] (in `render.rs`) runs the same shader with emission on,
-/// after a depth pre-pass, into a depth/stencil attachment.
 pub struct VulkanBackend {
     pub(crate) prepared: PreparedScenes<Prepared>,
     pub(crate) pipes: Pipelines,
@@ -55,7 +52,7 @@ impl std::fmt::Debug for VulkanBackend {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("VulkanBackend")
             .field("device", &self.ctx.caps.device_name)
-            .field("filter", &self.filter())
+            .field("filter", &self.exact_filter())
             .field("scenes", &self.prepared.len())
             .finish()
     }
@@ -66,8 +63,8 @@ impl VulkanBackend {
     ///
     /// # Errors
     /// [`BackendError::Unavailable`] naming what is missing: the Vulkan loader, a device, Vulkan
-    /// 1.1, `geometryShader`, `vertexPipelineStoresAndAtomics`, a depth/stencil format, or the
-    /// validation layer when it was asked for. [`BackendError::Build`] if a shader module or
+    /// 1.1, `geometryShader`, `vertexPipelineStoresAndAtomics`, or the validation layer when it
+    /// was asked for. [`BackendError::Build`] if a shader module or
     /// pipeline cannot be created.
     pub fn new(options: VulkanOptions) -> Result<Self, BackendError> {
         let ctx = Context::new(options)?;
@@ -105,12 +102,8 @@ impl VulkanBackend {
     /// The exact-mode filter in use: `F64` when the device has `shaderFloat64` (and it was not
     /// disabled with [`VulkanOptions::force_f32_filter`]), else `F32`.
     #[must_use]
-    pub fn filter(&self) -> DeviceFilter {
-        if self.ctx.use_f64 {
-            DeviceFilter::F64
-        } else {
-            DeviceFilter::F32
-        }
+    pub fn exact_filter(&self) -> ExactFilter {
+        self.ctx.filter
     }
 
     /// The device name, as the driver reports it.
@@ -164,6 +157,43 @@ impl VulkanBackend {
     pub(crate) fn scene(&self, id: PreparedId) -> Result<&Prepared, BackendError> {
         self.prepared.get(id)
     }
+
+    /// A descriptor pool with one set of the pipelines' layout; the pool is kept in `guard`
+    /// until the caller takes it (so an error frees it), and returned with the set.
+    fn allocate_set(
+        &self,
+        guard: &mut BufferGuard<'_>,
+    ) -> Result<(vk::DescriptorPool, vk::DescriptorSet), BackendError> {
+        let d = &self.ctx.device;
+        let sizes = [vk::DescriptorPoolSize {
+            ty: vk::DescriptorType::STORAGE_BUFFER,
+            descriptor_count: BINDINGS,
+        }];
+        // SAFETY: valid device and infos.
+        guard.pool = unsafe {
+            d.create_descriptor_pool(
+                &vk::DescriptorPoolCreateInfo::default()
+                    .max_sets(1)
+                    .pool_sizes(&sizes),
+                None,
+            )
+        }
+        .map_err(|e| device_err("vkCreateDescriptorPool", e))?;
+        let layouts = [self.pipes.set_layout];
+        // SAFETY: the pool has room for one set of this layout.
+        let set = unsafe {
+            d.allocate_descriptor_sets(
+                &vk::DescriptorSetAllocateInfo::default()
+                    .descriptor_pool(guard.pool)
+                    .set_layouts(&layouts),
+            )
+        }
+        .map_err(|e| device_err("vkAllocateDescriptorSets", e))?[0];
+        Ok((
+            std::mem::replace(&mut guard.pool, vk::DescriptorPool::null()),
+            set,
+        ))
+    }
 }
 
 impl SilhouetteBackend for VulkanBackend {
@@ -175,47 +205,40 @@ impl SilhouetteBackend for VulkanBackend {
             modes: Accuracy::ALL.to_vec(),
             max_lights: None,
             details: vec![
-                ("exact_filter".to_owned(), self.filter().name().to_owned()),
-                ("shader_float64".to_owned(), c.float64.to_string()),
-                ("depth_clamp".to_owned(), c.depth_clamp.to_string()),
-                ("validation".to_owned(), self.ctx.validation().to_string()),
                 (
-                    "stencil".to_owned(),
-                    "z-pass or z-fail with caps, two-sided, wrapping".to_owned(),
+                    "exact_filter".to_owned(),
+                    self.exact_filter().name().to_owned(),
                 ),
+                ("shader_float64".to_owned(), c.float64.to_string()),
+                ("validation".to_owned(), self.ctx.validation().to_string()),
                 ("silhouette_list".to_owned(), "host, from m".to_owned()),
             ],
         }
     }
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
-        let ds = DeviceScene::build(scene)?;
+        let layout = SceneLayout::build(scene, NAME)?;
         let ctx = &self.ctx;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let positions: Vec<u32> = ds.layout.positions.iter().map(|p| p.to_bits()).collect();
+        let positions: Vec<u32> = layout.positions.iter().map(|p| p.to_bits()).collect();
         // Everything created so far is freed if a later step fails.
         let mut guard = BufferGuard {
             ctx,
             bufs: Vec::with_capacity(BINDINGS as usize),
             pool: vk::DescriptorPool::null(),
         };
+        // In binding order (see `Prepared::buffers`).
         guard.bufs.push(Buffer::with_data(ctx, &positions)?);
-        guard.bufs.push(Buffer::with_data(ctx, &ds.layout.edges)?);
-        guard.bufs.push(Buffer::with_data(ctx, &ds.layout.ovs)?);
+        guard.bufs.push(Buffer::with_data(ctx, &layout.edges)?);
+        guard.bufs.push(Buffer::with_data(ctx, &layout.ovs)?);
         guard.bufs.push(Buffer::new(
             ctx,
             16 * scene.objects.len().max(1) as u64,
             storage,
         )?);
-        // Per-object clip transforms (written by the render path), 80 bytes each.
-        guard.bufs.push(Buffer::new(
-            ctx,
-            XFORM_BYTES * ds.models.len().max(1) as u64,
-            storage,
-        )?);
         guard.bufs.push(Buffer::host_read(
             ctx,
-            4 * ds.layout.edge_count().max(1) as u64,
+            4 * layout.edge_count().max(1) as u64,
             storage,
         )?);
         guard.bufs.push(Buffer::host_read(
@@ -223,42 +246,10 @@ impl SilhouetteBackend for VulkanBackend {
             UNCERTAIN_HEADER as u64 + 16 * u64::from(INITIAL_UNCERTAIN),
             storage,
         )?);
-        guard.bufs.push(Buffer::with_data(ctx, &ds.vertex_object)?);
-        guard.bufs.push(Buffer::with_data(ctx, &ds.corners)?);
-        guard.bufs.push(Buffer::new(
-            ctx,
-            4 * (ds.corners.len() / 3) as u64,
-            storage,
-        )?);
-        let sizes = [vk::DescriptorPoolSize {
-            ty: vk::DescriptorType::STORAGE_BUFFER,
-            descriptor_count: BINDINGS,
-        }];
-        // SAFETY: valid device and infos.
-        guard.pool = unsafe {
-            ctx.device.create_descriptor_pool(
-                &vk::DescriptorPoolCreateInfo::default()
-                    .max_sets(1)
-                    .pool_sizes(&sizes),
-                None,
-            )
-        }
-        .map_err(|e| device_err("vkCreateDescriptorPool", e))?;
-        let layouts = [self.pipes.set_layout];
-        // SAFETY: the pool has room for one set of this layout.
-        let set = unsafe {
-            ctx.device.allocate_descriptor_sets(
-                &vk::DescriptorSetAllocateInfo::default()
-                    .descriptor_pool(guard.pool)
-                    .set_layouts(&layouts),
-            )
-        }
-        .map_err(|e| device_err("vkAllocateDescriptorSets", e))?[0];
-        let pool = std::mem::replace(&mut guard.pool, vk::DescriptorPool::null());
+        let (pool, set) = self.allocate_set(&mut guard)?;
         let bufs = std::mem::take(&mut guard.bufs);
-        let Ok::<[Buffer; BINDINGS as usize], _>(
-            [positions, edges, ovs, lights, models, mult, uncertain, vertex_object, corners, tri_sign],
-        ) = bufs.try_into()
+        let Ok::<[Buffer; BINDINGS as usize], _>([positions, edges, ovs, lights, mult, uncertain]) =
+            bufs.try_into()
         else {
             // Unreachable: exactly BINDINGS buffers were pushed above.
             return Err(device_err(
@@ -268,17 +259,13 @@ impl SilhouetteBackend for VulkanBackend {
         };
         let p = Prepared {
             scene: scene.clone(),
-            ds,
+            layout,
             positions,
             edges,
             ovs,
             lights,
-            models,
             mult,
             uncertain,
-            vertex_object,
-            corners,
-            tri_sign,
             uncertain_capacity: INITIAL_UNCERTAIN,
             pool,
             set,
@@ -301,7 +288,7 @@ impl SilhouetteBackend for VulkanBackend {
         let t = Instant::now();
         let obj_lights = object_lights(self.scene(id)?.scene.transforms(), lights);
         stats.upload = t.elapsed();
-        out.reset(self.scene(id)?.ds.layout.edge_count(), lights.len());
+        out.reset(self.scene(id)?.layout.edge_count(), lights.len());
         self.extract_batches(id, &obj_lights, mode, out, &mut stats)?;
         Ok(stats)
     }

@@ -3,7 +3,7 @@
 
 use crate::NAME;
 use ash::vk;
-use shadowvol_silhouette::gpu::{self, describe_wait_limit, TIMEOUT_ENV};
+use shadowvol_silhouette::gpu::{self, describe_wait_limit, ExactFilter, TIMEOUT_ENV};
 use shadowvol_silhouette::BackendError;
 use std::ffi::{c_void, CStr, CString};
 use std::num::NonZeroUsize;
@@ -122,7 +122,6 @@ pub(crate) struct Capabilities {
     pub api_version: u32,
     pub driver: String,
     pub float64: bool,
-    pub depth_clamp: bool,
     pub max_storage_buffer_range: u64,
 }
 
@@ -131,9 +130,8 @@ pub(crate) struct Context {
     /// Keeps the loaded Vulkan library alive as long as the handles made from it.
     entry: ash::Entry,
     pub instance: ash::Instance,
-    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    debug: Option<Messenger>,
     pub messages: MessageLog,
-    pub physical: vk::PhysicalDevice,
     pub device: ash::Device,
     pub queue: vk::Queue,
     pub pool: vk::CommandPool,
@@ -141,7 +139,8 @@ pub(crate) struct Context {
     pub fence: vk::Fence,
     pub memory: vk::PhysicalDeviceMemoryProperties,
     pub caps: Capabilities,
-    pub use_f64: bool,
+    /// The exact filter the geometry shader runs (its SPIR-V variant).
+    pub filter: ExactFilter,
     /// [`IDLE`], [`PENDING`] or [`ABANDONED`].
     state: AtomicU8,
 }
@@ -156,95 +155,192 @@ fn device_type_rank(t: vk::PhysicalDeviceType) -> u32 {
     }
 }
 
+/// The debug messenger of the validation layer and its loader.
+type Messenger = (ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT);
+
+/// Loads the Vulkan loader library and checks that it supports Vulkan 1.1.
+fn load_entry() -> Result<ash::Entry, BackendError> {
+    // SAFETY: loading the system Vulkan loader; its initialisers are trusted like any driver.
+    let entry = unsafe { ash::Entry::load() }.map_err(|e| {
+        unavailable(format!(
+            "no Vulkan loader: {e} (install the Vulkan loader and a driver, for example \
+             Debian/Ubuntu: apt-get install libvulkan1 mesa-vulkan-drivers)"
+        ))
+    })?;
+    // SAFETY: plain query on a loaded entry.
+    let version = unsafe { entry.try_enumerate_instance_version() }
+        .map_err(|e| device_err("vkEnumerateInstanceVersion", e))?
+        .unwrap_or(vk::API_VERSION_1_0);
+    if version < vk::API_VERSION_1_1 {
+        return Err(unavailable(format!(
+            "the Vulkan loader supports only Vulkan {}.{}; Vulkan 1.1 or newer is needed",
+            vk::api_version_major(version),
+            vk::api_version_minor(version)
+        )));
+    }
+    Ok(entry)
+}
+
+/// Creates the instance, with the validation layer and `VK_EXT_debug_utils` when `validation`
+/// (an error naming the package to install when the layer is missing).
+fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance, BackendError> {
+    let mut layers: Vec<*const i8> = Vec::new();
+    let mut extensions: Vec<*const i8> = Vec::new();
+    if validation {
+        // SAFETY: plain query.
+        let available = unsafe { entry.enumerate_instance_layer_properties() }
+            .map_err(|e| device_err("vkEnumerateInstanceLayerProperties", e))?;
+        let found = available
+            .iter()
+            .any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER));
+        if !found {
+            return Err(unavailable(format!(
+                "validation was requested ({VALIDATION_ENV}=1) but the layer \
+                 VK_LAYER_KHRONOS_validation is not installed (Debian/Ubuntu: apt-get install \
+                 vulkan-validationlayers)"
+            )));
+        }
+        layers.push(VALIDATION_LAYER.as_ptr());
+        extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+    }
+    let app_name = CString::new("shadowvol").unwrap_or_default();
+    let app = vk::ApplicationInfo::default()
+        .application_name(&app_name)
+        .engine_name(&app_name)
+        .api_version(vk::API_VERSION_1_1);
+    let create = vk::InstanceCreateInfo::default()
+        .application_info(&app)
+        .enabled_layer_names(&layers)
+        .enabled_extension_names(&extensions);
+    // SAFETY: the create info and everything it points to outlive the call.
+    unsafe { entry.create_instance(&create, None) }.map_err(|e| match e {
+        vk::Result::ERROR_INCOMPATIBLE_DRIVER | vk::Result::ERROR_INITIALIZATION_FAILED => {
+            unavailable(format!(
+                "no Vulkan device: the loader found no usable driver ({e}); install one, for \
+                 example Mesa's lavapipe: apt-get install mesa-vulkan-drivers"
+            ))
+        }
+        vk::Result::ERROR_LAYER_NOT_PRESENT | vk::Result::ERROR_EXTENSION_NOT_PRESENT => {
+            unavailable(format!(
+                "the Vulkan instance lacks a requested layer or extension ({e}); validation \
+                 needs VK_LAYER_KHRONOS_validation and VK_EXT_debug_utils"
+            ))
+        }
+        e => device_err("vkCreateInstance", e),
+    })
+}
+
+/// The validation layer's messenger, collecting warnings and errors into `messages`. On failure
+/// the instance is destroyed (nothing else was created from it yet).
+fn create_messenger(
+    entry: &ash::Entry,
+    instance: &ash::Instance,
+    messages: &MessageLog,
+) -> Result<Messenger, BackendError> {
+    let loader = ash::ext::debug_utils::Instance::new(entry, instance);
+    let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+        .message_severity(
+            vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+        )
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+        )
+        .pfn_user_callback(Some(debug_callback))
+        .user_data(Arc::as_ptr(messages) as *mut c_void);
+    // SAFETY: `messages` lives as long as the Context, which destroys the messenger first.
+    match unsafe { loader.create_debug_utils_messenger(&info, None) } {
+        Ok(m) => Ok((loader, m)),
+        Err(e) => {
+            // SAFETY: nothing else was created from this instance yet.
+            unsafe { instance.destroy_instance(None) };
+            Err(device_err("vkCreateDebugUtilsMessengerEXT", e))
+        }
+    }
+}
+
+/// The logical device with one queue of `family`, the features the geometry-shader path needs
+/// (and `shaderFloat64` for the `f64` filter), and its command pool, command buffer and fence.
+/// On failure after the device exists, the device is destroyed.
+fn create_device(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    family: u32,
+    filter: ExactFilter,
+) -> Result<DeviceParts, BackendError> {
+    let features = vk::PhysicalDeviceFeatures::default()
+        .geometry_shader(true)
+        .vertex_pipeline_stores_and_atomics(true)
+        .shader_float64(filter == ExactFilter::F64);
+    let priorities = [1.0f32];
+    let queue_info = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(family)
+        .queue_priorities(&priorities)];
+    let dev_info = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queue_info)
+        .enabled_features(&features);
+    // SAFETY: the physical device comes from this instance; infos outlive the call.
+    let device = unsafe { instance.create_device(physical, &dev_info, None) }
+        .map_err(|e| device_err("vkCreateDevice", e))?;
+    // SAFETY: queue 0 of the family we created.
+    let queue = unsafe { device.get_device_queue(family, 0) };
+    let pool_info = vk::CommandPoolCreateInfo::default()
+        .queue_family_index(family)
+        .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+    let created = (|| {
+        // SAFETY: valid device and infos.
+        unsafe {
+            let pool = device
+                .create_command_pool(&pool_info, None)
+                .map_err(|e| device_err("vkCreateCommandPool", e))?;
+            let alloc = vk::CommandBufferAllocateInfo::default()
+                .command_pool(pool)
+                .level(vk::CommandBufferLevel::PRIMARY)
+                .command_buffer_count(1);
+            let cmd = device
+                .allocate_command_buffers(&alloc)
+                .map_err(|e| device_err("vkAllocateCommandBuffers", e))?[0];
+            let fence = device
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+                .map_err(|e| device_err("vkCreateFence", e))?;
+            Ok::<_, BackendError>((pool, cmd, fence))
+        }
+    })();
+    match created {
+        Ok((pool, cmd, fence)) => Ok(DeviceParts {
+            device,
+            queue,
+            pool,
+            cmd,
+            fence,
+        }),
+        Err(e) => {
+            // SAFETY: nothing from the device is in use.
+            unsafe { device.destroy_device(None) };
+            Err(e)
+        }
+    }
+}
+
+/// What [`create_device`] makes.
+struct DeviceParts {
+    device: ash::Device,
+    queue: vk::Queue,
+    pool: vk::CommandPool,
+    cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+}
+
 impl Context {
     /// Loads the Vulkan library and starts the best device that has what the GS path needs.
     pub fn new(options: VulkanOptions) -> Result<Self, BackendError> {
-        // SAFETY: loading the system Vulkan loader; its initialisers are trusted like any driver.
-        let entry = unsafe { ash::Entry::load() }.map_err(|e| {
-            unavailable(format!(
-                "no Vulkan loader: {e} (install the Vulkan loader and a driver, for example \
-                 Debian/Ubuntu: apt-get install libvulkan1 mesa-vulkan-drivers)"
-            ))
-        })?;
-        // SAFETY: plain query on a loaded entry.
-        let version = unsafe { entry.try_enumerate_instance_version() }
-            .map_err(|e| device_err("vkEnumerateInstanceVersion", e))?
-            .unwrap_or(vk::API_VERSION_1_0);
-        if version < vk::API_VERSION_1_1 {
-            return Err(unavailable(format!(
-                "the Vulkan loader supports only Vulkan {}.{}; Vulkan 1.1 or newer is needed",
-                vk::api_version_major(version),
-                vk::api_version_minor(version)
-            )));
-        }
+        let entry = load_entry()?;
         let messages: MessageLog = Arc::new(Mutex::new(Vec::new()));
-        let mut layers: Vec<*const i8> = Vec::new();
-        let mut extensions: Vec<*const i8> = Vec::new();
-        if options.validation {
-            // SAFETY: plain query.
-            let available = unsafe { entry.enumerate_instance_layer_properties() }
-                .map_err(|e| device_err("vkEnumerateInstanceLayerProperties", e))?;
-            let found = available
-                .iter()
-                .any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER));
-            if !found {
-                return Err(unavailable(format!(
-                    "validation was requested ({VALIDATION_ENV}=1) but the layer \
-                     VK_LAYER_KHRONOS_validation is not installed (Debian/Ubuntu: apt-get install \
-                     vulkan-validationlayers)"
-                )));
-            }
-            layers.push(VALIDATION_LAYER.as_ptr());
-            extensions.push(ash::ext::debug_utils::NAME.as_ptr());
-        }
-        let app_name = CString::new("shadowvol").unwrap_or_default();
-        let app = vk::ApplicationInfo::default()
-            .application_name(&app_name)
-            .engine_name(&app_name)
-            .api_version(vk::API_VERSION_1_1);
-        let create = vk::InstanceCreateInfo::default()
-            .application_info(&app)
-            .enabled_layer_names(&layers)
-            .enabled_extension_names(&extensions);
-        // SAFETY: the create info and everything it points to outlive the call.
-        let instance = unsafe { entry.create_instance(&create, None) }.map_err(|e| match e {
-            vk::Result::ERROR_INCOMPATIBLE_DRIVER | vk::Result::ERROR_INITIALIZATION_FAILED => {
-                unavailable(format!(
-                    "no Vulkan device: the loader found no usable driver ({e}); install one, for \
-                     example Mesa's lavapipe: apt-get install mesa-vulkan-drivers"
-                ))
-            }
-            vk::Result::ERROR_LAYER_NOT_PRESENT | vk::Result::ERROR_EXTENSION_NOT_PRESENT => {
-                unavailable(format!(
-                    "the Vulkan instance lacks a requested layer or extension ({e}); validation \
-                     needs VK_LAYER_KHRONOS_validation and VK_EXT_debug_utils"
-                ))
-            }
-            e => device_err("vkCreateInstance", e),
-        })?;
+        let instance = create_instance(&entry, options.validation)?;
         let debug = if options.validation {
-            let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
-            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-                .message_severity(
-                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                        | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-                )
-                .message_type(
-                    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
-                        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
-                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
-                )
-                .pfn_user_callback(Some(debug_callback))
-                .user_data(Arc::as_ptr(&messages) as *mut c_void);
-            // SAFETY: `messages` lives as long as the Context, which destroys the messenger first.
-            match unsafe { loader.create_debug_utils_messenger(&info, None) } {
-                Ok(m) => Some((loader, m)),
-                Err(e) => {
-                    // SAFETY: nothing else was created from this instance yet.
-                    unsafe { instance.destroy_instance(None) };
-                    return Err(device_err("vkCreateDebugUtilsMessengerEXT", e));
-                }
-            }
+            Some(create_messenger(&entry, &instance, &messages)?)
         } else {
             None
         };
@@ -254,54 +350,8 @@ impl Context {
             debug,
         };
         let (physical, family, caps) = pick_device(&instance)?;
-        let use_f64 = caps.float64 && !options.force_f32_filter;
-        let features = vk::PhysicalDeviceFeatures::default()
-            .geometry_shader(true)
-            .vertex_pipeline_stores_and_atomics(true)
-            .shader_float64(use_f64)
-            .depth_clamp(caps.depth_clamp);
-        let priorities = [1.0f32];
-        let queue_info = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(family)
-            .queue_priorities(&priorities)];
-        let dev_info = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queue_info)
-            .enabled_features(&features);
-        // SAFETY: the physical device comes from this instance; infos outlive the call.
-        let device = unsafe { instance.create_device(physical, &dev_info, None) }
-            .map_err(|e| device_err("vkCreateDevice", e))?;
-        // SAFETY: queue 0 of the family we created.
-        let queue = unsafe { device.get_device_queue(family, 0) };
-        let pool_info = vk::CommandPoolCreateInfo::default()
-            .queue_family_index(family)
-            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
-        let created = (|| {
-            // SAFETY: valid device and infos.
-            unsafe {
-                let pool = device
-                    .create_command_pool(&pool_info, None)
-                    .map_err(|e| device_err("vkCreateCommandPool", e))?;
-                let alloc = vk::CommandBufferAllocateInfo::default()
-                    .command_pool(pool)
-                    .level(vk::CommandBufferLevel::PRIMARY)
-                    .command_buffer_count(1);
-                let cmd = device
-                    .allocate_command_buffers(&alloc)
-                    .map_err(|e| device_err("vkAllocateCommandBuffers", e))?[0];
-                let fence = device
-                    .create_fence(&vk::FenceCreateInfo::default(), None)
-                    .map_err(|e| device_err("vkCreateFence", e))?;
-                Ok::<_, BackendError>((pool, cmd, fence))
-            }
-        })();
-        let (pool, cmd, fence) = match created {
-            Ok(x) => x,
-            Err(e) => {
-                // SAFETY: nothing from the device is in use.
-                unsafe { device.destroy_device(None) };
-                return Err(e);
-            }
-        };
+        let filter = ExactFilter::for_device(caps.float64, options.force_f32_filter);
+        let parts = create_device(&instance, physical, family, filter)?;
         // SAFETY: plain query.
         let memory = unsafe { instance.get_physical_device_memory_properties(physical) };
         let debug = ctx_partial.debug.take();
@@ -311,15 +361,14 @@ impl Context {
             instance,
             debug,
             messages,
-            physical,
-            device,
-            queue,
-            pool,
-            cmd,
-            fence,
+            device: parts.device,
+            queue: parts.queue,
+            pool: parts.pool,
+            cmd: parts.cmd,
+            fence: parts.fence,
             memory,
             caps,
-            use_f64,
+            filter,
             state: AtomicU8::new(IDLE),
         })
     }
@@ -466,7 +515,7 @@ impl Context {
 /// Cleans up a half-built instance on early return.
 struct Partial {
     instance: Option<ash::Instance>,
-    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    debug: Option<Messenger>,
 }
 
 impl Drop for Partial {
@@ -571,7 +620,6 @@ fn pick_device(
             device_name: name,
             api_version: props.api_version,
             float64: features.shader_float64 == vk::TRUE,
-            depth_clamp: features.depth_clamp == vk::TRUE,
             max_storage_buffer_range: u64::from(props.limits.max_storage_buffer_range),
         };
         let family = family.unwrap_or(0) as u32;

@@ -1,15 +1,16 @@
 //! One `extract` on the device: the light batches, each uploaded, drawn through the geometry
 //! shader with rasterisation discarded, waited for within the limit and read back, with the
-//! uncertain pairs decided on the host (`gpu::resolve_uncertain`).
+//! uncertain pairs decided on the host ([`crate::resolve`]).
 
 use crate::backend::VulkanBackend;
 use crate::device::Buffer;
 use crate::layout::{Prepared, UNCERTAIN_HEADER};
-use crate::pipeline::Push;
+use crate::pipeline::{Push, STAGES};
+use crate::resolve::{finish_batch, read_pass};
 use crate::NAME;
 use ash::vk;
 use shadowvol_robust_math::Accuracy;
-use shadowvol_silhouette::gpu::{self, UncertainRecord};
+use shadowvol_silhouette::gpu;
 use shadowvol_silhouette::{BackendError, ExtractStats, Multiplicities, PreparedId};
 use std::ops::Range;
 use std::time::Instant;
@@ -18,7 +19,7 @@ impl VulkanBackend {
     /// Makes the light, multiplicity and uncertain buffers large enough for the lights
     /// `lights` (indices into each object's list in `obj_lights`), writes those lights and zeroes
     /// the uncertain counters. The caller keeps the batch within [`Self::lights_per_batch`].
-    pub(crate) fn upload_lights(
+    fn upload_lights(
         &mut self,
         id: PreparedId,
         obj_lights: &[Vec<[f32; 4]>],
@@ -27,7 +28,7 @@ impl VulkanBackend {
         let max_range = self.ctx.caps.max_storage_buffer_range;
         let ctx = &self.ctx;
         let p = self.prepared.get_mut(id)?;
-        let edges = p.ds.layout.edge_count();
+        let edges = p.layout.edge_count();
         let light_count = lights.len();
         let slots = edges
             .checked_mul(light_count)
@@ -109,20 +110,17 @@ impl VulkanBackend {
         Ok(())
     }
 
-    /// Reads the uncertain buffer's header: (appended count, clamped-emission count).
-    pub(crate) fn uncertain_header(p: &Prepared) -> (u32, u32) {
-        let mut h = [0u8; 8];
+    /// Reads the uncertain buffer's count of appended records (possibly more than it holds).
+    fn uncertain_count(p: &Prepared) -> u32 {
+        let mut h = [0u8; 4];
         p.uncertain.read(0, &mut h);
-        (
-            u32::from_le_bytes([h[0], h[1], h[2], h[3]]),
-            u32::from_le_bytes([h[4], h[5], h[6], h[7]]),
-        )
+        u32::from_le_bytes(h)
     }
 
     /// Records the extraction draw (rasteriser discard) into `cmd`.
     fn record_extract(&self, p: &Prepared, cmd: vk::CommandBuffer, push: &Push, lights: u32) {
         let d = &self.ctx.device;
-        let edges = p.ds.layout.edge_count() as u32;
+        let edges = p.layout.edge_count() as u32;
         // SAFETY: all handles are live; the command buffer is recording.
         unsafe {
             d.cmd_begin_render_pass(
@@ -140,18 +138,8 @@ impl VulkanBackend {
                 vk::SubpassContents::INLINE,
             );
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipes.extract);
-            let extent = vk::Extent2D {
-                width: 1,
-                height: 1,
-            };
-            begin_draws(d, cmd, extent, self.pipes.layout, p.set);
-            d.cmd_push_constants(
-                cmd,
-                self.pipes.layout,
-                vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::GEOMETRY,
-                0,
-                bytemuck::bytes_of(push),
-            );
+            begin_draws(d, cmd, self.pipes.layout, p.set);
+            d.cmd_push_constants(cmd, self.pipes.layout, STAGES, 0, bytemuck::bytes_of(push));
             d.cmd_draw(cmd, edges, lights, 0, 0);
             d.cmd_end_render_pass(cmd);
             host_barrier(d, cmd);
@@ -204,7 +192,7 @@ impl VulkanBackend {
         self.upload_lights(id, obj_lights, batch.clone())?;
         stats.upload += t.elapsed();
 
-        let edges = self.scene(id)?.ds.layout.edge_count();
+        let edges = self.scene(id)?.layout.edge_count();
         let light_count = batch.len() as u32;
         let t = Instant::now();
         let mut count;
@@ -215,12 +203,10 @@ impl VulkanBackend {
                 edge_count: edges as u32,
                 light_count,
                 uncertain_capacity: p.uncertain_capacity,
-                emit: 0,
-                pass: 0,
             };
             self.ctx
                 .submit_and_wait(|_, cmd| self.record_extract(p, cmd, &push, light_count))?;
-            (count, _) = Self::uncertain_header(p);
+            count = Self::uncertain_count(p);
             if count <= p.uncertain_capacity {
                 break;
             }
@@ -231,36 +217,33 @@ impl VulkanBackend {
 
         let t = Instant::now();
         let p = self.scene(id)?;
-        let rows = &mut out.all_values_mut()[batch.start * edges..batch.end * edges];
-        p.mult.read(0, bytemuck::cast_slice_mut(rows));
-        let mut words = vec![0u32; UncertainRecord::WORDS * count as usize];
-        if count > 0 {
-            p.uncertain
-                .read(UNCERTAIN_HEADER, bytemuck::cast_slice_mut(&mut words));
-        }
-        let records = UncertainRecord::read_all(&words);
+        let records = read_pass(p, batch.clone(), count, out);
         stats.readback += t.elapsed();
 
         let t = Instant::now();
         stats.uncertain += u64::from(count);
-        gpu::resolve_uncertain(&p.ds.layout, obj_lights, batch, &records, out, NAME)?;
+        finish_batch(&p.layout, obj_lights, batch, &records, out)?;
         stats.host_resolve += t.elapsed();
         Ok(())
     }
 }
 
-/// Sets the dynamic viewport (depth 0 to 1) and scissor of `cmd` to the whole `extent` and binds
-/// the scene's descriptor set `set` (set 0 of `layout`) for the draws that follow.
+/// Sets the dynamic viewport (depth 0 to 1) and scissor of `cmd` to the extraction's 1 × 1
+/// framebuffer and binds the scene's descriptor set `set` (set 0 of `layout`) for the draw that
+/// follows.
 ///
 /// # Safety
 /// `cmd` must be recording; `layout` and `set` must be live.
-pub(crate) unsafe fn begin_draws(
+unsafe fn begin_draws(
     d: &ash::Device,
     cmd: vk::CommandBuffer,
-    extent: vk::Extent2D,
     layout: vk::PipelineLayout,
     set: vk::DescriptorSet,
 ) {
+    let extent = vk::Extent2D {
+        width: 1,
+        height: 1,
+    };
     let viewport = vk::Viewport {
         x: 0.0,
         y: 0.0,
@@ -285,7 +268,7 @@ pub(crate) unsafe fn begin_draws(
 ///
 /// # Safety
 /// `cmd` must be recording, outside a render pass.
-pub(crate) unsafe fn host_barrier(d: &ash::Device, cmd: vk::CommandBuffer) {
+unsafe fn host_barrier(d: &ash::Device, cmd: vk::CommandBuffer) {
     let barrier = vk::MemoryBarrier::default()
         .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
         .dst_access_mask(vk::AccessFlags::HOST_READ);

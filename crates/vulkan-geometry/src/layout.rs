@@ -1,55 +1,47 @@
-//! The device buffers of a prepared scene (the scene's layout, lights, results, uncertain
-//! records and render-path data, bound as one descriptor set) and how many lights fit one pass
-//! within `maxStorageBufferRange`.
+//! The device buffers of a prepared scene (the scene's layout, lights, results and uncertain
+//! records, bound as one descriptor set) and how many lights fit one pass within
+//! `maxStorageBufferRange`.
 
 use crate::backend::VulkanBackend;
 use crate::device::{Buffer, Context};
 use crate::pipeline::BINDINGS;
-use crate::twin::DeviceScene;
 use crate::NAME;
 use ash::vk;
+use shadowvol_silhouette::gpu::SceneLayout;
 use shadowvol_silhouette::{BackendError, TopologyScene};
 
-/// Bytes of the uncertain buffer's header (count, clamped count, two pads).
+/// Bytes of the uncertain buffer's header (the count and three pads).
 pub(crate) const UNCERTAIN_HEADER: usize = 16;
-/// Bytes of one object's transform record (`mat4 clip_from_anchor; vec4 anchor;`).
-pub(crate) const XFORM_BYTES: u64 = 80;
 /// Initial capacity of the uncertain buffer, in records.
 pub(crate) const INITIAL_UNCERTAIN: u32 = 1024;
 
 /// One prepared scene: its device buffers and descriptor set.
 pub(crate) struct Prepared {
     pub(crate) scene: TopologyScene,
-    pub(crate) ds: DeviceScene,
+    /// Positions, edge records `(a, b, first OV slot, object)` plus the sentinel, and opposite
+    /// vertices, with global vertex ids.
+    pub(crate) layout: SceneLayout,
     pub(crate) positions: Buffer,
     pub(crate) edges: Buffer,
     pub(crate) ovs: Buffer,
     pub(crate) lights: Buffer,
-    pub(crate) models: Buffer,
     pub(crate) mult: Buffer,
     pub(crate) uncertain: Buffer,
-    pub(crate) vertex_object: Buffer,
-    pub(crate) corners: Buffer,
-    /// Exact triangle signs for one light (z-fail caps in exact mode).
-    pub(crate) tri_sign: Buffer,
     pub(crate) uncertain_capacity: u32,
     pub(crate) pool: vk::DescriptorPool,
     pub(crate) set: vk::DescriptorSet,
 }
 
 impl Prepared {
+    /// The buffers in binding order (see `shaders/silhouette_gs.geom`).
     fn buffers(&self) -> [&Buffer; BINDINGS as usize] {
         [
             &self.positions,
             &self.edges,
             &self.ovs,
             &self.lights,
-            &self.models,
             &self.mult,
             &self.uncertain,
-            &self.vertex_object,
-            &self.corners,
-            &self.tri_sign,
         ]
     }
 
@@ -79,11 +71,6 @@ impl Prepared {
         unsafe { ctx.device.update_descriptor_sets(&writes, &[]) };
     }
 
-    /// Zeroes the uncertain buffer's counters.
-    pub(crate) fn uncertain_reset(&self) {
-        self.uncertain.write(0, &[0u8; UNCERTAIN_HEADER]);
-    }
-
     pub(crate) fn destroy(self, ctx: &Context) {
         // SAFETY: the device is idle; the pool frees the set.
         unsafe { ctx.device.destroy_descriptor_pool(self.pool, None) };
@@ -92,12 +79,8 @@ impl Prepared {
             self.edges,
             self.ovs,
             self.lights,
-            self.models,
             self.mult,
             self.uncertain,
-            self.vertex_object,
-            self.corners,
-            self.tri_sign,
         ] {
             b.destroy(ctx);
         }

@@ -6,11 +6,13 @@
 //!   [`shadowvol_robust_math::Accuracy`] mode, and writes it to a storage buffer. Exact mode uses a
 //!   certified `f64` filter on the device (the `f32` one without `shaderFloat64`) and decides the
 //!   pairs it cannot certify on the host with `orient_exact`; the result is bit-identical to the
-//!   `cpu` backend.
-//! * [`VulkanBackend::render_shadow_mask`] renders a shadow mask: a depth pre-pass of the scene,
-//!   then the same geometry shader emitting `|m|` side quads extruded to infinity (`w = 0`) into
-//!   the stencil buffer (z-pass, two-sided, wrapping), read back as `stencil != 0`.
-//! * [`twin`] is the CPU twin of the shader logic, for pinning down device differences.
+//!   `cpu` backend. The filter's precision is
+//!   [`ExactFilter`](shadowvol_silhouette::gpu::ExactFilter), as on the other GPU backends.
+//! * [`twin`] is the CPU twin of the shader logic, for pinning down device differences in tests;
+//!   the backend never calls it.
+//!
+//! Shadow volumes are drawn by `shadowvol-renderer` from this backend's multiplicities (its host
+//! pipeline), like any backend's.
 //!
 //! The Vulkan library is loaded at run time (`ash::Entry::load`): the crate builds without it, and
 //! [`create_backend`] returns [`BackendError::Unavailable`] naming what is missing. Set
@@ -38,7 +40,7 @@ mod device;
 mod dispatch;
 mod layout;
 mod pipeline;
-mod render;
+mod resolve;
 pub mod twin;
 
 pub use backend::VulkanBackend;
@@ -51,7 +53,6 @@ pub const NAME: &str = "vulkan";
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
 pub use device::{VulkanOptions, VALIDATION_ENV};
-pub use render::{RenderStats, ShadowMask, StencilTechnique, ViewProjection};
 
 use shadowvol_silhouette::{BackendError, SilhouetteBackend};
 

@@ -1,131 +1,45 @@
-//! The CPU twin of the geometry shader (`shaders/silhouette_gs.geom`).
+//! The CPU twin of the geometry shader (`shaders/silhouette_gs.geom`), for tests: nothing in the
+//! backend calls it.
 //!
-//! Same buffers ([`DeviceScene`]), same per-edge loop, same filters and the same emitted side
-//! quads, in Rust. When the device disagrees with the `cpu` backend, running the twin on the same
-//! input tells whether the shader logic or the device arithmetic is at fault.
+//! The same buffers (a [`SceneLayout`] and object-major lights), the same per-edge loop, the same
+//! filters, in Rust. When the device disagrees with the `cpu` backend, running the twin on the
+//! same input tells whether the shader logic or the device arithmetic is at fault.
+//!
+//! The twins of the three GPU backends have the same shape: [`filter_f32`], [`filter_f64`] and
+//! [`exact_filter`] (the device filters of exact mode), the per-invocation function
+//! ([`edge_multiplicity`]), [`run_kernel`] (one pass: the device's raw output) and [`extract`]
+//! (the whole extraction on the CPU, with the backend's own host side).
 //!
 //! ```
-//! use shadowvol_vulkan_geometry::twin::{extract_twin, DeviceFilter};
-//! use shadowvol_silhouette::Accuracy;
+//! use shadowvol_silhouette::gpu::ExactFilter;
+//! use shadowvol_silhouette::{Accuracy, Multiplicities};
 //! use shadowvol_test_support::corpus;
+//! use shadowvol_vulkan_geometry::twin;
 //!
 //! let case = &corpus::cases()[0];
 //! let scene = case.scene().unwrap();
-//! let (m, _uncertain) = extract_twin(&scene, &case.lights, Accuracy::Exact, DeviceFilter::F32).unwrap();
+//! let mut m = Multiplicities::default();
+//! let _uncertain = twin::extract(&scene, &case.lights, Accuracy::Exact, ExactFilter::F32, &mut m).unwrap();
 //! assert_eq!(m.edge_count(), scene.total_edges());
 //! ```
 
+use crate::resolve::finish_batch;
 use crate::NAME;
-use glam::{Mat4, Vec3, Vec4};
 use shadowvol_robust_math::filter::{self, TermsF32};
 use shadowvol_robust_math::{orient_filter_f64, sign_f32, Accuracy, Light, F32_FILTER_EPS};
-use shadowvol_silhouette::gpu::{self, SceneLayout, UncertainRecord};
+use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout, UncertainRecord};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, Multiplicities, TopologyScene,
 };
 
-/// The shader's mode code that emits quads from multiplicities already in the result buffer
-/// (the render path's exact mode). The other codes are [`shadowvol_silhouette::gpu::mode_code`]'s.
-pub const MODE_PRECOMPUTED: u32 = 4;
-
-/// Which certified filter exact mode runs on the device.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum DeviceFilter {
-    /// `orient_filter_f64` (devices with `shaderFloat64`).
-    F64,
-    /// The `f32` filter with the shader's denormal guards ([`device_filter_f32`]).
-    F32,
-}
-
-impl DeviceFilter {
-    /// `"f64"` or `"f32"`.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            DeviceFilter::F64 => "f64",
-            DeviceFilter::F32 => "f32",
-        }
-    }
-}
-
-/// The global arrays the shaders read, built from a [`TopologyScene`]: the shared
-/// [`SceneLayout`] (positions, edge records, opposite vertices) and what the render path adds.
-///
-/// Vertex ids are global: object `i`'s welded vertex `v` is `layout.vertex_offsets[i] + v`.
-/// Adding the same base to all ids of an object keeps their order, so canonical orders and
-/// parities are those of the object-local ids the `cpu` backend uses.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct DeviceScene {
-    /// Positions, edge records `(a, b, first OV slot, object)` plus the sentinel, and opposite
-    /// vertices.
-    pub layout: SceneLayout,
-    /// Object index of every global vertex.
-    pub vertex_object: Vec<u32>,
-    /// Triangle corners (global ids), three per kept triangle.
-    pub corners: Vec<u32>,
-    /// World-from-object matrices, column-major.
-    pub models: Vec<[f32; 16]>,
-    /// Per object, a point near its vertices (the centre of their bounding box, rounded to
-    /// `f32`): the render path transforms `position - anchor`, which keeps precision for objects
-    /// far from the origin.
-    pub anchors: Vec<[f32; 3]>,
-}
-
-impl DeviceScene {
-    /// Lays out `scene` for the device.
-    ///
-    /// # Errors
-    /// [`BackendError::Limit`] when a count exceeds `u32` indexing.
-    pub fn build(scene: &TopologyScene) -> Result<Self, BackendError> {
-        let layout = SceneLayout::build(scene, NAME)?;
-        let corners = 3 * scene.total_triangles();
-        if u32::try_from(corners).is_err() {
-            return Err(BackendError::Limit {
-                backend: NAME,
-                message: format!(
-                    "the number of triangle corners is {corners}, more than u32 indices can address"
-                ),
-            });
-        }
-        let mut ds = DeviceScene {
-            layout,
-            ..DeviceScene::default()
-        };
-        for (i, o) in scene.objects.iter().enumerate() {
-            let t = &o.table;
-            let base = ds.layout.vertex_offsets[i];
-            ds.vertex_object
-                .extend(std::iter::repeat_n(i as u32, t.positions.len()));
-            ds.corners
-                .extend(t.triangles.iter().flat_map(|tri| tri.map(|v| v + base)));
-            ds.models
-                .push(Mat4::from(o.world_from_object).to_cols_array());
-            let (lo, hi) = t.positions.iter().fold(
-                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-                |(lo, hi), &p| (lo.min(p), hi.max(p)),
-            );
-            let anchor = if t.positions.is_empty() {
-                Vec3::ZERO
-            } else {
-                (lo.as_dvec3() * 0.5 + hi.as_dvec3() * 0.5).as_vec3()
-            };
-            ds.anchors.push(anchor.to_array());
-        }
-        Ok(ds)
-    }
-
-    fn p(&self, v: u32) -> [f32; 3] {
-        self.layout.position(v)
-    }
-}
-
-/// The shader's `f32` filter: [`shadowvol_robust_math::orient_filter_f32`] plus guards that keep
-/// it certified on devices that flush `f32` denormals to zero (subnormal inputs, non-zero
+/// Twin of the shader's `f32` filter (`orient_filter` with `SHADOWVOL_NO_F64`): robust-math's
+/// [`orient_filter_f32`](shadowvol_robust_math::orient_filter_f32) plus guards that keep it
+/// certified on devices that flush `f32` denormals to zero (subnormal inputs, non-zero
 /// differences flushed to zero, `L.w * A` leaving the normal range are all "uncertain").
 ///
-/// Returns `Some(sign)` only when the sign equals the exact sign.
+/// Returns `Some(sign)` only when the sign equals the exact sign; `None` leaves it to the host.
 #[must_use]
-pub fn device_filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<i8> {
+pub fn filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<i8> {
     if filter::any_subnormal(a, b, l, o) || !filter::w_is_exact_f32(l[3]) {
         return None;
     }
@@ -146,50 +60,60 @@ pub fn device_filter_f32(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> 
     filter::certify_f32(det, perm, F32_FILTER_EPS)
 }
 
-/// The device filter of exact mode: `Some(sign)` when certified, `None` when the host must decide.
+/// Twin of the shader's `f64` filter (`orient_filter` without `SHADOWVOL_NO_F64`): robust-math's
+/// [`orient_filter_f64`], whose exact `f32` to `f64` conversion the shader does on the bits.
 #[must_use]
-pub fn device_filter(
-    filter: DeviceFilter,
+pub fn filter_f64(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<i8> {
+    orient_filter_f64(a, b, l, o)
+}
+
+/// The device filter of exact mode for `filter`: `Some(sign)` when certified, `None` when the
+/// host must decide.
+#[must_use]
+pub fn exact_filter(
+    filter: ExactFilter,
     a: [f32; 3],
     b: [f32; 3],
     l: [f32; 4],
     o: [f32; 3],
 ) -> Option<i8> {
     match filter {
-        DeviceFilter::F64 => orient_filter_f64(a, b, l, o),
-        DeviceFilter::F32 => device_filter_f32(a, b, l, o),
+        ExactFilter::F64 => filter_f64(a, b, l, o),
+        ExactFilter::F32 => filter_f32(a, b, l, o),
     }
 }
 
 /// What one geometry-shader invocation computes for one (edge, light).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct GsEdge {
+pub struct EdgeResult {
     /// The multiplicity the shader writes: in exact mode, the sum of the certified signs only.
     pub m: i32,
     /// Global OV slots (into [`SceneLayout::ovs`]) whose sign the device could not certify.
     pub uncertain: Vec<u32>,
 }
 
-/// The shader's per-edge loop for global edge `e` and object-space light `l`.
+/// Twin of the shader's `main`: the per-edge loop for global edge `e` and object-space light
+/// `l`.
 ///
 /// # Panics
 /// If `e` is out of range.
 #[must_use]
-pub fn gs_edge(
-    ds: &DeviceScene,
+pub fn edge_multiplicity(
+    layout: &SceneLayout,
     e: usize,
     l: [f32; 4],
     mode: Accuracy,
-    filter: DeviceFilter,
-) -> GsEdge {
-    let (a, b, _) = ds.layout.edge(e);
-    let mut out = GsEdge::default();
-    for k in ds.layout.ov_slots(e) {
+    filter: ExactFilter,
+) -> EdgeResult {
+    let p = |v: u32| layout.position(v);
+    let (a, b, _) = layout.edge(e);
+    let mut out = EdgeResult::default();
+    for k in layout.ov_slots(e) {
         let k = k as u32;
-        let o = ds.layout.ovs[k as usize];
+        let o = layout.ovs[k as usize];
         let s = match mode {
-            Accuracy::Original => sign_f32(ds.p(a), ds.p(b), l, ds.p(o)),
-            Accuracy::Exact => match device_filter(filter, ds.p(a), ds.p(b), l, ds.p(o)) {
+            Accuracy::Original => sign_f32(p(a), p(b), l, p(o)),
+            Accuracy::Exact => match exact_filter(filter, p(a), p(b), l, p(o)) {
                 Some(s) => s,
                 None => {
                     out.uncertain.push(k);
@@ -204,7 +128,7 @@ pub fn gs_edge(
                 } else {
                     (a, o, b, -1)
                 };
-                let (p0, p1, p2) = (ds.p(i0), ds.p(i1), ds.p(i2));
+                let (p0, p1, p2) = (p(i0), p(i1), p(i2));
                 let mut t = sign_f32(p0, p1, l, p2);
                 if mode == Accuracy::Robust {
                     let t1 = sign_f32(p1, p2, l, p0);
@@ -221,71 +145,71 @@ pub fn gs_edge(
     out
 }
 
-/// True when `p` is the point light `l` in `f32` arithmetic: `l.w != 0` and `p * l.w == l.xyz`
-/// componentwise. The render path follows the renderer crate's convention that triangles with
-/// such a vertex cast no shadow volume (with the light at a vertex the shadow has no volume);
-/// extraction results are not affected.
-#[must_use]
-pub fn touches_light(p: [f32; 3], l: [f32; 4]) -> bool {
-    l[3] != 0.0 && (0..3).all(|k| p[k] * l[3] == l[k])
+/// What one pass over the (edge, light) grid leaves on the device.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct KernelOutput {
+    /// `mult[light * edge_count + edge]`, uncertain pairs counted as 0.
+    pub mult: Vec<i32>,
+    /// The `(edge, OV slot, light)` triples the filter could not certify (here in invocation
+    /// order; on the device in atomic-append order).
+    pub uncertain: Vec<UncertainRecord>,
 }
 
-/// The side quad the shader emits (|m| times) for edge `(A, B)` with multiplicity sign
-/// `m.signum()`, as homogeneous object-space points in triangle-strip order: `A, B, A∞, B∞` for
-/// `m > 0`, `B, A, B∞, A∞` for `m < 0`, where `X∞ = (X * L.w - L.xyz, 0)` is the point at infinity
-/// away from the light.
+/// Runs the shader's logic for every (edge, light) of one pass: `lights` is object-major
+/// (`lights[object * light_count + light]`, object space, from [`object_lights`]).
+///
+/// # Panics
+/// If `lights` has fewer than `layout.object_count() * light_count` entries.
 #[must_use]
-pub fn side_quad(a: Vec3, b: Vec3, l: [f32; 4], m: i32) -> [Vec4; 4] {
-    let lxyz = Vec3::new(l[0], l[1], l[2]);
-    let ca = a.extend(1.0);
-    let cb = b.extend(1.0);
-    let ia = (a * l[3] - lxyz).extend(0.0);
-    let ib = (b * l[3] - lxyz).extend(0.0);
-    if m > 0 {
-        [ca, cb, ia, ib]
-    } else {
-        [cb, ca, ib, ia]
+pub fn run_kernel(
+    layout: &SceneLayout,
+    lights: &[[f32; 4]],
+    light_count: usize,
+    mode: Accuracy,
+    filter: ExactFilter,
+) -> KernelOutput {
+    let edges = layout.edge_count();
+    let mut out = KernelOutput {
+        mult: vec![0; edges * light_count],
+        uncertain: Vec::new(),
+    };
+    for li in 0..light_count {
+        for e in 0..edges {
+            let object = layout.edge(e).2 as usize;
+            let r = edge_multiplicity(layout, e, lights[object * light_count + li], mode, filter);
+            out.mult[li * edges + e] = r.m;
+            out.uncertain
+                .extend(r.uncertain.into_iter().map(|k| UncertainRecord {
+                    edge: e as u32,
+                    ov_slot: k,
+                    light: li as u32,
+                }));
+        }
     }
+    out
 }
 
-/// Runs the twin over a whole scene: the shader loop for every (edge, light), then the host
-/// resolution of uncertain pairs, exactly as [`crate::VulkanBackend`] does. Returns the
-/// multiplicities (with compact lists) and the number of uncertain pairs.
+/// Extracts like the `vulkan` backend does, on the CPU: [`run_kernel`] over all lights, then the
+/// backend's host side (the uncertain pairs decided with `orient_exact`, the compact lists
+/// built). Fills `out` and returns the number of uncertain pairs.
 ///
 /// # Errors
 /// [`BackendError::InvalidInput`] for no lights, [`BackendError::Limit`] for oversized scenes.
-pub fn extract_twin(
+pub fn extract(
     scene: &TopologyScene,
     lights: &[Light],
     mode: Accuracy,
-    filter: DeviceFilter,
-) -> Result<(Multiplicities, u64), BackendError> {
+    filter: ExactFilter,
+    out: &mut Multiplicities,
+) -> Result<u64, BackendError> {
     check_lights(lights)?;
-    let ds = DeviceScene::build(scene)?;
+    let layout = SceneLayout::build(scene, NAME)?;
     let obj_lights = object_lights(scene.transforms(), lights);
-    let mut out = Multiplicities::zeroed(ds.layout.edge_count(), lights.len());
-    let mut records = Vec::new();
-    let edges = ds.layout.edge_count().max(1);
-    for (li, values) in out.all_values_mut().chunks_mut(edges).enumerate() {
-        for (e, v) in values.iter_mut().enumerate() {
-            let l = obj_lights[ds.layout.edge(e).2 as usize][li];
-            let r = gs_edge(&ds, e, l, mode, filter);
-            *v = r.m;
-            records.extend(r.uncertain.into_iter().map(|k| UncertainRecord {
-                edge: e as u32,
-                ov_slot: k,
-                light: li as u32,
-            }));
-        }
-    }
-    gpu::resolve_uncertain(
-        &ds.layout,
-        &obj_lights,
-        0..lights.len(),
-        &records,
-        &mut out,
-        NAME,
-    )?;
+    let packed: Vec<[f32; 4]> = obj_lights.iter().flatten().copied().collect();
+    let k = run_kernel(&layout, &packed, lights.len(), mode, filter);
+    out.reset(layout.edge_count(), lights.len());
+    out.all_values_mut().copy_from_slice(&k.mult);
+    finish_batch(&layout, &obj_lights, 0..lights.len(), &k.uncertain, out)?;
     out.rebuild_silhouettes();
-    Ok((out, records.len() as u64))
+    Ok(k.uncertain.len() as u64)
 }

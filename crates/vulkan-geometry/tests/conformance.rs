@@ -6,10 +6,11 @@ mod common;
 mod values;
 
 use shadowvol_cpu::CpuBackend;
-use shadowvol_silhouette::{extract_once, invariant, Accuracy, SilhouetteBackend};
+use shadowvol_silhouette::gpu::ExactFilter;
+use shadowvol_silhouette::{extract_once, invariant, Accuracy, Multiplicities, SilhouetteBackend};
 use shadowvol_test_support::corpus;
 use shadowvol_test_support::{main, Outcome};
-use shadowvol_vulkan_geometry::twin::{extract_twin, DeviceFilter};
+use shadowvol_vulkan_geometry::twin;
 use shadowvol_vulkan_geometry::{VulkanBackend, VulkanOptions};
 use values::Rule;
 
@@ -83,7 +84,7 @@ fn corpus_on_vulkan_f32_filter() -> Outcome {
         ..VulkanOptions::default()
     };
     let mut vk = common::backend(opts)?;
-    assert_eq!(vk.filter(), DeviceFilter::F32);
+    assert_eq!(vk.exact_filter(), ExactFilter::F32);
     run_corpus(&mut vk, "f32 filter");
     Ok(())
 }
@@ -94,8 +95,9 @@ fn twin_matches_cpu_on_corpus() -> Outcome {
         let scene = case.scene().unwrap();
         for mode in Accuracy::ALL {
             let (want, _) = extract_once(&mut cpu, &scene, &case.lights, mode).unwrap();
-            for filter in [DeviceFilter::F64, DeviceFilter::F32] {
-                let (got, _) = extract_twin(&scene, &case.lights, mode, filter).unwrap();
+            for filter in [ExactFilter::F64, ExactFilter::F32] {
+                let mut got = Multiplicities::default();
+                twin::extract(&scene, &case.lights, mode, filter, &mut got).unwrap();
                 assert_eq!(
                     invariant::first_difference(&got, &want),
                     None,

@@ -7,7 +7,7 @@ use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{BackendError, Multiplicities, SilhouetteBackend, TopologyScene};
 use shadowvol_test_support::corpus;
 use shadowvol_test_support::{main, Outcome};
-use shadowvol_vulkan_geometry::{ViewProjection, VulkanOptions};
+use shadowvol_vulkan_geometry::VulkanOptions;
 
 main!(
     bad_input_is_an_error,
@@ -37,28 +37,6 @@ fn bad_input_is_an_error() -> Outcome {
         "{e}"
     );
 
-    let cam = ViewProjection::look_at(
-        Vec3::new(3.0, 2.0, 4.0),
-        Vec3::ZERO,
-        Vec3::Y,
-        0.8,
-        1.0,
-        0.01,
-    );
-    for (w, h) in [(0, 16), (16, 0), (100_000, 16)] {
-        let e = vk
-            .render_shadow_mask(id, case.lights[0], &cam, w, h, Accuracy::Robust)
-            .unwrap_err();
-        assert!(
-            matches!(e, BackendError::InvalidInput(ref m) if m.contains("size")),
-            "{e}"
-        );
-    }
-    let e = vk
-        .render_shadow_mask(bogus, case.lights[0], &cam, 8, 8, Accuracy::Robust)
-        .unwrap_err();
-    assert!(matches!(e, BackendError::UnknownScene { .. }), "{e}");
-
     // Released scenes are unknown afterwards; the backend keeps working.
     vk.release(id);
     assert!(vk
@@ -69,16 +47,12 @@ fn bad_input_is_an_error() -> Outcome {
         .unwrap();
     assert!(out.silhouettes_consistent());
 
-    // An empty scene is fine: zero edges, nothing drawn.
+    // An empty scene is fine: zero edges.
     let empty = vk.prepare(&TopologyScene::default()).unwrap();
     let stats = vk
         .extract(empty, &[Light::point(Vec3::ONE)], Accuracy::Exact, &mut out)
         .unwrap();
     assert_eq!((out.edge_count(), stats.uncertain), (0, 0));
-    let mask = vk
-        .render_shadow_mask(empty, Light::point(Vec3::ONE), &cam, 8, 8, Accuracy::Exact)
-        .unwrap();
-    assert!(mask.shadowed.iter().all(|&s| !s));
     Ok(())
 }
 

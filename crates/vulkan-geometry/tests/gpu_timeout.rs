@@ -16,7 +16,7 @@ use shadowvol_silhouette::{
 };
 use shadowvol_test_support::shapes::uv_sphere_y;
 use shadowvol_test_support::{main, Outcome};
-use shadowvol_vulkan_geometry::{ViewProjection, VulkanBackend, VulkanOptions};
+use shadowvol_vulkan_geometry::{VulkanBackend, VulkanOptions};
 use std::time::{Duration, Instant};
 
 main!(tiny_wait_limit_times_out_refuses_work_then_recovers);
@@ -94,20 +94,6 @@ fn tiny_wait_limit_times_out_refuses_work_then_recovers() -> Outcome {
     assert!(is_timeout_error(&e), "{e}");
     eprintln!("second extract: {e}");
 
-    // Rendering is refused the same way (it must not touch buffers the late work uses).
-    let camera = ViewProjection::look_at(
-        glam::Vec3::new(3.0, 2.5, 4.0),
-        glam::Vec3::ZERO,
-        glam::Vec3::Y,
-        0.8,
-        1.0,
-        0.01,
-    );
-    let e = vk
-        .render_shadow_mask(id, lights()[0], &camera, 16, 16, Accuracy::Robust)
-        .expect_err("a backend with pending work must refuse (or time out on) a render");
-    assert!(is_timeout_error(&e), "{e}");
-
     // An invalid limit is an input error, not a device error.
     std::env::set_var(TIMEOUT_ENV, "soon");
     let e = vk
@@ -147,10 +133,6 @@ fn tiny_wait_limit_times_out_refuses_work_then_recovers() -> Outcome {
         }
         assert!(stats.compute > Duration::ZERO);
     }
-    let mask = vk
-        .render_shadow_mask(id, lights()[0], &camera, 16, 16, Accuracy::Exact)
-        .unwrap();
-    assert!(mask.covered.iter().any(|&c| c), "the sphere is in view");
     vk.release(id);
     let messages = vk.validation_messages();
     assert!(messages.is_empty(), "validation:\n{}", messages.join("\n"));

@@ -1,15 +1,12 @@
-//! The CPU twin of the geometry shader: its filter certifies only true signs, and the side quads
-//! it emits close up exactly when the multiplicities satisfy the closed-chain invariant.
+//! The CPU twin of the geometry shader: its filter certifies only true signs, and its exact
+//! mode leaves pairs to the host that the host decides.
 
-use glam::Vec3;
 use shadowvol_robust_math::{orient_exact, orient_filter_f32, Accuracy};
-use shadowvol_silhouette::{invariant, object_lights};
+use shadowvol_silhouette::gpu::ExactFilter;
+use shadowvol_silhouette::Multiplicities;
 use shadowvol_test_support::corpus;
 use shadowvol_test_support::shapes::Rng;
-use shadowvol_vulkan_geometry::twin::{
-    device_filter_f32, extract_twin, side_quad, DeviceFilter, DeviceScene,
-};
-use std::collections::HashMap;
+use shadowvol_vulkan_geometry::twin;
 
 fn v3(rng: &mut Rng, scale: f32, offset: f32) -> [f32; 3] {
     [0, 1, 2].map(|_| offset + scale * rng.unit())
@@ -44,7 +41,7 @@ fn f32_device_filter_certifies_only_exact_signs() {
         };
         let exact = orient_exact(a, b, l, o);
         total += 1;
-        if let Some(s) = device_filter_f32(a, b, l, o) {
+        if let Some(s) = twin::filter_f32(a, b, l, o) {
             certified += 1;
             assert_eq!(
                 s, exact,
@@ -74,85 +71,19 @@ fn twin_uncertain_pairs_exist_and_are_resolved() {
     let mut uncertain = 0;
     for case in corpus::cases() {
         let scene = case.scene().unwrap();
-        let (_, u) =
-            extract_twin(&scene, &case.lights, Accuracy::Exact, DeviceFilter::F32).unwrap();
-        uncertain += u;
+        let mut m = Multiplicities::default();
+        uncertain += twin::extract(
+            &scene,
+            &case.lights,
+            Accuracy::Exact,
+            ExactFilter::F32,
+            &mut m,
+        )
+        .unwrap();
     }
     assert!(
         uncertain > 0,
         "the corpus should contain pairs the f32 filter cannot certify"
-    );
-}
-
-/// Sum over the emitted quads of the lateral edges (finite point -> point at infinity: +1,
-/// back: -1), per finite vertex: zero everywhere iff the volume sides close up.
-fn open_lateral_vertices(
-    scene: &shadowvol_silhouette::TopologyScene,
-    m: &[i32],
-    li: usize,
-    lights: &[shadowvol_silhouette::Light],
-) -> usize {
-    let ds = DeviceScene::build(scene).unwrap();
-    let obj_lights = object_lights(scene.transforms(), lights);
-    let mut sum: HashMap<(u32, [u32; 3]), i64> = HashMap::new();
-    for (e, &mult) in m.iter().enumerate().take(ds.layout.edge_count()) {
-        if mult == 0 {
-            continue;
-        }
-        let (a, b, obj) = ds.layout.edge(e);
-        let l = obj_lights[obj as usize][li];
-        let q = side_quad(
-            Vec3::from_array(ds.layout.position(a)),
-            Vec3::from_array(ds.layout.position(b)),
-            l,
-            mult,
-        );
-        // Strip order q0 q1 q2 q3 is the polygon q0 -> q1 -> q3 -> q2 -> q0.
-        let poly = [q[0], q[1], q[3], q[2]];
-        for k in 0..4 {
-            let (p, n) = (poly[k], poly[(k + 1) % 4]);
-            let key = |v: glam::Vec4| (obj, v.truncate().to_array().map(f32::to_bits));
-            if p.w == 1.0 && n.w == 0.0 {
-                *sum.entry(key(p)).or_default() += i64::from(mult.abs());
-            } else if p.w == 0.0 && n.w == 1.0 {
-                *sum.entry(key(n)).or_default() -= i64::from(mult.abs());
-            }
-        }
-    }
-    sum.values().filter(|&&s| s != 0).count()
-}
-
-#[test]
-fn twin_side_quads_close_in_consistent_modes() {
-    let mut original_open = 0;
-    for case in corpus::cases() {
-        let scene = case.scene().unwrap();
-        for mode in Accuracy::ALL {
-            let (m, _) = extract_twin(&scene, &case.lights, mode, DeviceFilter::F64).unwrap();
-            for li in 0..case.lights.len() {
-                let open = open_lateral_vertices(&scene, m.values(li), li, &case.lights);
-                if mode.is_consistent() {
-                    assert_eq!(
-                        open, 0,
-                        "{} {mode} light {li}: quads do not close",
-                        case.name
-                    );
-                } else {
-                    // Lateral edges and the chain invariant must tell the same story.
-                    assert_eq!(
-                        open == 0,
-                        invariant::open_vertices_scene(&scene, &m, li) == 0,
-                        "{} original light {li}",
-                        case.name
-                    );
-                    original_open += open;
-                }
-            }
-        }
-    }
-    assert!(
-        original_open > 0,
-        "original mode should crack somewhere in the corpus"
     );
 }
 
@@ -172,7 +103,7 @@ fn f32_filter_never_certifies_general_w() {
         "w * A is inexact in f32, so the exact V.x is not 0"
     );
     assert_eq!(
-        shadowvol_vulkan_geometry::twin::device_filter_f32(a, b, l, o),
+        twin::filter_f32(a, b, l, o),
         None,
         "general w must go to the host"
     );

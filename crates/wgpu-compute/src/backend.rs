@@ -5,10 +5,9 @@
 use crate::device::{device_error, ErrorScopes, Health, WgpuOptions};
 use crate::layout::{Prepared, StaticBuffers};
 use crate::pipeline::Pipelines;
-use crate::twin::ExactFilter;
 use crate::{shaders, NAME};
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::gpu::{SceneLayout, TriangleLayout};
+use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout, TriangleLayout};
 use shadowvol_silhouette::{
     BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId, PreparedScenes,
     SilhouetteBackend, TopologyScene,

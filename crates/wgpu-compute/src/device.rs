@@ -4,8 +4,8 @@
 
 use crate::backend::WgpuBackend;
 use crate::pipeline::{create_pipelines, STORAGE_BUFFERS};
-use crate::twin::ExactFilter;
 use crate::{shaders, NAME};
+use shadowvol_silhouette::gpu::ExactFilter;
 use shadowvol_silhouette::{BackendError, PreparedScenes};
 use std::num::NonZeroUsize;
 use std::sync::{Arc, Mutex, PoisonError};
@@ -239,13 +239,10 @@ impl WgpuBackend {
                 ),
             });
         }
-        let filter = if !options.force_f32_filter
-            && device.features().contains(wgpu::Features::SHADER_F64)
-        {
-            ExactFilter::F64
-        } else {
-            ExactFilter::F32
-        };
+        let filter = ExactFilter::for_device(
+            device.features().contains(wgpu::Features::SHADER_F64),
+            options.force_f32_filter,
+        );
         let adapter = device.adapter_info();
         let pipelines = create_pipelines(&device, filter, options.exact_on_device)?;
         let backend = Self {

@@ -3,11 +3,10 @@
 
 use crate::backend::WgpuBackend;
 use crate::device::{device_error, limit_error, wait_error, ErrorScopes};
-use crate::layout::{Frame, Prepared, StaticBuffers};
+use crate::layout::{pack_lights, Frame, Prepared, StaticBuffers};
 use crate::pipeline::DeferredExact;
 use crate::resolve::{expand_uncertain, finish_batch, BatchOutput, Patch, UncertainTriangle};
 use crate::shaders;
-use crate::twin::pack_lights;
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
     check_lights, gpu, object_lights, BackendError, ExtractStats, Multiplicities,
@@ -55,6 +54,36 @@ struct FirstTrip {
     /// Uncertain records the host decides: all of them with the host fallback, else none (the
     /// device decided them).
     host_records: u64,
+}
+
+/// The sizes and workgroup grids of one batch's dispatch.
+struct Dims {
+    /// Edges of the scene (the stride between lights in the device buffers).
+    edges: u64,
+    /// Triangles of the scene.
+    triangles: u64,
+    /// Lights of the batch.
+    lights: usize,
+    /// Workgroups of the edge step.
+    edge_grid: (u32, u32),
+    /// Workgroups of the triangle step.
+    triangle_grid: (u32, u32),
+}
+
+/// Where the first round trip's staging buffer holds what it brings back (byte offsets).
+struct Staging {
+    /// Bytes of the counts: one list length per light, then the uncertain count.
+    counters_bytes: u64,
+    /// Offset of the list prefixes, `k` entries of 8 bytes per light.
+    lists_at: u64,
+    /// List entries brought back per light.
+    k: u64,
+    /// Offset of the uncertain records, 16 bytes each.
+    uncertain_at: u64,
+    /// Uncertain records brought back.
+    ku: u64,
+    /// Bytes in all.
+    bytes: u64,
 }
 
 /// What one dispatch brought back, before the host decides its undecided triangles.
@@ -108,7 +137,7 @@ impl WgpuBackend {
             p.frame = Some(frame?);
         }
         stats.upload += t_upload.elapsed();
-        let m = shaders::mode_value(mode) as usize;
+        let m = gpu::mode_code(mode) as usize;
         let exact = mode == Accuracy::Exact;
         let steps = Steps {
             triangles: self.pipelines.triangles[m].as_ref(),
@@ -194,196 +223,264 @@ impl WgpuBackend {
         batch: &LightBatch<'_>,
         stats: &mut ExtractStats,
     ) -> Result<FirstTrip, BackendError> {
-        let (packed, count) = (&batch.packed[..], batch.lights.len());
-        let host_resolves = batch.host_resolves;
-        let edge_count = p.layout.edge_count();
-        let edges = edge_count as u64;
-        let objects = p.layout.object_count() as u64;
-        let tri_count = p.triangles.tri_count();
-        let tris = tri_count as u64;
-        // ---- compute (repeated with a bigger uncertain buffer if it overflowed)
-        let (gx, gy) = self.grid(edge_count, "edges")?;
-        let (tx, ty) = self.grid(tri_count, "triangles")?;
-        // The first round trip brings the counts and the first `k` entries of every list (and
-        // `ku` uncertain records); the second, if needed, the rest.
-        let first = loop {
+        let count = batch.lights.len();
+        let dims = Dims {
+            edges: p.layout.edge_count() as u64,
+            triangles: p.triangles.tri_count() as u64,
+            lights: count,
+            edge_grid: self.grid(p.layout.edge_count(), "edges")?,
+            triangle_grid: self.grid(p.triangles.tri_count(), "triangles")?,
+        };
+        // Repeated with a bigger uncertain buffer (or the fallback inline) after an overflow.
+        loop {
             let t = Instant::now();
             let frame = p
                 .frame
                 .as_mut()
                 .ok_or_else(|| device_error("no frame buffers"))?;
-            // ---- upload: lights and parameters (again after the buffers were regrown)
-            let params = [
-                edge_count as u32,
-                count as u32,
-                frame.uncertain_capacity,
-                tri_count as u32,
-            ];
-            self.queue
-                .write_buffer(&frame.lights, 0, bytemuck::cast_slice(packed));
-            self.queue
-                .write_buffer(&frame.params, 0, bytemuck::cast_slice(&params));
-            let counters_bytes = (count as u64 + 1) * 4;
-            let lists_at = counters_bytes.next_multiple_of(8);
-            // The prefixes shrink to keep the staging buffer within the buffer limit; the second
-            // round trip brings what they leave.
-            let room = self.limits.max_buffer_size.saturating_sub(lists_at);
-            let k = p
-                .list_prefix
-                .min(edges)
-                .min(room / (count as u64 * 8).max(1));
-            let ku = if host_resolves {
-                p.uncertain_prefix
-                    .min(u64::from(frame.uncertain_capacity))
-                    .min((room - count as u64 * k * 8) / 16)
-            } else {
-                0
-            };
-            let uncertain_at = lists_at + count as u64 * k * 8;
-            let staging_bytes = uncertain_at + ku * 16;
-            if frame
-                .staging
-                .as_ref()
-                .is_none_or(|b| b.size() < staging_bytes)
-            {
-                self.check_buffer("the staging buffer", staging_bytes, false)?;
-                frame.staging = Some(
-                    self.device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some("counts and list prefixes"),
-                        size: staging_bytes
-                            .next_power_of_two()
-                            .min(self.limits.max_buffer_size)
-                            .max(staging_bytes),
-                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    }),
-                );
-            }
-            let staging = frame
-                .staging
-                .as_ref()
-                .ok_or_else(|| device_error("no staging buffer"))?;
+            let prefixes = (p.list_prefix, p.uncertain_prefix);
+            let at = self.upload_batch(frame, &dims, batch, prefixes)?;
             stats.upload += t.elapsed();
-            // ---- compute
             let t = Instant::now();
-            // Exact mode on the device: the integer fallback inline, or the resolution of the
-            // list over one invocation per record it holds, up to a grid that fills a large GPU.
-            let (triangles, resolve) = match steps.deferred {
-                Some(d) if p.inline_exact => (Some(d.inline_triangles(&self.device)?), None),
-                Some(d) => {
-                    let records = frame
-                        .uncertain_capacity
-                        .min(RESOLVE_MAX_GROUPS * shaders::WORKGROUP_SIZE);
-                    let grid = self.grid(records as usize, "uncertain records")?;
-                    (steps.triangles, Some((&d.resolve, grid)))
-                }
-                None => (steps.triangles, None),
-            };
-            let mut encoder = self
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("extract"),
-                });
-            encoder.clear_buffer(&frame.counters, 0, Some(counters_bytes));
-            {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("silhouette"),
-                    timestamp_writes: None,
-                });
-                pass.set_bind_group(0, &frame.bind_group, &[]);
-                if let Some(triangles) = triangles {
-                    pass.set_pipeline(triangles);
-                    pass.dispatch_workgroups(tx, ty, 1);
-                }
-                if let Some((resolve, (rx, ry))) = resolve {
-                    pass.set_pipeline(resolve);
-                    pass.dispatch_workgroups(rx, ry, 1);
-                }
-                pass.set_pipeline(steps.edges);
-                pass.dispatch_workgroups(gx, gy, 1);
-            }
-            encoder.copy_buffer_to_buffer(&frame.counters, 0, staging, 0, counters_bytes);
-            if k > 0 {
-                for li in 0..count as u64 {
-                    encoder.copy_buffer_to_buffer(
-                        &frame.silhouettes,
-                        li * edges * 8,
-                        staging,
-                        lists_at + li * k * 8,
-                        k * 8,
-                    );
-                }
-            }
-            if ku > 0 {
-                encoder.copy_buffer_to_buffer(&frame.uncertain, 0, staging, uncertain_at, ku * 16);
-            }
-            let index = self.queue.submit([encoder.finish()]);
-            self.wait(index)?;
+            self.dispatch_batch(frame, steps, p.inline_exact, &dims, &at)?;
             stats.compute += t.elapsed();
-            // ---- readback, first round trip
             let t = Instant::now();
-            let (counts, output) = self.read_mapped(staging, staging_bytes, |b| {
-                let counts: Vec<u32> = read_u32s(&b[..counters_bytes as usize]).collect();
-                let lists = (0..count)
-                    .map(|li| {
-                        let n = u64::from(counts[li]).min(k) as usize;
-                        let at = (lists_at + li as u64 * k * 8) as usize;
-                        read_pairs(&b[at..at + n * 8])
-                    })
-                    .collect();
-                let n = u64::from(counts[count]).min(ku) as usize;
-                let at = uncertain_at as usize;
-                let uncertain = read_records(&b[at..at + n * 16]);
-                (
-                    counts,
-                    DeviceOutput {
-                        mult: None,
-                        lists,
-                        uncertain,
-                    },
-                )
-            })?;
+            let (counts, output) = self.read_first_trip(frame, count, &at)?;
             stats.readback += t.elapsed();
             let uncertain = counts[count];
             if uncertain <= frame.uncertain_capacity {
-                break FirstTrip {
-                    host_records: if host_resolves {
+                return Ok(FirstTrip {
+                    host_records: if batch.host_resolves {
                         u64::from(uncertain)
                     } else {
                         0
                     },
                     counts,
                     output,
-                    k,
-                    ku,
-                };
+                    k: at.k,
+                    ku: at.ku,
+                });
             }
-            if uncertain > self.max_uncertain_records() {
-                if steps.deferred.is_none() {
-                    return Err(limit_error(format!(
-                        "{uncertain} undecided (triangle, light) pairs need {} bytes, but the device allows storage bindings of {} bytes; pass fewer lights per call",
-                        u64::from(uncertain) * 16,
-                        self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size)
-                    )));
-                }
-                // Decided on the device all the same, with the integer fallback inline: slower
-                // per triangle, but no list, so the frame keeps its buffers. This prepared scene
-                // keeps the fallback inline from now on.
-                p.inline_exact = true;
-                continue;
-            }
-            // Overflow: grow the uncertain buffer and run the dispatch again.
-            let t = Instant::now();
-            let capacity = uncertain.checked_next_power_of_two().unwrap_or(uncertain);
-            let light_capacity = frame.light_capacity;
-            let staging = frame.staging.take();
-            let mut frame =
-                self.create_frame(gpu, edges, tris, objects, light_capacity, capacity)?;
-            frame.staging = staging;
-            p.frame = Some(frame);
-            stats.upload += t.elapsed();
+            self.after_overflow(p, gpu, steps, uncertain, stats)?;
+        }
+    }
+
+    /// Writes the batch's lights and parameters, and makes the staging buffer large enough for
+    /// what the first round trip brings back: the list lengths, the first `k` entries of every
+    /// list and (when the host resolves) `ku` uncertain records, `k` and `ku` the scene's
+    /// adapted `prefixes` shrunk to keep the staging buffer within the buffer limit.
+    fn upload_batch(
+        &self,
+        frame: &mut Frame,
+        dims: &Dims,
+        batch: &LightBatch<'_>,
+        (list_prefix, uncertain_prefix): (u64, u64),
+    ) -> Result<Staging, BackendError> {
+        let count = dims.lights as u64;
+        let params = [
+            dims.edges as u32,
+            count as u32,
+            frame.uncertain_capacity,
+            dims.triangles as u32,
+        ];
+        self.queue
+            .write_buffer(&frame.lights, 0, bytemuck::cast_slice(&batch.packed));
+        self.queue
+            .write_buffer(&frame.params, 0, bytemuck::cast_slice(&params));
+        let counters_bytes = (count + 1) * 4;
+        let lists_at = counters_bytes.next_multiple_of(8);
+        // The second round trip brings what the prefixes leave.
+        let room = self.limits.max_buffer_size.saturating_sub(lists_at);
+        let k = list_prefix.min(dims.edges).min(room / (count * 8).max(1));
+        let ku = if batch.host_resolves {
+            uncertain_prefix
+                .min(u64::from(frame.uncertain_capacity))
+                .min((room - count * k * 8) / 16)
+        } else {
+            0
         };
-        Ok(first)
+        let uncertain_at = lists_at + count * k * 8;
+        let at = Staging {
+            counters_bytes,
+            lists_at,
+            k,
+            uncertain_at,
+            ku,
+            bytes: uncertain_at + ku * 16,
+        };
+        if frame.staging.as_ref().is_none_or(|b| b.size() < at.bytes) {
+            self.check_buffer("the staging buffer", at.bytes, false)?;
+            frame.staging = Some(
+                self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("counts and list prefixes"),
+                    size: at
+                        .bytes
+                        .next_power_of_two()
+                        .min(self.limits.max_buffer_size)
+                        .max(at.bytes),
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }),
+            );
+        }
+        Ok(at)
+    }
+
+    /// Records and submits one batch's compute pass (the triangle step, exact mode's resolution
+    /// on the device, the edge step) and the copies of the counts, list prefixes and uncertain
+    /// records into the staging buffer, and waits for them.
+    fn dispatch_batch(
+        &self,
+        frame: &Frame,
+        steps: Steps<'_>,
+        inline_exact: bool,
+        dims: &Dims,
+        at: &Staging,
+    ) -> Result<(), BackendError> {
+        let staging = frame
+            .staging
+            .as_ref()
+            .ok_or_else(|| device_error("no staging buffer"))?;
+        // Exact mode on the device: the integer fallback inline, or the resolution of the
+        // list over one invocation per record it holds, up to a grid that fills a large GPU.
+        let (triangles, resolve) = match steps.deferred {
+            Some(d) if inline_exact => (Some(d.inline_triangles(&self.device)?), None),
+            Some(d) => {
+                let records = frame
+                    .uncertain_capacity
+                    .min(RESOLVE_MAX_GROUPS * shaders::WORKGROUP_SIZE);
+                let grid = self.grid(records as usize, "uncertain records")?;
+                (steps.triangles, Some((&d.resolve, grid)))
+            }
+            None => (steps.triangles, None),
+        };
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("extract"),
+            });
+        encoder.clear_buffer(&frame.counters, 0, Some(at.counters_bytes));
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("silhouette"),
+                timestamp_writes: None,
+            });
+            pass.set_bind_group(0, &frame.bind_group, &[]);
+            if let Some(triangles) = triangles {
+                let (tx, ty) = dims.triangle_grid;
+                pass.set_pipeline(triangles);
+                pass.dispatch_workgroups(tx, ty, 1);
+            }
+            if let Some((resolve, (rx, ry))) = resolve {
+                pass.set_pipeline(resolve);
+                pass.dispatch_workgroups(rx, ry, 1);
+            }
+            let (gx, gy) = dims.edge_grid;
+            pass.set_pipeline(steps.edges);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
+        encoder.copy_buffer_to_buffer(&frame.counters, 0, staging, 0, at.counters_bytes);
+        if at.k > 0 {
+            for li in 0..dims.lights as u64 {
+                encoder.copy_buffer_to_buffer(
+                    &frame.silhouettes,
+                    li * dims.edges * 8,
+                    staging,
+                    at.lists_at + li * at.k * 8,
+                    at.k * 8,
+                );
+            }
+        }
+        if at.ku > 0 {
+            encoder.copy_buffer_to_buffer(
+                &frame.uncertain,
+                0,
+                staging,
+                at.uncertain_at,
+                at.ku * 16,
+            );
+        }
+        let index = self.queue.submit([encoder.finish()]);
+        self.wait(index)
+    }
+
+    /// Maps the staging buffer and reads the counts (per light, then the uncertain records),
+    /// the list prefixes and the uncertain records the first round trip brought back.
+    fn read_first_trip(
+        &self,
+        frame: &Frame,
+        count: usize,
+        at: &Staging,
+    ) -> Result<(Vec<u32>, DeviceOutput), BackendError> {
+        let staging = frame
+            .staging
+            .as_ref()
+            .ok_or_else(|| device_error("no staging buffer"))?;
+        self.read_mapped(staging, at.bytes, |b| {
+            let counts: Vec<u32> = read_u32s(&b[..at.counters_bytes as usize]).collect();
+            let lists = (0..count)
+                .map(|li| {
+                    let n = u64::from(counts[li]).min(at.k) as usize;
+                    let from = (at.lists_at + li as u64 * at.k * 8) as usize;
+                    read_pairs(&b[from..from + n * 8])
+                })
+                .collect();
+            let n = u64::from(counts[count]).min(at.ku) as usize;
+            let from = at.uncertain_at as usize;
+            let uncertain = read_records(&b[from..from + n * 16]);
+            (
+                counts,
+                DeviceOutput {
+                    mult: None,
+                    lists,
+                    uncertain,
+                },
+            )
+        })
+    }
+
+    /// After a dispatch whose `uncertain` records overflowed the list: a bigger list, or, where
+    /// no list the device binds can hold them, the integer fallback inline from now on (exact
+    /// mode on the device; the host fallback has no way out and returns
+    /// [`BackendError::Limit`]). The caller dispatches again.
+    fn after_overflow(
+        &self,
+        p: &mut Prepared,
+        gpu: &StaticBuffers,
+        steps: Steps<'_>,
+        uncertain: u32,
+        stats: &mut ExtractStats,
+    ) -> Result<(), BackendError> {
+        if uncertain > self.max_uncertain_records() {
+            if steps.deferred.is_none() {
+                return Err(limit_error(format!(
+                    "{uncertain} undecided (triangle, light) pairs need {} bytes, but the device allows storage bindings of {} bytes; pass fewer lights per call",
+                    u64::from(uncertain) * 16,
+                    self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size)
+                )));
+            }
+            // Decided on the device all the same, with the integer fallback inline: slower per
+            // triangle, but no list, so the frame keeps its buffers. This prepared scene keeps
+            // the fallback inline from now on.
+            p.inline_exact = true;
+            return Ok(());
+        }
+        let t = Instant::now();
+        let capacity = uncertain.checked_next_power_of_two().unwrap_or(uncertain);
+        let edges = p.layout.edge_count() as u64;
+        let tris = p.triangles.tri_count() as u64;
+        let objects = p.layout.object_count() as u64;
+        let frame = p
+            .frame
+            .as_mut()
+            .ok_or_else(|| device_error("no frame buffers"))?;
+        let light_capacity = frame.light_capacity;
+        let staging = frame.staging.take();
+        let mut frame = self.create_frame(gpu, edges, tris, objects, light_capacity, capacity)?;
+        frame.staging = staging;
+        p.frame = Some(frame);
+        stats.upload += t.elapsed();
+        Ok(())
     }
 
     /// Brings back what the first round trip left: the rest of long lists and of the uncertain

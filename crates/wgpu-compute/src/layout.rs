@@ -8,6 +8,19 @@ use crate::pipeline::entry;
 use shadowvol_silhouette::gpu::{self, SceneLayout, TriangleLayout};
 use shadowvol_silhouette::{BackendError, TopologyScene};
 
+/// Object-space lights packed object-major for lights `first..first + count`, as uploaded:
+/// `packed[object * count + light - first]`.
+pub(crate) fn pack_lights(
+    obj_lights: &[Vec<[f32; 4]>],
+    first: usize,
+    count: usize,
+) -> Vec<[f32; 4]> {
+    obj_lights
+        .iter()
+        .flat_map(|per_object| per_object[first..first + count].iter().copied())
+        .collect()
+}
+
 /// Buffers uploaded once per prepared scene (cheap to clone: wgpu buffers are shared handles).
 #[derive(Clone)]
 pub(crate) struct StaticBuffers {

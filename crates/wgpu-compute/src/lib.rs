@@ -29,13 +29,14 @@
 //!   consistent (closed chains) either way, because each triangle is evaluated once, in one
 //!   order, for all its edges.
 //! * `exact` runs a certified filter on the device: `f64` when the device has `SHADER_F64`
-//!   (bound [`twin::GPU_F64_FILTER_EPS`] = 8 × robust-math's `F64_FILTER_EPS`, margin for
+//!   (bound [`shaders::GPU_F64_FILTER_EPS`] = 8 × robust-math's `F64_FILTER_EPS`, margin for
 //!   contraction), else robust-math's `f32` filter (`F32_FILTER_EPS`, its range checks, `w` in
 //!   {0, 1} only) plus
-//!   two device guards ([`twin::GPU_F32_INPUT_MAX`], [`twin::GPU_F32_PERM_MIN`]).
+//!   two device guards ([`shaders::GPU_F32_INPUT_MAX`], [`shaders::GPU_F32_PERM_MIN`]).
 //!   Subnormal inputs are never certified. By default
 //!   ([`WgpuOptions::exact_on_device`]) the `(triangle, light)` pairs the filter cannot
-//!   certify are decided on the device by [`exact_int::orient_int`]: integer arithmetic on the
+//!   certify are decided on the device by `orient_int` (`shaders/exact_int.wgsl`): integer
+//!   arithmetic on the
 //!   `f32` bits, exact for every finite input, so nothing is resolved on the host and
 //!   [`ExtractStats::uncertain`](shadowvol_silhouette::ExtractStats::uncertain) is 0. The
 //!   triangle step appends those pairs to a list and a dispatch of their own
@@ -50,8 +51,9 @@
 //!   counts and list prefixes), `readback` zeroing the host result, mapping and any second round
 //!   trip, `host_resolve` the exact decisions, list sorting and the device patch.
 //!
-//! [`twin`] is a CPU port of the kernel with the same loop structure, for pinning down
-//! failures.
+//! [`twin`] is a CPU port of the kernels with the same loop structure, for pinning down
+//! failures in tests; the backend never calls it. The exact filter's precision is
+//! [`ExactFilter`](shadowvol_silhouette::gpu::ExactFilter), as on the other GPU backends.
 //!
 //! ```no_run
 //! // Needs a wgpu adapter (for example Mesa lavapipe: `apt install mesa-vulkan-drivers`).
@@ -70,7 +72,6 @@
 mod backend;
 mod device;
 mod dispatch;
-pub mod exact_int;
 mod layout;
 mod pipeline;
 mod resolve;
@@ -80,7 +81,6 @@ pub mod twin;
 pub use backend::{GpuResults, WgpuBackend};
 pub use device::WgpuOptions;
 pub use resolve::UncertainTriangle;
-pub use twin::ExactFilter;
 
 use shadowvol_silhouette::{BackendError, SilhouetteBackend};
 

@@ -3,16 +3,16 @@
 //! exact mode's on-device resolution of what its filter leaves.
 
 use crate::device::ErrorScopes;
-use crate::twin::ExactFilter;
 use crate::{shaders, NAME};
 use shadowvol_robust_math::Accuracy;
+use shadowvol_silhouette::gpu::{mode_code, ExactFilter};
 use shadowvol_silhouette::BackendError;
 use std::sync::OnceLock;
 
 /// The bind-group layout and the compute pipelines of every mode.
 pub(crate) struct Pipelines {
     pub(crate) bind_group_layout: wgpu::BindGroupLayout,
-    /// The edge step, per mode ([`shaders::mode_value`]).
+    /// The edge step, per mode (indexed by [`mode_code`]).
     pub(crate) edges: Vec<wgpu::ComputePipeline>,
     /// The triangle step, per mode; `None` for `original`, which has none. With
     /// `exact_on_device`, exact mode's is built with `DEFER_INT` (see [`DeferredExact`]).
@@ -80,7 +80,7 @@ fn build(
     mode: Accuracy,
     defer_int: Option<bool>,
 ) -> wgpu::ComputePipeline {
-    let mut constants = vec![(shaders::MODE_CONSTANT, f64::from(shaders::mode_value(mode)))];
+    let mut constants = vec![(shaders::MODE_CONSTANT, f64::from(mode_code(mode)))];
     if let Some(defer) = defer_int {
         constants.push((shaders::DEFER_INT_CONSTANT, f64::from(u8::from(defer))));
     }

@@ -1,6 +1,8 @@
-//! The WGSL sources (from the workspace's `shaders/` folder) and how modules are composed.
+//! The WGSL sources (from the workspace's `shaders/` folder), their constants, and how modules
+//! are composed.
 
-use crate::twin::ExactFilter;
+use shadowvol_robust_math::F64_FILTER_EPS;
+use shadowvol_silhouette::gpu::ExactFilter;
 
 /// `shaders/silhouette.wgsl`: the kernel, complete with the `f32` exact filter.
 pub const SILHOUETTE_WGSL: &str = include_str!("../../../shaders/silhouette.wgsl");
@@ -8,17 +10,43 @@ pub const SILHOUETTE_WGSL: &str = include_str!("../../../shaders/silhouette.wgsl
 /// `shaders/exact_f64.wgsl`: the `f64` exact filter, appended for devices with `SHADER_F64`.
 pub const EXACT_F64_WGSL: &str = include_str!("../../../shaders/exact_f64.wgsl");
 
-/// Every WGSL file of this crate as `(file name, source)`; each is a valid module on its own.
-pub const FILES: [(&str, &str); 2] = [
-    ("silhouette.wgsl", SILHOUETTE_WGSL),
-    ("exact_f64.wgsl", EXACT_F64_WGSL),
-];
+/// `shaders/exact_int.wgsl`: a standalone module (no bindings, no entry point) whose public
+/// function is `fn orient_int(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>, o: vec3<f32>) -> i32`,
+/// the exact sign `-1`, `0` or `+1` with integer arithmetic only; its helpers are prefixed
+/// `xi_`, its constants `XI_`, so it can be concatenated with other modules.
+/// [`module_source_with`] appends it for exact mode on the device.
+pub const EXACT_INT_WGSL: &str = include_str!("../../../shaders/exact_int.wgsl");
+
+/// Relative bound of the device's `f64` filter: 8 × robust-math's [`F64_FILTER_EPS`].
+///
+/// `F64_FILTER_EPS` (1e-15) covers the `9u` of the straight evaluation. WGSL cannot forbid FMA
+/// contraction or reassociation; both remove roundings without adding any, so the straight
+/// bound still holds, and the factor 8 is margin for them (and for drivers). A larger bound only
+/// sends more near-degenerate triples to the exact fallback. Must equal `GPU_F64_FILTER_EPS` in
+/// `shaders/exact_f64.wgsl` (a test checks it).
+pub const GPU_F64_FILTER_EPS: f64 = 8.0 * F64_FILTER_EPS;
+
+/// Largest input magnitude (positions and light components) the device's `f32` filter accepts:
+/// 2^39, so that no difference or product overflows before the range checks (WGSL leaves the
+/// result of an overflowing operation indeterminate). WGSL `F32_INPUT_MAX_BITS` holds its bits.
+pub const GPU_F32_INPUT_MAX: f32 = 549_755_813_888.0; // 2^39
+
+/// Smallest non-zero permanent the device's `f32` filter certifies: 2^-60. A device may flush
+/// subnormal intermediates to zero (only the terms `(p - q) * d` can become subnormal under the
+/// range checks); each flush moves `det` by less than 2^-126, far below `F32_FILTER_EPS × 2^-60`.
+/// WGSL `F32_PERM_MIN`.
+pub const GPU_F32_PERM_MIN: f32 = 1.0 / 1_152_921_504_606_846_976.0; // 2^-60
+
+/// The sign value of a triangle the renderer's resident pass marks as touching the light (a
+/// vertex exactly at the point light): it has no volume, and with [`TOUCH_SIGNS_CONSTANT`] set
+/// `edge_multiplicity` skips it. WGSL `TOUCH`.
+pub const TOUCH: i32 = 2;
 
 /// The edge step's entry point (every mode).
 pub const ENTRY_POINT: &str = "extract";
 
-/// The pipeline-overridable constant that selects the mode (0 original, 1 robust, 2 ordered,
-/// 3 exact).
+/// The pipeline-overridable constant that selects the mode: the mode's
+/// [`mode_code`](shadowvol_silhouette::gpu::mode_code).
 pub const MODE_CONSTANT: &str = "MODE";
 
 /// The entry point of the triangle step (robust, ordered and exact modes), dispatched before
@@ -94,7 +122,7 @@ pub fn module_source_with(filter: ExactFilter, device_exact: bool) -> String {
     );
     let mut s = s.replace(HOST_FALLBACK, INT_FALLBACK);
     s.push('\n');
-    s.push_str(crate::exact_int::EXACT_INT_WGSL);
+    s.push_str(EXACT_INT_WGSL);
     s
 }
 
@@ -121,16 +149,4 @@ pub fn compute_pipeline(
         },
         cache: None,
     })
-}
-
-/// The `MODE` value of an accuracy mode.
-#[must_use]
-pub fn mode_value(mode: shadowvol_robust_math::Accuracy) -> u32 {
-    use shadowvol_robust_math::Accuracy;
-    match mode {
-        Accuracy::Original => 0,
-        Accuracy::Robust => 1,
-        Accuracy::Ordered => 2,
-        Accuracy::Exact => 3,
-    }
 }

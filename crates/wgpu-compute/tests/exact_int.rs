@@ -1,5 +1,5 @@
 //! The integer-only exact orientation sign (`shaders/exact_int.wgsl` and its CPU twin
-//! `exact_int::orient_int`):
+//! `twin::orient_int`):
 //!
 //! * the twin equals robust-math's `orient_exact` (and an independent big-integer determinant) on
 //!   random, exactly degenerate, near-degenerate (one ulp off), subnormal, huge, mixed huge/tiny
@@ -16,7 +16,8 @@ use num_bigint::BigInt;
 use proptest::prelude::*;
 use shadowvol_robust_math::orient_exact;
 use shadowvol_test_support::{main, Outcome};
-use shadowvol_wgpu_compute::exact_int::{mul32, orient_int, EXACT_INT_WGSL};
+use shadowvol_wgpu_compute::shaders::EXACT_INT_WGSL;
+use shadowvol_wgpu_compute::twin::{mul32, orient_int};
 use shadowvol_wgpu_compute::{WgpuBackend, WgpuOptions};
 
 main!(

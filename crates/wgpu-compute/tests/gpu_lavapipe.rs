@@ -10,11 +10,12 @@ mod values;
 use common::backend;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_robust_math::Accuracy;
+use shadowvol_silhouette::gpu::ExactFilter;
 use shadowvol_silhouette::{
     extract_once, invariant, BackendError, Light, Multiplicities, SilhouetteBackend, TopologyScene,
 };
 use shadowvol_test_support::{main, Outcome};
-use shadowvol_wgpu_compute::{ExactFilter, WgpuBackend, WgpuOptions};
+use shadowvol_wgpu_compute::{WgpuBackend, WgpuOptions};
 use values::Rule;
 
 main!(

@@ -5,10 +5,10 @@ mod common;
 
 use shadowvol_cpu::CpuBackend;
 use shadowvol_robust_math::{orient_exact, orient_filter_f32, Accuracy};
-use shadowvol_silhouette::gpu::{SceneLayout, TriangleLayout};
+use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout, TriangleLayout};
 use shadowvol_silhouette::{extract_once, invariant, object_lights, Multiplicities};
 use shadowvol_test_support::shapes::Rng;
-use shadowvol_wgpu_compute::twin::{self, ExactFilter};
+use shadowvol_wgpu_compute::twin;
 
 #[test]
 fn twin_equals_cpu_in_every_mode_with_both_filters() {

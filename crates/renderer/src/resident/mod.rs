@@ -25,8 +25,9 @@
 //! bit.
 //!
 //! The shaders are the `wgpu` silhouette backend's module (same bindings, sign functions and
-//! filter) with `extract.wgsl` appended, and the renderer's `shader.wgsl` with `draw.wgsl`
-//! appended. [`twin`] is the CPU port of the new kernels.
+//! filter) with `shaders/resident_extract.wgsl` appended, and the renderer's
+//! `shaders/render_raster.wgsl` with `shaders/resident_draw.wgsl` appended. [`twin`] is the CPU
+//! port of the new kernels.
 //!
 //! ```no_run
 //! # fn main() -> Result<(), shadowvol_renderer::RenderError> {
@@ -64,18 +65,19 @@ use crate::{Camera, RenderError};
 use glam::{Affine3A, DAffine3};
 use shadowvol_robust_math::Accuracy;
 use shadowvol_scenes::SceneLight;
+use shadowvol_silhouette::gpu::{mode_code, ExactFilter};
 use shadowvol_silhouette::object_light;
 use shadowvol_wgpu_compute::shaders;
-use shadowvol_wgpu_compute::twin::ExactFilter;
 use std::sync::Arc;
 use wgpu::util::DeviceExt;
 
-/// `resident/extract.wgsl`: the triangle, edge and reset kernels.
-pub const EXTRACT_WGSL: &str = include_str!("extract.wgsl");
-/// `resident/draw.wgsl`: the vertex-pulling shaders of the surfaces, sides and caps.
-pub const DRAW_WGSL: &str = include_str!("draw.wgsl");
-/// The renderer's `shader.wgsl` (fragment shaders and the uniforms both pipelines share).
-pub const SHADER_WGSL: &str = include_str!("../shader.wgsl");
+/// `shaders/resident_extract.wgsl`: the triangle, edge and reset kernels.
+pub const EXTRACT_WGSL: &str = include_str!("../../../../shaders/resident_extract.wgsl");
+/// `shaders/resident_draw.wgsl`: the vertex-pulling shaders of the surfaces, sides and caps.
+pub const DRAW_WGSL: &str = include_str!("../../../../shaders/resident_draw.wgsl");
+/// `shaders/render_raster.wgsl`: the renderer's raster shaders (fragment shaders and the
+/// uniforms both pipelines share).
+pub const SHADER_WGSL: &str = include_str!("../../../../shaders/render_raster.wgsl");
 
 /// Threads per workgroup of the triangle and edge passes (the `wgpu` backend's
 /// `WORKGROUP_SIZE`, whose module they join).
@@ -97,7 +99,7 @@ pub fn extract_source(filter: ExactFilter) -> String {
     s
 }
 
-/// The draw module: the renderer's `shader.wgsl`, then the resident vertex shaders.
+/// The draw module: the renderer's `render_raster.wgsl`, then the resident vertex shaders.
 #[must_use]
 pub fn draw_source() -> String {
     format!("{SHADER_WGSL}\n{DRAW_WGSL}")
@@ -160,6 +162,28 @@ pub struct PassCounts {
     pub records: Vec<[u32; 2]>,
 }
 
+/// Per-(light, object) technique codes of the pass, as uploaded: the edge's or triangle's object
+/// is skipped (culled), its sides go to the z-pass list, or to the z-fail list (and it gets
+/// caps).
+pub mod technique {
+    /// Culled: no sign, no record.
+    pub const CULLED: u32 = 0;
+    /// Z-pass sides.
+    pub const ZPASS: u32 = 1;
+    /// Z-fail sides and caps.
+    pub const ZFAIL: u32 = 2;
+}
+
+/// The side records of one light, from [`ShadowPass::read_records`]: global edge ids,
+/// [`layout::NEGATIVE`] set when `m < 0`, each edge `|m|` times; sorted.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct LightRecords {
+    /// Records of z-pass objects.
+    pub zpass: Vec<u32>,
+    /// Records of z-fail objects.
+    pub zfail: Vec<u32>,
+}
+
 /// The pipelines of the pass on one device.
 pub struct ShadowPass {
     device: wgpu::Device,
@@ -206,8 +230,10 @@ impl std::fmt::Debug for ShadowPass {
     }
 }
 
+/// The index of `mode`'s pipeline in the per-mode pipeline lists (built in [`Accuracy::ALL`]
+/// order, which is the order of the mode codes).
 fn mode_index(mode: Accuracy) -> usize {
-    shaders::mode_value(mode) as usize
+    mode_code(mode) as usize
 }
 
 fn gcd(a: u64, b: u64) -> u64 {
@@ -342,7 +368,7 @@ impl std::fmt::Debug for ResidentScene {
 }
 
 impl ResidentScene {
-    /// The uploaded layout (for the CPU twin).
+    /// The uploaded layout (what the CPU twin reads in tests).
     #[must_use]
     pub fn layout(&self) -> &ResidentLayout {
         &self.layout

@@ -98,11 +98,7 @@ impl ShadowPass {
         }
         let features = device.features();
         let depth_clamp = features.contains(wgpu::Features::DEPTH_CLIP_CONTROL);
-        let filter = if features.contains(wgpu::Features::SHADER_F64) {
-            ExactFilter::F64
-        } else {
-            ExactFilter::F32
-        };
+        let filter = ExactFilter::for_device(features.contains(wgpu::Features::SHADER_F64), false);
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let compute = wgpu::ShaderStages::COMPUTE;
         // Group 0: the wgpu backend's bindings the resident kernels use (its scene and triangle
@@ -151,7 +147,7 @@ impl ShadowPass {
         let compute_pipeline =
             |entry: &str, layout: &wgpu::PipelineLayout, mode: Accuracy, defer: bool| {
                 let constants = [
-                    (shaders::MODE_CONSTANT, f64::from(shaders::mode_value(mode))),
+                    (shaders::MODE_CONSTANT, f64::from(mode_code(mode))),
                     (shaders::TOUCH_SIGNS_CONSTANT, 1.0),
                     (shaders::DEFER_INT_CONSTANT, f64::from(u8::from(defer))),
                     ("PENDING_GROUPS_X", f64::from(max_x)),
@@ -331,7 +327,7 @@ impl ShadowPass {
 
     /// The exact filter the triangle pass runs (`f64` when the device has `SHADER_F64`).
     #[must_use]
-    pub fn filter(&self) -> ExactFilter {
+    pub fn exact_filter(&self) -> ExactFilter {
         self.filter
     }
 

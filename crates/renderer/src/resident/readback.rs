@@ -95,7 +95,7 @@ impl ShadowPass {
     /// # Errors
     /// [`RenderError::Device`] when mapping fails, or when the counts the device wrote exceed a
     /// light's record region.
-    pub fn read_records(&self, rs: &ResidentScene) -> Result<Vec<twin::LightRecords>, RenderError> {
+    pub fn read_records(&self, rs: &ResidentScene) -> Result<Vec<LightRecords>, RenderError> {
         let Some(fb) = rs.frame.as_ref() else {
             return Ok(Vec::new());
         };
@@ -118,7 +118,7 @@ impl ShadowPass {
                 let mut zfail = region[cap - zf..].to_vec();
                 zpass.sort_unstable();
                 zfail.sort_unstable();
-                Ok(twin::LightRecords { zpass, zfail })
+                Ok(LightRecords { zpass, zfail })
             })
             .collect()
     }

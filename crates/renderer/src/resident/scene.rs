@@ -243,9 +243,9 @@ impl ShadowPass {
             .techniques
             .iter()
             .map(|t| match t {
-                Technique::Culled => twin::technique::CULLED,
-                Technique::ZPass => twin::technique::ZPASS,
-                Technique::ZFail => twin::technique::ZFAIL,
+                Technique::Culled => technique::CULLED,
+                Technique::ZPass => technique::ZPASS,
+                Technique::ZFail => technique::ZFAIL,
             })
             .collect();
         if !codes.is_empty() {

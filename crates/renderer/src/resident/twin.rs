@@ -1,6 +1,7 @@
-//! The CPU twin of `resident/extract.wgsl`: the triangle pass and the edge pass, statement for
-//! statement, on a [`ResidentLayout`], with the `wgpu` backend's twins of the functions they
-//! share ([`twin::triangle_sign`], [`twin::edge_multiplicity`]).
+//! The CPU twin of `shaders/resident_extract.wgsl`, for tests: the triangle pass and the edge
+//! pass, statement for statement, on a [`ResidentLayout`], with the `wgpu` backend's twins of
+//! the functions they share (`triangle_sign`, `edge_multiplicity` of
+//! [`shadowvol_wgpu_compute::twin`]). The pass never calls it.
 //!
 //! The device appends side records in an unspecified order; [`side_records`] returns them sorted,
 //! and tests compare sorted lists. As for the `wgpu` backend's twin, the only intended difference
@@ -8,21 +9,11 @@
 //! bits but never the exact mode.
 
 use super::layout::{ResidentLayout, NEGATIVE};
+use super::{technique, LightRecords};
 use shadowvol_robust_math::Accuracy;
-use shadowvol_wgpu_compute::twin::{self, ExactFilter};
-
-pub use shadowvol_wgpu_compute::twin::TOUCH;
-
-/// Per-(light, object) technique codes of the pass: the edge's or triangle's object is skipped
-/// (culled), its sides go to the z-pass list, or to the z-fail list (and it gets caps).
-pub mod technique {
-    /// Culled: no sign, no record.
-    pub const CULLED: u32 = 0;
-    /// Z-pass sides.
-    pub const ZPASS: u32 = 1;
-    /// Z-fail sides and caps.
-    pub const ZFAIL: u32 = 2;
-}
+use shadowvol_silhouette::gpu::ExactFilter;
+use shadowvol_wgpu_compute::shaders::TOUCH;
+use shadowvol_wgpu_compute::twin;
 
 fn position(layout: &ResidentLayout, id: u32) -> [f32; 3] {
     layout.scene.position(id)
@@ -77,16 +68,6 @@ pub fn triangle_signs(
         }
     }
     (signs, integer)
-}
-
-/// The side records of one light: global edge ids, [`NEGATIVE`] set when `m < 0`, each edge
-/// `|m|` times; sorted.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct LightRecords {
-    /// Records of z-pass objects.
-    pub zpass: Vec<u32>,
-    /// Records of z-fail objects.
-    pub zfail: Vec<u32>,
 }
 
 /// Twin of `resident_edges`: the multiplicities `m[light * edge_count + edge]` and each light's

@@ -5,7 +5,8 @@
 //!   vertices);
 //! * [`TriangleLayout`]: the triangles of that scene, for two-step kernels (one sign per
 //!   triangle, then one sum per edge);
-//! * [`mode_code`]: the accuracy-mode code sent to the shaders;
+//! * [`mode_code`]: the accuracy-mode code sent to the shaders, and [`ExactFilter`]: the
+//!   precision of the certified filter their exact mode runs;
 //! * [`UncertainRecord`]: the `(edge, OV slot, light)` triple a kernel appends when its exact-mode
 //!   filter cannot certify a sign, and [`resolve_uncertain`], the host's exact decision of those
 //!   records;
@@ -56,6 +57,51 @@ pub fn mode_code(mode: Accuracy) -> u32 {
         Accuracy::Robust => MODE_ROBUST,
         Accuracy::Ordered => MODE_ORDERED,
         Accuracy::Exact => MODE_EXACT,
+    }
+}
+
+/// The certified filter a GPU kernel's exact mode runs before it leaves a sign to an exact
+/// decision: the precision of its arithmetic. Every GPU backend and the renderer's GPU-resident
+/// pass use this one type.
+///
+/// Both filters certify a sign only when it equals the exact sign of the determinant (each with
+/// its own forward error bound and range checks); `F64` certifies far more near-degenerate
+/// inputs, so fewer are left to the exact fallback.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ExactFilter {
+    /// `f64` arithmetic from the `f32` inputs (devices with 64-bit floats in shaders: wgpu's
+    /// `SHADER_F64`, Vulkan's `shaderFloat64`, OpenCL's `cl_khr_fp64`).
+    F64,
+    /// `f32` arithmetic with range checks (every device).
+    F32,
+}
+
+impl ExactFilter {
+    /// The filter a device runs: [`ExactFilter::F64`] when it has 64-bit floats in shaders
+    /// (`device_f64`) and `force_f32` is not set, else [`ExactFilter::F32`].
+    ///
+    /// ```
+    /// use shadowvol_silhouette::gpu::ExactFilter;
+    /// assert_eq!(ExactFilter::for_device(true, false), ExactFilter::F64);
+    /// assert_eq!(ExactFilter::for_device(true, true), ExactFilter::F32);
+    /// assert_eq!(ExactFilter::for_device(false, false), ExactFilter::F32);
+    /// ```
+    #[must_use]
+    pub fn for_device(device_f64: bool, force_f32: bool) -> Self {
+        if device_f64 && !force_f32 {
+            ExactFilter::F64
+        } else {
+            ExactFilter::F32
+        }
+    }
+
+    /// `"f64"` or `"f32"`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            ExactFilter::F64 => "f64",
+            ExactFilter::F32 => "f32",
+        }
     }
 }
 

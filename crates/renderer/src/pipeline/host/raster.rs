@@ -75,8 +75,10 @@ impl HostRaster {
         let depth_clamp = rd.depth_clamp;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("shadowvol-renderer shader.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../../shader.wgsl").into()),
+            label: Some("shaders/render_raster.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(
+                include_str!("../../../../../shaders/render_raster.wgsl").into(),
+            ),
         });
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let globals_bgl = pipelines::bind_group_layout(device, "globals", &[uniform(0, vf, false)]);

@@ -1,6 +1,6 @@
 // GPU-resident shadow volumes: the draws of the shadow-volume pass, by vertex pulling.
 //
-// Appended to the renderer's shader.wgsl (its Globals, LightU, fragment shaders and attenuation),
+// Appended to the renderer's render_raster.wgsl (its Globals, LightU, fragment shaders and attenuation),
 // so the host and GPU pipelines light pixels with the same code. Every vertex shader here builds
 // positions with `rel` and clips them with `g.view_proj * pos` (@invariant), so a front cap lands
 // on exactly the depth the pre-pass wrote from the same triangle.

@@ -18,7 +18,7 @@ struct LightU {
     emit: vec4<f32>,
     // (axis the spot shines along, 1 for a spot light).
     spot: vec4<f32>,
-    // GPU-resident pass only (resident.wgsl): (record region start, region size, first sign of
+    // GPU-resident pass only (resident_draw.wgsl): (record region start, region size, first sign of
     // this light, 1 when it has a back cap). Zero in the host pipeline.
     draw: vec4<u32>,
     // GPU-resident pass only: (first light point of this light, 0, 0, 0), see `r_light_points`.
