@@ -29,10 +29,9 @@ use crate::resolve::{finish, KernelOutput};
 use crate::NAME;
 use shadowvol_robust_math::filter::{self, TermsF32};
 use shadowvol_robust_math::{orient_filter_f64, Accuracy, Light, F32_FILTER_EPS};
+use shadowvol_silhouette::gpu::twin::TwinInputs;
 use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout, UncertainRecord};
-use shadowvol_silhouette::{
-    check_lights, object_lights, BackendError, Multiplicities, TopologyScene,
-};
+use shadowvol_silhouette::{BackendError, Multiplicities, TopologyScene};
 
 const F32_PRODUCT_MIN: f32 = f32::from_bits(27 << 23); // 2^-100
 const F32_PERM_MIN: f32 = f32::from_bits(31 << 23); // 2^-96
@@ -99,16 +98,11 @@ pub fn exact_filter(
     }
 }
 
-/// What one work item computes for its (edge, light).
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct EdgeResult {
-    /// The multiplicity: in exact mode, the sum of the certified signs only.
-    pub m: i32,
-    /// Global OV slots (into [`SceneLayout::ovs`]) whose sign the device could not certify.
-    pub uncertain: Vec<u32>,
-}
+pub use shadowvol_silhouette::gpu::twin::EdgeResult;
 
-/// The kernel's loop over the opposite vertices of global edge `e` for object-space light `l`.
+/// The kernel's loop over the opposite vertices of global edge `e` for object-space light `l`:
+/// the loop both per-edge kernels share ([`shadowvol_silhouette::gpu::twin::edge_multiplicity`]),
+/// with this kernel's exact-mode filter ([`exact_filter`]).
 ///
 /// # Panics
 /// If `e` is out of range.
@@ -120,52 +114,13 @@ pub fn edge_multiplicity(
     mode: Accuracy,
     filter: ExactFilter,
 ) -> EdgeResult {
-    let (ia, ib, _) = layout.edge(e);
-    let pa = layout.position(ia);
-    let pb = layout.position(ib);
-    let mut out = EdgeResult::default();
-    for k in layout.ov_slots(e) {
-        let io = layout.ovs[k];
-        let po = layout.position(io);
-        let s = match mode {
-            Accuracy::Original => sign_f32(pa, pb, l, po),
-            Accuracy::Exact => match exact_filter(filter, pa, pb, l, po) {
-                Some(s) => i32::from(s),
-                None => {
-                    out.uncertain.push(k as u32);
-                    0
-                }
-            },
-            Accuracy::Robust | Accuracy::Ordered => {
-                let (p0, p1, p2, parity) = if io > ib {
-                    (pa, pb, po, 1)
-                } else if io < ia {
-                    (po, pa, pb, 1)
-                } else {
-                    (pa, po, pb, -1)
-                };
-                let s0 = sign_f32(p0, p1, l, p2);
-                let s = if mode == Accuracy::Robust {
-                    let s1 = sign_f32(p1, p2, l, p0);
-                    let s2 = sign_f32(p2, p0, l, p1);
-                    if s0 == s1 && s1 == s2 {
-                        s0
-                    } else {
-                        0
-                    }
-                } else {
-                    s0
-                };
-                s * parity
-            }
-        };
-        out.m += s;
-    }
-    out
+    shadowvol_silhouette::gpu::twin::edge_multiplicity(layout, e, l, mode, |a, b, l, o| {
+        exact_filter(filter, a, b, l, o)
+    })
 }
 
 /// Runs the kernel's logic over the whole (edge, light) grid, like one launch: `lights` is
-/// object-major (`lights[object * light_count + light]`, object space, from [`object_lights`];
+/// object-major (`lights[object * light_count + light]`, object space, from [`object_lights`](shadowvol_silhouette::object_lights);
 /// the kernel reads the same values flattened to `f32`). The outputs are appended as the
 /// kernel's atomics append them (here in work-item order, lights outer, edges inner).
 ///
@@ -220,10 +175,11 @@ pub fn extract(
     filter: ExactFilter,
     out: &mut Multiplicities,
 ) -> Result<u64, BackendError> {
-    check_lights(lights)?;
-    let layout = SceneLayout::build(scene, NAME)?;
-    let obj_lights = object_lights(scene.transforms(), lights);
-    let packed: Vec<[f32; 4]> = obj_lights.iter().flatten().copied().collect();
+    let TwinInputs {
+        layout,
+        object_lights: obj_lights,
+        packed,
+    } = TwinInputs::new(scene, lights, NAME)?;
     let output = run_kernel(&layout, &packed, lights.len(), mode, filter);
     let uncertain = u64::from(output.counts[0]);
     finish(&layout, &obj_lights, lights.len(), output, out, NAME)?;

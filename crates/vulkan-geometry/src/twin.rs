@@ -26,11 +26,10 @@
 use crate::resolve::finish_batch;
 use crate::NAME;
 use shadowvol_robust_math::filter::{self, TermsF32};
-use shadowvol_robust_math::{orient_filter_f64, sign_f32, Accuracy, Light, F32_FILTER_EPS};
+use shadowvol_robust_math::{orient_filter_f64, Accuracy, Light, F32_FILTER_EPS};
+use shadowvol_silhouette::gpu::twin::TwinInputs;
 use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout, UncertainRecord};
-use shadowvol_silhouette::{
-    check_lights, object_lights, BackendError, Multiplicities, TopologyScene,
-};
+use shadowvol_silhouette::{BackendError, Multiplicities, TopologyScene};
 
 /// Twin of the shader's `f32` filter (`orient_filter` with `SHADOWVOL_NO_F64`): robust-math's
 /// [`orient_filter_f32`](shadowvol_robust_math::orient_filter_f32) plus guards that keep it
@@ -83,17 +82,11 @@ pub fn exact_filter(
     }
 }
 
-/// What one geometry-shader invocation computes for one (edge, light).
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct EdgeResult {
-    /// The multiplicity the shader writes: in exact mode, the sum of the certified signs only.
-    pub m: i32,
-    /// Global OV slots (into [`SceneLayout::ovs`]) whose sign the device could not certify.
-    pub uncertain: Vec<u32>,
-}
+pub use shadowvol_silhouette::gpu::twin::EdgeResult;
 
-/// Twin of the shader's `main`: the per-edge loop for global edge `e` and object-space light
-/// `l`.
+/// The kernel's loop over the opposite vertices of global edge `e` for object-space light `l`:
+/// the loop both per-edge kernels share ([`shadowvol_silhouette::gpu::twin::edge_multiplicity`]),
+/// with this kernel's exact-mode filter ([`exact_filter`]).
 ///
 /// # Panics
 /// If `e` is out of range.
@@ -105,44 +98,9 @@ pub fn edge_multiplicity(
     mode: Accuracy,
     filter: ExactFilter,
 ) -> EdgeResult {
-    let p = |v: u32| layout.position(v);
-    let (a, b, _) = layout.edge(e);
-    let mut out = EdgeResult::default();
-    for k in layout.ov_slots(e) {
-        let k = k as u32;
-        let o = layout.ovs[k as usize];
-        let s = match mode {
-            Accuracy::Original => sign_f32(p(a), p(b), l, p(o)),
-            Accuracy::Exact => match exact_filter(filter, p(a), p(b), l, p(o)) {
-                Some(s) => s,
-                None => {
-                    out.uncertain.push(k);
-                    0
-                }
-            },
-            Accuracy::Robust | Accuracy::Ordered => {
-                let (i0, i1, i2, parity) = if o > b {
-                    (a, b, o, 1)
-                } else if o < a {
-                    (o, a, b, 1)
-                } else {
-                    (a, o, b, -1)
-                };
-                let (p0, p1, p2) = (p(i0), p(i1), p(i2));
-                let mut t = sign_f32(p0, p1, l, p2);
-                if mode == Accuracy::Robust {
-                    let t1 = sign_f32(p1, p2, l, p0);
-                    let t2 = sign_f32(p2, p0, l, p1);
-                    if t != t1 || t1 != t2 {
-                        t = 0;
-                    }
-                }
-                t * parity
-            }
-        };
-        out.m += i32::from(s);
-    }
-    out
+    shadowvol_silhouette::gpu::twin::edge_multiplicity(layout, e, l, mode, |a, b, l, o| {
+        exact_filter(filter, a, b, l, o)
+    })
 }
 
 /// What one pass over the (edge, light) grid leaves on the device.
@@ -156,7 +114,7 @@ pub struct KernelOutput {
 }
 
 /// Runs the shader's logic for every (edge, light) of one pass: `lights` is object-major
-/// (`lights[object * light_count + light]`, object space, from [`object_lights`]).
+/// (`lights[object * light_count + light]`, object space, from [`object_lights`](shadowvol_silhouette::object_lights)).
 ///
 /// # Panics
 /// If `lights` has fewer than `layout.object_count() * light_count` entries.
@@ -202,10 +160,11 @@ pub fn extract(
     filter: ExactFilter,
     out: &mut Multiplicities,
 ) -> Result<u64, BackendError> {
-    check_lights(lights)?;
-    let layout = SceneLayout::build(scene, NAME)?;
-    let obj_lights = object_lights(scene.transforms(), lights);
-    let packed: Vec<[f32; 4]> = obj_lights.iter().flatten().copied().collect();
+    let TwinInputs {
+        layout,
+        object_lights: obj_lights,
+        packed,
+    } = TwinInputs::new(scene, lights, NAME)?;
     let k = run_kernel(&layout, &packed, lights.len(), mode, filter);
     out.reset(layout.edge_count(), lights.len());
     out.all_values_mut().copy_from_slice(&k.mult);

@@ -37,10 +37,9 @@ use crate::resolve::{expand_uncertain, finish_batch, BatchOutput, UncertainTrian
 use crate::shaders::{GPU_F32_INPUT_MAX, GPU_F32_PERM_MIN, GPU_F64_FILTER_EPS, TOUCH};
 use shadowvol_robust_math::filter::{self, TermsF32};
 use shadowvol_robust_math::{sign_f32, Accuracy, Light, F32_FILTER_EPS};
+use shadowvol_silhouette::gpu::twin::TwinInputs;
 use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout, TriangleLayout, NEGATIVE};
-use shadowvol_silhouette::{
-    check_lights, object_lights, BackendError, Multiplicities, TopologyScene,
-};
+use shadowvol_silhouette::{BackendError, Multiplicities, TopologyScene};
 
 /// Twin of WGSL `filter_f32`: robust-math's `orient_filter_f32` (the same
 /// [`TermsF32`] arithmetic, [`F32_FILTER_EPS`], range checks, and only `w` in {0, 1} certified)
@@ -202,7 +201,7 @@ pub struct KernelOutput {
 }
 
 /// Runs the kernels' logic for every triangle, then every edge, of `layout`: `lights` is
-/// object-major (`lights[object * light_count + light]`, object-space, from [`object_lights`]).
+/// object-major (`lights[object * light_count + light]`, object-space, from [`object_lights`](shadowvol_silhouette::object_lights)).
 /// What the exact filter cannot certify is left to the host (see [`run_kernel_with`]).
 ///
 /// # Panics
@@ -322,10 +321,12 @@ pub fn extract(
     filter: ExactFilter,
     out: &mut Multiplicities,
 ) -> Result<u64, BackendError> {
-    check_lights(lights)?;
-    let layout = SceneLayout::build(scene, crate::NAME)?;
+    let TwinInputs {
+        layout,
+        object_lights: obj_lights,
+        ..
+    } = TwinInputs::new(scene, lights, crate::NAME)?;
     let triangles = TriangleLayout::build(scene, &layout, crate::NAME)?;
-    let obj_lights = object_lights(scene.transforms(), lights);
     let packed = pack_lights(&obj_lights, 0, lights.len());
     let k = run_kernel(&layout, &triangles, &packed, lights.len(), mode, filter);
     out.reset(layout.edge_count(), lights.len());

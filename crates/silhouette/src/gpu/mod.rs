@@ -12,7 +12,8 @@
 //!   records;
 //! * [`wait_limit`]: the bound on every wait for a device;
 //! * [`lights_per_batch`] and [`batches`]: how the lights of one `extract` are split into batches
-//!   (a dispatch, a kernel launch, a geometry-shader pass) when they do not fit one.
+//!   (a dispatch, a kernel launch, a geometry-shader pass) when they do not fit one;
+//! * [`twin`]: the per-edge loop the CPU twins of the `opencl` and `vulkan` kernels share.
 //!
 //! It is a module of the trait crate rather than a crate of its own: it depends on nothing but
 //! the trait's types ([`TopologyScene`](crate::TopologyScene), [`Multiplicities`](crate::Multiplicities),
@@ -24,6 +25,7 @@ mod batches;
 mod layout;
 mod resolve;
 mod triangles;
+pub mod twin;
 mod wait;
 
 pub use batches::{batches, lights_per_batch};
