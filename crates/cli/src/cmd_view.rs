@@ -1,9 +1,8 @@
 //! `shadowvol view`: a live window onto a scene or mesh (see `shadowvol_viewer`).
 
-use crate::cmd_render::{parse_light, parse_size, render_error, stage, GroundArg, TechniqueArg};
+use crate::cmd_render::{parse_size, render_error, SceneArgs, TechniqueArg};
 use shadowvol::{find_backend, CliError, Format};
 use shadowvol_renderer::Pipeline;
-use shadowvol_robust_math::Accuracy;
 use shadowvol_viewer::controls::VolumeView;
 use shadowvol_viewer::{ViewError, ViewOptions};
 use std::io::Write;
@@ -46,35 +45,12 @@ pub enum VolumesArg {
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The scene: a preset name (see `shadowvol scenes`) or a .gltf/.glb/.obj/.stl/.ply file.
-    #[arg(value_name = "SCENE")]
-    scene: String,
-
-    /// A light as homogeneous X,Y,Z,W (repeatable); replaces the scene's own.
-    #[arg(long = "light", value_name = "X,Y,Z,W", allow_hyphen_values = true, value_parser = parse_light)]
-    lights: Vec<shadowvol_robust_math::Light>,
-
-    /// A receiver plane under the scene: auto, on or off (as for `render`).
-    #[arg(long, value_enum, default_value_t = GroundArg::Auto)]
-    ground: GroundArg,
+    #[command(flatten)]
+    input: SceneArgs,
 
     /// Window size in pixels.
     #[arg(long, default_value = "960x720", value_name = "WxH", value_parser = parse_size)]
     size: (u32, u32),
-
-    /// Accuracy mode at start (keys 1-4 switch it).
-    #[arg(long, value_parser = shadowvol::mode_parser(), default_value = "exact")]
-    mode: Accuracy,
-
-    /// Silhouette backend of the host pipeline (see `shadowvol backends`); giving it selects the
-    /// host pipeline [default with --pipeline host: cpu].
-    #[arg(long, value_name = "NAME")]
-    backend: Option<String>,
-
-    /// gpu: volumes built on the device (the default where the adapter supports it); host: from
-    /// --backend's multiplicities. Showing the volumes (V, --volumes) uses the host pipeline.
-    #[arg(long, value_enum, value_name = "gpu|host")]
-    pipeline: Option<crate::cmd_render::PipelineArg>,
 
     /// Technique at start (T cycles it).
     #[arg(long, value_enum, default_value_t = TechniqueArg::Auto)]
@@ -114,23 +90,13 @@ struct Report {
 
 pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     shadowvol_viewer::check_display().map_err(|e| CliError::Other(e.to_string()))?;
-    if args.pipeline == Some(crate::cmd_render::PipelineArg::Gpu) {
-        if let Some(b) = &args.backend {
-            return Err(CliError::Other(format!(
-                "--backend {b} selects the host pipeline; it cannot be combined with --pipeline gpu"
-            )));
-        }
-    }
-    let entry = find_backend(args.backend.as_deref().unwrap_or("cpu"))?;
-    let (mut scene, notes) = shadowvol::load_scene(&args.scene)?;
-    for n in &notes {
-        eprintln!("note: {n}");
-    }
-    stage(&mut scene, &args.scene, &args.lights, args.ground)?;
+    let wants_host = args.input.wants_host()?;
+    let entry = find_backend(args.input.backend.as_deref().unwrap_or("cpu"))?;
+    let (scene, _, _) = args.input.load()?;
     // The host pipeline's backend is started only if the viewer needs it (V, --pipeline host).
     let backend = Box::new(move || entry.start());
     let mut options = ViewOptions::new(args.size.0, args.size.1);
-    options.mode = args.mode;
+    options.mode = args.input.mode;
     options.policy = args.technique.into();
     options.frames = args.frames;
     options.screenshot.clone_from(&args.screenshot);
@@ -143,9 +109,10 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         VolumesArg::Wire => VolumeView::Wire,
     };
     options.title = format!("shadowvol - {}", scene.name);
-    options.pipeline = match (args.pipeline, &args.backend) {
-        (Some(crate::cmd_render::PipelineArg::Host), _) | (None, Some(_)) => Pipeline::Host,
-        _ => Pipeline::Gpu,
+    options.pipeline = if wants_host == Some(true) {
+        Pipeline::Host
+    } else {
+        Pipeline::Gpu
     };
     let report = shadowvol_viewer::view(scene, backend, options).map_err(|e| match e {
         ViewError::Render(r) => render_error(r),

@@ -78,14 +78,7 @@ fn check_split(
 fn corpus_split_into_light_batches_matches_one_launch_and_cpu() -> Outcome {
     let mut whole = start(OpenClOptions::from_env())?;
     let mut cpu = CpuBackend::new();
-    let cases: Vec<_> = corpus::cases()
-        .into_iter()
-        .filter(|c| c.lights.len() >= 3)
-        .collect();
-    assert!(
-        cases.len() >= 3,
-        "the corpus should have several cases with 3 or more lights"
-    );
+    let cases = corpus::multi_light_cases(3);
     let mut split_runs = 0;
     for n_per in [1, 2, 3] {
         let mut cl = start(per_launch(n_per))?;
@@ -200,7 +193,7 @@ fn allocation_limit_splits_lights_and_refuses_only_a_light_that_does_not_fit() -
     let mut whole = start(OpenClOptions::from_env())?;
     let mut cpu = CpuBackend::new();
     let (mut checked, mut refused) = (0, 0);
-    for case in corpus::cases().iter().filter(|c| c.lights.len() >= 3) {
+    for case in &corpus::multi_light_cases(3) {
         let scene = case.scene().unwrap();
         let (edges, objects) = (scene.total_edges(), scene.objects.len());
         let n = case.lights.len();

@@ -9,6 +9,7 @@ use shadowvol_opencl::twin;
 use shadowvol_robust_math::{orient_exact, orient_filter_f32, orient_filter_f64, sign_f32};
 use shadowvol_silhouette::gpu::ExactFilter;
 use shadowvol_silhouette::{extract_once, invariant, Accuracy, Multiplicities};
+use shadowvol_test_support::filters;
 
 #[test]
 fn twin_equals_cpu_in_every_mode_on_every_case() {
@@ -166,24 +167,11 @@ fn twin_guards_subnormal_and_underflowing_inputs() {
 }
 
 /// Regression: with `w` other than 0 or 1, `fl(w * A)` can round to exactly `L.xyz`, so the
-/// computed V is 0 while the exact V is not. The kernel's f32 filter (and this twin) used to
-/// certify a wrong 0 there; it must leave such lights to the host.
+/// computed V is 0 while the exact V is not. The kernel's filters (and this twin) must leave
+/// such lights to the host instead of certifying a wrong 0, and stay sound near them.
 #[test]
-fn f32_filter_never_certifies_general_w() {
-    let w = 1.1f32;
-    let a = [1.3f32, 0.0, 0.0];
-    let b = [1.3f32, -1.0, -2.0];
-    let o = [1.3f32, 3.0, 1.0];
-    let l = [w * a[0], 0.0, 0.0, w];
-    let want = orient_exact(a, b, l, o);
-    assert_ne!(
-        want, 0,
-        "w * A is inexact in f32, so the exact V.x is not 0"
-    );
-    let got = twin::filter_f32(a, b, l, o);
-    assert!(
-        got.is_none() || got == Some(want),
-        "f32 filter certified {got:?}, exact sign is {want}"
-    );
-    assert_eq!(got, None, "general w must go to the host");
+fn filters_are_sound_for_general_w() {
+    filters::assert_general_w_left_to_host("f32 filter", twin::filter_f32);
+    filters::assert_sound("f32 filter", twin::filter_f32, 20_000);
+    filters::assert_sound("f64 filter", twin::filter_f64, 20_000);
 }

@@ -97,6 +97,24 @@ pub fn cases() -> Vec<CorpusCase> {
         .collect()
 }
 
+/// The cases with `min_lights` or more lights, for tests that split the lights into batches.
+///
+/// # Panics
+/// When fewer than three cases qualify: the batch tests need several.
+#[must_use]
+pub fn multi_light_cases(min_lights: usize) -> Vec<CorpusCase> {
+    let out: Vec<_> = cases()
+        .into_iter()
+        .filter(|c| c.lights.len() >= min_lights)
+        .collect();
+    assert!(
+        out.len() >= 3,
+        "the corpus should have several cases with {min_lights} or more lights, has {}",
+        out.len()
+    );
+    out
+}
+
 /// The case called `name`, if any.
 #[must_use]
 pub fn case(name: &str) -> Option<CorpusCase> {

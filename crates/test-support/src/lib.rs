@@ -37,6 +37,7 @@
 
 pub mod ci;
 pub mod corpus;
+pub mod filters;
 pub mod shapes;
 
 use shadowvol_silhouette::BackendError;

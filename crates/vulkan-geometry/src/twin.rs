@@ -5,10 +5,10 @@
 //! filters, in Rust. When the device disagrees with the `cpu` backend, running the twin on the
 //! same input tells whether the shader logic or the device arithmetic is at fault.
 //!
-//! The twins of the three GPU backends have the same shape: [`filter_f32`], [`filter_f64`] and
-//! [`exact_filter`] (the device filters of exact mode), the per-invocation function
-//! ([`edge_multiplicity`]), [`run_kernel`] (one pass: the device's raw output) and [`extract`]
-//! (the whole extraction on the CPU, with the backend's own host side).
+//! The twins of the three GPU backends have the same shape: [`filter_f32`] and [`filter_f64`]
+//! (the device filters of exact mode, here as [`FILTERS`]), the per-invocation function
+//! ([`edge_multiplicity`], the loop this twin shares with the other per-edge kernel's),
+//! [`run_kernel`] (one pass: the device's raw output) and [`extract`] (the whole extraction on the CPU, with the backend's own host side).
 //!
 //! ```
 //! use shadowvol_silhouette::gpu::ExactFilter;
@@ -27,7 +27,7 @@ use crate::resolve::finish_batch;
 use crate::NAME;
 use shadowvol_robust_math::filter::{self, TermsF32};
 use shadowvol_robust_math::{orient_filter_f64, Accuracy, Light, F32_FILTER_EPS};
-use shadowvol_silhouette::gpu::twin::TwinInputs;
+use shadowvol_silhouette::gpu::twin::{edge_multiplicity, DeviceFilters, TwinInputs};
 use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout, UncertainRecord};
 use shadowvol_silhouette::{BackendError, Multiplicities, TopologyScene};
 
@@ -66,42 +66,14 @@ pub fn filter_f64(a: [f32; 3], b: [f32; 3], l: [f32; 4], o: [f32; 3]) -> Option<
     orient_filter_f64(a, b, l, o)
 }
 
-/// The device filter of exact mode for `filter`: `Some(sign)` when certified, `None` when the
-/// host must decide.
-#[must_use]
-pub fn exact_filter(
-    filter: ExactFilter,
-    a: [f32; 3],
-    b: [f32; 3],
-    l: [f32; 4],
-    o: [f32; 3],
-) -> Option<i8> {
-    match filter {
-        ExactFilter::F64 => filter_f64(a, b, l, o),
-        ExactFilter::F32 => filter_f32(a, b, l, o),
-    }
-}
+/// The shader's exact-mode filters, [`filter_f32`] and [`filter_f64`]; [`DeviceFilters::get`]
+/// picks the one a build for an [`ExactFilter`] runs.
+pub const FILTERS: DeviceFilters = DeviceFilters {
+    f32: filter_f32,
+    f64: filter_f64,
+};
 
 pub use shadowvol_silhouette::gpu::twin::EdgeResult;
-
-/// The kernel's loop over the opposite vertices of global edge `e` for object-space light `l`:
-/// the loop both per-edge kernels share ([`shadowvol_silhouette::gpu::twin::edge_multiplicity`]),
-/// with this kernel's exact-mode filter ([`exact_filter`]).
-///
-/// # Panics
-/// If `e` is out of range.
-#[must_use]
-pub fn edge_multiplicity(
-    layout: &SceneLayout,
-    e: usize,
-    l: [f32; 4],
-    mode: Accuracy,
-    filter: ExactFilter,
-) -> EdgeResult {
-    shadowvol_silhouette::gpu::twin::edge_multiplicity(layout, e, l, mode, |a, b, l, o| {
-        exact_filter(filter, a, b, l, o)
-    })
-}
 
 /// What one pass over the (edge, light) grid leaves on the device.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -134,7 +106,13 @@ pub fn run_kernel(
     for li in 0..light_count {
         for e in 0..edges {
             let object = layout.edge(e).2 as usize;
-            let r = edge_multiplicity(layout, e, lights[object * light_count + li], mode, filter);
+            let r = edge_multiplicity(
+                layout,
+                e,
+                lights[object * light_count + li],
+                mode,
+                FILTERS.get(filter),
+            );
             out.mult[li * edges + e] = r.m;
             out.uncertain
                 .extend(r.uncertain.into_iter().map(|k| UncertainRecord {

@@ -19,14 +19,7 @@ main!(
 fn corpus_split_into_light_batches_matches_one_pass_and_cpu() -> Outcome {
     let mut whole = common::backend(VulkanOptions::from_env())?;
     let mut cpu = CpuBackend::new();
-    let cases: Vec<_> = corpus::cases()
-        .into_iter()
-        .filter(|c| c.lights.len() >= 3)
-        .collect();
-    assert!(
-        cases.len() >= 3,
-        "the corpus should have several cases with 3 or more lights"
-    );
+    let cases = corpus::multi_light_cases(3);
     let mut split_runs = 0;
     for per_pass in [1, 2, 3] {
         let opts = VulkanOptions {

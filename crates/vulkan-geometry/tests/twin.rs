@@ -5,6 +5,7 @@ use shadowvol_robust_math::{orient_exact, orient_filter_f32, Accuracy};
 use shadowvol_silhouette::gpu::ExactFilter;
 use shadowvol_silhouette::Multiplicities;
 use shadowvol_test_support::corpus;
+use shadowvol_test_support::filters;
 use shadowvol_test_support::shapes::Rng;
 use shadowvol_vulkan_geometry::twin;
 
@@ -88,23 +89,11 @@ fn twin_uncertain_pairs_exist_and_are_resolved() {
 }
 
 /// Regression: with `w` other than 0 or 1, `fl(w * A)` can round to exactly `L.xyz`, so the
-/// computed V is 0 while the exact V is not. The shader's f32 filter (and this twin) must leave
-/// such lights to the host instead of certifying a wrong 0.
+/// computed V is 0 while the exact V is not. The shader's filters (and this twin) must leave
+/// such lights to the host instead of certifying a wrong 0, and stay sound near them.
 #[test]
-fn f32_filter_never_certifies_general_w() {
-    let w = 1.1f32;
-    let a = [1.3f32, 0.0, 0.0];
-    let b = [1.3f32, -1.0, -2.0];
-    let o = [1.3f32, 3.0, 1.0];
-    let l = [w * a[0], 0.0, 0.0, w];
-    let want = shadowvol_robust_math::orient_exact(a, b, l, o);
-    assert_ne!(
-        want, 0,
-        "w * A is inexact in f32, so the exact V.x is not 0"
-    );
-    assert_eq!(
-        twin::filter_f32(a, b, l, o),
-        None,
-        "general w must go to the host"
-    );
+fn filters_are_sound_for_general_w() {
+    filters::assert_general_w_left_to_host("f32 filter", twin::filter_f32);
+    filters::assert_sound("f32 filter", twin::filter_f32, 20_000);
+    filters::assert_sound("f64 filter", twin::filter_f64, 20_000);
 }

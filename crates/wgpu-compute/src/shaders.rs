@@ -80,18 +80,24 @@ const F64_CALL: &str = "return filter_f64(a, b, l, o); // @exact-filter";
 pub fn module_source(filter: ExactFilter) -> String {
     match filter {
         ExactFilter::F32 => SILHOUETTE_WGSL.to_owned(),
-        ExactFilter::F64 => {
-            assert_eq!(
-                SILHOUETTE_WGSL.matches(F32_CALL).count(),
-                1,
-                "shaders/silhouette.wgsl must contain the marked filter call exactly once"
-            );
-            let mut s = SILHOUETTE_WGSL.replace(F32_CALL, F64_CALL);
-            s.push('\n');
-            s.push_str(EXACT_F64_WGSL);
-            s
-        }
+        ExactFilter::F64 => splice(SILHOUETTE_WGSL, (F32_CALL, F64_CALL), EXACT_F64_WGSL),
     }
+}
+
+/// `src` with its one `marker` line replaced by `with`, then `append` after it.
+///
+/// # Panics
+/// If `src` does not contain `marker` exactly once.
+fn splice(src: &str, (marker, with): (&str, &str), append: &str) -> String {
+    assert_eq!(
+        src.matches(marker).count(),
+        1,
+        "shaders/silhouette.wgsl must contain the line `{marker}` exactly once"
+    );
+    let mut s = src.replace(marker, with);
+    s.push('\n');
+    s.push_str(append);
+    s
 }
 
 const HOST_FALLBACK: &str = "return UNCERTAIN; // @exact-int";
@@ -115,15 +121,7 @@ pub fn module_source_with(filter: ExactFilter, device_exact: bool) -> String {
     if !device_exact {
         return s;
     }
-    assert_eq!(
-        s.matches(HOST_FALLBACK).count(),
-        1,
-        "shaders/silhouette.wgsl must contain the marked host fallback exactly once"
-    );
-    let mut s = s.replace(HOST_FALLBACK, INT_FALLBACK);
-    s.push('\n');
-    s.push_str(EXACT_INT_WGSL);
-    s
+    splice(&s, (HOST_FALLBACK, INT_FALLBACK), EXACT_INT_WGSL)
 }
 
 /// The compute pipeline of `entry` in `module` under `layout`, with the pipeline-overridable

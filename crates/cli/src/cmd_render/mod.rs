@@ -5,7 +5,7 @@ mod frames;
 mod report;
 mod stage;
 
-pub(crate) use stage::stage;
+pub(crate) use stage::SceneArgs;
 
 use report::{Report, TextReport, Timings};
 use shadowvol::{find_backend, CliError, Format};
@@ -13,7 +13,6 @@ use shadowvol_renderer::{
     Exposure, GpuPipeline, HostPipeline, PlanPolicy, RenderDevice, RenderError, RenderOptions,
     Renderer, ShadowPipeline,
 };
-use shadowvol_robust_math::Accuracy;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -140,51 +139,17 @@ pub enum GroundArg {
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The scene: a preset name (see `shadowvol scenes`) or a .gltf/.glb/.obj/.stl/.ply file
-    /// (`shadowvol --help` lists what each format reads).
-    #[arg(value_name = "SCENE")]
-    scene: String,
-
-    /// A light as homogeneous X,Y,Z,W (w = 1 point, w = 0 directional towards (X,Y,Z)); repeat
-    /// for several. Replaces the scene's own lights; without any light anywhere, a default key
-    /// light is placed from the scene's bounds.
-    #[arg(
-        long = "light",
-        value_name = "X,Y,Z,W",
-        allow_hyphen_values = true,
-        value_parser = parse_light
-    )]
-    lights: Vec<shadowvol_robust_math::Light>,
+    #[command(flatten)]
+    input: SceneArgs,
 
     /// The PNG to write [default: SCENE's file stem or preset name + .png, in the current
     /// directory].
     #[arg(long, value_name = "FILE.png")]
     out: Option<PathBuf>,
 
-    /// A receiver plane under the scene: auto (under files with nothing below their casters),
-    /// on or off.
-    #[arg(long, value_enum, default_value_t = GroundArg::Auto)]
-    ground: GroundArg,
-
     /// Image size in pixels.
     #[arg(long, default_value = "512x512", value_name = "WxH", value_parser = parse_size)]
     size: (u32, u32),
-
-    /// Accuracy mode of silhouettes and caps.
-    #[arg(long, value_parser = shadowvol::mode_parser(), default_value = "exact")]
-    mode: Accuracy,
-
-    /// Silhouette backend of the host pipeline (see `shadowvol backends`), or `auto`: the first
-    /// backend on a hardware GPU, else `simd`, with a warning naming what was skipped. Giving it
-    /// selects the host pipeline [default with --pipeline host: cpu].
-    #[arg(long, value_name = "NAME")]
-    backend: Option<String>,
-
-    /// gpu: extraction, sides and caps on the renderer's device, nothing read back during a
-    /// frame; host: the backend's multiplicities come to the host, which builds the volumes
-    /// [default: gpu where the adapter supports it and no --backend is given, else host].
-    #[arg(long, value_enum, value_name = "gpu|host")]
-    pipeline: Option<PipelineArg>,
 
     /// After the final image, render N further frames with the lights on a fixed orbit (each
     /// re-extracts) and report their median, p10 and p90 times.
@@ -273,30 +238,19 @@ pub(crate) fn parse_light(s: &str) -> Result<shadowvol_robust_math::Light, Strin
 }
 
 pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
-    if args.pipeline == Some(PipelineArg::Gpu) {
-        if let Some(b) = &args.backend {
-            return Err(CliError::Other(format!(
-                "--backend {b} selects the host pipeline; it cannot be combined with --pipeline gpu \
-                 (the GPU pipeline runs the wgpu kernels on the renderer's device)"
-            )));
-        }
-    }
-    let (mut scene, notes) = shadowvol::load_scene(&args.scene)?;
-    for n in &notes {
-        eprintln!("note: {n}");
-    }
-    let (lights_source, ground) = stage(&mut scene, &args.scene, &args.lights, args.ground)?;
+    let wants_host = args.input.wants_host()?;
+    let (mut scene, lights_source, ground) = args.input.load()?;
     if args.backdrop {
         scene.add_backdrop();
     }
     let out_path = stage::out_path(args);
     let mut options = RenderOptions::new(args.size.0, args.size.1);
-    options.mode = args.mode;
+    options.mode = args.input.mode;
     options.exposure = args.exposure;
     options.scissor = !args.no_scissor;
     options.policy = args.technique.into();
     let device = RenderDevice::open().map_err(render_error)?;
-    let pipeline = pipeline(args, &device)?;
+    let pipeline = pipeline(wants_host, args.input.backend.as_deref(), &device)?;
     let mut renderer = Renderer::new(device, pipeline, options).map_err(render_error)?;
     let frame = renderer.render(&scene).map_err(render_error)?;
     frame.save_png(&out_path).map_err(render_error)?;
@@ -391,27 +345,29 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
 /// # Errors
 /// [`CliError::Other`] for `--pipeline gpu` on a device that cannot run it, naming why; the
 /// backend's start error for the host pipeline.
-fn pipeline(args: &Args, device: &RenderDevice) -> Result<Box<dyn ShadowPipeline>, CliError> {
-    let host = match (args.pipeline, &args.backend) {
-        (Some(PipelineArg::Host), _) | (None, Some(_)) => true,
-        (Some(PipelineArg::Gpu), _) => {
-            if let Some(why) = &device.gpu_pipeline_unsupported {
-                return Err(CliError::Other(format!(
-                    "--pipeline gpu: the adapter cannot run the GPU pipeline: {why}"
-                )));
-            }
-            false
+fn pipeline(
+    wants_host: Option<bool>,
+    backend: Option<&str>,
+    device: &RenderDevice,
+) -> Result<Box<dyn ShadowPipeline>, CliError> {
+    let unsupported = device.gpu_pipeline_unsupported.as_ref();
+    let host = match (wants_host, unsupported) {
+        (Some(host), None) | (Some(host @ true), _) => host,
+        (Some(false), Some(why)) => {
+            return Err(CliError::Other(format!(
+                "--pipeline gpu: the adapter cannot run the GPU pipeline: {why}"
+            )));
         }
-        (None, None) => match &device.gpu_pipeline_unsupported {
-            Some(why) => {
-                eprintln!("warning: using the host pipeline: the adapter cannot run the GPU pipeline: {why}");
-                true
-            }
-            None => false,
-        },
+        (None, Some(why)) => {
+            eprintln!(
+                "warning: using the host pipeline: the adapter cannot run the GPU pipeline: {why}"
+            );
+            true
+        }
+        (None, None) => false,
     };
     if host {
-        let entry = find_backend(args.backend.as_deref().unwrap_or("cpu"))?;
+        let entry = find_backend(backend.unwrap_or("cpu"))?;
         Ok(Box::new(HostPipeline::new(entry.start()?)))
     } else {
         Ok(Box::new(GpuPipeline::new()))

@@ -1,8 +1,87 @@
-//! What `render` and `view` add to a scene from the flags: lights, camera, ground.
+//! What `render` and `view` share: the flags that name and stage the scene ([`SceneArgs`]), and
+//! what they add to it: lights, camera, ground.
 
-use super::{Args, GroundArg};
+use super::{parse_light, Args, GroundArg, PipelineArg};
 use shadowvol::CliError;
+use shadowvol_robust_math::{Accuracy, Light};
 use std::path::PathBuf;
+
+/// The flags `render` and `view` share: the scene, its lights and ground, the accuracy mode and
+/// where silhouettes are built.
+#[derive(Debug, clap::Args)]
+pub(crate) struct SceneArgs {
+    /// The scene: a preset name (see `shadowvol scenes`) or a .gltf/.glb/.obj/.stl/.ply file
+    /// (`shadowvol --help` lists what each format reads).
+    #[arg(value_name = "SCENE")]
+    pub(crate) scene: String,
+
+    /// A light as homogeneous X,Y,Z,W (w = 1 point, w = 0 directional towards (X,Y,Z)); repeat
+    /// for several. Replaces the scene's own lights; without any light anywhere, a default key
+    /// light is placed from the scene's bounds.
+    #[arg(
+        long = "light",
+        value_name = "X,Y,Z,W",
+        allow_hyphen_values = true,
+        value_parser = parse_light
+    )]
+    pub(crate) lights: Vec<Light>,
+
+    /// A receiver plane under the scene: auto (under files with nothing below their casters),
+    /// on or off.
+    #[arg(long, value_enum, default_value_t = GroundArg::Auto)]
+    pub(crate) ground: GroundArg,
+
+    /// Accuracy mode of silhouettes and caps (`view`: at start; keys 1-4 switch it).
+    #[arg(long, value_parser = shadowvol::mode_parser(), default_value = "exact")]
+    pub(crate) mode: Accuracy,
+
+    /// Silhouette backend of the host pipeline (see `shadowvol backends`), or `auto`: the first
+    /// backend on a hardware GPU, else `simd`, with a warning naming what was skipped. Giving it
+    /// selects the host pipeline [default with --pipeline host: cpu].
+    #[arg(long, value_name = "NAME")]
+    pub(crate) backend: Option<String>,
+
+    /// gpu: extraction, sides and caps on the renderer's device, nothing read back during a
+    /// frame; host: the backend's multiplicities come to the host, which builds the volumes
+    /// [default: gpu where the adapter supports it and no --backend is given, else host]. In
+    /// `view`, showing the volumes (V, --volumes) uses the host pipeline.
+    #[arg(long, value_enum, value_name = "gpu|host")]
+    pub(crate) pipeline: Option<PipelineArg>,
+}
+
+impl SceneArgs {
+    /// The pipeline the flags ask for: `Some(true)` for the host one (`--pipeline host`, or any
+    /// `--backend`), `Some(false)` for `--pipeline gpu`, `None` to let the device decide.
+    ///
+    /// # Errors
+    /// [`CliError::Other`] for `--backend` with `--pipeline gpu`.
+    pub(crate) fn wants_host(&self) -> Result<Option<bool>, CliError> {
+        match (self.pipeline, &self.backend) {
+            (Some(PipelineArg::Gpu), Some(b)) => Err(CliError::Other(format!(
+                "--backend {b} selects the host pipeline; it cannot be combined with --pipeline gpu \
+                 (the GPU pipeline runs the wgpu kernels on the renderer's device)"
+            ))),
+            (Some(PipelineArg::Gpu), None) => Ok(Some(false)),
+            (Some(PipelineArg::Host), _) | (None, Some(_)) => Ok(Some(true)),
+            (None, None) => Ok(None),
+        }
+    }
+
+    /// Loads the scene, prints its loader's notes on stderr and [`stage`]s it with the flags.
+    ///
+    /// # Errors
+    /// The loader's error, or [`stage`]'s.
+    pub(crate) fn load(
+        &self,
+    ) -> Result<(shadowvol_scenes::Scene, LightsSource, Option<Ground>), CliError> {
+        let (mut scene, notes) = shadowvol::load_scene(&self.scene)?;
+        for n in &notes {
+            eprintln!("note: {n}");
+        }
+        let (lights_source, ground) = stage(&mut scene, &self.scene, &self.lights, self.ground)?;
+        Ok((scene, lights_source, ground))
+    }
+}
 
 /// Where the lights of a render came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -29,7 +108,7 @@ pub(crate) struct Ground {
 /// lights, a scene without any gets [`shadowvol_scenes::Scene::key_light`] seen from its camera
 /// (or the default framing), which becomes the scene's camera; `--ground` sets the ground
 /// receiver ([`shadowvol_scenes::Scene::set_ground`]).
-pub(crate) fn stage(
+fn stage(
     scene: &mut shadowvol_scenes::Scene,
     scene_arg: &str,
     lights: &[shadowvol_robust_math::Light],
@@ -83,7 +162,7 @@ pub(crate) fn stage(
 /// `--out`, or SCENE's file stem (a preset's name) + `.png` in the current directory.
 pub(super) fn out_path(args: &Args) -> PathBuf {
     args.out.clone().unwrap_or_else(|| {
-        let stem = std::path::Path::new(&args.scene)
+        let stem = std::path::Path::new(&args.input.scene)
             .file_stem()
             .map_or_else(|| "render".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from(format!("{stem}.png"))

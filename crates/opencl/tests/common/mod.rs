@@ -91,36 +91,6 @@ pub fn tilted_grid(n: u32) -> Mesh {
     m
 }
 
-/// A closed UV sphere (poles welded) of radius `r`.
-pub fn sphere(rings: u32, segments: u32, r: f32) -> Mesh {
-    let mut positions = vec![Vec3::new(0.0, 0.0, r)];
-    for k in 1..rings {
-        let th = std::f32::consts::PI * k as f32 / rings as f32;
-        for s in 0..segments {
-            let ph = std::f32::consts::TAU * s as f32 / segments as f32;
-            positions.push(r * Vec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()));
-        }
-    }
-    positions.push(Vec3::new(0.0, 0.0, -r));
-    let south = positions.len() as u32 - 1;
-    let ring = |k: u32, s: u32| 1 + (k - 1) * segments + s % segments;
-    let mut triangles = Vec::new();
-    for s in 0..segments {
-        triangles.push([0, ring(1, s), ring(1, s + 1)]);
-        triangles.push([south, ring(rings - 1, s + 1), ring(rings - 1, s)]);
-    }
-    for k in 1..rings - 1 {
-        for s in 0..segments {
-            triangles.push([ring(k, s), ring(k + 1, s), ring(k + 1, s + 1)]);
-            triangles.push([ring(k, s), ring(k + 1, s + 1), ring(k, s + 1)]);
-        }
-    }
-    Mesh {
-        positions,
-        triangles,
-    }
-}
-
 /// Four triangles sharing the edge (0, 1): a non-manifold "book", plus a triangle soup
 /// duplicate of one page.
 pub fn book() -> Mesh {
@@ -187,7 +157,7 @@ pub fn all_cases() -> Vec<Case> {
     let mut objects = Vec::new();
     for i in 0..12 {
         let mesh = if i % 3 == 0 {
-            sphere(5, 7, 0.4)
+            shapes::uv_sphere_y(5, 7, 0.4)
         } else if i % 3 == 1 {
             tetrahedron()
         } else {
@@ -230,7 +200,7 @@ pub fn all_cases() -> Vec<Case> {
         name: "sphere-offset-1e4".into(),
         scene: scene_of(vec![(
             {
-                let mut m = sphere(9, 13, 0.01);
+                let mut m = shapes::uv_sphere_y(9, 13, 0.01);
                 for p in &mut m.positions {
                     *p += Vec3::new(1.0e4, -1.0e4, 5.0e3);
                 }

@@ -195,12 +195,12 @@ impl FrameTargets {
             return Ok(None);
         };
         let (w, h) = (self.size.width, self.size.height);
-        let rgba = read_rows(device, color_rb, padded_row(w, 4), w * 4, h, 1)?;
-        let ids_bytes = read_rows(device, ids_rb, padded_row(w, 8), w * 8, h, 1)?;
+        let rgba = read_rows(device, color_rb, (w, h), 4, 1)?;
+        let ids_bytes = read_rows(device, ids_rb, (w, h), 8, 1)?;
         let stencil_bytes = if self.lights == 0 {
             Vec::new()
         } else {
-            read_rows(device, stencil_rb, padded_row(w, 1), w, h, self.lights)?
+            read_rows(device, stencil_rb, (w, h), 1, self.lights)?
         };
         let ids = ids_bytes
             .chunks_exact(8)
@@ -224,39 +224,10 @@ impl FrameTargets {
         }))
     }
 
-    fn copy(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        texture: &wgpu::Texture,
-        aspect: wgpu::TextureAspect,
-        buffer: &wgpu::Buffer,
-        bytes_per_px: u32,
-        image: u64,
-    ) {
-        let row = padded_row(self.size.width, bytes_per_px);
-        enc.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: u64::from(row) * u64::from(self.size.height) * image,
-                    bytes_per_row: Some(row),
-                    rows_per_image: Some(self.size.height),
-                },
-            },
-            self.size,
-        );
-    }
-
     /// With readback: copies the stencil aspect (light `light`'s shadow state) to its slot.
     fn copy_stencil(&self, enc: &mut wgpu::CommandEncoder, light: usize) {
         if let Some([_, _, stencil]) = &self.readbacks {
-            self.copy(
+            copy_rows(
                 enc,
                 &self.depth,
                 wgpu::TextureAspect::StencilOnly,
@@ -271,28 +242,60 @@ impl FrameTargets {
     /// after a frame drawn into another colour view).
     pub(crate) fn copy_color_ids(&self, enc: &mut wgpu::CommandEncoder) {
         if let Some([color, ids, _]) = &self.readbacks {
-            self.copy(enc, &self.color, wgpu::TextureAspect::All, color, 4, 0);
-            self.copy(enc, &self.ids, wgpu::TextureAspect::All, ids, 8, 0);
+            copy_rows(enc, &self.color, wgpu::TextureAspect::All, color, 4, 0);
+            copy_rows(enc, &self.ids, wgpu::TextureAspect::All, ids, 8, 0);
         }
     }
 }
 
-/// Maps `buffer`, strips row padding and returns `images` images of `w_bytes` × `h` bytes.
+/// Records a copy of one aspect of all of `texture` (`bytes_per_px` bytes per pixel) into
+/// image slot `image` of `buffer`, rows padded by [`padded_row`].
+fn copy_rows(
+    enc: &mut wgpu::CommandEncoder,
+    texture: &wgpu::Texture,
+    aspect: wgpu::TextureAspect,
+    buffer: &wgpu::Buffer,
+    bytes_per_px: u32,
+    image: u64,
+) {
+    let row = padded_row(texture.width(), bytes_per_px);
+    let offset = u64::from(row) * u64::from(texture.height()) * image;
+    enc.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(texture.height()),
+            },
+        },
+        texture.size(),
+    );
+}
+
+/// Maps `buffer` (rows padded by [`padded_row`]), strips the padding and returns `images`
+/// images of `w` × `h` pixels of `bytes_per_px` bytes.
 fn read_rows(
     device: &wgpu::Device,
     buffer: &wgpu::Buffer,
-    padded_row: u32,
-    w_bytes: u32,
-    h: u32,
+    (w, h): (u32, u32),
+    bytes_per_px: u32,
     images: usize,
 ) -> Result<Vec<u8>, RenderError> {
     let data = map_read(device, buffer)?;
-    let mut out = Vec::with_capacity((w_bytes * h) as usize * images);
-    for img in 0..images {
-        for y in 0..h as usize {
-            let o = (img * h as usize + y) * padded_row as usize;
-            out.extend_from_slice(&data[o..o + w_bytes as usize]);
-        }
+    let (row, w_bytes) = (
+        padded_row(w, bytes_per_px) as usize,
+        (w * bytes_per_px) as usize,
+    );
+    let mut out = Vec::with_capacity(w_bytes * h as usize * images);
+    for y in 0..h as usize * images {
+        out.extend_from_slice(&data[y * row..y * row + w_bytes]);
     }
     Ok(out)
 }
@@ -319,23 +322,7 @@ pub fn read_texture(
         mapped_at_creation: false,
     });
     let mut enc = device.create_command_encoder(&Default::default());
-    enc.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo {
-            texture,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect,
-        },
-        wgpu::TexelCopyBufferInfo {
-            buffer: &staging,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: Some(h),
-            },
-        },
-        texture.size(),
-    );
+    copy_rows(&mut enc, texture, aspect, &staging, bytes_per_px, 0);
     queue.submit([enc.finish()]);
-    read_rows(device, &staging, row, w * bytes_per_px, h, 1)
+    read_rows(device, &staging, (w, h), bytes_per_px, 1)
 }

@@ -3,9 +3,33 @@
 //! exact-mode filter, so one CPU version of that loop serves both twins. Used by tests only
 //! (through the backends' `twin` modules).
 
-use super::SceneLayout;
+use super::{ExactFilter, SceneLayout};
 use crate::{check_lights, object_lights, BackendError, Light, TopologyScene};
 use shadowvol_robust_math::{canonical, sign_f32, triangle_sign, Accuracy};
+
+/// A device filter of exact mode for `(A, B, L, O)`: `Some(sign)` only when the sign equals the
+/// exact sign of `orient_exact`; `None` leaves the triple to the host.
+pub type FilterFn = fn([f32; 3], [f32; 3], [f32; 4], [f32; 3]) -> Option<i8>;
+
+/// A kernel's two exact-mode filters, the one its build picks per [`ExactFilter`].
+#[derive(Debug, Clone, Copy)]
+pub struct DeviceFilters {
+    /// The `f32` filter (devices without `f64`).
+    pub f32: FilterFn,
+    /// The `f64` filter.
+    pub f64: FilterFn,
+}
+
+impl DeviceFilters {
+    /// The filter a kernel built for `filter` runs.
+    #[must_use]
+    pub fn get(self, filter: ExactFilter) -> FilterFn {
+        match filter {
+            ExactFilter::F32 => self.f32,
+            ExactFilter::F64 => self.f64,
+        }
+    }
+}
 
 /// What one kernel invocation computes for one (edge, light).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -18,8 +42,8 @@ pub struct EdgeResult {
 
 /// The kernels' loop over the opposite vertices of global edge `e` for object-space light `l`:
 /// `original` the naive `f32` sign per (edge, OV); `robust` and `ordered` the sign of the
-/// canonical triangle times the parity; `exact` the device's certified `filter`, whose `None`
-/// leaves the slot to the host.
+/// canonical triangle times the parity; `exact` the device's certified `filter` (one of a
+/// kernel's [`DeviceFilters`]), whose `None` leaves the slot to the host.
 ///
 /// # Panics
 /// If `e` is out of range.
@@ -29,7 +53,7 @@ pub fn edge_multiplicity(
     e: usize,
     l: [f32; 4],
     mode: Accuracy,
-    filter: impl Fn([f32; 3], [f32; 3], [f32; 4], [f32; 3]) -> Option<i8>,
+    filter: FilterFn,
 ) -> EdgeResult {
     let p = |v: u32| layout.position(v);
     let (a, b, _) = layout.edge(e);
