@@ -4,8 +4,8 @@
 //!
 //! 1. **drivers**: the Vulkan loader and Mesa's lavapipe ICD, the OpenCL ICD loader and PoCL, and
 //!    `glslangValidator`, the Khronos Vulkan validation layer (the vulkan backend's validation
-//!    test runs with it), Xvfb and the X11 client libraries (the viewer's window test). When one is missing and we are root, they are installed with apt-get;
-//!    when we are not root, the exact command is printed and the run goes on (the GPU backends
+//!    test runs with it), Xvfb and the X11 client libraries (the viewer's window test). When one
+//!    is missing and we are root, they are installed with apt-get; when we are not root, the exact command is printed and the run goes on (the GPU backends
 //!    then skip visibly), unless `CI=true`, where a missing driver is a failure.
 //! 2. **fmt**: `cargo fmt --all -- --check`.
 //! 3. **size**: no file over 800 lines before its tests, no function body over 120 lines
@@ -23,10 +23,10 @@
 //! 9. **gpu-crates**: every GPU backend crate has the core files and at most two of its own
 //!    ([`crate::gpu_crates`]).
 //! 10. **fuzz**: each fuzz target (`fuzz/`, its own workspace) built and run for [`FUZZ_SECONDS`]
-//!    seconds on its seed corpus with `cargo fuzz run --dev --sanitizer none` (stable Rust is
-//!    enough). A missing `cargo-fuzz` is installed with `cargo install` under CI or as root;
-//!    otherwise the targets are only `cargo check`ed and the step says what to install and
-//!    warns. Under CI a `cargo-fuzz` that still is not there fails the step.
+//!     seconds on its seed corpus with `cargo fuzz run --dev --sanitizer none` (stable Rust is
+//!     enough). A missing `cargo-fuzz` is installed with `cargo install` under CI or as root;
+//!     otherwise the targets are only `cargo check`ed and the step says what to install and
+//!     warns. Under CI a `cargo-fuzz` that still is not there fails the step.
 
 use std::path::Path;
 use std::process::Command;
@@ -148,38 +148,62 @@ struct Step {
     time: Duration,
 }
 
+/// The command line of `cargo xtask test`.
+struct Options {
+    /// Steps to skip.
+    skip: Vec<String>,
+    /// Arguments after `--`, for `cargo test`.
+    test_args: Vec<String>,
+    /// `-p` packages (empty: the workspace).
+    packages: Vec<String>,
+}
+
+impl Options {
+    /// Parses `args`; `None` for `--help`.
+    fn parse(args: &[String]) -> Result<Option<Self>, String> {
+        let mut o = Self {
+            skip: Vec::new(),
+            test_args: Vec::new(),
+            packages: Vec::new(),
+        };
+        let mut it = args.iter();
+        while let Some(a) = it.next() {
+            match a.as_str() {
+                "-h" | "--help" => return Ok(None),
+                "--no-drivers" => o.skip.push("drivers".into()),
+                "--skip" => {
+                    let step = it.next().ok_or("--skip needs a step name")?;
+                    if !STEPS.contains(&step.as_str()) {
+                        return Err(format!("unknown step {step:?} for --skip\n\n{USAGE}"));
+                    }
+                    o.skip.push(step.clone());
+                }
+                "-p" | "--package" => {
+                    o.packages
+                        .push(it.next().ok_or("-p needs a package name")?.clone());
+                }
+                "--" => o.test_args.extend(it.by_ref().cloned()),
+                other => return Err(format!("unknown argument {other:?}\n\n{USAGE}")),
+            }
+        }
+        Ok(Some(o))
+    }
+}
+
 /// Runs `cargo xtask test`.
 ///
 /// # Errors
 /// When an argument is unknown or any step failed (after all steps ran).
 pub fn run(args: &[String]) -> Result<(), String> {
-    let mut skip: Vec<String> = Vec::new();
-    let mut test_args: Vec<String> = Vec::new();
-    let mut packages: Vec<String> = Vec::new();
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "-h" | "--help" => {
-                print!("{USAGE}");
-                return Ok(());
-            }
-            "--no-drivers" => skip.push("drivers".into()),
-            "--skip" => {
-                let step = it.next().ok_or("--skip needs a step name")?;
-                if !STEPS.contains(&step.as_str()) {
-                    return Err(format!("unknown step {step:?} for --skip\n\n{USAGE}"));
-                }
-                skip.push(step.clone());
-            }
-            "-p" | "--package" => {
-                packages.push(it.next().ok_or("-p needs a package name")?.clone());
-            }
-            "--" => {
-                test_args.extend(it.by_ref().cloned());
-            }
-            other => return Err(format!("unknown argument {other:?}\n\n{USAGE}")),
-        }
-    }
+    let Some(Options {
+        skip,
+        test_args,
+        packages,
+    }) = Options::parse(args)?
+    else {
+        print!("{USAGE}");
+        return Ok(());
+    };
     let root = crate::project_root();
     let ci = crate::ci::is_ci();
     println!("xtask test: workspace {}, CI={ci}", root.display());

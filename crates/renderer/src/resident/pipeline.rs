@@ -100,6 +100,80 @@ impl ShadowPass {
         let depth_clamp = features.contains(wgpu::Features::DEPTH_CLIP_CONTROL);
         let filter = ExactFilter::for_device(features.contains(wgpu::Features::SHADER_F64), false);
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        // The empty group 1 of the vertex pass and of the pending entry, one layout for both (the
+        // vertex pass binds `empty` with it).
+        let v1 = bind_group_layout(device, "resident vertices (unused)", &[]);
+        let x = ExtractPipelines::new(device, filter, &v1);
+        let draw = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("resident draw"),
+            source: wgpu::ShaderSource::Wgsl(draw_source().into()),
+        });
+        let s = SurfacePipelines::new(device, &draw, &v1, &x.v2);
+        let d = DrawPipelines::new(device, &draw, formats, depth_clamp);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Device(format!("GPU pipeline creation: {e}")));
+        }
+        Ok(Self {
+            device: device.clone(),
+            queue: queue.clone(),
+            formats,
+            filter,
+            depth_clamp,
+            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            c0: x.c0,
+            c1: x.c1,
+            d0: d.d0,
+            dl: d.dl,
+            v0: s.v0,
+            v2: x.v2,
+            empty: s.empty,
+            vertices: s.vertices,
+            reset: x.reset,
+            triangles: x.triangles,
+            pending_args: x.pending_args,
+            pending: x.pending,
+            edges: x.edges,
+            prepass: d.prepass,
+            lit: d.lit,
+            s0: s.s0,
+            s2: s.s2,
+            surfaces: s.surfaces,
+            side_zpass: d.side_zpass,
+            side_zfail: d.side_zfail,
+            cap_ccw: d.cap_ccw,
+            cap_cw: d.cap_cw,
+        })
+    }
+
+    /// The exact filter the triangle pass runs (`f64` when the device has `SHADER_F64`).
+    #[must_use]
+    pub fn exact_filter(&self) -> ExactFilter {
+        self.filter
+    }
+
+    /// True when z-fail volumes are drawn with depth clamp (`DEPTH_CLIP_CONTROL`).
+    #[must_use]
+    pub fn depth_clamp(&self) -> bool {
+        self.depth_clamp
+    }
+}
+
+/// The extraction's layouts and compute pipelines (the `resident extract` module, built for
+/// `filter`): reset, the triangle pass per mode, exact mode's pending pair, the edge pass per
+/// mode.
+struct ExtractPipelines {
+    c0: wgpu::BindGroupLayout,
+    c1: wgpu::BindGroupLayout,
+    v2: wgpu::BindGroupLayout,
+    reset: wgpu::ComputePipeline,
+    triangles: Vec<wgpu::ComputePipeline>,
+    pending_args: wgpu::ComputePipeline,
+    pending: wgpu::ComputePipeline,
+    edges: Vec<wgpu::ComputePipeline>,
+}
+
+impl ExtractPipelines {
+    fn new(device: &wgpu::Device, filter: ExactFilter, v1: &wgpu::BindGroupLayout) -> Self {
         let compute = wgpu::ShaderStages::COMPUTE;
         // Group 0: the wgpu backend's bindings the resident kernels use (its scene and triangle
         // layouts, lights and signs).
@@ -132,7 +206,6 @@ impl ShadowPass {
             source: wgpu::ShaderSource::Wgsl(extract_source(filter).into()),
         });
         let c_layout = pipeline_layout(device, "resident extract", &[&c0, &c1]);
-        let v1 = bind_group_layout(device, "resident vertices (unused)", &[]);
         // Group 2 of the vertex pass (its output) and of the pending-arguments entry.
         let v2 = bind_group_layout(
             device,
@@ -142,7 +215,7 @@ impl ShadowPass {
         // Group 2: the pending dispatch's arguments (written by one entry, read as indirect
         // arguments by the next, so never bound while they are read).
         let args_layout = pipeline_layout(device, "resident pending args", &[&c0, &c1, &v2]);
-        let pending_layout = pipeline_layout(device, "resident pending", &[&c0, &c1, &v1]);
+        let pending_layout = pipeline_layout(device, "resident pending", &[&c0, &c1, v1]);
         let max_x = device.limits().max_compute_workgroups_per_dimension.max(1);
         let compute_pipeline =
             |entry: &str, layout: &wgpu::PipelineLayout, mode: Accuracy, defer: bool| {
@@ -154,25 +227,119 @@ impl ShadowPass {
                 ];
                 shaders::compute_pipeline(device, entry, layout, &module, entry, &constants)
             };
-        let reset = compute_pipeline("resident_reset", &c_layout, Accuracy::Original, false);
-        // Exact mode's triangle pass leaves `orient_int` out (DEFER_INT); `pending` decides what
-        // its filter leaves.
-        let triangles = Accuracy::ALL
-            .iter()
-            .map(|&m| compute_pipeline("resident_triangles", &c_layout, m, m == Accuracy::Exact))
-            .collect();
-        let pending_args = compute_pipeline(
-            "resident_pending_args",
-            &args_layout,
-            Accuracy::Exact,
-            false,
-        );
-        let pending = compute_pipeline("resident_pending", &pending_layout, Accuracy::Exact, false);
-        let edges = Accuracy::ALL
-            .iter()
-            .map(|&m| compute_pipeline("resident_edges", &c_layout, m, false))
-            .collect();
+        let per_mode = |entry: &str, defer_exact: bool| {
+            Accuracy::ALL
+                .iter()
+                .map(|&m| {
+                    compute_pipeline(entry, &c_layout, m, defer_exact && m == Accuracy::Exact)
+                })
+                .collect()
+        };
+        Self {
+            reset: compute_pipeline("resident_reset", &c_layout, Accuracy::Original, false),
+            // Exact mode's triangle pass leaves `orient_int` out (DEFER_INT); `pending` decides
+            // what its filter leaves.
+            triangles: per_mode("resident_triangles", true),
+            pending_args: compute_pipeline(
+                "resident_pending_args",
+                &args_layout,
+                Accuracy::Exact,
+                false,
+            ),
+            pending: compute_pipeline("resident_pending", &pending_layout, Accuracy::Exact, false),
+            edges: per_mode("resident_edges", false),
+            c0,
+            c1,
+            v2,
+        }
+    }
+}
 
+/// The vertex and surface passes (compute entries of the draw module, no constants):
+/// object-space positions to camera-relative world positions, once per vertex and frame, and the
+/// surface vertices from them.
+struct SurfacePipelines {
+    v0: wgpu::BindGroupLayout,
+    empty: wgpu::BindGroup,
+    vertices: wgpu::ComputePipeline,
+    s0: wgpu::BindGroupLayout,
+    s2: wgpu::BindGroupLayout,
+    surfaces: wgpu::ComputePipeline,
+}
+
+impl SurfacePipelines {
+    fn new(
+        device: &wgpu::Device,
+        draw: &wgpu::ShaderModule,
+        v1: &wgpu::BindGroupLayout,
+        v2: &wgpu::BindGroupLayout,
+    ) -> Self {
+        let compute = wgpu::ShaderStages::COMPUTE;
+        let draw_compute = |label: &str, entry: &str, groups: &[&wgpu::BindGroupLayout]| {
+            let layout = pipeline_layout(device, label, groups);
+            shaders::compute_pipeline(device, entry, &layout, draw, entry, &[])
+        };
+        let v0 = bind_group_layout(
+            device,
+            "resident vertices",
+            &[
+                storage(1, compute, true),
+                storage(6, compute, true),
+                storage(8, compute, true),
+            ],
+        );
+        let empty = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident vertices (unused)"),
+            layout: v1,
+            entries: &[],
+        });
+        let vertices = draw_compute("resident vertices", "resident_vertices", &[&v0, v1, v2]);
+        let s0 = bind_group_layout(
+            device,
+            "resident surfaces",
+            &[
+                storage(3, compute, true),
+                storage(6, compute, true),
+                storage(7, compute, true),
+            ],
+        );
+        let s2 = bind_group_layout(
+            device,
+            "resident surfaces out",
+            &[storage(1, compute, false), uniform(2, compute, false)],
+        );
+        let surfaces = draw_compute("resident surfaces", "resident_surfaces", &[&s0, v1, &s2]);
+        Self {
+            v0,
+            empty,
+            vertices,
+            s0,
+            s2,
+            surfaces,
+        }
+    }
+}
+
+/// The render pipelines of the draw module: the pre-pass and lit pass (each from the surface
+/// vertex buffer or from the storage buffers), the z-pass and z-fail sides and the caps.
+struct DrawPipelines {
+    d0: wgpu::BindGroupLayout,
+    dl: wgpu::BindGroupLayout,
+    prepass: [wgpu::RenderPipeline; 2],
+    lit: [wgpu::RenderPipeline; 2],
+    side_zpass: wgpu::RenderPipeline,
+    side_zfail: wgpu::RenderPipeline,
+    cap_ccw: wgpu::RenderPipeline,
+    cap_cw: wgpu::RenderPipeline,
+}
+
+impl DrawPipelines {
+    fn new(
+        device: &wgpu::Device,
+        draw: &wgpu::ShaderModule,
+        formats: PassFormats,
+        depth_clamp: bool,
+    ) -> Self {
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let vs = wgpu::ShaderStages::VERTEX;
         let d0 = bind_group_layout(
@@ -191,52 +358,11 @@ impl ShadowPass {
             ],
         );
         let dl = bind_group_layout(device, "resident light", &[uniform(0, vf, true)]);
-        let draw = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("resident draw"),
-            source: wgpu::ShaderSource::Wgsl(draw_source().into()),
-        });
-        // The vertex and surface passes (compute entries of the draw module, no constants):
-        // object-space positions to camera-relative world positions, once per vertex and frame,
-        // and the surface vertices from them.
-        let draw_compute = |label: &str, entry: &str, groups: &[&wgpu::BindGroupLayout]| {
-            let layout = pipeline_layout(device, label, groups);
-            shaders::compute_pipeline(device, entry, &layout, &draw, entry, &[])
-        };
-        let v0 = bind_group_layout(
-            device,
-            "resident vertices",
-            &[
-                storage(1, compute, true),
-                storage(6, compute, true),
-                storage(8, compute, true),
-            ],
-        );
-        let empty = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("resident vertices (unused)"),
-            layout: &v1,
-            entries: &[],
-        });
-        let vertices = draw_compute("resident vertices", "resident_vertices", &[&v0, &v1, &v2]);
-        let s0 = bind_group_layout(
-            device,
-            "resident surfaces",
-            &[
-                storage(3, compute, true),
-                storage(6, compute, true),
-                storage(7, compute, true),
-            ],
-        );
-        let s2 = bind_group_layout(
-            device,
-            "resident surfaces out",
-            &[storage(1, compute, false), uniform(2, compute, false)],
-        );
-        let surfaces = draw_compute("resident surfaces", "resident_surfaces", &[&s0, &v1, &s2]);
         let d_layout = pipeline_layout(device, "resident draw", &[&d0, &dl]);
         let make = RenderPipelines {
             device,
             layout: &d_layout,
-            module: &draw,
+            module: draw,
             depth: formats.depth,
         };
         let mut prepass_targets = vec![color_target(formats.color, None)];
@@ -287,53 +413,15 @@ impl ShadowPass {
         let zfail = |label, entry, face| {
             make.volume(label, entry, &[], depth_clamp, face, states::zfail_faces())
         };
-        let side_zfail = zfail("resident side zfail", "vs_resident_side_zfail", ccw);
-        let cap_ccw = zfail("resident cap ccw", "vs_resident_cap_ccw", ccw);
-        let cap_cw = zfail("resident cap cw", "vs_resident_cap_cw", wgpu::FrontFace::Cw);
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(RenderError::Device(format!("GPU pipeline creation: {e}")));
-        }
-        Ok(Self {
-            device: device.clone(),
-            queue: queue.clone(),
-            formats,
-            filter,
-            depth_clamp,
-            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
-            c0,
-            c1,
-            d0,
-            dl,
-            v0,
-            v2,
-            empty,
-            vertices,
-            reset,
-            triangles,
-            pending_args,
-            pending,
-            edges,
+        Self {
+            side_zpass,
+            side_zfail: zfail("resident side zfail", "vs_resident_side_zfail", ccw),
+            cap_ccw: zfail("resident cap ccw", "vs_resident_cap_ccw", ccw),
+            cap_cw: zfail("resident cap cw", "vs_resident_cap_cw", wgpu::FrontFace::Cw),
             prepass,
             lit,
-            s0,
-            s2,
-            surfaces,
-            side_zpass,
-            side_zfail,
-            cap_ccw,
-            cap_cw,
-        })
-    }
-
-    /// The exact filter the triangle pass runs (`f64` when the device has `SHADER_F64`).
-    #[must_use]
-    pub fn exact_filter(&self) -> ExactFilter {
-        self.filter
-    }
-
-    /// True when z-fail volumes are drawn with depth clamp (`DEPTH_CLIP_CONTROL`).
-    #[must_use]
-    pub fn depth_clamp(&self) -> bool {
-        self.depth_clamp
+            d0,
+            dl,
+        }
     }
 }
