@@ -4,16 +4,103 @@
 
 use super::document::Extensions;
 use super::nodes::Loader;
+use super::Source;
 use crate::SceneError;
 use std::collections::HashMap;
+
+impl Source<'_> {
+    /// Checks that relative URIs percent-decode to UTF-8 (`import_buffers` panics otherwise).
+    pub(super) fn check_buffer_uris(&self, document: &gltf::Document) -> Result<(), SceneError> {
+        for b in document.buffers() {
+            if let gltf::buffer::Source::Uri(uri) = b.source() {
+                if !uri.contains(':') && std::str::from_utf8(&percent_decode(uri)).is_err() {
+                    return Err(self.err(
+                        "buffers",
+                        format!(
+                            "buffer {}: uri {uri:?} percent-decodes to bytes that are not UTF-8",
+                            b.index()
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Each buffer's data, or `None` for one that positions and indices do not read.
+    pub(super) fn load_buffers(
+        &self,
+        document: &gltf::Document,
+        ext: &Extensions,
+        mut blob: Option<Vec<u8>>,
+    ) -> Result<Vec<Option<Vec<u8>>>, SceneError> {
+        // Only the buffers that positions and indices read are loaded (others may be
+        // placeholders without data, or URIs this loader cannot resolve, which is valid glTF).
+        // An EXT_meshopt_compression fallback buffer has no data; its views are decoded instead.
+        let needed = needed_buffers(document, ext);
+        let mut data: Vec<Option<Vec<u8>>> = Vec::with_capacity(document.buffers().len());
+        for b in document.buffers() {
+            let bin = matches!(b.source(), gltf::buffer::Source::Bin);
+            if !needed.contains(&b.index()) || (ext.fallback.contains(&b.index()) && bin) {
+                if bin && b.index() == 0 {
+                    // The GLB's BIN chunk belongs to buffer 0 only.
+                    blob = None;
+                }
+                data.push(None);
+                continue;
+            }
+            data.push(Some(self.load_buffer(&b, &mut blob)?));
+        }
+        Ok(data)
+    }
+
+    /// One needed buffer's data, from its URI or the GLB's BIN chunk, cut to `byteLength`.
+    fn load_buffer(
+        &self,
+        b: &gltf::Buffer,
+        blob: &mut Option<Vec<u8>>,
+    ) -> Result<Vec<u8>, SceneError> {
+        if matches!(b.source(), gltf::buffer::Source::Bin) && blob.is_none() {
+            // Valid glTF JSON (a buffer without `uri` names the GLB's binary chunk), but a
+            // `.gltf` has no such chunk, so the positions or indices it should hold are missing.
+            return Err(self.err(
+                "buffers",
+                format!(
+                    "buffer {} has no uri and no GLB binary chunk holds it (a .gltf has none; in \
+                     a .glb only buffer 0 uses it): the {} bytes its positions or indices are read \
+                     from are not in the file",
+                    b.index(),
+                    b.length()
+                ),
+            ));
+        }
+        let d = gltf::buffer::Data::from_source_and_blob(b.source(), self.base, blob)
+            .map_err(|e| self.err("buffers", format!("buffer {}: {e}", b.index())))?;
+        // Data shorter than byteLength is refused; data longer than it (beyond the up to 3
+        // padding bytes a GLB BIN chunk may carry) is a lie about the length too. Views are then
+        // checked against the declared length only.
+        if d.0.len() < b.length() || d.0.len() > b.length() + 3 {
+            return Err(self.err(
+                "buffers",
+                format!(
+                    "buffer {}: its data holds {} bytes but byteLength declares {} (a data URI, \
+                     file or GLB chunk must match byteLength)",
+                    b.index(),
+                    d.0.len(),
+                    b.length()
+                ),
+            ));
+        }
+        let mut d = d.0;
+        d.truncate(b.length());
+        Ok(d)
+    }
+}
 
 /// The buffers that positions and indices read: the buffers of their views (and sparse views),
 /// or, for `EXT_meshopt_compression` views, the buffer of the compressed source; for a
 /// `KHR_draco_mesh_compression` primitive, only the buffer of its Draco stream's view.
-pub(super) fn needed_buffers(
-    document: &gltf::Document,
-    ext: &Extensions,
-) -> std::collections::HashSet<usize> {
+fn needed_buffers(document: &gltf::Document, ext: &Extensions) -> std::collections::HashSet<usize> {
     let mut out = std::collections::HashSet::new();
     let mut add = |v: gltf::buffer::View| {
         match ext
@@ -169,7 +256,7 @@ pub(super) fn memory_shortfall(needed: u64) -> Option<(u64, String)> {
 
 /// `%XX` escapes decoded to bytes (anything else kept as is), as the gltf crate decodes relative
 /// URIs.
-pub(super) fn percent_decode(uri: &str) -> Vec<u8> {
+fn percent_decode(uri: &str) -> Vec<u8> {
     let b = uri.as_bytes();
     let hex = |c: u8| (c as char).to_digit(16);
     let mut out = Vec::with_capacity(b.len());

@@ -29,6 +29,7 @@ pub(super) struct Loader<'a> {
     pub(super) scene: Scene,
 }
 
+/// How messages name a node: its index, and its name where it has one.
 fn node_label(node: &gltf::Node) -> String {
     match node.name() {
         Some(n) => format!("node {} '{n}'", node.index()),
@@ -36,12 +37,30 @@ fn node_label(node: &gltf::Node) -> String {
     }
 }
 impl Loader<'_> {
+    /// A [`SceneError::Gltf`] of the file being loaded at `context`.
     pub(super) fn err(&self, context: String, message: impl Into<String>) -> SceneError {
         SceneError::Gltf {
             file: self.source_name.to_owned(),
             context,
             message: message.into(),
         }
+    }
+
+    /// Visits the nodes under `roots` depth-first, pre-order, with a stack (no recursion).
+    pub(super) fn walk(&mut self, roots: Vec<gltf::Node>) -> Result<(), SceneError> {
+        let mut stack: Vec<(gltf::Node, Affine3A)> = roots
+            .into_iter()
+            .rev()
+            .map(|n| (n, Affine3A::IDENTITY))
+            .collect();
+        while let Some((node, parent)) = stack.pop() {
+            let world = self.visit(&node, parent)?;
+            let children: Vec<gltf::Node> = node.children().collect();
+            for c in children.into_iter().rev() {
+                stack.push((c, world));
+            }
+        }
+        Ok(())
     }
 
     /// Handles one node; returns its world transform.
@@ -188,6 +207,25 @@ impl Loader<'_> {
             }
         }
         Ok(world)
+    }
+}
+
+/// The walk's roots: the `scene`'s nodes, else the first scene's, else all root nodes.
+pub(super) fn root_nodes(document: &gltf::Document) -> Vec<gltf::Node<'_>> {
+    match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
+        Some(s) => s.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; document.nodes().len()];
+            for n in document.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            document.nodes().filter(|n| !is_child[n.index()]).collect()
+        }
     }
 }
 
