@@ -291,123 +291,147 @@ impl Loader<'_> {
         let total = count
             .checked_mul(size)
             .ok_or_else(|| self.err(alabel.to_owned(), format!("count {count} overflows")))?;
-        // A view-less accessor is zeros of any declared count: its size is not bounded by the
-        // file, so it is checked against the memory budget before it is allocated.
-        if acc.view().is_none() {
-            if let Some((available, source)) = memory_shortfall(total as u64) {
-                return Err(self.err(
-                    alabel.to_owned(),
-                    format!(
-                        "{count} elements without a bufferView need {total} bytes, more than the \
-                         {available} bytes available ({source})"
-                    ),
-                ));
-            }
-        }
         let mut out = match acc.view() {
-            None => {
-                let mut v = Vec::new();
-                v.try_reserve_exact(total).map_err(|_| {
-                    self.err(
-                        alabel.to_owned(),
-                        format!(
-                            "{count} elements without a bufferView: cannot allocate {total} bytes"
-                        ),
-                    )
-                })?;
-                v.resize(total, 0u8);
-                v
-            }
-            Some(view) => {
-                let stride = view.stride().unwrap_or(size);
-                if stride < size {
-                    return Err(self.err(
-                        alabel.to_owned(),
-                        format!(
-                            "buffer view {} has byteStride {stride}, smaller than the element \
-                             size {size}",
-                            view.index()
-                        ),
-                    ));
-                }
-                let data = self.view_bytes(alabel, &view)?;
-                let needed = acc
-                    .offset()
-                    .checked_add((count - 1).saturating_mul(stride))
-                    .and_then(|x| x.checked_add(size));
-                match needed {
-                    Some(needed) if needed <= data.len() => {}
-                    _ => {
-                        return Err(self.err(
-                            alabel.to_owned(),
-                            format!(
-                                "{count} elements of {size} bytes (stride {stride}, byteOffset \
-                                 {}) run past the end of buffer view {} ({} bytes)",
-                                acc.offset(),
-                                view.index(),
-                                data.len()
-                            ),
-                        ))
-                    }
-                }
-                let mut v = Vec::with_capacity(total);
-                for i in 0..count {
-                    let s = acc.offset() + i * stride;
-                    v.extend_from_slice(&data[s..s + size]);
-                }
-                v
-            }
+            None => self.zero_elements(alabel, count, total)?,
+            Some(view) => self.view_elements(alabel, acc, &view)?,
         };
         if let Some(sparse) = acc.sparse() {
-            let n = sparse.count();
-            let idx = sparse.indices();
-            let isize = match idx.index_type() {
-                gltf::accessor::sparse::IndexType::U8 => 1,
-                gltf::accessor::sparse::IndexType::U16 => 2,
-                gltf::accessor::sparse::IndexType::U32 => 4,
-            };
-            let slabel = format!("{alabel}, sparse");
-            let idata = self.view_bytes(&slabel, &idx.view())?;
-            let vdata = self.view_bytes(&slabel, &sparse.values().view())?;
-            let ioff = idx.offset();
-            let voff = sparse.values().offset();
-            let ifits = n
-                .checked_mul(isize)
-                .and_then(|x| x.checked_add(ioff))
-                .is_some_and(|e| e <= idata.len());
-            let vfits = n
-                .checked_mul(size)
-                .and_then(|x| x.checked_add(voff))
-                .is_some_and(|e| e <= vdata.len());
-            if !ifits || !vfits {
-                return Err(self.err(
-                    slabel,
-                    format!("{n} sparse indices or values run past the end of their buffer views"),
-                ));
-            }
-            for k in 0..n {
-                let c = &idata[ioff + k * isize..ioff + (k + 1) * isize];
-                let target = match isize {
-                    1 => usize::from(c[0]),
-                    2 => usize::from(u16::from_le_bytes([c[0], c[1]])),
-                    _ => u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize,
-                };
-                if target >= count {
-                    return Err(self.err(
-                        slabel,
-                        format!(
-                            "sparse index {k} targets element {target}, but the accessor has \
-                             {count}"
-                        ),
-                    ));
-                }
-                out[target * size..(target + 1) * size]
-                    .copy_from_slice(&vdata[voff + k * size..voff + (k + 1) * size]);
-            }
+            self.substitute_sparse(alabel, acc, &sparse, &mut out)?;
         }
         Ok(out)
     }
 
+    /// A view-less accessor's zeros, after a memory check: the file does not bound them.
+    fn zero_elements(
+        &self,
+        alabel: &str,
+        count: usize,
+        total: usize,
+    ) -> Result<Vec<u8>, SceneError> {
+        if let Some((available, source)) = memory_shortfall(total as u64) {
+            return Err(self.err(
+                alabel.to_owned(),
+                format!(
+                    "{count} elements without a bufferView need {total} bytes, more than the \
+                     {available} bytes available ({source})"
+                ),
+            ));
+        }
+        let mut v = Vec::new();
+        v.try_reserve_exact(total).map_err(|_| {
+            self.err(
+                alabel.to_owned(),
+                format!("{count} elements without a bufferView: cannot allocate {total} bytes"),
+            )
+        })?;
+        v.resize(total, 0u8);
+        Ok(v)
+    }
+
+    /// The accessor's elements packed from its buffer view, after stride and bounds checks.
+    fn view_elements(
+        &self,
+        alabel: &str,
+        acc: &gltf::Accessor,
+        view: &gltf::buffer::View,
+    ) -> Result<Vec<u8>, SceneError> {
+        let (count, size) = (acc.count(), acc.size());
+        let stride = view.stride().unwrap_or(size);
+        if stride < size {
+            return Err(self.err(
+                alabel.to_owned(),
+                format!(
+                    "buffer view {} has byteStride {stride}, smaller than the element size {size}",
+                    view.index()
+                ),
+            ));
+        }
+        let data = self.view_bytes(alabel, view)?;
+        let needed = acc
+            .offset()
+            .checked_add((count - 1).saturating_mul(stride))
+            .and_then(|x| x.checked_add(size));
+        match needed {
+            Some(needed) if needed <= data.len() => {}
+            _ => {
+                return Err(self.err(
+                    alabel.to_owned(),
+                    format!(
+                        "{count} elements of {size} bytes (stride {stride}, byteOffset {}) run \
+                         past the end of buffer view {} ({} bytes)",
+                        acc.offset(),
+                        view.index(),
+                        data.len()
+                    ),
+                ))
+            }
+        }
+        let mut v = Vec::with_capacity(count * size);
+        for i in 0..count {
+            let s = acc.offset() + i * stride;
+            v.extend_from_slice(&data[s..s + size]);
+        }
+        Ok(v)
+    }
+
+    /// Replaces the elements that the sparse indices name by the sparse values.
+    fn substitute_sparse(
+        &self,
+        alabel: &str,
+        acc: &gltf::Accessor,
+        sparse: &gltf::accessor::sparse::Sparse,
+        out: &mut [u8],
+    ) -> Result<(), SceneError> {
+        let (count, size) = (acc.count(), acc.size());
+        let n = sparse.count();
+        let idx = sparse.indices();
+        let isize = match idx.index_type() {
+            gltf::accessor::sparse::IndexType::U8 => 1,
+            gltf::accessor::sparse::IndexType::U16 => 2,
+            gltf::accessor::sparse::IndexType::U32 => 4,
+        };
+        let slabel = format!("{alabel}, sparse");
+        let idata = self.view_bytes(&slabel, &idx.view())?;
+        let vdata = self.view_bytes(&slabel, &sparse.values().view())?;
+        let ioff = idx.offset();
+        let voff = sparse.values().offset();
+        let ifits = n
+            .checked_mul(isize)
+            .and_then(|x| x.checked_add(ioff))
+            .is_some_and(|e| e <= idata.len());
+        let vfits = n
+            .checked_mul(size)
+            .and_then(|x| x.checked_add(voff))
+            .is_some_and(|e| e <= vdata.len());
+        if !ifits || !vfits {
+            return Err(self.err(
+                slabel,
+                format!("{n} sparse indices or values run past the end of their buffer views"),
+            ));
+        }
+        for k in 0..n {
+            let c = &idata[ioff + k * isize..ioff + (k + 1) * isize];
+            let target = match isize {
+                1 => usize::from(c[0]),
+                2 => usize::from(u16::from_le_bytes([c[0], c[1]])),
+                _ => u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize,
+            };
+            if target >= count {
+                return Err(self.err(
+                    slabel,
+                    format!(
+                        "sparse index {k} targets element {target}, but the accessor has {count}"
+                    ),
+                ));
+            }
+            out[target * size..(target + 1) * size]
+                .copy_from_slice(&vdata[voff + k * size..voff + (k + 1) * size]);
+        }
+        Ok(())
+    }
+
+    /// The bytes of buffer `view`: decoded when it is `EXT_meshopt_compression`-compressed, else
+    /// its range of its buffer, checked to lie inside the buffer.
     pub(super) fn view_bytes(
         &self,
         alabel: &str,
