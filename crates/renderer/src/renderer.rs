@@ -1,12 +1,14 @@
 //! The renderer: a device, a pipeline, and the frame's shared steps below the pipeline (world
 //! positions, lighting, the plan, the attachments and their readback).
 
-use crate::frame::{Frame, FrameReport, FrameTime, Timings};
+use crate::frame::{Frame, FrameImage, FrameReport, FrameTime, Timings};
 use crate::lighting::{self, Exposure};
-use crate::pipeline::{FrameInputs, GpuPipeline, HostPipeline, Pipeline, ShadowPipeline};
-use crate::plan::{plan_frame, PlanPolicy};
+use crate::pipeline::{
+    FrameInputs, GpuPipeline, HostPipeline, PassReport, Pipeline, ShadowPipeline,
+};
+use crate::plan::{plan_frame, FramePlan, PlanPolicy};
 use crate::raster::{FrameTargets, COLOR_FORMAT};
-use crate::world::World;
+use crate::world::{World, WorldChanges};
 use crate::{Accuracy, RenderDevice, RenderError};
 use shadowvol_scenes::Scene;
 use shadowvol_silhouette::SilhouetteBackend;
@@ -212,13 +214,36 @@ impl Renderer {
         into: Option<&wgpu::TextureView>,
     ) -> Result<Frame, RenderError> {
         let t0 = Instant::now();
+        let mut setup = self.set_up(scene)?;
+        let t_raster = Instant::now();
+        let (image, pass) = self.draw(scene, &mut setup, readback, into)?;
+        let raster_ms = ms(t_raster);
+        let timings = Timings {
+            silhouette_ms: pass.silhouette_ms,
+            side_building_ms: pass.side_building_ms,
+            raster_ms,
+            prepare_ms: setup.prepare_ms,
+            total_ms: ms(t0),
+        };
+        let camera = setup.camera;
+        let report = self.report(setup, pass, timings);
+        Ok(Frame {
+            image,
+            report,
+            camera,
+            volumes: self.pipeline.volumes().to_vec(),
+        })
+    }
+
+    /// What the passes draw from: world sync, preparation, camera, checks, exposure, plan.
+    fn set_up(&mut self, scene: &Scene) -> Result<FrameSetup, RenderError> {
         let RenderOptions {
             width,
             height,
-            mode,
             policy,
             exposure,
             scissor,
+            ..
         } = self.options;
         let t_prep = Instant::now();
         let changes = self.world.sync(scene)?;
@@ -227,26 +252,14 @@ impl Renderer {
             self.unprepared = false;
         }
         let prepare_ms = ms(t_prep);
-        if changes.any() || self.default_camera.is_none() {
-            self.default_camera = scene.camera_or_default();
-        }
-        let camera = scene.camera.or(self.default_camera).ok_or_else(|| {
-            RenderError::InvalidInput(format!("scene {:?} has nothing to render", scene.name))
-        })?;
-        camera.validate()?;
-        let ambient = scene.effects.ambient;
-        if !(ambient.is_finite() && (0.0..=1.0).contains(&ambient)) {
-            return Err(RenderError::InvalidInput(format!(
-                "ambient is {ambient}; it must be in [0, 1]"
-            )));
-        }
-        lighting::validate(scene, exposure).map_err(RenderError::InvalidInput)?;
+        let camera = self.camera(scene, &changes)?;
+        check_effects(scene, exposure)?;
         let aspect = f64::from(width) / f64::from(height);
         let exposure = self
             .meter
             .exposure(scene, &self.world, &changes, &camera, aspect, exposure);
         let light_colors = lighting::light_colors(scene, exposure);
-        let mut plan = plan_frame(
+        let plan = plan_frame(
             scene,
             &self.world,
             &camera,
@@ -254,19 +267,46 @@ impl Renderer {
             policy,
             scissor,
         );
-        let inputs = FrameInputs {
-            scene,
-            world: &self.world,
-            changes: &changes,
-            camera: &camera,
-            size: (width, height),
-            mode,
-            scissors: &plan.scissors,
-            light_colors: &light_colors,
-            count: readback || into.is_some(),
-        };
+        Ok(FrameSetup {
+            changes,
+            camera,
+            exposure,
+            light_colors,
+            plan,
+            prepare_ms,
+        })
+    }
 
-        let t_raster = Instant::now();
+    /// The scene's camera, else the framing one (made again when the world changed), validated.
+    fn camera(
+        &mut self,
+        scene: &Scene,
+        changes: &WorldChanges,
+    ) -> Result<crate::Camera, RenderError> {
+        if changes.any() || self.default_camera.is_none() {
+            self.default_camera = scene.camera_or_default();
+        }
+        let camera = scene.camera.or(self.default_camera).ok_or_else(|| {
+            RenderError::InvalidInput(format!("scene {:?} has nothing to render", scene.name))
+        })?;
+        camera.validate()?;
+        Ok(camera)
+    }
+
+    /// Records, submits and reads back the pipeline's passes; a failed frame drops the targets.
+    fn draw(
+        &mut self,
+        scene: &Scene,
+        setup: &mut FrameSetup,
+        readback: bool,
+        into: Option<&wgpu::TextureView>,
+    ) -> Result<(Option<FrameImage>, PassReport), RenderError> {
+        let RenderOptions {
+            width,
+            height,
+            mode,
+            ..
+        } = self.options;
         let n_lights = scene.lights.len();
         if !self
             .targets
@@ -281,10 +321,21 @@ impl Renderer {
                 readback,
             ));
         }
+        let inputs = FrameInputs {
+            scene,
+            world: &self.world,
+            changes: &setup.changes,
+            camera: &setup.camera,
+            size: (width, height),
+            mode,
+            scissors: &setup.plan.scissors,
+            light_colors: &setup.light_colors,
+            count: readback || into.is_some(),
+        };
         let targets = self.targets.as_ref().expect("made above");
         let attachments = targets.attachments(into);
-        let mut pass = Default::default();
-        let entries = &mut plan.entries;
+        let mut pass = PassReport::default();
+        let entries = &mut setup.plan.entries;
         let pipeline = &mut self.pipeline;
         let device = &self.device;
         let drawn = device
@@ -306,38 +357,63 @@ impl Renderer {
             }
         };
         pipeline.finish(device, &inputs, entries, &mut pass)?;
-        let raster_ms = ms(t_raster);
+        Ok((image, pass))
+    }
 
-        let report = FrameReport {
+    /// The frame's report: what drew it, the plan with its counts, the exposure, `timings`.
+    fn report(&self, setup: FrameSetup, pass: PassReport, timings: Timings) -> FrameReport {
+        let RenderOptions {
+            width,
+            height,
+            mode,
+            ..
+        } = self.options;
+        let pipeline = &self.pipeline;
+        FrameReport {
             pipeline: pipeline.kind(),
             backend: pipeline.backend().map(str::to_owned),
-            adapter: device.description.clone(),
+            adapter: self.device.description.clone(),
             mode,
-            scissor_pixels_saved: plan.scissor_pixels_saved(width, height),
-            plan: plan.entries,
-            light_colors,
-            exposure,
+            scissor_pixels_saved: setup.plan.scissor_pixels_saved(width, height),
+            plan: setup.plan.entries,
+            light_colors: setup.light_colors,
+            exposure: setup.exposure,
             uncertain: pass.uncertain,
             uncertain_unit: pipeline.uncertain_unit(),
             host_resolved: pass.host_resolved,
             readback_bytes: pass.readback_bytes,
-            depth_clamp: pipeline.depth_clamp(device),
-            timings: Timings {
-                silhouette_ms: pass.silhouette_ms,
-                side_building_ms: pass.side_building_ms,
-                raster_ms,
-                prepare_ms,
-                total_ms: ms(t0),
-            },
+            depth_clamp: pipeline.depth_clamp(&self.device),
+            timings,
             gpu_timings: pass.gpu_timings,
-        };
-        Ok(Frame {
-            image,
-            report,
-            camera,
-            volumes: pipeline.volumes().to_vec(),
-        })
+        }
     }
+}
+
+/// What a frame's passes are drawn from, worked out before them by [`Renderer::set_up`].
+struct FrameSetup {
+    /// What changed in the world since the last frame.
+    changes: WorldChanges,
+    /// The camera drawn from.
+    camera: crate::Camera,
+    /// The exposure factor (`None`: no light has an emission).
+    exposure: Option<f32>,
+    /// Per light: its colour at that exposure.
+    light_colors: Vec<[f32; 3]>,
+    /// Techniques and scissors; the pipeline fills in the entries' counts.
+    plan: FramePlan,
+    /// Time in world sync and scene preparation, milliseconds.
+    prepare_ms: f64,
+}
+
+/// Checks the ambient factor (in `[0, 1]`) and the lights' emissions under `exposure`.
+fn check_effects(scene: &Scene, exposure: Exposure) -> Result<(), RenderError> {
+    let ambient = scene.effects.ambient;
+    if !(ambient.is_finite() && (0.0..=1.0).contains(&ambient)) {
+        return Err(RenderError::InvalidInput(format!(
+            "ambient is {ambient}; it must be in [0, 1]"
+        )));
+    }
+    lighting::validate(scene, exposure).map_err(RenderError::InvalidInput)
 }
 
 /// Milliseconds since `t`.

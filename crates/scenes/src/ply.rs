@@ -31,7 +31,7 @@
 use crate::SceneError;
 use glam::Vec3;
 use ply_rs_bw::parser::Parser;
-use ply_rs_bw::ply::{DefaultElement, Property};
+use ply_rs_bw::ply::{DefaultElement, Ply, Property};
 use shadowvol_mesh_topology::Mesh;
 use std::path::Path;
 
@@ -57,129 +57,166 @@ pub fn load_ply(path: impl AsRef<Path>) -> Result<Mesh, SceneError> {
 /// NaN or infinite coordinate, a face with fewer than 3 corners or an index out of range, a mesh
 /// too large for `u32` indices.
 pub fn parse_ply(bytes: &[u8], source_name: &str) -> Result<Mesh, SceneError> {
-    let err = |location: &str, message: String| SceneError::Ply {
-        file: source_name.to_owned(),
-        location: location.to_owned(),
-        message,
-    };
-    let mut reader = bytes;
-    let ply = Parser::<DefaultElement>::new()
-        .read_ply(&mut reader)
-        .map_err(|e| match e.line() {
-            Some(l) => err(
-                &format!("line {l}"),
-                e.to_string()
-                    .trim_start_matches(&format!("Line {l}: "))
-                    .replace("\n\t", "; "),
-            ),
-            None => err("payload", e.to_string().replace("\n\t", "; ")),
-        })?;
-    let Some(vdef) = ply.header.elements.get("vertex") else {
-        return Err(err(
-            "header",
-            "no \"vertex\" element (a mesh needs vertex positions)".to_owned(),
-        ));
-    };
-    for axis in ["x", "y", "z"] {
-        match vdef.properties.get(axis).map(|p| &p.data_type) {
-            Some(ply_rs_bw::ply::PropertyType::Scalar(_)) => {}
-            Some(_) => {
-                return Err(err(
-                    "header",
-                    format!("vertex property \"{axis}\" is a list, a scalar is needed"),
-                ))
-            }
-            None => {
-                return Err(err(
-                    "header",
-                    format!("the vertex element has no \"{axis}\" property"),
-                ))
-            }
+    let file = PlyFile { name: source_name };
+    let ply = file.read(bytes)?;
+    file.check_vertex_header(&ply)?;
+    let positions = file.positions(&ply)?;
+    let triangles = file.triangles(&ply, positions.len())?;
+    Ok(Mesh {
+        positions,
+        triangles,
+    })
+}
+
+/// The PLY file being parsed, by name, so that every stage of [`parse_ply`] names it alike.
+struct PlyFile<'a> {
+    name: &'a str,
+}
+
+impl PlyFile<'_> {
+    /// A [`SceneError::Ply`] of this file at `location`, so every stage names the file alike.
+    fn err(&self, location: &str, message: String) -> SceneError {
+        SceneError::Ply {
+            file: self.name.to_owned(),
+            location: location.to_owned(),
+            message,
         }
     }
-    let vertices = ply.payload.get("vertex").map_or(&[][..], Vec::as_slice);
-    if vertices.len() as u64 >= u64::from(u32::MAX) {
-        return Err(err(
-            "header",
-            format!("{} vertices: too many for u32 indices", vertices.len()),
-        ));
+
+    /// The parser's header and payload; its errors keep their line, without its prefix.
+    fn read(&self, bytes: &[u8]) -> Result<Ply<DefaultElement>, SceneError> {
+        let mut reader = bytes;
+        Parser::<DefaultElement>::new()
+            .read_ply(&mut reader)
+            .map_err(|e| match e.line() {
+                Some(l) => self.err(
+                    &format!("line {l}"),
+                    e.to_string()
+                        .trim_start_matches(&format!("Line {l}: "))
+                        .replace("\n\t", "; "),
+                ),
+                None => self.err("payload", e.to_string().replace("\n\t", "; ")),
+            })
     }
-    let mut positions = Vec::with_capacity(vertices.len());
-    for (i, v) in vertices.iter().enumerate() {
-        let mut p = [0.0f32; 3];
-        for (k, axis) in ["x", "y", "z"].into_iter().enumerate() {
-            let value = v.get(axis).and_then(Property::to_f32_lossy);
-            p[k] = match value {
-                Some(x) if x.is_finite() => x,
-                Some(x) => {
-                    return Err(err(
-                        &format!("element vertex {i}"),
-                        format!("coordinate {axis} is {x}, but positions must be finite"),
+
+    /// Checks the header's `vertex` element for scalar `x`, `y`, `z`, before any vertex.
+    fn check_vertex_header(&self, ply: &Ply<DefaultElement>) -> Result<(), SceneError> {
+        let Some(vdef) = ply.header.elements.get("vertex") else {
+            return Err(self.err(
+                "header",
+                "no \"vertex\" element (a mesh needs vertex positions)".to_owned(),
+            ));
+        };
+        for axis in ["x", "y", "z"] {
+            match vdef.properties.get(axis).map(|p| &p.data_type) {
+                Some(ply_rs_bw::ply::PropertyType::Scalar(_)) => {}
+                Some(_) => {
+                    return Err(self.err(
+                        "header",
+                        format!("vertex property \"{axis}\" is a list, a scalar is needed"),
                     ))
                 }
                 None => {
-                    return Err(err(
-                        &format!("element vertex {i}"),
-                        format!("coordinate {axis} is missing"),
+                    return Err(self.err(
+                        "header",
+                        format!("the vertex element has no \"{axis}\" property"),
                     ))
                 }
-            };
+            }
         }
-        positions.push(Vec3::from_array(p));
+        Ok(())
     }
-    let mut triangles = Vec::new();
-    if let Some(fdef) = ply.header.elements.get("face") {
+
+    /// The vertex positions in file order: every coordinate present and finite.
+    fn positions(&self, ply: &Ply<DefaultElement>) -> Result<Vec<Vec3>, SceneError> {
+        let vertices = ply.payload.get("vertex").map_or(&[][..], Vec::as_slice);
+        if vertices.len() as u64 >= u64::from(u32::MAX) {
+            return Err(self.err(
+                "header",
+                format!("{} vertices: too many for u32 indices", vertices.len()),
+            ));
+        }
+        let mut positions = Vec::with_capacity(vertices.len());
+        for (i, v) in vertices.iter().enumerate() {
+            let mut p = [0.0f32; 3];
+            for (k, axis) in ["x", "y", "z"].into_iter().enumerate() {
+                let value = v.get(axis).and_then(Property::to_f32_lossy);
+                p[k] = match value {
+                    Some(x) if x.is_finite() => x,
+                    Some(x) => {
+                        return Err(self.err(
+                            &format!("element vertex {i}"),
+                            format!("coordinate {axis} is {x}, but positions must be finite"),
+                        ))
+                    }
+                    None => {
+                        return Err(self.err(
+                            &format!("element vertex {i}"),
+                            format!("coordinate {axis} is missing"),
+                        ))
+                    }
+                };
+            }
+            positions.push(Vec3::from_array(p));
+        }
+        Ok(positions)
+    }
+
+    /// The faces as triangle fans over `n` vertices; none without a `face` element.
+    fn triangles(&self, ply: &Ply<DefaultElement>, n: usize) -> Result<Vec<[u32; 3]>, SceneError> {
+        let mut triangles = Vec::new();
+        let Some(fdef) = ply.header.elements.get("face") else {
+            return Ok(triangles);
+        };
         let key = ["vertex_indices", "vertex_index"]
             .into_iter()
             .find(|k| fdef.properties.contains_key(*k))
             .ok_or_else(|| {
-                err(
+                self.err(
                     "header",
                     "the face element has no \"vertex_indices\" (or \"vertex_index\") list"
                         .to_owned(),
                 )
             })?;
-        let n = positions.len();
         let mut corners: Vec<u32> = Vec::new();
         for (f, face) in ply.payload.get("face").into_iter().flatten().enumerate() {
             let loc = || format!("element face {f}");
             corners.clear();
             let list = face
                 .get(key)
-                .ok_or_else(|| err(&loc(), format!("property \"{key}\" is missing")))?;
-            list_indices(list, &mut corners).map_err(|m| err(&loc(), m))?;
-            if let Some((c, &i)) = corners.iter().enumerate().find(|(_, &i)| i as usize >= n) {
-                return Err(err(
-                    &loc(),
-                    format!(
-                        "corner {c}: vertex index {i} is out of range (the file has {n} vertices)"
-                    ),
-                ));
-            }
-            if corners.len() < 3 {
-                return Err(err(
-                    &loc(),
-                    format!(
-                        "face has {} corner(s), but at least 3 are needed",
-                        corners.len()
-                    ),
-                ));
-            }
+                .ok_or_else(|| self.err(&loc(), format!("property \"{key}\" is missing")))?;
+            list_indices(list, &mut corners).map_err(|m| self.err(&loc(), m))?;
+            self.check_face(f, &corners, n)?;
             for k in 1..corners.len() - 1 {
                 triangles.push([corners[0], corners[k], corners[k + 1]]);
             }
             if triangles.len() as u64 * 3 >= u64::from(u32::MAX) {
-                return Err(err(
-                    &loc(),
-                    "too many triangles for u32 indexing".to_owned(),
-                ));
+                return Err(self.err(&loc(), "too many triangles for u32 indexing".to_owned()));
             }
         }
+        Ok(triangles)
     }
-    Ok(Mesh {
-        positions,
-        triangles,
-    })
+
+    /// Checks face `f`'s corners: every index below `n`, and at least 3 of them.
+    fn check_face(&self, f: usize, corners: &[u32], n: usize) -> Result<(), SceneError> {
+        let loc = || format!("element face {f}");
+        if let Some((c, &i)) = corners.iter().enumerate().find(|(_, &i)| i as usize >= n) {
+            return Err(self.err(
+                &loc(),
+                format!("corner {c}: vertex index {i} is out of range (the file has {n} vertices)"),
+            ));
+        }
+        if corners.len() < 3 {
+            return Err(self.err(
+                &loc(),
+                format!(
+                    "face has {} corner(s), but at least 3 are needed",
+                    corners.len()
+                ),
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// The list's values as vertex indices; an error for a negative or non-integer value.

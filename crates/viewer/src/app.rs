@@ -3,7 +3,7 @@
 //! texture, and draws it, the volumes and the overlay onto the window.
 
 use crate::controls::{self, Orbit, VolumeView};
-use crate::gfx::{save_capture, volume_draw, Gfx};
+use crate::gfx::{save_capture, volume_draw, Gfx, VolumeDraw};
 use crate::overlay::Stats;
 use crate::{BackendStarter, ViewError, ViewOptions, ViewReport};
 use glam::Vec3;
@@ -125,6 +125,9 @@ impl App {
         Ok(())
     }
 
+    /// One window frame: the pipeline chosen, the scene rendered into the frame texture, then
+    /// the frame, the volumes and the overlay drawn onto the window (and into the window
+    /// capture on the last automated frame), and the frame time recorded.
     fn frame(&mut self, el: &ActiveEventLoop) -> Result<(), ViewError> {
         let t0 = Instant::now();
         // Only the host pipeline keeps the volume geometry the overlay draws.
@@ -149,129 +152,22 @@ impl App {
             .options
             .frames
             .is_some_and(|n| self.frame_ms.len() + 1 >= n as usize);
-        gfx.frame_texture(w, h);
-        let (texture, frame_view, blit_bg) = gfx.frame_texture.as_ref().expect("made above");
-        // Either pipeline draws into the frame texture on this device; the last automated
-        // frame, whose image is the screenshot, is read back and then uploaded.
-        let frame = if last && self.options.screenshot.is_some() {
-            let frame = gfx.renderer.render(&self.scene)?;
-            gfx.queue.write_texture(
-                texture.as_image_copy(),
-                &frame.read_image()?.rgba,
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(4 * w),
-                    rows_per_image: Some(h),
-                },
-                texture.size(),
-            );
-            frame
-        } else {
-            gfx.renderer.render_into(&self.scene, frame_view)?
-        };
+        let frame = render_scene(gfx, &self.scene, last && self.options.screenshot.is_some())?;
         let volumes = volume_draw(gfx, &frame, self.volumes, w, h);
-
-        let surface_texture = match gfx.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                gfx.surface.configure(&gfx.device, &gfx.config);
-                return Ok(());
-            }
-            other => return Err(ViewError::Gpu(format!("window surface: {other:?}"))),
+        let Some(surface_texture) = acquire(gfx)? else {
+            return Ok(());
         };
         let target = surface_texture.texture.create_view(&Default::default());
-
-        let raw = gfx.egui_state.take_egui_input(&gfx.window);
         let stats = Stats::of(&frame, &self.frame_ms, self.policy, self.volumes);
-        let mut out = gfx.egui_ctx.run_ui(raw, |ui| stats.show(ui));
-        let mut textures = std::mem::take(&mut out.textures_delta);
-        gfx.egui_state
-            .handle_platform_output(&gfx.window, out.platform_output);
-        let jobs = gfx.egui_ctx.tessellate(out.shapes, out.pixels_per_point);
-        let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [w, h],
-            pixels_per_point: out.pixels_per_point,
+        let (overlay, mut textures) = run_overlay(gfx, &stats);
+        let capture = self.options.window_screenshot.is_some() && last;
+        let draw = WindowDraw {
+            target: &target,
+            volumes,
+            overlay,
         };
-        for (id, deltas) in textures.set.drain() {
-            for delta in &deltas {
-                gfx.egui.update_texture(&gfx.device, &gfx.queue, id, delta);
-            }
-        }
-        let mut enc = gfx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("view"),
-            });
-        let extra = gfx
-            .egui
-            .update_buffers(&gfx.device, &gfx.queue, &mut enc, &jobs, &screen);
-        let capture = match (&self.options.window_screenshot, last) {
-            (Some(_), true) => Some(texture_2d(
-                &gfx.device,
-                "window capture",
-                w,
-                h,
-                gfx.config.format,
-                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            )),
-            _ => None,
-        };
-        let capture_view = capture.as_ref().map(|t| t.create_view(&Default::default()));
-        for view in std::iter::once(&target).chain(capture_view.as_ref()) {
-            let mut pass = enc
-                .begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("view"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: None,
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                })
-                .forget_lifetime();
-            pass.set_pipeline(&gfx.blit);
-            pass.set_bind_group(0, blit_bg, &[]);
-            pass.draw(0..3, 0..1);
-            if let Some((pipeline, bg, buf, n)) = &volumes {
-                pass.set_pipeline(pipeline);
-                pass.set_bind_group(0, bg, &[]);
-                pass.set_vertex_buffer(0, buf.slice(..));
-                pass.draw(0..*n, 0..1);
-            }
-            gfx.egui.render(&mut pass, &jobs, &screen);
-        }
-        let readback = capture.as_ref().map(|t| {
-            let row = (4 * w).div_ceil(256) * 256;
-            let buf = gfx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("window capture readback"),
-                size: u64::from(row) * u64::from(h),
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            });
-            enc.copy_texture_to_buffer(
-                t.as_image_copy(),
-                wgpu::TexelCopyBufferInfo {
-                    buffer: &buf,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(row),
-                        rows_per_image: Some(h),
-                    },
-                },
-                t.size(),
-            );
-            (buf, row)
-        });
-        gfx.queue
-            .submit(extra.into_iter().chain(std::iter::once(enc.finish())));
+        let (commands, readback) = record_window(gfx, &draw, capture);
+        gfx.queue.submit(commands);
         gfx.queue.present(surface_texture);
         if let (Some((buf, row)), Some(path)) = (readback, &self.options.window_screenshot) {
             save_capture(&gfx.device, &buf, row, w, h, gfx.config.format, path)?;
@@ -354,6 +250,184 @@ impl App {
             _ => {}
         }
     }
+}
+
+/// Renders into the frame texture; `read_back` (the screenshot frame) reads it back first.
+fn render_scene(gfx: &mut Gfx, scene: &Scene, read_back: bool) -> Result<Frame, ViewError> {
+    let (w, h) = (gfx.config.width, gfx.config.height);
+    gfx.frame_texture(w, h);
+    let (texture, frame_view, _) = gfx.frame_texture.as_ref().expect("made above");
+    if !read_back {
+        return Ok(gfx.renderer.render_into(scene, frame_view)?);
+    }
+    let frame = gfx.renderer.render(scene)?;
+    gfx.queue.write_texture(
+        texture.as_image_copy(),
+        &frame.read_image()?.rgba,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(4 * w),
+            rows_per_image: Some(h),
+        },
+        texture.size(),
+    );
+    Ok(frame)
+}
+
+/// The window's next texture, or `None` after reconfiguring an outdated or lost surface.
+fn acquire(gfx: &Gfx) -> Result<Option<wgpu::SurfaceTexture>, ViewError> {
+    match gfx.surface.get_current_texture() {
+        wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => {
+            Ok(Some(t))
+        }
+        wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+            gfx.surface.configure(&gfx.device, &gfx.config);
+            Ok(None)
+        }
+        other => Err(ViewError::Gpu(format!("window surface: {other:?}"))),
+    }
+}
+
+/// Runs and tessellates the overlay, uploads its new textures; returns what to free.
+fn run_overlay(gfx: &mut Gfx, stats: &Stats) -> (Overlay, egui::TexturesDelta) {
+    let raw = gfx.egui_state.take_egui_input(&gfx.window);
+    let mut out = gfx.egui_ctx.run_ui(raw, |ui| stats.show(ui));
+    let mut textures = std::mem::take(&mut out.textures_delta);
+    gfx.egui_state
+        .handle_platform_output(&gfx.window, out.platform_output);
+    let jobs = gfx.egui_ctx.tessellate(out.shapes, out.pixels_per_point);
+    let screen = egui_wgpu::ScreenDescriptor {
+        size_in_pixels: [gfx.config.width, gfx.config.height],
+        pixels_per_point: out.pixels_per_point,
+    };
+    for (id, deltas) in textures.set.drain() {
+        for delta in &deltas {
+            gfx.egui.update_texture(&gfx.device, &gfx.queue, id, delta);
+        }
+    }
+    (Overlay { jobs, screen }, textures)
+}
+
+/// The overlay's tessellated UI and the screen it is laid out for.
+struct Overlay {
+    jobs: Vec<egui::ClippedPrimitive>,
+    screen: egui_wgpu::ScreenDescriptor,
+}
+
+/// What one window frame draws onto `target`: the frame, the volumes, the overlay.
+struct WindowDraw<'a> {
+    target: &'a wgpu::TextureView,
+    volumes: Option<VolumeDraw>,
+    overlay: Overlay,
+}
+
+/// Records `draw` onto the window and, with `capture`, into a capture read back later.
+fn record_window(
+    gfx: &mut Gfx,
+    draw: &WindowDraw<'_>,
+    capture: bool,
+) -> (Vec<wgpu::CommandBuffer>, Option<(wgpu::Buffer, u32)>) {
+    let (w, h) = (gfx.config.width, gfx.config.height);
+    let mut enc = gfx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("view"),
+        });
+    let extra = gfx.egui.update_buffers(
+        &gfx.device,
+        &gfx.queue,
+        &mut enc,
+        &draw.overlay.jobs,
+        &draw.overlay.screen,
+    );
+    let capture = capture.then(|| {
+        texture_2d(
+            &gfx.device,
+            "window capture",
+            w,
+            h,
+            gfx.config.format,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        )
+    });
+    let capture_view = capture.as_ref().map(|t| t.create_view(&Default::default()));
+    for view in std::iter::once(draw.target).chain(capture_view.as_ref()) {
+        draw_onto(gfx, &mut enc, view, draw);
+    }
+    let readback = capture
+        .as_ref()
+        .map(|t| copy_capture(&gfx.device, &mut enc, t));
+    let mut commands = extra;
+    commands.push(enc.finish());
+    (commands, readback)
+}
+
+/// One render pass onto `view`: the frame blitted, then the volumes and the overlay.
+fn draw_onto(
+    gfx: &Gfx,
+    enc: &mut wgpu::CommandEncoder,
+    view: &wgpu::TextureView,
+    draw: &WindowDraw<'_>,
+) {
+    let (_, _, blit_bg) = gfx.frame_texture.as_ref().expect("made by render_scene");
+    let mut pass = enc
+        .begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("view"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        })
+        .forget_lifetime();
+    pass.set_pipeline(&gfx.blit);
+    pass.set_bind_group(0, blit_bg, &[]);
+    pass.draw(0..3, 0..1);
+    if let Some((pipeline, bg, buf, n)) = &draw.volumes {
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bg, &[]);
+        pass.set_vertex_buffer(0, buf.slice(..));
+        pass.draw(0..*n, 0..1);
+    }
+    gfx.egui
+        .render(&mut pass, &draw.overlay.jobs, &draw.overlay.screen);
+}
+
+/// Copies the capture into a mappable buffer, rows padded to 256 bytes; returns it, the pitch.
+fn copy_capture(
+    device: &wgpu::Device,
+    enc: &mut wgpu::CommandEncoder,
+    t: &wgpu::Texture,
+) -> (wgpu::Buffer, u32) {
+    let (w, h) = (t.width(), t.height());
+    let row = (4 * w).div_ceil(256) * 256;
+    let buf = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("window capture readback"),
+        size: u64::from(row) * u64::from(h),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    enc.copy_texture_to_buffer(
+        t.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buf,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
+        },
+        t.size(),
+    );
+    (buf, row)
 }
 
 impl ApplicationHandler for App {

@@ -79,157 +79,35 @@ impl Gfx {
         render_options: RenderOptions,
         pipeline: impl FnOnce(&RenderDevice) -> Result<Box<dyn ShadowPipeline>, ViewError>,
     ) -> Result<Self, ViewError> {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
-                Box::new(el.owned_display_handle()),
-            ));
-        let surface = instance
-            .create_surface(Arc::clone(&window))
-            .map_err(|e| ViewError::Gpu(format!("cannot create a surface for the window: {e}")))?;
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            compatible_surface: Some(&surface),
-            ..Default::default()
-        }))
-        .map_err(|e| ViewError::Gpu(format!("no GPU adapter can present to the window: {e}")))?;
-        let (required_features, required_limits) = RenderDevice::requirements(&adapter);
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("shadowvol-viewer"),
-            required_features,
-            required_limits,
-            ..Default::default()
-        }))
-        .map_err(|e| ViewError::Gpu(format!("device: {e}")))?;
+        let (surface, adapter, device, queue) = open_device(&window, el)?;
         let rd = RenderDevice::on_device(adapter.clone(), device.clone(), queue.clone());
         let first = pipeline(&rd)?;
         let renderer = Renderer::new(rd, first, render_options)?;
-        let size = window.inner_size();
-        let caps = surface.get_capabilities(&adapter);
-        let format = caps
-            .formats
-            .iter()
-            .copied()
-            .find(|f| !f.is_srgb())
-            .or_else(|| caps.formats.first().copied())
-            .ok_or_else(|| ViewError::Gpu("the window surface supports no format".into()))?;
-        let present_mode = if options.frames.is_some() {
-            wgpu::PresentMode::AutoNoVsync
-        } else {
-            wgpu::PresentMode::AutoVsync
-        };
-        let config = wgpu::SurfaceConfiguration {
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            format,
-            width: size.width.max(1),
-            height: size.height.max(1),
-            present_mode,
-            desired_maximum_frame_latency: 2,
-            alpha_mode: caps
-                .alpha_modes
-                .first()
-                .copied()
-                .unwrap_or(wgpu::CompositeAlphaMode::Auto),
-            view_formats: vec![],
-            color_space: wgpu::SurfaceColorSpace::Auto,
-        };
+        let config = surface_config(&surface, &adapter, window.inner_size(), options)?;
         surface.configure(&device, &config);
-
-        let blit_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("frame"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            }],
-        });
-        let volume_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("volumes"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
-        });
-        let blit_module = crate::shaders::blit_module(&device);
-        let volume_module = crate::shaders::volumes_module(&device);
-        let layout = |bgl: &wgpu::BindGroupLayout| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: None,
-                bind_group_layouts: &[Some(bgl)],
-                immediate_size: 0,
-            })
-        };
-        let target = [Some(wgpu::ColorTargetState {
-            format,
-            blend: Some(wgpu::BlendState::ALPHA_BLENDING),
-            write_mask: wgpu::ColorWrites::ALL,
-        })];
-        let blit_pl = layout(&blit_layout);
-        let blit = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("blit"),
-            layout: Some(&blit_pl),
-            vertex: wgpu::VertexState {
-                module: &blit_module,
-                entry_point: Some("vs_blit"),
-                compilation_options: Default::default(),
-                buffers: &[],
+        let format = config.format;
+        let blit_layout = single_binding_layout(
+            &device,
+            "frame",
+            wgpu::ShaderStages::FRAGMENT,
+            wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
             },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &blit_module,
-                entry_point: Some("fs_blit"),
-                compilation_options: Default::default(),
-                targets: &target,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let volume_pl = layout(&volume_layout);
-        let volume_pipeline = |topology: wgpu::PrimitiveTopology, label: &str| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&volume_pl),
-                vertex: wgpu::VertexState {
-                    module: &volume_module,
-                    entry_point: Some("vs_volume"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: 16,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![0 => Float32x4],
-                    })],
-                },
-                primitive: wgpu::PrimitiveState {
-                    topology,
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: None,
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &volume_module,
-                    entry_point: Some("fs_volume"),
-                    compilation_options: Default::default(),
-                    targets: &target,
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        };
-        let tri = volume_pipeline(wgpu::PrimitiveTopology::TriangleList, "volumes");
-        let wire = volume_pipeline(wgpu::PrimitiveTopology::LineList, "volume wires");
-
+        );
+        let volume_layout = single_binding_layout(
+            &device,
+            "volumes",
+            wgpu::ShaderStages::VERTEX_FRAGMENT,
+            wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+        );
+        let blit = blit_pipeline(&device, &blit_layout, format);
+        let [tri, wire] = volume_pipelines(&device, &volume_layout, format);
         let egui_ctx = egui::Context::default();
         let egui_state = egui_winit::State::new(
             egui_ctx.clone(),
@@ -267,6 +145,191 @@ impl Gfx {
             self.surface.configure(&self.device, &self.config);
         }
     }
+}
+
+/// A surface for `window`, an adapter that presents to it, and a device on that adapter.
+fn open_device(
+    window: &Arc<Window>,
+    el: &ActiveEventLoop,
+) -> Result<
+    (
+        wgpu::Surface<'static>,
+        wgpu::Adapter,
+        wgpu::Device,
+        wgpu::Queue,
+    ),
+    ViewError,
+> {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+        Box::new(el.owned_display_handle()),
+    ));
+    let surface = instance
+        .create_surface(Arc::clone(window))
+        .map_err(|e| ViewError::Gpu(format!("cannot create a surface for the window: {e}")))?;
+    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        compatible_surface: Some(&surface),
+        ..Default::default()
+    }))
+    .map_err(|e| ViewError::Gpu(format!("no GPU adapter can present to the window: {e}")))?;
+    let (required_features, required_limits) = RenderDevice::requirements(&adapter);
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("shadowvol-viewer"),
+        required_features,
+        required_limits,
+        ..Default::default()
+    }))
+    .map_err(|e| ViewError::Gpu(format!("device: {e}")))?;
+    Ok((surface, adapter, device, queue))
+}
+
+/// The surface's configuration: its first non-sRGB format, no vsync for automated frames.
+fn surface_config(
+    surface: &wgpu::Surface<'_>,
+    adapter: &wgpu::Adapter,
+    size: winit::dpi::PhysicalSize<u32>,
+    options: &ViewOptions,
+) -> Result<wgpu::SurfaceConfiguration, ViewError> {
+    let caps = surface.get_capabilities(adapter);
+    let format = caps
+        .formats
+        .iter()
+        .copied()
+        .find(|f| !f.is_srgb())
+        .or_else(|| caps.formats.first().copied())
+        .ok_or_else(|| ViewError::Gpu("the window surface supports no format".into()))?;
+    let present_mode = if options.frames.is_some() {
+        wgpu::PresentMode::AutoNoVsync
+    } else {
+        wgpu::PresentMode::AutoVsync
+    };
+    Ok(wgpu::SurfaceConfiguration {
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        format,
+        width: size.width.max(1),
+        height: size.height.max(1),
+        present_mode,
+        desired_maximum_frame_latency: 2,
+        alpha_mode: caps
+            .alpha_modes
+            .first()
+            .copied()
+            .unwrap_or(wgpu::CompositeAlphaMode::Auto),
+        view_formats: vec![],
+        color_space: wgpu::SurfaceColorSpace::Auto,
+    })
+}
+
+/// A bind group layout with one binding, 0, of type `ty`, seen by `visibility`.
+fn single_binding_layout(
+    device: &wgpu::Device,
+    label: &str,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BindingType,
+) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility,
+            ty,
+            count: None,
+        }],
+    })
+}
+
+/// A pipeline layout of the one bind group layout `bgl`.
+fn pipeline_layout(device: &wgpu::Device, bgl: &wgpu::BindGroupLayout) -> wgpu::PipelineLayout {
+    device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: None,
+        bind_group_layouts: &[Some(bgl)],
+        immediate_size: 0,
+    })
+}
+
+/// The window's colour target in `format`, alpha-blended (the overlays draw over the frame).
+fn window_target(format: wgpu::TextureFormat) -> [Option<wgpu::ColorTargetState>; 1] {
+    [Some(wgpu::ColorTargetState {
+        format,
+        blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+        write_mask: wgpu::ColorWrites::ALL,
+    })]
+}
+
+/// The pipeline that copies the frame texture (bound through `layout`) onto the window.
+fn blit_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    format: wgpu::TextureFormat,
+) -> wgpu::RenderPipeline {
+    let module = crate::shaders::blit_module(device);
+    let target = window_target(format);
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("blit"),
+        layout: Some(&pipeline_layout(device, layout)),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_blit"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: None,
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_blit"),
+            compilation_options: Default::default(),
+            targets: &target,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// The volume overlay's pipelines, `[triangles, wires]`, over the uniforms of `layout`.
+fn volume_pipelines(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    format: wgpu::TextureFormat,
+) -> [wgpu::RenderPipeline; 2] {
+    let module = crate::shaders::volumes_module(device);
+    let target = window_target(format);
+    let pipeline_layout = pipeline_layout(device, layout);
+    let volume_pipeline = |topology: wgpu::PrimitiveTopology, label: &str| {
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_volume"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: 16,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x4],
+                })],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology,
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_volume"),
+                compilation_options: Default::default(),
+                targets: &target,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    };
+    [
+        volume_pipeline(wgpu::PrimitiveTopology::TriangleList, "volumes"),
+        volume_pipeline(wgpu::PrimitiveTopology::LineList, "volume wires"),
+    ]
 }
 
 /// A volume overlay draw: pipeline, bind group, vertex buffer, vertex count.

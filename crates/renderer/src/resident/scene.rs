@@ -20,60 +20,78 @@ impl ShadowPass {
     /// # Errors
     /// As [`ShadowPass::prepare`].
     pub fn prepare_layout(&self, layout: ResidentLayout) -> Result<ResidentScene, RenderError> {
+        let positions = self.scene_buffer("positions", &layout.scene.positions)?;
+        let edges = self.scene_buffer("edges", &layout.scene.edges)?;
+        let ovs = self.scene_buffer("opposite vertices", &layout.scene.ovs)?;
+        let tris = self.scene_buffer("triangles", &layout.triangles.tris)?;
+        let ov_tris = self.scene_buffer("opposite-vertex triangles", &layout.triangles.ov_tris)?;
+        let vertex_objects = self.scene_buffer("vertex objects", &layout.vertex_objects)?;
+        let (world, world_out) = self.world_positions(layout.vertex_objects.len())?;
+        let pending_dispatch = self.pending_dispatch();
+        let surface = self.surface_vertices(&layout);
+        Ok(ResidentScene {
+            tri_offsets: layout.triangles.tri_offsets.clone(),
+            layout: Arc::new(layout),
+            positions,
+            edges,
+            ovs,
+            tris,
+            ov_tris,
+            vertex_objects,
+            world,
+            world_out,
+            pending_dispatch,
+            surface,
+            params: self.uniform_buffer("resident params", 16),
+            rparams: self.uniform_buffer("resident frame params", 16),
+            globals: self.uniform_buffer("resident globals", 96),
+            frame: None,
+            state: FrameState {
+                lights: 0,
+                mode: Accuracy::Exact,
+                techniques: Vec::new(),
+                scissors: Vec::new(),
+            },
+        })
+    }
+
+    /// A storage buffer of one scene array (16 zero bytes if empty), if the device binds it.
+    fn scene_buffer<T: bytemuck::Pod>(
+        &self,
+        label: &str,
+        data: &[T],
+    ) -> Result<wgpu::Buffer, RenderError> {
         let max = self.device.limits().max_storage_buffer_binding_size;
-        let init = |label: &str,
-                    bytes: &[u8],
-                    usage: wgpu::BufferUsages|
-         -> Result<wgpu::Buffer, RenderError> {
-            if bytes.len() as u64 > max {
-                return Err(RenderError::InvalidInput(format!(
-                    "the scene's {label} take {} bytes; the device binds at most {max} (max_storage_buffer_binding_size)",
-                    bytes.len()
-                )));
-            }
-            let padded;
-            let bytes = if bytes.is_empty() {
-                padded = [0u8; 16];
-                &padded[..]
-            } else {
-                bytes
-            };
-            Ok(self
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents: bytes,
-                    usage: usage | wgpu::BufferUsages::STORAGE,
-                }))
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        if bytes.len() as u64 > max {
+            return Err(RenderError::InvalidInput(format!(
+                "the scene's {label} take {} bytes; the device binds at most {max} (max_storage_buffer_binding_size)",
+                bytes.len()
+            )));
+        }
+        let padded;
+        let bytes = if bytes.is_empty() {
+            padded = [0u8; 16];
+            &padded[..]
+        } else {
+            bytes
         };
-        let none = wgpu::BufferUsages::empty();
-        let positions = init(
-            "positions",
-            bytemuck::cast_slice(&layout.scene.positions),
-            none,
-        )?;
-        let edges = init("edges", bytemuck::cast_slice(&layout.scene.edges), none)?;
-        let ovs = init(
-            "opposite vertices",
-            bytemuck::cast_slice(&layout.scene.ovs),
-            none,
-        )?;
-        let tris = init(
-            "triangles",
-            bytemuck::cast_slice(&layout.triangles.tris),
-            none,
-        )?;
-        let ov_tris = init(
-            "opposite-vertex triangles",
-            bytemuck::cast_slice(&layout.triangles.ov_tris),
-            none,
-        )?;
-        let vertex_objects = init(
-            "vertex objects",
-            bytemuck::cast_slice(&layout.vertex_objects),
-            none,
-        )?;
-        let world_bytes = 16 * layout.vertex_objects.len().max(1) as u64;
+        Ok(self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage: wgpu::BufferUsages::STORAGE,
+            }))
+    }
+
+    /// The world positions that the vertex pass writes each frame, and its output bind group.
+    fn world_positions(
+        &self,
+        vertices: usize,
+    ) -> Result<(wgpu::Buffer, wgpu::BindGroup), RenderError> {
+        let max = self.device.limits().max_storage_buffer_binding_size;
+        let world_bytes = 16 * vertices.max(1) as u64;
         if world_bytes > max {
             return Err(RenderError::InvalidInput(format!(
                 "the scene's world positions take {world_bytes} bytes; the device binds at most {max} (max_storage_buffer_binding_size)"
@@ -90,6 +108,11 @@ impl ShadowPass {
             layout: &self.v2,
             entries: &[entry(0, &world)],
         });
+        Ok((world, world_out))
+    }
+
+    /// Exact mode's pending-dispatch arguments and the bind group that writes them.
+    fn pending_dispatch(&self) -> (wgpu::Buffer, wgpu::BindGroup) {
         let dispatch = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("resident pending dispatch"),
             size: 16,
@@ -101,91 +124,84 @@ impl ShadowPass {
             layout: &self.v2,
             entries: &[entry(0, &dispatch)],
         });
+        (dispatch, pending_out)
+    }
+
+    /// The surface vertex buffer and its chunks' bind groups, or `None` (vertex pulling).
+    fn surface_vertices(
+        &self,
+        layout: &ResidentLayout,
+    ) -> Option<(wgpu::Buffer, Vec<(wgpu::BindGroup, u32)>)> {
         // The surface vertices (3 `SurfaceVertex` per triangle) where the buffer fits the device;
         // the surface pass writes them in chunks that each fit one storage binding.
         let per_tri = 3 * std::mem::size_of::<crate::raster::SurfaceVertex>() as u64;
         let surface_bytes = per_tri * layout.tri_count() as u64;
         let limits = self.device.limits();
+        let max = limits.max_storage_buffer_binding_size;
         let align = u64::from(limits.min_storage_buffer_offset_alignment.max(1));
         // Triangles per chunk: fits a binding, and chunk offsets stay aligned.
         let step = align / gcd(align, per_tri);
         let chunk = (max / per_tri) / step * step;
-        let surface = (surface_bytes > 0 && surface_bytes <= limits.max_buffer_size && chunk > 0)
-            .then(|| {
-                let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("surface vertices"),
-                    size: surface_bytes,
-                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::VERTEX,
-                    mapped_at_creation: false,
-                });
-                let tris = layout.tri_count() as u64;
-                let chunks = (0..tris.div_ceil(chunk))
-                    .map(|c| {
-                        let first = c * chunk;
-                        let count = chunk.min(tris - first);
-                        let base =
-                            self.device
-                                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                                    label: Some("resident surfaces chunk"),
-                                    contents: bytemuck::cast_slice(&[
-                                        first as u32,
-                                        count as u32,
-                                        0,
-                                        0,
-                                    ]),
-                                    usage: wgpu::BufferUsages::UNIFORM,
-                                });
-                        let group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                            label: Some("resident surfaces out"),
-                            layout: &self.s2,
-                            entries: &[
-                                wgpu::BindGroupEntry {
-                                    binding: 1,
-                                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                                        buffer: &buffer,
-                                        offset: first * per_tri,
-                                        size: std::num::NonZeroU64::new(count * per_tri),
-                                    }),
-                                },
-                                entry(2, &base),
-                            ],
-                        });
-                        (group, count as u32)
-                    })
-                    .collect();
-                (buffer, chunks)
-            });
-        let uniform = |label: &str, size: u64| {
-            self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
+        if !(surface_bytes > 0 && surface_bytes <= limits.max_buffer_size && chunk > 0) {
+            return None;
+        }
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("surface vertices"),
+            size: surface_bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::VERTEX,
+            mapped_at_creation: false,
+        });
+        let tris = layout.tri_count() as u64;
+        let chunks = (0..tris.div_ceil(chunk))
+            .map(|c| {
+                let first = c * chunk;
+                let count = chunk.min(tris - first);
+                let group = self.surface_chunk(&buffer, first, count, per_tri);
+                (group, count as u32)
             })
-        };
-        Ok(ResidentScene {
-            tri_offsets: layout.triangles.tri_offsets.clone(),
-            layout: Arc::new(layout),
-            positions,
-            edges,
-            ovs,
-            tris,
-            ov_tris,
-            vertex_objects,
-            world,
-            world_out,
-            pending_dispatch: (dispatch, pending_out),
-            surface,
-            params: uniform("resident params", 16),
-            rparams: uniform("resident frame params", 16),
-            globals: uniform("resident globals", 96),
-            frame: None,
-            state: FrameState {
-                lights: 0,
-                mode: Accuracy::Exact,
-                techniques: Vec::new(),
-                scissors: Vec::new(),
-            },
+            .collect();
+        Some((buffer, chunks))
+    }
+
+    /// The bind group through which the surface pass writes `count` triangles from `first`.
+    fn surface_chunk(
+        &self,
+        buffer: &wgpu::Buffer,
+        first: u64,
+        count: u64,
+        per_tri: u64,
+    ) -> wgpu::BindGroup {
+        let base = self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("resident surfaces chunk"),
+                contents: bytemuck::cast_slice(&[first as u32, count as u32, 0, 0]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident surfaces out"),
+            layout: &self.s2,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer,
+                        offset: first * per_tri,
+                        size: std::num::NonZeroU64::new(count * per_tri),
+                    }),
+                },
+                entry(2, &base),
+            ],
+        })
+    }
+
+    /// A uniform buffer of `size` bytes that the host writes each frame.
+    fn uniform_buffer(&self, label: &str, size: u64) -> wgpu::Buffer {
+        self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
         })
     }
 
@@ -197,27 +213,39 @@ impl ShadowPass {
     /// an object-space light is not finite, or the per-light buffers would exceed the device's
     /// `max_storage_buffer_binding_size`.
     pub fn update(&self, rs: &mut ResidentScene, f: &PassFrame<'_>) -> Result<(), RenderError> {
-        let objects = rs.layout.object_count();
-        let n_lights = f.lights.len();
-        let check = |what: &str, got: usize, want: usize| {
-            if got == want {
-                Ok(())
-            } else {
-                Err(RenderError::InvalidInput(format!(
-                    "GPU pipeline frame: {got} {what}, expected {want}"
-                )))
-            }
-        };
-        check("transforms", f.transforms.len(), objects)?;
-        check("albedos", f.albedo.len(), objects)?;
-        check("techniques", f.techniques.len(), objects * n_lights)?;
-        check("light colours", f.colors.len(), n_lights)?;
-        check("scissors", f.scissors.len(), n_lights)?;
-        let slots = n_lights.max(1);
+        check_frame_lengths(rs, f)?;
+        let slots = f.lights.len().max(1);
         if rs.frame.as_ref().is_none_or(|b| b.lights < slots) {
             rs.frame = Some(self.frame_buffers(rs, slots)?);
         }
         let fb = rs.frame.as_ref().expect("allocated above");
+        self.write_lights(rs, fb, f)?;
+        let q = &self.queue;
+        q.write_buffer(
+            &fb.objects,
+            0,
+            bytemuck::cast_slice(&object_rows(f, &rs.tri_offsets)),
+        );
+        self.write_params(rs, f);
+        q.write_buffer(&fb.light_u, 0, &light_uniforms(rs, f, slots));
+        rs.state = FrameState {
+            lights: f.lights.len(),
+            mode: f.mode,
+            techniques: f.techniques.to_vec(),
+            scissors: f.scissors.to_vec(),
+        };
+        Ok(())
+    }
+
+    /// Writes the object-space lights, their extrusion points and the plan's technique codes.
+    fn write_lights(
+        &self,
+        rs: &ResidentScene,
+        fb: &FrameBuffers,
+        f: &PassFrame<'_>,
+    ) -> Result<(), RenderError> {
+        let objects = rs.layout.object_count();
+        let n_lights = f.lights.len();
         let q = &self.queue;
         // Object-space lights, [object * light_count + light], through the one shared
         // conversion (f64, rounded once), as every backend does.
@@ -251,43 +279,20 @@ impl ShadowPass {
         if !codes.is_empty() {
             q.write_buffer(&fb.technique, 0, bytemuck::cast_slice(&codes));
         }
-        // Camera-relative transforms composed in f64 and rounded once, so large world
-        // coordinates keep their precision near the eye.
-        let eye = f.camera.eye.as_dvec3();
-        let mut objs: Vec<[u32; 4]> = Vec::with_capacity(objects * 5);
-        for (oi, t) in f.transforms.iter().enumerate() {
-            let d = DAffine3::from_cols(
-                t.matrix3.x_axis.as_dvec3(),
-                t.matrix3.y_axis.as_dvec3(),
-                t.matrix3.z_axis.as_dvec3(),
-                t.translation.as_dvec3() - eye,
-            );
-            let m = d.matrix3;
-            for r in 0..3 {
-                let row = m.row(r);
-                let v = [
-                    row.x as f32,
-                    row.y as f32,
-                    row.z as f32,
-                    d.translation[r] as f32,
-                ];
-                objs.push(v.map(f32::to_bits));
-            }
-            let a = f.albedo[oi];
-            objs.push([a[0], a[1], a[2], 1.0].map(f32::to_bits));
-            objs.push([rs.tri_offsets[oi], 0, 0, 0]);
-        }
-        if objs.is_empty() {
-            objs.push([0; 4]);
-        }
-        q.write_buffer(&fb.objects, 0, bytemuck::cast_slice(&objs));
+        Ok(())
+    }
+
+    /// Writes the extraction's parameters and the globals of the camera moved to the origin.
+    fn write_params(&self, rs: &ResidentScene, f: &PassFrame<'_>) {
+        let q = &self.queue;
         let edge_count = rs.layout.scene.edge_count() as u32;
         let tri_count = rs.layout.tri_count() as u32;
         q.write_buffer(
             &rs.params,
             0,
-            bytemuck::cast_slice(&[edge_count, n_lights as u32, 0, tri_count]),
+            bytemuck::cast_slice(&[edge_count, f.lights.len() as u32, 0, tri_count]),
         );
+        let objects = rs.layout.object_count();
         let capacity = rs.layout.capacity() as u32;
         q.write_buffer(
             &rs.rparams,
@@ -303,38 +308,37 @@ impl ShadowPass {
         globals[..16].copy_from_slice(&rel_cam.view_proj(f.aspect).to_cols_array());
         globals[20] = f.ambient;
         q.write_buffer(&rs.globals, 0, bytemuck::cast_slice(&globals));
-        let mut light_bytes = vec![0u8; slots * LIGHT_STRIDE as usize];
-        for (li, light) in f.lights.iter().enumerate() {
-            let mut l = light.light.to_array();
-            let w = l[3];
-            l[0] -= f.camera.eye.x * w;
-            l[1] -= f.camera.eye.y * w;
-            l[2] -= f.camera.eye.z * w;
-            let v = crate::raster::light_uniform(l, f.colors[li], light.emission.as_ref());
-            let draw = [
-                li as u32 * capacity,
-                capacity,
-                li as u32 * tri_count,
-                u32::from(w != 0.0),
-            ];
-            let o = li * LIGHT_STRIDE as usize;
-            light_bytes[o..o + 64].copy_from_slice(bytemuck::cast_slice(&v));
-            light_bytes[o + 64..o + 80].copy_from_slice(bytemuck::cast_slice(&draw));
-            let first_point = [(li * objects) as u32, 0, 0, 0];
-            light_bytes[o + 80..o + 96].copy_from_slice(bytemuck::cast_slice(&first_point));
-        }
-        q.write_buffer(&fb.light_u, 0, &light_bytes);
-        rs.state = FrameState {
-            lights: n_lights,
-            mode: f.mode,
-            techniques: f.techniques.to_vec(),
-            scissors: f.scissors.to_vec(),
-        };
-        Ok(())
     }
 
+    /// The buffers sized by `slots` lights, and the bind groups over them and the scene's.
     fn frame_buffers(&self, rs: &ResidentScene, slots: usize) -> Result<FrameBuffers, RenderError> {
-        let objects = rs.layout.object_count().max(1);
+        let b = self.light_buffers(rs, slots)?;
+        let [c0, c1] = self.extract_groups(rs, &b);
+        let [d0, dl] = self.draw_groups(rs, &b);
+        let [s0, v0] = self.world_groups(rs, &b);
+        Ok(FrameBuffers {
+            lights: slots,
+            queries: self.timestamp_queries(slots),
+            lights_buf: b.lights,
+            light_points: b.light_points,
+            technique: b.technique,
+            signs: b.signs,
+            args: b.args,
+            records: b.records,
+            objects: b.objects,
+            light_u: b.light_u,
+            c0,
+            c1,
+            d0,
+            dl,
+            v0,
+            s0,
+        })
+    }
+
+    /// The buffers sized by `slots` lights, each checked against what the device binds.
+    fn light_buffers(&self, rs: &ResidentScene, slots: usize) -> Result<LightBuffers, RenderError> {
+        let objects = rs.layout.object_count().max(1) as u64;
         let max = self.device.limits().max_storage_buffer_binding_size;
         let sized = |label: &str,
                      size: u64,
@@ -355,30 +359,37 @@ impl ShadowPass {
         let st = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let s = slots as u64;
         let tri = rs.layout.tri_count().max(1) as u64;
-        let lights_buf = sized("object-space lights", 16 * s * objects as u64, st)?;
-        let light_points = sized("light points", 32 * s * objects as u64, st)?;
-        let technique = sized("techniques", 4 * s * objects as u64, st)?;
         let readable = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-        let signs = sized("triangle signs", 4 * s * tri, readable)?;
-        let args = sized(
-            "indirect draws",
-            4 * (8 * s + 1 + 3 * s * objects as u64),
-            wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::INDIRECT
-                | wgpu::BufferUsages::COPY_SRC,
-        )?;
-        let records = sized(
-            "side records",
-            4 * s * rs.layout.capacity() as u64,
-            readable,
-        )?;
-        let objects_buf = sized("objects", 80 * objects as u64, st)?;
-        let light_u = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("resident lights"),
-            size: LIGHT_STRIDE * s,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let indirect = wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::INDIRECT
+            | wgpu::BufferUsages::COPY_SRC;
+        Ok(LightBuffers {
+            lights: sized("object-space lights", 16 * s * objects, st)?,
+            light_points: sized("light points", 32 * s * objects, st)?,
+            technique: sized("techniques", 4 * s * objects, st)?,
+            signs: sized("triangle signs", 4 * s * tri, readable)?,
+            args: sized(
+                "indirect draws",
+                4 * (8 * s + 1 + 3 * s * objects),
+                indirect,
+            )?,
+            records: sized(
+                "side records",
+                4 * s * rs.layout.capacity() as u64,
+                readable,
+            )?,
+            objects: sized("objects", 80 * objects, st)?,
+            light_u: self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("resident lights"),
+                size: LIGHT_STRIDE * s,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+        })
+    }
+
+    /// The extraction's bind groups: `c0` (scene, lights, signs), `c1` (frame, records).
+    fn extract_groups(&self, rs: &ResidentScene, b: &LightBuffers) -> [wgpu::BindGroup; 2] {
         let c0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident extract scene"),
             layout: &self.c0,
@@ -387,10 +398,10 @@ impl ShadowPass {
                 entry(1, &rs.positions),
                 entry(2, &rs.edges),
                 entry(3, &rs.ovs),
-                entry(4, &lights_buf),
+                entry(4, &b.lights),
                 entry(9, &rs.tris),
                 entry(10, &rs.ov_tris),
-                entry(11, &signs),
+                entry(11, &b.signs),
             ],
         });
         let c1 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -398,11 +409,16 @@ impl ShadowPass {
             layout: &self.c1,
             entries: &[
                 entry(0, &rs.rparams),
-                entry(3, &technique),
-                entry(5, &args),
-                entry(6, &records),
+                entry(3, &b.technique),
+                entry(5, &b.args),
+                entry(6, &b.records),
             ],
         });
+        [c0, c1]
+    }
+
+    /// The draws' bind groups: `d0` (what sides and caps read), `dl` (one light's uniform).
+    fn draw_groups(&self, rs: &ResidentScene, b: &LightBuffers) -> [wgpu::BindGroup; 2] {
         let d0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident draw"),
             layout: &self.d0,
@@ -411,29 +427,11 @@ impl ShadowPass {
                 entry(1, &rs.positions),
                 entry(2, &rs.edges),
                 entry(3, &rs.tris),
-                entry(4, &signs),
-                entry(5, &records),
-                entry(6, &objects_buf),
+                entry(4, &b.signs),
+                entry(5, &b.records),
+                entry(6, &b.objects),
                 entry(7, &rs.world),
-                entry(12, &light_points),
-            ],
-        });
-        let s0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("resident surfaces"),
-            layout: &self.s0,
-            entries: &[
-                entry(3, &rs.tris),
-                entry(6, &objects_buf),
-                entry(7, &rs.world),
-            ],
-        });
-        let v0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("resident vertices"),
-            layout: &self.v0,
-            entries: &[
-                entry(1, &rs.positions),
-                entry(6, &objects_buf),
-                entry(8, &rs.vertex_objects),
+                entry(12, &b.light_points),
             ],
         });
         let dl = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -442,13 +440,41 @@ impl ShadowPass {
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
                 resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &light_u,
+                    buffer: &b.light_u,
                     offset: 0,
                     size: std::num::NonZeroU64::new(LIGHT_BYTES),
                 }),
             }],
         });
-        let queries = self.timestamps.then(|| {
+        [d0, dl]
+    }
+
+    /// The bind groups of the surface pass (`s0`) and of the vertex pass (`v0`).
+    fn world_groups(&self, rs: &ResidentScene, b: &LightBuffers) -> [wgpu::BindGroup; 2] {
+        let s0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident surfaces"),
+            layout: &self.s0,
+            entries: &[
+                entry(3, &rs.tris),
+                entry(6, &b.objects),
+                entry(7, &rs.world),
+            ],
+        });
+        let v0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident vertices"),
+            layout: &self.v0,
+            entries: &[
+                entry(1, &rs.positions),
+                entry(6, &b.objects),
+                entry(8, &rs.vertex_objects),
+            ],
+        });
+        [s0, v0]
+    }
+
+    /// With `TIMESTAMP_QUERY`: the query set of a frame's passes and its resolve buffer.
+    fn timestamp_queries(&self, slots: usize) -> Option<(wgpu::QuerySet, wgpu::Buffer, u32)> {
+        self.timestamps.then(|| {
             let count = 2 * (2 + 3 * slots as u32);
             let set = self.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("resident timestamps"),
@@ -462,26 +488,102 @@ impl ShadowPass {
                 mapped_at_creation: false,
             });
             (set, resolve, count)
-        });
-        Ok(FrameBuffers {
-            lights: slots,
-            queries,
-            lights_buf,
-            light_points,
-            technique,
-            signs,
-            args,
-            records,
-            objects: objects_buf,
-            light_u,
-            c0,
-            c1,
-            d0,
-            dl,
-            v0,
-            s0,
         })
     }
+}
+
+/// The buffers of a [`FrameBuffers`], before the bind groups over them are made.
+struct LightBuffers {
+    lights: wgpu::Buffer,
+    light_points: wgpu::Buffer,
+    technique: wgpu::Buffer,
+    signs: wgpu::Buffer,
+    args: wgpu::Buffer,
+    records: wgpu::Buffer,
+    objects: wgpu::Buffer,
+    light_u: wgpu::Buffer,
+}
+
+/// Checks that the frame's per-object and per-light slices match the scene and lights.
+fn check_frame_lengths(rs: &ResidentScene, f: &PassFrame<'_>) -> Result<(), RenderError> {
+    let objects = rs.layout.object_count();
+    let n_lights = f.lights.len();
+    let check = |what: &str, got: usize, want: usize| {
+        if got == want {
+            Ok(())
+        } else {
+            Err(RenderError::InvalidInput(format!(
+                "GPU pipeline frame: {got} {what}, expected {want}"
+            )))
+        }
+    };
+    check("transforms", f.transforms.len(), objects)?;
+    check("albedos", f.albedo.len(), objects)?;
+    check("techniques", f.techniques.len(), objects * n_lights)?;
+    check("light colours", f.colors.len(), n_lights)?;
+    check("scissors", f.scissors.len(), n_lights)
+}
+
+/// Per object: its camera-relative transform rows, its albedo and its first triangle.
+fn object_rows(f: &PassFrame<'_>, tri_offsets: &[u32]) -> Vec<[u32; 4]> {
+    // Camera-relative transforms composed in f64 and rounded once, so large world
+    // coordinates keep their precision near the eye.
+    let eye = f.camera.eye.as_dvec3();
+    let mut objs: Vec<[u32; 4]> = Vec::with_capacity(f.transforms.len() * 5);
+    for (oi, t) in f.transforms.iter().enumerate() {
+        let d = DAffine3::from_cols(
+            t.matrix3.x_axis.as_dvec3(),
+            t.matrix3.y_axis.as_dvec3(),
+            t.matrix3.z_axis.as_dvec3(),
+            t.translation.as_dvec3() - eye,
+        );
+        let m = d.matrix3;
+        for r in 0..3 {
+            let row = m.row(r);
+            let v = [
+                row.x as f32,
+                row.y as f32,
+                row.z as f32,
+                d.translation[r] as f32,
+            ];
+            objs.push(v.map(f32::to_bits));
+        }
+        let a = f.albedo[oi];
+        objs.push([a[0], a[1], a[2], 1.0].map(f32::to_bits));
+        objs.push([tri_offsets[oi], 0, 0, 0]);
+    }
+    if objs.is_empty() {
+        objs.push([0; 4]);
+    }
+    objs
+}
+
+/// Per light: camera-relative light, colour and emission, draw ranges, first point.
+fn light_uniforms(rs: &ResidentScene, f: &PassFrame<'_>, slots: usize) -> Vec<u8> {
+    let objects = rs.layout.object_count();
+    let capacity = rs.layout.capacity() as u32;
+    let tri_count = rs.layout.tri_count() as u32;
+    let mut light_bytes = vec![0u8; slots * LIGHT_STRIDE as usize];
+    for (li, light) in f.lights.iter().enumerate() {
+        let mut l = light.light.to_array();
+        let w = l[3];
+        l[0] -= f.camera.eye.x * w;
+        l[1] -= f.camera.eye.y * w;
+        l[2] -= f.camera.eye.z * w;
+        let v = crate::raster::light_uniform(l, f.colors[li], light.emission.as_ref());
+        let draw = [
+            li as u32 * capacity,
+            capacity,
+            li as u32 * tri_count,
+            u32::from(w != 0.0),
+        ];
+        let o = li * LIGHT_STRIDE as usize;
+        light_bytes[o..o + 64].copy_from_slice(bytemuck::cast_slice(&v));
+        light_bytes[o + 64..o + 80].copy_from_slice(bytemuck::cast_slice(&draw));
+        let first_point = [(li * objects) as u32, 0, 0, 0];
+        light_bytes[o + 80..o + 96].copy_from_slice(bytemuck::cast_slice(&first_point));
+    }
+    light_bytes
 }
 
 /// The draws' extrusion inputs, `[light * object_count + object]`, two `[f32; 4]` each, from the

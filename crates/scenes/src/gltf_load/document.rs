@@ -1,7 +1,73 @@
-//! The glTF JSON before and after parsing: normalising what the `gltf` crate's serde types
-//! refuse, reading the extensions in use, and the structural and required-extension checks.
+//! The glTF JSON before and after parsing: the JSON and binary chunk of a GLB, normalising what
+//! the `gltf` crate's serde types refuse, reading the extensions in use, and the structural and
+//! required-extension checks.
 
+use super::Source;
+use crate::SceneError;
 use std::collections::HashMap;
+
+impl Source<'_> {
+    /// The JSON and BIN chunk of a GLB (trailing data cut with a note), or the JSON as is.
+    pub(super) fn split_container(
+        &self,
+        bytes: &[u8],
+        notes: &mut Vec<String>,
+    ) -> Result<(Vec<u8>, Option<Vec<u8>>), SceneError> {
+        if !bytes.starts_with(b"glTF") {
+            return Ok((bytes.to_vec(), None));
+        }
+        let mut bytes = bytes;
+        if bytes.len() >= 12 {
+            let declared = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize;
+            if declared >= 12 && declared < bytes.len() {
+                // Data after the end of the GLB stream: the spec allows it (the Khronos
+                // validator warns, GLB_EXTRA_DATA); the stream ends where the header says.
+                notes.push(format!(
+                    "{}: {} bytes after the end of the GLB stream (its header declares \
+                     {declared}) are ignored",
+                    self.name,
+                    bytes.len() - declared
+                ));
+                bytes = &bytes[..declared];
+            }
+            if declared != bytes.len() {
+                return Err(self.err(
+                    "document",
+                    format!(
+                        "GLB header declares {declared} bytes but the file has {} (truncated or \
+                         corrupted)",
+                        bytes.len()
+                    ),
+                ));
+            }
+        }
+        let glb = gltf::Glb::from_slice(bytes).map_err(|e| self.err("document", e.to_string()))?;
+        Ok((
+            glb.json.into_owned(),
+            glb.bin.map(std::borrow::Cow::into_owned),
+        ))
+    }
+
+    /// The document, normalised, parsed and validated, and the extension data it drops.
+    pub(super) fn read_document(
+        &self,
+        json: &[u8],
+        notes: &mut Vec<String>,
+    ) -> Result<(gltf::Document, Extensions), SceneError> {
+        let err = |message: String| self.err("document", message);
+        let mut value: serde_json::Value =
+            serde_json::from_slice(json).map_err(|e| err(format!("not valid JSON: {e}")))?;
+        normalize_json(&mut value);
+        notes.extend(unknown_enum_values(&mut value, self.name));
+        let ext = Extensions::read(&value);
+        let json = serde_json::to_vec(&value).map_err(|e| err(e.to_string()))?;
+        let root = gltf::json::Root::from_slice(&json).map_err(|e| err(e.to_string()))?;
+        let document = gltf::Document::from_json_without_validation(root);
+        validate(&document).map_err(err)?;
+        check_required_extensions(&document).map_err(err)?;
+        Ok((document, ext))
+    }
+}
 
 /// Rewrites what the glTF 2.0 schema allows but the `gltf` crate's serde types refuse:
 ///
@@ -13,7 +79,7 @@ use std::collections::HashMap;
 ///   a `node` (valid in glTF 2.0, used by `KHR_animation_pointer`), so they are dropped before
 ///   parsing.
 /// * a scene without `nodes` (optional in the spec) gets an empty list.
-pub(super) fn normalize_json(value: &mut serde_json::Value) {
+fn normalize_json(value: &mut serde_json::Value) {
     use serde_json::Value;
     if let Value::Object(m) = value {
         m.remove("animations");
@@ -51,7 +117,7 @@ pub(super) fn normalize_json(value: &mut serde_json::Value) {
 /// index reads becomes SCALAR (it is never read; one that is read stays, and is refused by
 /// name), and a KHR_lights_punctual light of an unknown `type` is dropped with the nodes'
 /// references to it (its light is unknown, so it lights nothing). Returns a note per change.
-pub(super) fn unknown_enum_values(value: &mut serde_json::Value, source_name: &str) -> Vec<String> {
+fn unknown_enum_values(value: &mut serde_json::Value, source_name: &str) -> Vec<String> {
     use serde_json::Value;
     const TYPES: [&str; 7] = ["SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4"];
     const LIGHTS: [&str; 3] = ["directional", "point", "spot"];
@@ -201,7 +267,7 @@ impl Extensions {
 
 /// Extensions that may be required: those read here, and those that only change appearance
 /// (materials, textures), which shadow volumes do not depend on.
-pub(super) fn check_required_extensions(document: &gltf::Document) -> Result<(), String> {
+fn check_required_extensions(document: &gltf::Document) -> Result<(), String> {
     for (i, ext) in document.extensions_required().enumerate() {
         let ok = matches!(
             ext,
@@ -231,7 +297,7 @@ pub(super) fn check_required_extensions(document: &gltf::Document) -> Result<(),
 /// accessors is accepted (many exporters omit them and this loader does not use them), and that
 /// `extensionsRequired` is checked by [`check_required_extensions`] instead (the crate refuses
 /// every extension it does not implement, including those read here).
-pub(super) fn validate(document: &gltf::Document) -> Result<(), String> {
+fn validate(document: &gltf::Document) -> Result<(), String> {
     use gltf::json::validation::{Error, Validate};
     let root = document.as_json();
     // gltf-json's validation indexes the POSITION accessor without a bounds check (it panics on

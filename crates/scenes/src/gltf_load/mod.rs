@@ -81,13 +81,9 @@ mod nodes;
 
 use crate::scene::{file_name, Effects, Scene};
 use crate::SceneError;
-use buffers::{decode_meshopt_views, needed_buffers, percent_decode};
-use document::{
-    check_required_extensions, normalize_json, unknown_enum_values, validate, Extensions,
-};
+use buffers::decode_meshopt_views;
 pub use draco::in_guarded_decoder;
-use glam::Affine3A;
-use nodes::Loader;
+use nodes::{root_nodes, Loader};
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -177,140 +173,18 @@ pub fn load_gltf_slice_with_notes(
     source_name: &str,
     base: Option<&Path>,
 ) -> Result<(Scene, Vec<String>), SceneError> {
-    let err = |context: &str, message: String| SceneError::Gltf {
-        file: source_name.to_owned(),
-        context: context.to_owned(),
-        message,
+    let source = Source {
+        name: source_name,
+        base,
     };
     let mut early_notes = Vec::new();
-    let mut bytes = bytes;
-    let (json, blob) = if bytes.starts_with(b"glTF") {
-        if bytes.len() >= 12 {
-            let declared = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize;
-            if declared >= 12 && declared < bytes.len() {
-                // Data after the end of the GLB stream: the spec allows it (the Khronos
-                // validator warns, GLB_EXTRA_DATA); the stream ends where the header says.
-                early_notes.push(format!(
-                    "{source_name}: {} bytes after the end of the GLB stream (its header \
-                     declares {declared}) are ignored",
-                    bytes.len() - declared
-                ));
-                bytes = &bytes[..declared];
-            }
-            if declared != bytes.len() {
-                return Err(err(
-                    "document",
-                    format!(
-                        "GLB header declares {declared} bytes but the file has {} (truncated or \
-                         corrupted)",
-                        bytes.len()
-                    ),
-                ));
-            }
-        }
-        let glb = gltf::Glb::from_slice(bytes).map_err(|e| err("document", e.to_string()))?;
-        (
-            glb.json.into_owned(),
-            glb.bin.map(std::borrow::Cow::into_owned),
-        )
-    } else {
-        (bytes.to_vec(), None)
-    };
-    let mut value: serde_json::Value = serde_json::from_slice(&json)
-        .map_err(|e| err("document", format!("not valid JSON: {e}")))?;
-    normalize_json(&mut value);
-    early_notes.extend(unknown_enum_values(&mut value, source_name));
-    let ext = Extensions::read(&value);
-    let json = serde_json::to_vec(&value).map_err(|e| err("document", e.to_string()))?;
-    let root = gltf::json::Root::from_slice(&json).map_err(|e| err("document", e.to_string()))?;
-    let document = gltf::Document::from_json_without_validation(root);
-    validate(&document).map_err(|m| err("document", m))?;
-    check_required_extensions(&document).map_err(|m| err("document", m))?;
-    // `import_buffers` unwraps the percent-decoding of relative URIs (it panics when the decoded
-    // bytes are not UTF-8): check them first.
-    for b in document.buffers() {
-        if let gltf::buffer::Source::Uri(uri) = b.source() {
-            if !uri.contains(':') && std::str::from_utf8(&percent_decode(uri)).is_err() {
-                return Err(err(
-                    "buffers",
-                    format!(
-                        "buffer {}: uri {uri:?} percent-decodes to bytes that are not UTF-8",
-                        b.index()
-                    ),
-                ));
-            }
-        }
-    }
-    // Only the buffers that positions and indices read are loaded (others may be placeholders
-    // without data, or URIs this loader cannot resolve, which is valid glTF). An
-    // EXT_meshopt_compression fallback buffer has no data; its views are decoded instead.
-    let needed = needed_buffers(&document, &ext);
-    let mut blob = blob;
-    let mut data: Vec<Option<Vec<u8>>> = Vec::with_capacity(document.buffers().len());
-    for b in document.buffers() {
-        let bin = matches!(b.source(), gltf::buffer::Source::Bin);
-        if !needed.contains(&b.index()) || (ext.fallback.contains(&b.index()) && bin) {
-            if bin && b.index() == 0 {
-                // The GLB's BIN chunk belongs to buffer 0 only.
-                blob = None;
-            }
-            data.push(None);
-            continue;
-        }
-        if bin && blob.is_none() {
-            // Valid glTF JSON (a buffer without `uri` names the GLB's binary chunk), but a
-            // `.gltf` has no such chunk, so the positions or indices it should hold are missing.
-            return Err(err(
-                "buffers",
-                format!(
-                    "buffer {} has no uri and no GLB binary chunk holds it (a .gltf has none; in \
-                     a .glb only buffer 0 uses it): the {} bytes its positions or indices are read \
-                     from are not in the file",
-                    b.index(),
-                    b.length()
-                ),
-            ));
-        }
-        let d = gltf::buffer::Data::from_source_and_blob(b.source(), base, &mut blob)
-            .map_err(|e| err("buffers", format!("buffer {}: {e}", b.index())))?;
-        // Data shorter than byteLength is refused; data longer than it (beyond the up to 3
-        // padding bytes a GLB BIN chunk may carry) is a lie about the length too. Views are then
-        // checked against the declared length only.
-        if d.0.len() < b.length() || d.0.len() > b.length() + 3 {
-            return Err(err(
-                "buffers",
-                format!(
-                    "buffer {}: its data holds {} bytes but byteLength declares {} (a data URI, \
-                     file or GLB chunk must match byteLength)",
-                    b.index(),
-                    d.0.len(),
-                    b.length()
-                ),
-            ));
-        }
-        let mut d = d.0;
-        d.truncate(b.length());
-        data.push(Some(d));
-    }
+    let (json, blob) = source.split_container(bytes, &mut early_notes)?;
+    let (document, ext) = source.read_document(&json, &mut early_notes)?;
+    source.check_buffer_uris(&document)?;
+    let data = source.load_buffers(&document, &ext, blob)?;
     let buffers: Vec<Option<&[u8]>> = data.iter().map(Option::as_deref).collect();
-    let decoded = decode_meshopt_views(&document, &ext, &buffers).map_err(|(c, m)| err(&c, m))?;
-
-    let roots: Vec<gltf::Node> = match document
-        .default_scene()
-        .or_else(|| document.scenes().next())
-    {
-        Some(s) => s.nodes().collect(),
-        None => {
-            let mut is_child = vec![false; document.nodes().len()];
-            for n in document.nodes() {
-                for c in n.children() {
-                    is_child[c.index()] = true;
-                }
-            }
-            document.nodes().filter(|n| !is_child[n.index()]).collect()
-        }
-    };
-
+    let decoded =
+        decode_meshopt_views(&document, &ext, &buffers).map_err(|(c, m)| source.err(&c, m))?;
     let mut loader = Loader {
         source_name,
         document: &document,
@@ -329,18 +203,24 @@ pub fn load_gltf_slice_with_notes(
             ..Scene::default()
         },
     };
-    // Depth-first, pre-order, with an explicit stack (deep hierarchies must not overflow).
-    let mut stack: Vec<(gltf::Node, Affine3A)> = roots
-        .into_iter()
-        .rev()
-        .map(|n| (n, Affine3A::IDENTITY))
-        .collect();
-    while let Some((node, parent)) = stack.pop() {
-        let world = loader.visit(&node, parent)?;
-        let children: Vec<gltf::Node> = node.children().collect();
-        for c in children.into_iter().rev() {
-            stack.push((c, world));
+    loader.walk(root_nodes(&document))?;
+    Ok((loader.scene, loader.notes))
+}
+
+/// The file being loaded: its name in messages and the base directory of relative URIs.
+#[derive(Debug, Clone, Copy)]
+struct Source<'a> {
+    name: &'a str,
+    base: Option<&'a Path>,
+}
+
+impl Source<'_> {
+    /// A [`SceneError::Gltf`] of this file at `context` (`document`, `buffers`, ...).
+    fn err(&self, context: &str, message: String) -> SceneError {
+        SceneError::Gltf {
+            file: self.name.to_owned(),
+            context: context.to_owned(),
+            message,
         }
     }
-    Ok((loader.scene, loader.notes))
 }

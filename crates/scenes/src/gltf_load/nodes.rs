@@ -29,6 +29,7 @@ pub(super) struct Loader<'a> {
     pub(super) scene: Scene,
 }
 
+/// How messages name a node: its index, and its name where it has one.
 fn node_label(node: &gltf::Node) -> String {
     match node.name() {
         Some(n) => format!("node {} '{n}'", node.index()),
@@ -36,6 +37,7 @@ fn node_label(node: &gltf::Node) -> String {
     }
 }
 impl Loader<'_> {
+    /// A [`SceneError::Gltf`] of the file being loaded at `context`.
     pub(super) fn err(&self, context: String, message: impl Into<String>) -> SceneError {
         SceneError::Gltf {
             file: self.source_name.to_owned(),
@@ -44,12 +46,25 @@ impl Loader<'_> {
         }
     }
 
+    /// Visits the nodes under `roots` depth-first, pre-order, with a stack (no recursion).
+    pub(super) fn walk(&mut self, roots: Vec<gltf::Node>) -> Result<(), SceneError> {
+        let mut stack: Vec<(gltf::Node, Affine3A)> = roots
+            .into_iter()
+            .rev()
+            .map(|n| (n, Affine3A::IDENTITY))
+            .collect();
+        while let Some((node, parent)) = stack.pop() {
+            let world = self.visit(&node, parent)?;
+            let children: Vec<gltf::Node> = node.children().collect();
+            for c in children.into_iter().rev() {
+                stack.push((c, world));
+            }
+        }
+        Ok(())
+    }
+
     /// Handles one node; returns its world transform.
-    pub(super) fn visit(
-        &mut self,
-        node: &gltf::Node,
-        parent: Affine3A,
-    ) -> Result<Affine3A, SceneError> {
+    fn visit(&mut self, node: &gltf::Node, parent: Affine3A) -> Result<Affine3A, SceneError> {
         let label = node_label(node);
         if std::mem::replace(&mut self.visited[node.index()], true) {
             return Err(self.err(
@@ -58,136 +73,200 @@ impl Loader<'_> {
                  cycles, no node with two parents)",
             ));
         }
+        let world = self.world_transform(&label, node, parent)?;
+        if let Some(mesh) = node.mesh() {
+            self.add_object(&label, node, &mesh, world)?;
+        }
+        if let Some(light) = node.light() {
+            self.add_light(&label, &light, world)?;
+        }
+        if let (Some(cam), None) = (node.camera(), self.scene.camera) {
+            self.set_camera(&label, node, &cam, world)?;
+        }
+        Ok(world)
+    }
+
+    /// The node's world transform `parent * local`, checked finite and affine.
+    fn world_transform(
+        &self,
+        label: &str,
+        node: &gltf::Node,
+        parent: Affine3A,
+    ) -> Result<Affine3A, SceneError> {
         let m = Mat4::from_cols_array_2d(&node.transform().matrix());
         if !m.is_finite() {
-            return Err(self.err(label, "transform has a NaN or infinite entry"));
+            return Err(self.err(label.to_owned(), "transform has a NaN or infinite entry"));
         }
         let row3 = m.row(3);
         if row3 != glam::Vec4::new(0.0, 0.0, 0.0, 1.0) {
             return Err(self.err(
-                label,
+                label.to_owned(),
                 format!("matrix is not affine: its last row is {row3}, expected (0, 0, 0, 1)"),
             ));
         }
         let local = Affine3A::from_mat4(m);
         let world = parent * local;
         if !world.is_finite() {
-            return Err(self.err(label, "world transform overflows f32"));
-        }
-
-        if let Some(mesh) = node.mesh() {
-            let det = world.matrix3.determinant();
-            if !det.is_normal() {
-                return Err(self.err(
-                    label,
-                    format!(
-                        "world transform of the mesh is singular or degenerate (determinant \
-                         {det:e}): a zero scale flattens the object, and lights cannot be \
-                         brought into its frame"
-                    ),
-                ));
-            }
-            let shared = match self.meshes.get(&mesh.index()) {
-                Some(t) => Arc::clone(t),
-                None => {
-                    let m = self.read_mesh(&label, &mesh)?;
-                    let t = Arc::new(EdgeTable::build(&m).map_err(|source| SceneError::Mesh {
-                        what: format!("{}: {label}, mesh {}", self.source_name, mesh.index()),
-                        source,
-                    })?);
-                    self.meshes.insert(mesh.index(), Arc::clone(&t));
-                    t
-                }
-            };
-            let name = node
-                .name()
-                .or(mesh.name())
-                .map_or_else(|| format!("node{}", node.index()), str::to_owned);
-            if shared.stats.triangles == 0 {
-                self.notes.push(format!(
-                    "{}: {label}: mesh {} has no triangles, the node is skipped",
-                    self.source_name,
-                    mesh.index()
-                ));
-            } else {
-                // A finite transform can still scale finite positions past f32's range.
-                let overflow = shared.positions.iter().enumerate().find_map(|(v, &p)| {
-                    let w = crate::scene::apply_f32(&world, p).to_array();
-                    (0..3).find(|&k| !w[k].is_finite()).map(|k| (v, k, w[k]))
-                });
-                if let Some((v, k, value)) = overflow {
-                    let axis = ['x', 'y', 'z'][k];
-                    return Err(self.err(
-                        format!("{label}, mesh {}", mesh.index()),
-                        format!(
-                            "vertex {v}: in world space, coordinate {axis} is {value}, but \
-                             positions must be finite (the world transform takes it past the \
-                             f32 range)"
-                        ),
-                    ));
-                }
-                self.scene.add_object(name, shared, world);
-            }
-        }
-
-        if let Some(light) = node.light() {
-            let l = match light.kind() {
-                gltf::khr_lights_punctual::Kind::Directional => {
-                    let z = world.matrix3.z_axis;
-                    Light::new(z.x, z.y, z.z, 0.0)
-                }
-                gltf::khr_lights_punctual::Kind::Point
-                | gltf::khr_lights_punctual::Kind::Spot { .. } => {
-                    let t = world.translation;
-                    Light::new(t.x, t.y, t.z, 1.0)
-                }
-            }
-            .map_err(|e| {
-                self.err(
-                    format!("{label}, light {}", light.index()),
-                    format!("invalid light: {e}"),
-                )
-            })?;
-            let emission = crate::emission::from_gltf(&light, &world)
-                .map_err(|m| self.err(format!("{label}, light {}", light.index()), m))?;
-            self.scene.lights.push(SceneLight {
-                light: l,
-                emission: Some(emission),
-            });
-        }
-
-        if let (Some(cam), None) = (node.camera(), self.scene.camera) {
-            if let gltf::camera::Projection::Perspective(p) = cam.projection() {
-                let eye = Vec3::from(world.translation);
-                let forward = -Vec3::from(world.matrix3.z_axis);
-                let up = Vec3::from(world.matrix3.y_axis);
-                let target = extras_vec3(node.extras(), "target")
-                    .unwrap_or(eye + forward.normalize_or(Vec3::NEG_Z));
-                let camera = Camera {
-                    eye,
-                    target,
-                    up: up.normalize_or(Vec3::Y),
-                    fov_y: p.yfov(),
-                    near: p.znear(),
-                };
-                let ok = camera.eye.is_finite()
-                    && camera.target.is_finite()
-                    && camera.fov_y.is_finite()
-                    && camera.fov_y > 0.0
-                    && camera.near.is_finite()
-                    && camera.near > 0.0
-                    && camera.target != camera.eye;
-                if !ok {
-                    return Err(self.err(
-                        format!("{label}, camera {}", cam.index()),
-                        "camera is degenerate (needs finite eye and target apart, yfov > 0, \
-                         znear > 0)",
-                    ));
-                }
-                self.scene.camera = Some(camera);
-            }
+            return Err(self.err(label.to_owned(), "world transform overflows f32"));
         }
         Ok(world)
+    }
+
+    /// Adds the node's mesh as an object at `world`, or notes it skipped without triangles.
+    fn add_object(
+        &mut self,
+        label: &str,
+        node: &gltf::Node,
+        mesh: &gltf::Mesh,
+        world: Affine3A,
+    ) -> Result<(), SceneError> {
+        let det = world.matrix3.determinant();
+        if !det.is_normal() {
+            return Err(self.err(
+                label.to_owned(),
+                format!(
+                    "world transform of the mesh is singular or degenerate (determinant \
+                     {det:e}): a zero scale flattens the object, and lights cannot be \
+                     brought into its frame"
+                ),
+            ));
+        }
+        let shared = self.edge_table(label, mesh)?;
+        let name = node
+            .name()
+            .or(mesh.name())
+            .map_or_else(|| format!("node{}", node.index()), str::to_owned);
+        if shared.stats.triangles == 0 {
+            self.notes.push(format!(
+                "{}: {label}: mesh {} has no triangles, the node is skipped",
+                self.source_name,
+                mesh.index()
+            ));
+            return Ok(());
+        }
+        // A finite transform can still scale finite positions past f32's range.
+        let overflow = shared.positions.iter().enumerate().find_map(|(v, &p)| {
+            let w = crate::scene::apply_f32(&world, p).to_array();
+            (0..3).find(|&k| !w[k].is_finite()).map(|k| (v, k, w[k]))
+        });
+        if let Some((v, k, value)) = overflow {
+            let axis = ['x', 'y', 'z'][k];
+            return Err(self.err(
+                format!("{label}, mesh {}", mesh.index()),
+                format!(
+                    "vertex {v}: in world space, coordinate {axis} is {value}, but positions \
+                     must be finite (the world transform takes it past the f32 range)"
+                ),
+            ));
+        }
+        self.scene.add_object(name, shared, world);
+        Ok(())
+    }
+
+    /// The mesh's edge table: read and welded once, then shared by every node using it.
+    fn edge_table(&mut self, label: &str, mesh: &gltf::Mesh) -> Result<Arc<EdgeTable>, SceneError> {
+        if let Some(t) = self.meshes.get(&mesh.index()) {
+            return Ok(Arc::clone(t));
+        }
+        let m = self.read_mesh(label, mesh)?;
+        let t = Arc::new(EdgeTable::build(&m).map_err(|source| SceneError::Mesh {
+            what: format!("{}: {label}, mesh {}", self.source_name, mesh.index()),
+            source,
+        })?);
+        self.meshes.insert(mesh.index(), Arc::clone(&t));
+        Ok(t)
+    }
+
+    /// Adds the node's punctual light at `world`, with its emission.
+    fn add_light(
+        &mut self,
+        label: &str,
+        light: &gltf::khr_lights_punctual::Light,
+        world: Affine3A,
+    ) -> Result<(), SceneError> {
+        let l = match light.kind() {
+            gltf::khr_lights_punctual::Kind::Directional => {
+                let z = world.matrix3.z_axis;
+                Light::new(z.x, z.y, z.z, 0.0)
+            }
+            gltf::khr_lights_punctual::Kind::Point
+            | gltf::khr_lights_punctual::Kind::Spot { .. } => {
+                let t = world.translation;
+                Light::new(t.x, t.y, t.z, 1.0)
+            }
+        }
+        .map_err(|e| {
+            self.err(
+                format!("{label}, light {}", light.index()),
+                format!("invalid light: {e}"),
+            )
+        })?;
+        let emission = crate::emission::from_gltf(light, &world)
+            .map_err(|m| self.err(format!("{label}, light {}", light.index()), m))?;
+        self.scene.lights.push(SceneLight {
+            light: l,
+            emission: Some(emission),
+        });
+        Ok(())
+    }
+
+    /// Makes a perspective camera the scene's: eye at the node, looking down `-Z`.
+    fn set_camera(
+        &mut self,
+        label: &str,
+        node: &gltf::Node,
+        cam: &gltf::Camera,
+        world: Affine3A,
+    ) -> Result<(), SceneError> {
+        let gltf::camera::Projection::Perspective(p) = cam.projection() else {
+            return Ok(());
+        };
+        let eye = Vec3::from(world.translation);
+        let forward = -Vec3::from(world.matrix3.z_axis);
+        let up = Vec3::from(world.matrix3.y_axis);
+        let target =
+            extras_vec3(node.extras(), "target").unwrap_or(eye + forward.normalize_or(Vec3::NEG_Z));
+        let camera = Camera {
+            eye,
+            target,
+            up: up.normalize_or(Vec3::Y),
+            fov_y: p.yfov(),
+            near: p.znear(),
+        };
+        let ok = camera.eye.is_finite()
+            && camera.target.is_finite()
+            && camera.fov_y.is_finite()
+            && camera.fov_y > 0.0
+            && camera.near.is_finite()
+            && camera.near > 0.0
+            && camera.target != camera.eye;
+        if !ok {
+            return Err(self.err(
+                format!("{label}, camera {}", cam.index()),
+                "camera is degenerate (needs finite eye and target apart, yfov > 0, znear > 0)",
+            ));
+        }
+        self.scene.camera = Some(camera);
+        Ok(())
+    }
+}
+
+/// The walk's roots: the `scene`'s nodes, else the first scene's, else all root nodes.
+pub(super) fn root_nodes(document: &gltf::Document) -> Vec<gltf::Node<'_>> {
+    match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
+        Some(s) => s.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; document.nodes().len()];
+            for n in document.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            document.nodes().filter(|n| !is_child[n.index()]).collect()
+        }
     }
 }
 

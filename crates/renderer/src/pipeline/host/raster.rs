@@ -163,8 +163,59 @@ impl HostRaster {
         target: &Attachments<'_>,
         input: &RasterInput<'_>,
     ) -> Result<(), RenderError> {
-        use wgpu::util::DeviceExt;
+        let bindings = self.bindings(device, input);
+        let ids = target.ids.ok_or_else(|| {
+            RenderError::InvalidInput(
+                "the host pipeline draws surface ids: give it an ids attachment".to_owned(),
+            )
+        })?;
+        let frame = FrameRecording {
+            raster: self,
+            target,
+            ids,
+            bindings,
+            surface_vertices: input.surface.len(),
+        };
+        frame.prepass(enc);
+        for (li, l) in input.lights.iter().enumerate() {
+            frame.stencil_pass(enc, li, l);
+            target.after_stencil(enc, li);
+            frame.lit_pass(enc, li, l);
+        }
+        Ok(())
+    }
 
+    /// The frame's uniforms and vertex buffers; empty lists are padded to one zero vertex.
+    fn bindings(&self, device: &wgpu::Device, input: &RasterInput<'_>) -> FrameBindings {
+        let padded_surface;
+        let surface: &[SurfaceVertex] = if input.surface.is_empty() {
+            padded_surface = [SurfaceVertex::zeroed()];
+            &padded_surface
+        } else {
+            input.surface
+        };
+        let padded_vol;
+        let volumes: &[[f32; 4]] = if input.volumes.is_empty() {
+            padded_vol = [[0f32; 4]];
+            &padded_vol
+        } else {
+            input.volumes
+        };
+        FrameBindings {
+            globals: self.globals_bind_group(device, input),
+            lights: self.lights_bind_group(device, input.lights),
+            surface: vertex_buffer(device, "surface", bytemuck::cast_slice(surface)),
+            volumes: vertex_buffer(device, "volumes", bytemuck::cast_slice(volumes)),
+        }
+    }
+
+    /// The globals uniform (`projection * view`, eye, ambient) and its bind group.
+    fn globals_bind_group(
+        &self,
+        device: &wgpu::Device,
+        input: &RasterInput<'_>,
+    ) -> wgpu::BindGroup {
+        use wgpu::util::DeviceExt;
         let mut globals = [0f32; 24];
         globals[..16].copy_from_slice(&input.view_proj);
         globals[16..19].copy_from_slice(&input.eye);
@@ -174,9 +225,22 @@ impl HostRaster {
             contents: bytemuck::cast_slice(&globals),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let n_lights = input.lights.len().max(1);
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("globals"),
+            layout: &self.globals_bgl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: globals_buf.as_entire_binding(),
+            }],
+        })
+    }
+
+    /// Every light's uniform, [`LIGHT_STRIDE`] apart, bound one at a time by dynamic offset.
+    fn lights_bind_group(&self, device: &wgpu::Device, lights: &[LightDraws]) -> wgpu::BindGroup {
+        use wgpu::util::DeviceExt;
+        let n_lights = lights.len().max(1);
         let mut light_bytes = vec![0u8; n_lights * LIGHT_STRIDE as usize];
-        for (i, l) in input.lights.iter().enumerate() {
+        for (i, l) in lights.iter().enumerate() {
             let v = light_uniform(l.light, l.color, l.emission.as_ref());
             let o = i * LIGHT_STRIDE as usize;
             light_bytes[o..o + v.len() * 4].copy_from_slice(bytemuck::cast_slice(&v));
@@ -186,15 +250,7 @@ impl HostRaster {
             contents: &light_bytes,
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let globals_bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("globals"),
-            layout: &self.globals_bgl,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: globals_buf.as_entire_binding(),
-            }],
-        });
-        let light_bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("light"),
             layout: &self.light_bgl,
             entries: &[wgpu::BindGroupEntry {
@@ -205,91 +261,113 @@ impl HostRaster {
                     size: std::num::NonZeroU64::new(96),
                 }),
             }],
-        });
-        let padded_surface;
-        let surface: &[SurfaceVertex] = if input.surface.is_empty() {
-            padded_surface = [SurfaceVertex::zeroed()];
-            &padded_surface
-        } else {
-            input.surface
-        };
-        let surface_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("surface"),
-            contents: bytemuck::cast_slice(surface),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
-        let padded_vol;
-        let volumes: &[[f32; 4]] = if input.volumes.is_empty() {
-            padded_vol = [[0f32; 4]];
-            &padded_vol
-        } else {
-            input.volumes
-        };
-        let volume_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("volumes"),
-            contents: bytemuck::cast_slice(volumes),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
-
-        let (color_view, depth_view) = (target.color, target.depth_stencil);
-        let ids_view = target.ids.ok_or_else(|| {
-            RenderError::InvalidInput(
-                "the host pipeline draws surface ids: give it an ids attachment".to_owned(),
-            )
-        })?;
-        {
-            let color = [
-                states::cleared(color_view, BACKGROUND),
-                states::cleared(ids_view, wgpu::Color::TRANSPARENT),
-            ];
-            let mut pass = states::begin_prepass(enc, "prepass", &color, depth_view, None);
-            if !input.surface.is_empty() {
-                pass.set_pipeline(&self.prepass);
-                pass.set_bind_group(0, &globals_bg, &[]);
-                pass.set_bind_group(1, &light_bg, &[0]);
-                pass.set_vertex_buffer(0, surface_buf.slice(..));
-                pass.draw(0..input.surface.len() as u32, 0..1);
-            }
-        }
-        for (li, l) in input.lights.iter().enumerate() {
-            let offset = (li as u64 * LIGHT_STRIDE) as u32;
-            {
-                let mut pass = states::begin_stencil_pass(
-                    enc,
-                    "stencil",
-                    depth_view,
-                    wgpu::LoadOp::Clear(0),
-                    l.scissor,
-                    None,
-                );
-                pass.set_bind_group(0, &globals_bg, &[]);
-                pass.set_bind_group(1, &light_bg, &[offset]);
-                pass.set_vertex_buffer(0, volume_buf.slice(..));
-                for (pipe, range) in [
-                    (&self.zpass, &l.zpass),
-                    (&self.zfail_ccw, &l.zfail_ccw),
-                    (&self.zfail_cw, &l.zfail_cw),
-                ] {
-                    if !range.is_empty() && !l.scissor.is_some_and(|r| r[2] == 0 || r[3] == 0) {
-                        pass.set_pipeline(pipe);
-                        pass.draw(range.clone(), 0..1);
-                    }
-                }
-            }
-            target.after_stencil(enc, li);
-            {
-                let mut pass =
-                    states::begin_lit_pass(enc, "lit", color_view, depth_view, l.scissor, None);
-                if !input.surface.is_empty() && !l.scissor.is_some_and(|r| r[2] == 0 || r[3] == 0) {
-                    pass.set_pipeline(&self.lit);
-                    pass.set_stencil_reference(0);
-                    pass.set_bind_group(0, &globals_bg, &[]);
-                    pass.set_bind_group(1, &light_bg, &[offset]);
-                    pass.set_vertex_buffer(0, surface_buf.slice(..));
-                    pass.draw(0..input.surface.len() as u32, 0..1);
-                }
-            }
-        }
-        Ok(())
+        })
     }
+}
+
+/// A vertex buffer holding `contents`.
+fn vertex_buffer(device: &wgpu::Device, label: &str, contents: &[u8]) -> wgpu::Buffer {
+    use wgpu::util::DeviceExt;
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents,
+        usage: wgpu::BufferUsages::VERTEX,
+    })
+}
+
+/// The buffers and bind groups of one frame's [`RasterInput`], shared by all its passes.
+struct FrameBindings {
+    /// The globals uniform's bind group.
+    globals: wgpu::BindGroup,
+    /// The per-light uniforms' bind group (dynamic offset: the light's).
+    lights: wgpu::BindGroup,
+    /// Surface triangles (at least one vertex).
+    surface: wgpu::Buffer,
+    /// All lights' volume vertices (at least one).
+    volumes: wgpu::Buffer,
+}
+
+/// One frame being recorded, so that each pass needs only the encoder and its light.
+struct FrameRecording<'a> {
+    raster: &'a HostRaster,
+    target: &'a Attachments<'a>,
+    ids: &'a wgpu::TextureView,
+    bindings: FrameBindings,
+    /// Surface vertices to draw (none: the passes clear and draw nothing).
+    surface_vertices: usize,
+}
+
+impl FrameRecording<'_> {
+    /// The pre-pass: colour, ids and depth cleared, then the surfaces' ambient, ids and depth.
+    fn prepass(&self, enc: &mut wgpu::CommandEncoder) {
+        let color = [
+            states::cleared(self.target.color, BACKGROUND),
+            states::cleared(self.ids, wgpu::Color::TRANSPARENT),
+        ];
+        let mut pass =
+            states::begin_prepass(enc, "prepass", &color, self.target.depth_stencil, None);
+        if self.surface_vertices != 0 {
+            pass.set_pipeline(&self.raster.prepass);
+            pass.set_bind_group(0, &self.bindings.globals, &[]);
+            pass.set_bind_group(1, &self.bindings.lights, &[0]);
+            pass.set_vertex_buffer(0, self.bindings.surface.slice(..));
+            pass.draw(0..self.surface_vertices as u32, 0..1);
+        }
+    }
+
+    /// Light `li`'s stencil pass: its z-pass and z-fail volumes counted in a cleared stencil.
+    fn stencil_pass(&self, enc: &mut wgpu::CommandEncoder, li: usize, l: &LightDraws) {
+        let mut pass = states::begin_stencil_pass(
+            enc,
+            "stencil",
+            self.target.depth_stencil,
+            wgpu::LoadOp::Clear(0),
+            l.scissor,
+            None,
+        );
+        pass.set_bind_group(0, &self.bindings.globals, &[]);
+        pass.set_bind_group(1, &self.bindings.lights, &[light_offset(li)]);
+        pass.set_vertex_buffer(0, self.bindings.volumes.slice(..));
+        let raster = self.raster;
+        for (pipe, range) in [
+            (&raster.zpass, &l.zpass),
+            (&raster.zfail_ccw, &l.zfail_ccw),
+            (&raster.zfail_cw, &l.zfail_cw),
+        ] {
+            if !range.is_empty() && !empty_scissor(l.scissor) {
+                pass.set_pipeline(pipe);
+                pass.draw(range.clone(), 0..1);
+            }
+        }
+    }
+
+    /// Light `li`'s lit pass: its Lambert term added where the stencil is 0.
+    fn lit_pass(&self, enc: &mut wgpu::CommandEncoder, li: usize, l: &LightDraws) {
+        let mut pass = states::begin_lit_pass(
+            enc,
+            "lit",
+            self.target.color,
+            self.target.depth_stencil,
+            l.scissor,
+            None,
+        );
+        if self.surface_vertices != 0 && !empty_scissor(l.scissor) {
+            pass.set_pipeline(&self.raster.lit);
+            pass.set_stencil_reference(0);
+            pass.set_bind_group(0, &self.bindings.globals, &[]);
+            pass.set_bind_group(1, &self.bindings.lights, &[light_offset(li)]);
+            pass.set_vertex_buffer(0, self.bindings.surface.slice(..));
+            pass.draw(0..self.surface_vertices as u32, 0..1);
+        }
+    }
+}
+
+/// The dynamic offset of light `li`'s uniform.
+fn light_offset(li: usize) -> u32 {
+    (li as u64 * LIGHT_STRIDE) as u32
+}
+
+/// Whether `scissor` is a rectangle without pixels, where a light's passes draw nothing.
+fn empty_scissor(scissor: Option<[u32; 4]>) -> bool {
+    scissor.is_some_and(|r| r[2] == 0 || r[3] == 0)
 }
