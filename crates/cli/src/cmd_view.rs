@@ -96,8 +96,8 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     // The host pipeline's backend is started only if the viewer needs it (V, --pipeline host).
     let backend = Box::new(move || entry.start());
     let mut options = ViewOptions::new(args.size.0, args.size.1);
-    options.mode = args.input.mode;
-    options.policy = args.technique.into();
+    options.render.mode = args.input.mode;
+    options.render.policy = args.technique.into();
     options.frames = args.frames;
     options.screenshot.clone_from(&args.screenshot);
     options

@@ -127,14 +127,7 @@ fn extract(
         .into_iter()
         .flatten()
         .collect();
-    let codes: Vec<u32> = techniques
-        .iter()
-        .map(|t| match t {
-            Technique::Culled => technique::CULLED,
-            Technique::ZPass => technique::ZPASS,
-            Technique::ZFail => technique::ZFAIL,
-        })
-        .collect();
+    let codes: Vec<u32> = techniques.iter().map(|&t| technique::code(t)).collect();
     let layout = rs.layout();
     let (twin_signs, twin_integer) =
         twin::triangle_signs(layout, &ol, lights.len(), &codes, mode, pass.exact_filter());

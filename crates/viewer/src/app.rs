@@ -23,8 +23,6 @@ use winit::window::{Window, WindowId};
 /// The state of a running viewer.
 pub(crate) struct App {
     scene: Scene,
-    /// The options the renderer is opened with once the window's device exists.
-    render_options: RenderOptions,
     /// Starts the silhouette backend of the host pipeline, the first time it is needed.
     backend: BackendStarter,
     /// The pipeline not in use (the host pipeline while the GPU one draws, or the other way
@@ -53,24 +51,22 @@ struct Drag {
 }
 
 impl App {
-    /// A viewer of `scene` (which has a camera) that opens its renderer with
-    /// `render_options` and starts the host pipeline's backend with `backend` when needed.
+    /// A viewer of `scene` (which has a camera) that opens its renderer with `options.render`
+    /// once the window's device exists, and starts the host pipeline's backend with `backend` when needed.
     pub(crate) fn new(
         scene: Scene,
         camera: Camera,
         backend: BackendStarter,
-        render_options: RenderOptions,
         options: ViewOptions,
     ) -> Self {
         let orbit = Orbit::from_camera(&camera);
         let centre = scene
             .bounds()
             .map_or(camera.target, |(lo, hi)| (lo + hi) * 0.5);
-        let policy = render_options.policy;
+        let policy = options.render.policy;
         let volumes = options.volumes;
         Self {
             scene,
-            render_options,
             backend,
             spare: None,
             options,
@@ -145,7 +141,7 @@ impl App {
         let mut opts: RenderOptions = gfx.renderer.options();
         opts.width = w;
         opts.height = h;
-        opts.mode = self.options.mode;
+        opts.mode = self.options.render.mode;
         opts.policy = self.policy;
         gfx.renderer.set_options(opts)?;
         let last = self
@@ -243,7 +239,7 @@ impl App {
                 "v" | "V" => self.volumes = self.volumes.next(),
                 s => {
                     if let Some(m) = s.parse::<u8>().ok().and_then(controls::mode_of_key) {
-                        self.options.mode = m;
+                        self.options.render.mode = m;
                     }
                 }
             },
@@ -438,8 +434,8 @@ impl ApplicationHandler for App {
         let attrs = Window::default_attributes()
             .with_title(self.options.title.clone())
             .with_inner_size(winit::dpi::PhysicalSize::new(
-                self.options.width,
-                self.options.height,
+                self.options.render.width,
+                self.options.render.height,
             ));
         let window = match el.create_window(attrs) {
             Ok(w) => Arc::new(w),
@@ -448,7 +444,7 @@ impl ApplicationHandler for App {
             }
         };
         let options = self.options.clone();
-        let made = Gfx::new(window, &options, el, self.render_options, |rd| {
+        let made = Gfx::new(window, &options, el, |rd| {
             if options.pipeline == Pipeline::Gpu {
                 if let Some(why) = &rd.gpu_pipeline_unsupported {
                     eprintln!(

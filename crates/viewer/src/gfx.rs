@@ -5,7 +5,7 @@ use crate::controls::VolumeView;
 use crate::{ViewError, ViewOptions};
 use glam::Vec3;
 use shadowvol_renderer::resident::texture_2d;
-use shadowvol_renderer::{Camera, Frame, RenderDevice, RenderOptions, Renderer, ShadowPipeline};
+use shadowvol_renderer::{Camera, Frame, RenderDevice, Renderer, ShadowPipeline};
 use std::sync::Arc;
 use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
@@ -70,19 +70,18 @@ impl Gfx {
     }
 
     /// The window's device and surface, the blit, volume and overlay pipelines, and the
-    /// renderer on that device drawing with the pipeline `pipeline` makes for the device (it
+    /// renderer on that device (with `options.render`) drawing with the pipeline `pipeline` makes for the device (it
     /// learns there whether the device runs the GPU pipeline).
     pub(crate) fn new(
         window: Arc<Window>,
         options: &ViewOptions,
         el: &ActiveEventLoop,
-        render_options: RenderOptions,
         pipeline: impl FnOnce(&RenderDevice) -> Result<Box<dyn ShadowPipeline>, ViewError>,
     ) -> Result<Self, ViewError> {
         let (surface, adapter, device, queue) = open_device(&window, el)?;
         let rd = RenderDevice::on_device(adapter.clone(), device.clone(), queue.clone());
         let first = pipeline(&rd)?;
-        let renderer = Renderer::new(rd, first, render_options)?;
+        let renderer = Renderer::new(rd, first, options.render)?;
         let config = surface_config(&surface, &adapter, window.inner_size(), options)?;
         surface.configure(&device, &config);
         let format = config.format;

@@ -43,7 +43,7 @@ mod gfx;
 mod overlay;
 pub mod shaders;
 
-use shadowvol_renderer::{Accuracy, Pipeline, PlanPolicy, RenderError, RenderOptions, Scene};
+use shadowvol_renderer::{Pipeline, RenderError, RenderOptions, Scene};
 use shadowvol_silhouette::{BackendError, SilhouetteBackend};
 use std::path::PathBuf;
 
@@ -55,14 +55,10 @@ pub type BackendStarter = Box<dyn FnMut() -> Result<Box<dyn SilhouetteBackend>, 
 /// What to open and how.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ViewOptions {
-    /// Window width in physical pixels.
-    pub width: u32,
-    /// Window height in physical pixels.
-    pub height: u32,
-    /// The accuracy mode at start (keys 1–4 change it).
-    pub mode: Accuracy,
-    /// The technique policy at start (T changes it).
-    pub policy: PlanPolicy,
+    /// The renderer's options at start: `width × height` is the window's size in physical
+    /// pixels (the image follows the window when it is resized), `mode` the accuracy mode (keys
+    /// 1–4 change it), `policy` the technique policy (T changes it).
+    pub render: RenderOptions,
     /// Render this many frames, then close and report; `None`: until the user closes it.
     pub frames: Option<u32>,
     /// With `frames`: where to write the last frame's image (the 3D view without the overlay),
@@ -83,14 +79,12 @@ pub struct ViewOptions {
 }
 
 impl ViewOptions {
-    /// A `width × height` window in exact mode with the automatic technique, until closed.
+    /// A `width × height` window with [`RenderOptions::new`]'s defaults (exact mode, the
+    /// automatic technique), the GPU pipeline, until closed.
     #[must_use]
     pub fn new(width: u32, height: u32) -> Self {
         Self {
-            width,
-            height,
-            mode: Accuracy::Exact,
-            policy: PlanPolicy::Auto,
+            render: RenderOptions::new(width, height),
             frames: None,
             screenshot: None,
             window_screenshot: None,
@@ -176,10 +170,10 @@ pub fn view(
     backend: BackendStarter,
     options: ViewOptions,
 ) -> Result<ViewReport, ViewError> {
-    if options.width == 0 || options.height == 0 {
+    let (width, height) = (options.render.width, options.render.height);
+    if width == 0 || height == 0 {
         return Err(ViewError::Options(format!(
-            "window size {}x{}: both must be > 0",
-            options.width, options.height
+            "window size {width}x{height}: both must be > 0"
         )));
     }
     if options.frames == Some(0) {
@@ -189,13 +183,10 @@ pub fn view(
         .camera_or_default()
         .ok_or_else(|| ViewError::Options(format!("scene {:?} has nothing to show", scene.name)))?;
     check_display()?;
-    let mut render_options = RenderOptions::new(options.width, options.height);
-    render_options.mode = options.mode;
-    render_options.policy = options.policy;
     let event_loop = winit::event_loop::EventLoop::new()
         .map_err(|e| ViewError::Window(format!("cannot connect to the display: {e}")))?;
     let pipeline = options.pipeline;
-    let mut app = app::App::new(scene, camera, backend, render_options, options);
+    let mut app = app::App::new(scene, camera, backend, options);
     event_loop
         .run_app(&mut app)
         .map_err(|e| ViewError::Window(format!("event loop: {e}")))?;

@@ -166,12 +166,24 @@ pub struct PassCounts {
 /// is skipped (culled), its sides go to the z-pass list, or to the z-fail list (and it gets
 /// caps).
 pub mod technique {
+    use crate::Technique;
+
     /// Culled: no sign, no record.
     pub const CULLED: u32 = 0;
     /// Z-pass sides.
     pub const ZPASS: u32 = 1;
     /// Z-fail sides and caps.
     pub const ZFAIL: u32 = 2;
+
+    /// The code of `t`.
+    #[must_use]
+    pub fn code(t: Technique) -> u32 {
+        match t {
+            Technique::Culled => CULLED,
+            Technique::ZPass => ZPASS,
+            Technique::ZFail => ZFAIL,
+        }
+    }
 }
 
 /// The side records of one light, from [`ShadowPass::read_records`]: global edge ids,

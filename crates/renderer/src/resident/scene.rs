@@ -267,15 +267,7 @@ impl ShadowPass {
         q.write_buffer(&fb.lights_buf, 0, bytemuck::cast_slice(&lights));
         let points = light_points(&lights, objects, n_lights);
         q.write_buffer(&fb.light_points, 0, bytemuck::cast_slice(&points));
-        let codes: Vec<u32> = f
-            .techniques
-            .iter()
-            .map(|t| match t {
-                Technique::Culled => technique::CULLED,
-                Technique::ZPass => technique::ZPASS,
-                Technique::ZFail => technique::ZFAIL,
-            })
-            .collect();
+        let codes: Vec<u32> = f.techniques.iter().map(|&t| technique::code(t)).collect();
         if !codes.is_empty() {
             q.write_buffer(&fb.technique, 0, bytemuck::cast_slice(&codes));
         }
