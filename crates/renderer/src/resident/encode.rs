@@ -42,14 +42,14 @@ impl ShadowPass {
             }),
         });
         // Vertices first: the draws of the frame read their camera-relative positions.
-        pass.set_pipeline(&self.vertices);
+        pass.set_pipeline(&self.world.vertices);
         pass.set_bind_group(0, &fb.v0, &[]);
-        pass.set_bind_group(1, &self.empty, &[]);
+        pass.set_bind_group(1, &self.world.empty, &[]);
         pass.set_bind_group(2, &rs.world_out, &[]);
         let (x, y) = grid(rs.layout.vertex_objects.len() as u32);
         pass.dispatch_workgroups(x, y, 1);
         if let Some((_, chunks)) = &rs.surface {
-            pass.set_pipeline(&self.surfaces);
+            pass.set_pipeline(&self.world.surfaces);
             pass.set_bind_group(0, &fb.s0, &[]);
             for (out, count) in chunks {
                 pass.set_bind_group(2, out, &[]);
@@ -59,7 +59,7 @@ impl ShadowPass {
         }
         pass.set_bind_group(0, &fb.c0, &[]);
         pass.set_bind_group(1, &fb.c1, &[]);
-        pass.set_pipeline(&self.reset);
+        pass.set_pipeline(&self.extract.reset);
         let total = n_lights * 8 + 1 + 3 * n_lights * objects;
         pass.dispatch_workgroups(total.div_ceil(64).max(1), 1, 1);
         if n_lights == 0 {
@@ -67,19 +67,19 @@ impl ShadowPass {
         }
         let mode = mode_index(rs.state.mode);
         let (x, y) = grid(rs.layout.tri_count() as u32);
-        pass.set_pipeline(&self.triangles[mode]);
+        pass.set_pipeline(&self.extract.triangles[mode]);
         pass.dispatch_workgroups(x, y, 1);
         if rs.state.mode == Accuracy::Exact {
             let (args, out) = &rs.pending_dispatch;
-            pass.set_pipeline(&self.pending_args);
+            pass.set_pipeline(&self.extract.pending_args);
             pass.set_bind_group(2, out, &[]);
             pass.dispatch_workgroups(1, 1, 1);
-            pass.set_pipeline(&self.pending);
-            pass.set_bind_group(2, &self.empty, &[]);
+            pass.set_pipeline(&self.extract.pending);
+            pass.set_bind_group(2, &self.world.empty, &[]);
             pass.dispatch_workgroups_indirect(args, 0);
         }
         let (x, y) = grid(rs.layout.scene.edge_count() as u32);
-        pass.set_pipeline(&self.edges[mode]);
+        pass.set_pipeline(&self.extract.edges[mode]);
         pass.dispatch_workgroups(x, y, 1);
     }
 
@@ -120,7 +120,7 @@ impl ShadowPass {
         );
         let tris = rs.layout.tri_count() as u32;
         if tris > 0 {
-            pass.set_pipeline(&self.prepass[usize::from(rs.surface.is_some())]);
+            pass.set_pipeline(&self.draw.prepass[usize::from(rs.surface.is_some())]);
             if let Some((vertices, _)) = &rs.surface {
                 pass.set_vertex_buffer(0, vertices.slice(..));
             }
@@ -170,10 +170,10 @@ impl ShadowPass {
             );
             if !empty {
                 let base = light as u64 * 32;
-                pass.set_pipeline(&self.side_zpass);
-                pass.draw_indirect(&fb.args, base);
-                pass.set_pipeline(&self.side_zfail);
-                pass.draw_indirect(&fb.args, base + 16);
+                pass.set_pipeline(&self.draw.side_zpass);
+                pass.draw_indirect(&fb.buffers.args, base);
+                pass.set_pipeline(&self.draw.side_zfail);
+                pass.draw_indirect(&fb.buffers.args, base + 16);
             }
         }
         let mut pass = begin(
@@ -190,14 +190,14 @@ impl ShadowPass {
             .filter(|&o| rs.state.techniques[light * objects + o] == Technique::ZFail)
             .collect();
         let range = |o: usize| (rs.tri_offsets[o], rs.tri_offsets[o + 1]);
-        pass.set_pipeline(&self.cap_ccw);
+        pass.set_pipeline(&self.draw.cap_ccw);
         for &o in &zfail {
             let (a, b) = range(o);
             if b > a {
                 pass.draw(a * 6..b * 6, 0..1);
             }
         }
-        pass.set_pipeline(&self.cap_cw);
+        pass.set_pipeline(&self.draw.cap_cw);
         for &o in &zfail {
             let (a, b) = range(o);
             if b > a {
@@ -231,7 +231,7 @@ impl ShadowPass {
         if tris == 0 || scissor.is_some_and(|r| r[2] == 0 || r[3] == 0) {
             return;
         }
-        pass.set_pipeline(&self.lit[usize::from(rs.surface.is_some())]);
+        pass.set_pipeline(&self.draw.lit[usize::from(rs.surface.is_some())]);
         if let Some((vertices, _)) = &rs.surface {
             pass.set_vertex_buffer(0, vertices.slice(..));
         }

@@ -204,32 +204,12 @@ pub struct ShadowPass {
     filter: ExactFilter,
     depth_clamp: bool,
     timestamps: bool,
-    c0: wgpu::BindGroupLayout,
-    c1: wgpu::BindGroupLayout,
-    d0: wgpu::BindGroupLayout,
-    dl: wgpu::BindGroupLayout,
-    v0: wgpu::BindGroupLayout,
-    v2: wgpu::BindGroupLayout,
-    empty: wgpu::BindGroup,
-    vertices: wgpu::ComputePipeline,
-    reset: wgpu::ComputePipeline,
-    triangles: Vec<wgpu::ComputePipeline>,
-    /// Exact mode: writes the indirect arguments of [`ShadowPass::pending`].
-    pending_args: wgpu::ComputePipeline,
-    /// Exact mode: decides the pairs the triangle pass's filter left, with `orient_int`.
-    pending: wgpu::ComputePipeline,
-    edges: Vec<wgpu::ComputePipeline>,
-    /// Pre-pass: `[vertex pulling, vertex buffer]`.
-    prepass: [wgpu::RenderPipeline; 2],
-    /// Lit pass: `[vertex pulling, vertex buffer]`.
-    lit: [wgpu::RenderPipeline; 2],
-    s0: wgpu::BindGroupLayout,
-    s2: wgpu::BindGroupLayout,
-    surfaces: wgpu::ComputePipeline,
-    side_zpass: wgpu::RenderPipeline,
-    side_zfail: wgpu::RenderPipeline,
-    cap_ccw: wgpu::RenderPipeline,
-    cap_cw: wgpu::RenderPipeline,
+    /// The extraction's layouts and compute pipelines.
+    extract: pipeline::ExtractPipelines,
+    /// The vertex and surface passes.
+    world: pipeline::SurfacePipelines,
+    /// The render pipelines and their layouts.
+    draw: pipeline::DrawPipelines,
 }
 
 impl std::fmt::Debug for ShadowPass {
@@ -322,13 +302,10 @@ struct FrameState {
     scissors: Vec<Option<[u32; 4]>>,
 }
 
-/// Buffers sized by the number of lights, and the bind groups over them.
-struct FrameBuffers {
-    lights: usize,
-    /// With `TIMESTAMP_QUERY`: begin/end of the extraction, the pre-pass, and per light its
-    /// side, cap and lit passes (see `TimestampSlot`), and the buffer they resolve into.
-    queries: Option<(wgpu::QuerySet, wgpu::Buffer, u32)>,
-    lights_buf: wgpu::Buffer,
+/// Buffers sized by the number of lights: object-space lights, light points, techniques,
+/// triangle signs, indirect arguments, side records, object rows, light uniforms.
+struct LightBuffers {
+    lights: wgpu::Buffer,
     light_points: wgpu::Buffer,
     technique: wgpu::Buffer,
     signs: wgpu::Buffer,
@@ -336,6 +313,15 @@ struct FrameBuffers {
     records: wgpu::Buffer,
     objects: wgpu::Buffer,
     light_u: wgpu::Buffer,
+}
+
+/// The [`LightBuffers`] for `lights` lights, and the bind groups over them.
+struct FrameBuffers {
+    lights: usize,
+    /// With `TIMESTAMP_QUERY`: begin/end of the extraction, the pre-pass, and per light its
+    /// side, cap and lit passes (see `TimestampSlot`), and the buffer they resolve into.
+    queries: Option<(wgpu::QuerySet, wgpu::Buffer, u32)>,
+    buffers: LightBuffers,
     c0: wgpu::BindGroup,
     c1: wgpu::BindGroup,
     d0: wgpu::BindGroup,

@@ -120,28 +120,9 @@ impl ShadowPass {
             filter,
             depth_clamp,
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
-            c0: x.c0,
-            c1: x.c1,
-            d0: d.d0,
-            dl: d.dl,
-            v0: s.v0,
-            v2: x.v2,
-            empty: s.empty,
-            vertices: s.vertices,
-            reset: x.reset,
-            triangles: x.triangles,
-            pending_args: x.pending_args,
-            pending: x.pending,
-            edges: x.edges,
-            prepass: d.prepass,
-            lit: d.lit,
-            s0: s.s0,
-            s2: s.s2,
-            surfaces: s.surfaces,
-            side_zpass: d.side_zpass,
-            side_zfail: d.side_zfail,
-            cap_ccw: d.cap_ccw,
-            cap_cw: d.cap_cw,
+            extract: x,
+            world: s,
+            draw: d,
         })
     }
 
@@ -161,15 +142,17 @@ impl ShadowPass {
 /// The extraction's layouts and compute pipelines (the `resident extract` module, built for
 /// `filter`): reset, the triangle pass per mode, exact mode's pending pair, the edge pass per
 /// mode.
-struct ExtractPipelines {
-    c0: wgpu::BindGroupLayout,
-    c1: wgpu::BindGroupLayout,
-    v2: wgpu::BindGroupLayout,
-    reset: wgpu::ComputePipeline,
-    triangles: Vec<wgpu::ComputePipeline>,
-    pending_args: wgpu::ComputePipeline,
-    pending: wgpu::ComputePipeline,
-    edges: Vec<wgpu::ComputePipeline>,
+pub(super) struct ExtractPipelines {
+    pub(super) c0: wgpu::BindGroupLayout,
+    pub(super) c1: wgpu::BindGroupLayout,
+    pub(super) v2: wgpu::BindGroupLayout,
+    pub(super) reset: wgpu::ComputePipeline,
+    pub(super) triangles: Vec<wgpu::ComputePipeline>,
+    /// Exact mode: writes the indirect arguments of `pending`.
+    pub(super) pending_args: wgpu::ComputePipeline,
+    /// Exact mode: decides the pairs the triangle pass's filter left, with `orient_int`.
+    pub(super) pending: wgpu::ComputePipeline,
+    pub(super) edges: Vec<wgpu::ComputePipeline>,
 }
 
 impl ExtractPipelines {
@@ -258,13 +241,13 @@ impl ExtractPipelines {
 /// The vertex and surface passes (compute entries of the draw module, no constants):
 /// object-space positions to camera-relative world positions, once per vertex and frame, and the
 /// surface vertices from them.
-struct SurfacePipelines {
-    v0: wgpu::BindGroupLayout,
-    empty: wgpu::BindGroup,
-    vertices: wgpu::ComputePipeline,
-    s0: wgpu::BindGroupLayout,
-    s2: wgpu::BindGroupLayout,
-    surfaces: wgpu::ComputePipeline,
+pub(super) struct SurfacePipelines {
+    pub(super) v0: wgpu::BindGroupLayout,
+    pub(super) empty: wgpu::BindGroup,
+    pub(super) vertices: wgpu::ComputePipeline,
+    pub(super) s0: wgpu::BindGroupLayout,
+    pub(super) s2: wgpu::BindGroupLayout,
+    pub(super) surfaces: wgpu::ComputePipeline,
 }
 
 impl SurfacePipelines {
@@ -322,15 +305,17 @@ impl SurfacePipelines {
 
 /// The render pipelines of the draw module: the pre-pass and lit pass (each from the surface
 /// vertex buffer or from the storage buffers), the z-pass and z-fail sides and the caps.
-struct DrawPipelines {
-    d0: wgpu::BindGroupLayout,
-    dl: wgpu::BindGroupLayout,
-    prepass: [wgpu::RenderPipeline; 2],
-    lit: [wgpu::RenderPipeline; 2],
-    side_zpass: wgpu::RenderPipeline,
-    side_zfail: wgpu::RenderPipeline,
-    cap_ccw: wgpu::RenderPipeline,
-    cap_cw: wgpu::RenderPipeline,
+pub(super) struct DrawPipelines {
+    pub(super) d0: wgpu::BindGroupLayout,
+    pub(super) dl: wgpu::BindGroupLayout,
+    /// Pre-pass: `[vertex pulling, vertex buffer]`.
+    pub(super) prepass: [wgpu::RenderPipeline; 2],
+    /// Lit pass: `[vertex pulling, vertex buffer]`.
+    pub(super) lit: [wgpu::RenderPipeline; 2],
+    pub(super) side_zpass: wgpu::RenderPipeline,
+    pub(super) side_zfail: wgpu::RenderPipeline,
+    pub(super) cap_ccw: wgpu::RenderPipeline,
+    pub(super) cap_cw: wgpu::RenderPipeline,
 }
 
 impl DrawPipelines {

@@ -13,7 +13,7 @@ impl ShadowPass {
         let Some(fb) = rs.frame.as_ref() else {
             return Ok(PassCounts::default());
         };
-        let words = read_buffer(&self.device, &self.queue, &fb.args)?;
+        let words = read_buffer(&self.device, &self.queue, &fb.buffers.args)?;
         let l = rs.state.lights;
         let objects = rs.layout.object_count();
         let base = 8 * l;
@@ -86,7 +86,7 @@ impl ShadowPass {
             return Ok(Vec::new());
         };
         let n = rs.state.lights * rs.layout.tri_count();
-        let words = read_buffer(&self.device, &self.queue, &fb.signs)?;
+        let words = read_buffer(&self.device, &self.queue, &fb.buffers.signs)?;
         Ok(words[..n].iter().map(|&w| w as i32).collect())
     }
 
@@ -100,7 +100,7 @@ impl ShadowPass {
             return Ok(Vec::new());
         };
         let counts = self.read_counts(rs)?;
-        let words = read_buffer(&self.device, &self.queue, &fb.records)?;
+        let words = read_buffer(&self.device, &self.queue, &fb.buffers.records)?;
         let cap = rs.layout.capacity();
         counts
             .records

@@ -105,7 +105,7 @@ impl ShadowPass {
         });
         let world_out = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident vertices out"),
-            layout: &self.v2,
+            layout: &self.extract.v2,
             entries: &[entry(0, &world)],
         });
         Ok((world, world_out))
@@ -121,7 +121,7 @@ impl ShadowPass {
         });
         let pending_out = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident pending dispatch"),
-            layout: &self.v2,
+            layout: &self.extract.v2,
             entries: &[entry(0, &dispatch)],
         });
         (dispatch, pending_out)
@@ -180,7 +180,7 @@ impl ShadowPass {
             });
         self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident surfaces out"),
-            layout: &self.s2,
+            layout: &self.world.s2,
             entries: &[
                 wgpu::BindGroupEntry {
                     binding: 1,
@@ -222,12 +222,12 @@ impl ShadowPass {
         self.write_lights(rs, fb, f)?;
         let q = &self.queue;
         q.write_buffer(
-            &fb.objects,
+            &fb.buffers.objects,
             0,
             bytemuck::cast_slice(&object_rows(f, &rs.tri_offsets)),
         );
         self.write_params(rs, f);
-        q.write_buffer(&fb.light_u, 0, &light_uniforms(rs, f, slots));
+        q.write_buffer(&fb.buffers.light_u, 0, &light_uniforms(rs, f, slots));
         rs.state = FrameState {
             lights: f.lights.len(),
             mode: f.mode,
@@ -264,12 +264,12 @@ impl ShadowPass {
         if lights.is_empty() {
             lights.push([0.0; 4]);
         }
-        q.write_buffer(&fb.lights_buf, 0, bytemuck::cast_slice(&lights));
+        q.write_buffer(&fb.buffers.lights, 0, bytemuck::cast_slice(&lights));
         let points = light_points(&lights, objects, n_lights);
-        q.write_buffer(&fb.light_points, 0, bytemuck::cast_slice(&points));
+        q.write_buffer(&fb.buffers.light_points, 0, bytemuck::cast_slice(&points));
         let codes: Vec<u32> = f.techniques.iter().map(|&t| technique::code(t)).collect();
         if !codes.is_empty() {
-            q.write_buffer(&fb.technique, 0, bytemuck::cast_slice(&codes));
+            q.write_buffer(&fb.buffers.technique, 0, bytemuck::cast_slice(&codes));
         }
         Ok(())
     }
@@ -311,14 +311,7 @@ impl ShadowPass {
         Ok(FrameBuffers {
             lights: slots,
             queries: self.timestamp_queries(slots),
-            lights_buf: b.lights,
-            light_points: b.light_points,
-            technique: b.technique,
-            signs: b.signs,
-            args: b.args,
-            records: b.records,
-            objects: b.objects,
-            light_u: b.light_u,
+            buffers: b,
             c0,
             c1,
             d0,
@@ -384,7 +377,7 @@ impl ShadowPass {
     fn extract_groups(&self, rs: &ResidentScene, b: &LightBuffers) -> [wgpu::BindGroup; 2] {
         let c0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident extract scene"),
-            layout: &self.c0,
+            layout: &self.extract.c0,
             entries: &[
                 entry(0, &rs.params),
                 entry(1, &rs.positions),
@@ -398,7 +391,7 @@ impl ShadowPass {
         });
         let c1 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident extract frame"),
-            layout: &self.c1,
+            layout: &self.extract.c1,
             entries: &[
                 entry(0, &rs.rparams),
                 entry(3, &b.technique),
@@ -413,7 +406,7 @@ impl ShadowPass {
     fn draw_groups(&self, rs: &ResidentScene, b: &LightBuffers) -> [wgpu::BindGroup; 2] {
         let d0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident draw"),
-            layout: &self.d0,
+            layout: &self.draw.d0,
             entries: &[
                 entry(0, &rs.globals),
                 entry(1, &rs.positions),
@@ -428,7 +421,7 @@ impl ShadowPass {
         });
         let dl = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident light"),
-            layout: &self.dl,
+            layout: &self.draw.dl,
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
                 resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
@@ -445,7 +438,7 @@ impl ShadowPass {
     fn world_groups(&self, rs: &ResidentScene, b: &LightBuffers) -> [wgpu::BindGroup; 2] {
         let s0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident surfaces"),
-            layout: &self.s0,
+            layout: &self.world.s0,
             entries: &[
                 entry(3, &rs.tris),
                 entry(6, &b.objects),
@@ -454,7 +447,7 @@ impl ShadowPass {
         });
         let v0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident vertices"),
-            layout: &self.v0,
+            layout: &self.world.v0,
             entries: &[
                 entry(1, &rs.positions),
                 entry(6, &b.objects),
@@ -482,18 +475,6 @@ impl ShadowPass {
             (set, resolve, count)
         })
     }
-}
-
-/// The buffers of a [`FrameBuffers`], before the bind groups over them are made.
-struct LightBuffers {
-    lights: wgpu::Buffer,
-    light_points: wgpu::Buffer,
-    technique: wgpu::Buffer,
-    signs: wgpu::Buffer,
-    args: wgpu::Buffer,
-    records: wgpu::Buffer,
-    objects: wgpu::Buffer,
-    light_u: wgpu::Buffer,
 }
 
 /// Checks that the frame's per-object and per-light slices match the scene and lights.
