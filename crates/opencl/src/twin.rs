@@ -153,13 +153,9 @@ pub fn extract(
     filter: ExactFilter,
     out: &mut Multiplicities,
 ) -> Result<u64, BackendError> {
-    let TwinInputs {
-        layout,
-        object_lights: obj_lights,
-        packed,
-    } = TwinInputs::new(scene, lights, NAME)?;
-    let output = run_kernel(&layout, &packed, lights.len(), mode, filter);
+    let x = TwinInputs::new(scene, lights, NAME)?;
+    let output = run_kernel(&x.layout, &x.packed, lights.len(), mode, filter);
     let uncertain = u64::from(output.counts[0]);
-    finish(&layout, &obj_lights, lights.len(), output, out, NAME)?;
+    finish(&x.layout, &x.object_lights, lights.len(), output, out, NAME)?;
     Ok(uncertain)
 }

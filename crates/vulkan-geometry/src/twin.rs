@@ -138,15 +138,17 @@ pub fn extract(
     filter: ExactFilter,
     out: &mut Multiplicities,
 ) -> Result<u64, BackendError> {
-    let TwinInputs {
-        layout,
-        object_lights: obj_lights,
-        packed,
-    } = TwinInputs::new(scene, lights, NAME)?;
-    let k = run_kernel(&layout, &packed, lights.len(), mode, filter);
-    out.reset(layout.edge_count(), lights.len());
+    let x = TwinInputs::new(scene, lights, NAME)?;
+    let k = run_kernel(&x.layout, &x.packed, lights.len(), mode, filter);
+    out.reset(x.layout.edge_count(), lights.len());
     out.all_values_mut().copy_from_slice(&k.mult);
-    finish_batch(&layout, &obj_lights, 0..lights.len(), &k.uncertain, out)?;
+    finish_batch(
+        &x.layout,
+        &x.object_lights,
+        0..lights.len(),
+        &k.uncertain,
+        out,
+    )?;
     out.rebuild_silhouettes();
     Ok(k.uncertain.len() as u64)
 }

@@ -32,7 +32,6 @@
 //! assert!(uncertain <= (scene.total_ovs() * case.lights.len()) as u64);
 //! ```
 
-use crate::layout::pack_lights;
 use crate::resolve::{expand_uncertain, finish_batch, BatchOutput, UncertainTriangle};
 use crate::shaders::{GPU_F32_INPUT_MAX, GPU_F32_PERM_MIN, GPU_F64_FILTER_EPS, TOUCH};
 use shadowvol_robust_math::filter::{self, TermsF32};
@@ -321,24 +320,20 @@ pub fn extract(
     filter: ExactFilter,
     out: &mut Multiplicities,
 ) -> Result<u64, BackendError> {
-    let TwinInputs {
-        layout,
-        object_lights: obj_lights,
-        ..
-    } = TwinInputs::new(scene, lights, crate::NAME)?;
-    let triangles = TriangleLayout::build(scene, &layout, crate::NAME)?;
-    let packed = pack_lights(&obj_lights, 0, lights.len());
-    let k = run_kernel(&layout, &triangles, &packed, lights.len(), mode, filter);
+    let x = TwinInputs::new(scene, lights, crate::NAME)?;
+    let layout = &x.layout;
+    let triangles = TriangleLayout::build(scene, layout, crate::NAME)?;
+    let k = run_kernel(layout, &triangles, &x.packed, lights.len(), mode, filter);
     out.reset(layout.edge_count(), lights.len());
     let records = if k.uncertain.is_empty() {
         Vec::new()
     } else {
-        expand_uncertain(&k.uncertain, &triangles.edge_slots(&layout), lights.len())?
+        expand_uncertain(&k.uncertain, &triangles.edge_slots(layout), lights.len())?
     };
     let uncertain = records.len() as u64;
     let _patch = finish_batch(
-        &layout,
-        &obj_lights,
+        layout,
+        &x.object_lights,
         0..lights.len(),
         BatchOutput {
             mult: Some(k.mult),
