@@ -102,11 +102,11 @@ fn attenuation(world: vec3<f32>) -> f32 {
     return a;
 }
 
-@fragment
-fn fs_lit(i: SurfaceOut) -> @location(0) vec4<f32> {
+// The light's Lambert term at a surface fragment, the normal turned towards the eye.
+fn lambert(i: SurfaceOut) -> vec3<f32> {
     let len = length(i.normal);
     if (len <= 0.0) {
-        return vec4<f32>(0.0);
+        return vec3<f32>(0.0);
     }
     var n = i.normal / len;
     if (dot(n, g.eye.xyz - i.world) < 0.0) {
@@ -114,7 +114,12 @@ fn fs_lit(i: SurfaceOut) -> @location(0) vec4<f32> {
     }
     let l = normalize(lt.pos.xyz - lt.pos.w * i.world);
     let k = max(dot(n, l), 0.0) * attenuation(i.world);
-    return vec4<f32>(i.albedo * lt.color.rgb * k, 0.0);
+    return i.albedo * lt.color.rgb * k;
+}
+
+@fragment
+fn fs_lit(i: SurfaceOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(lambert(i), 0.0);
 }
 
 // The pre-pass for a colour target alone (embedders without an ids target).

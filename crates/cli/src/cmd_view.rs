@@ -1,6 +1,6 @@
 //! `shadowvol view`: a live window onto a scene or mesh (see `shadowvol_viewer`).
 
-use crate::cmd_render::{parse_size, render_error, SceneArgs, TechniqueArg};
+use crate::cmd_render::{parse_size, render_error, SceneArgs, ShadowsArg, TechniqueArg};
 use shadowvol::{find_backend, CliError, Format};
 use shadowvol_renderer::Pipeline;
 use shadowvol_viewer::controls::VolumeView;
@@ -16,7 +16,8 @@ pub const LONG_ABOUT: &str = "Open a window onto SCENE (a preset, a .gltf/.glb s
     Controls: left drag orbits, right (or middle) drag pans, the wheel zooms; the arrow keys or \
     shift + left drag move the first light around the scene; 1-4 pick the accuracy mode \
     (original, ordered, robust, exact); T cycles the technique (auto, z-pass, z-fail); V cycles \
-    how the volumes show (hidden, translucent, wire: cracks become visible); Esc or Q quits. \
+    how the volumes show (hidden, translucent, wire: cracks become visible); M switches between \
+    volumes and shadow maps (--shadows and the --map-* flags as for `render`); Esc or Q quits. \
     The overlay shows fps, frame ms, silhouette edges, the uncertain and host-resolved pairs, \
     the pipeline and each object's technique.\n\n\
     The renderer runs on the window's device: in the GPU pipeline it draws each frame into a \
@@ -109,7 +110,10 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         VolumesArg::Wire => VolumeView::Wire,
     };
     options.title = format!("shadowvol - {}", scene.name);
-    options.pipeline = if wants_host == Some(true) {
+    options.maps = args.input.map_settings();
+    options.pipeline = if args.input.shadows == ShadowsArg::Map {
+        Pipeline::Map
+    } else if wants_host == Some(true) {
         Pipeline::Host
     } else {
         Pipeline::Gpu

@@ -174,7 +174,13 @@ impl RenderDevice {
             return Err(RenderError::Device(format!("out of memory: {e}")));
         }
         if let Some(e) = validation {
-            return Err(RenderError::Device(format!("validation: {e}")));
+            // The description names the pass and the rule; Display alone says only "Validation
+            // Error".
+            let detail = match &e {
+                wgpu::Error::Validation { description, .. } => description.trim().to_owned(),
+                other => other.to_string(),
+            };
+            return Err(RenderError::Device(format!("validation: {detail}")));
         }
         Ok(())
     }

@@ -118,6 +118,9 @@ pub struct FrameReport {
     /// The GPU time of each pass from timestamp queries, where the pipeline and device have
     /// them (GPU pipeline).
     pub gpu_timings: Option<GpuTimings>,
+    /// Per light, its shadow map ([`crate::MapPipeline`]; `None`: nothing casts); empty for the
+    /// volume pipelines.
+    pub shadow_maps: Vec<Option<crate::maps::LightMap>>,
 }
 
 impl FrameReport {
@@ -133,6 +136,28 @@ impl FrameReport {
             self.adapter,
             if self.depth_clamp { "on" } else { "off" }
         );
+        if self.pipeline == crate::Pipeline::Map {
+            for (li, m) in self.shadow_maps.iter().enumerate() {
+                s.push_str(&match m {
+                    Some(m) => format!(
+                        "light {li}: {:?} map {}x{}{}, texel {:.3e} {}, near {:.3e}, bias depth {} slope {} normal {} (offset {:.3e})\n",
+                        m.kind,
+                        m.size,
+                        m.size,
+                        if m.kind == crate::maps::MapKind::Cube { " x 6 faces" } else { "" },
+                        m.texel,
+                        if m.kind == crate::maps::MapKind::Directional { "world units" } else { "per unit of distance" },
+                        m.near,
+                        m.bias.depth,
+                        m.bias.slope,
+                        m.bias.normal,
+                        m.normal_offset,
+                    ),
+                    None => format!("light {li}: no map (nothing casts a shadow)\n"),
+                });
+            }
+            return s;
+        }
         for e in &self.plan {
             s.push_str(&e.to_string());
             s.push('\n');

@@ -10,6 +10,8 @@
 //!   the host, which builds the volumes); [`GpuPipeline`] wraps the resident pass
 //!   ([`resident::ShadowPass`]: extraction, sides and caps on the device, nothing read back),
 //!   which applications can also embed on their own device and encoder.
+//! * [`MapPipeline`] draws shadow maps instead ([`maps`]: directional, spot and cube maps with
+//!   Bevy 0.20's defaults), the peer the volumes are measured against.
 //! * [`plan`]: per (light, surface) the cheapest correct technique: culled, z-pass (when the
 //!   near-clip volume test proves the camera is outside the surface's shadow volume) or z-fail
 //!   with caps (no back cap for directional lights).
@@ -41,6 +43,7 @@ mod error;
 mod frame;
 pub mod hard;
 pub mod lighting;
+pub mod maps;
 pub mod pipeline;
 pub mod plan;
 pub mod raster;
@@ -52,8 +55,9 @@ pub use device::RenderDevice;
 pub use error::RenderError;
 pub use frame::{Frame, FrameImage, FrameReport, FrameTime, Timings, UncertainUnit};
 pub use lighting::Exposure;
+pub use maps::{MapBias, MapFilter, MapSettings};
 pub use pipeline::volume;
-pub use pipeline::{GpuPipeline, HostPipeline, Pipeline, ShadowPipeline};
+pub use pipeline::{GpuPipeline, HostPipeline, MapPipeline, Pipeline, ShadowPipeline};
 pub use plan::{PlanEntry, PlanPolicy, SilhouetteSource, Technique};
 pub use renderer::{RenderOptions, Renderer};
 pub use shadowvol_robust_math::{Accuracy, Light};

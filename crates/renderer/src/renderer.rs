@@ -385,6 +385,7 @@ impl Renderer {
             depth_clamp: pipeline.depth_clamp(&self.device),
             timings,
             gpu_timings: pass.gpu_timings,
+            shadow_maps: pipeline.maps().to_vec(),
         }
     }
 }
@@ -423,7 +424,8 @@ fn ms(t: Instant) -> f64 {
 
 /// Which pipelines [`Renderer`]s can use, for callers that choose by name.
 impl Pipeline {
-    /// A new pipeline of this kind: [`GpuPipeline`], or [`HostPipeline`] over `backend`.
+    /// A new pipeline of this kind: [`GpuPipeline`], [`HostPipeline`] over `backend`, or
+    /// [`crate::MapPipeline`] with Bevy's defaults.
     ///
     /// # Errors
     /// [`RenderError::InvalidInput`] for the host pipeline without a backend.
@@ -433,6 +435,9 @@ impl Pipeline {
     ) -> Result<Box<dyn ShadowPipeline>, RenderError> {
         match (self, backend) {
             (Pipeline::Gpu, _) => Ok(Box::new(GpuPipeline::new())),
+            (Pipeline::Map, _) => Ok(Box::new(crate::MapPipeline::new(
+                crate::MapSettings::default(),
+            ))),
             (Pipeline::Host, Some(b)) => Ok(Box::new(HostPipeline::new(b))),
             (Pipeline::Host, None) => Err(RenderError::InvalidInput(
                 "the host pipeline needs a silhouette backend".to_owned(),

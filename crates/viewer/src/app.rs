@@ -9,8 +9,8 @@ use crate::{BackendStarter, ViewError, ViewOptions, ViewReport};
 use glam::Vec3;
 use shadowvol_renderer::resident::texture_2d;
 use shadowvol_renderer::{
-    Camera, Frame, GpuPipeline, HostPipeline, Pipeline, PlanPolicy, RenderError, RenderOptions,
-    Scene, ShadowPipeline,
+    Camera, Frame, GpuPipeline, HostPipeline, MapPipeline, Pipeline, PlanPolicy, RenderError,
+    RenderOptions, Scene, ShadowPipeline,
 };
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -33,6 +33,8 @@ pub(crate) struct App {
     centre: Vec3,
     policy: PlanPolicy,
     volumes: VolumeView,
+    /// Shadow maps instead of volumes (M switches).
+    maps: bool,
     gfx: Option<Gfx>,
     drag: Drag,
     frame_ms: Vec<f64>,
@@ -65,6 +67,11 @@ impl App {
             .map_or(camera.target, |(lo, hi)| (lo + hi) * 0.5);
         let policy = options.render.policy;
         let volumes = options.volumes;
+        let maps = options.pipeline == Pipeline::Map;
+        let mut options = options;
+        if maps {
+            options.pipeline = Pipeline::Gpu;
+        }
         Self {
             scene,
             backend,
@@ -74,6 +81,7 @@ impl App {
             centre,
             policy,
             volumes,
+            maps,
             gfx: None,
             drag: Drag::default(),
             frame_ms: Vec::new(),
@@ -94,6 +102,7 @@ impl App {
     fn make_pipeline(&mut self, kind: Pipeline) -> Result<Box<dyn ShadowPipeline>, ViewError> {
         Ok(match kind {
             Pipeline::Gpu => Box::new(GpuPipeline::new()),
+            Pipeline::Map => Box::new(MapPipeline::new(self.options.maps)),
             Pipeline::Host => {
                 let backend = (self.backend)().map_err(RenderError::Backend)?;
                 Box::new(HostPipeline::new(backend).keep_volumes(true))
@@ -127,7 +136,9 @@ impl App {
     fn frame(&mut self, el: &ActiveEventLoop) -> Result<(), ViewError> {
         let t0 = Instant::now();
         // Only the host pipeline keeps the volume geometry the overlay draws.
-        let kind = if self.volumes == VolumeView::Hidden {
+        let kind = if self.maps {
+            Pipeline::Map
+        } else if self.volumes == VolumeView::Hidden {
             self.options.pipeline
         } else {
             Pipeline::Host
@@ -237,6 +248,7 @@ impl App {
                 "q" | "Q" => el.exit(),
                 "t" | "T" => self.policy = controls::next_policy(self.policy),
                 "v" | "V" => self.volumes = self.volumes.next(),
+                "m" | "M" => self.maps = !self.maps,
                 s => {
                     if let Some(m) = s.parse::<u8>().ok().and_then(controls::mode_of_key) {
                         self.options.render.mode = m;
@@ -453,7 +465,11 @@ impl ApplicationHandler for App {
                     self.options.pipeline = Pipeline::Host;
                 }
             }
-            self.make_pipeline(self.options.pipeline)
+            self.make_pipeline(if self.maps {
+                Pipeline::Map
+            } else {
+                self.options.pipeline
+            })
         });
         match made {
             Ok(g) => {

@@ -14,7 +14,7 @@
 //! shift + left drag move the first light around the scene's centre; 1–4 pick the accuracy
 //! mode (original, ordered, robust, exact); T cycles the technique (auto, z-pass, z-fail); V
 //! cycles the volumes (hidden, translucent, wire), drawn over the image so that cracks show;
-//! Esc or Q quits.
+//! M switches between the volumes and shadow maps ([`ViewOptions::maps`]); Esc or Q quits.
 //!
 //! For automation, [`ViewOptions::frames`] renders that many frames, writes the last one's
 //! image to [`ViewOptions::screenshot`] and returns a [`ViewReport`].
@@ -74,8 +74,11 @@ pub struct ViewOptions {
     /// Where volumes are built: [`Pipeline::Gpu`] (on the device, nothing read back but the
     /// image; used when the adapter supports it, else the host pipeline with a warning) or
     /// [`Pipeline::Host`]. While the volumes are shown (V) frames use the host pipeline, which
-    /// keeps their geometry.
+    /// keeps their geometry. [`Pipeline::Map`] starts with shadow maps (M switches to the GPU
+    /// pipeline's volumes and back).
     pub pipeline: Pipeline,
+    /// The shadow maps' settings, while maps are shown (M).
+    pub maps: shadowvol_renderer::MapSettings,
 }
 
 impl ViewOptions {
@@ -91,6 +94,7 @@ impl ViewOptions {
             volumes: controls::VolumeView::Hidden,
             title: "shadowvol".into(),
             pipeline: Pipeline::Gpu,
+            maps: shadowvol_renderer::MapSettings::default(),
         }
     }
 }

@@ -69,6 +69,7 @@ fn median_timings(
         caps: med(|t| t.caps),
         stencil: med(|t| t.stencil),
         lighting: med(|t| t.lighting),
+        shadow_maps: med(|t| t.shadow_maps),
     })
 }
 

@@ -5,7 +5,7 @@ mod frames;
 mod report;
 mod stage;
 
-pub(crate) use stage::SceneArgs;
+pub(crate) use stage::{SceneArgs, ShadowsArg};
 
 use report::{Report, TextReport, Timings};
 use shadowvol::{find_backend, CliError, Format};
@@ -238,7 +238,7 @@ pub(crate) fn parse_light(s: &str) -> Result<shadowvol_robust_math::Light, Strin
 }
 
 pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
-    let wants_host = args.input.wants_host()?;
+    args.input.wants_host()?;
     let (mut scene, lights_source, ground) = args.input.load()?;
     if args.backdrop {
         scene.add_backdrop();
@@ -250,7 +250,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     options.scissor = !args.no_scissor;
     options.policy = args.technique.into();
     let device = RenderDevice::open().map_err(render_error)?;
-    let pipeline = pipeline(wants_host, args.input.backend.as_deref(), &device)?;
+    let pipeline = args.input.pipeline(&device)?;
     let mut renderer = Renderer::new(device, pipeline, options).map_err(render_error)?;
     let frame = renderer.render(&scene).map_err(render_error)?;
     frame.save_png(&out_path).map_err(render_error)?;
@@ -313,6 +313,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 uncertain: r.uncertain,
                 uncertain_unit: r.uncertain_unit,
                 host_resolved: r.host_resolved,
+                map: report::MapFields::new(&args.input),
             };
             serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
             writeln!(out)?;
@@ -345,7 +346,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
 /// # Errors
 /// [`CliError::Other`] for `--pipeline gpu` on a device that cannot run it, naming why; the
 /// backend's start error for the host pipeline.
-fn pipeline(
+pub(crate) fn pipeline(
     wants_host: Option<bool>,
     backend: Option<&str>,
     device: &RenderDevice,

@@ -1,9 +1,11 @@
 //! `render`'s reports: the JSON of the CLI contract (extended) and the text for people.
 
 use super::frames::FrameStats;
-use super::stage::{Ground, LightsSource};
+use super::stage::{Ground, LightsSource, SceneArgs, ShadowsArg};
 use super::Args;
+use shadowvol_renderer::maps::MapKind;
 use shadowvol_renderer::{Frame, Pipeline, UncertainUnit};
+use shadowvol_renderer::{MapBias, MapFilter};
 use shadowvol_robust_math::Accuracy;
 use std::io::Write;
 
@@ -57,6 +59,59 @@ pub(super) struct Report<'a> {
     pub(super) uncertain_unit: shadowvol_renderer::UncertainUnit,
     /// Of those, the ones decided on the host.
     pub(super) host_resolved: u64,
+    /// `shadows` and the map settings.
+    #[serde(flatten)]
+    pub(super) map: MapFields,
+}
+
+/// What drew the shadows, and with `--shadows map` the maps' settings in effect (`null` for
+/// volumes).
+#[derive(Debug, serde::Serialize)]
+pub(super) struct MapFields {
+    /// `volumes` or `map`.
+    shadows: ShadowsArg,
+    /// Side of directional and spot maps, texels.
+    map_size: Option<u32>,
+    /// Side of each cube face (point lights), texels.
+    map_size_point: Option<u32>,
+    /// `hard` or `pcf`.
+    map_filter: Option<MapFilter>,
+    /// The bias of directional and spot maps, and of cube maps.
+    map_bias: Option<MapBiases>,
+}
+
+/// The biases in effect per map kind.
+#[derive(Debug, serde::Serialize)]
+struct MapBiases {
+    /// Directional and spot maps.
+    directional: MapBias,
+    /// Cube maps (point lights).
+    point: MapBias,
+}
+
+impl MapFields {
+    pub(super) fn new(input: &SceneArgs) -> Self {
+        if input.shadows != ShadowsArg::Map {
+            return Self {
+                shadows: input.shadows,
+                map_size: None,
+                map_size_point: None,
+                map_filter: None,
+                map_bias: None,
+            };
+        }
+        let s = input.map_settings();
+        Self {
+            shadows: input.shadows,
+            map_size: Some(s.size_for(MapKind::Directional)),
+            map_size_point: Some(s.size_for(MapKind::Cube)),
+            map_filter: Some(s.filter),
+            map_bias: Some(MapBiases {
+                directional: s.bias_for(MapKind::Directional),
+                point: s.bias_for(MapKind::Cube),
+            }),
+        }
+    }
 }
 
 #[derive(Debug, serde::Serialize)]

@@ -47,6 +47,50 @@ pub(crate) struct SceneArgs {
     /// `view`, showing the volumes (V, --volumes) uses the host pipeline.
     #[arg(long, value_enum, value_name = "gpu|host")]
     pub(crate) pipeline: Option<PipelineArg>,
+
+    /// What draws the shadows: `volumes` (the pipeline --pipeline picks) or `map`, shadow maps
+    /// on the renderer's device, Bevy 0.20's defaults unless the --map-* flags say otherwise: a
+    /// fitted orthographic map per directional light, a perspective map per spot light, a cube
+    /// map per point light (`view`: key M switches).
+    #[arg(long, value_enum, default_value_t = ShadowsArg::Volumes)]
+    pub(crate) shadows: ShadowsArg,
+
+    /// --shadows map: the side of every map and cube face in texels, 1 to the device's texture
+    /// limit [default: Bevy's, 2048 for directional and spot lights, 1024 for point lights].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub(crate) map_size: Option<u32>,
+
+    /// --shadows map: how maps are read: `hard` (one hardware comparison) or `pcf` (3x3
+    /// bilinear comparisons, the soft edge of Bevy's default filter).
+    #[arg(long, value_enum, default_value_t = MapFilterArg::Pcf)]
+    pub(crate) map_filter: MapFilterArg,
+
+    /// --shadows map: the bias of every map, DEPTH,SLOPE,NORMAL: world units towards the light,
+    /// the map pass's slope-scaled depth bias, texels along the normal [default: Bevy's,
+    /// 0.02,0,1.8 for directional and spot lights, 0.08,0,0.6 for point lights].
+    #[arg(long, value_name = "DEPTH,SLOPE,NORMAL", allow_hyphen_values = true)]
+    pub(crate) map_bias: Option<shadowvol_renderer::MapBias>,
+}
+
+/// `--shadows`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum ShadowsArg {
+    /// Stencil shadow volumes (--pipeline gpu or host).
+    #[default]
+    Volumes,
+    /// Shadow maps (the map pipeline).
+    Map,
+}
+
+/// `--map-filter`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum MapFilterArg {
+    /// One hardware depth comparison per lookup.
+    Hard,
+    /// Percentage-closer filtering over 3x3 bilinear comparisons.
+    #[default]
+    Pcf,
 }
 
 impl SceneArgs {
@@ -61,10 +105,57 @@ impl SceneArgs {
                 "--backend {b} selects the host pipeline; it cannot be combined with --pipeline gpu \
                  (the GPU pipeline runs the wgpu kernels on the renderer's device)"
             ))),
+            _ if self.shadows == ShadowsArg::Map
+                && (self.pipeline.is_some() || self.backend.is_some()) =>
+            {
+                Err(CliError::Other(
+                    "--shadows map draws shadow maps with the map pipeline on the renderer's \
+                     device; leave out --pipeline and --backend, which choose a volume pipeline"
+                        .to_owned(),
+                ))
+            }
             (Some(PipelineArg::Gpu), None) => Ok(Some(false)),
             (Some(PipelineArg::Host), _) | (None, Some(_)) => Ok(Some(true)),
             (None, None) => Ok(None),
         }
+    }
+
+    /// The shadow-map settings of the --map-* flags (with a warning when they are given without
+    /// --shadows map, where nothing reads them).
+    pub(crate) fn map_settings(&self) -> shadowvol_renderer::MapSettings {
+        let map_flags = self.map_size.is_some()
+            || self.map_bias.is_some()
+            || self.map_filter != MapFilterArg::Pcf;
+        if self.shadows != ShadowsArg::Map && map_flags {
+            eprintln!(
+                "warning: --map-size, --map-filter and --map-bias apply to --shadows map only"
+            );
+        }
+        shadowvol_renderer::MapSettings {
+            size: self.map_size,
+            filter: match self.map_filter {
+                MapFilterArg::Hard => shadowvol_renderer::MapFilter::Hard,
+                MapFilterArg::Pcf => shadowvol_renderer::MapFilter::Pcf,
+            },
+            bias: self.map_bias,
+        }
+    }
+
+    /// The pipeline these flags ask for on `device`: the map pipeline with --shadows map, else
+    /// the volume pipeline of [`SceneArgs::wants_host`] (see [`super::pipeline`]).
+    ///
+    /// # Errors
+    /// As [`SceneArgs::wants_host`] and [`super::pipeline`].
+    pub(crate) fn pipeline(
+        &self,
+        device: &shadowvol_renderer::RenderDevice,
+    ) -> Result<Box<dyn shadowvol_renderer::ShadowPipeline>, CliError> {
+        let wants_host = self.wants_host()?;
+        let settings = self.map_settings();
+        if self.shadows == ShadowsArg::Map {
+            return Ok(Box::new(shadowvol_renderer::MapPipeline::new(settings)));
+        }
+        super::pipeline(wants_host, self.backend.as_deref(), device)
     }
 
     /// Loads the scene, prints its loader's notes on stderr and [`stage`]s it with the flags.

@@ -12,12 +12,16 @@
 //!   the multiplicities come back to the host, which builds the volumes and uploads them.
 //! * [`GpuPipeline`] wraps the resident pass ([`crate::resident::ShadowPass`]): extraction,
 //!   sides and caps on the device, nothing read back; it starts no silhouette backend.
+//! * [`MapPipeline`] draws shadow maps instead of volumes ([`crate::maps`]): the peer the
+//!   volumes are measured against, with the same pre-pass, lit pass and report.
 
 mod gpu;
 mod host;
+mod map;
 
 pub use gpu::GpuPipeline;
 pub use host::{volume, HostPipeline};
+pub use map::MapPipeline;
 
 use crate::frame::UncertainUnit;
 use crate::plan::{PlanEntry, Scissor};
@@ -37,6 +41,9 @@ pub enum Pipeline {
     /// [`GpuPipeline`]: extraction, sides and caps on the renderer's device; nothing is read
     /// back during a frame, and no backend runs.
     Gpu,
+    /// [`MapPipeline`]: shadow maps instead of volumes, on the renderer's device; nothing is
+    /// read back during a frame, and no backend runs.
+    Map,
 }
 
 impl Pipeline {
@@ -46,6 +53,7 @@ impl Pipeline {
         match self {
             Pipeline::Host => "host",
             Pipeline::Gpu => "gpu",
+            Pipeline::Map => "map",
         }
     }
 }
@@ -154,6 +162,12 @@ pub trait ShadowPipeline {
     /// The shadow-volume vertices of the last frame, camera-relative, as triangles (`w = 0`:
     /// at infinity), for viewers that draw the volumes; empty unless the pipeline keeps them.
     fn volumes(&self) -> &[[f32; 4]] {
+        &[]
+    }
+
+    /// Per light, the shadow map of the last frame (`None`: the light has none, nothing casts);
+    /// empty for the volume pipelines.
+    fn maps(&self) -> &[Option<crate::maps::LightMap>] {
         &[]
     }
 }

@@ -46,6 +46,37 @@ pub struct SurfaceVertex {
     pub pad: [u32; 2],
 }
 
+/// Appends surface `index`'s triangles (of `table`, at world `positions`) to `out`, in
+/// canonical vertex order (ascending ids, the sign convention's), relative to `origin`, with the
+/// flat normal, `albedo` and ids `[index + 1, triangle]`: what every pipeline's pre-pass and lit
+/// pass draw.
+pub(crate) fn push_surface(
+    out: &mut Vec<SurfaceVertex>,
+    index: usize,
+    table: &shadowvol_mesh_topology::EdgeTable,
+    positions: &[glam::Vec3],
+    albedo: [f32; 3],
+    origin: glam::Vec3,
+) {
+    out.reserve(3 * table.triangles.len());
+    for (ti, t) in table.triangles.iter().enumerate() {
+        let mut k = *t;
+        k.sort_unstable();
+        let p = k.map(|k| positions[k as usize]);
+        let n = (p[1] - p[0]).cross(p[2] - p[0]);
+        for v in p {
+            let v = v - origin;
+            out.push(SurfaceVertex {
+                pos: [v.x, v.y, v.z, 1.0],
+                normal: [n.x, n.y, n.z, 0.0],
+                albedo: [albedo[0], albedo[1], albedo[2], 1.0],
+                ids: [index as u32 + 1, ti as u32],
+                pad: [0; 2],
+            });
+        }
+    }
+}
+
 /// The shader's `LightU` for a light at `light` (camera-relative, homogeneous) of linear
 /// `color` (times gain): position, colour, then `emit = (inverse square 0/1, 1 / range or 0,
 /// cone scale, cone offset)` and `spot = (axis, 1 for a cone)` (see `fs_lit`). A unit light

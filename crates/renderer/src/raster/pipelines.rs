@@ -149,7 +149,8 @@ impl RenderPipelines<'_> {
         self.create(label, vs, buffers, primitive, depth, None)
     }
 
-    fn surface(
+    /// A surface draw: `vs` over `buffers` with `depth`, `fs` into `targets`.
+    pub(crate) fn surface(
         &self,
         label: &str,
         vs: &str,
@@ -168,7 +169,9 @@ impl RenderPipelines<'_> {
         self.create(label, vs, buffers, primitive, depth, Some(fragment))
     }
 
-    fn create(
+    /// A render pipeline of these shaders and layout, with `primitive`, `depth` and the optional
+    /// `fragment` stage.
+    pub(crate) fn create(
         &self,
         label: &str,
         vs: &str,

@@ -84,6 +84,57 @@ pub(crate) fn lit_depth(format: wgpu::TextureFormat) -> wgpu::DepthStencilState 
     }
 }
 
+/// The shadow-map pipeline's mask pass: depth `equal` (the pre-pass's surface only) without
+/// writes; the stencil set to the reference (1) wherever a fragment survives (shadowed).
+pub(crate) fn map_mask_depth(format: wgpu::TextureFormat) -> wgpu::DepthStencilState {
+    let face = wgpu::StencilFaceState {
+        compare: wgpu::CompareFunction::Always,
+        fail_op: wgpu::StencilOperation::Keep,
+        depth_fail_op: wgpu::StencilOperation::Keep,
+        pass_op: wgpu::StencilOperation::Replace,
+    };
+    wgpu::DepthStencilState {
+        format,
+        depth_write_enabled: Some(false),
+        depth_compare: Some(wgpu::CompareFunction::Equal),
+        stencil: wgpu::StencilState {
+            front: face,
+            back: face,
+            read_mask: 0xff,
+            write_mask: 0xff,
+        },
+        bias: wgpu::DepthBiasState::default(),
+    }
+}
+
+/// The shadow-map pipeline's lit pass: depth `equal` without writes, no stencil test (the map's
+/// visibility scales the light in the shader).
+pub(crate) fn map_lit_depth(format: wgpu::TextureFormat) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format,
+        depth_write_enabled: Some(false),
+        depth_compare: Some(wgpu::CompareFunction::Equal),
+        stencil: wgpu::StencilState::default(),
+        bias: wgpu::DepthBiasState::default(),
+    }
+}
+
+/// A shadow map's depth pass (reverse-Z): `Depth32Float`, `greater-equal` with writes, and the
+/// slope-scaled bias pushing stored depths away from the light by `slope`.
+pub(crate) fn map_depth(slope: f32) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: wgpu::TextureFormat::Depth32Float,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
+        stencil: wgpu::StencilState::default(),
+        bias: wgpu::DepthBiasState {
+            constant: 0,
+            slope_scale: -slope,
+            clamp: 0.0,
+        },
+    }
+}
+
 /// A shadow-volume draw: depth `less` without writes, two-sided stencil `(front, back)`.
 pub(crate) fn volume_depth(
     format: wgpu::TextureFormat,

@@ -94,6 +94,18 @@ impl<'a> Attachments<'a> {
     /// compares) where the frame is read back; nothing otherwise. A pipeline calls it after each
     /// light's stencil pass, before the next light's clears it.
     pub fn after_stencil(&self, enc: &mut wgpu::CommandEncoder, light: usize) {
+        self.copy_stencil(enc, light);
+    }
+
+    /// True when the frame is read back, so that [`Attachments::after_stencil`] copies each
+    /// light's stencil: a pipeline whose shadows are not in the stencil otherwise (the shadow-map
+    /// pipeline) writes them there only then.
+    #[must_use]
+    pub fn reads_stencil(&self) -> bool {
+        self.readback.is_some()
+    }
+
+    fn copy_stencil(&self, enc: &mut wgpu::CommandEncoder, light: usize) {
         if let Some(t) = self.readback {
             t.copy_stencil(enc, light);
         }

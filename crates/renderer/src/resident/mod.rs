@@ -291,6 +291,8 @@ pub struct GpuTimings {
     pub stencil: f64,
     /// The depth pre-pass and every light's lit pass.
     pub lighting: f64,
+    /// The shadow-map pipeline's map passes (0 for the volume pipelines).
+    pub shadow_maps: f64,
 }
 
 /// What the last [`ShadowPass::update`] set, for the draws.

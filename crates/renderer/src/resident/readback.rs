@@ -73,6 +73,7 @@ impl ShadowPass {
             caps,
             stencil: sides + caps,
             lighting: span(TimestampSlot::Prepass) + lit,
+            shadow_maps: 0.0,
         }))
     }
 

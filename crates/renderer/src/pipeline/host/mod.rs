@@ -9,7 +9,7 @@ pub mod volume;
 use super::{FrameInputs, PassReport, Pipeline, ShadowPipeline};
 use crate::frame::UncertainUnit;
 use crate::plan::PlanEntry;
-use crate::raster::{Attachments, SurfaceVertex};
+use crate::raster::{push_surface, Attachments};
 use crate::{Camera, RenderDevice, RenderError};
 use glam::{Affine3A, Vec3};
 use raster::{HostRaster, RasterInput};
@@ -19,7 +19,6 @@ use shadowvol_scenes::Scene;
 use shadowvol_silhouette::{PreparedId, SilhouetteBackend, TopologyScene};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use volume::canonical_triangle;
 
 /// One light's silhouette of one object, as last extracted.
 struct LightCache {
@@ -208,7 +207,15 @@ impl ShadowPipeline for HostPipeline {
         }
         let build_time = t_build.elapsed();
 
-        let surface = surface_vertices(frame, origin);
+        let mut surface = Vec::new();
+        for (oi, (s, w)) in frame
+            .scene
+            .surfaces()
+            .zip(frame.world.surfaces())
+            .enumerate()
+        {
+            push_surface(&mut surface, oi, s.table, &w.positions, s.albedo, origin);
+        }
         let (w, h) = frame.size;
         let aspect = (f64::from(w) / f64::from(h)) as f32;
         let raster = self.raster.as_ref().ok_or_else(|| {
@@ -251,35 +258,6 @@ impl ShadowPipeline for HostPipeline {
     fn volumes(&self) -> &[[f32; 4]] {
         &self.volumes
     }
-}
-
-/// Every surface's triangles in canonical order, camera-relative, with flat normals, albedo
-/// and ids `[surface + 1, triangle]`.
-fn surface_vertices(frame: &FrameInputs<'_>, origin: Vec3) -> Vec<SurfaceVertex> {
-    let mut surface = Vec::new();
-    for (oi, (s, w)) in frame
-        .scene
-        .surfaces()
-        .zip(frame.world.surfaces())
-        .enumerate()
-    {
-        for (ti, t) in s.table.triangles.iter().enumerate() {
-            let k = canonical_triangle(*t);
-            let p = k.map(|k| w.positions[k as usize]);
-            let n = (p[1] - p[0]).cross(p[2] - p[0]);
-            for v in p {
-                let v = v - origin;
-                surface.push(SurfaceVertex {
-                    pos: [v.x, v.y, v.z, 1.0],
-                    normal: [n.x, n.y, n.z, 0.0],
-                    albedo: [s.albedo[0], s.albedo[1], s.albedo[2], 1.0],
-                    ids: [oi as u32 + 1, ti as u32],
-                    pad: [0; 2],
-                });
-            }
-        }
-    }
-    surface
 }
 
 fn ms(d: Duration) -> f64 {

@@ -1,0 +1,405 @@
+//! Each light's map projection: where its map looks and what it covers, computed on the host from
+//! the camera, the scene's box and the casters' boxes. Every matrix maps camera-relative world
+//! positions (world minus the eye) to reverse-Z clip space: depth 1 nearest the light.
+
+use super::{MapBias, MapSettings};
+use crate::Camera;
+use glam::{DVec3, Mat4, Vec3, Vec4};
+use shadowvol_scenes::SceneLight;
+
+/// The kind of map a light gets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MapKind {
+    /// A directional light: one orthographic map fitted to the view and the casters.
+    Directional,
+    /// A spot light with an outer cone angle up to [`SPOT_MAX_HALF_ANGLE`]: one perspective map
+    /// over the cone.
+    Spot,
+    /// A point light (and a wider spot light): a cube map of 6 faces.
+    Cube,
+}
+
+/// The widest spot cone (half angle, radians) that gets a perspective map; wider cones get a
+/// cube map, as a point light does (a perspective map over 150° wastes most of its texels).
+pub const SPOT_MAX_HALF_ANGLE: f32 = 75.0 * std::f32::consts::PI / 180.0;
+
+/// The rows of each cube face's view, in the layer order +X, -X, +Y, -Y, +Z, -Z: a direction
+/// `d` from the light maps to `(sc, -tc, -ma)` of the Vulkan/WebGPU cube-map face selection
+/// table, so that the perspective divide gives the face's `(s, t)` as the sampler reads them.
+pub(crate) const CUBE_FACE_ROWS: [[[f32; 3]; 3]; 6] = [
+    [[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]],
+    [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]],
+    [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, -1.0, 0.0]],
+    [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]],
+    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]],
+    [[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+];
+
+/// One light's map for one frame: its kind, the projection of each face and the bias in world
+/// units, as the shaders read them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightMap {
+    /// Which map.
+    pub kind: MapKind,
+    /// Side of the map (of each cube face), texels.
+    pub size: u32,
+    /// Clip from camera-relative world, per face (only the first is used unless
+    /// [`MapKind::Cube`]).
+    pub view_proj: [Mat4; 6],
+    /// The bias in effect for this light's kind (Bevy's units: world units of depth bias, normal
+    /// bias in texels).
+    pub bias: MapBias,
+    /// Normal bias in world units: times the texel size for a directional map, per unit of
+    /// distance from the light for spot and cube maps (as Bevy scales it, with its `√2`).
+    pub normal_offset: f32,
+    /// Near plane of a perspective map (world units); 0 for a directional map.
+    pub near: f32,
+    /// The world size of one texel: directional maps in world units, perspective maps per unit of
+    /// distance from the light.
+    pub texel: f32,
+    /// A spot light's axis (unit); zero otherwise.
+    pub axis: Vec3,
+}
+
+/// What a map is fitted to, in world space.
+#[derive(Debug, Clone, Copy)]
+pub struct FitBounds {
+    /// The box of every surface (casters and receivers).
+    pub scene: (Vec3, Vec3),
+    /// The box of the shadow casters; `None` without any.
+    pub casters: Option<(Vec3, Vec3)>,
+}
+
+/// The map of `light` for this frame, `None` for a light that cannot cast (no caster, or a
+/// light that is not finite).
+#[must_use]
+pub fn light_map(
+    light: &SceneLight,
+    camera: &Camera,
+    aspect: f32,
+    bounds: &FitBounds,
+    settings: &MapSettings,
+) -> Option<LightMap> {
+    let casters = bounds.casters?;
+    let [x, y, z, w] = light.light.to_array();
+    let spot = light.emission.as_ref().and_then(|e| e.spot);
+    let eye = camera.eye;
+    if w == 0.0 {
+        let to_light = Vec3::new(x, y, z).try_normalize()?;
+        let size = settings.size_for(MapKind::Directional);
+        let bias = settings.bias_for(MapKind::Directional);
+        let (view_proj, texel) = directional(to_light, camera, aspect, bounds, casters, size)?;
+        return Some(LightMap {
+            kind: MapKind::Directional,
+            size,
+            view_proj: [view_proj; 6],
+            bias,
+            normal_offset: bias.normal * texel * std::f32::consts::SQRT_2,
+            near: 0.0,
+            texel,
+            axis: Vec3::ZERO,
+        });
+    }
+    let pos = Vec3::new(x, y, z) / w;
+    if !pos.is_finite() {
+        return None;
+    }
+    let near = near_plane(pos, bounds.scene, casters);
+    let rel = pos - eye;
+    match spot {
+        Some(s) if s.outer_cone_angle <= SPOT_MAX_HALF_ANGLE => {
+            let axis = s.direction.try_normalize()?;
+            let size = settings.size_for(MapKind::Spot);
+            let bias = settings.bias_for(MapKind::Spot);
+            let half = s.outer_cone_angle;
+            let up = if axis.y.abs() > 0.99 {
+                Vec3::X
+            } else {
+                Vec3::Y
+            };
+            let view = glam::camera::rh::view::look_to_mat4(rel, axis, up);
+            let proj = glam::camera::rh::proj::directx::perspective_infinite_reverse(
+                2.0 * half,
+                1.0,
+                near,
+            );
+            let texel = 2.0 * half.tan() / size as f32;
+            Some(LightMap {
+                kind: MapKind::Spot,
+                size,
+                view_proj: [proj * view; 6],
+                bias,
+                normal_offset: bias.normal * texel * std::f32::consts::SQRT_2,
+                near,
+                texel,
+                axis,
+            })
+        }
+        _ => {
+            let size = settings.size_for(MapKind::Cube);
+            let bias = settings.bias_for(MapKind::Cube);
+            let proj = glam::camera::rh::proj::directx::perspective_infinite_reverse(
+                std::f32::consts::FRAC_PI_2,
+                1.0,
+                near,
+            );
+            let view_proj = CUBE_FACE_ROWS.map(|r| proj * face_view(r, rel));
+            let texel = 2.0 / size as f32;
+            Some(LightMap {
+                kind: MapKind::Cube,
+                size,
+                view_proj,
+                bias,
+                normal_offset: bias.normal * texel * std::f32::consts::SQRT_2,
+                near,
+                texel,
+                axis: Vec3::ZERO,
+            })
+        }
+    }
+}
+
+/// The view of one cube face from a light at camera-relative `light`: rows `r` applied to the
+/// direction from the light.
+fn face_view(r: [[f32; 3]; 3], light: Vec3) -> Mat4 {
+    let row = |k: usize| Vec3::from(r[k]);
+    Mat4::from_cols(
+        Vec4::new(r[0][0], r[1][0], r[2][0], 0.0),
+        Vec4::new(r[0][1], r[1][1], r[2][1], 0.0),
+        Vec4::new(r[0][2], r[1][2], r[2][2], 0.0),
+        Vec4::new(
+            -row(0).dot(light),
+            -row(1).dot(light),
+            -row(2).dot(light),
+            1.0,
+        ),
+    )
+}
+
+/// A perspective map's near plane: half the distance from the light to the nearest caster box
+/// point, so no caster is clipped, and at least a millionth of the scene's size (a light inside
+/// a caster's box).
+fn near_plane(light: Vec3, scene: (Vec3, Vec3), casters: (Vec3, Vec3)) -> f32 {
+    let nearest = light.clamp(casters.0, casters.1);
+    let d = (nearest - light).length();
+    let size = (scene.1 - scene.0).length().max(f32::MIN_POSITIVE);
+    (0.5 * d).max(1e-6 * size)
+}
+
+/// A directional light's orthographic map towards `-to_light`, and its texel size (world
+/// units): across, the part of the scene box the view can see (the box of the frustum up to the
+/// farthest scene point, met with the scene's box, both in light space); along the light, from
+/// the casters' top to the scene's bottom, so that every caster that can shadow a visible point
+/// is in the map (such a caster lies on the same light-space column as the point).
+fn directional(
+    to_light: Vec3,
+    camera: &Camera,
+    aspect: f32,
+    bounds: &FitBounds,
+    casters: (Vec3, Vec3),
+    size: u32,
+) -> Option<(Mat4, f32)> {
+    let d = to_light.as_dvec3();
+    let up = if d.y.abs() > 0.99 { DVec3::X } else { DVec3::Y };
+    let right = up.cross(d).normalize();
+    let top = d.cross(right);
+    let eye = camera.eye.as_dvec3();
+    let to_light_space =
+        |p: DVec3| DVec3::new(right.dot(p - eye), top.dot(p - eye), d.dot(p - eye));
+    let scene = box_in(bounds.scene, to_light_space);
+    let caster_box = box_in(casters, to_light_space);
+    let near = camera.near_corners(f64::from(aspect));
+    let forward = (camera.target - camera.eye).as_dvec3().normalize();
+    let far = corners(bounds.scene)
+        .iter()
+        .map(|c| (c.as_dvec3() - eye).dot(forward))
+        .fold(f64::from(camera.near), f64::max);
+    let scale = far / f64::from(camera.near);
+    let frustum = near
+        .iter()
+        .flat_map(|&c| [c, eye + (c - eye) * scale])
+        .map(to_light_space)
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p), hi.max(p))
+        });
+    let lo = scene.0.max(frustum.0);
+    let hi = scene.1.min(frustum.1);
+    if lo.x > hi.x || lo.y > hi.y {
+        return None;
+    }
+    // A margin of one part in 10^4 of the extent (and a little more along the light), so that
+    // points on the box's faces round inside.
+    let extent = (hi - lo)
+        .max_element()
+        .max(scene.1.z - scene.0.z)
+        .max(1e-30);
+    let m = 1e-4 * extent;
+    let (x0, x1) = (lo.x - m, hi.x + m);
+    let (y0, y1) = (lo.y - m, hi.y + m);
+    let z_top = caster_box.1.z.max(hi.z) + 4.0 * m;
+    let z_bottom = scene.0.z - 4.0 * m;
+    // Light space (right, top, d) about the eye, then x, y to [-1, 1] and z to depth: 1 at the
+    // top (nearest the light), 0 at the bottom.
+    let view = glam::DMat4::from_cols(
+        glam::DVec4::new(right.x, top.x, d.x, 0.0),
+        glam::DVec4::new(right.y, top.y, d.y, 0.0),
+        glam::DVec4::new(right.z, top.z, d.z, 0.0),
+        glam::DVec4::W,
+    );
+    let sx = 2.0 / (x1 - x0);
+    let sy = 2.0 / (y1 - y0);
+    let sz = 1.0 / (z_top - z_bottom);
+    let proj = glam::DMat4::from_cols(
+        glam::DVec4::new(sx, 0.0, 0.0, 0.0),
+        glam::DVec4::new(0.0, sy, 0.0, 0.0),
+        glam::DVec4::new(0.0, 0.0, sz, 0.0),
+        glam::DVec4::new(
+            -(x0 + x1) * 0.5 * sx,
+            -(y0 + y1) * 0.5 * sy,
+            -z_bottom * sz,
+            1.0,
+        ),
+    );
+    let texel = ((x1 - x0).max(y1 - y0) / f64::from(size)) as f32;
+    Some(((proj * view).as_mat4(), texel))
+}
+
+/// The 8 corners of a box.
+fn corners((lo, hi): (Vec3, Vec3)) -> [Vec3; 8] {
+    std::array::from_fn(|i| {
+        Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    })
+}
+
+/// The box of `b`'s corners mapped by `f`.
+fn box_in(b: (Vec3, Vec3), f: impl Fn(DVec3) -> DVec3) -> (DVec3, DVec3) {
+    corners(b)
+        .iter()
+        .map(|c| f(c.as_dvec3()))
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p), hi.max(p))
+        })
+}
+
+/// The layer of the cube face a direction `v` from the light falls on, with its `(s, t)` in
+/// `[0, 1]`: the Vulkan/WebGPU face selection the sampler applies (CPU twin of
+/// `textureSampleCompareLevel` on a cube, for tests).
+#[must_use]
+pub fn cube_face(v: Vec3) -> (usize, [f32; 2]) {
+    let a = v.abs();
+    let (face, sc, tc, ma) = if a.x >= a.y && a.x >= a.z {
+        if v.x >= 0.0 {
+            (0, -v.z, -v.y, a.x)
+        } else {
+            (1, v.z, -v.y, a.x)
+        }
+    } else if a.y >= a.z {
+        if v.y >= 0.0 {
+            (2, v.x, v.z, a.y)
+        } else {
+            (3, v.x, -v.z, a.y)
+        }
+    } else if v.z >= 0.0 {
+        (4, v.x, -v.y, a.z)
+    } else {
+        (5, -v.x, -v.y, a.z)
+    };
+    (face, [0.5 * (sc / ma + 1.0), 0.5 * (tc / ma + 1.0)])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use shadowvol_robust_math::Light;
+
+    fn camera() -> Camera {
+        Camera::look_at(Vec3::new(3.0, 2.0, 4.0), Vec3::ZERO)
+    }
+
+    fn bounds() -> FitBounds {
+        FitBounds {
+            scene: (Vec3::new(-5.0, -1.0, -5.0), Vec3::new(5.0, 2.0, 5.0)),
+            casters: Some((Vec3::new(-0.5, -1.0, -0.5), Vec3::new(0.5, 2.0, 0.5))),
+        }
+    }
+
+    /// Where a camera-relative point lands in a face's map: `(u, v, depth)`.
+    fn project(m: Mat4, p: Vec3) -> Vec3 {
+        let c = m * p.extend(1.0);
+        let n = c.truncate() / c.w;
+        Vec3::new(0.5 * (n.x + 1.0), 0.5 * (1.0 - n.y), n.z)
+    }
+
+    #[test]
+    fn each_cube_face_renders_where_the_sampler_reads() {
+        let light = SceneLight::unit(Light::point(Vec3::new(0.0, 3.0, 0.0)));
+        let cam = camera();
+        let map = light_map(&light, &cam, 1.0, &bounds(), &MapSettings::default()).unwrap();
+        assert_eq!(map.kind, MapKind::Cube);
+        let dirs = [
+            Vec3::new(1.0, 0.3, -0.2),
+            Vec3::new(-1.0, -0.4, 0.1),
+            Vec3::new(0.2, 1.0, 0.45),
+            Vec3::new(-0.3, -1.0, 0.2),
+            Vec3::new(0.25, -0.1, 1.0),
+            Vec3::new(0.4, 0.35, -1.0),
+        ];
+        for (k, d) in dirs.iter().enumerate() {
+            let (face, st) = cube_face(*d);
+            assert_eq!(face, k);
+            let p = Vec3::new(0.0, 3.0, 0.0) + 2.0 * *d - cam.eye;
+            let uvz = project(map.view_proj[face], p);
+            assert!((uvz.x - st[0]).abs() < 1e-5, "face {k}: {uvz} vs {st:?}");
+            assert!((uvz.y - st[1]).abs() < 1e-5, "face {k}: {uvz} vs {st:?}");
+            let major = (2.0 * *d).abs().max_element();
+            assert!((uvz.z - map.near / major).abs() < 1e-6, "face {k} depth");
+        }
+    }
+
+    #[test]
+    fn a_directional_map_holds_every_caster_and_the_visible_scene() {
+        let light = SceneLight::unit(Light::directional(Vec3::new(0.3, 1.0, 0.2)));
+        let cam = camera();
+        let b = bounds();
+        let map = light_map(&light, &cam, 1.5, &b, &MapSettings::default()).unwrap();
+        for c in corners(b.casters.unwrap()) {
+            let uvz = project(map.view_proj[0], c - cam.eye);
+            assert!(
+                (0.0..=1.0).contains(&uvz.x) && (0.0..=1.0).contains(&uvz.y),
+                "{c}"
+            );
+            assert!(
+                uvz.z > 0.0 && uvz.z < 1.0,
+                "caster corner {c} at depth {}",
+                uvz.z
+            );
+        }
+        // The view's centre on the ground is in the map, and below the casters' top.
+        let uvz = project(map.view_proj[0], Vec3::new(0.0, -1.0, 0.0) - cam.eye);
+        assert!((0.0..=1.0).contains(&uvz.x) && uvz.z >= 0.0);
+    }
+
+    #[test]
+    fn a_spot_map_looks_along_the_cone() {
+        let mut light = SceneLight::unit(Light::point(Vec3::new(0.0, 4.0, 0.0)));
+        light.emission = Some(shadowvol_scenes::Emission {
+            spot: Some(shadowvol_scenes::SpotCone {
+                direction: Vec3::NEG_Y,
+                inner_cone_angle: 0.3,
+                outer_cone_angle: 0.6,
+            }),
+            ..Default::default()
+        });
+        let cam = camera();
+        let map = light_map(&light, &cam, 1.0, &bounds(), &MapSettings::default()).unwrap();
+        assert_eq!(map.kind, MapKind::Spot);
+        let uvz = project(map.view_proj[0], Vec3::new(0.0, 1.0, 0.0) - cam.eye);
+        assert!((uvz.x - 0.5).abs() < 1e-5 && (uvz.y - 0.5).abs() < 1e-5);
+        assert!((uvz.z - map.near / 3.0).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,812 @@
+//! The shadow-map passes on the caller's device: the surfaces uploaded once in world space, and
+//! per frame only uniforms written; per light its map passes, the optional mask pass into the
+//! stencil, and its lit pass reading the map.
+
+use super::fit::{LightMap, MapKind};
+use super::MapFilter;
+use crate::raster::pipelines::{self, color_target, uniform};
+use crate::raster::{
+    light_uniform, push_surface, states, Attachments, SurfaceVertex, BACKGROUND, COLOR_FORMAT,
+    IDS_FORMAT, LIGHT_STRIDE,
+};
+use crate::{RenderDevice, RenderError};
+use glam::{Mat4, Vec3};
+use shadowvol_scenes::Scene;
+use std::ops::Range;
+
+/// `shaders/render_maps.wgsl`: the map, mask and lit passes (appended to `render_raster.wgsl`).
+pub const MAPS_WGSL: &str = include_str!("../../../../shaders/render_maps.wgsl");
+
+/// The map module: the renderer's `render_raster.wgsl`, then `render_maps.wgsl`.
+#[must_use]
+pub fn maps_source() -> String {
+    format!("{}\n{MAPS_WGSL}", crate::resident::SHADER_WGSL)
+}
+
+/// Byte stride of the per-light map uniforms (`MapU`, 448 bytes).
+const MAP_STRIDE: u64 = 512;
+/// Bytes of one `MapU`.
+const MAP_BYTES: u64 = 448;
+/// `MapU.mode.x` of a light without a map (nothing casts): visibility 1.
+const NO_MAP: u32 = 3;
+
+/// The shadow-map passes' pipelines on one device.
+pub struct MapPass {
+    globals_bgl: wgpu::BindGroupLayout,
+    light_bgl: wgpu::BindGroupLayout,
+    map_bgl: wgpu::BindGroupLayout,
+    tex_bgl: wgpu::BindGroupLayout,
+    depth_layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
+    prepass: wgpu::RenderPipeline,
+    prepass_color: wgpu::RenderPipeline,
+    mask: wgpu::RenderPipeline,
+    lit: wgpu::RenderPipeline,
+    /// The map passes by slope-scaled bias (the only pipeline state a setting changes).
+    depth: Vec<(f32, wgpu::RenderPipeline)>,
+    hard: wgpu::Sampler,
+    pcf: wgpu::Sampler,
+    timestamps: bool,
+}
+
+impl std::fmt::Debug for MapPass {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MapPass")
+            .field("timestamps", &self.timestamps)
+            .finish_non_exhaustive()
+    }
+}
+
+/// One scene on the device: its surfaces in world space, the frame's uniforms, the maps.
+pub(crate) struct MapScene {
+    surface: wgpu::Buffer,
+    /// Per surface: its vertex range in `surface`.
+    ranges: Vec<Range<u32>>,
+    /// Vertices of the shadow casters (the first surfaces).
+    caster_vertices: u32,
+    globals: wgpu::Buffer,
+    globals_bg: wgpu::BindGroup,
+    /// Light and map uniforms, sized for `slots` lights.
+    slots: usize,
+    lights: wgpu::Buffer,
+    lights_bg: wgpu::BindGroup,
+    maps: wgpu::Buffer,
+    maps_bg: wgpu::BindGroup,
+    textures: Option<MapTextures>,
+    queries: Option<Queries>,
+}
+
+/// The 2-D map and the cube map (one each, reused light after light), with their bind group.
+struct MapTextures {
+    size_2d: u32,
+    size_cube: u32,
+    view_2d: wgpu::TextureView,
+    /// The cube's 6 faces as render targets, layer order +X, -X, +Y, -Y, +Z, -Z.
+    faces: Vec<wgpu::TextureView>,
+    bind_group: wgpu::BindGroup,
+}
+
+/// Timestamps: pairs for the pre-pass, then per light its map passes, mask pass and lit pass.
+struct Queries {
+    set: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    read: wgpu::Buffer,
+    lights: usize,
+}
+
+/// The GPU time of a frame's map passes, as [`crate::resident::GpuTimings`] splits it.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct MapTimings {
+    pub(crate) maps: f64,
+    pub(crate) mask: f64,
+    pub(crate) lighting: f64,
+}
+
+impl MapPass {
+    /// The pipelines on `rd`.
+    ///
+    /// # Errors
+    /// [`RenderError::Device`] when a shader or pipeline fails to build.
+    pub fn new(rd: &RenderDevice) -> Result<Self, RenderError> {
+        let device = &rd.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("shaders/render_maps.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(maps_source().into()),
+        });
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let globals_bgl = pipelines::bind_group_layout(device, "globals", &[uniform(0, vf, false)]);
+        let light_bgl = pipelines::bind_group_layout(device, "light", &[uniform(0, vf, true)]);
+        let map_bgl = pipelines::bind_group_layout(device, "map", &[uniform(0, vf, true)]);
+        let tex_bgl = pipelines::bind_group_layout(device, "map textures", &texture_entries());
+        let layout = pipelines::pipeline_layout(
+            device,
+            "maps",
+            &[&globals_bgl, &light_bgl, &map_bgl, &tex_bgl],
+        );
+        let depth_layout =
+            pipelines::pipeline_layout(device, "map depth", &[&globals_bgl, &light_bgl, &map_bgl]);
+        let surface_layout = [Some(states::surface_layout())];
+        let make = pipelines::RenderPipelines {
+            device,
+            layout: &layout,
+            module: &module,
+            depth: rd.depth_format,
+        };
+        let prepass = make.prepass(
+            "map prepass",
+            "vs_map_surface",
+            &surface_layout,
+            "fs_prepass",
+            &[
+                color_target(COLOR_FORMAT, None),
+                color_target(IDS_FORMAT, None),
+            ],
+        );
+        let prepass_color = make.prepass(
+            "map prepass (colour)",
+            "vs_map_surface",
+            &surface_layout,
+            "fs_prepass_color",
+            &[color_target(COLOR_FORMAT, None)],
+        );
+        let mask = make.surface(
+            "map mask",
+            "vs_map_surface",
+            &surface_layout,
+            states::map_mask_depth(rd.depth_format),
+            "fs_map_mask",
+            &[],
+        );
+        let lit = make.surface(
+            "map lit",
+            "vs_map_surface",
+            &surface_layout,
+            states::map_lit_depth(rd.depth_format),
+            "fs_map_lit",
+            &[color_target(COLOR_FORMAT, Some(states::additive()))],
+        );
+        if let Some(err) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Device(format!("map pipelines: {err}")));
+        }
+        let sampler = |label, filter| {
+            device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some(label),
+                address_mode_u: wgpu::AddressMode::ClampToEdge,
+                address_mode_v: wgpu::AddressMode::ClampToEdge,
+                address_mode_w: wgpu::AddressMode::ClampToEdge,
+                mag_filter: filter,
+                min_filter: filter,
+                compare: Some(wgpu::CompareFunction::GreaterEqual),
+                ..Default::default()
+            })
+        };
+        Ok(Self {
+            hard: sampler("map hard", wgpu::FilterMode::Nearest),
+            pcf: sampler("map pcf", wgpu::FilterMode::Linear),
+            globals_bgl,
+            light_bgl,
+            map_bgl,
+            tex_bgl,
+            depth_layout,
+            module,
+            prepass,
+            prepass_color,
+            mask,
+            lit,
+            depth: Vec::new(),
+            timestamps: device.features().contains(wgpu::Features::TIMESTAMP_QUERY),
+        })
+    }
+
+    /// The map pass with slope-scaled bias `slope`, built on first use.
+    fn depth_pipeline(&mut self, device: &wgpu::Device, slope: f32) -> usize {
+        if let Some(i) = self.depth.iter().position(|(s, _)| *s == slope) {
+            return i;
+        }
+        let make = pipelines::RenderPipelines {
+            device,
+            layout: &self.depth_layout,
+            module: &self.module,
+            depth: wgpu::TextureFormat::Depth32Float,
+        };
+        let primitive = wgpu::PrimitiveState {
+            cull_mode: None,
+            ..Default::default()
+        };
+        let pipeline = make.create(
+            "map depth",
+            "vs_map_depth",
+            &[Some(states::surface_layout())],
+            primitive,
+            states::map_depth(slope),
+            None,
+        );
+        self.depth.push((slope, pipeline));
+        self.depth.len() - 1
+    }
+
+    /// Uploads `scene`'s surfaces in world space.
+    pub(crate) fn prepare(&self, device: &wgpu::Device, scene: &Scene) -> MapScene {
+        let mut vertices = Vec::new();
+        let mut ranges = Vec::new();
+        let mut caster_vertices = 0;
+        for (i, s) in scene.surfaces().enumerate() {
+            let start = vertices.len() as u32;
+            push_surface(
+                &mut vertices,
+                i,
+                s.table,
+                &s.world_positions(),
+                s.albedo,
+                Vec3::ZERO,
+            );
+            ranges.push(start..vertices.len() as u32);
+            if s.casts_shadows {
+                caster_vertices = vertices.len() as u32;
+            }
+        }
+        if vertices.is_empty() {
+            vertices.push(bytemuck::Zeroable::zeroed());
+        }
+        use wgpu::util::DeviceExt;
+        let surface = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("map surfaces"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+        });
+        let globals = uniform_buffer(device, "map globals", 96);
+        let globals_bg = bind(device, &self.globals_bgl, &globals, 96);
+        let (lights, lights_bg, maps, maps_bg) = self.light_buffers(device, 1);
+        MapScene {
+            surface,
+            ranges,
+            caster_vertices,
+            globals,
+            globals_bg,
+            slots: 1,
+            lights,
+            lights_bg,
+            maps,
+            maps_bg,
+            textures: None,
+            queries: None,
+        }
+    }
+
+    fn light_buffers(
+        &self,
+        device: &wgpu::Device,
+        slots: usize,
+    ) -> (wgpu::Buffer, wgpu::BindGroup, wgpu::Buffer, wgpu::BindGroup) {
+        let lights = uniform_buffer(device, "map lights", slots as u64 * LIGHT_STRIDE);
+        let lights_bg = bind(device, &self.light_bgl, &lights, 96);
+        let maps = uniform_buffer(device, "map uniforms", slots as u64 * MAP_STRIDE);
+        let maps_bg = bind(device, &self.map_bgl, &maps, MAP_BYTES);
+        (lights, lights_bg, maps, maps_bg)
+    }
+
+    /// Rewrites the world vertices of `surface` (it moved) from its new `positions`.
+    pub(crate) fn update_surface(
+        &self,
+        queue: &wgpu::Queue,
+        ms: &MapScene,
+        surface: usize,
+        s: &shadowvol_scenes::Surface<'_>,
+        positions: &[Vec3],
+    ) {
+        let mut v = Vec::new();
+        push_surface(&mut v, surface, s.table, positions, s.albedo, Vec3::ZERO);
+        let offset =
+            u64::from(ms.ranges[surface].start) * std::mem::size_of::<SurfaceVertex>() as u64;
+        if !v.is_empty() {
+            queue.write_buffer(&ms.surface, offset, bytemuck::cast_slice(&v));
+        }
+    }
+
+    /// Writes the frame's uniforms and makes the maps and timestamps the frame needs.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] for a map larger than the device's 2-D texture limit.
+    pub(crate) fn update(
+        &mut self,
+        rd: &RenderDevice,
+        ms: &mut MapScene,
+        frame: &MapFrame<'_>,
+    ) -> Result<(), RenderError> {
+        let device = &rd.device;
+        let n = frame.lights.len();
+        if n > ms.slots {
+            let (l, lb, m, mb) = self.light_buffers(device, n);
+            (ms.lights, ms.lights_bg, ms.maps, ms.maps_bg, ms.slots) = (l, lb, m, mb, n);
+            ms.queries = None;
+        }
+        let mut globals = [0f32; 24];
+        globals[..16].copy_from_slice(&frame.view_proj.to_cols_array());
+        globals[20] = frame.ambient;
+        rd.queue
+            .write_buffer(&ms.globals, 0, bytemuck::cast_slice(&globals));
+        let mut light_bytes = vec![0u8; ms.slots * LIGHT_STRIDE as usize];
+        let mut map_bytes = vec![0u8; ms.slots * MAP_STRIDE as usize];
+        for (i, l) in frame.lights.iter().enumerate() {
+            let v = light_uniform(l.light, l.color, l.emission.as_ref());
+            let o = i * LIGHT_STRIDE as usize;
+            light_bytes[o..o + 64].copy_from_slice(bytemuck::cast_slice(&v));
+            let u = map_uniform(l.map.as_ref(), frame.eye, frame.filter);
+            let o = i * MAP_STRIDE as usize;
+            map_bytes[o..o + MAP_BYTES as usize].copy_from_slice(bytemuck::cast_slice(&u));
+        }
+        if n == 0 {
+            let u = map_uniform(None, frame.eye, frame.filter);
+            map_bytes[..MAP_BYTES as usize].copy_from_slice(bytemuck::cast_slice(&u));
+        }
+        rd.queue.write_buffer(&ms.lights, 0, &light_bytes);
+        rd.queue.write_buffer(&ms.maps, 0, &map_bytes);
+        let size = |kind: MapKind| {
+            frame
+                .lights
+                .iter()
+                .filter_map(|l| {
+                    l.map
+                        .filter(|m| (m.kind == MapKind::Cube) == (kind == MapKind::Cube))
+                })
+                .map(|m| m.size)
+                .max()
+                .unwrap_or(1)
+        };
+        let (s2, sc) = (size(MapKind::Directional), size(MapKind::Cube));
+        let limit = device.limits().max_texture_dimension_2d;
+        if s2.max(sc) > limit {
+            return Err(RenderError::InvalidInput(format!(
+                "a shadow map of {} texels a side exceeds the device's max_texture_dimension_2d \
+                 {limit}; give a smaller --map-size",
+                s2.max(sc)
+            )));
+        }
+        if !ms
+            .textures
+            .as_ref()
+            .is_some_and(|t| t.size_2d == s2 && t.size_cube == sc)
+        {
+            ms.textures = None;
+            ms.textures = Some(self.textures(device, s2, sc));
+        }
+        for l in frame.lights.iter().filter_map(|l| l.map) {
+            self.depth_pipeline(device, l.bias.slope);
+        }
+        if self.timestamps && ms.queries.is_none() {
+            ms.queries = Some(queries(device, ms.slots));
+        }
+        Ok(())
+    }
+
+    fn textures(&self, device: &wgpu::Device, size_2d: u32, size_cube: u32) -> MapTextures {
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        let map = |label, size, layers| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: size,
+                    height: size,
+                    depth_or_array_layers: layers,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Depth32Float,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let t2 = map("shadow map", size_2d, 1);
+        let tc = map("shadow cube map", size_cube, 6);
+        let view_2d = t2.create_view(&Default::default());
+        let faces = (0..6)
+            .map(|layer| {
+                tc.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: layer,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            })
+            .collect();
+        let cube = tc.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::Cube),
+            ..Default::default()
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("map textures"),
+            layout: &self.tex_bgl,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&view_2d),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&cube),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&self.hard),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::Sampler(&self.pcf),
+                },
+            ],
+        });
+        MapTextures {
+            size_2d,
+            size_cube,
+            view_2d,
+            faces,
+            bind_group,
+        }
+    }
+
+    /// Records the frame: the pre-pass, then per light its map passes, its mask pass (where the
+    /// frame's stencil is read back) and its lit pass. Returns which timestamp pairs it wrote.
+    pub(crate) fn record(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        ms: &MapScene,
+        frame: &MapFrame<'_>,
+        target: &Attachments<'_>,
+    ) -> Vec<bool> {
+        let mut written = vec![false; 1 + 3 * frame.lights.len()];
+        let Some(tex) = ms.textures.as_ref() else {
+            return written;
+        };
+        written[0] = true;
+        let q = |slot: usize, begin: bool, end: bool| {
+            if !(begin || end) {
+                return None;
+            }
+            ms.queries
+                .as_ref()
+                .map(|q| wgpu::RenderPassTimestampWrites {
+                    query_set: &q.set,
+                    beginning_of_pass_write_index: begin.then_some(2 * slot as u32),
+                    end_of_pass_write_index: end.then_some(2 * slot as u32 + 1),
+                })
+        };
+        let all = 0..ms.ranges.last().map_or(0, |r| r.end);
+        {
+            let ids = target
+                .ids
+                .map(|v| states::cleared(v, wgpu::Color::TRANSPARENT));
+            let mut color = vec![states::cleared(target.color, BACKGROUND)];
+            color.extend(ids);
+            let mut pass = states::begin_prepass(
+                enc,
+                "map prepass",
+                &color,
+                target.depth_stencil,
+                q(0, true, true),
+            );
+            if !all.is_empty() {
+                let pipeline = if target.ids.is_some() {
+                    &self.prepass
+                } else {
+                    &self.prepass_color
+                };
+                pass.set_pipeline(pipeline);
+                self.bind_surface(&mut pass, ms, 0, Some(tex));
+                pass.draw(all.clone(), 0..1);
+            }
+        }
+        for (li, l) in frame.lights.iter().enumerate() {
+            let slot = 1 + 3 * li;
+            written[slot] = l.map.is_some();
+            written[slot + 1] = target.reads_stencil();
+            written[slot + 2] = true;
+            if let Some(map) = &l.map {
+                self.record_map(enc, ms, tex, li, map, |first, last| q(slot, first, last));
+            }
+            let drawn = l.map.is_some() && !empty_scissor(l.scissor) && !all.is_empty();
+            if target.reads_stencil() {
+                let mut pass = states::begin_stencil_pass(
+                    enc,
+                    "map mask",
+                    target.depth_stencil,
+                    wgpu::LoadOp::Clear(0),
+                    l.scissor,
+                    q(slot + 1, true, true),
+                );
+                if drawn {
+                    pass.set_pipeline(&self.mask);
+                    pass.set_stencil_reference(1);
+                    self.bind_surface(&mut pass, ms, li, Some(tex));
+                    pass.draw(all.clone(), 0..1);
+                }
+            }
+            target.after_stencil(enc, li);
+            let mut pass = states::begin_lit_pass(
+                enc,
+                "map lit",
+                target.color,
+                target.depth_stencil,
+                l.scissor,
+                q(slot + 2, true, true),
+            );
+            if !empty_scissor(l.scissor) && !all.is_empty() {
+                pass.set_pipeline(&self.lit);
+                self.bind_surface(&mut pass, ms, li, Some(tex));
+                pass.draw(all.clone(), 0..1);
+            }
+        }
+        written
+    }
+
+    /// Light `li`'s map passes: each face cleared to 0 (farthest), then the casters.
+    fn record_map<'q>(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        ms: &MapScene,
+        tex: &MapTextures,
+        li: usize,
+        map: &LightMap,
+        timestamps: impl Fn(bool, bool) -> Option<wgpu::RenderPassTimestampWrites<'q>>,
+    ) {
+        let pipeline = self
+            .depth
+            .iter()
+            .find(|(s, _)| *s == map.bias.slope)
+            .map(|(_, p)| p)
+            .expect("built in update");
+        let faces: Vec<&wgpu::TextureView> = match map.kind {
+            MapKind::Cube => tex.faces.iter().collect(),
+            _ => vec![&tex.view_2d],
+        };
+        let last = faces.len() - 1;
+        for (face, view) in faces.into_iter().enumerate() {
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadow map"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(0.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: timestamps(face == 0, face == last),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            if ms.caster_vertices > 0 {
+                pass.set_pipeline(pipeline);
+                self.bind_surface(&mut pass, ms, li, None);
+                pass.draw(0..ms.caster_vertices, face as u32..face as u32 + 1);
+            }
+        }
+    }
+
+    /// Binds the surfaces, the globals, light `li`'s uniforms and (but in the map passes) the
+    /// maps.
+    fn bind_surface(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        ms: &MapScene,
+        li: usize,
+        tex: Option<&MapTextures>,
+    ) {
+        pass.set_bind_group(0, &ms.globals_bg, &[]);
+        pass.set_bind_group(1, &ms.lights_bg, &[(li as u64 * LIGHT_STRIDE) as u32]);
+        pass.set_bind_group(2, &ms.maps_bg, &[(li as u64 * MAP_STRIDE) as u32]);
+        if let Some(t) = tex {
+            pass.set_bind_group(3, &t.bind_group, &[]);
+        }
+        pass.set_vertex_buffer(0, ms.surface.slice(..));
+    }
+
+    /// Resolves the last frame's timestamps (after its submission finished); `None` without
+    /// timestamp queries.
+    ///
+    /// # Errors
+    /// [`RenderError::Device`] when mapping fails.
+    pub(crate) fn read_timings(
+        &self,
+        rd: &RenderDevice,
+        ms: &MapScene,
+        written: &[bool],
+    ) -> Result<Option<MapTimings>, RenderError> {
+        let Some(q) = ms.queries.as_ref() else {
+            return Ok(None);
+        };
+        if written.is_empty() || written.len() > 1 + 3 * q.lights {
+            return Ok(None);
+        }
+        let mut enc = rd
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("map timestamps"),
+            });
+        // Each written pair on its own (resolve offsets are 256-aligned): an unwritten query
+        // has no value to resolve.
+        for (slot, _) in written.iter().enumerate().filter(|(_, w)| **w) {
+            let first = 2 * slot as u32;
+            enc.resolve_query_set(&q.set, first..first + 2, &q.resolve, 256 * slot as u64);
+        }
+        enc.copy_buffer_to_buffer(&q.resolve, 0, &q.read, 0, 256 * written.len() as u64);
+        rd.queue.submit([enc.finish()]);
+        let bytes = crate::raster::map_read(&rd.device, &q.read)?;
+        let tick = |i: usize| {
+            let o = 256 * (i / 2) + 8 * (i % 2);
+            u64::from_le_bytes(bytes[o..o + 8].try_into().expect("8 bytes"))
+        };
+        let period_ms = f64::from(rd.queue.get_timestamp_period()) * 1e-6;
+        // Only the pairs the frame wrote: the others hold no defined value.
+        let span = |slot: usize| {
+            if written[slot] {
+                tick(2 * slot + 1).saturating_sub(tick(2 * slot)) as f64 * period_ms
+            } else {
+                0.0
+            }
+        };
+        let mut t = MapTimings {
+            lighting: span(0),
+            ..MapTimings::default()
+        };
+        for slot in (1..written.len()).step_by(3) {
+            t.maps += span(slot);
+            t.mask += span(slot + 1);
+            t.lighting += span(slot + 2);
+        }
+        Ok(Some(t))
+    }
+}
+
+/// One light of a frame, as the map passes draw it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct MapLight {
+    /// Camera-relative homogeneous light.
+    pub(crate) light: [f32; 4],
+    /// Colour times gain.
+    pub(crate) color: [f32; 3],
+    /// Range and cone.
+    pub(crate) emission: Option<shadowvol_scenes::Emission>,
+    /// Its map, `None` when nothing casts.
+    pub(crate) map: Option<LightMap>,
+    /// Scissor of its mask and lit passes.
+    pub(crate) scissor: Option<[u32; 4]>,
+}
+
+/// One frame's inputs to the map passes.
+#[derive(Debug, Clone)]
+pub(crate) struct MapFrame<'a> {
+    /// The camera's `projection * view` at the origin (camera-relative).
+    pub(crate) view_proj: Mat4,
+    /// The eye in world space.
+    pub(crate) eye: Vec3,
+    /// Ambient factor.
+    pub(crate) ambient: f32,
+    /// How the maps are read.
+    pub(crate) filter: MapFilter,
+    /// The lights.
+    pub(crate) lights: &'a [MapLight],
+}
+
+/// The `MapU` of a light: face matrices, eye, mode, bias, axis.
+fn map_uniform(map: Option<&LightMap>, eye: Vec3, filter: MapFilter) -> [u32; 112] {
+    let mut u = [0u32; 112];
+    let f = |x: f32| x.to_bits();
+    let (kind, size) = match map {
+        Some(m) => {
+            for (k, vp) in m.view_proj.iter().enumerate() {
+                for (j, x) in vp.to_cols_array().iter().enumerate() {
+                    u[16 * k + j] = f(*x);
+                }
+            }
+            let kind = match m.kind {
+                MapKind::Directional => 0,
+                MapKind::Spot => 1,
+                MapKind::Cube => 2,
+            };
+            (kind, m.size)
+        }
+        None => (NO_MAP, 1),
+    };
+    u[96..99].copy_from_slice(&[f(eye.x), f(eye.y), f(eye.z)]);
+    u[100] = kind;
+    u[101] = match filter {
+        MapFilter::Hard => 0,
+        MapFilter::Pcf => 1,
+    };
+    u[102] = size;
+    if let Some(m) = map {
+        u[104] = f(m.bias.depth);
+        u[105] = f(m.normal_offset);
+        u[106] = f(m.near);
+        u[108..111].copy_from_slice(&[f(m.axis.x), f(m.axis.y), f(m.axis.z)]);
+    }
+    u
+}
+
+fn texture_entries() -> [wgpu::BindGroupLayoutEntry; 4] {
+    let fs = wgpu::ShaderStages::FRAGMENT;
+    let texture = |binding, view_dimension| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: fs,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Depth,
+            view_dimension,
+            multisampled: false,
+        },
+        count: None,
+    };
+    let sampler = |binding| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: fs,
+        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+        count: None,
+    };
+    [
+        texture(0, wgpu::TextureViewDimension::D2),
+        texture(1, wgpu::TextureViewDimension::Cube),
+        sampler(2),
+        sampler(3),
+    ]
+}
+
+fn uniform_buffer(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// A bind group of `buffer`'s first `size` bytes (the window a dynamic offset moves).
+fn bind(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    buffer: &wgpu::Buffer,
+    size: u64,
+) -> wgpu::BindGroup {
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("maps"),
+        layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer,
+                offset: 0,
+                size: std::num::NonZeroU64::new(size),
+            }),
+        }],
+    })
+}
+
+fn queries(device: &wgpu::Device, lights: usize) -> Queries {
+    let count = 2 * (1 + 3 * lights) as u32;
+    Queries {
+        set: device.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some("map timestamps"),
+            ty: wgpu::QueryType::Timestamp,
+            count,
+        }),
+        resolve: device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("map timestamps resolve"),
+            size: 256 * (1 + 3 * lights) as u64,
+            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        }),
+        read: device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("map timestamps read"),
+            size: 256 * (1 + 3 * lights) as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        }),
+        lights,
+    }
+}
+
+/// Whether `scissor` is a rectangle without pixels.
+fn empty_scissor(scissor: Option<[u32; 4]>) -> bool {
+    scissor.is_some_and(|r| r[2] == 0 || r[3] == 0)
+}
