@@ -96,6 +96,41 @@ fn a_box_on_a_floor_agrees_with_the_reference_under_every_light_type() -> Result
     Ok(())
 }
 
+/// A point light low over a floor with a box hovering on each side, off the axes so that a
+/// mirrored face shows: the shadows fall through
+/// the cube faces +X, -X, +Z and -Z; the same scene turned a quarter about x puts them behind
+/// +Y and -Y. Each face must render where the sampler reads it.
+#[test]
+fn a_point_light_casts_through_every_cube_face() -> Result<(), Skip> {
+    for turn in [
+        Affine3A::IDENTITY,
+        Affine3A::from_rotation_x(std::f32::consts::FRAC_PI_2),
+    ] {
+        let boxes = [(2.0, 0.7), (-2.0, -0.5), (0.6, 2.0), (-0.8, -2.0)].map(|(x, z)| {
+            let lo = Vec3::new(x - 0.3, 0.2, z - 0.3);
+            ("box", cuboid(lo, lo + Vec3::new(0.6, 1.0, 0.6)), turn)
+        });
+        let mut objects = vec![("floor", floor(8.0, 4), turn)];
+        objects.extend(boxes);
+        let camera = Camera {
+            eye: turn.transform_point3(Vec3::new(0.0, 12.0, 4.0)),
+            target: Vec3::ZERO,
+            up: turn.transform_vector3(Vec3::Y),
+            ..Camera::look_at(Vec3::new(0.0, 12.0, 4.0), Vec3::ZERO)
+        };
+        let light = Light::point(turn.transform_point3(Vec3::new(0.0, 0.6, 0.0)));
+        let scene = scene_of(objects, &[light], camera, 0.15);
+        let settings = MapSettings {
+            filter: MapFilter::Hard,
+            ..at(2048)
+        };
+        let c = map_comparison(&scene, 256, settings)?;
+        assert_shadowed(&c, "boxes around a point light");
+        assert_eq!(c.artifact_pixels, 0, "turn {turn:?}");
+    }
+    Ok(())
+}
+
 /// Without any bias the lit floor shadows itself (acne): the metric sees it.
 #[test]
 fn without_bias_a_lit_floor_shadows_itself() -> Result<(), Skip> {
