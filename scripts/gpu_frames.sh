@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# The GPU pipeline against the host pipeline on a real GPU, in one run (for a session that is
-# lent a device machine; see docs/GPU.md). Builds the release CLI, then for each scene renders
-# --frames N with the GPU pipeline, the host pipeline on simd and the host pipeline on wgpu,
-# back to back, and writes one JSON report per run plus a summary table. Then times the `wgpu`
+# The GPU pipeline against the host pipeline and against shadow maps on a real GPU, in one run
+# (for a session that is lent a device machine; see docs/GPU.md). Builds the release CLI, then
+# for each scene renders --frames N with the GPU pipeline, the host pipeline on simd, the host
+# pipeline on wgpu, and shadow maps (Bevy's defaults, and 8192 texels), back to back, and
+# writes one JSON report per run plus a summary table. Then times the `wgpu`
 # silhouette backend alone on sphere-1m in every mode (`bench`), which shows what exact mode's
 # certified filter and its integer dispatch cost on the device.
 #
@@ -25,14 +26,16 @@ else
 fi
 "$bin" backends --format json >"$out/backends.json"
 summary="$out/summary.md"
-echo "| scene | run | median ms | p10 | p90 | read back | extract | sides | caps | lighting |" >"$summary"
-echo "|---|---|---|---|---|---|---|---|---|---|" >>"$summary"
+echo "| scene | run | median ms | p10 | p90 | read back | extract | sides | caps | shadow maps | lighting |" >"$summary"
+echo "|---|---|---|---|---|---|---|---|---|---|---|" >>"$summary"
 for scene in sphere-1m spheres-100x1k sphere-100k town; do
-  for run in gpu host-simd host-wgpu; do
+  for run in gpu host-simd host-wgpu map-bevy map-8192; do
     case $run in
       gpu) args=(--pipeline gpu) ;;
       host-simd) args=(--pipeline host --backend simd) ;;
       host-wgpu) args=(--pipeline host --backend wgpu) ;;
+      map-bevy) args=(--shadows map) ;;
+      map-8192) args=(--shadows map --map-size 8192) ;;
     esac
     json="$out/$scene-$run.json"
     "$bin" render "$scene" --size 1280x720 --mode exact --frames "$frames" "${args[@]}" \
@@ -44,7 +47,7 @@ f, g = d["frames"], d["gpu_timings_ms"] or {}
 cell = lambda k: f"{g[k]:.2f}" if k in g else "-"
 print(f"| {sys.argv[2]} | {sys.argv[3]} | {f['median_ms']:.2f} | {f['p10_ms']:.2f} | "
       f"{f['p90_ms']:.2f} | {d['frame_readback_bytes']} | {cell('extract')} | "
-      f"{cell('sides')} | {cell('caps')} | {cell('lighting')} |")
+      f"{cell('sides')} | {cell('caps')} | {cell('shadow_maps')} | {cell('lighting')} |")
 PY
   done
 done

@@ -102,6 +102,11 @@ fn modules() -> Vec<Module> {
         Capabilities::empty(),
     ));
     all.push(module(
+        "renderer shadow maps",
+        shadowvol_renderer::maps::maps_source(),
+        Capabilities::empty(),
+    ));
+    all.push(module(
         "viewer blit",
         viewer::BLIT_WGSL,
         Capabilities::empty(),

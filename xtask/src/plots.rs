@@ -40,6 +40,7 @@ pub fn all(out: &Path, records: &[Record]) -> PlotResult {
     time_vs_lights(&out.join("time_vs_lights.png"), records, &mode)?;
     accuracy_cost(&out.join("accuracy_cost.png"), records)?;
     individual_vs_baked(&out.join("individual_vs_baked.png"), records)?;
+    maps_vs_volumes(&out.join("maps_vs_volumes.png"), records)?;
     Ok(())
 }
 
@@ -496,4 +497,70 @@ fn individual_vs_baked(path: &Path, records: &[Record]) -> PlotResult {
     legend(&mut chart, SeriesLabelPosition::UpperRight, 0.85, 15)?;
     root.present()?;
     Ok(())
+}
+
+/// Artifact share against frame time, log-log: each technique of the volumes-against-maps
+/// table (volumes per mode and pipeline, maps per size and filter with Bevy's bias and tuned),
+/// its frame times summed and its artifact pixels over all pixels, over the table's scenes.
+/// A share of 0 is drawn at the axis floor.
+fn maps_vs_volumes(path: &Path, records: &[Record]) -> PlotResult {
+    const FLOOR: f64 = 1e-6;
+    let pts = crate::matrix::maps_table::plot_points(records);
+    let title = "Artifact share against frame time: volumes and shadow maps";
+    if pts.is_empty() {
+        return no_data(path, title);
+    }
+    let x0 = pts.iter().map(|p| p.2).fold(f64::INFINITY, f64::min);
+    let x1 = pts.iter().map(|p| p.2).fold(0.0f64, f64::max);
+    let y1 = pts.iter().map(|p| p.3).fold(FLOOR * 10.0, f64::max);
+    let root = canvas(path, (1200, 800))?;
+    let mut chart = chart_on(&root)
+        .caption(title, ("sans-serif", 24))
+        .build_cartesian_2d(
+            (x0 * 0.7..x1 * 1.6).log_scale(),
+            (FLOOR * 0.5..y1 * 3.0).log_scale(),
+        )?;
+    chart
+        .configure_mesh()
+        .x_desc("frame ms, summed over the scenes (median of each)")
+        .y_desc("artifact pixels / pixels (0 drawn at 1e-6)")
+        .x_label_formatter(&tick)
+        .y_label_formatter(&|v: &f64| format!("{v:.0e}"))
+        .label_style(("sans-serif", 14))
+        .draw()?;
+    for (i, kind) in ["volumes", "map", "map tuned"].iter().enumerate() {
+        let c = palette(i);
+        let mine: Vec<(f64, f64, String)> = pts
+            .iter()
+            .filter(|p| p.1 == *kind)
+            .map(|p| (p.2, p.3.max(FLOOR), short_label(&p.0)))
+            .collect();
+        let xy: Vec<(f64, f64)> = mine.iter().map(|p| (p.0, p.1)).collect();
+        let name = match *kind {
+            "volumes" => "volumes",
+            "map" => "maps, Bevy's bias",
+            _ => "maps, bias tuned with hindsight",
+        };
+        let anno = markers!(chart, i, xy, c);
+        marker_legend!(anno.label(name), i, c);
+        chart.draw_series(mine.iter().map(|(x, y, l)| {
+            Text::new(
+                l.clone(),
+                (*x, *y),
+                ("sans-serif", 12).into_font().color(&c),
+            )
+        }))?;
+    }
+    legend(&mut chart, SeriesLabelPosition::UpperRight, 0.85, 15)?;
+    root.present()?;
+    Ok(())
+}
+
+/// `volumes, GPU pipeline, exact` -> `gpu exact`; `map 2048 pcf, Bevy's bias` -> `2048 pcf`.
+fn short_label(label: &str) -> String {
+    let l = label
+        .replace("volumes, GPU pipeline, ", "gpu ")
+        .replace("volumes, host pipeline ", "host ");
+    let l = l.strip_prefix("map ").unwrap_or(&l);
+    l.split(',').next().unwrap_or(l).to_owned()
 }

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 pub(super) const USAGE: &str = "\
 cargo xtask matrix [--quick] [--out DIR] [--backends LIST] [--modes LIST] [--frames N]
+                   [--only maps]
 
 Runs the paper's experiment matrix with the release `shadowvol` binary on every available
 backend and writes DIR/tables.md, DIR/results.json, DIR/results.csv and PNG plots.
@@ -14,6 +15,9 @@ backend and writes DIR/tables.md, DIR/results.json, DIR/results.csv and PNG plot
   --backends LIST  comma-separated backend names (default: all available)
   --modes LIST     comma-separated accuracy modes (default: original,robust,ordered,exact)
   --frames N       timed frames per measurement (default: 30, or 5 with --quick)
+  --only maps      only the volumes-against-maps table (every hard-* preset, town,
+                   bunnies-10-individual and sphere-1m at 1280x720; maps of 512 to 8192 texels,
+                   hard and PCF, Bevy's bias and a bias sweep; about an hour on 2 cores)
   --replot DIR     measure nothing: rewrite DIR/tables.md, DIR/results.csv and the plots from
                    DIR/results.json (after a change to the tables or plots)
 ";
@@ -33,6 +37,8 @@ pub(super) struct Options {
     pub warmup: u32,
     /// `--replot DIR`: rewrite the tables and plots of an earlier run.
     pub replot: Option<PathBuf>,
+    /// `--only maps`: only the volumes-against-maps table.
+    pub only_maps: bool,
 }
 
 /// Parses the arguments after `matrix`; `None` after `--help` (the usage is printed).
@@ -48,6 +54,7 @@ pub(super) fn parse_args(args: &[String]) -> Result<Option<Options>, String> {
         frames: 0,
         warmup: 3,
         replot: None,
+        only_maps: false,
     };
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -60,6 +67,15 @@ pub(super) fn parse_args(args: &[String]) -> Result<Option<Options>, String> {
             "--quick" => o.quick = true,
             "--out" => o.out = PathBuf::from(value("--out")?),
             "--replot" => o.replot = Some(PathBuf::from(value("--replot")?)),
+            "--only" => {
+                let v = value("--only")?;
+                if v != "maps" {
+                    return Err(format!(
+                        "--only {v:?}: only the table `maps` (volumes against maps) runs alone"
+                    ));
+                }
+                o.only_maps = true;
+            }
             "--backends" => {
                 o.backends = Some(split_list(&value("--backends")?));
             }

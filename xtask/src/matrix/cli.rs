@@ -127,6 +127,18 @@ pub struct RenderReport {
     pub frames: Option<FrameStats>,
     /// Bytes brought to the host during the `--frames` frames.
     pub frame_readback_bytes: Option<u64>,
+    /// Pixels where render and reference differ within one pixel of a reference boundary.
+    pub boundary_pixels: Option<u64>,
+    /// Covered pixels the reference could not decide.
+    pub undecidable_pixels: Option<u64>,
+    /// `volumes` or `map` (renders before the map pipeline: absent).
+    pub shadows: Option<String>,
+    /// Side of directional and spot maps, texels (`--shadows map`).
+    pub map_size: Option<u64>,
+    /// `hard` or `pcf` (`--shadows map`).
+    pub map_filter: Option<String>,
+    /// Per-pass GPU times, ms, where the adapter has timestamp queries.
+    pub gpu_timings_ms: Option<Map<String, Value>>,
 }
 
 /// `render`'s `frames`: the `--frames` frames on the light orbit, in ms.

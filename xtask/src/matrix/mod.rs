@@ -8,13 +8,13 @@
 //!
 //! Output in `--out DIR` (default `matrix-out`): `tables.md`, `results.json`, `results.csv` and
 //! PNG plots (`time_vs_triangles.png`, `time_vs_lights.png`, `accuracy_cost.png`,
-//! `individual_vs_baked.png`).
+//! `individual_vs_baked.png`, `maps_vs_volumes.png`).
 //!
 //! Where things are, from the command line to the files:
 //! - [`args`]: the command line;
 //! - [`plan`]: which scenes each table uses, and what one run measures;
 //! - [`runner`]: the CLI as a subprocess, the host, one record per measurement ([`progress`]:
-//!   the progress bar);
+//!   the progress bar; [`maps`]: the volumes-against-maps renders);
 //! - [`cli`]: the JSON the CLI prints, typed; [`records`]: the matrix's records and
 //!   `results.json`, typed;
 //! - [`tables`]: `tables.md`; [`csv`]: `results.csv`; the plots are in `crate::plots`.
@@ -22,6 +22,8 @@
 mod args;
 mod cli;
 mod csv;
+mod maps;
+pub(crate) mod maps_table;
 mod plan;
 mod progress;
 pub(crate) mod records;

@@ -33,6 +33,32 @@ pub(super) const FRAME_SCENES: [&str; 3] = ["sphere-1m", "spheres-100x1k", "town
 pub(super) const FRAME_HOST_BACKEND: &str = "simd";
 /// The key `backend` of the frame table's GPU-pipeline rows.
 pub(super) const FRAME_GPU_KEY: &str = "gpu-pipeline";
+/// Scenes of the volumes-against-maps table besides every `hard-*` preset.
+pub(super) const MAP_SCENES_EXTRA: [&str; 3] = ["town", "bunnies-10-individual", "sphere-1m"];
+/// The `--quick` subset of the volumes-against-maps table.
+pub(super) const MAP_SCENES_QUICK: [&str; 3] = ["hard-light-on-edge-line", "town", "bunny"];
+/// Image size of the volumes-against-maps table.
+pub(super) const MAP_RENDER_SIZE: &str = "1280x720";
+/// Map sizes of the volumes-against-maps table (texels a side).
+pub(super) const MAP_SIZES: [u32; 5] = [512, 1024, 2048, 4096, 8192];
+/// The `--quick` map sizes.
+pub(super) const MAP_SIZES_QUICK: [u32; 2] = [512, 2048];
+/// The biases (`DEPTH,SLOPE,NORMAL`) swept for the table's "tuned with hindsight" rows, besides
+/// Bevy's defaults: around both of Bevy's defaults, smaller and larger, and one with a
+/// slope-scaled part.
+pub(super) const MAP_BIAS_SWEEP: [&str; 6] = [
+    "0.005,0,0.3",
+    "0.02,0,0.6",
+    "0.08,0,1.8",
+    "0.02,2,1.8",
+    "0.3,0,1.8",
+    "0.3,0,4",
+];
+/// The `--quick` sweep.
+pub(super) const MAP_BIAS_SWEEP_QUICK: [&str; 2] = ["0.005,0,0.3", "0.3,0,4"];
+/// The key `backend` of the map pipeline's rows.
+pub(super) const MAP_KEY: &str = "map";
+
 /// Scenes of the Toy Wars table (closed manifold meshes, which the seeds' algorithms need).
 pub(super) const TOYWARS_SCENES: [&str; 2] = ["bunny", "bunny-subdivided"];
 
@@ -52,6 +78,14 @@ pub(super) struct Plan {
     pub toywars_scenes: Vec<&'static str>,
     /// Scenes of the frame table (empty when `simd` is not measured).
     pub frame_scenes: Vec<&'static str>,
+    /// Scenes of the volumes-against-maps table.
+    pub map_scenes: Vec<String>,
+    /// Map sizes of that table.
+    pub map_sizes: Vec<u32>,
+    /// Biases swept for its tuned rows.
+    pub map_biases: Vec<&'static str>,
+    /// Only the volumes-against-maps table runs (`--only maps`).
+    pub only_maps: bool,
 }
 
 impl Plan {
@@ -78,12 +112,36 @@ impl Plan {
             } else {
                 Vec::new()
             },
+            map_scenes: if o.quick {
+                MAP_SCENES_QUICK.iter().map(|s| (*s).to_owned()).collect()
+            } else {
+                scenes
+                    .iter()
+                    .filter(|s| s.starts_with("hard-"))
+                    .cloned()
+                    .chain(MAP_SCENES_EXTRA.iter().map(|s| (*s).to_owned()))
+                    .collect()
+            },
+            map_sizes: if o.quick {
+                MAP_SIZES_QUICK.to_vec()
+            } else {
+                MAP_SIZES.to_vec()
+            },
+            only_maps: o.only_maps,
+            map_biases: if o.quick {
+                MAP_BIAS_SWEEP_QUICK.to_vec()
+            } else {
+                MAP_BIAS_SWEEP.to_vec()
+            },
         }
     }
 
     /// Progress steps; must follow `Matrix::run_plan`: one per bench call (all backends
     /// at once), render, accuracy call (per backend) and baselines call.
     pub fn steps(&self) -> u64 {
+        if self.only_maps {
+            return self.map_steps();
+        }
         let b = self.backends.len() as u64;
         let m = self.modes.len() as u64;
         let tri = TRI_SCENES.iter().filter(|s| **s != T1_SCENE).count() as u64;
@@ -105,5 +163,15 @@ impl Plan {
             + self.render_scenes.len() as u64 * b * m
             + self.toywars_scenes.len() as u64
             + 2 * self.frame_scenes.len() as u64
+            + self.map_steps()
+    }
+
+    /// Progress steps of the volumes-against-maps table: per scene the GPU pipeline in each mode
+    /// and the host pipeline in exact mode, then per map size and filter the default bias and
+    /// each swept one.
+    pub fn map_steps(&self) -> u64 {
+        let per_map = 1 + self.map_biases.len() as u64;
+        self.map_scenes.len() as u64
+            * (self.modes.len() as u64 + 1 + 2 * self.map_sizes.len() as u64 * per_map)
     }
 }

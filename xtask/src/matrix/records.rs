@@ -105,6 +105,24 @@ pub struct Render {
     /// Bytes brought to the host during those frames.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frame_readback_bytes: Option<u64>,
+    /// Pixels where render and reference differ within a pixel of a reference boundary.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub boundary_pixels: Option<u64>,
+    /// Covered pixels the reference could not decide.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub undecidable_pixels: Option<u64>,
+    /// Side of the directional and spot maps, texels (the map pipeline's renders).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub map_size: Option<u64>,
+    /// `hard` or `pcf` (the map pipeline's renders).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub map_filter: Option<String>,
+    /// `default` (Bevy's per light type) or the `--map-bias` given (the map pipeline's renders).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub map_bias: Option<String>,
+    /// GPU time of the map passes, ms (median of the `--frames` frames).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gpu_shadow_maps_ms: Option<f64>,
     /// Where the image was written.
     pub png: String,
     /// The report's timings as `timing_<stage>` columns.
@@ -129,6 +147,17 @@ impl Render {
             frames_p10_ms: report.frames.as_ref().and_then(|f| f.p10_ms),
             frames_p90_ms: report.frames.as_ref().and_then(|f| f.p90_ms),
             frame_readback_bytes: report.frames.as_ref().and(report.frame_readback_bytes),
+            boundary_pixels: report.boundary_pixels,
+            undecidable_pixels: report.undecidable_pixels,
+            map_size: report.map_size,
+            map_filter: report.map_filter.clone(),
+            map_bias: None,
+            gpu_shadow_maps_ms: report
+                .gpu_timings_ms
+                .as_ref()
+                .and_then(|t| t.get("shadow_maps"))
+                .and_then(Value::as_f64)
+                .filter(|_| report.map_size.is_some()),
             png,
             timing: report
                 .timings
@@ -142,6 +171,9 @@ impl Render {
 /// What one record measured.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(untagged)]
+// A run holds a few thousand records: boxing the larger variant would save little and add a
+// layer to every construction and match.
+#[allow(clippy::large_enum_variant)]
 pub enum Data {
     /// `bench`: tables 1-3, time against triangles and lights.
     Bench(Bench),
@@ -159,7 +191,9 @@ impl Data {
         let v = Value::Object(fields);
         Ok(match experiment {
             "accuracy" => Self::ModeErrors(serde_json::from_value(v)?),
-            "artifacts" | "table1-frame" | "frames" => Self::Render(serde_json::from_value(v)?),
+            "artifacts" | "table1-frame" | "frames" | "maps" | "maps-sweep" => {
+                Self::Render(serde_json::from_value(v)?)
+            }
             "toywars" => Self::Baseline(serde_json::from_value(v)?),
             _ => Self::Bench(serde_json::from_value(v)?),
         })

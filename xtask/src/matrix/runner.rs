@@ -181,7 +181,8 @@ pub(super) struct Matrix {
 }
 
 impl Matrix {
-    fn frames(&self) -> String {
+    /// `--frames`, as an argument.
+    pub(super) fn frames(&self) -> String {
         self.opts.frames.to_string()
     }
 
@@ -194,7 +195,8 @@ impl Matrix {
             .unwrap_or_default()
     }
 
-    fn fail(&mut self, what: String) {
+    /// Records a failed measurement and says so.
+    pub(super) fn fail(&mut self, what: String) {
         eprintln!("\nmatrix: {what}");
         self.results.failures.push(what);
     }
@@ -297,6 +299,10 @@ impl Matrix {
 
     /// Runs every measurement of `plan`, in table order.
     pub fn run_plan(&mut self, plan: &Plan) {
+        if self.opts.only_maps {
+            self.maps_table(plan);
+            return;
+        }
         let modes = plan.modes.clone();
         let backends = plan.backends.clone();
         let two: Vec<String> = ["original", "robust"]
@@ -364,6 +370,7 @@ impl Matrix {
             }
         }
         self.frame_table(plan);
+        self.maps_table(plan);
         // The seeds' CPU algorithms against our modes on cpu and simd.
         for s in &plan.toywars_scenes {
             self.progress.step(&format!("toywars: {s}"));

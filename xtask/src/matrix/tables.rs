@@ -71,6 +71,7 @@ pub(super) fn tables(r: &Results, modes: &[String]) -> String {
     s += &t.artifact_table();
     s += &t.scaling_tables();
     s += &t.frame_table();
+    s += &super::maps_table::maps_tables(r);
     s += "\n## Seed \"Toy Wars\" table: the seeds' CPU algorithms against ours\n\n";
     s += &t.toywars_table();
     s += "\nThe Toy Wars notes (PSP-era hardware, ms):\n\n";

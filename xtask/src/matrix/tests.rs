@@ -423,3 +423,94 @@ fn frame_table_compares_the_pipelines_of_one_run() {
     let text = serde_json::to_string(&results.records[0]).unwrap();
     assert!(text.contains("\"frames_median_ms\":40.0"), "{text}");
 }
+
+/// A record of the volumes-against-maps table: `backend` `gpu-pipeline`, `simd` or `map`;
+/// `map` = (size, filter, bias) for the map pipeline; `frames` = median ms (timed) or `None`
+/// (a sweep render).
+fn maps_record(
+    backend: &str,
+    mode: Option<&str>,
+    map: Option<(u64, &str, &str)>,
+    frames: Option<f64>,
+    artifacts: u64,
+) -> Record {
+    let mut report = json!({
+        "artifact_pixels": artifacts,
+        "boundary_pixels": 7,
+        "shadow_pixels": 500,
+        "reference_shadow_pixels": 510,
+        "adapter": "llvmpipe",
+        "pipeline": if map.is_some() { "map" } else { "gpu" },
+        "shadows": if map.is_some() { "map" } else { "volumes" },
+        "gpu_timings_ms": {"shadow_maps": 1.5, "lighting": 2.0},
+    });
+    if let Some(ms) = frames {
+        report["frames"] =
+            json!({"count": 5, "median_ms": ms, "p10_ms": ms * 0.9, "p90_ms": ms * 1.2});
+    }
+    if let Some((size, filter, _)) = map {
+        report["map_size"] = json!(size);
+        report["map_filter"] = json!(filter);
+    }
+    let report: RenderReport = serde_json::from_value(report).unwrap();
+    let mut render = Render::new(report, "100x100", "m.png".into());
+    render.map_bias = map.map(|(_, _, b)| b.to_owned());
+    Record {
+        host: host(),
+        experiment: if frames.is_some() {
+            "maps"
+        } else {
+            "maps-sweep"
+        }
+        .into(),
+        reused_from: None,
+        key: Key {
+            scene: "s".into(),
+            backend: backend.into(),
+            mode: mode.map(str::to_owned),
+        },
+        device: "llvmpipe".into(),
+        data: Data::Render(render),
+    }
+}
+
+#[test]
+fn maps_table_picks_the_best_swept_bias_and_the_first_map_as_good_as_exact() {
+    let results = Results {
+        host: host(),
+        records: vec![
+            maps_record("gpu-pipeline", Some("exact"), None, Some(10.0), 0),
+            maps_record("simd", Some("exact"), None, Some(40.0), 0),
+            maps_record("map", None, Some((512, "pcf", "default")), Some(5.0), 100),
+            maps_record("map", None, Some((512, "pcf", "0.3,0,4")), None, 20),
+            maps_record("map", None, Some((512, "pcf", "0.005,0,0.3")), None, 60),
+            maps_record("map", None, Some((2048, "pcf", "default")), Some(8.0), 0),
+        ],
+        ..Results::default()
+    };
+    let r = results.records[2].render().unwrap();
+    assert_eq!(r.gpu_shadow_maps_ms, Some(1.5));
+    assert_eq!(
+        results.records[0].render().unwrap().gpu_shadow_maps_ms,
+        None
+    );
+    let t = tables(&results, &["exact".to_owned()]);
+    for line in [
+        "| s | volumes, GPU pipeline, exact | 10.0 (9.00-12.0) | 1.00 | 0 | 7 | 500 (510) |",
+        "| s | volumes, host pipeline (simd), exact | 40.0 (36.0-48.0) | 4.00 | 0 | 7 | 500 (510) |",
+        "| s | map 512 pcf, Bevy's bias | 5.00 (4.50-6.00) | 0.50 | 100 | 7 | 500 (510) |",
+        "| s | map 512 pcf, tuned with hindsight (bias 0.3,0,4) | 5.00 (4.50-6.00) | 0.50 | 20 | 7 | 500 (510) |",
+        "| s | map 2048 pcf, tuned with hindsight (bias default) | 8.00 (7.20-9.60) | 0.80 | 0 | 7 | 500 (510) |",
+        "| s | 10.0, 0 | map 2048 pcf, Bevy's bias | 8.00 | 1.25 | 0 |",
+    ] {
+        assert!(t.lines().any(|l| l == line), "no line {line:?} in\n{t}");
+    }
+    let pts = super::maps_table::plot_points(&results.records);
+    let tuned_512 = pts
+        .iter()
+        .find(|p| p.0 == "map 512 pcf, tuned with hindsight")
+        .expect("a tuned point");
+    assert_eq!((tuned_512.1, tuned_512.2), ("map tuned", 5.0));
+    assert!((tuned_512.3 - 20.0 / 10_000.0).abs() < 1e-12);
+    assert_eq!(pts.len(), 6);
+}

@@ -1,6 +1,7 @@
 //! Shadow maps, the technique engines ship, built as a fair peer of the volumes: the settings
-//! ([`MapSettings`]), each light's projection ([`fit`]) and the passes ([`MapPass`]), on the
-//! caller's device and in the caller's encoder, with nothing read back during a frame.
+//! ([`MapSettings`]), each light's projection ([`fit`]) and the passes that
+//! [`crate::MapPipeline`] records on the caller's device and in the caller's encoder, with
+//! nothing read back during a frame.
 //!
 //! Per light, one map:
 //! * directional: an orthographic map fitted to what the view sees of the scene's box and to
@@ -20,7 +21,16 @@ pub mod fit;
 pub(crate) mod pass;
 
 pub use fit::{cube_face, light_map, FitBounds, LightMap, MapKind};
-pub use pass::MapPass;
+pub(crate) use pass::MapPass;
+
+/// `shaders/render_maps.wgsl`: the map, mask and lit passes (appended to `render_raster.wgsl`).
+pub const MAPS_WGSL: &str = include_str!("../../../../shaders/render_maps.wgsl");
+
+/// The map pipeline's module: the renderer's `render_raster.wgsl`, then `render_maps.wgsl`.
+#[must_use]
+pub fn maps_source() -> String {
+    format!("{}\n{MAPS_WGSL}", crate::resident::SHADER_WGSL)
+}
 
 /// Bevy 0.20's directional (and spot) map size, texels.
 pub const BEVY_DIRECTIONAL_SIZE: u32 = 2048;

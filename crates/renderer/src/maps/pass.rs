@@ -14,15 +14,6 @@ use glam::{Mat4, Vec3};
 use shadowvol_scenes::Scene;
 use std::ops::Range;
 
-/// `shaders/render_maps.wgsl`: the map, mask and lit passes (appended to `render_raster.wgsl`).
-pub const MAPS_WGSL: &str = include_str!("../../../../shaders/render_maps.wgsl");
-
-/// The map module: the renderer's `render_raster.wgsl`, then `render_maps.wgsl`.
-#[must_use]
-pub fn maps_source() -> String {
-    format!("{}\n{MAPS_WGSL}", crate::resident::SHADER_WGSL)
-}
-
 /// Byte stride of the per-light map uniforms (`MapU`, 448 bytes).
 const MAP_STRIDE: u64 = 512;
 /// Bytes of one `MapU`.
@@ -31,7 +22,7 @@ const MAP_BYTES: u64 = 448;
 const NO_MAP: u32 = 3;
 
 /// The shadow-map passes' pipelines on one device.
-pub struct MapPass {
+pub(crate) struct MapPass {
     globals_bgl: wgpu::BindGroupLayout,
     light_bgl: wgpu::BindGroupLayout,
     map_bgl: wgpu::BindGroupLayout,
@@ -107,12 +98,12 @@ impl MapPass {
     ///
     /// # Errors
     /// [`RenderError::Device`] when a shader or pipeline fails to build.
-    pub fn new(rd: &RenderDevice) -> Result<Self, RenderError> {
+    pub(crate) fn new(rd: &RenderDevice) -> Result<Self, RenderError> {
         let device = &rd.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("shaders/render_maps.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(maps_source().into()),
+            source: wgpu::ShaderSource::Wgsl(super::maps_source().into()),
         });
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let globals_bgl = pipelines::bind_group_layout(device, "globals", &[uniform(0, vf, false)]);
