@@ -524,6 +524,7 @@ fn maps_vs_volumes(path: &Path, records: &[Record]) -> PlotResult {
         .configure_mesh()
         .x_desc("frame ms, summed over the scenes (median of each)")
         .y_desc("artifact pixels / pixels (0 drawn at 1e-6)")
+        .x_labels(12)
         .x_label_formatter(&tick)
         .y_label_formatter(&|v: &f64| format!("{v:.0e}"))
         .label_style(("sans-serif", 14))
@@ -544,11 +545,12 @@ fn maps_vs_volumes(path: &Path, records: &[Record]) -> PlotResult {
         let anno = markers!(chart, i, xy, c);
         marker_legend!(anno.label(name), i, c);
         chart.draw_series(mine.iter().map(|(x, y, l)| {
-            Text::new(
-                l.clone(),
-                (*x, *y),
-                ("sans-serif", 12).into_font().color(&c),
-            )
+            EmptyElement::at((*x, *y))
+                + Text::new(
+                    l.clone(),
+                    (9, -14),
+                    ("sans-serif", 13).into_font().color(&c),
+                )
         }))?;
     }
     legend(&mut chart, SeriesLabelPosition::UpperRight, 0.85, 15)?;
