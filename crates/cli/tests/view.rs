@@ -12,6 +12,7 @@ use std::time::{Duration, Instant};
 
 main!(
     view_under_xvfb_matches_render,
+    view_with_maps_matches_render_with_maps,
     view_without_a_display_exits_1_naming_the_variables
 );
 
@@ -94,8 +95,19 @@ fn rgba(path: &Path) -> image::RgbaImage {
 }
 
 fn view_under_xvfb_matches_render() -> Outcome {
+    view_matches_render("xvfb", &[], "gpu")
+}
+
+/// With `--shadows map` the view draws with the map pipeline, as `render --shadows map` does.
+fn view_with_maps_matches_render_with_maps() -> Outcome {
+    view_matches_render("xvfb-maps", &["--shadows", "map"], "map")
+}
+
+/// `view MESH EXTRA --frames 5 --screenshot` under Xvfb reports `pipeline` and shows what
+/// `render MESH EXTRA` draws.
+fn view_matches_render(name: &str, extra: &[&str], pipeline: &str) -> Outcome {
     let x = xvfb()?;
-    let dir = scratch("xvfb");
+    let dir = scratch(name);
     let shot = dir.join("shot.png");
     let out = Command::new(BIN)
         .env("DISPLAY", &x.display)
@@ -110,6 +122,7 @@ fn view_under_xvfb_matches_render() -> Outcome {
             "--format",
             "json",
         ])
+        .args(extra)
         .arg("--screenshot")
         .arg(&shot)
         .output()
@@ -122,8 +135,8 @@ fn view_under_xvfb_matches_render() -> Outcome {
     assert!(out.status.success(), "view failed:\n{stderr}");
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(v["frames"], 5, "{v}");
-    // Both the view and the render below run the GPU pipeline, the default.
-    assert_eq!(v["pipeline"], "gpu", "{v}");
+    // The view and the render below run the same pipeline.
+    assert_eq!(v["pipeline"], pipeline, "{v}");
     assert!(v["fps"].as_f64().unwrap() > 0.0 && v["median_ms"].as_f64().unwrap() > 0.0);
     assert!(!v["adapter"].as_str().unwrap().is_empty());
     assert_eq!(
@@ -133,14 +146,20 @@ fn view_under_xvfb_matches_render() -> Outcome {
     eprintln!("view under Xvfb: {v}");
 
     let reference = dir.join("render.png");
-    let r = common::run(&[
-        "render",
-        &mesh(),
-        "--size",
-        "256x192",
-        "--out",
-        reference.to_str().unwrap(),
-    ]);
+    let r = common::run(
+        &[
+            &[
+                "render",
+                &mesh(),
+                "--size",
+                "256x192",
+                "--out",
+                reference.to_str().unwrap(),
+            ][..],
+            extra,
+        ]
+        .concat(),
+    );
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let (a, b) = (rgba(&shot), rgba(&reference));
     assert_eq!(a.dimensions(), b.dimensions());
