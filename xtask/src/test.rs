@@ -15,9 +15,9 @@
 //!    link or malformed doc comment fails; `-D warnings` is added to any `RUSTDOCFLAGS` set).
 //! 6. **test**: `cargo test --workspace` (with `CI=true`, the conformance tests fail for a backend
 //!    that cannot start instead of skipping it).
-//! 7. **example**: `cargo run -p shadowvol-renderer --example embed -- OUT --check`: the
-//!    embedding example renders on its own device and its image's shadows are checked against the
-//!    ray-traced reference. Without a wgpu adapter it warns (a visible skip), under `CI=true` it
+//! 7. **example**: `cargo run -p shadowvol-renderer --example embed -- OUT --check [--maps]`: the
+//!    embedding example renders on its own device, once with volumes and once with shadow maps,
+//!    and each image's shadows are checked against the ray-traced reference. Without a wgpu adapter it warns (a visible skip), under `CI=true` it
 //!    fails.
 //! 8. **shaders**: `cargo xtask shaders --check` (the committed SPIR-V matches the GLSL).
 //! 9. **gpu-crates**: every GPU backend crate has the core files and at most two of its own
@@ -111,7 +111,7 @@ Runs, in order, and prints a summary:
   clippy   cargo clippy --workspace --all-targets -- -D warnings
   docs     RUSTDOCFLAGS=\"-D warnings\" cargo doc --workspace --no-deps
   test     cargo test --workspace [CARGO_TEST_ARGS]
-  example  cargo run -p shadowvol-renderer --example embed -- OUT --check: the embedding
+  example  cargo run -p shadowvol-renderer --example embed -- OUT --check [--maps]: the embedding
            example on its own device, its shadows checked against the ray-traced
            reference (a warning without a wgpu adapter; a failure under CI=true)
   shaders  cargo xtask shaders --check
@@ -371,13 +371,28 @@ fn cargo_step(root: &Path, args: &[&str], env: &[(&str, &str)]) -> Outcome {
     }
 }
 
-/// The `example` step: the embedding example, run as a user runs it, with `--check`.
+/// The `example` step: the embedding example, run as a user runs it, with `--check`, with the
+/// volumes and then with `--maps`.
 fn embed_example(root: &Path, ci: bool) -> Outcome {
+    for (png, extra) in [
+        ("embed-example.png", None),
+        ("embed-example-maps.png", Some("--maps")),
+    ] {
+        let outcome = embed_example_run(root, ci, png, extra);
+        if !matches!(outcome, Outcome::Passed) {
+            return outcome;
+        }
+    }
+    Outcome::Passed
+}
+
+/// One run of the embedding example, writing `png` in the target folder, with `extra`.
+fn embed_example_run(root: &Path, ci: bool, png: &str, extra: Option<&str>) -> Outcome {
     let target = std::env::var_os("CARGO_TARGET_DIR")
         .map_or_else(|| root.join("target"), std::path::PathBuf::from);
-    let out = target.join("embed-example.png");
+    let out = target.join(png);
     let out = out.to_string_lossy();
-    let args = [
+    let mut args = vec![
         "run",
         "-p",
         "shadowvol-renderer",
@@ -387,6 +402,7 @@ fn embed_example(root: &Path, ci: bool) -> Outcome {
         &out,
         "--check",
     ];
+    args.extend(extra);
     let line = format!("cargo {}", args.join(" "));
     println!("$ {line}");
     let output = match Command::new(crate::cargo())

@@ -5,18 +5,24 @@
 //! lights, transforms, the plan's techniques). Nothing is read back during a frame; here the
 //! image is read once at the end to write the PNG.
 //!
-//! Run with `cargo run -p shadowvol-renderer --example embed -- [OUT.png] [--check]` (needs a
-//! wgpu adapter, for example Mesa's lavapipe). `OUT.png` defaults to `embed.png`. With `--check`
-//! the example also reads back the pre-pass ids and the stencil of the last frame and compares
-//! its shadows with the ray-traced reference (`shadowvol_reference`); it fails when
-//! more than 0.05 % of the pixels are artifacts. `cargo xtask test` runs it that way.
+//! Run with `cargo run -p shadowvol-renderer --example embed -- [OUT.png] [--check] [--maps]`
+//! (needs a wgpu adapter, for example Mesa's lavapipe). `OUT.png` defaults to `embed.png`. With
+//! `--check` the example also reads back the pre-pass ids and the stencil of the last frame and
+//! compares its shadows with the ray-traced reference (`shadowvol_reference`); it fails when
+//! more than 0.05 % of the pixels are artifacts. `cargo xtask test` runs it that way. With
+//! `--maps` the same frames are drawn with shadow maps instead (`MapPipeline`, recorded through
+//! the `ShadowPipeline` trait into the same encoder and attachments).
 
 use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::Mesh;
 use shadowvol_reference::Shot;
-use shadowvol_renderer::raster::read_texture;
+use shadowvol_renderer::pipeline::FrameInputs;
+use shadowvol_renderer::plan::plan_frame;
+use shadowvol_renderer::raster::{read_texture, Attachments};
 use shadowvol_renderer::resident::{texture_2d, PassFormats, PassFrame, ShadowPass};
+use shadowvol_renderer::world::World;
 use shadowvol_renderer::{Camera, RenderDevice, Scene, Technique};
+use shadowvol_renderer::{MapPipeline, MapSettings, PlanPolicy, ShadowPipeline};
 use shadowvol_robust_math::{Accuracy, Light};
 
 const W: u32 = 320;
@@ -25,7 +31,7 @@ const H: u32 = 240;
 /// The largest fraction of artifact pixels `--check` accepts (DESIGN's 0.05 %).
 const MAX_ARTIFACT_FRACTION: f64 = 0.0005;
 
-const USAGE: &str = "usage: embed [OUT.png] [--check]";
+const USAGE: &str = "usage: embed [OUT.png] [--check] [--maps]";
 
 fn main() -> std::process::ExitCode {
     match run() {
@@ -40,9 +46,11 @@ fn main() -> std::process::ExitCode {
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut out = String::from("embed.png");
     let mut check = false;
+    let mut maps = false;
     for a in std::env::args().skip(1) {
         match a.as_str() {
             "--check" => check = true,
+            "--maps" => maps = true,
             "-h" | "--help" => {
                 println!("{USAGE}");
                 return Ok(());
@@ -142,7 +150,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let colors = [[0.9, 0.85, 0.8]];
     let albedo: Vec<[f32; 3]> = scene.surfaces().map(|s| s.albedo).collect();
     let mut transforms = [Affine3A::IDENTITY; 2];
-    for frame in 0..30 {
+    if maps {
+        let targets = Attachments::new(&color_view, ids_view.as_ref(), &depth_view);
+        let rd = RenderDevice::on_device(adapter.clone(), device.clone(), queue.clone());
+        transforms[1] = map_frames(&rd, &mut scene, &camera, &colors, &targets)?;
+    }
+    for frame in 0..if maps { 0 } else { 30 } {
         transforms[1] = Affine3A::from_translation(Vec3::new(-0.5, 0.6, -0.5))
             * Affine3A::from_rotation_y(frame as f32 * 0.05);
         pass.update(
@@ -239,6 +252,47 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .into());
     }
     Ok(())
+}
+
+/// `--maps`: the same 30 frames with the shadow-map pipeline, through the `ShadowPipeline` trait
+/// on the application's device, encoder and attachments. Each frame syncs the world positions
+/// (only the box moved), plans it, and records; the stencil keeps each light's map test for
+/// `--check`. Returns the box's last transform.
+fn map_frames(
+    rd: &RenderDevice,
+    scene: &mut Scene,
+    camera: &Camera,
+    colors: &[[f32; 3]],
+    targets: &Attachments<'_>,
+) -> Result<Affine3A, Box<dyn std::error::Error>> {
+    let mut pipeline = MapPipeline::new(MapSettings::default());
+    pipeline.prepare(rd, scene)?;
+    let mut world = World::default();
+    let targets = targets.with_shadow_stencil();
+    let mut t = Affine3A::IDENTITY;
+    for frame in 0..30 {
+        t = Affine3A::from_translation(Vec3::new(-0.5, 0.6, -0.5))
+            * Affine3A::from_rotation_y(frame as f32 * 0.05);
+        scene.geometry.objects[1].world_from_object = t;
+        let changes = world.sync(scene)?;
+        let plan = plan_frame(scene, &world, camera, (W, H), PlanPolicy::Auto, false);
+        let mut entries = plan.entries;
+        let inputs = FrameInputs {
+            scene,
+            world: &world,
+            changes: &changes,
+            camera,
+            size: (W, H),
+            mode: Accuracy::Exact,
+            scissors: &plan.scissors,
+            light_colors: colors,
+            count: false,
+        };
+        let mut enc = rd.device.create_command_encoder(&Default::default());
+        pipeline.record(rd, &inputs, &mut entries, &targets, &mut enc)?;
+        rd.queue.submit([enc.finish()]);
+    }
+    Ok(t)
 }
 
 /// The ids texture, made with `--check`.

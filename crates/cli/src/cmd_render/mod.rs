@@ -70,16 +70,28 @@ pub const LONG_ABOUT: &str =
     scissor, the screen rectangle of its range sphere or spot cone within the scene's bounds \
     (each plan entry's \"scissor\": [x, y, w, h] or \
     null for the whole image; --no-scissor turns it off, the image is the same), \
-    \"pipeline\": \"gpu\" or \"host\", \"frame_readback_bytes\": bytes brought to the host during \
+    \"pipeline\": \"gpu\", \"host\" or \"map\", \"frame_readback_bytes\": bytes brought to the host during \
     the --frames frames besides the final image (host: the multiplicities, 4 bytes per edge and \
     light and extraction; gpu: 0), \"frames\": null or {\"count\", \"median_ms\", \"p10_ms\", \
     \"p90_ms\"}, \"gpu_timings_ms\": null or {\"extract\", \"sides\", \"caps\", \"stencil\" (sides + \
-    caps), \"lighting\" (pre-pass + lit passes)}, GPU milliseconds from timestamp queries (gpu \
+    caps; maps: the mask passes), \"lighting\" (pre-pass + lit passes), \"shadow_maps\" (the map \
+    passes; 0 for volumes)}, GPU milliseconds from timestamp queries (gpu \
     pipeline on an adapter with TIMESTAMP_QUERY; the median over --frames, else the final frame), \
     \"uncertain\": exact-mode evaluations the certified filter left undecided, \"uncertain_unit\": \
     what they are (\"edge-opposite-vertex-light\" triples on the host pipeline, \"triangle-light\" \
     pairs on the gpu pipeline), \"host_resolved\": those decided on the host (gpu: 0)}. On the gpu \
     pipeline extraction and volumes are part of raster_ms (and of gpu_timings_ms).\n\n\
+    --shadows map draws shadow maps instead of volumes (the map pipeline, on the renderer's \
+    device, nothing read back during a frame), with Bevy 0.20's defaults: a directional light \
+    gets an orthographic map of 2048 texels fitted to what the view sees and to every caster, a \
+    spot light a perspective map of 2048 over its cone, a point light a cube map of 1024 a face; \
+    bias 0.02,0,1.8 (directional, spot) and 0.08,0,0.6 (point) as DEPTH (world units towards \
+    the light), SLOPE (the map pass's slope-scaled depth bias) and NORMAL (texels along the \
+    normal); PCF filtering. --map-size, --map-filter and --map-bias replace them for every \
+    light. The JSON adds \"shadows\" (\"volumes\" or \"map\"), \"map_size\", \"map_size_point\", \
+    \"map_filter\" and \"map_bias\" ({\"directional\", \"point\"}: {\"depth\", \"slope\", \
+    \"normal\"}), null for volumes; --reference compares each light's map test (visibility < \
+    1/2) with the reference as it compares volumes, and --explain lists each light's map.\n\n\
     glTF lights are lit as KHR_lights_punctual says: colour, intensity (candela for point and \
     spot lights, lux for directional ones) over distance squared, the range window \
     saturate(1 - (d/range)^4) and the spot cone's smooth falloff; a spot light's shadow volume \
@@ -92,7 +104,8 @@ pub const AFTER_HELP: &str = "Examples:\n  shadowvol render model.obj\n  \
     shadowvol render sphere-1m --frames 10 --pipeline gpu --format json\n  \
     shadowvol render hard-book-3 --out book.png --reference --backdrop\n  \
     shadowvol render scene.glb --out scene.png --size 640x480 --mode robust --backend simd --explain\n  \
-    shadowvol render town --out town.png --reference --diff town-diff.png --format json";
+    shadowvol render town --out town.png --reference --diff town-diff.png --format json\n  \
+    shadowvol render bunny --shadows map --map-size 4096 --map-filter hard --reference";
 
 /// How the plan may choose between z-pass and z-fail.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]

@@ -63,6 +63,9 @@ pub struct Attachments<'a> {
     /// The depth-stencil attachment (a format with a stencil aspect).
     pub depth_stencil: &'a wgpu::TextureView,
     readback: Option<&'a FrameTargets>,
+    /// Leave each light's shadow state in the stencil even without readback
+    /// ([`Attachments::with_shadow_stencil`]).
+    shadow_stencil: bool,
 }
 
 impl std::fmt::Debug for Attachments<'_> {
@@ -87,7 +90,18 @@ impl<'a> Attachments<'a> {
             ids,
             depth_stencil,
             readback: None,
+            shadow_stencil: false,
         }
+    }
+
+    /// These attachments, with each light's shadow state written into the stencil (0 = lit)
+    /// by every pipeline, so that the caller can read the last light's stencil after the frame
+    /// (to compare it with the reference, for example). The volume pipelines always leave it
+    /// there; the shadow-map pipeline then adds its mask pass.
+    #[must_use]
+    pub fn with_shadow_stencil(mut self) -> Self {
+        self.shadow_stencil = true;
+        self
     }
 
     /// Records the copy of light `light`'s stencil (its shadow state, which the reference
@@ -102,7 +116,7 @@ impl<'a> Attachments<'a> {
     /// pipeline) writes them there only then.
     #[must_use]
     pub fn reads_stencil(&self) -> bool {
-        self.readback.is_some()
+        self.readback.is_some() || self.shadow_stencil
     }
 
     fn copy_stencil(&self, enc: &mut wgpu::CommandEncoder, light: usize) {
@@ -193,6 +207,7 @@ impl FrameTargets {
             ids: Some(&self.ids_view),
             depth_stencil: &self.depth_view,
             readback: self.readbacks.is_some().then_some(self),
+            shadow_stencil: false,
         }
     }
 
