@@ -39,6 +39,7 @@ fn json(args: &[&str]) -> Result<Value, Skip> {
 
 fn map_json_names_the_settings_and_frames_read_nothing_back() -> Outcome {
     let png = scratch("map.png");
+    let diff = scratch("map-diff.png");
     let v = json(&[
         "hard-light-at-vertex",
         "--backdrop",
@@ -54,11 +55,14 @@ fn map_json_names_the_settings_and_frames_read_nothing_back() -> Outcome {
         "0.01,0.5,1",
         "--frames",
         "2",
-        "--reference",
+        "--diff",
+        &diff,
         "--out",
         &png,
     ])?;
     assert_eq!(v["shadows"], "map", "{v}");
+    let d = image::open(&diff).expect("--diff wrote a PNG").to_rgba8();
+    assert_eq!(d.dimensions(), (96, 72));
     assert_eq!(v["pipeline"], "map");
     assert!(v["backend"].is_null());
     assert_eq!(v["map_size"], 1024);

@@ -14,7 +14,11 @@ use crate::resident::GpuTimings;
 use crate::{Camera, RenderDevice, RenderError};
 use glam::Vec3;
 
-/// The shadow-map pipeline: see the [module documentation](self).
+/// The shadow-map pipeline: each light gets a map ([`crate::maps`]) on the renderer's device,
+/// in the frame's encoder; the pre-pass and the lit pass are the volume pipelines', so that only
+/// the shadows differ. Where the frame is read back (or the attachments ask for it,
+/// [`Attachments::with_shadow_stencil`]), a mask pass writes each light's map test into the
+/// stencil, so the reference compares maps as it compares volumes.
 #[derive(Debug, Default)]
 pub struct MapPipeline {
     settings: MapSettings,
