@@ -19,6 +19,7 @@
 
 pub mod fit;
 pub(crate) mod pass;
+mod resources;
 
 pub use fit::{cube_face, light_map, FitBounds, LightMap, MapKind};
 pub(crate) use pass::MapPass;

@@ -18,8 +18,10 @@ use std::ops::Range;
 const MAP_STRIDE: u64 = 512;
 /// Bytes of one `MapU`.
 const MAP_BYTES: u64 = 448;
-/// `MapU.mode.x` of a light without a map (nothing casts): visibility 1.
-const NO_MAP: u32 = 3;
+use super::resources::{
+    bind, empty_scissor, map_uniform, queries, texture_entries, uniform_buffer, MapTextures,
+    Queries,
+};
 
 /// The shadow-map passes' pipelines on one device.
 pub(crate) struct MapPass {
@@ -65,24 +67,6 @@ pub(crate) struct MapScene {
     maps_bg: wgpu::BindGroup,
     textures: Option<MapTextures>,
     queries: Option<Queries>,
-}
-
-/// The 2-D map and the cube map (one each, reused light after light), with their bind group.
-struct MapTextures {
-    size_2d: u32,
-    size_cube: u32,
-    view_2d: wgpu::TextureView,
-    /// The cube's 6 faces as render targets, layer order +X, -X, +Y, -Y, +Z, -Z.
-    faces: Vec<wgpu::TextureView>,
-    bind_group: wgpu::BindGroup,
-}
-
-/// Timestamps: pairs for the pre-pass, then per light its map passes, mask pass and lit pass.
-struct Queries {
-    set: wgpu::QuerySet,
-    resolve: wgpu::Buffer,
-    read: wgpu::Buffer,
-    lights: usize,
 }
 
 /// The GPU time of a frame's map passes, as [`crate::resident::GpuTimings`] splits it.
@@ -679,125 +663,4 @@ pub(crate) struct MapFrame<'a> {
     pub(crate) filter: MapFilter,
     /// The lights.
     pub(crate) lights: &'a [MapLight],
-}
-
-/// The `MapU` of a light: face matrices, eye, mode, bias, axis.
-fn map_uniform(map: Option<&LightMap>, eye: Vec3, filter: MapFilter) -> [u32; 112] {
-    let mut u = [0u32; 112];
-    let f = |x: f32| x.to_bits();
-    let (kind, size) = match map {
-        Some(m) => {
-            for (k, vp) in m.view_proj.iter().enumerate() {
-                for (j, x) in vp.to_cols_array().iter().enumerate() {
-                    u[16 * k + j] = f(*x);
-                }
-            }
-            let kind = match m.kind {
-                MapKind::Directional => 0,
-                MapKind::Spot => 1,
-                MapKind::Cube => 2,
-            };
-            (kind, m.size)
-        }
-        None => (NO_MAP, 1),
-    };
-    u[96..99].copy_from_slice(&[f(eye.x), f(eye.y), f(eye.z)]);
-    u[100] = kind;
-    u[101] = match filter {
-        MapFilter::Hard => 0,
-        MapFilter::Pcf => 1,
-    };
-    u[102] = size;
-    if let Some(m) = map {
-        u[104] = f(m.bias.depth);
-        u[105] = f(m.normal_offset);
-        u[106] = f(m.near);
-        u[108..111].copy_from_slice(&[f(m.axis.x), f(m.axis.y), f(m.axis.z)]);
-    }
-    u
-}
-
-fn texture_entries() -> [wgpu::BindGroupLayoutEntry; 4] {
-    let fs = wgpu::ShaderStages::FRAGMENT;
-    let texture = |binding, view_dimension| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: fs,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Depth,
-            view_dimension,
-            multisampled: false,
-        },
-        count: None,
-    };
-    let sampler = |binding| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: fs,
-        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
-        count: None,
-    };
-    [
-        texture(0, wgpu::TextureViewDimension::D2),
-        texture(1, wgpu::TextureViewDimension::Cube),
-        sampler(2),
-        sampler(3),
-    ]
-}
-
-fn uniform_buffer(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
-    device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size,
-        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    })
-}
-
-/// A bind group of `buffer`'s first `size` bytes (the window a dynamic offset moves).
-fn bind(
-    device: &wgpu::Device,
-    layout: &wgpu::BindGroupLayout,
-    buffer: &wgpu::Buffer,
-    size: u64,
-) -> wgpu::BindGroup {
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("maps"),
-        layout,
-        entries: &[wgpu::BindGroupEntry {
-            binding: 0,
-            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer,
-                offset: 0,
-                size: std::num::NonZeroU64::new(size),
-            }),
-        }],
-    })
-}
-
-fn queries(device: &wgpu::Device, lights: usize) -> Queries {
-    let count = 2 * (1 + 3 * lights) as u32;
-    Queries {
-        set: device.create_query_set(&wgpu::QuerySetDescriptor {
-            label: Some("map timestamps"),
-            ty: wgpu::QueryType::Timestamp,
-            count,
-        }),
-        resolve: device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("map timestamps resolve"),
-            size: 256 * (1 + 3 * lights) as u64,
-            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        }),
-        read: device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("map timestamps read"),
-            size: 256 * (1 + 3 * lights) as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        }),
-        lights,
-    }
-}
-
-/// Whether `scissor` is a rectangle without pixels.
-fn empty_scissor(scissor: Option<[u32; 4]>) -> bool {
-    scissor.is_some_and(|r| r[2] == 0 || r[3] == 0)
 }
