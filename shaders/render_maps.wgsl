@@ -10,23 +10,30 @@
 // A surface point is lit by the map when its reference depth >= the stored depth.
 
 struct MapU {
-    // World-to-clip of each face, camera-relative: 1 face (directional, spot) or 6 (cube, in the
-    // layer order +X, -X, +Y, -Y, +Z, -Z).
+    // World-to-clip of each face, camera-relative: 1 face (spot, directional), up to 4
+    // (cascaded directional, one per cascade and layer) or 6 (cube, in the layer order +X, -X,
+    // +Y, -Y, +Z, -Z).
     view_proj: array<mat4x4<f32>, 6>,
     // The eye in world space (w unused).
     eye: vec4<f32>,
-    // (kind: 0 directional, 1 spot, 2 cube; filter: 0 hard, 1 PCF 3x3; map size in texels; 0).
+    // (kind: 0 directional, 1 spot, 2 cube, 3 none; filter: 0 hard, 1 PCF 3x3; map size in
+    // texels; cascades of a directional map).
     mode: vec4<u32>,
     // (depth bias in world units along the direction to the light; normal bias in world units,
     // already times the texel size (directional) or per unit of distance (spot, cube); the
     // cube's near plane; 0).
     bias: vec4<f32>,
-    // Spot: the axis the light shines along, camera-relative (w unused).
+    // Spot: the axis the light shines along; cascaded directional: the camera's forward
+    // direction (w unused).
     axis: vec4<f32>,
+    // Cascaded directional: each cascade's far end, distance along `axis` from the eye.
+    cascade_far: vec4<f32>,
+    // Cascaded directional: each cascade's normal offset in world units.
+    cascade_offset: vec4<f32>,
 };
 
 @group(2) @binding(0) var<uniform> mp: MapU;
-@group(3) @binding(0) var map_2d: texture_depth_2d;
+@group(3) @binding(0) var map_2d: texture_depth_2d_array;
 @group(3) @binding(1) var map_cube: texture_depth_cube;
 @group(3) @binding(2) var hard_cmp: sampler_comparison;
 @group(3) @binding(3) var pcf_cmp: sampler_comparison;
@@ -49,16 +56,16 @@ fn vs_map_depth(v: SurfaceIn, @builtin(instance_index) face: u32) -> @builtin(po
     return mp.view_proj[face] * vec4<f32>(v.pos.xyz - mp.eye.xyz, 1.0);
 }
 
-// One comparison of the 2-D map at `uv` (texels from the top left, in [0, 1]).
-fn tap_2d(uv: vec2<f32>, depth: f32) -> f32 {
+// One comparison of layer `layer` of the 2-D map at `uv` (from the top left, in [0, 1]).
+fn tap_2d(uv: vec2<f32>, layer: u32, depth: f32) -> f32 {
     if (mp.mode.y == 0u) {
-        return textureSampleCompareLevel(map_2d, hard_cmp, uv, depth);
+        return textureSampleCompareLevel(map_2d, hard_cmp, uv, layer, depth);
     }
-    return textureSampleCompareLevel(map_2d, pcf_cmp, uv, depth);
+    return textureSampleCompareLevel(map_2d, pcf_cmp, uv, layer, depth);
 }
 
-// The 2-D map's visibility of a clip position: 1 outside the map.
-fn lookup_2d(clip: vec4<f32>) -> f32 {
+// Layer `layer` of the 2-D map's visibility of a clip position: 1 outside the map.
+fn lookup_2d(clip: vec4<f32>, layer: u32) -> f32 {
     if (clip.w <= 0.0) {
         return 1.0;
     }
@@ -69,13 +76,13 @@ fn lookup_2d(clip: vec4<f32>) -> f32 {
     let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
     let depth = clamp(ndc.z, 0.0, 1.0);
     if (mp.mode.y == 0u) {
-        return tap_2d(uv, depth);
+        return tap_2d(uv, layer, depth);
     }
     let texel = 1.0 / f32(mp.mode.z);
     var sum = 0.0;
     for (var j = -1; j <= 1; j++) {
         for (var i = -1; i <= 1; i++) {
-            sum += tap_2d(uv + vec2<f32>(f32(i), f32(j)) * texel, depth);
+            sum += tap_2d(uv + vec2<f32>(f32(i), f32(j)) * texel, layer, depth);
         }
     }
     return sum / 9.0;
@@ -127,13 +134,21 @@ fn map_visibility(world: vec3<f32>, normal: vec3<f32>) -> f32 {
         return 1.0;
     }
     if (mp.mode.x == 0u) {
-        let p = world + mp.bias.x * l + mp.bias.y * n;
-        return lookup_2d(mp.view_proj[0] * vec4<f32>(p, 1.0));
+        // The first cascade whose slice of the view holds the point (the last one beyond).
+        var c = 0u;
+        let view_depth = dot(world, mp.axis.xyz);
+        for (var k = 0u; k + 1u < mp.mode.w; k++) {
+            if (view_depth > mp.cascade_far[k]) {
+                c = k + 1u;
+            }
+        }
+        let p = world + mp.bias.x * l + mp.cascade_offset[c] * n;
+        return lookup_2d(mp.view_proj[c] * vec4<f32>(p, 1.0), c);
     }
     if (mp.mode.x == 1u) {
         let dist = max(dot(-to_light, mp.axis.xyz), 0.0);
         let p = world + mp.bias.x * l + mp.bias.y * dist * n;
-        return lookup_2d(mp.view_proj[0] * vec4<f32>(p, 1.0));
+        return lookup_2d(mp.view_proj[0] * vec4<f32>(p, 1.0), 0u);
     }
     let a = abs(to_light);
     let dist = max(a.x, max(a.y, a.z));

@@ -53,6 +53,8 @@ fn map_json_names_the_settings_and_frames_read_nothing_back() -> Outcome {
         "hard",
         "--map-bias",
         "0.01,0.5,1",
+        "--map-cascades",
+        "3",
         "--frames",
         "2",
         "--diff",
@@ -68,6 +70,7 @@ fn map_json_names_the_settings_and_frames_read_nothing_back() -> Outcome {
     assert_eq!(v["map_size"], 1024);
     assert_eq!(v["map_size_point"], 1024);
     assert_eq!(v["map_filter"], "hard");
+    assert_eq!(v["map_cascades"], 3);
     for kind in ["directional", "point"] {
         let b = &v["map_bias"][kind];
         assert_eq!(
@@ -109,6 +112,7 @@ fn map_json_names_the_settings_and_frames_read_nothing_back() -> Outcome {
         (Some(2048), Some(1024))
     );
     assert_eq!(d["map_filter"], "pcf");
+    assert_eq!(d["map_cascades"], 1);
     assert_eq!(d["map_bias"]["point"]["depth"].as_f64(), Some(0.08));
     assert_eq!(d["map_bias"]["directional"]["normal"].as_f64(), Some(1.8));
     let vol = json(&["hard-book-3", "--size", "64x48", "--out", &png])?;
@@ -203,6 +207,10 @@ fn bad_map_flags_are_refused() -> Outcome {
             "--map-size",
         ),
         (vec!["--shadows", "maps"], "--shadows"),
+        (
+            vec!["--shadows", "map", "--map-cascades", "5"],
+            "--map-cascades",
+        ),
     ] {
         let all = [&["render", "hard-book-3", "--out", &png][..], &args].concat();
         let out = run(&all);

@@ -144,7 +144,11 @@ impl FrameReport {
                         m.kind,
                         m.size,
                         m.size,
-                        if m.kind == crate::maps::MapKind::Cube { " x 6 faces" } else { "" },
+                        match (m.kind, m.cascades) {
+                            (crate::maps::MapKind::Cube, _) => " x 6 faces".to_owned(),
+                            (_, 1) => String::new(),
+                            (_, n) => format!(" x {n} cascades"),
+                        },
                         m.texel,
                         if m.kind == crate::maps::MapKind::Directional { "world units" } else { "per unit of distance" },
                         m.near,

@@ -88,9 +88,10 @@ pub const LONG_ABOUT: &str =
     bias 0.02,0,1.8 (directional, spot) and 0.08,0,0.6 (point) as DEPTH (world units towards \
     the light), SLOPE (the map pass's slope-scaled depth bias) and NORMAL (texels along the \
     normal); PCF filtering. --map-size, --map-filter and --map-bias replace them for every \
-    light. The JSON adds \"shadows\" (\"volumes\" or \"map\"), \"map_size\", \"map_size_point\", \
-    \"map_filter\" and \"map_bias\" ({\"directional\", \"point\"}: {\"depth\", \"slope\", \
-    \"normal\"}), null for volumes; --reference compares each light's map test (visibility < \
+    light; --map-cascades N splits each directional light's map into N cascades over slices of \
+    the view (Bevy ships 4; the default here is 1, one map fitted to the whole view). The JSON adds \"shadows\" (\"volumes\" or \"map\"), \"map_size\", \"map_size_point\", \
+    \"map_filter\", \"map_bias\" ({\"directional\", \"point\"}: {\"depth\", \"slope\", \
+    \"normal\"}) and \"map_cascades\", null for volumes; --reference compares each light's map test (visibility < \
     1/2) with the reference as it compares volumes, and --explain lists each light's map.\n\n\
     glTF lights are lit as KHR_lights_punctual says: colour, intensity (candela for point and \
     spot lights, lux for directional ones) over distance squared, the range window \

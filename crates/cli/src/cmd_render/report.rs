@@ -78,6 +78,8 @@ pub(super) struct MapFields {
     map_filter: Option<MapFilter>,
     /// The bias of directional and spot maps, and of cube maps.
     map_bias: Option<MapBiases>,
+    /// Cascades of each directional light's map.
+    map_cascades: Option<u32>,
 }
 
 /// The biases in effect per map kind.
@@ -98,6 +100,7 @@ impl MapFields {
                 map_size_point: None,
                 map_filter: None,
                 map_bias: None,
+                map_cascades: None,
             };
         }
         let s = input.map_settings();
@@ -110,6 +113,7 @@ impl MapFields {
                 directional: s.bias_for(MapKind::Directional),
                 point: s.bias_for(MapKind::Cube),
             }),
+            map_cascades: Some(s.cascades),
         }
     }
 }

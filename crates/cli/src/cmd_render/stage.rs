@@ -70,6 +70,12 @@ pub(crate) struct SceneArgs {
     /// 0.02,0,1.8 for directional and spot lights, 0.08,0,0.6 for point lights].
     #[arg(long, value_name = "DEPTH,SLOPE,NORMAL", allow_hyphen_values = true)]
     pub(crate) map_bias: Option<shadowvol_renderer::MapBias>,
+
+    /// --shadows map: cascades of each directional light's map, 1 to 4, each --map-size texels
+    /// over a slice of the view (1: one map fitted to the whole view; Bevy ships 4).
+    #[arg(long, value_name = "N", default_value_t = 1,
+          value_parser = clap::value_parser!(u32).range(1..=4))]
+    pub(crate) map_cascades: u32,
 }
 
 /// `--shadows`.
@@ -125,10 +131,12 @@ impl SceneArgs {
     pub(crate) fn map_settings(&self) -> shadowvol_renderer::MapSettings {
         let map_flags = self.map_size.is_some()
             || self.map_bias.is_some()
+            || self.map_cascades != 1
             || self.map_filter != MapFilterArg::Pcf;
         if self.shadows != ShadowsArg::Map && map_flags {
             eprintln!(
-                "warning: --map-size, --map-filter and --map-bias apply to --shadows map only"
+                "warning: --map-size, --map-filter, --map-bias and --map-cascades apply to \
+                 --shadows map only"
             );
         }
         shadowvol_renderer::MapSettings {
@@ -138,6 +146,7 @@ impl SceneArgs {
                 MapFilterArg::Pcf => shadowvol_renderer::MapFilter::Pcf,
             },
             bias: self.map_bias,
+            cascades: self.map_cascades,
         }
     }
 

@@ -58,8 +58,17 @@ pub struct LightMap {
     /// The world size of one texel: directional maps in world units, perspective maps per unit of
     /// distance from the light.
     pub texel: f32,
-    /// A spot light's axis (unit); zero otherwise.
+    /// A spot light's axis (unit); for a cascaded directional map the camera's forward
+    /// direction (unit), along which the cascade is chosen; zero otherwise.
     pub axis: Vec3,
+    /// Cascades of a directional map ([`MapSettings::cascades`]); 1 for every other map. Cascade
+    /// `i` uses `view_proj[i]`.
+    pub cascades: u32,
+    /// Per cascade: the far end of its slice of the view, distance along the camera's forward
+    /// direction (world units); the last reaches the farthest scene point.
+    pub cascade_far: [f32; 4],
+    /// Per cascade: its normal offset in world units (its texel size differs).
+    pub cascade_offset: [f32; 4],
 }
 
 /// What a map is fitted to, in world space.
@@ -89,16 +98,39 @@ pub fn light_map(
         let to_light = Vec3::new(x, y, z).try_normalize()?;
         let size = settings.size_for(MapKind::Directional);
         let bias = settings.bias_for(MapKind::Directional);
-        let (view_proj, texel) = directional(to_light, camera, aspect, bounds, casters, size)?;
+        let n = settings.cascades.clamp(1, 4) as usize;
+        let forward = (camera.target - camera.eye).normalize_or_zero();
+        let far = corners(bounds.scene)
+            .iter()
+            .map(|c| (*c - eye).dot(forward))
+            .fold(camera.near, f32::max);
+        let splits = cascade_splits(camera.near, far, n);
+        let mut view_proj = [Mat4::IDENTITY; 6];
+        let mut cascade_far = [far; 4];
+        let mut cascade_offset = [0.0; 4];
+        let mut texel0 = 0.0;
+        for i in 0..n {
+            let slice = (f64::from(splits[i]), f64::from(splits[i + 1]));
+            let (vp, texel) = directional(to_light, camera, aspect, bounds, casters, size, slice)?;
+            view_proj[i] = vp;
+            cascade_far[i] = splits[i + 1];
+            cascade_offset[i] = bias.normal * texel * std::f32::consts::SQRT_2;
+            if i == 0 {
+                texel0 = texel;
+            }
+        }
         return Some(LightMap {
             kind: MapKind::Directional,
             size,
-            view_proj: [view_proj; 6],
+            view_proj,
             bias,
-            normal_offset: bias.normal * texel * std::f32::consts::SQRT_2,
+            normal_offset: cascade_offset[0],
             near: 0.0,
-            texel,
-            axis: Vec3::ZERO,
+            texel: texel0,
+            axis: if n > 1 { forward } else { Vec3::ZERO },
+            cascades: n as u32,
+            cascade_far,
+            cascade_offset,
         });
     }
     let pos = Vec3::new(x, y, z) / w;
@@ -134,6 +166,9 @@ pub fn light_map(
                 near,
                 texel,
                 axis,
+                cascades: 1,
+                cascade_far: [0.0; 4],
+                cascade_offset: [0.0; 4],
             })
         }
         _ => {
@@ -155,6 +190,9 @@ pub fn light_map(
                 near,
                 texel,
                 axis: Vec3::ZERO,
+                cascades: 1,
+                cascade_far: [0.0; 4],
+                cascade_offset: [0.0; 4],
             })
         }
     }
@@ -199,6 +237,7 @@ fn directional(
     bounds: &FitBounds,
     casters: (Vec3, Vec3),
     size: u32,
+    (slice_near, slice_far): (f64, f64),
 ) -> Option<(Mat4, f32)> {
     let d = to_light.as_dvec3();
     let up = if d.y.abs() > 0.99 { DVec3::X } else { DVec3::Y };
@@ -210,23 +249,22 @@ fn directional(
     let scene = box_in(bounds.scene, to_light_space);
     let caster_box = box_in(casters, to_light_space);
     let near = camera.near_corners(f64::from(aspect));
-    let forward = (camera.target - camera.eye).as_dvec3().normalize();
-    let far = corners(bounds.scene)
-        .iter()
-        .map(|c| (c.as_dvec3() - eye).dot(forward))
-        .fold(f64::from(camera.near), f64::max);
-    let scale = far / f64::from(camera.near);
+    let (a, b) = (
+        slice_near / f64::from(camera.near),
+        slice_far / f64::from(camera.near),
+    );
     let frustum = near
         .iter()
-        .flat_map(|&c| [c, eye + (c - eye) * scale])
+        .flat_map(|&c| [eye + (c - eye) * a, eye + (c - eye) * b])
         .map(to_light_space)
         .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
             (lo.min(p), hi.max(p))
         });
-    let lo = scene.0.max(frustum.0);
-    let hi = scene.1.min(frustum.1);
+    let (mut lo, mut hi) = (scene.0.max(frustum.0), scene.1.min(frustum.1));
     if lo.x > hi.x || lo.y > hi.y {
-        return None;
+        // A slice of the view that holds no part of the scene: the whole scene, so that the
+        // map is still a valid projection.
+        (lo, hi) = scene;
     }
     // A margin of one part in 10^4 of the extent (and a little more along the light), so that
     // points on the box's faces round inside.
@@ -263,6 +301,20 @@ fn directional(
     );
     let texel = ((x1 - x0).max(y1 - y0) / f64::from(size)) as f32;
     Some(((proj * view).as_mat4(), texel))
+}
+
+/// The `n + 1` ends of `n` cascades over the view distances `near..far`: the practical split
+/// scheme, the mean of the logarithmic and the uniform splits (Bevy's own bounds are fixed
+/// distances in metres, which do not follow a scene's scale).
+fn cascade_splits(near: f32, far: f32, n: usize) -> [f32; 5] {
+    let mut s = [far; 5];
+    for (i, v) in s.iter_mut().enumerate().take(n + 1) {
+        let t = i as f32 / n as f32;
+        *v = 0.5 * (near * (far / near).powf(t)) + 0.5 * (near + (far - near) * t);
+    }
+    s[0] = near;
+    s[n] = far;
+    s
 }
 
 /// The 8 corners of a box.

@@ -125,7 +125,7 @@ impl std::str::FromStr for MapBias {
 }
 
 /// What the shadow-map pipeline draws with.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MapSettings {
     /// Side of every map and cube face, texels; `None`: Bevy's, [`BEVY_DIRECTIONAL_SIZE`] for
     /// directional and spot lights and [`BEVY_POINT_SIZE`] for point lights.
@@ -135,6 +135,22 @@ pub struct MapSettings {
     /// The bias of every map; `None`: Bevy's per light type ([`BEVY_DIRECTIONAL_BIAS`],
     /// [`BEVY_POINT_BIAS`]).
     pub bias: Option<MapBias>,
+    /// Cascades of each directional light's map, 1 to 4, each a map of [`MapSettings::size`]
+    /// over a slice of the view (practical split scheme); 1 (the default; 0 reads as 1): one
+    /// map fitted to the whole view. Bevy ships 4 by default, with bounds in metres.
+    pub cascades: u32,
+}
+
+impl Default for MapSettings {
+    /// Bevy's sizes, bias and filter; one map per directional light.
+    fn default() -> Self {
+        Self {
+            size: None,
+            filter: MapFilter::default(),
+            bias: None,
+            cascades: 1,
+        }
+    }
 }
 
 impl MapSettings {

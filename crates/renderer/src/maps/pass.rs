@@ -14,10 +14,10 @@ use glam::{Mat4, Vec3};
 use shadowvol_scenes::Scene;
 use std::ops::Range;
 
-/// Byte stride of the per-light map uniforms (`MapU`, 448 bytes).
+/// Byte stride of the per-light map uniforms (`MapU`, 480 bytes).
 const MAP_STRIDE: u64 = 512;
 /// Bytes of one `MapU`.
-const MAP_BYTES: u64 = 448;
+const MAP_BYTES: u64 = 480;
 use super::resources::{
     bind, empty_scissor, map_uniform, queries, texture_entries, uniform_buffer, MapTextures,
     Queries,
@@ -338,13 +338,18 @@ impl MapPass {
                 s2.max(sc)
             )));
         }
-        if !ms
-            .textures
-            .as_ref()
-            .is_some_and(|t| t.size_2d == s2 && t.size_cube == sc)
-        {
+        let layers = frame
+            .lights
+            .iter()
+            .filter_map(|l| l.map.map(|m| m.cascades))
+            .max()
+            .unwrap_or(1)
+            .max(1);
+        if !ms.textures.as_ref().is_some_and(|t| {
+            t.size_2d == s2 && t.layers_2d.len() == layers as usize && t.size_cube == sc
+        }) {
             ms.textures = None;
-            ms.textures = Some(self.textures(device, s2, sc));
+            ms.textures = Some(self.textures(device, (s2, layers), sc));
         }
         for l in frame.lights.iter().filter_map(|l| l.map) {
             self.depth_pipeline(device, l.bias.slope);
@@ -355,7 +360,13 @@ impl MapPass {
         Ok(())
     }
 
-    fn textures(&self, device: &wgpu::Device, size_2d: u32, size_cube: u32) -> MapTextures {
+    /// The 2-D map (`size_2d` texels, `layers` layers: one per cascade) and the cube map.
+    fn textures(
+        &self,
+        device: &wgpu::Device,
+        (size_2d, layers): (u32, u32),
+        size_cube: u32,
+    ) -> MapTextures {
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
         let map = |label, size, layers| {
             device.create_texture(&wgpu::TextureDescriptor {
@@ -373,19 +384,26 @@ impl MapPass {
                 view_formats: &[],
             })
         };
-        let t2 = map("shadow map", size_2d, 1);
+        let t2 = map("shadow map", size_2d, layers);
         let tc = map("shadow cube map", size_cube, 6);
-        let view_2d = t2.create_view(&Default::default());
-        let faces = (0..6)
-            .map(|layer| {
-                tc.create_view(&wgpu::TextureViewDescriptor {
-                    dimension: Some(wgpu::TextureViewDimension::D2),
-                    base_array_layer: layer,
-                    array_layer_count: Some(1),
-                    ..Default::default()
+        let layer_views = |t: &wgpu::Texture, n: u32| -> Vec<wgpu::TextureView> {
+            (0..n)
+                .map(|layer| {
+                    t.create_view(&wgpu::TextureViewDescriptor {
+                        dimension: Some(wgpu::TextureViewDimension::D2),
+                        base_array_layer: layer,
+                        array_layer_count: Some(1),
+                        ..Default::default()
+                    })
                 })
-            })
-            .collect();
+                .collect()
+        };
+        let view_2d = t2.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let layers_2d = layer_views(&t2, layers);
+        let faces = layer_views(&tc, 6);
         let cube = tc.create_view(&wgpu::TextureViewDescriptor {
             dimension: Some(wgpu::TextureViewDimension::Cube),
             ..Default::default()
@@ -415,7 +433,7 @@ impl MapPass {
         MapTextures {
             size_2d,
             size_cube,
-            view_2d,
+            layers_2d,
             faces,
             bind_group,
         }
@@ -533,7 +551,7 @@ impl MapPass {
             .expect("built in update");
         let faces: Vec<&wgpu::TextureView> = match map.kind {
             MapKind::Cube => tex.faces.iter().collect(),
-            _ => vec![&tex.view_2d],
+            _ => tex.layers_2d.iter().take(map.cascades as usize).collect(),
         };
         let last = faces.len() - 1;
         for (face, view) in faces.into_iter().enumerate() {

@@ -12,7 +12,8 @@ pub(super) const NO_MAP: u32 = 3;
 pub(super) struct MapTextures {
     pub(super) size_2d: u32,
     pub(super) size_cube: u32,
-    pub(super) view_2d: wgpu::TextureView,
+    /// The 2-D map's layers as render targets (one per cascade; spot maps use the first).
+    pub(super) layers_2d: Vec<wgpu::TextureView>,
     /// The cube's 6 faces as render targets, layer order +X, -X, +Y, -Y, +Z, -Z.
     pub(super) faces: Vec<wgpu::TextureView>,
     pub(super) bind_group: wgpu::BindGroup,
@@ -27,8 +28,8 @@ pub(super) struct Queries {
 }
 
 /// The `MapU` of a light: face matrices, eye, mode, bias, axis.
-pub(super) fn map_uniform(map: Option<&LightMap>, eye: Vec3, filter: MapFilter) -> [u32; 112] {
-    let mut u = [0u32; 112];
+pub(super) fn map_uniform(map: Option<&LightMap>, eye: Vec3, filter: MapFilter) -> [u32; 120] {
+    let mut u = [0u32; 120];
     let f = |x: f32| x.to_bits();
     let (kind, size) = match map {
         Some(m) => {
@@ -58,6 +59,11 @@ pub(super) fn map_uniform(map: Option<&LightMap>, eye: Vec3, filter: MapFilter) 
         u[105] = f(m.normal_offset);
         u[106] = f(m.near);
         u[108..111].copy_from_slice(&[f(m.axis.x), f(m.axis.y), f(m.axis.z)]);
+        u[103] = m.cascades;
+        for k in 0..4 {
+            u[112 + k] = f(m.cascade_far[k]);
+            u[116 + k] = f(m.cascade_offset[k]);
+        }
     }
     u
 }
@@ -81,7 +87,7 @@ pub(super) fn texture_entries() -> [wgpu::BindGroupLayoutEntry; 4] {
         count: None,
     };
     [
-        texture(0, wgpu::TextureViewDimension::D2),
+        texture(0, wgpu::TextureViewDimension::D2Array),
         texture(1, wgpu::TextureViewDimension::Cube),
         sampler(2),
         sampler(3),
