@@ -58,6 +58,10 @@ const PAPER_TOYWARS: &str = "\
 pub(super) fn tables(r: &Results, modes: &[String]) -> String {
     let t = Tables { r, modes };
     let mut s = t.header();
+    // `--only maps`: the other tables would only say they have no data.
+    if !r.records.is_empty() && r.records.iter().all(|x| x.experiment.starts_with("maps")) {
+        return s + &super::maps_table::maps_tables(r) + &t.failures();
+    }
     s += &t.table1();
     s += "\n## Table 2: individual vs baked objects (~6.5*10^5 triangles)\n\n";
     s += &t.scene_table("table2", &T2_SCENES);
@@ -77,13 +81,7 @@ pub(super) fn tables(r: &Results, modes: &[String]) -> String {
     s += "\nThe Toy Wars notes (PSP-era hardware, ms):\n\n";
     s += PAPER_TOYWARS;
     s += "\n## Plots\n\n![time vs triangles](time_vs_triangles.png)\n![time vs lights](time_vs_lights.png)\n![accuracy cost](accuracy_cost.png)\n![individual vs baked](individual_vs_baked.png)\n";
-    if !r.failures.is_empty() {
-        s += "\n## Failures\n\n";
-        for f in &r.failures {
-            s += &format!("- {}\n", f.replace('\n', " "));
-        }
-    }
-    s
+    s + &t.failures()
 }
 
 /// Milliseconds with three significant digits or so; `n/a` for none.
@@ -114,6 +112,18 @@ struct Tables<'a> {
 }
 
 impl<'a> Tables<'a> {
+    /// The failures section, empty without failures.
+    fn failures(&self) -> String {
+        let mut s = String::new();
+        if !self.r.failures.is_empty() {
+            s += "\n## Failures\n\n";
+            for f in &self.r.failures {
+                s += &format!("- {}\n", f.replace('\n', " "));
+            }
+        }
+        s
+    }
+
     /// The records of `experiment` with their measurement `data` (those that have one).
     fn records<T>(
         &self,
