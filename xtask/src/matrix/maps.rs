@@ -77,12 +77,7 @@ impl Matrix {
         let experiment = if timed { "maps" } else { "maps-sweep" };
         self.progress
             .step(&format!("{experiment}: {scene} {label}"));
-        let png = self
-            .opts
-            .out
-            .join("renders")
-            .join(format!("maps-{scene}-{label}.png"));
-        let png_s = png.to_string_lossy().to_string();
+        let png_s = self.render_png(&format!("maps-{scene}-{label}"));
         let frames = self.frames();
         let size_s;
         let mut args = vec![

@@ -195,6 +195,12 @@ impl Matrix {
             .unwrap_or_default()
     }
 
+    /// Where a render named `name` writes its PNG: `OUT/renders/NAME.png`.
+    pub(super) fn render_png(&self, name: &str) -> String {
+        let png = self.opts.out.join("renders").join(format!("{name}.png"));
+        png.to_string_lossy().to_string()
+    }
+
     /// Records a failed measurement and says so.
     pub(super) fn fail(&mut self, what: String) {
         eprintln!("\nmatrix: {what}");
@@ -406,12 +412,7 @@ impl Matrix {
                     FRAME_HOST_BACKEND
                 };
                 self.progress.step(&format!("frames: {s} {key}"));
-                let png = self
-                    .opts
-                    .out
-                    .join("renders")
-                    .join(format!("frames-{s}-{key}.png"));
-                let png_s = png.to_string_lossy().to_string();
+                let png_s = self.render_png(&format!("frames-{s}-{key}"));
                 let mut args = vec![
                     "render",
                     s,
@@ -470,12 +471,7 @@ impl Matrix {
     ) {
         self.progress
             .step(&format!("{experiment}: {scene} {backend} {mode}"));
-        let png = self
-            .opts
-            .out
-            .join("renders")
-            .join(format!("{experiment}-{scene}-{backend}-{mode}.png"));
-        let png_s = png.to_string_lossy().to_string();
+        let png_s = self.render_png(&format!("{experiment}-{scene}-{backend}-{mode}"));
         let mut args = vec![
             "render",
             scene,

@@ -64,35 +64,40 @@ pub(crate) fn prepass_depth(format: wgpu::TextureFormat) -> wgpu::DepthStencilSt
 
 /// A lit pass: depth `equal` (the pre-pass's surface only), stencil `== reference` (0: lit).
 pub(crate) fn lit_depth(format: wgpu::TextureFormat) -> wgpu::DepthStencilState {
-    let face = wgpu::StencilFaceState {
-        compare: wgpu::CompareFunction::Equal,
-        fail_op: wgpu::StencilOperation::Keep,
-        depth_fail_op: wgpu::StencilOperation::Keep,
-        pass_op: wgpu::StencilOperation::Keep,
-    };
-    wgpu::DepthStencilState {
-        format,
-        depth_write_enabled: Some(false),
-        depth_compare: Some(wgpu::CompareFunction::Equal),
-        stencil: wgpu::StencilState {
-            front: face,
-            back: face,
-            read_mask: 0xff,
-            write_mask: 0,
-        },
-        bias: wgpu::DepthBiasState::default(),
-    }
+    let face = stencil_op(wgpu::CompareFunction::Equal, wgpu::StencilOperation::Keep);
+    on_prepass_depth(format, face, 0)
 }
 
 /// The shadow-map pipeline's mask pass: depth `equal` (the pre-pass's surface only) without
 /// writes; the stencil set to the reference (1) wherever a fragment survives (shadowed).
 pub(crate) fn map_mask_depth(format: wgpu::TextureFormat) -> wgpu::DepthStencilState {
-    let face = wgpu::StencilFaceState {
-        compare: wgpu::CompareFunction::Always,
+    let face = stencil_op(
+        wgpu::CompareFunction::Always,
+        wgpu::StencilOperation::Replace,
+    );
+    on_prepass_depth(format, face, 0xff)
+}
+
+/// A stencil face that tests `compare` and applies `pass` where both tests pass.
+fn stencil_op(
+    compare: wgpu::CompareFunction,
+    pass: wgpu::StencilOperation,
+) -> wgpu::StencilFaceState {
+    wgpu::StencilFaceState {
+        compare,
         fail_op: wgpu::StencilOperation::Keep,
         depth_fail_op: wgpu::StencilOperation::Keep,
-        pass_op: wgpu::StencilOperation::Replace,
-    };
+        pass_op: pass,
+    }
+}
+
+/// Depth `equal` without writes (the pre-pass's surface only), both stencil faces `face`,
+/// writing the stencil bits of `write_mask`.
+fn on_prepass_depth(
+    format: wgpu::TextureFormat,
+    face: wgpu::StencilFaceState,
+    write_mask: u32,
+) -> wgpu::DepthStencilState {
     wgpu::DepthStencilState {
         format,
         depth_write_enabled: Some(false),
@@ -101,7 +106,7 @@ pub(crate) fn map_mask_depth(format: wgpu::TextureFormat) -> wgpu::DepthStencilS
             front: face,
             back: face,
             read_mask: 0xff,
-            write_mask: 0xff,
+            write_mask,
         },
         bias: wgpu::DepthBiasState::default(),
     }
