@@ -5,8 +5,8 @@
 
 use super::cli::RenderReport;
 use super::plan::{Plan, FRAME_GPU_KEY, FRAME_HOST_BACKEND, MAP_KEY, MAP_RENDER_SIZE};
-use super::records::{Data, Key, Record, Render};
-use super::runner::Matrix;
+use super::records::{Data, Key, Render};
+use super::runner::{render_args, Matrix};
 
 /// One render of the table: what draws the shadows.
 enum Technique<'a> {
@@ -80,17 +80,8 @@ impl Matrix {
         let png_s = self.render_png(&format!("maps-{scene}-{label}"));
         let frames = self.frames();
         let size_s;
-        let mut args = vec![
-            "render",
-            scene,
-            "--out",
-            &png_s,
-            "--size",
-            MAP_RENDER_SIZE,
-            "--reference",
-            "--format",
-            "json",
-        ];
+        let mut args = render_args(scene, &png_s, MAP_RENDER_SIZE);
+        args.push("--reference");
         if timed {
             args.extend(["--frames", &frames]);
         }
@@ -130,19 +121,12 @@ impl Matrix {
                 if let Technique::Map { bias, .. } = t {
                     render.map_bias = Some(bias.unwrap_or("default").to_owned());
                 }
-                let rec = Record {
-                    host: self.results.host.clone(),
-                    experiment: experiment.to_owned(),
-                    reused_from: None,
-                    key: Key {
-                        scene: scene.to_owned(),
-                        backend,
-                        mode: mode.map(str::to_owned),
-                    },
-                    device,
-                    data: Data::Render(render),
+                let key = Key {
+                    scene: scene.to_owned(),
+                    backend,
+                    mode: mode.map(str::to_owned),
                 };
-                self.results.records.push(rec);
+                self.push(experiment, key, device, Data::Render(render));
             }
             Err(e) => self.fail(format!("{experiment}: {e}")),
         }

@@ -172,6 +172,13 @@ pub(super) fn probe_build(cli: &Cli, host: &mut HostInfo) {
     host.profile = Some(profile);
 }
 
+/// `render SCENE --out PNG --size SIZE --format json`, for the caller to extend.
+pub(super) fn render_args<'a>(scene: &'a str, png: &'a str, size: &'a str) -> Vec<&'a str> {
+    vec![
+        "render", scene, "--out", png, "--size", size, "--format", "json",
+    ]
+}
+
 /// One run in progress: the CLI, the options and the results so far.
 pub(super) struct Matrix {
     pub cli: Cli,
@@ -199,6 +206,19 @@ impl Matrix {
     pub(super) fn render_png(&self, name: &str) -> String {
         let png = self.opts.out.join("renders").join(format!("{name}.png"));
         png.to_string_lossy().to_string()
+    }
+
+    /// Records one measurement of `experiment`.
+    pub(super) fn push(&mut self, experiment: &str, key: Key, device: String, data: Data) {
+        let rec = Record {
+            host: self.results.host.clone(),
+            experiment: experiment.to_owned(),
+            reused_from: None,
+            key,
+            device,
+            data,
+        };
+        self.results.records.push(rec);
     }
 
     /// Records a failed measurement and says so.
@@ -413,20 +433,8 @@ impl Matrix {
                 };
                 self.progress.step(&format!("frames: {s} {key}"));
                 let png_s = self.render_png(&format!("frames-{s}-{key}"));
-                let mut args = vec![
-                    "render",
-                    s,
-                    "--out",
-                    &png_s,
-                    "--size",
-                    plan.render_size,
-                    "--mode",
-                    "exact",
-                    "--frames",
-                    &frames,
-                    "--format",
-                    "json",
-                ];
+                let mut args = render_args(s, &png_s, plan.render_size);
+                args.extend(["--mode", "exact", "--frames", &frames]);
                 if gpu {
                     args.extend(["--pipeline", "gpu"]);
                 } else {
@@ -434,23 +442,14 @@ impl Matrix {
                 }
                 match self.cli.json::<RenderReport>(&args) {
                     Ok(report) => {
-                        let rec = Record {
-                            host: self.results.host.clone(),
-                            experiment: "frames".to_owned(),
-                            reused_from: None,
-                            key: Key {
-                                scene: s.to_owned(),
-                                backend: key.to_owned(),
-                                mode: Some("exact".to_owned()),
-                            },
-                            device: report.adapter.clone().unwrap_or_default(),
-                            data: Data::Render(Render::new(
-                                report,
-                                plan.render_size,
-                                png_s.clone(),
-                            )),
+                        let key = Key {
+                            scene: s.to_owned(),
+                            backend: key.to_owned(),
+                            mode: Some("exact".to_owned()),
                         };
-                        self.results.records.push(rec);
+                        let device = report.adapter.clone().unwrap_or_default();
+                        let render = Render::new(report, plan.render_size, png_s);
+                        self.push("frames", key, device, Data::Render(render));
                     }
                     Err(e) => self.fail(format!("frames: {e}")),
                 }
@@ -472,20 +471,8 @@ impl Matrix {
         self.progress
             .step(&format!("{experiment}: {scene} {backend} {mode}"));
         let png_s = self.render_png(&format!("{experiment}-{scene}-{backend}-{mode}"));
-        let mut args = vec![
-            "render",
-            scene,
-            "--out",
-            &png_s,
-            "--size",
-            size,
-            "--mode",
-            mode,
-            "--backend",
-            backend,
-            "--format",
-            "json",
-        ];
+        let mut args = render_args(scene, &png_s, size);
+        args.extend(["--mode", mode, "--backend", backend]);
         if reference {
             args.push("--reference");
         }
@@ -495,19 +482,18 @@ impl Matrix {
         }
         match self.cli.json::<RenderReport>(&args) {
             Ok(report) => {
-                let rec = Record {
-                    host: self.results.host.clone(),
-                    experiment: experiment.to_owned(),
-                    reused_from: None,
-                    key: Key {
-                        scene: scene.to_owned(),
-                        backend: backend.to_owned(),
-                        mode: Some(mode.to_owned()),
-                    },
-                    device: self.device(backend),
-                    data: Data::Render(Render::new(report, size, png_s.clone())),
+                let key = Key {
+                    scene: scene.to_owned(),
+                    backend: backend.to_owned(),
+                    mode: Some(mode.to_owned()),
                 };
-                self.results.records.push(rec);
+                let device = self.device(backend);
+                self.push(
+                    experiment,
+                    key,
+                    device,
+                    Data::Render(Render::new(report, size, png_s)),
+                );
             }
             Err(e) => self.fail(format!("{experiment}: {e}")),
         }

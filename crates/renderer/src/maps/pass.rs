@@ -125,18 +125,17 @@ impl MapPass {
             "fs_prepass_color",
             &[color_target(COLOR_FORMAT, None)],
         );
-        let mask = make.surface(
+        let surface = |label, depth, fs, targets: &[Option<wgpu::ColorTargetState>]| {
+            make.surface(label, "vs_map_surface", &surface_layout, depth, fs, targets)
+        };
+        let mask = surface(
             "map mask",
-            "vs_map_surface",
-            &surface_layout,
             states::map_mask_depth(rd.depth_format),
             "fs_map_mask",
             &[],
         );
-        let lit = make.surface(
+        let lit = surface(
             "map lit",
-            "vs_map_surface",
-            &surface_layout,
             states::map_lit_depth(rd.depth_format),
             "fs_map_lit",
             &[color_target(COLOR_FORMAT, Some(states::additive()))],

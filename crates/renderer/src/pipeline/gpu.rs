@@ -4,7 +4,6 @@
 //! backend runs.
 
 use super::{FrameInputs, PassReport, Pipeline, ShadowPipeline};
-use crate::frame::UncertainUnit;
 use crate::plan::{PlanEntry, SilhouetteSource, Technique};
 use crate::raster::{Attachments, BACKGROUND, COLOR_FORMAT, IDS_FORMAT};
 use crate::resident::{PassFormats, PassFrame, ResidentScene, ShadowPass};
@@ -44,14 +43,6 @@ impl GpuPipeline {
 impl ShadowPipeline for GpuPipeline {
     fn kind(&self) -> Pipeline {
         Pipeline::Gpu
-    }
-
-    fn backend(&self) -> Option<&str> {
-        None
-    }
-
-    fn uncertain_unit(&self) -> UncertainUnit {
-        UncertainUnit::TriangleLight
     }
 
     fn depth_clamp(&self, device: &RenderDevice) -> bool {

@@ -5,7 +5,6 @@
 //! stencil, so the reference compares maps as it compares volumes.
 
 use super::{FrameInputs, PassReport, Pipeline, ShadowPipeline};
-use crate::frame::UncertainUnit;
 use crate::maps::pass::{MapFrame, MapLight, MapScene};
 use crate::maps::{light_map, FitBounds, LightMap, MapPass, MapSettings};
 use crate::plan::{PlanEntry, SilhouetteSource};
@@ -55,14 +54,6 @@ impl MapPipeline {
 impl ShadowPipeline for MapPipeline {
     fn kind(&self) -> Pipeline {
         Pipeline::Map
-    }
-
-    fn backend(&self) -> Option<&str> {
-        None
-    }
-
-    fn uncertain_unit(&self) -> UncertainUnit {
-        UncertainUnit::TriangleLight
     }
 
     fn depth_clamp(&self, _device: &RenderDevice) -> bool {

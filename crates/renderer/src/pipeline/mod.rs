@@ -106,11 +106,17 @@ pub trait ShadowPipeline {
     /// Which pipeline this is.
     fn kind(&self) -> Pipeline;
 
-    /// The registry name of the silhouette backend it runs, `None` when it runs none.
-    fn backend(&self) -> Option<&str>;
+    /// The registry name of the silhouette backend it runs, `None` (the default) when it runs
+    /// none.
+    fn backend(&self) -> Option<&str> {
+        None
+    }
 
-    /// What [`PassReport::uncertain`] counts in this pipeline.
-    fn uncertain_unit(&self) -> UncertainUnit;
+    /// What [`PassReport::uncertain`] counts in this pipeline (by default (triangle, light)
+    /// pairs, as a pipeline that decides signs on the device counts them).
+    fn uncertain_unit(&self) -> UncertainUnit {
+        UncertainUnit::TriangleLight
+    }
 
     /// True when its volumes are drawn with depth clamp on `device`.
     fn depth_clamp(&self, device: &RenderDevice) -> bool {
