@@ -121,7 +121,14 @@ fn lookup_cube(v: vec3<f32>) -> f32 {
 // normal, turned towards the light).
 fn map_visibility(world: vec3<f32>, normal: vec3<f32>) -> f32 {
     let len = length(normal);
-    let to_light = lt.pos.xyz - lt.pos.w * world;
+    // Towards the light: its direction, or the vector to its point xyz / w (any w != 0, as the
+    // reference reads a homogeneous light).
+    var light_point = vec3<f32>(0.0);
+    var to_light = lt.pos.xyz;
+    if (lt.pos.w != 0.0) {
+        light_point = lt.pos.xyz / lt.pos.w;
+        to_light = light_point - world;
+    }
     var n = vec3<f32>(0.0);
     if (len > 0.0) {
         n = normal / len;
@@ -153,7 +160,7 @@ fn map_visibility(world: vec3<f32>, normal: vec3<f32>) -> f32 {
     let a = abs(to_light);
     let dist = max(a.x, max(a.y, a.z));
     let p = world + mp.bias.x * l + mp.bias.y * dist * n;
-    return lookup_cube(p - lt.pos.xyz);
+    return lookup_cube(p - light_point);
 }
 
 // The mask pass: the stencil is set (reference 1, replace) where the map shadows the point

@@ -191,6 +191,25 @@ fn cascades_sharpen_a_deep_view() -> Result<(), Skip> {
     Ok(())
 }
 
+/// A point light written with w != 1 (`(w P, w)`) casts from its point P, as
+/// the reference reads it.
+#[test]
+fn a_homogeneous_point_light_casts_from_its_point() -> Result<(), Skip> {
+    let p = Vec3::new(0.5, 6.0, 0.3);
+    for w in [2.5f32, 0.25] {
+        let light = Light::new(w * p.x, w * p.y, w * p.z, w).expect("a finite light");
+        let scene = box_on_floor(light, camera());
+        let settings = MapSettings {
+            filter: MapFilter::Hard,
+            ..at(4096)
+        };
+        let c = map_comparison(&scene, 256, settings)?;
+        assert_shadowed(&c, "homogeneous point light");
+        assert_eq!(c.artifact_pixels, 0, "w = {w}");
+    }
+    Ok(())
+}
+
 /// Without any bias the lit floor shadows itself (acne): the metric sees it.
 #[test]
 fn without_bias_a_lit_floor_shadows_itself() -> Result<(), Skip> {
