@@ -22,9 +22,12 @@ pub const LONG_ABOUT: &str = "Open a window onto SCENE (a preset, a .gltf/.glb s
     the pipeline and each object's technique.\n\n\
     The renderer runs on the window's device: in the GPU pipeline it draws each frame into a \
     texture the window samples, and nothing comes back to the host but the plan's counts. The \
-    host pipeline (and the volume view, V) reads each image back and uploads it.\n\n\
+    host pipeline (and the volume view, V) reads each image back and uploads it; the map \
+    pipeline (--shadows map, or M) draws shadow maps on the window's device like the GPU \
+    pipeline.\n\n\
     For automation: --frames N renders N frames, writes the last one's 3D view to --screenshot \
-    and prints {\"frames\", \"fps\", \"median_ms\", \"adapter\", \"screenshot\"}, then exits 0. \
+    and prints {\"frames\", \"fps\", \"median_ms\", \"adapter\", \"screenshot\", \"pipeline\": \
+    \"gpu\", \"host\" or \"map\"}, then exits 0. \
     Without a display (DISPLAY and WAYLAND_DISPLAY unset) it exits 1 saying so; xvfb-run \
     gives it a virtual one.";
 
