@@ -17,7 +17,7 @@ backend and writes DIR/tables.md, DIR/results.json, DIR/results.csv and PNG plot
   --frames N       timed frames per measurement (default: 30, or 5 with --quick)
   --only maps      only the volumes-against-maps table (every hard-* preset, town,
                    bunnies-10-individual and sphere-1m at 1280x720; maps of 512 to 8192 texels,
-                   hard and PCF, Bevy's bias and a bias sweep; about an hour on 2 cores)
+                   hard and PCF, Bevy's bias and a bias sweep; 105 minutes on 2 cores with --frames 10)
   --replot DIR     measure nothing: rewrite DIR/tables.md, DIR/results.csv and the plots from
                    DIR/results.json (after a change to the tables or plots)
 ";

@@ -18,10 +18,9 @@ use std::ops::Range;
 const MAP_STRIDE: u64 = 512;
 /// Bytes of one `MapU`.
 const MAP_BYTES: u64 = 480;
-use super::resources::{
-    bind, empty_scissor, map_uniform, queries, texture_entries, uniform_buffer, MapTextures,
-    Queries,
-};
+use super::resources::{bind, map_uniform, queries, texture_entries, MapTextures, Queries};
+use crate::raster::empty_scissor;
+use crate::raster::pipelines::uniform_buffer;
 
 /// The shadow-map passes' pipelines on one device.
 pub(crate) struct MapPass {

@@ -94,15 +94,6 @@ pub(super) fn texture_entries() -> [wgpu::BindGroupLayoutEntry; 4] {
     ]
 }
 
-pub(super) fn uniform_buffer(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
-    device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size,
-        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    })
-}
-
 /// A bind group of `buffer`'s first `size` bytes (the window a dynamic offset moves).
 pub(super) fn bind(
     device: &wgpu::Device,
@@ -146,9 +137,4 @@ pub(super) fn queries(device: &wgpu::Device, lights: usize) -> Queries {
         }),
         lights,
     }
-}
-
-/// Whether `scissor` is a rectangle without pixels.
-pub(super) fn empty_scissor(scissor: Option<[u32; 4]>) -> bool {
-    scissor.is_some_and(|r| r[2] == 0 || r[3] == 0)
 }

@@ -115,19 +115,12 @@ impl ShadowPipeline for MapPipeline {
             .iter()
             .zip(&self.maps)
             .enumerate()
-            .map(|(li, (l, map))| {
-                let mut light = l.light.to_array();
-                let lw = light[3];
-                light[0] -= eye.x * lw;
-                light[1] -= eye.y * lw;
-                light[2] -= eye.z * lw;
-                MapLight {
-                    light,
-                    color: frame.light_colors[li],
-                    emission: l.emission,
-                    map: *map,
-                    scissor: frame.scissors[li],
-                }
+            .map(|(li, (l, map))| MapLight {
+                light: crate::raster::relative_light(l.light.to_array(), eye),
+                color: frame.light_colors[li],
+                emission: l.emission,
+                map: *map,
+                scissor: frame.scissors[li],
             })
             .collect();
         let map_frame = MapFrame {

@@ -77,6 +77,21 @@ pub(crate) fn push_surface(
     }
 }
 
+/// `light` (homogeneous) relative to `origin`: a point light's position minus `origin` (in
+/// homogeneous form, `xyz - w origin`), a directional light unchanged. The one conversion
+/// every pipeline applies to draw camera-relative.
+#[must_use]
+pub(crate) fn relative_light(light: [f32; 4], origin: glam::Vec3) -> [f32; 4] {
+    let [x, y, z, w] = light;
+    [x - origin.x * w, y - origin.y * w, z - origin.z * w, w]
+}
+
+/// Whether `scissor` is a rectangle without pixels, where a light's passes draw nothing.
+#[must_use]
+pub(crate) fn empty_scissor(scissor: Option<[u32; 4]>) -> bool {
+    scissor.is_some_and(|r| r[2] == 0 || r[3] == 0)
+}
+
 /// The shader's `LightU` for a light at `light` (camera-relative, homogeneous) of linear
 /// `color` (times gain): position, colour, then `emit = (inverse square 0/1, 1 / range or 0,
 /// cone scale, cone offset)` and `spot = (axis, 1 for a cone)` (see `fs_lit`). A unit light

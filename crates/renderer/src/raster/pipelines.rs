@@ -44,6 +44,16 @@ fn buffer_entry(
     }
 }
 
+/// A uniform buffer of `size` bytes that the host writes each frame.
+pub(crate) fn uniform_buffer(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
 /// A bind-group layout of `entries`.
 pub(crate) fn bind_group_layout(
     device: &wgpu::Device,

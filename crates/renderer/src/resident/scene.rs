@@ -197,12 +197,7 @@ impl ShadowPass {
 
     /// A uniform buffer of `size` bytes that the host writes each frame.
     fn uniform_buffer(&self, label: &str, size: u64) -> wgpu::Buffer {
-        self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        })
+        crate::raster::pipelines::uniform_buffer(&self.device, label, size)
     }
 
     /// Writes one frame's inputs (object-space lights, techniques, camera-relative transforms,
@@ -538,17 +533,13 @@ fn light_uniforms(rs: &ResidentScene, f: &PassFrame<'_>, slots: usize) -> Vec<u8
     let tri_count = rs.layout.tri_count() as u32;
     let mut light_bytes = vec![0u8; slots * LIGHT_STRIDE as usize];
     for (li, light) in f.lights.iter().enumerate() {
-        let mut l = light.light.to_array();
-        let w = l[3];
-        l[0] -= f.camera.eye.x * w;
-        l[1] -= f.camera.eye.y * w;
-        l[2] -= f.camera.eye.z * w;
+        let l = crate::raster::relative_light(light.light.to_array(), f.camera.eye);
         let v = crate::raster::light_uniform(l, f.colors[li], light.emission.as_ref());
         let draw = [
             li as u32 * capacity,
             capacity,
             li as u32 * tri_count,
-            u32::from(w != 0.0),
+            u32::from(l[3] != 0.0),
         ];
         let o = li * LIGHT_STRIDE as usize;
         light_bytes[o..o + 64].copy_from_slice(bytemuck::cast_slice(&v));

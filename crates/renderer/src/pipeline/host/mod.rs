@@ -200,10 +200,7 @@ impl ShadowPipeline for HostPipeline {
             }
         }
         for d in &mut draws {
-            let w = d.light[3];
-            d.light[0] -= origin.x * w;
-            d.light[1] -= origin.y * w;
-            d.light[2] -= origin.z * w;
+            d.light = crate::raster::relative_light(d.light, origin);
         }
         let build_time = t_build.elapsed();
 

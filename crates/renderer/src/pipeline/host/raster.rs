@@ -9,8 +9,8 @@
 
 use crate::raster::pipelines::{self, color_target, uniform};
 use crate::raster::{
-    light_uniform, states, Attachments, SurfaceVertex, BACKGROUND, COLOR_FORMAT, IDS_FORMAT,
-    LIGHT_STRIDE,
+    empty_scissor, light_uniform, states, Attachments, SurfaceVertex, BACKGROUND, COLOR_FORMAT,
+    IDS_FORMAT, LIGHT_STRIDE,
 };
 use crate::{RenderDevice, RenderError};
 use bytemuck::Zeroable;
@@ -365,9 +365,4 @@ impl FrameRecording<'_> {
 /// The dynamic offset of light `li`'s uniform.
 fn light_offset(li: usize) -> u32 {
     (li as u64 * LIGHT_STRIDE) as u32
-}
-
-/// Whether `scissor` is a rectangle without pixels, where a light's passes draw nothing.
-fn empty_scissor(scissor: Option<[u32; 4]>) -> bool {
-    scissor.is_some_and(|r| r[2] == 0 || r[3] == 0)
 }
