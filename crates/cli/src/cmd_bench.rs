@@ -2,6 +2,7 @@
 //! measured memory floor.
 
 use serde::Serialize;
+use shadowvol::memory::{peak_rss_bytes, TableBytes};
 use shadowvol::{find_backend, BackendEntry, CliError, Format, MemoryFloor};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{Multiplicities, SilhouetteBackend, TopologyScene};
@@ -25,7 +26,12 @@ pub const LONG_ABOUT: &str = "Time silhouette extraction on a scene for each bac
     light count's floor, and each record carries its own floor_ms and floor_ratio. Records also \
     carry upload/compute/readback medians, the uncertain count (exact mode), the backend's \
     device and details (simd_level for simd). A progress bar is drawn on stderr when it is a \
-    terminal.";
+    terminal.\n\n\
+    Memory: each record has \"table_bytes\" (what the prepared scene held on that backend: \
+    \"table_bytes_parts\" {\"topology\", \"host\", \"device\"}) and \"peak_rss_bytes\", the \
+    process's peak resident set (the kernel's VmHWM) when its backend finished; that is a \
+    high-water mark over every backend run before it, so give one --backend per process to \
+    attribute it. The top-level \"peak_rss_bytes\" is the whole run's.";
 
 /// Timed frames per (mode, light count) in one turn of the interleaved schedule.
 const TURN_FRAMES: u32 = 5;
@@ -119,6 +125,13 @@ struct Record {
     floor_ratio: f64,
     device: String,
     details: serde_json::Map<String, serde_json::Value>,
+    /// The process's peak resident set when this backend's records were made: a high-water
+    /// mark, so it includes every backend run before it (run one backend per process to
+    /// attribute it).
+    peak_rss_bytes: Option<u64>,
+    /// What the prepared scene held on this backend (edge tables, host layout, device buffers).
+    table_bytes: u64,
+    table_bytes_parts: TableBytes,
 }
 
 /// The floor of one light count.
@@ -144,6 +157,8 @@ struct Report {
     schedule: &'static str,
     records: Vec<Record>,
     host: Host,
+    /// The process's peak resident set over the whole run.
+    peak_rss_bytes: Option<u64>,
 }
 
 fn ms(d: Duration) -> f64 {
@@ -453,6 +468,8 @@ fn bench_backend(
         Ok(())
     };
     run_schedule(args, entry.name, combos, bar, &mut frame)?;
+    let table = TableBytes::new(topo.table_bytes(), backend.prepared_bytes(id)?);
+    let peak = peak_rss_bytes();
     let records = combos
         .iter()
         .zip(&mut samples)
@@ -479,6 +496,9 @@ fn bench_backend(
                 floor_ratio: 0.0,
                 device: info.device.clone(),
                 details: details.clone(),
+                peak_rss_bytes: peak,
+                table_bytes: table.total(),
+                table_bytes_parts: table,
             }
         })
         .collect();
@@ -579,6 +599,7 @@ fn report(
         floors: floor_records,
         records,
         host: host(),
+        peak_rss_bytes: peak_rss_bytes(),
     }
 }
 
@@ -612,11 +633,12 @@ fn print_text(r: &Report, out: &mut dyn Write) -> Result<(), CliError> {
             .details
             .get("simd_level")
             .and_then(|v| v.as_str())
-            .map(|s| format!("simd_level={s}"))
+            .map(|s| format!("simd_level={s} "))
             .unwrap_or_default();
+        let table = format!("table={:.1}MB", rec.table_bytes as f64 / 1e6);
         writeln!(
             out,
-            "{:8} {:9} {:>6} {:10.3} {:10.3} {:10.3} {:8.2} {:10}  {level}",
+            "{:8} {:9} {:>6} {:10.3} {:10.3} {:10.3} {:8.2} {:10}  {level}{table}",
             rec.backend,
             rec.mode,
             rec.lights,

@@ -15,9 +15,15 @@ pub const LONG_ABOUT: &str =
                   JSON: {\"backend\", \"mode\", \"mesh\": {\"vertices\", \"welded_vertices\", \
                   \"triangles\", \"edges\", \"boundary_edges\", \"nonmanifold_edges\", ...}, \
                   \"lights\": [{\"light\": [x,y,z,w], \"edges\": [[a,b,m], ...], \
-                  \"open_vertices\": N}], \"device\", \"timings\"}; only m != 0 is listed, \
-                  sorted by (a, b); \"notes\": [\"...\"] is added when the loader skipped \
-                  something (glTF primitives that are not triangles).";
+                  \"open_vertices\": N}], \"device\", \"timings\", \"peak_rss_bytes\", \
+                  \"table_bytes\", \"table_bytes_parts\"}; only m != 0 is listed, sorted by \
+                  (a, b); \"notes\": [\"...\"] is added when the loader skipped something \
+                  (glTF primitives that are not triangles).\n\n\
+                  Memory: \"peak_rss_bytes\" is the process's peak resident set (the kernel's \
+                  VmHWM, null off Linux; on lavapipe and PoCL it includes device memory); \
+                  \"table_bytes\" what the prepared scene held, the sum of \
+                  \"table_bytes_parts\": \"topology\" (the welded edge table), \"host\" (the \
+                  backend's own layout of it) and \"device\" (its device buffers).";
 
 /// Examples shown after the help.
 pub const AFTER_HELP: &str =
@@ -92,6 +98,8 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
             if !input.notes.is_empty() {
                 json["notes"] = serde_json::Value::from(input.notes.clone());
             }
+            // The peak once the whole report, the JSON value included, is built.
+            json["peak_rss_bytes"] = serde_json::Value::from(shadowvol::memory::peak_rss_bytes());
             serde_json::to_writer(&mut *out, &json).map_err(|e| CliError::Output(e.into()))?;
             writeln!(out)?;
         }
@@ -134,6 +142,7 @@ fn write_text(
     } else {
         writeln!(out, "mode     {}: compute {:.3} ms", r.mode, t.compute_ms)?;
     }
+    writeln!(out, "{}", memory_line(r))?;
     for (i, l) in r.lights.iter().enumerate() {
         let [x, y, z, w] = l.light.to_array();
         let kind = if w == 0.0 { "directional" } else { "point" };
@@ -171,4 +180,29 @@ fn write_text(
         }
     }
     Ok(())
+}
+
+/// `memory   peak RSS ..., table ...`: both in MB and in bytes per input triangle.
+fn memory_line(r: &SilhouetteReport) -> String {
+    let per_tri = |b: u64| b as f64 / r.mesh.triangles.max(1) as f64;
+    let p = &r.table_bytes_parts;
+    let peak = r.peak_rss_bytes.map_or_else(
+        || "peak RSS unknown (no /proc/self/status)".to_owned(),
+        |b| {
+            format!(
+                "peak RSS {:.1} MB ({:.0} B/triangle)",
+                b as f64 / 1e6,
+                per_tri(b)
+            )
+        },
+    );
+    format!(
+        "memory   {peak}, table {:.1} MB ({:.0} B/triangle: topology {:.1} MB, backend host {:.1} \
+         MB, device {:.1} MB)",
+        r.table_bytes as f64 / 1e6,
+        per_tri(r.table_bytes),
+        p.topology as f64 / 1e6,
+        p.host as f64 / 1e6,
+        p.device as f64 / 1e6
+    )
 }

@@ -15,6 +15,7 @@
 //!   contract of DESIGN.md).
 //! * [`mode_parser`]: the values of `--mode`, parsed straight into [`Accuracy`] (the one type
 //!   of the accuracy mode; there is no command-line copy of it).
+//! * [`memory`]: the JSON's `peak_rss_bytes` and `table_bytes`.
 //! * [`CliError`]: errors with their exit codes (2 for usage, 1 for everything else).
 //!
 //! ```
@@ -31,6 +32,7 @@
 pub mod error;
 pub mod floor;
 pub mod input;
+pub mod memory;
 pub mod registry;
 pub mod report;
 

@@ -6,12 +6,15 @@
 //! ```text
 //! {"backend": "...", "mode": "...", "mesh": {"vertices": N, "welded_vertices": N,
 //!  "triangles": N, "edges": N, "boundary_edges": N, "nonmanifold_edges": N, ...},
-//!  "lights": [{"light": [x,y,z,w], "edges": [[a, b, m], ...], "open_vertices": N}], ...}
+//!  "lights": [{"light": [x,y,z,w], "edges": [[a, b, m], ...], "open_vertices": N}], ...,
+//!  "peak_rss_bytes": N or null, "table_bytes": N, "table_bytes_parts": {"topology", "host",
+//!  "device"}}
 //! ```
 //!
 //! `a < b` are input vertex indices (0-based; a weld group is named by its smallest input index),
 //! only `m != 0` is listed, sorted by `(a, b)`.
 
+use crate::memory::{peak_rss_bytes, TableBytes};
 use crate::CliError;
 use serde::Serialize;
 use shadowvol_mesh_topology::{EdgeTable, MeshStats};
@@ -103,6 +106,14 @@ pub struct SilhouetteReport {
     pub device: String,
     /// Timings (addition to the contract).
     pub timings: Timings,
+    /// The process's peak resident set in bytes when the report was made
+    /// ([`crate::memory::peak_rss_bytes`]; `None` off Linux).
+    pub peak_rss_bytes: Option<u64>,
+    /// Bytes the prepared scene held: its edge table plus the backend's host layout and device
+    /// buffers ([`TableBytes::total`]).
+    pub table_bytes: u64,
+    /// `table_bytes` by part.
+    pub table_bytes_parts: TableBytes,
 }
 
 /// Milliseconds, from whole nanoseconds (one rounding, so JSON shows e.g. `0.007955`).
@@ -134,8 +145,10 @@ pub fn silhouette_report(
     let prepare = start.elapsed();
     let mut m = shadowvol_silhouette::Multiplicities::default();
     let result = backend.extract(id, lights, mode, &mut m);
+    let prepared = backend.prepared_bytes(id);
     backend.release(id);
     let extract = result?;
+    let table_bytes = TableBytes::new(scene.table_bytes(), prepared?);
     let info = backend.info();
     if m.edge_count() != scene.total_edges() || m.light_count() != lights.len() {
         return Err(CliError::Other(format!(
@@ -185,5 +198,8 @@ pub fn silhouette_report(
             uncertain: extract.uncertain,
             host_resolved: extract.uncertain,
         },
+        peak_rss_bytes: peak_rss_bytes(),
+        table_bytes: table_bytes.total(),
+        table_bytes_parts: table_bytes,
     })
 }

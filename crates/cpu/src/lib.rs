@@ -17,8 +17,8 @@
 
 use shadowvol_robust_math::{ov_sign, Accuracy, Light};
 use shadowvol_silhouette::{
-    check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
-    PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
+    check_lights, object_lights, vec_bytes, BackendError, BackendInfo, ExtractStats,
+    Multiplicities, PreparedBytes, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
 use std::time::Instant;
 
@@ -124,6 +124,15 @@ impl SilhouetteBackend for CpuBackend {
         Ok(ExtractStats {
             compute: start.elapsed(),
             ..ExtractStats::default()
+        })
+    }
+
+    fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
+        // The scalar kernel reads the scene's own tables: only the object list is copied.
+        let scene = self.scenes.get(id)?;
+        Ok(PreparedBytes {
+            host: vec_bytes(&scene.objects),
+            device: 0,
         })
     }
 

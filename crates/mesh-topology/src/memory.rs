@@ -63,6 +63,25 @@ impl EdgeTable {
             .saturating_add(vertices.saturating_mul(76))
     }
 
+    /// Heap bytes the table holds now: the capacity of each of its vectors times the size of
+    /// its element (positions, names, triangles and their sources, edges, CSR offsets and
+    /// opposite vertices, the per-triangle connectivity). The struct itself is not counted.
+    #[must_use]
+    pub fn heap_bytes(&self) -> u64 {
+        fn bytes<T>(v: &Vec<T>) -> u64 {
+            (v.capacity() * std::mem::size_of::<T>()) as u64
+        }
+        bytes(&self.positions)
+            + bytes(&self.vertex_names)
+            + bytes(&self.triangles)
+            + bytes(&self.triangle_sources)
+            + bytes(&self.edges)
+            + bytes(&self.ov_offsets)
+            + bytes(&self.ovs)
+            + bytes(&self.connectivity.tri_edges)
+            + bytes(&self.connectivity.neighbors)
+    }
+
     /// Checks, without allocating, that a mesh of `triangles` triangles and `vertices` vertices
     /// fits `u32` indexing and that its edge table ([`EdgeTable::estimate_bytes`]) fits the
     /// available memory ([`available_memory`]). Returns the estimate in bytes.

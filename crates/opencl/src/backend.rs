@@ -15,7 +15,7 @@ use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::gpu::{self, ExactFilter, SceneLayout};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
-    PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
+    PreparedBytes, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
 use std::mem::ManuallyDrop;
 use std::num::NonZeroUsize;
@@ -217,6 +217,10 @@ impl SilhouetteBackend for OpenClBackend {
             }
         }
         Ok(stats)
+    }
+
+    fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
+        Ok(self.scenes.get(id)?.bytes())
     }
 
     fn release(&mut self, id: PreparedId) {

@@ -9,7 +9,7 @@ use opencl3::context::Context;
 use opencl3::memory::{Buffer, CL_MEM_COPY_HOST_PTR, CL_MEM_READ_WRITE};
 use opencl3::types::cl_mem_flags;
 use shadowvol_silhouette::gpu::{SceneLayout, UncertainRecord};
-use shadowvol_silhouette::{BackendError, TopologyScene};
+use shadowvol_silhouette::{BackendError, PreparedBytes, TopologyScene};
 use std::ops::Range;
 use std::ptr;
 
@@ -48,6 +48,30 @@ pub(crate) struct Prepared {
     pub(crate) sil: Option<(Buffer<i32>, usize)>,
     pub(crate) unc: Option<(Buffer<u32>, usize)>,
     pub(crate) unc_records: usize,
+}
+
+impl Prepared {
+    /// What the scene holds beyond its edge tables: the host layout, and the device buffers
+    /// (the scene's, at least one element each, and the per-frame ones at their capacity).
+    pub(crate) fn bytes(&self) -> PreparedBytes {
+        fn cap<T>(b: &Option<(Buffer<T>, usize)>) -> u64 {
+            b.as_ref()
+                .map_or(0, |(_, n)| (n * std::mem::size_of::<T>()) as u64)
+        }
+        let at_least_one = |n: usize, size: usize| (n.max(1) * size) as u64;
+        let l = &self.layout;
+        let device = at_least_one(l.positions.len(), 4)
+            + at_least_one(l.edges.len() * 4, 4)
+            + at_least_one(l.ovs.len(), 4)
+            + cap(&self.lights)
+            + cap(&self.counts)
+            + cap(&self.sil)
+            + cap(&self.unc);
+        PreparedBytes {
+            host: l.heap_bytes(),
+            device,
+        }
+    }
 }
 
 /// Creates a buffer holding a copy of `data` (at least one element: OpenCL has no empty buffers).

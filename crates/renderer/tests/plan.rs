@@ -9,8 +9,8 @@ use shadowvol_renderer::{
 };
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
-    BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId, SilhouetteBackend,
-    TopologyScene,
+    BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedBytes, PreparedId,
+    SilhouetteBackend, TopologyScene,
 };
 use shadowvol_test_support::{main, Outcome};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -218,6 +218,9 @@ impl SilhouetteBackend for Counting {
         self.extracts.fetch_add(1, Ordering::SeqCst);
         self.lights.fetch_add(lights.len(), Ordering::SeqCst);
         self.inner.extract(id, lights, mode, out)
+    }
+    fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
+        self.inner.prepared_bytes(id)
     }
     fn release(&mut self, id: PreparedId) {
         self.inner.release(id);

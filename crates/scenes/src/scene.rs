@@ -252,6 +252,28 @@ impl Scene {
         })
     }
 
+    /// Heap bytes of every edge table the scene holds, casters' and receivers', each shared
+    /// table once ([`EdgeTable::heap_bytes`]).
+    #[must_use]
+    pub fn table_bytes(&self) -> u64 {
+        let receivers = self.receivers.iter().map(|r| &r.table);
+        let tables = self
+            .geometry
+            .objects
+            .iter()
+            .map(|o| &o.table)
+            .chain(receivers);
+        let mut seen: Vec<*const EdgeTable> = Vec::new();
+        let mut bytes = 0;
+        for t in tables {
+            if !seen.contains(&Arc::as_ptr(t)) {
+                seen.push(Arc::as_ptr(t));
+                bytes += t.heap_bytes();
+            }
+        }
+        bytes
+    }
+
     /// Every surface ([`Scene::surfaces`] order) as a topology: the casters with their
     /// transforms, then the receivers at the identity. The tables are shared, not copied; what
     /// a renderer lays out once to draw every surface.

@@ -59,6 +59,35 @@ pub struct BackendInfo {
     pub details: Vec<(String, String)>,
 }
 
+/// What a prepared scene costs a backend, in bytes, beyond the scene's own edge tables (which
+/// the caller holds and [`TopologyScene::table_bytes`] counts).
+///
+/// `host` is the backend's own layout of the scene in host memory (structure-of-arrays copies,
+/// flattened records, work lists); `device` is the size of every device buffer the scene keeps
+/// (inputs and the result buffers of the last `extract`). On lavapipe and PoCL device memory is
+/// host memory, so both show in the process's resident set.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PreparedBytes {
+    /// Bytes of host memory the backend keeps for the scene.
+    pub host: u64,
+    /// Bytes of device buffers the backend keeps for the scene.
+    pub device: u64,
+}
+
+impl PreparedBytes {
+    /// `host + device`.
+    #[must_use]
+    pub fn total(&self) -> u64 {
+        self.host + self.device
+    }
+}
+
+/// Heap bytes of a vector's allocation (its capacity, not its length).
+#[must_use]
+pub fn vec_bytes<T>(v: &Vec<T>) -> u64 {
+    (v.capacity() * std::mem::size_of::<T>()) as u64
+}
+
 /// Errors from a backend. Each names the backend and what is missing or went wrong.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum BackendError {
@@ -156,6 +185,13 @@ pub trait SilhouetteBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError>;
+
+    /// What the prepared scene `id` holds beyond the scene's edge tables: the backend's host
+    /// layout and its device buffers ([`PreparedBytes`]), in bytes.
+    ///
+    /// # Errors
+    /// [`BackendError::UnknownScene`] when `id` was not returned by `prepare` or was released.
+    fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError>;
 
     /// Frees a prepared scene. The default does nothing.
     fn release(&mut self, id: PreparedId) {

@@ -72,6 +72,22 @@ impl TopologyScene {
         self.objects.iter().map(|o| o.table.triangles.len()).sum()
     }
 
+    /// Heap bytes of the objects' edge tables ([`EdgeTable::heap_bytes`]), each table counted
+    /// once however many objects share it.
+    #[must_use]
+    pub fn table_bytes(&self) -> u64 {
+        let mut seen: Vec<*const EdgeTable> = Vec::new();
+        let mut bytes = 0;
+        for o in &self.objects {
+            let p = Arc::as_ptr(&o.table);
+            if !seen.contains(&p) {
+                seen.push(p);
+                bytes += o.table.heap_bytes();
+            }
+        }
+        bytes
+    }
+
     /// Prefix sums of edge counts: object `i` owns global edges
     /// `offsets[i]..offsets[i + 1]`; `objects.len() + 1` entries.
     #[must_use]

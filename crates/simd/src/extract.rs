@@ -146,6 +146,25 @@ fn items_for(counts: &[usize]) -> Vec<Item> {
 }
 
 impl Prepared {
+    /// Heap bytes of the layouts (each shared layout once) and the work lists.
+    pub(crate) fn heap_bytes(&self) -> u64 {
+        use shadowvol_silhouette::vec_bytes;
+        let mut seen: Vec<*const Layout> = Vec::new();
+        let mut bytes = vec_bytes(&self.objects)
+            + vec_bytes(&self.tri_items)
+            + vec_bytes(&self.edge_items)
+            + vec_bytes(&self.tri_bounds)
+            + vec_bytes(&self.edge_bounds);
+        for o in &self.objects {
+            let p = Arc::as_ptr(&o.layout);
+            if !seen.contains(&p) {
+                seen.push(p);
+                bytes += o.layout.heap_bytes();
+            }
+        }
+        bytes
+    }
+
     /// Lays out every object of `scene` (instances of one table share a layout) and makes the
     /// work items.
     ///

@@ -72,6 +72,31 @@ pub(crate) struct Layout {
     pub coords_in_filter_range: bool,
 }
 
+impl Layout {
+    /// Heap bytes of every array of the layout (capacities).
+    pub(crate) fn heap_bytes(&self) -> u64 {
+        use shadowvol_silhouette::vec_bytes;
+        vec_bytes(&self.xs)
+            + vec_bytes(&self.ys)
+            + vec_bytes(&self.zs)
+            + vec_bytes(&self.xyz)
+            + vec_bytes(&self.t0)
+            + vec_bytes(&self.t1)
+            + vec_bytes(&self.t2)
+            + vec_bytes(&self.block_fast)
+            + vec_bytes(&self.ea)
+            + vec_bytes(&self.eb)
+            + vec_bytes(&self.eo1)
+            + vec_bytes(&self.eo2)
+            + vec_bytes(&self.tri_a)
+            + vec_bytes(&self.tri_b)
+            + vec_bytes(&self.edges)
+            + vec_bytes(&self.ov_offsets)
+            + vec_bytes(&self.ovs)
+            + vec_bytes(&self.ov_tri)
+    }
+}
+
 /// Largest coordinate magnitude (2^39) for which the `f32` filter's range check is known to
 /// pass without evaluating it.
 pub(crate) const COORD_MAX: f32 = 549_755_813_888.0;

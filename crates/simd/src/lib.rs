@@ -48,7 +48,7 @@ mod layout;
 use extract::{run_extract, Prepared, Scratch};
 use shadowvol_silhouette::{
     check_lights, Accuracy, BackendError, BackendInfo, ExtractStats, Light, Multiplicities,
-    PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
+    PreparedBytes, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
 use std::time::Instant;
 
@@ -258,6 +258,13 @@ impl SilhouetteBackend for SimdBackend {
             compute: start.elapsed(),
             uncertain,
             ..ExtractStats::default()
+        })
+    }
+
+    fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
+        Ok(PreparedBytes {
+            host: self.scenes.get(id)?.heap_bytes(),
+            device: 0,
         })
     }
 

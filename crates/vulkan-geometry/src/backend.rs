@@ -11,7 +11,7 @@ use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
-    PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
+    PreparedBytes, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
 use std::num::NonZeroUsize;
 use std::time::Instant;
@@ -291,6 +291,10 @@ impl SilhouetteBackend for VulkanBackend {
         out.reset(self.scene(id)?.layout.edge_count(), lights.len());
         self.extract_batches(id, &obj_lights, mode, out, &mut stats)?;
         Ok(stats)
+    }
+
+    fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
+        Ok(self.prepared.get(id)?.bytes())
     }
 
     fn release(&mut self, id: PreparedId) {

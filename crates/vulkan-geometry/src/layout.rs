@@ -8,7 +8,7 @@ use crate::pipeline::BINDINGS;
 use crate::NAME;
 use ash::vk;
 use shadowvol_silhouette::gpu::SceneLayout;
-use shadowvol_silhouette::{BackendError, TopologyScene};
+use shadowvol_silhouette::{BackendError, PreparedBytes, TopologyScene};
 
 /// Bytes of the uncertain buffer's header (the count and three pads).
 pub(crate) const UNCERTAIN_HEADER: usize = 16;
@@ -33,6 +33,14 @@ pub(crate) struct Prepared {
 }
 
 impl Prepared {
+    /// What the scene holds beyond its edge tables: the host layout and the device buffers.
+    pub(crate) fn bytes(&self) -> PreparedBytes {
+        PreparedBytes {
+            host: self.layout.heap_bytes(),
+            device: self.buffers().iter().map(|b| b.size).sum(),
+        }
+    }
+
     /// The buffers in binding order (see `shaders/silhouette_gs.geom`).
     fn buffers(&self) -> [&Buffer; BINDINGS as usize] {
         [

@@ -9,8 +9,8 @@ use crate::{shaders, NAME};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout, TriangleLayout};
 use shadowvol_silhouette::{
-    BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedId, PreparedScenes,
-    SilhouetteBackend, TopologyScene,
+    BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedBytes, PreparedId,
+    PreparedScenes, SilhouetteBackend, TopologyScene,
 };
 use std::sync::Arc;
 use wgpu::util::DeviceExt;
@@ -255,6 +255,10 @@ impl SilhouetteBackend for WgpuBackend {
         let result = self.extract_prepared(&mut prepared, lights, mode, out);
         self.scenes.restore(id, prepared);
         result
+    }
+
+    fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
+        Ok(self.scenes.get(id)?.bytes())
     }
 
     fn release(&mut self, id: PreparedId) {

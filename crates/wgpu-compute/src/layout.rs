@@ -6,7 +6,7 @@ use crate::backend::WgpuBackend;
 use crate::device::limit_error;
 use crate::pipeline::entry;
 use shadowvol_silhouette::gpu::{self, SceneLayout, TriangleLayout};
-use shadowvol_silhouette::{BackendError, TopologyScene};
+use shadowvol_silhouette::{vec_bytes, BackendError, PreparedBytes, TopologyScene};
 
 /// Object-space lights packed object-major for lights `first..first + count`, as uploaded:
 /// `packed[object * count + light - first]`.
@@ -64,6 +64,38 @@ pub(crate) struct Prepared {
     /// Exact mode on the device runs the triangle step with the integer fallback inline, since a
     /// batch's undecided pairs did not fit the largest uncertain list the device binds.
     pub(crate) inline_exact: bool,
+}
+
+impl Prepared {
+    /// What the scene holds beyond its edge tables: the host layouts, and every device buffer
+    /// (the scene's and the last frame's).
+    pub(crate) fn bytes(&self) -> PreparedBytes {
+        let host = self.layout.heap_bytes()
+            + self.triangles.heap_bytes()
+            + self.edge_slots.as_ref().map_or(0, vec_bytes);
+        let mut device = 0;
+        if let Some(g) = &self.gpu {
+            for b in [&g.positions, &g.edges, &g.ovs, &g.tris, &g.ov_tris] {
+                device += b.size();
+            }
+        }
+        if let Some(f) = &self.frame {
+            for b in [
+                &f.params,
+                &f.lights,
+                &f.mult,
+                &f.counters,
+                &f.silhouettes,
+                &f.uncertain,
+            ] {
+                device += b.size();
+            }
+            for b in [&f.staging, &f.readback].into_iter().flatten() {
+                device += b.size();
+            }
+        }
+        PreparedBytes { host, device }
+    }
 }
 
 impl WgpuBackend {

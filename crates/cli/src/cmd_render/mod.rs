@@ -8,6 +8,7 @@ mod stage;
 pub(crate) use stage::{SceneArgs, ShadowsArg};
 
 use report::{Report, TextReport, Timings};
+use shadowvol::memory::{peak_rss_bytes, TableBytes};
 use shadowvol::{find_backend, CliError, Format};
 use shadowvol_renderer::{
     Exposure, GpuPipeline, HostPipeline, PlanPolicy, RenderDevice, RenderError, RenderOptions,
@@ -79,8 +80,13 @@ pub const LONG_ABOUT: &str =
     pipeline on an adapter with TIMESTAMP_QUERY; the median over --frames, else the final frame), \
     \"uncertain\": exact-mode evaluations the certified filter left undecided, \"uncertain_unit\": \
     what they are (\"edge-opposite-vertex-light\" triples on the host pipeline, \"triangle-light\" \
-    pairs on the gpu pipeline), \"host_resolved\": those decided on the host (gpu: 0)}. On the gpu \
-    pipeline extraction and volumes are part of raster_ms (and of gpu_timings_ms).\n\n\
+    pairs on the gpu pipeline), \"host_resolved\": those decided on the host (gpu: 0), \
+    \"peak_rss_bytes\": the process's peak resident set (the kernel's VmHWM; on lavapipe it \
+    includes device memory; null off Linux), \"table_bytes\": what the prepared scene held, the \
+    sum of \"table_bytes_parts\" {\"topology\" (the scene's edge tables), \"host\" (the \
+    pipeline's and its backend's layouts), \"device\" (their device buffers; the image \
+    attachments are not counted)}}. On the gpu pipeline extraction and volumes are part of \
+    raster_ms (and of gpu_timings_ms).\n\n\
     --shadows map draws shadow maps instead of volumes (the map pipeline, on the renderer's \
     device, nothing read back during a frame), with Bevy 0.20's defaults: a directional light \
     gets an orthographic map of 2048 texels fitted to what the view sees and to every caster, a \
@@ -269,6 +275,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let frame = renderer.render(&scene).map_err(render_error)?;
     frame.save_png(&out_path).map_err(render_error)?;
     let timed = frames::timed_frames(&mut renderer, &mut scene, args.frames)?;
+    let table = TableBytes::new(scene.table_bytes(), renderer.pipeline().prepared_bytes());
 
     let shot = frame.shot(&scene).map_err(render_error)?;
     let want_reference = args.reference || args.diff.is_some();
@@ -328,6 +335,9 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 uncertain_unit: r.uncertain_unit,
                 host_resolved: r.host_resolved,
                 map: report::MapFields::new(&args.input),
+                peak_rss_bytes: peak_rss_bytes(),
+                table_bytes: table.total(),
+                table_bytes_parts: table,
             };
             serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
             writeln!(out)?;

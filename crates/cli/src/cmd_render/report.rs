@@ -62,6 +62,13 @@ pub(super) struct Report<'a> {
     /// `shadows` and the map settings.
     #[serde(flatten)]
     pub(super) map: MapFields,
+    /// The process's peak resident set (the kernel's high-water mark), `null` off Linux.
+    pub(super) peak_rss_bytes: Option<u64>,
+    /// What the prepared scene held: its edge tables plus the pipeline's host layout and device
+    /// buffers (the image attachments not included).
+    pub(super) table_bytes: u64,
+    /// `table_bytes` by part.
+    pub(super) table_bytes_parts: shadowvol::memory::TableBytes,
 }
 
 /// What drew the shadows, and with `--shadows map` the maps' settings in effect (`null` for

@@ -12,6 +12,7 @@ use crate::raster::{
 use crate::{RenderDevice, RenderError};
 use glam::{Mat4, Vec3};
 use shadowvol_scenes::Scene;
+use shadowvol_silhouette::{vec_bytes, PreparedBytes};
 use std::ops::Range;
 
 /// Byte stride of the per-light map uniforms (`MapU`, 480 bytes).
@@ -66,6 +67,30 @@ pub(crate) struct MapScene {
     maps_bg: wgpu::BindGroup,
     textures: Option<MapTextures>,
     queries: Option<Queries>,
+}
+
+impl MapScene {
+    /// Device bytes the scene keeps: the surface vertices, the uniforms, the maps (4 bytes a
+    /// texel: every cascade layer of the 2-D map and the 6 cube faces) and the timestamp
+    /// buffers; the host keeps only the surfaces' ranges.
+    pub(crate) fn bytes(&self) -> PreparedBytes {
+        let mut device: u64 = [&self.surface, &self.globals, &self.lights, &self.maps]
+            .iter()
+            .map(|b| b.size())
+            .sum();
+        if let Some(t) = &self.textures {
+            let texels = |size: u32, layers: usize| u64::from(size).pow(2) * layers as u64;
+            device +=
+                4 * (texels(t.size_2d, t.layers_2d.len()) + texels(t.size_cube, t.faces.len()));
+        }
+        if let Some(q) = &self.queries {
+            device += q.resolve.size() + q.read.size();
+        }
+        PreparedBytes {
+            host: vec_bytes(&self.ranges),
+            device,
+        }
+    }
 }
 
 /// The GPU time of a frame's map passes, as [`crate::resident::GpuTimings`] splits it.

@@ -9,6 +9,7 @@ use crate::raster::{Attachments, BACKGROUND, COLOR_FORMAT, IDS_FORMAT};
 use crate::resident::{PassFormats, PassFrame, ResidentScene, ShadowPass};
 use crate::{RenderDevice, RenderError};
 use glam::Affine3A;
+use shadowvol_silhouette::PreparedBytes;
 
 /// The GPU pipeline: the plan's techniques go to the resident pass
 /// ([`crate::resident::ShadowPass`]), which extracts, builds and draws the volumes on the device
@@ -49,6 +50,12 @@ impl ShadowPipeline for GpuPipeline {
         self.pass
             .as_ref()
             .map_or(device.depth_clamp, ShadowPass::depth_clamp)
+    }
+
+    fn prepared_bytes(&self) -> PreparedBytes {
+        self.scene
+            .as_ref()
+            .map_or_else(PreparedBytes::default, ResidentScene::bytes)
     }
 
     fn prepare(

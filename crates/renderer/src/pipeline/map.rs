@@ -12,6 +12,7 @@ use crate::raster::Attachments;
 use crate::resident::GpuTimings;
 use crate::{Camera, RenderDevice, RenderError};
 use glam::Vec3;
+use shadowvol_silhouette::PreparedBytes;
 
 /// The shadow-map pipeline: each light gets a map ([`crate::maps`]) on the renderer's device,
 /// in the frame's encoder; the pre-pass and the lit pass are the volume pipelines', so that only
@@ -58,6 +59,12 @@ impl ShadowPipeline for MapPipeline {
 
     fn depth_clamp(&self, _device: &RenderDevice) -> bool {
         false
+    }
+
+    fn prepared_bytes(&self) -> PreparedBytes {
+        self.scene
+            .as_ref()
+            .map_or_else(PreparedBytes::default, MapScene::bytes)
     }
 
     fn prepare(

@@ -30,6 +30,7 @@ use crate::resident::GpuTimings;
 use crate::world::{World, WorldChanges};
 use crate::{Accuracy, Camera, RenderDevice, RenderError};
 use shadowvol_scenes::Scene;
+pub use shadowvol_silhouette::PreparedBytes;
 
 /// Which pipeline drew a frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
@@ -164,6 +165,12 @@ pub trait ShadowPipeline {
         let _ = (device, frame, plan, report);
         Ok(())
     }
+
+    /// What the prepared scene holds beyond the scene's edge tables: the pipeline's (and its
+    /// backend's) host layout and its device buffers, in bytes ([`PreparedBytes`]); zero before
+    /// [`ShadowPipeline::prepare`]. The attachments the frame renders into are the caller's and
+    /// not counted.
+    fn prepared_bytes(&self) -> PreparedBytes;
 
     /// The shadow-volume vertices of the last frame, camera-relative, as triangles (`w = 0`:
     /// at infinity), for viewers that draw the volumes; empty unless the pipeline keeps them.

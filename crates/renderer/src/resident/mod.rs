@@ -66,7 +66,7 @@ use glam::{Affine3A, DAffine3};
 use shadowvol_robust_math::Accuracy;
 use shadowvol_scenes::SceneLight;
 use shadowvol_silhouette::gpu::{mode_code, ExactFilter};
-use shadowvol_silhouette::object_light;
+use shadowvol_silhouette::{object_light, vec_bytes, PreparedBytes};
 use shadowvol_wgpu_compute::shaders;
 use std::sync::Arc;
 use wgpu::util::DeviceExt;
@@ -355,6 +355,55 @@ pub struct ResidentScene {
     globals: wgpu::Buffer,
     frame: Option<FrameBuffers>,
     state: FrameState,
+}
+
+impl ResidentScene {
+    /// What the scene holds beyond its edge tables: the host layout, and every device buffer
+    /// (the scene's, the surface vertices', and those of the last frame's lights).
+    #[must_use]
+    pub fn bytes(&self) -> PreparedBytes {
+        let l = &self.layout;
+        let host = l.scene.heap_bytes()
+            + l.triangles.heap_bytes()
+            + vec_bytes(&l.vertex_objects)
+            + vec_bytes(&self.tri_offsets);
+        let mut buffers = vec![
+            &self.positions,
+            &self.edges,
+            &self.ovs,
+            &self.tris,
+            &self.ov_tris,
+            &self.vertex_objects,
+            &self.world,
+            &self.pending_dispatch.0,
+            &self.params,
+            &self.rparams,
+            &self.globals,
+        ];
+        if let Some((b, _)) = &self.surface {
+            buffers.push(b);
+        }
+        if let Some(f) = &self.frame {
+            let b = &f.buffers;
+            buffers.extend([
+                &b.lights,
+                &b.light_points,
+                &b.technique,
+                &b.signs,
+                &b.args,
+                &b.records,
+                &b.objects,
+                &b.light_u,
+            ]);
+            if let Some((_, q, _)) = &f.queries {
+                buffers.push(q);
+            }
+        }
+        PreparedBytes {
+            host,
+            device: buffers.iter().map(|b| b.size()).sum(),
+        }
+    }
 }
 
 impl std::fmt::Debug for ResidentScene {

@@ -40,6 +40,17 @@ fn to_u32(backend: &'static str, what: &str, n: usize) -> Result<u32, BackendErr
 }
 
 impl SceneLayout {
+    /// Heap bytes of the layout's arrays (capacities).
+    #[must_use]
+    pub fn heap_bytes(&self) -> u64 {
+        use crate::vec_bytes;
+        vec_bytes(&self.positions)
+            + vec_bytes(&self.edges)
+            + vec_bytes(&self.ovs)
+            + vec_bytes(&self.vertex_offsets)
+            + vec_bytes(&self.edge_offsets)
+    }
+
     /// Concatenates the objects of `scene` for `backend` (named in errors).
     ///
     /// # Errors

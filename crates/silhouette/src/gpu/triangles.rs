@@ -33,6 +33,13 @@ pub struct TriangleLayout {
 }
 
 impl TriangleLayout {
+    /// Heap bytes of the layout's arrays (capacities).
+    #[must_use]
+    pub fn heap_bytes(&self) -> u64 {
+        use crate::vec_bytes;
+        vec_bytes(&self.tris) + vec_bytes(&self.ov_tris) + vec_bytes(&self.tri_offsets)
+    }
+
     /// The triangles of `scene`, against `layout` (built from the same scene), for `backend`
     /// (named in errors).
     ///

@@ -16,7 +16,9 @@ use raster::{HostRaster, RasterInput};
 use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_scenes::Scene;
-use shadowvol_silhouette::{PreparedId, SilhouetteBackend, TopologyScene};
+use shadowvol_silhouette::{
+    vec_bytes, PreparedBytes, PreparedId, SilhouetteBackend, TopologyScene,
+};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -165,6 +167,27 @@ impl ShadowPipeline for HostPipeline {
 
     fn uncertain_unit(&self) -> UncertainUnit {
         UncertainUnit::EdgeOppositeVertexLight
+    }
+
+    fn prepared_bytes(&self) -> PreparedBytes {
+        // The backend's preparations (each object on its own, and the whole geometry), plus the
+        // volume vertices kept for viewers. A frame's vertex buffers live for that frame only.
+        let ids = self
+            .objects
+            .iter()
+            .map(|c| c.prepared)
+            .chain(self.whole.as_ref().map(|(id, _)| *id));
+        let mut bytes = PreparedBytes {
+            host: vec_bytes(&self.volumes),
+            device: 0,
+        };
+        for id in ids {
+            if let Ok(b) = self.backend.prepared_bytes(id) {
+                bytes.host += b.host;
+                bytes.device += b.device;
+            }
+        }
+        bytes
     }
 
     fn prepare(&mut self, device: &RenderDevice, scene: &Scene) -> Result<(), RenderError> {
