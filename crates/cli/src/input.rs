@@ -46,10 +46,11 @@ pub const INPUT_FORMATS: &str = "Input formats (by extension, case-insensitive):
 /// [`CliError::Other`] for an input without triangles (an empty or garbage file).
 pub fn load_input(path_or_name: &str) -> Result<Input, CliError> {
     let (scene, notes) = load_scene(path_or_name)?;
+    let lights = scene.light_positions();
     Ok(Input {
         name: path_or_name.to_owned(),
-        table: scene.baked_table()?,
-        lights: scene.light_positions(),
+        table: scene.into_baked_table()?,
+        lights,
         notes,
     })
 }

@@ -40,7 +40,7 @@ pub use edge_table::{Connectivity, EdgeTable, MeshStats, NO_NEIGHBOR};
 pub use error::MeshError;
 pub use memory::{available_memory, MEMORY_CHECK_THRESHOLD, MEMORY_LIMIT_ENV};
 pub use mesh::Mesh;
-pub use welding::{weld, Weld};
+pub use welding::{positions_distinct, weld, Weld};
 
 /// Peak-allocation tracking for the estimate tests: a global allocator that counts each
 /// thread's live bytes (only in this crate's unit-test binary).

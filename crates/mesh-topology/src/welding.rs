@@ -84,3 +84,31 @@ pub fn weld(positions: &[Vec3]) -> Weld {
         positions: out_positions,
     }
 }
+
+/// True when no two of `positions` weld ([`weld`] would keep every vertex), found without
+/// copying them: an open-addressing table of vertex indices (4 bytes a slot, at least twice the
+/// vertex count) whose keys are read from `positions`.
+#[must_use]
+pub fn positions_distinct(positions: &[Vec3]) -> bool {
+    let bits = (positions.len().max(8) * 2)
+        .next_power_of_two()
+        .trailing_zeros();
+    let mask = (1usize << bits) - 1;
+    let mut slots = vec![u32::MAX; 1 << bits];
+    for (i, &p) in positions.iter().enumerate() {
+        let key = weld_key(p);
+        let mut h = weld_hash(key, bits);
+        loop {
+            let s = slots[h];
+            if s == u32::MAX {
+                slots[h] = i as u32;
+                break;
+            }
+            if weld_key(positions[s as usize]) == key {
+                return false;
+            }
+            h = (h + 1) & mask;
+        }
+    }
+    true
+}

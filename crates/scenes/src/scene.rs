@@ -8,7 +8,7 @@
 
 use crate::{Camera, Emission, SceneError};
 use glam::{Affine3A, Vec3};
-use shadowvol_mesh_topology::{EdgeTable, Mesh};
+use shadowvol_mesh_topology::{positions_distinct, EdgeTable, Mesh};
 use shadowvol_robust_math::Light;
 use shadowvol_silhouette::{SceneObject, TopologyScene};
 use std::path::Path;
@@ -394,7 +394,42 @@ impl Scene {
             if o.world_from_object == Affine3A::IDENTITY {
                 return Ok(Arc::clone(&o.table));
             }
+            let mut table = EdgeTable::clone(&o.table);
+            if move_table(&mut table, &o.world_from_object) {
+                return Ok(Arc::new(table));
+            }
         }
+        self.rebuilt_table()
+    }
+
+    /// [`Scene::baked_table`], consuming the scene: a single object's table is moved rather
+    /// than copied where nothing else shares it, so that the scene's table and the baked one
+    /// are not held at once (the command line's path for a mesh argument).
+    ///
+    /// # Errors
+    /// As [`Scene::baked_table`].
+    pub fn into_baked_table(mut self) -> Result<Arc<EdgeTable>, SceneError> {
+        if self.geometry.objects.len() == 1 {
+            let o = self.geometry.objects.pop().expect("one object");
+            if o.world_from_object == Affine3A::IDENTITY {
+                return Ok(o.table);
+            }
+            let mut table = Arc::try_unwrap(o.table).unwrap_or_else(|shared| (*shared).clone());
+            if move_table(&mut table, &o.world_from_object) {
+                return Ok(Arc::new(table));
+            }
+            self.geometry.objects.push(SceneObject {
+                table: Arc::new(table),
+                ..o
+            });
+            return self.rebuilt_table();
+        }
+        self.baked_table()
+    }
+
+    /// The general path of [`Scene::baked_table`]: every object transformed into one mesh,
+    /// welded and tabled again.
+    fn rebuilt_table(&self) -> Result<Arc<EdgeTable>, SceneError> {
         let what = || format!("baked mesh of scene '{}'", self.name);
         let welded: usize = self
             .geometry
@@ -519,6 +554,19 @@ impl Scene {
 }
 
 /// Input vertices or triangles of a bake beyond `u32` numbering.
+/// Moves `table`'s positions by `t` ([`apply_f32`]) when that makes the table a rebuild would
+/// make: every moved position finite and no two of them equal (then welding keeps every vertex,
+/// in the same order, and the triangles, edges and names stay as they are). Returns false, and
+/// leaves the table as it was, otherwise.
+fn move_table(table: &mut EdgeTable, t: &Affine3A) -> bool {
+    let moved: Vec<Vec3> = table.positions.iter().map(|&p| apply_f32(t, p)).collect();
+    let ok = moved.iter().all(|p| p.is_finite()) && positions_distinct(&moved);
+    if ok {
+        table.positions = moved;
+    }
+    ok
+}
+
 fn too_large(what: String, count: u64) -> SceneError {
     SceneError::Mesh {
         what,
@@ -583,4 +631,63 @@ pub(crate) fn file_name(path: &Path) -> String {
         || path.display().to_string(),
         |n| n.to_string_lossy().into_owned(),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One object of `mesh` placed by `t`.
+    fn one(mesh: &Mesh, t: Affine3A) -> Scene {
+        let mut scene = Scene::new("test");
+        let table = scene.add_mesh("mesh", mesh).unwrap();
+        scene.add_object("mesh", table, t);
+        scene
+    }
+
+    #[test]
+    fn a_moved_table_is_the_table_a_rebuild_makes() {
+        let mesh = crate::procedural::uv_sphere(2000, 1.5);
+        let t = Affine3A::from_scale_rotation_translation(
+            Vec3::new(1.0, 2.0, 0.5),
+            glam::Quat::from_rotation_y(0.3),
+            Vec3::new(3.0, -1.0, 2.0),
+        );
+        let scene = one(&mesh, t);
+        let rebuilt = scene.rebuilt_table().unwrap();
+        assert!(move_table(
+            &mut EdgeTable::clone(&scene.geometry.objects[0].table),
+            &t
+        ));
+        assert_eq!(*scene.baked_table().unwrap(), *rebuilt);
+        assert_eq!(*scene.into_baked_table().unwrap(), *rebuilt);
+    }
+
+    #[test]
+    fn positions_that_meet_when_moved_are_welded_by_a_rebuild() {
+        // Two vertices one ulp apart at x = 1 land on one f32 once moved by 2^30.
+        let next = f32::from_bits(1.0f32.to_bits() + 1);
+        let mesh = Mesh {
+            positions: vec![
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(next, 0.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(0.0, 0.0, 1.0),
+            ],
+            triangles: vec![[0, 2, 3], [1, 3, 2], [0, 1, 2]],
+        };
+        let t = Affine3A::from_translation(Vec3::new(1_073_741_824.0, 0.0, 0.0));
+        let scene = one(&mesh, t);
+        let table = EdgeTable::clone(&scene.geometry.objects[0].table);
+        let mut unchanged = table.clone();
+        assert!(!move_table(&mut unchanged, &t), "two vertices meet");
+        assert_eq!(
+            unchanged, table,
+            "a refused move leaves the table as it was"
+        );
+        let rebuilt = scene.rebuilt_table().unwrap();
+        assert!(rebuilt.positions.len() < table.positions.len());
+        assert_eq!(*scene.baked_table().unwrap(), *rebuilt);
+        assert_eq!(*scene.into_baked_table().unwrap(), *rebuilt);
+    }
 }
