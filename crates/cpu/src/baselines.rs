@@ -141,6 +141,8 @@ impl Baseline {
 pub struct ClosedMesh<'a> {
     table: &'a EdgeTable,
     edge_tris: Vec<[u32; 2]>,
+    /// The connectivity table: the triangle across each edge of each triangle.
+    neighbors: Vec<[u32; 3]>,
 }
 
 #[inline]
@@ -188,7 +190,11 @@ impl<'a> ClosedMesh<'a> {
                 }
             }
         }
-        Ok(Self { table, edge_tris })
+        Ok(Self {
+            table,
+            edge_tris,
+            neighbors: table.manifold_neighbors(),
+        })
     }
 
     /// The table this mesh was built from.
@@ -334,7 +340,7 @@ impl<'a> ClosedMesh<'a> {
             }
             for i in 0..3 {
                 // Closed manifold: every neighbour exists (checked in `new`).
-                let n = c.neighbors[t][i] as usize;
+                let n = self.neighbors[t][i] as usize;
                 if !self.lit(n, light) {
                     out.push(c.tri_edges[t][i]);
                 }

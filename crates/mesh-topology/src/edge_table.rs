@@ -1,10 +1,10 @@
 //! The edge table: every undirected edge once, with the opposite vertices of all its triangles
-//! (CSR), the per-triangle connectivity and the counts.
+//! (CSR), each triangle's edges and the counts; the triangles across each edge on demand.
 
 use crate::{weld, Mesh, MeshError, Weld};
 use glam::Vec3;
 
-/// Marker for "no triangle" in [`Connectivity::neighbors`].
+/// Marker for "no triangle" in [`EdgeTable::manifold_neighbors`].
 pub const NO_NEIGHBOR: u32 = u32::MAX;
 
 /// Topology statistics of an [`EdgeTable`].
@@ -31,18 +31,16 @@ pub struct MeshStats {
 }
 
 /// Per-triangle-edge connectivity: for every kept triangle and each of its three edges, the edge
-/// index and the triangle across that edge.
+/// index.
 ///
 /// Edge `i` of triangle `[v0, v1, v2]` goes from `v_i` to `v_{(i+1) % 3}` (in the triangle's own
-/// winding). The seeds' baseline algorithms (Toy Wars' connectivity table, the thesis' two-step
-/// method) walk this table.
+/// winding). The backends that decide signs per triangle read it; the seeds' baselines also
+/// need the triangle across each edge, which [`EdgeTable::manifold_neighbors`] builds when
+/// asked.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Connectivity {
     /// `tri_edges[t][i]` is the index into [`EdgeTable::edges`] of edge `i` of triangle `t`.
     pub tri_edges: Vec<[u32; 3]>,
-    /// `neighbors[t][i]` is the other triangle on edge `i` of triangle `t` when that edge is
-    /// manifold (exactly two triangles), otherwise [`NO_NEIGHBOR`].
-    pub neighbors: Vec<[u32; 3]>,
 }
 
 /// The edge table: every undirected edge once, with the opposite vertices of all its triangles.
@@ -107,7 +105,7 @@ impl EdgeTable {
         };
         let (start, mut entries) = bucket_entries(&triangles, vertex_count);
         let grouped = group_edges(&triangles, &start, &mut entries, &mut stats);
-        let neighbors = manifold_neighbors(&grouped.tri_edges, &grouped.ov_offsets);
+        drop(entries);
         Self {
             positions: weld.positions,
             vertex_names: weld.names,
@@ -118,10 +116,18 @@ impl EdgeTable {
             ovs: grouped.ovs,
             connectivity: Connectivity {
                 tri_edges: grouped.tri_edges,
-                neighbors,
             },
             stats,
         }
+    }
+
+    /// For each triangle edge (`[t][i]`, as [`Connectivity::tri_edges`]), the other triangle
+    /// across it when the edge is manifold (exactly two triangles), otherwise [`NO_NEIGHBOR`].
+    /// Built on each call (12 bytes a triangle, and 8 an edge while it runs): only the seeds'
+    /// connectivity-table baselines walk it.
+    #[must_use]
+    pub fn manifold_neighbors(&self) -> Vec<[u32; 3]> {
+        manifold_neighbors(&self.connectivity.tri_edges, &self.ov_offsets)
     }
 
     /// Number of edges.
@@ -190,9 +196,10 @@ fn compact_triangles(weld: &Weld, input_triangles: &[[u32; 3]]) -> (Vec<[u32; 3]
     (triangles, triangle_sources)
 }
 
-/// One edge entry of a triangle: (larger endpoint, triangle, corner `i` of the edge); the OV is
-/// corner `(i + 2) % 3`.
-type Entry = (u32, u32, u8);
+/// One edge entry of a triangle: (larger endpoint, `3 t + i` for corner `i` of triangle `t`,
+/// where the edge starts); the OV is corner `(i + 2) % 3`. Eight bytes: `3 t + i` fits `u32`
+/// because [`EdgeTable::check_size`] refuses `3 × triangles >= 2^32 - 1`.
+type Entry = (u32, u32);
 
 /// Step 2: a counting sort of the 3 entries per triangle by their smaller endpoint. Returns the
 /// bucket starts (`vertex_count + 1` offsets) and the entries, bucket by bucket.
@@ -207,13 +214,13 @@ fn bucket_entries(triangles: &[[u32; 3]], vertex_count: usize) -> (Vec<u32>, Vec
     for v in 0..vertex_count {
         start[v + 1] += start[v];
     }
-    let mut entries = vec![(0u32, 0u32, 0u8); triangles.len() * 3];
+    let mut entries = vec![(0u32, 0u32); triangles.len() * 3];
     let mut fill = start.clone();
     for (ti, t) in triangles.iter().enumerate() {
         for i in 0..3 {
             let (a, b) = (t[i], t[(i + 1) % 3]);
             let slot = &mut fill[a.min(b) as usize];
-            entries[*slot as usize] = (a.max(b), ti as u32, i as u8);
+            entries[*slot as usize] = (a.max(b), 3 * ti as u32 + i as u32);
             *slot += 1;
         }
     }
@@ -245,17 +252,16 @@ fn group_edges(
     ov_offsets.push(0);
     for a in 0..start.len() - 1 {
         let bucket = &mut entries[start[a] as usize..start[a + 1] as usize];
-        bucket.sort_unstable_by_key(|&(b, t, i)| (b, t, i));
+        bucket.sort_unstable();
         let mut k = 0;
         while k < bucket.len() {
             let b = bucket[k].0;
             let edge_index = edges.len() as u32;
             let mut n = 0usize;
             while k < bucket.len() && bucket[k].0 == b {
-                let (_, t, i) = bucket[k];
-                let tri = triangles[t as usize];
-                ovs.push(tri[(usize::from(i) + 2) % 3]);
-                tri_edges[t as usize][usize::from(i)] = edge_index;
+                let (t, i) = ((bucket[k].1 / 3) as usize, (bucket[k].1 % 3) as usize);
+                ovs.push(triangles[t][(i + 2) % 3]);
+                tri_edges[t][i] = edge_index;
                 n += 1;
                 k += 1;
             }
@@ -277,8 +283,8 @@ fn group_edges(
     }
 }
 
-/// Step 4: for each triangle edge, the other triangle across it when the edge is manifold
-/// (exactly two triangles), otherwise [`NO_NEIGHBOR`].
+/// [`EdgeTable::manifold_neighbors`]: for each triangle edge, the other triangle across it when
+/// the edge is manifold (exactly two triangles), otherwise [`NO_NEIGHBOR`].
 fn manifold_neighbors(tri_edges: &[[u32; 3]], ov_offsets: &[u32]) -> Vec<[u32; 3]> {
     let edge_count = ov_offsets.len() - 1;
     let mut first_tri = vec![NO_NEIGHBOR; edge_count];

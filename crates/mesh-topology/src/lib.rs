@@ -276,7 +276,7 @@ mod tests {
         assert_eq!(t.stats.nonmanifold_edges, 1);
         assert_eq!(t.stats.boundary_edges, 8);
         assert_eq!(t.ovs_of(0), &[2, 3, 4, 5]);
-        assert_eq!(t.connectivity.neighbors[0][0], NO_NEIGHBOR);
+        assert_eq!(t.manifold_neighbors()[0][0], NO_NEIGHBOR);
     }
 
     #[test]

@@ -50,22 +50,21 @@ impl EdgeTable {
     /// Upper bound of the heap bytes [`EdgeTable::build`] allocates for a mesh of `triangles`
     /// triangles and `vertices` input vertices, not counting the input mesh itself.
     ///
-    /// Per triangle (166 bytes): kept triangles and their sources (16), the counting-sort entries
-    /// (36), OV lists (12), per-triangle edge ids and neighbours (24), edge records, CSR offsets
-    /// and the neighbour scratch at the worst case of 3 edges per triangle, including one vector
-    /// regrowth (78). Per vertex (76 bytes): the weld's hash slots (up to 16), keys, names and
-    /// positions at double capacity (56) and the input-to-compact map (4). A closed manifold mesh
-    /// needs about 70 % of this.
+    /// Per triangle (118 bytes): kept triangles and their sources (16), the counting-sort entries
+    /// (24), OV lists (12), per-triangle edge ids (12), edge records and CSR offsets at the worst
+    /// case of 3 edges per triangle, including one vector regrowth (54). Per vertex (76 bytes):
+    /// the weld's hash slots (up to 16), keys, names and positions at double capacity (56) and
+    /// the input-to-compact map (4). A closed manifold mesh needs about 70 % of this.
     #[must_use]
     pub fn estimate_bytes(triangles: u64, vertices: u64) -> u64 {
         triangles
-            .saturating_mul(166)
+            .saturating_mul(118)
             .saturating_add(vertices.saturating_mul(76))
     }
 
     /// Heap bytes the table holds now: the capacity of each of its vectors times the size of
     /// its element (positions, names, triangles and their sources, edges, CSR offsets and
-    /// opposite vertices, the per-triangle connectivity). The struct itself is not counted.
+    /// opposite vertices, each triangle's edges). The struct itself is not counted.
     #[must_use]
     pub fn heap_bytes(&self) -> u64 {
         fn bytes<T>(v: &Vec<T>) -> u64 {
@@ -79,7 +78,6 @@ impl EdgeTable {
             + bytes(&self.ov_offsets)
             + bytes(&self.ovs)
             + bytes(&self.connectivity.tri_edges)
-            + bytes(&self.connectivity.neighbors)
     }
 
     /// Checks, without allocating, that a mesh of `triangles` triangles and `vertices` vertices

@@ -115,12 +115,13 @@ fn check_table(mesh: &Mesh, table: &EdgeTable) {
 /// Neighbours: across a manifold edge the other triangle (and symmetric), else NO_NEIGHBOR.
 fn check_connectivity(table: &EdgeTable) {
     let c = &table.connectivity;
+    let neighbors = table.manifold_neighbors();
     assert_eq!(c.tri_edges.len(), table.triangles.len());
-    assert_eq!(c.neighbors.len(), table.triangles.len());
+    assert_eq!(neighbors.len(), table.triangles.len());
     for t in 0..table.triangles.len() {
         for i in 0..3 {
             let e = c.tri_edges[t][i] as usize;
-            let n = c.neighbors[t][i];
+            let n = neighbors[t][i];
             if table.ovs_of(e).len() == 2 {
                 assert_ne!(n, NO_NEIGHBOR);
                 assert_ne!(n as usize, t);
@@ -128,7 +129,7 @@ fn check_connectivity(table: &EdgeTable) {
                     .iter()
                     .position(|&x| x as usize == e)
                     .expect("the neighbour shares the edge");
-                assert_eq!(c.neighbors[n as usize][j] as usize, t, "symmetric");
+                assert_eq!(neighbors[n as usize][j] as usize, t, "symmetric");
             } else {
                 assert_eq!(n, NO_NEIGHBOR);
             }
@@ -234,13 +235,14 @@ fn connectivity_of_a_closed_octahedron() {
     assert_eq!(t.stats.edges, 12);
     assert_eq!(t.stats.manifold_edges, 12);
     // Every triangle has three neighbours, all different, and the relation is symmetric.
-    for (i, n) in t.connectivity.neighbors.iter().enumerate() {
+    let neighbors = t.manifold_neighbors();
+    for (i, n) in neighbors.iter().enumerate() {
         assert!(n.iter().all(|&x| x != NO_NEIGHBOR && x as usize != i));
         assert!(n[0] != n[1] && n[1] != n[2] && n[0] != n[2]);
     }
     // Triangle 0 = [0, 2, 4]: edge 0 (0-2) borders [2, 0, 5] (4), edge 1 (2-4) borders
     // [2, 1, 4] (1), edge 2 (4-0) borders [3, 0, 4] (3).
-    assert_eq!(t.connectivity.neighbors[0], [4, 1, 3]);
+    assert_eq!(neighbors[0], [4, 1, 3]);
     check_table(&mesh, &t);
 }
 
@@ -257,16 +259,16 @@ fn connectivity_of_books_and_boundaries() {
     ];
     let quad = vec![[0, 1, 2], [1, 3, 2]];
     let t = EdgeTable::build(&Mesh::new(p.clone(), quad.clone()).unwrap()).unwrap();
-    assert_eq!(t.connectivity.neighbors[0], [NO_NEIGHBOR, 1, NO_NEIGHBOR]);
-    assert_eq!(t.connectivity.neighbors[1], [NO_NEIGHBOR, NO_NEIGHBOR, 0]);
+    let neighbors = t.manifold_neighbors();
+    assert_eq!(neighbors[0], [NO_NEIGHBOR, 1, NO_NEIGHBOR]);
+    assert_eq!(neighbors[1], [NO_NEIGHBOR, NO_NEIGHBOR, 0]);
     let mut book = quad;
     book.push([1, 2, 4]);
     let mesh = Mesh::new(p, book).unwrap();
     let t = EdgeTable::build(&mesh).unwrap();
     assert_eq!(t.stats.nonmanifold_edges, 1);
     assert!(t
-        .connectivity
-        .neighbors
+        .manifold_neighbors()
         .iter()
         .flatten()
         .all(|&n| n == NO_NEIGHBOR));
