@@ -58,18 +58,78 @@ pub(crate) struct Layout {
     pub tri_a: Vec<u32>,
     /// Second triangle reference of each edge (see `tri_a`).
     pub tri_b: Vec<u32>,
-    /// Edge endpoints (storage indices), for the general path.
-    pub edges: Vec<[u32; 2]>,
-    /// CSR offsets into `ovs` / `ov_tri`.
-    pub ov_offsets: Vec<u32>,
-    /// Opposite vertices (storage indices).
-    pub ovs: Vec<u32>,
-    /// Canonical-triangle index of each entry of `ovs`, with [`ODD`] for odd parity.
-    pub ov_tri: Vec<u32>,
+    /// The CSR records of the blocks that are not fast, for the general path.
+    pub general: GeneralBlocks,
     /// Every stored coordinate passes [`coord_in_filter_range`] (a multiple of 2^-40 of
     /// magnitude at most 2^39): then, with a light whose coordinates pass too, no difference the
     /// `f32` filter forms can fail its range check.
     pub coords_in_filter_range: bool,
+}
+
+/// The edges of the blocks whose `block_fast` is false, in CSR form, block by block: a mesh
+/// with few boundary or non-manifold edges keeps few of them (a closed manifold one none).
+#[derive(Debug, Default)]
+pub(crate) struct GeneralBlocks {
+    /// Per block of [`LANES`] edges: its index among the general blocks, or [`NOT_GENERAL`].
+    pub index: Vec<u32>,
+    /// Per general block, [`LANES`] edge endpoints (storage indices), padded with `[0, 0]`.
+    pub edges: Vec<[u32; 2]>,
+    /// Per general block, [`LANES`] + 1 offsets into `ovs` / `ov_tri` (equal past the last
+    /// edge).
+    pub offsets: Vec<u32>,
+    /// Opposite vertices (storage indices).
+    pub ovs: Vec<u32>,
+    /// Canonical-triangle index of each entry of `ovs`, with [`ODD`] for odd parity.
+    pub ov_tri: Vec<u32>,
+}
+
+/// [`GeneralBlocks::index`] of a fast block.
+pub(crate) const NOT_GENERAL: u32 = u32::MAX;
+
+impl GeneralBlocks {
+    /// The records of the blocks of `table`'s edges that `block_fast` marks as not fast, with
+    /// vertices at their storage index `st` and the OV triangles `ov_tri` of [`ov_triangles`].
+    fn new(table: &EdgeTable, st: &[u32], ov_tri: &[u32], block_fast: &[bool]) -> Self {
+        let ne = table.edges.len();
+        let mut g = Self {
+            index: Vec::with_capacity(block_fast.len()),
+            ..Self::default()
+        };
+        let mut count = 0u32;
+        for (blk, &fast) in block_fast.iter().enumerate() {
+            if fast {
+                g.index.push(NOT_GENERAL);
+                continue;
+            }
+            g.index.push(count);
+            count += 1;
+            for k in 0..LANES {
+                let e = blk * LANES + k;
+                g.offsets.push(g.ovs.len() as u32);
+                if e >= ne {
+                    g.edges.push([0, 0]);
+                    continue;
+                }
+                let [a, b] = table.edges[e];
+                g.edges.push([st[a as usize], st[b as usize]]);
+                let r = table.ov_offsets[e] as usize..table.ov_offsets[e + 1] as usize;
+                g.ovs
+                    .extend(table.ovs[r.clone()].iter().map(|&o| st[o as usize]));
+                g.ov_tri.extend_from_slice(&ov_tri[r]);
+            }
+            g.offsets.push(g.ovs.len() as u32);
+        }
+        g
+    }
+
+    fn heap_bytes(&self) -> u64 {
+        use shadowvol_silhouette::vec_bytes;
+        vec_bytes(&self.index)
+            + vec_bytes(&self.edges)
+            + vec_bytes(&self.offsets)
+            + vec_bytes(&self.ovs)
+            + vec_bytes(&self.ov_tri)
+    }
 }
 
 impl Layout {
@@ -90,10 +150,25 @@ impl Layout {
             + vec_bytes(&self.eo2)
             + vec_bytes(&self.tri_a)
             + vec_bytes(&self.tri_b)
-            + vec_bytes(&self.edges)
-            + vec_bytes(&self.ov_offsets)
-            + vec_bytes(&self.ovs)
-            + vec_bytes(&self.ov_tri)
+            + self.general.heap_bytes()
+    }
+
+    /// Edge `e` of a general block: its ends (storage indices) and the range of its OVs in
+    /// [`GeneralBlocks::ovs`] and [`GeneralBlocks::ov_tri`].
+    ///
+    /// # Panics
+    /// If `e`'s block is fast, or `e` is out of range.
+    #[inline(always)]
+    pub(crate) fn general_edge(&self, e: usize) -> ([u32; 2], std::ops::Range<usize>) {
+        let g = &self.general;
+        let blk = g.index[e / LANES];
+        assert!(blk != NOT_GENERAL, "edge {e} is in a fast block");
+        let (k, o) = (blk as usize * LANES, blk as usize * (LANES + 1));
+        let i = e % LANES;
+        (
+            g.edges[k + i],
+            g.offsets[o + i] as usize..g.offsets[o + i + 1] as usize,
+        )
     }
 }
 
@@ -175,6 +250,8 @@ impl Layout {
         let ov_tri = ov_triangles(table, &slot)?;
         let ne = table.edges.len();
         let manifold = ManifoldEdges::new(table, &st, &ov_tri);
+        let general = GeneralBlocks::new(table, &st, &ov_tri, &manifold.block_fast);
+        drop(ov_tri);
         Ok(Self {
             xs,
             ys,
@@ -192,10 +269,7 @@ impl Layout {
             eo2: manifold.eo2,
             tri_a: manifold.tri_a,
             tri_b: manifold.tri_b,
-            edges: table.edges.iter().map(|&[a, b]| [sv(a), sv(b)]).collect(),
-            ov_offsets: table.ov_offsets.clone(),
-            ovs: table.ovs.iter().map(|&o| sv(o)).collect(),
-            ov_tri,
+            general,
             coords_in_filter_range,
         })
     }

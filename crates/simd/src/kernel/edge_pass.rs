@@ -112,10 +112,10 @@ fn edge_sums(pass: EdgeSums) {
 fn edge_sums_general(lay: &Layout, e0: usize, e_start: usize, ps: &PackedSigns, out: &mut EdgeOut) {
     let nl = out.rows.len();
     for e in e0..(e0 + LANES).min(lay.edge_count) {
-        let r = lay.ov_offsets[e] as usize..lay.ov_offsets[e + 1] as usize;
+        let (_, r) = lay.general_edge(e);
         for (l, row) in out.rows.iter_mut().enumerate() {
             let base = ps.bases[l / PACK];
-            let m: i32 = lay.ov_tri[r.clone()]
+            let m: i32 = lay.general.ov_tri[r.clone()]
                 .iter()
                 .map(|&t| signed(pack_sign(ps.all[base + (t & !ODD) as usize], nl, l), t))
                 .sum();

@@ -611,10 +611,7 @@ mod tests {
             eo2: vec![],
             tri_a: vec![],
             tri_b: vec![],
-            edges: vec![],
-            ov_offsets: vec![],
-            ovs: vec![],
-            ov_tri: vec![],
+            general: Default::default(),
             coords_in_filter_range: true,
         }
     }

@@ -92,9 +92,9 @@ fn original_general_block(
     out: &mut EdgeOut,
 ) {
     for e in e0..(e0 + LANES).min(lay.edge_count) {
-        let [a, b] = lay.edges[e];
+        let ([a, b], r) = lay.general_edge(e);
         let (pa, pb) = (lay.pos(a), lay.pos(b));
-        let ovs = &lay.ovs[lay.ov_offsets[e] as usize..lay.ov_offsets[e + 1] as usize];
+        let ovs = &lay.general.ovs[r];
         for (l, light) in lights.iter().enumerate() {
             let m: i32 = ovs
                 .iter()
