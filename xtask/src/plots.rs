@@ -41,6 +41,33 @@ pub fn all(out: &Path, records: &[Record]) -> PlotResult {
     accuracy_cost(&out.join("accuracy_cost.png"), records)?;
     individual_vs_baked(&out.join("individual_vs_baked.png"), records)?;
     maps_vs_volumes(&out.join("maps_vs_volumes.png"), records)?;
+    memory_per_triangle(&out.join("memory_per_triangle.png"), records)?;
+    Ok(())
+}
+
+fn memory_per_triangle(path: &Path, records: &[Record]) -> PlotResult {
+    let s = crate::matrix::memory_table::plot_points(records);
+    let title = "Peak RSS per triangle vs triangles (exact)";
+    let Some(((x0, x1), (y0, y1))) = bounds_or_no_data(path, title, &s)? else {
+        return Ok(());
+    };
+    let root = canvas(path, SIZE)?;
+    let mut chart = chart_on(&root)
+        .caption(title, ("sans-serif", 24))
+        .build_cartesian_2d(
+            (x0 * 0.8..x1 * 1.25).log_scale(),
+            (y0 * 0.7..y1 * 1.4).log_scale(),
+        )?;
+    chart
+        .configure_mesh()
+        .x_desc("triangles")
+        .y_desc("peak RSS, bytes per triangle")
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
+        .label_style(("sans-serif", 14))
+        .draw()?;
+    backend_lines(&mut chart, &s, SeriesLabelPosition::UpperRight)?;
+    root.present()?;
     Ok(())
 }
 

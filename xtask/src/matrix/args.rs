@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 pub(super) const USAGE: &str = "\
 cargo xtask matrix [--quick] [--out DIR] [--backends LIST] [--modes LIST] [--frames N]
-                   [--only maps]
+                   [--only maps|memory]
 
 Runs the paper's experiment matrix with the release `shadowvol` binary on every available
 backend and writes DIR/tables.md, DIR/results.json, DIR/results.csv and PNG plots.
@@ -18,6 +18,9 @@ backend and writes DIR/tables.md, DIR/results.json, DIR/results.csv and PNG plot
   --only maps      only the volumes-against-maps table (every hard-* preset, town,
                    bunnies-10-individual and sphere-1m at 1280x720; maps of 512 to 8192 texels,
                    hard and PCF, Bevy's bias and a bias sweep; 105 minutes on 2 cores with --frames 10)
+  --only memory    only the memory table: peak RSS and prepared bytes per triangle of
+                   `silhouette` on every backend and of `render` on each pipeline, on spheres of
+                   10^5 to 10^7 triangles (10^5 and 10^6 with --quick)
   --replot DIR     measure nothing: rewrite DIR/tables.md, DIR/results.csv and the plots from
                    DIR/results.json (after a change to the tables or plots)
 ";
@@ -37,8 +40,17 @@ pub(super) struct Options {
     pub warmup: u32,
     /// `--replot DIR`: rewrite the tables and plots of an earlier run.
     pub replot: Option<PathBuf>,
-    /// `--only maps`: only the volumes-against-maps table.
-    pub only_maps: bool,
+    /// `--only TABLE`: only that table runs.
+    pub only: Option<Only>,
+}
+
+/// A table that `--only` runs alone.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Only {
+    /// The volumes-against-maps table.
+    Maps,
+    /// The memory table.
+    Memory,
 }
 
 /// Parses the arguments after `matrix`; `None` after `--help` (the usage is printed).
@@ -54,7 +66,7 @@ pub(super) fn parse_args(args: &[String]) -> Result<Option<Options>, String> {
         frames: 0,
         warmup: 3,
         replot: None,
-        only_maps: false,
+        only: None,
     };
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -69,12 +81,16 @@ pub(super) fn parse_args(args: &[String]) -> Result<Option<Options>, String> {
             "--replot" => o.replot = Some(PathBuf::from(value("--replot")?)),
             "--only" => {
                 let v = value("--only")?;
-                if v != "maps" {
-                    return Err(format!(
-                        "--only {v:?}: only the table `maps` (volumes against maps) runs alone"
-                    ));
-                }
-                o.only_maps = true;
+                o.only = Some(match v.as_str() {
+                    "maps" => Only::Maps,
+                    "memory" => Only::Memory,
+                    _ => {
+                        return Err(format!(
+                            "--only {v:?}: the tables that run alone are `maps` (volumes against \
+                             maps) and `memory`"
+                        ))
+                    }
+                });
             }
             "--backends" => {
                 o.backends = Some(split_list(&value("--backends")?));

@@ -24,6 +24,8 @@ mod cli;
 mod csv;
 mod maps;
 pub(crate) mod maps_table;
+mod memory;
+pub(crate) mod memory_table;
 mod plan;
 mod progress;
 pub(crate) mod records;

@@ -1,7 +1,7 @@
 //! What the matrix measures: the scenes of each table and the light counts, image size and
 //! render scenes of one run.
 
-use super::args::Options;
+use super::args::{Only, Options};
 
 /// Scene of Table 1 and of the accuracy table's time ratios.
 pub(super) const T1_SCENE: &str = "sphere-1m";
@@ -59,6 +59,23 @@ pub(super) const MAP_BIAS_SWEEP_QUICK: [&str; 2] = ["0.005,0,0.3", "0.3,0,4"];
 /// The key `backend` of the map pipeline's rows.
 pub(super) const MAP_KEY: &str = "map";
 
+/// Scenes of the memory table: spheres of 10^5, 10^6 and 10^7 triangles.
+pub(super) const MEMORY_SCENES: [&str; 3] = ["sphere-100k", "sphere-1m", "sphere-10m"];
+/// The `--quick` memory scenes (the 10^7 one left out).
+pub(super) const MEMORY_SCENES_QUICK: [&str; 2] = ["sphere-100k", "sphere-1m"];
+/// The `render` runs of the memory table: its key `backend` and the flags that pick the
+/// pipeline.
+pub(super) const MEMORY_RENDERS: [(&str, &[&str]); 3] = [
+    ("render-gpu", &["--pipeline", "gpu"]),
+    (
+        "render-host-simd",
+        &["--pipeline", "host", "--backend", "simd"],
+    ),
+    ("render-map", &["--shadows", "map"]),
+];
+/// Image size of the memory table's renders.
+pub(super) const MEMORY_RENDER_SIZE: &str = "1280x720";
+
 /// Scenes of the Toy Wars table (closed manifold meshes, which the seeds' algorithms need).
 pub(super) const TOYWARS_SCENES: [&str; 2] = ["bunny", "bunny-subdivided"];
 
@@ -84,8 +101,10 @@ pub(super) struct Plan {
     pub map_sizes: Vec<u32>,
     /// Biases swept for its tuned rows.
     pub map_biases: Vec<&'static str>,
-    /// Only the volumes-against-maps table runs (`--only maps`).
-    pub only_maps: bool,
+    /// Scenes of the memory table.
+    pub memory_scenes: Vec<&'static str>,
+    /// The one table that runs (`--only`), if any.
+    pub only: Option<Only>,
 }
 
 impl Plan {
@@ -127,7 +146,12 @@ impl Plan {
             } else {
                 MAP_SIZES.to_vec()
             },
-            only_maps: o.only_maps,
+            memory_scenes: if o.quick {
+                MEMORY_SCENES_QUICK.to_vec()
+            } else {
+                MEMORY_SCENES.to_vec()
+            },
+            only: o.only,
             map_biases: if o.quick {
                 MAP_BIAS_SWEEP_QUICK.to_vec()
             } else {
@@ -139,8 +163,10 @@ impl Plan {
     /// Progress steps; must follow `Matrix::run_plan`: one per bench call (all backends
     /// at once), render, accuracy call (per backend) and baselines call.
     pub fn steps(&self) -> u64 {
-        if self.only_maps {
-            return self.map_steps();
+        match self.only {
+            Some(Only::Maps) => return self.map_steps(),
+            Some(Only::Memory) => return self.memory_steps(),
+            None => {}
         }
         let b = self.backends.len() as u64;
         let m = self.modes.len() as u64;
@@ -164,6 +190,13 @@ impl Plan {
             + self.toywars_scenes.len() as u64
             + 2 * self.frame_scenes.len() as u64
             + self.map_steps()
+            + self.memory_steps()
+    }
+
+    /// Progress steps of the memory table: per scene one `silhouette` per backend and one
+    /// `render` per pipeline.
+    pub fn memory_steps(&self) -> u64 {
+        self.memory_scenes.len() as u64 * (self.backends.len() + MEMORY_RENDERS.len()) as u64
     }
 
     /// Progress steps of the volumes-against-maps table: per scene the GPU pipeline in each mode

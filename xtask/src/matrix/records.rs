@@ -168,6 +168,39 @@ impl Render {
     }
 }
 
+/// One memory measurement: one `silhouette` (on a backend) or `render` (on a pipeline) of one
+/// scene, in its own process, with the figures of its JSON.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Memory {
+    /// Triangles of the scene.
+    pub triangles: Option<u64>,
+    /// The process's peak resident set, bytes (`peak_rss_bytes`).
+    pub peak_rss_bytes: Option<u64>,
+    /// What the prepared scene held, bytes (`table_bytes`).
+    pub table_bytes: Option<u64>,
+    /// Its edge tables (`table_bytes_parts.topology`).
+    pub topology_bytes: Option<u64>,
+    /// The backend's or pipeline's host layout (`table_bytes_parts.host`).
+    pub host_bytes: Option<u64>,
+    /// Its device buffers (`table_bytes_parts.device`).
+    pub device_bytes: Option<u64>,
+    /// Wall time of the whole command, s.
+    pub wall_s: Option<f64>,
+    /// Every other field.
+    #[serde(flatten)]
+    pub extra: Map<String, Value>,
+}
+
+impl Memory {
+    /// `bytes` per triangle.
+    #[must_use]
+    pub fn per_triangle(&self, bytes: Option<u64>) -> Option<f64> {
+        let t = self.triangles.filter(|&t| t > 0)?;
+        Some(bytes? as f64 / t as f64)
+    }
+}
+
 /// What one record measured.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(untagged)]
@@ -183,6 +216,8 @@ pub enum Data {
     Render(Render),
     /// `baselines`: the Toy Wars table.
     Baseline(Baseline),
+    /// `memory`: bytes per triangle.
+    Memory(Memory),
 }
 
 impl Data {
@@ -195,6 +230,7 @@ impl Data {
                 Self::Render(serde_json::from_value(v)?)
             }
             "toywars" => Self::Baseline(serde_json::from_value(v)?),
+            "memory" => Self::Memory(serde_json::from_value(v)?),
             _ => Self::Bench(serde_json::from_value(v)?),
         })
     }
@@ -206,6 +242,7 @@ impl Data {
             Self::Baseline(b) => &mut b.extra,
             Self::ModeErrors(a) => &mut a.extra,
             Self::Render(r) => &mut r.timing,
+            Self::Memory(m) => &mut m.extra,
         };
         for (k, v) in columns {
             extra.entry(k).or_insert(v);
@@ -342,6 +379,15 @@ impl Record {
     pub fn render(&self) -> Option<&Render> {
         match &self.data {
             Data::Render(r) => Some(r),
+            _ => None,
+        }
+    }
+
+    /// The `memory` measurement, if that is what this is.
+    #[must_use]
+    pub fn memory(&self) -> Option<&Memory> {
+        match &self.data {
+            Data::Memory(m) => Some(m),
             _ => None,
         }
     }

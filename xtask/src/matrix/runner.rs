@@ -1,7 +1,7 @@
 //! Running the plan: the release CLI as a subprocess, the host it runs on, and one record per
 //! measurement.
 
-use super::args::Options;
+use super::args::{Only, Options};
 use super::cli::{BenchReport, RecordList, RenderReport, SceneRow};
 use super::plan::{
     Plan, FRAME_GPU_KEY, FRAME_HOST_BACKEND, LIGHT_SCENE, RENDER_SCENES_EXTRA, T1_SCENE, T2_SCENES,
@@ -325,9 +325,10 @@ impl Matrix {
 
     /// Runs every measurement of `plan`, in table order.
     pub fn run_plan(&mut self, plan: &Plan) {
-        if self.opts.only_maps {
-            self.maps_table(plan);
-            return;
+        match self.opts.only {
+            Some(Only::Maps) => return self.maps_table(plan),
+            Some(Only::Memory) => return self.memory_table(plan),
+            None => {}
         }
         let modes = plan.modes.clone();
         let backends = plan.backends.clone();
@@ -397,6 +398,7 @@ impl Matrix {
         }
         self.frame_table(plan);
         self.maps_table(plan);
+        self.memory_table(plan);
         // The seeds' CPU algorithms against our modes on cpu and simd.
         for s in &plan.toywars_scenes {
             self.progress.step(&format!("toywars: {s}"));

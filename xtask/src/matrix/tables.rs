@@ -62,6 +62,10 @@ pub(super) fn tables(r: &Results, modes: &[String]) -> String {
     if !r.records.is_empty() && r.records.iter().all(|x| x.experiment.starts_with("maps")) {
         return s + &super::maps_table::maps_tables(r) + &t.failures();
     }
+    // `--only memory`.
+    if !r.records.is_empty() && r.records.iter().all(|x| x.experiment == "memory") {
+        return s + &super::memory_table::memory_tables(r) + &t.failures();
+    }
     s += &t.table1();
     s += "\n## Table 2: individual vs baked objects (~6.5*10^5 triangles)\n\n";
     s += &t.scene_table("table2", &T2_SCENES);
@@ -76,6 +80,7 @@ pub(super) fn tables(r: &Results, modes: &[String]) -> String {
     s += &t.scaling_tables();
     s += &t.frame_table();
     s += &super::maps_table::maps_tables(r);
+    s += &super::memory_table::memory_tables(r);
     s += "\n## Seed \"Toy Wars\" table: the seeds' CPU algorithms against ours\n\n";
     s += &t.toywars_table();
     s += "\nThe Toy Wars notes (PSP-era hardware, ms):\n\n";

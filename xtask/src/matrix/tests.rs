@@ -514,3 +514,43 @@ fn maps_table_picks_the_best_swept_bias_and_the_first_map_as_good_as_exact() {
     assert!((tuned_512.3 - 20.0 / 10_000.0).abs() < 1e-12);
     assert_eq!(pts.len(), 6);
 }
+
+#[test]
+fn memory_table_shows_bytes_per_triangle_and_round_trips() {
+    use super::records::Memory;
+    let m = Memory {
+        triangles: Some(1_000_000),
+        peak_rss_bytes: Some(172_000_000),
+        table_bytes: Some(129_000_000),
+        topology_bytes: Some(66_000_000),
+        host_bytes: Some(63_000_000),
+        device_bytes: Some(0),
+        wall_s: Some(1.5),
+        ..Memory::default()
+    };
+    let results = Results {
+        host: host(),
+        records: vec![Record {
+            host: host(),
+            experiment: "memory".into(),
+            reused_from: None,
+            key: Key {
+                scene: "sphere-1m".into(),
+                backend: "simd".into(),
+                mode: Some("exact".into()),
+            },
+            device: "cpu".into(),
+            data: Data::Memory(m),
+        }],
+        ..Results::default()
+    };
+    let line = "| sphere-1m | 1000000 | simd | 172 | 129 | 66 | 63 | 0 | 172 | 1.5 |";
+    let t = tables(&results, &["exact".to_owned()]);
+    assert!(t.lines().any(|l| l == line), "no line {line:?} in\n{t}");
+    // `--replot` reads results.json back into the same record.
+    let text = serde_json::to_string(&serde_json::to_value(&results).unwrap()).unwrap();
+    let back: Results = serde_json::from_str(&text).unwrap();
+    assert_eq!(back.records, results.records);
+    let points = super::memory_table::plot_points(&back.records);
+    assert_eq!(points["simd"], vec![(1e6, 172.0)]);
+}
