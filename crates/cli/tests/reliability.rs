@@ -28,6 +28,7 @@ fn main() {
         subnormal_coordinates_are_accepted_and_exact_on_cpu,
         meshes_beyond_u32_indices_are_refused_without_allocating,
         memory_estimate_refuses_big_tables_with_the_numbers,
+        large_presets_are_refused_before_they_are_generated,
         opencl_kernel_build_failure_is_an_error_not_a_panic,
         oversized_device_buffers_are_a_limit_error_or_work,
         backend_auto_is_accepted_by_every_command_and_warns_on_fallback,
@@ -509,7 +510,7 @@ fn meshes_beyond_u32_indices_are_refused_without_allocating() -> Outcome {
 }
 
 fn memory_estimate_refuses_big_tables_with_the_numbers() -> Outcome {
-    // The bunny needs 749,648 bytes by the estimate (3,674 triangles, 1,839 vertices).
+    // The bunny needs 573,296 bytes by the estimate (3,674 triangles, 1,839 vertices).
     let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bunny.obj");
     let b = bunny.to_str().unwrap();
     let needed = shadowvol_mesh_topology::EdgeTable::estimate_bytes(3674, 1839);
@@ -536,6 +537,29 @@ fn memory_estimate_refuses_big_tables_with_the_numbers() -> Outcome {
             &[("SHADOWVOL_MEMORY_LIMIT", &needed.to_string())],
         );
         assert!(out.status.success(), "{}", stderr(&out));
+    }
+    Ok(())
+}
+
+fn large_presets_are_refused_before_they_are_generated() -> Outcome {
+    // 10^8 triangles against a 1 GB budget: the preset is refused from its size alone (its
+    // generation would take minutes and gigabytes; an abort would show as a signal).
+    let needed = shadowvol_mesh_topology::EdgeTable::estimate_bytes(100_000_000, 50_000_002);
+    for args in [
+        &["silhouette", "sphere-100m", "--backend", "cpu"][..],
+        &["render", "sphere-100m", "--out", "/dev/null"],
+    ] {
+        let (out, _) = run_env(args, &[("SHADOWVOL_MEMORY_LIMIT", "1000000000")]);
+        let msg = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {msg}");
+        for part in [
+            "preset 'sphere-100m' (100000000 triangles)",
+            "not enough memory",
+            &format!("needs up to {needed} bytes"),
+            "1000000000 bytes",
+        ] {
+            assert!(msg.contains(part), "{args:?}: expected {part:?} in: {msg}");
+        }
     }
     Ok(())
 }

@@ -43,6 +43,20 @@ fn scenes_json_lists_every_preset_with_its_size() {
             assert_eq!(row["lights"], s.lights.len());
         }
     }
+    // The largest presets are listed with their size, not generated (10^7 and 10^8
+    // triangles: icospheres are exact for even counts).
+    for (name, t) in [("sphere-10m", 10_000_000u64), ("sphere-100m", 100_000_000)] {
+        let row = rows.iter().find(|r| r["name"] == name).unwrap();
+        assert_eq!(
+            (
+                row["objects"].as_u64(),
+                row["triangles"].as_u64(),
+                row["lights"].as_u64()
+            ),
+            (Some(1), Some(t), Some(1)),
+            "{row}"
+        );
+    }
     let town = rows.iter().find(|r| r["name"] == "town").unwrap();
     let t = town["triangles"].as_u64().unwrap();
     assert!((558_600..=581_400).contains(&t), "town: {t}");

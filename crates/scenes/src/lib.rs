@@ -59,7 +59,7 @@ pub use glb_write::{export_glb, glb_container, to_glb};
 pub use gltf_load::{
     in_guarded_decoder, load_gltf, load_gltf_mesh, load_gltf_slice, load_gltf_slice_with_notes,
 };
-pub use presets::{is_preset, preset, preset_names, presets, PresetInfo};
+pub use presets::{is_preset, preset, preset_names, presets, PresetInfo, PresetSize};
 pub use scene::{
     apply_f32, mesh_bounds, points_bounds, transformed, Effects, Receiver, Scene, SceneLight,
     Surface, BACKDROP, CASTER_ALBEDO, GROUND, RECEIVER_ALBEDO,

@@ -37,65 +37,112 @@ pub struct PresetInfo {
     pub name: String,
     /// What it is, in words.
     pub description: String,
+    /// Its size, known without generating it: set for the presets of 10^7 triangles and more,
+    /// which take seconds to minutes and gigabytes to build (`None`: build it to count).
+    pub size: Option<PresetSize>,
+}
+
+/// The size of a preset, as [`preset`] builds it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PresetSize {
+    /// Objects (instances).
+    pub objects: usize,
+    /// Triangles over all objects.
+    pub triangles: usize,
+    /// Lights.
+    pub lights: usize,
 }
 
 struct Fixed {
     name: &'static str,
     description: &'static str,
+    size: Option<PresetSize>,
+}
+
+/// One icosphere of `triangles` (exact for even counts from 320) and one light.
+const fn one_sphere(triangles: usize) -> Option<PresetSize> {
+    Some(PresetSize {
+        objects: 1,
+        triangles,
+        lights: 1,
+    })
 }
 
 const FIXED: &[Fixed] = &[
     Fixed {
         name: "bunnies-10-individual",
         description: "10 Loop-subdivided bunnies (58,784 triangles each), 10 objects sharing one mesh",
+        size: None,
     },
     Fixed {
         name: "bunnies-10-baked",
         description: "the 10 bunnies merged into one world-space mesh (587,840 triangles)",
+        size: None,
     },
     Fixed {
         name: "spheres-10-individual",
         description: "10 icospheres of 65,000 triangles, 10 objects sharing one mesh",
+        size: None,
     },
     Fixed {
         name: "spheres-10-baked",
         description: "the 10 spheres merged into one world-space mesh (650,000 triangles)",
+        size: None,
     },
     Fixed {
         name: "sphere-1m",
         description: "one icosphere of 1,000,000 triangles",
+        size: None,
     },
     Fixed {
         name: "sphere-100k",
         description: "one icosphere of 100,000 triangles",
+        size: None,
     },
     Fixed {
         name: "spheres-100x10k",
         description: "10 x 10 grid of icospheres of 10,000 triangles (100 objects, one mesh)",
+        size: None,
     },
     Fixed {
         name: "spheres-100x1k",
         description: "10 x 10 grid of icospheres of 1,000 triangles (100 objects, one mesh)",
+        size: None,
     },
     Fixed {
         name: "sphere-10k",
         description: "one icosphere of 10,000 triangles (time against triangles, 10^4)",
+        size: None,
     },
     Fixed {
         name: "sphere-1k",
         description: "one icosphere of 1,000 triangles (time against triangles, 10^3)",
+        size: None,
     },
     Fixed {
         name: "bunny",
         description: "the bundled Stanford bunny (3,674 triangles; the Toy Wars table)",
+        size: None,
     },
     Fixed {
         name: "bunny-subdivided",
         description: "the bunny Loop-subdivided twice (58,784 triangles; the Toy Wars table)",
+        size: None,
     },
     Fixed {
         name: "town",
         description: "~570k triangles of axis-aligned box buildings; sun exactly along +Y, so every wall is parallel to it",
+        size: None,
+    },
+    Fixed {
+        name: "sphere-10m",
+        description: "one icosphere of 10,000,000 triangles (scale: about 1.2 GB to run on cpu)",
+        size: one_sphere(10_000_000),
+    },
+    Fixed {
+        name: "sphere-100m",
+        description: "one icosphere of 100,000,000 triangles (scale: refused before building when the memory is short)",
+        size: one_sphere(100_000_000),
     },
 ];
 
@@ -107,12 +154,14 @@ pub fn presets() -> Vec<PresetInfo> {
         .map(|f| PresetInfo {
             name: f.name.to_owned(),
             description: f.description.to_owned(),
+            size: f.size,
         })
         .collect();
     for case in hard::cases() {
         v.push(PresetInfo {
             name: format!("hard-{}", case.name),
             description: case.description.to_owned(),
+            size: None,
         });
     }
     v
@@ -153,8 +202,8 @@ pub fn preset(name: &str) -> Result<Scene, SceneError> {
         "bunny" => single_bunny(name, 0)?,
         "bunny-subdivided" => single_bunny(name, BUNNY_LEVELS)?,
         "town" => town_scene()?,
-        // Unlisted (so `shadowvol scenes` does not generate it): the 10^7-triangle limit test.
         "sphere-10m" => sphere_grid(name, 10_000_000, 1, 1)?,
+        "sphere-100m" => sphere_grid(name, 100_000_000, 1, 1)?,
         _ => match name
             .strip_prefix("hard-")
             .and_then(|case| hard::cases().into_iter().find(|c| c.name == case))
@@ -241,6 +290,13 @@ fn single_bunny(name: &str, levels: u32) -> Result<Scene, SceneError> {
 }
 
 fn sphere_grid(name: &str, triangles: usize, cols: u32, rows: u32) -> Result<Scene, SceneError> {
+    // Refuse before generating what the edge table could not hold (an icosphere of T triangles
+    // has T / 2 + 2 vertices).
+    shadowvol_mesh_topology::EdgeTable::check_size(triangles as u64, triangles as u64 / 2 + 2)
+        .map_err(|source| SceneError::Mesh {
+            what: format!("preset '{name}' ({triangles} triangles)"),
+            source,
+        })?;
     let mesh = icosphere(triangles, 1.0);
     // Spheres of radius 1 stand on y = 0 (centre at y = 1), 3 units apart.
     let mut scene = Scene::new(name);
