@@ -17,7 +17,7 @@ backend and writes DIR/tables.md, DIR/results.json, DIR/results.csv and PNG plot
   --frames N       timed frames per measurement (default: 30, or 5 with --quick)
   --only maps      only the volumes-against-maps table (every hard-* preset, town,
                    bunnies-10-individual and sphere-1m at 1280x720; maps of 512 to 8192 texels,
-                   hard and PCF, Bevy's bias and a bias sweep; 105 minutes on 2 cores with --frames 10)
+                   hard and PCF, Bevy's bias and a bias sweep; about 110 minutes on 2 cores with --frames 10)
   --only memory    only the memory table: peak RSS and prepared bytes per triangle of
                    `silhouette` on every backend and of `render` on each pipeline, on spheres of
                    10^5 to 10^7 triangles (10^5 and 10^6 with --quick)
