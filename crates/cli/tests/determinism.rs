@@ -5,7 +5,8 @@
 //!
 //! Only the fields that describe the run rather than the result are cut out before comparing,
 //! on the raw bytes: `"timings"` (durations, and the count of pairs a device's filter could not
-//! certify, which depends on the device) always; `"device"` across thread counts (it names the
+//! certify, which depends on the device) and the memory figures (`"peak_rss_bytes"`,
+//! `"table_bytes"`, `"table_bytes_parts"`: what the process and the backend held) always; `"device"` across thread counts (it names the
 //! thread count); `"backend"` and `"device"` across backends. Everything else (mesh statistics,
 //! lights as printed, every `[a, b, m]`, open vertices, key order, number formatting) must match
 //! byte for byte.
@@ -63,8 +64,17 @@ fn silhouette(scene: &str, extra: &[&str], env: &[(&str, &str)]) -> String {
     String::from_utf8(out.stdout).expect("UTF-8 JSON")
 }
 
+/// The members that describe the run rather than the result, cut from every comparison.
+const RUN: [&str; 4] = [
+    "timings",
+    "peak_rss_bytes",
+    "table_bytes",
+    "table_bytes_parts",
+];
+
 /// Cuts the object member `"key":...` out of the top level of `json` (raw text; the value is a
-/// string or a flat object), with its separating comma. Panics if the key is missing.
+/// string, a number, `null` or a flat object), with its separating comma. Panics if the key is
+/// missing.
 fn cut(json: &str, key: &str) -> String {
     let pat = format!("\"{key}\":");
     let start = json
@@ -74,9 +84,16 @@ fn cut(json: &str, key: &str) -> String {
     let len = if let Some(string) = rest.strip_prefix('"') {
         // A string without escaped quotes (backend and device names).
         1 + string.find('"').unwrap() + 1
-    } else {
-        assert!(rest.starts_with('{'), "{key} is not flat: {rest}");
+    } else if rest.starts_with('{') {
         rest.find('}').unwrap() + 1
+    } else {
+        // A number or null: up to the next member or the end of the object.
+        let n = rest.find([',', '}']).unwrap();
+        assert!(
+            !rest[..n].contains(['[', '{', '"']),
+            "{key} is not flat: {rest}"
+        );
+        n
     };
     let end = start + pat.len() + len;
     // Remove one adjacent comma so the result stays valid JSON.
@@ -109,10 +126,15 @@ fn without(json: &str, keys: &[&str]) -> String {
 }
 
 fn cut_removes_exactly_the_member() {
-    let j = r#"{"backend":"simd","mode":"exact","lights":[{"edges":[[0,1,2]]}],"device":"x, 2 threads","timings":{"a":1.5,"uncertain":0}}"#;
+    let j = r#"{"backend":"simd","mode":"exact","lights":[{"edges":[[0,1,2]]}],"device":"x, 2 threads","timings":{"a":1.5,"uncertain":0},"peak_rss_bytes":8536064,"table_bytes":560,"table_bytes_parts":{"device":0,"host":96,"topology":464}}"#;
     assert_eq!(
-        without(j, &["backend", "device", "timings"]),
+        without(j, &[&RUN[..], &["backend", "device"]].concat()),
         r#"{"mode":"exact","lights":[{"edges":[[0,1,2]]}]}"#
+    );
+    let null = r#"{"peak_rss_bytes":null,"lights":[{"edges":[[0,1,2]]}]}"#;
+    assert_eq!(
+        without(null, &["peak_rss_bytes"]),
+        r#"{"lights":[{"edges":[[0,1,2]]}]}"#
     );
 }
 
@@ -120,8 +142,8 @@ fn cut_removes_exactly_the_member() {
 fn same_input_same_bytes_across_runs(backend: &str) {
     for scene in ["hard-book-4", "bunny"] {
         let args = ["--backend", backend, "--mode", "exact"];
-        let a = without(&silhouette(scene, &args, &[]), &["timings"]);
-        let b = without(&silhouette(scene, &args, &[]), &["timings"]);
+        let a = without(&silhouette(scene, &args, &[]), &RUN);
+        let b = without(&silhouette(scene, &args, &[]), &RUN);
         assert_eq!(a, b, "{backend} {scene}: two runs differ");
     }
 }
@@ -134,9 +156,10 @@ fn simd_gives_the_same_bytes_with_one_and_two_threads_in_every_mode() {
             let two = silhouette(scene, &args, &[("RAYON_NUM_THREADS", "2")]);
             assert!(one.contains("1 thread"), "{one}");
             assert!(two.contains("2 threads"), "{two}");
+            let keys = [&RUN[..], &["device"]].concat();
             assert_eq!(
-                without(&one, &["device", "timings"]),
-                without(&two, &["device", "timings"]),
+                without(&one, &keys),
+                without(&two, &keys),
                 "{scene} {mode}: 1 and 2 threads differ"
             );
         }
@@ -150,7 +173,7 @@ fn exact_reports(backend: &str) -> Vec<String> {
         .map(|scene| {
             without(
                 &silhouette(scene, &["--backend", backend, "--mode", "exact"], &[]),
-                &["backend", "device", "timings"],
+                &[&RUN[..], &["backend", "device"]].concat(),
             )
         })
         .collect()
