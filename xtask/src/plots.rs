@@ -48,27 +48,11 @@ pub fn all(out: &Path, records: &[Record]) -> PlotResult {
 fn memory_per_triangle(path: &Path, records: &[Record]) -> PlotResult {
     let s = crate::matrix::memory_table::plot_points(records);
     let title = "Peak RSS per triangle vs triangles (exact)";
-    let Some(((x0, x1), (y0, y1))) = bounds_or_no_data(path, title, &s)? else {
-        return Ok(());
-    };
-    let root = canvas(path, SIZE)?;
-    let mut chart = chart_on(&root)
-        .caption(title, ("sans-serif", 24))
-        .build_cartesian_2d(
-            (x0 * 0.8..x1 * 1.25).log_scale(),
-            (y0 * 0.7..y1 * 1.4).log_scale(),
-        )?;
-    chart
-        .configure_mesh()
-        .x_desc("triangles")
-        .y_desc("peak RSS, bytes per triangle")
-        .x_label_formatter(&tick)
-        .y_label_formatter(&tick)
-        .label_style(("sans-serif", 14))
-        .draw()?;
-    backend_lines(&mut chart, &s, SeriesLabelPosition::UpperRight)?;
-    root.present()?;
-    Ok(())
+    let axes = (
+        "peak RSS, bytes per triangle",
+        SeriesLabelPosition::UpperRight,
+    );
+    per_triangles_log_log(path, title, &s, axes)
 }
 
 fn preferred_mode(records: &[Record]) -> String {
@@ -220,12 +204,23 @@ where
 fn time_vs_triangles(path: &Path, records: &[Record], mode: &str) -> PlotResult {
     let s = series(records, "triangles", mode, |b| b.triangles);
     let title = format!("Silhouette time vs triangles ({mode}, 1 light)");
-    let Some(((x0, x1), (y0, y1))) = bounds_or_no_data(path, &title, &s)? else {
+    let axes = ("median ms", SeriesLabelPosition::UpperLeft);
+    per_triangles_log_log(path, &title, &s, axes)
+}
+
+/// One line per series of `s` against triangles, both axes logarithmic; `(y_desc, legend)`.
+fn per_triangles_log_log(
+    path: &Path,
+    title: &str,
+    s: &Series,
+    (y_desc, legend): (&str, SeriesLabelPosition),
+) -> PlotResult {
+    let Some(((x0, x1), (y0, y1))) = bounds_or_no_data(path, title, s)? else {
         return Ok(());
     };
     let root = canvas(path, SIZE)?;
     let mut chart = chart_on(&root)
-        .caption(&title, ("sans-serif", 24))
+        .caption(title, ("sans-serif", 24))
         .build_cartesian_2d(
             (x0 * 0.8..x1 * 1.25).log_scale(),
             (y0 * 0.7..y1 * 1.4).log_scale(),
@@ -233,12 +228,12 @@ fn time_vs_triangles(path: &Path, records: &[Record], mode: &str) -> PlotResult 
     chart
         .configure_mesh()
         .x_desc("triangles")
-        .y_desc("median ms")
+        .y_desc(y_desc)
         .x_label_formatter(&tick)
         .y_label_formatter(&tick)
         .label_style(("sans-serif", 14))
         .draw()?;
-    backend_lines(&mut chart, &s, SeriesLabelPosition::UpperLeft)?;
+    backend_lines(&mut chart, s, legend)?;
     root.present()?;
     Ok(())
 }
