@@ -263,6 +263,39 @@ mod tests {
     }
 
     #[test]
+    fn build_owned_makes_the_table_build_makes() {
+        // A grid, a soup, and a mesh with a duplicate vertex (-0.0) and a triangle degenerate
+        // after welding, so that compaction drops one and renumbers the rest.
+        let dup = Mesh {
+            positions: vec![
+                Vec3::ZERO,
+                Vec3::X,
+                Vec3::Y,
+                Vec3::new(-0.0, 0.0, 0.0),
+                Vec3::Z,
+            ],
+            triangles: vec![[0, 1, 2], [3, 1, 4], [0, 3, 2], [1, 2, 4], [4, 2, 3]],
+        };
+        for mesh in [grid(40), soup(500), dup] {
+            let built = EdgeTable::build(&mesh).unwrap();
+            let owned = EdgeTable::build_owned(mesh).unwrap();
+            assert_eq!(owned, built);
+        }
+        assert_eq!(
+            EdgeTable::build_owned(Mesh {
+                positions: vec![Vec3::ZERO],
+                triangles: vec![[0, 0, 3]],
+            })
+            .unwrap_err(),
+            EdgeTable::build(&Mesh {
+                positions: vec![Vec3::ZERO],
+                triangles: vec![[0, 0, 3]],
+            })
+            .unwrap_err()
+        );
+    }
+
+    #[test]
     fn nonmanifold_book() {
         // Spine (0,1) shared by 4 pages.
         let mut positions = vec![Vec3::ZERO, Vec3::Z];

@@ -225,12 +225,12 @@ pub fn preset(name: &str) -> Result<Scene, SceneError> {
 fn grid_objects(
     scene: &mut Scene,
     prefix: &str,
-    mesh: &Mesh,
+    mesh: Mesh,
     (cols, rows): (u32, u32),
     spacing: f32,
     y: f32,
 ) -> Result<(), SceneError> {
-    let table = scene.add_mesh(prefix, mesh)?;
+    let table = scene.add_mesh_owned(prefix, mesh)?;
     for r in 0..rows {
         for c in 0..cols {
             let x = (c as f32 - (cols - 1) as f32 * 0.5) * spacing;
@@ -264,7 +264,7 @@ fn bunnies(name: &str) -> Result<Scene, SceneError> {
     let mesh = loop_subdivide_levels(&bunny(), BUNNY_LEVELS);
     // The bunny spans about 10 x 9.7 x 7.5 units, standing on y = 0.
     let mut scene = Scene::new(name);
-    grid_objects(&mut scene, "bunny", &mesh, (5, 2), 12.0, 0.0)?;
+    grid_objects(&mut scene, "bunny", mesh, (5, 2), 12.0, 0.0)?;
     Ok(on_ground_framed(
         scene,
         vec![Light::point(Vec3::new(-20.0, 40.0, 25.0))],
@@ -281,7 +281,7 @@ fn single_bunny(name: &str, levels: u32) -> Result<Scene, SceneError> {
         loop_subdivide_levels(&base, levels)
     };
     let mut scene = Scene::new(name);
-    grid_objects(&mut scene, "bunny", &mesh, (1, 1), 12.0, 0.0)?;
+    grid_objects(&mut scene, "bunny", mesh, (1, 1), 12.0, 0.0)?;
     Ok(on_ground_framed(
         scene,
         vec![Light::point(Vec3::new(-8.0, 25.0, 12.0))],
@@ -300,7 +300,7 @@ fn sphere_grid(name: &str, triangles: usize, cols: u32, rows: u32) -> Result<Sce
     let mesh = icosphere(triangles, 1.0);
     // Spheres of radius 1 stand on y = 0 (centre at y = 1), 3 units apart.
     let mut scene = Scene::new(name);
-    grid_objects(&mut scene, "sphere", &mesh, (cols, rows), 3.0, 1.0)?;
+    grid_objects(&mut scene, "sphere", mesh, (cols, rows), 3.0, 1.0)?;
     let extent = 3.0 * cols.max(rows) as f32;
     Ok(on_ground_framed(
         scene,

@@ -189,6 +189,20 @@ impl Scene {
             })
     }
 
+    /// [`Scene::add_mesh`], consuming `mesh` ([`EdgeTable::build_owned`]: the mesh is freed
+    /// while the table is built, so the two are not held at once).
+    ///
+    /// # Errors
+    /// As [`Scene::add_mesh`].
+    pub fn add_mesh_owned(&mut self, what: &str, mesh: Mesh) -> Result<Arc<EdgeTable>, SceneError> {
+        EdgeTable::build_owned(mesh)
+            .map(Arc::new)
+            .map_err(|source| SceneError::Mesh {
+                what: what.to_owned(),
+                source,
+            })
+    }
+
     /// Adds an object: `table` (from [`Scene::add_mesh`], possibly shared) placed by
     /// `transform` (world from object, invertible).
     pub fn add_object(
