@@ -38,7 +38,9 @@ mod welding;
 
 pub use edge_table::{Connectivity, EdgeTable, MeshStats, NO_NEIGHBOR};
 pub use error::MeshError;
-pub use memory::{available_memory, MEMORY_CHECK_THRESHOLD, MEMORY_LIMIT_ENV};
+pub use memory::{
+    available_memory, unique_arc_bytes, vec_bytes, MEMORY_CHECK_THRESHOLD, MEMORY_LIMIT_ENV,
+};
 pub use mesh::Mesh;
 pub use welding::{positions_distinct, weld, Weld};
 
@@ -260,6 +262,18 @@ mod tests {
             assert_eq!(w.names[c as usize], names[i], "vertex {i}");
             assert_eq!(w.positions[c as usize], p[i]);
         }
+    }
+
+    #[test]
+    fn shared_tables_are_counted_once() {
+        let a = std::sync::Arc::new(EdgeTable::build(&grid(10)).unwrap());
+        let b = std::sync::Arc::new(EdgeTable::build(&grid(20)).unwrap());
+        let items = [a.clone(), b.clone(), a.clone(), a.clone()];
+        assert_eq!(
+            unique_arc_bytes(&items, EdgeTable::heap_bytes),
+            a.heap_bytes() + b.heap_bytes()
+        );
+        assert!(a.heap_bytes() >= vec_bytes(&a.ovs) + vec_bytes(&a.edges));
     }
 
     #[test]

@@ -2,6 +2,28 @@
 //! check that refuses a mesh before allocating when it would not fit.
 
 use crate::{EdgeTable, MeshError};
+use std::collections::HashSet;
+use std::sync::Arc;
+
+/// Heap bytes of a vector's allocation (its capacity, not its length).
+#[must_use]
+pub fn vec_bytes<T>(v: &Vec<T>) -> u64 {
+    (v.capacity() * std::mem::size_of::<T>()) as u64
+}
+
+/// The sum of `bytes` over `items`, each shared allocation counted once however many times it
+/// appears (instances of one mesh share one table or one layout).
+pub fn unique_arc_bytes<'a, T: 'a>(
+    items: impl IntoIterator<Item = &'a Arc<T>>,
+    bytes: impl Fn(&T) -> u64,
+) -> u64 {
+    let mut seen = HashSet::new();
+    items
+        .into_iter()
+        .filter(|a| seen.insert(Arc::as_ptr(a)))
+        .map(|a| bytes(a))
+        .sum()
+}
 
 /// Environment variable that caps the bytes [`EdgeTable::build`] may allocate (a decimal
 /// number of bytes). It takes precedence over `/proc/meminfo`; use it to test the
@@ -67,17 +89,14 @@ impl EdgeTable {
     /// opposite vertices, each triangle's edges). The struct itself is not counted.
     #[must_use]
     pub fn heap_bytes(&self) -> u64 {
-        fn bytes<T>(v: &Vec<T>) -> u64 {
-            (v.capacity() * std::mem::size_of::<T>()) as u64
-        }
-        bytes(&self.positions)
-            + bytes(&self.vertex_names)
-            + bytes(&self.triangles)
-            + bytes(&self.triangle_sources)
-            + bytes(&self.edges)
-            + bytes(&self.ov_offsets)
-            + bytes(&self.ovs)
-            + bytes(&self.connectivity.tri_edges)
+        vec_bytes(&self.positions)
+            + vec_bytes(&self.vertex_names)
+            + vec_bytes(&self.triangles)
+            + vec_bytes(&self.triangle_sources)
+            + vec_bytes(&self.edges)
+            + vec_bytes(&self.ov_offsets)
+            + vec_bytes(&self.ovs)
+            + vec_bytes(&self.connectivity.tri_edges)
     }
 
     /// Checks, without allocating, that a mesh of `triangles` triangles and `vertices` vertices

@@ -270,22 +270,9 @@ impl Scene {
     /// table once ([`EdgeTable::heap_bytes`]).
     #[must_use]
     pub fn table_bytes(&self) -> u64 {
-        let receivers = self.receivers.iter().map(|r| &r.table);
-        let tables = self
-            .geometry
-            .objects
-            .iter()
-            .map(|o| &o.table)
-            .chain(receivers);
-        let mut seen: Vec<*const EdgeTable> = Vec::new();
-        let mut bytes = 0;
-        for t in tables {
-            if !seen.contains(&Arc::as_ptr(t)) {
-                seen.push(Arc::as_ptr(t));
-                bytes += t.heap_bytes();
-            }
-        }
-        bytes
+        let casters = self.geometry.objects.iter().map(|o| &o.table);
+        let tables = casters.chain(self.receivers.iter().map(|r| &r.table));
+        shadowvol_mesh_topology::unique_arc_bytes(tables, EdgeTable::heap_bytes)
     }
 
     /// Every surface ([`Scene::surfaces`] order) as a topology: the casters with their

@@ -35,6 +35,7 @@ mod scene;
 pub use multiplicities::{ExtractStats, Multiplicities};
 pub use prepared::{check_lights, PreparedScenes};
 pub use scene::{object_light, object_lights, SceneObject, TopologyScene};
+pub use shadowvol_mesh_topology::{unique_arc_bytes, vec_bytes};
 pub use shadowvol_robust_math::{Accuracy, Light};
 
 use std::time::Duration;
@@ -80,12 +81,6 @@ impl PreparedBytes {
     pub fn total(&self) -> u64 {
         self.host + self.device
     }
-}
-
-/// Heap bytes of a vector's allocation (its capacity, not its length).
-#[must_use]
-pub fn vec_bytes<T>(v: &Vec<T>) -> u64 {
-    (v.capacity() * std::mem::size_of::<T>()) as u64
 }
 
 /// Errors from a backend. Each names the backend and what is missing or went wrong.

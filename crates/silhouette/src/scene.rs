@@ -76,16 +76,7 @@ impl TopologyScene {
     /// once however many objects share it.
     #[must_use]
     pub fn table_bytes(&self) -> u64 {
-        let mut seen: Vec<*const EdgeTable> = Vec::new();
-        let mut bytes = 0;
-        for o in &self.objects {
-            let p = Arc::as_ptr(&o.table);
-            if !seen.contains(&p) {
-                seen.push(p);
-                bytes += o.table.heap_bytes();
-            }
-        }
-        bytes
+        crate::unique_arc_bytes(self.objects.iter().map(|o| &o.table), EdgeTable::heap_bytes)
     }
 
     /// Prefix sums of edge counts: object `i` owns global edges

@@ -148,21 +148,14 @@ fn items_for(counts: &[usize]) -> Vec<Item> {
 impl Prepared {
     /// Heap bytes of the layouts (each shared layout once) and the work lists.
     pub(crate) fn heap_bytes(&self) -> u64 {
-        use shadowvol_silhouette::vec_bytes;
-        let mut seen: Vec<*const Layout> = Vec::new();
-        let mut bytes = vec_bytes(&self.objects)
+        use shadowvol_silhouette::{unique_arc_bytes, vec_bytes};
+        let layouts = self.objects.iter().map(|o| &o.layout);
+        vec_bytes(&self.objects)
             + vec_bytes(&self.tri_items)
             + vec_bytes(&self.edge_items)
             + vec_bytes(&self.tri_bounds)
-            + vec_bytes(&self.edge_bounds);
-        for o in &self.objects {
-            let p = Arc::as_ptr(&o.layout);
-            if !seen.contains(&p) {
-                seen.push(p);
-                bytes += o.layout.heap_bytes();
-            }
-        }
-        bytes
+            + vec_bytes(&self.edge_bounds)
+            + unique_arc_bytes(layouts, Layout::heap_bytes)
     }
 
     /// Lays out every object of `scene` (instances of one table share a layout) and makes the
