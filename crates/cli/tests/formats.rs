@@ -32,7 +32,7 @@ fn edges_by_position(file: &str, json: &Value) -> Vec<EdgeByPosition> {
         .vertex_names
         .iter()
         .zip(&table.positions)
-        .map(|(&n, &p)| (u64::from(n), p))
+        .map(|(n, &p)| (u64::from(n), p))
         .collect();
     let key = |i: u64| {
         let p = by_name[&i];

@@ -83,8 +83,8 @@ fn reference_edges(name: &str, light: [f32; 4]) -> Vec<[i64; 3]> {
         .filter(|(_, &v)| v != 0)
         .map(|(&[a, b], &v)| {
             [
-                i64::from(t.vertex_names[a as usize]),
-                i64::from(t.vertex_names[b as usize]),
+                i64::from(t.vertex_names.get(a as usize)),
+                i64::from(t.vertex_names.get(b as usize)),
                 i64::from(v),
             ]
         })

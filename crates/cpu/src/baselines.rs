@@ -143,6 +143,27 @@ pub struct ClosedMesh<'a> {
     edge_tris: Vec<[u32; 2]>,
     /// The connectivity table: the triangle across each edge of each triangle.
     neighbors: Vec<[u32; 3]>,
+    /// Each triangle's edges ([`EdgeTable::tri_edges`]), for the connectivity table's output.
+    tri_edges: Vec<[u32; 3]>,
+}
+
+/// The triangle across each edge of each triangle of a closed manifold mesh, from each
+/// triangle's edges and each edge's two triangles.
+fn manifold_neighbors(tri_edges: &[[u32; 3]], edge_tris: &[[u32; 2]]) -> Vec<[u32; 3]> {
+    tri_edges
+        .iter()
+        .enumerate()
+        .map(|(t, te)| {
+            te.map(|e| {
+                let [t0, t1] = edge_tris[e as usize];
+                if t0 == t as u32 {
+                    t1
+                } else {
+                    t0
+                }
+            })
+        })
+        .collect()
 }
 
 #[inline]
@@ -171,7 +192,8 @@ impl<'a> ClosedMesh<'a> {
         let mut edge_tris = vec![[NO_NEIGHBOR; 2]; table.edges.len()];
         // Direction of each triangle's traversal of its edges: +1 for a -> b.
         let mut dir = vec![0i8; table.edges.len()];
-        for (t, tri, te) in table.triangles_with_edges() {
+        let tri_edges = table.tri_edges();
+        for (t, (tri, te)) in table.triangles.iter().zip(&tri_edges).enumerate() {
             for i in 0..3 {
                 let e = te[i] as usize;
                 let forward = tri[i] == table.edges[e][0];
@@ -192,8 +214,9 @@ impl<'a> ClosedMesh<'a> {
         }
         Ok(Self {
             table,
+            neighbors: manifold_neighbors(&tri_edges, &edge_tris),
             edge_tris,
-            neighbors: table.manifold_neighbors(),
+            tri_edges,
         })
     }
 
@@ -311,7 +334,7 @@ impl<'a> ClosedMesh<'a> {
                     Some(cell) => *cell = v2,
                     None => {
                         return Err(BaselineError::HashRowFull {
-                            vertex: self.table.vertex_names[v1 as usize],
+                            vertex: self.table.vertex_names.get(v1 as usize),
                             columns,
                         })
                     }
@@ -332,7 +355,6 @@ impl<'a> ClosedMesh<'a> {
     /// and its neighbour across the edge is not. Returns sorted edge indices.
     #[must_use]
     pub fn connectivity(&self, light: [f32; 4]) -> Vec<u32> {
-        let c = &self.table.connectivity;
         let mut out = Vec::new();
         for t in 0..self.table.triangles.len() {
             if !self.lit(t, light) {
@@ -342,7 +364,7 @@ impl<'a> ClosedMesh<'a> {
                 // Closed manifold: every neighbour exists (checked in `new`).
                 let n = self.neighbors[t][i] as usize;
                 if !self.lit(n, light) {
-                    out.push(c.tri_edges[t][i]);
+                    out.push(self.tri_edges[t][i]);
                 }
             }
         }

@@ -1,11 +1,14 @@
 //! The edge table: every undirected edge once, with the opposite vertices of all its triangles
-//! (CSR), each triangle's edges and the counts; the triangles across each edge on demand.
+//! (CSR) and the counts; each triangle's edges and the triangles across each edge on demand.
 
-use crate::{weld, Mesh, MeshError, Weld};
+use crate::{weld, Mesh, MeshError, Renumbering, Weld};
 use glam::Vec3;
 
 /// Marker for "no triangle" in [`EdgeTable::manifold_neighbors`].
 pub const NO_NEIGHBOR: u32 = u32::MAX;
+
+/// Marker for "no such edge" in [`EdgeTable::triangles_with_edges`].
+pub const NO_EDGE: u32 = u32::MAX;
 
 /// Topology statistics of an [`EdgeTable`].
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -30,42 +33,33 @@ pub struct MeshStats {
     pub opposite_vertices: usize,
 }
 
-/// Per-triangle-edge connectivity: for every kept triangle and each of its three edges, the edge
-/// index.
-///
-/// Edge `i` of triangle `[v0, v1, v2]` goes from `v_i` to `v_{(i+1) % 3}` (in the triangle's own
-/// winding). The backends that decide signs per triangle read it; the seeds' baselines also
-/// need the triangle across each edge, which [`EdgeTable::manifold_neighbors`] builds when
-/// asked.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct Connectivity {
-    /// `tri_edges[t][i]` is the index into [`EdgeTable::edges`] of edge `i` of triangle `t`.
-    pub tri_edges: Vec<[u32; 3]>,
-}
-
 /// The edge table: every undirected edge once, with the opposite vertices of all its triangles.
 ///
 /// All vertex ids in this table are *compact* ids into [`EdgeTable::positions`]; use
 /// [`EdgeTable::vertex_names`] to turn them back into input indices. Edges are sorted by `(a, b)`
 /// with `a < b`; since compact ids are ordered like names, this is also the order by name.
+///
+/// It holds what every backend reads and nothing else: for a closed mesh, 48 bytes a triangle
+/// (positions 6, triangles 12, edges 12, CSR offsets 6, opposite vertices 12). Each triangle's
+/// edges ([`EdgeTable::tri_edges`]) and the triangles across each edge
+/// ([`EdgeTable::manifold_neighbors`]) are built when asked for; the maps back to the input
+/// ([`Renumbering`]) are stored only when they are not the identity.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct EdgeTable {
     /// Welded positions, indexed by compact id.
     pub positions: Vec<Vec3>,
     /// Compact id → smallest input index of the weld group.
-    pub vertex_names: Vec<u32>,
+    pub vertex_names: Renumbering,
     /// Kept (non-degenerate) triangles in compact ids, original winding.
     pub triangles: Vec<[u32; 3]>,
     /// For each kept triangle, its index in the input mesh.
-    pub triangle_sources: Vec<u32>,
+    pub triangle_sources: Renumbering,
     /// Unique edges `[a, b]`, `a < b`, sorted.
     pub edges: Vec<[u32; 2]>,
     /// CSR offsets into [`EdgeTable::ovs`]; `edges.len() + 1` entries.
     pub ov_offsets: Vec<u32>,
     /// Opposite vertices, grouped by edge, in ascending triangle order within an edge.
     pub ovs: Vec<u32>,
-    /// Per-triangle-edge connectivity.
-    pub connectivity: Connectivity,
     /// Counts.
     pub stats: MeshStats,
 }
@@ -128,7 +122,7 @@ impl EdgeTable {
     fn from_compact(
         weld: Weld,
         triangles: Vec<[u32; 3]>,
-        triangle_sources: Vec<u32>,
+        triangle_sources: Renumbering,
         input_triangles: usize,
     ) -> Self {
         let vertex_count = weld.names.len();
@@ -147,48 +141,94 @@ impl EdgeTable {
             positions,
         } = weld;
         drop(compact_of_input);
-        let (start, mut entries) = bucket_entries(&triangles, vertex_count);
-        let grouped = group_edges(&triangles, &start, &mut entries, &mut stats);
-        drop(entries);
+        let vertex_names = Renumbering::from_vec(names);
+        let (start, entries) = bucket_entries(&triangles, vertex_count);
+        let grouped = group_edges(&triangles, &start, entries, &mut stats);
         Self {
             positions,
-            vertex_names: names,
+            vertex_names,
             triangles,
             triangle_sources,
             edges: grouped.edges,
             ov_offsets: grouped.ov_offsets,
             ovs: grouped.ovs,
-            connectivity: Connectivity {
-                tri_edges: grouped.tri_edges,
-            },
             stats,
         }
     }
 
-    /// For each triangle edge (`[t][i]`, as [`Connectivity::tri_edges`]), the other triangle
+    /// For every kept triangle, the indices into [`EdgeTable::edges`] of its three edges: edge
+    /// `i` of triangle `[v0, v1, v2]` goes from `v_i` to `v_{(i+1) % 3}` (the triangle's own
+    /// winding). Built on each call in linear time (12 bytes a triangle); to walk them once
+    /// without storing them, use [`EdgeTable::triangles_with_edges`].
+    ///
+    /// # Panics
+    /// If the table is inconsistent (a triangle edge that is not in [`EdgeTable::edges`]); a
+    /// table built by [`EdgeTable::build`] never is.
+    #[must_use]
+    pub fn tri_edges(&self) -> Vec<[u32; 3]> {
+        self.triangles_with_edges()
+            .map(|(t, _, te)| {
+                assert!(
+                    !te.contains(&NO_EDGE),
+                    "triangle {t} has an edge the table lacks"
+                );
+                te
+            })
+            .collect()
+    }
+
+    /// Every kept triangle in order as `(t, triangle, edges)`: its index, its vertices (compact
+    /// ids, original winding) and the indices into [`EdgeTable::edges`] of its edges
+    /// `(v0, v1)`, `(v1, v2)`, `(v2, v0)`, looked up as it goes (each vertex's first edge is
+    /// held meanwhile: 4 bytes a vertex). An edge the table lacks, or a vertex id out of range
+    /// (only in a table not made by [`EdgeTable::build`]), gives [`NO_EDGE`].
+    pub fn triangles_with_edges(&self) -> impl Iterator<Item = (usize, [u32; 3], [u32; 3])> + '_ {
+        let first = self.first_edges();
+        self.triangles.iter().enumerate().map(move |(t, &tri)| {
+            let te = [0, 1, 2].map(|i| {
+                let (u, v) = (tri[i], tri[(i + 1) % 3]);
+                edge_in(&self.edges, &first, u.min(v), u.max(v)).unwrap_or(NO_EDGE)
+            });
+            (t, tri, te)
+        })
+    }
+
+    /// The index of edge `(a, b)` (either order) in [`EdgeTable::edges`], if the table has it.
+    /// A binary search: O(log edges), no allocation.
+    #[must_use]
+    pub fn edge_index(&self, a: u32, b: u32) -> Option<u32> {
+        let key = [a.min(b), a.max(b)];
+        self.edges.binary_search(&key).ok().map(|e| e as u32)
+    }
+
+    /// For each compact vertex `v`, the index of the first edge `[v, _]`; `positions.len() + 1`
+    /// entries (edges are sorted by their smaller end).
+    fn first_edges(&self) -> Vec<u32> {
+        let mut first = vec![0u32; self.positions.len() + 1];
+        for &[a, _] in &self.edges {
+            if let Some(f) = first.get_mut(a as usize + 1) {
+                *f += 1;
+            }
+        }
+        for v in 0..self.positions.len() {
+            first[v + 1] += first[v];
+        }
+        first
+    }
+
+    /// For each triangle edge (`[t][i]`, as [`EdgeTable::tri_edges`]), the other triangle
     /// across it when the edge is manifold (exactly two triangles), otherwise [`NO_NEIGHBOR`].
-    /// Built on each call (12 bytes a triangle, and 8 an edge while it runs): only the seeds'
+    /// Built on each call (24 bytes a triangle, and 8 an edge while it runs): only the seeds'
     /// connectivity-table baselines walk it.
     #[must_use]
     pub fn manifold_neighbors(&self) -> Vec<[u32; 3]> {
-        manifold_neighbors(&self.connectivity.tri_edges, &self.ov_offsets)
+        manifold_neighbors(&self.tri_edges(), &self.ov_offsets)
     }
 
     /// Number of edges.
     #[must_use]
     pub fn edge_count(&self) -> usize {
         self.edges.len()
-    }
-
-    /// Every kept triangle in order as `(t, triangle, edges)`: its index, its vertices (compact
-    /// ids, original winding) and [`Connectivity::tri_edges`]`[t]`, the indices into
-    /// [`EdgeTable::edges`] of its edges `(v0, v1)`, `(v1, v2)`, `(v2, v0)`.
-    pub fn triangles_with_edges(&self) -> impl Iterator<Item = (usize, &[u32; 3], &[u32; 3])> {
-        self.triangles
-            .iter()
-            .zip(&self.connectivity.tri_edges)
-            .enumerate()
-            .map(|(t, (tri, te))| (t, tri, te))
     }
 
     /// The opposite vertices (compact ids) of edge `e`.
@@ -207,7 +247,10 @@ impl EdgeTable {
     #[must_use]
     pub fn edge_names(&self, e: usize) -> (u32, u32) {
         let [a, b] = self.edges[e];
-        (self.vertex_names[a as usize], self.vertex_names[b as usize])
+        (
+            self.vertex_names.get(a as usize),
+            self.vertex_names.get(b as usize),
+        )
     }
 
     /// Bytes that one pass over the table must read at least: edge records, OV lists, offsets and
@@ -223,48 +266,53 @@ impl EdgeTable {
 
 /// Step 1 of [`EdgeTable::from_weld`]: the triangles in compact ids without those that are
 /// degenerate after welding (a repeated vertex), and each kept triangle's input index.
-fn compact_triangles(weld: &Weld, input_triangles: &[[u32; 3]]) -> (Vec<[u32; 3]>, Vec<u32>) {
-    let mut triangles = Vec::with_capacity(input_triangles.len());
-    let mut triangle_sources = Vec::with_capacity(input_triangles.len());
-    for (i, t) in input_triangles.iter().enumerate() {
-        let c = [
-            weld.compact_of_input[t[0] as usize],
-            weld.compact_of_input[t[1] as usize],
-            weld.compact_of_input[t[2] as usize],
-        ];
-        if c[0] != c[1] && c[1] != c[2] && c[0] != c[2] {
-            triangles.push(c);
-            triangle_sources.push(i as u32);
-        }
-    }
-    (triangles, triangle_sources)
+fn compact_triangles(weld: &Weld, input_triangles: &[[u32; 3]]) -> (Vec<[u32; 3]>, Renumbering) {
+    let mut triangles = input_triangles.to_vec();
+    let sources = compact_in_place(weld, &mut triangles);
+    triangles.shrink_to_fit();
+    (triangles, sources)
 }
 
 /// [`compact_triangles`] in place: `triangles` (input ids) becomes the kept triangles in compact
-/// ids, in order; returns each kept triangle's input index.
-fn compact_in_place(weld: &Weld, triangles: &mut Vec<[u32; 3]>) -> Vec<u32> {
-    let mut sources = Vec::with_capacity(triangles.len());
+/// ids, in order; returns each kept triangle's input index, stored only once a triangle is
+/// dropped.
+fn compact_in_place(weld: &Weld, triangles: &mut Vec<[u32; 3]>) -> Renumbering {
+    let mut sources: Option<Vec<u32>> = None;
     let mut kept = 0;
     for i in 0..triangles.len() {
         let t = triangles[i];
         let c = t.map(|v| weld.compact_of_input[v as usize]);
         if c[0] != c[1] && c[1] != c[2] && c[0] != c[2] {
             triangles[kept] = c;
-            sources.push(i as u32);
+            if let Some(s) = &mut sources {
+                s.push(i as u32);
+            }
             kept += 1;
+        } else if sources.is_none() {
+            // The first dropped triangle: every one before it was kept at its own index.
+            sources = Some((0..kept as u32).collect());
         }
     }
     triangles.truncate(kept);
-    sources
+    sources.map_or(Renumbering::Identity(kept), Renumbering::Stored)
 }
 
-/// One edge entry of a triangle: (larger endpoint, `3 t + i` for corner `i` of triangle `t`,
-/// where the edge starts); the OV is corner `(i + 2) % 3`. Eight bytes: `3 t + i` fits `u32`
-/// because [`EdgeTable::check_size`] refuses `3 × triangles >= 2^32 - 1`.
-type Entry = (u32, u32);
+/// One edge entry of a triangle: the corner `3 t + i` where edge `i` of triangle `t` starts
+/// (its ends are corners `i` and `(i + 1) % 3`, its OV corner `(i + 2) % 3`). Four bytes: `3 t
+/// + i` fits `u32` because [`EdgeTable::check_size`] refuses `3 × triangles >= 2^32 - 1`.
+type Entry = u32;
+
+/// The two ends of the edge that starts at `corner`, smaller first.
+#[inline]
+fn corner_edge(triangles: &[[u32; 3]], corner: Entry) -> (u32, u32) {
+    let (t, i) = ((corner / 3) as usize, (corner % 3) as usize);
+    let (a, b) = (triangles[t][i], triangles[t][(i + 1) % 3]);
+    (a.min(b), a.max(b))
+}
 
 /// Step 2: a counting sort of the 3 entries per triangle by their smaller endpoint. Returns the
-/// bucket starts (`vertex_count + 1` offsets) and the entries, bucket by bucket.
+/// bucket starts (`vertex_count + 1` offsets) and the entries, bucket by bucket, each bucket in
+/// ascending triangle order.
 fn bucket_entries(triangles: &[[u32; 3]], vertex_count: usize) -> (Vec<u32>, Vec<Entry>) {
     let mut start = vec![0u32; vertex_count + 1];
     for t in triangles {
@@ -276,13 +324,13 @@ fn bucket_entries(triangles: &[[u32; 3]], vertex_count: usize) -> (Vec<u32>, Vec
     for v in 0..vertex_count {
         start[v + 1] += start[v];
     }
-    let mut entries = vec![(0u32, 0u32); triangles.len() * 3];
+    let mut entries = vec![0; triangles.len() * 3];
     let mut fill = start.clone();
     for (ti, t) in triangles.iter().enumerate() {
         for i in 0..3 {
             let (a, b) = (t[i], t[(i + 1) % 3]);
             let slot = &mut fill[a.min(b) as usize];
-            entries[*slot as usize] = (a.max(b), 3 * ti as u32 + i as u32);
+            entries[*slot as usize] = 3 * ti as u32 + i as u32;
             *slot += 1;
         }
     }
@@ -294,41 +342,50 @@ struct Grouped {
     edges: Vec<[u32; 2]>,
     ov_offsets: Vec<u32>,
     ovs: Vec<u32>,
-    tri_edges: Vec<[u32; 3]>,
 }
 
-/// Step 3: sorts each bucket (its size is the vertex's degree) and walks its groups of equal
-/// larger endpoint: one edge per group, with the group's opposite vertices. Counts the edges by
-/// kind into `stats`.
+/// Step 3: sorts each bucket (its size is the vertex's degree) by larger endpoint, then
+/// triangle, and walks its groups of equal larger endpoint: one edge per group, with the
+/// group's opposite vertices. Counts the edges by kind into `stats`.
+///
+/// The opposite vertices take the entries' place: entry `k` of the sorted order becomes OV `k`
+/// (each bucket is copied out, with its sort keys, before it is overwritten). So the build holds
+/// 12 bytes a triangle for both, not 24 for the entries beside 12 for the OVs.
 fn group_edges(
     triangles: &[[u32; 3]],
     start: &[u32],
-    entries: &mut [Entry],
+    mut entries: Vec<Entry>,
     stats: &mut MeshStats,
 ) -> Grouped {
     let total = entries.len();
     let mut edges = Vec::with_capacity(total / 2 + 1);
     let mut ov_offsets = Vec::with_capacity(total / 2 + 2);
-    let mut ovs = Vec::with_capacity(total);
-    let mut tri_edges = vec![[0u32; 3]; triangles.len()];
     ov_offsets.push(0);
+    // One bucket as (larger endpoint, corner): sorted, ascending corners are ascending triangles.
+    let mut bucket: Vec<[u32; 2]> = Vec::new();
     for a in 0..start.len() - 1 {
-        let bucket = &mut entries[start[a] as usize..start[a + 1] as usize];
+        let range = start[a] as usize..start[a + 1] as usize;
+        bucket.clear();
+        bucket.extend(
+            entries[range.clone()]
+                .iter()
+                .map(|&c| [corner_edge(triangles, c).1, c]),
+        );
         bucket.sort_unstable();
-        let mut k = 0;
-        while k < bucket.len() {
-            let b = bucket[k].0;
-            let edge_index = edges.len() as u32;
+        let mut k = range.start;
+        let mut j = 0;
+        while j < bucket.len() {
+            let b = bucket[j][0];
             let mut n = 0usize;
-            while k < bucket.len() && bucket[k].0 == b {
-                let (t, i) = ((bucket[k].1 / 3) as usize, (bucket[k].1 % 3) as usize);
-                ovs.push(triangles[t][(i + 2) % 3]);
-                tri_edges[t][i] = edge_index;
-                n += 1;
+            while j < bucket.len() && bucket[j][0] == b {
+                let (t, i) = ((bucket[j][1] / 3) as usize, (bucket[j][1] % 3) as usize);
+                entries[k] = triangles[t][(i + 2) % 3];
                 k += 1;
+                j += 1;
+                n += 1;
             }
             edges.push([a as u32, b]);
-            ov_offsets.push(ovs.len() as u32);
+            ov_offsets.push(k as u32);
             match n {
                 1 => stats.boundary_edges += 1,
                 2 => stats.manifold_edges += 1,
@@ -340,9 +397,18 @@ fn group_edges(
     Grouped {
         edges,
         ov_offsets,
-        ovs,
-        tri_edges,
+        ovs: entries,
     }
+}
+
+/// The index of edge `[a, b]` (`a < b`) among the edges of `a`, which start at `first[a]`;
+/// `None` when it is not there or `a` is out of range.
+fn edge_in(edges: &[[u32; 2]], first: &[u32], a: u32, b: u32) -> Option<u32> {
+    let lo = *first.get(a as usize)? as usize;
+    let of_a = edges.get(lo..*first.get(a as usize + 1)? as usize)?;
+    of_a.binary_search_by_key(&b, |e| e[1])
+        .ok()
+        .map(|i| (lo + i) as u32)
 }
 
 /// [`EdgeTable::manifold_neighbors`]: for each triangle edge, the other triangle across it when

@@ -34,14 +34,16 @@ mod edge_table;
 mod error;
 mod memory;
 mod mesh;
+mod renumbering;
 mod welding;
 
-pub use edge_table::{Connectivity, EdgeTable, MeshStats, NO_NEIGHBOR};
+pub use edge_table::{EdgeTable, MeshStats, NO_EDGE, NO_NEIGHBOR};
 pub use error::MeshError;
 pub use memory::{
     available_memory, unique_arc_bytes, vec_bytes, MEMORY_CHECK_THRESHOLD, MEMORY_LIMIT_ENV,
 };
 pub use mesh::Mesh;
+pub use renumbering::Renumbering;
 pub use welding::{positions_distinct, weld, Weld};
 
 /// Peak-allocation tracking for the estimate tests: a global allocator that counts each
@@ -151,10 +153,11 @@ mod tests {
                 peak <= estimate,
                 "{name}: peak {peak} > estimate {estimate}"
             );
-            // Not uselessly loose either.
+            // Not uselessly loose either. The per-vertex part assumes every growable vector of
+            // the weld just past a doubling; the soup (3 vertices a triangle) is far from one.
             assert!(
-                2 * peak >= estimate,
-                "{name}: peak {peak} is under half of {estimate}"
+                5 * peak >= 2 * estimate,
+                "{name}: peak {peak} is under 40 % of {estimate}"
             );
         }
     }
@@ -332,7 +335,19 @@ mod tests {
         let t = EdgeTable::build(&Mesh::new(p, vec![[0, 1, 2], [0, 1, 3]]).unwrap()).unwrap();
         assert_eq!(t.stats.degenerate_triangles, 1);
         assert_eq!(t.triangles.len(), 1);
-        assert_eq!(t.triangle_sources, vec![1]);
+        assert_eq!(t.triangle_sources, Renumbering::Stored(vec![1]));
+        // A mesh with nothing to weld or drop stores neither map.
+        let closed = EdgeTable::build(
+            &Mesh::new(
+                vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+                vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+            )
+            .unwrap(),
+        )
+        .unwrap();
+        assert!(closed.triangle_sources.is_identity() && closed.vertex_names.is_identity());
+        assert_eq!(closed.edge_index(3, 1), Some(4));
+        assert_eq!(closed.tri_edges()[0], [1, 3, 0]);
     }
 
     #[test]

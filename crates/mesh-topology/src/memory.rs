@@ -72,31 +72,31 @@ impl EdgeTable {
     /// Upper bound of the heap bytes [`EdgeTable::build`] allocates for a mesh of `triangles`
     /// triangles and `vertices` input vertices, not counting the input mesh itself.
     ///
-    /// Per triangle (118 bytes): kept triangles and their sources (16), the counting-sort entries
-    /// (24), OV lists (12), per-triangle edge ids (12), edge records and CSR offsets at the worst
-    /// case of 3 edges per triangle, including one vector regrowth (54). Per vertex (76 bytes):
+    /// Per triangle (86 bytes): kept triangles (12) and their sources when some are dropped (up
+    /// to 8 while that vector grows), the counting-sort entries that become the OV lists (12),
+    /// edge records and CSR offsets at the worst case of 3 edges per triangle, including one
+    /// vector regrowth (54). Per vertex (76 bytes):
     /// the weld's hash slots (up to 16), keys, names and positions at double capacity (56) and
     /// the input-to-compact map (4). A closed manifold mesh needs about 70 % of this.
     #[must_use]
     pub fn estimate_bytes(triangles: u64, vertices: u64) -> u64 {
         triangles
-            .saturating_mul(118)
+            .saturating_mul(86)
             .saturating_add(vertices.saturating_mul(76))
     }
 
     /// Heap bytes the table holds now: the capacity of each of its vectors times the size of
-    /// its element (positions, names, triangles and their sources, edges, CSR offsets and
-    /// opposite vertices, each triangle's edges). The struct itself is not counted.
+    /// its element (positions, names and triangle sources where stored, triangles, edges, CSR
+    /// offsets and opposite vertices). The struct itself is not counted.
     #[must_use]
     pub fn heap_bytes(&self) -> u64 {
         vec_bytes(&self.positions)
-            + vec_bytes(&self.vertex_names)
+            + self.vertex_names.heap_bytes()
             + vec_bytes(&self.triangles)
-            + vec_bytes(&self.triangle_sources)
+            + self.triangle_sources.heap_bytes()
             + vec_bytes(&self.edges)
             + vec_bytes(&self.ov_offsets)
             + vec_bytes(&self.ovs)
-            + vec_bytes(&self.connectivity.tri_edges)
     }
 
     /// Checks, without allocating, that a mesh of `triangles` triangles and `vertices` vertices

@@ -39,18 +39,31 @@ fn check_table(mesh: &Mesh, table: &EdgeTable) {
     let mut expected_names: Vec<u32> = names.clone();
     expected_names.sort_unstable();
     expected_names.dedup();
-    assert_eq!(table.vertex_names, expected_names);
-    for (c, &name) in table.vertex_names.iter().enumerate() {
+    assert_eq!(table.vertex_names.to_vec(), expected_names);
+    assert_eq!(
+        table.vertex_names.is_identity(),
+        expected_names
+            .iter()
+            .enumerate()
+            .all(|(i, &n)| n == i as u32),
+        "names are stored exactly when they are not the identity"
+    );
+    for (c, name) in table.vertex_names.iter().enumerate() {
         assert_eq!(table.positions[c], mesh.positions[name as usize]);
     }
-    let compact_of_name = |name: u32| table.vertex_names.binary_search(&name).unwrap() as u32;
+    let compact_of_name = |name: u32| table.vertex_names.position(name).unwrap() as u32;
 
     // Kept triangles and their sources.
     let (map, kept) = naive_edges(mesh, &names);
     assert_eq!(table.triangles.len(), kept);
     assert_eq!(table.triangle_sources.len(), kept);
-    assert!(table.triangle_sources.windows(2).all(|w| w[0] < w[1]));
-    for (t, &src) in table.triangles.iter().zip(&table.triangle_sources) {
+    let sources = table.triangle_sources.to_vec();
+    assert!(sources.windows(2).all(|w| w[0] < w[1]));
+    assert_eq!(
+        table.triangle_sources.is_identity(),
+        kept == mesh.triangles.len()
+    );
+    for (t, &src) in table.triangles.iter().zip(&sources) {
         let want = mesh.triangles[src as usize].map(|v| compact_of_name(names[v as usize]));
         assert_eq!(*t, want, "kept triangle keeps its winding, in compact ids");
     }
@@ -77,16 +90,19 @@ fn check_table(mesh: &Mesh, table: &EdgeTable) {
         let got: Vec<u32> = table
             .ovs_of(e)
             .iter()
-            .map(|&o| table.vertex_names[o as usize])
+            .map(|&o| table.vertex_names.get(o as usize))
             .collect();
         assert_eq!(&got, ovs, "OVs of edge ({na}, {nb})");
         assert!(table.ovs_of(e).iter().all(|&o| o != a && o != b));
     }
     // Every triangle's three edges are present and point back to the triangle.
+    let tri_edges = table.tri_edges();
+    assert_eq!(tri_edges.len(), table.triangles.len());
     for (t, tri) in table.triangles.iter().enumerate() {
         for i in 0..3 {
             let (a, b) = (tri[i], tri[(i + 1) % 3]);
-            let e = table.connectivity.tri_edges[t][i] as usize;
+            let e = tri_edges[t][i] as usize;
+            assert_eq!(table.edge_index(b, a), Some(e as u32));
             assert_eq!(table.edges[e], [a.min(b), a.max(b)]);
             assert!(table.ovs_of(e).contains(&tri[(i + 2) % 3]));
         }
@@ -114,18 +130,17 @@ fn check_table(mesh: &Mesh, table: &EdgeTable) {
 
 /// Neighbours: across a manifold edge the other triangle (and symmetric), else NO_NEIGHBOR.
 fn check_connectivity(table: &EdgeTable) {
-    let c = &table.connectivity;
+    let tri_edges = table.tri_edges();
     let neighbors = table.manifold_neighbors();
-    assert_eq!(c.tri_edges.len(), table.triangles.len());
     assert_eq!(neighbors.len(), table.triangles.len());
     for t in 0..table.triangles.len() {
         for i in 0..3 {
-            let e = c.tri_edges[t][i] as usize;
+            let e = tri_edges[t][i] as usize;
             let n = neighbors[t][i];
             if table.ovs_of(e).len() == 2 {
                 assert_ne!(n, NO_NEIGHBOR);
                 assert_ne!(n as usize, t);
-                let j = c.tri_edges[n as usize]
+                let j = tri_edges[n as usize]
                     .iter()
                     .position(|&x| x as usize == e)
                     .expect("the neighbour shares the edge");
@@ -209,7 +224,7 @@ fn negative_zero_welds_with_positive_zero() {
     )
     .unwrap();
     let t = EdgeTable::build(&mesh).unwrap();
-    assert_eq!(t.vertex_names, vec![0, 1, 2, 5]);
+    assert_eq!(t.vertex_names.to_vec(), vec![0, 1, 2, 5]);
     // Both triangles share the welded edge (0, 1): it is manifold.
     assert_eq!(t.edges[0], [0, 1]);
     assert_eq!(t.ovs_of(0), &[2, 3]);

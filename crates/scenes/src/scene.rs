@@ -464,10 +464,10 @@ impl Scene {
                     .iter()
                     .map(|&p| apply_f32(&o.world_from_object, p)),
             );
-            names.extend(t.vertex_names.iter().map(|&n| offset + n));
+            names.extend(t.vertex_names.iter().map(|n| offset + n));
             mesh.triangles
                 .extend(t.triangles.iter().map(|tri| tri.map(|v| base + v)));
-            sources.extend(t.triangle_sources.iter().map(|&s| tri_offset + s));
+            sources.extend(t.triangle_sources.iter().map(|s| tri_offset + s));
             input_vertices += t.stats.vertices as u64;
             input_triangles += t.stats.triangles as u64;
             degenerate += t.stats.degenerate_triangles;
@@ -481,12 +481,9 @@ impl Scene {
         })?;
         // Names grow with the vertex index of `mesh` (within an object compact ids follow names,
         // and objects follow each other), so a group's smallest index carries its smallest name.
-        for n in &mut baked.vertex_names {
-            *n = names[*n as usize];
-        }
-        for s in &mut baked.triangle_sources {
-            *s = sources[*s as usize];
-        }
+        baked.vertex_names = std::mem::take(&mut baked.vertex_names).map(|n| names[n as usize]);
+        baked.triangle_sources =
+            std::mem::take(&mut baked.triangle_sources).map(|s| sources[s as usize]);
         baked.stats.vertices = input_vertices as usize;
         baked.stats.triangles = input_triangles as usize;
         baked.stats.degenerate_triangles += degenerate;
@@ -559,6 +556,7 @@ impl Scene {
 /// make: every moved position finite and no two of them equal (then welding keeps every vertex,
 /// in the same order, and the triangles, edges and names stay as they are). Returns false, and
 /// leaves the table as it was, otherwise.
+///
 fn move_table(table: &mut EdgeTable, t: &Affine3A) -> bool {
     let moved: Vec<Vec3> = table.positions.iter().map(|&p| apply_f32(t, p)).collect();
     let ok = moved.iter().all(|p| p.is_finite()) && positions_distinct(&moved);

@@ -301,8 +301,8 @@ fn edge_map(scene: &TopologyScene, m: &Multiplicities, l: usize) -> BTreeMap<(u3
             let v = m.values(l)[offsets[i] + e];
             if v != 0 {
                 let key = (
-                    o.table.vertex_names[a as usize] + vertex_base,
-                    o.table.vertex_names[b as usize] + vertex_base,
+                    o.table.vertex_names.get(a as usize) + vertex_base,
+                    o.table.vertex_names.get(b as usize) + vertex_base,
                 );
                 out.insert(key, v);
             }

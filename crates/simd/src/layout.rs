@@ -283,8 +283,8 @@ impl Layout {
     }
 }
 
-/// Checks that `table` fits the layout's index range and is consistent (offsets, OVs and
-/// connectivity agree, every vertex id is in range), so the kernels may rely on it.
+/// Checks that `table` fits the layout's index range and is consistent (offsets and OVs agree,
+/// every vertex id is in range), so the kernels may rely on it.
 fn check_table(table: &EdgeTable) -> Result<(), LayoutError> {
     let nv = table.positions.len();
     if nv >= i32::MAX as usize || table.triangles.len() >= (ODD as usize) - LANES {
@@ -295,10 +295,9 @@ fn check_table(table: &EdgeTable) -> Result<(), LayoutError> {
     }
     if table.ov_offsets.len() != table.edges.len() + 1
         || table.ov_offsets.last().copied().unwrap_or(0) as usize != table.ovs.len()
-        || table.connectivity.tri_edges.len() != table.triangles.len()
     {
         return Err(LayoutError(
-            "edge table is inconsistent (offsets, OVs and connectivity disagree)".to_owned(),
+            "edge table is inconsistent (offsets and OVs disagree)".to_owned(),
         ));
     }
     let in_range = |v: u32| (v as usize) < nv;

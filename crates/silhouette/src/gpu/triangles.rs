@@ -73,12 +73,13 @@ impl TriangleLayout {
             let vbase = layout.vertex_offsets[oi];
             let ebase = layout.edge_offsets[oi];
             let mut cursor = vec![0u32; t.edges.len()];
+            let tri_edges = t.tri_edges();
             for (ti, tri) in t.triangles.iter().enumerate() {
                 let global = tris.len() as u32;
                 let mut c = *tri;
                 c.sort_unstable();
                 tris.push([c[0] + vbase, c[1] + vbase, c[2] + vbase, oi as u32]);
-                for &e in &t.connectivity.tri_edges[ti] {
+                for &e in &tri_edges[ti] {
                     let [a, b] = t.edges[e as usize];
                     let o = tri
                         .iter()

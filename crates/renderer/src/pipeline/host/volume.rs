@@ -235,7 +235,9 @@ pub fn remove_triangles(
         for i in 0..3 {
             let (u, v, o) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
             let (a, b) = if u < v { (u, v) } else { (v, u) };
-            let e = table.connectivity.tri_edges[ti][i] as usize;
+            let e = table
+                .edge_index(a, b)
+                .expect("a triangle's edge is in its table") as usize;
             m[e] -= i32::from(ov_sign(mode, &table.positions, a, b, o, object_light));
         }
     }
