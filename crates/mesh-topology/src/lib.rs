@@ -44,7 +44,7 @@ pub use memory::{
 };
 pub use mesh::Mesh;
 pub use renumbering::Renumbering;
-pub use welding::{positions_distinct, weld, Weld};
+pub use welding::{positions_distinct, positions_distinct_by, weld, Weld};
 
 /// Peak-allocation tracking for the estimate tests: a global allocator that counts each
 /// thread's live bytes (only in this crate's unit-test binary).

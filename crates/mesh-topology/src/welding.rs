@@ -86,17 +86,23 @@ pub fn weld(positions: &[Vec3]) -> Weld {
 }
 
 /// True when no two of `positions` weld ([`weld`] would keep every vertex), found without
-/// copying them: an open-addressing table of vertex indices (4 bytes a slot, at least twice the
-/// vertex count) whose keys are read from `positions`.
+/// copying them; [`positions_distinct_by`] over the slice.
 #[must_use]
 pub fn positions_distinct(positions: &[Vec3]) -> bool {
-    let bits = (positions.len().max(8) * 2)
-        .next_power_of_two()
-        .trailing_zeros();
+    positions_distinct_by(positions.len(), |i| positions[i])
+}
+
+/// True when no two of the `count` positions `position(0..count)` weld, with nothing stored but
+/// an open-addressing table of indices (4 bytes a slot, at least 1.5 times the count rounded up
+/// to a power of two): `position` is called again to compare keys, so the positions may be
+/// computed (moved by a transform, say) rather than held.
+#[must_use]
+pub fn positions_distinct_by(count: usize, position: impl Fn(usize) -> Vec3) -> bool {
+    let bits = (count.max(8) * 3 / 2).next_power_of_two().trailing_zeros();
     let mask = (1usize << bits) - 1;
     let mut slots = vec![u32::MAX; 1 << bits];
-    for (i, &p) in positions.iter().enumerate() {
-        let key = weld_key(p);
+    for i in 0..count {
+        let key = weld_key(position(i));
         let mut h = weld_hash(key, bits);
         loop {
             let s = slots[h];
@@ -104,7 +110,7 @@ pub fn positions_distinct(positions: &[Vec3]) -> bool {
                 slots[h] = i as u32;
                 break;
             }
-            if weld_key(positions[s as usize]) == key {
+            if weld_key(position(s as usize)) == key {
                 return false;
             }
             h = (h + 1) & mask;

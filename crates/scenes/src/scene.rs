@@ -8,7 +8,7 @@
 
 use crate::{Camera, Emission, SceneError};
 use glam::{Affine3A, Vec3};
-use shadowvol_mesh_topology::{positions_distinct, EdgeTable, Mesh};
+use shadowvol_mesh_topology::{positions_distinct_by, EdgeTable, Mesh};
 use shadowvol_robust_math::Light;
 use shadowvol_silhouette::{SceneObject, TopologyScene};
 use std::path::Path;
@@ -557,11 +557,16 @@ impl Scene {
 /// in the same order, and the triangles, edges and names stay as they are). Returns false, and
 /// leaves the table as it was, otherwise.
 ///
+/// The moved positions are checked as they are computed and written only once they pass, so the
+/// move holds no second copy of them.
 fn move_table(table: &mut EdgeTable, t: &Affine3A) -> bool {
-    let moved: Vec<Vec3> = table.positions.iter().map(|&p| apply_f32(t, p)).collect();
-    let ok = moved.iter().all(|p| p.is_finite()) && positions_distinct(&moved);
+    let moved = |i: usize| apply_f32(t, table.positions[i]);
+    let n = table.positions.len();
+    let ok = (0..n).all(|i| moved(i).is_finite()) && positions_distinct_by(n, moved);
     if ok {
-        table.positions = moved;
+        for p in &mut table.positions {
+            *p = apply_f32(t, *p);
+        }
     }
     ok
 }
