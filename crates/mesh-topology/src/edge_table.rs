@@ -137,10 +137,14 @@ impl EdgeTable {
         // Only the names and positions of the weld are kept.
         let Weld {
             compact_of_input,
-            names,
-            positions,
+            mut names,
+            mut positions,
         } = weld;
         drop(compact_of_input);
+        // The weld grows these by doubling; the table keeps only what it holds (a shrinking
+        // reallocation of a large block gives its tail back in place).
+        positions.shrink_to_fit();
+        names.shrink_to_fit();
         let vertex_names = Renumbering::from_vec(names);
         let (start, entries) = bucket_entries(&triangles, vertex_count);
         let grouped = group_edges(&triangles, &start, entries, &mut stats);
@@ -269,7 +273,6 @@ impl EdgeTable {
 fn compact_triangles(weld: &Weld, input_triangles: &[[u32; 3]]) -> (Vec<[u32; 3]>, Renumbering) {
     let mut triangles = input_triangles.to_vec();
     let sources = compact_in_place(weld, &mut triangles);
-    triangles.shrink_to_fit();
     (triangles, sources)
 }
 
@@ -294,6 +297,7 @@ fn compact_in_place(weld: &Weld, triangles: &mut Vec<[u32; 3]>) -> Renumbering {
         }
     }
     triangles.truncate(kept);
+    triangles.shrink_to_fit();
     sources.map_or(Renumbering::Identity(kept), Renumbering::Stored)
 }
 
