@@ -44,8 +44,12 @@ fn scenes_json_lists_every_preset_with_its_size() {
         }
     }
     // The largest presets are listed with their size, not generated (10^7 and 10^8
-    // triangles: icospheres are exact for even counts).
-    for (name, t) in [("sphere-10m", 10_000_000u64), ("sphere-100m", 100_000_000)] {
+    // triangles: icospheres are exact for even counts; Loop subdivision quadruples).
+    for (name, t) in [
+        ("sphere-10m", 10_000_000u64),
+        ("sphere-100m", 100_000_000),
+        ("bunny-10m", 3_674 * 4u64.pow(6)),
+    ] {
         let row = rows.iter().find(|r| r["name"] == name).unwrap();
         assert_eq!(
             (

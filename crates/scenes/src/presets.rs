@@ -18,6 +18,13 @@ pub const BUNNY_OBJ: &str = include_str!("../../../assets/bunny.obj");
 /// a power-of-four multiple of 3,674; two levels is the closest (−9.6 %).
 pub const BUNNY_LEVELS: u32 = 2;
 
+/// Loop subdivision levels of `bunny-10m`: 3,674 · 4⁶ = 15,048,704 triangles, the power-of-four
+/// multiple of the bundled bunny closest to 10^7 in ratio (five levels give 3,762,176).
+pub const BUNNY_10M_LEVELS: u32 = 6;
+
+/// Triangles of `bunny-10m` (3,674 · 4⁶).
+pub const BUNNY_10M_TRIANGLES: usize = 3_674 << (2 * BUNNY_10M_LEVELS);
+
 /// Triangles per sphere in `spheres-10-*` (10 × 65,000 = 650,000 ≈ the paper's 6.5·10⁵).
 pub const SPHERE_10_TRIANGLES: usize = 65_000;
 
@@ -140,6 +147,15 @@ const FIXED: &[Fixed] = &[
         size: one_sphere(10_000_000),
     },
     Fixed {
+        name: "bunny-10m",
+        description: "the bunny Loop-subdivided six times (15,048,704 triangles, about 10^7: real curvature at scale)",
+        size: Some(PresetSize {
+            objects: 1,
+            triangles: BUNNY_10M_TRIANGLES,
+            lights: 1,
+        }),
+    },
+    Fixed {
         name: "sphere-100m",
         description: "one icosphere of 100,000,000 triangles (scale: refused before building when the memory is short)",
         size: one_sphere(100_000_000),
@@ -204,6 +220,10 @@ pub fn preset(name: &str) -> Result<Scene, SceneError> {
         "town" => town_scene()?,
         "sphere-10m" => sphere_grid(name, 10_000_000, 1, 1)?,
         "sphere-100m" => sphere_grid(name, 100_000_000, 1, 1)?,
+        "bunny-10m" => {
+            refuse_beyond_memory(name, BUNNY_10M_TRIANGLES)?;
+            single_bunny(name, BUNNY_10M_LEVELS)?
+        }
         _ => match name
             .strip_prefix("hard-")
             .and_then(|case| hard::cases().into_iter().find(|c| c.name == case))
@@ -289,14 +309,19 @@ fn single_bunny(name: &str, levels: u32) -> Result<Scene, SceneError> {
     ))
 }
 
-fn sphere_grid(name: &str, triangles: usize, cols: u32, rows: u32) -> Result<Scene, SceneError> {
-    // Refuse before generating what the edge table could not hold (an icosphere of T triangles
-    // has T / 2 + 2 vertices).
+/// Refuses, before generating it, a preset of `triangles` triangles (a closed mesh: half as many
+/// vertices, plus two) whose edge table the memory could not hold.
+fn refuse_beyond_memory(name: &str, triangles: usize) -> Result<(), SceneError> {
     shadowvol_mesh_topology::EdgeTable::check_size(triangles as u64, triangles as u64 / 2 + 2)
+        .map(drop)
         .map_err(|source| SceneError::Mesh {
             what: format!("preset '{name}' ({triangles} triangles)"),
             source,
-        })?;
+        })
+}
+
+fn sphere_grid(name: &str, triangles: usize, cols: u32, rows: u32) -> Result<Scene, SceneError> {
+    refuse_beyond_memory(name, triangles)?;
     let mesh = icosphere(triangles, 1.0);
     // Spheres of radius 1 stand on y = 0 (centre at y = 1), 3 units apart.
     let mut scene = Scene::new(name);
