@@ -1,9 +1,14 @@
 //! The memory measurements: each run its own process, so that its peak resident set is its own
 //! (`peak_rss_bytes`, the kernel's high-water mark), with what the prepared scene held
 //! (`table_bytes` and its parts): `silhouette` on every backend in exact mode, and `render` on
-//! each pipeline, on spheres of 10^5 to 10^7 triangles.
+//! each pipeline, on spheres of 10^5 to 10^7 triangles; in a full run also `bunny-10m`
+//! (`silhouette` everywhere, `render` on the GPU pipeline) and `sphere-100m` on the CPU
+//! backends, each only when the machine has the memory for it.
 
-use super::plan::{Plan, MEMORY_RENDERS, MEMORY_RENDER_SIZE};
+use super::plan::{
+    Plan, MEMORY_BUNNY, MEMORY_HUGE, MEMORY_HUGE_BACKENDS, MEMORY_HUGE_FROM, MEMORY_RENDERS,
+    MEMORY_RENDER_SIZE,
+};
 use super::records::{Data, Key, Memory};
 use super::runner::{render_args, Matrix};
 use serde_json::Value;
@@ -17,28 +22,86 @@ impl Matrix {
             for b in plan.backends.clone() {
                 self.progress
                     .step(&format!("memory: {scene} silhouette {b}"));
-                let args = [
-                    "silhouette",
-                    scene,
-                    "--backend",
-                    &b,
-                    "--mode",
-                    "exact",
-                    "--format",
-                    "json",
-                ];
-                if let Some(m) = self.memory_run(scene, &b, &args, None) {
+                if let Some(m) = self.memory_run(scene, &b, &silhouette_args(scene, &b), None) {
                     triangles = triangles.or(m);
                 }
             }
             for (key, flags) in MEMORY_RENDERS {
-                self.progress.step(&format!("memory: {scene} {key}"));
-                let png = self.render_png(&format!("memory-{scene}-{key}"));
-                let mut args = render_args(scene, &png, MEMORY_RENDER_SIZE);
-                args.extend_from_slice(flags);
-                self.memory_run(scene, key, &args, triangles);
+                self.memory_render(scene, key, flags, triangles);
             }
         }
+        if plan.memory_large {
+            self.memory_large(plan);
+        }
+    }
+
+    /// `bunny-10m` on every backend and the GPU pipeline, then `sphere-100m` on the CPU
+    /// backends where the memory suffices (a skip that says why where it does not).
+    fn memory_large(&mut self, plan: &Plan) {
+        let mut triangles = None;
+        for b in plan.backends.clone() {
+            self.progress
+                .step(&format!("memory: {MEMORY_BUNNY} silhouette {b}"));
+            if let Some(m) =
+                self.memory_run(MEMORY_BUNNY, &b, &silhouette_args(MEMORY_BUNNY, &b), None)
+            {
+                triangles = triangles.or(m);
+            }
+        }
+        let (key, flags) = MEMORY_RENDERS[0];
+        self.memory_render(MEMORY_BUNNY, key, flags, triangles);
+        for b in MEMORY_HUGE_BACKENDS {
+            self.progress
+                .step(&format!("memory: {MEMORY_HUGE} silhouette {b}"));
+            if !plan.backends.iter().any(|x| x == b) {
+                continue;
+            }
+            match self.huge_fits(b) {
+                Ok(()) => {
+                    self.memory_run(MEMORY_HUGE, b, &silhouette_args(MEMORY_HUGE, b), None);
+                }
+                Err(why) => {
+                    let what = format!("memory: {MEMORY_HUGE} on {b} skipped: {why}");
+                    eprintln!("\nmatrix: {what}");
+                    self.results.skips.push(what);
+                }
+            }
+        }
+    }
+
+    /// Whether [`MEMORY_HUGE`] fits on backend `b`: its peak per triangle on
+    /// [`MEMORY_HUGE_FROM`] in this run, times 10^8 triangles and the margin, against
+    /// `MemAvailable` now.
+    fn huge_fits(&self, b: &str) -> Result<(), String> {
+        let (from, margin) = MEMORY_HUGE_FROM;
+        let per_tri = self
+            .results
+            .records
+            .iter()
+            .filter(|r| r.experiment == "memory" && r.key.scene == from && r.key.backend == b)
+            .find_map(|r| r.memory().and_then(|m| m.per_triangle(m.peak_rss_bytes)))
+            .ok_or_else(|| format!("no {from} peak on {b} in this run to size it from"))?;
+        let needed = per_tri * 1e8 * margin;
+        let available = mem_available()
+            .ok_or_else(|| "MemAvailable is not readable (/proc/meminfo)".to_owned())?;
+        if needed > available as f64 {
+            return Err(format!(
+                "needs about {:.1} GB ({per_tri:.0} B/triangle on {from} x 10^8 x {margin}), \
+                 {:.1} GB available",
+                needed / 1e9,
+                available as f64 / 1e9
+            ));
+        }
+        Ok(())
+    }
+
+    /// One `render` of `scene` on a pipeline (`key`, `flags`) into the memory table.
+    fn memory_render(&mut self, scene: &str, key: &str, flags: &[&str], triangles: Option<u64>) {
+        self.progress.step(&format!("memory: {scene} {key}"));
+        let png = self.render_png(&format!("memory-{scene}-{key}"));
+        let mut args = render_args(scene, &png, MEMORY_RENDER_SIZE);
+        args.extend_from_slice(flags);
+        self.memory_run(scene, key, &args, triangles);
     }
 
     /// Runs `args` and records its memory figures under `backend`; `triangles` when the JSON
@@ -84,4 +147,32 @@ impl Matrix {
         self.push("memory", key, device, Data::Memory(m));
         Some(named)
     }
+}
+
+/// `silhouette SCENE --backend B --mode exact --format json`.
+fn silhouette_args<'a>(scene: &'a str, backend: &'a str) -> [&'a str; 8] {
+    [
+        "silhouette",
+        scene,
+        "--backend",
+        backend,
+        "--mode",
+        "exact",
+        "--format",
+        "json",
+    ]
+}
+
+/// `MemAvailable` from `/proc/meminfo`, bytes.
+fn mem_available() -> Option<u64> {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()?
+        .lines()
+        .find_map(|l| l.strip_prefix("MemAvailable:"))?
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse::<u64>()
+        .ok()
+        .map(|kb| kb * 1024)
 }

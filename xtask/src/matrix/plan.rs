@@ -63,6 +63,17 @@ pub(super) const MAP_KEY: &str = "map";
 pub(super) const MEMORY_SCENES: [&str; 3] = ["sphere-100k", "sphere-1m", "sphere-10m"];
 /// The `--quick` memory scenes (the 10^7 one left out).
 pub(super) const MEMORY_SCENES_QUICK: [&str; 2] = ["sphere-100k", "sphere-1m"];
+/// The real-curvature scene at scale (full run only): `silhouette` on every backend and
+/// `render` on the GPU pipeline.
+pub(super) const MEMORY_BUNNY: &str = "bunny-10m";
+/// The 10^8 scene (full run only): `silhouette` on the CPU backends only, each when the
+/// machine has the memory its sphere-10m peak in the same run implies.
+pub(super) const MEMORY_HUGE: &str = "sphere-100m";
+/// The backends that run [`MEMORY_HUGE`].
+pub(super) const MEMORY_HUGE_BACKENDS: [&str; 2] = ["cpu", "simd"];
+/// The 10^7 scene whose peak per triangle, times [`MEMORY_HUGE`]'s triangles and this margin,
+/// must be available before [`MEMORY_HUGE`] runs on a backend.
+pub(super) const MEMORY_HUGE_FROM: (&str, f64) = ("sphere-10m", 1.25);
 /// The `render` runs of the memory table: its key `backend` and the flags that pick the
 /// pipeline.
 pub(super) const MEMORY_RENDERS: [(&str, &[&str]); 3] = [
@@ -103,6 +114,8 @@ pub(super) struct Plan {
     pub map_biases: Vec<&'static str>,
     /// Scenes of the memory table.
     pub memory_scenes: Vec<&'static str>,
+    /// Whether the memory table adds [`MEMORY_BUNNY`] and [`MEMORY_HUGE`] (full run).
+    pub memory_large: bool,
     /// The one table that runs (`--only`), if any.
     pub only: Option<Only>,
 }
@@ -151,6 +164,7 @@ impl Plan {
             } else {
                 MEMORY_SCENES.to_vec()
             },
+            memory_large: !o.quick,
             only: o.only,
             map_biases: if o.quick {
                 MAP_BIAS_SWEEP_QUICK.to_vec()
@@ -196,7 +210,13 @@ impl Plan {
     /// Progress steps of the memory table: per scene one `silhouette` per backend and one
     /// `render` per pipeline.
     pub fn memory_steps(&self) -> u64 {
+        let large = if self.memory_large {
+            self.backends.len() as u64 + 1 + MEMORY_HUGE_BACKENDS.len() as u64
+        } else {
+            0
+        };
         self.memory_scenes.len() as u64 * (self.backends.len() + MEMORY_RENDERS.len()) as u64
+            + large
     }
 
     /// Progress steps of the volumes-against-maps table: per scene the GPU pipeline in each mode

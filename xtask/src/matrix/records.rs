@@ -479,6 +479,9 @@ pub struct Results {
     pub unavailable: Vec<Unavailable>,
     /// Measurements that failed, in words.
     pub failures: Vec<String>,
+    /// Measurements left out on purpose, in words (why, and what it would have needed).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub skips: Vec<String>,
     /// Every measurement.
     pub records: Vec<Record>,
 }

@@ -117,12 +117,18 @@ struct Tables<'a> {
 }
 
 impl<'a> Tables<'a> {
-    /// The failures section, empty without failures.
+    /// The failures and the measurements left out on purpose, empty without either.
     fn failures(&self) -> String {
         let mut s = String::new();
         if !self.r.failures.is_empty() {
             s += "\n## Failures\n\n";
             for f in &self.r.failures {
+                s += &format!("- {}\n", f.replace('\n', " "));
+            }
+        }
+        if !self.r.skips.is_empty() {
+            s += "\n## Left out\n\n";
+            for f in &self.r.skips {
                 s += &format!("- {}\n", f.replace('\n', " "));
             }
         }

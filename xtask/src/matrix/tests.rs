@@ -542,15 +542,20 @@ fn memory_table_shows_bytes_per_triangle_and_round_trips() {
             device: "cpu".into(),
             data: Data::Memory(m),
         }],
+        skips: vec!["memory: sphere-100m on simd skipped: needs about 18.4 GB".into()],
         ..Results::default()
     };
     let line = "| sphere-1m | 1000000 | simd | 172 | 129 | 66 | 63 | 0 | 172 | 1.5 |";
     let t = tables(&results, &["exact".to_owned()]);
     assert!(t.lines().any(|l| l == line), "no line {line:?} in\n{t}");
+    // A run left out says so, under its own heading.
+    let skip = "- memory: sphere-100m on simd skipped: needs about 18.4 GB";
+    assert!(t.contains("\n## Left out\n\n") && t.lines().any(|l| l == skip), "{t}");
     // `--replot` reads results.json back into the same record.
     let text = serde_json::to_string(&serde_json::to_value(&results).unwrap()).unwrap();
     let back: Results = serde_json::from_str(&text).unwrap();
     assert_eq!(back.records, results.records);
+    assert_eq!(back.skips, results.skips);
     let points = super::memory_table::plot_points(&back.records);
     assert_eq!(points["simd"], vec![(1e6, 172.0)]);
 }
