@@ -72,17 +72,17 @@ impl EdgeTable {
     /// Upper bound of the heap bytes [`EdgeTable::build`] allocates for a mesh of `triangles`
     /// triangles and `vertices` input vertices, not counting the input mesh itself.
     ///
-    /// Per triangle (86 bytes): kept triangles (12) and their sources when some are dropped (up
+    /// Per triangle (68 bytes): kept triangles (12) and their sources when some are dropped (up
     /// to 8 while that vector grows), the counting-sort entries that become the OV lists (12),
-    /// edge records and CSR offsets at the worst case of 3 edges per triangle, including one
-    /// vector regrowth (54). Per vertex (76 bytes):
-    /// the weld's hash slots (up to 16), keys, names and positions at double capacity (56) and
-    /// the input-to-compact map (4). A closed manifold mesh needs about 70 % of this.
+    /// edge records and CSR offsets at the worst case of 3 edges per triangle (36). Per vertex
+    /// (52 bytes): the weld's index table (up to 12), each vertex's compact id (4), names,
+    /// positions and (on one thread) keys reserved for as many groups as vertices (28), the
+    /// buckets' and the edges' starts (8). A closed manifold mesh needs about 70 % of this.
     #[must_use]
     pub fn estimate_bytes(triangles: u64, vertices: u64) -> u64 {
         triangles
-            .saturating_mul(86)
-            .saturating_add(vertices.saturating_mul(76))
+            .saturating_mul(68)
+            .saturating_add(vertices.saturating_mul(52))
     }
 
     /// Heap bytes the table holds now: the capacity of each of its vectors times the size of

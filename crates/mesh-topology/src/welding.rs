@@ -2,6 +2,8 @@
 //! become one.
 
 use glam::Vec3;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU32, Ordering};
 
 /// The result of exact-position welding.
 #[derive(Debug, Clone, PartialEq)]
@@ -41,23 +43,39 @@ pub(crate) fn weld_hash(k: [u32; 3], bits: u32) -> usize {
 ///
 /// Each group is named by its smallest input index, and compact ids are numbered in ascending
 /// order of names. The position of a group is the position of its named (first) vertex. Runs in
-/// expected linear time (hashing with open addressing). Positions are expected to be finite
-/// (see [`Mesh::validate`](crate::Mesh::validate)); NaN positions weld only with NaNs of the
-/// identical bit pattern (their bits are kept).
+/// expected linear time, on all of rayon's threads when there are several (one pass on one
+/// thread otherwise: the parallel steps do about twice the work); the result is the same either
+/// way. Positions are expected to be finite (see [`Mesh::validate`](crate::Mesh::validate)); NaN
+/// positions weld only with NaNs of the identical bit pattern (their bits are kept).
+///
+/// Memory besides the output: an index table of 4 bytes a slot, at least 1.5 times the vertex
+/// count rounded up to a power of two, and 4 to 16 bytes a vertex of scratch.
 #[must_use]
 pub fn weld(positions: &[Vec3]) -> Weld {
-    // Open addressing with linear probing in a table of at least twice the vertex count; a
-    // slot holds a compact id (4 bytes), the key is compared against that group's key. This is
-    // about half the memory traffic of a general hash map on 10^6-triangle meshes.
-    let bits = (positions.len().max(8) * 2)
-        .next_power_of_two()
-        .trailing_zeros();
+    if positions.len() < PAR_MIN || rayon::current_num_threads() == 1 {
+        weld_one_thread(positions)
+    } else {
+        weld_parallel(positions)
+    }
+}
+
+/// Index-table bits for `n` vertices: at least 1.5 `n` slots, a power of two.
+fn table_bits(n: usize) -> u32 {
+    (n.max(8) * 3 / 2).next_power_of_two().trailing_zeros()
+}
+
+/// [`weld`] in one pass: a slot holds a compact id, numbered as groups first appear (which is
+/// the order of their names); the key is compared against that group's key.
+fn weld_one_thread(positions: &[Vec3]) -> Weld {
+    let n = positions.len();
+    let bits = table_bits(n);
     let mask = (1usize << bits) - 1;
     let mut slots = vec![u32::MAX; 1 << bits];
-    let mut keys: Vec<[u32; 3]> = Vec::new();
-    let mut compact_of_input = Vec::with_capacity(positions.len());
-    let mut names = Vec::new();
-    let mut out_positions = Vec::new();
+    // At most one group per vertex; pages past the groups found are never touched.
+    let mut keys: Vec<[u32; 3]> = Vec::with_capacity(n);
+    let mut compact_of_input = Vec::with_capacity(n);
+    let mut names = Vec::with_capacity(n);
+    let mut out_positions = Vec::with_capacity(n);
     for (i, &p) in positions.iter().enumerate() {
         let key = weld_key(p);
         let mut h = weld_hash(key, bits);
@@ -82,6 +100,139 @@ pub fn weld(positions: &[Vec3]) -> Weld {
         compact_of_input,
         names,
         positions: out_positions,
+    }
+}
+
+/// [`weld`] on rayon's threads, in four parallel steps over the vertices.
+fn weld_parallel(positions: &[Vec3]) -> Weld {
+    let n = positions.len();
+    let bits = table_bits(n);
+    let table = GroupTable::new(bits);
+    // 1. Every vertex into the table, where its group's slot ends up holding the group's
+    //    smallest index; each vertex's slot is kept (it becomes its compact id in step 4).
+    let mut compact_of_input: Vec<u32> = positions
+        .par_iter()
+        .enumerate()
+        .with_min_len(PAR_MIN)
+        .map(|(i, &p)| table.insert(positions, i as u32, weld_key(p)))
+        .collect();
+    // 2. The firsts (a vertex whose group's slot holds it), counted per chunk of vertices.
+    let chunk = n.div_ceil(rayon::current_num_threads() * 8).max(PAR_MIN);
+    let first: Vec<bool> = compact_of_input
+        .par_iter()
+        .enumerate()
+        .with_min_len(PAR_MIN)
+        .map(|(i, &slot)| table.get(slot) == i as u32)
+        .collect();
+    let counts: Vec<usize> = first
+        .par_chunks(chunk)
+        .map(|c| c.iter().filter(|&&f| f).count())
+        .collect();
+    // 3. Each chunk numbers its own firsts (ids in order of names), writes their names and
+    //    positions, and puts each id in its group's slot (no slot is read for step 2 any more).
+    let welded: usize = counts.iter().sum();
+    let mut names = vec![0u32; welded];
+    let mut out_positions = vec![Vec3::ZERO; welded];
+    let mut first_ids = Vec::with_capacity(counts.len());
+    let mut next = 0u32;
+    for &k in &counts {
+        first_ids.push(next);
+        next += k as u32;
+    }
+    let slot_of = &compact_of_input;
+    first
+        .par_chunks(chunk)
+        .zip(split_by(&mut names, counts.iter().copied()))
+        .zip(split_by(&mut out_positions, counts.iter().copied()))
+        .zip(&first_ids)
+        .enumerate()
+        .for_each(|(c, (((firsts, nm), ps), &first_id))| {
+            let found = firsts.iter().enumerate().filter(|(_, &f)| f);
+            for (k, (j, _)) in found.enumerate() {
+                let i = c * chunk + j;
+                nm[k] = i as u32;
+                ps[k] = positions[i];
+                table.set(slot_of[i], first_id + k as u32);
+            }
+        });
+    drop(first);
+    // 4. Every vertex's compact id, from its group's slot.
+    compact_of_input
+        .par_iter_mut()
+        .with_min_len(PAR_MIN)
+        .for_each(|s| *s = table.get(*s));
+    Weld {
+        compact_of_input,
+        names,
+        positions: out_positions,
+    }
+}
+
+/// `v` cut into consecutive parts of the given lengths (which must add up to at most its
+/// length).
+pub(crate) fn split_by<T>(v: &mut [T], lens: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut rest = v;
+    lens.map(|n| {
+        let (part, r) = std::mem::take(&mut rest).split_at_mut(n);
+        rest = r;
+        part
+    })
+    .collect()
+}
+
+/// Vertices below which a parallel step runs on one thread (rayon's splitting costs more).
+const PAR_MIN: usize = 1 << 14;
+
+/// The weld's open-addressing table with linear probing: a slot holds an input index (a
+/// group's smallest so far) while groups are found, a compact id once they are numbered. Keys
+/// are not stored; they are read from the positions.
+struct GroupTable {
+    slots: Vec<AtomicU32>,
+    bits: u32,
+}
+
+impl GroupTable {
+    const EMPTY: u32 = u32::MAX;
+
+    fn new(bits: u32) -> Self {
+        Self {
+            slots: (0..1usize << bits)
+                .map(|_| AtomicU32::new(Self::EMPTY))
+                .collect(),
+            bits,
+        }
+    }
+
+    fn get(&self, slot: u32) -> u32 {
+        self.slots[slot as usize].load(Ordering::Relaxed)
+    }
+
+    fn set(&self, slot: u32, value: u32) {
+        self.slots[slot as usize].store(value, Ordering::Relaxed);
+    }
+
+    /// Puts vertex `i` (key `key`) in its group's slot and returns the slot. The slot keeps the
+    /// group's smallest index: an empty slot is claimed with a compare-exchange, an equal key's
+    /// slot takes the minimum, so the outcome is the same in any order.
+    fn insert(&self, positions: &[Vec3], i: u32, key: [u32; 3]) -> u32 {
+        let mask = (1usize << self.bits) - 1;
+        let mut h = weld_hash(key, self.bits);
+        loop {
+            let slot = &self.slots[h];
+            let s = slot.load(Ordering::Relaxed);
+            if s == Self::EMPTY {
+                match slot.compare_exchange(Self::EMPTY, i, Ordering::Relaxed, Ordering::Relaxed) {
+                    Ok(_) => return h as u32,
+                    Err(_) => continue, // claimed meanwhile: look at this slot again
+                }
+            }
+            // Every index a slot ever holds has the same key, so a stale `s` compares the same.
+            if weld_key(positions[s as usize]) == key {
+                slot.fetch_min(i, Ordering::Relaxed);
+                return h as u32;
+            }
+            h = (h + 1) & mask;
+        }
     }
 }
 

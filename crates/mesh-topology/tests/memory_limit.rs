@@ -38,7 +38,7 @@ fn memory_limit_env_caps_the_build_and_falls_back_to_the_system() {
     let needed = EdgeTable::estimate_bytes(t, v);
     assert_eq!(
         needed,
-        1000 * 86 + 600 * 76,
+        1000 * 68 + 600 * 52,
         "the documented per-item bytes"
     );
     assert!(needed < MEMORY_CHECK_THRESHOLD);
