@@ -31,7 +31,12 @@ pub const LONG_ABOUT: &str = "Time silhouette extraction on a scene for each bac
     \"table_bytes_parts\" {\"topology\", \"host\", \"device\"}) and \"peak_rss_bytes\", the \
     process's peak resident set (the kernel's VmHWM) when its backend finished; that is a \
     high-water mark over every backend run before it, so give one --backend per process to \
-    attribute it. The top-level \"peak_rss_bytes\" is the whole run's.";
+    attribute it. The top-level \"peak_rss_bytes\" is the whole run's.\n\n\
+    --build-runs N adds \"build\": the scene's largest edge table rebuilt N times from its own \
+    positions and triangles (EdgeTable::build: weld, counting sort, grouping, on rayon's \
+    threads), {\"triangles\", \"vertices\", \"input_bytes\", \"runs\", \"median_ms\", \
+    \"min_ms\", \"read_ms\", \"ratio\", \"threads\"}: read_ms is the median time to read \
+    input_bytes on the same threads, ratio = median_ms / read_ms.";
 
 /// Timed frames per (mode, light count) in one turn of the interleaved schedule.
 const TURN_FRAMES: u32 = 5;
@@ -78,6 +83,10 @@ pub struct Args {
     /// Skip backends that cannot start here (with a warning) instead of failing.
     #[arg(long)]
     skip_unavailable: bool,
+    /// Also time building the scene's largest edge table from its mesh, this many times, next
+    /// to reading the same bytes from memory ("build" in the JSON; 0: not timed).
+    #[arg(long, default_value_t = 0)]
+    build_runs: u32,
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
@@ -159,6 +168,9 @@ struct Report {
     host: Host,
     /// The process's peak resident set over the whole run.
     peak_rss_bytes: Option<u64>,
+    /// The edge-table build against its memory floor (`--build-runs`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    build: Option<crate::build_time::BuildTiming>,
 }
 
 fn ms(d: Duration) -> f64 {
@@ -404,9 +416,25 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         records.extend(bench_backend(args, &setup, entry, backend.as_mut(), &bar)?);
     }
     run_floors(&mut floors);
+    let build = if args.build_runs > 0 {
+        bar.set_message("edge-table build");
+        let largest = setup
+            .topo
+            .objects
+            .iter()
+            .max_by_key(|o| o.table.triangles.len())
+            .ok_or_else(|| CliError::Other("the scene has no object to build".to_owned()))?;
+        Some(crate::build_time::time_build(
+            &largest.table,
+            args.build_runs,
+        )?)
+    } else {
+        None
+    };
     bar.finish_and_clear();
 
-    let report = report(args, floors, &setup.light_sets, records);
+    let mut report = report(args, floors, &setup.light_sets, records);
+    report.build = build;
     match args.format {
         Format::Json => {
             serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
@@ -600,6 +628,7 @@ fn report(
         records,
         host: host(),
         peak_rss_bytes: peak_rss_bytes(),
+        build: None,
     }
 }
 
@@ -621,6 +650,20 @@ fn print_text(r: &Report, out: &mut dyn Write) -> Result<(), CliError> {
             f.floor_p90_ms,
             f.floor_bytes_read as f64 / 1e6,
             f.floor_bytes_written as f64 / 1e6
+        )?;
+    }
+    if let Some(b) = &r.build {
+        writeln!(
+            out,
+            "build, {} triangles: {:.1} ms median of {} (min {:.1}); reading its {:.1} MB: {:.2} ms; {:.0}x the read, {} threads",
+            b.triangles,
+            b.median_ms,
+            b.runs,
+            b.min_ms,
+            b.input_bytes as f64 / 1e6,
+            b.read_ms,
+            b.ratio,
+            b.threads
         )?;
     }
     writeln!(

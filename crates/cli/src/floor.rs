@@ -68,6 +68,18 @@ impl MemoryFloor {
         }
     }
 
+    /// Buffers that read `bytes` (rounded up to whole `u32` words) and write nothing: the floor
+    /// of any pass over that much input, such as building an edge table from a mesh.
+    #[must_use]
+    pub fn read_only(bytes: usize) -> Self {
+        Self {
+            input: (0..bytes.div_ceil(4) as u32)
+                .map(|i| i.wrapping_mul(2_654_435_761))
+                .collect(),
+            output: Vec::new(),
+        }
+    }
+
     /// Bytes read per pass.
     #[must_use]
     pub fn bytes_read(&self) -> usize {

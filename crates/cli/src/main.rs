@@ -10,6 +10,7 @@ use shadowvol::CliError;
 use std::io::Write;
 use std::process::ExitCode;
 
+mod build_time;
 mod cmd_accuracy;
 mod cmd_backends;
 mod cmd_baselines;

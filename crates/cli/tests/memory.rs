@@ -15,6 +15,7 @@ const SCENE: &str = "sphere-100k";
 fn main() {
     let mut trials = shadowvol_test_support::trials![
         bench_records_carry_their_backends_table,
+        bench_build_runs_time_the_table_against_a_read,
         render_counts_each_pipelines_device_buffers,
     ];
     trials.extend(per_backend!(
@@ -76,6 +77,50 @@ fn silhouette_reports_what_the_prepared_scene_holds(backend: &str) {
         peak >= topology + host,
         "{backend}: peak {peak} < {topology} + {host}"
     );
+}
+
+/// `bench --build-runs` times the scene's table build next to a read of its input, and says
+/// so only when asked.
+fn bench_build_runs_time_the_table_against_a_read() -> Outcome {
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "bench",
+            "--scene",
+            SCENE,
+            "--backend",
+            "cpu",
+            "--mode",
+            "exact",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+            "--format",
+            "json",
+        ];
+        args.extend_from_slice(extra);
+        json_of(&args)
+    };
+    assert!(
+        run(&[]).get("build").is_none(),
+        "no build timing unless asked"
+    );
+    let v = run(&["--build-runs", "2"]);
+    let b = &v["build"];
+    let triangles = v["records"][0]["triangles"].as_u64().expect("triangles");
+    assert_eq!(u(b, "triangles"), triangles);
+    assert_eq!(u(b, "runs"), 2);
+    // The mesh the build reads: 12 bytes a vertex (half a vertex a triangle) and a triangle.
+    assert_eq!(u(b, "input_bytes"), 12 * (u(b, "vertices") + triangles));
+    let f = |k: &str| b[k].as_f64().unwrap_or_else(|| panic!("{k} in {b}"));
+    assert!(f("min_ms") <= f("median_ms") && f("read_ms") > 0.0, "{b}");
+    assert!(
+        (f("ratio") - f("median_ms") / f("read_ms")).abs() < 1e-6 * f("ratio"),
+        "{b}"
+    );
+    // Building is sorting and hashing: it cannot be as fast as reading its input once.
+    assert!(f("ratio") > 1.0, "{b}");
+    Ok(())
 }
 
 fn bench_records_carry_their_backends_table() -> Outcome {

@@ -6,8 +6,8 @@
 //! backends, each only when the machine has the memory for it.
 
 use super::plan::{
-    Plan, MEMORY_BUNNY, MEMORY_HUGE, MEMORY_HUGE_BACKENDS, MEMORY_HUGE_FROM, MEMORY_RENDERS,
-    MEMORY_RENDER_SIZE,
+    Plan, BUILD_RUNS, MEMORY_BUNNY, MEMORY_HUGE, MEMORY_HUGE_BACKENDS, MEMORY_HUGE_FROM,
+    MEMORY_RENDERS, MEMORY_RENDER_SIZE,
 };
 use super::records::{Data, Key, Memory};
 use super::runner::{render_args, Matrix};
@@ -33,6 +33,54 @@ impl Matrix {
         if plan.memory_large {
             self.memory_large(plan);
         }
+        if let Some(scene) = plan.memory_scenes.last() {
+            self.build_timing(scene);
+        }
+    }
+
+    /// `EdgeTable::build` on `scene`'s table against reading its input from memory
+    /// (`shadowvol bench --build-runs`), as a `memory` record of backend `build`.
+    fn build_timing(&mut self, scene: &str) {
+        self.progress
+            .step(&format!("memory: {scene} edge-table build"));
+        let args = [
+            "bench",
+            "--scene",
+            scene,
+            "--backend",
+            "cpu",
+            "--mode",
+            "exact",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+            "--build-runs",
+            BUILD_RUNS,
+            "--format",
+            "json",
+        ];
+        let v = match self.cli.json::<Value>(&args) {
+            Ok(v) => v,
+            Err(e) => {
+                self.fail(format!("memory: {scene} build: {e}"));
+                return;
+            }
+        };
+        let b = &v["build"];
+        let m = Memory {
+            triangles: b["triangles"].as_u64(),
+            build_ms: b["median_ms"].as_f64(),
+            build_read_ms: b["read_ms"].as_f64(),
+            build_threads: b["threads"].as_u64(),
+            ..Memory::default()
+        };
+        let key = Key {
+            scene: scene.to_owned(),
+            backend: "build".to_owned(),
+            mode: None,
+        };
+        self.push("memory", key, "cpu".to_owned(), Data::Memory(m));
     }
 
     /// `bunny-10m` on every backend and the GPU pipeline, then `sphere-100m` on the CPU

@@ -8,7 +8,9 @@ use std::fmt::Write as _;
 pub(crate) fn plot_points(records: &[Record]) -> BTreeMap<String, Vec<(f64, f64)>> {
     let mut s: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
     for r in records.iter().filter(|r| r.experiment == "memory") {
-        let Some(m) = r.memory() else { continue };
+        let Some(m) = r.memory().filter(|m| m.build_ms.is_none()) else {
+            continue;
+        };
         if let (Some(t), Some(b)) = (m.triangles, m.per_triangle(m.peak_rss_bytes)) {
             s.entry(r.key.backend.clone())
                 .or_default()
@@ -44,8 +46,10 @@ pub(crate) fn memory_tables(r: &Results) -> String {
          |---|---|---|---|---|---|---|---|---|---|\n",
     );
     let f = |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |v| format!("{v:.0}"));
-    for x in recs {
-        let Some(m) = x.memory() else { continue };
+    for x in &recs {
+        let Some(m) = x.memory().filter(|m| m.build_ms.is_none()) else {
+            continue;
+        };
         let _ = writeln!(
             s,
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
@@ -63,5 +67,44 @@ pub(crate) fn memory_tables(r: &Results) -> String {
                 .map_or_else(|| "-".to_owned(), |w| format!("{w:.1}")),
         );
     }
-    s + "\n![bytes per triangle](memory_per_triangle.png)\n"
+    s += "\n![bytes per triangle](memory_per_triangle.png)\n";
+    s + &build_table(&recs)
+}
+
+/// `### Edge-table build`: `EdgeTable::build` against reading its input, from the `build`
+/// records; empty without them.
+fn build_table(recs: &[&Record]) -> String {
+    let rows: Vec<String> = recs
+        .iter()
+        .filter_map(|x| {
+            let m = x.memory()?;
+            let (build, read) = (m.build_ms?, m.build_read_ms?);
+            Some(format!(
+                "| {} | {} | {:.0} | {:.2} | {:.0} | {} |",
+                x.key.scene,
+                m.triangles
+                    .map_or_else(|| "-".to_owned(), |t| t.to_string()),
+                build,
+                read,
+                build / read.max(1e-9),
+                m.build_threads
+                    .map_or_else(|| "-".to_owned(), |t| t.to_string()),
+            ))
+        })
+        .collect();
+    if rows.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from(
+        "\n### Edge-table build\n\n\
+         `EdgeTable::build` (weld, counting sort, grouping) of the scene's mesh, median of \
+         several builds, against reading the mesh's bytes (12 per vertex and per triangle) \
+         from memory on the same threads (`shadowvol bench --build-runs`).\n\n\
+         | scene | triangles | build ms | read ms | build / read | threads |\n\
+         |---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let _ = writeln!(s, "{r}");
+    }
+    s
 }

@@ -84,6 +84,8 @@ pub(super) const MEMORY_RENDERS: [(&str, &[&str]); 3] = [
     ),
     ("render-map", &["--shadows", "map"]),
 ];
+/// Builds of the largest memory scene's edge table timed (`bench --build-runs`).
+pub(super) const BUILD_RUNS: &str = "3";
 /// Image size of the memory table's renders.
 pub(super) const MEMORY_RENDER_SIZE: &str = "1280x720";
 
@@ -208,7 +210,7 @@ impl Plan {
     }
 
     /// Progress steps of the memory table: per scene one `silhouette` per backend and one
-    /// `render` per pipeline.
+    /// `render` per pipeline, the large scenes of a full run, and the build timing.
     pub fn memory_steps(&self) -> u64 {
         let large = if self.memory_large {
             self.backends.len() as u64 + 1 + MEMORY_HUGE_BACKENDS.len() as u64
@@ -217,6 +219,7 @@ impl Plan {
         };
         self.memory_scenes.len() as u64 * (self.backends.len() + MEMORY_RENDERS.len()) as u64
             + large
+            + 1
     }
 
     /// Progress steps of the volumes-against-maps table: per scene the GPU pipeline in each mode

@@ -187,6 +187,15 @@ pub struct Memory {
     pub device_bytes: Option<u64>,
     /// Wall time of the whole command, s.
     pub wall_s: Option<f64>,
+    /// The edge-table build's median, ms (`bench --build-runs`: records of backend `build`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub build_ms: Option<f64>,
+    /// Reading the build's input bytes from memory, ms, in the same run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub build_read_ms: Option<f64>,
+    /// Threads the build and the read ran on.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub build_threads: Option<u64>,
     /// Every other field.
     #[serde(flatten)]
     pub extra: Map<String, Value>,

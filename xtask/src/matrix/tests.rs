@@ -530,18 +530,38 @@ fn memory_table_shows_bytes_per_triangle_and_round_trips() {
     };
     let results = Results {
         host: host(),
-        records: vec![Record {
-            host: host(),
-            experiment: "memory".into(),
-            reused_from: None,
-            key: Key {
-                scene: "sphere-1m".into(),
-                backend: "simd".into(),
-                mode: Some("exact".into()),
+        records: vec![
+            Record {
+                host: host(),
+                experiment: "memory".into(),
+                reused_from: None,
+                key: Key {
+                    scene: "sphere-1m".into(),
+                    backend: "simd".into(),
+                    mode: Some("exact".into()),
+                },
+                device: "cpu".into(),
+                data: Data::Memory(m),
             },
-            device: "cpu".into(),
-            data: Data::Memory(m),
-        }],
+            Record {
+                host: host(),
+                experiment: "memory".into(),
+                reused_from: None,
+                key: Key {
+                    scene: "sphere-10m".into(),
+                    backend: "build".into(),
+                    mode: None,
+                },
+                device: "cpu".into(),
+                data: Data::Memory(Memory {
+                    triangles: Some(10_000_000),
+                    build_ms: Some(900.0),
+                    build_read_ms: Some(7.0),
+                    build_threads: Some(2),
+                    ..Memory::default()
+                }),
+            },
+        ],
         skips: vec!["memory: sphere-100m on simd skipped: needs about 18.4 GB".into()],
         ..Results::default()
     };
@@ -550,7 +570,10 @@ fn memory_table_shows_bytes_per_triangle_and_round_trips() {
     assert!(t.lines().any(|l| l == line), "no line {line:?} in\n{t}");
     // A run left out says so, under its own heading.
     let skip = "- memory: sphere-100m on simd skipped: needs about 18.4 GB";
-    assert!(t.contains("\n## Left out\n\n") && t.lines().any(|l| l == skip), "{t}");
+    assert!(
+        t.contains("\n## Left out\n\n") && t.lines().any(|l| l == skip),
+        "{t}"
+    );
     // `--replot` reads results.json back into the same record.
     let text = serde_json::to_string(&serde_json::to_value(&results).unwrap()).unwrap();
     let back: Results = serde_json::from_str(&text).unwrap();
@@ -558,4 +581,8 @@ fn memory_table_shows_bytes_per_triangle_and_round_trips() {
     assert_eq!(back.skips, results.skips);
     let points = super::memory_table::plot_points(&back.records);
     assert_eq!(points["simd"], vec![(1e6, 172.0)]);
+    // The build timing is its own table, not a memory row or a plotted point.
+    let build = "| sphere-10m | 10000000 | 900 | 7.00 | 129 | 2 |";
+    assert!(t.lines().any(|l| l == build), "no line {build:?} in\n{t}");
+    assert!(!points.contains_key("build") && !t.contains("| sphere-10m | 10000000 | build |"));
 }
