@@ -29,10 +29,12 @@
 pub mod gpu;
 pub mod invariant;
 mod multiplicities;
+mod parts;
 mod prepared;
 mod scene;
 
 pub use multiplicities::{ExtractStats, Multiplicities};
+pub use parts::SceneParts;
 pub use prepared::{check_lights, PreparedScenes};
 pub use scene::{object_light, object_lights, SceneObject, TopologyScene};
 pub use shadowvol_mesh_topology::{unique_arc_bytes, vec_bytes};

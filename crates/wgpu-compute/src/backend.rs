@@ -10,7 +10,7 @@ use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout, TriangleLayout};
 use shadowvol_silhouette::{
     BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedBytes, PreparedId,
-    PreparedScenes, SilhouetteBackend, TopologyScene,
+    PreparedScenes, SceneParts, SilhouetteBackend, TopologyScene,
 };
 use std::sync::Arc;
 use wgpu::util::DeviceExt;
@@ -66,7 +66,26 @@ pub struct WgpuBackend {
     pub(crate) limits: wgpu::Limits,
     pub(crate) pipelines: Pipelines,
     pub(crate) health: Arc<Health>,
-    pub(crate) scenes: PreparedScenes<Prepared>,
+    pub(crate) scenes: PreparedScenes<Entry>,
+}
+
+/// A prepared scene: whole, or cut into parts whose buffers each fit the device
+/// ([`SceneParts`]), extracted one after the other and added up.
+pub(crate) enum Entry {
+    Whole(Box<Prepared>),
+    Split {
+        parts: SceneParts,
+        prepared: Vec<Prepared>,
+    },
+}
+
+impl Entry {
+    fn whole(&self) -> Option<&Prepared> {
+        match self {
+            Self::Whole(p) => Some(p),
+            Self::Split { .. } => None,
+        }
+    }
 }
 
 impl std::fmt::Debug for WgpuBackend {
@@ -106,18 +125,20 @@ impl WgpuBackend {
         &self.queue
     }
 
-    /// The flat layout of a prepared scene (global vertex ids, edge records), as uploaded.
+    /// The flat layout of a prepared scene (global vertex ids, edge records), as uploaded;
+    /// `None` for an unknown id or a scene prepared in parts (one too big for the device's
+    /// buffers).
     #[must_use]
     pub fn layout(&self, id: PreparedId) -> Option<&SceneLayout> {
-        self.scenes.get(id).ok().map(|p| &p.layout)
+        self.scenes.get(id).ok()?.whole().map(|p| &p.layout)
     }
 
     /// The device buffers holding the results of the last `extract` on `id` (see
     /// [`GpuResults`] for their layouts), or `None` before the first extract, for an unknown id,
-    /// or for a scene without edges.
+    /// for a scene without edges, or for a scene prepared in parts.
     #[must_use]
     pub fn gpu_results(&self, id: PreparedId) -> Option<GpuResults<'_>> {
-        let p = self.scenes.get(id).ok()?;
+        let p = self.scenes.get(id).ok()?.whole()?;
         let (first_light, light_count) = p.last?;
         let gpu = p.gpu.as_ref()?;
         let frame = p.frame.as_ref()?;
@@ -189,6 +210,112 @@ impl SilhouetteBackend for WgpuBackend {
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
         self.check_health()?;
+        let entry = match self.part_triangles(scene) {
+            None => Entry::Whole(Box::new(self.prepare_whole(scene)?)),
+            Some(max) => {
+                let parts = SceneParts::split(scene, max).map_err(|e| {
+                    BackendError::InvalidInput(format!("cutting the scene into parts: {e}"))
+                })?;
+                let prepared = parts
+                    .parts
+                    .iter()
+                    .map(|p| self.prepare_whole(p))
+                    .collect::<Result<_, _>>()?;
+                Entry::Split { parts, prepared }
+            }
+        };
+        Ok(self.scenes.insert(entry))
+    }
+
+    fn extract(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        self.check_health()?;
+        let mut entry = self.scenes.take(id)?;
+        let result = match &mut entry {
+            Entry::Whole(p) => self.extract_prepared(p, lights, mode, out),
+            Entry::Split { parts, prepared } => {
+                self.extract_parts(parts, prepared, lights, mode, out)
+            }
+        };
+        self.scenes.restore(id, entry);
+        result
+    }
+
+    fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
+        Ok(match self.scenes.get(id)? {
+            Entry::Whole(p) => p.bytes(),
+            Entry::Split { parts, prepared } => {
+                let mut b = PreparedBytes {
+                    host: parts.own_bytes(),
+                    device: 0,
+                };
+                for p in prepared {
+                    let pb = p.bytes();
+                    b.host += pb.host;
+                    b.device += pb.device;
+                }
+                b
+            }
+        })
+    }
+
+    fn release(&mut self, id: PreparedId) {
+        self.scenes.remove(id);
+    }
+}
+
+impl WgpuBackend {
+    /// Triangles per part when `scene`'s static buffers exceed one buffer or storage binding of
+    /// the device (or [`WgpuOptions::max_buffer_bytes`](crate::WgpuOptions::max_buffer_bytes));
+    /// `None` when it fits whole. A part's largest array is its edge records: at most 3 edges
+    /// of 16 bytes per triangle.
+    fn part_triangles(&self, scene: &TopologyScene) -> Option<usize> {
+        let limit = self
+            .limits
+            .max_storage_buffer_binding_size
+            .min(self.limits.max_buffer_size);
+        let (v, e, ov, t) = (
+            scene.total_vertices() as u64,
+            scene.total_edges() as u64,
+            scene.total_ovs() as u64,
+            scene.total_triangles() as u64,
+        );
+        let largest = [12 * v, 16 * (e + 1), 4 * ov, 16 * t].into_iter().max()?;
+        (largest > limit).then(|| (limit.saturating_sub(64) / 48).max(1) as usize)
+    }
+
+    /// [`SilhouetteBackend::extract`] on a scene prepared in parts: each part extracted, its
+    /// multiplicities added onto the scene's edges.
+    fn extract_parts(
+        &self,
+        parts: &SceneParts,
+        prepared: &mut [Prepared],
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        out.reset(parts.scene_edges, lights.len());
+        let (mut part, mut stats) = (Multiplicities::default(), ExtractStats::default());
+        for (k, p) in prepared.iter_mut().enumerate() {
+            let s = self.extract_prepared(p, lights, mode, &mut part)?;
+            stats.upload += s.upload;
+            stats.compute += s.compute;
+            stats.readback += s.readback;
+            stats.host_resolve += s.host_resolve;
+            stats.uncertain += s.uncertain;
+            parts.add_part(k, &part, out);
+        }
+        out.rebuild_silhouettes();
+        Ok(stats)
+    }
+
+    /// Lays out and uploads `scene` whole.
+    fn prepare_whole(&self, scene: &TopologyScene) -> Result<Prepared, BackendError> {
         let layout = SceneLayout::build(scene, NAME)?;
         let triangles = TriangleLayout::build(scene, &layout, NAME)?;
         let gpu = if layout.edge_count() == 0 {
@@ -228,7 +355,7 @@ impl SilhouetteBackend for WgpuBackend {
             Some(buffers)
         };
         self.check_health()?;
-        let id = self.scenes.insert(Prepared {
+        Ok(Prepared {
             scene: scene.clone(),
             layout,
             triangles,
@@ -239,29 +366,6 @@ impl SilhouetteBackend for WgpuBackend {
             list_prefix: u64::from(self.options.min_list_prefix),
             uncertain_prefix: u64::from(self.options.min_list_prefix),
             inline_exact: false,
-        });
-        Ok(id)
-    }
-
-    fn extract(
-        &mut self,
-        id: PreparedId,
-        lights: &[Light],
-        mode: Accuracy,
-        out: &mut Multiplicities,
-    ) -> Result<ExtractStats, BackendError> {
-        self.check_health()?;
-        let mut prepared = self.scenes.take(id)?;
-        let result = self.extract_prepared(&mut prepared, lights, mode, out);
-        self.scenes.restore(id, prepared);
-        result
-    }
-
-    fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
-        Ok(self.scenes.get(id)?.bytes())
-    }
-
-    fn release(&mut self, id: PreparedId) {
-        self.scenes.remove(id);
+        })
     }
 }

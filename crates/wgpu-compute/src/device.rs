@@ -48,8 +48,9 @@ pub struct WgpuOptions {
     /// from then on for that scene, and the host fallback returns [`BackendError::Limit`].
     pub initial_uncertain_capacity: u32,
     /// A cap, in bytes, on every buffer and storage binding, below the device's own limits (a
-    /// memory budget; default `None`). Scenes whose static buffers exceed it are refused with
-    /// [`BackendError::Limit`]; per-frame buffers shrink by running fewer lights per dispatch.
+    /// memory budget; default `None`). Scenes whose static buffers exceed it (or the device's
+    /// limits) are prepared in parts that fit ([`SceneParts`](shadowvol_silhouette::SceneParts)),
+    /// with the same results; per-frame buffers shrink by running fewer lights per dispatch.
     pub max_buffer_bytes: Option<u64>,
     /// A cap on workgroups per dispatch dimension, below the device's limit (default `None`).
     /// Scenes with more workgroups than one dimension holds fold them into a 2-D grid; a small

@@ -26,7 +26,8 @@ main!(
     gpu_corpus_f32_modes_values_and_closed_chains,
     gpu_full_readback_chunking_and_device_buffers_agree,
     gpu_errors_are_reported_not_panics,
-    gpu_buffer_limits_chunk_lights_or_refuse_with_numbers,
+    gpu_buffer_limits_chunk_lights_or_split_the_scene,
+    gpu_scenes_in_parts_equal_whole_scenes_on_the_corpus,
     gpu_lost_device_is_an_error_not_a_panic
 );
 
@@ -429,28 +430,30 @@ fn gpu_errors_are_reported_not_panics() -> Outcome {
     Ok(())
 }
 
-fn gpu_buffer_limits_chunk_lights_or_refuse_with_numbers() -> Outcome {
+fn gpu_buffer_limits_chunk_lights_or_split_the_scene() -> Outcome {
     let mut unlimited = backend(
-        "gpu_buffer_limits_chunk_lights_or_refuse_with_numbers",
+        "gpu_buffer_limits_chunk_lights_or_split_the_scene",
         WgpuOptions::default(),
     )?;
     let case = common::case("many-objects-transformed");
     let edges = case.scene.total_edges() as u64;
     // The edge records ((E + 1) x 16 bytes) are the largest static buffer: a cap below them
-    // refuses the scene, naming the sizes.
+    // prepares the scene in parts, with the same results in every mode.
     let mut small = WgpuBackend::new(WgpuOptions {
         max_buffer_bytes: Some((edges + 1) * 16 - 4),
         ..WgpuOptions::default()
     })
     .unwrap();
-    match small.prepare(&case.scene) {
-        Err(BackendError::Limit { message, .. }) => {
-            assert!(
-                message.contains(&format!("{}", (edges + 1) * 16)),
-                "{message}"
-            );
-        }
-        other => panic!("expected a limit error, got {other:?}"),
+    let id = small.prepare(&case.scene).unwrap();
+    assert!(
+        small.layout(id).is_none(),
+        "prepared in parts, not as one layout"
+    );
+    for mode in Accuracy::ALL {
+        let mut got = Multiplicities::default();
+        small.extract(id, &case.lights, mode, &mut got).unwrap();
+        let (expected, _) = extract_once(&mut unlimited, &case.scene, &case.lights, mode).unwrap();
+        assert_eq!(got, expected, "{mode}");
     }
     // A cap that holds the scene but only two lights' compact lists (8 bytes per edge each):
     // the lights run two per dispatch, with the same result.
@@ -472,6 +475,50 @@ fn gpu_buffer_limits_chunk_lights_or_refuse_with_numbers() -> Outcome {
         assert_eq!(res.light_count, 2 - lights.len() % 2);
         assert_eq!(res.first_light + res.light_count, lights.len());
     }
+    Ok(())
+}
+
+/// Every corpus case, with a buffer cap that cuts it into parts (objects grouped, big objects
+/// cut into triangle ranges): exact mode equals `cpu` bit for bit, the other modes equal the
+/// whole scene on the same device.
+fn gpu_scenes_in_parts_equal_whole_scenes_on_the_corpus() -> Outcome {
+    let mut whole = backend(
+        "gpu_scenes_in_parts_equal_whole_scenes_on_the_corpus",
+        WgpuOptions::default(),
+    )?;
+    let mut split_somewhere = false;
+    for case in common::all_cases() {
+        // A third of the edge records: at least three parts of cap / 48 triangles.
+        let cap = ((case.scene.total_edges() as u64 + 1) * 16 / 3).max(64);
+        let mut parts = WgpuBackend::new(WgpuOptions {
+            max_buffer_bytes: Some(cap),
+            ..WgpuOptions::default()
+        })
+        .unwrap();
+        let id = parts.prepare(&case.scene).unwrap();
+        split_somewhere |= parts.layout(id).is_none();
+        for mode in Accuracy::ALL {
+            let mut got = Multiplicities::default();
+            parts
+                .extract(id, &case.lights, mode, &mut got)
+                .unwrap_or_else(|e| panic!("{} {mode}: {e}", case.name));
+            let expected = if mode == Accuracy::Exact {
+                cpu_result(&case.scene, &case.lights, mode)
+            } else {
+                extract_once(&mut whole, &case.scene, &case.lights, mode)
+                    .unwrap()
+                    .0
+            };
+            assert_eq!(
+                invariant::first_difference(&got, &expected),
+                None,
+                "{} {mode}: (light, edge, parts, whole)",
+                case.name
+            );
+            assert_eq!(got, expected, "{} {mode}: compact lists", case.name);
+        }
+    }
+    assert!(split_somewhere, "the cap cut no scene into parts");
     Ok(())
 }
 
