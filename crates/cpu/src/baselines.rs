@@ -20,8 +20,8 @@
 //!   removes `v1` from row `v2` if present, otherwise it is stored in row `v1`. Fails when a row
 //!   fills up ([`BaselineError::HashRowFull`]), the method's known limit.
 //! * [`ClosedMesh::connectivity`] (Toy Wars, "connectivity table"): for every triangle edge, a
-//!   lit triangle whose neighbour across the edge is not lit emits the edge (using
-//!   [`shadowvol_mesh_topology::Connectivity`]).
+//!   lit triangle whose neighbour across the edge is not lit emits the edge (each triangle's
+//!   edges from [`EdgeTable::tri_edges`], the neighbours from its edges' two triangles).
 //!
 //! On such meshes, with lights in general position, each returns exactly the edges with
 //! `m != 0` of [`shadowvol_robust_math::Accuracy::Exact`] (tested in `tests/baselines.rs`).
