@@ -50,7 +50,18 @@ fuzz_target!(|input: Input| {
     assert_eq!(table.ov_offsets.len(), table.edges.len() + 1);
     assert!(table.edges.windows(2).all(|w| w[0] < w[1]));
     assert!(table.edges.iter().all(|e| e[0] < e[1]));
-    assert!(table.vertex_names.windows(2).all(|w| w[0] < w[1]));
+    assert!(table.vertex_names.to_vec().windows(2).all(|w| w[0] < w[1]));
+    assert_eq!(table.vertex_names.len(), table.positions.len());
+    let sources = table.triangle_sources.to_vec();
+    assert!(sources.windows(2).all(|w| w[0] < w[1]));
+    assert_eq!(sources.len(), table.triangles.len());
+    // Each triangle's edges, built on demand, are its edges.
+    for (tri, te) in table.triangles.iter().zip(table.tri_edges()) {
+        for i in 0..3 {
+            let (u, v) = (tri[i], tri[(i + 1) % 3]);
+            assert_eq!(table.edges[te[i] as usize], [u.min(v), u.max(v)]);
+        }
+    }
     for (e, &[a, b]) in table.edges.iter().enumerate() {
         for &o in table.ovs_of(e) {
             assert!(o != a && o != b);
