@@ -715,8 +715,22 @@ fn fuzz(root: &Path, ci: bool) -> Outcome {
             Outcome::Warned(msg.to_owned())
         };
     }
-    // `cargo fuzz run` builds every target first (a debug build: cheaper than release, and
-    // more than `cargo check`).
+    // Every target built first (a debug build: cheaper than release, and more than `cargo
+    // check`), so that a target that does not compile is reported as such, not as a crash.
+    println!("$ (cd fuzz && cargo fuzz build --dev --sanitizer none)");
+    match Command::new(crate::cargo())
+        .current_dir(&dir)
+        .args(["fuzz", "build", "--dev", "--sanitizer", "none"])
+        .status()
+    {
+        Ok(s) if s.success() => {}
+        Ok(s) => {
+            return Outcome::Failed(format!(
+                "the fuzz targets do not build ({s}; the compiler's errors are above)"
+            ))
+        }
+        Err(e) => return Outcome::Failed(format!("cannot run cargo fuzz build: {e}")),
+    }
     // New inputs go to a scratch corpus per target (libFuzzer writes to the first folder), so
     // the seed folders stay as they are.
     let scratch = std::env::temp_dir().join(format!("shadowvol-fuzz-{}", std::process::id()));
