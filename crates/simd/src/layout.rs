@@ -247,7 +247,11 @@ impl Layout {
             v
         };
         let (t0, t1, t2) = (column(0), column(1), column(2));
+        // Freed as soon as they are done with (16 and 4 bytes a triangle), so that the per-edge
+        // columns below are not built beside them.
+        drop(canon);
         let ov_tri = ov_triangles(table, &slot)?;
+        drop(slot);
         let ne = table.edges.len();
         let manifold = ManifoldEdges::new(table, &st, &ov_tri);
         let general = GeneralBlocks::new(table, &st, &ov_tri, &manifold.block_fast);
