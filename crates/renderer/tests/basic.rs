@@ -6,7 +6,10 @@ use shadowvol_renderer::{Camera, PlanPolicy, Technique};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_test_support::{main, Outcome};
 
-main!(box_on_floor_matches_reference_zpass_and_zfail);
+main!(
+    box_on_floor_matches_reference_zpass_and_zfail,
+    vertex_buffers_beyond_the_device_are_errors_not_panics
+);
 
 fn box_on_floor_matches_reference_zpass_and_zfail() -> Outcome {
     let mut r = common::renderer(128, 128, Accuracy::Exact)?;
@@ -50,6 +53,55 @@ fn box_on_floor_matches_reference_zpass_and_zfail() -> Outcome {
                 .plan
                 .iter()
                 .all(|e| e.technique == Technique::ZPass));
+        }
+    }
+    Ok(())
+}
+
+/// On a device whose buffers are smaller than a scene's surface vertices, the host pipeline and
+/// the map pipeline refuse the frame with the numbers (they used to panic inside wgpu, which
+/// could not map the buffer: `render bunny-10m --pipeline host` on lavapipe, 2.5 GB of
+/// vertices).
+fn vertex_buffers_beyond_the_device_are_errors_not_panics() -> Outcome {
+    use shadowvol_renderer::{
+        HostPipeline, MapPipeline, MapSettings, RenderDevice, RenderError, RenderOptions, Renderer,
+        ShadowPipeline,
+    };
+    let adapter = RenderDevice::headless_adapter().map_err(shadowvol_test_support::skip)?;
+    // 64 KiB buffers: the 48 x 32 image's targets and staging fit, a scene of 1,000 triangles
+    // (168 bytes of surface vertices each) does not.
+    const CAP: u64 = 64 << 10;
+    let open = || {
+        let (features, mut limits) = RenderDevice::requirements(&adapter);
+        limits.max_buffer_size = CAP;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("small buffers"),
+            required_features: features,
+            required_limits: limits,
+            ..Default::default()
+        }))
+        .expect("a device with smaller limits than the adapter's");
+        RenderDevice::on_device(adapter.clone(), device, queue)
+    };
+    let scene = shadowvol_scenes::preset("sphere-1k").expect("sphere-1k");
+    let pipelines: [Box<dyn ShadowPipeline>; 2] = [
+        Box::new(HostPipeline::new(
+            Box::new(shadowvol_cpu::CpuBackend::new()),
+        )),
+        Box::new(MapPipeline::new(MapSettings::default())),
+    ];
+    for pipeline in pipelines {
+        let kind = pipeline.kind();
+        let mut r = Renderer::new(open(), pipeline, RenderOptions::new(48, 32)).unwrap();
+        match r.render(&scene) {
+            Err(RenderError::InvalidInput(m)) => {
+                assert!(
+                    m.contains("max_buffer_size") && m.contains(&CAP.to_string()),
+                    "{m}"
+                );
+            }
+            Err(e) => panic!("{kind:?}: expected the buffer-size error, got {e}"),
+            Ok(_) => panic!("{kind:?}: a frame whose vertices exceed {CAP} bytes was drawn"),
         }
     }
     Ok(())

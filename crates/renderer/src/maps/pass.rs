@@ -225,7 +225,15 @@ impl MapPass {
     }
 
     /// Uploads `scene`'s surfaces in world space.
-    pub(crate) fn prepare(&self, device: &wgpu::Device, scene: &Scene) -> MapScene {
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`](crate::RenderError::InvalidInput) when the surfaces'
+    /// vertices exceed the device's `max_buffer_size`.
+    pub(crate) fn prepare(
+        &self,
+        device: &wgpu::Device,
+        scene: &Scene,
+    ) -> Result<MapScene, crate::RenderError> {
         let mut vertices = Vec::new();
         let mut ranges = Vec::new();
         let mut caster_vertices = 0;
@@ -247,16 +255,16 @@ impl MapPass {
         if vertices.is_empty() {
             vertices.push(bytemuck::Zeroable::zeroed());
         }
-        use wgpu::util::DeviceExt;
-        let surface = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("map surfaces"),
-            contents: bytemuck::cast_slice(&vertices),
-            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-        });
+        let surface = crate::raster::vertex_buffer(
+            device,
+            "map surfaces",
+            bytemuck::cast_slice(&vertices),
+            wgpu::BufferUsages::COPY_DST,
+        )?;
         let globals = uniform_buffer(device, "map globals", 96);
         let globals_bg = bind(device, &self.globals_bgl, &globals, 96);
         let (lights, lights_bg, maps, maps_bg) = self.light_buffers(device, 1);
-        MapScene {
+        Ok(MapScene {
             surface,
             ranges,
             caster_vertices,
@@ -269,7 +277,7 @@ impl MapPass {
             maps_bg,
             textures: None,
             queries: None,
-        }
+        })
     }
 
     fn light_buffers(

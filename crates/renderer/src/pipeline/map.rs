@@ -77,7 +77,7 @@ impl ShadowPipeline for MapPipeline {
         }
         let pass = self.pass.as_ref().expect("built above");
         self.scene = None;
-        self.scene = Some(pass.prepare(&device.device, scene));
+        self.scene = Some(pass.prepare(&device.device, scene)?);
         Ok(())
     }
 

@@ -77,6 +77,33 @@ pub(crate) fn push_surface(
     }
 }
 
+/// A vertex buffer holding `contents` (with `usage` besides `VERTEX`), or
+/// [`RenderError::InvalidInput`](crate::RenderError::InvalidInput) naming its size and the
+/// device's `max_buffer_size` when it is larger: wgpu would otherwise fail to map it at creation
+/// and panic.
+pub(crate) fn vertex_buffer(
+    device: &wgpu::Device,
+    label: &str,
+    contents: &[u8],
+    usage: wgpu::BufferUsages,
+) -> Result<wgpu::Buffer, crate::RenderError> {
+    use wgpu::util::DeviceExt;
+    let max = device.limits().max_buffer_size;
+    if contents.len() as u64 > max {
+        return Err(crate::RenderError::InvalidInput(format!(
+            "the {label} vertex buffer takes {} bytes; the device allows buffers of at most {max} (max_buffer_size)",
+            contents.len()
+        )));
+    }
+    Ok(
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage: wgpu::BufferUsages::VERTEX | usage,
+        }),
+    )
+}
+
 /// `light` (homogeneous) relative to `origin`: a point light's position minus `origin` (in
 /// homogeneous form, `xyz - w origin`), a directional light unchanged. The one conversion
 /// every pipeline applies to draw camera-relative.

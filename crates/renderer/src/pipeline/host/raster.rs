@@ -163,7 +163,7 @@ impl HostRaster {
         target: &Attachments<'_>,
         input: &RasterInput<'_>,
     ) -> Result<(), RenderError> {
-        let bindings = self.bindings(device, input);
+        let bindings = self.bindings(device, input)?;
         let ids = target.ids.ok_or_else(|| {
             RenderError::InvalidInput(
                 "the host pipeline draws surface ids: give it an ids attachment".to_owned(),
@@ -186,7 +186,15 @@ impl HostRaster {
     }
 
     /// The frame's uniforms and vertex buffers; empty lists are padded to one zero vertex.
-    fn bindings(&self, device: &wgpu::Device, input: &RasterInput<'_>) -> FrameBindings {
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] when a vertex buffer exceeds the device's
+    /// `max_buffer_size`.
+    fn bindings(
+        &self,
+        device: &wgpu::Device,
+        input: &RasterInput<'_>,
+    ) -> Result<FrameBindings, RenderError> {
         let padded_surface;
         let surface: &[SurfaceVertex] = if input.surface.is_empty() {
             padded_surface = [SurfaceVertex::zeroed()];
@@ -201,12 +209,23 @@ impl HostRaster {
         } else {
             input.volumes
         };
-        FrameBindings {
+        let none = wgpu::BufferUsages::empty();
+        Ok(FrameBindings {
             globals: self.globals_bind_group(device, input),
             lights: self.lights_bind_group(device, input.lights),
-            surface: vertex_buffer(device, "surface", bytemuck::cast_slice(surface)),
-            volumes: vertex_buffer(device, "volumes", bytemuck::cast_slice(volumes)),
-        }
+            surface: crate::raster::vertex_buffer(
+                device,
+                "surface",
+                bytemuck::cast_slice(surface),
+                none,
+            )?,
+            volumes: crate::raster::vertex_buffer(
+                device,
+                "volumes",
+                bytemuck::cast_slice(volumes),
+                none,
+            )?,
+        })
     }
 
     /// The globals uniform (`projection * view`, eye, ambient) and its bind group.
@@ -263,16 +282,6 @@ impl HostRaster {
             }],
         })
     }
-}
-
-/// A vertex buffer holding `contents`.
-fn vertex_buffer(device: &wgpu::Device, label: &str, contents: &[u8]) -> wgpu::Buffer {
-    use wgpu::util::DeviceExt;
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents,
-        usage: wgpu::BufferUsages::VERTEX,
-    })
 }
 
 /// The buffers and bind groups of one frame's [`RasterInput`], shared by all its passes.
