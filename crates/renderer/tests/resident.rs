@@ -128,7 +128,8 @@ fn extract(
         .flatten()
         .collect();
     let codes: Vec<u32> = techniques.iter().map(|&t| technique::code(t)).collect();
-    let layout = rs.layout();
+    // The pass keeps only the layout's sizes; the twin reads the same layout, built again.
+    let layout = &ResidentLayout::build(scene).unwrap();
     let (twin_signs, twin_integer) =
         twin::triangle_signs(layout, &ol, lights.len(), &codes, mode, pass.exact_filter());
     let (_, twin_records) =
@@ -185,7 +186,7 @@ fn exact_multiplicities_equal_cpu_bit_for_bit_on_the_corpus_with_no_host_resolut
         let (want, _) =
             shadowvol_silhouette::extract_once(&mut cpu, &scene, &case.lights, Accuracy::Exact)
                 .unwrap();
-        let got = multiplicities(&run.records, rs.layout().scene.edge_count());
+        let got = multiplicities(&run.records, rs.edge_count());
         let ol = object_lights(scene.transforms(), &case.lights);
         let offsets = scene.edge_offsets();
         for (li, m) in got.iter().enumerate() {
@@ -240,7 +241,7 @@ fn every_mode_matches_its_twin_and_the_consistent_modes_close_their_chains() -> 
                 "{mode} {}: records",
                 case.name
             );
-            let m = multiplicities(&run.records, rs.layout().scene.edge_count());
+            let m = multiplicities(&run.records, rs.edge_count());
             let offsets = scene.edge_offsets();
             for (li, m) in m.iter().enumerate() {
                 for (oi, o) in scene.objects.iter().enumerate() {
@@ -313,7 +314,7 @@ fn exact_mode_decides_subnormal_and_huge_inputs_on_the_device() -> Outcome {
         let (rs, run) = extract(&gpu, &scene, &lights, Accuracy::Exact, &[Technique::ZFail]);
         let (want, _) =
             shadowvol_silhouette::extract_once(&mut cpu, &scene, &lights, Accuracy::Exact).unwrap();
-        let got = multiplicities(&run.records, rs.layout().scene.edge_count());
+        let got = multiplicities(&run.records, rs.edge_count());
         assert_eq!(got[0].as_slice(), want.values(0), "scale {s:e}");
         if s < 1e-30 {
             assert!(
@@ -477,7 +478,7 @@ proptest::proptest! {
         if !touching.is_empty() {
             volume::remove_triangles(&o.table, ol, Accuracy::Exact, &touching, &mut want);
         }
-        let got = multiplicities(&run.records, rs.layout().scene.edge_count());
+        let got = multiplicities(&run.records, rs.edge_count());
         proptest::prop_assert_eq!(&got[0], &want);
     }
 }

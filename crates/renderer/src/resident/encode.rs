@@ -19,7 +19,7 @@ impl ShadowPass {
             .as_ref()
             .expect("ShadowPass::update before encode_extract");
         let n_lights = rs.state.lights as u32;
-        let objects = rs.layout.object_count() as u32;
+        let objects = rs.counts.objects as u32;
         let max_dim = self
             .device
             .limits()
@@ -46,7 +46,7 @@ impl ShadowPass {
         pass.set_bind_group(0, &fb.v0, &[]);
         pass.set_bind_group(1, &self.world.empty, &[]);
         pass.set_bind_group(2, &rs.world_out, &[]);
-        let (x, y) = grid(rs.layout.vertex_objects.len() as u32);
+        let (x, y) = grid(rs.counts.vertices as u32);
         pass.dispatch_workgroups(x, y, 1);
         if let Some((_, chunks)) = &rs.surface {
             pass.set_pipeline(&self.world.surfaces);
@@ -66,7 +66,7 @@ impl ShadowPass {
             return;
         }
         let mode = mode_index(rs.state.mode);
-        let (x, y) = grid(rs.layout.tri_count() as u32);
+        let (x, y) = grid(rs.counts.tris as u32);
         pass.set_pipeline(&self.extract.triangles[mode]);
         pass.dispatch_workgroups(x, y, 1);
         if rs.state.mode == Accuracy::Exact {
@@ -78,7 +78,7 @@ impl ShadowPass {
             pass.set_bind_group(2, &self.world.empty, &[]);
             pass.dispatch_workgroups_indirect(args, 0);
         }
-        let (x, y) = grid(rs.layout.scene.edge_count() as u32);
+        let (x, y) = grid(rs.counts.edges as u32);
         pass.set_pipeline(&self.extract.edges[mode]);
         pass.dispatch_workgroups(x, y, 1);
     }
@@ -118,7 +118,7 @@ impl ShadowPass {
             depth,
             render_ts(fb, TimestampSlot::Prepass),
         );
-        let tris = rs.layout.tri_count() as u32;
+        let tris = rs.counts.tris as u32;
         if tris > 0 {
             pass.set_pipeline(&self.draw.prepass[usize::from(rs.surface.is_some())]);
             if let Some((vertices, _)) = &rs.surface {
@@ -185,7 +185,7 @@ impl ShadowPass {
         if empty {
             return;
         }
-        let objects = rs.layout.object_count();
+        let objects = rs.counts.objects;
         let zfail: Vec<usize> = (0..objects)
             .filter(|&o| rs.state.techniques[light * objects + o] == Technique::ZFail)
             .collect();
@@ -227,7 +227,7 @@ impl ShadowPass {
             scissor,
             render_ts(fb, TimestampSlot::Lit(light)),
         );
-        let tris = rs.layout.tri_count() as u32;
+        let tris = rs.counts.tris as u32;
         if tris == 0 || scissor.is_some_and(|r| r[2] == 0 || r[3] == 0) {
             return;
         }

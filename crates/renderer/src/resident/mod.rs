@@ -68,7 +68,6 @@ use shadowvol_scenes::SceneLight;
 use shadowvol_silhouette::gpu::{mode_code, ExactFilter};
 use shadowvol_silhouette::{object_light, vec_bytes, PreparedBytes};
 use shadowvol_wgpu_compute::shaders;
-use std::sync::Arc;
 use wgpu::util::DeviceExt;
 
 /// `shaders/resident_extract.wgsl`: the triangle, edge and reset kernels.
@@ -334,7 +333,7 @@ struct FrameBuffers {
 
 /// A scene uploaded by [`ShadowPass::prepare`], with its per-frame buffers.
 pub struct ResidentScene {
-    layout: Arc<ResidentLayout>,
+    counts: LayoutCounts,
     tri_offsets: Vec<u32>,
     positions: wgpu::Buffer,
     edges: wgpu::Buffer,
@@ -358,15 +357,12 @@ pub struct ResidentScene {
 }
 
 impl ResidentScene {
-    /// What the scene holds beyond its edge tables: the host layout, and every device buffer
-    /// (the scene's, the surface vertices', and those of the last frame's lights).
+    /// What the scene holds beyond its edge tables: its per-object triangle offsets on the host
+    /// (the layout itself is freed once uploaded), and every device buffer (the scene's, the
+    /// surface vertices', and those of the last frame's lights).
     #[must_use]
     pub fn bytes(&self) -> PreparedBytes {
-        let l = &self.layout;
-        let host = l.scene.heap_bytes()
-            + l.triangles.heap_bytes()
-            + vec_bytes(&l.vertex_objects)
-            + vec_bytes(&self.tri_offsets);
+        let host = vec_bytes(&self.tri_offsets);
         let mut buffers = vec![
             &self.positions,
             &self.edges,
@@ -409,17 +405,41 @@ impl ResidentScene {
 impl std::fmt::Debug for ResidentScene {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("ResidentScene")
-            .field("triangles", &self.layout.tri_count())
-            .field("edges", &self.layout.scene.edge_count())
-            .field("objects", &self.layout.object_count())
+            .field("triangles", &self.counts.tris)
+            .field("edges", &self.counts.edges)
+            .field("objects", &self.counts.objects)
             .finish_non_exhaustive()
     }
 }
 
 impl ResidentScene {
-    /// The uploaded layout (what the CPU twin reads in tests).
+    /// Number of global edges uploaded (the stride of the per-edge results).
     #[must_use]
-    pub fn layout(&self) -> &ResidentLayout {
-        &self.layout
+    pub fn edge_count(&self) -> usize {
+        self.counts.edges
+    }
+}
+
+/// The sizes of an uploaded [`ResidentLayout`]: all the frames need of it once its arrays are
+/// on the device.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LayoutCounts {
+    pub objects: usize,
+    pub tris: usize,
+    pub vertices: usize,
+    pub edges: usize,
+    /// [`ResidentLayout::capacity`].
+    pub capacity: usize,
+}
+
+impl LayoutCounts {
+    pub(crate) fn of(layout: &ResidentLayout) -> Self {
+        Self {
+            objects: layout.object_count(),
+            tris: layout.tri_count(),
+            vertices: layout.vertex_objects.len(),
+            edges: layout.scene.edge_count(),
+            capacity: layout.capacity(),
+        }
     }
 }

@@ -15,7 +15,7 @@ impl ShadowPass {
         };
         let words = read_buffer(&self.device, &self.queue, &fb.buffers.args)?;
         let l = rs.state.lights;
-        let objects = rs.layout.object_count();
+        let objects = rs.counts.objects;
         let base = 8 * l;
         let mut c = PassCounts {
             integer_decided: u64::from(words[base]),
@@ -86,7 +86,7 @@ impl ShadowPass {
         let Some(fb) = rs.frame.as_ref() else {
             return Ok(Vec::new());
         };
-        let n = rs.state.lights * rs.layout.tri_count();
+        let n = rs.state.lights * rs.counts.tris;
         let words = read_buffer(&self.device, &self.queue, &fb.buffers.signs)?;
         Ok(words[..n].iter().map(|&w| w as i32).collect())
     }
@@ -102,7 +102,7 @@ impl ShadowPass {
         };
         let counts = self.read_counts(rs)?;
         let words = read_buffer(&self.device, &self.queue, &fb.buffers.records)?;
-        let cap = rs.layout.capacity();
+        let cap = rs.counts.capacity;
         counts
             .records
             .iter()

@@ -29,9 +29,10 @@ impl ShadowPass {
         let (world, world_out) = self.world_positions(layout.vertex_objects.len())?;
         let pending_dispatch = self.pending_dispatch();
         let surface = self.surface_vertices(&layout);
+        // The layout's arrays are on the device now; only its sizes and offsets stay.
         Ok(ResidentScene {
-            tri_offsets: layout.triangles.tri_offsets.clone(),
-            layout: Arc::new(layout),
+            counts: LayoutCounts::of(&layout),
+            tri_offsets: layout.triangles.tri_offsets,
             positions,
             edges,
             ovs,
@@ -239,7 +240,7 @@ impl ShadowPass {
         fb: &FrameBuffers,
         f: &PassFrame<'_>,
     ) -> Result<(), RenderError> {
-        let objects = rs.layout.object_count();
+        let objects = rs.counts.objects;
         let n_lights = f.lights.len();
         let q = &self.queue;
         // Object-space lights, [object * light_count + light], through the one shared
@@ -272,15 +273,15 @@ impl ShadowPass {
     /// Writes the extraction's parameters and the globals of the camera moved to the origin.
     fn write_params(&self, rs: &ResidentScene, f: &PassFrame<'_>) {
         let q = &self.queue;
-        let edge_count = rs.layout.scene.edge_count() as u32;
-        let tri_count = rs.layout.tri_count() as u32;
+        let edge_count = rs.counts.edges as u32;
+        let tri_count = rs.counts.tris as u32;
         q.write_buffer(
             &rs.params,
             0,
             bytemuck::cast_slice(&[edge_count, f.lights.len() as u32, 0, tri_count]),
         );
-        let objects = rs.layout.object_count();
-        let capacity = rs.layout.capacity() as u32;
+        let objects = rs.counts.objects;
+        let capacity = rs.counts.capacity as u32;
         q.write_buffer(
             &rs.rparams,
             0,
@@ -318,7 +319,7 @@ impl ShadowPass {
 
     /// The buffers sized by `slots` lights, each checked against what the device binds.
     fn light_buffers(&self, rs: &ResidentScene, slots: usize) -> Result<LightBuffers, RenderError> {
-        let objects = rs.layout.object_count().max(1) as u64;
+        let objects = rs.counts.objects.max(1) as u64;
         let max = self.device.limits().max_storage_buffer_binding_size;
         let sized = |label: &str,
                      size: u64,
@@ -338,7 +339,7 @@ impl ShadowPass {
         };
         let st = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let s = slots as u64;
-        let tri = rs.layout.tri_count().max(1) as u64;
+        let tri = rs.counts.tris.max(1) as u64;
         let readable = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let indirect = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::INDIRECT
@@ -353,11 +354,7 @@ impl ShadowPass {
                 4 * (8 * s + 1 + 3 * s * objects),
                 indirect,
             )?,
-            records: sized(
-                "side records",
-                4 * s * rs.layout.capacity() as u64,
-                readable,
-            )?,
+            records: sized("side records", 4 * s * rs.counts.capacity as u64, readable)?,
             objects: sized("objects", 80 * objects, st)?,
             light_u: self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("resident lights"),
@@ -474,7 +471,7 @@ impl ShadowPass {
 
 /// Checks that the frame's per-object and per-light slices match the scene and lights.
 fn check_frame_lengths(rs: &ResidentScene, f: &PassFrame<'_>) -> Result<(), RenderError> {
-    let objects = rs.layout.object_count();
+    let objects = rs.counts.objects;
     let n_lights = f.lights.len();
     let check = |what: &str, got: usize, want: usize| {
         if got == want {
@@ -528,9 +525,9 @@ fn object_rows(f: &PassFrame<'_>, tri_offsets: &[u32]) -> Vec<[u32; 4]> {
 
 /// Per light: camera-relative light, colour and emission, draw ranges, first point.
 fn light_uniforms(rs: &ResidentScene, f: &PassFrame<'_>, slots: usize) -> Vec<u8> {
-    let objects = rs.layout.object_count();
-    let capacity = rs.layout.capacity() as u32;
-    let tri_count = rs.layout.tri_count() as u32;
+    let objects = rs.counts.objects;
+    let capacity = rs.counts.capacity as u32;
+    let tri_count = rs.counts.tris as u32;
     let mut light_bytes = vec![0u8; slots * LIGHT_STRIDE as usize];
     for (li, light) in f.lights.iter().enumerate() {
         let l = crate::raster::relative_light(light.light.to_array(), f.camera.eye);
