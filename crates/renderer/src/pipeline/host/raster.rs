@@ -188,7 +188,7 @@ impl HostRaster {
     /// The frame's uniforms and vertex buffers; empty lists are padded to one zero vertex.
     ///
     /// # Errors
-    /// [`RenderError::InvalidInput`] when a vertex buffer exceeds the device's
+    /// [`RenderError::InvalidInput`] when not even one triangle's vertices fit the device's
     /// `max_buffer_size`.
     fn bindings(
         &self,
@@ -209,22 +209,11 @@ impl HostRaster {
         } else {
             input.volumes
         };
-        let none = wgpu::BufferUsages::empty();
         Ok(FrameBindings {
             globals: self.globals_bind_group(device, input),
             lights: self.lights_bind_group(device, input.lights),
-            surface: crate::raster::vertex_buffer(
-                device,
-                "surface",
-                bytemuck::cast_slice(surface),
-                none,
-            )?,
-            volumes: crate::raster::vertex_buffer(
-                device,
-                "volumes",
-                bytemuck::cast_slice(volumes),
-                none,
-            )?,
+            surface: Chunks::new(device, "surface", surface)?,
+            volumes: Chunks::new(device, "volumes", volumes)?,
         })
     }
 
@@ -291,9 +280,69 @@ struct FrameBindings {
     /// The per-light uniforms' bind group (dynamic offset: the light's).
     lights: wgpu::BindGroup,
     /// Surface triangles (at least one vertex).
-    surface: wgpu::Buffer,
+    surface: Chunks,
     /// All lights' volume vertices (at least one).
-    volumes: wgpu::Buffer,
+    volumes: Chunks,
+}
+
+/// Triangle-list vertices in consecutive vertex buffers, each at most the device's
+/// `max_buffer_size` and holding whole triangles: a scene's 2.9 GB of surface vertices on a
+/// device whose buffers hold 2 GiB. Drawing a range draws its part in each buffer, in order, so
+/// the primitives reach the rasteriser in the same order as from one buffer.
+struct Chunks {
+    /// Each buffer and the index of its first vertex.
+    parts: Vec<(wgpu::Buffer, u32)>,
+    /// Vertices per full buffer (a multiple of 3).
+    per_buffer: u32,
+}
+
+impl Chunks {
+    /// `vertices` in as few buffers as the device's `max_buffer_size` allows.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] when one triangle's vertices do not fit one buffer.
+    fn new<T: bytemuck::Pod>(
+        device: &wgpu::Device,
+        label: &str,
+        vertices: &[T],
+    ) -> Result<Self, RenderError> {
+        let stride = std::mem::size_of::<T>() as u64;
+        let fit = device.limits().max_buffer_size / stride / 3 * 3;
+        let per_buffer = u32::try_from(fit).unwrap_or(u32::MAX / 3 * 3);
+        if per_buffer == 0 {
+            return Err(RenderError::InvalidInput(format!(
+                "a triangle's {label} vertices take {} bytes; the device allows buffers of at most {} (max_buffer_size)",
+                3 * stride,
+                device.limits().max_buffer_size
+            )));
+        }
+        let parts = vertices
+            .chunks(per_buffer as usize)
+            .enumerate()
+            .map(|(k, c)| {
+                let buffer = crate::raster::vertex_buffer(
+                    device,
+                    label,
+                    bytemuck::cast_slice(c),
+                    wgpu::BufferUsages::empty(),
+                )?;
+                Ok((buffer, k as u32 * per_buffer))
+            })
+            .collect::<Result<_, RenderError>>()?;
+        Ok(Self { parts, per_buffer })
+    }
+
+    /// Draws the vertices `range` with the pass's current pipeline and bindings.
+    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, range: std::ops::Range<u32>) {
+        for (buffer, first) in &self.parts {
+            let lo = range.start.max(*first);
+            let hi = range.end.min(first.saturating_add(self.per_buffer));
+            if lo < hi {
+                pass.set_vertex_buffer(0, buffer.slice(..));
+                pass.draw(lo - first..hi - first, 0..1);
+            }
+        }
+    }
 }
 
 /// One frame being recorded, so that each pass needs only the encoder and its light.
@@ -319,8 +368,9 @@ impl FrameRecording<'_> {
             pass.set_pipeline(&self.raster.prepass);
             pass.set_bind_group(0, &self.bindings.globals, &[]);
             pass.set_bind_group(1, &self.bindings.lights, &[0]);
-            pass.set_vertex_buffer(0, self.bindings.surface.slice(..));
-            pass.draw(0..self.surface_vertices as u32, 0..1);
+            self.bindings
+                .surface
+                .draw(&mut pass, 0..self.surface_vertices as u32);
         }
     }
 
@@ -336,7 +386,6 @@ impl FrameRecording<'_> {
         );
         pass.set_bind_group(0, &self.bindings.globals, &[]);
         pass.set_bind_group(1, &self.bindings.lights, &[light_offset(li)]);
-        pass.set_vertex_buffer(0, self.bindings.volumes.slice(..));
         let raster = self.raster;
         for (pipe, range) in [
             (&raster.zpass, &l.zpass),
@@ -345,7 +394,7 @@ impl FrameRecording<'_> {
         ] {
             if !range.is_empty() && !empty_scissor(l.scissor) {
                 pass.set_pipeline(pipe);
-                pass.draw(range.clone(), 0..1);
+                self.bindings.volumes.draw(&mut pass, range.clone());
             }
         }
     }
@@ -365,8 +414,9 @@ impl FrameRecording<'_> {
             pass.set_stencil_reference(0);
             pass.set_bind_group(0, &self.bindings.globals, &[]);
             pass.set_bind_group(1, &self.bindings.lights, &[light_offset(li)]);
-            pass.set_vertex_buffer(0, self.bindings.surface.slice(..));
-            pass.draw(0..self.surface_vertices as u32, 0..1);
+            self.bindings
+                .surface
+                .draw(&mut pass, 0..self.surface_vertices as u32);
         }
     }
 }
