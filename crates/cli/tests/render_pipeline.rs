@@ -10,7 +10,8 @@ use shadowvol_test_support::{main, Outcome, Skip};
 main!(
     gpu_pipeline_is_the_default_and_timed_frames_read_nothing_back,
     backend_means_host_and_both_pipelines_agree,
-    gpu_pipeline_with_a_backend_is_refused
+    gpu_pipeline_with_a_backend_is_refused,
+    a_scene_beyond_the_gpu_bindings_is_drawn_by_the_host_pipeline
 );
 
 fn scratch(name: &str) -> String {
@@ -129,5 +130,61 @@ fn gpu_pipeline_with_a_backend_is_refused() -> Outcome {
         e.contains("--backend simd selects the host pipeline"),
         "{e}"
     );
+    Ok(())
+}
+
+/// With every buffer capped at 64 KiB (`SHADOWVOL_MAX_BUFFER_BYTES`), sphere-10k's edge records
+/// (240 KB) do not fit one binding: without `--pipeline` the host pipeline draws it, from
+/// several buffers, with a warning and the same image as the host pipeline on the uncapped
+/// device; `--pipeline gpu` fails naming both numbers.
+fn a_scene_beyond_the_gpu_bindings_is_drawn_by_the_host_pipeline() -> Outcome {
+    let capped = |args: &[&str]| {
+        std::process::Command::new(common::BIN)
+            .args(args)
+            .env(shadowvol_renderer::BUFFER_CAP_ENV, "65536")
+            .output()
+            .expect("run shadowvol")
+    };
+    let (fallback, host) = (scratch("cap-fallback.png"), scratch("cap-host.png"));
+    let base = [
+        "render",
+        "sphere-10k",
+        "--size",
+        "96x80",
+        "--format",
+        "json",
+    ];
+    let out = capped(&[&base[..], &["--out", &fallback]].concat());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    common::no_adapter("render", &stderr)?;
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("warning: using the host pipeline: the scene is too large")
+            && stderr.contains("65536"),
+        "{stderr}"
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
+    assert_eq!(v["pipeline"], "host");
+    render(&[
+        "sphere-10k",
+        "--size",
+        "96x80",
+        "--pipeline",
+        "host",
+        "--out",
+        &host,
+    ])?;
+    assert!(
+        std::fs::read(&fallback).unwrap() == std::fs::read(&host).unwrap(),
+        "the capped host pipeline's image differs from the uncapped one"
+    );
+    let out = capped(&[&base[..], &["--pipeline", "gpu", "--out", &fallback]].concat());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("too large for the device") && stderr.contains("at most 65536"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
     Ok(())
 }

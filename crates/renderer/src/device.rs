@@ -93,7 +93,9 @@ impl RenderDevice {
         }
         required |= crate::resident::ShadowPass::optional_features(adapter);
         let limits = crate::resident::ShadowPass::required_limits(adapter).unwrap_or_else(|_| {
-            wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits())
+            let mut l = wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits());
+            l.max_buffer_size = l.max_buffer_size.min(buffer_cap().unwrap_or(u64::MAX));
+            l
         });
         (required, limits)
     }
@@ -184,4 +186,17 @@ impl RenderDevice {
         }
         Ok(())
     }
+}
+
+/// Environment variable that caps, in bytes, every buffer and storage binding the renderer asks
+/// a device for ([`RenderDevice::requirements`]): a memory budget, and the way to see on a
+/// small scene what a device with smaller limits does with a large one (the GPU pipeline
+/// refuses a scene beyond one binding with [`RenderError::TooLarge`]; the host pipeline draws
+/// from several buffers).
+pub const BUFFER_CAP_ENV: &str = "SHADOWVOL_MAX_BUFFER_BYTES";
+
+/// The cap of [`BUFFER_CAP_ENV`], if it is set to a number of bytes.
+#[must_use]
+pub fn buffer_cap() -> Option<u64> {
+    std::env::var(BUFFER_CAP_ENV).ok()?.trim().parse().ok()
 }

@@ -30,6 +30,11 @@ pub enum RenderError {
     /// Bad parameters (size, camera, light).
     #[error("invalid input: {0}")]
     InvalidInput(String),
+    /// The scene does not fit a buffer or storage binding of the device (both numbers named):
+    /// the GPU pipeline binds each scene array whole, the map pipeline its surfaces in one
+    /// buffer. The host pipeline draws from several buffers.
+    #[error("too large for the device: {0}")]
+    TooLarge(String),
     /// Writing an image failed.
     #[error("image {path}: {message}")]
     Image {

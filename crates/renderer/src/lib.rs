@@ -51,7 +51,7 @@ mod renderer;
 pub mod resident;
 pub mod world;
 
-pub use device::RenderDevice;
+pub use device::{buffer_cap, RenderDevice, BUFFER_CAP_ENV};
 pub use error::RenderError;
 pub use frame::{Frame, FrameImage, FrameReport, FrameTime, Timings, UncertainUnit};
 pub use lighting::Exposure;

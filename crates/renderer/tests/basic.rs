@@ -109,7 +109,7 @@ fn vertex_buffers_beyond_the_device_are_drawn_in_parts_or_refused() -> Outcome {
     let maps = Box::new(MapPipeline::new(MapSettings::default()));
     let mut r = Renderer::new(open(Some(CAP)), maps, RenderOptions::new(96, 80)).unwrap();
     match r.render(&scene) {
-        Err(RenderError::InvalidInput(m)) => {
+        Err(RenderError::TooLarge(m)) => {
             assert!(
                 m.contains("max_buffer_size") && m.contains(&CAP.to_string()),
                 "{m}"

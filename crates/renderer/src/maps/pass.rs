@@ -227,8 +227,8 @@ impl MapPass {
     /// Uploads `scene`'s surfaces in world space.
     ///
     /// # Errors
-    /// [`RenderError::InvalidInput`](crate::RenderError::InvalidInput) when the surfaces'
-    /// vertices exceed the device's `max_buffer_size`.
+    /// [`RenderError::TooLarge`](crate::RenderError::TooLarge) when the surfaces' vertices
+    /// exceed the device's `max_buffer_size`.
     pub(crate) fn prepare(
         &self,
         device: &wgpu::Device,

@@ -78,7 +78,7 @@ pub(crate) fn push_surface(
 }
 
 /// A vertex buffer holding `contents` (with `usage` besides `VERTEX`), or
-/// [`RenderError::InvalidInput`](crate::RenderError::InvalidInput) naming its size and the
+/// [`RenderError::TooLarge`](crate::RenderError::TooLarge) naming its size and the
 /// device's `max_buffer_size` when it is larger: wgpu would otherwise fail to map it at creation
 /// and panic.
 pub(crate) fn vertex_buffer(
@@ -90,7 +90,7 @@ pub(crate) fn vertex_buffer(
     use wgpu::util::DeviceExt;
     let max = device.limits().max_buffer_size;
     if contents.len() as u64 > max {
-        return Err(crate::RenderError::InvalidInput(format!(
+        return Err(crate::RenderError::TooLarge(format!(
             "the {label} vertex buffer takes {} bytes; the device allows buffers of at most {max} (max_buffer_size)",
             contents.len()
         )));

@@ -20,17 +20,19 @@ impl ShadowPass {
     }
 
     /// Limits to request on the device: the downlevel defaults, with the adapter's storage
-    /// buffer counts and sizes (the pass binds up to 10 storage buffers in one stage).
+    /// buffer counts and sizes (the pass binds up to 10 storage buffers in one stage), each size
+    /// at most [`crate::buffer_cap`] when it is set.
     ///
     /// # Errors
     /// [`RenderError::Unsupported`] naming the limit or capability the adapter lacks.
     pub fn required_limits(adapter: &wgpu::Adapter) -> Result<wgpu::Limits, RenderError> {
         let a = adapter.limits();
         Self::check_adapter(adapter)?;
+        let cap = crate::device::buffer_cap().unwrap_or(u64::MAX);
         let mut l = wgpu::Limits::downlevel_defaults().using_resolution(a.clone());
         l.max_storage_buffers_per_shader_stage = a.max_storage_buffers_per_shader_stage;
-        l.max_storage_buffer_binding_size = a.max_storage_buffer_binding_size;
-        l.max_buffer_size = a.max_buffer_size;
+        l.max_storage_buffer_binding_size = a.max_storage_buffer_binding_size.min(cap);
+        l.max_buffer_size = a.max_buffer_size.min(cap);
         l.max_compute_workgroups_per_dimension = a.max_compute_workgroups_per_dimension;
         Ok(l)
     }

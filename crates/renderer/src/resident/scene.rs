@@ -9,8 +9,9 @@ impl ShadowPass {
     /// transforms are not used here; each frame gives its own ([`PassFrame::transforms`]).
     ///
     /// # Errors
-    /// [`RenderError::InvalidInput`] when the scene is too large to index with `u32`, or a buffer
-    /// exceeds the device's `max_storage_buffer_binding_size`.
+    /// [`RenderError::InvalidInput`] when the scene is too large to index with `u32`;
+    /// [`RenderError::TooLarge`] when a buffer exceeds the device's
+    /// `max_storage_buffer_binding_size`.
     pub fn prepare(&self, scene: &shadowvol_scenes::Scene) -> Result<ResidentScene, RenderError> {
         self.prepare_layout(ResidentLayout::of_scene(scene)?)
     }
@@ -65,7 +66,7 @@ impl ShadowPass {
         let max = self.device.limits().max_storage_buffer_binding_size;
         let bytes: &[u8] = bytemuck::cast_slice(data);
         if bytes.len() as u64 > max {
-            return Err(RenderError::InvalidInput(format!(
+            return Err(RenderError::TooLarge(format!(
                 "the scene's {label} take {} bytes; the device binds at most {max} (max_storage_buffer_binding_size)",
                 bytes.len()
             )));
@@ -94,7 +95,7 @@ impl ShadowPass {
         let max = self.device.limits().max_storage_buffer_binding_size;
         let world_bytes = 16 * vertices.max(1) as u64;
         if world_bytes > max {
-            return Err(RenderError::InvalidInput(format!(
+            return Err(RenderError::TooLarge(format!(
                 "the scene's world positions take {world_bytes} bytes; the device binds at most {max} (max_storage_buffer_binding_size)"
             )));
         }

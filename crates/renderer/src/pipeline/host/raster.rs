@@ -188,7 +188,7 @@ impl HostRaster {
     /// The frame's uniforms and vertex buffers; empty lists are padded to one zero vertex.
     ///
     /// # Errors
-    /// [`RenderError::InvalidInput`] when not even one triangle's vertices fit the device's
+    /// [`RenderError::TooLarge`] when not even one triangle's vertices fit the device's
     /// `max_buffer_size`.
     fn bindings(
         &self,
@@ -300,7 +300,7 @@ impl Chunks {
     /// `vertices` in as few buffers as the device's `max_buffer_size` allows.
     ///
     /// # Errors
-    /// [`RenderError::InvalidInput`] when one triangle's vertices do not fit one buffer.
+    /// [`RenderError::TooLarge`] when one triangle's vertices do not fit one buffer.
     fn new<T: bytemuck::Pod>(
         device: &wgpu::Device,
         label: &str,
@@ -310,7 +310,7 @@ impl Chunks {
         let fit = device.limits().max_buffer_size / stride / 3 * 3;
         let per_buffer = u32::try_from(fit).unwrap_or(u32::MAX / 3 * 3);
         if per_buffer == 0 {
-            return Err(RenderError::InvalidInput(format!(
+            return Err(RenderError::TooLarge(format!(
                 "a triangle's {label} vertices take {} bytes; the device allows buffers of at most {} (max_buffer_size)",
                 3 * stride,
                 device.limits().max_buffer_size
