@@ -99,10 +99,18 @@ fn resident_surfaces(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     let p2 = rel(tr.z);
     let n = vec4<f32>(cross(p1 - p0, p2 - p0), 0.0);
     let albedo = bitcast<vec4<f32>>(r_objects[tr.w * 5u + 3u]);
-    let ids = vec2<u32>(tr.w + 1u, t - r_objects[tr.w * 5u + 4u].x);
+    let ids = surface_ids(tr.w, t);
     r_surface_out[3u * k] = SurfaceV(vec4<f32>(p0, 1.0), n, albedo, ids, vec2<u32>(0u));
     r_surface_out[3u * k + 1u] = SurfaceV(vec4<f32>(p1, 1.0), n, albedo, ids, vec2<u32>(0u));
     r_surface_out[3u * k + 2u] = SurfaceV(vec4<f32>(p2, 1.0), n, albedo, ids, vec2<u32>(0u));
+}
+
+// The pixel ids `[surface + 1, triangle]` of global triangle `t` of `object`: the object's
+// record holds its first global triangle (x), its surface + 1 (y) and the index of its first
+// triangle within that surface (z; not 0 where a surface is drawn in parts).
+fn surface_ids(object: u32, t: u32) -> vec2<u32> {
+    let r = r_objects[object * 5u + 4u];
+    return vec2<u32>(r.y, t - r.x + r.z);
 }
 
 fn rel(id: u32) -> vec3<f32> {
@@ -162,7 +170,7 @@ fn vs_resident_surface(@builtin(vertex_index) vi: u32) -> SurfaceOut {
     o.world = p;
     o.normal = cross(p1 - p0, p2 - p0);
     o.albedo = bitcast<vec4<f32>>(r_objects[tr.w * 5u + 3u]).rgb;
-    o.ids = vec2<u32>(tr.w + 1u, t - r_objects[tr.w * 5u + 4u].x);
+    o.ids = surface_ids(tr.w, t);
     return o;
 }
 

@@ -11,7 +11,7 @@ main!(
     gpu_pipeline_is_the_default_and_timed_frames_read_nothing_back,
     backend_means_host_and_both_pipelines_agree,
     gpu_pipeline_with_a_backend_is_refused,
-    a_scene_beyond_the_gpu_bindings_is_drawn_by_the_host_pipeline
+    a_scene_beyond_the_device_bindings_is_drawn_in_parts
 );
 
 fn scratch(name: &str) -> String {
@@ -134,57 +134,60 @@ fn gpu_pipeline_with_a_backend_is_refused() -> Outcome {
 }
 
 /// With every buffer capped at 64 KiB (`SHADOWVOL_MAX_BUFFER_BYTES`), sphere-10k's edge records
-/// (240 KB) do not fit one binding: without `--pipeline` the host pipeline draws it, from
-/// several buffers, with a warning and the same image as the host pipeline on the uncapped
-/// device; `--pipeline gpu` fails naming both numbers.
-fn a_scene_beyond_the_gpu_bindings_is_drawn_by_the_host_pipeline() -> Outcome {
-    let capped = |args: &[&str]| {
-        std::process::Command::new(common::BIN)
-            .args(args)
-            .env(shadowvol_renderer::BUFFER_CAP_ENV, "65536")
-            .output()
-            .expect("run shadowvol")
+/// (240 KB) do not fit one storage binding: the GPU pipeline uploads the scene in parts and
+/// draws the same image as uncapped (with the same pixel ids, so the same comparison with the
+/// reference), and the host pipeline draws from several vertex buffers, also the same image as
+/// uncapped.
+fn a_scene_beyond_the_device_bindings_is_drawn_in_parts() -> Outcome {
+    let run_with = |cap: Option<&str>, args: &[&str]| {
+        let mut c = std::process::Command::new(common::BIN);
+        c.args(args);
+        if let Some(cap) = cap {
+            c.env(shadowvol_renderer::BUFFER_CAP_ENV, cap);
+        }
+        c.output().expect("run shadowvol")
     };
-    let (fallback, host) = (scratch("cap-fallback.png"), scratch("cap-host.png"));
-    let base = [
-        "render",
-        "sphere-10k",
-        "--size",
-        "96x80",
-        "--format",
-        "json",
-    ];
-    let out = capped(&[&base[..], &["--out", &fallback]].concat());
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    common::no_adapter("render", &stderr)?;
-    assert!(out.status.success(), "{stderr}");
-    assert!(
-        stderr.contains("warning: using the host pipeline: the scene is too large")
-            && stderr.contains("65536"),
-        "{stderr}"
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
-    assert_eq!(v["pipeline"], "host");
-    render(&[
-        "sphere-10k",
-        "--size",
-        "96x80",
-        "--pipeline",
-        "host",
-        "--out",
-        &host,
-    ])?;
-    assert!(
-        std::fs::read(&fallback).unwrap() == std::fs::read(&host).unwrap(),
-        "the capped host pipeline's image differs from the uncapped one"
-    );
-    let out = capped(&[&base[..], &["--pipeline", "gpu", "--out", &fallback]].concat());
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(
-        stderr.contains("too large for the device") && stderr.contains("at most 65536"),
-        "{stderr}"
-    );
-    assert!(!stderr.contains("panicked"), "{stderr}");
+    for pipeline in ["gpu", "host"] {
+        let mut images = Vec::new();
+        for cap in [None, Some("65536")] {
+            let png = scratch(&format!("cap-{pipeline}-{}.png", cap.unwrap_or("none")));
+            let args = [
+                "render",
+                "sphere-10k",
+                "--size",
+                "96x80",
+                "--pipeline",
+                pipeline,
+                "--out",
+                &png,
+                "--reference",
+                "--format",
+                "json",
+            ];
+            let out = run_with(cap, &args);
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            common::no_adapter("render", &stderr)?;
+            assert!(out.status.success(), "{pipeline} {cap:?}: {stderr}");
+            assert!(!stderr.contains("panicked"), "{stderr}");
+            let v: Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
+            assert_eq!(v["pipeline"], pipeline);
+            let parts = v["scene_parts"].as_u64().expect("scene_parts");
+            match (pipeline, cap) {
+                ("gpu", Some(_)) => assert!(parts > 1, "the GPU pipeline in one part"),
+                _ => assert_eq!(parts, 1, "{pipeline} {cap:?}"),
+            }
+            // The reference reads the pixel ids `[surface + 1, triangle]`: a part's ids must
+            // name the scene's triangles.
+            let counts =
+                ["artifact_pixels", "covered_pixels", "shadow_pixels"].map(|k| v[k].clone());
+            images.push((std::fs::read(&png).unwrap(), counts));
+        }
+        assert!(
+            images[0] == images[1],
+            "{pipeline}: the capped image or its comparison differs from the uncapped one: {:?} {:?}",
+            images[0].1,
+            images[1].1
+        );
+    }
     Ok(())
 }

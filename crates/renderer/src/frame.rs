@@ -118,6 +118,11 @@ pub struct FrameReport {
     /// The GPU time of each pass from timestamp queries, where the pipeline and device have
     /// them (GPU pipeline).
     pub gpu_timings: Option<GpuTimings>,
+    /// Parts the GPU pipeline uploaded the scene in: 1, or more for a scene beyond one storage
+    /// binding of the device. With more than one, each plan entry's `silhouette_edges` and
+    /// `side_quads` add up the parts', the edges where the parts meet included (their volumes
+    /// cancel in the stencil).
+    pub scene_parts: usize,
     /// Per light, its shadow map ([`crate::MapPipeline`]; `None`: nothing casts); empty for the
     /// volume pipelines.
     pub shadow_maps: Vec<Option<crate::maps::LightMap>>,

@@ -385,6 +385,7 @@ impl Renderer {
             depth_clamp: pipeline.depth_clamp(&self.device),
             timings,
             gpu_timings: pass.gpu_timings,
+            scene_parts: pass.scene_parts.max(1),
             shadow_maps: pipeline.maps().to_vec(),
         }
     }

@@ -25,6 +25,9 @@ pub struct SceneParts {
     pub parts: Vec<TopologyScene>,
     /// For each part, the scene's global edge index of each of the part's global edges.
     pub edge_maps: Vec<Vec<u32>>,
+    /// For each part, each of its objects' `(object of the scene, its first triangle there)`:
+    /// `(o, 0)` for a whole object, `(o, k · N)` for range `k` of a cut one.
+    pub sources: Vec<Vec<(usize, u32)>>,
     /// Global edges of the whole scene.
     pub scene_edges: usize,
     /// For each part, whether its table was built here (a range of a cut object) rather than
@@ -45,34 +48,43 @@ impl SceneParts {
         let mut out = Self {
             parts: Vec::new(),
             edge_maps: Vec::new(),
+            sources: Vec::new(),
             scene_edges: scene.total_edges(),
             built: Vec::new(),
         };
         let offsets = scene.edge_offsets();
         let (mut group, mut group_map, mut group_tris) = (Vec::new(), Vec::new(), 0usize);
+        let mut group_sources = Vec::new();
         for (o, obj) in scene.objects.iter().enumerate() {
             let tris = obj.table.triangles.len();
             if tris > max_triangles {
-                out.push(&mut group, &mut group_map);
+                out.push(&mut group, &mut group_map, &mut group_sources);
                 group_tris = 0;
-                out.cut(obj, offsets[o] as u32, max_triangles)?;
+                out.cut(obj, o, offsets[o] as u32, max_triangles)?;
                 continue;
             }
             if group_tris + tris > max_triangles {
-                out.push(&mut group, &mut group_map);
+                out.push(&mut group, &mut group_map, &mut group_sources);
                 group_tris = 0;
             }
             group.push(obj.clone());
+            group_sources.push((o, 0));
             group_map.extend(offsets[o] as u32..offsets[o + 1] as u32);
             group_tris += tris;
         }
-        out.push(&mut group, &mut group_map);
+        out.push(&mut group, &mut group_map, &mut group_sources);
         Ok(out)
     }
 
     /// Ends the current group of whole objects as a part (if it has any).
-    fn push(&mut self, group: &mut Vec<SceneObject>, map: &mut Vec<u32>) {
+    fn push(
+        &mut self,
+        group: &mut Vec<SceneObject>,
+        map: &mut Vec<u32>,
+        sources: &mut Vec<(usize, u32)>,
+    ) {
         if !group.is_empty() {
+            self.sources.push(std::mem::take(sources));
             self.parts.push(TopologyScene {
                 objects: std::mem::take(group),
             });
@@ -81,8 +93,15 @@ impl SceneParts {
         }
     }
 
-    /// Cuts `obj` (whose edges start at global edge `base`) into parts of `max` triangles.
-    fn cut(&mut self, obj: &SceneObject, base: u32, max: usize) -> Result<(), MeshError> {
+    /// Cuts `obj` (object `index` of the scene, whose edges start at global edge `base`) into
+    /// parts of `max` triangles.
+    fn cut(
+        &mut self,
+        obj: &SceneObject,
+        index: usize,
+        base: u32,
+        max: usize,
+    ) -> Result<(), MeshError> {
         let table = &obj.table;
         // Compact id in the part of each of the object's vertices (u32::MAX: not in it).
         let mut local = vec![u32::MAX; table.positions.len()];
@@ -119,6 +138,7 @@ impl SceneParts {
                 }],
             });
             self.edge_maps.push(map);
+            self.sources.push(vec![(index, (k * max) as u32)]);
             self.built.push(true);
         }
         Ok(())
@@ -235,6 +255,11 @@ mod tests {
         assert_eq!(parts.parts.len(), 1 + 9 + 1);
         let tris: usize = parts.parts.iter().map(TopologyScene::total_triangles).sum();
         assert_eq!(tris, scene.total_triangles());
+        let big_ranges: Vec<(usize, u32)> = (0..9).map(|k| (1, 97 * k)).collect();
+        let sources: Vec<(usize, u32)> = parts.sources.iter().flatten().copied().collect();
+        assert_eq!(sources[0], (0, 0));
+        assert_eq!(sources[1..10], big_ranges[..]);
+        assert_eq!(sources[10..], [(2, 0), (3, 0)]);
         // A point light level with some vertices, one above, a directional one.
         let lights = [
             [5.0, 5.0, 0.5, 1.0],

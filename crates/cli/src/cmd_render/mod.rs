@@ -37,12 +37,13 @@ pub const LONG_ABOUT: &str =
     device with nothing read back during a frame (the `wgpu` backend's kernels; exact mode \
     decides every triangle on the device with exact integer arithmetic); `host` brings the \
     multiplicities of --backend (default cpu) to the host, which builds and uploads the volumes. \
-    Giving --backend means host. Where the adapter cannot run the GPU pipeline, or the scene's \
-    arrays exceed one of its storage bindings (lavapipe binds 128 MiB: about 5 million \
-    triangles), host is used with a warning; the host pipeline draws from several vertex \
-    buffers where one would exceed the device's largest buffer. SHADOWVOL_MAX_BUFFER_BYTES caps \
-    every buffer and binding the renderer asks for (a budget, and a way to see this on a small \
-    scene). --frames N renders N further frames with every light moving on a fixed \
+    Giving --backend means host. Where the adapter cannot run the GPU pipeline, host is used \
+    with a warning. A scene whose arrays exceed one storage binding of the device (lavapipe \
+    binds 128 MiB: about 5 million triangles) is uploaded in parts (\"scene_parts\" in the \
+    JSON; each plan entry's counts then add up the parts', the edges where parts meet \
+    included), with the same image; the host pipeline draws from several vertex buffers where \
+    one would exceed the device's largest buffer. SHADOWVOL_MAX_BUFFER_BYTES caps every buffer \
+    and binding the renderer asks for (a budget, and a way to see this on a small scene). --frames N renders N further frames with every light moving on a fixed \
     orbit (1 degree per frame about the vertical axis through the scene's centre), so each \
     frame re-extracts, and reports their times; nothing but the final image is read back in the \
     GPU pipeline (frame_readback_bytes).\n\n\
@@ -262,7 +263,7 @@ pub(crate) fn parse_light(s: &str) -> Result<shadowvol_robust_math::Light, Strin
 }
 
 pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
-    let wants_host = args.input.wants_host()?;
+    args.input.wants_host()?;
     let (mut scene, lights_source, ground) = args.input.load()?;
     if args.backdrop {
         scene.add_backdrop();
@@ -276,21 +277,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let device = RenderDevice::open().map_err(render_error)?;
     let pipeline = args.input.pipeline(&device)?;
     let mut renderer = Renderer::new(device, pipeline, options).map_err(render_error)?;
-    let frame = match renderer.render(&scene) {
-        // Without --pipeline, a scene beyond the GPU pipeline's bindings is drawn with the host
-        // pipeline, which draws from several buffers; as where the adapter cannot run it.
-        Err(RenderError::TooLarge(why))
-            if wants_host.is_none()
-                && renderer.pipeline().kind() == shadowvol_renderer::Pipeline::Gpu =>
-        {
-            eprintln!("warning: using the host pipeline: the scene is too large for the GPU pipeline: {why}");
-            let host = self::pipeline(Some(true), args.input.backend.as_deref(), renderer.device())?;
-            renderer.set_pipeline(host);
-            renderer.render(&scene)
-        }
-        other => other,
-    }
-    .map_err(render_error)?;
+    let frame = renderer.render(&scene).map_err(render_error)?;
     frame.save_png(&out_path).map_err(render_error)?;
     let timed = frames::timed_frames(&mut renderer, &mut scene, args.frames)?;
     let table = TableBytes::new(scene.table_bytes(), renderer.pipeline().prepared_bytes());
@@ -349,6 +336,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 frame_readback_bytes: timed.readback_bytes,
                 frames: timed.stats,
                 gpu_timings_ms: timed.gpu_timings.or(r.gpu_timings),
+                scene_parts: r.scene_parts,
                 uncertain: r.uncertain,
                 uncertain_unit: r.uncertain_unit,
                 host_resolved: r.host_resolved,

@@ -51,6 +51,9 @@ pub(super) struct Report<'a> {
     /// Per-pass GPU times from timestamp queries (the median of the `--frames` frames, else the
     /// final frame's); `null` for the host pipeline or without timestamp queries.
     pub(super) gpu_timings_ms: Option<shadowvol_renderer::resident::GpuTimings>,
+    /// Parts the GPU pipeline uploaded the scene in (1, or more for a scene beyond one of the
+    /// device's storage bindings; then each plan entry's counts add up the parts').
+    pub(super) scene_parts: usize,
     /// Exact-mode evaluations the certified filter left undecided, counted as
     /// `uncertain_unit` says.
     pub(super) uncertain: u64,

@@ -6,10 +6,12 @@
 use super::{FrameInputs, PassReport, Pipeline, ShadowPipeline};
 use crate::plan::{PlanEntry, SilhouetteSource, Technique};
 use crate::raster::{Attachments, BACKGROUND, COLOR_FORMAT, IDS_FORMAT};
-use crate::resident::{PassFormats, PassFrame, ResidentScene, ShadowPass};
+use crate::resident::{
+    GpuTimings, PassFormats, PassFrame, ResidentLayout, ResidentScene, ShadowPass,
+};
 use crate::{RenderDevice, RenderError};
 use glam::Affine3A;
-use shadowvol_silhouette::PreparedBytes;
+use shadowvol_silhouette::{PreparedBytes, SceneParts};
 
 /// The GPU pipeline: the plan's techniques go to the resident pass
 /// ([`crate::resident::ShadowPass`]), which extracts, builds and draws the volumes on the device
@@ -18,7 +20,8 @@ use shadowvol_silhouette::PreparedBytes;
 #[derive(Debug, Default)]
 pub struct GpuPipeline {
     pass: Option<ShadowPass>,
-    scene: Option<ResidentScene>,
+    /// The uploaded scene: one part, or several where one would exceed a storage binding.
+    parts: Vec<Part>,
     /// Per surface: its albedo and its world transform (updated when it moves).
     albedo: Vec<[f32; 3]>,
     transforms: Vec<Affine3A>,
@@ -34,11 +37,59 @@ impl GpuPipeline {
         Self::default()
     }
 
-    /// The resident pass and the uploaded scene, once prepared.
+    /// The resident pass and the uploaded scene, once prepared; `None` for a scene uploaded in
+    /// parts (one beyond a storage binding of the device).
     #[must_use]
     pub fn resident(&self) -> Option<(&ShadowPass, &ResidentScene)> {
-        self.pass.as_ref().zip(self.scene.as_ref())
+        match self.parts.as_slice() {
+            [one] => self.pass.as_ref().map(|p| (p, &one.rs)),
+            _ => None,
+        }
     }
+
+    /// Uploads `scene` in parts ([`SceneParts`]) of whole triangles that each fit the device's
+    /// storage bindings: a part of `N` triangles binds at most 3 `N` edge records and world
+    /// positions of 16 bytes.
+    fn prepare_parts(
+        pass: &ShadowPass,
+        device: &RenderDevice,
+        scene: &shadowvol_scenes::Scene,
+    ) -> Result<Vec<Part>, RenderError> {
+        let limits = device.device.limits();
+        let limit = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        let budget = (limit.saturating_sub(64) / 48).max(1) as usize;
+        let parts = SceneParts::split(&scene.surface_geometry(), budget).map_err(|source| {
+            RenderError::Mesh {
+                object: "a part of the scene".to_owned(),
+                source,
+            }
+        })?;
+        parts
+            .parts
+            .iter()
+            .zip(&parts.sources)
+            .map(|(part, sources)| {
+                let mut rs = pass.prepare_layout(ResidentLayout::build(part)?)?;
+                rs.ids = sources
+                    .iter()
+                    .map(|&(o, first)| [o as u32, first])
+                    .collect();
+                Ok(Part {
+                    rs,
+                    objects: sources.iter().map(|&(o, _)| o).collect(),
+                })
+            })
+            .collect()
+    }
+}
+
+/// One uploaded part of the scene and, per object of it, the scene's surface it draws.
+#[derive(Debug)]
+struct Part {
+    rs: ResidentScene,
+    objects: Vec<usize>,
 }
 
 impl ShadowPipeline for GpuPipeline {
@@ -53,9 +104,13 @@ impl ShadowPipeline for GpuPipeline {
     }
 
     fn prepared_bytes(&self) -> PreparedBytes {
-        self.scene
-            .as_ref()
-            .map_or_else(PreparedBytes::default, ResidentScene::bytes)
+        let mut b = PreparedBytes::default();
+        for p in &self.parts {
+            let pb = p.rs.bytes();
+            b.host += pb.host + shadowvol_silhouette::vec_bytes(&p.objects);
+            b.device += pb.device;
+        }
+        b
     }
 
     fn prepare(
@@ -79,8 +134,15 @@ impl ShadowPipeline for GpuPipeline {
             )?);
         }
         let pass = self.pass.as_ref().expect("built above");
-        self.scene = None;
-        self.scene = Some(pass.prepare(scene)?);
+        self.parts.clear();
+        self.parts = match pass.prepare(scene) {
+            Ok(rs) => vec![Part {
+                rs,
+                objects: (0..scene.surfaces().count()).collect(),
+            }],
+            Err(RenderError::TooLarge(_)) => Self::prepare_parts(pass, device, scene)?,
+            Err(e) => return Err(e),
+        };
         self.albedo = scene.surfaces().map(|s| s.albedo).collect();
         self.transforms = scene.surfaces().map(|s| s.world_from_object).collect();
         Ok(())
@@ -94,7 +156,7 @@ impl ShadowPipeline for GpuPipeline {
         target: &Attachments<'_>,
         enc: &mut wgpu::CommandEncoder,
     ) -> Result<PassReport, RenderError> {
-        let (Some(pass), Some(rs)) = (self.pass.as_ref(), self.scene.as_mut()) else {
+        let Some(pass) = self.pass.as_ref().filter(|_| !self.parts.is_empty()) else {
             return Err(RenderError::InvalidInput(
                 "the GPU pipeline records before prepare".to_owned(),
             ));
@@ -112,35 +174,64 @@ impl ShadowPipeline for GpuPipeline {
         self.techniques.clear();
         self.techniques.extend(plan.iter().map(|e| e.technique));
         let (w, h) = frame.size;
-        pass.update(
-            rs,
-            &PassFrame {
-                camera: frame.camera,
-                aspect: (f64::from(w) / f64::from(h)) as f32,
-                lights: &frame.scene.lights,
-                colors: frame.light_colors,
-                transforms: &self.transforms,
-                albedo: &self.albedo,
-                techniques: &self.techniques,
-                scissors: frame.scissors,
-                ambient: frame.scene.effects.ambient.clamp(0.0, 1.0),
-                mode: frame.mode,
-                count: frame.count,
-            },
-        )?;
-        pass.encode_extract(enc, rs);
+        let n = self.transforms.len();
+        let lights = frame.scene.lights.len();
+        for part in &mut self.parts {
+            // This part's objects' inputs, from their surfaces' (the identity for one part).
+            let transforms: Vec<Affine3A> =
+                part.objects.iter().map(|&o| self.transforms[o]).collect();
+            let albedo: Vec<[f32; 3]> = part.objects.iter().map(|&o| self.albedo[o]).collect();
+            let techniques: Vec<Technique> = (0..lights)
+                .flat_map(|l| part.objects.iter().map(move |&o| l * n + o))
+                .map(|i| self.techniques[i])
+                .collect();
+            pass.update(
+                &mut part.rs,
+                &PassFrame {
+                    camera: frame.camera,
+                    aspect: (f64::from(w) / f64::from(h)) as f32,
+                    lights: &frame.scene.lights,
+                    colors: frame.light_colors,
+                    transforms: &transforms,
+                    albedo: &albedo,
+                    techniques: &techniques,
+                    scissors: frame.scissors,
+                    ambient: frame.scene.effects.ambient.clamp(0.0, 1.0),
+                    mode: frame.mode,
+                    count: frame.count,
+                },
+            )?;
+            pass.encode_extract(enc, &part.rs);
+        }
+        // The first part clears the targets; the others draw over it, into the same depth and
+        // stencil, so that the volumes of every part count for every pixel.
+        let (first, rest) = self.parts.split_first().expect("checked above");
         pass.encode_prepass(
             enc,
-            rs,
+            &first.rs,
             target.color,
             target.ids,
             target.depth_stencil,
             BACKGROUND,
         );
-        for li in 0..frame.scene.lights.len() {
-            pass.encode_stencil(enc, rs, li, target.depth_stencil);
+        for part in rest {
+            pass.encode_prepass_over(
+                enc,
+                &part.rs,
+                target.color,
+                target.ids,
+                target.depth_stencil,
+            );
+        }
+        for li in 0..lights {
+            pass.encode_stencil(enc, &first.rs, li, target.depth_stencil);
+            for part in rest {
+                pass.encode_stencil_over(enc, &part.rs, li, target.depth_stencil);
+            }
             target.after_stencil(enc, li);
-            pass.encode_lit(enc, rs, li, target.color, target.depth_stencil);
+            for part in &self.parts {
+                pass.encode_lit(enc, &part.rs, li, target.color, target.depth_stencil);
+            }
         }
         for e in plan.iter_mut().filter(|e| e.technique != Technique::Culled) {
             e.silhouette = SilhouetteSource::Extracted;
@@ -155,23 +246,56 @@ impl ShadowPipeline for GpuPipeline {
         plan: &mut [PlanEntry],
         report: &mut PassReport,
     ) -> Result<(), RenderError> {
-        let (Some(pass), Some(rs)) = (self.pass.as_ref(), self.scene.as_ref()) else {
+        let Some(pass) = self.pass.as_ref() else {
             return Ok(());
         };
-        report.gpu_timings = pass.read_timings(rs)?;
+        let mut timings: Option<GpuTimings> = None;
+        for part in &self.parts {
+            if let Some(t) = pass.read_timings(&part.rs)? {
+                let sum = timings.get_or_insert_with(GpuTimings::default);
+                sum.extract += t.extract;
+                sum.sides += t.sides;
+                sum.caps += t.caps;
+                sum.stencil += t.stencil;
+                sum.lighting += t.lighting;
+                sum.shadow_maps += t.shadow_maps;
+            }
+        }
+        report.gpu_timings = timings;
+        report.scene_parts = self.parts.len();
         if !frame.count {
             return Ok(());
         }
-        let counts = pass.read_counts(rs)?;
         let n = frame.world.surfaces().len();
-        for e in plan.iter_mut().filter(|e| e.technique != Technique::Culled) {
-            let i = e.light * n + e.object;
-            e.silhouette_edges = counts.silhouette_edges[i] as usize;
-            e.side_quads = counts.side_quads[i] as usize;
-            let front = counts.cap_triangles[i] as usize;
-            e.cap_triangles = if e.back_cap { 2 * front } else { front };
+        debug_assert_eq!(
+            plan.len(),
+            frame.scene.lights.len() * n,
+            "one entry per (light, surface)"
+        );
+        for e in plan.iter_mut() {
+            e.silhouette_edges = 0;
+            e.side_quads = 0;
+            e.cap_triangles = 0;
         }
-        report.uncertain = counts.integer_decided;
+        report.uncertain = 0;
+        for part in &self.parts {
+            let counts = pass.read_counts(&part.rs)?;
+            let m = part.objects.len();
+            for (k, &o) in part.objects.iter().enumerate() {
+                for l in 0..frame.scene.lights.len() {
+                    let e = &mut plan[l * n + o];
+                    if e.technique == Technique::Culled {
+                        continue;
+                    }
+                    let i = l * m + k;
+                    e.silhouette_edges += counts.silhouette_edges[i] as usize;
+                    e.side_quads += counts.side_quads[i] as usize;
+                    let front = counts.cap_triangles[i] as usize;
+                    e.cap_triangles += if e.back_cap { 2 * front } else { front };
+                }
+            }
+            report.uncertain += counts.integer_decided;
+        }
         Ok(())
     }
 }

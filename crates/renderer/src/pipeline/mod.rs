@@ -100,6 +100,9 @@ pub struct PassReport {
     pub readback_bytes: u64,
     /// GPU time of each pass, where the device has timestamp queries.
     pub gpu_timings: Option<GpuTimings>,
+    /// Parts the scene was uploaded in (the GPU pipeline, for a scene beyond one storage
+    /// binding); 0 or 1: one.
+    pub scene_parts: usize,
 }
 
 /// A way to shadow a frame. See the [module documentation](self).

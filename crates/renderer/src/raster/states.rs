@@ -188,6 +188,32 @@ pub(crate) fn cleared(
     })
 }
 
+/// A colour attachment of `view`, loaded (a later part of the same frame draws over it).
+pub(crate) fn loaded(view: &wgpu::TextureView) -> Option<wgpu::RenderPassColorAttachment<'_>> {
+    Some(wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: keep(),
+    })
+}
+
+/// The pre-pass of a later part of a scene drawn in parts: colour, depth and stencil loaded.
+pub(crate) fn begin_prepass_over<'e>(
+    enc: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    color: &[Option<wgpu::RenderPassColorAttachment<'_>>],
+    depth: &wgpu::TextureView,
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
+    let depth = wgpu::RenderPassDepthStencilAttachment {
+        view: depth,
+        depth_ops: Some(keep()),
+        stencil_ops: Some(keep()),
+    };
+    begin_pass(enc, label, color, depth, None, timestamp_writes)
+}
+
 /// The pre-pass: the colour attachments `color`, depth cleared to 1 and stencil to 0.
 pub(crate) fn begin_prepass<'e>(
     enc: &'e mut wgpu::CommandEncoder,

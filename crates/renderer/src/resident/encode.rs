@@ -98,6 +98,35 @@ impl ShadowPass {
         depth: &wgpu::TextureView,
         clear: wgpu::Color,
     ) {
+        self.prepass(enc, rs, color, ids, depth, Some(clear));
+    }
+
+    /// [`ShadowPass::encode_prepass`] for a later part of a scene drawn in parts: colour, ids,
+    /// depth and stencil loaded, so that the parts' surfaces meet in one depth buffer.
+    ///
+    /// # Panics
+    /// As [`ShadowPass::encode_prepass`].
+    pub fn encode_prepass_over(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        rs: &ResidentScene,
+        color: &wgpu::TextureView,
+        ids: Option<&wgpu::TextureView>,
+        depth: &wgpu::TextureView,
+    ) {
+        self.prepass(enc, rs, color, ids, depth, None);
+    }
+
+    /// The pre-pass, clearing to `clear` or (`None`) loading every target.
+    fn prepass(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        rs: &ResidentScene,
+        color: &wgpu::TextureView,
+        ids: Option<&wgpu::TextureView>,
+        depth: &wgpu::TextureView,
+        clear: Option<wgpu::Color>,
+    ) {
         assert_eq!(
             ids.is_some(),
             self.formats.ids.is_some(),
@@ -107,11 +136,20 @@ impl ShadowPass {
             .frame
             .as_ref()
             .expect("ShadowPass::update before encode_prepass");
-        let mut attachments = vec![states::cleared(color, clear)];
+        let mut attachments =
+            vec![clear.map_or_else(|| states::loaded(color), |c| states::cleared(color, c))];
         if let Some(ids) = ids {
-            attachments.push(states::cleared(ids, wgpu::Color::TRANSPARENT));
+            attachments.push(clear.map_or_else(
+                || states::loaded(ids),
+                |_| states::cleared(ids, wgpu::Color::TRANSPARENT),
+            ));
         }
-        let mut pass = states::begin_prepass(
+        let begin = if clear.is_some() {
+            states::begin_prepass
+        } else {
+            states::begin_prepass_over
+        };
+        let mut pass = begin(
             enc,
             "resident prepass",
             &attachments,
@@ -142,11 +180,38 @@ impl ShadowPass {
         light: usize,
         depth: &wgpu::TextureView,
     ) {
+        self.stencil(enc, rs, light, depth, wgpu::LoadOp::Clear(0));
+    }
+
+    /// [`ShadowPass::encode_stencil`] for a later part of a scene drawn in parts: the stencil
+    /// loaded, so that every part's volumes count into it.
+    ///
+    /// # Panics
+    /// As [`ShadowPass::encode_stencil`].
+    pub fn encode_stencil_over(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        rs: &ResidentScene,
+        light: usize,
+        depth: &wgpu::TextureView,
+    ) {
+        self.stencil(enc, rs, light, depth, wgpu::LoadOp::Load);
+    }
+
+    /// Light `light`'s stencil passes, the first starting from `stencil`.
+    fn stencil(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        rs: &ResidentScene,
+        light: usize,
+        depth: &wgpu::TextureView,
+        stencil: wgpu::LoadOp<u32>,
+    ) {
         let (fb, scissor) = light_frame(rs, light, "encode_stencil");
         let empty = scissor.is_some_and(|r| r[2] == 0 || r[3] == 0);
         let offset = (light as u64 * LIGHT_STRIDE) as u32;
-        // Two passes, sides then caps, so that each has its own timestamps; the first clears
-        // the stencil, the second keeps counting into it.
+        // Two passes, sides then caps, so that each has its own timestamps; the first starts
+        // from `stencil` (cleared, or another part's counts), the second keeps counting.
         let begin = |enc: &mut wgpu::CommandEncoder, label, stencil, slot| {
             let mut pass = states::begin_stencil_pass(
                 enc,
@@ -162,12 +227,7 @@ impl ShadowPass {
             pass
         };
         {
-            let mut pass = begin(
-                enc,
-                "resident sides",
-                wgpu::LoadOp::Clear(0),
-                TimestampSlot::Sides(light),
-            );
+            let mut pass = begin(enc, "resident sides", stencil, TimestampSlot::Sides(light));
             if !empty {
                 let base = light as u64 * 32;
                 pass.set_pipeline(&self.draw.side_zpass);

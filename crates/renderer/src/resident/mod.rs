@@ -333,6 +333,9 @@ struct FrameBuffers {
 
 /// A scene uploaded by [`ShadowPass::prepare`], with its per-frame buffers.
 pub struct ResidentScene {
+    /// Per object, the pixel ids' `[surface, first triangle]` where they are not
+    /// `[object, 0]` (a scene drawn in parts); empty: every object is its own surface.
+    pub(crate) ids: Vec<[u32; 2]>,
     counts: LayoutCounts,
     tri_offsets: Vec<u32>,
     positions: wgpu::Buffer,

@@ -32,6 +32,7 @@ impl ShadowPass {
         let surface = self.surface_vertices(&layout);
         // The layout's arrays are on the device now; only its sizes and offsets stay.
         Ok(ResidentScene {
+            ids: Vec::new(),
             counts: LayoutCounts::of(&layout),
             tri_offsets: layout.triangles.tri_offsets,
             positions,
@@ -221,7 +222,7 @@ impl ShadowPass {
         q.write_buffer(
             &fb.buffers.objects,
             0,
-            bytemuck::cast_slice(&object_rows(f, &rs.tri_offsets)),
+            bytemuck::cast_slice(&object_rows(f, &rs.tri_offsets, &rs.ids)),
         );
         self.write_params(rs, f);
         q.write_buffer(&fb.buffers.light_u, 0, &light_uniforms(rs, f, slots));
@@ -491,7 +492,7 @@ fn check_frame_lengths(rs: &ResidentScene, f: &PassFrame<'_>) -> Result<(), Rend
 }
 
 /// Per object: its camera-relative transform rows, its albedo and its first triangle.
-fn object_rows(f: &PassFrame<'_>, tri_offsets: &[u32]) -> Vec<[u32; 4]> {
+fn object_rows(f: &PassFrame<'_>, tri_offsets: &[u32], ids: &[[u32; 2]]) -> Vec<[u32; 4]> {
     // Camera-relative transforms composed in f64 and rounded once, so large world
     // coordinates keep their precision near the eye.
     let eye = f.camera.eye.as_dvec3();
@@ -516,7 +517,8 @@ fn object_rows(f: &PassFrame<'_>, tri_offsets: &[u32]) -> Vec<[u32; 4]> {
         }
         let a = f.albedo[oi];
         objs.push([a[0], a[1], a[2], 1.0].map(f32::to_bits));
-        objs.push([tri_offsets[oi], 0, 0, 0]);
+        let [surface, first] = ids.get(oi).copied().unwrap_or([oi as u32, 0]);
+        objs.push([tri_offsets[oi], surface + 1, first, 0]);
     }
     if objs.is_empty() {
         objs.push([0; 4]);

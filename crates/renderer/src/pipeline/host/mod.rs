@@ -272,6 +272,7 @@ impl ShadowPipeline for HostPipeline {
             host_resolved: extracted.uncertain,
             readback_bytes: extracted.readback_bytes,
             gpu_timings: None,
+            scene_parts: 1,
         })
     }
 
