@@ -206,11 +206,7 @@ pub(crate) fn begin_prepass_over<'e>(
     depth: &wgpu::TextureView,
     timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
 ) -> wgpu::RenderPass<'e> {
-    let depth = wgpu::RenderPassDepthStencilAttachment {
-        view: depth,
-        depth_ops: Some(keep()),
-        stencil_ops: Some(keep()),
-    };
+    let depth = prepass_attachment(depth, keep(), keep());
     begin_pass(enc, label, color, depth, None, timestamp_writes)
 }
 
@@ -222,18 +218,33 @@ pub(crate) fn begin_prepass<'e>(
     depth: &wgpu::TextureView,
     timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
 ) -> wgpu::RenderPass<'e> {
-    let depth = wgpu::RenderPassDepthStencilAttachment {
-        view: depth,
-        depth_ops: Some(wgpu::Operations {
-            load: wgpu::LoadOp::Clear(1.0),
-            store: wgpu::StoreOp::Store,
-        }),
-        stencil_ops: Some(wgpu::Operations {
-            load: wgpu::LoadOp::Clear(0),
-            store: wgpu::StoreOp::Store,
-        }),
-    };
+    let depth = prepass_attachment(
+        depth,
+        stored(wgpu::LoadOp::Clear(1.0)),
+        stored(wgpu::LoadOp::Clear(0)),
+    );
     begin_pass(enc, label, color, depth, None, timestamp_writes)
+}
+
+/// `load`, then store.
+fn stored<V>(load: wgpu::LoadOp<V>) -> wgpu::Operations<V> {
+    wgpu::Operations {
+        load,
+        store: wgpu::StoreOp::Store,
+    }
+}
+
+/// The pre-pass's depth-stencil attachment with these operations.
+fn prepass_attachment(
+    view: &wgpu::TextureView,
+    depth: wgpu::Operations<f32>,
+    stencil: wgpu::Operations<u32>,
+) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(depth),
+        stencil_ops: Some(stencil),
+    }
 }
 
 /// A stencil pass of one light: no colour, depth loaded (the pre-pass's), the stencil cleared to
@@ -305,8 +316,5 @@ fn begin_pass<'e>(
 
 /// Load what the attachment holds and store what the pass draws.
 fn keep<V>() -> wgpu::Operations<V> {
-    wgpu::Operations {
-        load: wgpu::LoadOp::Load,
-        store: wgpu::StoreOp::Store,
-    }
+    stored(wgpu::LoadOp::Load)
 }
