@@ -508,6 +508,7 @@ impl MapPass {
                 "map prepass",
                 &color,
                 target.depth_stencil,
+                true,
                 q(0, true, true),
             );
             if !all.is_empty() {

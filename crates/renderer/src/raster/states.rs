@@ -198,31 +198,25 @@ pub(crate) fn loaded(view: &wgpu::TextureView) -> Option<wgpu::RenderPassColorAt
     })
 }
 
-/// The pre-pass of a later part of a scene drawn in parts: colour, depth and stencil loaded.
-pub(crate) fn begin_prepass_over<'e>(
-    enc: &'e mut wgpu::CommandEncoder,
-    label: &str,
-    color: &[Option<wgpu::RenderPassColorAttachment<'_>>],
-    depth: &wgpu::TextureView,
-    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
-) -> wgpu::RenderPass<'e> {
-    let depth = prepass_attachment(depth, keep(), keep());
-    begin_pass(enc, label, color, depth, None, timestamp_writes)
-}
-
-/// The pre-pass: the colour attachments `color`, depth cleared to 1 and stencil to 0.
+/// The pre-pass: the colour attachments `color`, and depth cleared to 1 and stencil to 0 when
+/// `clear` (otherwise loaded: a later part of a scene drawn in parts).
 pub(crate) fn begin_prepass<'e>(
     enc: &'e mut wgpu::CommandEncoder,
     label: &str,
     color: &[Option<wgpu::RenderPassColorAttachment<'_>>],
     depth: &wgpu::TextureView,
+    clear: bool,
     timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
 ) -> wgpu::RenderPass<'e> {
-    let depth = prepass_attachment(
-        depth,
-        stored(wgpu::LoadOp::Clear(1.0)),
-        stored(wgpu::LoadOp::Clear(0)),
-    );
+    let depth = if clear {
+        prepass_attachment(
+            depth,
+            stored(wgpu::LoadOp::Clear(1.0)),
+            stored(wgpu::LoadOp::Clear(0)),
+        )
+    } else {
+        prepass_attachment(depth, keep(), keep())
+    };
     begin_pass(enc, label, color, depth, None, timestamp_writes)
 }
 

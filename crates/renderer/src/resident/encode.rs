@@ -144,16 +144,12 @@ impl ShadowPass {
                 |_| states::cleared(ids, wgpu::Color::TRANSPARENT),
             ));
         }
-        let begin = if clear.is_some() {
-            states::begin_prepass
-        } else {
-            states::begin_prepass_over
-        };
-        let mut pass = begin(
+        let mut pass = states::begin_prepass(
             enc,
             "resident prepass",
             &attachments,
             depth,
+            clear.is_some(),
             render_ts(fb, TimestampSlot::Prepass),
         );
         let tris = rs.counts.tris as u32;

@@ -362,8 +362,14 @@ impl FrameRecording<'_> {
             states::cleared(self.target.color, BACKGROUND),
             states::cleared(self.ids, wgpu::Color::TRANSPARENT),
         ];
-        let mut pass =
-            states::begin_prepass(enc, "prepass", &color, self.target.depth_stencil, None);
+        let mut pass = states::begin_prepass(
+            enc,
+            "prepass",
+            &color,
+            self.target.depth_stencil,
+            true,
+            None,
+        );
         if self.surface_vertices != 0 {
             pass.set_pipeline(&self.raster.prepass);
             pass.set_bind_group(0, &self.bindings.globals, &[]);
