@@ -30,9 +30,11 @@ pub enum RenderError {
     /// Bad parameters (size, camera, light).
     #[error("invalid input: {0}")]
     InvalidInput(String),
-    /// The scene does not fit a buffer or storage binding of the device (both numbers named):
-    /// the GPU pipeline binds each scene array whole, the map pipeline its surfaces in one
-    /// buffer. The host pipeline draws from several buffers.
+    /// The scene does not fit a buffer or storage binding of the device (both numbers named).
+    /// The map pipeline returns it for surfaces beyond one buffer. The resident pass returns it
+    /// for a scene array beyond one binding, and the GPU pipeline then uploads the scene in
+    /// parts; the host pipeline draws from several buffers, so it only refuses a device whose
+    /// buffers cannot hold one triangle.
     #[error("too large for the device: {0}")]
     TooLarge(String),
     /// Writing an image failed.
