@@ -1,0 +1,194 @@
+//! Exact, crack-free stencil shadow volumes for Bevy 0.20.
+//!
+//! [`ShadowVolumesPlugin`] draws shadow volumes for the lights an application marks with
+//! [`ShadowVolumeLight`], cast by the meshes it marks with [`ShadowCaster`], seen by the camera
+//! it marks with [`ShadowVolumes`]. It runs shadowvol's GPU-resident pass
+//! (`shadowvol_renderer::resident::ShadowPass`) on Bevy's own device and in Bevy's own command
+//! encoder, in the `Core3d` schedule before the main pass:
+//!
+//! 1. a depth-stencil pre-pass of the casters, one sample per pixel, forward-Z, in its own
+//!    target (Bevy's main depth is reverse-Z `Depth32Float`, which has no stencil);
+//! 2. per light, the silhouette extraction and the z-fail stencil volumes in the accuracy mode
+//!    of [`ShadowVolumes::mode`] (exact by default: bit-identical signs on every device);
+//! 3. per light, a resolve of the stencil into one layer of a screen-space mask (1 lit, 0 in
+//!    shadow).
+//!
+//! The casters' materials become [`ShadowVolumeMaterial`], a `StandardMaterial` extended with
+//! the mask: its fragment shader runs Bevy's own PBR lighting and then takes away, per marked
+//! light, the share the mask says is blocked, computed with Bevy's own light functions. So the
+//! mask replaces exactly that light's shadow factor; other lights, ambient, emissive and
+//! specular stay Bevy's. The marked lights' Bevy shadow maps are turned off.
+//!
+//! A caster whose mesh is added, removed or changed is prepared again (edge tables built and
+//! uploaded); a caster or light that only moves costs a few small uploads in the next frame.
+//! [`ShadowVolumeStats`] counts both.
+//!
+//! ```no_run
+//! use bevy::prelude::*;
+//! use shadowvol_bevy::{ShadowCaster, ShadowVolumeLight, ShadowVolumes, ShadowVolumesPlugin};
+//!
+//! fn main() {
+//!     App::new()
+//!         .add_plugins((DefaultPlugins, ShadowVolumesPlugin))
+//!         .add_systems(Startup, setup)
+//!         .run();
+//! }
+//!
+//! fn setup(
+//!     mut commands: Commands,
+//!     mut meshes: ResMut<Assets<Mesh>>,
+//!     mut materials: ResMut<Assets<StandardMaterial>>,
+//! ) {
+//!     let white = materials.add(Color::WHITE);
+//!     commands.spawn((Mesh3d(meshes.add(Cuboid::default())), MeshMaterial3d(white.clone()),
+//!         Transform::from_xyz(0.0, 0.5, 0.0), ShadowCaster));
+//!     commands.spawn((Mesh3d(meshes.add(Plane3d::default().mesh().size(8.0, 8.0))),
+//!         MeshMaterial3d(white), ShadowCaster));
+//!     commands.spawn((PointLight::default(), Transform::from_xyz(2.0, 5.0, 1.0), ShadowVolumeLight));
+//!     commands.spawn((Camera3d::default(), ShadowVolumes::default(),
+//!         Transform::from_xyz(4.0, 5.0, 7.0).looking_at(Vec3::ZERO, Vec3::Y)));
+//! }
+//! ```
+//!
+//! Limits, each reported rather than drawn wrong:
+//! - one camera: the first [`ShadowVolumes`] camera by entity; others are named in
+//!   [`ShadowVolumeStats::error`];
+//! - at most [`MAX_LIGHTS`] marked lights; perspective cameras only, without sub-pixel jitter
+//!   (`TemporalJitter`, as TAA uses), which would misalign the mask by up to a pixel;
+//! - a surface receives volume shadows only where it is a caster (in the pre-pass): mark the
+//!   ground too. Meshes without the marker keep `StandardMaterial` and are lit unshadowed by
+//!   the marked lights;
+//! - forward rendering only (not the deferred path); clearcoat and diffuse transmission take
+//!   the base layer's share.
+
+mod extract;
+mod material;
+mod render;
+
+use std::sync::{Arc, Mutex};
+
+use bevy::prelude::*;
+
+pub use material::{ShadowMask, ShadowVolumeMaterial};
+pub use shadowvol_robust_math::Accuracy;
+
+/// The most lights one camera shadows with volumes: the layers of the mask.
+pub const MAX_LIGHTS: usize = 8;
+
+/// Marks a mesh entity (`Mesh3d`, with a `MeshMaterial3d<StandardMaterial>`) whose triangles
+/// cast shadow volumes and receive the marked lights' shadows. On an entity with children (a
+/// glTF `WorldAssetRoot`, say) it marks every mesh below it as well. Its mesh needs its positions in
+/// the main world (`RenderAssetUsages::MAIN_WORLD`, Bevy's default for meshes it builds and
+/// loads), as a triangle list.
+#[derive(Component, Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct ShadowCaster;
+
+/// Marks a `PointLight`, `SpotLight` or `DirectionalLight` whose shadows are drawn with
+/// volumes. The plugin turns its Bevy shadow maps off (`shadow_maps_enabled = false`).
+#[derive(Component, Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct ShadowVolumeLight;
+
+/// On a `Camera3d`: draw shadow volumes for this view, in this accuracy mode.
+#[derive(Component, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ShadowVolumes {
+    /// How silhouette signs are decided (`Accuracy::Exact` by default: exact signs, closed
+    /// volumes, however degenerate the mesh). `Original` is the naive float test whose cracks
+    /// the paper measures.
+    pub mode: Accuracy,
+}
+
+impl Default for ShadowVolumes {
+    fn default() -> Self {
+        Self {
+            mode: Accuracy::Exact,
+        }
+    }
+}
+
+/// What the plugin has done so far, shared by the main and the render world: read it from the
+/// main world to watch preparations, frames and errors.
+#[derive(Resource, Debug, Clone, Default)]
+pub struct ShadowVolumeStats(Arc<Mutex<StatsInner>>);
+
+#[derive(Debug, Default)]
+struct StatsInner {
+    prepares: u64,
+    frames: u64,
+    /// Per side (`[main world, render world]`): its current error.
+    errors: [Option<String>; 2],
+}
+
+/// Which world reports an error: each side sets and clears its own.
+#[derive(Debug, Clone, Copy)]
+enum Side {
+    Main = 0,
+    Render = 1,
+}
+
+impl ShadowVolumeStats {
+    fn with<R>(&self, f: impl FnOnce(&mut StatsInner) -> R) -> R {
+        f(&mut self
+            .0
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner))
+    }
+
+    /// How many times the casters were prepared: edge tables built and uploaded to the GPU.
+    /// Moving a caster or a light does not prepare again; adding, removing or changing a
+    /// caster's mesh does.
+    #[must_use]
+    pub fn prepares(&self) -> u64 {
+        self.with(|s| s.prepares)
+    }
+
+    /// How many frames drew their masks.
+    #[must_use]
+    pub fn frames(&self) -> u64 {
+        self.with(|s| s.frames)
+    }
+
+    /// The last error: a mesh that could not be read, a device that lacks what the pass needs,
+    /// a camera or light beyond the limits. `None` while all is well. Each error is also logged
+    /// once, with `error!`.
+    #[must_use]
+    pub fn error(&self) -> Option<String> {
+        self.with(|s| {
+            let e: Vec<&str> = s.errors.iter().flatten().map(String::as_str).collect();
+            (!e.is_empty()).then(|| e.join("; "))
+        })
+    }
+
+    /// Records `message` as `side`'s current error, logging it when it is new.
+    fn fail(&self, side: Side, message: String) {
+        self.with(|s| {
+            let slot = &mut s.errors[side as usize];
+            if slot.as_deref() != Some(message.as_str()) {
+                error!("shadowvol: {message}");
+                *slot = Some(message);
+            }
+        });
+    }
+
+    /// `side` is well again.
+    fn clear(&self, side: Side) {
+        self.with(|s| s.errors[side as usize] = None);
+    }
+}
+
+/// The plugin: adds [`ShadowVolumeMaterial`], the systems that turn marked entities into
+/// shadowvol's scene model, and the pass in the `Core3d` schedule. Add it after
+/// `DefaultPlugins` (it needs `RenderPlugin` and `PbrPlugin`).
+#[derive(Debug, Default, Clone, Copy)]
+pub struct ShadowVolumesPlugin;
+
+impl Plugin for ShadowVolumesPlugin {
+    fn build(&self, app: &mut App) {
+        material::build(app);
+        extract::build(app);
+        render::build(app);
+    }
+
+    fn finish(&self, app: &mut App) {
+        render::finish(app);
+    }
+}

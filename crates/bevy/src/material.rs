@@ -1,0 +1,174 @@
+//! The material side: the `StandardMaterial` extension that reads the mask, the two textures it
+//! binds, and the systems that give casters that material and size the mask to the camera.
+
+use std::collections::HashMap;
+
+use bevy::asset::{embedded_asset, RenderAssetUsages};
+use bevy::image::TextureFormatPixelInfo as _;
+use bevy::pbr::{ExtendedMaterial, MaterialExtension};
+use bevy::prelude::*;
+use bevy::render::render_resource::{
+    AsBindGroup, Extent3d, TextureDimension, TextureFormat, TextureUsages, TextureViewDescriptor,
+    TextureViewDimension,
+};
+use bevy::shader::ShaderRef;
+
+use crate::{ShadowCaster, ShadowVolumes, MAX_LIGHTS};
+
+/// The extension's binding of the mask (binding 100) and of the light table (101); the
+/// `StandardMaterial` keeps its own bindings below 100.
+#[derive(Asset, AsBindGroup, Reflect, Debug, Clone)]
+pub struct ShadowMask {
+    /// The screen-space mask, `R8Unorm`, one layer per marked light: 1 lit, 0 in shadow.
+    #[texture(100, dimension = "2d_array", sample_type = "float", filterable = false)]
+    pub mask: Handle<Image>,
+    /// Per marked light, one `Rgba32Float` texel: the light's position (`w = 1`, point and spot)
+    /// or its direction towards the light (`w = 2`, directional); `w = 0` marks an unused slot.
+    #[texture(101, sample_type = "float", filterable = false)]
+    pub lights: Handle<Image>,
+}
+
+/// The material of every caster: Bevy's `StandardMaterial` with each marked light's shadow
+/// factor taken from the mask. The plugin puts it in place of a caster's
+/// `MeshMaterial3d<StandardMaterial>` and keeps it equal to that material when it changes.
+pub type ShadowVolumeMaterial = ExtendedMaterial<StandardMaterial, ShadowMask>;
+
+impl MaterialExtension for ShadowMask {
+    fn fragment_shader() -> ShaderRef {
+        "embedded://shadowvol_bevy/mask.wesl".into()
+    }
+}
+
+/// The mask and the light table, one pair for the [`ShadowVolumes`] camera.
+#[derive(Resource, Debug, Clone)]
+pub(crate) struct MaskTextures {
+    pub mask: Handle<Image>,
+    pub lights: Handle<Image>,
+}
+
+/// Each base material's extended copy, by the base's id.
+#[derive(Resource, Debug, Default)]
+struct Swapped(HashMap<AssetId<StandardMaterial>, Handle<ShadowVolumeMaterial>>);
+
+pub(crate) fn build(app: &mut App) {
+    embedded_asset!(app, "mask.wesl");
+    app.add_plugins(MaterialPlugin::<ShadowVolumeMaterial>::default())
+        .init_resource::<Swapped>()
+        .add_systems(PreStartup, make_textures)
+        .add_systems(PostUpdate, (swap_materials, size_mask));
+}
+
+/// A mask of `width × height` pixels and [`MAX_LIGHTS`] layers, drawn by the pass and sampled by
+/// the material; it lives on the GPU only.
+fn mask_image(width: u32, height: u32) -> Image {
+    let mut image = Image::new_uninit(
+        Extent3d {
+            width: width.max(1),
+            height: height.max(1),
+            depth_or_array_layers: MAX_LIGHTS as u32,
+        },
+        TextureDimension::D2,
+        TextureFormat::R8Unorm,
+        RenderAssetUsages::RENDER_WORLD,
+    );
+    image.texture_descriptor.usage =
+        TextureUsages::TEXTURE_BINDING | TextureUsages::RENDER_ATTACHMENT | TextureUsages::COPY_SRC;
+    image.texture_view_descriptor = Some(TextureViewDescriptor {
+        dimension: Some(TextureViewDimension::D2Array),
+        ..default()
+    });
+    image
+}
+
+fn make_textures(mut commands: Commands, mut images: ResMut<Assets<Image>>) {
+    let format = TextureFormat::Rgba32Float;
+    let texel = format.pixel_size().unwrap_or(16);
+    let mut lights = Image::new(
+        Extent3d {
+            width: MAX_LIGHTS as u32,
+            height: 1,
+            depth_or_array_layers: 1,
+        },
+        TextureDimension::D2,
+        vec![0; texel * MAX_LIGHTS],
+        format,
+        RenderAssetUsages::RENDER_WORLD,
+    );
+    lights.texture_descriptor.usage |= TextureUsages::COPY_DST;
+    commands.insert_resource(MaskTextures {
+        mask: images.add(mask_image(1, 1)),
+        lights: images.add(lights),
+    });
+}
+
+/// Gives every caster with a `StandardMaterial` the extended copy of it, and keeps the copies
+/// equal to their bases when a base changes.
+fn swap_materials(
+    mut commands: Commands,
+    casters: Query<(Entity, &MeshMaterial3d<StandardMaterial>), With<ShadowCaster>>,
+    mut events: MessageReader<AssetEvent<StandardMaterial>>,
+    standard: Res<Assets<StandardMaterial>>,
+    mut extended: ResMut<Assets<ShadowVolumeMaterial>>,
+    mut swapped: ResMut<Swapped>,
+    textures: Option<Res<MaskTextures>>,
+) {
+    let Some(textures) = textures else { return };
+    for event in events.read() {
+        if let AssetEvent::Modified { id } = event {
+            if let (Some(copy), Some(base)) = (swapped.0.get(id), standard.get(*id)) {
+                if let Some(mut m) = extended.get_mut(copy) {
+                    m.base = base.clone();
+                }
+            }
+        }
+    }
+    for (entity, material) in &casters {
+        let id = material.id();
+        let Some(base) = standard.get(id) else {
+            continue; // not loaded yet
+        };
+        let handle = swapped
+            .0
+            .entry(id)
+            .or_insert_with(|| {
+                extended.add(ShadowVolumeMaterial {
+                    base: base.clone(),
+                    extension: ShadowMask {
+                        mask: textures.mask.clone(),
+                        lights: textures.lights.clone(),
+                    },
+                })
+            })
+            .clone();
+        commands
+            .entity(entity)
+            .remove::<MeshMaterial3d<StandardMaterial>>()
+            .insert(MeshMaterial3d(handle));
+    }
+}
+
+/// Keeps the mask the size of the [`ShadowVolumes`] camera's viewport, in physical pixels. The
+/// materials are touched on a resize so that their bind groups take the new texture.
+fn size_mask(
+    cameras: Query<(Entity, &Camera), With<ShadowVolumes>>,
+    textures: Option<Res<MaskTextures>>,
+    mut images: ResMut<Assets<Image>>,
+    mut materials: ResMut<Assets<ShadowVolumeMaterial>>,
+) {
+    let Some(textures) = textures else { return };
+    let Some((_, camera)) = cameras.iter().min_by_key(|(e, _)| *e) else {
+        return;
+    };
+    let Some(size) = camera.physical_viewport_size() else {
+        return;
+    };
+    let current = images.get(&textures.mask).map(|i| (i.width(), i.height()));
+    if current == Some((size.x.max(1), size.y.max(1))) {
+        return;
+    }
+    let _ = images.insert(&textures.mask, mask_image(size.x, size.y));
+    let ids: Vec<_> = materials.ids().collect();
+    for id in ids {
+        let _ = materials.get_mut(id);
+    }
+}

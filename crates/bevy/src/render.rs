@@ -1,0 +1,436 @@
+//! The render world's side: shadowvol's resident pass on Bevy's device, in Bevy's encoder, in the
+//! `Core3d` schedule before the main pass; and the resolve of each light's stencil into its
+//! mask layer.
+
+use bevy::core_pipeline::{schedule::Core3d, Core3dSystems};
+use bevy::prelude::*;
+use bevy::render::camera::TemporalJitter;
+use bevy::render::render_asset::RenderAssets;
+use bevy::render::renderer::{RenderAdapter, RenderContext, RenderDevice, RenderQueue, ViewQuery};
+use bevy::render::sync_world::MainEntity;
+use bevy::render::texture::GpuImage;
+use bevy::render::view::ExtractedView;
+use bevy::render::{Extract, ExtractSchedule, RenderApp};
+use shadowvol_renderer::resident::{texture_2d, PassFormats, PassFrame, ResidentScene, ShadowPass};
+use shadowvol_renderer::{Camera, Technique};
+use shadowvol_scenes::SceneLight;
+
+use crate::extract::VolumeFrame;
+use crate::material::MaskTextures;
+use crate::{Side, MAX_LIGHTS};
+
+/// The pass's depth-stencil format (forward-Z, its own pre-pass) and the mask's format.
+const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth24PlusStencil8;
+const MASK: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+/// The pre-pass's colour target, which nothing reads: the smallest colour format.
+const SCRATCH: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+
+pub(crate) fn build(app: &mut App) {
+    let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+        return;
+    };
+    render_app
+        .init_resource::<PassState>()
+        .add_systems(ExtractSchedule, extract_textures)
+        .add_systems(Core3d, draw_masks.in_set(Core3dSystems::Prepass));
+}
+
+pub(crate) fn finish(_app: &mut App) {}
+
+fn extract_textures(mut commands: Commands, textures: Extract<Option<Res<MaskTextures>>>) {
+    if let Some(t) = textures.as_ref() {
+        commands.insert_resource(MaskTextures::clone(t));
+    }
+}
+
+/// The pre-pass targets at one size.
+struct Targets {
+    size: (u32, u32),
+    depth: wgpu::TextureView,
+    scratch: wgpu::TextureView,
+}
+
+/// What the pass keeps between frames.
+#[derive(Resource, Default)]
+struct PassState {
+    /// The pass, built on Bevy's device at the first frame that needs it.
+    pass: Option<ShadowPass>,
+    /// Why the pass could not be built: it is not tried again.
+    failed: Option<String>,
+    /// The casters on the device, and the scene generation they hold.
+    resident: Option<(u64, ResidentScene)>,
+    targets: Option<Targets>,
+    resolve: Option<wgpu::RenderPipeline>,
+}
+
+/// Bevy's view as shadowvol's camera, with the aspect its projection uses.
+///
+/// # Errors
+/// A projection the mask cannot follow: jittered (`TemporalJitter`, as TAA uses), orthographic,
+/// or off-centre (a sub-view), named.
+fn view_camera(view: &ExtractedView, jittered: bool) -> Result<(Camera, f32), String> {
+    if jittered {
+        return Err(
+            "the ShadowVolumes camera has TemporalJitter (TAA's sub-pixel jitter): the \
+                    one-sample mask would not line up with the jittered image; remove \
+                    TemporalJitter and TemporalAntiAliasing from that camera"
+                .into(),
+        );
+    }
+    let m = view.clip_from_view;
+    if m.w_axis.w == 1.0 {
+        return Err(
+            "the ShadowVolumes camera is orthographic; shadow volumes support \
+                    perspective cameras only"
+                .into(),
+        );
+    }
+    if m.z_axis.x != 0.0 || m.z_axis.y != 0.0 {
+        return Err(
+            "the ShadowVolumes camera's projection is off-centre (a sub-view or a custom \
+             projection): shadow volumes need a centred perspective projection"
+                .into(),
+        );
+    }
+    let (f, fx, near) = (m.y_axis.y, m.x_axis.x, m.w_axis.z);
+    let t = &view.world_from_view;
+    let eye = t.translation();
+    let eye = glam::Vec3::from(eye.to_array());
+    let forward = glam::Vec3::from(t.forward().as_vec3().to_array());
+    let up = glam::Vec3::from(t.up().as_vec3().to_array());
+    let camera = Camera {
+        eye,
+        target: eye + forward,
+        up,
+        fov_y: 2.0 * (1.0 / f).atan(),
+        near,
+    };
+    camera
+        .validate()
+        .map_err(|e| format!("the ShadowVolumes camera: {e}"))?;
+    Ok((camera, f / fx))
+}
+
+/// The `Core3d` system: for the [`crate::ShadowVolumes`] camera's view, the pass and the
+/// masks. On any failure the masks say lit (the marked lights shine unshadowed) and the error
+/// goes to [`crate::ShadowVolumeStats`].
+#[allow(clippy::too_many_arguments)]
+fn draw_masks(
+    view: ViewQuery<(&MainEntity, &ExtractedView, Has<TemporalJitter>)>,
+    frame: Option<Res<VolumeFrame>>,
+    textures: Option<Res<MaskTextures>>,
+    images: Res<RenderAssets<GpuImage>>,
+    mut state: ResMut<PassState>,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+    adapter: Res<RenderAdapter>,
+    mut ctx: RenderContext,
+) {
+    let (main, extracted, jittered) = view.into_inner();
+    let (Some(frame), Some(textures)) = (frame, textures) else {
+        return;
+    };
+    if frame.camera.is_none_or(|(e, _)| main.id() != e) {
+        return;
+    }
+    let (Some(mask), Some(table)) = (images.get(&textures.mask), images.get(&textures.lights))
+    else {
+        return; // the textures reach the GPU in a later frame
+    };
+    let gpu = Gpu {
+        device: device.wgpu_device(),
+        queue: &queue,
+        adapter: &adapter,
+    };
+    write_light_table(gpu.queue, &table.texture, &frame);
+    let enc = ctx.command_encoder();
+    let outcome = view_camera(extracted, jittered)
+        .and_then(|camera| record(&gpu, &mut state, &frame, camera, &mask.texture, enc));
+    match outcome {
+        Ok(()) => {
+            frame.stats.clear(Side::Render);
+            frame.stats.with(|s| s.frames += 1);
+        }
+        Err(e) => {
+            frame.stats.fail(Side::Render, e);
+            clear_masks(enc, &mask.texture, MAX_LIGHTS);
+        }
+    }
+}
+
+/// Bevy's device, queue and adapter, as wgpu's.
+struct Gpu<'a> {
+    device: &'a wgpu::Device,
+    queue: &'a wgpu::Queue,
+    adapter: &'a wgpu::Adapter,
+}
+
+/// The light table: one texel a light; unused slots are zero.
+fn write_light_table(queue: &wgpu::Queue, table: &wgpu::Texture, frame: &VolumeFrame) {
+    let mut texels = [[0f32; 4]; MAX_LIGHTS];
+    for (t, l) in texels.iter_mut().zip(&frame.lights) {
+        *t = l.texel;
+    }
+    queue.write_texture(
+        table.as_image_copy(),
+        bytemuck::cast_slice(&texels),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(16 * MAX_LIGHTS as u32),
+            rows_per_image: None,
+        },
+        wgpu::Extent3d {
+            width: MAX_LIGHTS as u32,
+            height: 1,
+            depth_or_array_layers: 1,
+        },
+    );
+}
+
+/// Records one frame's pass and masks into `enc`: the pass built at the first frame, the casters
+/// prepared when their generation changed, then extraction, pre-pass, and per light the
+/// stencil and its resolve.
+///
+/// # Errors
+/// What went wrong, in words: the device lacks what the pass needs (not tried again), the
+/// casters cannot be prepared, or the frame's inputs do not fit the prepared casters.
+fn record(
+    gpu: &Gpu<'_>,
+    state: &mut PassState,
+    frame: &VolumeFrame,
+    (camera, aspect): (Camera, f32),
+    mask: &wgpu::Texture,
+    enc: &mut wgpu::CommandEncoder,
+) -> Result<(), String> {
+    if let Some(e) = &state.failed {
+        return Err(e.clone());
+    }
+    if state.pass.is_none() {
+        let formats = PassFormats {
+            color: SCRATCH,
+            ids: None,
+            depth: DEPTH,
+        };
+        let pass = ShadowPass::new(gpu.adapter, gpu.device, gpu.queue, formats).map_err(|e| {
+            let msg = format!("GPU: the shadow-volume pass cannot run on Bevy's device: {e}");
+            state.failed = Some(msg.clone());
+            msg
+        })?;
+        state.pass = Some(pass);
+        state.resolve = Some(resolve_pipeline(gpu.device));
+    }
+    let (Some(pass), Some(resolve)) = (&state.pass, &state.resolve) else {
+        return Ok(());
+    };
+    let Some(scene) = &frame.scene else {
+        clear_masks(enc, mask, frame.lights.len());
+        return Ok(());
+    };
+    if state
+        .resident
+        .as_ref()
+        .is_none_or(|(g, _)| *g != frame.generation)
+    {
+        state.resident = None;
+        let rs = pass
+            .prepare(scene)
+            .map_err(|e| format!("GPU: preparing the casters: {e}"))?;
+        state.resident = Some((frame.generation, rs));
+        frame.stats.with(|s| s.prepares += 1);
+    }
+    let Some((_, resident)) = &mut state.resident else {
+        return Ok(());
+    };
+    let objects = scene.geometry.objects.len();
+    if frame.transforms.len() != objects {
+        return Ok(()); // a rebuild is pending; the last masks stay
+    }
+    let n = frame.lights.len();
+    let lights: Vec<SceneLight> = frame
+        .lights
+        .iter()
+        .map(|l| SceneLight::unit(l.light))
+        .collect();
+    pass.update(
+        resident,
+        &PassFrame {
+            camera: &camera,
+            aspect,
+            lights: &lights,
+            colors: &vec![[1.0f32; 3]; n],
+            transforms: &frame.transforms,
+            albedo: &vec![[1.0f32; 3]; objects],
+            // z-fail is right wherever the camera is; the caps are cheap next to the sides.
+            techniques: &vec![Technique::ZFail; n * objects],
+            scissors: &vec![None; n],
+            ambient: 0.0,
+            mode: frame
+                .camera
+                .map_or(shadowvol_robust_math::Accuracy::Exact, |c| c.1),
+            count: false,
+        },
+    )
+    .map_err(|e| format!("GPU: the frame's inputs: {e}"))?;
+    let size = (mask.size().width, mask.size().height);
+    if state.targets.as_ref().is_none_or(|t| t.size != size) {
+        state.targets = Some(make_targets(gpu.device, size));
+    }
+    let Some(targets) = &state.targets else {
+        return Ok(());
+    };
+    pass.encode_extract(enc, resident);
+    pass.encode_prepass(
+        enc,
+        resident,
+        &targets.scratch,
+        None,
+        &targets.depth,
+        wgpu::Color::BLACK,
+    );
+    for k in 0..n {
+        pass.encode_stencil(enc, resident, k, &targets.depth);
+        resolve_layer(enc, resolve, mask, k, &targets.depth);
+    }
+    Ok(())
+}
+
+fn make_targets(device: &wgpu::Device, (w, h): (u32, u32)) -> Targets {
+    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
+    let depth = texture_2d(device, "shadowvol-bevy depth-stencil", w, h, DEPTH, usage);
+    let scratch = texture_2d(
+        device,
+        "shadowvol-bevy pre-pass colour",
+        w,
+        h,
+        SCRATCH,
+        usage,
+    );
+    Targets {
+        size: (w, h),
+        depth: depth.create_view(&Default::default()),
+        scratch: scratch.create_view(&Default::default()),
+    }
+}
+
+/// A view of one layer of the mask.
+fn layer_view(mask: &wgpu::Texture, k: usize) -> wgpu::TextureView {
+    mask.create_view(&wgpu::TextureViewDescriptor {
+        label: Some("shadowvol-bevy mask layer"),
+        dimension: Some(wgpu::TextureViewDimension::D2),
+        base_array_layer: k as u32,
+        array_layer_count: Some(1),
+        ..Default::default()
+    })
+}
+
+/// No casters yet: every marked light's layer says lit.
+fn clear_masks(enc: &mut wgpu::CommandEncoder, mask: &wgpu::Texture, lights: usize) {
+    for k in 0..lights {
+        let view = layer_view(mask, k);
+        let _ = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shadowvol-bevy mask clear"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+    }
+}
+
+/// Layer `k` of the mask: cleared to 0 (shadow), then 1 wherever the stencil is 0 (lit).
+fn resolve_layer(
+    enc: &mut wgpu::CommandEncoder,
+    pipeline: &wgpu::RenderPipeline,
+    mask: &wgpu::Texture,
+    k: usize,
+    depth: &wgpu::TextureView,
+) {
+    let view = layer_view(mask, k);
+    let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("shadowvol-bevy mask resolve"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: &view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: None,
+            stencil_ops: None,
+        }),
+        ..Default::default()
+    });
+    rp.set_pipeline(pipeline);
+    rp.set_stencil_reference(0);
+    rp.draw(0..3, 0..1);
+}
+
+/// A full-screen triangle that writes 1 where the stencil equals the reference (0).
+fn resolve_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("shadowvol-bevy mask resolve"),
+        source: wgpu::ShaderSource::Wgsl(RESOLVE_WGSL.into()),
+    });
+    let stencil = wgpu::StencilFaceState {
+        compare: wgpu::CompareFunction::Equal,
+        fail_op: wgpu::StencilOperation::Keep,
+        depth_fail_op: wgpu::StencilOperation::Keep,
+        pass_op: wgpu::StencilOperation::Keep,
+    };
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("shadowvol-bevy mask resolve"),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs"),
+            compilation_options: Default::default(),
+            targets: &[Some(MASK.into())],
+        }),
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH,
+            depth_write_enabled: Some(false),
+            depth_compare: Some(wgpu::CompareFunction::Always),
+            stencil: wgpu::StencilState {
+                front: stencil,
+                back: stencil,
+                read_mask: 0xff,
+                write_mask: 0,
+            },
+            bias: wgpu::DepthBiasState::default(),
+        }),
+        multisample: wgpu::MultisampleState::default(),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// The resolve's shader: a triangle that covers the target, writing 1.
+pub(crate) const RESOLVE_WGSL: &str = "
+@vertex
+fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(p * 2.0 - 1.0, 0.0, 1.0);
+}
+
+@fragment
+fn fs() -> @location(0) vec4<f32> {
+    return vec4<f32>(1.0);
+}
+";

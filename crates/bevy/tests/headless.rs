@@ -1,0 +1,163 @@
+//! The plugin in a Bevy app without a window, on whatever adapter wgpu finds (Mesa's lavapipe in
+//! CI), against the project's exact reference for the same scene, camera and lights.
+//!
+//! One Bevy app for all three checks, in one test: Bevy keeps process-wide state (its logger),
+//! and one start on a software device costs seconds.
+//! - two lights of different colours (red, green) over a box on a floor, then the bundled bunny
+//!   OBJ: each light's shadow, read from its own colour channel, agrees with the reference;
+//! - moving the box changes its shadow in the next frame, without preparing the casters again;
+//! - a camera with TAA's `TemporalJitter` gets an error naming it, which goes with the jitter.
+
+mod common;
+
+use bevy::prelude::*;
+use common::{agreement, reference, Driver};
+use shadowvol_bevy::ShadowVolumeLight;
+
+const W: u32 = 320;
+const H: u32 = 240;
+/// DESIGN's bound on artifact pixels: 0.05 % of the image.
+const MAX_ARTIFACTS: usize = (W * H) as usize / 2000;
+const LIGHTS: [Vec3; 2] = [Vec3::new(3.0, 2.5, 0.5), Vec3::new(-3.0, 4.0, 2.0)];
+
+/// Each light's agreement with the reference, or why it fails.
+fn check(
+    d: &mut Driver,
+    what: &str,
+    meshes: &[(&Mesh, Transform)],
+    lights: &[Entity],
+    failures: &mut Vec<String>,
+) -> Vec<u8> {
+    for _ in 0..4 {
+        d.update();
+    }
+    let shadowed = d.capture();
+    for &l in lights {
+        d.world().entity_mut(l).remove::<ShadowVolumeLight>();
+    }
+    for _ in 0..2 {
+        d.update();
+    }
+    let unshadowed = d.capture();
+    for &l in lights {
+        d.world().entity_mut(l).insert(ShadowVolumeLight);
+    }
+    let states = reference(meshes, &LIGHTS, W, H);
+    for (li, states) in states.iter().enumerate() {
+        let a = agreement(&shadowed, &unshadowed, states, li);
+        println!(
+            "{what}, light {li}: {} artifact pixels of {} compared ({} in shadow), bound {MAX_ARTIFACTS}",
+            a.artifacts, a.compared, a.shadowed
+        );
+        if a.artifacts > MAX_ARTIFACTS {
+            failures.push(format!(
+                "{what}, light {li}: {} artifact pixels, over {MAX_ARTIFACTS}",
+                a.artifacts
+            ));
+        }
+        if a.compared < 10_000 || a.shadowed < 300 {
+            failures.push(format!(
+                "{what}, light {li}: too little to compare ({} pixels lit by it, {} in shadow)",
+                a.compared, a.shadowed
+            ));
+        }
+    }
+    shadowed
+}
+
+#[test]
+fn shadows_match_the_reference() {
+    let mut d = Driver::new(W, H);
+    let mut failures = Vec::new();
+    let lights: Vec<Entity> = [Color::srgb(1.0, 0.0, 0.0), Color::srgb(0.0, 1.0, 0.0)]
+        .iter()
+        .zip(LIGHTS)
+        .map(|(c, p)| d.spawn_light(p, *c))
+        .collect();
+
+    // 1. A box on a floor, two lights.
+    let (floor, cube) = (common::floor(), common::unit_box());
+    let box_at = Transform::from_xyz(-0.3, 0.5, 0.2);
+    d.spawn_caster(floor.clone(), Transform::IDENTITY);
+    let cube_entity = d.spawn_caster(cube.clone(), box_at);
+    let before = check(
+        &mut d,
+        "box on floor",
+        &[(&floor, Transform::IDENTITY), (&cube, box_at)],
+        &lights,
+        &mut failures,
+    );
+
+    // 2. The box moves: the next frame shows its new shadow, with no new preparation.
+    let prepares = d.stats().prepares();
+    let moved = Transform::from_xyz(0.6, 0.5, -0.4).with_rotation(Quat::from_rotation_y(0.5));
+    d.world().entity_mut(cube_entity).insert(moved);
+    let after = d.capture();
+    let changed = before
+        .chunks_exact(4)
+        .zip(after.chunks_exact(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    println!("moved box: {changed} pixels changed in the next frame");
+    if changed < 1000 {
+        failures.push(format!("moving the box changed only {changed} pixels"));
+    }
+    check(
+        &mut d,
+        "moved box",
+        &[(&floor, Transform::IDENTITY), (&cube, moved)],
+        &lights,
+        &mut failures,
+    );
+    if d.stats().prepares() != prepares {
+        failures.push(format!(
+            "moving the box prepared the casters again ({} preparations, {prepares} before)",
+            d.stats().prepares()
+        ));
+    }
+    if prepares == 0 {
+        failures.push("the casters were never prepared".into());
+    }
+    d.world().entity_mut(cube_entity).despawn();
+
+    // 3. The bundled bunny OBJ on the floor: its mesh changed the casters, so it is prepared.
+    let bunny = common::bunny();
+    let bunny_at = common::stand_on_floor(&bunny, 2.0);
+    d.spawn_caster(bunny.clone(), bunny_at);
+    check(
+        &mut d,
+        "bunny.obj",
+        &[(&floor, Transform::IDENTITY), (&bunny, bunny_at)],
+        &lights,
+        &mut failures,
+    );
+    if d.stats().prepares() <= prepares {
+        failures.push("adding the bunny did not prepare the casters again".into());
+    }
+    if let Some(e) = d.stats().error() {
+        failures.push(format!("the plugin reported: {e}"));
+    }
+
+    // 4. TAA's jitter would misalign the mask: a clear error, and the lights unshadowed.
+    let camera = d.camera;
+    d.world()
+        .entity_mut(camera)
+        .insert(bevy::render::camera::TemporalJitter {
+            offset: Vec2::new(0.25, -0.25),
+        });
+    d.update();
+    d.update();
+    match d.stats().error() {
+        Some(e) if e.contains("TemporalJitter") => println!("jittered camera: {e}"),
+        other => failures.push(format!("a jittered camera gave {other:?}, not an error")),
+    }
+    d.world()
+        .entity_mut(camera)
+        .remove::<bevy::render::camera::TemporalJitter>();
+    d.update();
+    d.update();
+    if let Some(e) = d.stats().error() {
+        failures.push(format!("the error stayed after the jitter went: {e}"));
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
