@@ -13,6 +13,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+mod bevy;
 mod ci;
 mod figures;
 mod gpu_crates;

@@ -19,10 +19,14 @@
 //!    embedding example renders on its own device, once with volumes and once with shadow maps,
 //!    and each image's shadows are checked against the ray-traced reference. Without a wgpu adapter it warns (a visible skip), under `CI=true` it
 //!    fails.
-//! 8. **shaders**: `cargo xtask shaders --check` (the committed SPIR-V matches the GLSL).
-//! 9. **gpu-crates**: every GPU backend crate has the core files and at most two of its own
-//!    ([`crate::gpu_crates`]).
-//! 10. **fuzz**: each fuzz target (`fuzz/`, its own workspace) built and run for [`FUZZ_SECONDS`]
+//! 8. **bevy**: the Bevy plugin crate (`crates/bevy`, outside the workspace, Rust 1.97.1):
+//!    toolchain installed with rustup as root or under CI; fmt, clippy, its headless tests on
+//!    lavapipe, its `headless` example and its docs ([`crate::bevy`]). Without a Vulkan driver
+//!    it warns (a visible skip), under `CI=true` it fails.
+//! 9. **shaders**: `cargo xtask shaders --check` (the committed SPIR-V matches the GLSL).
+//! 10. **gpu-crates**: every GPU backend crate has the core files and at most two of its own
+//!     ([`crate::gpu_crates`]).
+//! 11. **fuzz**: each fuzz target (`fuzz/`, its own workspace) built and run for [`FUZZ_SECONDS`]
 //!     seconds on its seed corpus with `cargo fuzz run --dev --sanitizer none` (stable Rust is
 //!     enough). A missing `cargo-fuzz` is installed with `cargo install` under CI or as root;
 //!     otherwise the targets are only `cargo check`ed and the step says what to install and
@@ -50,7 +54,7 @@ const APT_PACKAGES: &[&str] = &[
 ];
 
 /// The steps, in the order they run (the names `--skip` takes).
-const STEPS: [&str; 10] = [
+const STEPS: [&str; 11] = [
     "drivers",
     "fmt",
     "size",
@@ -58,6 +62,7 @@ const STEPS: [&str; 10] = [
     "docs",
     "test",
     "example",
+    "bevy",
     "shaders",
     "gpu-crates",
     "fuzz",
@@ -114,6 +119,11 @@ Runs, in order, and prints a summary:
   example  cargo run -p shadowvol-renderer --example embed -- OUT --check [--maps]: the embedding
            example on its own device, its shadows checked against the ray-traced
            reference (a warning without a wgpu adapter; a failure under CI=true)
+  bevy     the Bevy plugin (crates/bevy, Rust 1.97.1, its own target folder
+           $SHADOWVOL_BEVY_TARGET_DIR or ~/.cache/shadowvol/bevy-target): rustup installs
+           the toolchain as root or under CI; fmt, clippy, headless tests against the
+           exact reference, the headless example, docs (a warning without the toolchain
+           or a Vulkan driver; a failure under CI=true)
   shaders  cargo xtask shaders --check
   gpu-crates  every GPU backend crate (wgpu-compute, vulkan-geometry, opencl) has the
            core files (lib, backend, device, layout, pipeline, dispatch, resolve, twin)
@@ -125,8 +135,8 @@ Runs, in order, and prints a summary:
 
 Options:
   --no-drivers   same as --skip drivers
-  --skip STEP    skip a step (drivers, fmt, size, clippy, docs, test, example, shaders,
-                 gpu-crates, fuzz); repeatable
+  --skip STEP    skip a step (drivers, fmt, size, clippy, docs, test, example, bevy,
+                 shaders, gpu-crates, fuzz); repeatable
   -p PACKAGE     clippy, docs and test only PACKAGE instead of --workspace; repeatable
 
 Environment:
@@ -135,7 +145,7 @@ Environment:
 ";
 
 /// Outcome of one step.
-enum Outcome {
+pub(crate) enum Outcome {
     Passed,
     Warned(String),
     Failed(String),
@@ -271,6 +281,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
         cargo_test_step(&root, &a, &mut counts)
     });
     step("example", &mut || embed_example(&root, ci));
+    step("bevy", &mut || crate::bevy::step(&root, ci, is_root()));
     step(
         "shaders",
         &mut || match crate::shaders::run(&["--check".to_owned()]) {
@@ -608,6 +619,14 @@ fn requirements() -> Vec<Requirement> {
             }),
         },
     ]
+}
+
+/// Whether the Vulkan loader and lavapipe are installed.
+pub(crate) fn vulkan_present() -> bool {
+    requirements()
+        .iter()
+        .filter(|r| r.what.contains("Vulkan loader") || r.what.contains("lavapipe"))
+        .all(|r| r.present)
 }
 
 fn is_root() -> bool {
