@@ -17,7 +17,9 @@
 //! the mask: its fragment shader runs Bevy's own PBR lighting and then takes away, per marked
 //! light, the share the mask says is blocked, computed with Bevy's own light functions. So the
 //! mask replaces exactly that light's shadow factor; other lights, ambient, emissive and
-//! specular stay Bevy's. The marked lights' Bevy shadow maps are turned off.
+//! specular stay Bevy's. A surface whose geometric normal faces away from a marked light takes
+//! none of it, as in shadowvol's renderer and reference (smooth normals would light it, and the
+//! volumes cannot shadow it). The marked lights' Bevy shadow maps are turned off.
 //!
 //! A caster whose mesh is added, removed or changed is prepared again (edge tables built and
 //! uploaded); a caster or light that only moves costs a few small uploads in the next frame.

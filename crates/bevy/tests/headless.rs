@@ -6,6 +6,8 @@
 //! - two lights of different colours (red, green) over a box on a floor, then the bundled bunny
 //!   OBJ: each light's shadow, read from its own colour channel, agrees with the reference;
 //! - moving the box changes its shadow in the next frame, without preparing the casters again;
+//! - the bunny's mesh changed in place is prepared again; a directional and a spot light, each
+//!   against the reference;
 //! - a camera with TAA's `TemporalJitter` gets an error naming it, which goes with the jitter.
 
 mod common;
@@ -20,12 +22,18 @@ const H: u32 = 240;
 const MAX_ARTIFACTS: usize = (W * H) as usize / 2000;
 const LIGHTS: [Vec3; 2] = [Vec3::new(3.0, 2.5, 0.5), Vec3::new(-3.0, 4.0, 2.0)];
 
+/// [`LIGHTS`] as homogeneous points, for the reference.
+fn points() -> Vec<Vec4> {
+    LIGHTS.iter().map(|p| p.extend(1.0)).collect()
+}
+
 /// Each light's agreement with the reference, or why it fails.
 fn check(
     d: &mut Driver,
     what: &str,
     meshes: &[(&Mesh, Transform)],
     lights: &[Entity],
+    homogeneous: &[Vec4],
     failures: &mut Vec<String>,
 ) -> Vec<u8> {
     for _ in 0..4 {
@@ -42,7 +50,7 @@ fn check(
     for &l in lights {
         d.world().entity_mut(l).insert(ShadowVolumeLight);
     }
-    let states = reference(meshes, &LIGHTS, W, H);
+    let states = reference(meshes, homogeneous, W, H);
     for (li, states) in states.iter().enumerate() {
         let a = agreement(&shadowed, &unshadowed, states, li);
         println!(
@@ -85,6 +93,7 @@ fn shadows_match_the_reference() {
         "box on floor",
         &[(&floor, Transform::IDENTITY), (&cube, box_at)],
         &lights,
+        &points(),
         &mut failures,
     );
 
@@ -107,6 +116,7 @@ fn shadows_match_the_reference() {
         "moved box",
         &[(&floor, Transform::IDENTITY), (&cube, moved)],
         &lights,
+        &points(),
         &mut failures,
     );
     if d.stats().prepares() != prepares {
@@ -123,12 +133,13 @@ fn shadows_match_the_reference() {
     // 3. The bundled bunny OBJ on the floor: its mesh changed the casters, so it is prepared.
     let bunny = common::bunny();
     let bunny_at = common::stand_on_floor(&bunny, 2.0);
-    d.spawn_caster(bunny.clone(), bunny_at);
+    let bunny_entity = d.spawn_caster(bunny.clone(), bunny_at);
     check(
         &mut d,
         "bunny.obj",
         &[(&floor, Transform::IDENTITY), (&bunny, bunny_at)],
         &lights,
+        &points(),
         &mut failures,
     );
     if d.stats().prepares() <= prepares {
@@ -138,7 +149,44 @@ fn shadows_match_the_reference() {
         failures.push(format!("the plugin reported: {e}"));
     }
 
-    // 4. TAA's jitter would misalign the mask: a clear error, and the lights unshadowed.
+    // 4. The bunny's mesh changes in place (stretched along x), so the casters are prepared
+    // again; then the other two kinds of light: a directional light (red) and a spot light
+    // (green).
+    let before_change = d.stats().prepares();
+    let stretched = stretch_x(&bunny, 1.5);
+    let handle = d
+        .world()
+        .get::<Mesh3d>(bunny_entity)
+        .expect("Mesh3d")
+        .0
+        .clone();
+    *d.world()
+        .resource_mut::<Assets<Mesh>>()
+        .get_mut(&handle)
+        .expect("the bunny's mesh") = stretched.clone();
+    let bunny = stretched;
+    for l in lights {
+        d.world().entity_mut(l).despawn();
+    }
+    let towards = Vec3::new(-2.0, 4.0, 3.0);
+    let (spot_at, spot_to) = (Vec3::new(-2.5, 3.5, -1.5), Vec3::new(0.5, 0.0, 0.5));
+    let others = [
+        d.spawn_directional(towards, Color::srgb(1.0, 0.0, 0.0), 3000.0),
+        d.spawn_spot(spot_at, spot_to, Color::srgb(0.0, 1.0, 0.0), 0.9),
+    ];
+    check(
+        &mut d,
+        "directional and spot",
+        &[(&floor, Transform::IDENTITY), (&bunny, bunny_at)],
+        &others,
+        &[towards.normalize().extend(0.0), spot_at.extend(1.0)],
+        &mut failures,
+    );
+    if d.stats().prepares() <= before_change {
+        failures.push("changing the bunny's mesh did not prepare the casters again".into());
+    }
+
+    // 5. TAA's jitter would misalign the mask: a clear error, and the lights unshadowed.
     let camera = d.camera;
     d.world()
         .entity_mut(camera)
@@ -160,4 +208,17 @@ fn shadows_match_the_reference() {
         failures.push(format!("the error stayed after the jitter went: {e}"));
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// `mesh` with every position's x scaled by `s`.
+fn stretch_x(mesh: &Mesh, s: f32) -> Mesh {
+    let mut m = mesh.clone();
+    if let Some(bevy::mesh::VertexAttributeValues::Float32x3(p)) =
+        m.attribute_mut(Mesh::ATTRIBUTE_POSITION)
+    {
+        for v in p.iter_mut() {
+            v[0] *= s;
+        }
+    }
+    m
 }

@@ -34,8 +34,9 @@ pub struct Driver {
 
 impl Driver {
     /// Bevy's default plugins without a window, `ShadowVolumesPlugin`, and a camera at
-    /// [`EYE`] looking at [`TARGET`] with `ShadowVolumes` (exact), Bevy's default MSAA (4x) and
-    /// no tonemapping, drawing into a `width × height` sRGB image. No ambient light.
+    /// [`EYE`] looking at [`TARGET`] with `ShadowVolumes` (exact), Bevy's default MSAA (4x),
+    /// no tonemapping and a black background, drawing into a `width × height` sRGB image. No
+    /// ambient light.
     pub fn new(width: u32, height: u32) -> Self {
         let mut app = App::new();
         app.add_plugins(
@@ -67,6 +68,10 @@ impl Driver {
         let camera = world
             .spawn((
                 Camera3d::default(),
+                Camera {
+                    clear_color: ClearColorConfig::Custom(Color::BLACK),
+                    ..default()
+                },
                 RenderTarget::from(target.clone()),
                 Tonemapping::None,
                 ShadowVolumes::default(),
@@ -158,6 +163,41 @@ impl Driver {
             .id()
     }
 
+    /// Adds a marked directional light shining from `towards` (a direction, not a point) to
+    /// the origin, with this illuminance in lux.
+    pub fn spawn_directional(&mut self, towards: Vec3, color: Color, lux: f32) -> Entity {
+        self.world()
+            .spawn((
+                DirectionalLight {
+                    color,
+                    illuminance: lux,
+                    ..default()
+                },
+                Transform::from_translation(towards).looking_at(Vec3::ZERO, Vec3::Y),
+                ShadowVolumeLight,
+            ))
+            .id()
+    }
+
+    /// Adds a marked spot light at `position` aimed at `target`, its cone `outer` radians wide
+    /// on each side.
+    pub fn spawn_spot(&mut self, position: Vec3, target: Vec3, color: Color, outer: f32) -> Entity {
+        self.world()
+            .spawn((
+                SpotLight {
+                    color,
+                    intensity: 2.0e6,
+                    range: 40.0,
+                    outer_angle: outer,
+                    inner_angle: outer * 0.8,
+                    ..default()
+                },
+                Transform::from_translation(position).looking_at(target, Vec3::Y),
+                ShadowVolumeLight,
+            ))
+            .id()
+    }
+
     /// The plugin's statistics.
     pub fn stats(&mut self) -> shadowvol_bevy::ShadowVolumeStats {
         self.world()
@@ -194,11 +234,12 @@ pub fn topology(mesh: &Mesh) -> shadowvol_mesh_topology::Mesh {
 }
 
 /// The exact reference's per-light, per-pixel states for these meshes (with their transforms)
-/// and point lights, seen from [`EYE`] at `width × height`: the project's renderer gives each
-/// pixel's surface, and the reference ray-casts every light from it.
+/// and homogeneous lights (`w = 1` a point, `w = 0` a direction towards the light), seen from
+/// [`EYE`] at `width × height`: the project's renderer gives each pixel's surface, and the
+/// reference ray-casts every light from it.
 pub fn reference(
     meshes: &[(&Mesh, Transform)],
-    lights: &[Vec3],
+    lights: &[Vec4],
     width: u32,
     height: u32,
 ) -> Vec<Vec<PixelState>> {
@@ -213,7 +254,7 @@ pub fn reference(
     scene.add_unit_lights(
         lights
             .iter()
-            .map(|l| shadowvol_robust_math::Light::point(glam::Vec3::from(l.to_array()))),
+            .map(|l| shadowvol_robust_math::Light::new(l.x, l.y, l.z, l.w).expect("light")),
     );
     scene.camera = Some(Camera::look_at(
         glam::Vec3::from(EYE.to_array()),
