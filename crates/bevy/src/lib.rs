@@ -8,7 +8,8 @@
 //!
 //! 1. a depth-stencil pre-pass of the casters, one sample per pixel, forward-Z, in its own
 //!    target (Bevy's main depth is reverse-Z `Depth32Float`, which has no stencil);
-//! 2. per light, the silhouette extraction and the z-fail stencil volumes in the accuracy mode
+//! 2. per light, the silhouette extraction and the stencil volumes (z-pass or z-fail per object,
+//!    as shadowvol's plan chooses from where the camera stands) in the accuracy mode
 //!    of [`ShadowVolumes::mode`] (exact by default: bit-identical signs on every device);
 //! 3. per light, a resolve of the stencil into one layer of a screen-space mask (1 lit, 0 in
 //!    shadow).

@@ -11,9 +11,11 @@ use bevy::render::sync_world::MainEntity;
 use bevy::render::texture::GpuImage;
 use bevy::render::view::ExtractedView;
 use bevy::render::{Extract, ExtractSchedule, RenderApp};
+use shadowvol_renderer::plan::plan_frame;
 use shadowvol_renderer::resident::{texture_2d, PassFormats, PassFrame, ResidentScene, ShadowPass};
-use shadowvol_renderer::{Camera, Technique};
-use shadowvol_scenes::SceneLight;
+use shadowvol_renderer::world::World;
+use shadowvol_renderer::{Camera, PlanPolicy};
+use shadowvol_scenes::{Scene, SceneLight};
 
 use crate::extract::VolumeFrame;
 use crate::material::MaskTextures;
@@ -61,6 +63,9 @@ struct PassState {
     resident: Option<(u64, ResidentScene)>,
     targets: Option<Targets>,
     resolve: Option<wgpu::RenderPipeline>,
+    /// The plan's copy of the scene, with this frame's transforms and lights, and the world
+    /// positions it plans from.
+    planned: Option<(Scene, World)>,
 }
 
 /// Bevy's view as shadowvol's camera, with the aspect its projection uses.
@@ -232,6 +237,7 @@ fn record(
         .is_none_or(|(g, _)| *g != frame.generation)
     {
         state.resident = None;
+        state.planned = None;
         let rs = pass
             .prepare(scene)
             .map_err(|e| format!("GPU: preparing the casters: {e}"))?;
@@ -251,6 +257,26 @@ fn record(
         .iter()
         .map(|l| SceneLight::unit(l.light))
         .collect();
+    let size = (mask.size().width, mask.size().height);
+    // The plan: per (light, object) z-pass where the camera is outside the volume, z-fail where
+    // it may be inside, nothing where the light cannot reach; per light a scissor.
+    let (plan_scene, world) = state
+        .planned
+        .get_or_insert_with(|| ((**scene).clone(), World::default()));
+    for (o, t) in plan_scene
+        .geometry
+        .objects
+        .iter_mut()
+        .zip(&frame.transforms)
+    {
+        o.world_from_object = *t;
+    }
+    plan_scene.lights.clone_from(&lights);
+    world
+        .sync(plan_scene)
+        .map_err(|e| format!("the casters' world positions: {e}"))?;
+    let plan = plan_frame(plan_scene, world, &camera, size, PlanPolicy::Auto, true);
+    let techniques: Vec<_> = plan.entries.iter().map(|e| e.technique).collect();
     pass.update(
         resident,
         &PassFrame {
@@ -260,9 +286,8 @@ fn record(
             colors: &vec![[1.0f32; 3]; n],
             transforms: &frame.transforms,
             albedo: &vec![[1.0f32; 3]; objects],
-            // z-fail is right wherever the camera is; the caps are cheap next to the sides.
-            techniques: &vec![Technique::ZFail; n * objects],
-            scissors: &vec![None; n],
+            techniques: &techniques,
+            scissors: &plan.scissors,
             ambient: 0.0,
             mode: frame
                 .camera
@@ -271,7 +296,6 @@ fn record(
         },
     )
     .map_err(|e| format!("GPU: the frame's inputs: {e}"))?;
-    let size = (mask.size().width, mask.size().height);
     if state.targets.as_ref().is_none_or(|t| t.size != size) {
         state.targets = Some(make_targets(gpu.device, size));
     }

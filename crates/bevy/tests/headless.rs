@@ -8,12 +8,13 @@
 //! - moving the box changes its shadow in the next frame, without preparing the casters again;
 //! - the bunny's mesh changed in place is prepared again; a directional and a spot light, each
 //!   against the reference;
+//! - the camera inside a shadow volume (under a roof), where only z-fail is right;
 //! - a camera with TAA's `TemporalJitter` gets an error naming it, which goes with the jitter.
 
 mod common;
 
 use bevy::prelude::*;
-use common::{agreement, reference, Driver};
+use common::{agreement, reference_from, Driver};
 use shadowvol_bevy::ShadowVolumeLight;
 
 const W: u32 = 320;
@@ -36,6 +37,27 @@ fn check(
     homogeneous: &[Vec4],
     failures: &mut Vec<String>,
 ) -> Vec<u8> {
+    check_from(
+        d,
+        (common::EYE, common::TARGET),
+        what,
+        meshes,
+        lights,
+        homogeneous,
+        failures,
+    )
+}
+
+/// [`check`] with the camera at `eye` looking at `target` (the caller has moved it there).
+fn check_from(
+    d: &mut Driver,
+    (eye, target): (Vec3, Vec3),
+    what: &str,
+    meshes: &[(&Mesh, Transform)],
+    lights: &[Entity],
+    homogeneous: &[Vec4],
+    failures: &mut Vec<String>,
+) -> Vec<u8> {
     for _ in 0..4 {
         d.update();
     }
@@ -50,7 +72,7 @@ fn check(
     for &l in lights {
         d.world().entity_mut(l).insert(ShadowVolumeLight);
     }
-    let states = reference(meshes, homogeneous, W, H);
+    let states = reference_from(eye, target, meshes, homogeneous, W, H);
     for (li, states) in states.iter().enumerate() {
         let a = agreement(&shadowed, &unshadowed, states, li);
         println!(
@@ -186,7 +208,31 @@ fn shadows_match_the_reference() {
         failures.push("changing the bunny's mesh did not prepare the casters again".into());
     }
 
-    // 5. TAA's jitter would misalign the mask: a clear error, and the lights unshadowed.
+    // 5. The camera inside a shadow volume: under a roof, lit from above. z-pass would invert
+    // the shadows here; the plan must pick z-fail.
+    for l in others {
+        d.world().entity_mut(l).despawn();
+    }
+    d.world().entity_mut(bunny_entity).despawn();
+    let roof = Cuboid::new(3.0, 0.2, 3.0).into();
+    let roof_at = Transform::from_xyz(0.0, 2.0, 0.0);
+    d.spawn_caster(Mesh::clone(&roof), roof_at);
+    let above = Vec3::new(0.4, 6.0, 0.3);
+    let sun = [d.spawn_light(above, Color::srgb(1.0, 0.0, 0.0))];
+    let (eye, target) = (Vec3::new(0.3, 1.0, 1.2), Vec3::new(-1.0, 0.0, -3.0));
+    d.look(eye, target);
+    check_from(
+        &mut d,
+        (eye, target),
+        "camera under a roof",
+        &[(&floor, Transform::IDENTITY), (&roof, roof_at)],
+        &sun,
+        &[above.extend(1.0)],
+        &mut failures,
+    );
+    d.look(common::EYE, common::TARGET);
+
+    // 6. TAA's jitter would misalign the mask: a clear error, and the lights unshadowed.
     let camera = d.camera;
     d.world()
         .entity_mut(camera)

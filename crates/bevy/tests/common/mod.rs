@@ -198,6 +198,14 @@ impl Driver {
             .id()
     }
 
+    /// Moves the camera to `eye`, looking at `target`.
+    pub fn look(&mut self, eye: Vec3, target: Vec3) {
+        let camera = self.camera;
+        self.world()
+            .entity_mut(camera)
+            .insert(Transform::from_translation(eye).looking_at(target, Vec3::Y));
+    }
+
     /// The plugin's statistics.
     pub fn stats(&mut self) -> shadowvol_bevy::ShadowVolumeStats {
         self.world()
@@ -243,6 +251,18 @@ pub fn reference(
     width: u32,
     height: u32,
 ) -> Vec<Vec<PixelState>> {
+    reference_from(EYE, TARGET, meshes, lights, width, height)
+}
+
+/// [`reference`] seen from `eye` looking at `target`.
+pub fn reference_from(
+    eye: Vec3,
+    target: Vec3,
+    meshes: &[(&Mesh, Transform)],
+    lights: &[Vec4],
+    width: u32,
+    height: u32,
+) -> Vec<Vec<PixelState>> {
     use shadowvol_renderer::{Camera, RenderOptions, Renderer, Scene};
     let mut scene = Scene::new("bevy test");
     for (i, (m, t)) in meshes.iter().enumerate() {
@@ -257,8 +277,8 @@ pub fn reference(
             .map(|l| shadowvol_robust_math::Light::new(l.x, l.y, l.z, l.w).expect("light")),
     );
     scene.camera = Some(Camera::look_at(
-        glam::Vec3::from(EYE.to_array()),
-        glam::Vec3::from(TARGET.to_array()),
+        glam::Vec3::from(eye.to_array()),
+        glam::Vec3::from(target.to_array()),
     ));
     let mut renderer = Renderer::gpu(RenderOptions::new(width, height)).expect("renderer");
     let frame = renderer.render(&scene).expect("render");
