@@ -44,6 +44,9 @@ impl MaterialExtension for ShadowMask {
 pub(crate) struct MaskTextures {
     pub mask: Handle<Image>,
     pub lights: Handle<Image>,
+    /// The mask's size in pixels. Kept here: the image lives on the GPU only, so the main
+    /// world's copy is gone once uploaded.
+    size: (u32, u32),
 }
 
 /// Each base material's extended copy, by the base's id.
@@ -98,6 +101,7 @@ fn make_textures(mut commands: Commands, mut images: ResMut<Assets<Image>>) {
     commands.insert_resource(MaskTextures {
         mask: images.add(mask_image(1, 1)),
         lights: images.add(lights),
+        size: (1, 1),
     });
 }
 
@@ -147,28 +151,29 @@ fn swap_materials(
     }
 }
 
-/// Keeps the mask the size of the [`ShadowVolumes`] camera's viewport, in physical pixels. The
-/// materials are touched on a resize so that their bind groups take the new texture.
+/// Keeps the mask the size of the [`ShadowVolumes`] camera's viewport, in physical pixels. A new
+/// size is a new image, given to every material: a material re-prepared with a new image waits
+/// for it to reach the GPU, where one whose image changed in place could keep the old texture.
 fn size_mask(
     cameras: Query<(Entity, &Camera), With<ShadowVolumes>>,
-    textures: Option<Res<MaskTextures>>,
+    textures: Option<ResMut<MaskTextures>>,
     mut images: ResMut<Assets<Image>>,
     mut materials: ResMut<Assets<ShadowVolumeMaterial>>,
 ) {
-    let Some(textures) = textures else { return };
+    let Some(mut textures) = textures else { return };
     let Some((_, camera)) = cameras.iter().min_by_key(|(e, _)| *e) else {
         return;
     };
     let Some(size) = camera.physical_viewport_size() else {
         return;
     };
-    let current = images.get(&textures.mask).map(|i| (i.width(), i.height()));
-    if current == Some((size.x.max(1), size.y.max(1))) {
+    let wanted = (size.x.max(1), size.y.max(1));
+    if textures.size == wanted {
         return;
     }
-    let _ = images.insert(&textures.mask, mask_image(size.x, size.y));
-    let ids: Vec<_> = materials.ids().collect();
-    for id in ids {
-        let _ = materials.get_mut(id);
+    textures.size = wanted;
+    textures.mask = images.add(mask_image(wanted.0, wanted.1));
+    for (_, m) in materials.iter_mut() {
+        m.extension.mask = textures.mask.clone();
     }
 }

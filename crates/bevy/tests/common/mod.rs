@@ -198,6 +198,19 @@ impl Driver {
             .id()
     }
 
+    /// Draws into a new `width × height` target from now on, as when a window is resized.
+    pub fn resize(&mut self, width: u32, height: u32) {
+        let mut image =
+            Image::new_target_texture(width, height, TextureFormat::Rgba8UnormSrgb, None);
+        image.asset_usage = RenderAssetUsages::RENDER_WORLD;
+        let target = self.world().resource_mut::<Assets<Image>>().add(image);
+        let camera = self.camera;
+        self.world()
+            .entity_mut(camera)
+            .insert(RenderTarget::from(target.clone()));
+        (self.target, self.width, self.height) = (target, width, height);
+    }
+
     /// Moves the camera to `eye`, looking at `target`.
     pub fn look(&mut self, eye: Vec3, target: Vec3) {
         let camera = self.camera;
