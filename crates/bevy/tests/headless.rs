@@ -10,7 +10,7 @@
 //!   against the reference;
 //! - the camera inside a shadow volume (under a roof), where only z-fail is right; then the
 //!   target resized to another aspect;
-//! - a camera with TAA's `TemporalJitter` gets an error naming it, which goes with the jitter.
+//! - a camera with TAA's `TemporalJitter`, or an orthographic one, gets an error naming it.
 
 mod common;
 
@@ -257,6 +257,25 @@ fn shadows_match_the_reference() {
     d.update();
     if let Some(e) = d.stats().error() {
         failures.push(format!("the error stayed after the jitter went: {e}"));
+    }
+
+    // 8. An orthographic camera: refused by name too.
+    let perspective = d.world().get::<Projection>(camera).cloned();
+    d.world()
+        .entity_mut(camera)
+        .insert(Projection::Orthographic(
+            OrthographicProjection::default_3d(),
+        ));
+    d.update();
+    d.update();
+    match d.stats().error() {
+        Some(e) if e.contains("orthographic") => println!("orthographic camera: {e}"),
+        other => failures.push(format!(
+            "an orthographic camera gave {other:?}, not an error"
+        )),
+    }
+    if let Some(p) = perspective {
+        d.world().entity_mut(camera).insert(p);
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
