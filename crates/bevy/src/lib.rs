@@ -68,6 +68,11 @@ mod extract;
 mod material;
 mod render;
 
+/// The README's code, compiled as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 use std::sync::{Arc, Mutex};
 
 use bevy::prelude::*;
