@@ -30,8 +30,12 @@ pub(crate) struct VolumeFrame {
     pub scene: Option<Arc<Scene>>,
     /// Bumped each time `scene` is rebuilt: the render world prepares again when it changes.
     pub generation: u64,
-    /// Which caster entity, with which mesh, each scene object is.
+    /// The marked (entity, mesh) pairs `scene` was built from.
     key: Vec<(Entity, AssetId<Mesh>)>,
+    /// Which entity each scene object is (the marked casters whose meshes could be read).
+    objects: Vec<Entity>,
+    /// The casters left out of `scene`, and why: reported every frame until the next build.
+    left_out: Vec<String>,
     /// Per scene object: world from object, this frame.
     pub transforms: Vec<glam::Affine3A>,
     /// The marked lights, by entity, at most [`MAX_LIGHTS`].
@@ -152,22 +156,21 @@ fn gather(
         _ => false,
     });
     if key != frame.key || changed || frame.scene.is_none() && !key.is_empty() {
-        match build_scene(&marked, &meshes) {
-            Ok(Some(scene)) => {
-                frame.scene = Some(Arc::new(scene));
-                frame.generation += 1;
-                frame.key = key;
-            }
-            Ok(None) => {} // a mesh is still loading: try again next frame
-            Err(e) => problems.push(e),
-        }
+        if let Some(built) = build_scene(&marked, &meshes) {
+            frame.scene = Some(Arc::new(built.scene));
+            frame.generation += 1;
+            frame.key = key;
+            frame.objects = built.objects;
+            frame.left_out = built.left_out;
+        } // else a mesh is still loading: try again next frame
     }
+    problems.extend(frame.left_out.iter().cloned());
     // Per object of the current scene; an object whose entity is gone while its rebuild waits
     // is collapsed to a point, which casts nothing.
     let transforms = frame
-        .key
+        .objects
         .iter()
-        .map(|(k, _)| {
+        .map(|k| {
             marked
                 .iter()
                 .find(|(e, _, _)| e == k)
@@ -226,29 +229,49 @@ fn to_affine(t: &GlobalTransform) -> glam::Affine3A {
     glam::Affine3A::from_cols_array(&t.affine().to_cols_array())
 }
 
+/// The scene model of the marked casters, the entity of each object, and the casters left out.
+struct Built {
+    scene: Scene,
+    objects: Vec<Entity>,
+    left_out: Vec<String>,
+}
+
 /// The scene model of the marked casters: one edge table per distinct mesh, one object per
-/// entity. `Ok(None)` while a mesh is not loaded yet.
+/// entity. A caster whose mesh cannot be read is left out, with the reason; the others are
+/// built. `None` while a mesh is not loaded yet.
 fn build_scene(
     casters: &[(Entity, &Mesh3d, &GlobalTransform)],
     meshes: &Assets<Mesh>,
-) -> Result<Option<Scene>, String> {
-    let mut scene = Scene::new("bevy");
+) -> Option<Built> {
+    let mut built = Built {
+        scene: Scene::new("bevy"),
+        objects: Vec::new(),
+        left_out: Vec::new(),
+    };
     let mut tables = std::collections::HashMap::new();
     for (entity, mesh, t) in casters {
         let id = mesh.id();
         if let std::collections::hash_map::Entry::Vacant(slot) = tables.entry(id) {
-            let Some(m) = meshes.get(id) else {
-                return Ok(None);
-            };
-            let topo = to_topology(m).map_err(|e| format!("caster {entity}: {e}"))?;
-            let table = scene
-                .add_mesh_owned(&format!("{id}"), topo)
-                .map_err(|e| format!("caster {entity}: {e}"))?;
-            slot.insert(table);
+            let m = meshes.get(id)?;
+            slot.insert(to_topology(m).and_then(|topo| {
+                built
+                    .scene
+                    .add_mesh_owned(&format!("{id}"), topo)
+                    .map_err(|e| e.to_string())
+            }));
         }
-        scene.add_object(format!("{entity}"), tables[&id].clone(), to_affine(t));
+        match &tables[&id] {
+            Ok(table) => {
+                let name = format!("{entity}");
+                built.scene.add_object(name, table.clone(), to_affine(t));
+                built.objects.push(*entity);
+            }
+            Err(e) => built
+                .left_out
+                .push(format!("caster {entity} is left out: {e}")),
+        }
     }
-    Ok(Some(scene))
+    Some(built)
 }
 
 /// A Bevy mesh's positions and triangles, checked: a triangle list with `Float32x3` positions

@@ -10,7 +10,8 @@
 //!   against the reference;
 //! - the camera inside a shadow volume (under a roof), where only z-fail is right; then the
 //!   target resized to another aspect;
-//! - a camera with TAA's `TemporalJitter`, or an orthographic one, gets an error naming it.
+//! - a caster with a NaN position, a camera with TAA's `TemporalJitter`, or an orthographic
+//!   one, gets an error naming it.
 
 mod common;
 
@@ -259,7 +260,48 @@ fn shadows_match_the_reference() {
         failures.push(format!("the error stayed after the jitter went: {e}"));
     }
 
-    // 8. An orthographic camera: refused by name too.
+    // 8. A caster with a NaN position, added with a good one: an error naming the bad entity,
+    // and the other casters, the new one too, are built and cast; the error goes with the bad
+    // caster.
+    let mut bad = common::unit_box();
+    if let Some(bevy::mesh::VertexAttributeValues::Float32x3(p)) =
+        bad.attribute_mut(Mesh::ATTRIBUTE_POSITION)
+    {
+        p[3][1] = f32::NAN;
+    }
+    let bad_entity = d.spawn_caster(bad, Transform::from_xyz(2.0, 0.5, 2.0));
+    let good_at = Transform::from_xyz(-2.5, 0.5, 1.5);
+    let good = d.spawn_caster(common::unit_box(), good_at);
+    d.update();
+    d.update();
+    match d.stats().error() {
+        Some(e) if e.contains(&format!("{bad_entity}")) => println!("NaN caster: {e}"),
+        other => failures.push(format!(
+            "a NaN caster gave {other:?}, not an error naming it"
+        )),
+    }
+    check(
+        &mut d,
+        HOME,
+        "roof and a new box, a NaN caster beside them left out",
+        &[
+            (&floor, Transform::IDENTITY),
+            (&roof, roof_at),
+            (&common::unit_box(), good_at),
+        ],
+        &sun,
+        &[above.extend(1.0)],
+        &mut failures,
+    );
+    d.world().entity_mut(bad_entity).despawn();
+    d.world().entity_mut(good).despawn();
+    d.update();
+    d.update();
+    if let Some(e) = d.stats().error() {
+        failures.push(format!("the error stayed after the NaN caster went: {e}"));
+    }
+
+    // 9. An orthographic camera: refused by name too.
     let perspective = d.world().get::<Projection>(camera).cloned();
     d.world()
         .entity_mut(camera)
