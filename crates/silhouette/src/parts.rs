@@ -158,6 +158,15 @@ impl SceneParts {
         tables + self.edge_maps.iter().map(crate::vec_bytes).sum::<u64>()
     }
 
+    /// Moves the parts out, leaving the maps that [`SceneParts::add_part`] needs: a backend that
+    /// lays each part out and no longer reads its table frees each cut range's table as soon as
+    /// it is prepared. [`SceneParts::own_bytes`] then counts the edge maps only.
+    #[must_use]
+    pub fn take_parts(&mut self) -> Vec<TopologyScene> {
+        self.built.iter_mut().for_each(|b| *b = false);
+        std::mem::take(&mut self.parts)
+    }
+
     /// Adds part `part`'s multiplicities `from` onto the scene's edges in `into`, which must be
     /// shaped for the whole scene and the same lights. Call
     /// [`Multiplicities::rebuild_silhouettes`] on `into` once every part is added.
@@ -283,5 +292,33 @@ mod tests {
                 "{mode:?}: nothing to compare"
             );
         }
+    }
+
+    /// Parts taken out (and dropped one by one, as the `wgpu` backend does) leave maps that
+    /// still add them up to the scene; the bytes then count the maps alone.
+    #[test]
+    fn taken_parts_still_add_up_and_free_their_tables() {
+        let big = Arc::new(bumpy(12));
+        let scene = TopologyScene {
+            objects: vec![SceneObject {
+                name: "big".to_owned(),
+                table: Arc::clone(&big),
+                world_from_object: Affine3A::IDENTITY,
+            }],
+        };
+        let mut parts = SceneParts::split(&scene, 50).unwrap();
+        let maps: u64 = parts.edge_maps.iter().map(crate::vec_bytes).sum();
+        assert!(parts.own_bytes() > maps, "cut ranges hold tables before");
+        let taken = parts.take_parts();
+        assert!(parts.parts.is_empty());
+        assert_eq!(parts.own_bytes(), maps);
+        let lights = [[5.0, 5.0, 0.5, 1.0], [1.0, 2.0, 3.0, 0.0]];
+        let whole = reference(&scene, Accuracy::Exact, &lights);
+        let mut sum = Multiplicities::zeroed(scene.total_edges(), lights.len());
+        for (k, part) in taken.into_iter().enumerate() {
+            parts.add_part(k, &reference(&part, Accuracy::Exact, &lights), &mut sum);
+        }
+        assert_eq!(sum, whole);
+        assert!(whole.all_values().iter().any(|&v| v != 0));
     }
 }

@@ -213,13 +213,14 @@ impl SilhouetteBackend for WgpuBackend {
         let entry = match self.part_triangles(scene) {
             None => Entry::Whole(Box::new(self.prepare_whole(scene)?)),
             Some(max) => {
-                let parts = SceneParts::split(scene, max).map_err(|e| {
+                let mut parts = SceneParts::split(scene, max).map_err(|e| {
                     BackendError::InvalidInput(format!("cutting the scene into parts: {e}"))
                 })?;
+                // Each part's own table is dropped once its layouts are built and uploaded.
                 let prepared = parts
-                    .parts
-                    .iter()
-                    .map(|p| self.prepare_whole(p))
+                    .take_parts()
+                    .into_iter()
+                    .map(|p| self.prepare_whole(&p))
                     .collect::<Result<_, _>>()?;
                 Entry::Split { parts, prepared }
             }
@@ -356,7 +357,7 @@ impl WgpuBackend {
         };
         self.check_health()?;
         Ok(Prepared {
-            scene: scene.clone(),
+            transforms: scene.transforms().collect(),
             layout,
             triangles,
             edge_slots: None,

@@ -118,7 +118,7 @@ impl WgpuBackend {
             return Ok(stats);
         };
         let t_upload = Instant::now();
-        let obj_lights = object_lights(p.scene.transforms(), lights);
+        let obj_lights = object_lights(p.transforms.iter().copied(), lights);
         let edges = edge_count as u64;
         let objects = p.layout.object_count() as u64;
         let tris = p.triangles.tri_count() as u64;

@@ -6,7 +6,7 @@ use crate::backend::WgpuBackend;
 use crate::device::limit_error;
 use crate::pipeline::entry;
 use shadowvol_silhouette::gpu::{self, SceneLayout, TriangleLayout};
-use shadowvol_silhouette::{vec_bytes, BackendError, PreparedBytes, TopologyScene};
+use shadowvol_silhouette::{vec_bytes, BackendError, PreparedBytes};
 
 /// Object-space lights packed object-major for lights `first..first + count`, as uploaded:
 /// `packed[object * count + light - first]`.
@@ -48,7 +48,8 @@ pub(crate) struct Frame {
 }
 
 pub(crate) struct Prepared {
-    pub(crate) scene: TopologyScene,
+    /// Per object: world from object (the layouts hold everything else the kernels read).
+    pub(crate) transforms: Vec<glam::Affine3A>,
     pub(crate) layout: SceneLayout,
     pub(crate) triangles: TriangleLayout,
     /// [`TriangleLayout::edge_slots`], built the first time the host decides a triangle.
