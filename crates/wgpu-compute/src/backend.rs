@@ -353,6 +353,9 @@ impl WgpuBackend {
             if let Some(e) = scope.pop() {
                 return Err(device_error(format!("uploading the scene: {e}")));
             }
+            // The copies from the staging memory of each initialised buffer run at the next
+            // submission; waiting for it now frees that memory before the next part is laid out.
+            self.wait(self.queue.submit([]))?;
             Some(buffers)
         };
         self.check_health()?;

@@ -686,7 +686,7 @@ fn validate_lists(lists: &[Vec<(u32, i32)>], edges: usize) -> Result<(), Backend
 }
 
 impl WgpuBackend {
-    fn wait(&self, index: wgpu::SubmissionIndex) -> Result<(), BackendError> {
+    pub(crate) fn wait(&self, index: wgpu::SubmissionIndex) -> Result<(), BackendError> {
         let limit = gpu::wait_limit()?;
         self.device
             .poll(wgpu::PollType::Wait {
