@@ -11,8 +11,12 @@
 //!   SPIR-V file `cargo xtask shaders` makes of it, with the same definitions: the job list is
 //!   xtask's own (`xtask/src/shaders.rs`, included below). Without glslangValidator the test is
 //!   ignored with the reason, and fails under `CI=true`.
-//! * Nothing else lives in `shaders/`: a file that is neither WGSL, a GLSL stage nor the SPIR-V
-//!   of a job fails the test.
+//! * WESL: `shaders/bevy_mask.wesl`, the Bevy plugin's material shader, imports Bevy's own PBR
+//!   modules, so only Bevy's composer can validate it: `crates/bevy`'s headless test does (a
+//!   broken shader draws nothing there, and the test fails). Here it must only exist, be named
+//!   `bevy_*` and be read by that crate.
+//! * Nothing else lives in `shaders/`: a file that is neither WGSL, the Bevy plugin's WESL, a
+//!   GLSL stage nor the SPIR-V of a job fails the test.
 //!
 //! This test lives in the workspace test crate because that crate already depends on every crate
 //! that builds shaders (through the CLI), so it sees the production compositions without a new
@@ -114,6 +118,12 @@ fn modules() -> Vec<Module> {
     all.push(module(
         "viewer volumes",
         viewer::VOLUMES_WGSL,
+        Capabilities::empty(),
+    ));
+    // The Bevy plugin (outside the workspace) includes this file whole, as its resolve module.
+    all.push(module(
+        "bevy mask resolve (crates/bevy/src/render.rs)",
+        include_str!("../shaders/bevy_mask_resolve.wgsl"),
         Capabilities::empty(),
     ));
     all
@@ -228,7 +238,8 @@ fn shaders_holds_only_shader_sources_and_their_spirv() {
         .into_iter()
         .filter(|(name, path)| {
             let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
-            let source = ext == "wgsl" || xtask_shaders::STAGES.contains(&ext);
+            let bevy_wesl = ext == "wesl" && name.starts_with("bevy_") && bevy_reads(name);
+            let source = ext == "wgsl" || bevy_wesl || xtask_shaders::STAGES.contains(&ext);
             let spirv = jobs
                 .iter()
                 .any(|j| j.output.file_name() == Some(std::ffi::OsStr::new(name)));
@@ -238,8 +249,19 @@ fn shaders_holds_only_shader_sources_and_their_spirv() {
         .collect();
     assert!(
         stray.is_empty(),
-        "files in shaders/ that are neither WGSL, a GLSL stage nor the SPIR-V of a \
-         `cargo xtask shaders` job: {}",
+        "files in shaders/ that are neither WGSL, the Bevy plugin's WESL, a GLSL stage nor the \
+         SPIR-V of a `cargo xtask shaders` job: {}",
         stray.join(", ")
     );
+}
+
+/// Whether a file of `crates/bevy/src` includes `shaders/NAME`.
+fn bevy_reads(name: &str) -> bool {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../crates/bevy/src");
+    std::fs::read_dir(&src).is_ok_and(|dir| {
+        dir.flatten().any(|f| {
+            std::fs::read_to_string(f.path())
+                .is_ok_and(|text| text.contains(&format!("shaders/{name}\")")))
+        })
+    })
 }

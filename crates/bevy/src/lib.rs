@@ -197,6 +197,7 @@ impl Plugin for ShadowVolumesPlugin {
     }
 
     fn finish(&self, app: &mut App) {
+        material::finish(app);
         render::finish(app);
     }
 }

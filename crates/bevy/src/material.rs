@@ -3,7 +3,7 @@
 
 use std::collections::HashMap;
 
-use bevy::asset::{embedded_asset, RenderAssetUsages};
+use bevy::asset::{uuid_handle, RenderAssetUsages};
 use bevy::image::TextureFormatPixelInfo as _;
 use bevy::pbr::{ExtendedMaterial, MaterialExtension};
 use bevy::prelude::*;
@@ -11,7 +11,7 @@ use bevy::render::render_resource::{
     AsBindGroup, Extent3d, TextureDimension, TextureFormat, TextureUsages, TextureViewDescriptor,
     TextureViewDimension,
 };
-use bevy::shader::ShaderRef;
+use bevy::shader::{Shader, ShaderRef};
 
 use crate::{ShadowCaster, ShadowVolumes, MAX_LIGHTS};
 
@@ -33,9 +33,13 @@ pub struct ShadowMask {
 /// `MeshMaterial3d<StandardMaterial>` and keeps it equal to that material when it changes.
 pub type ShadowVolumeMaterial = ExtendedMaterial<StandardMaterial, ShadowMask>;
 
+/// The extension's fragment shader, `shaders/bevy_mask.wesl` (WESL, as Bevy 0.20's own shaders:
+/// it imports `bevy_pbr`'s lighting), under a fixed handle.
+const MASK_SHADER: Handle<Shader> = uuid_handle!("6f1d3c1e-52a4-4c8e-9a57-3f2b8d0e7a41");
+
 impl MaterialExtension for ShadowMask {
     fn fragment_shader() -> ShaderRef {
-        "embedded://shadowvol_bevy/mask.wesl".into()
+        MASK_SHADER.into()
     }
 }
 
@@ -54,11 +58,28 @@ pub(crate) struct MaskTextures {
 struct Swapped(HashMap<AssetId<StandardMaterial>, Handle<ShadowVolumeMaterial>>);
 
 pub(crate) fn build(app: &mut App) {
-    embedded_asset!(app, "mask.wesl");
     app.add_plugins(MaterialPlugin::<ShadowVolumeMaterial>::default())
         .init_resource::<Swapped>()
         .add_systems(PreStartup, make_textures)
         .add_systems(PostUpdate, (swap_materials, size_mask));
+}
+
+/// Adds the extension's shader, once every plugin is built (the shader assets come with
+/// `DefaultPlugins`).
+pub(crate) fn finish(app: &mut App) {
+    let shader = Shader::from_wesl(
+        include_str!("../../../shaders/bevy_mask.wesl"),
+        "shadowvol_bevy/bevy_mask.wesl",
+    );
+    match app.world_mut().get_resource_mut::<Assets<Shader>>() {
+        Some(mut shaders) => {
+            let _ = shaders.insert(&MASK_SHADER, shader);
+        }
+        None => error!(
+            "shadowvol: ShadowVolumesPlugin needs Bevy's shader assets (DefaultPlugins, or \
+             RenderPlugin with its asset plugins); the casters will not draw"
+        ),
+    }
 }
 
 /// A mask of `width × height` pixels and [`MAX_LIGHTS`] layers, drawn by the pass and sampled by

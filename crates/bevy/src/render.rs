@@ -445,16 +445,6 @@ fn resolve_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
     })
 }
 
-/// The resolve's shader: a triangle that covers the target, writing 1.
-pub(crate) const RESOLVE_WGSL: &str = "
-@vertex
-fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(p * 2.0 - 1.0, 0.0, 1.0);
-}
-
-@fragment
-fn fs() -> @location(0) vec4<f32> {
-    return vec4<f32>(1.0);
-}
-";
+/// The resolve's shader (`shaders/bevy_mask_resolve.wgsl`): a triangle that covers the target,
+/// writing 1.
+const RESOLVE_WGSL: &str = include_str!("../../../shaders/bevy_mask_resolve.wgsl");
