@@ -78,7 +78,10 @@ impl ShadowPipeline for MapPipeline {
         let pass = self.pass.as_ref().expect("built above");
         self.scene = None;
         self.scene = Some(pass.prepare(&device.device, scene)?);
-        Ok(())
+        // The surfaces reach their buffer through staging memory at the next submission:
+        // submitting and waiting now frees it before the first frame allocates its targets.
+        device.queue.submit([]);
+        crate::raster::wait(&device.device)
     }
 
     fn record(
