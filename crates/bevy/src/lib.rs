@@ -198,6 +198,5 @@ impl Plugin for ShadowVolumesPlugin {
 
     fn finish(&self, app: &mut App) {
         material::finish(app);
-        render::finish(app);
     }
 }

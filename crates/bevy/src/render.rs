@@ -37,8 +37,6 @@ pub(crate) fn build(app: &mut App) {
         .add_systems(Core3d, draw_masks.in_set(Core3dSystems::Prepass));
 }
 
-pub(crate) fn finish(_app: &mut App) {}
-
 fn extract_textures(mut commands: Commands, textures: Extract<Option<Res<MaskTextures>>>) {
     if let Some(t) = textures.as_ref() {
         commands.insert_resource(MaskTextures::clone(t));
