@@ -78,10 +78,8 @@ impl ShadowPipeline for MapPipeline {
         let pass = self.pass.as_ref().expect("built above");
         self.scene = None;
         self.scene = Some(pass.prepare(&device.device, scene)?);
-        // The surfaces reach their buffer through staging memory at the next submission:
-        // submitting and waiting now frees it before the first frame allocates its targets.
-        device.queue.submit([]);
-        crate::raster::wait(&device.device)
+        // Frees the upload's staging memory before the first frame allocates its targets.
+        crate::raster::finish_uploads(&device.device, &device.queue)
     }
 
     fn record(

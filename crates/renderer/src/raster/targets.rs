@@ -27,6 +27,17 @@ pub(crate) fn map_read(
     Ok(out)
 }
 
+/// Completes the uploads made so far. `create_buffer_init` copies its contents through staging
+/// memory that lives until the next submission completes; submitting nothing and waiting frees
+/// it now, before the next upload or frame allocates on top of it.
+pub(crate) fn finish_uploads(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+) -> Result<(), RenderError> {
+    queue.submit([]);
+    wait(device)
+}
+
 /// Waits for all submitted work, bounded by `SHADOWVOL_GPU_TIMEOUT`: a hung device is an error.
 pub(crate) fn wait(device: &wgpu::Device) -> Result<(), RenderError> {
     let limit =

@@ -30,10 +30,8 @@ impl ShadowPass {
         let (world, world_out) = self.world_positions(layout.vertex_objects.len())?;
         let pending_dispatch = self.pending_dispatch();
         let surface = self.surface_vertices(&layout);
-        // The initial contents reach their buffers through staging memory at the next
-        // submission: submitting and waiting now frees it before the next part is laid out.
-        self.queue.submit([]);
-        crate::raster::wait(&self.device)?;
+        // Frees the uploads' staging memory before the next part is laid out.
+        crate::raster::finish_uploads(&self.device, &self.queue)?;
         // The layout's arrays are on the device now; only its sizes and offsets stay.
         Ok(ResidentScene {
             ids: Vec::new(),
