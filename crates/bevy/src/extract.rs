@@ -2,6 +2,7 @@
 //! (built again only when the casters' meshes change) and small per-frame inputs, which the
 //! render world copies each frame.
 
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
@@ -167,14 +168,15 @@ fn gather(
     problems.extend(frame.left_out.iter().cloned());
     // Per object of the current scene; an object whose entity is gone while its rebuild waits
     // is collapsed to a point, which casts nothing.
+    let by_entity: HashMap<Entity, &GlobalTransform> =
+        marked.iter().map(|&(e, _, t)| (e, t)).collect();
     let transforms = frame
         .objects
         .iter()
         .map(|k| {
-            marked
-                .iter()
-                .find(|(e, _, _)| e == k)
-                .map_or(glam::Affine3A::ZERO, |(_, _, t)| to_affine(t))
+            by_entity
+                .get(k)
+                .map_or(glam::Affine3A::ZERO, |t| to_affine(t))
         })
         .collect();
     frame.transforms = transforms;
@@ -248,7 +250,7 @@ fn build_scene(
         objects: Vec::new(),
         left_out: Vec::new(),
     };
-    let mut tables = std::collections::HashMap::new();
+    let mut tables = HashMap::new();
     for (entity, mesh, t) in casters {
         let id = mesh.id();
         if let std::collections::hash_map::Entry::Vacant(slot) = tables.entry(id) {
