@@ -235,7 +235,7 @@ pub fn reference(scene: &TopologyScene, lights: &[Light], mode: Accuracy) -> Ref
             let p: Vec<[f32; 3]> = t.positions.iter().map(|v| v.to_array()).collect();
             for (e, &[a, b]) in t.edges.iter().enumerate() {
                 let (mut m, mut mx, mut cert) = (0i32, 0i32, true);
-                for &o in t.ovs_of(e) {
+                for o in t.ovs_of(e) {
                     let x = sign_exact(p[a as usize], p[b as usize], l, p[o as usize]);
                     if needs_oracle(p[a as usize], p[b as usize], l, p[o as usize]) {
                         r.oracle_pairs.0 += 1;
@@ -339,7 +339,7 @@ pub fn fallback_signs(scene: &TopologyScene, lights: &[Light]) -> [usize; 3] {
         let p: Vec<[f32; 3]> = t.positions.iter().map(|v| v.to_array()).collect();
         for l in &obj_lights[obj] {
             for (e, &[a, b]) in t.edges.iter().enumerate() {
-                for &o in t.ovs_of(e) {
+                for o in t.ovs_of(e) {
                     let (a, b, o) = (p[a as usize], p[b as usize], p[o as usize]);
                     if shadowvol_robust_math::orient_filter_f64(a, b, *l, o).is_none() {
                         counts[(oracle::sign_exact(a, b, *l, o) + 1) as usize] += 1;

@@ -465,13 +465,15 @@ fn bench_backend(
             entry.name
         )));
     }
-    let details: serde_json::Map<String, serde_json::Value> = info
+    bar.set_message(format!("{}: prepare", entry.name));
+    let id = backend.prepare(topo)?;
+    // After the preparation, which some backends report on (the layout `simd` chose).
+    let details: serde_json::Map<String, serde_json::Value> = backend
+        .info()
         .details
         .iter()
         .map(|(k, v)| (k.clone(), serde_json::Value::String(v.clone())))
         .collect();
-    bar.set_message(format!("{}: prepare", entry.name));
-    let id = backend.prepare(topo)?;
     // One output per light set, so that interleaving never resizes it inside a timed frame.
     let mut results: Vec<Multiplicities> = light_sets
         .iter()

@@ -55,7 +55,7 @@ impl MemoryFloor {
         let words_in: usize = scene
             .objects
             .iter()
-            .map(|o| o.table.edges.len() * 2 + o.table.ovs.len() + o.table.positions.len() * 3)
+            .map(|o| o.table.edges.len() * 2 + o.table.ov_refs.len() + o.table.positions.len() * 3)
             .sum();
         let words_out = scene.total_edges() * lights;
         // Non-constant contents, so nothing can be folded away.

@@ -15,6 +15,7 @@ const SCENE: &str = "sphere-100k";
 fn main() {
     let mut trials = shadowvol_test_support::trials![
         bench_records_carry_their_backends_table,
+        simd_reads_the_table_in_place_when_asked,
         bench_build_runs_time_the_table_against_a_read,
         render_counts_each_pipelines_device_buffers,
     ];
@@ -63,7 +64,7 @@ fn silhouette_reports_what_the_prepared_scene_holds(backend: &str) {
     match backend {
         // The scalar kernel reads the table itself.
         "cpu" => assert!(host < 4096 && device == 0, "cpu copies nothing: {v}"),
-        // Its own structure-of-arrays copy, opposite vertices (12 B/triangle) included.
+        // A scene this small gets the copy layout: canonical triangles (12 B/triangle) and more.
         "simd" => assert!(
             host >= 12 * triangles && device == 0,
             "simd: {host}, {device}"
@@ -120,6 +121,63 @@ fn bench_build_runs_time_the_table_against_a_read() -> Outcome {
     );
     // Building is sorting and hashing: it cannot be as fast as reading its input once.
     assert!(f("ratio") > 1.0, "{b}");
+    Ok(())
+}
+
+/// `SHADOWVOL_SIMD_LAYOUT=in-place`: the bench record says so, and the backend holds under a
+/// byte a triangle of its own; the default (a scene this small is copied) holds tens.
+fn simd_reads_the_table_in_place_when_asked() -> Outcome {
+    let record = |layout: Option<&str>| {
+        let mut cmd = std::process::Command::new(common::BIN);
+        cmd.args([
+            "bench",
+            "--scene",
+            SCENE,
+            "--backend",
+            "simd",
+            "--mode",
+            "exact",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+            "--format",
+            "json",
+        ]);
+        if let Some(layout) = layout {
+            cmd.env("SHADOWVOL_SIMD_LAYOUT", layout);
+        }
+        let out = cmd.output().expect("run shadowvol");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: Value = serde_json::from_slice(&out.stdout).expect("JSON");
+        v["records"][0].clone()
+    };
+    for (layout, name) in [(None, "copy"), (Some("in-place"), "in-place")] {
+        let r = record(layout);
+        assert_eq!(r["details"]["simd_layout"], name, "{r}");
+        let (_, host, _) = parts(&r);
+        let triangles = u(&r, "triangles");
+        assert_eq!(
+            host < triangles,
+            name == "in-place",
+            "{name}: {host} B host"
+        );
+    }
+    // An unknown layout is refused, naming the variable.
+    let out = std::process::Command::new(common::BIN)
+        .args(["silhouette", SCENE, "--backend", "simd"])
+        .env("SHADOWVOL_SIMD_LAYOUT", "sideways")
+        .output()
+        .expect("run shadowvol");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("SHADOWVOL_SIMD_LAYOUT"),
+        "{stderr}"
+    );
     Ok(())
 }
 

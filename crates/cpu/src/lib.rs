@@ -80,8 +80,7 @@ pub fn extract_table(
     for (e, (&[a, b], m)) in table.edges.iter().zip(out.iter_mut()).enumerate() {
         *m = table
             .ovs_of(e)
-            .iter()
-            .map(|&o| i32::from(ov_sign(mode, &table.positions, a, b, o, light)))
+            .map(|o| i32::from(ov_sign(mode, &table.positions, a, b, o, light)))
             .sum();
     }
 }

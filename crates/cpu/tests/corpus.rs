@@ -209,7 +209,7 @@ fn corpus_reaches_the_exact_fallback_and_exact_zeros() {
             let t = &object.table;
             for &l in per_light {
                 for (e, &[a, b]) in t.edges.iter().enumerate() {
-                    for &o in t.ovs_of(e) {
+                    for o in t.ovs_of(e) {
                         let p = |i: u32| t.positions[i as usize].to_array();
                         total += 1;
                         if orient_filter_f64(p(a), p(b), l, p(o)).is_none() {

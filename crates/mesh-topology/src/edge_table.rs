@@ -1,5 +1,6 @@
-//! The edge table: every undirected edge once, with the opposite vertices of all its triangles
-//! (CSR) and the counts; each triangle's edges and the triangles across each edge on demand.
+//! The edge table: every undirected edge once, with references to the opposite vertices of all
+//! its triangles (CSR) and the counts; each triangle's edges and the triangles across each edge
+//! on demand.
 
 use crate::welding::split_by;
 use crate::{weld, Mesh, MeshError, Renumbering, Weld};
@@ -42,7 +43,13 @@ pub struct MeshStats {
 /// with `a < b`; since compact ids are ordered like names, this is also the order by name.
 ///
 /// It holds what every backend reads and nothing else: for a closed mesh, 48 bytes a triangle
-/// (positions 6, triangles 12, edges 12, CSR offsets 6, opposite vertices 12). Each triangle's
+/// (positions 6, triangles 12, edges 12, CSR offsets 6, opposite-vertex references 12). An
+/// opposite vertex is stored as a *reference* `4 t + r` ([`EdgeTable::ov_refs`]): its triangle
+/// `t` and its rank `r` among that triangle's vertex ids. That names the vertex
+/// ([`EdgeTable::ov_vertex`]), the triangle whose canonical orientation the (edge, OV) pair takes
+/// ([`EdgeTable::ov_triangle`]) and the pair's permutation parity ([`EdgeTable::ov_odd`]), so
+/// kernels that evaluate each triangle once find an edge's triangles in the table itself. Each
+/// triangle's
 /// edges ([`EdgeTable::tri_edges`]) and the triangles across each edge
 /// ([`EdgeTable::manifold_neighbors`]) are built when asked for; the maps back to the input
 /// ([`Renumbering`]) are stored only when they are not the identity.
@@ -58,10 +65,14 @@ pub struct EdgeTable {
     pub triangle_sources: Renumbering,
     /// Unique edges `[a, b]`, `a < b`, sorted.
     pub edges: Vec<[u32; 2]>,
-    /// CSR offsets into [`EdgeTable::ovs`]; `edges.len() + 1` entries.
+    /// CSR offsets into [`EdgeTable::ov_refs`]; `edges.len() + 1` entries.
     pub ov_offsets: Vec<u32>,
-    /// Opposite vertices, grouped by edge, in ascending triangle order within an edge.
-    pub ovs: Vec<u32>,
+    /// The opposite vertices of each edge as references `4 t + r`, grouped by edge, in
+    /// ascending triangle order within an edge: triangle `t` has the edge, and its opposite
+    /// vertex is the one of rank `r` among the triangle's three ids (0 the smallest, 1 the
+    /// middle, 2 the largest). For edge `(a, b)`, `a < b`, and opposite vertex `o`: `r = 0` when
+    /// `o < a`, `r = 1` when `a < o < b` (odd permutation parity), `r = 2` when `o > b`.
+    pub ov_refs: Vec<u32>,
     /// Counts.
     pub stats: MeshStats,
 }
@@ -157,7 +168,7 @@ impl EdgeTable {
             triangle_sources,
             edges: grouped.edges,
             ov_offsets: grouped.ov_offsets,
-            ovs: grouped.ovs,
+            ov_refs: grouped.ov_refs,
             stats,
         }
     }
@@ -237,13 +248,58 @@ impl EdgeTable {
         self.edges.len()
     }
 
-    /// The opposite vertices (compact ids) of edge `e`.
+    /// The opposite vertices (compact ids) of edge `e`, in ascending triangle order.
+    ///
+    /// # Panics
+    /// Panics if `e >= self.edge_count()`, or (while iterating) if a corner is out of range of
+    /// [`EdgeTable::triangles`] (never in a table made by [`EdgeTable::build`]).
+    pub fn ovs_of(
+        &self,
+        e: usize,
+    ) -> impl ExactSizeIterator<Item = u32> + DoubleEndedIterator + Clone + '_ {
+        self.ov_refs_of(e).iter().map(|&c| self.ov_vertex(c))
+    }
+
+    /// The opposite-vertex references `4 t + r` of edge `e` (see [`EdgeTable::ov_refs`]).
     ///
     /// # Panics
     /// Panics if `e >= self.edge_count()`.
     #[must_use]
-    pub fn ovs_of(&self, e: usize) -> &[u32] {
-        &self.ovs[self.ov_offsets[e] as usize..self.ov_offsets[e + 1] as usize]
+    pub fn ov_refs_of(&self, e: usize) -> &[u32] {
+        &self.ov_refs[self.ov_offsets[e] as usize..self.ov_offsets[e + 1] as usize]
+    }
+
+    /// The opposite vertex (compact id) that reference `r = 4 t + rank` names: the vertex of
+    /// that rank among triangle `t`'s ids.
+    ///
+    /// # Panics
+    /// Panics if `t >= self.triangles.len()`.
+    #[must_use]
+    #[inline]
+    pub fn ov_vertex(&self, r: u32) -> u32 {
+        let [a, b, c] = self.triangles[Self::ov_triangle(r) as usize];
+        let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+        match r & 3 {
+            0 => lo,
+            1 => a ^ b ^ c ^ lo ^ hi,
+            _ => hi,
+        }
+    }
+
+    /// The triangle `t` of reference `r = 4 t + rank`.
+    #[must_use]
+    #[inline]
+    pub const fn ov_triangle(r: u32) -> u32 {
+        r >> 2
+    }
+
+    /// Whether the (edge, OV) pair of reference `r` has odd permutation parity: the opposite
+    /// vertex lies between the edge's ends (`a < o < b`), rank 1. The pair's sign is then the
+    /// opposite of its canonical triangle's.
+    #[must_use]
+    #[inline]
+    pub const fn ov_odd(r: u32) -> bool {
+        r & 3 == 1
     }
 
     /// The input-index names `(name(a), name(b))` of edge `e`; `name(a) < name(b)`.
@@ -265,7 +321,7 @@ impl EdgeTable {
     pub fn streamed_bytes(&self) -> usize {
         self.edges.len() * 8
             + self.ov_offsets.len() * 4
-            + self.ovs.len() * 4
+            + self.ov_refs.len() * 4
             + self.positions.len() * 12
     }
 }
@@ -305,7 +361,7 @@ fn compact_in_place(weld: &Weld, triangles: &mut Vec<[u32; 3]>) -> Renumbering {
 
 /// One edge entry of a triangle: the corner `3 t + i` where edge `i` of triangle `t` starts
 /// (its ends are corners `i` and `(i + 1) % 3`, its OV corner `(i + 2) % 3`). Four bytes: `3 t
-/// + i` fits `u32` because [`EdgeTable::check_size`] refuses `3 × triangles >= 2^32 - 1`.
+/// + i` fits `u32` because [`EdgeTable::check_size`] refuses `4 × triangles >= 2^32 - 1`.
 type Entry = u32;
 
 /// The two ends of the edge that starts at `corner`, smaller first.
@@ -347,17 +403,18 @@ fn bucket_entries(triangles: &[[u32; 3]], vertex_count: usize) -> (Vec<u32>, Vec
 struct Grouped {
     edges: Vec<[u32; 2]>,
     ov_offsets: Vec<u32>,
-    ovs: Vec<u32>,
+    ov_refs: Vec<u32>,
 }
 
 /// Step 3: sorts each bucket (its size is the vertex's degree) by larger endpoint, then
 /// triangle, and walks its groups of equal larger endpoint: one edge per group, with the
-/// group's opposite vertices. Counts the edges by kind into `stats`.
+/// group's opposite-vertex references. Counts the edges by kind into `stats`.
 ///
 /// Buckets are independent: chunks of vertices run on rayon's threads, first sorting and
 /// counting each bucket's edges, then (once the counts give each chunk its first edge) writing
-/// edges, offsets and OVs. The OVs take the entries' place: entry `k` of the sorted order
-/// becomes OV `k`, read before it is written. So the build holds 12 bytes a triangle for both,
+/// edges, offsets and OV references. The references take the entries' place: entry `k` of the
+/// sorted order (the edge's starting corner `3 t + i`) becomes reference `k` (`4 t + r`, `r`
+/// the rank of the triangle's vertex `(i + 2) % 3`), read before it is written. So the build holds 12 bytes a triangle for both,
 /// not 24 for the entries beside 12 for the OVs; the result is the same on any number of
 /// threads.
 fn group_edges(
@@ -432,7 +489,10 @@ fn group_edges(
                     let first = j;
                     while j < hi && corner_edge(triangles, ents[j]).1 == b {
                         let c = ents[j];
-                        ents[j] = triangles[(c / 3) as usize][((c % 3 + 2) % 3) as usize];
+                        let o = triangles[(c / 3) as usize][((c % 3 + 2) % 3) as usize];
+                        // The rank of `o` among the edge's ends `a < b` and itself.
+                        let rank = u32::from(o > a as u32) + u32::from(o > b);
+                        ents[j] = 4 * (c / 3) + rank;
                         j += 1;
                     }
                     eds[e] = [a as u32, b];
@@ -451,7 +511,7 @@ fn group_edges(
     Grouped {
         edges,
         ov_offsets,
-        ovs: entries,
+        ov_refs: entries,
     }
 }
 

@@ -33,7 +33,8 @@ pub enum MeshError {
         "the mesh is too large: {what} is {count}, but at most {limit} can be indexed with u32"
     )]
     TooLarge {
-        /// What overflowed (for example "vertices" or "edge entries (3 x triangles)").
+        /// What overflowed (for example "vertices" or "opposite-vertex references (4 x
+        /// triangles)").
         what: &'static str,
         /// The count found.
         count: u64,

@@ -175,11 +175,11 @@ mod tests {
             assert!(matches!(
                 e,
                 MeshError::TooLarge {
-                    what: "edge entries (3 x triangles)",
+                    what: "opposite-vertex references (4 x triangles)",
                     ..
                 }
             ));
-            assert!(e.to_string().contains("6442450944"), "{e}");
+            assert!(e.to_string().contains("8589934592"), "{e}");
             let e = EdgeTable::check_size(10, u64::from(u32::MAX)).unwrap_err();
             assert!(
                 matches!(
@@ -194,7 +194,7 @@ mod tests {
         });
         assert!(peak < 4096, "{peak} bytes allocated");
         // Just inside the limit passes the index check (the memory check may still refuse).
-        let inside = EdgeTable::check_size((u64::from(u32::MAX) - 1) / 3, 3);
+        let inside = EdgeTable::check_size((u64::from(u32::MAX) - 1) / 4, 3);
         assert!(
             !matches!(inside, Err(MeshError::TooLarge { .. })),
             "{inside:?}"
@@ -208,7 +208,7 @@ mod tests {
         let Some((available, _)) = available_memory() else {
             return; // not Linux: nothing to compare against
         };
-        let t = (u64::from(u32::MAX) - 1) / 3;
+        let t = (u64::from(u32::MAX) - 1) / 4;
         let v = u64::from(u32::MAX) - 2;
         let needed = EdgeTable::estimate_bytes(t, v);
         if needed <= available {
@@ -278,8 +278,15 @@ mod tests {
             *left.entry(canon(t)).or_default() += 3;
         }
         for (e, &[a, b]) in many.edges.iter().enumerate() {
-            for &o in many.ovs_of(e) {
-                *left.entry(canon([a, b, o])).or_default() -= 1;
+            for &r in many.ov_refs_of(e) {
+                // Reference `4 t + rank`: triangle t is the edge's and the OV's, the OV has that
+                // rank among its ids.
+                let (t, rank) = ((r >> 2) as usize, (r & 3) as usize);
+                let sorted = canon(many.triangles[t]);
+                let o = sorted[rank];
+                assert_eq!(canon([a, b, o]), sorted, "reference {r} of edge {e}");
+                assert_eq!(EdgeTable::ov_odd(r), a < o && o < b);
+                *left.entry(sorted).or_default() -= 1;
             }
         }
         assert!(
@@ -348,7 +355,7 @@ mod tests {
             unique_arc_bytes(&items, EdgeTable::heap_bytes),
             a.heap_bytes() + b.heap_bytes()
         );
-        assert!(a.heap_bytes() >= vec_bytes(&a.ovs) + vec_bytes(&a.edges));
+        assert!(a.heap_bytes() >= vec_bytes(&a.ov_refs) + vec_bytes(&a.edges));
     }
 
     #[test]
@@ -397,7 +404,7 @@ mod tests {
         let t = EdgeTable::build(&Mesh::new(positions, triangles).unwrap()).unwrap();
         assert_eq!(t.stats.nonmanifold_edges, 1);
         assert_eq!(t.stats.boundary_edges, 8);
-        assert_eq!(t.ovs_of(0), &[2, 3, 4, 5]);
+        assert!(t.ovs_of(0).eq([2, 3, 4, 5]));
         assert_eq!(t.manifold_neighbors()[0][0], NO_NEIGHBOR);
     }
 

@@ -87,7 +87,7 @@ impl EdgeTable {
 
     /// Heap bytes the table holds now: the capacity of each of its vectors times the size of
     /// its element (positions, names and triangle sources where stored, triangles, edges, CSR
-    /// offsets and opposite vertices). The struct itself is not counted.
+    /// offsets and opposite-vertex corners). The struct itself is not counted.
     #[must_use]
     pub fn heap_bytes(&self) -> u64 {
         vec_bytes(&self.positions)
@@ -96,7 +96,7 @@ impl EdgeTable {
             + self.triangle_sources.heap_bytes()
             + vec_bytes(&self.edges)
             + vec_bytes(&self.ov_offsets)
-            + vec_bytes(&self.ovs)
+            + vec_bytes(&self.ov_refs)
     }
 
     /// Checks, without allocating, that a mesh of `triangles` triangles and `vertices` vertices
@@ -107,7 +107,8 @@ impl EdgeTable {
     /// [`MEMORY_LIMIT_ENV`] is set; it is skipped when the available memory cannot be read.
     ///
     /// # Errors
-    /// [`MeshError::TooLarge`] when `vertices >= 2^32 - 1` or `3 * triangles >= 2^32 - 1`;
+    /// [`MeshError::TooLarge`] when `vertices >= 2^32 - 1` or `4 * triangles >= 2^32 - 1` (the
+    /// opposite-vertex references `4 t + r`, [`EdgeTable::ov_refs`], are 32-bit);
     /// [`MeshError::OutOfMemory`] naming both numbers when the estimate exceeds what is available.
     pub fn check_size(triangles: u64, vertices: u64) -> Result<u64, MeshError> {
         let limit = u64::from(u32::MAX);
@@ -118,10 +119,10 @@ impl EdgeTable {
                 limit: limit - 1,
             });
         }
-        if triangles.saturating_mul(3) >= limit {
+        if triangles.saturating_mul(4) >= limit {
             return Err(MeshError::TooLarge {
-                what: "edge entries (3 x triangles)",
-                count: triangles.saturating_mul(3),
+                what: "opposite-vertex references (4 x triangles)",
+                count: triangles.saturating_mul(4),
                 limit: limit - 1,
             });
         }

@@ -44,10 +44,10 @@ impl Mesh {
                 limit: limit - 1,
             });
         }
-        if self.triangles.len() as u64 * 3 >= limit {
+        if self.triangles.len() as u64 * 4 >= limit {
             return Err(MeshError::TooLarge {
-                what: "edge entries (3 x triangles)",
-                count: self.triangles.len() as u64 * 3,
+                what: "opposite-vertex references (4 x triangles)",
+                count: self.triangles.len() as u64 * 4,
                 limit: limit - 1,
             });
         }

@@ -78,22 +78,42 @@ fn check_table(mesh: &Mesh, table: &EdgeTable) {
     // CSR well-formed.
     assert_eq!(table.ov_offsets.len(), table.edges.len() + 1);
     assert_eq!(table.ov_offsets[0], 0);
-    assert_eq!(*table.ov_offsets.last().unwrap() as usize, table.ovs.len());
+    assert_eq!(
+        *table.ov_offsets.last().unwrap() as usize,
+        table.ov_refs.len()
+    );
     assert!(
         table.ov_offsets.windows(2).all(|w| w[0] < w[1]),
         "every edge has an OV"
     );
-    assert_eq!(table.ovs.len(), 3 * kept, "OV count is 3 x kept triangles");
+    assert_eq!(
+        table.ov_refs.len(),
+        3 * kept,
+        "OV count is 3 x kept triangles"
+    );
     for (e, ((&(na, nb), ovs), &[a, b])) in map.iter().zip(&table.edges).enumerate() {
         assert_eq!((na, nb), table.edge_names(e));
         assert_eq!((compact_of_name(na), compact_of_name(nb)), (a, b));
         let got: Vec<u32> = table
             .ovs_of(e)
-            .iter()
-            .map(|&o| table.vertex_names.get(o as usize))
+            .map(|o| table.vertex_names.get(o as usize))
             .collect();
         assert_eq!(&got, ovs, "OVs of edge ({na}, {nb})");
-        assert!(table.ovs_of(e).iter().all(|&o| o != a && o != b));
+        assert!(table.ovs_of(e).all(|o| o != a && o != b));
+        // Each reference `4 t + rank` names a triangle with this edge, whose vertex of that rank
+        // is the opposite one; rank 1 (between the ends) is the odd parity.
+        for &r in table.ov_refs_of(e) {
+            let (t, rank) = ((r >> 2) as usize, (r & 3) as usize);
+            let mut sorted = table.triangles[t];
+            sorted.sort_unstable();
+            let o = sorted[rank];
+            let mut ids = [a, b, o];
+            ids.sort_unstable();
+            assert_eq!(ids, sorted, "reference {r} of edge {e}");
+            assert_eq!(table.ov_vertex(r), o);
+            assert_eq!(EdgeTable::ov_triangle(r) as usize, t);
+            assert_eq!(EdgeTable::ov_odd(r), a < o && o < b, "reference {r}");
+        }
     }
     // Every triangle's three edges are present and point back to the triangle.
     let tri_edges = table.tri_edges();
@@ -104,7 +124,9 @@ fn check_table(mesh: &Mesh, table: &EdgeTable) {
             let e = tri_edges[t][i] as usize;
             assert_eq!(table.edge_index(b, a), Some(e as u32));
             assert_eq!(table.edges[e], [a.min(b), a.max(b)]);
-            assert!(table.ovs_of(e).contains(&tri[(i + 2) % 3]));
+            let o = tri[(i + 2) % 3];
+            let rank = tri.iter().filter(|&&v| v < o).count() as u32;
+            assert!(table.ov_refs_of(e).contains(&(4 * t as u32 + rank)));
         }
     }
 
@@ -123,7 +145,7 @@ fn check_table(mesh: &Mesh, table: &EdgeTable) {
     assert_eq!(s.boundary_edges, count(|n| n == 1));
     assert_eq!(s.manifold_edges, count(|n| n == 2));
     assert_eq!(s.nonmanifold_edges, count(|n| n >= 3));
-    assert_eq!(s.opposite_vertices, table.ovs.len());
+    assert_eq!(s.opposite_vertices, table.ov_refs.len());
 
     check_connectivity(table);
 }
@@ -227,7 +249,7 @@ fn negative_zero_welds_with_positive_zero() {
     assert_eq!(t.vertex_names.to_vec(), vec![0, 1, 2, 5]);
     // Both triangles share the welded edge (0, 1): it is manifold.
     assert_eq!(t.edges[0], [0, 1]);
-    assert_eq!(t.ovs_of(0), &[2, 3]);
+    assert!(t.ovs_of(0).eq([2, 3]));
     assert_eq!(t.stats.manifold_edges, 1);
     check_table(&mesh, &t);
 }
@@ -297,7 +319,7 @@ fn duplicate_triangles_are_kept_as_a_manifold_pair() {
     let mesh = Mesh::new(p, vec![[0, 1, 2], [0, 2, 1]]).unwrap();
     let t = EdgeTable::build(&mesh).unwrap();
     assert_eq!(t.stats.manifold_edges, 3);
-    assert_eq!(t.ovs_of(0), &[2, 2]);
+    assert!(t.ovs_of(0).eq([2, 2]));
     check_table(&mesh, &t);
 }
 
@@ -349,7 +371,7 @@ fn counts_and_streamed_bytes_of_a_tetrahedron() {
     // One pass reads the edge records, offsets, OVs and positions: their sizes in memory.
     use std::mem::size_of_val;
     let want = size_of_val(&t.edges[..]) + size_of_val(&t.ov_offsets[..]);
-    let want = want + size_of_val(&t.ovs[..]) + size_of_val(&t.positions[..]);
+    let want = want + size_of_val(&t.ov_refs[..]) + size_of_val(&t.positions[..]);
     assert_eq!(t.streamed_bytes(), want);
     // 6 edges x 8 + 7 offsets x 4 + 12 OVs x 4 + 4 positions x 12.
     assert_eq!(t.streamed_bytes(), 48 + 28 + 48 + 48);
@@ -359,14 +381,14 @@ fn counts_and_streamed_bytes_of_a_tetrahedron() {
 #[test]
 fn index_limits_are_exact_and_named() {
     let limit = u64::from(u32::MAX) - 1;
-    // 3 x triangles = 2^32 - 1 is one entry too many; one triangle less fits.
-    let t = u64::from(u32::MAX) / 3;
-    assert_eq!(3 * t, u64::from(u32::MAX));
+    // 4 x triangles >= 2^32 - 1 is too many references; one triangle less fits.
+    let t = u64::from(u32::MAX) / 4 + 1;
+    assert_eq!(4 * t, u64::from(u32::MAX) + 1);
     assert_eq!(
         EdgeTable::check_size(t, 3),
         Err(MeshError::TooLarge {
-            what: "edge entries (3 x triangles)",
-            count: 3 * t,
+            what: "opposite-vertex references (4 x triangles)",
+            count: 4 * t,
             limit,
         })
     );

@@ -396,8 +396,7 @@ impl OpenClBackend {
             let [a, b] = table.edges[e];
             *w = table
                 .ovs_of(e)
-                .iter()
-                .map(|&o| {
+                .map(|o| {
                     i32::from(shadowvol_robust_math::ov_sign(
                         Accuracy::Exact,
                         &table.positions,

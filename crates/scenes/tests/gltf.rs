@@ -109,7 +109,7 @@ fn same_geometry(a: &EdgeTable, b: &EdgeTable, what: &str) {
     assert_eq!(a.triangles, b.triangles, "{what}: triangles");
     assert_eq!(a.edges, b.edges, "{what}: edges");
     assert_eq!(a.ov_offsets, b.ov_offsets, "{what}: ov_offsets");
-    assert_eq!(a.ovs, b.ovs, "{what}: ovs");
+    assert_eq!(a.ov_refs, b.ov_refs, "{what}: ov_refs");
     assert_eq!(
         b.stats.vertices, a.stats.welded_vertices,
         "{what}: vertices"

@@ -232,8 +232,7 @@ mod tests {
                 for (e, &[a, b]) in t.edges.iter().enumerate() {
                     m.values_mut(l)[g + e] = t
                         .ovs_of(e)
-                        .iter()
-                        .map(|&ov| i32::from(ov_sign(mode, &t.positions, a, b, ov, local)))
+                        .map(|ov| i32::from(ov_sign(mode, &t.positions, a, b, ov, local)))
                         .sum();
                 }
                 g += t.edges.len();

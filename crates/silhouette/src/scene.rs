@@ -57,7 +57,7 @@ impl TopologyScene {
     /// Total number of (edge, OV) pairs over all objects.
     #[must_use]
     pub fn total_ovs(&self) -> usize {
-        self.objects.iter().map(|o| o.table.ovs.len()).sum()
+        self.objects.iter().map(|o| o.table.ov_refs.len()).sum()
     }
 
     /// Total number of welded vertices over all objects.

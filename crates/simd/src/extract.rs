@@ -7,7 +7,7 @@ use crate::kernel::original::EdgeOriginal;
 use crate::kernel::signs::PACK;
 use crate::kernel::tri_pass::TriPass;
 use crate::kernel::EdgeOut;
-use crate::layout::{Layout, LANES};
+use crate::layout::{with_geometry, Geometry, Layout, LayoutChoice, COPY_MAX_TRIANGLES, LANES};
 use crate::SimdLevel;
 use glam::{Affine3A, DAffine3, DVec3};
 use rayon::prelude::*;
@@ -145,7 +145,25 @@ fn items_for(counts: &[usize]) -> Vec<Item> {
     items
 }
 
+/// Triangles of the distinct tables of `scene` (instances counted once).
+fn distinct_triangles(scene: &TopologyScene) -> usize {
+    let mut seen = std::collections::HashSet::new();
+    scene
+        .objects
+        .iter()
+        .filter(|o| seen.insert(Arc::as_ptr(&o.table)))
+        .map(|o| o.table.triangles.len())
+        .sum()
+}
+
 impl Prepared {
+    /// The layout the scene's tables were given: `copy` or `in-place`.
+    pub(crate) fn layout_name(&self) -> &'static str {
+        self.objects
+            .first()
+            .map_or(LayoutChoice::Copy.name(), |o| o.layout.name())
+    }
+
     /// Heap bytes of the layouts (each shared layout once) and the work lists.
     pub(crate) fn heap_bytes(&self) -> u64 {
         use shadowvol_silhouette::{unique_arc_bytes, vec_bytes};
@@ -158,12 +176,17 @@ impl Prepared {
             + unique_arc_bytes(layouts, Layout::heap_bytes)
     }
 
-    /// Lays out every object of `scene` (instances of one table share a layout) and makes the
-    /// work items.
+    /// Lays out every object of `scene` (instances of one table share a layout), copied or in
+    /// place as `choice` says, and makes the work items.
     ///
     /// # Errors
     /// [`BackendError::Limit`] when an object is too large for the layout's 32-bit indices.
-    pub(crate) fn build(scene: &TopologyScene) -> Result<Self, BackendError> {
+    pub(crate) fn build(scene: &TopologyScene, choice: LayoutChoice) -> Result<Self, BackendError> {
+        let copy = match choice {
+            LayoutChoice::Copy => true,
+            LayoutChoice::InPlace => false,
+            LayoutChoice::Auto => distinct_triangles(scene) <= COPY_MAX_TRIANGLES,
+        };
         // Objects sharing one table (instances) share one layout.
         let mut cache: HashMap<*const EdgeTable, Arc<Layout>> = HashMap::new();
         let mut objects = Vec::with_capacity(scene.objects.len());
@@ -173,15 +196,20 @@ impl Prepared {
             let layout = match cache.get(&key) {
                 Some(l) => Arc::clone(l),
                 None => {
-                    let l = Arc::new(Layout::build(&o.table).map_err(|e| BackendError::Limit {
-                        backend: crate::NAME,
-                        message: format!("object {i} ({}): {}", o.name, e.0),
+                    let l = Arc::new(Layout::build(&o.table, copy).map_err(|e| {
+                        BackendError::Limit {
+                            backend: crate::NAME,
+                            message: format!("object {i} ({}): {}", o.name, e.0),
+                        }
                     })?);
                     cache.insert(key, Arc::clone(&l));
                     l
                 }
             };
-            let (ne, nt) = (layout.edge_count, layout.t0.len());
+            let (ne, nt) = (
+                layout.edge_count(),
+                with_geometry!(&*layout, g => g.tri_slots()),
+            );
             objects.push(PreparedObject {
                 layout,
                 to_object: ToObject::new(&o.world_from_object),
@@ -191,8 +219,8 @@ impl Prepared {
             edge_base += ne;
             tri_base += nt;
         }
-        let tri_counts: Vec<usize> = objects.iter().map(|o| o.layout.tri_count).collect();
-        let edge_counts: Vec<usize> = objects.iter().map(|o| o.layout.edge_count).collect();
+        let tri_counts: Vec<usize> = objects.iter().map(|o| o.layout.tri_count()).collect();
+        let edge_counts: Vec<usize> = objects.iter().map(|o| o.layout.edge_count()).collect();
         let (tri_items, edge_items) = (items_for(&tri_counts), items_for(&edge_counts));
         let tri_bounds = std::iter::once(0)
             .chain(
@@ -204,7 +232,7 @@ impl Prepared {
         let edge_bounds = std::iter::once(0)
             .chain(edge_items.iter().map(|it| {
                 let o = &objects[it.object];
-                o.edge_base + (it.blocks.end * LANES).min(o.layout.edge_count)
+                o.edge_base + (it.blocks.end * LANES).min(o.layout.edge_count())
             }))
             .collect();
         Ok(Self {
@@ -262,14 +290,16 @@ pub(crate) fn run_extract(
                 .zip(parts.par_chunks_mut(packs))
                 .map(|(it, dst)| {
                     let o = &p.objects[it.object];
-                    let pass = TriPass {
-                        lay: &o.layout,
-                        blocks: it.blocks.clone(),
-                        lights: obj_lights(it.object),
-                        mode,
-                        out: dst,
-                    };
-                    dispatch::run(level, pass)
+                    with_geometry!(&*o.layout, lay => {
+                        let pass = TriPass {
+                            lay,
+                            blocks: it.blocks.clone(),
+                            lights: obj_lights(it.object),
+                            mode,
+                            out: dst,
+                        };
+                        dispatch::run(level, pass)
+                    })
                 })
                 .sum();
         }
@@ -296,13 +326,15 @@ pub(crate) fn run_extract(
                     edge_base: o.edge_base,
                 };
                 if mode == Accuracy::Original {
-                    let pass = EdgeOriginal {
-                        lay: &o.layout,
-                        blocks: it.blocks.clone(),
-                        lights: obj_lights(it.object),
-                        out,
-                    };
-                    dispatch::run(level, pass);
+                    with_geometry!(&*o.layout, lay => {
+                        let pass = EdgeOriginal {
+                            lay,
+                            blocks: it.blocks.clone(),
+                            lights: obj_lights(it.object),
+                            out,
+                        };
+                        dispatch::run(level, pass);
+                    });
                 } else {
                     // Per pack of lights, where the object's slot 0 is (up to 64 lights on the
                     // stack).
@@ -317,13 +349,15 @@ pub(crate) fn run_extract(
                     for (pack, b) in bases.iter_mut().enumerate() {
                         *b = pack * slots + o.tri_base;
                     }
-                    let pass = EdgeSums {
-                        lay: &o.layout,
-                        blocks: it.blocks.clone(),
-                        signs: PackedSigns { all: signs, bases },
-                        out,
-                    };
-                    dispatch::run(level, pass);
+                    with_geometry!(&*o.layout, lay => {
+                        let pass = EdgeSums {
+                            lay,
+                            blocks: it.blocks.clone(),
+                            signs: PackedSigns { all: signs, bases },
+                            out,
+                        };
+                        dispatch::run(level, pass);
+                    });
                 }
             });
     }

@@ -24,31 +24,17 @@ pub(crate) mod signs;
 pub(crate) mod tri_pass;
 
 use crate::lanes::{Arith, Level, F32V};
-use crate::layout::{Layout, LANES};
-
-/// Gather from the three SoA arrays (`true`) or load 16-byte records and transpose (`false`);
-/// a switch for comparing the two (docs/PERFORMANCE.md).
-const USE_SOA_GATHER: bool = false;
+use crate::layout::{Geometry, LANES};
 
 /// Gathers the positions of the 8 vertex ids `idx[..8]`.
 ///
 /// # Safety
-/// `idx.len() >= 8` and every id is a vertex of `lay` (guaranteed for the layout's own index
-/// arrays by `Layout::build`).
+/// `idx.len() >= 8` and every id is a vertex of `lay` (guaranteed for the ids the layout hands
+/// out: `Layout::build` checks them).
 #[inline(always)]
-unsafe fn gather<Lv: Level>(lay: &Layout, idx: &[u32]) -> [Lv::F; 3] {
-    // SAFETY: forwarded from the caller; the position arrays have the vertex count as length.
-    unsafe {
-        if USE_SOA_GATHER {
-            [
-                Lv::F::gather(&lay.xs, idx),
-                Lv::F::gather(&lay.ys, idx),
-                Lv::F::gather(&lay.zs, idx),
-            ]
-        } else {
-            Lv::gather_xyz(&lay.xyz, idx)
-        }
-    }
+unsafe fn gather<Lv: Level, G: Geometry>(lay: &G, idx: &[u32]) -> [Lv::F; 3] {
+    // SAFETY: forwarded from the caller.
+    unsafe { lay.gather::<Lv>(idx) }
 }
 
 /// A light `[x, y, z, w]` in lanes.

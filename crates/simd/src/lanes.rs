@@ -44,6 +44,7 @@ pub(crate) trait F32V: Arith {
     ///
     /// # Safety
     /// `idx` has at least 8 entries, each `< base.len()`, and `base.len() <= i32::MAX`.
+    #[cfg(test)]
     unsafe fn gather(base: &[f32], idx: &[u32]) -> Self;
     /// `(positive, negative)`: bit `i` set when lane `i` is `> 0` / `< 0`.
     fn sign_bits(self) -> (u32, u32);
@@ -111,14 +112,38 @@ pub(crate) trait Level {
     type D: F64V;
     /// Lanes 0..4 and 4..8 of `f`, widened exactly to `f64`.
     fn widen(f: Self::F) -> (Self::D, Self::D);
+    /// `(x, y, z)` lanes of the points `pos[idx[i]]` (12-byte records).
+    ///
+    /// # Safety
+    /// `idx` has at least 8 entries, each `< pos.len()`, and `pos.len() >= 2`.
+    unsafe fn gather_vec3(pos: &[glam::Vec3], idx: &[u32]) -> [Self::F; 3];
     /// `(x, y, z)` lanes of the points `pos[idx[i]]` (`[x, y, z, pad]` records).
     ///
     /// # Safety
     /// `idx` has at least 8 entries, each `< pos.len()`.
-    unsafe fn gather_xyz(pos: &[[f32; 4]], idx: &[u32]) -> [Self::F; 3];
+    unsafe fn gather_records(pos: &[[f32; 4]], idx: &[u32]) -> [Self::F; 3];
     /// Orders this thread's earlier streaming stores ([`F32V::store_i32`]) before its later
     /// stores, as `_mm_sfence` does; a no-op where the level has no streaming stores.
     fn store_fence() {}
+    /// The 8 triangles `tris` (vertex ids in winding order) in canonical order: column `k`,
+    /// lane `i` is the `k`-th smallest id of triangle `i`.
+    #[inline(always)]
+    fn canon8(tris: &[[u32; 3]; 8]) -> [[u32; 8]; 3] {
+        canon8_scalar(tris)
+    }
+}
+
+/// [`Level::canon8`], one triangle at a time.
+#[inline(always)]
+pub(crate) fn canon8_scalar(tris: &[[u32; 3]]) -> [[u32; 8]; 3] {
+    let mut c = [[0u32; 8]; 3];
+    for (i, &[a, b, d]) in tris.iter().take(8).enumerate() {
+        let (lo, hi) = (a.min(b), a.max(b));
+        let (mid, top) = (hi.min(d), hi.max(d));
+        let (bot, mid) = (lo.min(mid), lo.max(mid));
+        (c[0][i], c[1][i], c[2][i]) = (bot, mid, top);
+    }
+    c
 }
 
 /// The `wide` crate at the compile-time target level.
@@ -136,11 +161,20 @@ impl Level for Wide {
         )
     }
     #[inline(always)]
-    unsafe fn gather_xyz(pos: &[[f32; 4]], idx: &[u32]) -> [wide::f32x8; 3] {
+    unsafe fn gather_records(pos: &[[f32; 4]], idx: &[u32]) -> [wide::f32x8; 3] {
         debug_assert!(idx.len() >= 8 && idx[..8].iter().all(|&i| (i as usize) < pos.len()));
         // SAFETY: the caller guarantees 8 indices, all in range.
         let p: [[f32; 4]; 8] =
             std::array::from_fn(|i| unsafe { *pos.get_unchecked(*idx.get_unchecked(i) as usize) });
+        [0, 1, 2].map(|c| wide::f32x8::new(std::array::from_fn(|i| p[i][c])))
+    }
+    #[inline(always)]
+    unsafe fn gather_vec3(pos: &[glam::Vec3], idx: &[u32]) -> [wide::f32x8; 3] {
+        debug_assert!(idx.len() >= 8 && idx[..8].iter().all(|&i| (i as usize) < pos.len()));
+        // SAFETY: the caller guarantees 8 indices, all in range.
+        let p: [[f32; 3]; 8] = std::array::from_fn(|i| unsafe {
+            pos.get_unchecked(*idx.get_unchecked(i) as usize).to_array()
+        });
         [0, 1, 2].map(|c| wide::f32x8::new(std::array::from_fn(|i| p[i][c])))
     }
 }
@@ -150,6 +184,7 @@ impl F32V for wide::f32x8 {
     fn splat(x: f32) -> Self {
         wide::f32x8::splat(x)
     }
+    #[cfg(test)]
     #[inline(always)]
     unsafe fn gather(base: &[f32], idx: &[u32]) -> Self {
         debug_assert!(idx.len() >= 8 && idx[..8].iter().all(|&i| (i as usize) < base.len()));
@@ -285,6 +320,42 @@ mod avx2 {
         type F = F8;
         type D = D4;
         #[inline(always)]
+        fn canon8(tris: &[[u32; 3]; 8]) -> [[u32; 8]; 3] {
+            // SAFETY: `tris` is 96 readable bytes (three unaligned 32-byte loads); `out` 96
+            // writable ones; AVX2 present (module docs).
+            unsafe {
+                let p = tris.as_ptr().cast::<u32>();
+                let a = _mm256_loadu_si256(p.cast());
+                let b = _mm256_loadu_si256(p.add(8).cast());
+                let c = _mm256_loadu_si256(p.add(16).cast());
+                // Id `k` of triangle `i` is element `3 i + k` of a|b|c. Each column's eight
+                // elements sit at distinct lanes of a, b and c: blend them into one vector,
+                // then permute them into triangle order.
+                let col = |m: __m256i, order: [i32; 8]| {
+                    let idx = _mm256_loadu_si256(order.as_ptr().cast());
+                    _mm256_permutevar8x32_epi32(m, idx)
+                };
+                let x =
+                    _mm256_blend_epi32::<0b0010_0100>(_mm256_blend_epi32::<0b1001_0010>(a, b), c);
+                let y =
+                    _mm256_blend_epi32::<0b0100_1001>(_mm256_blend_epi32::<0b0010_0100>(a, b), c);
+                let z =
+                    _mm256_blend_epi32::<0b1001_0010>(_mm256_blend_epi32::<0b0100_1001>(a, b), c);
+                let x = col(x, [0, 3, 6, 1, 4, 7, 2, 5]);
+                let y = col(y, [1, 4, 7, 2, 5, 0, 3, 6]);
+                let z = col(z, [2, 5, 0, 3, 6, 1, 4, 7]);
+                // A three-element sorting network, per lane (unsigned).
+                let (lo, hi) = (_mm256_min_epu32(x, y), _mm256_max_epu32(x, y));
+                let (mid, top) = (_mm256_min_epu32(hi, z), _mm256_max_epu32(hi, z));
+                let (bot, mid) = (_mm256_min_epu32(lo, mid), _mm256_max_epu32(lo, mid));
+                let mut out = [[0u32; 8]; 3];
+                for (o, v) in out.iter_mut().zip([bot, mid, top]) {
+                    _mm256_storeu_si256(o.as_mut_ptr().cast(), v);
+                }
+                out
+            }
+        }
+        #[inline(always)]
         fn store_fence() {
             // SAFETY: SSE is part of x86-64.
             unsafe { _mm_sfence() }
@@ -300,32 +371,65 @@ mod avx2 {
             }
         }
         #[inline(always)]
-        unsafe fn gather_xyz(pos: &[[f32; 4]], idx: &[u32]) -> [F8; 3] {
+        unsafe fn gather_vec3(pos: &[glam::Vec3], idx: &[u32]) -> [F8; 3] {
+            debug_assert!(idx.len() >= 8 && idx[..8].iter().all(|&i| (i as usize) < pos.len()));
+            // SAFETY: 8 readable indices, each in range of `pos` (caller). Records are 12 bytes
+            // (`Vec3` is `repr(C)` `[f32; 3]`): a 16-byte load at a record reads the next
+            // record's x too, which exists for every record but the last; the last is loaded
+            // from 4 bytes earlier (the previous record's z: `pos.len() >= 2`) and rotated.
+            // AVX2 present (module docs).
+            unsafe {
+                let base = pos.as_ptr().cast::<f32>();
+                let last = pos.len() - 1;
+                transpose8(|i: usize| {
+                    let v = *idx.get_unchecked(i) as usize;
+                    if v < last {
+                        _mm_loadu_ps(base.add(3 * v))
+                    } else {
+                        // [z', x, y, z] to [x, y, z, z'].
+                        _mm_permute_ps::<0b00_11_10_01>(_mm_loadu_ps(base.add(3 * v - 1)))
+                    }
+                })
+            }
+        }
+        #[inline(always)]
+        unsafe fn gather_records(pos: &[[f32; 4]], idx: &[u32]) -> [F8; 3] {
             debug_assert!(idx.len() >= 8 && idx[..8].iter().all(|&i| (i as usize) < pos.len()));
             // SAFETY: 8 readable indices, each in range of `pos` (caller); each record is 16
             // readable bytes; AVX2 present (module docs).
             unsafe {
-                let p = |i: usize| {
+                transpose8(|i: usize| {
                     _mm_loadu_ps(
                         pos.as_ptr()
                             .add(*idx.get_unchecked(i) as usize)
                             .cast::<f32>(),
                     )
-                };
-                let pair =
-                    |i: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(p(i)), p(i + 4));
-                // Rows [x y z w] of points i and i+4 in the two 128-bit halves; 4x4 transpose.
-                let (r0, r1, r2, r3) = (pair(0), pair(1), pair(2), pair(3));
-                let t0 = _mm256_unpacklo_ps(r0, r1); // x0 x1 y0 y1
-                let t1 = _mm256_unpacklo_ps(r2, r3); // x2 x3 y2 y3
-                let t2 = _mm256_unpackhi_ps(r0, r1); // z0 z1 w0 w1
-                let t3 = _mm256_unpackhi_ps(r2, r3); // z2 z3 w2 w3
-                [
-                    F8(_mm256_shuffle_ps::<0x44>(t0, t1)),
-                    F8(_mm256_shuffle_ps::<0xEE>(t0, t1)),
-                    F8(_mm256_shuffle_ps::<0x44>(t2, t3)),
-                ]
+                })
             }
+        }
+    }
+
+    /// The x, y and z lanes of the 8 points whose `[x, y, z, _]` rows `row(i)` loads.
+    ///
+    /// # Safety
+    /// AVX2 present (module docs); `row` is safe to call for `0..8`.
+    #[inline(always)]
+    unsafe fn transpose8(row: impl Fn(usize) -> __m128) -> [F8; 3] {
+        // SAFETY: AVX2 present (the caller's contract).
+        unsafe {
+            let pair =
+                |i: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(row(i)), row(i + 4));
+            // Rows [x y z w] of points i and i+4 in the two 128-bit halves; 4x4 transpose.
+            let (r0, r1, r2, r3) = (pair(0), pair(1), pair(2), pair(3));
+            let t0 = _mm256_unpacklo_ps(r0, r1); // x0 x1 y0 y1
+            let t1 = _mm256_unpacklo_ps(r2, r3); // x2 x3 y2 y3
+            let t2 = _mm256_unpackhi_ps(r0, r1); // z0 z1 w0 w1
+            let t3 = _mm256_unpackhi_ps(r2, r3); // z2 z3 w2 w3
+            [
+                F8(_mm256_shuffle_ps::<0x44>(t0, t1)),
+                F8(_mm256_shuffle_ps::<0xEE>(t0, t1)),
+                F8(_mm256_shuffle_ps::<0x44>(t2, t3)),
+            ]
         }
     }
 
@@ -360,6 +464,7 @@ mod avx2 {
             // SAFETY: see the module documentation.
             F8(unsafe { _mm256_set1_ps(x) })
         }
+        #[cfg(test)]
         #[inline(always)]
         unsafe fn gather(base: &[f32], idx: &[u32]) -> Self {
             debug_assert!(idx.len() >= 8 && idx[..8].iter().all(|&i| (i as usize) < base.len()));
@@ -576,6 +681,42 @@ mod tests {
         }
         assert!(n > 0, "some triples must agree");
     }
+    /// `canon8` at level `Lv` sorts each triangle, against a sort of each triangle.
+    fn check_canon8<Lv: Level>() {
+        let mut x = 0x9E37_79B9u32;
+        for _ in 0..200 {
+            let tris: [[u32; 3]; 8] = std::array::from_fn(|_| {
+                std::array::from_fn(|_| {
+                    x ^= x << 13;
+                    x ^= x >> 17;
+                    x ^= x << 5;
+                    // Ids on both sides of 2^31, so a signed comparison would fail.
+                    x.rotate_left(x & 31) | (x & 1) << 31
+                })
+            });
+            let got = Lv::canon8(&tris);
+            for (i, t) in tris.iter().enumerate() {
+                let mut want = *t;
+                want.sort_unstable();
+                assert_eq!([got[0][i], got[1][i], got[2][i]], want, "{tris:?} lane {i}");
+            }
+        }
+    }
+
+    #[test]
+    fn canon8_of_every_level_sorts_each_triangle() {
+        check_canon8::<Wide>();
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            #[target_feature(enable = "avx2")]
+            unsafe fn run() {
+                check_canon8::<Avx2>();
+            }
+            // SAFETY: AVX2 detected above.
+            unsafe { run() }
+        }
+    }
+
     #[test]
     fn sign_bits_of_every_level_follow_the_scalar_definition() {
         check_level::<Wide>();

@@ -11,9 +11,12 @@
 //!   (the geometry of a block is loaded once and evaluated for every light). `original` is one
 //!   parallel pass over the edges of all objects; the per-triangle modes are two (all triangles,
 //!   then all edges) with a single join between them.
-//! * **Layout**: structure-of-arrays positions, canonical triangles sorted by vertex id, edges in
-//!   the table's sorted order with a fast path for blocks of 8 two-OV (manifold) edges next to the
-//!   general CSR path.
+//! * **Layout**: for scenes of up to [`COPY_MAX_TRIANGLES`] triangles, a copy laid out for speed
+//!   (16-byte position records, canonical triangles sorted by vertex id, per-edge columns for
+//!   blocks of 8 two-OV (manifold) edges next to the general CSR path; about 56 bytes a
+//!   triangle); beyond, the edge table itself, read in place (under one byte a triangle of its
+//!   own, 1.5–3x the time). [`LayoutChoice`] and [`LAYOUT_ENV`] choose; `simd_layout` in
+//!   [`BackendInfo::details`] says which ran.
 //! * **Modes**: `original` per (edge, OV) with the exact operation order of
 //!   [`shadowvol_robust_math::sign_f32`]; `ordered`, `robust` and `exact` once per canonical
 //!   triangle (every (edge, OV) pair of a triangle has that triangle as its canonical form, so
@@ -46,6 +49,7 @@ mod lanes;
 mod layout;
 
 use extract::{run_extract, Prepared, Scratch};
+pub use layout::{LayoutChoice, COPY_MAX_TRIANGLES};
 use shadowvol_silhouette::{
     check_lights, Accuracy, BackendError, BackendInfo, ExtractStats, Light, Multiplicities,
     PreparedBytes, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
@@ -54,6 +58,10 @@ use std::time::Instant;
 
 /// Environment variable that forces a [`SimdLevel`] in [`create_backend`]: `wide` or `avx2`.
 pub const LEVEL_ENV: &str = "SHADOWVOL_SIMD_LEVEL";
+
+/// Environment variable that forces a [`LayoutChoice`] in [`create_backend`]: `auto`, `copy` or
+/// `in-place`.
+pub const LAYOUT_ENV: &str = "SHADOWVOL_SIMD_LAYOUT";
 
 /// The backend's registry name.
 pub const NAME: &str = "simd";
@@ -134,26 +142,40 @@ fn wide_compile_level() -> &'static str {
 }
 
 /// Starts the `simd` backend at [`SimdLevel::detect`]'s level on rayon's global thread pool,
-/// unless [`LEVEL_ENV`] names a level.
+/// with [`LayoutChoice::Auto`], unless [`LEVEL_ENV`] names a level or [`LAYOUT_ENV`] a layout.
 ///
 /// # Errors
 /// [`BackendError::Unavailable`] when [`LEVEL_ENV`] names an unknown level or one this CPU
-/// lacks.
+/// lacks, or [`LAYOUT_ENV`] an unknown layout.
 pub fn create_backend() -> Result<Box<dyn SilhouetteBackend>, BackendError> {
-    let level = match std::env::var(LEVEL_ENV) {
-        Ok(v) if !v.trim().is_empty() => v.parse().map_err(|why| BackendError::Unavailable {
-            backend: NAME,
-            reason: format!("{LEVEL_ENV}: {why}"),
-        })?,
-        _ => SimdLevel::detect(),
+    let from_env = |var: &str| match std::env::var(var) {
+        Ok(v) if !v.trim().is_empty() => Some(v),
+        _ => None,
     };
-    Ok(Box::new(SimdBackend::with_level(level, None)?))
+    let unavailable = |var: &str, why: String| BackendError::Unavailable {
+        backend: NAME,
+        reason: format!("{var}: {why}"),
+    };
+    let level = match from_env(LEVEL_ENV) {
+        Some(v) => v.parse().map_err(|why| unavailable(LEVEL_ENV, why))?,
+        None => SimdLevel::detect(),
+    };
+    let layout = match from_env(LAYOUT_ENV) {
+        Some(v) => v.parse().map_err(|why| unavailable(LAYOUT_ENV, why))?,
+        None => LayoutChoice::Auto,
+    };
+    Ok(Box::new(
+        SimdBackend::with_level(level, None)?.with_layout(layout),
+    ))
 }
 
 /// The SIMD + threads backend. See the crate documentation.
 #[derive(Debug)]
 pub struct SimdBackend {
     level: SimdLevel,
+    layout: LayoutChoice,
+    /// The layout the last prepared scene got (`copy` or `in-place`).
+    last_layout: Option<&'static str>,
     pool: Option<rayon::ThreadPool>,
     scenes: PreparedScenes<Prepared>,
     /// What an extraction keeps between calls (triangle signs, per-item silhouette lists, the
@@ -189,10 +211,19 @@ impl SimdBackend {
         };
         Ok(Self {
             level,
+            layout: LayoutChoice::Auto,
+            last_layout: None,
             pool,
             scenes: PreparedScenes::new(NAME),
             scratch: Scratch::default(),
         })
+    }
+
+    /// The backend with `layout` for the scenes it prepares from now on.
+    #[must_use]
+    pub fn with_layout(mut self, layout: LayoutChoice) -> Self {
+        self.layout = layout;
+        self
     }
 
     /// The level the kernels run at.
@@ -229,12 +260,17 @@ impl SilhouetteBackend for SimdBackend {
                     "wide_compile_level".to_owned(),
                     wide_compile_level().to_owned(),
                 ),
+                (
+                    "simd_layout".to_owned(),
+                    self.last_layout.unwrap_or(self.layout.name()).to_owned(),
+                ),
             ],
         }
     }
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
-        let prepared = Prepared::build(scene)?;
+        let prepared = Prepared::build(scene, self.layout)?;
+        self.last_layout = Some(prepared.layout_name());
         Ok(self.scenes.insert(prepared))
     }
 

@@ -1,7 +1,8 @@
 //! The `simd` backend against the scalar `cpu` reference.
 //!
-//! * The whole conformance corpus, every supported SIMD level, every mode, all lights of a case
-//!   in one call: results bit-identical to `cpu` (exact is required; the `f32` modes evaluate the
+//! * The whole conformance corpus, every supported SIMD level, both layouts (a copy, and the
+//!   table read in place), every mode, all lights of a case in one call: results bit-identical
+//!   to `cpu` (exact is required; the `f32` modes evaluate the
 //!   same IEEE operations, so they must match too), and 0 open vertices in consistent modes.
 //! * Procedural meshes that exercise partial blocks, the general CSR path (boundary and
 //!   non-manifold edges), many objects with transforms and shared tables, thread counts.
@@ -15,9 +16,12 @@ use shadowvol_silhouette::{
     extract_once, invariant, Accuracy, Light, Multiplicities, SceneObject, SilhouetteBackend,
     TopologyScene,
 };
-use shadowvol_simd::{SimdBackend, SimdLevel};
+use shadowvol_simd::{LayoutChoice, SimdBackend, SimdLevel};
 use shadowvol_test_support::{corpus, shapes::uv_sphere_y};
 use std::sync::Arc;
+
+/// The two layouts every check runs on.
+const LAYOUTS: [LayoutChoice; 2] = [LayoutChoice::Copy, LayoutChoice::InPlace];
 
 fn levels() -> Vec<SimdLevel> {
     [SimdLevel::Wide, SimdLevel::Avx2]
@@ -26,22 +30,24 @@ fn levels() -> Vec<SimdLevel> {
         .collect()
 }
 
-/// Runs cpu and simd (every level, 1 and 3 threads; all lights in one call and each light
-/// alone) and checks equality and consistency.
+/// Runs cpu and simd (every level and layout, 1 and 3 threads; all lights in one call and each
+/// light alone) and checks equality and consistency.
 /// Returns the total `uncertain` count of the exact runs (per level and thread count).
 fn check_scene(name: &str, scene: &TopologyScene, lights: &[Light]) -> u64 {
     let mut uncertain = 0;
     for mode in Accuracy::ALL {
         let (reference, _) = extract_once(&mut CpuBackend::new(), scene, lights, mode).unwrap();
-        for level in levels() {
+        for (level, layout) in levels().into_iter().flat_map(|l| LAYOUTS.map(|y| (l, y))) {
             for threads in [Some(1), Some(3)] {
-                let mut simd = SimdBackend::with_level(level, threads).unwrap();
+                let mut simd = SimdBackend::with_level(level, threads)
+                    .unwrap()
+                    .with_layout(layout);
                 let (m, stats) = extract_once(&mut simd, scene, lights, mode).unwrap();
                 assert_eq!(
                     invariant::first_difference(&m, &reference),
                     None,
-                    "{name}: simd {level:?} {threads:?} differs from cpu in mode {mode} \
-                     (light, edge, simd, cpu)"
+                    "{name}: simd {level:?} {layout:?} {threads:?} differs from cpu in mode \
+                     {mode} (light, edge, simd, cpu)"
                 );
                 assert!(m.silhouettes_consistent(), "{name}: compact lists wrong");
                 for l in 0..lights.len() {
@@ -65,8 +71,8 @@ fn check_scene(name: &str, scene: &TopologyScene, lights: &[Light]) -> u64 {
                     assert_eq!(
                         one.values(0),
                         reference.values(l),
-                        "{name}: simd {level:?} {threads:?}, light {l} alone, differs from cpu \
-                         in mode {mode}"
+                        "{name}: simd {level:?} {layout:?} {threads:?}, light {l} alone, \
+                         differs from cpu in mode {mode}"
                     );
                     assert_eq!(one.silhouette(0), reference.silhouette(l));
                 }
@@ -290,6 +296,38 @@ fn info_reports_the_level() {
             .map(|(_, v)| v.clone());
         assert_eq!(reported.as_deref(), Some(level.name()));
         assert_eq!(simd.threads(), 2);
+    }
+}
+
+#[test]
+fn info_reports_the_layout_the_scene_got() {
+    let scene = single(&uv_sphere_y(5, 4, 1.0));
+    let layout_of = |simd: &SimdBackend| {
+        simd.info()
+            .details
+            .into_iter()
+            .find(|(k, _)| k == "simd_layout")
+            .map(|(_, v)| v)
+    };
+    for (choice, before, after) in [
+        (LayoutChoice::Auto, "auto", "copy"),
+        (LayoutChoice::Copy, "copy", "copy"),
+        (LayoutChoice::InPlace, "in-place", "in-place"),
+    ] {
+        let mut simd = SimdBackend::with_level(SimdLevel::detect(), Some(1))
+            .unwrap()
+            .with_layout(choice);
+        assert_eq!(layout_of(&simd).as_deref(), Some(before));
+        let id = simd.prepare(&scene).unwrap();
+        assert_eq!(layout_of(&simd).as_deref(), Some(after), "{choice:?}");
+        // The copy holds tens of bytes a triangle; in place, under one.
+        let host = simd.prepared_bytes(id).unwrap().host;
+        let triangles = scene.total_triangles() as u64;
+        assert_eq!(
+            host >= 16 * triangles,
+            after == "copy",
+            "{choice:?}: {host}"
+        );
     }
 }
 

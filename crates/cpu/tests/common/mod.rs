@@ -31,7 +31,10 @@ pub fn table_reference(table: &EdgeTable, light: [f32; 4]) -> Vec<i32> {
         .edges
         .iter()
         .enumerate()
-        .map(|(e, &[a, b])| oracle::multiplicity(&positions, a, b, table.ovs_of(e), light))
+        .map(|(e, &[a, b])| {
+            let ovs: Vec<u32> = table.ovs_of(e).collect();
+            oracle::multiplicity(&positions, a, b, &ovs, light)
+        })
         .collect()
 }
 

@@ -84,9 +84,11 @@ impl SceneLayout {
                     .edges
                     .push([a + vbase, b + vbase, t.ov_offsets[e] + obase, object as u32]);
             }
-            layout.ovs.extend(t.ovs.iter().map(|&v| v + vbase));
+            layout
+                .ovs
+                .extend(t.ov_refs.iter().map(|&c| t.ov_vertex(c) + vbase));
             vbase += t.positions.len() as u32;
-            obase += t.ovs.len() as u32;
+            obase += t.ov_refs.len() as u32;
             layout.vertex_offsets.push(vbase);
         }
         layout.edges.push([0, 0, obase, 0]);

@@ -156,8 +156,7 @@ mod tests {
         for (e, &[a, b]) in t.edges.iter().enumerate() {
             let want: i32 = t
                 .ovs_of(e)
-                .iter()
-                .map(|&o| i32::from(ov_sign(Accuracy::Exact, &t.positions, a, b, o, ol[0][1])))
+                .map(|o| i32::from(ov_sign(Accuracy::Exact, &t.positions, a, b, o, ol[0][1])))
                 .sum();
             assert_eq!(out.values(1)[e], want, "edge {e}");
             assert_eq!(out.values(0)[e], 0, "light 0 is outside the batch");

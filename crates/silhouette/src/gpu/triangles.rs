@@ -3,6 +3,7 @@
 
 use super::SceneLayout;
 use crate::{BackendError, TopologyScene};
+use shadowvol_mesh_topology::EdgeTable;
 
 /// Set on a [`TriangleLayout::ov_tris`] entry when the edge's `(a, b, o)` is an odd permutation
 /// of the triangle's canonical (ascending) order, that is when `a < o < b`.
@@ -68,33 +69,24 @@ impl TriangleLayout {
         let mut ov_tris = vec![0u32; layout.ovs.len()];
         let mut tri_offsets = Vec::with_capacity(scene.objects.len() + 1);
         tri_offsets.push(0u32);
+        let mut obase = 0usize;
         for (oi, o) in scene.objects.iter().enumerate() {
             let t = &o.table;
             let vbase = layout.vertex_offsets[oi];
-            let ebase = layout.edge_offsets[oi];
-            let mut cursor = vec![0u32; t.edges.len()];
-            let tri_edges = t.tri_edges();
-            for (ti, tri) in t.triangles.iter().enumerate() {
-                let global = tris.len() as u32;
+            let tbase = tris.len() as u32;
+            tris.extend(t.triangles.iter().map(|tri| {
                 let mut c = *tri;
                 c.sort_unstable();
-                tris.push([c[0] + vbase, c[1] + vbase, c[2] + vbase, oi as u32]);
-                for &e in &tri_edges[ti] {
-                    let [a, b] = t.edges[e as usize];
-                    let o = tri
-                        .iter()
-                        .copied()
-                        .find(|&v| v != a && v != b)
-                        .expect("a kept triangle has three distinct vertices");
-                    let slot = (layout.edges[ebase + e as usize][2] + cursor[e as usize]) as usize;
-                    cursor[e as usize] += 1;
-                    // The edge table lists an edge's opposite vertices in ascending triangle
-                    // order, which is the order this loop visits them.
-                    debug_assert_eq!(layout.ovs[slot], o + vbase);
-                    let odd = a < o && o < b;
-                    ov_tris[slot] = global | if odd { NEGATIVE } else { 0 };
-                }
+                [c[0] + vbase, c[1] + vbase, c[2] + vbase, oi as u32]
+            }));
+            // The table's OV references name each (edge, OV) pair's triangle and parity; the
+            // layout keeps the table's OV order, so slot `obase + k` is the table's entry `k`.
+            for (k, &r) in t.ov_refs.iter().enumerate() {
+                let odd = EdgeTable::ov_odd(r);
+                ov_tris[obase + k] =
+                    (tbase + EdgeTable::ov_triangle(r)) | if odd { NEGATIVE } else { 0 };
             }
+            obase += t.ov_refs.len();
             tri_offsets.push(tris.len() as u32);
         }
         Ok(Self {

@@ -1,12 +1,13 @@
 //! The edge pass of `robust`, `ordered` and `exact`: `m(e) = Σ sign(t) · parity(e, t)` over
-//! the triangles of each edge, from the triangle pass's signs. Scalar at the `wide` level; with
+//! the triangles of each edge, from the triangle pass's signs. Each (edge, OV) pair's triangle
+//! slot `s` and parity come from its reference `4 s + r` (odd for `r = 1`). Scalar at the `wide` level; with
 //! AVX2, 8 edges per vector ([`edge_sums_avx2`]).
 
 use super::signs::{pack_sign, signed, PACK};
 use super::{push_bits, EdgeOut};
 use crate::dispatch::Pass;
 use crate::lanes::Level;
-use crate::layout::{Layout, LANES, ODD};
+use crate::layout::{ref_odd, ref_slot, Geometry, LANES};
 use std::ops::Range;
 
 /// The triangle signs an edge pass reads for one object: light `l`'s sign of the object's
@@ -21,9 +22,9 @@ pub(crate) struct PackedSigns<'a> {
 
 /// The edge pass over the blocks `blocks` of one object: `out.rows[l]` receives the range's
 /// multiplicities for light `l`, `out.sil[l]` collects `edge_base + e` where `m != 0`.
-pub(crate) struct EdgeSums<'a, 'r> {
+pub(crate) struct EdgeSums<'a, 'r, G> {
     /// The object's layout.
-    pub lay: &'a Layout,
+    pub lay: &'a G,
     /// Blocks of 8 edges.
     pub blocks: Range<usize>,
     /// The object's triangle signs.
@@ -32,7 +33,7 @@ pub(crate) struct EdgeSums<'a, 'r> {
     pub out: EdgeOut<'a, 'r>,
 }
 
-impl Pass for EdgeSums<'_, '_> {
+impl<G: Geometry> Pass for EdgeSums<'_, '_, G> {
     type Out = ();
     #[inline(always)]
     fn run<Lv: Level>(self) {
@@ -46,14 +47,14 @@ impl Pass for EdgeSums<'_, '_> {
     }
 }
 
-impl EdgeSums<'_, '_> {
+impl<G: Geometry> EdgeSums<'_, '_, G> {
     /// Asserts what the kernels rely on (one sign base per pack of lights, each followed by the
     /// object's `tri_count` slots) and returns the range's first edge, where `out.rows` start.
     #[inline(always)]
     fn check(&self) -> usize {
         let PackedSigns { all, bases } = self.signs;
-        // Every triangle reference of the layout is < tri_count.
-        assert!(bases.iter().all(|&b| b + self.lay.tri_count <= all.len()));
+        // Every reference names a triangle slot < tri_count (`Layout::build`).
+        assert!(bases.iter().all(|&b| b + self.lay.tri_count() <= all.len()));
         assert!(bases.len() == self.out.rows.len().div_ceil(PACK));
         self.blocks.start * LANES
     }
@@ -63,32 +64,27 @@ impl EdgeSums<'_, '_> {
 ///
 /// # Panics
 /// If a slice is shorter than described.
-fn edge_sums(pass: EdgeSums) {
+fn edge_sums<G: Geometry>(pass: EdgeSums<G>) {
     let e_start = pass.check();
     let (lay, blocks, ps, mut out) = (pass.lay, pass.blocks, pass.signs, pass.out);
     let (signs, bases, edge_base) = (ps.all, ps.bases, out.edge_base);
     let nl = out.rows.len();
     for blk in blocks {
         let e0 = blk * LANES;
-        if lay.block_fast[blk] {
-            // Block-outer, light-inner: the block's triangle references are read once.
-            let (ta, tb) = (&lay.tri_a[e0..e0 + LANES], &lay.tri_b[e0..e0 + LANES]);
+        if lay.block_fast(blk) {
+            // Block-outer, light-inner: the block's OV references are read once.
+            let refs = lay.fast_refs(blk);
             for (l, row) in out.rows.iter_mut().enumerate() {
                 let base = bases[l / PACK];
-                let s = &signs[base..base + lay.tri_count];
-                // The last block may be partial (the reference arrays are padded): `zip` keeps
-                // the real edges only.
+                let s = &signs[base..base + lay.tri_count()];
+                // The last block may be partial (the references are padded): `dst` holds the
+                // real edges only.
                 let end = (e0 - e_start + LANES).min(row.len());
                 let dst = &mut row[e0 - e_start..end];
                 let mut any = 0;
-                for ((d, &t1), &t2) in dst.iter_mut().zip(ta).zip(tb) {
-                    let i1 = (t1 & !ODD) as usize;
-                    let i2 = (t2 & !ODD) as usize;
-                    debug_assert!(i1 < s.len() && i2 < s.len());
-                    // SAFETY: `Layout::build` stores only triangle slots < tri_count, and
-                    // `s` covers slot tri_count - 1 (asserted above).
-                    let (s1, s2) = unsafe { (*s.get_unchecked(i1), *s.get_unchecked(i2)) };
-                    let m = signed(pack_sign(s1, nl, l), t1) + signed(pack_sign(s2, nl, l), t2);
+                for (d, r) in dst.iter_mut().zip(refs.chunks_exact(2)) {
+                    let sign = |r: u32| signed(pack_sign(s[ref_slot(r)], nl, l), ref_odd(r));
+                    let m = sign(r[0]) + sign(r[1]);
                     *d = m;
                     any |= m;
                 }
@@ -109,15 +105,21 @@ fn edge_sums(pass: EdgeSums) {
 /// The general (CSR) path of [`edge_sums`] for the block starting at edge `e0`; `out.rows`
 /// start at edge `e_start`.
 #[inline(always)]
-fn edge_sums_general(lay: &Layout, e0: usize, e_start: usize, ps: &PackedSigns, out: &mut EdgeOut) {
+fn edge_sums_general<G: Geometry>(
+    lay: &G,
+    e0: usize,
+    e_start: usize,
+    ps: &PackedSigns,
+    out: &mut EdgeOut,
+) {
     let nl = out.rows.len();
-    for e in e0..(e0 + LANES).min(lay.edge_count) {
-        let (_, r) = lay.general_edge(e);
+    for e in e0..(e0 + LANES).min(lay.edge_count()) {
+        let refs = lay.general_refs(e);
         for (l, row) in out.rows.iter_mut().enumerate() {
             let base = ps.bases[l / PACK];
-            let m: i32 = lay.general.ov_tri[r.clone()]
+            let m: i32 = refs
                 .iter()
-                .map(|&t| signed(pack_sign(ps.all[base + (t & !ODD) as usize], nl, l), t))
+                .map(|&r| signed(pack_sign(ps.all[base + ref_slot(r)], nl, l), ref_odd(r)))
                 .sum();
             row[e - e_start] = m;
             if m != 0 {
@@ -127,47 +129,43 @@ fn edge_sums_general(lay: &Layout, e0: usize, e_start: usize, ps: &PackedSigns, 
     }
 }
 
-/// The sign bytes of the 8 triangle slots `ta[..8]` and of `tb[..8]` (parity bit cleared) in
-/// the pack at `sp`, sign-extended to 32-bit lanes: 16 scalar byte loads, which are faster than
-/// two `vpgatherdd` on Zen 3 (docs/PERFORMANCE.md).
+/// The sign bytes (sign-extended to 32-bit lanes) of the triangles of the block's first OV
+/// references (`refs[2 i]`, lane `i`) and of its second (`refs[2 i + 1]`) in the pack at `sp`,
+/// and their parity masks (all ones for odd parity, else 0). The bytes take scalar loads, which
+/// are faster than `vpgatherdd` on Zen 3 (docs/PERFORMANCE.md); the parities are computed in
+/// lanes.
 ///
 /// # Safety
-/// AVX2 present (the caller is compiled with it); `ta` and `tb` point to 8 readable `u32` each,
-/// and every slot `t & !ODD` they hold is inside the pack at `sp`.
+/// AVX2 present (the caller is compiled with it); every reference's triangle `r >> 2` is a slot
+/// inside the pack at `sp`.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 unsafe fn sign_bytes_of_block(
     sp: *const i8,
-    ta: *const u32,
-    tb: *const u32,
-) -> (std::arch::x86_64::__m256i, std::arch::x86_64::__m256i) {
-    use std::arch::x86_64::_mm256_setr_epi32;
-    // SAFETY: forwarded from the caller.
+    refs: &[u32; 2 * LANES],
+) -> [std::arch::x86_64::__m256i; 4] {
+    use std::arch::x86_64::*;
+    // SAFETY: every `r >> 2` is inside the pack at `sp` (the caller's contract); AVX2 present.
     unsafe {
-        let ld =
-            |t: *const u32, i: usize| -> i32 { i32::from(*sp.add((*t.add(i) & !ODD) as usize)) };
-        (
-            _mm256_setr_epi32(
-                ld(ta, 0),
-                ld(ta, 1),
-                ld(ta, 2),
-                ld(ta, 3),
-                ld(ta, 4),
-                ld(ta, 5),
-                ld(ta, 6),
-                ld(ta, 7),
-            ),
-            _mm256_setr_epi32(
-                ld(tb, 0),
-                ld(tb, 1),
-                ld(tb, 2),
-                ld(tb, 3),
-                ld(tb, 4),
-                ld(tb, 5),
-                ld(tb, 6),
-                ld(tb, 7),
-            ),
-        )
+        let ld = |k: usize| -> i32 { i32::from(*sp.add((refs[k] >> 2) as usize)) };
+        let g1 = _mm256_setr_epi32(ld(0), ld(2), ld(4), ld(6), ld(8), ld(10), ld(12), ld(14));
+        let g2 = _mm256_setr_epi32(ld(1), ld(3), ld(5), ld(7), ld(9), ld(11), ld(13), ld(15));
+        // The references deinterleaved into first and second of each edge, then rank 1 (odd).
+        let lo = _mm256_loadu_si256(refs.as_ptr().cast());
+        let hi = _mm256_loadu_si256(refs.as_ptr().add(LANES).cast());
+        let split = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
+        let (lo, hi) = (
+            _mm256_permutevar8x32_epi32(lo, split),
+            _mm256_permutevar8x32_epi32(hi, split),
+        );
+        let (r1, r2) = (
+            _mm256_permute2x128_si256::<0x20>(lo, hi),
+            _mm256_permute2x128_si256::<0x31>(lo, hi),
+        );
+        let (three, one) = (_mm256_set1_epi32(3), _mm256_set1_epi32(1));
+        let k1 = _mm256_cmpeq_epi32(_mm256_and_si256(r1, three), one);
+        let k2 = _mm256_cmpeq_epi32(_mm256_and_si256(r2, three), one);
+        [g1, g2, k1, k2]
     }
 }
 
@@ -196,7 +194,7 @@ fn store_part_epi32(m: std::arch::x86_64::__m256i, dst: &mut [i32]) -> u32 {
 /// If a slice is shorter than described.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn edge_sums_avx2(pass: EdgeSums) {
+unsafe fn edge_sums_avx2<G: Geometry>(pass: EdgeSums<G>) {
     use std::arch::x86_64::*;
     let e_start = pass.check();
     let (lay, blocks, ps, mut out) = (pass.lay, pass.blocks, pass.signs, pass.out);
@@ -209,29 +207,14 @@ unsafe fn edge_sums_avx2(pass: EdgeSums) {
     }
     for blk in blocks {
         let e0 = blk * LANES;
-        if lay.block_fast[blk] {
-            // SAFETY: tri_a and tri_b are padded to whole blocks, so e0 + 8 <= tri_a.len() =
-            // tri_b.len().
-            let (t1, t2) = unsafe {
-                (
-                    _mm256_loadu_si256(lay.tri_a[e0..e0 + LANES].as_ptr().cast()),
-                    _mm256_loadu_si256(lay.tri_b[e0..e0 + LANES].as_ptr().cast()),
-                )
-            };
-            // Parity masks: -1 for odd (bit 31 set), 0 for even.
-            let (k1, k2) = (_mm256_srai_epi32::<31>(t1), _mm256_srai_epi32::<31>(t2));
+        if lay.block_fast(blk) {
+            let refs = lay.fast_refs(blk);
             for (pack, &base) in bases.iter().enumerate() {
                 // The 16 sign bytes of the block's triangles, as in the one-light loop.
-                // SAFETY: e0 + 8 <= tri_a.len() = tri_b.len(); every byte read is
-                // signs[base + slot] with slot < tri_count (the padding is slot 0), and
+                // SAFETY: every reference's triangle is < tri_count (`Layout::build`), and
                 // base + tri_count <= signs.len() (asserted above).
-                let (g1, g2) = unsafe {
-                    sign_bytes_of_block(
-                        signs.as_ptr().add(base),
-                        lay.tri_a.as_ptr().add(e0),
-                        lay.tri_b.as_ptr().add(e0),
-                    )
-                };
+                let [g1, g2, k1, k2] =
+                    unsafe { sign_bytes_of_block(signs.as_ptr().add(base), &refs) };
                 // Each byte holds four lights' signs as bits (`PACK`; the loads sign-extended
                 // it, the shuffle reads byte 0 only). Copy it to the four
                 // bytes of its lane, and make byte `j` the sign of light `4 pack + j`: `+1`
@@ -316,8 +299,8 @@ unsafe fn edge_sums_avx2(pass: EdgeSums) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn one_light_avx2(
-    lay: &Layout,
+unsafe fn one_light_avx2<G: Geometry>(
+    lay: &G,
     blocks: Range<usize>,
     ps: &PackedSigns,
     out0: &mut [i32],
@@ -328,7 +311,7 @@ unsafe fn one_light_avx2(
     let (signs, base, e_start) = (ps.all, ps.bases[0], blocks.start * LANES);
     for blk in blocks {
         let e0 = blk * LANES;
-        if !lay.block_fast[blk] {
+        if !lay.block_fast(blk) {
             let mut one = [&mut *out0];
             let mut rest = EdgeOut {
                 rows: &mut one,
@@ -338,22 +321,10 @@ unsafe fn one_light_avx2(
             edge_sums_general(lay, e0, e_start, ps, &mut rest);
             continue;
         }
-        // SAFETY: tri_a and tri_b are padded to whole blocks, so e0 + 8 <= tri_a.len() =
-        // tri_b.len(); every byte read is signs[base + slot] with slot < tri_count (the
-        // padding is slot 0), and base + tri_count <= signs.len() (`EdgeSums::check`).
-        let (g1, g2, k1, k2) = unsafe {
-            let ta = lay.tri_a.as_ptr().add(e0);
-            let tb = lay.tri_b.as_ptr().add(e0);
-            let t1 = _mm256_loadu_si256(ta.cast());
-            let t2 = _mm256_loadu_si256(tb.cast());
-            let (g1, g2) = sign_bytes_of_block(signs.as_ptr().add(base), ta, tb);
-            (
-                g1,
-                g2,
-                _mm256_srai_epi32::<31>(t1),
-                _mm256_srai_epi32::<31>(t2),
-            )
-        };
+        let refs = lay.fast_refs(blk);
+        // SAFETY: every reference's triangle is < tri_count (`Layout::build`), and base +
+        // tri_count <= signs.len() (`EdgeSums::check`).
+        let [g1, g2, k1, k2] = unsafe { sign_bytes_of_block(signs.as_ptr().add(base), &refs) };
         // The loads sign-extended each byte already.
         let s1 = _mm256_sub_epi32(_mm256_xor_si256(g1, k1), k1);
         let s2 = _mm256_sub_epi32(_mm256_xor_si256(g2, k2), k2);

@@ -9,7 +9,7 @@
 
 use super::{cross, cross_products, dot3, gather, light_dir, sub3};
 use crate::lanes::{Arith, Level, F32V, F64V};
-use crate::layout::{coord_in_filter_range, Layout};
+use crate::layout::{coord_in_filter_range, CanonBlock, Geometry};
 use shadowvol_robust_math::{
     orient_exact, F32_FILTER_EPS, F32_FILTER_MAX, F32_FILTER_MIN, F64_FILTER_EPS,
 };
@@ -157,12 +157,13 @@ pub(super) enum F32Stage {
     Unchecked,
 }
 
-/// The [`F32Stage`] of `light` on the object of `lay`.
+/// The [`F32Stage`] of `light` on an object whose coordinates all pass
+/// [`coord_in_filter_range`] (`coords_ok`) or not.
 #[inline(always)]
-pub(super) fn f32_stage(lay: &Layout, light: &[f32; 4]) -> F32Stage {
+pub(super) fn f32_stage(coords_ok: bool, light: &[f32; 4]) -> F32Stage {
     if light[3] != 0.0 && light[3] != 1.0 {
         F32Stage::Skip
-    } else if lay.coords_in_filter_range && light[..3].iter().all(|&c| coord_in_filter_range(c)) {
+    } else if coords_ok && light[..3].iter().all(|&c| coord_in_filter_range(c)) {
         F32Stage::Unchecked
     } else {
         F32Stage::Checked
@@ -180,19 +181,23 @@ type Widened<Lv> = [([<Lv as Level>::D; 3], [<Lv as Level>::D; 3]); 3];
 /// those registers is loop-invariant and speculatable, so LLVM would hoist it (and its spills)
 /// out of the light loop into every block; a gather after the stores of earlier lights cannot
 /// be hoisted.
-pub(super) struct Fallback<'a, Lv: Level> {
-    lay: &'a Layout,
-    /// First triangle slot of the block.
-    t: usize,
+pub(super) struct Fallback<'a, Lv: Level, G> {
+    lay: &'a G,
+    /// The block's canonical triangles.
+    ids: &'a CanonBlock,
     /// The block's points widened to `f64`, once some lane needed them.
     w64: Option<Widened<Lv>>,
 }
 
-impl<'a, Lv: Level> Fallback<'a, Lv> {
-    /// The block at triangle slot `t`; `t + 8 <= lay.t0.len()` (asserted by the triangle pass).
+impl<'a, Lv: Level, G: Geometry> Fallback<'a, Lv, G> {
+    /// The block of canonical triangles `ids` (vertices of `lay`'s table).
     #[inline(always)]
-    pub(super) fn new(lay: &'a Layout, t: usize) -> Self {
-        Self { lay, t, w64: None }
+    pub(super) fn new(lay: &'a G, ids: &'a CanonBlock) -> Self {
+        Self {
+            lay,
+            ids,
+            w64: None,
+        }
     }
 
     /// Decides the lanes `unc` for `light` (`one64`: its `f64` lanes when made already): the
@@ -211,14 +216,14 @@ impl<'a, Lv: Level> Fallback<'a, Lv> {
         if unc == 0 {
             return 0;
         }
-        let (lay, t) = (self.lay, self.t);
+        let (lay, ids) = (self.lay, self.ids);
         if self.w64.is_none() {
-            // SAFETY: `t + 8 <= t0.len()` (see `new`), and the layout's ids are in range.
+            // SAFETY: `ids` are vertices of the table (see `new`).
             let (a, b, o) = unsafe {
                 (
-                    gather::<Lv>(lay, &lay.t0[t..]),
-                    gather::<Lv>(lay, &lay.t1[t..]),
-                    gather::<Lv>(lay, &lay.t2[t..]),
+                    gather::<Lv, G>(lay, &ids[0]),
+                    gather::<Lv, G>(lay, &ids[1]),
+                    gather::<Lv, G>(lay, &ids[2]),
                 )
             };
             self.w64 = Some([widen3::<Lv>(&a), widen3::<Lv>(&b), widen3::<Lv>(&o)]);
@@ -244,10 +249,10 @@ impl<'a, Lv: Level> Fallback<'a, Lv> {
             let i = bits.trailing_zeros() as usize;
             bits &= bits - 1;
             let s = orient_exact(
-                lay.pos(lay.t0[t + i]),
-                lay.pos(lay.t1[t + i]),
+                lay.pos(ids[0][i]),
+                lay.pos(ids[1][i]),
                 *light,
-                lay.pos(lay.t2[t + i]),
+                lay.pos(ids[2][i]),
             );
             if s > 0 {
                 *pos |= 1 << i;
@@ -573,12 +578,8 @@ mod tests {
     /// `w` outside `{0, 1}` is left to the f64 stage, like `orient_filter_f32` (always `None`).
     #[test]
     fn f32_stage_skips_lights_with_other_w() {
-        let lay = |p: [f32; 3]| Layout {
-            coords_in_filter_range: p.iter().all(|&c| coord_in_filter_range(c)),
-            ..empty_layout()
-        };
-        let ok = lay([1.0, 2.0, 0.0]);
-        assert!(f32_stage(&ok, &[1.0, 2.0, 3.0, 0.5]) == F32Stage::Skip);
+        let ok = [1.0f32, 2.0, 0.0].iter().all(|&c| coord_in_filter_range(c));
+        assert!(f32_stage(ok, &[1.0, 2.0, 3.0, 0.5]) == F32Stage::Skip);
         assert!(orient_filter_f32(
             [0.0; 3],
             [1.0, 0.0, 0.0],
@@ -586,33 +587,12 @@ mod tests {
             [0.0, 1.0, 0.0]
         )
         .is_none());
-        assert!(f32_stage(&ok, &[1.0, 2.0, 3.0, 1.0]) == F32Stage::Unchecked);
-        assert!(f32_stage(&ok, &[1.0, 2.0, 3.0, 0.0]) == F32Stage::Unchecked);
-        assert!(f32_stage(&ok, &[1e-30, 2.0, 3.0, 1.0]) == F32Stage::Checked);
-        let tiny = lay([1e-30, 1.0, 1.0]);
-        assert!(f32_stage(&tiny, &[1.0, 2.0, 3.0, 1.0]) == F32Stage::Checked);
-    }
-
-    fn empty_layout() -> Layout {
-        Layout {
-            xs: vec![],
-            ys: vec![],
-            zs: vec![],
-            xyz: vec![],
-            t0: vec![],
-            t1: vec![],
-            t2: vec![],
-            tri_count: 0,
-            edge_count: 0,
-            block_fast: vec![],
-            ea: vec![],
-            eb: vec![],
-            eo1: vec![],
-            eo2: vec![],
-            tri_a: vec![],
-            tri_b: vec![],
-            general: Default::default(),
-            coords_in_filter_range: true,
-        }
+        assert!(f32_stage(ok, &[1.0, 2.0, 3.0, 1.0]) == F32Stage::Unchecked);
+        assert!(f32_stage(ok, &[1.0, 2.0, 3.0, 0.0]) == F32Stage::Unchecked);
+        assert!(f32_stage(ok, &[1e-30, 2.0, 3.0, 1.0]) == F32Stage::Checked);
+        let tiny = [1e-30f32, 1.0, 1.0]
+            .iter()
+            .all(|&c| coord_in_filter_range(c));
+        assert!(f32_stage(tiny, &[1.0, 2.0, 3.0, 1.0]) == F32Stage::Checked);
     }
 }

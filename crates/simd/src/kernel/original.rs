@@ -5,15 +5,15 @@
 use super::{dot3, edge_normal, gather, off_plane, push_bits, splat4, store_part, sub3, EdgeOut};
 use crate::dispatch::Pass;
 use crate::lanes::{Level, F32V};
-use crate::layout::{Layout, LANES};
+use crate::layout::{Geometry, LANES};
 use shadowvol_robust_math::sign_f32;
 use std::ops::Range;
 
 /// `original` over the blocks `blocks` of one object: `out.rows[l]` receives the range's
 /// multiplicities for light `l`, `out.sil[l]` collects `edge_base + e` where `m != 0`.
-pub(crate) struct EdgeOriginal<'a, 'r> {
+pub(crate) struct EdgeOriginal<'a, 'r, G> {
     /// The object's layout.
-    pub lay: &'a Layout,
+    pub lay: &'a G,
     /// Blocks of 8 edges.
     pub blocks: Range<usize>,
     /// The lights, in the object's frame.
@@ -22,17 +22,17 @@ pub(crate) struct EdgeOriginal<'a, 'r> {
     pub out: EdgeOut<'a, 'r>,
 }
 
-impl Pass for EdgeOriginal<'_, '_> {
+impl<G: Geometry> Pass for EdgeOriginal<'_, '_, G> {
     type Out = ();
     #[inline(always)]
     fn run<Lv: Level>(self) {
-        edge_original::<Lv>(self);
+        edge_original::<Lv, G>(self);
     }
 }
 
 /// [`EdgeOriginal`] at level `Lv`.
 #[inline(always)]
-fn edge_original<Lv: Level>(pass: EdgeOriginal) {
+fn edge_original<Lv: Level, G: Geometry>(pass: EdgeOriginal<G>) {
     let EdgeOriginal {
         lay,
         blocks,
@@ -41,24 +41,21 @@ fn edge_original<Lv: Level>(pass: EdgeOriginal) {
     } = pass;
     let edge_base = out.edge_base;
     if let ([light], [out0], [sil0]) = (lights, &mut *out.rows, &mut *out.sil) {
-        edge_original_one::<Lv>(lay, blocks, *light, out0, sil0, edge_base);
+        edge_original_one::<Lv, G>(lay, blocks, *light, out0, sil0, edge_base);
         return;
     }
     let e_start = blocks.start * LANES;
     for blk in blocks {
         let e0 = blk * LANES;
-        if lay.block_fast[blk] {
-            // ea, eb, eo1 and eo2 are padded to whole blocks: e0 + 8 <= ea.len().
-            let idx =
-                |v: &[u32]| -> [u32; LANES] { v[e0..e0 + LANES].try_into().unwrap_or([0; LANES]) };
-            let (ia, ib, i1, i2) = (idx(&lay.ea), idx(&lay.eb), idx(&lay.eo1), idx(&lay.eo2));
-            // SAFETY: 8 ids each, all vertices of the layout (`Layout::build`).
+        if lay.block_fast(blk) {
+            let [ia, ib, i1, i2] = lay.fast_ends_and_ovs(blk);
+            // SAFETY: 8 ids each, all vertices of the table (`Layout::build`).
             let (a, b, o1, o2) = unsafe {
                 (
-                    gather::<Lv>(lay, &ia),
-                    gather::<Lv>(lay, &ib),
-                    gather::<Lv>(lay, &i1),
-                    gather::<Lv>(lay, &i2),
+                    gather::<Lv, G>(lay, &ia),
+                    gather::<Lv, G>(lay, &ib),
+                    gather::<Lv, G>(lay, &i1),
+                    gather::<Lv, G>(lay, &i2),
                 )
             };
             // The operations of `sign_f32`: `A − B` and both `O − A` made once for all lights,
@@ -84,21 +81,20 @@ fn edge_original<Lv: Level>(pass: EdgeOriginal) {
 /// `original` for the block starting at edge `e0` through the general (CSR) path, scalar: any
 /// number of OVs per edge; `out.rows` start at edge `e_start`.
 #[inline(always)]
-fn original_general_block(
-    lay: &Layout,
+fn original_general_block<G: Geometry>(
+    lay: &G,
     e0: usize,
     e_start: usize,
     lights: &[[f32; 4]],
     out: &mut EdgeOut,
 ) {
-    for e in e0..(e0 + LANES).min(lay.edge_count) {
-        let ([a, b], r) = lay.general_edge(e);
+    for e in e0..(e0 + LANES).min(lay.edge_count()) {
+        let [a, b] = lay.general_ends(e);
         let (pa, pb) = (lay.pos(a), lay.pos(b));
-        let ovs = &lay.general.ovs[r];
         for (l, light) in lights.iter().enumerate() {
-            let m: i32 = ovs
-                .iter()
-                .map(|&o| i32::from(sign_f32(pa, pb, *light, lay.pos(o))))
+            let m: i32 = lay
+                .general_ovs(e)
+                .map(|o| i32::from(sign_f32(pa, pb, *light, lay.pos(o))))
                 .sum();
             out.rows[l][e - e_start] = m;
             if m != 0 {
@@ -113,8 +109,8 @@ fn original_general_block(
 /// exists, which spares the general loop's register spills), with the light's lanes made
 /// once and the output written with streaming stores (one output row, written once).
 #[inline(always)]
-fn edge_original_one<Lv: Level>(
-    lay: &Layout,
+fn edge_original_one<Lv: Level, G: Geometry>(
+    lay: &G,
     blocks: Range<usize>,
     light: [f32; 4],
     out: &mut [i32],
@@ -125,7 +121,7 @@ fn edge_original_one<Lv: Level>(
     let lv = splat4::<Lv::F>(light);
     for blk in blocks {
         let e0 = blk * LANES;
-        if !lay.block_fast[blk] {
+        if !lay.block_fast(blk) {
             let mut rest = EdgeOut {
                 rows: &mut [&mut *out],
                 sil: std::slice::from_mut(sil),
@@ -134,23 +130,16 @@ fn edge_original_one<Lv: Level>(
             original_general_block(lay, e0, e_start, &[light], &mut rest);
             continue;
         }
-        // ea, eb, eo1 and eo2 are padded to whole blocks: e0 + 8 <= ea.len().
-        let idx =
-            |v: &[u32]| -> [u32; LANES] { v[e0..e0 + LANES].try_into().unwrap_or([0; LANES]) };
-        // SAFETY: 8 ids each, all vertices of the layout (`Layout::build`).
-        let (a, b) = unsafe {
-            (
-                gather::<Lv>(lay, &idx(&lay.ea)),
-                gather::<Lv>(lay, &idx(&lay.eb)),
-            )
-        };
+        let ids = lay.fast_ends_and_ovs(blk);
+        // SAFETY: 8 ids each, all vertices of the table (`Layout::build`).
+        let (a, b) = unsafe { (gather::<Lv, G>(lay, &ids[0]), gather::<Lv, G>(lay, &ids[1])) };
         let e = sub3(&a, &b);
         let n = edge_normal(&lv, &a, &e);
         // SAFETY: as above.
-        let o1 = unsafe { gather::<Lv>(lay, &idx(&lay.eo1)) };
+        let o1 = unsafe { gather::<Lv, G>(lay, &ids[2]) };
         let d1 = off_plane(&n, &a, &o1);
         // SAFETY: as above.
-        let o2 = unsafe { gather::<Lv>(lay, &idx(&lay.eo2)) };
+        let o2 = unsafe { gather::<Lv, G>(lay, &ids[3]) };
         let d2 = off_plane(&n, &a, &o2);
         let m = d1.signum0() + d2.signum0();
         let dst = &mut out[e0 - e_start..];

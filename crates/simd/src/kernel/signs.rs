@@ -4,6 +4,9 @@
 //! as an `i8`, with several the signs of the pack's lights as bits. The triangle pass builds a
 //! block's bytes from lane masks ([`write_one`], [`write_pack`], [`set_sign_bits`]); the edge
 //! pass decodes them ([`pack_sign`]) and applies the permutation parity ([`signed`]).
+//!
+//! A slot is a triangle of the table, in the table's order: the OV corner `3 t + j` of an
+//! (edge, OV) pair names its slot `t`.
 
 use crate::lanes::or_sign_mask_bits;
 use crate::layout::LANES;
@@ -94,10 +97,10 @@ pub(super) fn write_pack(
     }
 }
 
-/// `±s` by the parity bit of a triangle reference.
+/// `s`, negated where the (edge, OV) pair has odd parity.
 #[inline(always)]
-pub(super) fn signed(s: i8, tref: u32) -> i32 {
-    let k = (tref >> 31) as i32; // 1 for odd parity
+pub(super) fn signed(s: i8, odd: bool) -> i32 {
+    let k = i32::from(odd); // 1 for odd parity
     (i32::from(s) ^ -k) + k
 }
 

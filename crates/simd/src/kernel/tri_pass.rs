@@ -7,17 +7,17 @@ use super::signs::{set_sign_bits, write_one, write_pack, PACK};
 use super::{dot3, edge_normal, gather, off_plane, plane, splat4, sub3};
 use crate::dispatch::Pass;
 use crate::lanes::{Level, F32V, F64V};
-use crate::layout::{Layout, LANES};
+use crate::layout::{CanonBlock, Geometry, LANES};
 use shadowvol_robust_math::Accuracy;
 use std::ops::Range;
 
 /// The triangle pass over the blocks `blocks` of one object: see [`tri_signs`] for what it
 /// writes. Its [`Pass::Out`] is the number of (triangle, light) evaluations decided by the
 /// scalar exact predicate.
-pub(crate) struct TriPass<'a, 'o> {
+pub(crate) struct TriPass<'a, 'o, G> {
     /// The object's layout.
-    pub lay: &'a Layout,
-    /// Blocks of 8 canonical triangles.
+    pub lay: &'a G,
+    /// Blocks of 8 triangles.
     pub blocks: Range<usize>,
     /// The lights, in the object's frame.
     pub lights: &'a [[f32; 4]],
@@ -27,11 +27,11 @@ pub(crate) struct TriPass<'a, 'o> {
     pub out: &'a mut [&'o mut [i8]],
 }
 
-impl Pass for TriPass<'_, '_> {
+impl<G: Geometry> Pass for TriPass<'_, '_, G> {
     type Out = u64;
     #[inline(always)]
     fn run<Lv: Level>(self) -> u64 {
-        tri_signs::<Lv>(self)
+        tri_signs::<Lv, G>(self)
     }
 }
 
@@ -43,7 +43,7 @@ impl Pass for TriPass<'_, '_> {
 /// Returns the number of (triangle, light) evaluations neither the `f32` nor the `f64` filter
 /// could certify (exact mode), which were decided with the scalar exact predicate.
 #[inline(always)]
-fn tri_signs<Lv: Level>(pass: TriPass) -> u64 {
+fn tri_signs<Lv: Level, G: Geometry>(pass: TriPass<G>) -> u64 {
     let TriPass {
         lay,
         blocks,
@@ -54,7 +54,7 @@ fn tri_signs<Lv: Level>(pass: TriPass) -> u64 {
     let mut uncertain = 0u64;
     let b0 = blocks.start;
     assert!(
-        blocks.end * LANES <= lay.t0.len()
+        blocks.end * LANES <= lay.tri_slots()
             && out.len() == lights.len().div_ceil(PACK)
             && out.iter().all(|o| o.len() == blocks.len() * LANES)
     );
@@ -74,32 +74,34 @@ fn tri_signs<Lv: Level>(pass: TriPass) -> u64 {
     let stages = f32_stages(lay, lights, mode, &mut stage_buf, &mut stage_spill);
     for blk in blocks {
         let t = blk * LANES;
-        let valid: u32 = if t + LANES <= lay.tri_count {
+        let valid: u32 = if t + LANES <= lay.tri_count() {
             0xFF
         } else {
-            (1u32 << (lay.tri_count - t)) - 1
+            (1u32 << (lay.tri_count() - t)) - 1
         };
         let dst = (blk - b0) * LANES;
+        // The block's triangles in canonical order (vertex 0 in the padding lanes).
+        let ids = lay.canon_block::<Lv>(t);
         if let (Accuracy::Ordered | Accuracy::Original, 0xFF, Some(lv)) = (mode, valid, one32) {
-            ordered_one_full::<Lv>(lay, t, &lv, &mut out[0][dst..dst + LANES]);
+            ordered_one_full::<Lv, G>(lay, &ids, &lv, &mut out[0][dst..dst + LANES]);
             continue;
         }
         if let (Accuracy::Exact, 0xFF, Some(lv), [F32Stage::Unchecked]) =
             (mode, valid, one32, stages)
         {
-            uncertain += exact_one_full::<Lv>(lay, t, &lv, &lights[0], one64, out, dst);
+            uncertain += exact_one_full::<Lv, G>(lay, &ids, &lv, &lights[0], one64, out, dst);
             continue;
         }
-        // SAFETY: `t + 8 <= t0.len()` (asserted above), and the layout's ids are in range.
+        // SAFETY: `ids` are vertices of the table (`Layout::build` checked them).
         let (a, b, o) = unsafe {
             (
-                gather::<Lv>(lay, &lay.t0[t..]),
-                gather::<Lv>(lay, &lay.t1[t..]),
-                gather::<Lv>(lay, &lay.t2[t..]),
+                gather::<Lv, G>(lay, &ids[0]),
+                gather::<Lv, G>(lay, &ids[1]),
+                gather::<Lv, G>(lay, &ids[2]),
             )
         };
         let block = Block {
-            t,
+            ids: &ids,
             dst,
             valid,
             a,
@@ -110,14 +112,15 @@ fn tri_signs<Lv: Level>(pass: TriPass) -> u64 {
             Accuracy::Ordered | Accuracy::Original => ordered::<Lv>(&block, lights, out),
             Accuracy::Robust => robust::<Lv>(&block, lights, out),
             Accuracy::Exact if one32.is_none() => {
-                uncertain += exact_packs::<Lv>(lay, &block, (lights, stages), one64, out);
+                uncertain += exact_packs::<Lv, G>(lay, &block, (lights, stages), one64, out);
             }
             Accuracy::Exact => {
                 // One light (the arm above takes several), where the one-light path above does
                 // not apply (a partial block, a light needing the range check, or `w` other
                 // than 0 and 1).
                 if let (Some(lv32), [light], [stage]) = (one32, lights, stages) {
-                    uncertain += exact_one::<Lv>(lay, &block, (&lv32, light, *stage), one64, out);
+                    uncertain +=
+                        exact_one::<Lv, G>(lay, &block, (&lv32, light, *stage), one64, out);
                 }
             }
         }
@@ -128,8 +131,8 @@ fn tri_signs<Lv: Level>(pass: TriPass) -> u64 {
 /// The `f32` filter's stage of each light in exact mode (none in the other modes): in `buf` for
 /// up to 8 lights, in `spill` beyond, so that the common case allocates nothing.
 #[inline(always)]
-fn f32_stages<'s>(
-    lay: &Layout,
+fn f32_stages<'s, G: Geometry>(
+    lay: &G,
     lights: &[[f32; 4]],
     mode: Accuracy,
     buf: &'s mut [F32Stage; 8],
@@ -139,19 +142,23 @@ fn f32_stages<'s>(
         &[]
     } else if lights.len() <= buf.len() {
         for (s, light) in buf.iter_mut().zip(lights) {
-            *s = f32_stage(lay, light);
+            *s = f32_stage(lay.coords_in_filter_range(), light);
         }
         &buf[..lights.len()]
     } else {
-        spill.extend(lights.iter().map(|light| f32_stage(lay, light)));
+        spill.extend(
+            lights
+                .iter()
+                .map(|light| f32_stage(lay.coords_in_filter_range(), light)),
+        );
         spill
     }
 }
 
-/// One block of 8 canonical triangles: its first slot `t`, where its sign bytes go (`dst`), the
+/// One block of 8 canonical triangles: their vertex ids, where its sign bytes go (`dst`), the
 /// lanes that are triangles (`valid`), and its corners.
-struct Block<F> {
-    t: usize,
+struct Block<'i, F> {
+    ids: &'i CanonBlock,
     dst: usize,
     valid: u32,
     a: [F; 3],
@@ -163,18 +170,18 @@ struct Block<F> {
 /// vectors live (O is loaded once N exists), and the 8 signs stored as 8 consecutive bytes
 /// (one byte per slot) into `out`.
 #[inline(always)]
-fn ordered_one_full<Lv: Level>(lay: &Layout, t: usize, lv: &[Lv::F; 4], out: &mut [i8]) {
-    // SAFETY: `t + 8 <= t0.len()` (asserted by `tri_signs`), and the layout's ids are in range.
-    let (a, b) = unsafe {
-        (
-            gather::<Lv>(lay, &lay.t0[t..]),
-            gather::<Lv>(lay, &lay.t1[t..]),
-        )
-    };
+fn ordered_one_full<Lv: Level, G: Geometry>(
+    lay: &G,
+    ids: &CanonBlock,
+    lv: &[Lv::F; 4],
+    out: &mut [i8],
+) {
+    // SAFETY: `ids` are vertices of the table (`Layout::build` checked them).
+    let (a, b) = unsafe { (gather::<Lv, G>(lay, &ids[0]), gather::<Lv, G>(lay, &ids[1])) };
     let e = sub3(&a, &b);
     let n = edge_normal(lv, &a, &e);
     // SAFETY: as above.
-    let o = unsafe { gather::<Lv>(lay, &lay.t2[t..]) };
+    let o = unsafe { gather::<Lv, G>(lay, &ids[2]) };
     let m = off_plane(&n, &a, &o).signum0().to_i32();
     for (byte, s) in out.iter_mut().zip(m) {
         *byte = s as i8;
@@ -185,27 +192,22 @@ fn ordered_one_full<Lv: Level>(lay: &Layout, t: usize, lv: &[Lv::F; 4], out: &mu
 /// [`ordered_one_full`], `O` is loaded only once the products exist (fewer vectors live).
 /// Returns the evaluations decided by the scalar exact predicate.
 #[inline(always)]
-fn exact_one_full<Lv: Level>(
-    lay: &Layout,
-    t: usize,
+fn exact_one_full<Lv: Level, G: Geometry>(
+    lay: &G,
+    ids: &CanonBlock,
     lv: &[Lv::F; 4],
     light: &[f32; 4],
     one64: Option<[Lv::D; 4]>,
     out: &mut [&mut [i8]],
     dst: usize,
 ) -> u64 {
-    // SAFETY: `t + 8 <= t0.len()` (asserted by `tri_signs`), and the layout's ids are in range.
-    let (a, b) = unsafe {
-        (
-            gather::<Lv>(lay, &lay.t0[t..]),
-            gather::<Lv>(lay, &lay.t1[t..]),
-        )
-    };
+    // SAFETY: `ids` are vertices of the table (`Layout::build` checked them).
+    let (a, b) = unsafe { (gather::<Lv, G>(lay, &ids[0]), gather::<Lv, G>(lay, &ids[1])) };
     let (pq, bad) = f32_products::<Lv::F, false>(&a, &b, lv);
     // SAFETY: as above.
-    let o = unsafe { gather::<Lv>(lay, &lay.t2[t..]) };
+    let o = unsafe { gather::<Lv, G>(lay, &ids[2]) };
     let (mut pos, mut neg, unc) = f32_decide::<Lv::F, false>(&pq, &a, &o, bad);
-    let uncertain = Fallback::<Lv>::new(lay, t).decide(light, one64, unc, &mut pos, &mut neg);
+    let uncertain = Fallback::<Lv, G>::new(lay, ids).decide(light, one64, unc, &mut pos, &mut neg);
     write_one(out, dst, pos, neg);
     uncertain
 }
@@ -213,7 +215,7 @@ fn exact_one_full<Lv: Level>(
 /// `ordered` (and `original`, evaluated as `ordered`): `plane`'s operations with `A − B` and
 /// `O − A` made once for all lights.
 #[inline(always)]
-fn ordered<Lv: Level>(block: &Block<Lv::F>, lights: &[[f32; 4]], out: &mut [&mut [i8]]) {
+fn ordered<Lv: Level>(block: &Block<'_, Lv::F>, lights: &[[f32; 4]], out: &mut [&mut [i8]]) {
     let Block {
         dst,
         valid,
@@ -243,7 +245,7 @@ fn ordered<Lv: Level>(block: &Block<Lv::F>, lights: &[[f32; 4]], out: &mut [&mut
 
 /// `robust`: the three sides of each triangle; the sign where all three agree, else 0.
 #[inline(always)]
-fn robust<Lv: Level>(block: &Block<Lv::F>, lights: &[[f32; 4]], out: &mut [&mut [i8]]) {
+fn robust<Lv: Level>(block: &Block<'_, Lv::F>, lights: &[[f32; 4]], out: &mut [&mut [i8]]) {
     let Block {
         dst,
         valid,
@@ -279,15 +281,15 @@ fn robust<Lv: Level>(block: &Block<Lv::F>, lights: &[[f32; 4]], out: &mut [&mut 
 /// one store. The block's points are widened to f64 (by `fallback`) only when some lane needs
 /// the f64 filter. Returns the evaluations decided by the scalar exact predicate.
 #[inline(always)]
-fn exact_packs<Lv: Level>(
-    lay: &Layout,
-    block: &Block<Lv::F>,
+fn exact_packs<Lv: Level, G: Geometry>(
+    lay: &G,
+    block: &Block<'_, Lv::F>,
     (lights, stages): (&[[f32; 4]], &[F32Stage]),
     one64: Option<[Lv::D; 4]>,
     out: &mut [&mut [i8]],
 ) -> u64 {
     let Block {
-        t,
+        ids,
         dst,
         valid,
         a,
@@ -295,7 +297,7 @@ fn exact_packs<Lv: Level>(
         o,
     } = block;
     let mut uncertain = 0;
-    let mut fallback = Fallback::<Lv>::new(lay, *t);
+    let mut fallback = Fallback::<Lv, G>::new(lay, ids);
     for (pack, chunk) in lights.chunks(PACK).enumerate() {
         let mut acc = [0u32; LANES];
         for (k, light) in chunk.iter().enumerate() {
@@ -324,15 +326,15 @@ fn exact_packs<Lv: Level>(
 /// `exact` with one light (`lv32`, `light`, `stage`) on a block the one-light fast path does not
 /// take. Returns the evaluations decided by the scalar exact predicate.
 #[inline(always)]
-fn exact_one<Lv: Level>(
-    lay: &Layout,
-    block: &Block<Lv::F>,
+fn exact_one<Lv: Level, G: Geometry>(
+    lay: &G,
+    block: &Block<'_, Lv::F>,
     (lv32, light, stage): (&[Lv::F; 4], &[f32; 4], F32Stage),
     one64: Option<[Lv::D; 4]>,
     out: &mut [&mut [i8]],
 ) -> u64 {
     let Block {
-        t,
+        ids,
         dst,
         valid,
         a,
@@ -346,7 +348,7 @@ fn exact_one<Lv: Level>(
         F32Stage::Unchecked => filter_f32::<Lv::F, false>(a, b, lv32, o),
     };
     let unc = unc32 & valid;
-    let uncertain = Fallback::<Lv>::new(lay, *t).decide(light, one64, unc, &mut pos, &mut neg);
+    let uncertain = Fallback::<Lv, G>::new(lay, ids).decide(light, one64, unc, &mut pos, &mut neg);
     write_one(out, *dst, pos & valid, neg & valid);
     uncertain
 }

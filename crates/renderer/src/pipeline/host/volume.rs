@@ -265,8 +265,7 @@ mod tests {
             .map(|(e, &[a, b])| {
                 table
                     .ovs_of(e)
-                    .iter()
-                    .map(|&o| i32::from(ov_sign(mode, &table.positions, a, b, o, light)))
+                    .map(|o| i32::from(ov_sign(mode, &table.positions, a, b, o, light)))
                     .sum()
             })
             .collect()

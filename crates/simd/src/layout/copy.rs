@@ -1,31 +1,26 @@
-//! The prepared, streaming-friendly layout of one edge table.
+//! A copy of one edge table laid out for the kernels' speed.
 //!
-//! * Positions are stored as three arrays (`xs`, `ys`, `zs`: structure of arrays), indexed by
-//!   compact vertex id.
-//! * Triangles are stored in canonical vertex order (ascending ids) and sorted, so the
-//!   per-triangle pass walks the vertex arrays roughly front to back, in the same order as the
-//!   edges (which [`EdgeTable`] sorts by their smaller vertex).
-//! * Edges keep the table's order (global edge index = output slot) and are processed in blocks
-//!   of [`LANES`]. A block whose edges all have exactly two opposite vertices (the closed-manifold
-//!   case) takes the fast path, which needs no CSR offsets: `abo[e] = [a, b, o1, o2]` for the
-//!   per-edge `original` mode and `tri_a[e]`, `tri_b[e]` (canonical-triangle index with the
-//!   permutation parity in bit 31) for the per-triangle modes. Every other block takes the general
-//!   CSR path (`ov_offsets`, `ovs`, `ov_tri`).
+//! * Vertices are *stored* in the order of their first reference when walking the edges (and
+//!   their OVs) in table order, so the vertices one block of edges touches sit close together
+//!   (a Cuthill-McKee-like renumbering); canonical order and parity still use the table's ids.
+//! * Positions as 16-byte records `[x, y, z, 0]`: one aligned load per vertex.
+//! * Triangles in canonical vertex order (ascending ids), sorted, as three columns, so the
+//!   triangle pass walks the vertices roughly front to back, in the order of the edges (which
+//!   the table sorts by their smaller vertex). A triangle's slot is its place in this order.
+//! * Edges keep the table's order (global edge index = output slot), in blocks of [`LANES`]. A
+//!   fast block (all edges manifold) keeps per edge `a`, `b` and the two OVs for `original`
+//!   and its two references `4 s + r` (slot `s`, rank 1 or 0 for the parity) for the other
+//!   modes. Every other block keeps CSR records in [`GeneralBlocks`].
 
+use super::LANES;
+use super::{check_table, coord_in_filter_range, fast_blocks, CanonBlock, Geometry, LayoutError};
+use crate::lanes::Level;
 use shadowvol_mesh_topology::EdgeTable;
-
-/// Lanes per `f32` vector and edges / triangles per block.
-pub(crate) const LANES: usize = 8;
-
-/// Bit 31 of a triangle reference: the (edge, OV) pair has odd parity (`a < o < b`).
-pub(crate) const ODD: u32 = 1 << 31;
+use std::sync::Arc;
 
 /// One edge table laid out for the kernels.
 #[derive(Debug)]
-pub(crate) struct Layout {
-    pub xs: Vec<f32>,
-    pub ys: Vec<f32>,
-    pub zs: Vec<f32>,
+pub(crate) struct CopyLayout {
     /// Positions as 16-byte records `[x, y, z, 0]` (one aligned load per vertex).
     pub xyz: Vec<[f32; 4]>,
     /// Canonical triangles (ascending ids `t0 < t1 < t2`), sorted, as three arrays; padded with
@@ -53,11 +48,10 @@ pub(crate) struct Layout {
     pub eo1: Vec<u32>,
     /// See `ea`.
     pub eo2: Vec<u32>,
-    /// Per edge: the two canonical triangles with parity bits (only meaningful in fast blocks;
-    /// padded with triangle slot 0 like `ea`).
-    pub tri_a: Vec<u32>,
-    /// Second triangle reference of each edge (see `tri_a`).
-    pub tri_b: Vec<u32>,
+    /// Per edge of a fast block: its two references `4 s + r` (triangle slot `s`, `r` 1 for
+    /// odd parity, else 0), at `2 e` and `2 e + 1`; 0 elsewhere and in the padding to whole
+    /// blocks.
+    pub refs: Vec<u32>,
     /// The CSR records of the blocks that are not fast, for the general path.
     pub general: GeneralBlocks,
     /// Every stored coordinate passes [`coord_in_filter_range`] (a multiple of 2^-40 of
@@ -74,13 +68,13 @@ pub(crate) struct GeneralBlocks {
     pub index: Vec<u32>,
     /// Per general block, [`LANES`] edge endpoints (storage indices), padded with `[0, 0]`.
     pub edges: Vec<[u32; 2]>,
-    /// Per general block, [`LANES`] + 1 offsets into `ovs` / `ov_tri` (equal past the last
+    /// Per general block, [`LANES`] + 1 offsets into `ovs` / `refs` (equal past the last
     /// edge).
     pub offsets: Vec<u32>,
     /// Opposite vertices (storage indices).
     pub ovs: Vec<u32>,
-    /// Canonical-triangle index of each entry of `ovs`, with [`ODD`] for odd parity.
-    pub ov_tri: Vec<u32>,
+    /// The reference `4 s + r` of each entry of `ovs` (as [`CopyLayout::refs`]).
+    pub refs: Vec<u32>,
 }
 
 /// [`GeneralBlocks::index`] of a fast block.
@@ -88,8 +82,8 @@ pub(crate) const NOT_GENERAL: u32 = u32::MAX;
 
 impl GeneralBlocks {
     /// The records of the blocks of `table`'s edges that `block_fast` marks as not fast, with
-    /// vertices at their storage index `st` and the OV triangles `ov_tri` of [`ov_triangles`].
-    fn new(table: &EdgeTable, st: &[u32], ov_tri: &[u32], block_fast: &[bool]) -> Self {
+    /// vertices at their storage index `st` and the references `refs` of [`slot_refs`].
+    fn new(table: &EdgeTable, st: &[u32], refs: &[u32], block_fast: &[bool]) -> Self {
         let ne = table.edges.len();
         let mut g = Self {
             index: Vec::with_capacity(block_fast.len()),
@@ -113,9 +107,12 @@ impl GeneralBlocks {
                 let [a, b] = table.edges[e];
                 g.edges.push([st[a as usize], st[b as usize]]);
                 let r = table.ov_offsets[e] as usize..table.ov_offsets[e + 1] as usize;
-                g.ovs
-                    .extend(table.ovs[r.clone()].iter().map(|&o| st[o as usize]));
-                g.ov_tri.extend_from_slice(&ov_tri[r]);
+                g.ovs.extend(
+                    table.ov_refs[r.clone()]
+                        .iter()
+                        .map(|&c| st[table.ov_vertex(c) as usize]),
+                );
+                g.refs.extend_from_slice(&refs[r]);
             }
             g.offsets.push(g.ovs.len() as u32);
         }
@@ -128,18 +125,15 @@ impl GeneralBlocks {
             + vec_bytes(&self.edges)
             + vec_bytes(&self.offsets)
             + vec_bytes(&self.ovs)
-            + vec_bytes(&self.ov_tri)
+            + vec_bytes(&self.refs)
     }
 }
 
-impl Layout {
+impl CopyLayout {
     /// Heap bytes of every array of the layout (capacities).
     pub(crate) fn heap_bytes(&self) -> u64 {
         use shadowvol_silhouette::vec_bytes;
-        vec_bytes(&self.xs)
-            + vec_bytes(&self.ys)
-            + vec_bytes(&self.zs)
-            + vec_bytes(&self.xyz)
+        vec_bytes(&self.xyz)
             + vec_bytes(&self.t0)
             + vec_bytes(&self.t1)
             + vec_bytes(&self.t2)
@@ -148,18 +142,17 @@ impl Layout {
             + vec_bytes(&self.eb)
             + vec_bytes(&self.eo1)
             + vec_bytes(&self.eo2)
-            + vec_bytes(&self.tri_a)
-            + vec_bytes(&self.tri_b)
+            + vec_bytes(&self.refs)
             + self.general.heap_bytes()
     }
 
     /// Edge `e` of a general block: its ends (storage indices) and the range of its OVs in
-    /// [`GeneralBlocks::ovs`] and [`GeneralBlocks::ov_tri`].
+    /// [`GeneralBlocks::ovs`] and [`GeneralBlocks::refs`].
     ///
     /// # Panics
     /// If `e`'s block is fast, or `e` is out of range.
     #[inline(always)]
-    pub(crate) fn general_edge(&self, e: usize) -> ([u32; 2], std::ops::Range<usize>) {
+    fn general_edge(&self, e: usize) -> ([u32; 2], std::ops::Range<usize>) {
         let g = &self.general;
         let blk = g.index[e / LANES];
         assert!(blk != NOT_GENERAL, "edge {e} is in a fast block");
@@ -172,41 +165,14 @@ impl Layout {
     }
 }
 
-/// Largest coordinate magnitude (2^39) for which the `f32` filter's range check is known to
-/// pass without evaluating it.
-pub(crate) const COORD_MAX: f32 = 549_755_813_888.0;
-
-/// The grid step (2^-40 = `F32_FILTER_MIN`) every coordinate must be a multiple of.
-const COORD_STEP_INV: f32 = 1_099_511_627_776.0; // 2^40
-
-/// Whether `x` is an integer multiple of 2^-40 with `|x| <= 2^39` (false for NaN and
-/// infinities). Every `f32` of magnitude at least 2^-17 is such a multiple (its ulp is 2^-40 or
-/// coarser), and so are 0 and, for example, `1 - 0.99999994 = 2^-24`.
-///
-/// If every coordinate of `A`, `B`, `O` and `L.xyz` passes and `L.w` is 0 or 1, each of the nine
-/// differences of `orient_filter_f32` (`A - B`, `L.xyz - w A`, `O - A`) passes its range check
-/// (`0` or a magnitude in `[2^-40, 2^40]`): `w A` is `A` or a zero exactly, so each exact
-/// difference is a multiple of 2^-40 of magnitude at most 2^39 + 2^39 = 2^40; round-to-nearest
-/// is monotone and both bounds are representable, so a non-zero exact difference rounds into
-/// `[2^-40, 2^40]`, and a zero one gives 0.
-#[inline]
-pub(crate) fn coord_in_filter_range(x: f32) -> bool {
-    // `x * 2^40` is exact: a power-of-two scaling that cannot overflow for |x| <= 2^39.
-    x.abs() <= COORD_MAX && (x * COORD_STEP_INV).fract() == 0.0
-}
-
 const fn zero_record() -> [f32; 4] {
     [0.0; 4]
 }
 
-/// Why a table cannot be laid out.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub(crate) struct LayoutError(pub String);
-
-impl Layout {
+impl CopyLayout {
     /// Lays out `table`. Checks every index against the vertex count, so the kernels may rely
     /// on it.
-    pub(crate) fn build(table: &EdgeTable) -> Result<Self, LayoutError> {
+    pub(crate) fn build(table: &Arc<EdgeTable>) -> Result<Self, LayoutError> {
         check_table(table)?;
         let nv = table.positions.len();
         let st = storage_order(table);
@@ -214,9 +180,6 @@ impl Layout {
         for (v, p) in table.positions.iter().enumerate() {
             stored[st[v] as usize] = [p.x, p.y, p.z, 0.0];
         }
-        let xs = stored.iter().map(|p| p[0]).collect();
-        let ys = stored.iter().map(|p| p[1]).collect();
-        let zs = stored.iter().map(|p| p[2]).collect();
         let coords_in_filter_range = stored
             .iter()
             .all(|p| p[..3].iter().all(|&c| coord_in_filter_range(c)));
@@ -250,16 +213,13 @@ impl Layout {
         // Freed as soon as they are done with (16 and 4 bytes a triangle), so that the per-edge
         // columns below are not built beside them.
         drop(canon);
-        let ov_tri = ov_triangles(table, &slot)?;
+        let refs = slot_refs(table, &slot);
         drop(slot);
         let ne = table.edges.len();
-        let manifold = ManifoldEdges::new(table, &st, &ov_tri);
-        let general = GeneralBlocks::new(table, &st, &ov_tri, &manifold.block_fast);
-        drop(ov_tri);
+        let manifold = ManifoldEdges::new(table, &st, &refs);
+        let general = GeneralBlocks::new(table, &st, &refs, &manifold.block_fast);
+        drop(refs);
         Ok(Self {
-            xs,
-            ys,
-            zs,
             xyz,
             t0,
             t1,
@@ -271,49 +231,11 @@ impl Layout {
             eb: manifold.eb,
             eo1: manifold.eo1,
             eo2: manifold.eo2,
-            tri_a: manifold.tri_a,
-            tri_b: manifold.tri_b,
+            refs: manifold.refs,
             general,
             coords_in_filter_range,
         })
     }
-
-    /// Position of the vertex stored at index `v` (all index arrays of the layout hold storage
-    /// indices) as an array.
-    #[inline(always)]
-    pub(crate) fn pos(&self, v: u32) -> [f32; 3] {
-        let v = v as usize;
-        [self.xs[v], self.ys[v], self.zs[v]]
-    }
-}
-
-/// Checks that `table` fits the layout's index range and is consistent (offsets and OVs agree,
-/// every vertex id is in range), so the kernels may rely on it.
-fn check_table(table: &EdgeTable) -> Result<(), LayoutError> {
-    let nv = table.positions.len();
-    if nv >= i32::MAX as usize || table.triangles.len() >= (ODD as usize) - LANES {
-        return Err(LayoutError(format!(
-            "{nv} vertices / {} triangles exceed the 2^31 limit of the layout",
-            table.triangles.len()
-        )));
-    }
-    if table.ov_offsets.len() != table.edges.len() + 1
-        || table.ov_offsets.last().copied().unwrap_or(0) as usize != table.ovs.len()
-    {
-        return Err(LayoutError(
-            "edge table is inconsistent (offsets and OVs disagree)".to_owned(),
-        ));
-    }
-    let in_range = |v: u32| (v as usize) < nv;
-    if !table.triangles.iter().flatten().all(|&v| in_range(v))
-        || !table.edges.iter().flatten().all(|&v| in_range(v))
-        || !table.ovs.iter().all(|&v| in_range(v))
-    {
-        return Err(LayoutError(format!(
-            "edge table refers to a vertex id >= its {nv} positions"
-        )));
-    }
-    Ok(())
 }
 
 /// The storage index of each vertex: order of first reference when walking the edges (and their
@@ -333,7 +255,7 @@ fn storage_order(table: &EdgeTable) -> Vec<u32> {
     for (e, &[a, b]) in table.edges.iter().enumerate() {
         place(a, &mut st);
         place(b, &mut st);
-        for &o in table.ovs_of(e) {
+        for o in table.ovs_of(e) {
             place(o, &mut st);
         }
     }
@@ -343,37 +265,18 @@ fn storage_order(table: &EdgeTable) -> Vec<u32> {
     st
 }
 
-/// For each (edge, OV) entry, its triangle's slot (`slot[t]` for table triangle `t`), with
-/// [`ODD`] set when the OV lies between the edge's ends. OVs of an edge are listed in ascending
-/// triangle order, so filling per edge while walking triangles in order reproduces it; a table
-/// where it does not is an error.
-fn ov_triangles(table: &EdgeTable, slot: &[u32]) -> Result<Vec<u32>, LayoutError> {
-    let ne = table.edges.len();
-    let mut fill: Vec<u32> = table.ov_offsets[..ne].to_vec();
-    let mut ov_tri = vec![0u32; table.ovs.len()];
-    for (t, tri, te) in table.triangles_with_edges() {
-        for i in 0..3 {
-            let e = te[i] as usize;
-            let o = tri[(i + 2) % 3];
-            let [a, b] = *table.edges.get(e).ok_or_else(|| {
-                LayoutError(format!("triangle {t} refers to edge {e} out of range"))
-            })?;
-            let k = fill[e] as usize;
-            if k >= table.ov_offsets[e + 1] as usize || table.ovs[k] != o {
-                return Err(LayoutError(format!(
-                    "edge {e}: opposite vertex list does not match triangle {t}"
-                )));
-            }
-            fill[e] += 1;
-            let odd = if a < o && o < b { ODD } else { 0 };
-            ov_tri[k] = slot[t] | odd;
-        }
-    }
-    Ok(ov_tri)
+/// For each (edge, OV) entry of `table`, its reference with the triangle slot `slot[t]` in
+/// place of the table's triangle `t`: `4 slot[t] + 1` for odd parity, `4 slot[t]` for even.
+fn slot_refs(table: &EdgeTable, slot: &[u32]) -> Vec<u32> {
+    table
+        .ov_refs
+        .iter()
+        .map(|&r| 4 * slot[EdgeTable::ov_triangle(r) as usize] + u32::from(EdgeTable::ov_odd(r)))
+        .collect()
 }
 
 /// The fast path's columns: for each two-OV (manifold) edge its ends, OVs (storage indices) and
-/// OV triangles; zeros elsewhere and in the padding to whole blocks. A block is fast when all its
+/// references; zeros elsewhere and in the padding to whole blocks. A block is fast when all its
 /// edges are manifold.
 struct ManifoldEdges {
     block_fast: Vec<bool>,
@@ -381,22 +284,21 @@ struct ManifoldEdges {
     eb: Vec<u32>,
     eo1: Vec<u32>,
     eo2: Vec<u32>,
-    tri_a: Vec<u32>,
-    tri_b: Vec<u32>,
+    refs: Vec<u32>,
 }
 
 impl ManifoldEdges {
-    /// The columns of `table`, with vertices at their storage index `st` and the OV triangles
-    /// `ov_tri` of [`ov_triangles`].
-    fn new(table: &EdgeTable, st: &[u32], ov_tri: &[u32]) -> Self {
+    /// The columns of `table`, with vertices at their storage index `st` and the references
+    /// `refs` of [`slot_refs`].
+    fn new(table: &EdgeTable, st: &[u32], refs: &[u32]) -> Self {
         let sv = |v: u32| st[v as usize];
         let ne = table.edges.len();
-        let mut block_fast = Vec::with_capacity(ne.div_ceil(LANES));
+        let block_fast = fast_blocks(table);
         // Padded to whole blocks, so a partial last block of manifold edges takes the fast path.
         let ne_padded = ne.div_ceil(LANES) * LANES;
         let (mut ea, mut eb) = (vec![0u32; ne_padded], vec![0u32; ne_padded]);
         let (mut eo1, mut eo2) = (vec![0u32; ne_padded], vec![0u32; ne_padded]);
-        let (mut tri_a, mut tri_b) = (vec![0u32; ne_padded], vec![0u32; ne_padded]);
+        let mut pairs = vec![0u32; 2 * ne_padded];
         for e in 0..ne {
             let (s, t) = (
                 table.ov_offsets[e] as usize,
@@ -405,16 +307,10 @@ impl ManifoldEdges {
             if t - s == 2 {
                 let [a, b] = table.edges[e];
                 (ea[e], eb[e]) = (sv(a), sv(b));
-                (eo1[e], eo2[e]) = (sv(table.ovs[s]), sv(table.ovs[s + 1]));
-                (tri_a[e], tri_b[e]) = (ov_tri[s], ov_tri[s + 1]);
+                let ov = |k: usize| sv(table.ov_vertex(table.ov_refs[k]));
+                (eo1[e], eo2[e]) = (ov(s), ov(s + 1));
+                (pairs[2 * e], pairs[2 * e + 1]) = (refs[s], refs[s + 1]);
             }
-        }
-        for blk in 0..ne.div_ceil(LANES) {
-            let r = blk * LANES..((blk + 1) * LANES).min(ne);
-            block_fast.push(
-                r.into_iter()
-                    .all(|e| table.ov_offsets[e + 1] - table.ov_offsets[e] == 2),
-            );
         }
         Self {
             block_fast,
@@ -422,8 +318,78 @@ impl ManifoldEdges {
             eb,
             eo1,
             eo2,
-            tri_a,
-            tri_b,
+            refs: pairs,
         }
+    }
+}
+
+impl Geometry for CopyLayout {
+    #[inline(always)]
+    fn tri_count(&self) -> usize {
+        self.tri_count
+    }
+
+    #[inline(always)]
+    fn edge_count(&self) -> usize {
+        self.edge_count
+    }
+
+    #[inline(always)]
+    fn block_fast(&self, blk: usize) -> bool {
+        self.block_fast[blk]
+    }
+
+    #[inline(always)]
+    fn coords_in_filter_range(&self) -> bool {
+        self.coords_in_filter_range
+    }
+
+    #[inline(always)]
+    fn canon_block<Lv: Level>(&self, t: usize) -> CanonBlock {
+        let col = |c: &[u32]| -> [u32; LANES] { c[t..t + LANES].try_into().unwrap_or([0; LANES]) };
+        [col(&self.t0), col(&self.t1), col(&self.t2)]
+    }
+
+    #[inline(always)]
+    unsafe fn gather<Lv: Level>(&self, idx: &[u32]) -> [Lv::F; 3] {
+        // SAFETY: the ids are stored vertices (the caller).
+        unsafe { Lv::gather_records(&self.xyz, idx) }
+    }
+
+    #[inline(always)]
+    fn pos(&self, v: u32) -> [f32; 3] {
+        let [x, y, z, _] = self.xyz[v as usize];
+        [x, y, z]
+    }
+
+    #[inline(always)]
+    fn fast_refs(&self, blk: usize) -> [u32; 2 * LANES] {
+        let k = 2 * LANES * blk;
+        self.refs[k..k + 2 * LANES]
+            .try_into()
+            .unwrap_or([0; 2 * LANES])
+    }
+
+    #[inline(always)]
+    fn fast_ends_and_ovs(&self, blk: usize) -> [[u32; LANES]; 4] {
+        let e0 = blk * LANES;
+        let col =
+            |c: &[u32]| -> [u32; LANES] { c[e0..e0 + LANES].try_into().unwrap_or([0; LANES]) };
+        [col(&self.ea), col(&self.eb), col(&self.eo1), col(&self.eo2)]
+    }
+
+    #[inline(always)]
+    fn general_ends(&self, e: usize) -> [u32; 2] {
+        self.general_edge(e).0
+    }
+
+    #[inline(always)]
+    fn general_refs(&self, e: usize) -> &[u32] {
+        &self.general.refs[self.general_edge(e).1]
+    }
+
+    #[inline(always)]
+    fn general_ovs(&self, e: usize) -> impl Iterator<Item = u32> + '_ {
+        self.general.ovs[self.general_edge(e).1].iter().copied()
     }
 }
