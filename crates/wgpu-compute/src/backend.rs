@@ -7,7 +7,7 @@ use crate::layout::{Prepared, StaticBuffers};
 use crate::pipeline::Pipelines;
 use crate::{shaders, NAME};
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout, TriangleLayout};
+use shadowvol_silhouette::gpu::{ExactFilter, SceneIndex, SceneLayout, TriangleLayout};
 use shadowvol_silhouette::{
     BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedBytes, PreparedId,
     PreparedScenes, SceneParts, SilhouetteBackend, TopologyScene,
@@ -125,12 +125,12 @@ impl WgpuBackend {
         &self.queue
     }
 
-    /// The flat layout of a prepared scene (global vertex ids, edge records), as uploaded;
-    /// `None` for an unknown id or a scene prepared in parts (one too big for the device's
-    /// buffers).
+    /// The index of a prepared scene's objects in the flat layout it uploaded (their first
+    /// global edge, OV slot and triangle, over the scene's edge tables); `None` for an unknown id
+    /// or a scene prepared in parts (one too big for the device's buffers).
     #[must_use]
-    pub fn layout(&self, id: PreparedId) -> Option<&SceneLayout> {
-        self.scenes.get(id).ok()?.whole().map(|p| &p.layout)
+    pub fn index(&self, id: PreparedId) -> Option<&SceneIndex> {
+        self.scenes.get(id).ok()?.whole().map(|p| &p.index)
     }
 
     /// The device buffers holding the results of the last `extract` on `id` (see
@@ -148,7 +148,7 @@ impl WgpuBackend {
             silhouettes: &frame.silhouettes,
             edges: &gpu.edges,
             positions: &gpu.positions,
-            edge_count: p.layout.edge_count() as u32,
+            edge_count: p.index.edge_count() as u32,
             first_light,
             light_count,
         })
@@ -315,7 +315,8 @@ impl WgpuBackend {
         Ok(stats)
     }
 
-    /// Lays out and uploads `scene` whole.
+    /// Lays out and uploads `scene` whole. The host layouts are dropped once uploaded: the
+    /// host's exact decisions read the scene's edge tables through a [`SceneIndex`].
     fn prepare_whole(&self, scene: &TopologyScene) -> Result<Prepared, BackendError> {
         let layout = SceneLayout::build(scene, NAME)?;
         let triangles = TriangleLayout::build(scene, &layout, NAME)?;
@@ -359,11 +360,10 @@ impl WgpuBackend {
             Some(buffers)
         };
         self.check_health()?;
+        drop((layout, triangles));
         Ok(Prepared {
             transforms: scene.transforms().collect(),
-            layout,
-            triangles,
-            edge_slots: None,
+            index: SceneIndex::new(scene),
             gpu,
             frame: None,
             last: None,

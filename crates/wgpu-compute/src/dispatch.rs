@@ -106,7 +106,7 @@ impl WgpuBackend {
     ) -> Result<ExtractStats, BackendError> {
         check_lights(lights)?;
         let mut stats = ExtractStats::default();
-        let edge_count = p.layout.edge_count();
+        let edge_count = p.index.edge_count();
         // Zeroing the host result is part of bringing results back (the device sends only the
         // non-zero entries).
         let t_reset = Instant::now();
@@ -120,8 +120,8 @@ impl WgpuBackend {
         let t_upload = Instant::now();
         let obj_lights = object_lights(p.transforms.iter().copied(), lights);
         let edges = edge_count as u64;
-        let objects = p.layout.object_count() as u64;
-        let tris = p.triangles.tri_count() as u64;
+        let objects = p.index.object_count() as u64;
+        let tris = p.index.tri_count() as u64;
         let per_batch = self.lights_per_batch(edges, tris, objects, lights.len())?;
         let needs_new_frame = p
             .frame
@@ -206,7 +206,7 @@ impl WgpuBackend {
             .frame
             .as_mut()
             .ok_or_else(|| device_error("no frame buffers"))?;
-        let output = self.second_round_trip(frame, p.layout.edge_count(), count, first, stats)?;
+        let output = self.second_round_trip(frame, p.index.edge_count(), count, first, stats)?;
         self.resolve_batch(p, batch, output, out, stats)
     }
 
@@ -225,11 +225,11 @@ impl WgpuBackend {
     ) -> Result<FirstTrip, BackendError> {
         let count = batch.lights.len();
         let dims = Dims {
-            edges: p.layout.edge_count() as u64,
-            triangles: p.triangles.tri_count() as u64,
+            edges: p.index.edge_count() as u64,
+            triangles: p.index.tri_count() as u64,
             lights: count,
-            edge_grid: self.grid(p.layout.edge_count(), "edges")?,
-            triangle_grid: self.grid(p.triangles.tri_count(), "triangles")?,
+            edge_grid: self.grid(p.index.edge_count(), "edges")?,
+            triangle_grid: self.grid(p.index.tri_count(), "triangles")?,
         };
         // Repeated with a bigger uncertain buffer (or the fallback inline) after an overflow.
         loop {
@@ -467,9 +467,9 @@ impl WgpuBackend {
         }
         let t = Instant::now();
         let capacity = uncertain.checked_next_power_of_two().unwrap_or(uncertain);
-        let edges = p.layout.edge_count() as u64;
-        let tris = p.triangles.tri_count() as u64;
-        let objects = p.layout.object_count() as u64;
+        let edges = p.index.edge_count() as u64;
+        let tris = p.index.tri_count() as u64;
+        let objects = p.index.object_count() as u64;
         let frame = p
             .frame
             .as_mut()
@@ -605,20 +605,19 @@ impl WgpuBackend {
         stats: &mut ExtractStats,
     ) -> Result<(), BackendError> {
         let count = batch.lights.len();
-        let edges = p.layout.edge_count() as u64;
+        let edges = p.index.edge_count() as u64;
         let t = Instant::now();
-        validate_lists(&output.lists, p.layout.edge_count())?;
+        validate_lists(&output.lists, p.index.edge_count())?;
         let records = if output.uncertain.is_empty() {
             Vec::new()
         } else {
-            let slots = p
-                .edge_slots
-                .get_or_insert_with(|| p.triangles.edge_slots(&p.layout));
-            expand_uncertain(&output.uncertain, slots, count)?
+            let index = &p.index;
+            let of = |t: usize| index.edge_slots(t);
+            expand_uncertain(&output.uncertain, of, index.tri_count(), count)?
         };
         stats.uncertain += records.len() as u64;
         let patch = finish_batch(
-            &p.layout,
+            &p.index,
             batch.object_lights,
             batch.lights.clone(),
             BatchOutput {

@@ -5,7 +5,7 @@
 use crate::backend::WgpuBackend;
 use crate::device::limit_error;
 use crate::pipeline::entry;
-use shadowvol_silhouette::gpu::{self, SceneLayout, TriangleLayout};
+use shadowvol_silhouette::gpu::{self, SceneIndex};
 use shadowvol_silhouette::{vec_bytes, BackendError, PreparedBytes};
 
 /// Object-space lights packed object-major for lights `first..first + count`, as uploaded:
@@ -48,12 +48,12 @@ pub(crate) struct Frame {
 }
 
 pub(crate) struct Prepared {
-    /// Per object: world from object (the layouts hold everything else the kernels read).
+    /// Per object: world from object (the device buffers hold everything else the kernels
+    /// read).
     pub(crate) transforms: Vec<glam::Affine3A>,
-    pub(crate) layout: SceneLayout,
-    pub(crate) triangles: TriangleLayout,
-    /// [`TriangleLayout::edge_slots`], built the first time the host decides a triangle.
-    pub(crate) edge_slots: Option<Vec<[(u32, u32); 3]>>,
+    /// The objects in the uploaded layout's numbering, over the scene's edge tables: what the
+    /// host's exact decisions read.
+    pub(crate) index: SceneIndex,
     pub(crate) gpu: Option<StaticBuffers>,
     pub(crate) frame: Option<Frame>,
     /// Lights of the last extract whose results the frame buffers hold: `(first, count)`.
@@ -68,12 +68,10 @@ pub(crate) struct Prepared {
 }
 
 impl Prepared {
-    /// What the scene holds beyond its edge tables: the host layouts, and every device buffer
-    /// (the scene's and the last frame's).
+    /// What the scene holds beyond its edge tables: its index and transforms on the host, and
+    /// every device buffer (the scene's and the last frame's).
     pub(crate) fn bytes(&self) -> PreparedBytes {
-        let host = self.layout.heap_bytes()
-            + self.triangles.heap_bytes()
-            + self.edge_slots.as_ref().map_or(0, vec_bytes);
+        let host = self.index.heap_bytes() + vec_bytes(&self.transforms);
         let mut device = 0;
         if let Some(g) = &self.gpu {
             for b in [&g.positions, &g.edges, &g.ovs, &g.tris, &g.ov_tris] {

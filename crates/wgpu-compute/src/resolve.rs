@@ -1,7 +1,7 @@
 //! Host side of a dispatch: fill [`Multiplicities`] from the device's output and decide the
 //! uncertain triples exactly. Shared by the wgpu backend and the CPU twin.
 
-use shadowvol_silhouette::gpu::{resolve_uncertain, SceneLayout, UncertainRecord};
+use shadowvol_silhouette::gpu::{resolve_uncertain, HostScene, UncertainRecord};
 use shadowvol_silhouette::{BackendError, Multiplicities};
 use std::ops::Range;
 
@@ -20,23 +20,27 @@ pub struct UncertainTriangle {
     pub light: u32,
 }
 
-/// The `(edge, OV slot, light)` triples of `pairs`, three per pair, from
-/// [`TriangleLayout::edge_slots`](shadowvol_silhouette::gpu::TriangleLayout::edge_slots).
+/// The `(edge, OV slot, light)` triples of `pairs`, three per pair: `edge_slots(t)` gives
+/// triangle `t`'s pairs (as
+/// [`TriangleLayout::edge_slots`](shadowvol_silhouette::gpu::TriangleLayout::edge_slots) or
+/// [`SceneIndex::edge_slots`](shadowvol_silhouette::gpu::SceneIndex::edge_slots)), `None` past the
+/// last of the scene's `triangles` triangles.
 ///
 /// # Errors
 /// [`BackendError::Device`] for a pair out of range (a malformed device output).
 pub(crate) fn expand_uncertain(
     pairs: &[UncertainTriangle],
-    edge_slots: &[[(u32, u32); 3]],
+    edge_slots: impl Fn(usize) -> Option<[(u32, u32); 3]>,
+    triangles: usize,
     light_count: usize,
 ) -> Result<Vec<UncertainRecord>, BackendError> {
     let mut out = Vec::with_capacity(3 * pairs.len());
     for p in pairs {
-        let Some(slots) = edge_slots.get(p.triangle as usize) else {
-            return Err(malformed(p, edge_slots.len(), light_count));
+        let Some(slots) = edge_slots(p.triangle as usize) else {
+            return Err(malformed(p, triangles, light_count));
         };
         if p.light as usize >= light_count {
-            return Err(malformed(p, edge_slots.len(), light_count));
+            return Err(malformed(p, triangles, light_count));
         }
         out.extend(slots.iter().map(|&(edge, ov_slot)| UncertainRecord {
             edge,
@@ -83,15 +87,15 @@ pub(crate) struct Patch {
 ///
 /// # Errors
 /// [`BackendError::Device`] for an uncertain record out of range.
-pub(crate) fn finish_batch(
-    layout: &SceneLayout,
+pub(crate) fn finish_batch<H: HostScene>(
+    scene: &H,
     object_lights: &[Vec<[f32; 4]>],
     batch: Range<usize>,
     output: BatchOutput,
     out: &mut Multiplicities,
 ) -> Result<Patch, BackendError> {
     let first = batch.start;
-    let edge_count = layout.edge_count();
+    let edge_count = scene.edge_count();
     let BatchOutput {
         mult,
         mut lists,
@@ -111,7 +115,7 @@ pub(crate) fn finish_batch(
     let mut patch = Patch::default();
     if !uncertain.is_empty() {
         uncertain.sort_unstable_by_key(|r| (r.light, r.edge, r.ov_slot));
-        resolve_uncertain(layout, object_lights, batch, &uncertain, out, crate::NAME)?;
+        resolve_uncertain(scene, object_lights, batch, &uncertain, out, crate::NAME)?;
         let mut touched: Vec<(u32, u32)> = uncertain.iter().map(|r| (r.light, r.edge)).collect();
         touched.dedup();
         for &(li, e) in &touched {
@@ -185,12 +189,14 @@ mod tests {
     #[test]
     fn out_of_range_pairs_are_errors_not_panics() {
         let slots = [[(0, 0), (1, 2), (2, 4)]];
+        let of = |t: usize| slots.get(t).copied();
         let ok = expand_uncertain(
             &[UncertainTriangle {
                 triangle: 0,
                 light: 1,
             }],
-            &slots,
+            of,
+            1,
             2,
         )
         .unwrap();
@@ -208,7 +214,7 @@ mod tests {
                 light: 2,
             },
         ] {
-            let e = expand_uncertain(&[bad], &slots, 2).unwrap_err().to_string();
+            let e = expand_uncertain(&[bad], of, 1, 2).unwrap_err().to_string();
             assert!(e.contains("out of range"), "{e}");
         }
     }

@@ -328,7 +328,9 @@ pub fn extract(
     let records = if k.uncertain.is_empty() {
         Vec::new()
     } else {
-        expand_uncertain(&k.uncertain, &triangles.edge_slots(layout), lights.len())?
+        let slots = triangles.edge_slots(layout);
+        let of = |t: usize| slots.get(t).copied();
+        expand_uncertain(&k.uncertain, of, slots.len(), lights.len())?
     };
     let uncertain = records.len() as u64;
     let _patch = finish_batch(

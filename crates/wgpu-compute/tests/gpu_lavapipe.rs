@@ -446,7 +446,7 @@ fn gpu_buffer_limits_chunk_lights_or_split_the_scene() -> Outcome {
     .unwrap();
     let id = small.prepare(&case.scene).unwrap();
     assert!(
-        small.layout(id).is_none(),
+        small.index(id).is_none(),
         "prepared in parts, not as one layout"
     );
     for mode in Accuracy::ALL {
@@ -496,7 +496,7 @@ fn gpu_scenes_in_parts_equal_whole_scenes_on_the_corpus() -> Outcome {
         })
         .unwrap();
         let id = parts.prepare(&case.scene).unwrap();
-        split_somewhere |= parts.layout(id).is_none();
+        split_somewhere |= parts.index(id).is_none();
         for mode in Accuracy::ALL {
             let mut got = Multiplicities::default();
             parts

@@ -9,7 +9,8 @@
 //!   precision of the certified filter their exact mode runs;
 //! * [`UncertainRecord`]: the `(edge, OV slot, light)` triple a kernel appends when its exact-mode
 //!   filter cannot certify a sign, and [`resolve_uncertain`], the host's exact decision of those
-//!   records;
+//!   records, over a [`HostScene`]: the layout itself, or a [`SceneIndex`] that reads the edge
+//!   tables (so a backend need not keep its layouts once they are uploaded);
 //! * [`wait_limit`]: the bound on every wait for a device;
 //! * [`lights_per_batch`] and [`batches`]: how the lights of one `extract` are split into batches
 //!   (a dispatch, a kernel launch, a geometry-shader pass) when they do not fit one;
@@ -22,6 +23,7 @@
 //! dependency edge and a README for the same ~400 lines.
 
 mod batches;
+mod host;
 mod layout;
 mod resolve;
 mod triangles;
@@ -29,6 +31,7 @@ pub mod twin;
 mod wait;
 
 pub use batches::{batches, lights_per_batch};
+pub use host::{HostScene, SceneIndex};
 pub use layout::SceneLayout;
 pub use resolve::{check_batch, resolve_uncertain, UncertainRecord};
 pub use triangles::{TriangleLayout, NEGATIVE};

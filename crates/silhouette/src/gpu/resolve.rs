@@ -1,6 +1,6 @@
 //! The uncertain-record format of the GPU kernels and the host's exact decision of the records.
 
-use super::SceneLayout;
+use super::HostScene;
 use crate::{BackendError, Multiplicities};
 use shadowvol_robust_math::orient_exact;
 use std::ops::Range;
@@ -12,9 +12,10 @@ use std::ops::Range;
 /// (16 bytes, the stride of a `vec4<u32>`/`uvec4` array element).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct UncertainRecord {
-    /// Global edge index (into [`SceneLayout::edges`]).
+    /// Global edge index (into [`SceneLayout::edges`](super::SceneLayout::edges)).
     pub edge: u32,
-    /// Global OV slot (index into [`SceneLayout::ovs`]), one of the edge's slots.
+    /// Global OV slot (index into [`SceneLayout::ovs`](super::SceneLayout::ovs)), one of the
+    /// edge's slots.
     pub ov_slot: u32,
     /// Light index within the batch the kernel ran (0-based).
     pub light: u32,
@@ -74,7 +75,8 @@ pub fn check_batch(
 
 /// Decides every record of `records` exactly and adds its sign to `out`: record `r` of a batch
 /// over the lights `batch` adds `orient_exact(A, B, L, O)` to edge `r.edge` of light
-/// `batch.start + r.light`, with the positions of `layout` and the object-space light
+/// `batch.start + r.light`, with the positions `scene` gives (a [`SceneLayout`] in host memory,
+/// or a [`SceneIndex`] over the edge tables) and the object-space light
 /// `object_lights[object of the edge][batch.start + r.light]`, the very `f32` inputs the kernel
 /// filtered. Compact silhouette lists are left to the caller.
 ///
@@ -84,19 +86,22 @@ pub fn check_batch(
 ///   driver fault, reported instead of a panic.
 /// * [`BackendError::InvalidInput`] when `out` does not have the layout's edges and
 ///   `batch.end` lights, or an object of `object_lights` has fewer than `batch.end` lights.
-pub fn resolve_uncertain(
-    layout: &SceneLayout,
+///
+/// [`SceneLayout`]: super::SceneLayout
+/// [`SceneIndex`]: super::SceneIndex
+pub fn resolve_uncertain<H: HostScene + ?Sized>(
+    scene: &H,
     object_lights: &[Vec<[f32; 4]>],
     batch: Range<usize>,
     records: &[UncertainRecord],
     out: &mut Multiplicities,
     backend: &'static str,
 ) -> Result<(), BackendError> {
-    let edges = layout.edge_count();
+    let edges = scene.edge_count();
     check_batch(edges, object_lights, &batch, out)?;
     for r in records {
         let (e, k, li) = (r.edge as usize, r.ov_slot as usize, r.light as usize);
-        if e >= edges || li >= batch.len() || !layout.ov_slots(e).contains(&k) {
+        if e >= edges || li >= batch.len() || !scene.ov_slots(e).contains(&k) {
             return Err(BackendError::Device {
                 backend,
                 message: format!(
@@ -106,14 +111,9 @@ pub fn resolve_uncertain(
                 ),
             });
         }
-        let (a, b, object) = layout.edge(e);
+        let (a, b, object) = scene.edge_points(e);
         let light = batch.start + li;
-        let s = orient_exact(
-            layout.position(a),
-            layout.position(b),
-            object_lights[object as usize][light],
-            layout.position(layout.ovs[k]),
-        );
+        let s = orient_exact(a, b, object_lights[object][light], scene.ov_point(e, k));
         out.values_mut(light)[e] += i32::from(s);
     }
     Ok(())
@@ -122,6 +122,7 @@ pub fn resolve_uncertain(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gpu::{SceneIndex, SceneLayout};
     use crate::{object_lights, TopologyScene};
     use shadowvol_mesh_topology::EdgeTable;
     use shadowvol_robust_math::{ov_sign, Accuracy, Light};
@@ -152,6 +153,11 @@ mod tests {
             .collect();
         let mut out = Multiplicities::zeroed(layout.edge_count(), 2);
         resolve_uncertain(&layout, &ol, 1..2, &records, &mut out, "t").unwrap();
+        // The same from the edge tables.
+        let mut from_tables = Multiplicities::zeroed(layout.edge_count(), 2);
+        let index = SceneIndex::new(&scene);
+        resolve_uncertain(&index, &ol, 1..2, &records, &mut from_tables, "t").unwrap();
+        assert_eq!(from_tables.values(1), out.values(1));
         let t = &scene.objects[0].table;
         for (e, &[a, b]) in t.edges.iter().enumerate() {
             let want: i32 = t
