@@ -1,6 +1,7 @@
 //! [`OpenClBackend`]: the backend type, its accessors, its release on drop, and the
-//! [`SilhouetteBackend`] implementation (`prepare` uploads the scene, `extract` runs the light
-//! batches of [`crate::dispatch`]).
+//! [`SilhouetteBackend`] implementation (`prepare` uploads the scene, whole or in parts when its
+//! buffers exceed the device's largest allocation; `extract` runs the light batches of
+//! [`crate::dispatch`] on each).
 
 use crate::device::DeviceDesc;
 use crate::dispatch::{Batch, Extraction, Pending};
@@ -15,7 +16,7 @@ use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::gpu::{self, ExactFilter, SceneLayout};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
-    PreparedBytes, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
+    PreparedBytes, PreparedId, PreparedScenes, SceneParts, SilhouetteBackend, TopologyScene,
 };
 use std::mem::ManuallyDrop;
 use std::num::NonZeroUsize;
@@ -28,6 +29,10 @@ use std::time::Instant;
 /// edge and light, the light buffer 16 bytes per object and light) and the kernel's 32-bit
 /// indices, and at most [`OpenClOptions::max_lights_per_batch`](crate::OpenClOptions::max_lights_per_batch). Usually that is all of them;
 /// the result is the same however they are split.
+///
+/// A scene whose buffers exceed that allocation (the edge records take 16 bytes an edge) is
+/// prepared in parts ([`SceneParts`]: objects grouped, big objects cut into triangle ranges),
+/// each extracted on its own and added up: the same bits as the whole scene.
 pub struct OpenClBackend {
     pub(crate) device: DeviceDesc,
     /// The exact filter the kernel was built with.
@@ -47,7 +52,10 @@ pub struct OpenClBackend {
     pub(crate) program: ManuallyDrop<Program>,
     pub(crate) queue: ManuallyDrop<CommandQueue>,
     pub(crate) context: ManuallyDrop<Context>,
+    /// The uploaded scenes and parts of scenes, by their own ids.
     pub(crate) scenes: ManuallyDrop<PreparedScenes<Prepared>>,
+    /// What the caller's ids name: one of `scenes`, or the parts of a split scene.
+    pub(crate) entries: PreparedScenes<Entry>,
     /// Work abandoned by a wait that gave up; the next `extract` waits for it first.
     pub(crate) pending: Option<Pending>,
 }
@@ -110,6 +118,16 @@ impl OpenClBackend {
         self.last_batches
     }
 
+    /// Into how many parts scene `id` was cut (1: uploaded whole); for tests of the splitting.
+    #[doc(hidden)]
+    #[must_use]
+    pub fn parts_of_for_tests(&self, id: PreparedId) -> Option<usize> {
+        Some(match self.entries.get(id).ok()? {
+            Entry::Whole(_) => 1,
+            Entry::Split { ids, .. } => ids.len(),
+        })
+    }
+
     /// Pretends the device's largest allocation is `bytes` from now on (checks and batch sizes
     /// only; nothing is allocated differently), so that tests can reach the device limits.
     #[doc(hidden)]
@@ -118,35 +136,33 @@ impl OpenClBackend {
     }
 }
 
-impl SilhouetteBackend for OpenClBackend {
-    fn info(&self) -> BackendInfo {
-        BackendInfo {
-            name: NAME,
-            device: self.device.describe(),
-            modes: Accuracy::ALL.to_vec(),
-            max_lights: None,
-            details: vec![
-                ("platform".to_owned(), self.device.platform_name.clone()),
-                (
-                    "platform_version".to_owned(),
-                    self.device.platform_version.clone(),
-                ),
-                ("device_type".to_owned(), self.device.device_type.to_owned()),
-                ("driver".to_owned(), self.device.driver_version.clone()),
-                (
-                    "exact_filter".to_owned(),
-                    match self.filter {
-                        ExactFilter::F64 => "f64 (cl_khr_fp64)",
-                        ExactFilter::F32 => "f32",
-                    }
-                    .to_owned(),
-                ),
-                ("kernel".to_owned(), self.kernel_origin.clone()),
-            ],
-        }
+/// A prepared scene as the caller names it.
+pub(crate) enum Entry {
+    /// Uploaded whole: its id in [`OpenClBackend::scenes`].
+    Whole(PreparedId),
+    /// Uploaded in parts: the cut, and each part's id in [`OpenClBackend::scenes`].
+    Split {
+        parts: SceneParts,
+        ids: Vec<PreparedId>,
+    },
+}
+
+impl OpenClBackend {
+    /// Triangles per part when `scene`'s largest buffer (positions 12 bytes a vertex, edge
+    /// records 16 an edge and one more, OVs 4 each) exceeds the device's largest allocation;
+    /// `None` when it fits whole. A part's edge records take at most 48 bytes a triangle.
+    fn part_triangles(&self, scene: &TopologyScene) -> Option<usize> {
+        let (v, e, ov) = (
+            scene.total_vertices() as u64,
+            scene.total_edges() as u64,
+            scene.total_ovs() as u64,
+        );
+        let largest = [12 * v, 16 * (e + 1), 4 * ov].into_iter().max()?;
+        (largest > self.max_alloc).then(|| (self.max_alloc.saturating_sub(64) / 48).max(1) as usize)
     }
 
-    fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
+    /// Lays out and uploads `scene` whole; returns its id in [`OpenClBackend::scenes`].
+    fn prepare_whole(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
         let layout = SceneLayout::build(scene, NAME)?;
         let edge_words = layout.edges.as_flattened();
         let hint = "; split the scene";
@@ -169,7 +185,9 @@ impl SilhouetteBackend for OpenClBackend {
         Ok(self.scenes.insert(prepared))
     }
 
-    fn extract(
+    /// [`SilhouetteBackend::extract`] on the uploaded scene or part `id` of
+    /// [`OpenClBackend::scenes`], adding its light batches to `last_batches`.
+    fn extract_whole(
         &mut self,
         id: PreparedId,
         lights: &[Light],
@@ -177,10 +195,7 @@ impl SilhouetteBackend for OpenClBackend {
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
         let limit = gpu::wait_limit()?;
-        self.scenes.get(id)?;
-        check_lights(lights)?;
         self.settle(limit)?;
-        self.last_batches = 0;
         let p = self.scenes.get(id)?;
         let num_lights = lights.len();
         let edges = p.layout.edge_count();
@@ -218,12 +233,131 @@ impl SilhouetteBackend for OpenClBackend {
         }
         Ok(stats)
     }
+}
+
+impl SilhouetteBackend for OpenClBackend {
+    fn info(&self) -> BackendInfo {
+        BackendInfo {
+            name: NAME,
+            device: self.device.describe(),
+            modes: Accuracy::ALL.to_vec(),
+            max_lights: None,
+            details: vec![
+                ("platform".to_owned(), self.device.platform_name.clone()),
+                (
+                    "platform_version".to_owned(),
+                    self.device.platform_version.clone(),
+                ),
+                ("device_type".to_owned(), self.device.device_type.to_owned()),
+                ("driver".to_owned(), self.device.driver_version.clone()),
+                (
+                    "exact_filter".to_owned(),
+                    match self.filter {
+                        ExactFilter::F64 => "f64 (cl_khr_fp64)",
+                        ExactFilter::F32 => "f32",
+                    }
+                    .to_owned(),
+                ),
+                ("kernel".to_owned(), self.kernel_origin.clone()),
+            ],
+        }
+    }
+
+    fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
+        let entry = match self.part_triangles(scene) {
+            None => Entry::Whole(self.prepare_whole(scene)?),
+            Some(max) => {
+                let mut parts = SceneParts::split(scene, max).map_err(|e| {
+                    BackendError::InvalidInput(format!("cutting the scene into parts: {e}"))
+                })?;
+                let mut ids = Vec::new();
+                for part in parts.take_parts() {
+                    match self.prepare_whole(&part) {
+                        Ok(id) => ids.push(id),
+                        Err(e) => {
+                            for id in ids {
+                                self.scenes.remove(id);
+                            }
+                            return Err(e);
+                        }
+                    }
+                }
+                Entry::Split { parts, ids }
+            }
+        };
+        Ok(self.entries.insert(entry))
+    }
+
+    fn extract(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        self.entries.get(id)?;
+        check_lights(lights)?;
+        self.last_batches = 0;
+        let entry = self.entries.take(id)?;
+        let result = match &entry {
+            Entry::Whole(inner) => self.extract_whole(*inner, lights, mode, out),
+            Entry::Split { parts, ids } => {
+                out.reset(parts.scene_edges, lights.len());
+                let (mut part, mut stats) = (Multiplicities::default(), ExtractStats::default());
+                let mut result = Ok(());
+                for (k, &inner) in ids.iter().enumerate() {
+                    match self.extract_whole(inner, lights, mode, &mut part) {
+                        Ok(s) => {
+                            stats.upload += s.upload;
+                            stats.compute += s.compute;
+                            stats.readback += s.readback;
+                            stats.host_resolve += s.host_resolve;
+                            stats.uncertain += s.uncertain;
+                            parts.add_part(k, &part, out);
+                        }
+                        Err(e) => {
+                            result = Err(e);
+                            break;
+                        }
+                    }
+                }
+                out.rebuild_silhouettes();
+                result.map(|()| stats)
+            }
+        };
+        self.entries.restore(id, entry);
+        result
+    }
 
     fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
-        Ok(self.scenes.get(id)?.bytes())
+        Ok(match self.entries.get(id)? {
+            Entry::Whole(inner) => self.scenes.get(*inner)?.bytes(),
+            Entry::Split { parts, ids } => {
+                let mut b = PreparedBytes {
+                    host: parts.own_bytes(),
+                    device: 0,
+                };
+                for &inner in ids {
+                    let pb = self.scenes.get(inner)?.bytes();
+                    b.host += pb.host;
+                    b.device += pb.device;
+                }
+                b
+            }
+        })
     }
 
     fn release(&mut self, id: PreparedId) {
-        self.scenes.remove(id);
+        match self.entries.remove(id) {
+            Some(Entry::Whole(inner)) => {
+                self.scenes.remove(inner);
+            }
+            Some(Entry::Split { ids, .. }) => {
+                for inner in ids {
+                    self.scenes.remove(inner);
+                }
+            }
+            None => {}
+        }
     }
 }

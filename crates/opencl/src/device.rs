@@ -370,6 +370,7 @@ impl OpenClBackend {
             queue: ManuallyDrop::new(queue),
             context: ManuallyDrop::new(context),
             scenes: ManuallyDrop::new(PreparedScenes::new(NAME)),
+            entries: PreparedScenes::new(NAME),
             pending: None,
         };
         backend.warm_up()?;

@@ -3,6 +3,8 @@
 //! limit, gives the same result as one launch: `exact` bit-identical to the `cpu` backend, 0 open
 //! vertices in `robust` and `ordered`, the uncertain count equal to one launch's, and the
 //! statistics summed over the launches. Only a light that does not fit alone is a `Limit` error.
+//! A scene whose buffers exceed the (pretended) allocation limit is prepared in parts, with the
+//! same results as the whole scene.
 //!
 //! Without an OpenCL platform each test is ignored with the reason, except under `CI=true`,
 //! where a missing platform fails it (`shadowvol_test_support::skip`).
@@ -28,6 +30,7 @@ main!(
     uncertain_records_resolve_into_their_own_light_across_batches,
     allocation_limit_splits_lights_and_refuses_only_a_light_that_does_not_fit,
     too_many_uncertain_records_split_the_batch_further,
+    scene_beyond_the_largest_allocation_is_prepared_in_parts,
 );
 
 /// Bytes of one uncertain record in the device buffer.
@@ -349,5 +352,49 @@ fn too_many_uncertain_records_split_the_batch_further() -> Outcome {
     let (want, _) = extract_once(&mut cpu, &scene, &lights, Accuracy::Exact).unwrap();
     assert_eq!(invariant::first_difference(&again, &want), None);
     cl.release(id);
+    Ok(())
+}
+
+/// With the allocation limit pretended to be a third of a scene's edge records when it is
+/// prepared, the scene is cut into parts; every mode gives the bits of the whole scene on the
+/// same device (and, exact, of `cpu`), silhouettes included.
+fn scene_beyond_the_largest_allocation_is_prepared_in_parts() -> Outcome {
+    let mut whole = start(OpenClOptions::from_env())?;
+    let mut cut = start(OpenClOptions::from_env())?;
+    let mut cpu = CpuBackend::new();
+    let mut most_parts = 0;
+    for case in corpus::cases() {
+        let scene = case.scene().unwrap();
+        let cap = ((scene.total_edges() as u64 + 1) * 16 / 3).max(64);
+        cut.set_max_alloc_for_tests(cap);
+        let id = cut.prepare(&scene).unwrap();
+        // Extraction with the real limit: only the preparation is under test here.
+        cut.set_max_alloc_for_tests(u64::MAX);
+        let parts = cut.parts_of_for_tests(id).unwrap();
+        most_parts = most_parts.max(parts);
+        for mode in Accuracy::ALL {
+            let what = format!("{} {mode}, {parts} parts", case.name);
+            let mut got = Multiplicities::default();
+            cut.extract(id, &case.lights, mode, &mut got)
+                .unwrap_or_else(|e| panic!("{what}: {e}"));
+            let (want, _) = extract_once(&mut whole, &scene, &case.lights, mode).unwrap();
+            assert_eq!(invariant::first_difference(&got, &want), None, "{what}");
+            for l in 0..case.lights.len() {
+                assert_eq!(got.silhouette(l), want.silhouette(l), "{what}: light {l}");
+            }
+            if mode == Accuracy::Exact {
+                let (exact, _) = extract_once(&mut cpu, &scene, &case.lights, mode).unwrap();
+                assert_eq!(
+                    invariant::first_difference(&got, &exact),
+                    None,
+                    "{what}: cpu"
+                );
+            }
+        }
+        assert!(cut.prepared_bytes(id).is_ok());
+        cut.release(id);
+        assert!(cut.parts_of_for_tests(id).is_none());
+    }
+    assert!(most_parts >= 3, "no case was cut into 3 parts or more");
     Ok(())
 }
