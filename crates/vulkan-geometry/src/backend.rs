@@ -1,6 +1,7 @@
 //! [`VulkanBackend`]: the backend type, its accessors, deferred clean-up after a timeout, its
 //! release on drop, and the [`SilhouetteBackend`] implementation over the geometry shader
-//! (`prepare` creates the scene's buffers, `extract` runs [`crate::dispatch`]).
+//! (`prepare` creates the scene's buffers, whole or in parts when one would exceed
+//! `maxStorageBufferRange`; `extract` runs [`crate::dispatch`] on each).
 
 use crate::device::{device_err, Buffer, Context, VulkanOptions};
 use crate::layout::{BufferGuard, Prepared, INITIAL_UNCERTAIN, UNCERTAIN_HEADER};
@@ -11,7 +12,7 @@ use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
-    PreparedBytes, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
+    PreparedBytes, PreparedId, PreparedScenes, SceneParts, SilhouetteBackend, TopologyScene,
 };
 use std::num::NonZeroUsize;
 use std::time::Instant;
@@ -30,7 +31,10 @@ type Cleanup = Box<dyn FnOnce(&Context)>;
 ///
 /// When the result buffer (`edges x lights` multiplicities) or the light buffer would exceed
 /// `maxStorageBufferRange` (or [`VulkanOptions::max_lights_per_batch`] is set), the lights are split
-/// into batches, one pass each; the result is the same as one pass would give.
+/// into batches, one pass each; the result is the same as one pass would give. A scene whose
+/// static buffers (edge records: 16 bytes an edge) would exceed `maxStorageBufferRange` is
+/// prepared in parts ([`SceneParts`]), each extracted on its own and added up: the same bits as
+/// the whole scene.
 ///
 /// Every wait for the device is bounded by [`shadowvol_silhouette::gpu::wait_limit`]
 /// (`SHADOWVOL_GPU_TIMEOUT`). After a timeout the late work is still pending: the backend then
@@ -38,7 +42,13 @@ type Cleanup = Box<dyn FnOnce(&Context)>;
 /// call waits for it up to the limit again and recovers when it has finished), and dropping the
 /// backend leaks the device instead of destroying it under running work.
 pub struct VulkanBackend {
+    /// The scenes and parts of scenes with their device buffers, by their own ids.
     pub(crate) prepared: PreparedScenes<Prepared>,
+    /// What the caller's ids name: one of `prepared`, or the parts of a split scene.
+    entries: PreparedScenes<Entry>,
+    /// The largest static buffer a scene may have before it is prepared in parts:
+    /// `maxStorageBufferRange` (lowered by tests).
+    part_limit: u64,
     pub(crate) pipes: Pipelines,
     /// Cleanups of objects that a timed-out submission may still use; run once it has finished.
     pub(crate) retired: Vec<Cleanup>,
@@ -71,6 +81,8 @@ impl VulkanBackend {
         let pipes = Pipelines::new(&ctx)?;
         Ok(Self {
             prepared: PreparedScenes::new(NAME),
+            entries: PreparedScenes::new(NAME),
+            part_limit: ctx.caps.max_storage_buffer_range,
             pipes,
             retired: Vec::new(),
             max_lights_per_batch: options.max_lights_per_batch,
@@ -158,6 +170,62 @@ impl VulkanBackend {
         self.prepared.get(id)
     }
 
+    /// Pretends that static buffers above `bytes` exceed `maxStorageBufferRange` in the scenes
+    /// prepared from now on (only the decision to cut a scene into parts changes), so that tests
+    /// can reach it.
+    #[doc(hidden)]
+    pub fn set_part_limit_for_tests(&mut self, bytes: u64) {
+        self.part_limit = bytes;
+    }
+
+    /// Into how many parts scene `id` was cut (1: prepared whole); for tests of the splitting.
+    #[doc(hidden)]
+    #[must_use]
+    pub fn parts_of_for_tests(&self, id: PreparedId) -> Option<usize> {
+        Some(match self.entries.get(id).ok()? {
+            Entry::Whole(_) => 1,
+            Entry::Split { ids, .. } => ids.len(),
+        })
+    }
+
+    /// Triangles per part when `scene`'s largest static buffer (positions 12 bytes a vertex,
+    /// edge records 16 an edge and one more, OVs 4 each) exceeds the part limit; `None` when it
+    /// fits whole. A part's edge records take at most 48 bytes a triangle.
+    fn part_triangles(&self, scene: &TopologyScene) -> Option<usize> {
+        let (v, e, ov) = (
+            scene.total_vertices() as u64,
+            scene.total_edges() as u64,
+            scene.total_ovs() as u64,
+        );
+        let largest = [12 * v, 16 * (e + 1), 4 * ov].into_iter().max()?;
+        (largest > self.part_limit)
+            .then(|| (self.part_limit.saturating_sub(64) / 48).max(1) as usize)
+    }
+
+    /// Releases the buffers of the scene or part `id` of `prepared`.
+    fn release_inner(&mut self, id: PreparedId) {
+        if let Some(p) = self.prepared.remove(id) {
+            // A timed-out submission may still read this scene's buffers: free them later.
+            self.retire(move |ctx| p.destroy(ctx));
+        }
+    }
+
+    /// [`SilhouetteBackend::extract`] on the scene or part `id` of `prepared`.
+    fn extract_whole(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+        stats: &mut ExtractStats,
+    ) -> Result<(), BackendError> {
+        let t = Instant::now();
+        let obj_lights = object_lights(self.scene(id)?.scene.transforms(), lights);
+        stats.upload += t.elapsed();
+        out.reset(self.scene(id)?.layout.edge_count(), lights.len());
+        self.extract_batches(id, &obj_lights, mode, out, stats)
+    }
+
     /// A descriptor pool with one set of the pipelines' layout; the pool is kept in `guard`
     /// until the caller takes it (so an error frees it), and returned with the set.
     fn allocate_set(
@@ -217,6 +285,109 @@ impl SilhouetteBackend for VulkanBackend {
     }
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
+        let entry = match self.part_triangles(scene) {
+            None => Entry::Whole(self.prepare_whole(scene)?),
+            Some(max) => {
+                let mut parts = SceneParts::split(scene, max).map_err(|e| {
+                    BackendError::InvalidInput(format!("cutting the scene into parts: {e}"))
+                })?;
+                let mut ids = Vec::new();
+                for part in parts.take_parts() {
+                    match self.prepare_whole(&part) {
+                        Ok(id) => ids.push(id),
+                        Err(e) => {
+                            for id in ids {
+                                self.release_inner(id);
+                            }
+                            return Err(e);
+                        }
+                    }
+                }
+                Entry::Split { parts, ids }
+            }
+        };
+        Ok(self.entries.insert(entry))
+    }
+
+    fn extract(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        check_lights(lights)?;
+        self.entries.get(id)?;
+        self.settle()?;
+        self.last_passes = 0;
+        let mut stats = ExtractStats::default();
+        let entry = self.entries.take(id)?;
+        let result = match &entry {
+            Entry::Whole(inner) => self.extract_whole(*inner, lights, mode, out, &mut stats),
+            Entry::Split { parts, ids } => {
+                out.reset(parts.scene_edges, lights.len());
+                let mut part = Multiplicities::default();
+                let mut result = Ok(());
+                for (k, &inner) in ids.iter().enumerate() {
+                    result = self.extract_whole(inner, lights, mode, &mut part, &mut stats);
+                    if result.is_err() {
+                        break;
+                    }
+                    parts.add_part(k, &part, out);
+                }
+                out.rebuild_silhouettes();
+                result
+            }
+        };
+        self.entries.restore(id, entry);
+        result.map(|()| stats)
+    }
+
+    fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
+        Ok(match self.entries.get(id)? {
+            Entry::Whole(inner) => self.prepared.get(*inner)?.bytes(),
+            Entry::Split { parts, ids } => {
+                let mut b = PreparedBytes {
+                    host: parts.own_bytes(),
+                    device: 0,
+                };
+                for &inner in ids {
+                    let pb = self.prepared.get(inner)?.bytes();
+                    b.host += pb.host;
+                    b.device += pb.device;
+                }
+                b
+            }
+        })
+    }
+
+    fn release(&mut self, id: PreparedId) {
+        match self.entries.remove(id) {
+            Some(Entry::Whole(inner)) => self.release_inner(inner),
+            Some(Entry::Split { ids, .. }) => {
+                for inner in ids {
+                    self.release_inner(inner);
+                }
+            }
+            None => {}
+        }
+    }
+}
+
+/// A prepared scene as the caller names it.
+enum Entry {
+    /// Prepared whole: its id in [`VulkanBackend::prepared`].
+    Whole(PreparedId),
+    /// Prepared in parts: the cut, and each part's id in [`VulkanBackend::prepared`].
+    Split {
+        parts: SceneParts,
+        ids: Vec<PreparedId>,
+    },
+}
+
+impl VulkanBackend {
+    /// Creates the buffers of `scene`, whole; returns its id in [`VulkanBackend::prepared`].
+    fn prepare_whole(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
         let layout = SceneLayout::build(scene, NAME)?;
         let ctx = &self.ctx;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
@@ -272,36 +443,6 @@ impl SilhouetteBackend for VulkanBackend {
         };
         p.write_set(ctx);
         Ok(self.prepared.insert(p))
-    }
-
-    fn extract(
-        &mut self,
-        id: PreparedId,
-        lights: &[Light],
-        mode: Accuracy,
-        out: &mut Multiplicities,
-    ) -> Result<ExtractStats, BackendError> {
-        check_lights(lights)?;
-        self.settle()?;
-        self.last_passes = 0;
-        let mut stats = ExtractStats::default();
-        let t = Instant::now();
-        let obj_lights = object_lights(self.scene(id)?.scene.transforms(), lights);
-        stats.upload = t.elapsed();
-        out.reset(self.scene(id)?.layout.edge_count(), lights.len());
-        self.extract_batches(id, &obj_lights, mode, out, &mut stats)?;
-        Ok(stats)
-    }
-
-    fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
-        Ok(self.prepared.get(id)?.bytes())
-    }
-
-    fn release(&mut self, id: PreparedId) {
-        if let Some(p) = self.prepared.remove(id) {
-            // A timed-out submission may still read this scene's buffers: free them later.
-            self.retire(move |ctx| p.destroy(ctx));
-        }
     }
 }
 

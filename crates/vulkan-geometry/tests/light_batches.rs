@@ -1,6 +1,8 @@
 //! Light splitting: `extract` with at most 1, 2 or 3 lights per geometry-shader pass gives the
 //! same result as one pass: `exact` bit-identical to the `cpu` backend, 0 open vertices in
-//! `robust` and `ordered`, and the statistics summed over the passes.
+//! `robust` and `ordered`, and the statistics summed over the passes. A scene whose static
+//! buffers exceed the (pretended) `maxStorageBufferRange` is prepared in parts, with the same
+//! results as the whole scene.
 
 mod common;
 
@@ -13,7 +15,8 @@ use std::num::NonZeroUsize;
 
 main!(
     corpus_split_into_light_batches_matches_one_pass_and_cpu,
-    uncertain_pairs_resolve_into_their_own_light_across_batches
+    uncertain_pairs_resolve_into_their_own_light_across_batches,
+    scene_beyond_the_storage_range_is_prepared_in_parts
 );
 
 fn corpus_split_into_light_batches_matches_one_pass_and_cpu() -> Outcome {
@@ -103,5 +106,46 @@ fn uncertain_pairs_resolve_into_their_own_light_across_batches() -> Outcome {
         uncertain_in_split > 0,
         "the corpus should need host resolution somewhere (degenerate lights)"
     );
+    Ok(())
+}
+
+/// With static buffers pretended to exceed `maxStorageBufferRange` above a third of a scene's
+/// edge records, the scene is cut into parts; every mode gives the bits of the whole scene on
+/// the same device (and, exact, of `cpu`), silhouettes included.
+fn scene_beyond_the_storage_range_is_prepared_in_parts() -> Outcome {
+    let mut whole = common::backend(VulkanOptions::from_env())?;
+    let mut cut = common::backend(VulkanOptions::from_env())?;
+    let mut cpu = CpuBackend::new();
+    let mut most_parts = 0;
+    for case in corpus::cases() {
+        let scene = case.scene().unwrap();
+        cut.set_part_limit_for_tests(((scene.total_edges() as u64 + 1) * 16 / 3).max(64));
+        let id = cut.prepare(&scene).unwrap();
+        let parts = cut.parts_of_for_tests(id).unwrap();
+        most_parts = most_parts.max(parts);
+        for mode in Accuracy::ALL {
+            let what = format!("{} {mode}, {parts} parts", case.name);
+            let mut got = Multiplicities::default();
+            cut.extract(id, &case.lights, mode, &mut got)
+                .unwrap_or_else(|e| panic!("{what}: {e}"));
+            let (want, _) = extract_once(&mut whole, &scene, &case.lights, mode).unwrap();
+            assert_eq!(invariant::first_difference(&got, &want), None, "{what}");
+            for l in 0..case.lights.len() {
+                assert_eq!(got.silhouette(l), want.silhouette(l), "{what}: light {l}");
+            }
+            if mode == Accuracy::Exact {
+                let (exact, _) = extract_once(&mut cpu, &scene, &case.lights, mode).unwrap();
+                assert_eq!(
+                    invariant::first_difference(&got, &exact),
+                    None,
+                    "{what}: cpu"
+                );
+            }
+        }
+        assert!(cut.prepared_bytes(id).is_ok());
+        cut.release(id);
+        assert!(cut.parts_of_for_tests(id).is_none());
+    }
+    assert!(most_parts >= 3, "no case was cut into 3 parts or more");
     Ok(())
 }
