@@ -270,19 +270,15 @@ impl SilhouetteBackend for OpenClBackend {
                 let mut parts = SceneParts::split(scene, max).map_err(|e| {
                     BackendError::InvalidInput(format!("cutting the scene into parts: {e}"))
                 })?;
-                let mut ids = Vec::new();
-                for part in parts.take_parts() {
-                    match self.prepare_whole(&part) {
-                        Ok(id) => ids.push(id),
-                        Err(e) => {
-                            for id in ids {
-                                self.scenes.remove(id);
-                            }
-                            return Err(e);
+                match parts.prepare_each(|part| self.prepare_whole(part)) {
+                    Ok(ids) => Entry::Split { parts, ids },
+                    Err((e, done)) => {
+                        for id in done {
+                            self.scenes.remove(id);
                         }
+                        return Err(e);
                     }
                 }
-                Entry::Split { parts, ids }
             }
         };
         Ok(self.entries.insert(entry))
@@ -301,29 +297,9 @@ impl SilhouetteBackend for OpenClBackend {
         let entry = self.entries.take(id)?;
         let result = match &entry {
             Entry::Whole(inner) => self.extract_whole(*inner, lights, mode, out),
-            Entry::Split { parts, ids } => {
-                out.reset(parts.scene_edges, lights.len());
-                let (mut part, mut stats) = (Multiplicities::default(), ExtractStats::default());
-                let mut result = Ok(());
-                for (k, &inner) in ids.iter().enumerate() {
-                    match self.extract_whole(inner, lights, mode, &mut part) {
-                        Ok(s) => {
-                            stats.upload += s.upload;
-                            stats.compute += s.compute;
-                            stats.readback += s.readback;
-                            stats.host_resolve += s.host_resolve;
-                            stats.uncertain += s.uncertain;
-                            parts.add_part(k, &part, out);
-                        }
-                        Err(e) => {
-                            result = Err(e);
-                            break;
-                        }
-                    }
-                }
-                out.rebuild_silhouettes();
-                result.map(|()| stats)
-            }
+            Entry::Split { parts, ids } => parts.extract_each(lights.len(), out, |k, part| {
+                self.extract_whole(ids[k], lights, mode, part)
+            }),
         };
         self.entries.restore(id, entry);
         result

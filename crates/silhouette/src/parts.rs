@@ -12,7 +12,7 @@
 //! vertices in ascending order of their ids in the object, so every `a < b` and every canonical
 //! (sorted) triangle keeps its order, and with it the sign convention.
 
-use crate::{Multiplicities, SceneObject, TopologyScene};
+use crate::{BackendError, ExtractStats, Multiplicities, SceneObject, TopologyScene};
 use shadowvol_mesh_topology::{EdgeTable, Mesh, MeshError};
 use std::sync::Arc;
 
@@ -165,6 +165,53 @@ impl SceneParts {
     pub fn take_parts(&mut self) -> Vec<TopologyScene> {
         self.built.iter_mut().for_each(|b| *b = false);
         std::mem::take(&mut self.parts)
+    }
+
+    /// Prepares each part, in order, with `prepare`, moving the parts out as
+    /// [`SceneParts::take_parts`] does (so each cut range's table is freed once prepared).
+    ///
+    /// # Errors
+    /// The first error of `prepare`, with what was prepared before it (for the caller to
+    /// release).
+    pub fn prepare_each<P>(
+        &mut self,
+        mut prepare: impl FnMut(&TopologyScene) -> Result<P, BackendError>,
+    ) -> Result<Vec<P>, (BackendError, Vec<P>)> {
+        let mut done = Vec::with_capacity(self.parts.len());
+        for part in self.take_parts() {
+            match prepare(&part) {
+                Ok(p) => done.push(p),
+                Err(e) => return Err((e, done)),
+            }
+        }
+        Ok(done)
+    }
+
+    /// The scene's multiplicities for `lights` lights in `out`: `extract(k, part_out)` fills
+    /// part `k`'s, which are added onto the scene's edges ([`SceneParts::add_part`]) in order,
+    /// then the silhouette lists are rebuilt. Returns the parts' statistics summed.
+    ///
+    /// # Errors
+    /// The first error of `extract` (`out` then holds the parts before it).
+    pub fn extract_each(
+        &self,
+        lights: usize,
+        out: &mut Multiplicities,
+        mut extract: impl FnMut(usize, &mut Multiplicities) -> Result<ExtractStats, BackendError>,
+    ) -> Result<ExtractStats, BackendError> {
+        out.reset(self.scene_edges, lights);
+        let (mut part, mut stats) = (Multiplicities::default(), ExtractStats::default());
+        for k in 0..self.edge_maps.len() {
+            let s = extract(k, &mut part)?;
+            stats.upload += s.upload;
+            stats.compute += s.compute;
+            stats.readback += s.readback;
+            stats.host_resolve += s.host_resolve;
+            stats.uncertain += s.uncertain;
+            self.add_part(k, &part, out);
+        }
+        out.rebuild_silhouettes();
+        Ok(stats)
     }
 
     /// Adds part `part`'s multiplicities `from` onto the scene's edges in `into`, which must be

@@ -291,19 +291,15 @@ impl SilhouetteBackend for VulkanBackend {
                 let mut parts = SceneParts::split(scene, max).map_err(|e| {
                     BackendError::InvalidInput(format!("cutting the scene into parts: {e}"))
                 })?;
-                let mut ids = Vec::new();
-                for part in parts.take_parts() {
-                    match self.prepare_whole(&part) {
-                        Ok(id) => ids.push(id),
-                        Err(e) => {
-                            for id in ids {
-                                self.release_inner(id);
-                            }
-                            return Err(e);
+                match parts.prepare_each(|part| self.prepare_whole(part)) {
+                    Ok(ids) => Entry::Split { parts, ids },
+                    Err((e, done)) => {
+                        for id in done {
+                            self.release_inner(id);
                         }
+                        return Err(e);
                     }
                 }
-                Entry::Split { parts, ids }
             }
         };
         Ok(self.entries.insert(entry))
@@ -320,27 +316,21 @@ impl SilhouetteBackend for VulkanBackend {
         self.entries.get(id)?;
         self.settle()?;
         self.last_passes = 0;
-        let mut stats = ExtractStats::default();
         let entry = self.entries.take(id)?;
         let result = match &entry {
-            Entry::Whole(inner) => self.extract_whole(*inner, lights, mode, out, &mut stats),
-            Entry::Split { parts, ids } => {
-                out.reset(parts.scene_edges, lights.len());
-                let mut part = Multiplicities::default();
-                let mut result = Ok(());
-                for (k, &inner) in ids.iter().enumerate() {
-                    result = self.extract_whole(inner, lights, mode, &mut part, &mut stats);
-                    if result.is_err() {
-                        break;
-                    }
-                    parts.add_part(k, &part, out);
-                }
-                out.rebuild_silhouettes();
-                result
+            Entry::Whole(inner) => {
+                let mut stats = ExtractStats::default();
+                self.extract_whole(*inner, lights, mode, out, &mut stats)
+                    .map(|()| stats)
             }
+            Entry::Split { parts, ids } => parts.extract_each(lights.len(), out, |k, part| {
+                let mut stats = ExtractStats::default();
+                self.extract_whole(ids[k], lights, mode, part, &mut stats)
+                    .map(|()| stats)
+            }),
         };
         self.entries.restore(id, entry);
-        result.map(|()| stats)
+        result
     }
 
     fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {

@@ -218,10 +218,8 @@ impl SilhouetteBackend for WgpuBackend {
                 })?;
                 // Each part's own table is dropped once its layouts are built and uploaded.
                 let prepared = parts
-                    .take_parts()
-                    .into_iter()
-                    .map(|p| self.prepare_whole(&p))
-                    .collect::<Result<_, _>>()?;
+                    .prepare_each(|p| self.prepare_whole(p))
+                    .map_err(|(e, _)| e)?;
                 Entry::Split { parts, prepared }
             }
         };
@@ -300,19 +298,9 @@ impl WgpuBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
-        out.reset(parts.scene_edges, lights.len());
-        let (mut part, mut stats) = (Multiplicities::default(), ExtractStats::default());
-        for (k, p) in prepared.iter_mut().enumerate() {
-            let s = self.extract_prepared(p, lights, mode, &mut part)?;
-            stats.upload += s.upload;
-            stats.compute += s.compute;
-            stats.readback += s.readback;
-            stats.host_resolve += s.host_resolve;
-            stats.uncertain += s.uncertain;
-            parts.add_part(k, &part, out);
-        }
-        out.rebuild_silhouettes();
-        Ok(stats)
+        parts.extract_each(lights.len(), out, |k, part| {
+            self.extract_prepared(&mut prepared[k], lights, mode, part)
+        })
     }
 
     /// Lays out and uploads `scene` whole. The host layouts are dropped once uploaded: the
