@@ -9,7 +9,7 @@ use crate::pipeline::{Pipelines, BINDINGS};
 use crate::NAME;
 use ash::vk;
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout};
+use shadowvol_silhouette::gpu::{ExactFilter, SceneIndex, SceneLayout};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
     PreparedBytes, PreparedId, PreparedScenes, SceneParts, SilhouetteBackend, TopologyScene,
@@ -222,7 +222,7 @@ impl VulkanBackend {
         let t = Instant::now();
         let obj_lights = object_lights(self.scene(id)?.scene.transforms(), lights);
         stats.upload += t.elapsed();
-        out.reset(self.scene(id)?.layout.edge_count(), lights.len());
+        out.reset(self.scene(id)?.index.edge_count(), lights.len());
         self.extract_batches(id, &obj_lights, mode, out, stats)
     }
 
@@ -376,7 +376,8 @@ enum Entry {
 }
 
 impl VulkanBackend {
-    /// Creates the buffers of `scene`, whole; returns its id in [`VulkanBackend::prepared`].
+    /// Creates the buffers of `scene`, whole, and drops its host layout; returns its id in
+    /// [`VulkanBackend::prepared`].
     fn prepare_whole(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
         let layout = SceneLayout::build(scene, NAME)?;
         let ctx = &self.ctx;
@@ -418,9 +419,11 @@ impl VulkanBackend {
                 vk::Result::ERROR_UNKNOWN,
             ));
         };
+        // The host's exact decisions read the tables through the index: the layout goes.
+        drop(layout);
         let p = Prepared {
             scene: scene.clone(),
-            layout,
+            index: SceneIndex::new(scene),
             positions,
             edges,
             ovs,

@@ -28,7 +28,7 @@ impl VulkanBackend {
         let max_range = self.ctx.caps.max_storage_buffer_range;
         let ctx = &self.ctx;
         let p = self.prepared.get_mut(id)?;
-        let edges = p.layout.edge_count();
+        let edges = p.index.edge_count();
         let light_count = lights.len();
         let slots = edges
             .checked_mul(light_count)
@@ -120,7 +120,7 @@ impl VulkanBackend {
     /// Records the extraction draw (rasteriser discard) into `cmd`.
     fn record_extract(&self, p: &Prepared, cmd: vk::CommandBuffer, push: &Push, lights: u32) {
         let d = &self.ctx.device;
-        let edges = p.layout.edge_count() as u32;
+        let edges = p.index.edge_count() as u32;
         // SAFETY: all handles are live; the command buffer is recording.
         unsafe {
             d.cmd_begin_render_pass(
@@ -192,7 +192,7 @@ impl VulkanBackend {
         self.upload_lights(id, obj_lights, batch.clone())?;
         stats.upload += t.elapsed();
 
-        let edges = self.scene(id)?.layout.edge_count();
+        let edges = self.scene(id)?.index.edge_count();
         let light_count = batch.len() as u32;
         let t = Instant::now();
         let mut count;
@@ -222,7 +222,7 @@ impl VulkanBackend {
 
         let t = Instant::now();
         stats.uncertain += u64::from(count);
-        finish_batch(&p.layout, obj_lights, batch, &records, out)?;
+        finish_batch(&p.index, obj_lights, batch, &records, out)?;
         stats.host_resolve += t.elapsed();
         Ok(())
     }

@@ -7,7 +7,7 @@ use crate::device::{Buffer, Context};
 use crate::pipeline::BINDINGS;
 use crate::NAME;
 use ash::vk;
-use shadowvol_silhouette::gpu::SceneLayout;
+use shadowvol_silhouette::gpu::SceneIndex;
 use shadowvol_silhouette::{BackendError, PreparedBytes, TopologyScene};
 
 /// Bytes of the uncertain buffer's header (the count and three pads).
@@ -18,9 +18,10 @@ pub(crate) const INITIAL_UNCERTAIN: u32 = 1024;
 /// One prepared scene: its device buffers and descriptor set.
 pub(crate) struct Prepared {
     pub(crate) scene: TopologyScene,
-    /// Positions, edge records `(a, b, first OV slot, object)` plus the sentinel, and opposite
-    /// vertices, with global vertex ids.
-    pub(crate) layout: SceneLayout,
+    /// The objects in the numbering of the uploaded layout (positions, edge records `(a, b,
+    /// first OV slot, object)` plus the sentinel, opposite vertices, with global vertex ids),
+    /// over the scene's edge tables: what the host's exact decisions read.
+    pub(crate) index: SceneIndex,
     pub(crate) positions: Buffer,
     pub(crate) edges: Buffer,
     pub(crate) ovs: Buffer,
@@ -33,10 +34,10 @@ pub(crate) struct Prepared {
 }
 
 impl Prepared {
-    /// What the scene holds beyond its edge tables: the host layout and the device buffers.
+    /// What the scene holds beyond its edge tables: the index and the device buffers.
     pub(crate) fn bytes(&self) -> PreparedBytes {
         PreparedBytes {
-            host: self.layout.heap_bytes(),
+            host: self.index.heap_bytes(),
             device: self.buffers().iter().map(|b| b.size).sum(),
         }
     }

@@ -4,7 +4,7 @@
 
 use crate::layout::{Prepared, UNCERTAIN_HEADER};
 use crate::NAME;
-use shadowvol_silhouette::gpu::{self, SceneLayout, UncertainRecord};
+use shadowvol_silhouette::gpu::{self, HostScene, UncertainRecord};
 use shadowvol_silhouette::{BackendError, Multiplicities};
 use std::ops::Range;
 
@@ -20,7 +20,7 @@ pub(crate) fn read_pass(
     count: u32,
     out: &mut Multiplicities,
 ) -> Vec<UncertainRecord> {
-    let edges = p.layout.edge_count();
+    let edges = p.index.edge_count();
     let rows = &mut out.all_values_mut()[batch.start * edges..batch.end * edges];
     p.mult.read(0, bytemuck::cast_slice_mut(rows));
     let mut words = vec![0u32; UncertainRecord::WORDS * count as usize];
@@ -38,8 +38,8 @@ pub(crate) fn read_pass(
 ///
 /// # Errors
 /// [`BackendError::Device`] for a record out of range (a malformed device output).
-pub(crate) fn finish_batch(
-    layout: &SceneLayout,
+pub(crate) fn finish_batch<H: HostScene>(
+    layout: &H,
     object_lights: &[Vec<[f32; 4]>],
     batch: Range<usize>,
     records: &[UncertainRecord],
