@@ -37,8 +37,9 @@ impl Scene {
                     _ => (crate::ply::load_ply(path)?, Vec::new()),
                 };
                 let name = file_name(path);
-                // The table names the file alone: the loader's own errors already did.
-                let scene = Self::single(name, &mesh).map_err(|e| match e {
+                // The table names the file alone: the loader's own errors already did. The
+                // mesh is freed as its table is built.
+                let scene = Self::single_owned(name, mesh).map_err(|e| match e {
                     SceneError::Mesh { source, .. } => SceneError::Mesh {
                         what: path.display().to_string(),
                         source,

@@ -85,15 +85,32 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Mesh, LoadError> {
 /// # Errors
 /// As [`load_obj`].
 pub fn load_obj_with_notes(path: impl AsRef<Path>) -> Result<(Mesh, Vec<String>), LoadError> {
+    use std::io::BufRead;
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+    let io = |source| LoadError::Io {
         path: path.to_path_buf(),
         source,
-    })?;
-    // Invalid UTF-8 becomes U+FFFD; if it sits in a `v` or `f` statement, the number that holds
-    // it is reported as malformed at its line, elsewhere (comments, names) it does no harm.
-    let text = String::from_utf8_lossy(&bytes);
-    parse_obj_with_notes(&text, &path.display().to_string())
+    };
+    // Read a line at a time: the file's text is never held whole beside the mesh it becomes.
+    let mut reader =
+        std::io::BufReader::with_capacity(1 << 16, std::fs::File::open(path).map_err(io)?);
+    let name = path.display().to_string();
+    let mut parser = Parser::new(&name);
+    let mut line = Vec::new();
+    for line_no in 1.. {
+        line.clear();
+        if reader.read_until(b'\n', &mut line).map_err(io)? == 0 {
+            break;
+        }
+        // As `str::lines`: the `\n`, and a `\r` before it, end the line.
+        let end = line.strip_suffix(b"\n").unwrap_or(&line);
+        let end = end.strip_suffix(b"\r").unwrap_or(end);
+        // Invalid UTF-8 becomes U+FFFD; if it sits in a `v` or `f` statement, the number that
+        // holds it is reported as malformed at its line, elsewhere (comments, names) it does no
+        // harm. (A `\n` byte is never part of a multi-byte character.)
+        parser.line(&String::from_utf8_lossy(end), line_no)?;
+    }
+    parser.finish()
 }
 
 /// Parses OBJ text. `source_name` is used in error messages (usually the file name).
@@ -153,6 +170,9 @@ struct Parser<'a> {
     corners: Vec<u32>,
     /// Per entry of [`SKIPPED_GEOMETRY`]: how many statements, and the first one's line.
     skipped: [(usize, usize); SKIPPED_GEOMETRY.len()],
+    /// A statement continued with a trailing backslash, so far, and its first line.
+    pending: String,
+    pending_line: usize,
 }
 
 impl<'a> Parser<'a> {
@@ -164,6 +184,8 @@ impl<'a> Parser<'a> {
             forward: Vec::new(),
             corners: Vec::new(),
             skipped: [(0, 0); SKIPPED_GEOMETRY.len()],
+            pending: String::new(),
+            pending_line: 0,
         }
     }
 
@@ -176,30 +198,38 @@ impl<'a> Parser<'a> {
     }
 
     fn run(mut self, text: &str) -> Result<(Mesh, Vec<String>), LoadError> {
-        let mut pending = String::new();
-        let mut pending_line = 0;
         for (i, raw) in text.lines().enumerate() {
-            let line_no = i + 1;
-            let raw = raw.strip_suffix('\r').unwrap_or(raw);
-            if let Some(head) = raw.strip_suffix('\\') {
-                if pending.is_empty() {
-                    pending_line = line_no;
-                }
-                pending.push_str(head);
-                pending.push(' ');
-                continue;
-            }
-            if pending.is_empty() {
-                self.statement(raw, line_no)?;
-            } else {
-                pending.push_str(raw);
-                let joined = std::mem::take(&mut pending);
-                self.statement(&joined, pending_line)?;
-            }
+            self.line(raw, i + 1)?;
         }
-        if !pending.is_empty() {
-            let joined = std::mem::take(&mut pending);
-            self.statement(&joined, pending_line)?;
+        self.finish()
+    }
+
+    /// Line `line_no` of the file (without its line break): a statement, or part of one
+    /// continued with a trailing backslash.
+    fn line(&mut self, raw: &str, line_no: usize) -> Result<(), LoadError> {
+        let raw = raw.strip_suffix('\r').unwrap_or(raw);
+        if let Some(head) = raw.strip_suffix('\\') {
+            if self.pending.is_empty() {
+                self.pending_line = line_no;
+            }
+            self.pending.push_str(head);
+            self.pending.push(' ');
+            return Ok(());
+        }
+        if self.pending.is_empty() {
+            self.statement(raw, line_no)
+        } else {
+            self.pending.push_str(raw);
+            let joined = std::mem::take(&mut self.pending);
+            self.statement(&joined, self.pending_line)
+        }
+    }
+
+    /// After the last line: the statement still continued, the forward references, the mesh.
+    fn finish(mut self) -> Result<(Mesh, Vec<String>), LoadError> {
+        if !self.pending.is_empty() {
+            let joined = std::mem::take(&mut self.pending);
+            self.statement(&joined, self.pending_line)?;
         }
         let n = self.positions.len() as u64;
         if let Some(f) = self.forward.iter().find(|f| f.index > n) {
@@ -529,6 +559,42 @@ mod tests {
             .iter()
             .map(|t| t.map(|i| positions[i as usize]))
             .collect()
+    }
+
+    /// The file loader reads a line at a time; it must see what the text parser sees: CRLF and
+    /// LF endings, a statement continued over lines, invalid UTF-8 in a comment, no line break
+    /// at the end, and an error on the right line.
+    #[test]
+    fn the_streaming_loader_reads_a_file_as_the_text_parser_reads_it() {
+        let dir = std::env::temp_dir().join(format!("shadowvol-obj-stream-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = |name: &str, bytes: &[u8]| {
+            let path = dir.join(name);
+            std::fs::write(&path, bytes).unwrap();
+            path
+        };
+        let good: &[u8] = b"# \xff\xfe not UTF-8\r\nv 0 0 0\r\nv 1 0 \\\n 0\nv 0 1 0\n\
+            v 0 0 1\r\r\nf 1 2 3\nf 1 3 4\nl 1 2\nf 1 4 2";
+        let path = file("good.obj", good);
+        let text = String::from_utf8_lossy(good);
+        let name = path.display().to_string();
+        let (want, want_notes) = parse_obj_with_notes(&text, &name).unwrap();
+        let (got, notes) = load_obj_with_notes(&path).unwrap();
+        assert_eq!(got.positions, want.positions);
+        assert_eq!(got.triangles, want.triangles);
+        assert_eq!(got.triangles.len(), 3);
+        assert_eq!(notes, want_notes);
+        // An error on line 4 after a continued line 2: the same message either way.
+        let bad: &[u8] = b"v 0 0 0\r\nv 1 0 \\\n0\nv 0 1 1.5.2\n";
+        let path = file("bad.obj", bad);
+        let name = path.display().to_string();
+        let want = parse_obj(&String::from_utf8_lossy(bad), &name)
+            .unwrap_err()
+            .to_string();
+        let got = load_obj(&path).unwrap_err().to_string();
+        assert_eq!(got, want);
+        assert!(got.contains(":4:"), "{got}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     /// Differential check on valid input against an independent parser (`tobj`, with fan

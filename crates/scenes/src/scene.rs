@@ -229,6 +229,18 @@ impl Scene {
         Ok(scene)
     }
 
+    /// [`Scene::single`], consuming `mesh`, which is freed while its table is built
+    /// ([`Scene::add_mesh_owned`]).
+    ///
+    /// # Errors
+    /// As [`Scene::single`].
+    pub fn single_owned(name: impl Into<String>, mesh: Mesh) -> Result<Self, SceneError> {
+        let mut scene = Self::new(name);
+        let table = scene.add_mesh_owned(&scene.name.clone(), mesh)?;
+        scene.add_object(scene.name.clone(), table, Affine3A::IDENTITY);
+        Ok(scene)
+    }
+
     /// Adds unit lights (no [`Emission`]).
     pub fn add_unit_lights(&mut self, lights: impl IntoIterator<Item = Light>) {
         self.lights.extend(lights.into_iter().map(SceneLight::unit));
