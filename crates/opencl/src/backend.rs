@@ -13,7 +13,7 @@ use opencl3::kernel::Kernel;
 use opencl3::memory::CL_MEM_READ_ONLY;
 use opencl3::program::Program;
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::gpu::{self, ExactFilter, SceneLayout};
+use shadowvol_silhouette::gpu::{self, ExactFilter, SceneIndex, SceneLayout};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
     PreparedBytes, PreparedId, PreparedScenes, SceneParts, SilhouetteBackend, TopologyScene,
@@ -161,7 +161,8 @@ impl OpenClBackend {
         (largest > self.max_alloc).then(|| (self.max_alloc.saturating_sub(64) / 48).max(1) as usize)
     }
 
-    /// Lays out and uploads `scene` whole; returns its id in [`OpenClBackend::scenes`].
+    /// Lays out and uploads `scene` whole, then drops the host layout; returns its id in
+    /// [`OpenClBackend::scenes`].
     fn prepare_whole(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
         let layout = SceneLayout::build(scene, NAME)?;
         let edge_words = layout.edges.as_flattened();
@@ -170,12 +171,17 @@ impl OpenClBackend {
         self.check_alloc("the edge buffer", edge_words.len() * 4, hint)?;
         self.check_alloc("the OV buffer", layout.ovs.len() * 4, hint)?;
         let ro = CL_MEM_READ_ONLY;
+        let at_least_one = |n: usize| (n.max(1) * 4) as u64;
+        let static_bytes = at_least_one(layout.positions.len())
+            + at_least_one(edge_words.len())
+            + at_least_one(layout.ovs.len());
         let prepared = Prepared {
             pos: upload(&self.context, ro, &layout.positions, "positions")?,
             edges: upload(&self.context, ro, edge_words, "edges")?,
             ovs: upload(&self.context, ro, &layout.ovs, "opposite vertices")?,
             scene: scene.clone(),
-            layout,
+            index: SceneIndex::new(scene),
+            static_bytes,
             lights: None,
             counts: None,
             sil: None,
@@ -198,13 +204,13 @@ impl OpenClBackend {
         self.settle(limit)?;
         let p = self.scenes.get(id)?;
         let num_lights = lights.len();
-        let edges = p.layout.edge_count();
+        let edges = p.index.edge_count();
         if edges == 0 {
             out.reset(0, num_lights);
             return Ok(ExtractStats::default());
         }
         let mut per_launch =
-            self.lights_per_batch(edges, p.layout.object_count(), p.layout.ovs.len())?;
+            self.lights_per_batch(edges, p.index.object_count(), p.index.slot_count())?;
         // Per-frame host preparation (object-space lights) counts as upload.
         let prep_start = Instant::now();
         let obj_lights = object_lights(p.scene.transforms(), lights);

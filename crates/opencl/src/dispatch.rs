@@ -315,7 +315,7 @@ impl OpenClBackend {
         };
         stats.uncertain += output.uncertain.len() as u64;
         let p = self.scenes.get(id)?;
-        finish_batch(&p.layout, obj_lights, batch, output, out, NAME)?;
+        finish_batch(&p.index, obj_lights, batch, output, out, NAME)?;
         stats.host_resolve += t.elapsed();
         Ok(Batch::Done)
     }
@@ -334,7 +334,7 @@ impl OpenClBackend {
         let max_records = self.max_uncertain_records();
         let ctx = &self.context;
         let p = self.scenes.get_mut(id)?;
-        let edges = p.layout.edge_count();
+        let edges = p.index.edge_count();
         ensure(ctx, &mut p.lights, light_floats, "the light buffer")?;
         ensure(ctx, &mut p.counts, 2, "the counters")?;
         ensure(
@@ -490,7 +490,7 @@ unsafe fn enqueue_kernel(
     num_lights: usize,
     mode: Accuracy,
 ) -> Result<Event, BackendError> {
-    let edges = p.layout.edge_count();
+    let edges = p.index.edge_count();
     let set = |i: u32, r: Result<(), ClError>| {
         r.map_err(|e| device_error(&format!("setting kernel argument {i}"), e))
     };

@@ -1,6 +1,7 @@
 //! What an extraction puts on the device: the device buffers of a prepared scene (the shared
-//! [`SceneLayout`] uploaded once, and the per-frame buffers grown on demand), the kernel's light
-//! buffer, and how many lights fit one launch within the device's largest allocation.
+//! [`SceneLayout`](shadowvol_silhouette::gpu::SceneLayout) uploaded once, and the per-frame
+//! buffers grown on demand), the kernel's light buffer, and how many lights fit one launch
+//! within the device's largest allocation.
 
 use crate::backend::OpenClBackend;
 use crate::device::device_error;
@@ -8,7 +9,7 @@ use crate::NAME;
 use opencl3::context::Context;
 use opencl3::memory::{Buffer, CL_MEM_COPY_HOST_PTR, CL_MEM_READ_WRITE};
 use opencl3::types::cl_mem_flags;
-use shadowvol_silhouette::gpu::{SceneLayout, UncertainRecord};
+use shadowvol_silhouette::gpu::{SceneIndex, UncertainRecord};
 use shadowvol_silhouette::{BackendError, PreparedBytes, TopologyScene};
 use std::ops::Range;
 use std::ptr;
@@ -38,7 +39,12 @@ pub fn flat_light_batch(
 /// Device buffers of one prepared scene.
 pub(crate) struct Prepared {
     pub(crate) scene: TopologyScene,
-    pub(crate) layout: SceneLayout,
+    /// The objects in the uploaded layout's numbering, over the scene's edge tables: what the
+    /// host's exact decisions read (the layout itself is dropped once uploaded).
+    pub(crate) index: SceneIndex,
+    /// Bytes of the three static buffers (positions, edge records, OVs; at least one element
+    /// each).
+    pub(crate) static_bytes: u64,
     pub(crate) pos: Buffer<f32>,
     pub(crate) edges: Buffer<u32>,
     pub(crate) ovs: Buffer<u32>,
@@ -51,24 +57,21 @@ pub(crate) struct Prepared {
 }
 
 impl Prepared {
-    /// What the scene holds beyond its edge tables: the host layout, and the device buffers
-    /// (the scene's, at least one element each, and the per-frame ones at their capacity).
+    /// What the scene holds beyond its edge tables: the index on the host, and the device
+    /// buffers (the scene's, at least one element each, and the per-frame ones at their
+    /// capacity).
     pub(crate) fn bytes(&self) -> PreparedBytes {
         fn cap<T>(b: &Option<(Buffer<T>, usize)>) -> u64 {
             b.as_ref()
                 .map_or(0, |(_, n)| (n * std::mem::size_of::<T>()) as u64)
         }
-        let at_least_one = |n: usize, size: usize| (n.max(1) * size) as u64;
-        let l = &self.layout;
-        let device = at_least_one(l.positions.len(), 4)
-            + at_least_one(l.edges.len() * 4, 4)
-            + at_least_one(l.ovs.len(), 4)
+        let device = self.static_bytes
             + cap(&self.lights)
             + cap(&self.counts)
             + cap(&self.sil)
             + cap(&self.unc);
         PreparedBytes {
-            host: l.heap_bytes(),
+            host: self.index.heap_bytes(),
             device,
         }
     }

@@ -4,7 +4,7 @@
 //! Both the device path and the [CPU twin](crate::twin) use exactly this code, so a difference
 //! between them can only come from the kernel itself.
 
-use shadowvol_silhouette::gpu::{check_batch, resolve_uncertain, SceneLayout, UncertainRecord};
+use shadowvol_silhouette::gpu::{check_batch, resolve_uncertain, HostScene, UncertainRecord};
 use shadowvol_silhouette::{BackendError, Multiplicities};
 use std::ops::Range;
 
@@ -28,8 +28,8 @@ pub struct KernelOutput {
 /// [`BackendError::Device`] when the kernel's output is malformed (an index, slot or light out
 /// of range, an edge listed twice, or fewer records than counted): a device or driver fault.
 /// [`BackendError::InvalidInput`] when `object_lights` has fewer than `lights` lights per object.
-pub fn finish(
-    layout: &SceneLayout,
+pub fn finish<H: HostScene + ?Sized>(
+    layout: &H,
     object_lights: &[Vec<[f32; 4]>],
     lights: usize,
     output: KernelOutput,
@@ -54,8 +54,8 @@ pub fn finish(
 /// of range, an edge listed twice, or fewer records than counted): a device or driver fault.
 /// [`BackendError::InvalidInput`] when `out` does not have the layout's edges and at least
 /// `batch.end` lights, or an object of `object_lights` has fewer than `batch.end` lights.
-pub fn finish_batch(
-    layout: &SceneLayout,
+pub fn finish_batch<H: HostScene + ?Sized>(
+    layout: &H,
     object_lights: &[Vec<[f32; 4]>],
     batch: Range<usize>,
     output: KernelOutput,

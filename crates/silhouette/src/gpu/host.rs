@@ -99,6 +99,13 @@ impl SceneIndex {
         self.edges.last().copied().unwrap_or(0)
     }
 
+    /// Number of OV slots (all objects): the length of
+    /// [`SceneLayout::ovs`](super::SceneLayout::ovs).
+    #[must_use]
+    pub fn slot_count(&self) -> usize {
+        self.slots.last().copied().unwrap_or(0)
+    }
+
     /// Number of objects.
     #[must_use]
     pub fn object_count(&self) -> usize {
@@ -211,6 +218,7 @@ mod tests {
         let index = SceneIndex::new(&scene);
         assert_eq!(HostScene::edge_count(&index), layout.edge_count());
         assert_eq!(index.object_count(), layout.object_count());
+        assert_eq!(index.slot_count(), layout.ovs.len());
         assert_eq!(index.tri_count(), tris.tri_count());
         for e in 0..layout.edge_count() {
             assert_eq!(index.ov_slots(e), layout.ov_slots(e), "edge {e}");
