@@ -45,7 +45,7 @@ fuzz_target!(|input: Input| {
     let s = table.stats;
     assert_eq!(s.triangles, mesh.triangles.len());
     assert_eq!(table.triangles.len() + s.degenerate_triangles, s.triangles);
-    assert_eq!(table.ovs.len(), 3 * table.triangles.len());
+    assert_eq!(table.ov_refs.len(), 3 * table.triangles.len());
     assert_eq!(s.boundary_edges + s.manifold_edges + s.nonmanifold_edges, s.edges);
     assert_eq!(table.ov_offsets.len(), table.edges.len() + 1);
     assert!(table.edges.windows(2).all(|w| w[0] < w[1]));
@@ -62,9 +62,17 @@ fuzz_target!(|input: Input| {
             assert_eq!(table.edges[te[i] as usize], [u.min(v), u.max(v)]);
         }
     }
+    // Each OV reference names a triangle with the edge, and the OV's rank in it.
     for (e, &[a, b]) in table.edges.iter().enumerate() {
-        for &o in table.ovs_of(e) {
+        for &r in table.ov_refs_of(e) {
+            let mut tri = table.triangles[EdgeTable::ov_triangle(r) as usize];
+            tri.sort_unstable();
+            let o = table.ov_vertex(r);
             assert!(o != a && o != b);
+            let mut ids = [a, b, o];
+            ids.sort_unstable();
+            assert_eq!(ids, tri);
+            assert_eq!(EdgeTable::ov_odd(r), a < o && o < b);
         }
     }
 });
