@@ -16,7 +16,7 @@ use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::gpu::{self, ExactFilter, SceneIndex, SceneLayout};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
-    PreparedBytes, PreparedId, PreparedScenes, SceneParts, SilhouetteBackend, TopologyScene,
+    PartsEntry, PreparedBytes, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
 use std::mem::ManuallyDrop;
 use std::num::NonZeroUsize;
@@ -31,8 +31,9 @@ use std::time::Instant;
 /// the result is the same however they are split.
 ///
 /// A scene whose buffers exceed that allocation (the edge records take 16 bytes an edge) is
-/// prepared in parts ([`SceneParts`]: objects grouped, big objects cut into triangle ranges),
-/// each extracted on its own and added up: the same bits as the whole scene.
+/// prepared in parts ([`SceneParts`](shadowvol_silhouette::SceneParts): objects grouped, big
+/// objects cut into triangle ranges), each extracted on its own and added up: the same bits as
+/// the whole scene.
 pub struct OpenClBackend {
     pub(crate) device: DeviceDesc,
     /// The exact filter the kernel was built with.
@@ -55,7 +56,7 @@ pub struct OpenClBackend {
     /// The uploaded scenes and parts of scenes, by their own ids.
     pub(crate) scenes: ManuallyDrop<PreparedScenes<Prepared>>,
     /// What the caller's ids name: one of `scenes`, or the parts of a split scene.
-    pub(crate) entries: PreparedScenes<Entry>,
+    pub(crate) entries: PreparedScenes<PartsEntry>,
     /// Work abandoned by a wait that gave up; the next `extract` waits for it first.
     pub(crate) pending: Option<Pending>,
 }
@@ -122,10 +123,7 @@ impl OpenClBackend {
     #[doc(hidden)]
     #[must_use]
     pub fn parts_of_for_tests(&self, id: PreparedId) -> Option<usize> {
-        Some(match self.entries.get(id).ok()? {
-            Entry::Whole(_) => 1,
-            Entry::Split { ids, .. } => ids.len(),
-        })
+        Some(self.entries.get(id).ok()?.ids().len())
     }
 
     /// Pretends the device's largest allocation is `bytes` from now on (checks and batch sizes
@@ -134,17 +132,6 @@ impl OpenClBackend {
     pub fn set_max_alloc_for_tests(&mut self, bytes: u64) {
         self.max_alloc = bytes;
     }
-}
-
-/// A prepared scene as the caller names it.
-pub(crate) enum Entry {
-    /// Uploaded whole: its id in [`OpenClBackend::scenes`].
-    Whole(PreparedId),
-    /// Uploaded in parts: the cut, and each part's id in [`OpenClBackend::scenes`].
-    Split {
-        parts: SceneParts,
-        ids: Vec<PreparedId>,
-    },
 }
 
 impl OpenClBackend {
@@ -270,24 +257,16 @@ impl SilhouetteBackend for OpenClBackend {
     }
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
-        let entry = match self.part_triangles(scene) {
-            None => Entry::Whole(self.prepare_whole(scene)?),
-            Some(max) => {
-                let mut parts = SceneParts::split(scene, max).map_err(|e| {
-                    BackendError::InvalidInput(format!("cutting the scene into parts: {e}"))
-                })?;
-                match parts.prepare_each(|part| self.prepare_whole(part)) {
-                    Ok(ids) => Entry::Split { parts, ids },
-                    Err((e, done)) => {
-                        for id in done {
-                            self.scenes.remove(id);
-                        }
-                        return Err(e);
-                    }
+        let max = self.part_triangles(scene);
+        match PartsEntry::prepare(scene, max, |part| self.prepare_whole(part)) {
+            Ok(entry) => Ok(self.entries.insert(entry)),
+            Err((e, done)) => {
+                for id in done {
+                    self.scenes.remove(id);
                 }
+                Err(e)
             }
-        };
-        Ok(self.entries.insert(entry))
+        }
     }
 
     fn extract(
@@ -301,45 +280,24 @@ impl SilhouetteBackend for OpenClBackend {
         check_lights(lights)?;
         self.last_batches = 0;
         let entry = self.entries.take(id)?;
-        let result = match &entry {
-            Entry::Whole(inner) => self.extract_whole(*inner, lights, mode, out),
-            Entry::Split { parts, ids } => parts.extract_each(lights.len(), out, |k, part| {
-                self.extract_whole(ids[k], lights, mode, part)
-            }),
-        };
+        let result = entry.extract(lights.len(), out, |inner, out| {
+            self.extract_whole(inner, lights, mode, out)
+        });
         self.entries.restore(id, entry);
         result
     }
 
     fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
-        Ok(match self.entries.get(id)? {
-            Entry::Whole(inner) => self.scenes.get(*inner)?.bytes(),
-            Entry::Split { parts, ids } => {
-                let mut b = PreparedBytes {
-                    host: parts.own_bytes(),
-                    device: 0,
-                };
-                for &inner in ids {
-                    let pb = self.scenes.get(inner)?.bytes();
-                    b.host += pb.host;
-                    b.device += pb.device;
-                }
-                b
-            }
-        })
+        self.entries
+            .get(id)?
+            .bytes(|inner| Ok(self.scenes.get(inner)?.bytes()))
     }
 
     fn release(&mut self, id: PreparedId) {
-        match self.entries.remove(id) {
-            Some(Entry::Whole(inner)) => {
+        if let Some(entry) = self.entries.remove(id) {
+            for &inner in entry.ids() {
                 self.scenes.remove(inner);
             }
-            Some(Entry::Split { ids, .. }) => {
-                for inner in ids {
-                    self.scenes.remove(inner);
-                }
-            }
-            None => {}
         }
     }
 }

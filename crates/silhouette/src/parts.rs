@@ -12,7 +12,10 @@
 //! vertices in ascending order of their ids in the object, so every `a < b` and every canonical
 //! (sorted) triangle keeps its order, and with it the sign convention.
 
-use crate::{BackendError, ExtractStats, Multiplicities, SceneObject, TopologyScene};
+use crate::{
+    BackendError, ExtractStats, Multiplicities, PreparedBytes, PreparedId, SceneObject,
+    TopologyScene,
+};
 use shadowvol_mesh_topology::{EdgeTable, Mesh, MeshError};
 use std::sync::Arc;
 
@@ -229,6 +232,96 @@ impl SceneParts {
             let dst = into.values_mut(l);
             for (&g, &m) in map.iter().zip(from.values(l)) {
                 dst[g as usize] += m;
+            }
+        }
+    }
+}
+
+/// What a backend's prepared id names when the backend keeps its uploaded scenes under ids of
+/// their own and may cut a scene into parts: one uploaded scene, or the parts of a cut one with
+/// each part's id.
+#[derive(Debug)]
+pub enum PartsEntry {
+    /// Uploaded whole.
+    Whole(PreparedId),
+    /// Uploaded in parts.
+    Split {
+        /// The cut.
+        parts: SceneParts,
+        /// Each part's id, in order.
+        ids: Vec<PreparedId>,
+    },
+}
+
+impl PartsEntry {
+    /// `scene` uploaded whole by `prepare` when `max_triangles` is `None`, else cut into parts
+    /// of at most that many triangles, each uploaded by `prepare` in turn.
+    ///
+    /// # Errors
+    /// The first error, with the ids uploaded before it (for the caller to release): of
+    /// `prepare`, or [`BackendError::InvalidInput`] when a part cannot be cut.
+    pub fn prepare(
+        scene: &TopologyScene,
+        max_triangles: Option<usize>,
+        mut prepare: impl FnMut(&TopologyScene) -> Result<PreparedId, BackendError>,
+    ) -> Result<Self, (BackendError, Vec<PreparedId>)> {
+        let cut_error =
+            |e: MeshError| BackendError::InvalidInput(format!("cutting the scene into parts: {e}"));
+        let Some(max) = max_triangles else {
+            return prepare(scene).map(Self::Whole).map_err(|e| (e, Vec::new()));
+        };
+        let mut parts = SceneParts::split(scene, max).map_err(|e| (cut_error(e), Vec::new()))?;
+        let ids = parts.prepare_each(prepare)?;
+        Ok(Self::Split { parts, ids })
+    }
+
+    /// The uploaded scenes' ids: one, or one per part.
+    #[must_use]
+    pub fn ids(&self) -> &[PreparedId] {
+        match self {
+            Self::Whole(id) => std::slice::from_ref(id),
+            Self::Split { ids, .. } => ids,
+        }
+    }
+
+    /// What the entry holds: its uploaded scenes' bytes (`bytes_of` each) and the cut's own.
+    ///
+    /// # Errors
+    /// The first error of `bytes_of`.
+    pub fn bytes(
+        &self,
+        bytes_of: impl Fn(PreparedId) -> Result<PreparedBytes, BackendError>,
+    ) -> Result<PreparedBytes, BackendError> {
+        let mut b = PreparedBytes {
+            host: match self {
+                Self::Whole(_) => 0,
+                Self::Split { parts, .. } => parts.own_bytes(),
+            },
+            device: 0,
+        };
+        for &id in self.ids() {
+            let pb = bytes_of(id)?;
+            b.host += pb.host;
+            b.device += pb.device;
+        }
+        Ok(b)
+    }
+
+    /// The scene's multiplicities for `lights` lights in `out`: `extract(id, out)` on the
+    /// uploaded scene, or on each part, added up ([`SceneParts::extract_each`]).
+    ///
+    /// # Errors
+    /// The first error of `extract`.
+    pub fn extract(
+        &self,
+        lights: usize,
+        out: &mut Multiplicities,
+        mut extract: impl FnMut(PreparedId, &mut Multiplicities) -> Result<ExtractStats, BackendError>,
+    ) -> Result<ExtractStats, BackendError> {
+        match self {
+            Self::Whole(id) => extract(*id, out),
+            Self::Split { parts, ids } => {
+                parts.extract_each(lights, out, |k, part| extract(ids[k], part))
             }
         }
     }

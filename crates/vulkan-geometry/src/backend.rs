@@ -12,7 +12,7 @@ use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::gpu::{ExactFilter, SceneIndex, SceneLayout};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
-    PreparedBytes, PreparedId, PreparedScenes, SceneParts, SilhouetteBackend, TopologyScene,
+    PartsEntry, PreparedBytes, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
 };
 use std::num::NonZeroUsize;
 use std::time::Instant;
@@ -33,8 +33,8 @@ type Cleanup = Box<dyn FnOnce(&Context)>;
 /// `maxStorageBufferRange` (or [`VulkanOptions::max_lights_per_batch`] is set), the lights are split
 /// into batches, one pass each; the result is the same as one pass would give. A scene whose
 /// static buffers (edge records: 16 bytes an edge) would exceed `maxStorageBufferRange` is
-/// prepared in parts ([`SceneParts`]), each extracted on its own and added up: the same bits as
-/// the whole scene.
+/// prepared in parts ([`SceneParts`](shadowvol_silhouette::SceneParts)), each extracted on its
+/// own and added up: the same bits as the whole scene.
 ///
 /// Every wait for the device is bounded by [`shadowvol_silhouette::gpu::wait_limit`]
 /// (`SHADOWVOL_GPU_TIMEOUT`). After a timeout the late work is still pending: the backend then
@@ -45,7 +45,7 @@ pub struct VulkanBackend {
     /// The scenes and parts of scenes with their device buffers, by their own ids.
     pub(crate) prepared: PreparedScenes<Prepared>,
     /// What the caller's ids name: one of `prepared`, or the parts of a split scene.
-    entries: PreparedScenes<Entry>,
+    entries: PreparedScenes<PartsEntry>,
     /// The largest static buffer a scene may have before it is prepared in parts:
     /// `maxStorageBufferRange` (lowered by tests).
     part_limit: u64,
@@ -182,10 +182,7 @@ impl VulkanBackend {
     #[doc(hidden)]
     #[must_use]
     pub fn parts_of_for_tests(&self, id: PreparedId) -> Option<usize> {
-        Some(match self.entries.get(id).ok()? {
-            Entry::Whole(_) => 1,
-            Entry::Split { ids, .. } => ids.len(),
-        })
+        Some(self.entries.get(id).ok()?.ids().len())
     }
 
     /// Triangles per part when `scene`'s largest static buffer (positions 12 bytes a vertex,
@@ -285,24 +282,16 @@ impl SilhouetteBackend for VulkanBackend {
     }
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
-        let entry = match self.part_triangles(scene) {
-            None => Entry::Whole(self.prepare_whole(scene)?),
-            Some(max) => {
-                let mut parts = SceneParts::split(scene, max).map_err(|e| {
-                    BackendError::InvalidInput(format!("cutting the scene into parts: {e}"))
-                })?;
-                match parts.prepare_each(|part| self.prepare_whole(part)) {
-                    Ok(ids) => Entry::Split { parts, ids },
-                    Err((e, done)) => {
-                        for id in done {
-                            self.release_inner(id);
-                        }
-                        return Err(e);
-                    }
+        let max = self.part_triangles(scene);
+        match PartsEntry::prepare(scene, max, |part| self.prepare_whole(part)) {
+            Ok(entry) => Ok(self.entries.insert(entry)),
+            Err((e, done)) => {
+                for id in done {
+                    self.release_inner(id);
                 }
+                Err(e)
             }
-        };
-        Ok(self.entries.insert(entry))
+        }
     }
 
     fn extract(
@@ -317,62 +306,28 @@ impl SilhouetteBackend for VulkanBackend {
         self.settle()?;
         self.last_passes = 0;
         let entry = self.entries.take(id)?;
-        let result = match &entry {
-            Entry::Whole(inner) => {
-                let mut stats = ExtractStats::default();
-                self.extract_whole(*inner, lights, mode, out, &mut stats)
-                    .map(|()| stats)
-            }
-            Entry::Split { parts, ids } => parts.extract_each(lights.len(), out, |k, part| {
-                let mut stats = ExtractStats::default();
-                self.extract_whole(ids[k], lights, mode, part, &mut stats)
-                    .map(|()| stats)
-            }),
-        };
+        let result = entry.extract(lights.len(), out, |inner, out| {
+            let mut stats = ExtractStats::default();
+            self.extract_whole(inner, lights, mode, out, &mut stats)
+                .map(|()| stats)
+        });
         self.entries.restore(id, entry);
         result
     }
 
     fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
-        Ok(match self.entries.get(id)? {
-            Entry::Whole(inner) => self.prepared.get(*inner)?.bytes(),
-            Entry::Split { parts, ids } => {
-                let mut b = PreparedBytes {
-                    host: parts.own_bytes(),
-                    device: 0,
-                };
-                for &inner in ids {
-                    let pb = self.prepared.get(inner)?.bytes();
-                    b.host += pb.host;
-                    b.device += pb.device;
-                }
-                b
-            }
-        })
+        self.entries
+            .get(id)?
+            .bytes(|inner| Ok(self.prepared.get(inner)?.bytes()))
     }
 
     fn release(&mut self, id: PreparedId) {
-        match self.entries.remove(id) {
-            Some(Entry::Whole(inner)) => self.release_inner(inner),
-            Some(Entry::Split { ids, .. }) => {
-                for inner in ids {
-                    self.release_inner(inner);
-                }
+        if let Some(entry) = self.entries.remove(id) {
+            for &inner in entry.ids() {
+                self.release_inner(inner);
             }
-            None => {}
         }
     }
-}
-
-/// A prepared scene as the caller names it.
-enum Entry {
-    /// Prepared whole: its id in [`VulkanBackend::prepared`].
-    Whole(PreparedId),
-    /// Prepared in parts: the cut, and each part's id in [`VulkanBackend::prepared`].
-    Split {
-        parts: SceneParts,
-        ids: Vec<PreparedId>,
-    },
 }
 
 impl VulkanBackend {
