@@ -38,6 +38,7 @@
 pub mod ci;
 pub mod corpus;
 pub mod filters;
+pub mod parts;
 pub mod shapes;
 
 use shadowvol_silhouette::BackendError;

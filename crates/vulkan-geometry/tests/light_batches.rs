@@ -10,7 +10,7 @@ use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{extract_once, invariant, Accuracy, Multiplicities, SilhouetteBackend};
 use shadowvol_test_support::corpus;
 use shadowvol_test_support::{main, Outcome};
-use shadowvol_vulkan_geometry::VulkanOptions;
+use shadowvol_vulkan_geometry::{VulkanBackend, VulkanOptions};
 use std::num::NonZeroUsize;
 
 main!(
@@ -115,37 +115,15 @@ fn uncertain_pairs_resolve_into_their_own_light_across_batches() -> Outcome {
 fn scene_beyond_the_storage_range_is_prepared_in_parts() -> Outcome {
     let mut whole = common::backend(VulkanOptions::from_env())?;
     let mut cut = common::backend(VulkanOptions::from_env())?;
-    let mut cpu = CpuBackend::new();
-    let mut most_parts = 0;
-    for case in corpus::cases() {
-        let scene = case.scene().unwrap();
-        cut.set_part_limit_for_tests(((scene.total_edges() as u64 + 1) * 16 / 3).max(64));
-        let id = cut.prepare(&scene).unwrap();
-        let parts = cut.parts_of_for_tests(id).unwrap();
-        most_parts = most_parts.max(parts);
-        for mode in Accuracy::ALL {
-            let what = format!("{} {mode}, {parts} parts", case.name);
-            let mut got = Multiplicities::default();
-            cut.extract(id, &case.lights, mode, &mut got)
-                .unwrap_or_else(|e| panic!("{what}: {e}"));
-            let (want, _) = extract_once(&mut whole, &scene, &case.lights, mode).unwrap();
-            assert_eq!(invariant::first_difference(&got, &want), None, "{what}");
-            for l in 0..case.lights.len() {
-                assert_eq!(got.silhouette(l), want.silhouette(l), "{what}: light {l}");
-            }
-            if mode == Accuracy::Exact {
-                let (exact, _) = extract_once(&mut cpu, &scene, &case.lights, mode).unwrap();
-                assert_eq!(
-                    invariant::first_difference(&got, &exact),
-                    None,
-                    "{what}: cpu"
-                );
-            }
-        }
-        assert!(cut.prepared_bytes(id).is_ok());
-        cut.release(id);
-        assert!(cut.parts_of_for_tests(id).is_none());
-    }
-    assert!(most_parts >= 3, "no case was cut into 3 parts or more");
+    shadowvol_test_support::parts::check_parts_equal_whole(
+        &mut cut,
+        &mut whole,
+        &mut CpuBackend::new(),
+        |cut, scene, limit| {
+            cut.set_part_limit_for_tests(limit);
+            cut.prepare(scene).unwrap()
+        },
+        VulkanBackend::parts_of_for_tests,
+    );
     Ok(())
 }
