@@ -25,6 +25,25 @@ fn main() {
     shadowvol_test_support::run(trials)
 }
 
+/// `shadowvol bench`: one exact frame without warm-up of [`SCENE`] on `backend`, as JSON.
+fn one_frame_bench(backend: &str) -> [&str; 13] {
+    [
+        "bench",
+        "--scene",
+        SCENE,
+        "--backend",
+        backend,
+        "--mode",
+        "exact",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--format",
+        "json",
+    ]
+}
+
 fn u(v: &Value, key: &str) -> u64 {
     v[key]
         .as_u64()
@@ -84,21 +103,7 @@ fn silhouette_reports_what_the_prepared_scene_holds(backend: &str) {
 /// so only when asked.
 fn bench_build_runs_time_the_table_against_a_read() -> Outcome {
     let run = |extra: &[&str]| {
-        let mut args = vec![
-            "bench",
-            "--scene",
-            SCENE,
-            "--backend",
-            "cpu",
-            "--mode",
-            "exact",
-            "--frames",
-            "1",
-            "--warmup",
-            "0",
-            "--format",
-            "json",
-        ];
+        let mut args = one_frame_bench("cpu").to_vec();
         args.extend_from_slice(extra);
         json_of(&args)
     };
@@ -129,21 +134,7 @@ fn bench_build_runs_time_the_table_against_a_read() -> Outcome {
 fn simd_reads_the_table_in_place_when_asked() -> Outcome {
     let record = |layout: Option<&str>| {
         let mut cmd = std::process::Command::new(common::BIN);
-        cmd.args([
-            "bench",
-            "--scene",
-            SCENE,
-            "--backend",
-            "simd",
-            "--mode",
-            "exact",
-            "--frames",
-            "1",
-            "--warmup",
-            "0",
-            "--format",
-            "json",
-        ]);
+        cmd.args(one_frame_bench("simd"));
         if let Some(layout) = layout {
             cmd.env("SHADOWVOL_SIMD_LAYOUT", layout);
         }
