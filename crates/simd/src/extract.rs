@@ -147,13 +147,8 @@ fn items_for(counts: &[usize]) -> Vec<Item> {
 
 /// Triangles of the distinct tables of `scene` (instances counted once).
 fn distinct_triangles(scene: &TopologyScene) -> usize {
-    let mut seen = std::collections::HashSet::new();
-    scene
-        .objects
-        .iter()
-        .filter(|o| seen.insert(Arc::as_ptr(&o.table)))
-        .map(|o| o.table.triangles.len())
-        .sum()
+    let tables = scene.objects.iter().map(|o| &o.table);
+    shadowvol_silhouette::unique_arc_bytes(tables, |t| t.triangles.len() as u64) as usize
 }
 
 impl Prepared {
