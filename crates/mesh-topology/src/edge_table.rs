@@ -414,9 +414,9 @@ struct Grouped {
 /// counting each bucket's edges, then (once the counts give each chunk its first edge) writing
 /// edges, offsets and OV references. The references take the entries' place: entry `k` of the
 /// sorted order (the edge's starting corner `3 t + i`) becomes reference `k` (`4 t + r`, `r`
-/// the rank of the triangle's vertex `(i + 2) % 3`), read before it is written. So the build holds 12 bytes a triangle for both,
-/// not 24 for the entries beside 12 for the OVs; the result is the same on any number of
-/// threads.
+/// the rank of the triangle's vertex `(i + 2) % 3`), read before it is written. So the build
+/// holds 12 bytes a triangle for both, not 24 for the entries beside 12 for the references; the
+/// result is the same on any number of threads.
 fn group_edges(
     triangles: &[[u32; 3]],
     start: &[u32],

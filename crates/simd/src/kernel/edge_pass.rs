@@ -1,7 +1,7 @@
 //! The edge pass of `robust`, `ordered` and `exact`: `m(e) = Σ sign(t) · parity(e, t)` over
 //! the triangles of each edge, from the triangle pass's signs. Each (edge, OV) pair's triangle
-//! slot `s` and parity come from its reference `4 s + r` (odd for `r = 1`). Scalar at the `wide` level; with
-//! AVX2, 8 edges per vector ([`edge_sums_avx2`]).
+//! slot `s` and parity come from its reference `4 s + r` (odd for `r = 1`). Scalar at the `wide`
+//! level; with AVX2, 8 edges per vector ([`edge_sums_avx2`]).
 
 use super::signs::{pack_sign, signed, PACK};
 use super::{push_bits, EdgeOut};
