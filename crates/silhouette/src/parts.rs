@@ -33,6 +33,8 @@ pub struct SceneParts {
     pub sources: Vec<Vec<(usize, u32)>>,
     /// Global edges of the whole scene.
     pub scene_edges: usize,
+    /// Heap bytes of the cut ranges' tables that [`SceneParts::take_parts`] handed out.
+    handed_out: u64,
     /// For each part, whether its table was built here (a range of a cut object) rather than
     /// shared with the scene.
     built: Vec<bool>,
@@ -54,6 +56,7 @@ impl SceneParts {
             sources: Vec::new(),
             scene_edges: scene.total_edges(),
             built: Vec::new(),
+            handed_out: 0,
         };
         let offsets = scene.edge_offsets();
         let (mut group, mut group_map, mut group_tris) = (Vec::new(), Vec::new(), 0usize);
@@ -163,11 +166,28 @@ impl SceneParts {
 
     /// Moves the parts out, leaving the maps that [`SceneParts::add_part`] needs: a backend that
     /// lays each part out and no longer reads its table frees each cut range's table as soon as
-    /// it is prepared. [`SceneParts::own_bytes`] then counts the edge maps only.
+    /// it is prepared. [`SceneParts::own_bytes`] then counts the edge maps only, and
+    /// [`SceneParts::handed_out_bytes`] the tables handed out.
     #[must_use]
     pub fn take_parts(&mut self) -> Vec<TopologyScene> {
+        self.handed_out += self
+            .parts
+            .iter()
+            .zip(&self.built)
+            .filter(|(_, &b)| b)
+            .map(|(p, _)| p.table_bytes())
+            .sum::<u64>();
         self.built.iter_mut().for_each(|b| *b = false);
         std::mem::take(&mut self.parts)
+    }
+
+    /// Heap bytes of the cut ranges' tables that [`SceneParts::take_parts`] (or
+    /// [`SceneParts::prepare_each`]) handed out: a backend that keeps the parts' tables (to
+    /// decide uncertain pairs on the host, through a
+    /// [`SceneIndex`](crate::gpu::SceneIndex)) holds these too.
+    #[must_use]
+    pub fn handed_out_bytes(&self) -> u64 {
+        self.handed_out
     }
 
     /// Prepares each part, in order, with `prepare`, moving the parts out as
@@ -284,7 +304,8 @@ impl PartsEntry {
         }
     }
 
-    /// What the entry holds: its uploaded scenes' bytes (`bytes_of` each) and the cut's own.
+    /// What the entry holds: its uploaded scenes' bytes (`bytes_of` each), the cut's own and the
+    /// cut ranges' tables its parts keep.
     ///
     /// # Errors
     /// The first error of `bytes_of`.
@@ -292,10 +313,11 @@ impl PartsEntry {
         &self,
         bytes_of: impl Fn(PreparedId) -> Result<PreparedBytes, BackendError>,
     ) -> Result<PreparedBytes, BackendError> {
+        // A split scene's parts keep their cut ranges' tables (the backends' indices read them).
         let mut b = PreparedBytes {
             host: match self {
                 Self::Whole(_) => 0,
-                Self::Split { parts, .. } => parts.own_bytes(),
+                Self::Split { parts, .. } => parts.own_bytes() + parts.handed_out_bytes(),
             },
             device: 0,
         };
@@ -447,10 +469,16 @@ mod tests {
         };
         let mut parts = SceneParts::split(&scene, 50).unwrap();
         let maps: u64 = parts.edge_maps.iter().map(crate::vec_bytes).sum();
-        assert!(parts.own_bytes() > maps, "cut ranges hold tables before");
+        let before = parts.own_bytes();
+        assert!(before > maps, "cut ranges hold tables before");
+        assert_eq!(parts.handed_out_bytes(), 0);
         let taken = parts.take_parts();
         assert!(parts.parts.is_empty());
         assert_eq!(parts.own_bytes(), maps);
+        // What was handed out is counted, for the backends that keep it.
+        assert_eq!(parts.handed_out_bytes(), before - maps);
+        let tables: u64 = taken.iter().map(TopologyScene::table_bytes).sum();
+        assert_eq!(parts.handed_out_bytes(), tables);
         let lights = [[5.0, 5.0, 0.5, 1.0], [1.0, 2.0, 3.0, 0.0]];
         let whole = reference(&scene, Accuracy::Exact, &lights);
         let mut sum = Multiplicities::zeroed(scene.total_edges(), lights.len());

@@ -216,7 +216,8 @@ impl SilhouetteBackend for WgpuBackend {
                 let mut parts = SceneParts::split(scene, max).map_err(|e| {
                     BackendError::InvalidInput(format!("cutting the scene into parts: {e}"))
                 })?;
-                // Each part's own table is dropped once its layouts are built and uploaded.
+                // Each part's layouts are dropped once uploaded; its table stays, for the host's
+                // exact decisions (its index reads it).
                 let prepared = parts
                     .prepare_each(|p| self.prepare_whole(p))
                     .map_err(|(e, _)| e)?;
@@ -249,8 +250,9 @@ impl SilhouetteBackend for WgpuBackend {
         Ok(match self.scenes.get(id)? {
             Entry::Whole(p) => p.bytes(),
             Entry::Split { parts, prepared } => {
+                // Each part's index keeps its table: the cut ranges' tables are held too.
                 let mut b = PreparedBytes {
-                    host: parts.own_bytes(),
+                    host: parts.own_bytes() + parts.handed_out_bytes(),
                     device: 0,
                 };
                 for p in prepared {
