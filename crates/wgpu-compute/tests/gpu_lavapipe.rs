@@ -486,7 +486,7 @@ fn gpu_scenes_in_parts_equal_whole_scenes_on_the_corpus() -> Outcome {
         "gpu_scenes_in_parts_equal_whole_scenes_on_the_corpus",
         WgpuOptions::default(),
     )?;
-    let mut split_somewhere = false;
+    let (mut split_somewhere, mut host_decided) = (false, 0);
     for case in common::all_cases() {
         // A third of the edge records: at least three parts of cap / 48 triangles.
         let cap = ((case.scene.total_edges() as u64 + 1) * 16 / 3).max(64);
@@ -517,8 +517,21 @@ fn gpu_scenes_in_parts_equal_whole_scenes_on_the_corpus() -> Outcome {
             );
             assert_eq!(got, expected, "{} {mode}: compact lists", case.name);
         }
+        // Exact mode decided on the host (each part's index reads its table): the same bits.
+        let mut host = WgpuBackend::new(WgpuOptions {
+            max_buffer_bytes: Some(cap),
+            exact_on_device: false,
+            ..WgpuOptions::default()
+        })
+        .unwrap();
+        let (got, stats) =
+            extract_once(&mut host, &case.scene, &case.lights, Accuracy::Exact).unwrap();
+        let expected = cpu_result(&case.scene, &case.lights, Accuracy::Exact);
+        assert_eq!(got, expected, "{} exact, decided on the host", case.name);
+        host_decided += stats.uncertain;
     }
     assert!(split_somewhere, "the cap cut no scene into parts");
+    assert!(host_decided > 0, "no part left a pair to the host");
     Ok(())
 }
 
