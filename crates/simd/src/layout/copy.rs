@@ -13,7 +13,9 @@
 //!   modes. Every other block keeps CSR records in [`GeneralBlocks`].
 
 use super::LANES;
-use super::{check_table, coord_in_filter_range, fast_blocks, CanonBlock, Geometry, LayoutError};
+use super::{
+    check_table, fast_blocks, positions_in_filter_range, CanonBlock, Geometry, LayoutError,
+};
 use crate::lanes::Level;
 use shadowvol_mesh_topology::EdgeTable;
 use std::sync::Arc;
@@ -180,9 +182,7 @@ impl CopyLayout {
         for (v, p) in table.positions.iter().enumerate() {
             stored[st[v] as usize] = [p.x, p.y, p.z, 0.0];
         }
-        let coords_in_filter_range = stored
-            .iter()
-            .all(|p| p[..3].iter().all(|&c| coord_in_filter_range(c)));
+        let coords_in_filter_range = positions_in_filter_range(table);
         let xyz = stored;
         let sv = |v: u32| st[v as usize];
 

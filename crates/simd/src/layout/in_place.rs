@@ -5,7 +5,9 @@
 //! [`LANES`] edges, whether the block is fast.
 
 use super::LANES;
-use super::{check_table, coord_in_filter_range, fast_blocks, CanonBlock, Geometry, LayoutError};
+use super::{
+    check_table, fast_blocks, positions_in_filter_range, CanonBlock, Geometry, LayoutError,
+};
 use crate::lanes::{canon8_scalar, Level};
 use shadowvol_mesh_topology::EdgeTable;
 use std::sync::Arc;
@@ -25,10 +27,7 @@ impl InPlaceLayout {
     /// Checks `table` and notes its fast blocks.
     pub(crate) fn build(table: &Arc<EdgeTable>) -> Result<Self, LayoutError> {
         check_table(table)?;
-        let coords_in_filter_range = table
-            .positions
-            .iter()
-            .all(|p| p.to_array().iter().all(|&c| coord_in_filter_range(c)));
+        let coords_in_filter_range = positions_in_filter_range(table);
         Ok(Self {
             table: Arc::clone(table),
             block_fast: fast_blocks(table),

@@ -87,6 +87,17 @@ pub(crate) enum Layout {
     InPlace(in_place::InPlaceLayout),
 }
 
+/// Runs `$body` with `$g` bound to the [`Geometry`] inside the layout `$layout`.
+macro_rules! with_geometry {
+    ($layout:expr, $g:ident => $body:expr) => {
+        match $layout {
+            $crate::layout::Layout::Copy($g) => $body,
+            $crate::layout::Layout::InPlace($g) => $body,
+        }
+    };
+}
+pub(crate) use with_geometry;
+
 impl Layout {
     /// Lays out `table`, copied or in place. Checks every index, so the kernels may rely on
     /// them.
@@ -116,31 +127,14 @@ impl Layout {
 
     /// Number of triangles.
     pub(crate) fn tri_count(&self) -> usize {
-        match self {
-            Self::Copy(l) => l.tri_count(),
-            Self::InPlace(l) => l.tri_count(),
-        }
+        with_geometry!(self, g => g.tri_count())
     }
 
     /// Number of edges.
     pub(crate) fn edge_count(&self) -> usize {
-        match self {
-            Self::Copy(l) => l.edge_count(),
-            Self::InPlace(l) => l.edge_count(),
-        }
+        with_geometry!(self, g => g.edge_count())
     }
 }
-
-/// Runs `$body` with `$g` bound to the [`Geometry`] inside the layout `$layout`.
-macro_rules! with_geometry {
-    ($layout:expr, $g:ident => $body:expr) => {
-        match $layout {
-            $crate::layout::Layout::Copy($g) => $body,
-            $crate::layout::Layout::InPlace($g) => $body,
-        }
-    };
-}
-pub(crate) use with_geometry;
 
 /// What the kernels read of one table, however it is laid out. Vertex ids are the layout's own
 /// (the copy renumbers them for locality); triangle slots index the per-light sign arrays.
@@ -276,4 +270,13 @@ pub(crate) fn check_table(table: &EdgeTable) -> Result<(), LayoutError> {
         }
     }
     Ok(())
+}
+
+/// Whether every coordinate of `table`'s positions passes [`coord_in_filter_range`] (what
+/// [`Geometry::coords_in_filter_range`] reports, whatever order a layout stores them in).
+pub(crate) fn positions_in_filter_range(table: &EdgeTable) -> bool {
+    table
+        .positions
+        .iter()
+        .all(|p| p.to_array().iter().all(|&c| coord_in_filter_range(c)))
 }
