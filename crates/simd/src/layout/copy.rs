@@ -56,9 +56,10 @@ pub(crate) struct CopyLayout {
     pub refs: Vec<u32>,
     /// The CSR records of the blocks that are not fast, for the general path.
     pub general: GeneralBlocks,
-    /// Every stored coordinate passes [`coord_in_filter_range`] (a multiple of 2^-40 of
-    /// magnitude at most 2^39): then, with a light whose coordinates pass too, no difference the
-    /// `f32` filter forms can fail its range check.
+    /// Every stored coordinate passes
+    /// [`coord_in_filter_range`](super::coord_in_filter_range) (a multiple of 2^-40 of magnitude
+    /// at most 2^39): then, with a light whose coordinates pass too, no difference the `f32`
+    /// filter forms can fail its range check.
     pub coords_in_filter_range: bool,
 }
 

@@ -19,7 +19,7 @@ pub(crate) struct InPlaceLayout {
     table: Arc<EdgeTable>,
     /// Per block of [`LANES`] edges: true when every edge of the block is manifold.
     block_fast: Vec<bool>,
-    /// Every coordinate passes [`coord_in_filter_range`].
+    /// Every coordinate passes [`coord_in_filter_range`](super::coord_in_filter_range).
     coords_in_filter_range: bool,
 }
 
