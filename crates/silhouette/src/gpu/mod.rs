@@ -5,6 +5,8 @@
 //!   vertices);
 //! * [`TriangleLayout`]: the triangles of that scene, for two-step kernels (one sign per
 //!   triangle, then one sum per edge);
+//! * [`TableLayout`]: the scene's edge tables concatenated in their own form, and
+//!   [`TableWriter`], which writes any range of them straight from the tables;
 //! * [`mode_code`]: the accuracy-mode code sent to the shaders, and [`ExactFilter`]: the
 //!   precision of the certified filter their exact mode runs;
 //! * [`UncertainRecord`]: the `(edge, OV slot, light)` triple a kernel appends when its exact-mode
@@ -26,6 +28,7 @@ mod batches;
 mod host;
 mod layout;
 mod resolve;
+mod tables;
 mod triangles;
 pub mod twin;
 mod wait;
@@ -34,6 +37,10 @@ pub use batches::{batches, lights_per_batch};
 pub use host::{HostScene, SceneIndex};
 pub use layout::SceneLayout;
 pub use resolve::{check_batch, resolve_uncertain, UncertainRecord};
+pub use tables::{
+    object_of, TableBuffer, TableLayout, TableWriter, FIRST_EDGE, FIRST_SLOT, FIRST_TRIANGLE,
+    FIRST_VERTEX,
+};
 pub use triangles::{TriangleLayout, NEGATIVE};
 pub use wait::{describe_wait_limit, wait_limit, DEFAULT_TIMEOUT, TIMEOUT_ENV};
 
