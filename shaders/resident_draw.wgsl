@@ -24,10 +24,10 @@ const R_TOUCH: i32 = 2;
 // The object of each global vertex (for `resident_vertices`).
 @group(0) @binding(8) var<storage, read> r_vertex_objects: array<u32>;
 @group(2) @binding(0) var<storage, read_write> r_world_out: array<vec4<f32>>;
-// Global edges (a, b, first OV slot, object).
-@group(0) @binding(2) var<storage, read> r_edges: array<vec4<u32>>;
-// Global triangles: canonical global vertex ids and the object.
-@group(0) @binding(3) var<storage, read> r_tris: array<vec4<u32>>;
+// Global edges: their ends (a, b) (the extraction's `edges`).
+@group(0) @binding(2) var<storage, read> r_edges: array<vec2<u32>>;
+// Global triangles, 3 words each: canonical global vertex ids (the extraction's `tris`).
+@group(0) @binding(3) var<storage, read> r_tris: array<u32>;
 // [light * tri_count + triangle] signs from resident_triangles.
 @group(0) @binding(4) var<storage, read> r_signs: array<i32>;
 // [light * capacity + slot] side records from resident_edges.
@@ -37,8 +37,35 @@ const R_TOUCH: i32 = 2;
 // (L.xyz, 0) then 0 (`scene::light_points`, in f64 on the host).
 @group(0) @binding(12) var<storage, read> r_light_points: array<vec4<f32>>;
 // Per object, 5 words of 4: rows 0-2 of the camera-relative world-from-object transform (f32
-// bits), the albedo (f32 bits), (first global triangle, 0, 0, 0).
+// bits), the albedo (f32 bits), (first global triangle, surface + 1, first triangle within the
+// surface, first global edge).
 @group(0) @binding(6) var<storage, read> r_objects: array<vec4<u32>>;
+
+// Fields of an object's fifth word.
+const R_FIRST_TRIANGLE: u32 = 0u;
+const R_FIRST_EDGE: u32 = 3u;
+
+// The object of global triangle (R_FIRST_TRIANGLE) or edge (R_FIRST_EDGE) `id`: the last object
+// whose first one is at most `id` (binary search, as the extraction's `object_of`).
+fn r_object_of(field: u32, id: u32) -> u32 {
+    var lo = 0u;
+    var hi = arrayLength(&r_objects) / 5u;
+    while hi - lo > 1u {
+        let mid = (lo + hi) / 2u;
+        if r_objects[mid * 5u + 4u][field] <= id {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+// The canonical vertex ids of global triangle `t`.
+fn r_triangle(t: u32) -> vec3<u32> {
+    let i = 3u * t;
+    return vec3<u32>(r_tris[i], r_tris[i + 1u], r_tris[i + 2u]);
+}
 
 // The camera-relative world position of global vertex `id` of object `obj`, once per vertex and
 // frame: every draw then reads the same stored value, so shared vertices are bit-identical.
@@ -93,13 +120,14 @@ fn resident_surfaces(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         return;
     }
     let t = r_chunk.first + k;
-    let tr = r_tris[t];
+    let tr = r_triangle(t);
+    let obj = r_object_of(R_FIRST_TRIANGLE, t);
     let p0 = rel(tr.x);
     let p1 = rel(tr.y);
     let p2 = rel(tr.z);
     let n = vec4<f32>(cross(p1 - p0, p2 - p0), 0.0);
-    let albedo = bitcast<vec4<f32>>(r_objects[tr.w * 5u + 3u]);
-    let ids = surface_ids(tr.w, t);
+    let albedo = bitcast<vec4<f32>>(r_objects[obj * 5u + 3u]);
+    let ids = surface_ids(obj, t);
     r_surface_out[3u * k] = SurfaceV(vec4<f32>(p0, 1.0), n, albedo, ids, vec2<u32>(0u));
     r_surface_out[3u * k + 1u] = SurfaceV(vec4<f32>(p1, 1.0), n, albedo, ids, vec2<u32>(0u));
     r_surface_out[3u * k + 2u] = SurfaceV(vec4<f32>(p2, 1.0), n, albedo, ids, vec2<u32>(0u));
@@ -154,7 +182,8 @@ fn degenerate() -> VolumeOut {
 @vertex
 fn vs_resident_surface(@builtin(vertex_index) vi: u32) -> SurfaceOut {
     let t = vi / 3u;
-    let tr = r_tris[t];
+    let tr = r_triangle(t);
+    let obj = r_object_of(R_FIRST_TRIANGLE, t);
     let p0 = rel(tr.x);
     let p1 = rel(tr.y);
     let p2 = rel(tr.z);
@@ -169,13 +198,14 @@ fn vs_resident_surface(@builtin(vertex_index) vi: u32) -> SurfaceOut {
     o.clip = g.view_proj * vec4<f32>(p, 1.0);
     o.world = p;
     o.normal = cross(p1 - p0, p2 - p0);
-    o.albedo = bitcast<vec4<f32>>(r_objects[tr.w * 5u + 3u]).rgb;
-    o.ids = surface_ids(tr.w, t);
+    o.albedo = bitcast<vec4<f32>>(r_objects[obj * 5u + 3u]).rgb;
+    o.ids = surface_ids(obj, t);
     return o;
 }
 
 fn side_vertex(record: u32, v: u32) -> VolumeOut {
-    let er = r_edges[record & ~R_NEGATIVE];
+    let e = record & ~R_NEGATIVE;
+    let er = r_edges[e];
     var p = er.y;
     var q = er.x;
     if (record & R_NEGATIVE) != 0u {
@@ -191,10 +221,10 @@ fn side_vertex(record: u32, v: u32) -> VolumeOut {
             return clip(vec4<f32>(rel(q), 1.0));
         }
         case 2u, 4u: {
-            return clip(extrude(q, er.w));
+            return clip(extrude(q, r_object_of(R_FIRST_EDGE, e)));
         }
         default: {
-            return clip(extrude(p, er.w));
+            return clip(extrude(p, r_object_of(R_FIRST_EDGE, e)));
         }
     }
 }
@@ -220,7 +250,7 @@ fn vs_resident_cap_ccw(@builtin(vertex_index) vi: u32) -> VolumeOut {
     if s == 0 || s == R_TOUCH {
         return degenerate();
     }
-    let tr = r_tris[t];
+    let tr = r_triangle(t);
     if k < 3u {
         if s != 1 {
             return degenerate();
@@ -235,7 +265,7 @@ fn vs_resident_cap_ccw(@builtin(vertex_index) vi: u32) -> VolumeOut {
     if s == 1 && c != 0u {
         c = 3u - c;
     }
-    return clip(extrude(tr[c], tr.w));
+    return clip(extrude(tr[c], r_object_of(R_FIRST_TRIANGLE, t)));
 }
 
 // 3 vertices per triangle: the sigma = -1 front cap (drawn with clockwise front faces).
@@ -245,6 +275,6 @@ fn vs_resident_cap_cw(@builtin(vertex_index) vi: u32) -> VolumeOut {
     if r_signs[lt.draw.z + t] != -1 {
         return degenerate();
     }
-    let tr = r_tris[t];
+    let tr = r_triangle(t);
     return clip(vec4<f32>(rel(tr[vi % 3u]), 1.0));
 }

@@ -2,10 +2,10 @@
 //
 // Appended to the `wgpu` silhouette backend's module (shaders/silhouette.wgsl, composed by
 // `shadowvol_wgpu_compute::shaders::module_source`) and to shaders/exact_int.wgsl, so it shares
-// their bindings in group 0 (params, positions, edges, ovs, lights, tris, ov_tris, signs: the
-// same SceneLayout and TriangleLayout), their MODE constant and their functions
-// (`Invocation`, `load_triangle`, `triangle_sign_traced`, `edge_multiplicity`, with TOUCH_SIGNS
-// set). The CPU twin is `shadowvol_renderer::resident::twin`: keep the two in step.
+// their bindings in group 0 (params, the scene's tables as the `wgpu` backend uploads them:
+// positions, edges, ov_refs, tris, ov_offsets, objects; lights and signs), their MODE constant
+// and their functions (`Invocation`, `load_edge`, `load_triangle`, `triangle_sign_traced`,
+// `edge_multiplicity`, with TOUCH_SIGNS set). The CPU twin is `shadowvol_renderer::resident::twin`: keep the two in step.
 //
 // 1. `resident_reset`: per light two indirect draw records (z-pass and z-fail sides, 6 vertices
 //    per instance, 0 instances) and the statistics, zeroed.
@@ -189,15 +189,15 @@ fn resident_edges(inv: Invocation) {
     let e = flat_index(inv);
     let lid = inv.lid;
     let valid = e < params.edge_count;
-    var rec = vec4<u32>(0u);
-    var ov_end = 0u;
+    var edge = Edge(0u, 0u, 0u, 0u, 0u);
+    var object = 0u;
     var a = vec3<f32>(0.0);
     var b = vec3<f32>(0.0);
     if valid {
-        rec = edges[e];
-        ov_end = edges[e + 1u].z;
-        a = position(rec.x);
-        b = position(rec.y);
+        edge = load_edge(e);
+        object = object_of(FIRST_EDGE, e);
+        a = position(edge.a);
+        b = position(edge.b);
     }
     let light_count = params.light_count;
     // Uniform loop: every invocation of the workgroup takes part in the barriers.
@@ -205,10 +205,10 @@ fn resident_edges(inv: Invocation) {
         var m = 0;
         var tech = 0u;
         if valid {
-            tech = technique[li * rp.object_count + rec.w];
+            tech = technique[li * rp.object_count + object];
         }
         if tech != 0u {
-            m = edge_multiplicity(rec, ov_end, li, a, b);
+            m = edge_multiplicity(edge, li, a, b);
         }
         let n = u32(abs(m));
         let list = select(0u, 1u, tech == 2u);
@@ -221,7 +221,7 @@ fn resident_edges(inv: Invocation) {
         if n != 0u {
             local = atomicAdd(&wg_count[list], n);
             if (rp.flags & 1u) != 0u {
-                let c = count_slot(li, rec.w);
+                let c = count_slot(li, object);
                 atomicAdd(&args[c], 1u);
                 atomicAdd(&args[c + 1u], n);
             }

@@ -45,8 +45,11 @@ const WORKGROUP_SIZE: u32 = 256u;
 const UNCERTAIN: i32 = 2;
 // A triangle sign that is not a sign: the triangle touches the light and has no volume.
 const TOUCH: i32 = 2;
-// Set on an `ov_tris` entry for an odd permutation of the canonical order.
+// Set on a side record of the renderer's resident pass for m < 0.
 const NEGATIVE: u32 = 0x80000000u;
+// Fields of an `objects` entry.
+const FIRST_EDGE: u32 = 0u;
+const FIRST_TRIANGLE: u32 = 1u;
 
 // robust-math's F32_FILTER_EPS (2^-19), F32_FILTER_MIN (2^-40), F32_FILTER_MAX (2^40).
 const F32_FILTER_EPS: f32 = 0x1p-19f;
@@ -63,6 +66,11 @@ struct Params {
     light_count: u32,
     uncertain_capacity: u32,
     tri_count: u32,
+    // Entries of each light's compact list in `silhouettes`.
+    list_capacity: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // One record per uncertain (triangle, light): global triangle, light index within this dispatch.
@@ -74,28 +82,32 @@ struct Uncertain {
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
+// The scene's edge tables concatenated, with global ids (silhouette's `gpu::TableBuffer`).
 // Object-space positions of all objects, xyz per global vertex id.
 @group(0) @binding(1) var<storage, read> positions: array<f32>;
-// Per global edge: (a, b, first OV slot, object index), a < b global vertex ids; one extra
-// sentinel record at the end whose z is the total OV count.
-@group(0) @binding(2) var<storage, read> edges: array<vec4<u32>>;
-// Opposite vertices (global vertex ids), CSR.
-@group(0) @binding(3) var<storage, read> ovs: array<u32>;
+// Per global edge: its ends (a, b), a < b global vertex ids.
+@group(0) @binding(2) var<storage, read> edges: array<vec2<u32>>;
+// Per OV slot: 4 t + r, the global triangle t whose vertex r (canonical order) is the OV.
+@group(0) @binding(3) var<storage, read> ov_refs: array<u32>;
 // Object-space lights, [object * light_count + light].
 @group(0) @binding(4) var<storage, read> lights: array<vec4<f32>>;
 // Multiplicities, [light * edge_count + edge].
 @group(0) @binding(5) var<storage, read_write> mult: array<i32>;
 // [light]: length of the light's compact list; [light_count]: number of uncertain records.
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
-// Compact lists: light l owns [l * edge_count, (l + 1) * edge_count); entries (edge, bitcast m).
+// Compact lists: light l owns [l * c, (l + 1) * c), c = params.list_capacity; entries (edge,
+// bitcast m). A light's counter may pass c: the entries past it are not written, and the host runs the
+// dispatch again with longer lists.
 @group(0) @binding(7) var<storage, read_write> silhouettes: array<vec2<u32>>;
 @group(0) @binding(8) var<storage, read_write> uncertain: array<Uncertain>;
-// Per global triangle: canonical (ascending) global vertex ids and the object index.
-@group(0) @binding(9) var<storage, read> tris: array<vec4<u32>>;
-// Per OV slot: its global triangle, with NEGATIVE set for an odd permutation.
-@group(0) @binding(10) var<storage, read> ov_tris: array<u32>;
+// Per global triangle, 3 words: its global vertex ids in ascending (canonical) order.
+@group(0) @binding(9) var<storage, read> tris: array<u32>;
+// Per global edge, its first OV slot; one sentinel at the end: the OV count.
+@group(0) @binding(10) var<storage, read> ov_offsets: array<u32>;
 // [light * tri_count + triangle]: -1, 0, 1 (TOUCH in the resident pass).
 @group(0) @binding(11) var<storage, read_write> signs: array<i32>;
+// Per object (first edge, first triangle, first vertex, first OV slot), plus a sentinel.
+@group(0) @binding(12) var<storage, read> objects: array<vec4<u32>>;
 
 // The builtins of one invocation of a triangle or edge kernel (every kernel of the module and of
 // the renderer's resident pass takes them so).
@@ -120,6 +132,37 @@ fn object_light(obj: u32, li: u32) -> vec4<f32> {
     return lights[obj * params.light_count + li];
 }
 
+// The object of global id `id` (an edge for FIRST_EDGE, a triangle for FIRST_TRIANGLE): the
+// last object whose first id is at most `id` (binary search; silhouette's `gpu::object_of`).
+fn object_of(field: u32, id: u32) -> u32 {
+    var lo = 0u;
+    var hi = arrayLength(&objects) - 1u;
+    while hi - lo > 1u {
+        let mid = (lo + hi) / 2u;
+        if objects[mid][field] <= id {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+// Global edge `e`: its ends' ids and its OV slots [ov_begin, ov_end) (its object, where needed,
+// is `object_of(FIRST_EDGE, e)`).
+struct Edge {
+    e: u32,
+    a: u32,
+    b: u32,
+    ov_begin: u32,
+    ov_end: u32,
+}
+
+fn load_edge(e: u32) -> Edge {
+    let ab = edges[e];
+    return Edge(e, ab.x, ab.y, ov_offsets[e], ov_offsets[e + 1u]);
+}
+
 // Global triangle `t`: its canonical (ascending) vertices' positions and its object.
 struct Triangle {
     p0: vec3<f32>,
@@ -129,8 +172,13 @@ struct Triangle {
 }
 
 fn load_triangle(t: u32) -> Triangle {
-    let tr = tris[t];
-    return Triangle(position(tr.x), position(tr.y), position(tr.z), tr.w);
+    let i = 3u * t;
+    return Triangle(
+        position(tris[i]),
+        position(tris[i + 1u]),
+        position(tris[i + 2u]),
+        object_of(FIRST_TRIANGLE, t),
+    );
 }
 
 fn sgn(x: f32) -> i32 {
@@ -262,31 +310,32 @@ fn triangle_sign_traced(tri: Triangle, l: vec4<f32>) -> vec2<i32> {
     return vec2<i32>(s0, 0);
 }
 
-// m of the edge `rec` (its edges[] record; `ov_end` the next record's first slot; `a`, `b` its
-// vertices' positions, loaded once by the caller) for light `li`: `original` evaluates every
-// (edge, OV) naively; the other modes sum the parity times the signs of the OVs' triangles.
-// TOUCH triangles contribute nothing.
-fn edge_multiplicity(rec: vec4<u32>, ov_end: u32, li: u32, a: vec3<f32>, b: vec3<f32>) -> i32 {
+// m of `edge` (`a`, `b` its ends' positions, loaded once by the caller) for light `li`:
+// `original` evaluates every (edge, OV) naively; the other modes sum the parity times the signs
+// of the OVs' triangles (a reference's rank 1 is the odd permutation). TOUCH triangles
+// contribute nothing.
+fn edge_multiplicity(edge: Edge, li: u32, a: vec3<f32>, b: vec3<f32>) -> i32 {
     let row = li * params.tri_count;
     var m = 0;
     if MODE == 0u {
-        let l = object_light(rec.w, li);
-        for (var k = rec.z; k < ov_end; k++) {
+        let l = object_light(object_of(FIRST_EDGE, edge.e), li);
+        for (var k = edge.ov_begin; k < edge.ov_end; k++) {
+            let r = ov_refs[k];
             // Nested, not `&&`: WGSL's `&&` may be compiled without short-circuit, and the
             // backend's `original` must not read the sign buffers.
             if TOUCH_SIGNS {
-                if signs[row + (ov_tris[k] & ~NEGATIVE)] == TOUCH {
+                if signs[row + (r >> 2u)] == TOUCH {
                     continue;
                 }
             }
-            m += sign_f32(a, b, l, position(ovs[k]));
+            m += sign_f32(a, b, l, position(tris[3u * (r >> 2u) + (r & 3u)]));
         }
     } else {
-        for (var k = rec.z; k < ov_end; k++) {
-            let ot = ov_tris[k];
-            let s = signs[row + (ot & ~NEGATIVE)];
+        for (var k = edge.ov_begin; k < edge.ov_end; k++) {
+            let r = ov_refs[k];
+            let s = signs[row + (r >> 2u)];
             if s != TOUCH {
-                m += select(s, -s, (ot & NEGATIVE) != 0u);
+                m += select(s, -s, (r & 3u) == 1u);
             }
         }
     }
@@ -338,16 +387,18 @@ fn extract(inv: Invocation) {
     if e >= edge_count {
         return;
     }
-    let rec = edges[e];
-    let ov_end = edges[e + 1u].z;
-    let a = position(rec.x);
-    let b = position(rec.y);
+    let edge = load_edge(e);
+    let a = position(edge.a);
+    let b = position(edge.b);
+    let capacity = params.list_capacity;
     for (var li = 0u; li < params.light_count; li++) {
-        let m = edge_multiplicity(rec, ov_end, li, a, b);
+        let m = edge_multiplicity(edge, li, a, b);
         mult[li * edge_count + e] = m;
         if m != 0 {
             let slot = atomicAdd(&counters[li], 1u);
-            silhouettes[li * edge_count + slot] = vec2<u32>(e, bitcast<u32>(m));
+            if slot < capacity {
+                silhouettes[li * capacity + slot] = vec2<u32>(e, bitcast<u32>(m));
+            }
         }
     }
 }

@@ -7,13 +7,12 @@ use crate::layout::{Prepared, StaticBuffers};
 use crate::pipeline::Pipelines;
 use crate::{shaders, NAME};
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::gpu::{ExactFilter, SceneIndex, SceneLayout, TriangleLayout};
+use shadowvol_silhouette::gpu::{ExactFilter, SceneIndex, TableBuffer, TableWriter};
 use shadowvol_silhouette::{
     BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedBytes, PreparedId,
     PreparedScenes, SceneParts, SilhouetteBackend, TopologyScene,
 };
 use std::sync::Arc;
-use wgpu::util::DeviceExt;
 
 /// Device-side results of the last [`SilhouetteBackend::extract`] on a prepared scene, for a
 /// renderer that works on the same [`wgpu::Device`] (see [`WgpuBackend::from_device`]).
@@ -27,10 +26,11 @@ use wgpu::util::DeviceExt;
 ///   dispatch (decided on the device by the resolution step, or by the host with
 ///   [`WgpuOptions::exact_on_device`](crate::WgpuOptions::exact_on_device) off; 0 when the
 ///   integer fallback ran inline);
-/// * `silhouettes`: `array<vec2<u32>>`, light `l`'s compact list at `l * E .. l * E + counters[l]`,
-///   entries `(edge, bitcast<u32>(m))` in unspecified order, only `m != 0`;
-/// * `edges`: `array<vec4<u32>>`, `(a, b, first OV slot, object)` with global vertex ids
-///   (object `i`'s ids start at [`SceneLayout::vertex_offsets`]`[i]`), plus a sentinel;
+/// * `silhouettes`: `array<vec2<u32>>`, light `l`'s compact list at `l * C .. l * C +
+///   counters[l]` (`C` = [`GpuResults::list_capacity`]), entries `(edge, bitcast<u32>(m))` in
+///   unspecified order, only `m != 0`;
+/// * `edges`: `array<vec2<u32>>`, the ends `(a, b)` of each global edge, global vertex ids
+///   (object `i`'s ids start at its first vertex in [`TableBuffer::Objects`]);
 /// * `positions`: `array<f32>`, object-space `xyz` per global vertex.
 ///
 /// In exact mode the host has already patched `multiplicities`, `silhouettes` and the list
@@ -48,8 +48,11 @@ pub struct GpuResults<'a> {
     pub edges: &'a wgpu::Buffer,
     /// Positions (`f32` × 3).
     pub positions: &'a wgpu::Buffer,
-    /// Number of edges `E` (the stride between lights).
+    /// Number of edges `E` (the stride between lights in `multiplicities`).
     pub edge_count: u32,
+    /// Entries `C` of each light's compact list (the stride between lights in `silhouettes`):
+    /// at most `E`, and at least every list's length.
+    pub list_capacity: u32,
     /// Index (in the `extract` call's light list) of the first light held.
     pub first_light: usize,
     /// Number of lights held.
@@ -149,6 +152,7 @@ impl WgpuBackend {
             edges: &gpu.edges,
             positions: &gpu.positions,
             edge_count: p.index.edge_count() as u32,
+            list_capacity: frame.list_capacity as u32,
             first_light,
             light_count,
         })
@@ -286,8 +290,12 @@ impl WgpuBackend {
             scene.total_ovs() as u64,
             scene.total_triangles() as u64,
         );
-        let largest = [12 * v, 16 * (e + 1), 4 * ov, 16 * t].into_iter().max()?;
-        (largest > limit).then(|| (limit.saturating_sub(64) / 48).max(1) as usize)
+        let largest = [12 * v, 8 * e, 4 * (e + 1), 4 * ov, 12 * t]
+            .into_iter()
+            .max()?;
+        // A part's largest buffer: its triangles, or its edges' ends (at most 3 edges of 8
+        // bytes a triangle).
+        (largest > limit).then(|| (limit.saturating_sub(64) / 24).max(1) as usize)
     }
 
     /// [`SilhouetteBackend::extract`] on a scene prepared in parts: each part extracted, its
@@ -305,52 +313,35 @@ impl WgpuBackend {
         })
     }
 
-    /// Lays out and uploads `scene` whole. The host layouts are dropped once uploaded: the
-    /// host's exact decisions read the scene's edge tables through a [`SceneIndex`].
+    /// Uploads `scene` whole, its [`TableBuffer`]s written in chunks straight from its edge
+    /// tables (no host copy). The host's exact decisions read the tables through a
+    /// [`SceneIndex`].
     fn prepare_whole(&self, scene: &TopologyScene) -> Result<Prepared, BackendError> {
-        let layout = SceneLayout::build(scene, NAME)?;
-        let triangles = TriangleLayout::build(scene, &layout, NAME)?;
-        let gpu = if layout.edge_count() == 0 {
+        let writer = TableWriter::new(scene, NAME)?;
+        let gpu = if writer.elements(TableBuffer::Edges) == 0 {
             None
         } else {
-            let positions = bytemuck::cast_slice::<f32, u8>(&layout.positions);
-            let edges = bytemuck::cast_slice::<[u32; 4], u8>(&layout.edges);
-            let ovs = bytemuck::cast_slice::<u32, u8>(&layout.ovs);
-            self.check_buffer("the positions", positions.len() as u64, true)?;
-            self.check_buffer("the edge records", edges.len() as u64, true)?;
-            self.check_buffer("the opposite vertices", ovs.len() as u64, true)?;
-            let tris = bytemuck::cast_slice::<[u32; 4], u8>(&triangles.tris);
-            let ov_tris = bytemuck::cast_slice::<u32, u8>(&triangles.ov_tris);
-            self.check_buffer("the triangles", tris.len() as u64, true)?;
-            self.check_buffer("the opposite-vertex triangles", ov_tris.len() as u64, true)?;
+            for b in TableBuffer::ALL {
+                self.check_buffer(&format!("the {}", b.label()), writer.bytes(b), true)?;
+            }
             let scope = ErrorScopes::push(&self.device);
-            let init = |label: &str, contents: &[u8]| {
-                self.device
-                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                        label: Some(label),
-                        contents,
-                        usage: wgpu::BufferUsages::STORAGE
-                            | wgpu::BufferUsages::COPY_SRC
-                            | wgpu::BufferUsages::VERTEX,
-                    })
-            };
-            let buffers = StaticBuffers {
-                positions: init("positions", positions),
-                edges: init("edges", edges),
-                ovs: init("opposite vertices", ovs),
-                tris: init("triangles", tris),
-                ov_tris: init("opposite-vertex triangles", ov_tris),
-            };
+            let upload = |b: TableBuffer| self.upload_table(&writer, b);
+            let buffers = (|| {
+                Ok::<_, BackendError>(StaticBuffers {
+                    positions: upload(TableBuffer::Positions)?,
+                    edges: upload(TableBuffer::Edges)?,
+                    ov_offsets: upload(TableBuffer::OvOffsets)?,
+                    ov_refs: upload(TableBuffer::OvRefs)?,
+                    tris: upload(TableBuffer::Triangles)?,
+                    objects: upload(TableBuffer::Objects)?,
+                })
+            })();
             if let Some(e) = scope.pop() {
                 return Err(device_error(format!("uploading the scene: {e}")));
             }
-            // The copies from the staging memory of each initialised buffer run at the next
-            // submission; waiting for it now frees that memory before the next part is laid out.
-            self.wait(self.queue.submit([]))?;
-            Some(buffers)
+            Some(buffers?)
         };
         self.check_health()?;
-        drop((layout, triangles));
         Ok(Prepared {
             transforms: scene.transforms().collect(),
             index: SceneIndex::new(scene),
@@ -362,4 +353,48 @@ impl WgpuBackend {
             inline_exact: false,
         })
     }
+
+    /// Creates buffer `b` of the scene `writer` writes and fills it in chunks of
+    /// [`UPLOAD_CHUNK_WORDS`], waiting for the copies every few chunks, so that the staging
+    /// memory stays bounded whatever the scene's size.
+    fn upload_table(
+        &self,
+        writer: &TableWriter<'_>,
+        b: TableBuffer,
+    ) -> Result<wgpu::Buffer, BackendError> {
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(b.label()),
+            size: writer.bytes(b).max(4),
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::VERTEX,
+            mapped_at_creation: false,
+        });
+        let per_chunk = (UPLOAD_CHUNK_WORDS / b.words()).max(1);
+        let mut words = Vec::with_capacity(per_chunk * b.words());
+        let (mut first, mut staged) = (0, 0);
+        while first < writer.elements(b) {
+            let n = per_chunk.min(writer.elements(b) - first);
+            words.clear();
+            writer.write(b, first, n, &mut words);
+            let offset = (first * b.words() * 4) as u64;
+            self.queue
+                .write_buffer(&buffer, offset, bytemuck::cast_slice(&words));
+            first += n;
+            staged += 1;
+            if staged % CHUNKS_PER_WAIT == 0 {
+                self.wait(self.queue.submit([]))?;
+            }
+        }
+        // The last copies run at this submission; waiting frees their staging memory.
+        self.wait(self.queue.submit([]))?;
+        Ok(buffer)
+    }
 }
+
+/// Words (4 bytes) of one chunk of a static buffer's upload: 16 MiB.
+const UPLOAD_CHUNK_WORDS: usize = 1 << 20;
+
+/// Chunks staged between two waits for the device (64 MiB of staging memory at most).
+const CHUNKS_PER_WAIT: usize = 4;

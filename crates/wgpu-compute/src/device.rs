@@ -47,6 +47,12 @@ pub struct WgpuOptions {
     /// binding limit), exact mode on the device runs `orient_int` inline in the triangle step
     /// from then on for that scene, and the host fallback returns [`BackendError::Limit`].
     pub initial_uncertain_capacity: u32,
+    /// Initial entries of each light's compact silhouette list on the device; `None` (the
+    /// default) sizes it from the scene: a sixty-fourth of its edges, at least 65,536, at most
+    /// the edge count. A list that overflows grows to what it needs (with room for the host's
+    /// exact decisions) and the dispatch is repeated, so this only trades memory for the odd
+    /// repeated dispatch.
+    pub initial_list_capacity: Option<u64>,
     /// A cap, in bytes, on every buffer and storage binding, below the device's own limits (a
     /// memory budget; default `None`). Scenes whose static buffers exceed it (or the device's
     /// limits) are prepared in parts that fit ([`SceneParts`](shadowvol_silhouette::SceneParts)),
@@ -70,6 +76,7 @@ impl Default for WgpuOptions {
             full_readback: false,
             max_lights_per_batch: NonZeroUsize::new(64),
             initial_uncertain_capacity: 4096,
+            initial_list_capacity: None,
             max_buffer_bytes: None,
             max_workgroups_per_dimension: None,
             min_list_prefix: 256,

@@ -129,8 +129,12 @@ impl WgpuBackend {
             .is_none_or(|f| f.light_capacity < per_batch);
         if needs_new_frame {
             let capacity = self.options.initial_uncertain_capacity;
+            let lists = p
+                .frame
+                .as_ref()
+                .map_or_else(|| self.initial_list_capacity(edges), |f| f.list_capacity);
             let scope = ErrorScopes::push(&self.device);
-            let frame = self.create_frame(&gpu, edges, tris, objects, per_batch, capacity);
+            let frame = self.create_frame(&gpu, (edges, tris, objects), per_batch, capacity, lists);
             if let Some(e) = scope.pop() {
                 return Err(device_error(format!("allocating frame buffers: {e}")));
             }
@@ -214,7 +218,8 @@ impl WgpuBackend {
     /// device, the resolution of what its filter left) and the edge step, and brings back the
     /// counts, the first `k` entries of every list and `ku` uncertain records; dispatches again
     /// with a bigger uncertain buffer when the records overflowed it, or, on the device, with the
-    /// integer fallback inline when the buffer cannot grow enough.
+    /// integer fallback inline when the buffer cannot grow enough, and with longer compact lists
+    /// when a list overflowed its own or has no room for the host's exact decisions.
     fn first_round_trip(
         &self,
         p: &mut Prepared,
@@ -248,20 +253,33 @@ impl WgpuBackend {
             let (counts, output) = self.read_first_trip(frame, count, &at)?;
             stats.readback += t.elapsed();
             let uncertain = counts[count];
-            if uncertain <= frame.uncertain_capacity {
+            let host_records = if batch.host_resolves {
+                u64::from(uncertain)
+            } else {
+                0
+            };
+            // Each undecided pair the host decides changes at most 3 edges of its light's list.
+            let longest = counts[..count].iter().copied().max().unwrap_or(0);
+            let lists_need = (u64::from(longest) + 3 * host_records).min(dims.edges);
+            let lists_fit = lists_need <= frame.list_capacity;
+            if uncertain <= frame.uncertain_capacity && lists_fit {
                 return Ok(FirstTrip {
-                    host_records: if batch.host_resolves {
-                        u64::from(uncertain)
-                    } else {
-                        0
-                    },
+                    host_records,
                     counts,
                     output,
                     k: at.k,
                     ku: at.ku,
                 });
             }
-            self.after_overflow(p, gpu, steps, uncertain, stats)?;
+            if uncertain > frame.uncertain_capacity {
+                self.after_overflow(p, gpu, steps, uncertain, stats)?;
+            }
+            if !lists_fit {
+                let t = Instant::now();
+                let lists = lists_need.next_power_of_two().min(dims.edges);
+                self.replace_frame(p, gpu, None, Some(lists))?;
+                stats.upload += t.elapsed();
+            }
         }
     }
 
@@ -282,6 +300,10 @@ impl WgpuBackend {
             count as u32,
             frame.uncertain_capacity,
             dims.triangles as u32,
+            frame.list_capacity as u32,
+            0,
+            0,
+            0,
         ];
         self.queue
             .write_buffer(&frame.lights, 0, bytemuck::cast_slice(&batch.packed));
@@ -291,7 +313,9 @@ impl WgpuBackend {
         let lists_at = counters_bytes.next_multiple_of(8);
         // The second round trip brings what the prefixes leave.
         let room = self.limits.max_buffer_size.saturating_sub(lists_at);
-        let k = list_prefix.min(dims.edges).min(room / (count * 8).max(1));
+        let k = list_prefix
+            .min(frame.list_capacity)
+            .min(room / (count * 8).max(1));
         let ku = if batch.host_resolves {
             uncertain_prefix
                 .min(u64::from(frame.uncertain_capacity))
@@ -384,7 +408,7 @@ impl WgpuBackend {
             for li in 0..dims.lights as u64 {
                 encoder.copy_buffer_to_buffer(
                     &frame.silhouettes,
-                    li * dims.edges * 8,
+                    li * frame.list_capacity * 8,
                     staging,
                     at.lists_at + li * at.k * 8,
                     at.k * 8,
@@ -467,19 +491,36 @@ impl WgpuBackend {
         }
         let t = Instant::now();
         let capacity = uncertain.checked_next_power_of_two().unwrap_or(uncertain);
-        let edges = p.index.edge_count() as u64;
-        let tris = p.index.tri_count() as u64;
-        let objects = p.index.object_count() as u64;
+        self.replace_frame(p, gpu, Some(capacity), None)?;
+        stats.upload += t.elapsed();
+        Ok(())
+    }
+
+    /// Replaces the scene's frame buffers by ones with room for `uncertain` records and `lists`
+    /// entries per compact list (the current frame's where `None`), keeping its staging buffer.
+    fn replace_frame(
+        &self,
+        p: &mut Prepared,
+        gpu: &StaticBuffers,
+        uncertain: Option<u32>,
+        lists: Option<u64>,
+    ) -> Result<(), BackendError> {
+        let sizes = (
+            p.index.edge_count() as u64,
+            p.index.tri_count() as u64,
+            p.index.object_count() as u64,
+        );
         let frame = p
             .frame
             .as_mut()
             .ok_or_else(|| device_error("no frame buffers"))?;
+        let uncertain = uncertain.unwrap_or(frame.uncertain_capacity);
+        let lists = lists.unwrap_or(frame.list_capacity);
         let light_capacity = frame.light_capacity;
         let staging = frame.staging.take();
-        let mut frame = self.create_frame(gpu, edges, tris, objects, light_capacity, capacity)?;
+        let mut frame = self.create_frame(gpu, sizes, light_capacity, uncertain, lists)?;
         frame.staging = staging;
         p.frame = Some(frame);
-        stats.upload += t.elapsed();
         Ok(())
     }
 
@@ -546,7 +587,7 @@ impl WgpuBackend {
             for &(li, from, n) in &rest {
                 encoder.copy_buffer_to_buffer(
                     &frame.silhouettes,
-                    (li as u64 * edges + from) * 8,
+                    (li as u64 * frame.list_capacity + from) * 8,
                     readback,
                     offset,
                     n * 8,
@@ -655,7 +696,7 @@ impl WgpuBackend {
             if !words.is_empty() {
                 self.queue.write_buffer(
                     &frame.silhouettes,
-                    u64::from(*li) * edges * 8,
+                    u64::from(*li) * frame.list_capacity * 8,
                     bytemuck::cast_slice(&words),
                 );
             }
@@ -685,6 +726,17 @@ fn validate_lists(lists: &[Vec<(u32, i32)>], edges: usize) -> Result<(), Backend
 }
 
 impl WgpuBackend {
+    /// Entries of each compact list in a scene's first frame:
+    /// [`WgpuOptions::initial_list_capacity`](crate::WgpuOptions::initial_list_capacity), or a
+    /// sixty-fourth of its `edges` (a silhouette is usually far smaller), at least 65,536, at
+    /// most `edges`.
+    fn initial_list_capacity(&self, edges: u64) -> u64 {
+        self.options
+            .initial_list_capacity
+            .unwrap_or((edges / 64).max(1 << 16))
+            .clamp(1, edges.max(1))
+    }
+
     pub(crate) fn wait(&self, index: wgpu::SubmissionIndex) -> Result<(), BackendError> {
         let limit = gpu::wait_limit()?;
         self.device

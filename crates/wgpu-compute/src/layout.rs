@@ -21,20 +21,37 @@ pub(crate) fn pack_lights(
         .collect()
 }
 
-/// Buffers uploaded once per prepared scene (cheap to clone: wgpu buffers are shared handles).
+/// Buffers uploaded once per prepared scene, one per [`TableBuffer`](gpu::TableBuffer) (cheap
+/// to clone: wgpu buffers are shared handles).
 #[derive(Clone)]
 pub(crate) struct StaticBuffers {
     pub(crate) positions: wgpu::Buffer,
     pub(crate) edges: wgpu::Buffer,
-    pub(crate) ovs: wgpu::Buffer,
+    pub(crate) ov_offsets: wgpu::Buffer,
+    pub(crate) ov_refs: wgpu::Buffer,
     pub(crate) tris: wgpu::Buffer,
-    pub(crate) ov_tris: wgpu::Buffer,
+    pub(crate) objects: wgpu::Buffer,
+}
+
+impl StaticBuffers {
+    fn all(&self) -> [&wgpu::Buffer; 6] {
+        [
+            &self.positions,
+            &self.edges,
+            &self.ov_offsets,
+            &self.ov_refs,
+            &self.tris,
+            &self.objects,
+        ]
+    }
 }
 
 /// Per-frame buffers (lights in, results out), reused between frames while they are big enough.
 pub(crate) struct Frame {
     pub(crate) light_capacity: usize,
     pub(crate) uncertain_capacity: u32,
+    /// Entries of each light's compact list (at most the edge count).
+    pub(crate) list_capacity: u64,
     pub(crate) params: wgpu::Buffer,
     pub(crate) lights: wgpu::Buffer,
     pub(crate) mult: wgpu::Buffer,
@@ -43,6 +60,8 @@ pub(crate) struct Frame {
     pub(crate) staging: Option<wgpu::Buffer>,
     pub(crate) silhouettes: wgpu::Buffer,
     pub(crate) uncertain: wgpu::Buffer,
+    /// The triangle step's signs, `[light * tri_count + triangle]`.
+    pub(crate) signs: wgpu::Buffer,
     pub(crate) readback: Option<wgpu::Buffer>,
     pub(crate) bind_group: wgpu::BindGroup,
 }
@@ -74,7 +93,7 @@ impl Prepared {
         let host = self.index.heap_bytes() + vec_bytes(&self.transforms);
         let mut device = 0;
         if let Some(g) = &self.gpu {
-            for b in [&g.positions, &g.edges, &g.ovs, &g.tris, &g.ov_tris] {
+            for b in g.all() {
                 device += b.size();
             }
         }
@@ -86,6 +105,7 @@ impl Prepared {
                 &f.counters,
                 &f.silhouettes,
                 &f.uncertain,
+                &f.signs,
             ] {
                 device += b.size();
             }
@@ -162,16 +182,19 @@ impl WgpuBackend {
             .min(u64::from(u32::MAX)) as u32
     }
 
+    /// The frame buffers of a scene of `edges` edges, `tris` triangles and `objects` objects,
+    /// for `light_capacity` lights, `uncertain_capacity` uncertain records and compact lists of
+    /// `list_capacity` entries per light.
     pub(crate) fn create_frame(
         &self,
         gpu: &StaticBuffers,
-        edges: u64,
-        tris: u64,
-        objects: u64,
+        (edges, tris, objects): (u64, u64, u64),
         light_capacity: usize,
         uncertain_capacity: u32,
+        list_capacity: u64,
     ) -> Result<Frame, BackendError> {
         let lc = light_capacity as u64;
+        let list_capacity = list_capacity.clamp(1, edges.max(1));
         // As many records as the limits allow, at most the capacity asked for.
         let uncertain_capacity = uncertain_capacity.min(self.max_uncertain_records()).max(1);
         let uncertain_bytes = u64::from(uncertain_capacity) * 16;
@@ -189,7 +212,7 @@ impl WgpuBackend {
         };
         let params = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("params"),
-            size: 16,
+            size: 32,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -201,14 +224,16 @@ impl WgpuBackend {
         let mult = storage("multiplicities", edges * lc * 4, wgpu::BufferUsages::VERTEX);
         let counters_bytes = (lc + 1) * 4;
         let counters = storage("counters", counters_bytes, wgpu::BufferUsages::empty());
-        // The triangle step's signs, `[light * tri_count + triangle]` (kept alive by the bind
-        // group).
         let signs = storage(
             "triangle signs",
             (tris * lc * 4).max(4),
             wgpu::BufferUsages::empty(),
         );
-        let silhouettes = storage("silhouettes", edges * lc * 8, wgpu::BufferUsages::VERTEX);
+        let silhouettes = storage(
+            "silhouettes",
+            list_capacity * lc * 8,
+            wgpu::BufferUsages::VERTEX,
+        );
         let uncertain = storage("uncertain", uncertain_bytes, wgpu::BufferUsages::empty());
         let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("silhouette"),
@@ -217,20 +242,22 @@ impl WgpuBackend {
                 entry(0, &params),
                 entry(1, &gpu.positions),
                 entry(2, &gpu.edges),
-                entry(3, &gpu.ovs),
+                entry(3, &gpu.ov_refs),
                 entry(4, &lights),
                 entry(5, &mult),
                 entry(6, &counters),
                 entry(7, &silhouettes),
                 entry(8, &uncertain),
                 entry(9, &gpu.tris),
-                entry(10, &gpu.ov_tris),
+                entry(10, &gpu.ov_offsets),
                 entry(11, &signs),
+                entry(12, &gpu.objects),
             ],
         });
         Ok(Frame {
             light_capacity,
             uncertain_capacity,
+            list_capacity,
             params,
             lights,
             mult,
@@ -238,6 +265,7 @@ impl WgpuBackend {
             staging: None,
             silhouettes,
             uncertain,
+            signs,
             readback: None,
             bind_group,
         })

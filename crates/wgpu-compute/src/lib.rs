@@ -2,12 +2,13 @@
 //! all four accuracy modes, and an exact mode that is bit-identical to the `cpu` backend.
 //!
 //! # How it works
-//! * [`SilhouetteBackend::prepare`] concatenates every object of the scene into one
-//!   [`SceneLayout`](shadowvol_silhouette::gpu::SceneLayout) (global vertex ids, an edge record
-//!   `(a, b, first OV, object)` per edge, CSR opposite vertices) and one
-//!   [`TriangleLayout`](shadowvol_silhouette::gpu::TriangleLayout) (each triangle in canonical
-//!   vertex order, and the triangle and parity of each opposite-vertex slot), and uploads them
-//!   once.
+//! * [`SilhouetteBackend::prepare`] uploads the scene's edge tables, every object concatenated
+//!   with global ids, in their own form
+//!   ([`TableBuffer`](shadowvol_silhouette::gpu::TableBuffer): positions, each edge's ends, CSR
+//!   offsets, each opposite vertex as a reference `4 t + r` to its triangle `t`, the triangles in
+//!   canonical vertex order, and each object's bases), written in chunks straight from the
+//!   tables, with no host copy. A kernel finds an edge's or a triangle's object by binary search
+//!   over the bases.
 //! * [`SilhouetteBackend::extract`] uploads only the object-space lights (from
 //!   [`shadowvol_silhouette::object_lights`], an `objects × lights` table) and runs
 //!   `shaders/silhouette.wgsl` once for all objects and up to

@@ -159,9 +159,9 @@ pub(crate) fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry
 }
 
 /// Storage buffers the kernels bind in one stage.
-pub(crate) const STORAGE_BUFFERS: u32 = 11;
+pub(crate) const STORAGE_BUFFERS: u32 = 12;
 
-fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 12] {
+fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 13] {
     let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -179,7 +179,7 @@ fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 12] {
             ty: wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Uniform,
                 has_dynamic_offset: false,
-                min_binding_size: wgpu::BufferSize::new(16),
+                min_binding_size: wgpu::BufferSize::new(32),
             },
             count: None,
         },
@@ -194,5 +194,6 @@ fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 12] {
         storage(9, true),
         storage(10, true),
         storage(11, false),
+        storage(12, true),
     ]
 }

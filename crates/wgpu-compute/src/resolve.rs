@@ -14,7 +14,7 @@ use std::ops::Range;
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct UncertainTriangle {
     /// Global triangle (index into
-    /// [`TriangleLayout::tris`](shadowvol_silhouette::gpu::TriangleLayout::tris)).
+    /// [`TableLayout::tris`](shadowvol_silhouette::gpu::TableLayout::tris)).
     pub triangle: u32,
     /// Light index within the dispatch (0-based).
     pub light: u32,
@@ -22,7 +22,6 @@ pub struct UncertainTriangle {
 
 /// The `(edge, OV slot, light)` triples of `pairs`, three per pair: `edge_slots(t)` gives
 /// triangle `t`'s pairs (as
-/// [`TriangleLayout::edge_slots`](shadowvol_silhouette::gpu::TriangleLayout::edge_slots) or
 /// [`SceneIndex::edge_slots`](shadowvol_silhouette::gpu::SceneIndex::edge_slots)), `None` past the
 /// last of the scene's `triangles` triangles.
 ///

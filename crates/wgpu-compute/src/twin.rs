@@ -2,10 +2,9 @@
 //! `shaders/exact_int.wgsl`), for tests: nothing in the backend calls it.
 //!
 //! Each function here mirrors one WGSL function, statement for statement, and [`run_kernel`]
-//! mirrors the two steps: one "invocation" per global triangle of a [`TriangleLayout`] (a sign
-//! per light, undecided pairs appended in exact mode), then one per global edge of a
-//! [`SceneLayout`] (lights in the outer loop, opposite vertices in the inner one, the compact
-//! list appended when `m != 0`). [`extract`] runs the kernel and the backend's own host side on
+//! mirrors the two steps over a [`TableLayout`]: one "invocation" per global triangle (a sign
+//! per light, undecided pairs appended in exact mode), then one per global edge (lights in the
+//! outer loop, opposite vertices in the inner one, the compact list appended when `m != 0`). [`extract`] runs the kernel and the backend's own host side on
 //! a whole scene. When the GPU disagrees with the `cpu` backend, run the twin on the same input:
 //! if the twin is right, the fault is in the device or the WGSL translation; if it is wrong too,
 //! it is in the algorithm (vello keeps CPU shaders for the same reason).
@@ -37,7 +36,7 @@ use crate::shaders::{GPU_F32_INPUT_MAX, GPU_F32_PERM_MIN, GPU_F64_FILTER_EPS, TO
 use shadowvol_robust_math::filter::{self, TermsF32};
 use shadowvol_robust_math::{sign_f32, Accuracy, Light, F32_FILTER_EPS};
 use shadowvol_silhouette::gpu::twin::TwinInputs;
-use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout, TriangleLayout, NEGATIVE};
+use shadowvol_silhouette::gpu::{ExactFilter, SceneIndex, TableLayout};
 use shadowvol_silhouette::{BackendError, Multiplicities, TopologyScene};
 
 /// Twin of WGSL `filter_f32`: robust-math's `orient_filter_f32` (the same
@@ -126,14 +125,12 @@ pub fn triangle_sign(
     }
 }
 
-/// The inputs of one edge step: the scene, its triangles, the triangle step's signs
+/// The inputs of one edge step: the scene's tables, the triangle step's signs
 /// (`[light * tri_count + triangle]`) and the object-major lights.
 #[derive(Debug, Clone, Copy)]
 pub struct EdgeInputs<'a> {
-    /// Positions, edges and opposite vertices.
-    pub layout: &'a SceneLayout,
-    /// Triangles and the triangle of each opposite-vertex slot.
-    pub triangles: &'a TriangleLayout,
+    /// The flattened tables the kernels read.
+    pub layout: &'a TableLayout,
     /// The triangle step's signs (unused by `original` unless `touch_signs`).
     pub signs: &'a [i32],
     /// `lights[object * light_count + light]`, object space.
@@ -147,34 +144,35 @@ pub struct EdgeInputs<'a> {
 
 /// Twin of WGSL `edge_multiplicity`: `m` of global edge `e` for light `li`. `original` sums the
 /// naive per-(edge, OV) signs; the other modes sum the parity times the signs of the OVs'
-/// triangles. [`TOUCH`] triangles contribute nothing.
+/// triangles (a reference's rank 1 is the odd permutation). [`TOUCH`] triangles contribute
+/// nothing.
 ///
 /// # Panics
 /// Panics if `e`, `li` or the inputs are out of range.
 #[must_use]
 pub fn edge_multiplicity(x: &EdgeInputs<'_>, e: usize, li: usize, mode: Accuracy) -> i32 {
-    let [ia, ib, _, object] = x.layout.edges[e];
-    let row = li * x.triangles.tri_count();
-    let triangle = |k: usize| row + (x.triangles.ov_tris[k] & !NEGATIVE) as usize;
+    let [ia, ib] = x.layout.edges[e];
+    let object = x.layout.edge_object(e);
+    let row = li * x.layout.tri_count();
+    let triangle = |r: u32| row + (r >> 2) as usize;
     let mut m = 0i32;
     if mode == Accuracy::Original {
-        let l = x.lights[object as usize * x.light_count + li];
+        let l = x.lights[object * x.light_count + li];
         let (a, b) = (x.layout.position(ia), x.layout.position(ib));
         for k in x.layout.ov_slots(e) {
-            if x.touch_signs && x.signs[triangle(k)] == TOUCH {
+            let r = x.layout.ov_refs[k];
+            if x.touch_signs && x.signs[triangle(r)] == TOUCH {
                 continue;
             }
-            m += i32::from(sign_f32(a, b, l, x.layout.position(x.layout.ovs[k])));
+            let o = x.layout.position(x.layout.ref_vertex(r));
+            m += i32::from(sign_f32(a, b, l, o));
         }
     } else {
         for k in x.layout.ov_slots(e) {
-            let s = x.signs[triangle(k)];
+            let r = x.layout.ov_refs[k];
+            let s = x.signs[triangle(r)];
             if s != TOUCH {
-                m += if x.triangles.ov_tris[k] & NEGATIVE != 0 {
-                    -s
-                } else {
-                    s
-                };
+                m += if r & 3 == 1 { -s } else { s };
             }
         }
     }
@@ -204,18 +202,16 @@ pub struct KernelOutput {
 /// What the exact filter cannot certify is left to the host (see [`run_kernel_with`]).
 ///
 /// # Panics
-/// Panics if `lights.len() != layout.object_count() * light_count`, or `triangles` was not built
-/// against `layout`.
+/// Panics if `lights.len() != layout.object_count() * light_count`.
 #[must_use]
 pub fn run_kernel(
-    layout: &SceneLayout,
-    triangles: &TriangleLayout,
+    layout: &TableLayout,
     lights: &[[f32; 4]],
     light_count: usize,
     mode: Accuracy,
     filter: ExactFilter,
 ) -> KernelOutput {
-    run_kernel_with(layout, triangles, lights, light_count, mode, filter, false)
+    run_kernel_with(layout, lights, light_count, mode, filter, false)
 }
 
 /// [`run_kernel`] for the module of
@@ -230,8 +226,7 @@ pub fn run_kernel(
 /// As [`run_kernel`].
 #[must_use]
 pub fn run_kernel_with(
-    layout: &SceneLayout,
-    triangles: &TriangleLayout,
+    layout: &TableLayout,
     lights: &[[f32; 4]],
     light_count: usize,
     mode: Accuracy,
@@ -244,7 +239,7 @@ pub fn run_kernel_with(
         "one light per (object, light)"
     );
     let edge_count = layout.edge_count();
-    let tri_count = triangles.tri_count();
+    let tri_count = layout.tri_count();
     let mut out = KernelOutput {
         signs: vec![0; tri_count * light_count],
         mult: vec![0; edge_count * light_count],
@@ -254,10 +249,11 @@ pub fn run_kernel_with(
     };
     if mode != Accuracy::Original {
         // The triangle step: one invocation per triangle.
-        for (t, tr) in triangles.tris.iter().enumerate() {
-            let p = [tr[0], tr[1], tr[2]].map(|v| layout.position(v));
+        for (t, tr) in layout.tris.iter().enumerate() {
+            let p = tr.map(|v| layout.position(v));
+            let object = layout.tri_object(t);
             for li in 0..light_count {
-                let l = lights[tr[3] as usize * light_count + li];
+                let l = lights[object * light_count + li];
                 let s = match triangle_sign(mode, filter, false, p, l).0 {
                     Some(s) => s,
                     None => {
@@ -275,9 +271,9 @@ pub fn run_kernel_with(
     if device_exact {
         // `resolve_uncertain`: one invocation per appended pair.
         for r in &out.uncertain {
-            let tr = triangles.tris[r.triangle as usize];
-            let p = [tr[0], tr[1], tr[2]].map(|v| layout.position(v));
-            let l = lights[tr[3] as usize * light_count + r.light as usize];
+            let t = r.triangle as usize;
+            let p = layout.tris[t].map(|v| layout.position(v));
+            let l = lights[layout.tri_object(t) * light_count + r.light as usize];
             let s = triangle_sign(mode, filter, true, p, l).0;
             out.signs[r.light as usize * tri_count + r.triangle as usize] =
                 i32::from(s.expect("the integer path decides every pair"));
@@ -287,7 +283,6 @@ pub fn run_kernel_with(
     // The edge step: one invocation per edge.
     let x = EdgeInputs {
         layout,
-        triangles,
         signs: &out.signs,
         lights,
         light_count,
@@ -321,20 +316,19 @@ pub fn extract(
     out: &mut Multiplicities,
 ) -> Result<u64, BackendError> {
     let x = TwinInputs::new(scene, lights, crate::NAME)?;
-    let layout = &x.layout;
-    let triangles = TriangleLayout::build(scene, layout, crate::NAME)?;
-    let k = run_kernel(layout, &triangles, &x.packed, lights.len(), mode, filter);
+    let layout = TableLayout::build(scene, crate::NAME)?;
+    let k = run_kernel(&layout, &x.packed, lights.len(), mode, filter);
     out.reset(layout.edge_count(), lights.len());
+    let index = SceneIndex::new(scene);
     let records = if k.uncertain.is_empty() {
         Vec::new()
     } else {
-        let slots = triangles.edge_slots(layout);
-        let of = |t: usize| slots.get(t).copied();
-        expand_uncertain(&k.uncertain, of, slots.len(), lights.len())?
+        let of = |t: usize| index.edge_slots(t);
+        expand_uncertain(&k.uncertain, of, index.tri_count(), lights.len())?
     };
     let uncertain = records.len() as u64;
     let _patch = finish_batch(
-        layout,
+        &index,
         &x.object_lights,
         0..lights.len(),
         BatchOutput {

@@ -10,7 +10,7 @@ mod values;
 use common::backend;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_robust_math::Accuracy;
-use shadowvol_silhouette::gpu::ExactFilter;
+use shadowvol_silhouette::gpu::{ExactFilter, TableBuffer, TableWriter};
 use shadowvol_silhouette::{
     extract_once, invariant, BackendError, Light, Multiplicities, SilhouetteBackend, TopologyScene,
 };
@@ -301,6 +301,9 @@ fn gpu_full_readback_chunking_and_device_buffers_agree() -> Outcome {
         max_workgroups_per_dimension: Some(cap as u32),
         // No prefix in the first round trip: every list comes in the second.
         min_list_prefix: 0,
+        // One entry per list at first: the lists grow (with room for the host's decisions)
+        // and the dispatch is repeated.
+        initial_list_capacity: Some(1),
         ..host_fallback
     })
     .unwrap();
@@ -332,8 +335,10 @@ fn gpu_full_readback_chunking_and_device_buffers_agree() -> Outcome {
                     "{} {mode} light {l}",
                     case.name
                 );
+                let c = res.list_capacity as usize;
+                assert!(c <= e && counts[li] as usize <= c);
                 let mut list: Vec<(u32, i32)> =
-                    lists[li * e..li * e + counts[li] as usize].to_vec();
+                    lists[li * c..li * c + counts[li] as usize].to_vec();
                 list.sort_unstable();
                 let expected: Vec<(u32, i32)> = b
                     .silhouette(l)
@@ -437,10 +442,16 @@ fn gpu_buffer_limits_chunk_lights_or_split_the_scene() -> Outcome {
     )?;
     let case = common::case("many-objects-transformed");
     let edges = case.scene.total_edges() as u64;
-    // The edge records ((E + 1) x 16 bytes) are the largest static buffer: a cap below them
-    // prepares the scene in parts, with the same results in every mode.
+    let writer = TableWriter::new(&case.scene, "wgpu").unwrap();
+    let largest = TableBuffer::ALL
+        .map(|b| writer.bytes(b))
+        .into_iter()
+        .max()
+        .unwrap();
+    // A cap below the largest static buffer prepares the scene in parts, with the same results
+    // in every mode.
     let mut small = WgpuBackend::new(WgpuOptions {
-        max_buffer_bytes: Some((edges + 1) * 16 - 4),
+        max_buffer_bytes: Some(largest - 4),
         ..WgpuOptions::default()
     })
     .unwrap();
@@ -458,7 +469,7 @@ fn gpu_buffer_limits_chunk_lights_or_split_the_scene() -> Outcome {
     // A cap that holds the scene but only two lights' compact lists (8 bytes per edge each):
     // the lights run two per dispatch, with the same result.
     let mut capped = WgpuBackend::new(WgpuOptions {
-        max_buffer_bytes: Some((edges + 1) * 16),
+        max_buffer_bytes: Some(largest.max((edges + 1) * 16)),
         ..WgpuOptions::default()
     })
     .unwrap();

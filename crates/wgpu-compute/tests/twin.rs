@@ -5,7 +5,7 @@ mod common;
 
 use shadowvol_cpu::CpuBackend;
 use shadowvol_robust_math::{orient_exact, orient_filter_f32, Accuracy};
-use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout, TriangleLayout};
+use shadowvol_silhouette::gpu::{ExactFilter, TableLayout};
 use shadowvol_silhouette::{extract_once, invariant, object_lights, Multiplicities};
 use shadowvol_test_support::shapes::Rng;
 use shadowvol_wgpu_compute::twin;
@@ -49,22 +49,13 @@ fn deferred_resolution_decides_every_pair_the_host_would() {
     for case in common::all_cases() {
         let (expected, _) =
             extract_once(&mut cpu, &case.scene, &case.lights, Accuracy::Exact).unwrap();
-        let layout = SceneLayout::build(&case.scene, "wgpu").unwrap();
-        let triangles = TriangleLayout::build(&case.scene, &layout, "wgpu").unwrap();
+        let layout = TableLayout::build(&case.scene, "wgpu").unwrap();
         let obj = object_lights(case.scene.transforms(), &case.lights);
         let n = case.lights.len();
         let packed: Vec<[f32; 4]> = obj.iter().flat_map(|v| v.iter().copied()).collect();
         for filter in [ExactFilter::F64, ExactFilter::F32] {
             let run = |device_exact| {
-                twin::run_kernel_with(
-                    &layout,
-                    &triangles,
-                    &packed,
-                    n,
-                    Accuracy::Exact,
-                    filter,
-                    device_exact,
-                )
+                twin::run_kernel_with(&layout, &packed, n, Accuracy::Exact, filter, device_exact)
             };
             let (host, device) = (run(false), run(true));
             assert!(device.uncertain.is_empty(), "{}", case.name);
@@ -127,22 +118,14 @@ fn hard_cases_send_triples_to_the_host() {
 #[test]
 fn kernel_records_are_well_formed() {
     for case in common::all_cases() {
-        let layout = SceneLayout::build(&case.scene, "wgpu").unwrap();
-        let triangles = TriangleLayout::build(&case.scene, &layout, "wgpu").unwrap();
+        let layout = TableLayout::build(&case.scene, "wgpu").unwrap();
         let obj = object_lights(case.scene.transforms(), &case.lights);
         let n = case.lights.len();
         let packed: Vec<[f32; 4]> = obj.iter().flat_map(|v| v.iter().copied()).collect();
-        let k = twin::run_kernel(
-            &layout,
-            &triangles,
-            &packed,
-            n,
-            Accuracy::Exact,
-            ExactFilter::F32,
-        );
+        let k = twin::run_kernel(&layout, &packed, n, Accuracy::Exact, ExactFilter::F32);
         let e = layout.edge_count();
         assert_eq!(k.mult.len(), e * n);
-        assert_eq!(k.signs.len(), triangles.tri_count() * n);
+        assert_eq!(k.signs.len(), layout.tri_count() * n);
         assert!(k.signs.iter().all(|s| (-1..=1).contains(s)));
         for (li, list) in k.silhouettes.iter().enumerate() {
             let nonzero = k.mult[li * e..(li + 1) * e]
@@ -155,10 +138,10 @@ fn kernel_records_are_well_formed() {
                 .all(|&(edge, m)| k.mult[li * e + edge as usize] == m));
         }
         for r in &k.uncertain {
-            assert!((r.triangle as usize) < triangles.tri_count());
+            assert!((r.triangle as usize) < layout.tri_count());
             assert!((r.light as usize) < n);
             assert_eq!(
-                k.signs[r.light as usize * triangles.tri_count() + r.triangle as usize],
+                k.signs[r.light as usize * layout.tri_count() + r.triangle as usize],
                 0
             );
         }

@@ -245,7 +245,8 @@ impl ShadowPass {
         let zfail: Vec<usize> = (0..objects)
             .filter(|&o| rs.state.techniques[light * objects + o] == Technique::ZFail)
             .collect();
-        let range = |o: usize| (rs.tri_offsets[o], rs.tri_offsets[o + 1]);
+        let first = |o: usize| rs.bases[o][FIRST_TRIANGLE];
+        let range = |o: usize| (first(o), first(o + 1));
         pass.set_pipeline(&self.draw.cap_ccw);
         for &o in &zfail {
             let (a, b) = range(o);

@@ -1,13 +1,14 @@
-//! The flattened scene the GPU-resident pass uploads once: the `wgpu` silhouette backend's
-//! [`SceneLayout`] (positions, edges, opposite vertices) and [`TriangleLayout`] (the triangles
-//! and, per opposite-vertex slot, its triangle and permutation parity), plus the object of each
-//! vertex.
+//! The flattened scene the GPU-resident pass uploads once: the scene's edge tables as the `wgpu`
+//! silhouette backend uploads them ([`TableLayout`]: positions, edge ends, CSR offsets, each
+//! opposite vertex as a reference to its triangle, canonical triangles, object bases), plus the
+//! object of each vertex.
 
 use crate::RenderError;
-use shadowvol_silhouette::gpu::{SceneLayout, TriangleLayout};
+use shadowvol_silhouette::gpu::{TableLayout, FIRST_VERTEX};
 use shadowvol_silhouette::TopologyScene;
 
-pub use shadowvol_silhouette::gpu::NEGATIVE;
+/// Set on a side record (a global edge) for `m < 0`: the side is drawn with the edge reversed.
+pub const NEGATIVE: u32 = 0x8000_0000;
 
 /// The name the pass gives itself in layout errors.
 const NAME: &str = "gpu pipeline";
@@ -16,11 +17,8 @@ const NAME: &str = "gpu pipeline";
 /// objects concatenated, in scene order).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ResidentLayout {
-    /// Positions, edges and opposite vertices, exactly as the `wgpu` backend lays them out.
-    pub scene: SceneLayout,
-    /// Triangles and the triangle of each opposite-vertex slot, as the `wgpu` backend lays them
-    /// out.
-    pub triangles: TriangleLayout,
+    /// The scene's tables, exactly as the `wgpu` backend uploads them.
+    pub tables: TableLayout,
     /// The object of each global vertex.
     pub vertex_objects: Vec<u32>,
 }
@@ -30,22 +28,32 @@ impl ResidentLayout {
     ///
     /// # Errors
     /// [`RenderError::InvalidInput`] when the scene has more vertices, edges, opposite vertices,
-    /// triangles or objects than `u32` ids can name (the sign bit of a triangle id is the parity,
-    /// so at most 2^31 - 1 triangles).
+    /// triangles or objects than `u32` ids can name (an opposite vertex names its triangle `t`
+    /// as `4 t + r`, so fewer than 2^30 triangles); the edge ids of side records keep their top
+    /// bit for [`NEGATIVE`].
     pub fn build(scene: &TopologyScene) -> Result<Self, RenderError> {
         let invalid =
             |e: shadowvol_silhouette::BackendError| RenderError::InvalidInput(e.to_string());
-        let layout = SceneLayout::build(scene, NAME).map_err(invalid)?;
-        let triangles = TriangleLayout::build(scene, &layout, NAME).map_err(invalid)?;
-        let vertex_objects = layout
-            .vertex_offsets
+        let tables = TableLayout::build(scene, NAME).map_err(invalid)?;
+        if tables.edge_count() >= NEGATIVE as usize {
+            return Err(RenderError::InvalidInput(format!(
+                "the scene has {} edges; the {NAME} names them with 31 bits",
+                tables.edge_count()
+            )));
+        }
+        let vertex_objects = tables
+            .objects
             .windows(2)
             .enumerate()
-            .flat_map(|(oi, w)| std::iter::repeat_n(oi as u32, (w[1] - w[0]) as usize))
+            .flat_map(|(oi, w)| {
+                std::iter::repeat_n(
+                    oi as u32,
+                    (w[1][FIRST_VERTEX] - w[0][FIRST_VERTEX]) as usize,
+                )
+            })
             .collect();
         Ok(Self {
-            scene: layout,
-            triangles,
+            tables,
             vertex_objects,
         })
     }
@@ -62,19 +70,19 @@ impl ResidentLayout {
     /// Number of triangles (all objects).
     #[must_use]
     pub fn tri_count(&self) -> usize {
-        self.triangles.tri_count()
+        self.tables.tri_count()
     }
 
     /// Number of objects.
     #[must_use]
     pub fn object_count(&self) -> usize {
-        self.triangles.tri_offsets.len().saturating_sub(1)
+        self.tables.object_count()
     }
 
     /// Side records a light can need at most: `Σ |m|` over edges is at most the number of
     /// opposite vertices (at least 1, so buffers are never empty).
     #[must_use]
     pub fn capacity(&self) -> usize {
-        self.scene.ovs.len().max(1)
+        self.tables.ov_refs.len().max(1)
     }
 }

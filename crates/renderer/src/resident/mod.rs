@@ -65,7 +65,7 @@ use crate::{Camera, RenderError};
 use glam::{Affine3A, DAffine3};
 use shadowvol_robust_math::Accuracy;
 use shadowvol_scenes::SceneLight;
-use shadowvol_silhouette::gpu::{mode_code, ExactFilter};
+use shadowvol_silhouette::gpu::{mode_code, ExactFilter, FIRST_EDGE, FIRST_TRIANGLE};
 use shadowvol_silhouette::{object_light, vec_bytes, PreparedBytes};
 use shadowvol_wgpu_compute::shaders;
 use wgpu::util::DeviceExt;
@@ -82,7 +82,7 @@ pub const SHADER_WGSL: &str = include_str!("../../../../shaders/render_raster.wg
 /// `WORKGROUP_SIZE`, whose module they join).
 const WORKGROUP: u32 = shaders::WORKGROUP_SIZE;
 /// Storage buffers the edge pass binds in one stage.
-const STORAGE_BUFFERS: u32 = 10;
+const STORAGE_BUFFERS: u32 = 11;
 /// Byte stride of the per-light uniforms (dynamic offsets).
 const LIGHT_STRIDE: u64 = 256;
 /// Bytes of one light uniform (`LightU`).
@@ -337,12 +337,14 @@ pub struct ResidentScene {
     /// `[object, 0]` (a scene drawn in parts); empty: every object is its own surface.
     pub(crate) ids: Vec<[u32; 2]>,
     counts: LayoutCounts,
-    tri_offsets: Vec<u32>,
+    /// Per object `(first edge, first triangle, first vertex, first OV slot)`, plus a sentinel.
+    bases: Vec<[u32; 4]>,
     positions: wgpu::Buffer,
     edges: wgpu::Buffer,
-    ovs: wgpu::Buffer,
+    ov_offsets: wgpu::Buffer,
+    ov_refs: wgpu::Buffer,
     tris: wgpu::Buffer,
-    ov_tris: wgpu::Buffer,
+    objects: wgpu::Buffer,
     vertex_objects: wgpu::Buffer,
     world: wgpu::Buffer,
     world_out: wgpu::BindGroup,
@@ -360,18 +362,19 @@ pub struct ResidentScene {
 }
 
 impl ResidentScene {
-    /// What the scene holds beyond its edge tables: its per-object triangle offsets on the host
+    /// What the scene holds beyond its edge tables: its per-object bases on the host
     /// (the layout itself is freed once uploaded), and every device buffer (the scene's, the
     /// surface vertices', and those of the last frame's lights).
     #[must_use]
     pub fn bytes(&self) -> PreparedBytes {
-        let host = vec_bytes(&self.tri_offsets);
+        let host = vec_bytes(&self.bases);
         let mut buffers = vec![
             &self.positions,
             &self.edges,
-            &self.ovs,
+            &self.ov_offsets,
+            &self.ov_refs,
             &self.tris,
-            &self.ov_tris,
+            &self.objects,
             &self.vertex_objects,
             &self.world,
             &self.pending_dispatch.0,
@@ -441,7 +444,7 @@ impl LayoutCounts {
             objects: layout.object_count(),
             tris: layout.tri_count(),
             vertices: layout.vertex_objects.len(),
-            edges: layout.scene.edge_count(),
+            edges: layout.tables.edge_count(),
             capacity: layout.capacity(),
         }
     }

@@ -174,6 +174,7 @@ impl ExtractPipelines {
                 storage(9, compute, true),
                 storage(10, compute, true),
                 storage(11, compute, false),
+                storage(12, compute, true),
             ],
         );
         let c1 = bind_group_layout(

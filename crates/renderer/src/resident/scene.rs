@@ -21,11 +21,13 @@ impl ShadowPass {
     /// # Errors
     /// As [`ShadowPass::prepare`].
     pub fn prepare_layout(&self, layout: ResidentLayout) -> Result<ResidentScene, RenderError> {
-        let positions = self.scene_buffer("positions", &layout.scene.positions)?;
-        let edges = self.scene_buffer("edges", &layout.scene.edges)?;
-        let ovs = self.scene_buffer("opposite vertices", &layout.scene.ovs)?;
-        let tris = self.scene_buffer("triangles", &layout.triangles.tris)?;
-        let ov_tris = self.scene_buffer("opposite-vertex triangles", &layout.triangles.ov_tris)?;
+        let t = &layout.tables;
+        let positions = self.scene_buffer("positions", &t.positions)?;
+        let edges = self.scene_buffer("edge ends", &t.edges)?;
+        let ov_offsets = self.scene_buffer("opposite-vertex offsets", &t.ov_offsets)?;
+        let ov_refs = self.scene_buffer("opposite-vertex references", &t.ov_refs)?;
+        let tris = self.scene_buffer("triangles", &t.tris)?;
+        let objects = self.scene_buffer("object bases", &t.objects)?;
         let vertex_objects = self.scene_buffer("vertex objects", &layout.vertex_objects)?;
         let (world, world_out) = self.world_positions(layout.vertex_objects.len())?;
         let pending_dispatch = self.pending_dispatch();
@@ -36,18 +38,19 @@ impl ShadowPass {
         Ok(ResidentScene {
             ids: Vec::new(),
             counts: LayoutCounts::of(&layout),
-            tri_offsets: layout.triangles.tri_offsets,
+            bases: layout.tables.objects,
             positions,
             edges,
-            ovs,
+            ov_offsets,
+            ov_refs,
             tris,
-            ov_tris,
+            objects,
             vertex_objects,
             world,
             world_out,
             pending_dispatch,
             surface,
-            params: self.uniform_buffer("resident params", 16),
+            params: self.uniform_buffer("resident params", 32),
             rparams: self.uniform_buffer("resident frame params", 16),
             globals: self.uniform_buffer("resident globals", 96),
             frame: None,
@@ -224,7 +227,7 @@ impl ShadowPass {
         q.write_buffer(
             &fb.buffers.objects,
             0,
-            bytemuck::cast_slice(&object_rows(f, &rs.tri_offsets, &rs.ids)),
+            bytemuck::cast_slice(&object_rows(f, &rs.bases, &rs.ids)),
         );
         self.write_params(rs, f);
         q.write_buffer(&fb.buffers.light_u, 0, &light_uniforms(rs, f, slots));
@@ -282,7 +285,7 @@ impl ShadowPass {
         q.write_buffer(
             &rs.params,
             0,
-            bytemuck::cast_slice(&[edge_count, f.lights.len() as u32, 0, tri_count]),
+            bytemuck::cast_slice(&[edge_count, f.lights.len() as u32, 0, tri_count, 0, 0, 0, 0]),
         );
         let objects = rs.counts.objects;
         let capacity = rs.counts.capacity as u32;
@@ -378,11 +381,12 @@ impl ShadowPass {
                 entry(0, &rs.params),
                 entry(1, &rs.positions),
                 entry(2, &rs.edges),
-                entry(3, &rs.ovs),
+                entry(3, &rs.ov_refs),
                 entry(4, &b.lights),
                 entry(9, &rs.tris),
-                entry(10, &rs.ov_tris),
+                entry(10, &rs.ov_offsets),
                 entry(11, &b.signs),
+                entry(12, &rs.objects),
             ],
         });
         let c1 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -493,8 +497,9 @@ fn check_frame_lengths(rs: &ResidentScene, f: &PassFrame<'_>) -> Result<(), Rend
     check("scissors", f.scissors.len(), n_lights)
 }
 
-/// Per object: its camera-relative transform rows, its albedo and its first triangle.
-fn object_rows(f: &PassFrame<'_>, tri_offsets: &[u32], ids: &[[u32; 2]]) -> Vec<[u32; 4]> {
+/// Per object: its camera-relative transform rows, its albedo, and its first triangle, pixel
+/// ids and first edge.
+fn object_rows(f: &PassFrame<'_>, bases: &[[u32; 4]], ids: &[[u32; 2]]) -> Vec<[u32; 4]> {
     // Camera-relative transforms composed in f64 and rounded once, so large world
     // coordinates keep their precision near the eye.
     let eye = f.camera.eye.as_dvec3();
@@ -520,7 +525,8 @@ fn object_rows(f: &PassFrame<'_>, tri_offsets: &[u32], ids: &[[u32; 2]]) -> Vec<
         let a = f.albedo[oi];
         objs.push([a[0], a[1], a[2], 1.0].map(f32::to_bits));
         let [surface, first] = ids.get(oi).copied().unwrap_or([oi as u32, 0]);
-        objs.push([tri_offsets[oi], surface + 1, first, 0]);
+        let b = bases[oi];
+        objs.push([b[FIRST_TRIANGLE], surface + 1, first, b[FIRST_EDGE]]);
     }
     if objs.is_empty() {
         objs.push([0; 4]);

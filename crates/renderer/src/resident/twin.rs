@@ -16,7 +16,7 @@ use shadowvol_wgpu_compute::shaders::TOUCH;
 use shadowvol_wgpu_compute::twin;
 
 fn position(layout: &ResidentLayout, id: u32) -> [f32; 3] {
-    layout.scene.position(id)
+    layout.tables.position(id)
 }
 
 fn touches(p: [f32; 3], l: [f32; 4]) -> bool {
@@ -46,13 +46,13 @@ pub fn triangle_signs(
     let objects = layout.object_count();
     let mut signs = vec![0i32; n * light_count];
     let mut integer = 0u64;
-    for (t, tr) in layout.triangles.tris.iter().enumerate() {
+    for (t, tr) in layout.tables.tris.iter().enumerate() {
         let (p0, p1, p2) = (
             position(layout, tr[0]),
             position(layout, tr[1]),
             position(layout, tr[2]),
         );
-        let obj = tr[3] as usize;
+        let obj = layout.tables.tri_object(t);
         for li in 0..light_count {
             if techniques[li * objects + obj] == technique::CULLED {
                 continue;
@@ -84,12 +84,11 @@ pub fn side_records(
     techniques: &[u32],
     mode: Accuracy,
 ) -> (Vec<i32>, Vec<LightRecords>) {
-    let s = &layout.scene;
+    let s = &layout.tables;
     let edges = s.edge_count();
     let objects = layout.object_count();
     let x = twin::EdgeInputs {
         layout: s,
-        triangles: &layout.triangles,
         signs,
         lights,
         light_count,
@@ -97,8 +96,8 @@ pub fn side_records(
     };
     let mut mult = vec![0i32; edges * light_count];
     let mut out = vec![LightRecords::default(); light_count];
-    for (e, rec) in s.edges[..edges].iter().enumerate() {
-        let obj = rec[3] as usize;
+    for e in 0..edges {
+        let obj = s.edge_object(e);
         for li in 0..light_count {
             let tech = techniques[li * objects + obj];
             if tech == technique::CULLED {

@@ -48,7 +48,7 @@ impl HostScene for SceneLayout {
 }
 
 /// A scene's objects in the flat numbering of [`SceneLayout`] and
-/// [`TriangleLayout`](super::TriangleLayout), read from their edge tables: each object's first
+/// [`TableLayout`](super::TableLayout), read from their edge tables: each object's first
 /// global edge, OV slot and triangle (24 bytes an object) beside the tables it shares with the
 /// scene. A backend that keeps this instead of the layouts holds no copy of the scene on the
 /// host once the layouts are uploaded.
@@ -65,7 +65,7 @@ pub struct SceneIndex {
 
 impl SceneIndex {
     /// The index of `scene`, in the numbering [`SceneLayout::build`] and
-    /// [`TriangleLayout::build`](super::TriangleLayout::build) give it.
+    /// [`TableLayout::build`](super::TableLayout::build) give it.
     #[must_use]
     pub fn new(scene: &TopologyScene) -> Self {
         let prefix = |f: fn(&EdgeTable) -> usize| {
@@ -129,9 +129,8 @@ impl SceneIndex {
         (o, e - self.edges[o])
     }
 
-    /// The three `(global edge, global OV slot)` pairs of global triangle `t` (as
-    /// [`TriangleLayout::edge_slots`](super::TriangleLayout::edge_slots) lists them, in slot
-    /// order), found in its table: the edge by binary search, the slot among the edge's
+    /// The three `(global edge, global OV slot)` pairs of global triangle `t`, in slot order,
+    /// found in its table: the edge by binary search, the slot among the edge's
     /// references. `None` when `t` is out of range or the table lacks one of them (a table not
     /// made by [`EdgeTable::build`]).
     #[must_use]
@@ -191,7 +190,7 @@ impl HostScene for SceneIndex {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gpu::TriangleLayout;
+    use crate::gpu::TableLayout;
     use glam::{Affine3A, Vec3};
     use shadowvol_test_support::shapes;
 
@@ -214,12 +213,12 @@ mod tests {
     fn the_index_answers_as_the_layout_does() {
         let scene = scene();
         let layout = SceneLayout::build(&scene, "t").unwrap();
-        let tris = TriangleLayout::build(&scene, &layout, "t").unwrap();
+        let tables = TableLayout::build(&scene, "t").unwrap();
         let index = SceneIndex::new(&scene);
         assert_eq!(HostScene::edge_count(&index), layout.edge_count());
         assert_eq!(index.object_count(), layout.object_count());
         assert_eq!(index.slot_count(), layout.ovs.len());
-        assert_eq!(index.tri_count(), tris.tri_count());
+        assert_eq!(index.tri_count(), tables.tri_count());
         for e in 0..layout.edge_count() {
             assert_eq!(index.ov_slots(e), layout.ov_slots(e), "edge {e}");
             assert_eq!(index.edge_points(e), layout.edge_points(e), "edge {e}");
@@ -231,10 +230,21 @@ mod tests {
                 );
             }
         }
-        let slots = tris.edge_slots(&layout);
-        for (t, want) in slots.iter().enumerate() {
-            assert_eq!(index.edge_slots(t).as_ref(), Some(want), "triangle {t}");
+        // Each slot's triangle, from the references the kernels read, in slot order.
+        let mut slots = vec![Vec::new(); tables.tri_count()];
+        for e in 0..tables.edge_count() {
+            for k in tables.ov_slots(e) {
+                let t = EdgeTable::ov_triangle(tables.ov_refs[k]) as usize;
+                slots[t].push((e as u32, k as u32));
+            }
         }
-        assert_eq!(index.edge_slots(tris.tri_count()), None);
+        for (t, want) in slots.iter().enumerate() {
+            assert_eq!(
+                index.edge_slots(t).map(Vec::from),
+                Some(want.clone()),
+                "triangle {t}"
+            );
+        }
+        assert_eq!(index.edge_slots(tables.tri_count()), None);
     }
 }

@@ -1,12 +1,12 @@
 //! What the GPU backends (`wgpu`, `opencl`, `vulkan`) share, in one place:
 //!
-//! * [`SceneLayout`]: the flattened scene every kernel reads (all objects concatenated, global
-//!   vertex ids, one `(a, b, first OV slot, object)` record per edge plus a sentinel, CSR opposite
-//!   vertices);
-//! * [`TriangleLayout`]: the triangles of that scene, for two-step kernels (one sign per
-//!   triangle, then one sum per edge);
-//! * [`TableLayout`]: the scene's edge tables concatenated in their own form, and
-//!   [`TableWriter`], which writes any range of them straight from the tables;
+//! * [`SceneLayout`]: the flattened scene the `opencl` and `vulkan` kernels read (all objects
+//!   concatenated, global vertex ids, one `(a, b, first OV slot, object)` record per edge plus a
+//!   sentinel, CSR opposite vertices);
+//! * [`TableLayout`]: the scene's edge tables concatenated in their own form, for the two-step
+//!   kernels (one sign per triangle, then one sum per edge: `wgpu` and the renderer's
+//!   GPU-resident pass), and [`TableWriter`], which writes any range of them straight from the
+//!   tables, so a backend uploads them in chunks with no host copy;
 //! * [`mode_code`]: the accuracy-mode code sent to the shaders, and [`ExactFilter`]: the
 //!   precision of the certified filter their exact mode runs;
 //! * [`UncertainRecord`]: the `(edge, OV slot, light)` triple a kernel appends when its exact-mode
@@ -29,7 +29,6 @@ mod host;
 mod layout;
 mod resolve;
 mod tables;
-mod triangles;
 pub mod twin;
 mod wait;
 
@@ -41,7 +40,6 @@ pub use tables::{
     object_of, TableBuffer, TableLayout, TableWriter, FIRST_EDGE, FIRST_SLOT, FIRST_TRIANGLE,
     FIRST_VERTEX,
 };
-pub use triangles::{TriangleLayout, NEGATIVE};
 pub use wait::{describe_wait_limit, wait_limit, DEFAULT_TIMEOUT, TIMEOUT_ENV};
 
 use shadowvol_robust_math::Accuracy;
