@@ -393,8 +393,8 @@ impl WgpuBackend {
     }
 }
 
-/// Words (4 bytes) of one chunk of a static buffer's upload: 16 MiB.
+/// Words (4 bytes) of one chunk of a static buffer's upload: 4 MiB.
 const UPLOAD_CHUNK_WORDS: usize = 1 << 20;
 
-/// Chunks staged between two waits for the device (64 MiB of staging memory at most).
+/// Chunks staged between two waits for the device (16 MiB of staging memory at most).
 const CHUNKS_PER_WAIT: usize = 4;
