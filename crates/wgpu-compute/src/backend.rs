@@ -3,7 +3,7 @@
 //! `extract` runs [`crate::dispatch`]).
 
 use crate::device::{device_error, ErrorScopes, Health, WgpuOptions};
-use crate::layout::{Prepared, StaticBuffers};
+use crate::layout::{upload_table, Prepared, StaticBuffers};
 use crate::pipeline::Pipelines;
 use crate::{shaders, NAME};
 use shadowvol_robust_math::{Accuracy, Light};
@@ -325,7 +325,14 @@ impl WgpuBackend {
                 self.check_buffer(&format!("the {}", b.label()), writer.bytes(b), true)?;
             }
             let scope = ErrorScopes::push(&self.device);
-            let upload = |b: TableBuffer| self.upload_table(&writer, b);
+            let usage = wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::VERTEX;
+            let upload = |b: TableBuffer| {
+                upload_table(&self.device, &self.queue, &writer, b, usage, |i| {
+                    self.wait(i)
+                })
+            };
             let buffers = (|| {
                 Ok::<_, BackendError>(StaticBuffers {
                     positions: upload(TableBuffer::Positions)?,
@@ -353,48 +360,4 @@ impl WgpuBackend {
             inline_exact: false,
         })
     }
-
-    /// Creates buffer `b` of the scene `writer` writes and fills it in chunks of
-    /// [`UPLOAD_CHUNK_WORDS`], waiting for the copies every few chunks, so that the staging
-    /// memory stays bounded whatever the scene's size.
-    fn upload_table(
-        &self,
-        writer: &TableWriter<'_>,
-        b: TableBuffer,
-    ) -> Result<wgpu::Buffer, BackendError> {
-        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(b.label()),
-            size: writer.bytes(b).max(4),
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_DST
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::VERTEX,
-            mapped_at_creation: false,
-        });
-        let per_chunk = (UPLOAD_CHUNK_WORDS / b.words()).max(1);
-        let mut words = Vec::with_capacity(per_chunk * b.words());
-        let (mut first, mut staged) = (0, 0);
-        while first < writer.elements(b) {
-            let n = per_chunk.min(writer.elements(b) - first);
-            words.clear();
-            writer.write(b, first, n, &mut words);
-            let offset = (first * b.words() * 4) as u64;
-            self.queue
-                .write_buffer(&buffer, offset, bytemuck::cast_slice(&words));
-            first += n;
-            staged += 1;
-            if staged % CHUNKS_PER_WAIT == 0 {
-                self.wait(self.queue.submit([]))?;
-            }
-        }
-        // The last copies run at this submission; waiting frees their staging memory.
-        self.wait(self.queue.submit([]))?;
-        Ok(buffer)
-    }
 }
-
-/// Words (4 bytes) of one chunk of a static buffer's upload: 4 MiB.
-const UPLOAD_CHUNK_WORDS: usize = 1 << 20;
-
-/// Chunks staged between two waits for the device (16 MiB of staging memory at most).
-const CHUNKS_PER_WAIT: usize = 4;

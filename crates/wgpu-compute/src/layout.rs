@@ -5,7 +5,7 @@
 use crate::backend::WgpuBackend;
 use crate::device::limit_error;
 use crate::pipeline::entry;
-use shadowvol_silhouette::gpu::{self, SceneIndex};
+use shadowvol_silhouette::gpu::{self, SceneIndex, TableBuffer, TableWriter};
 use shadowvol_silhouette::{vec_bytes, BackendError, PreparedBytes};
 
 /// Object-space lights packed object-major for lights `first..first + count`, as uploaded:
@@ -20,6 +20,58 @@ pub(crate) fn pack_lights(
         .flat_map(|per_object| per_object[first..first + count].iter().copied())
         .collect()
 }
+
+/// Creates buffer `b` of the tables `writer` writes, with `usage` (and `COPY_DST`), and fills it
+/// in chunks of 4 MiB written straight from the scene's edge tables; every 16 MiB it submits
+/// and calls `wait` with the submission, which must wait for the device, so that the staging
+/// memory of the copies stays bounded whatever the scene's size. The last chunk is waited for
+/// too. An empty buffer is 16 zero bytes (a binding cannot be empty).
+///
+/// No host copy of the scene is made: this is how the `wgpu` backend and the renderer's
+/// GPU-resident pass upload a scene.
+///
+/// # Errors
+/// The first error of `wait`. The caller checks the buffer against the device's limits
+/// ([`TableWriter::bytes`]) and catches validation errors in an error scope.
+pub fn upload_table<E>(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    writer: &TableWriter<'_>,
+    b: TableBuffer,
+    usage: wgpu::BufferUsages,
+    mut wait: impl FnMut(wgpu::SubmissionIndex) -> Result<(), E>,
+) -> Result<wgpu::Buffer, E> {
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(b.label()),
+        size: writer.bytes(b).max(16),
+        usage: usage | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let per_chunk = (UPLOAD_CHUNK_WORDS / b.words()).max(1);
+    let mut words = Vec::with_capacity(per_chunk * b.words());
+    let (mut first, mut staged) = (0, 0);
+    while first < writer.elements(b) {
+        let n = per_chunk.min(writer.elements(b) - first);
+        words.clear();
+        writer.write(b, first, n, &mut words);
+        let offset = (first * b.words() * 4) as u64;
+        queue.write_buffer(&buffer, offset, bytemuck::cast_slice(&words));
+        first += n;
+        staged += 1;
+        if staged % CHUNKS_PER_WAIT == 0 {
+            wait(queue.submit([]))?;
+        }
+    }
+    // The last copies run at this submission; waiting frees their staging memory.
+    wait(queue.submit([]))?;
+    Ok(buffer)
+}
+
+/// Words (4 bytes) of one chunk of a static buffer's upload: 4 MiB.
+const UPLOAD_CHUNK_WORDS: usize = 1 << 20;
+
+/// Chunks staged between two waits for the device (16 MiB of staging memory at most).
+const CHUNKS_PER_WAIT: usize = 4;
 
 /// Buffers uploaded once per prepared scene, one per [`TableBuffer`](gpu::TableBuffer) (cheap
 /// to clone: wgpu buffers are shared handles).
