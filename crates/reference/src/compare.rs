@@ -3,9 +3,10 @@
 
 use crate::states::{
     faces_light, light_attenuation, light_vec, raster_states, raster_states_geometric,
-    reference_states_geometric, surface_points, visible_only, SurfacePoint,
+    reference_states_geometric, surface_points, visible_only, PixelPoints, SurfacePoint,
 };
 use crate::{PixelState, Shot};
+use rayon::prelude::*;
 
 /// The comparison of a rendered frame with the reference.
 #[derive(Debug, Clone)]
@@ -62,11 +63,21 @@ impl Comparison {
     }
 }
 
-/// Counts the raster's shadowed pixels (stencil ≠ 0 on a surface facing the light, any light).
+/// Counts the raster's shadowed pixels (stencil ≠ 0 on a surface facing the light, any light):
+/// what a comparison counts as `shadow_pixels`, each pixel's point computed and dropped in
+/// turn.
 #[must_use]
 pub fn shadow_pixels(shot: &Shot<'_>) -> usize {
-    let points = surface_points(shot);
-    count_shadowed(shot, &points, &raster_states(shot, &points))
+    let at = PixelPoints::new(shot);
+    (0..at.pixels())
+        .into_par_iter()
+        .filter(|&i| {
+            at.point(shot, i).is_some_and(|sp| {
+                (0..shot.scene.lights.len())
+                    .any(|li| shot.stencil[li][i] != 0 && faces_light(shot, &sp, li))
+            })
+        })
+        .count()
 }
 
 fn count_shadowed(

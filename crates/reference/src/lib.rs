@@ -64,7 +64,14 @@ pub use states::{
 };
 
 use glam::Vec3;
-use shadowvol_scenes::{Camera, Scene};
+use shadowvol_scenes::{Camera, Scene, Surface};
+use std::sync::OnceLock;
+
+/// `t`'s ids in the canonical (ascending) vertex order every pipeline draws in.
+fn canonical(mut t: [u32; 3]) -> [u32; 3] {
+    t.sort_unstable();
+    t
+}
 
 /// Per-pixel state for one light.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -105,13 +112,16 @@ pub struct Shot<'a> {
     /// Per light: the colour times gain the lit pass multiplied by `albedo × attenuation ×
     /// cos θ` (linear RGB).
     pub light_colors: &'a [[f32; 3]],
-    /// Per surface: its world triangles in canonical vertex order.
-    triangles: Vec<Vec<[Vec3; 3]>>,
+    /// The scene's surfaces, in order.
+    surfaces: Vec<Surface<'a>>,
+    /// Per surface: its world triangles in canonical vertex order, built on first need (the
+    /// reference's BVH); one pixel's triangle is computed alone ([`Shot::triangle`]).
+    triangles: OnceLock<Vec<Vec<[Vec3; 3]>>>,
 }
 
 impl<'a> Shot<'a> {
-    /// A shot of `scene` from `camera`, `width` × `height` pixels. The world triangles of every
-    /// surface are computed here, in `f32` as the pipelines draw them.
+    /// A shot of `scene` from `camera`, `width` × `height` pixels. The world triangles are
+    /// computed from the scene in `f32`, as the pipelines draw them, when they are asked for.
     ///
     /// # Panics
     /// Panics if the per-pixel slices are not `width × height` long (`rgba` four times that),
@@ -141,22 +151,6 @@ impl<'a> Shot<'a> {
             scene.lights.len(),
             "one colour per light"
         );
-        let triangles = scene
-            .surfaces()
-            .map(|s| {
-                let world = s.world_positions();
-                s.table
-                    .triangles
-                    .iter()
-                    .map(|&t| {
-                        // The canonical (ascending) vertex order every pipeline draws in.
-                        let mut k = t;
-                        k.sort_unstable();
-                        k.map(|v| world[v as usize])
-                    })
-                    .collect()
-            })
-            .collect();
         Self {
             scene,
             camera,
@@ -166,14 +160,46 @@ impl<'a> Shot<'a> {
             ids,
             stencil,
             light_colors,
-            triangles,
+            surfaces: scene.surfaces().collect(),
+            triangles: OnceLock::new(),
         }
     }
 
     /// Per surface: its world triangles (the `f32` positions drawn), canonical vertex order.
+    /// Built on the first call (36 bytes a triangle), kept for the next.
     #[must_use]
     pub fn triangles(&self) -> &[Vec<[Vec3; 3]>] {
-        &self.triangles
+        self.triangles.get_or_init(|| {
+            self.surfaces
+                .iter()
+                .map(|s| {
+                    let world = s.world_positions();
+                    s.table
+                        .triangles
+                        .iter()
+                        .map(|&t| canonical(t).map(|v| world[v as usize]))
+                        .collect()
+                })
+                .collect()
+        })
+    }
+
+    /// Triangle `t` of surface `surface` as [`Shot::triangles`] holds it (the same bits),
+    /// computed alone; `None` past the last surface or triangle.
+    #[must_use]
+    pub fn triangle(&self, surface: usize, t: usize) -> Option<[Vec3; 3]> {
+        let s = self.surfaces.get(surface)?;
+        let tri = *s.table.triangles.get(t)?;
+        Some(canonical(tri).map(|v| s.world_position(v)))
+    }
+
+    /// Triangles of each surface.
+    #[must_use]
+    pub fn triangle_counts(&self) -> Vec<usize> {
+        self.surfaces
+            .iter()
+            .map(|s| s.table.triangles.len())
+            .collect()
     }
 
     /// Light `li`'s homogeneous vector.
@@ -194,7 +220,7 @@ impl<'a> Shot<'a> {
     /// Surface `i`'s albedo, `None` past the last surface.
     #[must_use]
     pub fn albedo(&self, i: usize) -> Option<[f32; 3]> {
-        self.scene.surfaces().nth(i).map(|s| s.albedo)
+        self.surfaces.get(i).map(|s| s.albedo)
     }
 
     /// The ambient factor of the pre-pass, `albedo × ambient` (the scene's, clamped to `[0, 1]`).

@@ -23,52 +23,81 @@ pub struct SurfacePoint {
 /// The surface points of every pixel (`None` for background).
 #[must_use]
 pub fn surface_points(shot: &Shot<'_>) -> Vec<Option<SurfacePoint>> {
-    let (w, h) = (shot.width as usize, shot.height as usize);
-    let aspect = f64::from(shot.width) / f64::from(shot.height);
-    let inv: DMat4 = shot.camera.view_proj_f64(aspect).inverse();
-    let eye = shot.camera.eye.as_dvec3();
-    let offsets: Vec<u32> = shot
-        .triangles()
-        .iter()
-        .scan(0u32, |acc, t| {
-            let o = *acc;
-            *acc += t.len() as u32;
-            Some(o)
-        })
-        .collect();
-    (0..w * h)
+    let at = PixelPoints::new(shot);
+    (0..at.pixels())
         .into_par_iter()
-        .map(|i| {
-            let [obj, tri] = shot.ids[i];
-            if obj == 0 {
-                return None;
-            }
-            let t = shot.triangles().get(obj as usize - 1)?.get(tri as usize)?;
-            let t = [t[0].as_dvec3(), t[1].as_dvec3(), t[2].as_dvec3()];
-            let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
-            let ndc = DVec4::new(x / w as f64 * 2.0 - 1.0, 1.0 - y / h as f64 * 2.0, 0.5, 1.0);
-            let p = inv * ndc;
-            let dir = p.truncate() / p.w - eye;
-            let mut n = (t[1] - t[0]).cross(t[2] - t[0]);
-            let denom = n.dot(dir);
-            let position = if denom != 0.0 && denom.is_finite() {
-                eye + dir * (n.dot(t[0] - eye) / denom)
-            } else {
-                (t[0] + t[1] + t[2]) / 3.0
-            };
-            if n.dot(eye - position) < 0.0 {
-                n = -n;
-            }
-            Some(SurfacePoint {
-                position,
-                normal: n,
-                triangle: offsets[obj as usize - 1] + tri,
-                albedo: shot
-                    .albedo(obj as usize - 1)
-                    .map_or(1.0, |a| a[0].max(a[1]).max(a[2])),
-            })
-        })
+        .map(|i| at.point(shot, i))
         .collect()
+}
+
+/// What [`surface_points`] computes for any one pixel, for a pass that needs each pixel's point
+/// once and need not hold them all.
+pub(crate) struct PixelPoints {
+    w: usize,
+    h: usize,
+    inv: DMat4,
+    eye: DVec3,
+    /// First global triangle of each surface.
+    offsets: Vec<u32>,
+}
+
+impl PixelPoints {
+    pub(crate) fn new(shot: &Shot<'_>) -> Self {
+        let aspect = f64::from(shot.width) / f64::from(shot.height);
+        let offsets = shot
+            .triangle_counts()
+            .iter()
+            .scan(0u32, |acc, &n| {
+                let o = *acc;
+                *acc += n as u32;
+                Some(o)
+            })
+            .collect();
+        Self {
+            w: shot.width as usize,
+            h: shot.height as usize,
+            inv: shot.camera.view_proj_f64(aspect).inverse(),
+            eye: shot.camera.eye.as_dvec3(),
+            offsets,
+        }
+    }
+
+    pub(crate) fn pixels(&self) -> usize {
+        self.w * self.h
+    }
+
+    /// Pixel `i`'s surface point, `None` for background.
+    pub(crate) fn point(&self, shot: &Shot<'_>, i: usize) -> Option<SurfacePoint> {
+        let (w, h, eye) = (self.w, self.h, self.eye);
+        let [obj, tri] = shot.ids[i];
+        if obj == 0 {
+            return None;
+        }
+        let t = shot.triangle(obj as usize - 1, tri as usize)?;
+        let t = [t[0].as_dvec3(), t[1].as_dvec3(), t[2].as_dvec3()];
+        let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+        let ndc = DVec4::new(x / w as f64 * 2.0 - 1.0, 1.0 - y / h as f64 * 2.0, 0.5, 1.0);
+        let p = self.inv * ndc;
+        let dir = p.truncate() / p.w - eye;
+        let mut n = (t[1] - t[0]).cross(t[2] - t[0]);
+        let denom = n.dot(dir);
+        let position = if denom != 0.0 && denom.is_finite() {
+            eye + dir * (n.dot(t[0] - eye) / denom)
+        } else {
+            (t[0] + t[1] + t[2]) / 3.0
+        };
+        if n.dot(eye - position) < 0.0 {
+            n = -n;
+        }
+        Some(SurfacePoint {
+            position,
+            normal: n,
+            triangle: self.offsets[obj as usize - 1] + tri,
+            albedo: shot
+                .albedo(obj as usize - 1)
+                .map_or(1.0, |a| a[0].max(a[1]).max(a[2])),
+        })
+    }
 }
 
 /// The vector from `p` to the light: towards the light for a directional light (`w = 0`), and

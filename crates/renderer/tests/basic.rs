@@ -47,6 +47,19 @@ fn box_on_floor_matches_reference_zpass_and_zfail() -> Outcome {
             "the box casts a visible shadow"
         );
         assert_eq!(cmp.artifact_pixels, 0, "{policy:?}");
+        // The count without the reference, each pixel's point dropped in turn, and each
+        // triangle computed alone, are the comparison's, bit for bit.
+        let shot = frame.shot(&scene).unwrap();
+        assert_eq!(shadowvol_reference::shadow_pixels(&shot), cmp.shadow_pixels);
+        for (i, tris) in shot.triangles().iter().enumerate() {
+            for (t, tri) in tris.iter().enumerate() {
+                assert_eq!(
+                    shot.triangle(i, t).as_ref(),
+                    Some(tri),
+                    "surface {i} triangle {t}"
+                );
+            }
+        }
         if policy == PlanPolicy::Auto {
             assert!(frame
                 .report

@@ -117,6 +117,15 @@ impl Surface<'_> {
             .map(|&p| apply_f32(&self.world_from_object, p))
             .collect()
     }
+
+    /// Vertex `v` of [`Surface::world_positions`], alone (the same bits).
+    ///
+    /// # Panics
+    /// Panics if `v` is out of range.
+    #[must_use]
+    pub fn world_position(&self, v: u32) -> Vec3 {
+        apply_f32(&self.world_from_object, self.table.positions[v as usize])
+    }
 }
 
 /// The effects a scene calls for; the renderer plans its passes from these.
