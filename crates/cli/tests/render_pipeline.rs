@@ -11,7 +11,8 @@ main!(
     gpu_pipeline_is_the_default_and_timed_frames_read_nothing_back,
     backend_means_host_and_both_pipelines_agree,
     gpu_pipeline_with_a_backend_is_refused,
-    a_scene_beyond_the_device_bindings_is_drawn_in_parts
+    a_scene_beyond_the_device_bindings_is_drawn_in_parts,
+    pulled_and_buffered_surface_vertices_draw_the_same_image
 );
 
 fn scratch(name: &str) -> String {
@@ -189,5 +190,50 @@ fn a_scene_beyond_the_device_bindings_is_drawn_in_parts() -> Outcome {
             images[1].1
         );
     }
+    Ok(())
+}
+
+/// `SHADOWVOL_SURFACE_VERTICES`: sphere-10k (below 2^22 triangles) gets the vertex buffer by
+/// default; `pull` draws it by vertex pulling, whole and in parts (a 64 KiB cap), with the same
+/// image and comparison; `buffer` is the default's; any other value is refused, by name.
+fn pulled_and_buffered_surface_vertices_draw_the_same_image() -> Outcome {
+    let env = shadowvol_renderer::resident::SurfaceVertices::ENV;
+    let run_with = |choice: Option<&str>, cap: Option<&str>, png: &str| {
+        let mut c = std::process::Command::new(common::BIN);
+        c.args(["render", "sphere-10k", "--size", "96x80", "--out", png]);
+        c.args(["--reference", "--format", "json"]);
+        if let Some(choice) = choice {
+            c.env(env, choice);
+        }
+        if let Some(cap) = cap {
+            c.env(shadowvol_renderer::BUFFER_CAP_ENV, cap);
+        }
+        c.output().expect("run shadowvol")
+    };
+    let mut images = Vec::new();
+    for (choice, cap, want) in [
+        (None, None, "buffer"),
+        (Some("pull"), None, "pulled"),
+        (Some("pull"), Some("65536"), "pulled"),
+        (Some("buffer"), None, "buffer"),
+    ] {
+        let png = scratch(&format!("surfaces-{choice:?}-{cap:?}.png"));
+        let out = run_with(choice, cap, &png);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        common::no_adapter("render", &stderr)?;
+        assert!(out.status.success(), "{choice:?} {cap:?}: {stderr}");
+        let v: Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
+        assert_eq!(v["surface_vertices"], want, "{choice:?} {cap:?}");
+        assert_eq!(v["scene_parts"].as_u64().unwrap() > 1, cap.is_some());
+        let counts = ["artifact_pixels", "covered_pixels", "shadow_pixels"].map(|k| v[k].clone());
+        images.push((std::fs::read(&png).unwrap(), counts));
+    }
+    for (k, other) in images.iter().enumerate().skip(1) {
+        assert!(other == &images[0], "run {k} differs: {:?} {:?}", other.1, images[0].1);
+    }
+    let out = run_with(Some("sometimes"), None, &scratch("bad.png"));
+    assert!(!out.status.success());
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(e.contains(env) && e.contains("auto, buffer or pull"), "{e}");
     Ok(())
 }

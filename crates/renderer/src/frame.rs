@@ -123,6 +123,9 @@ pub struct FrameReport {
     /// `side_quads` add up the parts', the edges where the parts meet included (their volumes
     /// cancel in the stencil).
     pub scene_parts: usize,
+    /// Where the GPU pipeline read the surface vertices, `"buffer"` or `"pulled"`
+    /// ([`crate::resident::SurfaceVertices`]); `None` for the other pipelines.
+    pub surface_vertices: Option<&'static str>,
     /// Per light, its shadow map ([`crate::MapPipeline`]; `None`: nothing casts); empty for the
     /// volume pipelines.
     pub shadow_maps: Vec<Option<crate::maps::LightMap>>,

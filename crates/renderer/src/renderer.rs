@@ -386,6 +386,7 @@ impl Renderer {
             timings,
             gpu_timings: pass.gpu_timings,
             scene_parts: pass.scene_parts.max(1),
+            surface_vertices: pass.surface_vertices,
             shadow_maps: pipeline.maps().to_vec(),
         }
     }

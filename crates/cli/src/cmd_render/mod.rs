@@ -43,7 +43,11 @@ pub const LONG_ABOUT: &str =
     JSON; each plan entry's counts then add up the parts', the edges where parts meet \
     included), with the same image; the host pipeline draws from several vertex buffers where \
     one would exceed the device's largest buffer. SHADOWVOL_MAX_BUFFER_BYTES caps every buffer \
-    and binding the renderer asks for (a budget, and a way to see this on a small scene). --frames N renders N further frames with every light moving on a fixed \
+    and binding the renderer asks for (a budget, and a way to see this on a small scene). The \
+    GPU pipeline writes the surfaces' vertices once a frame into a buffer of 168 bytes a \
+    triangle for scenes of up to 2^22 triangles and pulls them from the scene's buffers beyond \
+    (less memory, slower draws; the same image): SHADOWVOL_SURFACE_VERTICES=auto|buffer|pull \
+    chooses, and \"surface_vertices\" in the JSON says which ran. --frames N renders N further frames with every light moving on a fixed \
     orbit (1 degree per frame about the vertical axis through the scene's centre), so each \
     frame re-extracts, and reports their times; nothing but the final image is read back in the \
     GPU pipeline (frame_readback_bytes).\n\n\
@@ -337,6 +341,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 frames: timed.stats,
                 gpu_timings_ms: timed.gpu_timings.or(r.gpu_timings),
                 scene_parts: r.scene_parts,
+                surface_vertices: r.surface_vertices,
                 uncertain: r.uncertain,
                 uncertain_unit: r.uncertain_unit,
                 host_resolved: r.host_resolved,

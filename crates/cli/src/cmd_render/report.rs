@@ -54,6 +54,10 @@ pub(super) struct Report<'a> {
     /// Parts the GPU pipeline uploaded the scene in (1, or more for a scene beyond one of the
     /// device's storage bindings; then each plan entry's counts add up the parts').
     pub(super) scene_parts: usize,
+    /// Where the GPU pipeline read the surface vertices: `buffer` (written once a frame, 168
+    /// bytes a triangle) or `pulled` (vertex pulling, beyond 2^22 triangles or with
+    /// `SHADOWVOL_SURFACE_VERTICES=pull`); `null` for the other pipelines.
+    pub(super) surface_vertices: Option<&'static str>,
     /// Exact-mode evaluations the certified filter left undecided, counted as
     /// `uncertain_unit` says.
     pub(super) uncertain: u64,

@@ -7,7 +7,7 @@ use super::{FrameInputs, PassReport, Pipeline, ShadowPipeline};
 use crate::plan::{PlanEntry, SilhouetteSource, Technique};
 use crate::raster::{Attachments, BACKGROUND, COLOR_FORMAT, IDS_FORMAT};
 use crate::resident::{
-    GpuTimings, PassFormats, PassFrame, ResidentLayout, ResidentScene, ShadowPass,
+    GpuTimings, PassFormats, PassFrame, ResidentScene, ShadowPass, SurfaceVertices,
 };
 use crate::{RenderDevice, RenderError};
 use glam::Affine3A;
@@ -71,7 +71,7 @@ impl GpuPipeline {
             .iter()
             .zip(&parts.sources)
             .map(|(part, sources)| {
-                let mut rs = pass.prepare_layout(ResidentLayout::build(part)?)?;
+                let mut rs = pass.prepare_topology(part)?;
                 rs.ids = sources
                     .iter()
                     .map(|&(o, first)| [o as u32, first])
@@ -133,7 +133,11 @@ impl ShadowPipeline for GpuPipeline {
                 },
             )?);
         }
-        let pass = self.pass.as_ref().expect("built above");
+        // One choice for the whole scene, which may be uploaded in parts.
+        let tris = scene.surfaces().map(|s| s.table.triangles.len()).sum();
+        let pass = self.pass.as_mut().expect("built above");
+        pass.set_surface_vertices(SurfaceVertices::from_env()?.resolve(tris));
+        let pass = &*pass;
         self.parts.clear();
         self.parts = match pass.prepare(scene) {
             Ok(rs) => vec![Part {
@@ -263,6 +267,7 @@ impl ShadowPipeline for GpuPipeline {
         }
         report.gpu_timings = timings;
         report.scene_parts = self.parts.len();
+        report.surface_vertices = self.parts.first().map(|p| p.rs.surface_vertices());
         if !frame.count {
             return Ok(());
         }

@@ -103,6 +103,9 @@ pub struct PassReport {
     /// Parts the scene was uploaded in (the GPU pipeline, for a scene beyond one storage
     /// binding); 0 or 1: one.
     pub scene_parts: usize,
+    /// Where the GPU pipeline's lit pass read the surface vertices: `"buffer"` or `"pulled"`
+    /// ([`crate::resident::SurfaceVertices`]); `None` for the other pipelines.
+    pub surface_vertices: Option<&'static str>,
 }
 
 /// A way to shadow a frame. See the [module documentation](self).

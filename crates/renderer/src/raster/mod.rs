@@ -7,7 +7,7 @@ pub(crate) mod pipelines;
 pub(crate) mod states;
 mod targets;
 
-pub(crate) use targets::{finish_uploads, map_read, FrameTargets};
+pub(crate) use targets::{finish_uploads, map_read, wait, FrameTargets};
 pub use targets::{read_texture, Attachments};
 
 use bytemuck::{Pod, Zeroable};

@@ -11,7 +11,18 @@ use shadowvol_silhouette::TopologyScene;
 pub const NEGATIVE: u32 = 0x8000_0000;
 
 /// The name the pass gives itself in layout errors.
-const NAME: &str = "gpu pipeline";
+pub(crate) const NAME: &str = "gpu pipeline";
+
+/// [`RenderError::InvalidInput`] when `edges` edges cannot be named in a side record, whose top
+/// bit is [`NEGATIVE`].
+pub(crate) fn check_edge_count(edges: usize) -> Result<(), RenderError> {
+    if edges >= NEGATIVE as usize {
+        return Err(RenderError::InvalidInput(format!(
+            "the scene has {edges} edges; the {NAME} names them with 31 bits"
+        )));
+    }
+    Ok(())
+}
 
 /// Everything the pass uploads once for a scene. Vertex, edge and triangle ids are global (all
 /// objects concatenated, in scene order).
@@ -35,12 +46,7 @@ impl ResidentLayout {
         let invalid =
             |e: shadowvol_silhouette::BackendError| RenderError::InvalidInput(e.to_string());
         let tables = TableLayout::build(scene, NAME).map_err(invalid)?;
-        if tables.edge_count() >= NEGATIVE as usize {
-            return Err(RenderError::InvalidInput(format!(
-                "the scene has {} edges; the {NAME} names them with 31 bits",
-                tables.edge_count()
-            )));
-        }
+        check_edge_count(tables.edge_count())?;
         let vertex_objects = tables
             .objects
             .windows(2)

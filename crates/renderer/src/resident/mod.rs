@@ -209,6 +209,84 @@ pub struct ShadowPass {
     world: pipeline::SurfacePipelines,
     /// The render pipelines and their layouts.
     draw: pipeline::DrawPipelines,
+    /// Where the lit pass and the pre-pass read the surfaces' vertices.
+    surfaces: SurfaceVertices,
+}
+
+/// Where the lit pass and the pre-pass read the surfaces' vertices: a vertex buffer the surface
+/// pass writes each frame (3 vertices of 56 bytes a triangle: 168 bytes a triangle of device
+/// memory, and the fastest draws), or the storage buffers themselves (vertex pulling: no memory
+/// of its own, more work per vertex; 3.8 times the frame time of a 10^7-triangle scene on
+/// lavapipe). The image is the same either way.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum SurfaceVertices {
+    /// The vertex buffer for scenes of at most [`SurfaceVertices::AUTO_MAX_TRIANGLES`]
+    /// triangles, vertex pulling beyond (the default).
+    #[default]
+    Auto,
+    /// The vertex buffer wherever the device can hold it.
+    Buffer,
+    /// Vertex pulling.
+    Pull,
+}
+
+impl SurfaceVertices {
+    /// Triangles up to which [`SurfaceVertices::Auto`] writes the vertex buffer: 2^22, about
+    /// 700 MB of surface vertices.
+    pub const AUTO_MAX_TRIANGLES: usize = 1 << 22;
+
+    /// The environment variable that sets the choice of the CLI and of [`crate::Renderer`]'s
+    /// GPU pipeline: `auto`, `buffer` or `pull`.
+    pub const ENV: &'static str = "SHADOWVOL_SURFACE_VERTICES";
+
+    /// The choice `SHADOWVOL_SURFACE_VERTICES` names, [`SurfaceVertices::Auto`] when it is unset.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] naming the variable and the values it takes, for any other
+    /// value.
+    pub fn from_env() -> Result<Self, RenderError> {
+        match std::env::var(Self::ENV).as_deref() {
+            Err(_) | Ok("auto") => Ok(Self::Auto),
+            Ok("buffer") => Ok(Self::Buffer),
+            Ok("pull") => Ok(Self::Pull),
+            Ok(other) => Err(RenderError::InvalidInput(format!(
+                "{}={other:?}: expected auto, buffer or pull",
+                Self::ENV
+            ))),
+        }
+    }
+
+    /// [`SurfaceVertices::Buffer`] or [`SurfaceVertices::Pull`]: what this choice gives a
+    /// scene of `tris` triangles.
+    #[must_use]
+    pub fn resolve(self, tris: usize) -> Self {
+        if self.buffer_for(tris) {
+            Self::Buffer
+        } else {
+            Self::Pull
+        }
+    }
+
+    /// `"buffer"` or `"pulled"`: what this choice gives a scene of `tris` triangles, as the
+    /// render JSON's `surface_vertices` names it.
+    #[must_use]
+    pub fn name_for(self, tris: usize) -> &'static str {
+        if self.buffer_for(tris) {
+            "buffer"
+        } else {
+            "pulled"
+        }
+    }
+
+    /// Whether a scene of `tris` triangles gets the vertex buffer (where the device holds it).
+    #[must_use]
+    pub fn buffer_for(self, tris: usize) -> bool {
+        match self {
+            Self::Auto => tris <= Self::AUTO_MAX_TRIANGLES,
+            Self::Buffer => true,
+            Self::Pull => false,
+        }
+    }
 }
 
 impl std::fmt::Debug for ShadowPass {
@@ -339,13 +417,7 @@ pub struct ResidentScene {
     counts: LayoutCounts,
     /// Per object `(first edge, first triangle, first vertex, first OV slot)`, plus a sentinel.
     bases: Vec<[u32; 4]>,
-    positions: wgpu::Buffer,
-    edges: wgpu::Buffer,
-    ov_offsets: wgpu::Buffer,
-    ov_refs: wgpu::Buffer,
-    tris: wgpu::Buffer,
-    objects: wgpu::Buffer,
-    vertex_objects: wgpu::Buffer,
+    tables: SceneTables,
     world: wgpu::Buffer,
     world_out: wgpu::BindGroup,
     /// The indirect arguments of the pending dispatch (`STORAGE | INDIRECT`) and the bind group
@@ -368,14 +440,15 @@ impl ResidentScene {
     #[must_use]
     pub fn bytes(&self) -> PreparedBytes {
         let host = vec_bytes(&self.bases);
+        let t = &self.tables;
         let mut buffers = vec![
-            &self.positions,
-            &self.edges,
-            &self.ov_offsets,
-            &self.ov_refs,
-            &self.tris,
-            &self.objects,
-            &self.vertex_objects,
+            &t.positions,
+            &t.edges,
+            &t.ov_offsets,
+            &t.ov_refs,
+            &t.tris,
+            &t.objects,
+            &t.vertex_objects,
             &self.world,
             &self.pending_dispatch.0,
             &self.params,
@@ -424,6 +497,29 @@ impl ResidentScene {
     pub fn edge_count(&self) -> usize {
         self.counts.edges
     }
+
+    /// Where the lit pass and the pre-pass read this scene's surface vertices: `"buffer"` (the
+    /// surface pass's vertex buffer) or `"pulled"` (vertex pulling; see [`SurfaceVertices`]).
+    #[must_use]
+    pub fn surface_vertices(&self) -> &'static str {
+        if self.surface.is_some() {
+            "buffer"
+        } else {
+            "pulled"
+        }
+    }
+}
+
+/// The scene's static buffers: one per [`TableBuffer`](shadowvol_silhouette::gpu::TableBuffer),
+/// and the object of each vertex.
+struct SceneTables {
+    positions: wgpu::Buffer,
+    edges: wgpu::Buffer,
+    ov_offsets: wgpu::Buffer,
+    ov_refs: wgpu::Buffer,
+    tris: wgpu::Buffer,
+    objects: wgpu::Buffer,
+    vertex_objects: wgpu::Buffer,
 }
 
 /// The sizes of an uploaded [`ResidentLayout`]: all the frames need of it once its arrays are

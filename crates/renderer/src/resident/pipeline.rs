@@ -125,7 +125,14 @@ impl ShadowPass {
             extract: x,
             world: s,
             draw: d,
+            surfaces: SurfaceVertices::default(),
         })
+    }
+
+    /// Where scenes prepared from now on read their surfaces' vertices (default
+    /// [`SurfaceVertices::Auto`]).
+    pub fn set_surface_vertices(&mut self, surfaces: SurfaceVertices) {
+        self.surfaces = surfaces;
     }
 
     /// The exact filter the triangle pass runs (`f64` when the device has `SHADER_F64`).

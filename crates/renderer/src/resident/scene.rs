@@ -2,10 +2,17 @@
 //! ([`ShadowPass::update`]) and the buffers sized by the number of lights.
 
 use super::*;
+use shadowvol_silhouette::gpu::{TableBuffer, TableWriter, FIRST_VERTEX};
+use shadowvol_silhouette::TopologyScene;
+use shadowvol_wgpu_compute::upload_table;
+
+/// The usage of the scene's static buffers.
+const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE;
 
 impl ShadowPass {
     /// Uploads `scene` once: every surface's ([`shadowvol_scenes::Scene::surfaces`], casters
-    /// then receivers) object-space positions, edges, opposite vertices and triangles. The
+    /// then receivers) object-space positions, edges, opposite vertices and triangles, written
+    /// in chunks straight from their edge tables ([`ShadowPass::prepare_topology`]). The
     /// transforms are not used here; each frame gives its own ([`PassFrame::transforms`]).
     ///
     /// # Errors
@@ -13,7 +20,45 @@ impl ShadowPass {
     /// [`RenderError::TooLarge`] when a buffer exceeds the device's
     /// `max_storage_buffer_binding_size`.
     pub fn prepare(&self, scene: &shadowvol_scenes::Scene) -> Result<ResidentScene, RenderError> {
-        self.prepare_layout(ResidentLayout::of_scene(scene)?)
+        self.prepare_topology(&scene.surface_geometry())
+    }
+
+    /// Uploads any topology, its tables in the layout [`ResidentLayout::build`] gives them, but
+    /// written in chunks straight from its edge tables: no copy of the scene is made on the
+    /// host, and the staging memory stays bounded
+    /// ([`upload_table`](shadowvol_wgpu_compute::upload_table)).
+    ///
+    /// # Errors
+    /// As [`ShadowPass::prepare`].
+    pub fn prepare_topology(&self, scene: &TopologyScene) -> Result<ResidentScene, RenderError> {
+        let writer = TableWriter::new(scene, layout::NAME)
+            .map_err(|e| RenderError::InvalidInput(e.to_string()))?;
+        layout::check_edge_count(writer.elements(TableBuffer::Edges))?;
+        let vertices = writer.elements(TableBuffer::Positions);
+        for b in TableBuffer::ALL {
+            self.check_scene_buffer(b.label(), writer.bytes(b))?;
+        }
+        self.check_scene_buffer("vertex objects", 4 * vertices as u64)?;
+        let wait = |_| crate::raster::wait(&self.device);
+        let up = |b| upload_table(&self.device, &self.queue, &writer, b, STORAGE, wait);
+        let tables = SceneTables {
+            positions: up(TableBuffer::Positions)?,
+            edges: up(TableBuffer::Edges)?,
+            ov_offsets: up(TableBuffer::OvOffsets)?,
+            ov_refs: up(TableBuffer::OvRefs)?,
+            tris: up(TableBuffer::Triangles)?,
+            objects: up(TableBuffer::Objects)?,
+            vertex_objects: self.vertex_objects(writer.objects())?,
+        };
+        let bases = writer.objects().to_vec();
+        let counts = LayoutCounts {
+            objects: bases.len() - 1,
+            tris: writer.elements(TableBuffer::Triangles),
+            vertices,
+            edges: writer.elements(TableBuffer::Edges),
+            capacity: writer.elements(TableBuffer::OvRefs).max(1),
+        };
+        self.finish_prepare(tables, counts, bases)
     }
 
     /// Uploads a laid-out scene ([`ResidentLayout::build`] of any topology).
@@ -22,30 +67,36 @@ impl ShadowPass {
     /// As [`ShadowPass::prepare`].
     pub fn prepare_layout(&self, layout: ResidentLayout) -> Result<ResidentScene, RenderError> {
         let t = &layout.tables;
-        let positions = self.scene_buffer("positions", &t.positions)?;
-        let edges = self.scene_buffer("edge ends", &t.edges)?;
-        let ov_offsets = self.scene_buffer("opposite-vertex offsets", &t.ov_offsets)?;
-        let ov_refs = self.scene_buffer("opposite-vertex references", &t.ov_refs)?;
-        let tris = self.scene_buffer("triangles", &t.tris)?;
-        let objects = self.scene_buffer("object bases", &t.objects)?;
-        let vertex_objects = self.scene_buffer("vertex objects", &layout.vertex_objects)?;
-        let (world, world_out) = self.world_positions(layout.vertex_objects.len())?;
+        let tables = SceneTables {
+            positions: self.scene_buffer("positions", &t.positions)?,
+            edges: self.scene_buffer("edge ends", &t.edges)?,
+            ov_offsets: self.scene_buffer("opposite-vertex offsets", &t.ov_offsets)?,
+            ov_refs: self.scene_buffer("opposite-vertex references", &t.ov_refs)?,
+            tris: self.scene_buffer("triangles", &t.tris)?,
+            objects: self.scene_buffer("object bases", &t.objects)?,
+            vertex_objects: self.scene_buffer("vertex objects", &layout.vertex_objects)?,
+        };
+        let counts = LayoutCounts::of(&layout);
+        self.finish_prepare(tables, counts, layout.tables.objects)
+    }
+
+    /// The scene uploaded: its frame-independent buffers beside `tables`.
+    fn finish_prepare(
+        &self,
+        tables: SceneTables,
+        counts: LayoutCounts,
+        bases: Vec<[u32; 4]>,
+    ) -> Result<ResidentScene, RenderError> {
+        let (world, world_out) = self.world_positions(counts.vertices)?;
         let pending_dispatch = self.pending_dispatch();
-        let surface = self.surface_vertices(&layout);
+        let surface = self.surface_vertices(counts.tris);
         // Frees the uploads' staging memory before the next part is laid out.
         crate::raster::finish_uploads(&self.device, &self.queue)?;
-        // The layout's arrays are on the device now; only its sizes and offsets stay.
         Ok(ResidentScene {
             ids: Vec::new(),
-            counts: LayoutCounts::of(&layout),
-            bases: layout.tables.objects,
-            positions,
-            edges,
-            ov_offsets,
-            ov_refs,
-            tris,
-            objects,
-            vertex_objects,
+            counts,
+            bases,
+            tables,
             world,
             world_out,
             pending_dispatch,
@@ -63,20 +114,50 @@ impl ShadowPass {
         })
     }
 
+    /// [`RenderError::TooLarge`] when a scene buffer of `bytes` exceeds one storage binding.
+    fn check_scene_buffer(&self, label: &str, bytes: u64) -> Result<(), RenderError> {
+        let max = self.device.limits().max_storage_buffer_binding_size;
+        if bytes > max {
+            return Err(RenderError::TooLarge(format!(
+                "the scene's {label} take {bytes} bytes; the device binds at most {max} (max_storage_buffer_binding_size)"
+            )));
+        }
+        Ok(())
+    }
+
+    /// The object of each global vertex, from the objects' bases (`objects`, with their
+    /// sentinel), written in chunks.
+    fn vertex_objects(&self, objects: &[[u32; 4]]) -> Result<wgpu::Buffer, RenderError> {
+        let total = objects.last().map_or(0, |b| b[FIRST_VERTEX]) as u64;
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vertex objects"),
+            size: (4 * total).max(16),
+            usage: STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        const CHUNK: u32 = 1 << 20;
+        for (oi, w) in objects.windows(2).enumerate() {
+            let (mut v, end) = (w[0][FIRST_VERTEX], w[1][FIRST_VERTEX]);
+            while v < end {
+                let n = CHUNK.min(end - v);
+                let ids = vec![oi as u32; n as usize];
+                self.queue
+                    .write_buffer(&buffer, 4 * u64::from(v), bytemuck::cast_slice(&ids));
+                crate::raster::finish_uploads(&self.device, &self.queue)?;
+                v += n;
+            }
+        }
+        Ok(buffer)
+    }
+
     /// A storage buffer of one scene array (16 zero bytes if empty), if the device binds it.
     fn scene_buffer<T: bytemuck::Pod>(
         &self,
         label: &str,
         data: &[T],
     ) -> Result<wgpu::Buffer, RenderError> {
-        let max = self.device.limits().max_storage_buffer_binding_size;
         let bytes: &[u8] = bytemuck::cast_slice(data);
-        if bytes.len() as u64 > max {
-            return Err(RenderError::TooLarge(format!(
-                "the scene's {label} take {} bytes; the device binds at most {max} (max_storage_buffer_binding_size)",
-                bytes.len()
-            )));
-        }
+        self.check_scene_buffer(label, bytes.len() as u64)?;
         let padded;
         let bytes = if bytes.is_empty() {
             padded = [0u8; 16];
@@ -89,7 +170,7 @@ impl ShadowPass {
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
                 contents: bytes,
-                usage: wgpu::BufferUsages::STORAGE,
+                usage: STORAGE,
             }))
     }
 
@@ -135,15 +216,17 @@ impl ShadowPass {
         (dispatch, pending_out)
     }
 
-    /// The surface vertex buffer and its chunks' bind groups, or `None` (vertex pulling).
-    fn surface_vertices(
-        &self,
-        layout: &ResidentLayout,
-    ) -> Option<(wgpu::Buffer, Vec<(wgpu::BindGroup, u32)>)> {
+    /// The surface vertex buffer of `tris` triangles and its chunks' bind groups, or `None`
+    /// (vertex pulling: [`SurfaceVertices`] chose it, or the buffer exceeds the device's
+    /// largest).
+    fn surface_vertices(&self, tris: usize) -> Option<(wgpu::Buffer, Vec<(wgpu::BindGroup, u32)>)> {
+        if !self.surfaces.buffer_for(tris) {
+            return None;
+        }
         // The surface vertices (3 `SurfaceVertex` per triangle) where the buffer fits the device;
         // the surface pass writes them in chunks that each fit one storage binding.
         let per_tri = 3 * std::mem::size_of::<crate::raster::SurfaceVertex>() as u64;
-        let surface_bytes = per_tri * layout.tri_count() as u64;
+        let surface_bytes = per_tri * tris as u64;
         let limits = self.device.limits();
         let max = limits.max_storage_buffer_binding_size;
         let align = u64::from(limits.min_storage_buffer_offset_alignment.max(1));
@@ -159,7 +242,7 @@ impl ShadowPass {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::VERTEX,
             mapped_at_creation: false,
         });
-        let tris = layout.tri_count() as u64;
+        let tris = tris as u64;
         let chunks = (0..tris.div_ceil(chunk))
             .map(|c| {
                 let first = c * chunk;
@@ -379,14 +462,14 @@ impl ShadowPass {
             layout: &self.extract.c0,
             entries: &[
                 entry(0, &rs.params),
-                entry(1, &rs.positions),
-                entry(2, &rs.edges),
-                entry(3, &rs.ov_refs),
+                entry(1, &rs.tables.positions),
+                entry(2, &rs.tables.edges),
+                entry(3, &rs.tables.ov_refs),
                 entry(4, &b.lights),
-                entry(9, &rs.tris),
-                entry(10, &rs.ov_offsets),
+                entry(9, &rs.tables.tris),
+                entry(10, &rs.tables.ov_offsets),
                 entry(11, &b.signs),
-                entry(12, &rs.objects),
+                entry(12, &rs.tables.objects),
             ],
         });
         let c1 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -409,9 +492,9 @@ impl ShadowPass {
             layout: &self.draw.d0,
             entries: &[
                 entry(0, &rs.globals),
-                entry(1, &rs.positions),
-                entry(2, &rs.edges),
-                entry(3, &rs.tris),
+                entry(1, &rs.tables.positions),
+                entry(2, &rs.tables.edges),
+                entry(3, &rs.tables.tris),
                 entry(4, &b.signs),
                 entry(5, &b.records),
                 entry(6, &b.objects),
@@ -440,7 +523,7 @@ impl ShadowPass {
             label: Some("resident surfaces"),
             layout: &self.world.s0,
             entries: &[
-                entry(3, &rs.tris),
+                entry(3, &rs.tables.tris),
                 entry(6, &b.objects),
                 entry(7, &rs.world),
             ],
@@ -449,9 +532,9 @@ impl ShadowPass {
             label: Some("resident vertices"),
             layout: &self.world.v0,
             entries: &[
-                entry(1, &rs.positions),
+                entry(1, &rs.tables.positions),
                 entry(6, &b.objects),
-                entry(8, &rs.vertex_objects),
+                entry(8, &rs.tables.vertex_objects),
             ],
         });
         [s0, v0]

@@ -273,6 +273,7 @@ impl ShadowPipeline for HostPipeline {
             readback_bytes: extracted.readback_bytes,
             gpu_timings: None,
             scene_parts: 1,
+            surface_vertices: None,
         })
     }
 
