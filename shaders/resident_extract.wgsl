@@ -189,7 +189,7 @@ fn resident_edges(inv: Invocation) {
     let e = flat_index(inv);
     let lid = inv.lid;
     let valid = e < params.edge_count;
-    var edge = Edge(0u, 0u, 0u, 0u, 0u);
+    var edge = Edge(0u, 0u, 0u, 0u);
     var object = 0u;
     var a = vec3<f32>(0.0);
     var b = vec3<f32>(0.0);
@@ -208,7 +208,7 @@ fn resident_edges(inv: Invocation) {
             tech = technique[li * rp.object_count + object];
         }
         if tech != 0u {
-            m = edge_multiplicity(edge, li, a, b);
+            m = edge_multiplicity(edge, object, li, a, b);
         }
         let n = u32(abs(m));
         let list = select(0u, 1u, tech == 2u);

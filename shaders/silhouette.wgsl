@@ -41,6 +41,10 @@ override MODE: u32 = 0u;
 // at a point light as TOUCH: `edge_multiplicity` skips them in every mode.
 override TOUCH_SIGNS: bool = false;
 
+// True in the `wgpu` backend's `original` edge step for scenes whose OV vertex list is bound
+// (`ov_vertices`): it reads each OV in one step instead of through its triangle.
+override OV_VERTICES: bool = false;
+
 const WORKGROUP_SIZE: u32 = 256u;
 const UNCERTAIN: i32 = 2;
 // A triangle sign that is not a sign: the triangle touches the light and has no volume.
@@ -68,7 +72,8 @@ struct Params {
     tri_count: u32,
     // Entries of each light's compact list in `silhouettes`.
     list_capacity: u32,
-    _pad0: u32,
+    // Objects of the scene (`objects` has one more entry, the sentinel).
+    object_count: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -108,6 +113,8 @@ struct Uncertain {
 @group(0) @binding(11) var<storage, read_write> signs: array<i32>;
 // Per object (first edge, first triangle, first vertex, first OV slot), plus a sentinel.
 @group(0) @binding(12) var<storage, read> objects: array<vec4<u32>>;
+// With OV_VERTICES: per OV slot, the OV's global vertex id (else a placeholder, never read).
+@group(0) @binding(13) var<storage, read> ov_vertices: array<u32>;
 
 // The builtins of one invocation of a triangle or edge kernel (every kernel of the module and of
 // the renderer's resident pass takes them so).
@@ -135,8 +142,12 @@ fn object_light(obj: u32, li: u32) -> vec4<f32> {
 // The object of global id `id` (an edge for FIRST_EDGE, a triangle for FIRST_TRIANGLE): the
 // last object whose first id is at most `id` (binary search; silhouette's `gpu::object_of`).
 fn object_of(field: u32, id: u32) -> u32 {
+    // A uniform branch: most scenes are one object, and the loop costs where it is compiled.
+    if params.object_count <= 1u {
+        return 0u;
+    }
     var lo = 0u;
-    var hi = arrayLength(&objects) - 1u;
+    var hi = params.object_count;
     while hi - lo > 1u {
         let mid = (lo + hi) / 2u;
         if objects[mid][field] <= id {
@@ -151,7 +162,6 @@ fn object_of(field: u32, id: u32) -> u32 {
 // Global edge `e`: its ends' ids and its OV slots [ov_begin, ov_end) (its object, where needed,
 // is `object_of(FIRST_EDGE, e)`).
 struct Edge {
-    e: u32,
     a: u32,
     b: u32,
     ov_begin: u32,
@@ -160,7 +170,7 @@ struct Edge {
 
 fn load_edge(e: u32) -> Edge {
     let ab = edges[e];
-    return Edge(e, ab.x, ab.y, ov_offsets[e], ov_offsets[e + 1u]);
+    return Edge(ab.x, ab.y, ov_offsets[e], ov_offsets[e + 1u]);
 }
 
 // Global triangle `t`: its canonical (ascending) vertices' positions and its object.
@@ -310,25 +320,32 @@ fn triangle_sign_traced(tri: Triangle, l: vec4<f32>) -> vec2<i32> {
     return vec2<i32>(s0, 0);
 }
 
-// m of `edge` (`a`, `b` its ends' positions, loaded once by the caller) for light `li`:
+// m of `edge` of object `object` (`a`, `b` its ends' positions; both loaded once by the caller,
+// the object only for `original`, which alone reads it) for light `li`:
 // `original` evaluates every (edge, OV) naively; the other modes sum the parity times the signs
 // of the OVs' triangles (a reference's rank 1 is the odd permutation). TOUCH triangles
 // contribute nothing.
-fn edge_multiplicity(edge: Edge, li: u32, a: vec3<f32>, b: vec3<f32>) -> i32 {
+fn edge_multiplicity(edge: Edge, object: u32, li: u32, a: vec3<f32>, b: vec3<f32>) -> i32 {
     let row = li * params.tri_count;
     var m = 0;
     if MODE == 0u {
-        let l = object_light(object_of(FIRST_EDGE, edge.e), li);
+        let l = object_light(object, li);
         for (var k = edge.ov_begin; k < edge.ov_end; k++) {
-            let r = ov_refs[k];
             // Nested, not `&&`: WGSL's `&&` may be compiled without short-circuit, and the
             // backend's `original` must not read the sign buffers.
             if TOUCH_SIGNS {
-                if signs[row + (r >> 2u)] == TOUCH {
+                if signs[row + (ov_refs[k] >> 2u)] == TOUCH {
                     continue;
                 }
             }
-            m += sign_f32(a, b, l, position(tris[3u * (r >> 2u) + (r & 3u)]));
+            var o = 0u;
+            if OV_VERTICES {
+                o = ov_vertices[k];
+            } else {
+                let r = ov_refs[k];
+                o = tris[3u * (r >> 2u) + (r & 3u)];
+            }
+            m += sign_f32(a, b, l, position(o));
         }
     } else {
         for (var k = edge.ov_begin; k < edge.ov_end; k++) {
@@ -391,8 +408,12 @@ fn extract(inv: Invocation) {
     let a = position(edge.a);
     let b = position(edge.b);
     let capacity = params.list_capacity;
+    var object = 0u;
+    if MODE == 0u {
+        object = object_of(FIRST_EDGE, e);
+    }
     for (var li = 0u; li < params.light_count; li++) {
-        let m = edge_multiplicity(edge, li, a, b);
+        let m = edge_multiplicity(edge, object, li, a, b);
         mult[li * edge_count + e] = m;
         if m != 0 {
             let slot = atomicAdd(&counters[li], 1u);

@@ -229,7 +229,12 @@ fn pulled_and_buffered_surface_vertices_draw_the_same_image() -> Outcome {
         images.push((std::fs::read(&png).unwrap(), counts));
     }
     for (k, other) in images.iter().enumerate().skip(1) {
-        assert!(other == &images[0], "run {k} differs: {:?} {:?}", other.1, images[0].1);
+        assert!(
+            other == &images[0],
+            "run {k} differs: {:?} {:?}",
+            other.1,
+            images[0].1
+        );
     }
     let out = run_with(Some("sometimes"), None, &scratch("bad.png"));
     assert!(!out.status.success());

@@ -321,7 +321,12 @@ impl WgpuBackend {
         let gpu = if writer.elements(TableBuffer::Edges) == 0 {
             None
         } else {
-            for b in TableBuffer::ALL {
+            let tris = writer.elements(TableBuffer::Triangles);
+            let has_ov_vertices = tris <= self.options.ov_vertices_up_to;
+            for b in TableBuffer::ALL
+                .into_iter()
+                .chain(has_ov_vertices.then_some(TableBuffer::OvVertices))
+            {
                 self.check_buffer(&format!("the {}", b.label()), writer.bytes(b), true)?;
             }
             let scope = ErrorScopes::push(&self.device);
@@ -341,6 +346,17 @@ impl WgpuBackend {
                     ov_refs: upload(TableBuffer::OvRefs)?,
                     tris: upload(TableBuffer::Triangles)?,
                     objects: upload(TableBuffer::Objects)?,
+                    ov_vertices: if has_ov_vertices {
+                        upload(TableBuffer::OvVertices)?
+                    } else {
+                        self.device.create_buffer(&wgpu::BufferDescriptor {
+                            label: Some("no opposite vertices"),
+                            size: 16,
+                            usage: wgpu::BufferUsages::STORAGE,
+                            mapped_at_creation: false,
+                        })
+                    },
+                    has_ov_vertices,
                 })
             })();
             if let Some(e) = scope.pop() {

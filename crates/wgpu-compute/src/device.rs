@@ -53,6 +53,11 @@ pub struct WgpuOptions {
     /// exact decisions) and the dispatch is repeated, so this only trades memory for the odd
     /// repeated dispatch.
     pub initial_list_capacity: Option<u64>,
+    /// Scenes of up to this many triangles also get each OV slot's vertex id on the device (12
+    /// bytes a triangle), which `original` reads in one step instead of two (through the OV's
+    /// triangle); larger ones leave it out for memory. Default 2^22 (4,194,304); every mode
+    /// gives the same results either way.
+    pub ov_vertices_up_to: usize,
     /// A cap, in bytes, on every buffer and storage binding, below the device's own limits (a
     /// memory budget; default `None`). Scenes whose static buffers exceed it (or the device's
     /// limits) are prepared in parts that fit ([`SceneParts`](shadowvol_silhouette::SceneParts)),
@@ -77,6 +82,7 @@ impl Default for WgpuOptions {
             max_lights_per_batch: NonZeroUsize::new(64),
             initial_uncertain_capacity: 4096,
             initial_list_capacity: None,
+            ov_vertices_up_to: 1 << 22,
             max_buffer_bytes: None,
             max_workgroups_per_dimension: None,
             min_list_prefix: 256,

@@ -62,6 +62,8 @@ struct Dims {
     edges: u64,
     /// Triangles of the scene.
     triangles: u64,
+    /// Objects of the scene.
+    objects: u64,
     /// Lights of the batch.
     lights: usize,
     /// Workgroups of the edge step.
@@ -145,7 +147,11 @@ impl WgpuBackend {
         let exact = mode == Accuracy::Exact;
         let steps = Steps {
             triangles: self.pipelines.triangles[m].as_ref(),
-            edges: &self.pipelines.edges[m],
+            edges: if mode == Accuracy::Original && !gpu.has_ov_vertices {
+                &self.pipelines.original_by_triangles
+            } else {
+                &self.pipelines.edges[m]
+            },
             deferred: self.pipelines.deferred.as_ref().filter(|_| exact),
         };
         for range in gpu::batches(lights.len(), per_batch) {
@@ -232,6 +238,7 @@ impl WgpuBackend {
         let dims = Dims {
             edges: p.index.edge_count() as u64,
             triangles: p.index.tri_count() as u64,
+            objects: p.index.object_count() as u64,
             lights: count,
             edge_grid: self.grid(p.index.edge_count(), "edges")?,
             triangle_grid: self.grid(p.index.tri_count(), "triangles")?,
@@ -301,7 +308,7 @@ impl WgpuBackend {
             frame.uncertain_capacity,
             dims.triangles as u32,
             frame.list_capacity as u32,
-            0,
+            dims.objects as u32,
             0,
             0,
         ];

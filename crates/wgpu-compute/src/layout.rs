@@ -22,7 +22,7 @@ pub(crate) fn pack_lights(
 }
 
 /// Creates buffer `b` of the tables `writer` writes, with `usage` (and `COPY_DST`), and fills it
-/// in chunks of 4 MiB written straight from the scene's edge tables; every 16 MiB it submits
+/// in chunks of 1 MiB written straight from the scene's edge tables; every 4 MiB it submits
 /// and calls `wait` with the submission, which must wait for the device, so that the staging
 /// memory of the copies stays bounded whatever the scene's size. The last chunk is waited for
 /// too. An empty buffer is 16 zero bytes (a binding cannot be empty).
@@ -67,10 +67,10 @@ pub fn upload_table<E>(
     Ok(buffer)
 }
 
-/// Words (4 bytes) of one chunk of a static buffer's upload: 4 MiB.
-const UPLOAD_CHUNK_WORDS: usize = 1 << 20;
+/// Words (4 bytes) of one chunk of a static buffer's upload: 1 MiB.
+const UPLOAD_CHUNK_WORDS: usize = 1 << 18;
 
-/// Chunks staged between two waits for the device (16 MiB of staging memory at most).
+/// Chunks staged between two waits for the device (4 MiB of staging memory at most).
 const CHUNKS_PER_WAIT: usize = 4;
 
 /// Buffers uploaded once per prepared scene, one per [`TableBuffer`](gpu::TableBuffer) (cheap
@@ -83,10 +83,17 @@ pub(crate) struct StaticBuffers {
     pub(crate) ov_refs: wgpu::Buffer,
     pub(crate) tris: wgpu::Buffer,
     pub(crate) objects: wgpu::Buffer,
+    /// [`TableBuffer::OvVertices`] for scenes of up to
+    /// [`WgpuOptions::ov_vertices_up_to`](crate::WgpuOptions::ov_vertices_up_to) triangles
+    /// (`original` reads an OV in one step), else 16 bytes never read.
+    pub(crate) ov_vertices: wgpu::Buffer,
+    /// Whether `ov_vertices` holds the OVs (`original` then runs the edge step built with
+    /// `OV_VERTICES`).
+    pub(crate) has_ov_vertices: bool,
 }
 
 impl StaticBuffers {
-    fn all(&self) -> [&wgpu::Buffer; 6] {
+    fn all(&self) -> [&wgpu::Buffer; 7] {
         [
             &self.positions,
             &self.edges,
@@ -94,6 +101,7 @@ impl StaticBuffers {
             &self.ov_refs,
             &self.tris,
             &self.objects,
+            &self.ov_vertices,
         ]
     }
 }
@@ -304,6 +312,7 @@ impl WgpuBackend {
                 entry(10, &gpu.ov_offsets),
                 entry(11, &signs),
                 entry(12, &gpu.objects),
+                entry(13, &gpu.ov_vertices),
             ],
         });
         Ok(Frame {

@@ -12,8 +12,11 @@ use std::sync::OnceLock;
 /// The bind-group layout and the compute pipelines of every mode.
 pub(crate) struct Pipelines {
     pub(crate) bind_group_layout: wgpu::BindGroupLayout,
-    /// The edge step, per mode (indexed by [`mode_code`]).
+    /// The edge step, per mode (indexed by [`mode_code`]); `original`'s reads the scene's OV
+    /// vertex list ([`shaders::OV_VERTICES_CONSTANT`]).
     pub(crate) edges: Vec<wgpu::ComputePipeline>,
+    /// `original`'s edge step for scenes without the list: each OV through its triangle.
+    pub(crate) original_by_triangles: wgpu::ComputePipeline,
     /// The triangle step, per mode; `None` for `original`, which has none. With
     /// `exact_on_device`, exact mode's is built with `DEFER_INT` (see [`DeferredExact`]).
     pub(crate) triangles: Vec<Option<wgpu::ComputePipeline>>,
@@ -80,7 +83,19 @@ fn build(
     mode: Accuracy,
     defer_int: Option<bool>,
 ) -> wgpu::ComputePipeline {
+    build_with(device, layout, module, (entry, mode, defer_int), &[])
+}
+
+/// [`build`] with further pipeline-overridable `constants`.
+fn build_with(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    (entry, mode, defer_int): (&str, Accuracy, Option<bool>),
+    more: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
     let mut constants = vec![(shaders::MODE_CONSTANT, f64::from(mode_code(mode)))];
+    constants.extend_from_slice(more);
     if let Some(defer) = defer_int {
         constants.push((shaders::DEFER_INT_CONSTANT, f64::from(u8::from(defer))));
     }
@@ -116,10 +131,16 @@ pub(crate) fn create_pipelines(
         let defer_int = exact_on_device.then_some(defer_int);
         build(device, &pipeline_layout, &module, entry, mode, defer_int)
     };
+    let defer_off = exact_on_device.then_some(false);
+    let ov_vertices = [(shaders::OV_VERTICES_CONSTANT, 1.0)];
     let edges = Accuracy::ALL
         .iter()
-        .map(|&mode| pipeline(shaders::ENTRY_POINT, mode, false))
+        .map(|&mode| {
+            let key = (shaders::ENTRY_POINT, mode, defer_off);
+            build_with(device, &pipeline_layout, &module, key, &ov_vertices)
+        })
         .collect();
+    let original_by_triangles = pipeline(shaders::ENTRY_POINT, Accuracy::Original, false);
     let triangles = Accuracy::ALL
         .iter()
         .map(|&mode| {
@@ -141,6 +162,7 @@ pub(crate) fn create_pipelines(
     Ok(Pipelines {
         bind_group_layout,
         edges,
+        original_by_triangles,
         triangles,
         deferred: resolve.map(|resolve| DeferredExact {
             resolve,
@@ -159,9 +181,9 @@ pub(crate) fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry
 }
 
 /// Storage buffers the kernels bind in one stage.
-pub(crate) const STORAGE_BUFFERS: u32 = 12;
+pub(crate) const STORAGE_BUFFERS: u32 = 13;
 
-fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 13] {
+fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 14] {
     let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -195,5 +217,6 @@ fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 13] {
         storage(10, true),
         storage(11, false),
         storage(12, true),
+        storage(13, true),
     ]
 }

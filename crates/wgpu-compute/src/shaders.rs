@@ -64,6 +64,11 @@ pub const RESOLVE_ENTRY_POINT: &str = "resolve_uncertain";
 /// sets it).
 pub const TOUCH_SIGNS_CONSTANT: &str = "TOUCH_SIGNS";
 
+/// The pipeline-overridable constant (a `bool`, default `false`) that makes `original`'s edge
+/// step read each OV from the scene's OV vertex list (binding 13) instead of through its
+/// triangle; the backend sets it for scenes that have the list.
+pub const OV_VERTICES_CONSTANT: &str = "OV_VERTICES";
+
 /// Threads per workgroup (`WORKGROUP_SIZE` in the kernel).
 pub const WORKGROUP_SIZE: u32 = 256;
 

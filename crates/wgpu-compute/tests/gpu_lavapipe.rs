@@ -28,6 +28,7 @@ main!(
     gpu_errors_are_reported_not_panics,
     gpu_buffer_limits_chunk_lights_or_split_the_scene,
     gpu_scenes_in_parts_equal_whole_scenes_on_the_corpus,
+    gpu_every_mode_is_the_same_without_the_ov_vertex_list,
     gpu_lost_device_is_an_error_not_a_panic
 );
 
@@ -568,5 +569,34 @@ fn gpu_lost_device_is_an_error_not_a_panic() -> Outcome {
         b.prepare(&case.scene),
         Err(BackendError::Device { .. })
     ));
+    Ok(())
+}
+
+/// Scenes beyond `ov_vertices_up_to` triangles keep no OV vertex list on the device, and
+/// `original` reads each OV through its triangle: every mode gives the same bits either way, on
+/// every corpus case (the default keeps the list for all of them).
+fn gpu_every_mode_is_the_same_without_the_ov_vertex_list() -> Outcome {
+    let mut with = backend(
+        "gpu_every_mode_is_the_same_without_the_ov_vertex_list",
+        WgpuOptions::default(),
+    )?;
+    let mut without = WgpuBackend::new(WgpuOptions {
+        ov_vertices_up_to: 0,
+        ..WgpuOptions::default()
+    })
+    .unwrap();
+    for case in common::all_cases() {
+        for mode in Accuracy::ALL {
+            let (a, _) = extract_once(&mut with, &case.scene, &case.lights, mode).unwrap();
+            let (b, _) = extract_once(&mut without, &case.scene, &case.lights, mode).unwrap();
+            assert_eq!(
+                invariant::first_difference(&b, &a),
+                None,
+                "{} {mode}: (light, edge, without, with)",
+                case.name
+            );
+            assert_eq!(b, a, "{} {mode}: compact lists", case.name);
+        }
+    }
     Ok(())
 }

@@ -82,7 +82,7 @@ pub const SHADER_WGSL: &str = include_str!("../../../../shaders/render_raster.wg
 /// `WORKGROUP_SIZE`, whose module they join).
 const WORKGROUP: u32 = shaders::WORKGROUP_SIZE;
 /// Storage buffers the edge pass binds in one stage.
-const STORAGE_BUFFERS: u32 = 11;
+const STORAGE_BUFFERS: u32 = 12;
 /// Byte stride of the per-light uniforms (dynamic offsets).
 const LIGHT_STRIDE: u64 = 256;
 /// Bytes of one light uniform (`LightU`).
@@ -520,6 +520,9 @@ struct SceneTables {
     tris: wgpu::Buffer,
     objects: wgpu::Buffer,
     vertex_objects: wgpu::Buffer,
+    /// The extraction's optional OV vertex list, which this pass leaves out (16 bytes never
+    /// read; `params.has_ov_vertices` is 0): its `original` reads each OV through its triangle.
+    no_ov_vertices: wgpu::Buffer,
 }
 
 /// The sizes of an uploaded [`ResidentLayout`]: all the frames need of it once its arrays are

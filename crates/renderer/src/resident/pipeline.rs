@@ -182,6 +182,7 @@ impl ExtractPipelines {
                 storage(10, compute, true),
                 storage(11, compute, false),
                 storage(12, compute, true),
+                storage(13, compute, true),
             ],
         );
         let c1 = bind_group_layout(

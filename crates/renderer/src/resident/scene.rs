@@ -49,6 +49,7 @@ impl ShadowPass {
             tris: up(TableBuffer::Triangles)?,
             objects: up(TableBuffer::Objects)?,
             vertex_objects: self.vertex_objects(writer.objects())?,
+            no_ov_vertices: self.scene_buffer::<u32>("no opposite vertices", &[])?,
         };
         let bases = writer.objects().to_vec();
         let counts = LayoutCounts {
@@ -75,6 +76,7 @@ impl ShadowPass {
             tris: self.scene_buffer("triangles", &t.tris)?,
             objects: self.scene_buffer("object bases", &t.objects)?,
             vertex_objects: self.scene_buffer("vertex objects", &layout.vertex_objects)?,
+            no_ov_vertices: self.scene_buffer::<u32>("no opposite vertices", &[])?,
         };
         let counts = LayoutCounts::of(&layout);
         self.finish_prepare(tables, counts, layout.tables.objects)
@@ -368,7 +370,16 @@ impl ShadowPass {
         q.write_buffer(
             &rs.params,
             0,
-            bytemuck::cast_slice(&[edge_count, f.lights.len() as u32, 0, tri_count, 0, 0, 0, 0]),
+            bytemuck::cast_slice(&[
+                edge_count,
+                f.lights.len() as u32,
+                0,
+                tri_count,
+                0,
+                rs.counts.objects as u32,
+                0,
+                0,
+            ]),
         );
         let objects = rs.counts.objects;
         let capacity = rs.counts.capacity as u32;
@@ -470,6 +481,7 @@ impl ShadowPass {
                 entry(10, &rs.tables.ov_offsets),
                 entry(11, &b.signs),
                 entry(12, &rs.tables.objects),
+                entry(13, &rs.tables.no_ov_vertices),
             ],
         });
         let c1 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {

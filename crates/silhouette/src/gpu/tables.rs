@@ -20,6 +20,7 @@ use shadowvol_mesh_topology::EdgeTable;
 /// | [`OvRefs`](TableBuffer::OvRefs) | 1 | per OV slot, `4 t + r`: global triangle `t` and the rank `r` of the OV among its ids |
 /// | [`Triangles`](TableBuffer::Triangles) | 3 | the triangle's ids in ascending (canonical) order |
 /// | [`Objects`](TableBuffer::Objects) | 4 | per object `(first edge, first triangle, first vertex, first OV slot)`, plus a sentinel of the totals |
+/// | [`OvVertices`](TableBuffer::OvVertices) | 1 | optional: per OV slot, the OV's global vertex id (what a reference names, read in one step) |
 ///
 /// The OV of slot `k` is `Triangles[t][r]`; the pair's sign is `+` or `-` the sign of the
 /// canonical triangle `t`, minus exactly for `r == 1` (the OV between the edge's ends: an odd
@@ -39,10 +40,14 @@ pub enum TableBuffer {
     Triangles,
     /// Object bases, with a sentinel.
     Objects,
+    /// The OV of each slot, as a vertex id: not in [`TableBuffer::ALL`]. It spares `original`
+    /// (the one mode that reads an OV's position) a step per OV, for 12 bytes a triangle.
+    OvVertices,
 }
 
 impl TableBuffer {
-    /// Every buffer, in upload order.
+    /// Every buffer the kernels need, in upload order ([`TableBuffer::OvVertices`], optional,
+    /// is not among them).
     pub const ALL: [TableBuffer; 6] = [
         TableBuffer::Positions,
         TableBuffer::Edges,
@@ -58,7 +63,7 @@ impl TableBuffer {
         match self {
             TableBuffer::Positions | TableBuffer::Triangles => 3,
             TableBuffer::Edges => 2,
-            TableBuffer::OvOffsets | TableBuffer::OvRefs => 1,
+            TableBuffer::OvOffsets | TableBuffer::OvRefs | TableBuffer::OvVertices => 1,
             TableBuffer::Objects => 4,
         }
     }
@@ -73,6 +78,7 @@ impl TableBuffer {
             TableBuffer::OvRefs => "opposite-vertex references",
             TableBuffer::Triangles => "triangles",
             TableBuffer::Objects => "object bases",
+            TableBuffer::OvVertices => "opposite vertices",
         }
     }
 }
@@ -178,7 +184,7 @@ impl<'a> TableWriter<'a> {
             TableBuffer::Positions => total[FIRST_VERTEX] as usize,
             TableBuffer::Edges => total[FIRST_EDGE] as usize,
             TableBuffer::OvOffsets => total[FIRST_EDGE] as usize + 1,
-            TableBuffer::OvRefs => total[FIRST_SLOT] as usize,
+            TableBuffer::OvRefs | TableBuffer::OvVertices => total[FIRST_SLOT] as usize,
             TableBuffer::Triangles => total[FIRST_TRIANGLE] as usize,
             TableBuffer::Objects => self.objects.len(),
         }
@@ -209,7 +215,7 @@ impl<'a> TableWriter<'a> {
         let field = match b {
             TableBuffer::Positions => FIRST_VERTEX,
             TableBuffer::Edges | TableBuffer::OvOffsets => FIRST_EDGE,
-            TableBuffer::OvRefs => FIRST_SLOT,
+            TableBuffer::OvRefs | TableBuffer::OvVertices => FIRST_SLOT,
             TableBuffer::Triangles | TableBuffer::Objects => FIRST_TRIANGLE,
         };
         let mut i = first;
@@ -265,6 +271,9 @@ fn write_object(
                 .iter()
                 .map(|&r| r + 4 * base[FIRST_TRIANGLE]),
         ),
+        TableBuffer::OvVertices => {
+            out.extend(t.ov_refs[local].iter().map(|&r| t.ov_vertex(r) + vb));
+        }
         TableBuffer::Triangles => out.extend(t.triangles[local].iter().flat_map(|tri| {
             let mut c = *tri;
             c.sort_unstable();
@@ -437,7 +446,13 @@ mod tests {
     fn chunks_at_any_boundary_equal_the_whole() {
         let scene = two_objects();
         let w = TableWriter::new(&scene, "t").unwrap();
-        for b in TableBuffer::ALL {
+        let l = TableLayout::build(&scene, "t").unwrap();
+        let named: Vec<u32> = l.ov_refs.iter().map(|&r| l.ref_vertex(r)).collect();
+        assert_eq!(w.to_vec(TableBuffer::OvVertices), named);
+        for b in TableBuffer::ALL
+            .into_iter()
+            .chain([TableBuffer::OvVertices])
+        {
             let whole = w.to_vec(b);
             assert_eq!(whole.len(), w.elements(b) * b.words());
             assert_eq!(w.bytes(b), 4 * whole.len() as u64);
