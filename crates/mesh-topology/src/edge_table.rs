@@ -3,7 +3,7 @@
 //! on demand.
 
 use crate::welding::split_by;
-use crate::{weld, Mesh, MeshError, Renumbering, Weld};
+use crate::{weld, Mesh, MeshError, Renumbering, SoupWeld, Weld};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -111,8 +111,49 @@ impl EdgeTable {
         drop(positions);
         let input_triangles = triangles.len();
         let triangle_sources = compact_in_place(&weld, &mut triangles);
+        let inputs = weld.compact_of_input.len();
         Ok(Self::from_compact(
-            weld,
+            (weld, inputs),
+            triangles,
+            triangle_sources,
+            input_triangles,
+        ))
+    }
+
+    /// Builds the table of a soup welded as it was read: `weld` holds every corner pushed
+    /// (`weld.pushed()` input vertices) and `triangles` each input triangle in compact ids, in
+    /// input order. The same table as [`EdgeTable::build`] of the soup (every position pushed,
+    /// in order, and the triangles over those input indices), without the soup: triangles with
+    /// two equal corners are dropped, vertex names are the weld's.
+    ///
+    /// # Errors
+    /// [`MeshError::TooLarge`] or [`MeshError::OutOfMemory`] from [`EdgeTable::check_size`]
+    /// (for the triangles and the input vertices); [`MeshError::IndexOutOfRange`] for a
+    /// triangle naming a compact id the weld does not have.
+    pub fn from_soup_weld(weld: SoupWeld, mut triangles: Vec<[u32; 3]>) -> Result<Self, MeshError> {
+        Self::check_size(triangles.len() as u64, weld.pushed())?;
+        let vertices = weld.names().len();
+        for (triangle, tri) in triangles.iter().enumerate() {
+            if let Some(corner) = tri.iter().position(|&v| v as usize >= vertices) {
+                return Err(MeshError::IndexOutOfRange {
+                    triangle,
+                    corner,
+                    index: tri[corner],
+                    vertices,
+                });
+            }
+        }
+        let input_vertices = weld.pushed() as usize;
+        let (names, positions) = weld.into_parts();
+        let weld = Weld {
+            compact_of_input: Vec::new(),
+            names,
+            positions,
+        };
+        let input_triangles = triangles.len();
+        let triangle_sources = compact_in_place_by(&mut triangles, |v| v);
+        Ok(Self::from_compact(
+            (weld, input_vertices),
             triangles,
             triangle_sources,
             input_triangles,
@@ -127,20 +168,26 @@ impl EdgeTable {
     #[must_use]
     pub fn from_weld(weld: Weld, input_triangles: &[[u32; 3]]) -> Self {
         let (triangles, triangle_sources) = compact_triangles(&weld, input_triangles);
-        Self::from_compact(weld, triangles, triangle_sources, input_triangles.len())
+        let inputs = weld.compact_of_input.len();
+        Self::from_compact(
+            (weld, inputs),
+            triangles,
+            triangle_sources,
+            input_triangles.len(),
+        )
     }
 
     /// The rest of [`EdgeTable::from_weld`] once the kept triangles (compact ids) and their
-    /// input indices are known; `input_triangles` counts the input's triangles.
+    /// input indices are known; `input_vertices` and `input_triangles` count the input's.
     fn from_compact(
-        weld: Weld,
+        (weld, input_vertices): (Weld, usize),
         triangles: Vec<[u32; 3]>,
         triangle_sources: Renumbering,
         input_triangles: usize,
     ) -> Self {
         let vertex_count = weld.names.len();
         let mut stats = MeshStats {
-            vertices: weld.compact_of_input.len(),
+            vertices: input_vertices,
             welded_vertices: vertex_count,
             triangles: input_triangles,
             degenerate_triangles: input_triangles - triangles.len(),
@@ -338,11 +385,16 @@ fn compact_triangles(weld: &Weld, input_triangles: &[[u32; 3]]) -> (Vec<[u32; 3]
 /// ids, in order; returns each kept triangle's input index, stored only once a triangle is
 /// dropped.
 fn compact_in_place(weld: &Weld, triangles: &mut Vec<[u32; 3]>) -> Renumbering {
+    compact_in_place_by(triangles, |v| weld.compact_of_input[v as usize])
+}
+
+/// [`compact_in_place`] with each input id's compact id from `compact`.
+fn compact_in_place_by(triangles: &mut Vec<[u32; 3]>, compact: impl Fn(u32) -> u32) -> Renumbering {
     let mut sources: Option<Vec<u32>> = None;
     let mut kept = 0;
     for i in 0..triangles.len() {
         let t = triangles[i];
-        let c = t.map(|v| weld.compact_of_input[v as usize]);
+        let c = t.map(&compact);
         if c[0] != c[1] && c[1] != c[2] && c[0] != c[2] {
             triangles[kept] = c;
             if let Some(s) = &mut sources {

@@ -44,7 +44,7 @@ pub use memory::{
 };
 pub use mesh::Mesh;
 pub use renumbering::Renumbering;
-pub use welding::{positions_distinct, positions_distinct_by, weld, Weld};
+pub use welding::{positions_distinct, positions_distinct_by, weld, SoupWeld, Weld};
 
 /// Peak-allocation tracking for the estimate tests: a global allocator that counts each
 /// thread's live bytes (only in this crate's unit-test binary).
@@ -356,6 +356,60 @@ mod tests {
             a.heap_bytes() + b.heap_bytes()
         );
         assert!(a.heap_bytes() >= vec_bytes(&a.ov_refs) + vec_bytes(&a.edges));
+    }
+
+    /// The soup of `mesh`: triangle `t` over its own vertices `3 t .. 3 t + 3`.
+    fn as_soup(mesh: &Mesh) -> Mesh {
+        let positions: Vec<Vec3> = mesh
+            .triangles
+            .iter()
+            .flat_map(|t| t.map(|v| mesh.positions[v as usize]))
+            .collect();
+        let n = mesh.triangles.len() as u32;
+        Mesh::new(
+            positions,
+            (0..n).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect(),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn a_soup_welded_as_read_makes_the_table_build_makes() {
+        // Shared corners, -0.0 against +0.0, a facet degenerate after welding, and enough
+        // distinct positions to grow the index table several times.
+        let dup = Mesh {
+            positions: vec![
+                Vec3::ZERO,
+                Vec3::X,
+                Vec3::Y,
+                Vec3::new(-0.0, 0.0, 0.0),
+                Vec3::Z,
+            ],
+            triangles: vec![[0, 1, 2], [3, 1, 4], [0, 3, 2], [1, 2, 4], [4, 2, 3]],
+        };
+        for mesh in [grid(40), soup(500), dup] {
+            let soup = as_soup(&mesh);
+            let built = EdgeTable::build(&soup).unwrap();
+            let mut w = SoupWeld::new();
+            let tris: Vec<[u32; 3]> = soup
+                .triangles
+                .iter()
+                .map(|t| t.map(|v| w.push(soup.positions[v as usize])))
+                .collect();
+            assert_eq!(w.pushed(), soup.positions.len() as u64);
+            assert_eq!(EdgeTable::from_soup_weld(w, tris).unwrap(), built);
+        }
+        let mut w = SoupWeld::new();
+        w.push(Vec3::ZERO);
+        assert!(matches!(
+            EdgeTable::from_soup_weld(w, vec![[0, 0, 1]]),
+            Err(MeshError::IndexOutOfRange {
+                corner: 2,
+                index: 1,
+                vertices: 1,
+                ..
+            })
+        ));
     }
 
     #[test]

@@ -59,6 +59,115 @@ pub fn weld(positions: &[Vec3]) -> Weld {
     }
 }
 
+/// [`weld`] of positions that arrive one at a time, as a triangle soup is read: each position
+/// pushed ([`SoupWeld::push`]) comes back as its compact id, numbered and named exactly as
+/// [`weld`] numbers and names the list of every position pushed, in order (a group is named by
+/// its first input index, compact ids follow the names, a group's position is its first one's).
+///
+/// It holds only the distinct positions, their names and an index table (about 24 bytes a
+/// distinct position), never the input list: a loader that turns corners into compact ids as it
+/// reads them need not keep the soup (three positions a triangle).
+///
+/// ```
+/// use glam::Vec3;
+/// use shadowvol_mesh_topology::{weld, SoupWeld};
+///
+/// let soup = [Vec3::X, Vec3::Y, Vec3::ZERO, Vec3::new(-0.0, 0.0, 0.0), Vec3::Y, Vec3::Z];
+/// let mut w = SoupWeld::new();
+/// let ids: Vec<u32> = soup.iter().map(|&p| w.push(p)).collect();
+/// let whole = weld(&soup);
+/// assert_eq!(ids, whole.compact_of_input);
+/// assert_eq!((w.names(), w.positions()), (&whole.names[..], &whole.positions[..]));
+/// ```
+#[derive(Debug, Clone, Default)]
+pub struct SoupWeld {
+    /// Open-addressing index table of compact ids (`u32::MAX` empty); empty before the first
+    /// push.
+    slots: Vec<u32>,
+    names: Vec<u32>,
+    positions: Vec<Vec3>,
+    pushed: u64,
+}
+
+impl SoupWeld {
+    /// An empty weld.
+    #[must_use]
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Welds the next input position (input index [`SoupWeld::pushed`]) and returns its compact
+    /// id.
+    ///
+    /// # Panics
+    /// Panics past `u32::MAX` input positions (a loader refuses such inputs first).
+    pub fn push(&mut self, p: Vec3) -> u32 {
+        let name = u32::try_from(self.pushed).expect("at most u32::MAX input positions");
+        self.pushed += 1;
+        // Grow at a load of 2/3: probes stay short.
+        if 3 * (self.names.len() + 1) > 2 * self.slots.len() {
+            self.grow();
+        }
+        let key = weld_key(p);
+        let bits = self.slots.len().trailing_zeros();
+        let mask = self.slots.len() - 1;
+        let mut h = weld_hash(key, bits);
+        loop {
+            let s = self.slots[h];
+            if s == u32::MAX {
+                let id = self.names.len() as u32;
+                self.slots[h] = id;
+                self.names.push(name);
+                self.positions.push(p);
+                return id;
+            }
+            if weld_key(self.positions[s as usize]) == key {
+                return s;
+            }
+            h = (h + 1) & mask;
+        }
+    }
+
+    /// Doubles the index table (at least 16 slots) and re-inserts every group.
+    fn grow(&mut self) {
+        let n = (2 * self.slots.len()).max(16);
+        let bits = n.trailing_zeros();
+        let mut slots = vec![u32::MAX; n];
+        for (id, &p) in self.positions.iter().enumerate() {
+            let mut h = weld_hash(weld_key(p), bits);
+            while slots[h] != u32::MAX {
+                h = (h + 1) & (n - 1);
+            }
+            slots[h] = id as u32;
+        }
+        self.slots = slots;
+    }
+
+    /// Input positions pushed so far.
+    #[must_use]
+    pub fn pushed(&self) -> u64 {
+        self.pushed
+    }
+
+    /// Each compact id's name: the input index of its group's first position.
+    #[must_use]
+    pub fn names(&self) -> &[u32] {
+        &self.names
+    }
+
+    /// Each compact id's position.
+    #[must_use]
+    pub fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+
+    /// The names and positions, the index table freed.
+    #[must_use]
+    pub fn into_parts(self) -> (Vec<u32>, Vec<Vec3>) {
+        (self.names, self.positions)
+    }
+}
+
 /// Index-table bits for `n` vertices: at least 1.5 `n` slots, a power of two.
 fn table_bits(n: usize) -> u32 {
     (n.max(8) * 3 / 2).next_power_of_two().trailing_zeros()
