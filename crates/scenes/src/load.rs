@@ -30,10 +30,17 @@ impl Scene {
             .map(str::to_ascii_lowercase);
         match ext.as_deref() {
             Some("gltf" | "glb") => crate::gltf_load::load_gltf_with_notes(path),
-            Some(ext @ ("obj" | "stl" | "ply")) => {
+            Some("stl") => {
+                // Welded as it is read: the file's table, without the file or its soup.
+                let table = crate::stl::load_stl_table(path)?;
+                let name = file_name(path);
+                let mut scene = Self::new(name.clone());
+                scene.add_object(name, std::sync::Arc::new(table), glam::Affine3A::IDENTITY);
+                Ok((scene, Vec::new()))
+            }
+            Some(ext @ ("obj" | "ply")) => {
                 let (mesh, notes) = match ext {
                     "obj" => crate::obj::load_obj_with_notes(path)?,
-                    "stl" => (crate::stl::load_stl(path)?, Vec::new()),
                     _ => (crate::ply::load_ply(path)?, Vec::new()),
                 };
                 let name = file_name(path);

@@ -39,7 +39,8 @@
 
 use crate::SceneError;
 use glam::Vec3;
-use shadowvol_mesh_topology::Mesh;
+use shadowvol_mesh_topology::{EdgeTable, Mesh, SoupWeld};
+use std::io::Read;
 use std::path::Path;
 
 /// Reads an STL file (ASCII or binary). See the [module documentation](self).
@@ -127,25 +128,87 @@ fn parse_binary(
     check_size(n).map_err(|m| err("header".to_owned(), m))?;
     let mut positions = Vec::with_capacity(3 * n);
     for (t, rec) in bytes[84..].chunks_exact(50).enumerate() {
-        for c in 0..3 {
-            let mut p = [0.0f32; 3];
-            for (axis, v) in p.iter_mut().enumerate() {
-                let o = 12 + 12 * c + 4 * axis;
-                *v = f32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]);
-                if !v.is_finite() {
-                    return Err(err(
-                        format!("facet {t} (byte {})", 84 + 50 * t + o),
-                        format!(
-                            "vertex {c} coordinate {} is {v}, but positions must be finite",
-                            ['x', 'y', 'z'][axis]
-                        ),
-                    ));
-                }
-            }
-            positions.push(Vec3::from_array(p));
-        }
+        positions.extend(facet_corners(rec, t, err)?);
     }
     Ok(soup(positions))
+}
+
+/// The three corners of binary facet `t` (its 50-byte record `rec`).
+fn facet_corners(
+    rec: &[u8],
+    t: usize,
+    err: &dyn Fn(String, String) -> SceneError,
+) -> Result<[Vec3; 3], SceneError> {
+    let mut corners = [Vec3::ZERO; 3];
+    for (c, corner) in corners.iter_mut().enumerate() {
+        let mut p = [0.0f32; 3];
+        for (axis, v) in p.iter_mut().enumerate() {
+            let o = 12 + 12 * c + 4 * axis;
+            *v = f32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]);
+            if !v.is_finite() {
+                return Err(err(
+                    format!("facet {t} (byte {})", 84 + 50 * t + o),
+                    format!(
+                        "vertex {c} coordinate {} is {v}, but positions must be finite",
+                        ['x', 'y', 'z'][axis]
+                    ),
+                ));
+            }
+        }
+        *corner = Vec3::from_array(p);
+    }
+    Ok(corners)
+}
+
+/// Reads an STL file straight into its edge table: the table [`EdgeTable::build`] makes of
+/// [`load_stl`]'s soup (the same vertex names, the same triangles), at a lower peak. A binary
+/// file is read a facet at a time and its corners welded as they come ([`SoupWeld`]), so
+/// neither the file nor the soup (three positions a facet) is held; an ASCII file is read
+/// whole, as [`load_stl`] reads it.
+///
+/// # Errors
+/// As [`load_stl`]; [`SceneError::Mesh`] naming the file when its table cannot be built
+/// (too large for `u32` ids or for the available memory, checked before the facets are read).
+pub fn load_stl_table(path: impl AsRef<Path>) -> Result<EdgeTable, SceneError> {
+    let path = path.as_ref();
+    let name = path.display().to_string();
+    let io = |source| SceneError::Io {
+        path: name.clone(),
+        source,
+    };
+    let mesh_err = |source| SceneError::Mesh {
+        what: name.clone(),
+        source,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let len = file.metadata().map_err(io)?.len();
+    let mut reader = std::io::BufReader::with_capacity(1 << 20, file);
+    let mut header = [0u8; 84];
+    if len >= 84 {
+        reader.read_exact(&mut header).map_err(io)?;
+        let n = u32::from_le_bytes([header[80], header[81], header[82], header[83]]);
+        if 84 + 50 * u64::from(n) == len {
+            let err = |location: String, message: String| SceneError::Stl {
+                file: name.clone(),
+                location,
+                message,
+            };
+            let n = n as usize;
+            check_size(n).map_err(|m| err("header".to_owned(), m))?;
+            EdgeTable::check_size(n as u64, 3 * n as u64).map_err(mesh_err)?;
+            let mut weld = SoupWeld::new();
+            let mut triangles = Vec::with_capacity(n);
+            let mut rec = [0u8; 50];
+            for t in 0..n {
+                reader.read_exact(&mut rec).map_err(io)?;
+                let corners = facet_corners(&rec, t, &err)?;
+                triangles.push(corners.map(|p| weld.push(p)));
+            }
+            return EdgeTable::from_soup_weld(weld, triangles).map_err(mesh_err);
+        }
+    }
+    drop(reader);
+    EdgeTable::build_owned(load_stl(path)?).map_err(mesh_err)
 }
 
 /// Triangle `t` over vertices `3t, 3t + 1, 3t + 2`.

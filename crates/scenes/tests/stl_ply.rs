@@ -218,3 +218,59 @@ fn ply_errors_name_file_and_element_or_line() {
     let m = parse_ply(&bin, "bad.ply").unwrap_err().to_string();
     assert!(m.starts_with("bad.ply: "), "{m}");
 }
+
+/// A binary file is welded as it is read: the table equals the one built from the soup
+/// `load_stl` gives (names, sources, degenerate facets, -0.0), on files of every kind, and the
+/// errors are those of `load_stl`.
+#[test]
+fn stl_tables_welded_as_read_equal_the_soup_build() {
+    let dir = std::env::temp_dir().join(format!("shadowvol-stl-table-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let write = |name: &str, bytes: &[u8]| {
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        p
+    };
+    // A tetrahedron with -0.0 corners, a facet degenerate after welding, and a fan of 300
+    // facets (enough distinct corners to grow the weld's index table).
+    let mut facets = TETRA.to_vec();
+    facets[1][0] = [-0.0, 0.0, -0.0];
+    facets.push([[0.0, 0.0, 0.0], [-0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]);
+    for i in 0..300 {
+        let a = i as f32 * 0.01;
+        facets.push([
+            [5.0, 0.0, 0.0],
+            [5.0 + a, 1.0, 0.0],
+            [5.0 + a + 0.01, 1.0, 0.0],
+        ]);
+    }
+    let ascii = b"solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n\
+        vertex 0 1 0\nendloop\nendfacet\nendsolid t\n";
+    for (name, bytes) in [
+        ("tetra.stl", binary_stl(b"solid exported", &TETRA)),
+        ("mixed.stl", binary_stl(b"", &facets)),
+        ("ascii.stl", ascii.to_vec()),
+    ] {
+        let path = write(name, &bytes);
+        let soup = shadowvol_scenes::stl::load_stl(&path).unwrap();
+        let want = EdgeTable::build(&soup).unwrap();
+        let got = shadowvol_scenes::stl::load_stl_table(&path).unwrap();
+        assert_eq!(got, want, "{name}");
+    }
+    let mut f = TETRA;
+    f[2][1][2] = f32::NAN;
+    for (name, bytes) in [
+        ("nan.stl", binary_stl(b"", &f)),
+        ("short.stl", b"PK\x03\x04 not an stl".to_vec()),
+    ] {
+        let path = write(name, &bytes);
+        let want = shadowvol_scenes::stl::load_stl(&path)
+            .unwrap_err()
+            .to_string();
+        let got = shadowvol_scenes::stl::load_stl_table(&path)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(got, want, "{name}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
