@@ -150,6 +150,44 @@ fn ply_reads_positions_and_fans_polygons_ignoring_other_properties() {
         }
     }
     assert_eq!(parse_ply(&bin, "be.ply").unwrap(), mesh);
+    // Little-endian, with elements before and after the mesh's (read and dropped), from a
+    // file read a buffer at a time.
+    let vp = "property float x\nproperty float y\nproperty float z\n";
+    let mut le = "ply\nformat binary_little_endian 1.0\nelement material 2\nproperty uchar id\n\
+                  property list uchar float rgb\nelement vertex 6\n"
+        .to_owned();
+    le.push_str(vp);
+    le.push_str(
+        "element face 2\nproperty list uchar int vertex_indices\nelement edge 1\n\
+                 property int vertex1\nproperty int vertex2\nend_header\n",
+    );
+    let mut le = le.into_bytes();
+    for id in [1u8, 2] {
+        le.push(id);
+        le.push(3);
+        for c in [0.5f32, 0.25, 1.0] {
+            le.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for p in &mesh.positions {
+        for c in p.to_array() {
+            le.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for face in [&[0i32, 1, 2, 3, 4][..], &[0, 4, 5]] {
+        le.push(face.len() as u8);
+        for i in face {
+            le.extend_from_slice(&i.to_le_bytes());
+        }
+    }
+    for v in [0i32, 5] {
+        le.extend_from_slice(&v.to_le_bytes());
+    }
+    assert_eq!(parse_ply(&le, "le.ply").unwrap(), mesh);
+    let path = std::env::temp_dir().join(format!("shadowvol-le-{}.ply", std::process::id()));
+    std::fs::write(&path, &le).unwrap();
+    assert_eq!(shadowvol_scenes::ply::load_ply(&path).unwrap(), mesh);
+    std::fs::remove_file(&path).unwrap();
     // A point cloud (no face element) has no triangles.
     let cloud = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
                  property float z\nend_header\n1 2 3\n";
