@@ -7,16 +7,17 @@ use crate::SceneError;
 use std::collections::HashMap;
 
 impl Source<'_> {
-    /// The JSON and BIN chunk of a GLB (trailing data cut with a note), or the JSON as is.
+    /// The JSON and BIN chunk of a GLB (trailing data cut with a note), or the JSON as is. The
+    /// BIN chunk is `file` itself, cut to the chunk in place: the file is not held twice.
     pub(super) fn split_container(
         &self,
-        bytes: &[u8],
+        mut file: Vec<u8>,
         notes: &mut Vec<String>,
     ) -> Result<(Vec<u8>, Option<Vec<u8>>), SceneError> {
-        if !bytes.starts_with(b"glTF") {
-            return Ok((bytes.to_vec(), None));
+        if !file.starts_with(b"glTF") {
+            return Ok((file, None));
         }
-        let mut bytes = bytes;
+        let mut bytes = &file[..];
         if bytes.len() >= 12 {
             let declared = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize;
             if declared >= 12 && declared < bytes.len() {
@@ -42,9 +43,19 @@ impl Source<'_> {
             }
         }
         let glb = gltf::Glb::from_slice(bytes).map_err(|e| self.err("document", e.to_string()))?;
+        let json = glb.json.into_owned();
+        // Where the BIN chunk lies in the file (the parser borrows it from there).
+        let bin = glb.bin.map(|b| {
+            let at = b.as_ptr() as usize - file.as_ptr() as usize;
+            at..at + b.len()
+        });
         Ok((
-            glb.json.into_owned(),
-            glb.bin.map(std::borrow::Cow::into_owned),
+            json,
+            bin.map(|r| {
+                file.truncate(r.end);
+                file.drain(..r.start);
+                file
+            }),
         ))
     }
 

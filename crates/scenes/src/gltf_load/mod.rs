@@ -130,7 +130,7 @@ pub fn load_gltf_with_notes(path: impl AsRef<Path>) -> Result<(Scene, Vec<String
             ),
         });
     }
-    load_gltf_slice_with_notes(&bytes, &name, base).map(|(mut s, notes)| {
+    load_owned(bytes, &name, base).map(|(mut s, notes)| {
         s.name = file_name(path);
         (s, notes)
     })
@@ -170,6 +170,15 @@ pub fn load_gltf_slice(
 /// As [`load_gltf_slice`].
 pub fn load_gltf_slice_with_notes(
     bytes: &[u8],
+    source_name: &str,
+    base: Option<&Path>,
+) -> Result<(Scene, Vec<String>), SceneError> {
+    load_owned(bytes.to_vec(), source_name, base)
+}
+
+/// [`load_gltf_slice_with_notes`] of a file's bytes, which become its BIN chunk in place.
+fn load_owned(
+    bytes: Vec<u8>,
     source_name: &str,
     base: Option<&Path>,
 ) -> Result<(Scene, Vec<String>), SceneError> {

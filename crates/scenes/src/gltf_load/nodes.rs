@@ -169,10 +169,13 @@ impl Loader<'_> {
             return Ok(Arc::clone(t));
         }
         let m = self.read_mesh(label, mesh)?;
-        let t = Arc::new(EdgeTable::build(&m).map_err(|source| SceneError::Mesh {
-            what: format!("{}: {label}, mesh {}", self.source_name, mesh.index()),
-            source,
-        })?);
+        // The mesh is freed as its table is built.
+        let t = Arc::new(
+            EdgeTable::build_owned(m).map_err(|source| SceneError::Mesh {
+                what: format!("{}: {label}, mesh {}", self.source_name, mesh.index()),
+                source,
+            })?,
+        );
         self.meshes.insert(mesh.index(), Arc::clone(&t));
         Ok(t)
     }
