@@ -503,34 +503,6 @@ impl WgpuBackend {
         Ok(())
     }
 
-    /// Replaces the scene's frame buffers by ones with room for `uncertain` records and `lists`
-    /// entries per compact list (the current frame's where `None`), keeping its staging buffer.
-    fn replace_frame(
-        &self,
-        p: &mut Prepared,
-        gpu: &StaticBuffers,
-        uncertain: Option<u32>,
-        lists: Option<u64>,
-    ) -> Result<(), BackendError> {
-        let sizes = (
-            p.index.edge_count() as u64,
-            p.index.tri_count() as u64,
-            p.index.object_count() as u64,
-        );
-        let frame = p
-            .frame
-            .as_mut()
-            .ok_or_else(|| device_error("no frame buffers"))?;
-        let uncertain = uncertain.unwrap_or(frame.uncertain_capacity);
-        let lists = lists.unwrap_or(frame.list_capacity);
-        let light_capacity = frame.light_capacity;
-        let staging = frame.staging.take();
-        let mut frame = self.create_frame(gpu, sizes, light_capacity, uncertain, lists)?;
-        frame.staging = staging;
-        p.frame = Some(frame);
-        Ok(())
-    }
-
     /// Brings back what the first round trip left: the rest of long lists and of the uncertain
     /// records, and with `full_readback` the whole multiplicity buffer.
     fn second_round_trip(
@@ -733,17 +705,6 @@ fn validate_lists(lists: &[Vec<(u32, i32)>], edges: usize) -> Result<(), Backend
 }
 
 impl WgpuBackend {
-    /// Entries of each compact list in a scene's first frame:
-    /// [`WgpuOptions::initial_list_capacity`](crate::WgpuOptions::initial_list_capacity), or a
-    /// sixty-fourth of its `edges` (a silhouette is usually far smaller), at least 65,536, at
-    /// most `edges`.
-    fn initial_list_capacity(&self, edges: u64) -> u64 {
-        self.options
-            .initial_list_capacity
-            .unwrap_or((edges / 64).max(1 << 16))
-            .clamp(1, edges.max(1))
-    }
-
     pub(crate) fn wait(&self, index: wgpu::SubmissionIndex) -> Result<(), BackendError> {
         let limit = gpu::wait_limit()?;
         self.device

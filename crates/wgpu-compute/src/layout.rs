@@ -3,7 +3,7 @@
 //! within the device's buffer limits.
 
 use crate::backend::WgpuBackend;
-use crate::device::limit_error;
+use crate::device::{device_error, limit_error};
 use crate::pipeline::entry;
 use shadowvol_silhouette::gpu::{self, SceneIndex, TableBuffer, TableWriter};
 use shadowvol_silhouette::{vec_bytes, BackendError, PreparedBytes};
@@ -240,6 +240,45 @@ impl WgpuBackend {
             .min(self.limits.max_buffer_size)
             / 16)
             .min(u64::from(u32::MAX)) as u32
+    }
+
+    /// Entries of each compact list in a scene's first frame:
+    /// [`WgpuOptions::initial_list_capacity`](crate::WgpuOptions::initial_list_capacity), or a
+    /// sixty-fourth of its `edges` (a silhouette is usually far smaller), at least 65,536, at
+    /// most `edges`.
+    pub(crate) fn initial_list_capacity(&self, edges: u64) -> u64 {
+        self.options
+            .initial_list_capacity
+            .unwrap_or((edges / 64).max(1 << 16))
+            .clamp(1, edges.max(1))
+    }
+
+    /// Replaces the scene's frame buffers by ones with room for `uncertain` records and `lists`
+    /// entries per compact list (the current frame's where `None`), keeping its staging buffer.
+    pub(crate) fn replace_frame(
+        &self,
+        p: &mut Prepared,
+        gpu: &StaticBuffers,
+        uncertain: Option<u32>,
+        lists: Option<u64>,
+    ) -> Result<(), BackendError> {
+        let sizes = (
+            p.index.edge_count() as u64,
+            p.index.tri_count() as u64,
+            p.index.object_count() as u64,
+        );
+        let frame = p
+            .frame
+            .as_mut()
+            .ok_or_else(|| device_error("no frame buffers"))?;
+        let uncertain = uncertain.unwrap_or(frame.uncertain_capacity);
+        let lists = lists.unwrap_or(frame.list_capacity);
+        let light_capacity = frame.light_capacity;
+        let staging = frame.staging.take();
+        let mut frame = self.create_frame(gpu, sizes, light_capacity, uncertain, lists)?;
+        frame.staging = staging;
+        p.frame = Some(frame);
+        Ok(())
     }
 
     /// The frame buffers of a scene of `edges` edges, `tris` triangles and `objects` objects,
