@@ -26,7 +26,7 @@ impl ShadowPass {
     /// Uploads any topology, its tables in the layout [`ResidentLayout::build`] gives them, but
     /// written in chunks straight from its edge tables: no copy of the scene is made on the
     /// host, and the staging memory stays bounded
-    /// ([`upload_table`](shadowvol_wgpu_compute::upload_table)).
+    /// ([`upload_table`]).
     ///
     /// # Errors
     /// As [`ShadowPass::prepare`].
