@@ -358,6 +358,21 @@ mod tests {
         assert!(a.heap_bytes() >= vec_bytes(&a.ov_refs) + vec_bytes(&a.edges));
     }
 
+    /// A mesh with a duplicate vertex (-0.0 against +0.0) and a triangle degenerate after
+    /// welding, so that compaction drops one and renumbers the rest.
+    fn duplicate_and_degenerate() -> Mesh {
+        Mesh {
+            positions: vec![
+                Vec3::ZERO,
+                Vec3::X,
+                Vec3::Y,
+                Vec3::new(-0.0, 0.0, 0.0),
+                Vec3::Z,
+            ],
+            triangles: vec![[0, 1, 2], [3, 1, 4], [0, 3, 2], [1, 2, 4], [4, 2, 3]],
+        }
+    }
+
     /// The soup of `mesh`: triangle `t` over its own vertices `3 t .. 3 t + 3`.
     fn as_soup(mesh: &Mesh) -> Mesh {
         let positions: Vec<Vec3> = mesh
@@ -377,16 +392,7 @@ mod tests {
     fn a_soup_welded_as_read_makes_the_table_build_makes() {
         // Shared corners, -0.0 against +0.0, a facet degenerate after welding, and enough
         // distinct positions to grow the index table several times.
-        let dup = Mesh {
-            positions: vec![
-                Vec3::ZERO,
-                Vec3::X,
-                Vec3::Y,
-                Vec3::new(-0.0, 0.0, 0.0),
-                Vec3::Z,
-            ],
-            triangles: vec![[0, 1, 2], [3, 1, 4], [0, 3, 2], [1, 2, 4], [4, 2, 3]],
-        };
+        let dup = duplicate_and_degenerate();
         for mesh in [grid(40), soup(500), dup] {
             let soup = as_soup(&mesh);
             let built = EdgeTable::build(&soup).unwrap();
@@ -416,16 +422,7 @@ mod tests {
     fn build_owned_makes_the_table_build_makes() {
         // A grid, a soup, and a mesh with a duplicate vertex (-0.0) and a triangle degenerate
         // after welding, so that compaction drops one and renumbers the rest.
-        let dup = Mesh {
-            positions: vec![
-                Vec3::ZERO,
-                Vec3::X,
-                Vec3::Y,
-                Vec3::new(-0.0, 0.0, 0.0),
-                Vec3::Z,
-            ],
-            triangles: vec![[0, 1, 2], [3, 1, 4], [0, 3, 2], [1, 2, 4], [4, 2, 3]],
-        };
+        let dup = duplicate_and_degenerate();
         for mesh in [grid(40), soup(500), dup] {
             let built = EdgeTable::build(&mesh).unwrap();
             let owned = EdgeTable::build_owned(mesh).unwrap();

@@ -119,12 +119,7 @@ impl SceneLayout {
     /// Panics if `id` is out of range.
     #[must_use]
     pub fn position(&self, id: u32) -> [f32; 3] {
-        let i = id as usize * 3;
-        [
-            self.positions[i],
-            self.positions[i + 1],
-            self.positions[i + 2],
-        ]
+        super::xyz(&self.positions, id)
     }
 
     /// The vertices `(a, b)` and the object of global edge `e`.

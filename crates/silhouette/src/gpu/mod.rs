@@ -44,6 +44,16 @@ pub use wait::{describe_wait_limit, wait_limit, DEFAULT_TIMEOUT, TIMEOUT_ENV};
 
 use shadowvol_robust_math::Accuracy;
 
+/// Vertex `id`'s `xyz` in a flat `f32` position array (3 values a vertex), as every GPU layout
+/// stores positions.
+///
+/// # Panics
+/// Panics if `id` is out of range.
+fn xyz(positions: &[f32], id: u32) -> [f32; 3] {
+    let i = id as usize * 3;
+    [positions[i], positions[i + 1], positions[i + 2]]
+}
+
 /// Shader code of [`Accuracy::Original`].
 pub const MODE_ORIGINAL: u32 = 0;
 /// Shader code of [`Accuracy::Robust`].

@@ -360,12 +360,7 @@ impl TableLayout {
     /// Panics if `id` is out of range.
     #[must_use]
     pub fn position(&self, id: u32) -> [f32; 3] {
-        let i = id as usize * 3;
-        [
-            self.positions[i],
-            self.positions[i + 1],
-            self.positions[i + 2],
-        ]
+        super::xyz(&self.positions, id)
     }
 
     /// The OV slots of global edge `e`.
