@@ -28,6 +28,7 @@ fn main() {
         subnormal_coordinates_are_accepted_and_exact_on_cpu,
         meshes_beyond_u32_indices_are_refused_without_allocating,
         memory_estimate_refuses_big_tables_with_the_numbers,
+        files_are_refused_from_their_headers_before_they_are_read,
         large_presets_are_refused_before_they_are_generated,
         opencl_kernel_build_failure_is_an_error_not_a_panic,
         oversized_device_buffers_are_a_limit_error_or_work,
@@ -538,6 +539,58 @@ fn memory_estimate_refuses_big_tables_with_the_numbers() -> Outcome {
         );
         assert!(out.status.success(), "{}", stderr(&out));
     }
+    Ok(())
+}
+
+/// A binary STL and a PLY whose declared counts need more than the memory budget are refused
+/// by name, with the numbers, before their facets or elements are read: the PLY declares 10^8
+/// faces and has none (reading it would end in a parse error, not this one).
+fn files_are_refused_from_their_headers_before_they_are_read() -> Outcome {
+    let dir = std::env::temp_dir().join(format!("shadowvol-headers-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut stl = vec![b' '; 80];
+    stl.extend_from_slice(&2u32.to_le_bytes());
+    for f in 0..2u8 {
+        stl.extend_from_slice(&[0u8; 12]);
+        for v in [
+            [0.0f32, 0.0, 0.0],
+            [1.0, f32::from(f), 0.0],
+            [0.0, 1.0, 1.0],
+        ] {
+            for c in v {
+                stl.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        stl.extend_from_slice(&[0u8; 2]);
+    }
+    let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+               property float z\nelement face 100000000\nproperty list uchar int \
+               vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+    for (name, bytes, triangles, vertices) in [
+        ("two.stl", stl, 2u64, 6u64),
+        ("huge.ply", ply.as_bytes().to_vec(), 100_000_000, 3),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, &bytes).unwrap();
+        let p = path.to_str().unwrap();
+        let needed = shadowvol_mesh_topology::EdgeTable::estimate_bytes(triangles, vertices);
+        let budget = (needed - 1).to_string();
+        let (out, _) = run_env(
+            &["silhouette", p, "--light", "0,10,0,1", "--backend", "cpu"],
+            &[("SHADOWVOL_MEMORY_LIMIT", &budget)],
+        );
+        let msg = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{msg}");
+        for part in [
+            p,
+            "not enough memory",
+            &format!("{triangles} triangles and {vertices} vertices"),
+            &format!("needs up to {needed} bytes"),
+        ] {
+            assert!(msg.contains(part), "expected {part:?} in: {msg}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
     Ok(())
 }
 

@@ -36,7 +36,7 @@ use crate::SceneError;
 use glam::Vec3;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{ElementDef, Header, Property, PropertyAccess, PropertyAccessResult};
-use shadowvol_mesh_topology::Mesh;
+use shadowvol_mesh_topology::{EdgeTable, Mesh};
 use std::io::BufRead;
 use std::path::Path;
 
@@ -184,6 +184,15 @@ impl PlyFile<'_> {
             .map_err(|e| self.parse_err(&e))?;
         self.check_vertex_header(&header)?;
         let face_key = self.face_key(&header)?;
+        // The table these counts need (a face is at least one triangle), refused before a
+        // record is read when it cannot fit.
+        let count = |name: &str| header.elements.get(name).map_or(0, |e| e.count as u64);
+        EdgeTable::check_size(count("face"), count("vertex")).map_err(|source| {
+            SceneError::Mesh {
+                what: self.name.to_owned(),
+                source,
+            }
+        })?;
         let (mut vertices, mut faces) = (Vec::new(), Vec::new());
         for def in header.elements.values() {
             let read = match def.name.as_str() {
