@@ -44,7 +44,7 @@ pub struct GpuResults<'a> {
     pub counters: &'a wgpu::Buffer,
     /// Compact lists (`vec2<u32>`).
     pub silhouettes: &'a wgpu::Buffer,
-    /// Edge records (`vec4<u32>`).
+    /// Edge ends (`vec2<u32>`, global vertex ids).
     pub edges: &'a wgpu::Buffer,
     /// Positions (`f32` × 3).
     pub positions: &'a wgpu::Buffer,
@@ -277,8 +277,9 @@ impl SilhouetteBackend for WgpuBackend {
 impl WgpuBackend {
     /// Triangles per part when `scene`'s static buffers exceed one buffer or storage binding of
     /// the device (or [`WgpuOptions::max_buffer_bytes`](crate::WgpuOptions::max_buffer_bytes));
-    /// `None` when it fits whole. A part's largest array is its edge records: at most 3 edges
-    /// of 16 bytes per triangle.
+    /// `None` when it fits whole. A part of `N` triangles has at most `3 N` vertices of 12 bytes
+    /// (a soup), `3 N` edges of 8 and `3 N` OV slots of 4: its positions are its largest buffer
+    /// at worst, 36 bytes a triangle.
     fn part_triangles(&self, scene: &TopologyScene) -> Option<usize> {
         let limit = self
             .limits
@@ -293,9 +294,7 @@ impl WgpuBackend {
         let largest = [12 * v, 8 * e, 4 * (e + 1), 4 * ov, 12 * t]
             .into_iter()
             .max()?;
-        // A part's largest buffer: its triangles, or its edges' ends (at most 3 edges of 8
-        // bytes a triangle).
-        (largest > limit).then(|| (limit.saturating_sub(64) / 24).max(1) as usize)
+        (largest > limit).then(|| (limit.saturating_sub(64) / 36).max(1) as usize)
     }
 
     /// [`SilhouetteBackend::extract`] on a scene prepared in parts: each part extracted, its

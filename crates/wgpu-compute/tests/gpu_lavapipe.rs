@@ -467,6 +467,39 @@ fn gpu_buffer_limits_chunk_lights_or_split_the_scene() -> Outcome {
         let (expected, _) = extract_once(&mut unlimited, &case.scene, &case.lights, mode).unwrap();
         assert_eq!(got, expected, "{mode}");
     }
+    // A soup (three vertices of its own a triangle) cut under a cap of half its positions:
+    // a part's positions, not its edges, are its largest buffer, and every part must fit.
+    let n = 200u32;
+    let soup = shadowvol_mesh_topology::Mesh::new(
+        (0..n)
+            .flat_map(|i| {
+                let x = i as f32;
+                [
+                    glam::Vec3::new(x, 0.0, 0.0),
+                    glam::Vec3::new(x, 1.0, 0.0),
+                    glam::Vec3::new(x, 0.0, 1.0),
+                ]
+            })
+            .collect(),
+        (0..n).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect(),
+    )
+    .unwrap();
+    let soup = TopologyScene::single(shadowvol_mesh_topology::EdgeTable::build(&soup).unwrap());
+    let mut halved = WgpuBackend::new(WgpuOptions {
+        max_buffer_bytes: Some(36 * u64::from(n) / 2),
+        ..WgpuOptions::default()
+    })
+    .unwrap();
+    let id = halved
+        .prepare(&soup)
+        .unwrap_or_else(|e| panic!("a soup in parts: {e}"));
+    assert!(halved.index(id).is_none(), "prepared in parts");
+    for mode in Accuracy::ALL {
+        let mut got = Multiplicities::default();
+        halved.extract(id, &case.lights, mode, &mut got).unwrap();
+        let (expected, _) = extract_once(&mut unlimited, &soup, &case.lights, mode).unwrap();
+        assert_eq!(got, expected, "soup {mode}");
+    }
     // A cap that holds the scene but only two lights' compact lists (8 bytes per edge each):
     // the lights run two per dispatch, with the same result.
     let mut capped = WgpuBackend::new(WgpuOptions {
