@@ -3,7 +3,7 @@
 //! `extract` runs [`crate::dispatch`]).
 
 use crate::device::{device_error, ErrorScopes, Health, WgpuOptions};
-use crate::layout::{upload_table, Prepared, StaticBuffers};
+use crate::layout::{Prepared, TableBuffers};
 use crate::pipeline::Pipelines;
 use crate::{shaders, NAME};
 use shadowvol_robust_math::{Accuracy, Light};
@@ -332,32 +332,15 @@ impl WgpuBackend {
             let usage = wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::VERTEX;
-            let upload = |b: TableBuffer| {
-                upload_table(&self.device, &self.queue, &writer, b, usage, |i| {
-                    self.wait(i)
-                })
-            };
-            let buffers = (|| {
-                Ok::<_, BackendError>(StaticBuffers {
-                    positions: upload(TableBuffer::Positions)?,
-                    edges: upload(TableBuffer::Edges)?,
-                    ov_offsets: upload(TableBuffer::OvOffsets)?,
-                    ov_refs: upload(TableBuffer::OvRefs)?,
-                    tris: upload(TableBuffer::Triangles)?,
-                    objects: upload(TableBuffer::Objects)?,
-                    ov_vertices: if has_ov_vertices {
-                        upload(TableBuffer::OvVertices)?
-                    } else {
-                        self.device.create_buffer(&wgpu::BufferDescriptor {
-                            label: Some("no opposite vertices"),
-                            size: 16,
-                            usage: wgpu::BufferUsages::STORAGE,
-                            mapped_at_creation: false,
-                        })
-                    },
-                    has_ov_vertices,
-                })
-            })();
+            let wait = |i| self.wait(i);
+            let buffers = TableBuffers::upload(
+                &self.device,
+                &self.queue,
+                &writer,
+                usage,
+                has_ov_vertices,
+                wait,
+            );
             if let Some(e) = scope.pop() {
                 return Err(device_error(format!("uploading the scene: {e}")));
             }

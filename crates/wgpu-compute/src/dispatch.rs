@@ -3,7 +3,7 @@
 
 use crate::backend::WgpuBackend;
 use crate::device::{device_error, limit_error, wait_error, ErrorScopes};
-use crate::layout::{pack_lights, Frame, Prepared, StaticBuffers};
+use crate::layout::{pack_lights, Frame, Prepared, TableBuffers};
 use crate::pipeline::DeferredExact;
 use crate::resolve::{expand_uncertain, finish_batch, BatchOutput, Patch, UncertainTriangle};
 use crate::shaders;
@@ -196,7 +196,7 @@ impl WgpuBackend {
     fn run_batch(
         &self,
         p: &mut Prepared,
-        gpu: &StaticBuffers,
+        gpu: &TableBuffers,
         steps: Steps<'_>,
         batch: &LightBatch<'_>,
         out: &mut Multiplicities,
@@ -229,7 +229,7 @@ impl WgpuBackend {
     fn first_round_trip(
         &self,
         p: &mut Prepared,
-        gpu: &StaticBuffers,
+        gpu: &TableBuffers,
         steps: Steps<'_>,
         batch: &LightBatch<'_>,
         stats: &mut ExtractStats,
@@ -477,7 +477,7 @@ impl WgpuBackend {
     fn after_overflow(
         &self,
         p: &mut Prepared,
-        gpu: &StaticBuffers,
+        gpu: &TableBuffers,
         steps: Steps<'_>,
         uncertain: u32,
         stats: &mut ExtractStats,

@@ -39,7 +39,7 @@ pub fn upload_table<E>(
     writer: &TableWriter<'_>,
     b: TableBuffer,
     usage: wgpu::BufferUsages,
-    mut wait: impl FnMut(wgpu::SubmissionIndex) -> Result<(), E>,
+    wait: &mut impl FnMut(wgpu::SubmissionIndex) -> Result<(), E>,
 ) -> Result<wgpu::Buffer, E> {
     let buffer = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(b.label()),
@@ -73,35 +73,100 @@ const UPLOAD_CHUNK_WORDS: usize = 1 << 18;
 /// Chunks staged between two waits for the device (4 MiB of staging memory at most).
 const CHUNKS_PER_WAIT: usize = 4;
 
-/// Buffers uploaded once per prepared scene, one per [`TableBuffer`](gpu::TableBuffer) (cheap
+/// The scene's buffers as `shaders/silhouette.wgsl` binds them, one per [`TableBuffer`], uploaded
+/// once per prepared scene by the `wgpu` backend and by the renderer's GPU-resident pass (cheap
 /// to clone: wgpu buffers are shared handles).
-#[derive(Clone)]
-pub(crate) struct StaticBuffers {
-    pub(crate) positions: wgpu::Buffer,
-    pub(crate) edges: wgpu::Buffer,
-    pub(crate) ov_offsets: wgpu::Buffer,
-    pub(crate) ov_refs: wgpu::Buffer,
-    pub(crate) tris: wgpu::Buffer,
-    pub(crate) objects: wgpu::Buffer,
-    /// [`TableBuffer::OvVertices`] for scenes of up to
-    /// [`WgpuOptions::ov_vertices_up_to`](crate::WgpuOptions::ov_vertices_up_to) triangles
-    /// (`original` reads an OV in one step), else 16 bytes never read.
-    pub(crate) ov_vertices: wgpu::Buffer,
-    /// Whether `ov_vertices` holds the OVs (`original` then runs the edge step built with
-    /// `OV_VERTICES`).
-    pub(crate) has_ov_vertices: bool,
+#[derive(Debug, Clone)]
+pub struct TableBuffers {
+    /// [`TableBuffer::Positions`], binding 1.
+    pub positions: wgpu::Buffer,
+    /// [`TableBuffer::Edges`], binding 2.
+    pub edges: wgpu::Buffer,
+    /// [`TableBuffer::OvRefs`], binding 3.
+    pub ov_refs: wgpu::Buffer,
+    /// [`TableBuffer::Triangles`], binding 9.
+    pub tris: wgpu::Buffer,
+    /// [`TableBuffer::OvOffsets`], binding 10.
+    pub ov_offsets: wgpu::Buffer,
+    /// [`TableBuffer::Objects`], binding 12.
+    pub objects: wgpu::Buffer,
+    /// [`TableBuffer::OvVertices`], binding 13, where `has_ov_vertices`; else 16 bytes never
+    /// read (the binding must exist).
+    pub ov_vertices: wgpu::Buffer,
+    /// Whether `ov_vertices` holds the OVs: `original`'s edge step may then be built with
+    /// [`OV_VERTICES_CONSTANT`](crate::shaders::OV_VERTICES_CONSTANT).
+    pub has_ov_vertices: bool,
 }
 
-impl StaticBuffers {
-    fn all(&self) -> [&wgpu::Buffer; 7] {
+impl TableBuffers {
+    /// Uploads every [`TableBuffer`] of the scene `writer` writes, with [`upload_table`], and
+    /// [`TableBuffer::OvVertices`] too when `with_ov_vertices`. `usage` is added to each
+    /// buffer's.
+    ///
+    /// # Errors
+    /// The first error of `wait` (see [`upload_table`]).
+    pub fn upload<E>(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        writer: &TableWriter<'_>,
+        usage: wgpu::BufferUsages,
+        with_ov_vertices: bool,
+        mut wait: impl FnMut(wgpu::SubmissionIndex) -> Result<(), E>,
+    ) -> Result<Self, E> {
+        let mut up = |b| upload_table(device, queue, writer, b, usage, &mut wait);
+        Ok(Self {
+            positions: up(TableBuffer::Positions)?,
+            edges: up(TableBuffer::Edges)?,
+            ov_refs: up(TableBuffer::OvRefs)?,
+            tris: up(TableBuffer::Triangles)?,
+            ov_offsets: up(TableBuffer::OvOffsets)?,
+            objects: up(TableBuffer::Objects)?,
+            ov_vertices: if with_ov_vertices {
+                up(TableBuffer::OvVertices)?
+            } else {
+                Self::no_ov_vertices(device)
+            },
+            has_ov_vertices: with_ov_vertices,
+        })
+    }
+
+    /// The placeholder bound at binding 13 when the scene has no OV vertex list.
+    #[must_use]
+    pub fn no_ov_vertices(device: &wgpu::Device) -> wgpu::Buffer {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("no opposite vertices"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Every buffer, for counting their bytes.
+    #[must_use]
+    pub fn all(&self) -> [&wgpu::Buffer; 7] {
         [
             &self.positions,
             &self.edges,
-            &self.ov_offsets,
             &self.ov_refs,
             &self.tris,
+            &self.ov_offsets,
             &self.objects,
             &self.ov_vertices,
+        ]
+    }
+
+    /// Their entries in a bind group of `shaders/silhouette.wgsl`'s group 0 (bindings 1, 2, 3,
+    /// 9, 10, 12 and 13).
+    #[must_use]
+    pub fn entries(&self) -> [wgpu::BindGroupEntry<'_>; 7] {
+        [
+            entry(1, &self.positions),
+            entry(2, &self.edges),
+            entry(3, &self.ov_refs),
+            entry(9, &self.tris),
+            entry(10, &self.ov_offsets),
+            entry(12, &self.objects),
+            entry(13, &self.ov_vertices),
         ]
     }
 }
@@ -133,7 +198,7 @@ pub(crate) struct Prepared {
     /// The objects in the uploaded layout's numbering, over the scene's edge tables: what the
     /// host's exact decisions read.
     pub(crate) index: SceneIndex,
-    pub(crate) gpu: Option<StaticBuffers>,
+    pub(crate) gpu: Option<TableBuffers>,
     pub(crate) frame: Option<Frame>,
     /// Lights of the last extract whose results the frame buffers hold: `(first, count)`.
     pub(crate) last: Option<(usize, usize)>,
@@ -258,7 +323,7 @@ impl WgpuBackend {
     pub(crate) fn replace_frame(
         &self,
         p: &mut Prepared,
-        gpu: &StaticBuffers,
+        gpu: &TableBuffers,
         uncertain: Option<u32>,
         lists: Option<u64>,
     ) -> Result<(), BackendError> {
@@ -286,7 +351,7 @@ impl WgpuBackend {
     /// `list_capacity` entries per light.
     pub(crate) fn create_frame(
         &self,
-        gpu: &StaticBuffers,
+        gpu: &TableBuffers,
         (edges, tris, objects): (u64, u64, u64),
         light_capacity: usize,
         uncertain_capacity: u32,
@@ -334,25 +399,20 @@ impl WgpuBackend {
             wgpu::BufferUsages::VERTEX,
         );
         let uncertain = storage("uncertain", uncertain_bytes, wgpu::BufferUsages::empty());
+        let mut entries = vec![
+            entry(0, &params),
+            entry(4, &lights),
+            entry(5, &mult),
+            entry(6, &counters),
+            entry(7, &silhouettes),
+            entry(8, &uncertain),
+            entry(11, &signs),
+        ];
+        entries.extend(gpu.entries());
         let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("silhouette"),
             layout: &self.pipelines.bind_group_layout,
-            entries: &[
-                entry(0, &params),
-                entry(1, &gpu.positions),
-                entry(2, &gpu.edges),
-                entry(3, &gpu.ov_refs),
-                entry(4, &lights),
-                entry(5, &mult),
-                entry(6, &counters),
-                entry(7, &silhouettes),
-                entry(8, &uncertain),
-                entry(9, &gpu.tris),
-                entry(10, &gpu.ov_offsets),
-                entry(11, &signs),
-                entry(12, &gpu.objects),
-                entry(13, &gpu.ov_vertices),
-            ],
+            entries: &entries,
         });
         Ok(Frame {
             light_capacity,

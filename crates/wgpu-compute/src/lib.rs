@@ -81,7 +81,7 @@ pub mod twin;
 
 pub use backend::{GpuResults, WgpuBackend};
 pub use device::WgpuOptions;
-pub use layout::upload_table;
+pub use layout::{upload_table, TableBuffers};
 pub use resolve::UncertainTriangle;
 
 use shadowvol_silhouette::{BackendError, SilhouetteBackend};

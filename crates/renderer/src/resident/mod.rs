@@ -417,7 +417,11 @@ pub struct ResidentScene {
     counts: LayoutCounts,
     /// Per object `(first edge, first triangle, first vertex, first OV slot)`, plus a sentinel.
     bases: Vec<[u32; 4]>,
-    tables: SceneTables,
+    /// The extraction's tables, as the `wgpu` backend binds them (without the OV vertex list:
+    /// this pass's `original` reads each OV through its triangle).
+    tables: shadowvol_wgpu_compute::TableBuffers,
+    /// The object of each global vertex.
+    vertex_objects: wgpu::Buffer,
     world: wgpu::Buffer,
     world_out: wgpu::BindGroup,
     /// The indirect arguments of the pending dispatch (`STORAGE | INDIRECT`) and the bind group
@@ -440,21 +444,15 @@ impl ResidentScene {
     #[must_use]
     pub fn bytes(&self) -> PreparedBytes {
         let host = vec_bytes(&self.bases);
-        let t = &self.tables;
-        let mut buffers = vec![
-            &t.positions,
-            &t.edges,
-            &t.ov_offsets,
-            &t.ov_refs,
-            &t.tris,
-            &t.objects,
-            &t.vertex_objects,
+        let mut buffers = self.tables.all().to_vec();
+        buffers.extend([
+            &self.vertex_objects,
             &self.world,
             &self.pending_dispatch.0,
             &self.params,
             &self.rparams,
             &self.globals,
-        ];
+        ]);
         if let Some((b, _)) = &self.surface {
             buffers.push(b);
         }
@@ -508,21 +506,6 @@ impl ResidentScene {
             "pulled"
         }
     }
-}
-
-/// The scene's static buffers: one per [`TableBuffer`](shadowvol_silhouette::gpu::TableBuffer),
-/// and the object of each vertex.
-struct SceneTables {
-    positions: wgpu::Buffer,
-    edges: wgpu::Buffer,
-    ov_offsets: wgpu::Buffer,
-    ov_refs: wgpu::Buffer,
-    tris: wgpu::Buffer,
-    objects: wgpu::Buffer,
-    vertex_objects: wgpu::Buffer,
-    /// The extraction's optional OV vertex list, which this pass leaves out (16 bytes never
-    /// read; `params.has_ov_vertices` is 0): its `original` reads each OV through its triangle.
-    no_ov_vertices: wgpu::Buffer,
 }
 
 /// The sizes of an uploaded [`ResidentLayout`]: all the frames need of it once its arrays are

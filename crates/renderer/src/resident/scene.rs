@@ -4,7 +4,7 @@
 use super::*;
 use shadowvol_silhouette::gpu::{TableBuffer, TableWriter, FIRST_VERTEX};
 use shadowvol_silhouette::TopologyScene;
-use shadowvol_wgpu_compute::upload_table;
+use shadowvol_wgpu_compute::TableBuffers;
 
 /// The usage of the scene's static buffers.
 const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE;
@@ -26,7 +26,7 @@ impl ShadowPass {
     /// Uploads any topology, its tables in the layout [`ResidentLayout::build`] gives them, but
     /// written in chunks straight from its edge tables: no copy of the scene is made on the
     /// host, and the staging memory stays bounded
-    /// ([`upload_table`]).
+    /// ([`TableBuffers::upload`]).
     ///
     /// # Errors
     /// As [`ShadowPass::prepare`].
@@ -40,17 +40,9 @@ impl ShadowPass {
         }
         self.check_scene_buffer("vertex objects", 4 * vertices as u64)?;
         let wait = |_| crate::raster::wait(&self.device);
-        let up = |b| upload_table(&self.device, &self.queue, &writer, b, STORAGE, wait);
-        let tables = SceneTables {
-            positions: up(TableBuffer::Positions)?,
-            edges: up(TableBuffer::Edges)?,
-            ov_offsets: up(TableBuffer::OvOffsets)?,
-            ov_refs: up(TableBuffer::OvRefs)?,
-            tris: up(TableBuffer::Triangles)?,
-            objects: up(TableBuffer::Objects)?,
-            vertex_objects: self.vertex_objects(writer.objects())?,
-            no_ov_vertices: self.scene_buffer::<u32>("no opposite vertices", &[])?,
-        };
+        let tables =
+            TableBuffers::upload(&self.device, &self.queue, &writer, STORAGE, false, wait)?;
+        let vertex_objects = self.vertex_objects(writer.objects())?;
         let bases = writer.objects().to_vec();
         let counts = LayoutCounts {
             objects: bases.len() - 1,
@@ -59,7 +51,7 @@ impl ShadowPass {
             edges: writer.elements(TableBuffer::Edges),
             capacity: writer.elements(TableBuffer::OvRefs).max(1),
         };
-        self.finish_prepare(tables, counts, bases)
+        self.finish_prepare((tables, vertex_objects), counts, bases)
     }
 
     /// Uploads a laid-out scene ([`ResidentLayout::build`] of any topology).
@@ -68,24 +60,25 @@ impl ShadowPass {
     /// As [`ShadowPass::prepare`].
     pub fn prepare_layout(&self, layout: ResidentLayout) -> Result<ResidentScene, RenderError> {
         let t = &layout.tables;
-        let tables = SceneTables {
-            positions: self.scene_buffer("positions", &t.positions)?,
-            edges: self.scene_buffer("edge ends", &t.edges)?,
-            ov_offsets: self.scene_buffer("opposite-vertex offsets", &t.ov_offsets)?,
-            ov_refs: self.scene_buffer("opposite-vertex references", &t.ov_refs)?,
-            tris: self.scene_buffer("triangles", &t.tris)?,
-            objects: self.scene_buffer("object bases", &t.objects)?,
-            vertex_objects: self.scene_buffer("vertex objects", &layout.vertex_objects)?,
-            no_ov_vertices: self.scene_buffer::<u32>("no opposite vertices", &[])?,
+        let tables = TableBuffers {
+            positions: self.scene_buffer(TableBuffer::Positions.label(), &t.positions)?,
+            edges: self.scene_buffer(TableBuffer::Edges.label(), &t.edges)?,
+            ov_refs: self.scene_buffer(TableBuffer::OvRefs.label(), &t.ov_refs)?,
+            tris: self.scene_buffer(TableBuffer::Triangles.label(), &t.tris)?,
+            ov_offsets: self.scene_buffer(TableBuffer::OvOffsets.label(), &t.ov_offsets)?,
+            objects: self.scene_buffer(TableBuffer::Objects.label(), &t.objects)?,
+            ov_vertices: TableBuffers::no_ov_vertices(&self.device),
+            has_ov_vertices: false,
         };
+        let vertex_objects = self.scene_buffer("vertex objects", &layout.vertex_objects)?;
         let counts = LayoutCounts::of(&layout);
-        self.finish_prepare(tables, counts, layout.tables.objects)
+        self.finish_prepare((tables, vertex_objects), counts, layout.tables.objects)
     }
 
-    /// The scene uploaded: its frame-independent buffers beside `tables`.
+    /// The scene uploaded: its frame-independent buffers beside `tables` and `vertex_objects`.
     fn finish_prepare(
         &self,
-        tables: SceneTables,
+        (tables, vertex_objects): (TableBuffers, wgpu::Buffer),
         counts: LayoutCounts,
         bases: Vec<[u32; 4]>,
     ) -> Result<ResidentScene, RenderError> {
@@ -99,6 +92,7 @@ impl ShadowPass {
             counts,
             bases,
             tables,
+            vertex_objects,
             world,
             world_out,
             pending_dispatch,
@@ -468,21 +462,16 @@ impl ShadowPass {
 
     /// The extraction's bind groups: `c0` (scene, lights, signs), `c1` (frame, records).
     fn extract_groups(&self, rs: &ResidentScene, b: &LightBuffers) -> [wgpu::BindGroup; 2] {
+        let mut entries = vec![
+            entry(0, &rs.params),
+            entry(4, &b.lights),
+            entry(11, &b.signs),
+        ];
+        entries.extend(rs.tables.entries());
         let c0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident extract scene"),
             layout: &self.extract.c0,
-            entries: &[
-                entry(0, &rs.params),
-                entry(1, &rs.tables.positions),
-                entry(2, &rs.tables.edges),
-                entry(3, &rs.tables.ov_refs),
-                entry(4, &b.lights),
-                entry(9, &rs.tables.tris),
-                entry(10, &rs.tables.ov_offsets),
-                entry(11, &b.signs),
-                entry(12, &rs.tables.objects),
-                entry(13, &rs.tables.no_ov_vertices),
-            ],
+            entries: &entries,
         });
         let c1 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident extract frame"),
@@ -546,7 +535,7 @@ impl ShadowPass {
             entries: &[
                 entry(1, &rs.tables.positions),
                 entry(6, &b.objects),
-                entry(8, &rs.tables.vertex_objects),
+                entry(8, &rs.vertex_objects),
             ],
         });
         [s0, v0]
