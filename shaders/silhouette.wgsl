@@ -101,8 +101,8 @@ struct Uncertain {
 // [light]: length of the light's compact list; [light_count]: number of uncertain records.
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
 // Compact lists: light l owns [l * c, (l + 1) * c), c = params.list_capacity; entries (edge,
-// bitcast m). A light's counter may pass c: the entries past it are not written, and the host runs the
-// dispatch again with longer lists.
+// bitcast m). A light's counter may pass c: the entries past it are not written, and the host
+// runs the dispatch again with longer lists.
 @group(0) @binding(7) var<storage, read_write> silhouettes: array<vec2<u32>>;
 @group(0) @binding(8) var<storage, read_write> uncertain: array<Uncertain>;
 // Per global triangle, 3 words: its global vertex ids in ascending (canonical) order.
@@ -142,7 +142,7 @@ fn object_light(obj: u32, li: u32) -> vec4<f32> {
 // The object of global id `id` (an edge for FIRST_EDGE, a triangle for FIRST_TRIANGLE): the
 // last object whose first id is at most `id` (binary search; silhouette's `gpu::object_of`).
 fn object_of(field: u32, id: u32) -> u32 {
-    // A uniform branch: most scenes are one object, and the loop costs where it is compiled.
+    // A uniform branch: most scenes are one object, and it spares them the search.
     if params.object_count <= 1u {
         return 0u;
     }

@@ -96,6 +96,18 @@ impl SoupWeld {
         Self::default()
     }
 
+    /// An empty weld whose index table holds `n` distinct positions without growing (the
+    /// table [`weld`] sizes for `n` inputs: at least 1.5 `n` slots).
+    #[must_use]
+    pub fn with_capacity(n: usize) -> Self {
+        Self {
+            slots: vec![u32::MAX; 1 << table_bits(n)],
+            names: Vec::with_capacity(n),
+            positions: Vec::with_capacity(n),
+            pushed: 0,
+        }
+    }
+
     /// Welds the next input position (input index [`SoupWeld::pushed`]) and returns its compact
     /// id.
     ///
@@ -173,42 +185,15 @@ fn table_bits(n: usize) -> u32 {
     (n.max(8) * 3 / 2).next_power_of_two().trailing_zeros()
 }
 
-/// [`weld`] in one pass: a slot holds a compact id, numbered as groups first appear (which is
-/// the order of their names); the key is compared against that group's key.
+/// [`weld`] in one pass: a [`SoupWeld`] sized for every input, so its table never grows.
 fn weld_one_thread(positions: &[Vec3]) -> Weld {
-    let n = positions.len();
-    let bits = table_bits(n);
-    let mask = (1usize << bits) - 1;
-    let mut slots = vec![u32::MAX; 1 << bits];
-    // At most one group per vertex; pages past the groups found are never touched.
-    let mut keys: Vec<[u32; 3]> = Vec::with_capacity(n);
-    let mut compact_of_input = Vec::with_capacity(n);
-    let mut names = Vec::with_capacity(n);
-    let mut out_positions = Vec::with_capacity(n);
-    for (i, &p) in positions.iter().enumerate() {
-        let key = weld_key(p);
-        let mut h = weld_hash(key, bits);
-        let id = loop {
-            let s = slots[h];
-            if s == u32::MAX {
-                let id = names.len() as u32;
-                slots[h] = id;
-                keys.push(key);
-                names.push(i as u32);
-                out_positions.push(p);
-                break id;
-            }
-            if keys[s as usize] == key {
-                break s;
-            }
-            h = (h + 1) & mask;
-        };
-        compact_of_input.push(id);
-    }
+    let mut w = SoupWeld::with_capacity(positions.len());
+    let compact_of_input = positions.iter().map(|&p| w.push(p)).collect();
+    let (names, positions) = w.into_parts();
     Weld {
         compact_of_input,
         names,
-        positions: out_positions,
+        positions,
     }
 }
 
