@@ -319,7 +319,12 @@ fn non_triangle_primitives_and_primitives_without_positions_are_skipped_with_not
     bin.extend_from_slice(&idx);
     let doc = json!({
         "asset": {"version": "2.0"},
-        "nodes": [{"mesh": 0, "name": "mixed"}, {"mesh": 1, "name": "lines"}],
+        "nodes": [
+            {"mesh": 0, "name": "mixed"},
+            {"mesh": 1, "name": "lines"},
+            {"mesh": 1, "name": "again"},
+            {"mesh": 2, "name": "more"}
+        ],
         "meshes": [
             {"primitives": [
                 {"attributes": {"POSITION": 0}, "indices": 1, "mode": 1},
@@ -327,7 +332,11 @@ fn non_triangle_primitives_and_primitives_without_positions_are_skipped_with_not
                 {"attributes": {}, "indices": 1},
                 {"attributes": {"POSITION": 0}, "mode": 0}
             ]},
-            {"primitives": [{"attributes": {"POSITION": 0}, "mode": 3}]}
+            {"primitives": [{"attributes": {"POSITION": 0}, "mode": 3}]},
+            {"primitives": [
+                {"attributes": {"POSITION": 0}, "mode": 0},
+                {"attributes": {"POSITION": 0}, "indices": 1}
+            ]}
         ],
         "buffers": [{"byteLength": 60}],
         "bufferViews": [
@@ -342,31 +351,72 @@ fn non_triangle_primitives_and_primitives_without_positions_are_skipped_with_not
     let (scene, notes) = load_gltf_slice_with_notes(&glb(&doc, &bin), "m.glb", None).unwrap();
     assert_eq!(
         scene.geometry.objects.len(),
-        1,
-        "the node left without triangles is skipped"
+        2,
+        "the nodes left without triangles are skipped"
     );
     assert_eq!(
         scene.geometry.objects[0].table.triangles,
         [[0, 1, 2], [0, 2, 3]]
     );
-    assert_eq!(notes.len(), 5, "{notes:#?}");
-    let has = |parts: &[&str]| notes.iter().any(|n| parts.iter().all(|p| n.contains(p)));
-    assert!(has(&[
-        "m.glb",
-        "node 0 'mixed'",
-        "primitive 0",
-        "Lines",
-        "skipped"
-    ]));
-    assert!(has(&["primitive 2", "no POSITION"]));
-    assert!(has(&["primitive 3", "Points"]));
-    assert!(has(&[
-        "node 1 'lines'",
-        "mesh 1",
-        "primitive 0",
-        "LineStrip"
-    ]));
-    assert!(has(&["node 1 'lines'", "no triangles", "node is skipped"]));
+    assert_eq!(scene.geometry.objects[1].name, "more");
+    // The notes come in the walk's order, a skipped node's own note where the walk reached it
+    // (the tables are built after the walk).
+    let expected: [&[&str]; 7] = [
+        &["m.glb", "node 0 'mixed'", "primitive 0", "Lines", "skipped"],
+        &["node 0 'mixed'", "primitive 2", "no POSITION"],
+        &["node 0 'mixed'", "primitive 3", "Points"],
+        &["node 1 'lines'", "mesh 1", "primitive 0", "LineStrip"],
+        &[
+            "node 1 'lines'",
+            "mesh 1 has no triangles",
+            "node is skipped",
+        ],
+        &[
+            "node 2 'again'",
+            "mesh 1 has no triangles",
+            "node is skipped",
+        ],
+        &["node 3 'more'", "mesh 2", "primitive 0", "Points"],
+    ];
+    assert_eq!(notes.len(), expected.len(), "{notes:#?}");
+    for (note, parts) in notes.iter().zip(expected) {
+        assert!(parts.iter().all(|p| note.contains(p)), "{notes:#?}");
+    }
+}
+
+#[test]
+fn an_instance_whose_transform_takes_a_vertex_past_f32_is_refused_by_vertex() {
+    let (pos, idx) = quad();
+    let mut bin = pos.clone();
+    bin.extend_from_slice(&idx);
+    // Node 0 is in range; node 1 shares its mesh, and takes vertex 1 (x = 1) to 4e38.
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "nodes": [
+            {"mesh": 0},
+            {"mesh": 0, "scale": [2e38, 1.0, 1.0], "translation": [2e38, 0.0, 0.0]}
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "buffers": [{"byteLength": 60}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 12}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": 4},
+            {"bufferView": 1, "componentType": 5123, "type": "SCALAR", "count": 6}
+        ],
+    });
+    let e = err(&doc, &bin);
+    for part in [
+        "t.glb",
+        "node 1, mesh 0",
+        "vertex 1",
+        "coordinate x is inf",
+        "past the f32 range",
+    ] {
+        assert!(e.contains(part), "{part:?} not in {e}");
+    }
 }
 
 #[test]

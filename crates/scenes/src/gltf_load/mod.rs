@@ -10,7 +10,9 @@
 //!   the CLI contract: depth-first node order, then primitive order, then accessor order.
 //! * **Meshes**: all primitives of a mesh are concatenated, in order, into one mesh, welded into
 //!   one edge table. Nodes
-//!   that use the same mesh share one `Arc<EdgeTable>`. Modes `TRIANGLES`, `TRIANGLE_STRIP` and
+//!   that use the same mesh share one `Arc<EdgeTable>`. The walk reads the meshes; the tables
+//!   are built after it, once the file's buffers are dropped, each mesh freed as its table is
+//!   built (notes and objects keep the walk's order). Modes `TRIANGLES`, `TRIANGLE_STRIP` and
 //!   `TRIANGLE_FAN` are read (strips and fans are turned into triangle lists); points and lines,
 //!   and primitives without `POSITION`, are skipped with a note (see
 //!   [`load_gltf_slice_with_notes`]), and a node whose mesh is left without triangles is skipped
@@ -78,6 +80,7 @@ mod document;
 mod draco;
 mod mesh;
 mod nodes;
+mod objects;
 
 use crate::scene::{file_name, Effects, Scene};
 use crate::SceneError;
@@ -85,7 +88,8 @@ use buffers::decode_meshopt_views;
 pub use draco::in_guarded_decoder;
 use nodes::{root_nodes, Loader};
 
-use std::collections::HashMap;
+use objects::add_objects;
+use std::collections::HashSet;
 use std::path::Path;
 
 /// Loads a `.gltf` or `.glb` file as a [`Scene`] with its objects kept separate.
@@ -200,7 +204,8 @@ fn load_owned(
         draco: &ext.draco,
         buffers: &buffers,
         decoded: &decoded,
-        meshes: HashMap::new(),
+        read_meshes: HashSet::new(),
+        pending: Vec::new(),
         visited: vec![false; document.nodes().len()],
         quantization: document
             .extensions_used()
@@ -213,7 +218,18 @@ fn load_owned(
         },
     };
     loader.walk(root_nodes(&document))?;
-    Ok((loader.scene, loader.notes))
+    let Loader {
+        pending,
+        mut notes,
+        mut scene,
+        ..
+    } = loader;
+    // The meshes are read: the file's bytes and decoded views go before the tables are built.
+    drop(decoded);
+    drop(buffers);
+    drop(data);
+    add_objects(source_name, pending, &mut scene, &mut notes)?;
+    Ok((scene, notes))
 }
 
 /// The file being loaded: its name in messages and the base directory of relative URIs.

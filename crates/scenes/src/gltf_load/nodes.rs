@@ -1,16 +1,16 @@
 //! The node walk: each node's world transform, its mesh as an object, and the scene camera
 //! and lights (`KHR_lights_punctual`) it carries.
 
+use super::objects::PendingObject;
 use crate::scene::{Scene, SceneLight};
 use crate::Camera;
 use crate::SceneError;
 use glam::{Affine3A, Mat4, Vec3};
-use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_robust_math::Light;
-use std::collections::HashMap;
-use std::sync::Arc;
+use std::collections::{HashMap, HashSet};
 
-/// One load in progress: the file's buffers, the meshes read so far and the scene being built.
+/// One load's walk: the file's buffers, the meshes read so far and the scene being built (its
+/// objects are [`PendingObject`]s until the walk ends).
 pub(super) struct Loader<'a> {
     pub(super) source_name: &'a str,
     pub(super) document: &'a gltf::Document,
@@ -20,8 +20,10 @@ pub(super) struct Loader<'a> {
     pub(super) buffers: &'a [Option<&'a [u8]>],
     /// Decoded `EXT_meshopt_compression` views by view index.
     pub(super) decoded: &'a HashMap<usize, Vec<u8>>,
-    /// Edge tables of the meshes read so far, by mesh index (instances share them).
-    pub(super) meshes: HashMap<usize, Arc<EdgeTable>>,
+    /// Indices of the meshes read so far (instances share them).
+    pub(super) read_meshes: HashSet<usize>,
+    /// The nodes with a mesh, in the walk's order, whose objects are built after the walk.
+    pub(super) pending: Vec<PendingObject>,
     pub(super) visited: Vec<bool>,
     /// `KHR_mesh_quantization` is in `extensionsUsed`: integer positions are allowed.
     pub(super) quantization: bool,
@@ -112,7 +114,7 @@ impl Loader<'_> {
         Ok(world)
     }
 
-    /// Adds the node's mesh as an object at `world`, or notes it skipped without triangles.
+    /// Records the node's mesh as an object at `world`, reading the mesh on its first use.
     fn add_object(
         &mut self,
         label: &str,
@@ -131,53 +133,25 @@ impl Loader<'_> {
                 ),
             ));
         }
-        let shared = self.edge_table(label, mesh)?;
+        // The first node that uses a mesh reads it; the table is built after the walk.
+        let read = if self.read_meshes.insert(mesh.index()) {
+            Some(self.read_mesh(label, mesh)?)
+        } else {
+            None
+        };
         let name = node
             .name()
             .or(mesh.name())
             .map_or_else(|| format!("node{}", node.index()), str::to_owned);
-        if shared.stats.triangles == 0 {
-            self.notes.push(format!(
-                "{}: {label}: mesh {} has no triangles, the node is skipped",
-                self.source_name,
-                mesh.index()
-            ));
-            return Ok(());
-        }
-        // A finite transform can still scale finite positions past f32's range.
-        let overflow = shared.positions.iter().enumerate().find_map(|(v, &p)| {
-            let w = crate::scene::apply_f32(&world, p).to_array();
-            (0..3).find(|&k| !w[k].is_finite()).map(|k| (v, k, w[k]))
+        self.pending.push(PendingObject {
+            label: label.to_owned(),
+            name,
+            mesh: mesh.index(),
+            read,
+            world,
+            note_at: self.notes.len(),
         });
-        if let Some((v, k, value)) = overflow {
-            let axis = ['x', 'y', 'z'][k];
-            return Err(self.err(
-                format!("{label}, mesh {}", mesh.index()),
-                format!(
-                    "vertex {v}: in world space, coordinate {axis} is {value}, but positions \
-                     must be finite (the world transform takes it past the f32 range)"
-                ),
-            ));
-        }
-        self.scene.add_object(name, shared, world);
         Ok(())
-    }
-
-    /// The mesh's edge table: read and welded once, then shared by every node using it.
-    fn edge_table(&mut self, label: &str, mesh: &gltf::Mesh) -> Result<Arc<EdgeTable>, SceneError> {
-        if let Some(t) = self.meshes.get(&mesh.index()) {
-            return Ok(Arc::clone(t));
-        }
-        let m = self.read_mesh(label, mesh)?;
-        // The mesh is freed as its table is built.
-        let t = Arc::new(
-            EdgeTable::build_owned(m).map_err(|source| SceneError::Mesh {
-                what: format!("{}: {label}, mesh {}", self.source_name, mesh.index()),
-                source,
-            })?,
-        );
-        self.meshes.insert(mesh.index(), Arc::clone(&t));
-        Ok(t)
     }
 
     /// Adds the node's punctual light at `world`, with its emission.
