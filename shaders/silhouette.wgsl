@@ -45,6 +45,10 @@ override TOUCH_SIGNS: bool = false;
 // (`ov_vertices`): it reads each OV in one step instead of through its triangle.
 override OV_VERTICES: bool = false;
 
+// True in the `wgpu` backend's pipelines for scenes of one object: `object_of` is 0 at compile
+// time (a search the compiler cannot remove costs lavapipe up to a tenth of a frame).
+override SINGLE_OBJECT: bool = false;
+
 const WORKGROUP_SIZE: u32 = 256u;
 const UNCERTAIN: i32 = 2;
 // A triangle sign that is not a sign: the triangle touches the light and has no volume.
@@ -142,7 +146,10 @@ fn object_light(obj: u32, li: u32) -> vec4<f32> {
 // The object of global id `id` (an edge for FIRST_EDGE, a triangle for FIRST_TRIANGLE): the
 // last object whose first id is at most `id` (binary search; silhouette's `gpu::object_of`).
 fn object_of(field: u32, id: u32) -> u32 {
-    // A uniform branch: most scenes are one object, and it spares them the search.
+    if SINGLE_OBJECT {
+        return 0u;
+    }
+    // A uniform branch, for the pipelines built without SINGLE_OBJECT.
     if params.object_count <= 1u {
         return 0u;
     }

@@ -145,12 +145,13 @@ impl WgpuBackend {
         stats.upload += t_upload.elapsed();
         let m = gpu::mode_code(mode) as usize;
         let exact = mode == Accuracy::Exact;
+        let set = self.pipelines.steps(p.index.object_count());
         let steps = Steps {
-            triangles: self.pipelines.triangles[m].as_ref(),
+            triangles: set.triangles[m].as_ref(),
             edges: if mode == Accuracy::Original && !gpu.has_ov_vertices {
-                &self.pipelines.original_by_triangles
+                &set.original_by_triangles
             } else {
-                &self.pipelines.edges[m]
+                &set.edges[m]
             },
             deferred: self.pipelines.deferred.as_ref().filter(|_| exact),
         };

@@ -12,6 +12,27 @@ use std::sync::OnceLock;
 /// The bind-group layout and the compute pipelines of every mode.
 pub(crate) struct Pipelines {
     pub(crate) bind_group_layout: wgpu::BindGroupLayout,
+    /// The steps for scenes of one object ([`shaders::SINGLE_OBJECT_CONSTANT`]).
+    pub(crate) single_object: StepPipelines,
+    /// The steps for scenes of several objects (each id's object found by search).
+    pub(crate) objects: StepPipelines,
+    /// With `exact_on_device`: what decides on the device the pairs the filter leaves.
+    pub(crate) deferred: Option<DeferredExact>,
+}
+
+impl Pipelines {
+    /// The steps for a scene of `object_count` objects.
+    pub(crate) fn steps(&self, object_count: usize) -> &StepPipelines {
+        if object_count <= 1 {
+            &self.single_object
+        } else {
+            &self.objects
+        }
+    }
+}
+
+/// The edge and triangle steps of every mode, built with one set of constants.
+pub(crate) struct StepPipelines {
     /// The edge step, per mode (indexed by [`mode_code`]); `original`'s reads the scene's OV
     /// vertex list ([`shaders::OV_VERTICES_CONSTANT`]).
     pub(crate) edges: Vec<wgpu::ComputePipeline>,
@@ -20,8 +41,6 @@ pub(crate) struct Pipelines {
     /// The triangle step, per mode; `None` for `original`, which has none. With
     /// `exact_on_device`, exact mode's is built with `DEFER_INT` (see [`DeferredExact`]).
     pub(crate) triangles: Vec<Option<wgpu::ComputePipeline>>,
-    /// With `exact_on_device`: what decides on the device the pairs the filter leaves.
-    pub(crate) deferred: Option<DeferredExact>,
 }
 
 /// Exact mode's integer fallback in a dispatch of its own. Compiled into the triangle step,
@@ -131,25 +150,38 @@ pub(crate) fn create_pipelines(
         let defer_int = exact_on_device.then_some(defer_int);
         build(device, &pipeline_layout, &module, entry, mode, defer_int)
     };
-    let defer_off = exact_on_device.then_some(false);
-    let ov_vertices = [(shaders::OV_VERTICES_CONSTANT, 1.0)];
-    let edges = Accuracy::ALL
-        .iter()
-        .map(|&mode| {
-            let key = (shaders::ENTRY_POINT, mode, defer_off);
-            build_with(device, &pipeline_layout, &module, key, &ov_vertices)
-        })
-        .collect();
-    let original_by_triangles = pipeline(shaders::ENTRY_POINT, Accuracy::Original, false);
-    let triangles = Accuracy::ALL
-        .iter()
-        .map(|&mode| {
-            (mode != Accuracy::Original).then(|| {
-                let defer = exact_on_device && mode == Accuracy::Exact;
-                pipeline(shaders::TRIANGLE_ENTRY_POINT, mode, defer)
-            })
-        })
-        .collect();
+    let steps = |single_object: bool| {
+        let single = (
+            shaders::SINGLE_OBJECT_CONSTANT,
+            f64::from(u8::from(single_object)),
+        );
+        let build = |entry: &str, mode: Accuracy, defer_int: bool, ov_vertices: bool| {
+            let key = (entry, mode, exact_on_device.then_some(defer_int));
+            let ov = (
+                shaders::OV_VERTICES_CONSTANT,
+                f64::from(u8::from(ov_vertices)),
+            );
+            build_with(device, &pipeline_layout, &module, key, &[single, ov])
+        };
+        StepPipelines {
+            edges: Accuracy::ALL
+                .iter()
+                .map(|&mode| build(shaders::ENTRY_POINT, mode, false, true))
+                .collect(),
+            original_by_triangles: build(shaders::ENTRY_POINT, Accuracy::Original, false, false),
+            triangles: Accuracy::ALL
+                .iter()
+                .map(|&mode| {
+                    (mode != Accuracy::Original).then(|| {
+                        let defer = exact_on_device && mode == Accuracy::Exact;
+                        build(shaders::TRIANGLE_ENTRY_POINT, mode, defer, false)
+                    })
+                })
+                .collect(),
+        }
+    };
+    let single_object = steps(true);
+    let objects = steps(false);
     let resolve =
         exact_on_device.then(|| pipeline(shaders::RESOLVE_ENTRY_POINT, Accuracy::Exact, false));
     if let Some(e) = scope.pop() {
@@ -161,9 +193,8 @@ pub(crate) fn create_pipelines(
     }
     Ok(Pipelines {
         bind_group_layout,
-        edges,
-        original_by_triangles,
-        triangles,
+        single_object,
+        objects,
         deferred: resolve.map(|resolve| DeferredExact {
             resolve,
             inline_triangles: OnceLock::new(),

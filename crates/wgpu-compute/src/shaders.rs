@@ -69,6 +69,11 @@ pub const TOUCH_SIGNS_CONSTANT: &str = "TOUCH_SIGNS";
 /// triangle; the backend sets it for scenes that have the list.
 pub const OV_VERTICES_CONSTANT: &str = "OV_VERTICES";
 
+/// The pipeline-overridable constant (a `bool`, default `false`) that makes the kernels' object
+/// search return object 0 at compile time; the backend builds a set of pipelines with it for
+/// scenes of one object.
+pub const SINGLE_OBJECT_CONSTANT: &str = "SINGLE_OBJECT";
+
 /// Threads per workgroup (`WORKGROUP_SIZE` in the kernel).
 pub const WORKGROUP_SIZE: u32 = 256;
 

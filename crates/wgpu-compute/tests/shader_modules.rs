@@ -58,6 +58,8 @@ fn entry_points_and_overrides_exist() {
     }
     assert!(has_override(&module, shaders::MODE_CONSTANT));
     assert!(has_override(&module, shaders::TOUCH_SIGNS_CONSTANT));
+    assert!(has_override(&module, shaders::OV_VERTICES_CONSTANT));
+    assert!(has_override(&module, shaders::SINGLE_OBJECT_CONSTANT));
     let exact = parse(
         "silhouette + exact_int",
         &shaders::module_source_with(ExactFilter::F32, true),
