@@ -18,7 +18,7 @@ const R_NEGATIVE: u32 = 0x80000000u;
 const R_TOUCH: i32 = 2;
 
 // Object-space positions of all objects, xyz per global vertex id (the extraction's layout).
-@group(0) @binding(1) var<storage, read> r_positions: array<f32>;
+@group(0) @binding(1) var<storage, read> r_positions: array<array<f32, 3>>;
 // Camera-relative world positions per global vertex id, written by `resident_vertices`.
 @group(0) @binding(7) var<storage, read> r_world: array<vec4<f32>>;
 // The object of each global vertex (for `resident_vertices`).
@@ -26,8 +26,8 @@ const R_TOUCH: i32 = 2;
 @group(2) @binding(0) var<storage, read_write> r_world_out: array<vec4<f32>>;
 // Global edges: their ends (a, b) (the extraction's `edges`).
 @group(0) @binding(2) var<storage, read> r_edges: array<vec2<u32>>;
-// Global triangles, 3 words each: canonical global vertex ids (the extraction's `tris`).
-@group(0) @binding(3) var<storage, read> r_tris: array<u32>;
+// Global triangles: canonical global vertex ids (the extraction's `tris`).
+@group(0) @binding(3) var<storage, read> r_tris: array<array<u32, 3>>;
 // [light * tri_count + triangle] signs from resident_triangles.
 @group(0) @binding(4) var<storage, read> r_signs: array<i32>;
 // [light * capacity + slot] side records from resident_edges.
@@ -63,15 +63,20 @@ fn r_object_of(field: u32, id: u32) -> u32 {
 
 // The canonical vertex ids of global triangle `t`.
 fn r_triangle(t: u32) -> vec3<u32> {
-    let i = 3u * t;
-    return vec3<u32>(r_tris[i], r_tris[i + 1u], r_tris[i + 2u]);
+    let tr = r_tris[t];
+    return vec3<u32>(tr[0], tr[1], tr[2]);
+}
+
+// The object-space position of global vertex `id`.
+fn r_position(id: u32) -> vec3<f32> {
+    let p = r_positions[id];
+    return vec3<f32>(p[0], p[1], p[2]);
 }
 
 // The camera-relative world position of global vertex `id` of object `obj`, once per vertex and
 // frame: every draw then reads the same stored value, so shared vertices are bit-identical.
 fn transform(obj: u32, id: u32) -> vec3<f32> {
-    let i = id * 3u;
-    let p = vec3<f32>(r_positions[i], r_positions[i + 1u], r_positions[i + 2u]);
+    let p = r_position(id);
     let r0 = bitcast<vec4<f32>>(r_objects[obj * 5u]);
     let r1 = bitcast<vec4<f32>>(r_objects[obj * 5u + 1u]);
     let r2 = bitcast<vec4<f32>>(r_objects[obj * 5u + 2u]);
@@ -154,8 +159,7 @@ fn extrude(id: u32, obj: u32) -> vec4<f32> {
     let a = r_light_points[k];
     var d = -a.xyz;
     if a.w != 0.0 {
-        let i = id * 3u;
-        let p = vec3<f32>(r_positions[i], r_positions[i + 1u], r_positions[i + 2u]);
+        let p = r_position(id);
         d = (p - a.xyz) - r_light_points[k + 1u].xyz;
     }
     let r0 = bitcast<vec4<f32>>(r_objects[obj * 5u]).xyz;

@@ -92,8 +92,9 @@ struct Uncertain {
 
 @group(0) @binding(0) var<uniform> params: Params;
 // The scene's edge tables concatenated, with global ids (silhouette's `gpu::TableBuffer`).
-// Object-space positions of all objects, xyz per global vertex id.
-@group(0) @binding(1) var<storage, read> positions: array<f32>;
+// Object-space positions of all objects, xyz per global vertex id (an element of 3 words: one
+// bounds check a vertex, not three).
+@group(0) @binding(1) var<storage, read> positions: array<array<f32, 3>>;
 // Per global edge: its ends (a, b), a < b global vertex ids.
 @group(0) @binding(2) var<storage, read> edges: array<vec2<u32>>;
 // Per OV slot: 4 t + r, the global triangle t whose vertex r (canonical order) is the OV.
@@ -109,8 +110,8 @@ struct Uncertain {
 // runs the dispatch again with longer lists.
 @group(0) @binding(7) var<storage, read_write> silhouettes: array<vec2<u32>>;
 @group(0) @binding(8) var<storage, read_write> uncertain: array<Uncertain>;
-// Per global triangle, 3 words: its global vertex ids in ascending (canonical) order.
-@group(0) @binding(9) var<storage, read> tris: array<u32>;
+// Per global triangle: its global vertex ids in ascending (canonical) order.
+@group(0) @binding(9) var<storage, read> tris: array<array<u32, 3>>;
 // Per global edge, its first OV slot; one sentinel at the end: the OV count.
 @group(0) @binding(10) var<storage, read> ov_offsets: array<u32>;
 // [light * tri_count + triangle]: -1, 0, 1 (TOUCH in the resident pass).
@@ -134,8 +135,8 @@ fn flat_index(inv: Invocation) -> u32 {
 }
 
 fn position(id: u32) -> vec3<f32> {
-    let i = id * 3u;
-    return vec3<f32>(positions[i], positions[i + 1u], positions[i + 2u]);
+    let p = positions[id];
+    return vec3<f32>(p[0], p[1], p[2]);
 }
 
 // Light `li` of the dispatch in object `obj`'s space.
@@ -189,11 +190,11 @@ struct Triangle {
 }
 
 fn load_triangle(t: u32) -> Triangle {
-    let i = 3u * t;
+    let tr = tris[t];
     return Triangle(
-        position(tris[i]),
-        position(tris[i + 1u]),
-        position(tris[i + 2u]),
+        position(tr[0]),
+        position(tr[1]),
+        position(tr[2]),
         object_of(FIRST_TRIANGLE, t),
     );
 }
@@ -350,7 +351,7 @@ fn edge_multiplicity(edge: Edge, object: u32, li: u32, a: vec3<f32>, b: vec3<f32
                 o = ov_vertices[k];
             } else {
                 let r = ov_refs[k];
-                o = tris[3u * (r >> 2u) + (r & 3u)];
+                o = tris[r >> 2u][r & 3u];
             }
             m += sign_f32(a, b, l, position(o));
         }
