@@ -40,7 +40,7 @@
 use crate::SceneError;
 use glam::Vec3;
 use shadowvol_mesh_topology::{EdgeTable, Mesh, SoupWeld};
-use std::io::Read;
+use std::io::{BufRead, Read, Seek, SeekFrom};
 use std::path::Path;
 
 /// Reads an STL file (ASCII or binary). See the [module documentation](self).
@@ -76,7 +76,10 @@ pub fn parse_stl(bytes: &[u8], source_name: &str) -> Result<Mesh, SceneError> {
         }
     }
     if starts_with_solid(bytes) {
-        return parse_ascii(bytes, &err);
+        let mut positions = Vec::new();
+        let io = |e: std::io::Error| err("text".to_owned(), e.to_string());
+        parse_ascii(bytes, &err, &io, &mut |f| positions.extend(f))?;
+        return Ok(soup(positions));
     }
     if bytes.len() < 84 {
         return Err(err(
@@ -163,8 +166,8 @@ fn facet_corners(
 /// Reads an STL file straight into its edge table: the table [`EdgeTable::build`] makes of
 /// [`load_stl`]'s soup (the same vertex names, the same triangles), at a lower peak. A binary
 /// file is read a facet at a time and its corners welded as they come ([`SoupWeld`]), so
-/// neither the file nor the soup (three positions a facet) is held; an ASCII file is read
-/// whole, as [`load_stl`] reads it.
+/// neither the file nor the soup (three positions a facet) is held; an ASCII file is read a line
+/// at a time, its corners welded in the same way.
 ///
 /// # Errors
 /// As [`load_stl`]; [`SceneError::Mesh`] naming the file when its table cannot be built
@@ -207,8 +210,30 @@ pub fn load_stl_table(path: impl AsRef<Path>) -> Result<EdgeTable, SceneError> {
             return EdgeTable::from_soup_weld(weld, triangles).map_err(mesh_err);
         }
     }
-    drop(reader);
-    EdgeTable::build_owned(load_stl(path)?).map_err(mesh_err)
+    reader.seek(SeekFrom::Start(0)).map_err(io)?;
+    if !starts_with_solid(reader.fill_buf().map_err(io)?) {
+        // Not STL: the whole-file reader's message says why.
+        drop(reader);
+        return EdgeTable::build_owned(load_stl(path)?).map_err(mesh_err);
+    }
+    let err = |location: String, message: String| SceneError::Stl {
+        file: name.clone(),
+        location,
+        message,
+    };
+    let mut weld = SoupWeld::new();
+    let mut triangles = Vec::new();
+    let mut memory = Ok(());
+    parse_ascii(reader, &err, &io, &mut |f| {
+        triangles.push(f.map(|p| weld.push(p)));
+        // The facet count is not in the header: the memory is checked as the facets come.
+        let n = triangles.len() as u64;
+        if n.is_power_of_two() && n >= 1 << 16 && memory.is_ok() {
+            memory = EdgeTable::check_size(n, 3 * n).map(|_| ());
+        }
+    })?;
+    memory.map_err(mesh_err)?;
+    EdgeTable::from_soup_weld(weld, triangles).map_err(mesh_err)
 }
 
 /// Triangle `t` over vertices `3t, 3t + 1, 3t + 2`.
@@ -222,60 +247,78 @@ fn soup(positions: Vec<Vec3>) -> Mesh {
     }
 }
 
-/// Whitespace-separated tokens with their 1-based line numbers.
-struct Tokens<'a> {
-    text: &'a [u8],
+/// Whitespace-separated tokens of a text read a line at a time, with their 1-based line
+/// numbers (a line ends at `\n`).
+struct Tokens<R> {
+    reader: R,
+    /// The current line, with its `\n`.
+    buf: Vec<u8>,
     at: usize,
+    /// The current line's number.
     line: usize,
 }
 
-impl<'a> Tokens<'a> {
-    fn next(&mut self) -> Option<(&'a [u8], usize)> {
-        while self.at < self.text.len() && self.text[self.at].is_ascii_whitespace() {
-            if self.text[self.at] == b'\n' {
+impl<R: BufRead> Tokens<R> {
+    fn new(reader: R) -> Self {
+        Self {
+            reader,
+            buf: Vec::new(),
+            at: 0,
+            line: 1,
+        }
+    }
+
+    /// The next token and its line, or `None` at the end of the text.
+    fn next(&mut self) -> std::io::Result<Option<(&[u8], usize)>> {
+        loop {
+            while self.at < self.buf.len() && self.buf[self.at].is_ascii_whitespace() {
+                self.at += 1;
+            }
+            if self.at < self.buf.len() {
+                break;
+            }
+            if self.buf.last() == Some(&b'\n') {
                 self.line += 1;
             }
-            self.at += 1;
-        }
-        if self.at == self.text.len() {
-            return None;
+            self.buf.clear();
+            self.at = 0;
+            if self.reader.read_until(b'\n', &mut self.buf)? == 0 {
+                return Ok(None);
+            }
         }
         let start = self.at;
-        while self.at < self.text.len() && !self.text[self.at].is_ascii_whitespace() {
+        while self.at < self.buf.len() && !self.buf[self.at].is_ascii_whitespace() {
             self.at += 1;
         }
-        Some((&self.text[start..self.at], self.line))
+        Ok(Some((&self.buf[start..self.at], self.line)))
     }
 
     /// Skips the rest of the current line (a solid's name).
     fn skip_line(&mut self) {
-        while self.at < self.text.len() && self.text[self.at] != b'\n' {
-            self.at += 1;
-        }
+        self.at = self.buf.len();
     }
 }
 
-fn parse_ascii(
-    bytes: &[u8],
+/// Parses an ASCII STL text, giving each facet's corners to `facet` in file order.
+fn parse_ascii<R: BufRead>(
+    reader: R,
     err: &dyn Fn(String, String) -> SceneError,
-) -> Result<Mesh, SceneError> {
-    let mut tok = Tokens {
-        text: bytes,
-        at: 0,
-        line: 1,
-    };
+    io: &dyn Fn(std::io::Error) -> SceneError,
+    facet: &mut dyn FnMut([Vec3; 3]),
+) -> Result<(), SceneError> {
+    let mut tok = Tokens::new(reader);
     let at = |line: usize| format!("line {line}");
     let show = |t: &[u8]| String::from_utf8_lossy(t).into_owned();
-    let mut positions: Vec<Vec3> = Vec::new();
+    let mut facets = 0usize;
     // One solid per turn; `solid` has been read when the loop body starts.
-    let Some((first, _)) = tok.next() else {
+    let Some((first, _)) = tok.next().map_err(io)? else {
         return Err(err("line 1".to_owned(), "empty file".to_owned()));
     };
     debug_assert!(first.eq_ignore_ascii_case(b"solid"));
     tok.skip_line();
     'solids: loop {
         loop {
-            let Some((word, line)) = tok.next() else {
+            let Some((word, line)) = tok.next().map_err(io)? else {
                 return Err(err(
                     at(tok.line),
                     "end of file inside a solid: \"endsolid\" expected".to_owned(),
@@ -291,25 +334,26 @@ fn parse_ascii(
                     format!("expected \"facet\" or \"endsolid\", found '{}'", show(word)),
                 ));
             }
-            expect(&mut tok, b"normal", err)?;
+            expect(&mut tok, b"normal", err, io)?;
             for _ in 0..3 {
                 // Normals are ignored; exporters write "nan" for degenerate facets, so any token
                 // is accepted.
-                if tok.next().is_none() {
+                if tok.next().map_err(io)?.is_none() {
                     return Err(err(
                         at(tok.line),
                         "end of file in a facet normal: 3 numbers expected".to_owned(),
                     ));
                 }
             }
-            expect(&mut tok, b"outer", err)?;
-            expect(&mut tok, b"loop", err)?;
-            for _ in 0..3 {
-                expect(&mut tok, b"vertex", err)?;
+            expect(&mut tok, b"outer", err, io)?;
+            expect(&mut tok, b"loop", err, io)?;
+            let mut corners = [Vec3::ZERO; 3];
+            for corner in &mut corners {
+                expect(&mut tok, b"vertex", err, io)?;
                 let mut p = [0.0f32; 3];
                 for (axis, v) in p.iter_mut().enumerate() {
                     let name = ['x', 'y', 'z'][axis];
-                    let Some((t, line)) = tok.next() else {
+                    let Some((t, line)) = tok.next().map_err(io)? else {
                         return Err(err(
                             at(tok.line),
                             format!("end of file: vertex coordinate {name} expected"),
@@ -337,13 +381,15 @@ fn parse_ascii(
                         }
                     };
                 }
-                positions.push(Vec3::from_array(p));
+                *corner = Vec3::from_array(p);
             }
-            expect(&mut tok, b"endloop", err)?;
-            expect(&mut tok, b"endfacet", err)?;
-            check_size(positions.len() / 3).map_err(|m| err(at(tok.line), m))?;
+            expect(&mut tok, b"endloop", err, io)?;
+            expect(&mut tok, b"endfacet", err, io)?;
+            facets += 1;
+            check_size(facets).map_err(|m| err(at(tok.line), m))?;
+            facet(corners);
         }
-        match tok.next() {
+        match tok.next().map_err(io)? {
             None => break 'solids,
             Some((w, _)) if w.eq_ignore_ascii_case(b"solid") => tok.skip_line(),
             Some((w, line)) => {
@@ -357,16 +403,17 @@ fn parse_ascii(
             }
         }
     }
-    Ok(soup(positions))
+    Ok(())
 }
 
-fn expect(
-    tok: &mut Tokens,
+fn expect<R: BufRead>(
+    tok: &mut Tokens<R>,
     word: &[u8],
     err: &dyn Fn(String, String) -> SceneError,
+    io: &dyn Fn(std::io::Error) -> SceneError,
 ) -> Result<(), SceneError> {
     let want = String::from_utf8_lossy(word);
-    match tok.next() {
+    match tok.next().map_err(io)? {
         Some((w, _)) if w.eq_ignore_ascii_case(word) => Ok(()),
         Some((w, line)) => Err(err(
             format!("line {line}"),

@@ -22,6 +22,23 @@ fn binary_stl(header: &[u8], facets: &[[[f32; 3]; 3]]) -> Vec<u8> {
     out
 }
 
+/// `facets` as ASCII STL, two solids, lines ending in `eol`, coordinates written exactly.
+fn ascii_stl(facets: &[[[f32; 3]; 3]], eol: &str) -> Vec<u8> {
+    let mut text = format!("solid first{eol}");
+    for (k, f) in facets.iter().enumerate() {
+        if k == facets.len() / 2 {
+            text.push_str(&format!("endsolid first{eol}solid second{eol}"));
+        }
+        text.push_str(&format!("facet normal 0 0 1{eol} outer loop{eol}"));
+        for v in f {
+            text.push_str(&format!("  vertex {:?} {:?} {:?}{eol}", v[0], v[1], v[2]));
+        }
+        text.push_str(&format!(" endloop{eol}endfacet{eol}"));
+    }
+    text.push_str(&format!("endsolid second{eol}"));
+    text.into_bytes()
+}
+
 const TETRA: [[[f32; 3]; 3]; 4] = [
     [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]],
     [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]],
@@ -288,6 +305,8 @@ fn stl_tables_welded_as_read_equal_the_soup_build() {
         ("tetra.stl", binary_stl(b"solid exported", &TETRA)),
         ("mixed.stl", binary_stl(b"", &facets)),
         ("ascii.stl", ascii.to_vec()),
+        ("mixed-ascii.stl", ascii_stl(&facets, "\n")),
+        ("mixed-crlf.stl", ascii_stl(&facets, "\r\n")),
     ] {
         let path = write(name, &bytes);
         let soup = shadowvol_scenes::stl::load_stl(&path).unwrap();
@@ -297,9 +316,17 @@ fn stl_tables_welded_as_read_equal_the_soup_build() {
     }
     let mut f = TETRA;
     f[2][1][2] = f32::NAN;
+    let mut bad = ascii_stl(&TETRA, "\n");
+    bad.truncate(bad.len() - 40);
     for (name, bytes) in [
         ("nan.stl", binary_stl(b"", &f)),
         ("short.stl", b"PK\x03\x04 not an stl".to_vec()),
+        ("nan-ascii.stl", ascii_stl(&f, "\r\n")),
+        ("cut-ascii.stl", bad),
+        (
+            "word-ascii.stl",
+            b"solid a\nfacet normal 0 0 1\nouter lop\n".to_vec(),
+        ),
     ] {
         let path = write(name, &bytes);
         let want = shadowvol_scenes::stl::load_stl(&path)
