@@ -15,6 +15,7 @@
 //!
 //! See the README (its example runs as a doctest) for the edge-on case.
 
+use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_robust_math::{ov_sign, Accuracy, Light};
 use shadowvol_silhouette::{
     check_lights, object_lights, vec_bytes, BackendError, BackendInfo, ExtractStats,
@@ -27,10 +28,23 @@ pub mod baselines;
 /// The backend's registry name.
 pub const NAME: &str = "cpu";
 
+/// Scenes of at most this many triangles keep each OV slot's vertex id beside their tables
+/// (12 bytes a triangle), so that an edge reads its OVs in order rather than through their
+/// triangles at random.
+pub const OV_VERTICES_UP_TO: usize = 1 << 22;
+
 /// The scalar reference backend. Always available.
 #[derive(Debug)]
 pub struct CpuBackend {
-    scenes: PreparedScenes<TopologyScene>,
+    scenes: PreparedScenes<Prepared>,
+}
+
+/// A prepared scene: the scene, and for a scene within [`OV_VERTICES_UP_TO`] each object's
+/// [`ov_vertices`].
+#[derive(Debug)]
+struct Prepared {
+    scene: TopologyScene,
+    ov_vertices: Vec<Option<Vec<u32>>>,
 }
 
 impl Default for CpuBackend {
@@ -66,23 +80,46 @@ pub fn create_backend() -> Result<Box<dyn SilhouetteBackend>, BackendError> {
 ///
 /// # Panics
 /// Panics if `out.len() != table.edges.len()`.
-pub fn extract_table(
-    table: &shadowvol_mesh_topology::EdgeTable,
-    light: [f32; 4],
-    mode: Accuracy,
-    out: &mut [i32],
-) {
+pub fn extract_table(table: &EdgeTable, light: [f32; 4], mode: Accuracy, out: &mut [i32]) {
     assert_eq!(
         out.len(),
         table.edges.len(),
         "extract_table: one output slot per edge"
     );
-    for (e, (&[a, b], m)) in table.edges.iter().zip(out.iter_mut()).enumerate() {
-        *m = table
-            .ovs_of(e)
-            .map(|o| i32::from(ov_sign(mode, &table.positions, a, b, o, light)))
-            .sum();
+    extract_with(table, None, light, mode, out);
+}
+
+/// [`extract_table`], reading each OV from `ov_vertices` (the table's OV references resolved,
+/// [`ov_vertices`]) where given, else through its triangle.
+fn extract_with(
+    table: &EdgeTable,
+    ov_vertices: Option<&[u32]>,
+    light: [f32; 4],
+    mode: Accuracy,
+    out: &mut [i32],
+) {
+    let sign = |a: u32, b: u32, o: u32| i32::from(ov_sign(mode, &table.positions, a, b, o, light));
+    let edges = table.edges.iter().zip(out.iter_mut()).enumerate();
+    match ov_vertices {
+        Some(ovs) => {
+            for (e, (&[a, b], m)) in edges {
+                let slots = table.ov_offsets[e] as usize..table.ov_offsets[e + 1] as usize;
+                *m = ovs[slots].iter().map(|&o| sign(a, b, o)).sum();
+            }
+        }
+        None => {
+            for (e, (&[a, b], m)) in edges {
+                *m = table.ovs_of(e).map(|o| sign(a, b, o)).sum();
+            }
+        }
     }
+}
+
+/// Each OV slot's vertex id (`EdgeTable::ov_vertex` of each reference), in slot order: 12 bytes
+/// a triangle of a closed mesh.
+#[must_use]
+pub fn ov_vertices(table: &EdgeTable) -> Vec<u32> {
+    table.ov_refs.iter().map(|&r| table.ov_vertex(r)).collect()
 }
 
 impl SilhouetteBackend for CpuBackend {
@@ -97,7 +134,16 @@ impl SilhouetteBackend for CpuBackend {
     }
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
-        Ok(self.scenes.insert(scene.clone()))
+        let small = scene.total_triangles() <= OV_VERTICES_UP_TO;
+        let ov_vertices = scene
+            .objects
+            .iter()
+            .map(|o| small.then(|| ov_vertices(&o.table)))
+            .collect();
+        Ok(self.scenes.insert(Prepared {
+            scene: scene.clone(),
+            ov_vertices,
+        }))
     }
 
     fn extract(
@@ -107,7 +153,7 @@ impl SilhouetteBackend for CpuBackend {
         mode: Accuracy,
         out: &mut Multiplicities,
     ) -> Result<ExtractStats, BackendError> {
-        let scene = self.scenes.get(id)?;
+        let Prepared { scene, ov_vertices } = self.scenes.get(id)?;
         check_lights(lights)?;
         let start = Instant::now();
         let obj_lights = object_lights(scene.transforms(), lights);
@@ -116,7 +162,7 @@ impl SilhouetteBackend for CpuBackend {
         for (i, (o, per_light)) in scene.objects.iter().zip(&obj_lights).enumerate() {
             for (l, &light) in per_light.iter().enumerate() {
                 let values = &mut out.values_mut(l)[offsets[i]..offsets[i + 1]];
-                extract_table(&o.table, light, mode, values);
+                extract_with(&o.table, ov_vertices[i].as_deref(), light, mode, values);
             }
         }
         out.rebuild_silhouettes();
@@ -127,10 +173,12 @@ impl SilhouetteBackend for CpuBackend {
     }
 
     fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
-        // The scalar kernel reads the scene's own tables: only the object list is copied.
-        let scene = self.scenes.get(id)?;
+        // The scalar kernel reads the scene's own tables: only the object list is copied, and
+        // the OV vertex ids of a small scene are added.
+        let p = self.scenes.get(id)?;
+        let ovs: u64 = p.ov_vertices.iter().flatten().map(vec_bytes).sum();
         Ok(PreparedBytes {
-            host: vec_bytes(&scene.objects),
+            host: vec_bytes(&p.scene.objects) + ovs,
             device: 0,
         })
     }

@@ -232,3 +232,26 @@ fn corpus_reaches_the_exact_fallback_and_exact_zeros() {
         "only {zeros} of {total} were exactly degenerate"
     );
 }
+
+#[test]
+fn the_backend_with_its_ov_vertex_list_equals_extract_table_through_triangles() {
+    // The backend reads a small scene's OVs from `ov_vertices`; `extract_table` looks each up
+    // through its triangle. Both must give every mode's values.
+    let mut cpu = CpuBackend::new();
+    for case in corpus::cases() {
+        let scene = case.scene().unwrap();
+        let offsets = scene.edge_offsets();
+        for mode in Accuracy::ALL {
+            let (m, _) = extract_once(&mut cpu, &scene, &case.lights, mode).unwrap();
+            let lights = shadowvol_silhouette::object_lights(scene.transforms(), &case.lights);
+            for (i, (o, per_light)) in scene.objects.iter().zip(&lights).enumerate() {
+                for (l, &light) in per_light.iter().enumerate() {
+                    let mut want = vec![0; o.table.edges.len()];
+                    shadowvol_cpu::extract_table(&o.table, light, mode, &mut want);
+                    let got = &m.values(l)[offsets[i]..offsets[i + 1]];
+                    assert_eq!(got, want, "{} {mode} object {i} light {l}", case.name);
+                }
+            }
+        }
+    }
+}
