@@ -35,28 +35,34 @@ struct Row {
 const START_TIMEOUT: Duration = Duration::from_secs(60);
 
 /// Starts every backend on its own thread (in parallel; a backend that hangs in its driver
-/// cannot hang the command) and reports each in registry order.
+/// cannot hang the command) and reports each in registry order. Each thread that reported is
+/// joined, so that no driver is still tearing down a thread while the process exits.
 fn rows() -> Vec<Row> {
     let pending: Vec<_> = backends()
         .into_iter()
         .map(|entry| {
             let (tx, rx) = mpsc::channel();
-            std::thread::spawn(move || {
+            let thread = std::thread::spawn(move || {
                 let result = entry.start().map(|b| b.info().device);
                 let _ = tx.send(result);
             });
-            (entry.name, rx)
+            (entry.name, rx, thread)
         })
         .collect();
     pending
         .into_iter()
-        .map(|(name, rx)| {
-            let result = rx.recv_timeout(START_TIMEOUT).unwrap_or_else(|_| {
-                Err(BackendError::Unavailable {
+        .map(|(name, rx, thread)| {
+            let result = match rx.recv_timeout(START_TIMEOUT) {
+                Ok(result) => {
+                    // It has sent its result: only its exit is left.
+                    let _ = thread.join();
+                    result
+                }
+                Err(_) => Err(BackendError::Unavailable {
                     backend: name,
                     reason: format!("did not start within {} s", START_TIMEOUT.as_secs()),
-                })
-            });
+                }),
+            };
             match result {
                 Ok(device) => Row {
                     name,

@@ -309,7 +309,12 @@ fn backends_json_follows_the_contract() {
     }
     assert_eq!(rows[0]["available"], true, "cpu is always available");
     let text = run(&["backends"]);
-    assert!(text.status.success());
+    assert!(
+        text.status.success(),
+        "backends: {}\n{}",
+        text.status,
+        String::from_utf8_lossy(&text.stderr)
+    );
     let text = String::from_utf8(text.stdout).unwrap();
     for n in names {
         assert!(text.contains(n));
