@@ -155,6 +155,25 @@ fn quad() -> (Vec<u8>, Vec<u8>) {
     )
 }
 
+/// A document over [`quad`]'s buffer (positions as accessor 0, indices as accessor 1) with
+/// these `nodes` and `meshes`.
+fn quad_doc(nodes: serde_json::Value, meshes: serde_json::Value) -> serde_json::Value {
+    json!({
+        "asset": {"version": "2.0"},
+        "nodes": nodes,
+        "meshes": meshes,
+        "buffers": [{"byteLength": 60}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 12}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": 4},
+            {"bufferView": 1, "componentType": 5123, "type": "SCALAR", "count": 6}
+        ],
+    })
+}
+
 #[test]
 fn meshopt_compressed_views_decode_to_the_uncompressed_data_and_fallbacks_are_not_read() {
     let (pos, idx) = quad();
@@ -317,15 +336,14 @@ fn non_triangle_primitives_and_primitives_without_positions_are_skipped_with_not
     let (pos, idx) = quad();
     let mut bin = pos.clone();
     bin.extend_from_slice(&idx);
-    let doc = json!({
-        "asset": {"version": "2.0"},
-        "nodes": [
+    let doc = quad_doc(
+        json!([
             {"mesh": 0, "name": "mixed"},
             {"mesh": 1, "name": "lines"},
             {"mesh": 1, "name": "again"},
             {"mesh": 2, "name": "more"}
-        ],
-        "meshes": [
+        ]),
+        json!([
             {"primitives": [
                 {"attributes": {"POSITION": 0}, "indices": 1, "mode": 1},
                 {"attributes": {"POSITION": 0}, "indices": 1},
@@ -337,17 +355,8 @@ fn non_triangle_primitives_and_primitives_without_positions_are_skipped_with_not
                 {"attributes": {"POSITION": 0}, "mode": 0},
                 {"attributes": {"POSITION": 0}, "indices": 1}
             ]}
-        ],
-        "buffers": [{"byteLength": 60}],
-        "bufferViews": [
-            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
-            {"buffer": 0, "byteOffset": 48, "byteLength": 12}
-        ],
-        "accessors": [
-            {"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": 4},
-            {"bufferView": 1, "componentType": 5123, "type": "SCALAR", "count": 6}
-        ],
-    });
+        ]),
+    );
     let (scene, notes) = load_gltf_slice_with_notes(&glb(&doc, &bin), "m.glb", None).unwrap();
     assert_eq!(
         scene.geometry.objects.len(),
@@ -390,23 +399,13 @@ fn an_instance_whose_transform_takes_a_vertex_past_f32_is_refused_by_vertex() {
     let mut bin = pos.clone();
     bin.extend_from_slice(&idx);
     // Node 0 is in range; node 1 shares its mesh, and takes vertex 1 (x = 1) to 4e38.
-    let doc = json!({
-        "asset": {"version": "2.0"},
-        "nodes": [
+    let doc = quad_doc(
+        json!([
             {"mesh": 0},
             {"mesh": 0, "scale": [2e38, 1.0, 1.0], "translation": [2e38, 0.0, 0.0]}
-        ],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
-        "buffers": [{"byteLength": 60}],
-        "bufferViews": [
-            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
-            {"buffer": 0, "byteOffset": 48, "byteLength": 12}
-        ],
-        "accessors": [
-            {"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": 4},
-            {"bufferView": 1, "componentType": 5123, "type": "SCALAR", "count": 6}
-        ],
-    });
+        ]),
+        json!([{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}]),
+    );
     let e = err(&doc, &bin);
     for part in [
         "t.glb",
@@ -424,20 +423,10 @@ fn unknown_required_extensions_are_refused_by_name() {
     let (pos, idx) = quad();
     let mut bin = pos.clone();
     bin.extend_from_slice(&idx);
-    let mut doc = json!({
-        "asset": {"version": "2.0"},
-        "nodes": [{"mesh": 0}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
-        "buffers": [{"byteLength": 60}],
-        "bufferViews": [
-            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
-            {"buffer": 0, "byteOffset": 48, "byteLength": 12}
-        ],
-        "accessors": [
-            {"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": 4},
-            {"bufferView": 1, "componentType": 5123, "type": "SCALAR", "count": 6}
-        ],
-    });
+    let mut doc = quad_doc(
+        json!([{"mesh": 0}]),
+        json!([{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}]),
+    );
     // Draco required, but no primitive uses it: the accessors are read.
     doc["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
     doc["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
