@@ -566,9 +566,21 @@ fn files_are_refused_from_their_headers_before_they_are_read() -> Outcome {
     let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
                property float z\nelement face 100000000\nproperty list uchar int \
                vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+    // An ASCII STL has no count in its header: its memory is checked as the facets come, at
+    // each power of two from 65,536 facets, and the file is read no further. Its tail here is
+    // malformed: read on, the parse would fail on it instead.
+    let mut ascii = String::from("solid a\n");
+    for _ in 0..65_536 {
+        ascii.push_str(
+            "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n\
+             endloop\nendfacet\n",
+        );
+    }
+    ascii.push_str("not a facet\n");
     for (name, bytes, triangles, vertices) in [
         ("two.stl", stl, 2u64, 6u64),
         ("huge.ply", ply.as_bytes().to_vec(), 100_000_000, 3),
+        ("ascii.stl", ascii.into_bytes(), 65_536, 196_608),
     ] {
         let path = dir.join(name);
         std::fs::write(&path, &bytes).unwrap();

@@ -78,7 +78,10 @@ pub fn parse_stl(bytes: &[u8], source_name: &str) -> Result<Mesh, SceneError> {
     if starts_with_solid(bytes) {
         let mut positions = Vec::new();
         let io = |e: std::io::Error| err("text".to_owned(), e.to_string());
-        parse_ascii(bytes, &err, &io, &mut |f| positions.extend(f))?;
+        parse_ascii(bytes, &err, &io, &mut |f| {
+            positions.extend(f);
+            Ok(())
+        })?;
         return Ok(soup(positions));
     }
     if bytes.len() < 84 {
@@ -223,16 +226,16 @@ pub fn load_stl_table(path: impl AsRef<Path>) -> Result<EdgeTable, SceneError> {
     };
     let mut weld = SoupWeld::new();
     let mut triangles = Vec::new();
-    let mut memory = Ok(());
     parse_ascii(reader, &err, &io, &mut |f| {
         triangles.push(f.map(|p| weld.push(p)));
-        // The facet count is not in the header: the memory is checked as the facets come.
+        // The facet count is not in the header: the memory is checked as the facets come, and
+        // the file is read no further once it would not fit.
         let n = triangles.len() as u64;
-        if n.is_power_of_two() && n >= 1 << 16 && memory.is_ok() {
-            memory = EdgeTable::check_size(n, 3 * n).map(|_| ());
+        if n.is_power_of_two() && n >= 1 << 16 {
+            EdgeTable::check_size(n, 3 * n).map_err(mesh_err)?;
         }
+        Ok(())
     })?;
-    memory.map_err(mesh_err)?;
     EdgeTable::from_soup_weld(weld, triangles).map_err(mesh_err)
 }
 
@@ -299,12 +302,13 @@ impl<R: BufRead> Tokens<R> {
     }
 }
 
-/// Parses an ASCII STL text, giving each facet's corners to `facet` in file order.
+/// Parses an ASCII STL text, giving each facet's corners to `facet` in file order; an error from
+/// `facet` ends the parse.
 fn parse_ascii<R: BufRead>(
     reader: R,
     err: &dyn Fn(String, String) -> SceneError,
     io: &dyn Fn(std::io::Error) -> SceneError,
-    facet: &mut dyn FnMut([Vec3; 3]),
+    facet: &mut dyn FnMut([Vec3; 3]) -> Result<(), SceneError>,
 ) -> Result<(), SceneError> {
     let mut tok = Tokens::new(reader);
     let at = |line: usize| format!("line {line}");
@@ -387,7 +391,7 @@ fn parse_ascii<R: BufRead>(
             expect(&mut tok, b"endfacet", err, io)?;
             facets += 1;
             check_size(facets).map_err(|m| err(at(tok.line), m))?;
-            facet(corners);
+            facet(corners)?;
         }
         match tok.next().map_err(io)? {
             None => break 'solids,
