@@ -86,32 +86,39 @@ pub fn extract_table(table: &EdgeTable, light: [f32; 4], mode: Accuracy, out: &m
         table.edges.len(),
         "extract_table: one output slot per edge"
     );
-    extract_with(table, None, light, mode, out);
+    extract_with(table, light, mode, out);
 }
 
-/// [`extract_table`], reading each OV from `ov_vertices` (the table's OV references resolved,
-/// [`ov_vertices`]) where given, else through its triangle.
-fn extract_with(
+/// [`extract_table`] without the length check.
+///
+/// Each loop is a function of its own, kept out of line: with one loop in the function, the
+/// compiler takes the mode's dispatch and the edge's own terms out of the OV loop.
+#[inline(never)]
+fn extract_with(table: &EdgeTable, light: [f32; 4], mode: Accuracy, out: &mut [i32]) {
+    for (e, (&[a, b], m)) in table.edges.iter().zip(out.iter_mut()).enumerate() {
+        *m = table
+            .ovs_of(e)
+            .map(|o| i32::from(ov_sign(mode, &table.positions, a, b, o, light)))
+            .sum();
+    }
+}
+
+/// [`extract_table`], reading each OV's vertex id from `ov_vertices` ([`ov_vertices`] of the
+/// table) rather than through its triangle.
+#[inline(never)]
+fn extract_listed(
     table: &EdgeTable,
-    ov_vertices: Option<&[u32]>,
+    ov_vertices: &[u32],
     light: [f32; 4],
     mode: Accuracy,
     out: &mut [i32],
 ) {
-    let sign = |a: u32, b: u32, o: u32| i32::from(ov_sign(mode, &table.positions, a, b, o, light));
-    let edges = table.edges.iter().zip(out.iter_mut()).enumerate();
-    match ov_vertices {
-        Some(ovs) => {
-            for (e, (&[a, b], m)) in edges {
-                let slots = table.ov_offsets[e] as usize..table.ov_offsets[e + 1] as usize;
-                *m = ovs[slots].iter().map(|&o| sign(a, b, o)).sum();
-            }
-        }
-        None => {
-            for (e, (&[a, b], m)) in edges {
-                *m = table.ovs_of(e).map(|o| sign(a, b, o)).sum();
-            }
-        }
+    for (e, (&[a, b], m)) in table.edges.iter().zip(out.iter_mut()).enumerate() {
+        let slots = table.ov_offsets[e] as usize..table.ov_offsets[e + 1] as usize;
+        *m = ov_vertices[slots]
+            .iter()
+            .map(|&o| i32::from(ov_sign(mode, &table.positions, a, b, o, light)))
+            .sum();
     }
 }
 
@@ -162,7 +169,10 @@ impl SilhouetteBackend for CpuBackend {
         for (i, (o, per_light)) in scene.objects.iter().zip(&obj_lights).enumerate() {
             for (l, &light) in per_light.iter().enumerate() {
                 let values = &mut out.values_mut(l)[offsets[i]..offsets[i + 1]];
-                extract_with(&o.table, ov_vertices[i].as_deref(), light, mode, values);
+                match ov_vertices[i].as_deref() {
+                    Some(ovs) => extract_listed(&o.table, ovs, light, mode, values),
+                    None => extract_with(&o.table, light, mode, values),
+                }
             }
         }
         out.rebuild_silhouettes();
