@@ -25,13 +25,9 @@ use std::sync::Arc;
 pub(crate) struct CopyLayout {
     /// Positions as 16-byte records `[x, y, z, 0]` (one aligned load per vertex).
     pub xyz: Vec<[f32; 4]>,
-    /// Canonical triangles (ascending ids `t0 < t1 < t2`), sorted, as three arrays; padded with
-    /// vertex 0 to a multiple of [`LANES`].
-    pub t0: Vec<u32>,
-    /// Second vertex of each canonical triangle.
-    pub t1: Vec<u32>,
-    /// Third vertex of each canonical triangle.
-    pub t2: Vec<u32>,
+    /// Canonical triangles (ascending ids `t0 < t1 < t2`), sorted, a block of [`LANES`] at a
+    /// time as the kernels read them (the last block padded with vertex 0).
+    pub tris: Vec<CanonBlock>,
     /// Number of real triangles in `tris`.
     pub tri_count: usize,
     /// Number of edges.
@@ -50,10 +46,10 @@ pub(crate) struct CopyLayout {
     pub eo1: Vec<u32>,
     /// See `ea`.
     pub eo2: Vec<u32>,
-    /// Per edge of a fast block: its two references `4 s + r` (triangle slot `s`, `r` 1 for
-    /// odd parity, else 0), at `2 e` and `2 e + 1`; 0 elsewhere and in the padding to whole
-    /// blocks.
-    pub refs: Vec<u32>,
+    /// Per block of [`LANES`] edges, each fast edge's two references `4 s + r` (triangle slot
+    /// `s`, `r` 1 for odd parity, else 0), edge `i` of the block at `2 i` and `2 i + 1`; 0
+    /// elsewhere and in the padding.
+    pub refs: Vec<[u32; 2 * LANES]>,
     /// The CSR records of the blocks that are not fast, for the general path.
     pub general: GeneralBlocks,
     /// Every stored coordinate passes
@@ -137,9 +133,7 @@ impl CopyLayout {
     pub(crate) fn heap_bytes(&self) -> u64 {
         use shadowvol_silhouette::vec_bytes;
         vec_bytes(&self.xyz)
-            + vec_bytes(&self.t0)
-            + vec_bytes(&self.t1)
-            + vec_bytes(&self.t2)
+            + vec_bytes(&self.tris)
             + vec_bytes(&self.block_fast)
             + vec_bytes(&self.ea)
             + vec_bytes(&self.eb)
@@ -204,13 +198,18 @@ impl CopyLayout {
             slot[t as usize] = i as u32;
         }
         let tri_count = canon.len();
-        let padded = tri_count.div_ceil(LANES) * LANES;
-        let column = |k: usize| -> Vec<u32> {
-            let mut v: Vec<u32> = canon.iter().map(|(c, _)| sv(c[k])).collect();
-            v.resize(padded, 0);
-            v
-        };
-        let (t0, t1, t2) = (column(0), column(1), column(2));
+        let tris: Vec<CanonBlock> = canon
+            .chunks(LANES)
+            .map(|block| {
+                let mut ids = [[0u32; LANES]; 3];
+                for (i, (c, _)) in block.iter().enumerate() {
+                    for k in 0..3 {
+                        ids[k][i] = sv(c[k]);
+                    }
+                }
+                ids
+            })
+            .collect();
         // Freed as soon as they are done with (16 and 4 bytes a triangle), so that the per-edge
         // columns below are not built beside them.
         drop(canon);
@@ -222,9 +221,7 @@ impl CopyLayout {
         drop(refs);
         Ok(Self {
             xyz,
-            t0,
-            t1,
-            t2,
+            tris,
             tri_count,
             edge_count: ne,
             block_fast: manifold.block_fast,
@@ -285,7 +282,7 @@ struct ManifoldEdges {
     eb: Vec<u32>,
     eo1: Vec<u32>,
     eo2: Vec<u32>,
-    refs: Vec<u32>,
+    refs: Vec<[u32; 2 * LANES]>,
 }
 
 impl ManifoldEdges {
@@ -299,7 +296,7 @@ impl ManifoldEdges {
         let ne_padded = ne.div_ceil(LANES) * LANES;
         let (mut ea, mut eb) = (vec![0u32; ne_padded], vec![0u32; ne_padded]);
         let (mut eo1, mut eo2) = (vec![0u32; ne_padded], vec![0u32; ne_padded]);
-        let mut pairs = vec![0u32; 2 * ne_padded];
+        let mut pairs = vec![[0u32; 2 * LANES]; ne_padded / LANES];
         for e in 0..ne {
             let (s, t) = (
                 table.ov_offsets[e] as usize,
@@ -310,7 +307,8 @@ impl ManifoldEdges {
                 (ea[e], eb[e]) = (sv(a), sv(b));
                 let ov = |k: usize| sv(table.ov_vertex(table.ov_refs[k]));
                 (eo1[e], eo2[e]) = (ov(s), ov(s + 1));
-                (pairs[2 * e], pairs[2 * e + 1]) = (refs[s], refs[s + 1]);
+                let (blk, i) = (e / LANES, e % LANES);
+                (pairs[blk][2 * i], pairs[blk][2 * i + 1]) = (refs[s], refs[s + 1]);
             }
         }
         Self {
@@ -347,8 +345,7 @@ impl Geometry for CopyLayout {
 
     #[inline(always)]
     fn canon_block<Lv: Level>(&self, t: usize) -> CanonBlock {
-        let col = |c: &[u32]| -> [u32; LANES] { c[t..t + LANES].try_into().unwrap_or([0; LANES]) };
-        [col(&self.t0), col(&self.t1), col(&self.t2)]
+        self.tris[t / LANES]
     }
 
     #[inline(always)]
@@ -365,10 +362,7 @@ impl Geometry for CopyLayout {
 
     #[inline(always)]
     fn fast_refs(&self, blk: usize) -> [u32; 2 * LANES] {
-        let k = 2 * LANES * blk;
-        self.refs[k..k + 2 * LANES]
-            .try_into()
-            .unwrap_or([0; 2 * LANES])
+        self.refs[blk]
     }
 
     #[inline(always)]
