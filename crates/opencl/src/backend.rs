@@ -150,7 +150,13 @@ impl OpenClBackend {
 
     /// Lays out and uploads `scene` whole, then drops the host layout; returns its id in
     /// [`OpenClBackend::scenes`].
-    fn prepare_whole(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
+    /// The host's exact decisions read the tables through `index` ([`SceneIndex::new`] of
+    /// `scene`, or of the range a part of a cut scene is).
+    fn prepare_whole(
+        &mut self,
+        scene: &TopologyScene,
+        index: SceneIndex,
+    ) -> Result<PreparedId, BackendError> {
         let layout = SceneLayout::build(scene, NAME)?;
         let edge_words = layout.edges.as_flattened();
         let hint = "; split the scene";
@@ -166,8 +172,8 @@ impl OpenClBackend {
             pos: upload(&self.context, ro, &layout.positions, "positions")?,
             edges: upload(&self.context, ro, edge_words, "edges")?,
             ovs: upload(&self.context, ro, &layout.ovs, "opposite vertices")?,
-            scene: scene.clone(),
-            index: SceneIndex::new(scene),
+            transforms: scene.transforms().collect(),
+            index,
             static_bytes,
             lights: None,
             counts: None,
@@ -200,7 +206,7 @@ impl OpenClBackend {
             self.lights_per_batch(edges, p.index.object_count(), p.index.slot_count())?;
         // Per-frame host preparation (object-space lights) counts as upload.
         let prep_start = Instant::now();
-        let obj_lights = object_lights(p.scene.transforms(), lights);
+        let obj_lights = object_lights(p.transforms.iter().copied(), lights);
         out.reset(edges, num_lights);
         let mut stats = ExtractStats {
             upload: prep_start.elapsed(),
@@ -258,7 +264,7 @@ impl SilhouetteBackend for OpenClBackend {
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
         let max = self.part_triangles(scene);
-        match PartsEntry::prepare(scene, max, |part| self.prepare_whole(part)) {
+        match PartsEntry::prepare(scene, max, |part, index| self.prepare_whole(part, index)) {
             Ok(entry) => Ok(self.entries.insert(entry)),
             Err((e, done)) => {
                 for id in done {

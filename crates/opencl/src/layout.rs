@@ -10,7 +10,7 @@ use opencl3::context::Context;
 use opencl3::memory::{Buffer, CL_MEM_COPY_HOST_PTR, CL_MEM_READ_WRITE};
 use opencl3::types::cl_mem_flags;
 use shadowvol_silhouette::gpu::{SceneIndex, UncertainRecord};
-use shadowvol_silhouette::{BackendError, PreparedBytes, TopologyScene};
+use shadowvol_silhouette::{BackendError, PreparedBytes};
 use std::ops::Range;
 use std::ptr;
 
@@ -38,7 +38,8 @@ pub fn flat_light_batch(
 
 /// Device buffers of one prepared scene.
 pub(crate) struct Prepared {
-    pub(crate) scene: TopologyScene,
+    /// Each object's transform, world from object.
+    pub(crate) transforms: Vec<glam::Affine3A>,
     /// The objects in the uploaded layout's numbering, over the scene's edge tables: what the
     /// host's exact decisions read (the layout itself is dropped once uploaded).
     pub(crate) index: SceneIndex,
@@ -71,7 +72,7 @@ impl Prepared {
             + cap(&self.sil)
             + cap(&self.unc);
         PreparedBytes {
-            host: self.index.heap_bytes(),
+            host: self.index.heap_bytes() + shadowvol_silhouette::vec_bytes(&self.transforms),
             device,
         }
     }

@@ -12,6 +12,7 @@
 //! vertices in ascending order of their ids in the object, so every `a < b` and every canonical
 //! (sorted) triangle keeps its order, and with it the sign convention.
 
+use crate::gpu::{SceneIndex, TableRange};
 use crate::{
     BackendError, ExtractStats, Multiplicities, PreparedBytes, PreparedId, SceneObject,
     TopologyScene,
@@ -21,42 +22,48 @@ use std::sync::Arc;
 
 /// The parts of a scene: whole objects grouped up to a triangle budget, and objects beyond it cut
 /// into triangle ranges.
+///
+/// A cut range is kept as a [`TableRange`] of the object's own table (about 8 bytes a range
+/// edge); its table is built only when [`SceneParts::part`] asks for it, so that a backend
+/// builds, uploads and drops one part at a time ([`SceneParts::prepare_each`]), and decides
+/// its uncertain pairs through the range's [`SceneIndex`], which reads the scene's table.
 #[derive(Debug, Clone)]
 pub struct SceneParts {
-    /// The parts, in order. A part of a cut object is one object named `NAME#partK`, with the
-    /// object's transform.
-    pub parts: Vec<TopologyScene>,
-    /// For each part, the scene's global edge index of each of the part's global edges.
-    pub edge_maps: Vec<Vec<u32>>,
+    parts: Vec<Part>,
     /// For each part, each of its objects' `(object of the scene, its first triangle there)`:
     /// `(o, 0)` for a whole object, `(o, k · N)` for range `k` of a cut one.
     pub sources: Vec<Vec<(usize, u32)>>,
     /// Global edges of the whole scene.
     pub scene_edges: usize,
-    /// Heap bytes of the cut ranges' tables that [`SceneParts::take_parts`] handed out.
-    handed_out: u64,
-    /// For each part, whether its table was built here (a range of a cut object) rather than
-    /// shared with the scene.
-    built: Vec<bool>,
+}
+
+/// One part of a [`SceneParts`].
+#[derive(Debug, Clone)]
+enum Part {
+    /// Whole objects sharing the scene's tables, and the scene's global edge index of each of
+    /// the part's global edges.
+    Group { scene: TopologyScene, map: Vec<u32> },
+    /// Range `k` of one object: the object (its name and transform), the scene's global index
+    /// of the object's first edge, and the range.
+    Cut {
+        object: SceneObject,
+        k: usize,
+        base: u32,
+        range: TableRange,
+    },
 }
 
 impl SceneParts {
     /// Cuts `scene` into parts of at most `max_triangles` triangles each (at least 1). Whole
     /// objects are grouped in order; an object with more triangles is cut into consecutive
-    /// ranges, each rebuilt as an edge table of the vertices it uses.
-    ///
-    /// # Errors
-    /// A [`MeshError`] if a range's table cannot be built (never for a table made by
-    /// [`EdgeTable::build`], whose triangles are valid and positions distinct).
-    pub fn split(scene: &TopologyScene, max_triangles: usize) -> Result<Self, MeshError> {
+    /// ranges of its triangles. No table is built here.
+    #[must_use]
+    pub fn split(scene: &TopologyScene, max_triangles: usize) -> Self {
         let max_triangles = max_triangles.max(1);
         let mut out = Self {
             parts: Vec::new(),
-            edge_maps: Vec::new(),
             sources: Vec::new(),
             scene_edges: scene.total_edges(),
-            built: Vec::new(),
-            handed_out: 0,
         };
         let offsets = scene.edge_offsets();
         let (mut group, mut group_map, mut group_tris) = (Vec::new(), Vec::new(), 0usize);
@@ -66,7 +73,7 @@ impl SceneParts {
             if tris > max_triangles {
                 out.push(&mut group, &mut group_map, &mut group_sources);
                 group_tris = 0;
-                out.cut(obj, o, offsets[o] as u32, max_triangles)?;
+                out.cut(obj, o, offsets[o] as u32, max_triangles);
                 continue;
             }
             if group_tris + tris > max_triangles {
@@ -79,7 +86,7 @@ impl SceneParts {
             group_tris += tris;
         }
         out.push(&mut group, &mut group_map, &mut group_sources);
-        Ok(out)
+        out
     }
 
     /// Ends the current group of whole objects as a part (if it has any).
@@ -91,118 +98,114 @@ impl SceneParts {
     ) {
         if !group.is_empty() {
             self.sources.push(std::mem::take(sources));
-            self.parts.push(TopologyScene {
-                objects: std::mem::take(group),
+            self.parts.push(Part::Group {
+                scene: TopologyScene {
+                    objects: std::mem::take(group),
+                },
+                map: std::mem::take(map),
             });
-            self.edge_maps.push(std::mem::take(map));
-            self.built.push(false);
         }
     }
 
     /// Cuts `obj` (object `index` of the scene, whose edges start at global edge `base`) into
-    /// parts of `max` triangles.
-    fn cut(
-        &mut self,
-        obj: &SceneObject,
-        index: usize,
-        base: u32,
-        max: usize,
-    ) -> Result<(), MeshError> {
-        let table = &obj.table;
-        // Compact id in the part of each of the object's vertices (u32::MAX: not in it).
-        let mut local = vec![u32::MAX; table.positions.len()];
-        for (k, range) in table.triangles.chunks(max).enumerate() {
-            let mut used: Vec<u32> = range.iter().flatten().copied().collect();
-            used.sort_unstable();
-            used.dedup();
-            for (i, &v) in used.iter().enumerate() {
-                local[v as usize] = i as u32;
-            }
-            let mesh = Mesh::new(
-                used.iter().map(|&v| table.positions[v as usize]).collect(),
-                range.iter().map(|t| t.map(|v| local[v as usize])).collect(),
-            )?;
-            let part = EdgeTable::build_owned(mesh)?;
-            let map = part
-                .edges
-                .iter()
-                .map(|&[a, b]| {
-                    let e = table
-                        .edge_index(used[a as usize], used[b as usize])
-                        .expect("a part's edge is an edge of its object");
-                    base + e
-                })
-                .collect();
-            for &v in &used {
-                local[v as usize] = u32::MAX;
-            }
-            self.parts.push(TopologyScene {
-                objects: vec![SceneObject {
-                    name: format!("{}#part{k}", obj.name),
-                    table: Arc::new(part),
-                    world_from_object: obj.world_from_object,
-                }],
+    /// ranges of `max` triangles.
+    fn cut(&mut self, obj: &SceneObject, index: usize, base: u32, max: usize) {
+        for (k, range) in TableRange::cut(&obj.table, max).into_iter().enumerate() {
+            self.sources.push(vec![(index, range.triangles.start)]);
+            self.parts.push(Part::Cut {
+                object: obj.clone(),
+                k,
+                base,
+                range,
             });
-            self.edge_maps.push(map);
-            self.sources.push(vec![(index, (k * max) as u32)]);
-            self.built.push(true);
         }
-        Ok(())
     }
 
-    /// Heap bytes held beyond the scene's own tables: the tables built for cut objects' ranges
-    /// and the edge maps.
+    /// Number of parts.
     #[must_use]
-    pub fn own_bytes(&self) -> u64 {
-        let tables: u64 = self
-            .parts
-            .iter()
-            .zip(&self.built)
-            .filter(|(_, &b)| b)
-            .map(|(p, _)| p.table_bytes())
-            .sum();
-        tables + self.edge_maps.iter().map(crate::vec_bytes).sum::<u64>()
+    pub fn len(&self) -> usize {
+        self.parts.len()
     }
 
-    /// Moves the parts out, leaving the maps that [`SceneParts::add_part`] needs: a backend that
-    /// lays each part out and no longer reads its table frees each cut range's table as soon as
-    /// it is prepared. [`SceneParts::own_bytes`] then counts the edge maps only, and
-    /// [`SceneParts::handed_out_bytes`] the tables handed out.
+    /// Whether there are no parts (an empty scene).
     #[must_use]
-    pub fn take_parts(&mut self) -> Vec<TopologyScene> {
-        self.handed_out += self
-            .parts
-            .iter()
-            .zip(&self.built)
-            .filter(|(_, &b)| b)
-            .map(|(p, _)| p.table_bytes())
-            .sum::<u64>();
-        self.built.iter_mut().for_each(|b| *b = false);
-        std::mem::take(&mut self.parts)
+    pub fn is_empty(&self) -> bool {
+        self.parts.is_empty()
     }
 
-    /// Heap bytes of the cut ranges' tables that [`SceneParts::take_parts`] (or
-    /// [`SceneParts::prepare_each`]) handed out: a backend that keeps the parts' tables (to
-    /// decide uncertain pairs on the host, through a
-    /// [`SceneIndex`](crate::gpu::SceneIndex)) holds these too.
-    #[must_use]
-    pub fn handed_out_bytes(&self) -> u64 {
-        self.handed_out
-    }
-
-    /// Prepares each part, in order, with `prepare`, moving the parts out as
-    /// [`SceneParts::take_parts`] does (so each cut range's table is freed once prepared).
+    /// Part `k` as a scene: its whole objects, sharing the scene's tables, or for a range of a
+    /// cut object one object named `NAME#partK` with the object's transform and the range's
+    /// table, built here from the vertices the range uses (renumbered in ascending order, so
+    /// that every edge and canonical triangle keeps its vertex order, and with it the sign
+    /// convention).
     ///
     /// # Errors
-    /// The first error of `prepare`, with what was prepared before it (for the caller to
-    /// release).
+    /// A [`MeshError`] if a range's table cannot be built (never for a table made by
+    /// [`EdgeTable::build`], whose triangles are valid and positions distinct).
+    ///
+    /// # Panics
+    /// If `k >= self.len()`.
+    pub fn part(&self, k: usize) -> Result<TopologyScene, MeshError> {
+        match &self.parts[k] {
+            Part::Group { scene, .. } => Ok(scene.clone()),
+            Part::Cut {
+                object, k, range, ..
+            } => Ok(TopologyScene {
+                objects: vec![SceneObject {
+                    name: format!("{}#part{k}", object.name),
+                    table: Arc::new(range_table(range)?),
+                    world_from_object: object.world_from_object,
+                }],
+            }),
+        }
+    }
+
+    /// The index of part `k` ([`SceneParts::part`]) for the host's exact decisions, in the
+    /// numbering of the part's layouts, reading the scene's own tables.
+    ///
+    /// # Panics
+    /// If `k >= self.len()`.
+    #[must_use]
+    pub fn index(&self, k: usize) -> SceneIndex {
+        match &self.parts[k] {
+            Part::Group { scene, .. } => SceneIndex::new(scene),
+            Part::Cut { range, .. } => SceneIndex::of_range(range.clone()),
+        }
+    }
+
+    /// Heap bytes held beyond the scene's own tables: the groups' edge maps and the cut
+    /// ranges' edges and slots (which the ranges' indices share).
+    #[must_use]
+    pub fn own_bytes(&self) -> u64 {
+        self.parts
+            .iter()
+            .map(|p| match p {
+                Part::Group { map, .. } => crate::vec_bytes(map),
+                Part::Cut { range, .. } => range.heap_bytes(),
+            })
+            .sum()
+    }
+
+    /// Prepares each part, in order, with `prepare(part, index)` ([`SceneParts::part`] and
+    /// [`SceneParts::index`]): each cut range's table is built just before and dropped just
+    /// after, so that only one is held at a time.
+    ///
+    /// # Errors
+    /// The first error, with what was prepared before it (for the caller to release): of
+    /// `prepare`, or [`BackendError::InvalidInput`] when a range's table cannot be built.
     pub fn prepare_each<P>(
-        &mut self,
-        mut prepare: impl FnMut(&TopologyScene) -> Result<P, BackendError>,
+        &self,
+        mut prepare: impl FnMut(&TopologyScene, SceneIndex) -> Result<P, BackendError>,
     ) -> Result<Vec<P>, (BackendError, Vec<P>)> {
-        let mut done = Vec::with_capacity(self.parts.len());
-        for part in self.take_parts() {
-            match prepare(&part) {
+        let mut done = Vec::with_capacity(self.len());
+        for k in 0..self.len() {
+            let prepared = self
+                .part(k)
+                .map_err(|e| {
+                    BackendError::InvalidInput(format!("cutting the scene into parts: {e}"))
+                })
+                .and_then(|part| prepare(&part, self.index(k)));
+            match prepared {
                 Ok(p) => done.push(p),
                 Err(e) => return Err((e, done)),
             }
@@ -224,7 +227,7 @@ impl SceneParts {
     ) -> Result<ExtractStats, BackendError> {
         out.reset(self.scene_edges, lights);
         let (mut part, mut stats) = (Multiplicities::default(), ExtractStats::default());
-        for k in 0..self.edge_maps.len() {
+        for k in 0..self.len() {
             let s = extract(k, &mut part)?;
             stats.upload += s.upload;
             stats.compute += s.compute;
@@ -244,17 +247,34 @@ impl SceneParts {
     /// # Panics
     /// If `from` is not shaped like the part, or `into` like the scene, for the same lights.
     pub fn add_part(&self, part: usize, from: &Multiplicities, into: &mut Multiplicities) {
-        let map = &self.edge_maps[part];
+        let (map, base) = match &self.parts[part] {
+            Part::Group { map, .. } => (&map[..], 0),
+            Part::Cut { base, range, .. } => (&range.edges[..], *base as usize),
+        };
         assert_eq!(from.edge_count(), map.len(), "the part's edges");
         assert_eq!(into.edge_count(), self.scene_edges, "the scene's edges");
         assert_eq!(from.light_count(), into.light_count(), "the same lights");
         for l in 0..from.light_count() {
             let dst = into.values_mut(l);
             for (&g, &m) in map.iter().zip(from.values(l)) {
-                dst[g as usize] += m;
+                dst[base + g as usize] += m;
             }
         }
     }
+}
+
+/// The table of `range`'s triangles over the vertices they use, renumbered in ascending order.
+fn range_table(range: &TableRange) -> Result<EdgeTable, MeshError> {
+    let table = &range.table;
+    let tris = &table.triangles[range.triangles.start as usize..range.triangles.end as usize];
+    let mut used: Vec<u32> = tris.iter().flatten().copied().collect();
+    used.sort_unstable();
+    used.dedup();
+    let local = |v: u32| used.partition_point(|&u| u < v) as u32;
+    let triangles = tris.iter().map(|t| t.map(local)).collect();
+    let positions = used.iter().map(|&v| table.positions[v as usize]).collect();
+    drop(used);
+    EdgeTable::build_owned(Mesh::new(positions, triangles)?)
 }
 
 /// What a backend's prepared id names when the backend keeps its uploaded scenes under ids of
@@ -274,23 +294,25 @@ pub enum PartsEntry {
 }
 
 impl PartsEntry {
-    /// `scene` uploaded whole by `prepare` when `max_triangles` is `None`, else cut into parts
-    /// of at most that many triangles, each uploaded by `prepare` in turn.
+    /// `scene` uploaded whole by `prepare(scene, its index)` when `max_triangles` is `None`,
+    /// else cut into parts of at most that many triangles, each uploaded by `prepare` in turn
+    /// ([`SceneParts::prepare_each`]). The [`SceneIndex`] given with each scene is what the
+    /// backend keeps for its host's exact decisions.
     ///
     /// # Errors
     /// The first error, with the ids uploaded before it (for the caller to release): of
-    /// `prepare`, or [`BackendError::InvalidInput`] when a part cannot be cut.
+    /// `prepare`, or [`BackendError::InvalidInput`] when a part's table cannot be built.
     pub fn prepare(
         scene: &TopologyScene,
         max_triangles: Option<usize>,
-        mut prepare: impl FnMut(&TopologyScene) -> Result<PreparedId, BackendError>,
+        mut prepare: impl FnMut(&TopologyScene, SceneIndex) -> Result<PreparedId, BackendError>,
     ) -> Result<Self, (BackendError, Vec<PreparedId>)> {
-        let cut_error =
-            |e: MeshError| BackendError::InvalidInput(format!("cutting the scene into parts: {e}"));
         let Some(max) = max_triangles else {
-            return prepare(scene).map(Self::Whole).map_err(|e| (e, Vec::new()));
+            return prepare(scene, SceneIndex::new(scene))
+                .map(Self::Whole)
+                .map_err(|e| (e, Vec::new()));
         };
-        let mut parts = SceneParts::split(scene, max).map_err(|e| (cut_error(e), Vec::new()))?;
+        let parts = SceneParts::split(scene, max);
         let ids = parts.prepare_each(prepare)?;
         Ok(Self::Split { parts, ids })
     }
@@ -304,8 +326,8 @@ impl PartsEntry {
         }
     }
 
-    /// What the entry holds: its uploaded scenes' bytes (`bytes_of` each), the cut's own and the
-    /// cut ranges' tables its parts keep.
+    /// What the entry holds: its uploaded scenes' bytes (`bytes_of` each) and the cut's own
+    /// ([`SceneParts::own_bytes`]).
     ///
     /// # Errors
     /// The first error of `bytes_of`.
@@ -313,11 +335,10 @@ impl PartsEntry {
         &self,
         bytes_of: impl Fn(PreparedId) -> Result<PreparedBytes, BackendError>,
     ) -> Result<PreparedBytes, BackendError> {
-        // A split scene's parts keep their cut ranges' tables (the backends' indices read them).
         let mut b = PreparedBytes {
             host: match self {
                 Self::Whole(_) => 0,
-                Self::Split { parts, .. } => parts.own_bytes() + parts.handed_out_bytes(),
+                Self::Split { parts, .. } => parts.own_bytes(),
             },
             device: 0,
         };
@@ -421,9 +442,11 @@ mod tests {
             ],
         };
         // 801 triangles in `big`: cut into 9 ranges; the smalls grouped.
-        let parts = SceneParts::split(&scene, 97).unwrap();
-        assert_eq!(parts.parts.len(), 1 + 9 + 1);
-        let tris: usize = parts.parts.iter().map(TopologyScene::total_triangles).sum();
+        let parts = SceneParts::split(&scene, 97);
+        assert_eq!(parts.len(), 1 + 9 + 1);
+        let tris: usize = (0..parts.len())
+            .map(|k| parts.part(k).unwrap().total_triangles())
+            .sum();
         assert_eq!(tris, scene.total_triangles());
         let big_ranges: Vec<(usize, u32)> = (0..9).map(|k| (1, 97 * k)).collect();
         let sources: Vec<(usize, u32)> = parts.sources.iter().flatten().copied().collect();
@@ -444,8 +467,9 @@ mod tests {
         ] {
             let whole = reference(&scene, mode, &lights);
             let mut sum = Multiplicities::zeroed(scene.total_edges(), lights.len());
-            for (k, part) in parts.parts.iter().enumerate() {
-                parts.add_part(k, &reference(part, mode, &lights), &mut sum);
+            for k in 0..parts.len() {
+                let part = parts.part(k).unwrap();
+                parts.add_part(k, &reference(&part, mode, &lights), &mut sum);
             }
             assert_eq!(sum, whole, "{mode:?}");
             assert!(
@@ -455,37 +479,57 @@ mod tests {
         }
     }
 
-    /// Parts taken out (and dropped one by one, as the `wgpu` backend does) leave maps that
-    /// still add them up to the scene; the bytes then count the maps alone.
+    /// A cut range's index, which reads the object's table, answers every question of the
+    /// host's exact decisions as the index of the range's own table (built by
+    /// `EdgeTable::build`) does; and the cut holds a few bytes a range edge, not the tables.
     #[test]
-    fn taken_parts_still_add_up_and_free_their_tables() {
+    fn a_cut_part_is_indexed_through_the_scene_table_as_its_own_table() {
+        use crate::gpu::HostScene;
         let big = Arc::new(bumpy(12));
         let scene = TopologyScene {
             objects: vec![SceneObject {
                 name: "big".to_owned(),
                 table: Arc::clone(&big),
-                world_from_object: Affine3A::IDENTITY,
+                world_from_object: Affine3A::from_translation(Vec3::X),
             }],
         };
-        let mut parts = SceneParts::split(&scene, 50).unwrap();
-        let maps: u64 = parts.edge_maps.iter().map(crate::vec_bytes).sum();
-        let before = parts.own_bytes();
-        assert!(before > maps, "cut ranges hold tables before");
-        assert_eq!(parts.handed_out_bytes(), 0);
-        let taken = parts.take_parts();
-        assert!(parts.parts.is_empty());
-        assert_eq!(parts.own_bytes(), maps);
-        // What was handed out is counted, for the backends that keep it.
-        assert_eq!(parts.handed_out_bytes(), before - maps);
-        let tables: u64 = taken.iter().map(TopologyScene::table_bytes).sum();
-        assert_eq!(parts.handed_out_bytes(), tables);
-        let lights = [[5.0, 5.0, 0.5, 1.0], [1.0, 2.0, 3.0, 0.0]];
-        let whole = reference(&scene, Accuracy::Exact, &lights);
-        let mut sum = Multiplicities::zeroed(scene.total_edges(), lights.len());
-        for (k, part) in taken.into_iter().enumerate() {
-            parts.add_part(k, &reference(&part, Accuracy::Exact, &lights), &mut sum);
+        let parts = SceneParts::split(&scene, 50);
+        let tris = big.triangles.len() as u32;
+        assert_eq!(parts.len(), big.triangles.len().div_ceil(50));
+        let mut tables = 0;
+        for k in 0..parts.len() {
+            let part = parts.part(k).unwrap();
+            tables += part.table_bytes();
+            let own = SceneIndex::new(&part);
+            // The range as the cut found it, and found alone.
+            let first = (50 * k) as u32;
+            let alone = TableRange::new(Arc::clone(&big), first..(first + 50).min(tris));
+            for range in [parts.index(k), SceneIndex::of_range(alone)] {
+                assert_eq!(range.edge_count(), own.edge_count(), "part {k}");
+                assert_eq!(range.slot_count(), own.slot_count(), "part {k}");
+                assert_eq!(range.tri_count(), own.tri_count(), "part {k}");
+                for e in 0..own.edge_count() {
+                    let at = format!("part {k} edge {e}");
+                    assert_eq!(range.ov_slots(e), own.ov_slots(e), "{at}");
+                    assert_eq!(range.edge_points(e), own.edge_points(e), "{at}");
+                    for s in own.ov_slots(e) {
+                        assert_eq!(range.ov_point(e, s), own.ov_point(e, s), "{at} slot {s}");
+                    }
+                }
+                for t in 0..=own.tri_count() {
+                    let at = format!("part {k} triangle {t}");
+                    assert_eq!(range.edge_slots(t), own.edge_slots(t), "{at}");
+                }
+            }
         }
-        assert_eq!(sum, whole);
-        assert!(whole.all_values().iter().any(|&v| v != 0));
+        let ranges: usize = (0..parts.len())
+            .map(|k| parts.index(k).edge_count() * 8 + 4)
+            .sum();
+        assert_eq!(parts.own_bytes(), ranges as u64);
+        assert!(
+            parts.own_bytes() * 3 < tables,
+            "the cut holds no tables: {} bytes against {tables}",
+            parts.own_bytes()
+        );
     }
 }

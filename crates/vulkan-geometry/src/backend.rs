@@ -217,7 +217,7 @@ impl VulkanBackend {
         stats: &mut ExtractStats,
     ) -> Result<(), BackendError> {
         let t = Instant::now();
-        let obj_lights = object_lights(self.scene(id)?.scene.transforms(), lights);
+        let obj_lights = object_lights(self.scene(id)?.transforms.iter().copied(), lights);
         stats.upload += t.elapsed();
         out.reset(self.scene(id)?.index.edge_count(), lights.len());
         self.extract_batches(id, &obj_lights, mode, out, stats)
@@ -283,7 +283,7 @@ impl SilhouetteBackend for VulkanBackend {
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
         let max = self.part_triangles(scene);
-        match PartsEntry::prepare(scene, max, |part| self.prepare_whole(part)) {
+        match PartsEntry::prepare(scene, max, |part, index| self.prepare_whole(part, index)) {
             Ok(entry) => Ok(self.entries.insert(entry)),
             Err((e, done)) => {
                 for id in done {
@@ -332,8 +332,13 @@ impl SilhouetteBackend for VulkanBackend {
 
 impl VulkanBackend {
     /// Creates the buffers of `scene`, whole, and drops its host layout; returns its id in
-    /// [`VulkanBackend::prepared`].
-    fn prepare_whole(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
+    /// [`VulkanBackend::prepared`]. The host's exact decisions read the tables through `index`
+    /// ([`SceneIndex::new`] of `scene`, or of the range a part of a cut scene is).
+    fn prepare_whole(
+        &mut self,
+        scene: &TopologyScene,
+        index: SceneIndex,
+    ) -> Result<PreparedId, BackendError> {
         let layout = SceneLayout::build(scene, NAME)?;
         let ctx = &self.ctx;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
@@ -377,8 +382,8 @@ impl VulkanBackend {
         // The host's exact decisions read the tables through the index: the layout goes.
         drop(layout);
         let p = Prepared {
-            scene: scene.clone(),
-            index: SceneIndex::new(scene),
+            transforms: scene.transforms().collect(),
+            index,
             positions,
             edges,
             ovs,

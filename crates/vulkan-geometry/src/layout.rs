@@ -8,7 +8,7 @@ use crate::pipeline::BINDINGS;
 use crate::NAME;
 use ash::vk;
 use shadowvol_silhouette::gpu::SceneIndex;
-use shadowvol_silhouette::{BackendError, PreparedBytes, TopologyScene};
+use shadowvol_silhouette::{BackendError, PreparedBytes};
 
 /// Bytes of the uncertain buffer's header (the count and three pads).
 pub(crate) const UNCERTAIN_HEADER: usize = 16;
@@ -17,7 +17,8 @@ pub(crate) const INITIAL_UNCERTAIN: u32 = 1024;
 
 /// One prepared scene: its device buffers and descriptor set.
 pub(crate) struct Prepared {
-    pub(crate) scene: TopologyScene,
+    /// Each object's transform, world from object.
+    pub(crate) transforms: Vec<glam::Affine3A>,
     /// The objects in the numbering of the uploaded layout (positions, edge records `(a, b,
     /// first OV slot, object)` plus the sentinel, opposite vertices, with global vertex ids),
     /// over the scene's edge tables: what the host's exact decisions read.
@@ -37,7 +38,7 @@ impl Prepared {
     /// What the scene holds beyond its edge tables: the index and the device buffers.
     pub(crate) fn bytes(&self) -> PreparedBytes {
         PreparedBytes {
-            host: self.index.heap_bytes(),
+            host: self.index.heap_bytes() + shadowvol_silhouette::vec_bytes(&self.transforms),
             device: self.buffers().iter().map(|b| b.size).sum(),
         }
     }

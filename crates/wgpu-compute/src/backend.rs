@@ -215,15 +215,13 @@ impl SilhouetteBackend for WgpuBackend {
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
         self.check_health()?;
         let entry = match self.part_triangles(scene) {
-            None => Entry::Whole(Box::new(self.prepare_whole(scene)?)),
+            None => Entry::Whole(Box::new(self.prepare_whole(scene, SceneIndex::new(scene))?)),
             Some(max) => {
-                let mut parts = SceneParts::split(scene, max).map_err(|e| {
-                    BackendError::InvalidInput(format!("cutting the scene into parts: {e}"))
-                })?;
-                // Each part's layouts are dropped once uploaded; its table stays, for the host's
-                // exact decisions (its index reads it).
+                // Each part's table is built, uploaded and dropped in turn; the host's exact
+                // decisions read the scene's tables through each part's index.
+                let parts = SceneParts::split(scene, max);
                 let prepared = parts
-                    .prepare_each(|p| self.prepare_whole(p))
+                    .prepare_each(|p, index| self.prepare_whole(p, index))
                     .map_err(|(e, _)| e)?;
                 Entry::Split { parts, prepared }
             }
@@ -254,9 +252,8 @@ impl SilhouetteBackend for WgpuBackend {
         Ok(match self.scenes.get(id)? {
             Entry::Whole(p) => p.bytes(),
             Entry::Split { parts, prepared } => {
-                // Each part's index keeps its table: the cut ranges' tables are held too.
                 let mut b = PreparedBytes {
-                    host: parts.own_bytes() + parts.handed_out_bytes(),
+                    host: parts.own_bytes(),
                     device: 0,
                 };
                 for p in prepared {
@@ -313,9 +310,13 @@ impl WgpuBackend {
     }
 
     /// Uploads `scene` whole, its [`TableBuffer`]s written in chunks straight from its edge
-    /// tables (no host copy). The host's exact decisions read the tables through a
-    /// [`SceneIndex`].
-    fn prepare_whole(&self, scene: &TopologyScene) -> Result<Prepared, BackendError> {
+    /// tables (no host copy). The host's exact decisions read the tables through `index`
+    /// ([`SceneIndex::new`] of `scene`, or of the range a part of a cut scene is).
+    fn prepare_whole(
+        &self,
+        scene: &TopologyScene,
+        index: SceneIndex,
+    ) -> Result<Prepared, BackendError> {
         let writer = TableWriter::new(scene, NAME)?;
         let gpu = if writer.elements(TableBuffer::Edges) == 0 {
             None
@@ -349,7 +350,7 @@ impl WgpuBackend {
         self.check_health()?;
         Ok(Prepared {
             transforms: scene.transforms().collect(),
-            index: SceneIndex::new(scene),
+            index,
             gpu,
             frame: None,
             last: None,

@@ -60,18 +60,16 @@ impl GpuPipeline {
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
         let budget = (limit.saturating_sub(64) / 48).max(1) as usize;
-        let parts = SceneParts::split(&scene.surface_geometry(), budget).map_err(|source| {
-            RenderError::Mesh {
-                object: "a part of the scene".to_owned(),
-                source,
-            }
-        })?;
-        parts
-            .parts
-            .iter()
+        let parts = SceneParts::split(&scene.surface_geometry(), budget);
+        // Each part's table is built, uploaded and dropped in turn.
+        (0..parts.len())
             .zip(&parts.sources)
-            .map(|(part, sources)| {
-                let mut rs = pass.prepare_topology(part)?;
+            .map(|(k, sources)| {
+                let part = parts.part(k).map_err(|source| RenderError::Mesh {
+                    object: format!("part {k} of the scene"),
+                    source,
+                })?;
+                let mut rs = pass.prepare_topology(&part)?;
                 rs.ids = sources
                     .iter()
                     .map(|&(o, first)| [o as u32, first])

@@ -33,7 +33,7 @@ pub mod twin;
 mod wait;
 
 pub use batches::{batches, lights_per_batch};
-pub use host::{HostScene, SceneIndex};
+pub use host::{HostScene, SceneIndex, TableRange};
 pub use layout::SceneLayout;
 pub use resolve::{check_batch, resolve_uncertain, UncertainRecord};
 pub use tables::{
