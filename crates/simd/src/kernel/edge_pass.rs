@@ -7,7 +7,7 @@ use super::signs::{pack_sign, signed, PACK};
 use super::{push_bits, EdgeOut};
 use crate::dispatch::Pass;
 use crate::lanes::Level;
-use crate::layout::{ref_odd, ref_slot, Geometry, LANES};
+use crate::layout::{ref_odd, ref_slot, FastRefs, Geometry, LANES};
 use std::ops::Range;
 
 /// The triangle signs an edge pass reads for one object: light `l`'s sign of the object's
@@ -73,7 +73,7 @@ fn edge_sums<G: Geometry>(pass: EdgeSums<G>) {
         let e0 = blk * LANES;
         if lay.block_fast(blk) {
             // Block-outer, light-inner: the block's OV references are read once.
-            let refs = lay.fast_refs(blk);
+            let [first, second] = lay.fast_refs(blk);
             for (l, row) in out.rows.iter_mut().enumerate() {
                 let base = bases[l / PACK];
                 let s = &signs[base..base + lay.tri_count()];
@@ -82,9 +82,9 @@ fn edge_sums<G: Geometry>(pass: EdgeSums<G>) {
                 let end = (e0 - e_start + LANES).min(row.len());
                 let dst = &mut row[e0 - e_start..end];
                 let mut any = 0;
-                for (d, r) in dst.iter_mut().zip(refs.chunks_exact(2)) {
+                for (i, d) in dst.iter_mut().enumerate() {
                     let sign = |r: u32| signed(pack_sign(s[ref_slot(r)], nl, l), ref_odd(r));
-                    let m = sign(r[0]) + sign(r[1]);
+                    let m = sign(first[i]) + sign(second[i]);
                     *d = m;
                     any |= m;
                 }
@@ -130,7 +130,7 @@ fn edge_sums_general<G: Geometry>(
 }
 
 /// The sign bytes (sign-extended to 32-bit lanes) of the triangles of the block's first OV
-/// references (`refs[2 i]`, lane `i`) and of its second (`refs[2 i + 1]`) in the pack at `sp`,
+/// references (`refs[0][i]`, lane `i`) and of its second (`refs[1][i]`) in the pack at `sp`,
 /// and their parity masks (all ones for odd parity, else 0). The bytes take scalar loads, which
 /// are faster than `vpgatherdd` on Zen 3 (docs/PERFORMANCE.md); the parities are computed in
 /// lanes.
@@ -140,32 +140,26 @@ fn edge_sums_general<G: Geometry>(
 /// inside the pack at `sp`.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn sign_bytes_of_block(
-    sp: *const i8,
-    refs: &[u32; 2 * LANES],
-) -> [std::arch::x86_64::__m256i; 4] {
+unsafe fn sign_bytes_of_block(sp: *const i8, refs: &FastRefs) -> [std::arch::x86_64::__m256i; 4] {
     use std::arch::x86_64::*;
     // SAFETY: every `r >> 2` is inside the pack at `sp` (the caller's contract); AVX2 present.
     unsafe {
-        let ld = |k: usize| -> i32 { i32::from(*sp.add((refs[k] >> 2) as usize)) };
-        let g1 = _mm256_setr_epi32(ld(0), ld(2), ld(4), ld(6), ld(8), ld(10), ld(12), ld(14));
-        let g2 = _mm256_setr_epi32(ld(1), ld(3), ld(5), ld(7), ld(9), ld(11), ld(13), ld(15));
-        // The references deinterleaved into first and second of each edge, then rank 1 (odd).
-        let lo = _mm256_loadu_si256(refs.as_ptr().cast());
-        let hi = _mm256_loadu_si256(refs.as_ptr().add(LANES).cast());
-        let split = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
-        let (lo, hi) = (
-            _mm256_permutevar8x32_epi32(lo, split),
-            _mm256_permutevar8x32_epi32(hi, split),
-        );
-        let (r1, r2) = (
-            _mm256_permute2x128_si256::<0x20>(lo, hi),
-            _mm256_permute2x128_si256::<0x31>(lo, hi),
-        );
+        let signs = |r: &[u32; LANES]| {
+            let ld = |i: usize| -> i32 { i32::from(*sp.add((r[i] >> 2) as usize)) };
+            _mm256_setr_epi32(ld(0), ld(1), ld(2), ld(3), ld(4), ld(5), ld(6), ld(7))
+        };
         let (three, one) = (_mm256_set1_epi32(3), _mm256_set1_epi32(1));
-        let k1 = _mm256_cmpeq_epi32(_mm256_and_si256(r1, three), one);
-        let k2 = _mm256_cmpeq_epi32(_mm256_and_si256(r2, three), one);
-        [g1, g2, k1, k2]
+        // Rank 1: odd parity.
+        let odd = |r: &[u32; LANES]| {
+            let r = _mm256_loadu_si256(r.as_ptr().cast());
+            _mm256_cmpeq_epi32(_mm256_and_si256(r, three), one)
+        };
+        [
+            signs(&refs[0]),
+            signs(&refs[1]),
+            odd(&refs[0]),
+            odd(&refs[1]),
+        ]
     }
 }
 

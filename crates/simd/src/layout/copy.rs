@@ -14,7 +14,8 @@
 
 use super::LANES;
 use super::{
-    check_table, fast_blocks, positions_in_filter_range, CanonBlock, Geometry, LayoutError,
+    check_table, fast_blocks, positions_in_filter_range, CanonBlock, FastRefs, Geometry,
+    LayoutError,
 };
 use crate::lanes::Level;
 use shadowvol_mesh_topology::EdgeTable;
@@ -47,9 +48,8 @@ pub(crate) struct CopyLayout {
     /// See `ea`.
     pub eo2: Vec<u32>,
     /// Per block of [`LANES`] edges, each fast edge's two references `4 s + r` (triangle slot
-    /// `s`, `r` 1 for odd parity, else 0), edge `i` of the block at `2 i` and `2 i + 1`; 0
-    /// elsewhere and in the padding.
-    pub refs: Vec<[u32; 2 * LANES]>,
+    /// `s`, `r` 1 for odd parity, else 0) as [`FastRefs`]; 0 elsewhere and in the padding.
+    pub refs: Vec<FastRefs>,
     /// The CSR records of the blocks that are not fast, for the general path.
     pub general: GeneralBlocks,
     /// Every stored coordinate passes
@@ -282,7 +282,7 @@ struct ManifoldEdges {
     eb: Vec<u32>,
     eo1: Vec<u32>,
     eo2: Vec<u32>,
-    refs: Vec<[u32; 2 * LANES]>,
+    refs: Vec<FastRefs>,
 }
 
 impl ManifoldEdges {
@@ -296,7 +296,7 @@ impl ManifoldEdges {
         let ne_padded = ne.div_ceil(LANES) * LANES;
         let (mut ea, mut eb) = (vec![0u32; ne_padded], vec![0u32; ne_padded]);
         let (mut eo1, mut eo2) = (vec![0u32; ne_padded], vec![0u32; ne_padded]);
-        let mut pairs = vec![[0u32; 2 * LANES]; ne_padded / LANES];
+        let mut pairs = vec![[[0u32; LANES]; 2]; ne_padded / LANES];
         for e in 0..ne {
             let (s, t) = (
                 table.ov_offsets[e] as usize,
@@ -308,7 +308,7 @@ impl ManifoldEdges {
                 let ov = |k: usize| sv(table.ov_vertex(table.ov_refs[k]));
                 (eo1[e], eo2[e]) = (ov(s), ov(s + 1));
                 let (blk, i) = (e / LANES, e % LANES);
-                (pairs[blk][2 * i], pairs[blk][2 * i + 1]) = (refs[s], refs[s + 1]);
+                (pairs[blk][0][i], pairs[blk][1][i]) = (refs[s], refs[s + 1]);
             }
         }
         Self {
@@ -361,7 +361,7 @@ impl Geometry for CopyLayout {
     }
 
     #[inline(always)]
-    fn fast_refs(&self, blk: usize) -> [u32; 2 * LANES] {
+    fn fast_refs(&self, blk: usize) -> FastRefs {
         self.refs[blk]
     }
 

@@ -6,7 +6,8 @@
 
 use super::LANES;
 use super::{
-    check_table, fast_blocks, positions_in_filter_range, CanonBlock, Geometry, LayoutError,
+    check_table, fast_blocks, positions_in_filter_range, CanonBlock, FastRefs, Geometry,
+    LayoutError,
 };
 use crate::lanes::{canon8_scalar, Level};
 use shadowvol_mesh_topology::EdgeTable;
@@ -38,6 +39,23 @@ impl InPlaceLayout {
     /// Heap bytes the layout adds to its table.
     pub(crate) fn heap_bytes(&self) -> u64 {
         shadowvol_silhouette::vec_bytes(&self.block_fast)
+    }
+
+    /// The references of the fast block `blk`, which the table keeps two by two, as
+    /// [`FastRefs`].
+    #[inline(always)]
+    fn refs_of_block(&self, blk: usize) -> FastRefs {
+        let e0 = blk * LANES;
+        let n = (self.edge_count() - e0).min(LANES);
+        let k0 = self.table.ov_offsets[e0] as usize;
+        let mut refs = [[0u32; LANES]; 2];
+        for (i, pair) in self.table.ov_refs[k0..k0 + 2 * n]
+            .chunks_exact(2)
+            .enumerate()
+        {
+            (refs[0][i], refs[1][i]) = (pair[0], pair[1]);
+        }
+        refs
     }
 }
 
@@ -83,24 +101,14 @@ impl Geometry for InPlaceLayout {
     }
 
     #[inline(always)]
-    fn fast_refs(&self, blk: usize) -> [u32; 2 * LANES] {
-        let e0 = blk * LANES;
-        let n = (self.edge_count() - e0).min(LANES);
-        let k0 = self.table.ov_offsets[e0] as usize;
-        let refs = &self.table.ov_refs[k0..k0 + 2 * n];
-        if let Ok(full) = refs.try_into() {
-            full
-        } else {
-            let mut padded = [0u32; 2 * LANES];
-            padded[..refs.len()].copy_from_slice(refs);
-            padded
-        }
+    fn fast_refs(&self, blk: usize) -> FastRefs {
+        self.refs_of_block(blk)
     }
 
     #[inline(always)]
     fn fast_ends_and_ovs(&self, blk: usize) -> [[u32; LANES]; 4] {
         let e0 = blk * LANES;
-        let refs = self.fast_refs(blk);
+        let [first, second] = self.refs_of_block(blk);
         let edges = &self.table.edges[e0..(e0 + LANES).min(self.edge_count())];
         let tris = &self.table.triangles;
         let mut v = [[0u32; LANES]; 4];
@@ -113,8 +121,8 @@ impl Geometry for InPlaceLayout {
             };
             v[0][i] = a;
             v[1][i] = b;
-            v[2][i] = ov(refs[2 * i]);
-            v[3][i] = ov(refs[2 * i + 1]);
+            v[2][i] = ov(first[i]);
+            v[3][i] = ov(second[i]);
         }
         v
     }

@@ -29,6 +29,10 @@ pub(crate) const LANES: usize = 8;
 /// triangle).
 pub(crate) type CanonBlock = [[u32; LANES]; 3];
 
+/// The OV references `4 s + r` of one fast block of [`LANES`] edges: `[0][i]` is edge `i`'s
+/// first, `[1][i]` its second (0 past the last edge).
+pub(crate) type FastRefs = [[u32; LANES]; 2];
+
 /// Why a table cannot be laid out.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct LayoutError(pub String);
@@ -158,9 +162,8 @@ pub(crate) trait Geometry: Sync {
     unsafe fn gather<Lv: Level>(&self, idx: &[u32]) -> [Lv::F; 3];
     /// Position of vertex `v`.
     fn pos(&self, v: u32) -> [f32; 3];
-    /// The references of the fast block `blk`: edge `i`'s two at `2 i` and `2 i + 1` (0 past
-    /// the last edge).
-    fn fast_refs(&self, blk: usize) -> [u32; 2 * LANES];
+    /// The references of the fast block `blk` ([`FastRefs`]).
+    fn fast_refs(&self, blk: usize) -> FastRefs;
     /// `[a, b, o1, o2]` of each edge of the fast block `blk` (vertex 0 past the last edge).
     fn fast_ends_and_ovs(&self, blk: usize) -> [[u32; LANES]; 4];
     /// The ends of edge `e` in a general block.
