@@ -73,7 +73,7 @@ fn edge_sums<G: Geometry>(pass: EdgeSums<G>) {
         let e0 = blk * LANES;
         if lay.block_fast(blk) {
             // Block-outer, light-inner: the block's OV references are read once.
-            let [first, second] = lay.fast_refs(blk);
+            let [first, second] = *lay.fast_refs(blk);
             for (l, row) in out.rows.iter_mut().enumerate() {
                 let base = bases[l / PACK];
                 let s = &signs[base..base + lay.tri_count()];
@@ -203,12 +203,13 @@ unsafe fn edge_sums_avx2<G: Geometry>(pass: EdgeSums<G>) {
         let e0 = blk * LANES;
         if lay.block_fast(blk) {
             let refs = lay.fast_refs(blk);
+            let refs: &FastRefs = &refs;
             for (pack, &base) in bases.iter().enumerate() {
                 // The 16 sign bytes of the block's triangles, as in the one-light loop.
                 // SAFETY: every reference's triangle is < tri_count (`Layout::build`), and
                 // base + tri_count <= signs.len() (asserted above).
                 let [g1, g2, k1, k2] =
-                    unsafe { sign_bytes_of_block(signs.as_ptr().add(base), &refs) };
+                    unsafe { sign_bytes_of_block(signs.as_ptr().add(base), refs) };
                 // Each byte holds four lights' signs as bits (`PACK`; the loads sign-extended
                 // it, the shuffle reads byte 0 only). Copy it to the four
                 // bytes of its lane, and make byte `j` the sign of light `4 pack + j`: `+1`
@@ -316,9 +317,10 @@ unsafe fn one_light_avx2<G: Geometry>(
             continue;
         }
         let refs = lay.fast_refs(blk);
+        let refs: &FastRefs = &refs;
         // SAFETY: every reference's triangle is < tri_count (`Layout::build`), and base +
         // tri_count <= signs.len() (`EdgeSums::check`).
-        let [g1, g2, k1, k2] = unsafe { sign_bytes_of_block(signs.as_ptr().add(base), &refs) };
+        let [g1, g2, k1, k2] = unsafe { sign_bytes_of_block(signs.as_ptr().add(base), refs) };
         // The loads sign-extended each byte already.
         let s1 = _mm256_sub_epi32(_mm256_xor_si256(g1, k1), k1);
         let s2 = _mm256_sub_epi32(_mm256_xor_si256(g2, k2), k2);

@@ -81,15 +81,16 @@ fn tri_signs<Lv: Level, G: Geometry>(pass: TriPass<G>) -> u64 {
         };
         let dst = (blk - b0) * LANES;
         // The block's triangles in canonical order (vertex 0 in the padding lanes).
-        let ids = lay.canon_block::<Lv>(t);
+        let block_ids = lay.canon_block::<Lv>(t);
+        let ids: &CanonBlock = &block_ids;
         if let (Accuracy::Ordered | Accuracy::Original, 0xFF, Some(lv)) = (mode, valid, one32) {
-            ordered_one_full::<Lv, G>(lay, &ids, &lv, &mut out[0][dst..dst + LANES]);
+            ordered_one_full::<Lv, G>(lay, ids, &lv, &mut out[0][dst..dst + LANES]);
             continue;
         }
         if let (Accuracy::Exact, 0xFF, Some(lv), [F32Stage::Unchecked]) =
             (mode, valid, one32, stages)
         {
-            uncertain += exact_one_full::<Lv, G>(lay, &ids, &lv, &lights[0], one64, out, dst);
+            uncertain += exact_one_full::<Lv, G>(lay, ids, &lv, &lights[0], one64, out, dst);
             continue;
         }
         // SAFETY: `ids` are vertices of the table (`Layout::build` checked them).
@@ -101,7 +102,7 @@ fn tri_signs<Lv: Level, G: Geometry>(pass: TriPass<G>) -> u64 {
             )
         };
         let block = Block {
-            ids: &ids,
+            ids,
             dst,
             valid,
             a,

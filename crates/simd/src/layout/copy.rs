@@ -323,6 +323,9 @@ impl ManifoldEdges {
 }
 
 impl Geometry for CopyLayout {
+    type Canon<'a> = &'a CanonBlock;
+    type Refs<'a> = &'a FastRefs;
+
     #[inline(always)]
     fn tri_count(&self) -> usize {
         self.tri_count
@@ -344,8 +347,8 @@ impl Geometry for CopyLayout {
     }
 
     #[inline(always)]
-    fn canon_block<Lv: Level>(&self, t: usize) -> CanonBlock {
-        self.tris[t / LANES]
+    fn canon_block<Lv: Level>(&self, t: usize) -> &CanonBlock {
+        &self.tris[t / LANES]
     }
 
     #[inline(always)]
@@ -361,8 +364,8 @@ impl Geometry for CopyLayout {
     }
 
     #[inline(always)]
-    fn fast_refs(&self, blk: usize) -> FastRefs {
-        self.refs[blk]
+    fn fast_refs(&self, blk: usize) -> &FastRefs {
+        &self.refs[blk]
     }
 
     #[inline(always)]

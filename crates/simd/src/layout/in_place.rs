@@ -59,7 +59,22 @@ impl InPlaceLayout {
     }
 }
 
+/// What the layout makes as it reads the table: a block of triangles sorted into canonical
+/// order, or a block's references in columns.
+pub(crate) struct Made<T>(T);
+
+impl<T> std::ops::Deref for Made<T> {
+    type Target = T;
+    #[inline(always)]
+    fn deref(&self) -> &T {
+        &self.0
+    }
+}
+
 impl Geometry for InPlaceLayout {
+    type Canon<'a> = Made<CanonBlock>;
+    type Refs<'a> = Made<FastRefs>;
+
     #[inline(always)]
     fn tri_count(&self) -> usize {
         self.table.triangles.len()
@@ -81,12 +96,12 @@ impl Geometry for InPlaceLayout {
     }
 
     #[inline(always)]
-    fn canon_block<Lv: Level>(&self, t: usize) -> CanonBlock {
+    fn canon_block<Lv: Level>(&self, t: usize) -> Made<CanonBlock> {
         let tris = &self.table.triangles[t..(t + LANES).min(self.tri_count())];
-        match tris.try_into() {
+        Made(match tris.try_into() {
             Ok(whole) => Lv::canon8(whole),
             Err(_) => canon8_scalar(tris),
-        }
+        })
     }
 
     #[inline(always)]
@@ -101,8 +116,8 @@ impl Geometry for InPlaceLayout {
     }
 
     #[inline(always)]
-    fn fast_refs(&self, blk: usize) -> FastRefs {
-        self.refs_of_block(blk)
+    fn fast_refs(&self, blk: usize) -> Made<FastRefs> {
+        Made(self.refs_of_block(blk))
     }
 
     #[inline(always)]
