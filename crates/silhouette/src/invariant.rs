@@ -14,12 +14,19 @@ use shadowvol_mesh_topology::EdgeTable;
 #[must_use]
 pub fn open_vertices(table: &EdgeTable, m: &[i32]) -> usize {
     assert_eq!(m.len(), table.edges.len(), "one multiplicity per edge");
-    let mut sum = vec![0i64; table.positions.len()];
+    // Only the silhouette's vertices can be open: sum over them, not over every vertex (a
+    // per-vertex array would be 8 bytes a vertex for a few thousand silhouette edges).
+    let mut ends: Vec<(u32, i64)> = Vec::new();
     for (&[a, b], &mult) in table.edges.iter().zip(m) {
-        sum[a as usize] -= i64::from(mult);
-        sum[b as usize] += i64::from(mult);
+        if mult != 0 {
+            ends.push((a, -i64::from(mult)));
+            ends.push((b, i64::from(mult)));
+        }
     }
-    sum.iter().filter(|&&s| s != 0).count()
+    ends.sort_unstable_by_key(|&(v, _)| v);
+    ends.chunk_by(|x, y| x.0 == y.0)
+        .filter(|run| run.iter().map(|&(_, d)| d).sum::<i64>() != 0)
+        .count()
 }
 
 /// Open vertices of the whole scene for `light` (summed over objects).

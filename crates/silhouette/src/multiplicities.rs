@@ -27,8 +27,16 @@ impl Multiplicities {
     pub fn reset(&mut self, edges: usize, lights: usize) {
         self.edges = edges;
         self.lights = lights;
-        self.values.clear();
-        self.values.resize(edges * lights, 0);
+        let n = edges * lights;
+        if self.values.capacity() < n {
+            // A fresh zeroed allocation: its pages stay the kernel's shared zero page until an
+            // entry is written, so a result that is mostly zeros costs memory only around its
+            // silhouette edges (and `resize` would write every zero).
+            self.values = vec![0; n];
+        } else {
+            self.values.clear();
+            self.values.resize(n, 0);
+        }
         self.silhouettes.resize_with(lights, Vec::new);
         for s in &mut self.silhouettes {
             s.clear();

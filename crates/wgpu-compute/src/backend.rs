@@ -7,7 +7,7 @@ use crate::layout::{Prepared, TableBuffers};
 use crate::pipeline::Pipelines;
 use crate::{shaders, NAME};
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::gpu::{ExactFilter, SceneIndex, TableBuffer, TableWriter};
+use shadowvol_silhouette::gpu::{self, ExactFilter, SceneIndex, TableBuffer, TableWriter};
 use shadowvol_silhouette::{
     BackendError, BackendInfo, ExtractStats, Multiplicities, PreparedBytes, PreparedId,
     PreparedScenes, SceneParts, SilhouetteBackend, TopologyScene,
@@ -267,7 +267,16 @@ impl SilhouetteBackend for WgpuBackend {
     }
 
     fn release(&mut self, id: PreparedId) {
-        self.scenes.remove(id);
+        if self.scenes.remove(id).is_some() {
+            // Dropped buffers are freed when the device next triages its submissions: wait for
+            // that here, so that the memory is back when `release` returns.
+            // A device that does not answer within the wait limit keeps its memory a while
+            // longer; nothing else depends on it.
+            let _ = self.device.poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: Some(gpu::wait_limit().unwrap_or(std::time::Duration::from_secs(10))),
+            });
+        }
     }
 }
 
