@@ -35,8 +35,9 @@ struct MapU {
 @group(2) @binding(0) var<uniform> mp: MapU;
 @group(3) @binding(0) var map_2d: texture_depth_2d_array;
 @group(3) @binding(1) var map_cube: texture_depth_cube;
-@group(3) @binding(2) var hard_cmp: sampler_comparison;
-@group(3) @binding(3) var pcf_cmp: sampler_comparison;
+// The frame's comparison sampler: nearest for hard shadows, linear for PCF (one sampler, as
+// OpenGL samples a texture with one only).
+@group(3) @binding(2) var map_cmp: sampler_comparison;
 
 @vertex
 fn vs_map_surface(v: SurfaceIn) -> SurfaceOut {
@@ -58,10 +59,7 @@ fn vs_map_depth(v: SurfaceIn, @builtin(instance_index) face: u32) -> @builtin(po
 
 // One comparison of layer `layer` of the 2-D map at `uv` (from the top left, in [0, 1]).
 fn tap_2d(uv: vec2<f32>, layer: u32, depth: f32) -> f32 {
-    if (mp.mode.y == 0u) {
-        return textureSampleCompareLevel(map_2d, hard_cmp, uv, layer, depth);
-    }
-    return textureSampleCompareLevel(map_2d, pcf_cmp, uv, layer, depth);
+    return textureSampleCompareLevel(map_2d, map_cmp, uv, layer, depth);
 }
 
 // Layer `layer` of the 2-D map's visibility of a clip position: 1 outside the map.
@@ -94,7 +92,7 @@ fn lookup_cube(v: vec3<f32>) -> f32 {
     let major = max(a.x, max(a.y, a.z));
     let depth = clamp(mp.bias.z / major, 0.0, 1.0);
     if (mp.mode.y == 0u) {
-        return textureSampleCompareLevel(map_cube, hard_cmp, v, depth);
+        return textureSampleCompareLevel(map_cube, map_cmp, v, depth);
     }
     // 3x3 taps in the plane of the major face, one texel (2 major / size) apart.
     var u = vec3<f32>(0.0, 1.0, 0.0);
@@ -110,7 +108,7 @@ fn lookup_cube(v: vec3<f32>) -> f32 {
     for (var j = -1; j <= 1; j++) {
         for (var i = -1; i <= 1; i++) {
             let d = v + (f32(i) * u + f32(j) * w) * step;
-            sum += textureSampleCompareLevel(map_cube, pcf_cmp, d, depth);
+            sum += textureSampleCompareLevel(map_cube, map_cmp, d, depth);
         }
     }
     return sum / 9.0;

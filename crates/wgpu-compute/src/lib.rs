@@ -80,7 +80,7 @@ pub mod shaders;
 pub mod twin;
 
 pub use backend::{GpuResults, WgpuBackend};
-pub use device::WgpuOptions;
+pub use device::{ErrorScopes, WgpuOptions};
 pub use layout::{upload_table, TableBuffers};
 pub use resolve::UncertainTriangle;
 

@@ -13,6 +13,7 @@ use crate::{RenderDevice, RenderError};
 use glam::{Mat4, Vec3};
 use shadowvol_scenes::Scene;
 use shadowvol_silhouette::{vec_bytes, PreparedBytes};
+use shadowvol_wgpu_compute::ErrorScopes;
 use std::ops::Range;
 
 /// Byte stride of the per-light map uniforms (`MapU`, 480 bytes).
@@ -108,7 +109,7 @@ impl MapPass {
     /// [`RenderError::Device`] when a shader or pipeline fails to build.
     pub(crate) fn new(rd: &RenderDevice) -> Result<Self, RenderError> {
         let device = &rd.device;
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = ErrorScopes::push(device);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("shaders/render_maps.wgsl"),
             source: wgpu::ShaderSource::Wgsl(super::maps_source().into()),
@@ -164,7 +165,7 @@ impl MapPass {
             "fs_map_lit",
             &[color_target(COLOR_FORMAT, Some(states::additive()))],
         );
-        if let Some(err) = pollster::block_on(scope.pop()) {
+        if let Some(err) = scope.pop() {
             return Err(RenderError::Device(format!("map pipelines: {err}")));
         }
         let sampler = |label, filter| {
@@ -439,34 +440,35 @@ impl MapPass {
             dimension: Some(wgpu::TextureViewDimension::Cube),
             ..Default::default()
         });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("map textures"),
-            layout: &self.tex_bgl,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&view_2d),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&cube),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::Sampler(&self.hard),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::Sampler(&self.pcf),
-                },
-            ],
-        });
+        // One comparison sampler a bind group, of the frame's filter: OpenGL samples a texture
+        // with one sampler only.
+        let bind_group = |sampler: &wgpu::Sampler| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("map textures"),
+                layout: &self.tex_bgl,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&view_2d),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(&cube),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::Sampler(sampler),
+                    },
+                ],
+            })
+        };
+        let bind_groups = [bind_group(&self.hard), bind_group(&self.pcf)];
         MapTextures {
             size_2d,
             size_cube,
             layers_2d,
             faces,
-            bind_group,
+            bind_groups,
         }
     }
 
@@ -483,6 +485,7 @@ impl MapPass {
         let Some(tex) = ms.textures.as_ref() else {
             return written;
         };
+        let maps = tex.bind_group(frame.filter);
         written[0] = true;
         let q = |slot: usize, begin: bool, end: bool| {
             if !(begin || end) {
@@ -518,7 +521,7 @@ impl MapPass {
                     &self.prepass_color
                 };
                 pass.set_pipeline(pipeline);
-                self.bind_surface(&mut pass, ms, 0, Some(tex));
+                self.bind_surface(&mut pass, ms, 0, Some(maps));
                 pass.draw(all.clone(), 0..1);
             }
         }
@@ -543,7 +546,7 @@ impl MapPass {
                 if drawn {
                     pass.set_pipeline(&self.mask);
                     pass.set_stencil_reference(1);
-                    self.bind_surface(&mut pass, ms, li, Some(tex));
+                    self.bind_surface(&mut pass, ms, li, Some(maps));
                     pass.draw(all.clone(), 0..1);
                 }
             }
@@ -558,7 +561,7 @@ impl MapPass {
             );
             if !empty_scissor(l.scissor) && !all.is_empty() {
                 pass.set_pipeline(&self.lit);
-                self.bind_surface(&mut pass, ms, li, Some(tex));
+                self.bind_surface(&mut pass, ms, li, Some(maps));
                 pass.draw(all.clone(), 0..1);
             }
         }
@@ -617,13 +620,13 @@ impl MapPass {
         pass: &mut wgpu::RenderPass<'_>,
         ms: &MapScene,
         li: usize,
-        tex: Option<&MapTextures>,
+        tex: Option<&wgpu::BindGroup>,
     ) {
         pass.set_bind_group(0, &ms.globals_bg, &[]);
         pass.set_bind_group(1, &ms.lights_bg, &[(li as u64 * LIGHT_STRIDE) as u32]);
         pass.set_bind_group(2, &ms.maps_bg, &[(li as u64 * MAP_STRIDE) as u32]);
         if let Some(t) = tex {
-            pass.set_bind_group(3, &t.bind_group, &[]);
+            pass.set_bind_group(3, t, &[]);
         }
         pass.set_vertex_buffer(0, ms.surface.slice(..));
     }

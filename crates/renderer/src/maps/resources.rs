@@ -16,7 +16,18 @@ pub(super) struct MapTextures {
     pub(super) layers_2d: Vec<wgpu::TextureView>,
     /// The cube's 6 faces as render targets, layer order +X, -X, +Y, -Y, +Z, -Z.
     pub(super) faces: Vec<wgpu::TextureView>,
-    pub(super) bind_group: wgpu::BindGroup,
+    /// The maps with the comparison sampler of each filter: `[hard, pcf]`.
+    pub(super) bind_groups: [wgpu::BindGroup; 2],
+}
+
+impl MapTextures {
+    /// The bind group that reads the maps with `filter`'s sampler.
+    pub(super) fn bind_group(&self, filter: MapFilter) -> &wgpu::BindGroup {
+        match filter {
+            MapFilter::Hard => &self.bind_groups[0],
+            MapFilter::Pcf => &self.bind_groups[1],
+        }
+    }
 }
 
 /// Timestamps: pairs for the pre-pass, then per light its map passes, mask pass and lit pass.
@@ -68,7 +79,7 @@ pub(super) fn map_uniform(map: Option<&LightMap>, eye: Vec3, filter: MapFilter) 
     u
 }
 
-pub(super) fn texture_entries() -> [wgpu::BindGroupLayoutEntry; 4] {
+pub(super) fn texture_entries() -> [wgpu::BindGroupLayoutEntry; 3] {
     let fs = wgpu::ShaderStages::FRAGMENT;
     let texture = |binding, view_dimension| wgpu::BindGroupLayoutEntry {
         binding,
@@ -90,7 +101,6 @@ pub(super) fn texture_entries() -> [wgpu::BindGroupLayoutEntry; 4] {
         texture(0, wgpu::TextureViewDimension::D2Array),
         texture(1, wgpu::TextureViewDimension::Cube),
         sampler(2),
-        sampler(3),
     ]
 }
 

@@ -6,6 +6,7 @@ use crate::raster::pipelines::{
     bind_group_layout, color_target, pipeline_layout, storage, uniform, RenderPipelines,
 };
 use crate::raster::states;
+use shadowvol_wgpu_compute::ErrorScopes;
 
 impl ShadowPass {
     /// Features the pass uses when the adapter has them: `DEPTH_CLIP_CONTROL` (depth clamp for
@@ -101,7 +102,7 @@ impl ShadowPass {
         let features = device.features();
         let depth_clamp = features.contains(wgpu::Features::DEPTH_CLIP_CONTROL);
         let filter = ExactFilter::for_device(features.contains(wgpu::Features::SHADER_F64), false);
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = ErrorScopes::push(device);
         // The empty group 1 of the vertex pass and of the pending entry, one layout for both (the
         // vertex pass binds `empty` with it).
         let v1 = bind_group_layout(device, "resident vertices (unused)", &[]);
@@ -112,7 +113,7 @@ impl ShadowPass {
         });
         let s = SurfacePipelines::new(device, &draw, &v1, &x.v2);
         let d = DrawPipelines::new(device, &draw, formats, depth_clamp);
-        if let Some(e) = pollster::block_on(scope.pop()) {
+        if let Some(e) = scope.pop() {
             return Err(RenderError::Device(format!("GPU pipeline creation: {e}")));
         }
         Ok(Self {

@@ -15,6 +15,7 @@ use crate::raster::{
 use crate::{RenderDevice, RenderError};
 use bytemuck::Zeroable;
 use shadowvol_scenes::Emission;
+use shadowvol_wgpu_compute::ErrorScopes;
 use std::ops::Range;
 
 /// The draws of one light, as vertex ranges into the frame's volume vertex buffer.
@@ -73,7 +74,7 @@ impl HostRaster {
         let device = &rd.device;
         let depth_format = rd.depth_format;
         let depth_clamp = rd.depth_clamp;
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = ErrorScopes::push(device);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("shaders/render_raster.wgsl"),
             source: wgpu::ShaderSource::Wgsl(
@@ -137,7 +138,7 @@ impl HostRaster {
             wgpu::FrontFace::Cw,
             states::zfail_faces(),
         );
-        if let Some(err) = pollster::block_on(scope.pop()) {
+        if let Some(err) = scope.pop() {
             return Err(RenderError::Device(format!("pipeline creation: {err}")));
         }
         Ok(Self {
