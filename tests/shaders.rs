@@ -111,6 +111,11 @@ fn modules() -> Vec<Module> {
         Capabilities::empty(),
     ));
     all.push(module(
+        "renderer stencil bits (shaders/render_stencil_bits.wgsl)",
+        shadowvol_renderer::raster::STENCIL_BITS_WGSL,
+        Capabilities::empty(),
+    ));
+    all.push(module(
         "viewer blit",
         viewer::BLIT_WGSL,
         Capabilities::empty(),

@@ -51,6 +51,9 @@ const APT_PACKAGES: &[&str] = &[
     "libxrandr2",
     "libxi6",
     "libxkbcommon-x11-0",
+    "libegl1",
+    "libegl-mesa0",
+    "libgl1-mesa-dri",
 ];
 
 /// The steps, in the order they run (the names `--skip` takes).
@@ -591,6 +594,11 @@ fn requirements() -> Vec<Requirement> {
         Requirement {
             what: "PoCL OpenCL platform (/etc/OpenCL/vendors/pocl.icd)",
             present: Path::new("/etc/OpenCL/vendors/pocl.icd").is_file(),
+        },
+        Requirement {
+            what: "OpenGL through Mesa's EGL and llvmpipe (libEGL_mesa.so.0, the renderer's \
+                   OpenGL test)",
+            present: any_file(&libs, &|n| n.starts_with("libEGL_mesa.so")),
         },
         Requirement {
             what: "glslangValidator",

@@ -2,6 +2,7 @@
 //! do (depth clamp, the depth-stencil format, whether the GPU pipeline runs).
 
 use crate::RenderError;
+use shadowvol_wgpu_compute::ErrorScopes;
 
 /// A wgpu device with what the renderer needs to know about it. Open one with
 /// [`RenderDevice::open`], or wrap the caller's with [`RenderDevice::on_device`] (a window's
@@ -23,6 +24,11 @@ pub struct RenderDevice {
     /// Why the GPU pipeline cannot run on this device (a missing capability or limit, named),
     /// or `None` when it can.
     pub gpu_pipeline_unsupported: Option<String>,
+    /// True when the device copies a stencil aspect to a buffer (wgpu's
+    /// `DEPTH_TEXTURE_AND_BUFFER_COPIES`; OpenGL cannot). Where it cannot, a frame read back
+    /// copies each light's stencil through an 8-bit colour target, one draw per bit: the same
+    /// bytes, eight full-screen draws a light more.
+    pub stencil_copies: bool,
 }
 
 impl RenderDevice {
@@ -34,7 +40,23 @@ impl RenderDevice {
     /// [`RenderError::NoAdapter`] when there is no adapter (naming the driver to install),
     /// [`RenderError::Device`] when the device cannot be opened.
     pub fn open() -> Result<Self, RenderError> {
-        let adapter = Self::headless_adapter()?;
+        Self::on_adapter(Self::headless_adapter()?)
+    }
+
+    /// Opens the first adapter of `backends` (only those; the `WGPU_*` variables are not read),
+    /// as [`RenderDevice::open`] does: `wgpu::Backends::GL` for OpenGL's, for example.
+    ///
+    /// # Errors
+    /// [`RenderError::NoAdapter`] when none of `backends` has an adapter here,
+    /// [`RenderError::Device`] when the device cannot be opened.
+    pub fn open_with(backends: wgpu::Backends) -> Result<Self, RenderError> {
+        let adapter = request_adapter(backends, false)
+            .map_err(|e| RenderError::NoAdapter(format!("{e} (backends {backends:?})")))?;
+        Self::on_adapter(adapter)
+    }
+
+    /// Opens a device on `adapter` with [`RenderDevice::requirements`].
+    fn on_adapter(adapter: wgpu::Adapter) -> Result<Self, RenderError> {
         let info = adapter.get_info();
         let (features, limits) = Self::requirements(&adapter);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
@@ -55,19 +77,8 @@ impl RenderDevice {
     /// # Errors
     /// [`RenderError::NoAdapter`] naming the driver to install.
     pub fn headless_adapter() -> Result<wgpu::Adapter, RenderError> {
-        let request = |backends: wgpu::Backends| {
-            let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-            desc.backends = backends;
-            let instance = wgpu::Instance::new(desc.with_env());
-            pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-                power_preference: wgpu::PowerPreference::HighPerformance,
-                force_fallback_adapter: false,
-                compatible_surface: None,
-                apply_limit_buckets: false,
-            }))
-        };
-        request(wgpu::Backends::PRIMARY)
-            .or_else(|_| request(wgpu::Backends::all()))
+        request_adapter(wgpu::Backends::PRIMARY, true)
+            .or_else(|_| request_adapter(wgpu::Backends::all(), true))
             .map_err(|e| {
                 RenderError::NoAdapter(format!(
                     "{e}; install a Vulkan driver (for example Mesa's lavapipe, package mesa-vulkan-drivers)"
@@ -115,6 +126,10 @@ impl RenderDevice {
         } else {
             wgpu::TextureFormat::Depth24PlusStencil8
         };
+        let stencil_copies = adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
         let unsupported = crate::resident::ShadowPass::required_limits(&adapter).and_then(|l| {
             if l.check_limits(&device.limits()) {
                 Ok(())
@@ -134,6 +149,7 @@ impl RenderDevice {
             depth_format,
             depth_clamp,
             gpu_pipeline_unsupported: unsupported.err().map(|e| e.to_string()),
+            stencil_copies,
         }
     }
 
@@ -152,8 +168,8 @@ impl RenderDevice {
         Ok(())
     }
 
-    /// Runs `record` on a new encoder, submits it, and turns validation and out-of-memory
-    /// errors raised meanwhile into [`RenderError::Device`].
+    /// Runs `record` on a new encoder, submits it, and turns validation, internal and
+    /// out-of-memory errors raised meanwhile into [`RenderError::Device`].
     ///
     /// # Errors
     /// `record`'s own error, or [`RenderError::Device`] naming the device error.
@@ -162,30 +178,36 @@ impl RenderDevice {
         label: &str,
         record: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<(), RenderError>,
     ) -> Result<(), RenderError> {
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let scope = ErrorScopes::push(&self.device);
         let mut enc = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
         let recorded = record(&mut enc);
         self.queue.submit([enc.finish()]);
-        let oom = pollster::block_on(oom.pop());
-        let validation = pollster::block_on(scope.pop());
+        let errors = scope.pop();
         recorded?;
-        if let Some(e) = oom {
-            return Err(RenderError::Device(format!("out of memory: {e}")));
+        match errors {
+            Some(e) => Err(RenderError::Device(e)),
+            None => Ok(()),
         }
-        if let Some(e) = validation {
-            // The description names the pass and the rule; Display alone says only "Validation
-            // Error".
-            let detail = match &e {
-                wgpu::Error::Validation { description, .. } => description.trim().to_owned(),
-                other => other.to_string(),
-            };
-            return Err(RenderError::Device(format!("validation: {detail}")));
-        }
-        Ok(())
     }
+}
+
+/// The first adapter of `backends` (high performance preferred), on an instance without a
+/// display handle; with `env`, the `WGPU_*` variables may override `backends`.
+fn request_adapter(
+    backends: wgpu::Backends,
+    env: bool,
+) -> Result<wgpu::Adapter, wgpu::RequestAdapterError> {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = backends;
+    let instance = wgpu::Instance::new(if env { desc.with_env() } else { desc });
+    pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        power_preference: wgpu::PowerPreference::HighPerformance,
+        force_fallback_adapter: false,
+        compatible_surface: None,
+        apply_limit_buckets: false,
+    }))
 }
 
 /// Environment variable that caps, in bytes, every buffer and storage binding the renderer asks

@@ -319,6 +319,7 @@ impl Renderer {
                 (width, height),
                 n_lights,
                 readback,
+                self.device.stencil_copies,
             ));
         }
         let inputs = FrameInputs {

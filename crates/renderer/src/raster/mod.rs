@@ -5,8 +5,10 @@
 
 pub(crate) mod pipelines;
 pub(crate) mod states;
+mod stencil_bits;
 mod targets;
 
+pub use stencil_bits::STENCIL_BITS_WGSL;
 pub(crate) use targets::{finish_uploads, map_read, wait, FrameTargets};
 pub use targets::{read_texture, Attachments};
 

@@ -1,6 +1,7 @@
 //! Frame targets and readback: the attachments of one frame, the buffers its images are copied
 //! to, and the bounded waits and maps every GPU read goes through.
 
+use super::stencil_bits::StencilBits;
 use crate::RenderError;
 
 /// Maps `buffer` (`MAP_READ`, its copies already submitted) and returns its bytes, with the
@@ -148,17 +149,22 @@ pub(crate) struct FrameTargets {
     ids_view: wgpu::TextureView,
     depth_view: wgpu::TextureView,
     readbacks: Option<[wgpu::Buffer; 3]>,
+    /// With readback on a device that cannot copy a stencil aspect: the draws that copy it
+    /// through a colour target.
+    stencil_bits: Option<StencilBits>,
 }
 
 impl FrameTargets {
     /// The attachments of a `w` x `h` frame of `lights` lights and, with `readback`, the
-    /// buffers its images are copied to.
+    /// buffers its images are copied to (each light's stencil copied directly where
+    /// `stencil_copies`, else through [`StencilBits`]).
     pub(crate) fn new(
         device: &wgpu::Device,
         depth_format: wgpu::TextureFormat,
         (w, h): (u32, u32),
         lights: usize,
         readback: bool,
+        stencil_copies: bool,
     ) -> Self {
         let size = wgpu::Extent3d {
             width: w,
@@ -193,6 +199,8 @@ impl FrameTargets {
                     buffer("stencil-readback", 1, lights),
                 ]
             }),
+            stencil_bits: (readback && !stencil_copies)
+                .then(|| StencilBits::new(device, depth_format, (w, h))),
             color,
             ids,
             depth,
@@ -264,16 +272,17 @@ impl FrameTargets {
 
     /// With readback: copies the stencil aspect (light `light`'s shadow state) to its slot.
     fn copy_stencil(&self, enc: &mut wgpu::CommandEncoder, light: usize) {
-        if let Some([_, _, stencil]) = &self.readbacks {
-            copy_rows(
-                enc,
-                &self.depth,
-                wgpu::TextureAspect::StencilOnly,
-                stencil,
-                1,
-                light as u64,
-            );
-        }
+        let Some([_, _, stencil]) = &self.readbacks else {
+            return;
+        };
+        let (texture, aspect) = match &self.stencil_bits {
+            Some(bits) => {
+                bits.encode(enc, &self.depth_view);
+                (bits.target(), wgpu::TextureAspect::All)
+            }
+            None => (&self.depth, wgpu::TextureAspect::StencilOnly),
+        };
+        copy_rows(enc, texture, aspect, stencil, 1, light as u64);
     }
 
     /// With readback: copies the colour and ids images (the colour of these targets, so not
@@ -363,4 +372,123 @@ pub fn read_texture(
     copy_rows(&mut enc, texture, aspect, &staging, bytes_per_px, 0);
     queue.submit([enc.finish()]);
     read_rows(device, &staging, (w, h), bytes_per_px, 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::RenderDevice;
+
+    /// A pipeline that writes its stencil reference wherever it draws (the stencil-bits
+    /// module's full-screen triangle, no colour).
+    fn stencil_writer(device: &wgpu::Device, format: wgpu::TextureFormat) -> wgpu::RenderPipeline {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("stencil writer"),
+            source: wgpu::ShaderSource::Wgsl(super::super::STENCIL_BITS_WGSL.into()),
+        });
+        let face = wgpu::StencilFaceState {
+            compare: wgpu::CompareFunction::Always,
+            fail_op: wgpu::StencilOperation::Keep,
+            depth_fail_op: wgpu::StencilOperation::Keep,
+            pass_op: wgpu::StencilOperation::Replace,
+        };
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("stencil writer"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: wgpu::StencilState {
+                    front: face,
+                    back: face,
+                    read_mask: 0xff,
+                    write_mask: 0xff,
+                },
+                bias: wgpu::DepthBiasState::default(),
+            }),
+            multisample: wgpu::MultisampleState::default(),
+            fragment: None,
+            multiview_mask: None,
+            cache: None,
+        })
+    }
+
+    /// Column `x` of a 256 x 3 frame holds stencil `x`, every value of the 8 bits; the frame
+    /// read back with `stencil_copies` set or not.
+    fn every_stencil_value(rd: &RenderDevice, stencil_copies: bool) -> Vec<u8> {
+        let targets = FrameTargets::new(
+            &rd.device,
+            rd.depth_format,
+            (256, 3),
+            1,
+            true,
+            stencil_copies,
+        );
+        let writer = stencil_writer(&rd.device, rd.depth_format);
+        rd.submit("every stencil value", |enc| {
+            {
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("write stencil"),
+                    color_attachments: &[],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &targets.depth_view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(0),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&writer);
+                for x in 0..256 {
+                    pass.set_scissor_rect(x, 0, 1, 3);
+                    pass.set_stencil_reference(x);
+                    pass.draw(0..3, 0..1);
+                }
+            }
+            targets.copy_stencil(enc, 0);
+            targets.copy_color_ids(enc);
+            Ok(())
+        })
+        .expect("submit");
+        let image = targets.read(&rd.device).expect("read").expect("read back");
+        image.stencil.into_iter().next().expect("one light")
+    }
+
+    #[test]
+    fn every_stencil_value_reads_back_through_colour_as_copied(
+    ) -> Result<(), shadowvol_test_support::Skip> {
+        let rd = match RenderDevice::open() {
+            Ok(rd) => rd,
+            Err(e) => return Err(shadowvol_test_support::skip(format!("no GPU adapter: {e}"))),
+        };
+        let want: Vec<u8> = (0..3).flat_map(|_| 0..=255u8).collect();
+        let check = |got: Vec<u8>, how: &str| {
+            let wrong = got.iter().zip(&want).position(|(a, b)| a != b);
+            assert!(
+                got.len() == want.len() && wrong.is_none(),
+                "{how}: pixel {wrong:?} reads {:?}",
+                wrong.map(|i| (got[i], want[i]))
+            );
+        };
+        if rd.stencil_copies {
+            check(every_stencil_value(&rd, true), "the direct copy");
+        }
+        check(every_stencil_value(&rd, false), "through the colour target");
+        Ok(())
+    }
 }
