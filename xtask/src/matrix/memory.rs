@@ -14,6 +14,11 @@ use super::runner::{render_args, Matrix};
 use serde_json::Value;
 use std::time::Instant;
 
+/// Every memory run compiles its shaders as on a fresh machine: Mesa's shader cache off, so
+/// that a cache an earlier run filled does not lower the peak (the compiler's memory is some
+/// 40 MB of `wgpu`'s exact pipelines on lavapipe).
+const COLD_SHADERS: &[(&str, &str)] = &[("MESA_SHADER_CACHE_DISABLE", "true")];
+
 impl Matrix {
     /// The memory table's runs (experiment `memory`).
     pub(super) fn memory_table(&mut self, plan: &Plan) {
@@ -162,7 +167,7 @@ impl Matrix {
         triangles: Option<u64>,
     ) -> Option<Option<u64>> {
         let start = Instant::now();
-        let v = match self.cli.json::<Value>(args) {
+        let v = match self.cli.json_with_env::<Value>(args, COLD_SHADERS) {
             Ok(v) => v,
             Err(e) => {
                 self.fail(format!("memory: {scene} {backend}: {e}"));

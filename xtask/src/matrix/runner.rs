@@ -27,9 +27,22 @@ impl Cli {
     /// When the CLI cannot start or fails (with the last lines of its stderr), or prints JSON
     /// that is invalid or of another shape (with serde's line, column and field).
     pub fn json<T: DeserializeOwned>(&self, args: &[&str]) -> Result<T, String> {
+        self.json_with_env(args, &[])
+    }
+
+    /// [`Cli::json`] with the variables `env` set for the run.
+    ///
+    /// # Errors
+    /// As [`Cli::json`].
+    pub fn json_with_env<T: DeserializeOwned>(
+        &self,
+        args: &[&str],
+        env: &[(&str, &str)],
+    ) -> Result<T, String> {
         let out = Command::new(&self.bin)
             .current_dir(&self.root)
             .args(args)
+            .envs(env.iter().copied())
             .output()
             .map_err(|e| format!("cannot run {}: {e}", self.bin.display()))?;
         if !out.status.success() {
