@@ -50,7 +50,7 @@ type CargoRun<'a> = (&'a [&'a str], Option<(&'a str, &'a str)>);
 /// The step: the toolchain (`install`: may install it), then each cargo command; every command
 /// runs even after a failure, and the outcome lists the failures.
 pub fn step(root: &Path, ci: bool, install: bool) -> Outcome {
-    if !crate::test::vulkan_present() && !ci {
+    if !crate::drivers::vulkan_present() && !ci {
         return Outcome::Warned(
             "no Vulkan driver for the Bevy tests: the drivers step says what to install".into(),
         );

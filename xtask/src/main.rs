@@ -15,6 +15,7 @@ use std::process::ExitCode;
 
 mod bevy;
 mod ci;
+mod drivers;
 mod figures;
 mod gpu_crates;
 mod matrix;

@@ -2,11 +2,13 @@
 //!
 //! Steps (all run, even after a failure, so one run shows every problem):
 //!
-//! 1. **drivers**: the Vulkan loader and Mesa's lavapipe ICD, the OpenCL ICD loader and PoCL, and
-//!    `glslangValidator`, the Khronos Vulkan validation layer (the vulkan backend's validation
-//!    test runs with it), Xvfb and the X11 client libraries (the viewer's window test). When one
-//!    is missing and we are root, they are installed with apt-get; when we are not root, the exact command is printed and the run goes on (the GPU backends
-//!    then skip visibly), unless `CI=true`, where a missing driver is a failure.
+//! 1. **drivers** ([`crate::drivers`]): the Vulkan loader and Mesa's lavapipe ICD, the OpenCL
+//!    ICD loader and PoCL, Mesa's EGL (the renderer's OpenGL test), `glslangValidator`, the
+//!    Khronos Vulkan validation layer (the vulkan backend's validation test runs with it), Xvfb
+//!    and the X11 client libraries (the viewer's window test). When one is missing and we are
+//!    root, they are installed with apt-get; when we are not root, the exact command is printed
+//!    and the run goes on (the GPU backends then skip visibly), unless `CI=true`, where a
+//!    missing driver is a failure.
 //! 2. **fmt**: `cargo fmt --all -- --check`.
 //! 3. **size**: no file over 800 lines before its tests, no function body over 120 lines
 //!    ([`crate::size`]); each offender is printed as `path:line`.
@@ -35,26 +37,6 @@
 use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
-
-/// The apt packages that provide the drivers the backends load at run time.
-const APT_PACKAGES: &[&str] = &[
-    "mesa-vulkan-drivers",
-    "libvulkan1",
-    "pocl-opencl-icd",
-    "ocl-icd-libopencl1",
-    "glslang-tools",
-    "vulkan-validationlayers",
-    "xvfb",
-    "libx11-6",
-    "libx11-xcb1",
-    "libxcursor1",
-    "libxrandr2",
-    "libxi6",
-    "libxkbcommon-x11-0",
-    "libegl1",
-    "libegl-mesa0",
-    "libgl1-mesa-dri",
-];
 
 /// The steps, in the order they run (the names `--skip` takes).
 const STEPS: [&str; 11] = [
@@ -251,7 +233,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
         });
     };
 
-    step("drivers", &mut || drivers(ci));
+    step("drivers", &mut || crate::drivers::drivers(ci));
     step("fmt", &mut || {
         cargo_step(&root, &["fmt", "--all", "--", "--check"], &[])
     });
@@ -284,7 +266,9 @@ pub fn run(args: &[String]) -> Result<(), String> {
         cargo_test_step(&root, &a, &mut counts)
     });
     step("example", &mut || embed_example(&root, ci));
-    step("bevy", &mut || crate::bevy::step(&root, ci, is_root()));
+    step("bevy", &mut || {
+        crate::bevy::step(&root, ci, crate::drivers::is_root())
+    });
     step(
         "shaders",
         &mut || match crate::shaders::run(&["--check".to_owned()]) {
@@ -445,7 +429,7 @@ fn example_outcome(success: bool, stderr: &str, ci: bool, line: &str) -> Outcome
         Some(why) if !ci => Outcome::Warned(format!(
             "the embed example did not run ({}); install a Vulkan driver: {}",
             why.trim(),
-            install_command()
+            crate::drivers::install_command()
         )),
         _ => Outcome::Failed(format!(
             "`{line}` failed: {}",
@@ -533,175 +517,6 @@ fn cargo_test_step(root: &Path, args: &[&str], counts: &mut TestCounts) -> Outco
     }
 }
 
-/// One driver requirement: a name and whether it is present.
-struct Requirement {
-    what: &'static str,
-    present: bool,
-}
-
-fn any_file(dirs: &[&str], pred: &dyn Fn(&str) -> bool) -> bool {
-    dirs.iter().any(|d| {
-        std::fs::read_dir(d).is_ok_and(|entries| {
-            entries
-                .flatten()
-                .any(|e| e.file_name().to_str().is_some_and(pred))
-        })
-    })
-}
-
-/// Folders where shared libraries live on Debian-like and other Linux systems.
-fn lib_dirs() -> Vec<String> {
-    let mut dirs: Vec<String> = ["/usr/lib", "/usr/lib64", "/lib", "/lib64", "/usr/local/lib"]
-        .iter()
-        .map(|s| (*s).to_owned())
-        .collect();
-    for base in ["/usr/lib", "/lib"] {
-        if let Ok(entries) = std::fs::read_dir(base) {
-            for e in entries.flatten() {
-                let name = e.file_name();
-                if name.to_str().is_some_and(|n| n.ends_with("-linux-gnu")) {
-                    dirs.push(e.path().display().to_string());
-                }
-            }
-        }
-    }
-    dirs
-}
-
-fn in_path(program: &str) -> bool {
-    std::env::var_os("PATH")
-        .is_some_and(|p| std::env::split_paths(&p).any(|d| d.join(program).is_file()))
-}
-
-fn requirements() -> Vec<Requirement> {
-    let libs = lib_dirs();
-    let libs: Vec<&str> = libs.iter().map(String::as_str).collect();
-    vec![
-        Requirement {
-            what: "Vulkan loader (libvulkan.so.1)",
-            present: any_file(&libs, &|n| n.starts_with("libvulkan.so")),
-        },
-        Requirement {
-            what: "Mesa lavapipe Vulkan ICD (/usr/share/vulkan/icd.d/lvp_icd*.json)",
-            present: any_file(&["/usr/share/vulkan/icd.d"], &|n| {
-                n.starts_with("lvp_icd") && n.ends_with(".json")
-            }),
-        },
-        Requirement {
-            what: "OpenCL ICD loader (libOpenCL.so.1)",
-            present: any_file(&libs, &|n| n.starts_with("libOpenCL.so")),
-        },
-        Requirement {
-            what: "PoCL OpenCL platform (/etc/OpenCL/vendors/pocl.icd)",
-            present: Path::new("/etc/OpenCL/vendors/pocl.icd").is_file(),
-        },
-        Requirement {
-            what: "OpenGL through Mesa's EGL and llvmpipe (libEGL_mesa.so.0, the renderer's \
-                   OpenGL test)",
-            present: any_file(&libs, &|n| n.starts_with("libEGL_mesa.so")),
-        },
-        Requirement {
-            what: "glslangValidator",
-            present: in_path("glslangValidator"),
-        },
-        Requirement {
-            what: "Xvfb (a virtual X server for the viewer's window test)",
-            present: in_path("Xvfb"),
-        },
-        Requirement {
-            what: "X11 client libraries (libX11, libXcursor, libXrandr, libXi, libxkbcommon-x11)",
-            present: [
-                "libX11.so",
-                "libXcursor.so",
-                "libXrandr.so",
-                "libXi.so",
-                "libxkbcommon-x11.so",
-            ]
-            .iter()
-            .all(|lib| any_file(&libs, &|n| n.starts_with(lib))),
-        },
-        Requirement {
-            what: "Vulkan validation layer (VK_LAYER_KHRONOS_validation)",
-            present: any_file(&["/usr/share/vulkan/explicit_layer.d"], &|n| {
-                n.eq_ignore_ascii_case("VkLayer_khronos_validation.json")
-            }),
-        },
-    ]
-}
-
-/// Whether the Vulkan loader and lavapipe are installed.
-pub(crate) fn vulkan_present() -> bool {
-    requirements()
-        .iter()
-        .filter(|r| r.what.contains("Vulkan loader") || r.what.contains("lavapipe"))
-        .all(|r| r.present)
-}
-
-fn is_root() -> bool {
-    Command::new("id")
-        .arg("-u")
-        .output()
-        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
-}
-
-fn install_command() -> String {
-    format!(
-        "apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y {}",
-        APT_PACKAGES.join(" ")
-    )
-}
-
-fn drivers(ci: bool) -> Outcome {
-    let missing = |reqs: &[Requirement]| -> Vec<&'static str> {
-        reqs.iter().filter(|r| !r.present).map(|r| r.what).collect()
-    };
-    let reqs = requirements();
-    for r in &reqs {
-        println!(
-            "  {:8} {}",
-            if r.present { "found" } else { "MISSING" },
-            r.what
-        );
-    }
-    let mut absent = missing(&reqs);
-    if absent.is_empty() {
-        return Outcome::Passed;
-    }
-    if is_root() {
-        println!("  installing as root: {}", install_command());
-        let ok = Command::new("apt-get")
-            .arg("update")
-            .env("DEBIAN_FRONTEND", "noninteractive")
-            .status()
-            .is_ok_and(|s| s.success())
-            && Command::new("apt-get")
-                .args(["install", "-y", "--no-install-recommends"])
-                .args(APT_PACKAGES)
-                .env("DEBIAN_FRONTEND", "noninteractive")
-                .status()
-                .is_ok_and(|s| s.success());
-        if !ok {
-            println!("  apt-get failed");
-        }
-        absent = missing(&requirements());
-        if absent.is_empty() {
-            return Outcome::Passed;
-        }
-    } else {
-        println!(
-            "  not root: install the drivers with\n    sudo sh -c '{}'",
-            install_command()
-        );
-    }
-    let msg = format!("missing: {}", absent.join("; "));
-    if ci {
-        Outcome::Failed(format!("{msg} (CI=true: the GPU backends must run)"))
-    } else {
-        println!("  continuing: backends that need them will be skipped visibly");
-        Outcome::Warned(msg)
-    }
-}
-
 /// Whether `cargo fuzz` can run here.
 fn cargo_fuzz_available() -> bool {
     Command::new(crate::cargo())
@@ -715,7 +530,7 @@ fn cargo_fuzz_available() -> bool {
 /// The `fuzz` step: the targets must compile, and each must run its seeds without a crash.
 fn fuzz(root: &Path, ci: bool) -> Outcome {
     let dir = root.join("fuzz");
-    if !cargo_fuzz_available() && (ci || is_root()) {
+    if !cargo_fuzz_available() && (ci || crate::drivers::is_root()) {
         // Like the drivers: installed where CI or root runs, so a fresh machine needs nothing.
         println!("$ cargo install cargo-fuzz --locked");
         let installed = Command::new(crate::cargo())
