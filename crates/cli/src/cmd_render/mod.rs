@@ -23,7 +23,8 @@ pub const LONG_ABOUT: &str =
     "Render SCENE (a preset name from `shadowvol scenes`, a .gltf/.glb \
     file with its KHR_lights_punctual lights and camera, or a .obj/.stl/.ply mesh) with stencil \
     shadow volumes on the GPU (wgpu; headless), and write a PNG (--out, by default SCENE's file \
-    stem or preset name + .png in the current directory).\n\n\
+    stem or preset name + .png in the current directory). The GPU: the first Vulkan, Metal or \
+    DX12 adapter, else OpenGL's; WGPU_BACKEND=vulkan|gl|... chooses.\n\n\
     Any mesh renders without flags. Lights: --light (repeatable) replaces the scene's own; a \
     scene without any gets a default key light, a point light above the scene, to the camera's \
     left and slightly towards it, at 4 bounding radii from the centre, so that the shadow falls \
