@@ -79,7 +79,7 @@ pub(crate) fn map_mask_depth(format: wgpu::TextureFormat) -> wgpu::DepthStencilS
 }
 
 /// A stencil face that tests `compare` and applies `pass` where both tests pass.
-fn stencil_op(
+pub(crate) fn stencil_op(
     compare: wgpu::CompareFunction,
     pass: wgpu::StencilOperation,
 ) -> wgpu::StencilFaceState {
@@ -88,6 +88,28 @@ fn stencil_op(
         fail_op: wgpu::StencilOperation::Keep,
         depth_fail_op: wgpu::StencilOperation::Keep,
         pass_op: pass,
+    }
+}
+
+/// Depth untouched (test `always`, no writes), both stencil faces `face`, reading the stencil
+/// bits of `read_mask` and writing those of `write_mask`: a full-screen pass over the stencil.
+pub(crate) fn stencil_only_depth(
+    format: wgpu::TextureFormat,
+    face: wgpu::StencilFaceState,
+    read_mask: u32,
+    write_mask: u32,
+) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format,
+        depth_write_enabled: Some(false),
+        depth_compare: Some(wgpu::CompareFunction::Always),
+        stencil: wgpu::StencilState {
+            front: face,
+            back: face,
+            read_mask,
+            write_mask,
+        },
+        bias: wgpu::DepthBiasState::default(),
     }
 }
 

@@ -4,6 +4,8 @@
 //! set, and the target is copied instead. The bytes read back are the stencil values, the same
 //! as a direct copy.
 
+use super::states;
+
 /// `shaders/render_stencil_bits.wgsl`: the full-screen triangle and the per-bit fragment.
 pub const STENCIL_BITS_WGSL: &str = include_str!("../../../../shaders/render_stencil_bits.wgsl");
 
@@ -47,7 +49,7 @@ impl StencilBits {
     pub(crate) fn encode(&self, enc: &mut wgpu::CommandEncoder, depth: &wgpu::TextureView) {
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("stencil-bits"),
-            color_attachments: &[super::states::cleared(&self.view, wgpu::Color::TRANSPARENT)],
+            color_attachments: &[states::cleared(&self.view, wgpu::Color::TRANSPARENT)],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: depth,
                 depth_ops: None,
@@ -79,20 +81,33 @@ fn pipeline(
     depth_format: wgpu::TextureFormat,
     bit: u32,
 ) -> wgpu::RenderPipeline {
-    let face = wgpu::StencilFaceState {
-        compare: wgpu::CompareFunction::Equal,
-        fail_op: wgpu::StencilOperation::Keep,
-        depth_fail_op: wgpu::StencilOperation::Keep,
-        pass_op: wgpu::StencilOperation::Keep,
-    };
-    let constants = [("BIT", f64::from(bit))];
+    let face = states::stencil_op(wgpu::CompareFunction::Equal, wgpu::StencilOperation::Keep);
+    let depth = states::stencil_only_depth(depth_format, face, 1 << bit, 0);
+    fullscreen(device, Some(layout), module, depth, Some(bit))
+}
+
+/// The full-screen triangle of `module` (`vs_fullscreen`) over `depth`, with the fragment
+/// `fs_stencil_bit` of bit `bit` adding into an [`FORMAT`] target, or with no fragment stage
+/// and no colour where `bit` is `None`.
+pub(super) fn fullscreen(
+    device: &wgpu::Device,
+    layout: Option<&wgpu::PipelineLayout>,
+    module: &wgpu::ShaderModule,
+    depth: wgpu::DepthStencilState,
+    bit: Option<u32>,
+) -> wgpu::RenderPipeline {
+    let constants = bit.map(|b| [("BIT", f64::from(b))]);
     let options = wgpu::PipelineCompilationOptions {
-        constants: &constants,
+        constants: constants.as_ref().map_or(&[], |c| &c[..]),
         ..Default::default()
     };
+    let targets = [super::pipelines::color_target(
+        FORMAT,
+        Some(states::additive()),
+    )];
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some("stencil-bit"),
-        layout: Some(layout),
+        layout,
         vertex: wgpu::VertexState {
             module,
             entry_point: Some("vs_fullscreen"),
@@ -100,27 +115,13 @@ fn pipeline(
             buffers: &[],
         },
         primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: depth_format,
-            depth_write_enabled: Some(false),
-            depth_compare: Some(wgpu::CompareFunction::Always),
-            stencil: wgpu::StencilState {
-                front: face,
-                back: face,
-                read_mask: 1 << bit,
-                write_mask: 0,
-            },
-            bias: wgpu::DepthBiasState::default(),
-        }),
+        depth_stencil: Some(depth),
         multisample: wgpu::MultisampleState::default(),
-        fragment: Some(wgpu::FragmentState {
+        fragment: bit.map(|_| wgpu::FragmentState {
             module,
             entry_point: Some("fs_stencil_bit"),
             compilation_options: options,
-            targets: &[super::pipelines::color_target(
-                FORMAT,
-                Some(super::states::additive()),
-            )],
+            targets: &targets,
         }),
         multiview_mask: None,
         cache: None,

@@ -377,6 +377,7 @@ pub fn read_texture(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::raster::states;
     use crate::RenderDevice;
 
     /// A pipeline that writes its stencil reference wherever it draws (the stencil-bits
@@ -386,39 +387,12 @@ mod tests {
             label: Some("stencil writer"),
             source: wgpu::ShaderSource::Wgsl(super::super::STENCIL_BITS_WGSL.into()),
         });
-        let face = wgpu::StencilFaceState {
-            compare: wgpu::CompareFunction::Always,
-            fail_op: wgpu::StencilOperation::Keep,
-            depth_fail_op: wgpu::StencilOperation::Keep,
-            pass_op: wgpu::StencilOperation::Replace,
-        };
-        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("stencil writer"),
-            layout: None,
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: wgpu::StencilState {
-                    front: face,
-                    back: face,
-                    read_mask: 0xff,
-                    write_mask: 0xff,
-                },
-                bias: wgpu::DepthBiasState::default(),
-            }),
-            multisample: wgpu::MultisampleState::default(),
-            fragment: None,
-            multiview_mask: None,
-            cache: None,
-        })
+        let face = states::stencil_op(
+            wgpu::CompareFunction::Always,
+            wgpu::StencilOperation::Replace,
+        );
+        let depth = states::stencil_only_depth(format, face, 0xff, 0xff);
+        super::super::stencil_bits::fullscreen(device, None, &module, depth, None)
     }
 
     /// Column `x` of a 256 x 3 frame holds stencil `x`, every value of the 8 bits; the frame
