@@ -269,13 +269,15 @@ impl SilhouetteBackend for WgpuBackend {
     fn release(&mut self, id: PreparedId) {
         if self.scenes.remove(id).is_some() {
             // Dropped buffers are freed when the device next triages its submissions: wait for
-            // that here, so that the memory is back when `release` returns.
-            // A device that does not answer within the wait limit keeps its memory a while
-            // longer; nothing else depends on it.
-            let _ = self.device.poll(wgpu::PollType::Wait {
-                submission_index: None,
-                timeout: Some(gpu::wait_limit().unwrap_or(std::time::Duration::from_secs(10))),
-            });
+            // that here, so that the memory is back when `release` returns. A device that does
+            // not answer within the wait limit (or an unreadable limit: `extract` reports that)
+            // keeps its memory a while longer; nothing else depends on it.
+            if let Ok(limit) = gpu::wait_limit() {
+                let _ = self.device.poll(wgpu::PollType::Wait {
+                    submission_index: None,
+                    timeout: Some(limit),
+                });
+            }
         }
     }
 }
