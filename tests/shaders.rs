@@ -2,7 +2,7 @@
 //! validator of the workspace's shaders (OpenCL C in `kernels/` is built by the `opencl` crate's
 //! device tests).
 //!
-//! * WGSL: every module the crates build (`shadowvol_wgpu_compute::shaders`, the renderer's
+//! * WGSL: every module the crates build (`shadowvol_gpu::shaders`, the renderer's
 //!   raster shader and GPU-resident pass, `shadowvol_viewer::shaders`), composed by the crates'
 //!   own functions, parses and validates with naga under the capabilities its device is asked
 //!   for; and every `shaders/*.wgsl` file appears whole in at least one of them, so a file that
@@ -29,11 +29,11 @@
 mod xtask_shaders;
 
 use naga::valid::{Capabilities, ValidationFlags, Validator};
+use shadowvol_gpu::shaders;
 use shadowvol_renderer::resident;
 use shadowvol_silhouette::gpu::ExactFilter;
 use shadowvol_test_support::{main, skip, Outcome};
 use shadowvol_viewer::shaders as viewer;
-use shadowvol_wgpu_compute::shaders;
 use std::path::{Path, PathBuf};
 
 main!(
@@ -97,7 +97,7 @@ fn modules() -> Vec<Module> {
     }
     all.push(module(
         "renderer raster (shaders/render_raster.wgsl)",
-        resident::SHADER_WGSL,
+        shadowvol_renderer::raster::RASTER_WGSL,
         Capabilities::empty(),
     ));
     all.push(module(

@@ -307,10 +307,10 @@ fn record(
         &targets.scratch,
         None,
         &targets.depth,
-        wgpu::Color::BLACK,
+        Some(wgpu::Color::BLACK),
     );
     for k in 0..n {
-        pass.encode_stencil(enc, resident, k, &targets.depth);
+        pass.encode_stencil(enc, resident, k, &targets.depth, wgpu::LoadOp::Clear(0));
         resolve_layer(enc, resolve, mask, k, &targets.depth);
     }
     Ok(())

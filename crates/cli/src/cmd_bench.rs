@@ -2,7 +2,7 @@
 //! measured memory floor.
 
 use serde::Serialize;
-use shadowvol::memory::{peak_rss_bytes, TableBytes};
+use shadowvol::memory::{peak_rss_bytes, table_bytes, TableBytes};
 use shadowvol::{find_backend, BackendEntry, CliError, Format, MemoryFloor};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{Multiplicities, SilhouetteBackend, TopologyScene};
@@ -498,7 +498,7 @@ fn bench_backend(
         Ok(())
     };
     run_schedule(args, entry.name, combos, bar, &mut frame)?;
-    let table = TableBytes::new(topo.table_bytes(), backend.prepared_bytes(id)?);
+    let table = table_bytes(topo.table_bytes(), backend.prepared_bytes(id)?);
     let peak = peak_rss_bytes();
     let records = combos
         .iter()

@@ -1,7 +1,6 @@
 //! What a run costs in memory, as the JSON reports it: the process's peak resident set, measured
 //! by the kernel, and the bytes the prepared scene holds.
 
-use serde::Serialize;
 use shadowvol_silhouette::PreparedBytes;
 
 /// The process's peak resident set size in bytes (`VmHWM` in `/proc/self/status`: the kernel's
@@ -19,33 +18,16 @@ pub fn peak_rss_bytes() -> Option<u64> {
         .map(|kb| kb * 1024)
 }
 
-/// The bytes a prepared scene holds, by part; [`TableBytes::total`] is the JSON's
-/// `table_bytes`.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
-pub struct TableBytes {
-    /// The scene's edge tables (`EdgeTable::heap_bytes`, each shared table once).
-    pub topology: u64,
-    /// The backend's or pipeline's own host layout of the scene.
-    pub host: u64,
-    /// Device buffers the backend or pipeline keeps for the scene.
-    pub device: u64,
-}
+pub use shadowvol_report::TableBytes;
 
-impl TableBytes {
-    /// The tables of `topology_bytes` plus what a backend reports for its prepared scene.
-    #[must_use]
-    pub fn new(topology_bytes: u64, prepared: PreparedBytes) -> Self {
-        Self {
-            topology: topology_bytes,
-            host: prepared.host,
-            device: prepared.device,
-        }
-    }
-
-    /// `topology + host + device`.
-    #[must_use]
-    pub fn total(&self) -> u64 {
-        self.topology + self.host + self.device
+/// The tables of `topology_bytes` plus what a backend or pipeline reports for its prepared
+/// scene.
+#[must_use]
+pub fn table_bytes(topology_bytes: u64, prepared: PreparedBytes) -> TableBytes {
+    TableBytes {
+        topology: topology_bytes,
+        host: prepared.host,
+        device: prepared.device,
     }
 }
 

@@ -14,7 +14,7 @@
 //! `a < b` are input vertex indices (0-based; a weld group is named by its smallest input index),
 //! only `m != 0` is listed, sorted by `(a, b)`.
 
-use crate::memory::{peak_rss_bytes, TableBytes};
+use crate::memory::{peak_rss_bytes, table_bytes, TableBytes};
 use crate::CliError;
 use serde::Serialize;
 use shadowvol_mesh_topology::{EdgeTable, MeshStats};
@@ -148,7 +148,7 @@ pub fn silhouette_report(
     let prepared = backend.prepared_bytes(id);
     backend.release(id);
     let extract = result?;
-    let table_bytes = TableBytes::new(scene.table_bytes(), prepared?);
+    let table_bytes = table_bytes(scene.table_bytes(), prepared?);
     let info = backend.info();
     if m.edge_count() != scene.total_edges() || m.light_count() != lights.len() {
         return Err(CliError::Other(format!(

@@ -64,7 +64,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let frame = renderer.render(&scene)?;
     frame.save_png(&out)?;
     print!("{}", frame.report.explain());
-    let cmp = shadowvol_reference::compare(&frame.shot(&scene)?);
+    let img = frame.read_image()?;
+    let shot = shadowvol_reference::Shot::new(
+        &scene,
+        frame.camera,
+        img.width,
+        img.height,
+        &img.rgba,
+        &img.ids,
+        &img.stencil,
+        &frame.report.light_colors,
+    );
+    let cmp = shadowvol_reference::compare(&shot);
     println!(
         "{out}: {} shadow pixels, {} artifact pixels against the ray-traced reference",
         cmp.shadow_pixels, cmp.artifact_pixels

@@ -21,7 +21,7 @@ use shadowvol_renderer::plan::plan_frame;
 use shadowvol_renderer::raster::{read_texture, Attachments};
 use shadowvol_renderer::resident::{texture_2d, PassFormats, PassFrame, ShadowPass};
 use shadowvol_renderer::world::World;
-use shadowvol_renderer::{Camera, RenderDevice, Scene, Technique};
+use shadowvol_renderer::{Camera, FrameReport, Pipeline, RenderDevice, Scene, Technique};
 use shadowvol_renderer::{MapPipeline, MapSettings, PlanPolicy, ShadowPipeline};
 use shadowvol_robust_math::{Accuracy, Light};
 
@@ -184,9 +184,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             &color_view,
             ids_view.as_ref(),
             &depth_view,
-            wgpu::Color::BLACK,
+            Some(wgpu::Color::BLACK),
         );
-        pass.encode_stencil(&mut enc, &resident, 0, &depth_view);
+        pass.encode_stencil(&mut enc, &resident, 0, &depth_view, wgpu::LoadOp::Clear(0));
         pass.encode_lit(&mut enc, &resident, 0, &color_view, &depth_view);
         queue.submit([enc.finish()]);
     }
@@ -276,7 +276,8 @@ fn map_frames(
         scene.geometry.objects[1].world_from_object = t;
         let changes = world.sync(scene)?;
         let plan = plan_frame(scene, &world, camera, (W, H), PlanPolicy::Auto, false);
-        let mut entries = plan.entries;
+        let mut report = FrameReport::new(Pipeline::Map, Accuracy::Exact);
+        report.plan = plan.entries;
         let inputs = FrameInputs {
             scene,
             world: &world,
@@ -289,7 +290,7 @@ fn map_frames(
             count: false,
         };
         let mut enc = rd.device.create_command_encoder(&Default::default());
-        pipeline.record(rd, &inputs, &mut entries, &targets, &mut enc)?;
+        pipeline.record(rd, &inputs, &mut report, &targets, &mut enc)?;
         rd.queue.submit([enc.finish()]);
     }
     Ok(t)

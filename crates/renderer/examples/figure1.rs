@@ -117,7 +117,17 @@ fn run() -> Result<(), String> {
             let frame = renderer
                 .render(scene)
                 .map_err(|e| format!("{name} {mode}: {e}"))?;
-            let shot = frame.shot(scene).map_err(|e| e.to_string())?;
+            let img = frame.read_image().map_err(|e| e.to_string())?;
+            let shot = shadowvol_reference::Shot::new(
+                scene,
+                frame.camera,
+                img.width,
+                img.height,
+                &img.rgba,
+                &img.ids,
+                &img.stencil,
+                &frame.report.light_colors,
+            );
             let cmp = shadowvol_reference::compare(&shot);
             eprintln!(
                 "{name:16} {mode:8}: {:6} artifact pixels ({} differing), raster {:.0} ms, silhouette {:.0} ms",

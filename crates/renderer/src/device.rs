@@ -2,7 +2,8 @@
 //! do (depth clamp, the depth-stencil format, whether the GPU pipeline runs).
 
 use crate::RenderError;
-use shadowvol_wgpu_compute::ErrorScopes;
+use shadowvol_gpu::requirements::{self, RESIDENT};
+use shadowvol_gpu::ErrorScopes;
 
 /// A wgpu device with what the renderer needs to know about it. Open one with
 /// [`RenderDevice::open`], or wrap the caller's with [`RenderDevice::on_device`] (a window's
@@ -102,8 +103,8 @@ impl RenderDevice {
                 required |= f;
             }
         }
-        required |= crate::resident::ShadowPass::optional_features(adapter);
-        let limits = crate::resident::ShadowPass::required_limits(adapter).unwrap_or_else(|_| {
+        required |= requirements::optional_features(adapter);
+        let limits = RESIDENT.limits(adapter, buffer_cap()).unwrap_or_else(|_| {
             let mut l = wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits());
             l.max_buffer_size = l.max_buffer_size.min(buffer_cap().unwrap_or(u64::MAX));
             l
@@ -130,15 +131,15 @@ impl RenderDevice {
             .get_downlevel_capabilities()
             .flags
             .contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
-        let unsupported = crate::resident::ShadowPass::required_limits(&adapter).and_then(|l| {
+        let unsupported = RESIDENT.limits(&adapter, buffer_cap()).and_then(|l| {
             if l.check_limits(&device.limits()) {
                 Ok(())
             } else {
-                Err(RenderError::Unsupported(
+                Err(
                     "the device was opened with lower limits than the GPU pipeline needs \
                      (open it with RenderDevice::requirements)"
                         .to_owned(),
-                ))
+                )
             }
         });
         Self {
@@ -148,7 +149,7 @@ impl RenderDevice {
             adapter,
             depth_format,
             depth_clamp,
-            gpu_pipeline_unsupported: unsupported.err().map(|e| e.to_string()),
+            gpu_pipeline_unsupported: unsupported.err(),
             stencil_copies,
         }
     }

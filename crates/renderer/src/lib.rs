@@ -4,7 +4,7 @@
 //!   positions ([`world`]), light gains ([`lighting`]), the plan ([`plan`]), the attachments and
 //!   their readback ([`raster`]). [`Renderer::render`] draws a [`Scene`] (borrowed, never
 //!   converted) and returns a [`Frame`]: its image with the per-pixel surface ids and stencil
-//!   the reference reads ([`Frame::shot`]), and a [`FrameReport`] of one shape for every
+//!   the reference reads ([`Frame::read_image`]), and a [`FrameReport`] of one shape for every
 //!   pipeline.
 //! * [`pipeline`]: [`HostPipeline`] wraps any silhouette backend (multiplicities come back to
 //!   the host, which builds the volumes); [`GpuPipeline`] wraps the resident pass
@@ -28,8 +28,10 @@
 //! let frame = renderer.render(&scene)?;
 //! frame.save_png("book.png")?;
 //! print!("{}", frame.report.explain());
-//! let cmp = shadowvol_reference::compare(&frame.shot(&scene)?);
-//! println!("artifact pixels: {}", cmp.artifact_pixels);
+//! let img = frame.read_image()?;
+//! let shot = shadowvol_reference::Shot::new(&scene, frame.camera, img.width, img.height,
+//!     &img.rgba, &img.ids, &img.stencil, &frame.report.light_colors);
+//! println!("artifact pixels: {}", shadowvol_reference::compare(&shot).artifact_pixels);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
@@ -44,6 +46,7 @@ mod frame;
 pub mod hard;
 pub mod lighting;
 pub mod maps;
+mod nearest;
 pub mod pipeline;
 pub mod plan;
 pub mod raster;
@@ -53,7 +56,7 @@ pub mod world;
 
 pub use device::{buffer_cap, RenderDevice, BUFFER_CAP_ENV};
 pub use error::RenderError;
-pub use frame::{Frame, FrameImage, FrameReport, FrameTime, Timings, UncertainUnit};
+pub use frame::{Frame, FrameImage, FrameReport, FrameTime, GpuTimings, Timings, UncertainUnit};
 pub use lighting::Exposure;
 pub use maps::{MapBias, MapFilter, MapSettings};
 pub use pipeline::volume;

@@ -19,10 +19,10 @@
 //! instead ([`exposure_factor`]). [`Exposure::Fixed`] sets the factor per lux, so that a light's
 //! intensity shows in absolute terms too.
 
+use crate::nearest::NearestHit;
 use crate::world::{World, WorldChanges};
 use crate::Camera;
 use glam::{DMat4, DVec3, DVec4};
-use shadowvol_reference::Bvh;
 use shadowvol_scenes::{Scene, SceneLight};
 
 /// How lux map to the lit pass's output (linear, `1.0` = full 8-bit white on a white albedo).
@@ -96,7 +96,7 @@ fn illuminance(lights: &[SceneLight], p: DVec3, n: DVec3) -> f64 {
 /// give, measured again when the camera, the lights or the surfaces change.
 #[derive(Debug, Default)]
 pub struct ExposureMeter {
-    bvh: Option<Bvh>,
+    surfaces: Option<NearestHit>,
     last: Option<(Camera, f64, Vec<SceneLight>, Option<f32>)>,
 }
 
@@ -117,7 +117,7 @@ impl ExposureMeter {
             return x;
         }
         if changes.any() {
-            self.bvh = None;
+            self.surfaces = None;
             self.last = None;
         }
         if let Some((c, a, l, x)) = &self.last {
@@ -125,8 +125,10 @@ impl ExposureMeter {
                 return *x;
             }
         }
-        let bvh = self.bvh.get_or_insert_with(|| surface_bvh(world));
-        let samples = view_samples(bvh, camera, aspect);
+        let surfaces = self
+            .surfaces
+            .get_or_insert_with(|| surface_triangles(world));
+        let samples = view_samples(surfaces, camera, aspect);
         let x = metered_factor(&scene.lights, &samples)
             .or_else(|| exposure_factor(scene, world.bounds(), exposure));
         self.last = Some((*camera, aspect, scene.lights.clone(), x));
@@ -134,8 +136,8 @@ impl ExposureMeter {
     }
 }
 
-/// A BVH over every surface's world triangles.
-fn surface_bvh(world: &World) -> Bvh {
+/// Every surface's world triangles, arranged for nearest-hit casts.
+fn surface_triangles(world: &World) -> NearestHit {
     let mut tris = Vec::new();
     for w in world.surfaces() {
         let p = &w.positions;
@@ -145,11 +147,11 @@ fn surface_bvh(world: &World) -> Bvh {
                 .map(|t| t.map(|k| p[k as usize].as_dvec3())),
         );
     }
-    Bvh::build(tris)
+    NearestHit::new(tris)
 }
 
 /// The surface point and camera-facing normal of each ray of the metering grid that hits.
-fn view_samples(bvh: &Bvh, camera: &Camera, aspect: f64) -> Vec<(DVec3, DVec3)> {
+fn view_samples(surfaces: &NearestHit, camera: &Camera, aspect: f64) -> Vec<(DVec3, DVec3)> {
     let (gw, gh) = if aspect >= 1.0 {
         (
             METER_GRID,
@@ -170,8 +172,8 @@ fn view_samples(bvh: &Bvh, camera: &Camera, aspect: f64) -> Vec<(DVec3, DVec3)> 
             let y = 1.0 - (f64::from(j) + 0.5) / f64::from(gh) * 2.0;
             let p = inv * DVec4::new(x, y, 0.5, 1.0);
             let dir = p.truncate() / p.w - eye;
-            if let Some((k, t)) = bvh.closest_hit(eye, dir) {
-                let tri = bvh.triangle(k);
+            if let Some((k, t)) = surfaces.cast(eye, dir) {
+                let tri = surfaces.triangle(k);
                 let mut n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
                 if n.dot(dir) > 0.0 {
                     n = -n;

@@ -1,11 +1,9 @@
 //! The renderer: a device, a pipeline, and the frame's shared steps below the pipeline (world
 //! positions, lighting, the plan, the attachments and their readback).
 
-use crate::frame::{Frame, FrameImage, FrameReport, FrameTime, Timings};
+use crate::frame::{Frame, FrameImage, FrameReport, FrameTime};
 use crate::lighting::{self, Exposure};
-use crate::pipeline::{
-    FrameInputs, GpuPipeline, HostPipeline, PassReport, Pipeline, ShadowPipeline,
-};
+use crate::pipeline::{FrameInputs, GpuPipeline, HostPipeline, ShadowPipeline};
 use crate::plan::{plan_frame, FramePlan, PlanPolicy};
 use crate::raster::{FrameTargets, COLOR_FORMAT};
 use crate::world::{World, WorldChanges};
@@ -216,17 +214,13 @@ impl Renderer {
         let t0 = Instant::now();
         let mut setup = self.set_up(scene)?;
         let t_raster = Instant::now();
-        let (image, pass) = self.draw(scene, &mut setup, readback, into)?;
-        let raster_ms = ms(t_raster);
-        let timings = Timings {
-            silhouette_ms: pass.silhouette_ms,
-            side_building_ms: pass.side_building_ms,
-            raster_ms,
-            prepare_ms: setup.prepare_ms,
-            total_ms: ms(t0),
-        };
+        let mut report = self.report(&mut setup);
+        let image = self.draw(scene, &setup, &mut report, readback, into)?;
+        report.timings.raster_ms = ms(t_raster);
+        report.timings.prepare_ms = setup.prepare_ms;
+        report.timings.total_ms = ms(t0);
+        report.light_colors = setup.light_colors;
         let camera = setup.camera;
-        let report = self.report(setup, pass, timings);
         Ok(Frame {
             image,
             report,
@@ -297,10 +291,11 @@ impl Renderer {
     fn draw(
         &mut self,
         scene: &Scene,
-        setup: &mut FrameSetup,
+        setup: &FrameSetup,
+        report: &mut FrameReport,
         readback: bool,
         into: Option<&wgpu::TextureView>,
-    ) -> Result<(Option<FrameImage>, PassReport), RenderError> {
+    ) -> Result<Option<FrameImage>, RenderError> {
         let RenderOptions {
             width,
             height,
@@ -335,13 +330,11 @@ impl Renderer {
         };
         let targets = self.targets.as_ref().expect("made above");
         let attachments = targets.attachments(into);
-        let mut pass = PassReport::default();
-        let entries = &mut setup.plan.entries;
         let pipeline = &mut self.pipeline;
         let device = &self.device;
         let drawn = device
             .submit("frame", |enc| {
-                pass = pipeline.record(device, &inputs, entries, &attachments, enc)?;
+                pipeline.record(device, &inputs, report, &attachments, enc)?;
                 if into.is_none() {
                     targets.copy_color_ids(enc);
                 }
@@ -357,39 +350,29 @@ impl Renderer {
                 return Err(e);
             }
         };
-        pipeline.finish(device, &inputs, entries, &mut pass)?;
-        Ok((image, pass))
+        pipeline.finish(device, &inputs, report)?;
+        report.shadow_maps = pipeline
+            .maps()
+            .iter()
+            .map(|m| m.as_ref().map(crate::maps::LightMap::summary))
+            .collect();
+        Ok(image)
     }
 
-    /// The frame's report: what drew it, the plan with its counts, the exposure, `timings`.
-    fn report(&self, setup: FrameSetup, pass: PassReport, timings: Timings) -> FrameReport {
-        let RenderOptions {
-            width,
-            height,
-            mode,
-            ..
-        } = self.options;
+    /// The frame's report before its passes: what draws it, the plan (taken from `setup`), the
+    /// exposure; the pipeline and [`Renderer::frame`] fill in the rest.
+    fn report(&self, setup: &mut FrameSetup) -> FrameReport {
+        let (width, height) = (self.options.width, self.options.height);
         let pipeline = &self.pipeline;
-        FrameReport {
-            pipeline: pipeline.kind(),
-            backend: pipeline.backend().map(str::to_owned),
-            adapter: self.device.description.clone(),
-            mode,
-            scissor_pixels_saved: setup.plan.scissor_pixels_saved(width, height),
-            plan: setup.plan.entries,
-            light_colors: setup.light_colors,
-            exposure: setup.exposure,
-            uncertain: pass.uncertain,
-            uncertain_unit: pipeline.uncertain_unit(),
-            host_resolved: pass.host_resolved,
-            readback_bytes: pass.readback_bytes,
-            depth_clamp: pipeline.depth_clamp(&self.device),
-            timings,
-            gpu_timings: pass.gpu_timings,
-            scene_parts: pass.scene_parts.max(1),
-            surface_vertices: pass.surface_vertices,
-            shadow_maps: pipeline.maps().to_vec(),
-        }
+        let mut report = FrameReport::new(pipeline.kind(), self.options.mode);
+        report.backend = pipeline.backend().map(str::to_owned);
+        report.adapter.clone_from(&self.device.description);
+        report.scissor_pixels_saved = setup.plan.scissor_pixels_saved(width, height);
+        report.plan = std::mem::take(&mut setup.plan.entries);
+        report.exposure = setup.exposure;
+        report.uncertain_unit = pipeline.uncertain_unit();
+        report.depth_clamp = pipeline.depth_clamp(&self.device);
+        report
     }
 }
 
@@ -423,28 +406,4 @@ fn check_effects(scene: &Scene, exposure: Exposure) -> Result<(), RenderError> {
 /// Milliseconds since `t`.
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
-}
-
-/// Which pipelines [`Renderer`]s can use, for callers that choose by name.
-impl Pipeline {
-    /// A new pipeline of this kind: [`GpuPipeline`], [`HostPipeline`] over `backend`, or
-    /// [`crate::MapPipeline`] with Bevy's defaults.
-    ///
-    /// # Errors
-    /// [`RenderError::InvalidInput`] for the host pipeline without a backend.
-    pub fn build(
-        self,
-        backend: Option<Box<dyn SilhouetteBackend>>,
-    ) -> Result<Box<dyn ShadowPipeline>, RenderError> {
-        match (self, backend) {
-            (Pipeline::Gpu, _) => Ok(Box::new(GpuPipeline::new())),
-            (Pipeline::Map, _) => Ok(Box::new(crate::MapPipeline::new(
-                crate::MapSettings::default(),
-            ))),
-            (Pipeline::Host, Some(b)) => Ok(Box::new(HostPipeline::new(b))),
-            (Pipeline::Host, None) => Err(RenderError::InvalidInput(
-                "the host pipeline needs a silhouette backend".to_owned(),
-            )),
-        }
-    }
 }

@@ -39,7 +39,7 @@ fn box_on_floor_matches_reference_zpass_and_zfail() -> Outcome {
         frame
             .save_png(format!("/tmp/sv_box_{policy:?}.png"))
             .unwrap();
-        shadowvol_reference::diff_image(&frame.shot(&scene).unwrap(), &cmp)
+        shadowvol_reference::diff_image(&common::shot(&frame, &scene), &cmp)
             .save(format!("/tmp/sv_box_{policy:?}_diff.png"))
             .unwrap();
         assert!(
@@ -49,7 +49,7 @@ fn box_on_floor_matches_reference_zpass_and_zfail() -> Outcome {
         assert_eq!(cmp.artifact_pixels, 0, "{policy:?}");
         // The count without the reference, each pixel's point dropped in turn, and each
         // triangle computed alone, are the comparison's, bit for bit.
-        let shot = frame.shot(&scene).unwrap();
+        let shot = common::shot(&frame, &scene);
         assert_eq!(shadowvol_reference::shadow_pixels(&shot), cmp.shadow_pixels);
         for (i, tris) in shot.triangles().iter().enumerate() {
             for (t, tri) in tris.iter().enumerate() {

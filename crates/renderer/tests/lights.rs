@@ -61,7 +61,7 @@ fn checked(scene: &Scene, exposure: Exposure) -> Result<Frame, Skip> {
     let frame = render(scene, exposure)?;
     let cmp = common::compare(&frame, scene);
     assert_eq!(cmp.artifact_pixels, 0, "shadow artifacts: {cmp:?}");
-    let shading = shading_check(&frame.shot(scene).unwrap(), &cmp, 2);
+    let shading = shading_check(&common::shot(&frame, scene), &cmp, 2);
     assert!(shading.compared > (W * W / 2) as usize, "{shading:?}");
     assert_eq!(
         shading.mismatched, 0,
@@ -338,7 +338,10 @@ fn assert_scissor_changes_no_pixel(s: &Scene, min_saved: usize) -> Outcome {
     }
     let cmp = common::compare(&with, s);
     assert_eq!(cmp.artifact_pixels, 0, "{cmp:?}");
-    assert_eq!(shading_check(&with.shot(s).unwrap(), &cmp, 2).mismatched, 0);
+    assert_eq!(
+        shading_check(&common::shot(&with, s), &cmp, 2).mismatched,
+        0
+    );
     Ok(())
 }
 

@@ -555,8 +555,8 @@ fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> Vec<u8> {
     );
     let mut enc = device.create_command_encoder(&Default::default());
     pass.encode_extract(&mut enc, &rs);
-    pass.encode_prepass(&mut enc, &rs, &cv, None, &dv, wgpu::Color::BLACK);
-    pass.encode_stencil(&mut enc, &rs, 0, &dv);
+    pass.encode_prepass(&mut enc, &rs, &cv, None, &dv, Some(wgpu::Color::BLACK));
+    pass.encode_stencil(&mut enc, &rs, 0, &dv, wgpu::LoadOp::Clear(0));
     pass.encode_lit(&mut enc, &rs, 0, &cv, &dv);
     queue.submit([enc.finish()]);
     read_texture(device, queue, &color, wgpu::TextureAspect::All, 4).unwrap()

@@ -2,10 +2,12 @@
 //! results) and the [`SilhouetteBackend`] implementation (`prepare` uploads the static buffers,
 //! `extract` runs [`crate::dispatch`]).
 
-use crate::device::{device_error, ErrorScopes, Health, WgpuOptions};
-use crate::layout::{Prepared, TableBuffers};
+use crate::device::{device_error, Health, WgpuOptions};
+use crate::layout::Prepared;
 use crate::pipeline::Pipelines;
-use crate::{shaders, NAME};
+use crate::NAME;
+use shadowvol_gpu::shaders;
+use shadowvol_gpu::{ErrorScopes, TableBuffers};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::gpu::{self, ExactFilter, SceneIndex, TableBuffer, TableWriter};
 use shadowvol_silhouette::{

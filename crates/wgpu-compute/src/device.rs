@@ -3,8 +3,9 @@
 //! [`BackendError`]s.
 
 use crate::backend::WgpuBackend;
-use crate::pipeline::{create_pipelines, STORAGE_BUFFERS};
-use crate::{shaders, NAME};
+use crate::pipeline::create_pipelines;
+use crate::NAME;
+use shadowvol_gpu::requirements::SILHOUETTE;
 use shadowvol_silhouette::gpu::ExactFilter;
 use shadowvol_silhouette::{BackendError, PreparedScenes};
 use std::num::NonZeroUsize;
@@ -239,18 +240,10 @@ impl WgpuBackend {
             limits.max_compute_workgroups_per_dimension =
                 limits.max_compute_workgroups_per_dimension.min(cap.max(1));
         }
-        if limits.max_storage_buffers_per_shader_stage < STORAGE_BUFFERS
-            || limits.max_compute_invocations_per_workgroup < shaders::WORKGROUP_SIZE
-            || limits.max_compute_workgroup_size_x < shaders::WORKGROUP_SIZE
-        {
+        if let Err(reason) = SILHOUETTE.check_limits(&limits) {
             return Err(BackendError::Unavailable {
                 backend: NAME,
-                reason: format!(
-                    "the device allows {} storage buffers per stage and {} invocations per workgroup; the kernels need {STORAGE_BUFFERS} and {}",
-                    limits.max_storage_buffers_per_shader_stage,
-                    limits.max_compute_invocations_per_workgroup,
-                    shaders::WORKGROUP_SIZE
-                ),
+                reason,
             });
         }
         let filter = ExactFilter::for_device(
@@ -296,48 +289,5 @@ impl WgpuBackend {
             errors.clear();
             Err(device_error(message))
         }
-    }
-}
-
-/// Out-of-memory, validation and internal error scopes around a block of wgpu calls: what the
-/// block raises comes back from [`ErrorScopes::pop`] as text instead of reaching the device's
-/// uncaptured-error handler (whose default panics). Internal errors include a shader the
-/// backend's compiler rejects (OpenGL's limits on samplers, for example).
-#[must_use = "pop the scopes to learn what the block raised"]
-pub struct ErrorScopes {
-    scopes: Vec<wgpu::ErrorScopeGuard>,
-}
-
-impl ErrorScopes {
-    /// Pushes the three scopes on `device`.
-    pub fn push(device: &wgpu::Device) -> Self {
-        Self {
-            scopes: vec![
-                device.push_error_scope(wgpu::ErrorFilter::OutOfMemory),
-                device.push_error_scope(wgpu::ErrorFilter::Validation),
-                device.push_error_scope(wgpu::ErrorFilter::Internal),
-            ],
-        }
-    }
-
-    /// Pops the scopes (innermost first) and returns the captured errors, `; `-separated, each
-    /// with wgpu's description (which names the call, the object and the rule), or `None`.
-    #[must_use]
-    pub fn pop(mut self) -> Option<String> {
-        let mut errors = Vec::new();
-        while let Some(scope) = self.scopes.pop() {
-            if let Some(e) = pollster::block_on(scope.pop()) {
-                errors.push(match &e {
-                    wgpu::Error::OutOfMemory { .. } => "out of device memory".to_owned(),
-                    wgpu::Error::Validation { description, .. } => {
-                        format!("validation: {}", description.trim())
-                    }
-                    wgpu::Error::Internal { description, .. } => {
-                        format!("internal error: {}", description.trim())
-                    }
-                });
-            }
-        }
-        (!errors.is_empty()).then(|| errors.join("; "))
     }
 }

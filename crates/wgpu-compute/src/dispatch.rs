@@ -2,11 +2,12 @@
 //! resolved on the host, and the host's exact decisions patched into the device buffers.
 
 use crate::backend::WgpuBackend;
-use crate::device::{device_error, limit_error, wait_error, ErrorScopes};
-use crate::layout::{pack_lights, Frame, Prepared, TableBuffers};
+use crate::device::{device_error, limit_error, wait_error};
+use crate::layout::{pack_lights, Frame, Prepared};
 use crate::pipeline::DeferredExact;
 use crate::resolve::{expand_uncertain, finish_batch, BatchOutput, Patch, UncertainTriangle};
-use crate::shaders;
+use shadowvol_gpu::shaders;
+use shadowvol_gpu::{ErrorScopes, TableBuffers};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::{
     check_lights, gpu, object_lights, BackendError, ExtractStats, Multiplicities,

@@ -30,10 +30,10 @@
 //!   consistent (closed chains) either way, because each triangle is evaluated once, in one
 //!   order, for all its edges.
 //! * `exact` runs a certified filter on the device: `f64` when the device has `SHADER_F64`
-//!   (bound [`shaders::GPU_F64_FILTER_EPS`] = 8 × robust-math's `F64_FILTER_EPS`, margin for
+//!   (bound [`shadowvol_gpu::shaders::GPU_F64_FILTER_EPS`] = 8 × robust-math's `F64_FILTER_EPS`, margin for
 //!   contraction), else robust-math's `f32` filter (`F32_FILTER_EPS`, its range checks, `w` in
 //!   {0, 1} only) plus
-//!   two device guards ([`shaders::GPU_F32_INPUT_MAX`], [`shaders::GPU_F32_PERM_MIN`]).
+//!   two device guards ([`shadowvol_gpu::shaders::GPU_F32_INPUT_MAX`], [`shadowvol_gpu::shaders::GPU_F32_PERM_MIN`]).
 //!   Subnormal inputs are never certified. By default
 //!   ([`WgpuOptions::exact_on_device`]) the `(triangle, light)` pairs the filter cannot
 //!   certify are decided on the device by `orient_int` (`shaders/exact_int.wgsl`): integer
@@ -41,7 +41,7 @@
 //!   `f32` bits, exact for every finite input, so nothing is resolved on the host and
 //!   [`ExtractStats::uncertain`](shadowvol_silhouette::ExtractStats::uncertain) is 0. The
 //!   triangle step appends those pairs to a list and a dispatch of their own
-//!   ([`shaders::RESOLVE_ENTRY_POINT`]) decides them, since `orient_int` compiled into the
+//!   ([`shadowvol_gpu::shaders::RESOLVE_ENTRY_POINT`]) decides them, since `orient_int` compiled into the
 //!   triangle step slows every invocation; a batch whose pairs would not fit the largest list
 //!   the device binds runs the triangle step with `orient_int` inline instead. With it
 //!   off they go to an append buffer ([`UncertainTriangle`]); the host decides the three
@@ -76,12 +76,10 @@ mod dispatch;
 mod layout;
 mod pipeline;
 mod resolve;
-pub mod shaders;
 pub mod twin;
 
 pub use backend::{GpuResults, WgpuBackend};
-pub use device::{ErrorScopes, WgpuOptions};
-pub use layout::{upload_table, TableBuffers};
+pub use device::WgpuOptions;
 pub use resolve::UncertainTriangle;
 
 use shadowvol_silhouette::{BackendError, SilhouetteBackend};

@@ -1,9 +1,9 @@
-//! The compute pipelines: the composed WGSL module ([`crate::shaders`]), the bind-group layout
+//! The compute pipelines: the composed WGSL module ([`shadowvol_gpu::shaders`]), the bind-group layout
 //! shared by every step, one pipeline per mode for the edge step and the triangle step, and
 //! exact mode's on-device resolution of what its filter leaves.
 
-use crate::device::ErrorScopes;
-use crate::{shaders, NAME};
+use crate::NAME;
+use shadowvol_gpu::{shaders, ErrorScopes};
 use shadowvol_robust_math::Accuracy;
 use shadowvol_silhouette::gpu::{mode_code, ExactFilter};
 use shadowvol_silhouette::BackendError;
@@ -203,16 +203,6 @@ pub(crate) fn create_pipelines(
         }),
     })
 }
-
-pub(crate) fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry {
-        binding,
-        resource: buffer.as_entire_binding(),
-    }
-}
-
-/// Storage buffers the kernels bind in one stage.
-pub(crate) const STORAGE_BUFFERS: u32 = 13;
 
 fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 14] {
     let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {

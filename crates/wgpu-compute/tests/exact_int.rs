@@ -14,10 +14,10 @@ mod common;
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 use num_bigint::BigInt;
 use proptest::prelude::*;
+use shadowvol_gpu::shaders::EXACT_INT_WGSL;
+use shadowvol_gpu::twin::{mul32, orient_int};
 use shadowvol_robust_math::orient_exact;
 use shadowvol_test_support::{main, Outcome};
-use shadowvol_wgpu_compute::shaders::EXACT_INT_WGSL;
-use shadowvol_wgpu_compute::twin::{mul32, orient_int};
 use shadowvol_wgpu_compute::{WgpuBackend, WgpuOptions};
 
 main!(

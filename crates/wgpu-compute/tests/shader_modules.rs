@@ -2,11 +2,11 @@
 //! and the WGSL constants equal the Rust ones the CPU twin uses. (Validation of every module is
 //! the workspace's `tests/shaders.rs`.)
 
-use shadowvol_robust_math::{F32_FILTER_EPS, F32_FILTER_MAX, F32_FILTER_MIN};
-use shadowvol_silhouette::gpu::ExactFilter;
-use shadowvol_wgpu_compute::shaders::{
+use shadowvol_gpu::shaders::{
     self, GPU_F32_INPUT_MAX, GPU_F32_PERM_MIN, GPU_F64_FILTER_EPS, TOUCH,
 };
+use shadowvol_robust_math::{F32_FILTER_EPS, F32_FILTER_MAX, F32_FILTER_MIN};
+use shadowvol_silhouette::gpu::ExactFilter;
 
 fn parse(name: &str, source: &str) -> naga::Module {
     naga::front::wgsl::parse_str(source)

@@ -105,104 +105,22 @@ impl Details {
     }
 }
 
-/// `shadowvol render --format json`: the fields the matrix reads.
-#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
-#[serde(default)]
-pub struct RenderReport {
-    /// Pixels that differ from the reference (with `--reference`).
-    pub artifact_pixels: Option<u64>,
-    /// Shadowed pixels of the render.
-    pub shadow_pixels: Option<u64>,
-    /// Shadowed pixels of the reference (with `--reference`).
-    pub reference_shadow_pixels: Option<u64>,
-    /// Pixels covered by geometry (with `--reference`).
-    pub covered_pixels: Option<u64>,
-    /// The GPU adapter, in words.
-    pub adapter: Option<String>,
-    /// Stage times of the frame.
-    pub timings: Option<RenderTimings>,
-    /// `gpu` or `host` (renders before the GPU pipeline: absent).
-    pub pipeline: Option<String>,
-    /// The `--frames` frames' times.
-    pub frames: Option<FrameStats>,
-    /// Bytes brought to the host during the `--frames` frames.
-    pub frame_readback_bytes: Option<u64>,
-    /// Pixels where render and reference differ within one pixel of a reference boundary.
-    pub boundary_pixels: Option<u64>,
-    /// Covered pixels the reference could not decide.
-    pub undecidable_pixels: Option<u64>,
-    /// `volumes` or `map` (renders before the map pipeline: absent).
-    pub shadows: Option<String>,
-    /// Side of directional and spot maps, texels (`--shadows map`).
-    pub map_size: Option<u64>,
-    /// `hard` or `pcf` (`--shadows map`).
-    pub map_filter: Option<String>,
-    /// Per-pass GPU times, ms, where the adapter has timestamp queries.
-    pub gpu_timings_ms: Option<Map<String, Value>>,
+/// `shadowvol render --format json`, read through the type the command writes it with.
+pub use shadowvol_report::RenderReport;
+
+/// A render's frame time, ms: `total_ms - prepare_ms` (the one-off upload of the edge tables is
+/// not part of a frame).
+#[must_use]
+pub fn frame_ms(t: &shadowvol_report::Timings) -> f64 {
+    t.total_ms - t.prepare_ms
 }
 
-/// `render`'s `frames`: the `--frames` frames on the light orbit, in ms.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct FrameStats {
-    /// Frames timed.
-    pub count: Option<u64>,
-    /// Median frame time.
-    pub median_ms: Option<f64>,
-    /// 10th percentile.
-    pub p10_ms: Option<f64>,
-    /// 90th percentile.
-    pub p90_ms: Option<f64>,
-}
-
-/// `render`'s `timings`, in ms.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct RenderTimings {
-    /// Silhouette extraction.
-    pub silhouette_ms: Option<f64>,
-    /// Building the volume sides.
-    pub side_building_ms: Option<f64>,
-    /// Rasterisation.
-    pub raster_ms: Option<f64>,
-    /// One-off upload of the edge tables.
-    pub prepare_ms: Option<f64>,
-    /// The whole render, `prepare` included.
-    pub total_ms: Option<f64>,
-    /// The ray-traced reference (with `--reference`).
-    pub reference_ms: Option<f64>,
-    /// Stages added later.
-    #[serde(flatten)]
-    pub extra: Map<String, Value>,
-}
-
-impl RenderTimings {
-    /// Frame time, ms: `total_ms - prepare_ms` (the one-off upload of the edge tables is not
-    /// part of a frame) when given, else the sum of the per-stage `*_ms` without `prepare` and
-    /// `reference`.
-    #[must_use]
-    pub fn frame_ms(&self) -> f64 {
-        let prepare = self.prepare_ms.unwrap_or(0.0);
-        if let Some(total) = self.total_ms {
-            return total - prepare;
-        }
-        let added = self.extra.iter().filter(|(k, _)| {
-            k.ends_with("_ms") && !k.starts_with("reference") && !k.starts_with("prepare")
-        });
-        [self.raster_ms, self.side_building_ms, self.silhouette_ms]
-            .into_iter()
-            .flatten()
-            .chain(added.filter_map(|(_, v)| v.as_f64()))
-            .sum()
-    }
-
-    /// The timings as `timing_<stage>` columns.
-    pub(super) fn columns(&self) -> Map<String, Value> {
-        let Ok(Value::Object(m)) = serde_json::to_value(self) else {
-            return Map::new();
-        };
-        m.into_iter()
-            .map(|(k, v)| (format!("timing_{k}"), v))
-            .collect()
-    }
+/// A render's timings as `timing_<stage>` columns.
+pub(super) fn timing_columns(t: &shadowvol_report::Timings) -> Map<String, Value> {
+    let Ok(Value::Object(m)) = serde_json::to_value(t) else {
+        return Map::new();
+    };
+    m.into_iter()
+        .map(|(k, v)| (format!("timing_{k}"), v))
+        .collect()
 }

@@ -116,7 +116,7 @@ impl Matrix {
         }
         match self.cli.json::<RenderReport>(&args) {
             Ok(report) => {
-                let device = report.adapter.clone().unwrap_or_default();
+                let device = report.frame.adapter.clone();
                 let mut render = Render::new(report, MAP_RENDER_SIZE, png_s);
                 if let Technique::Map { bias, .. } = t {
                     render.map_bias = Some(bias.unwrap_or("default").to_owned());

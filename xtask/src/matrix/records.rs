@@ -5,7 +5,7 @@
 //! every field the CLI gave, new ones included. Reading `results.json` back (`--replot`) gives
 //! the same records.
 
-use super::cli::{CliRecord, RenderReport, RenderTimings};
+use super::cli::{frame_ms, timing_columns, CliRecord, RenderReport};
 use serde::{Deserialize, Deserializer, Serialize};
 use serde_json::{Map, Value};
 use std::collections::BTreeMap;
@@ -87,7 +87,7 @@ pub struct Render {
     pub covered_pixels: Option<u64>,
     /// See [`RenderReport`].
     pub adapter: Option<String>,
-    /// [`RenderTimings::frame_ms`], when the report had timings.
+    /// [`frame_ms`] of the report's timings.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frame_ms: Option<f64>,
     /// `gpu` or `host`, when the report said.
@@ -134,36 +134,34 @@ impl Render {
     /// The record of `report`, rendered at `size` into `png`.
     #[must_use]
     pub fn new(report: RenderReport, size: &str, png: String) -> Self {
+        let count = |n: usize| n as u64;
+        let frames = report.frames.as_ref();
+        let map_size = report.map.map_size.map(u64::from);
         Self {
             size: size.to_owned(),
-            artifact_pixels: report.artifact_pixels,
-            shadow_pixels: report.shadow_pixels,
-            reference_shadow_pixels: report.reference_shadow_pixels,
-            covered_pixels: report.covered_pixels,
-            adapter: report.adapter,
-            frame_ms: report.timings.as_ref().map(RenderTimings::frame_ms),
-            pipeline: report.pipeline.clone(),
-            frames_median_ms: report.frames.as_ref().and_then(|f| f.median_ms),
-            frames_p10_ms: report.frames.as_ref().and_then(|f| f.p10_ms),
-            frames_p90_ms: report.frames.as_ref().and_then(|f| f.p90_ms),
-            frame_readback_bytes: report.frames.as_ref().and(report.frame_readback_bytes),
-            boundary_pixels: report.boundary_pixels,
-            undecidable_pixels: report.undecidable_pixels,
-            map_size: report.map_size,
-            map_filter: report.map_filter.clone(),
+            artifact_pixels: report.artifact_pixels.map(count),
+            shadow_pixels: Some(count(report.shadow_pixels)),
+            reference_shadow_pixels: report.reference_shadow_pixels.map(count),
+            covered_pixels: report.covered_pixels.map(count),
+            adapter: Some(report.frame.adapter.clone()),
+            frame_ms: Some(frame_ms(&report.frame.timings)),
+            pipeline: Some(report.frame.pipeline.name().to_owned()),
+            frames_median_ms: frames.map(|f| f.median_ms),
+            frames_p10_ms: frames.map(|f| f.p10_ms),
+            frames_p90_ms: frames.map(|f| f.p90_ms),
+            frame_readback_bytes: frames.map(|_| report.frame_readback_bytes),
+            boundary_pixels: report.boundary_pixels.map(count),
+            undecidable_pixels: report.undecidable_pixels.map(count),
+            map_size,
+            map_filter: report.map.map_filter.map(|f| f.name().to_owned()),
             map_bias: None,
             gpu_shadow_maps_ms: report
-                .gpu_timings_ms
-                .as_ref()
-                .and_then(|t| t.get("shadow_maps"))
-                .and_then(Value::as_f64)
-                .filter(|_| report.map_size.is_some()),
+                .frame
+                .gpu_timings
+                .map(|t| t.shadow_maps)
+                .filter(|_| map_size.is_some()),
             png,
-            timing: report
-                .timings
-                .as_ref()
-                .map(RenderTimings::columns)
-                .unwrap_or_default(),
+            timing: timing_columns(&report.frame.timings),
         }
     }
 }

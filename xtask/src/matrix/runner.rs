@@ -462,7 +462,7 @@ impl Matrix {
                             backend: key.to_owned(),
                             mode: Some("exact".to_owned()),
                         };
-                        let device = report.adapter.clone().unwrap_or_default();
+                        let device = report.frame.adapter.clone();
                         let render = Render::new(report, plan.render_size, png_s);
                         self.push("frames", key, device, Data::Render(render));
                     }

@@ -295,7 +295,17 @@ pub fn reference_from(
     ));
     let mut renderer = Renderer::gpu(RenderOptions::new(width, height)).expect("renderer");
     let frame = renderer.render(&scene).expect("render");
-    let shot = frame.shot(&scene).expect("shot");
+    let img = frame.read_image().expect("a frame read back");
+    let shot = shadowvol_reference::Shot::new(
+        &scene,
+        frame.camera,
+        img.width,
+        img.height,
+        &img.rgba,
+        &img.ids,
+        &img.stencil,
+        &frame.report.light_colors,
+    );
     let points = shadowvol_reference::surface_points(&shot);
     shadowvol_reference::reference_states(&shot, &points)
 }

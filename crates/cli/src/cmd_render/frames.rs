@@ -5,31 +5,7 @@ use shadowvol::CliError;
 use shadowvol_renderer::{Renderer, Scene};
 use shadowvol_robust_math::Light;
 
-/// Times of the `--frames` frames.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub(crate) struct FrameStats {
-    pub(super) count: usize,
-    pub(super) median_ms: f64,
-    pub(super) p10_ms: f64,
-    pub(super) p90_ms: f64,
-}
-
-impl FrameStats {
-    /// Median, p10 and p90 (nearest rank) of `ms`; `None` when empty.
-    pub(super) fn of(ms: &mut [f64]) -> Option<Self> {
-        if ms.is_empty() {
-            return None;
-        }
-        ms.sort_by(f64::total_cmp);
-        let at = |q: f64| ms[((ms.len() - 1) as f64 * q).round() as usize];
-        Some(Self {
-            count: ms.len(),
-            median_ms: at(0.5),
-            p10_ms: at(0.1),
-            p90_ms: at(0.9),
-        })
-    }
-}
+pub(crate) use shadowvol_report::FrameStats;
 
 /// Light `l` in orbit frame `k`: turned by `k` degrees about the vertical axis through
 /// `centre` (a point light moves, a directional light turns).
@@ -48,22 +24,22 @@ pub(super) struct Timed {
     pub(super) stats: Option<FrameStats>,
     pub(super) readback_bytes: u64,
     /// The median of each pass's GPU time, where timestamps were read.
-    pub(super) gpu_timings: Option<shadowvol_renderer::resident::GpuTimings>,
+    pub(super) gpu_timings: Option<shadowvol_renderer::GpuTimings>,
 }
 
 /// The median of each field over `all` (`None` when empty).
 fn median_timings(
-    all: &[shadowvol_renderer::resident::GpuTimings],
-) -> Option<shadowvol_renderer::resident::GpuTimings> {
+    all: &[shadowvol_renderer::GpuTimings],
+) -> Option<shadowvol_renderer::GpuTimings> {
     if all.is_empty() {
         return None;
     }
-    let med = |f: fn(&shadowvol_renderer::resident::GpuTimings) -> f64| {
+    let med = |f: fn(&shadowvol_renderer::GpuTimings) -> f64| {
         let mut v: Vec<f64> = all.iter().map(f).collect();
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
-    Some(shadowvol_renderer::resident::GpuTimings {
+    Some(shadowvol_renderer::GpuTimings {
         extract: med(|t| t.extract),
         sides: med(|t| t.sides),
         caps: med(|t| t.caps),

@@ -7,13 +7,14 @@ mod stage;
 
 pub(crate) use stage::{SceneArgs, ShadowsArg};
 
-use report::{Report, TextReport, Timings};
-use shadowvol::memory::{peak_rss_bytes, TableBytes};
+use report::TextReport;
+use shadowvol::memory::{peak_rss_bytes, table_bytes};
 use shadowvol::{find_backend, CliError, Format};
 use shadowvol_renderer::{
     Exposure, GpuPipeline, HostPipeline, PlanPolicy, RenderDevice, RenderError, RenderOptions,
     Renderer, ShadowPipeline,
 };
+use shadowvol_report::RenderReport;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -64,39 +65,12 @@ pub const LONG_ABOUT: &str =
     edge-on to the light, which is invisible in the image). --diff FILE writes the disagreement (red: \
     lit but should be shadowed, blue: shadowed but should be lit, yellow: at a boundary or \
     undecidable, not counted); it implies --reference.\n\n\
-    JSON: {\"artifact_pixels\": N or null without --reference, \"shadow_pixels\": N, \"plan\": \
-    [{\"light\", \"object\", \"object_name\", \"technique\", \"back_cap\", \"silhouette\", \
-    \"silhouette_edges\", \"side_quads\", \"cap_triangles\", \"reason\"}], \"timings\": \
-    {\"silhouette_ms\", \"side_building_ms\", \"raster_ms\", \"prepare_ms\", \"total_ms\", \
-    \"reference_ms\"} (silhouette_ms and side_building_ms are null for the gpu pipeline, which \
-    does both on the device), \"scene\", \"backend\" (the silhouette backend that ran; null for \
-    the gpu pipeline, which runs none), \"mode\", \"size\": [w, h], \"adapter\", \"out\", \
-    \"covered_pixels\", \"reference_shadow_pixels\", \"geometric_artifact_pixels\", \"undecidable_pixels\" \
-    (covered pixels the reference could not decide), \"boundary_pixels\" (raster and reference differ \
-    within one pixel of a reference shadow boundary; neither is counted as an artifact), \
-    \"lights\": [[x, y, z, w]] (the lights used), \"lights_source\": \"file\", \"flags\" or \
-    \"default\", \"ground\": null or {\"y\", \"source\": \"scene\", \"auto\" or \"flags\"}, \
-    \"exposure\": output per lux for the file's lights, null when all are unit lights, \
-    \"scissor_pixels_saved\": pixels kept out of the stencil and lit passes by each light's \
-    scissor, the screen rectangle of its range sphere or spot cone within the scene's bounds \
-    (each plan entry's \"scissor\": [x, y, w, h] or \
-    null for the whole image; --no-scissor turns it off, the image is the same), \
-    \"pipeline\": \"gpu\", \"host\" or \"map\", \"frame_readback_bytes\": bytes brought to the host during \
-    the --frames frames besides the final image (host: the multiplicities, 4 bytes per edge and \
-    light and extraction; gpu: 0), \"frames\": null or {\"count\", \"median_ms\", \"p10_ms\", \
-    \"p90_ms\"}, \"gpu_timings_ms\": null or {\"extract\", \"sides\", \"caps\", \"stencil\" (sides + \
-    caps; maps: the mask passes), \"lighting\" (pre-pass + lit passes), \"shadow_maps\" (the map \
-    passes; 0 for volumes)}, GPU milliseconds from timestamp queries (gpu \
-    pipeline on an adapter with TIMESTAMP_QUERY; the median over --frames, else the final frame), \
-    \"uncertain\": exact-mode evaluations the certified filter left undecided, \"uncertain_unit\": \
-    what they are (\"edge-opposite-vertex-light\" triples on the host pipeline, \"triangle-light\" \
-    pairs on the gpu pipeline), \"host_resolved\": those decided on the host (gpu: 0), \
-    \"peak_rss_bytes\": the process's peak resident set (the kernel's VmHWM; on lavapipe it \
-    includes device memory; null off Linux), \"table_bytes\": what the prepared scene held, the \
-    sum of \"table_bytes_parts\" {\"topology\" (the scene's edge tables), \"host\" (the \
-    pipeline's and its backend's layouts), \"device\" (their device buffers; the image \
-    attachments are not counted)}}. On the gpu pipeline extraction and volumes are part of \
-    raster_ms (and of gpu_timings_ms).\n\n\
+    JSON (--format json): the fields of shadowvol_report::RenderReport, described once in \
+    docs/DESIGN.md (\"CLI contract\"): artifact_pixels (null without --reference), \
+    shadow_pixels, the plan, timings, pipeline, backend (null for the gpu and map pipelines), \
+    mode, adapter, the reference's counts, the lights and where they came from, the ground, \
+    exposure, uncertain and host_resolved, frames and gpu_timings_ms, the map settings, \
+    peak_rss_bytes and table_bytes.\n\n\
     --shadows map draws shadow maps instead of volumes (the map pipeline, on the renderer's \
     device, nothing read back during a frame), with Bevy 0.20's defaults: a directional light \
     gets an orthographic map of 2048 texels fitted to what the view sees and to every caster, a \
@@ -285,9 +259,19 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let frame = renderer.render(&scene).map_err(render_error)?;
     frame.save_png(&out_path).map_err(render_error)?;
     let timed = frames::timed_frames(&mut renderer, &mut scene, args.frames)?;
-    let table = TableBytes::new(scene.table_bytes(), renderer.pipeline().prepared_bytes());
+    let table = table_bytes(scene.table_bytes(), renderer.pipeline().prepared_bytes());
 
-    let shot = frame.shot(&scene).map_err(render_error)?;
+    let img = frame.read_image().map_err(render_error)?;
+    let shot = shadowvol_reference::Shot::new(
+        &scene,
+        frame.camera,
+        img.width,
+        img.height,
+        &img.rgba,
+        &img.ids,
+        &img.stencil,
+        &frame.report.light_colors,
+    );
     let want_reference = args.reference || args.diff.is_some();
     let (cmp, reference_ms) = if want_reference {
         let t = Instant::now();
@@ -304,29 +288,18 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         || shadowvol_reference::shadow_pixels(&shot),
         |c| c.shadow_pixels,
     );
-    let r = &frame.report;
-    let backend = r.backend.as_deref();
     match args.format {
         Format::Json => {
-            let t = r.timings;
-            let report = Report {
-                artifact_pixels: cmp.as_ref().map(|c| c.artifact_pixels),
-                shadow_pixels,
-                plan: &r.plan,
-                timings: Timings {
-                    silhouette_ms: t.silhouette_ms,
-                    side_building_ms: t.side_building_ms,
-                    raster_ms: t.raster_ms,
-                    prepare_ms: t.prepare_ms,
-                    total_ms: t.total_ms,
-                    reference_ms,
-                },
+            let mut report = frame.report.clone();
+            report.timings.reference_ms = reference_ms;
+            report.gpu_timings = timed.gpu_timings.or(report.gpu_timings);
+            let report = RenderReport {
+                frame: report,
                 scene: scene.name.clone(),
-                backend,
-                mode: r.mode,
                 size: [args.size.0, args.size.1],
-                adapter: &r.adapter,
                 out: out_path.display().to_string(),
+                shadow_pixels,
+                artifact_pixels: cmp.as_ref().map(|c| c.artifact_pixels),
                 covered_pixels: cmp.as_ref().map(|c| c.covered_pixels),
                 reference_shadow_pixels: cmp.as_ref().map(|c| c.reference_shadow_pixels),
                 geometric_artifact_pixels: cmp.as_ref().map(|c| c.geometric_artifact_pixels),
@@ -335,18 +308,9 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 lights: scene.lights.iter().map(|l| l.light.to_array()).collect(),
                 lights_source,
                 ground,
-                exposure: r.exposure,
-                scissor_pixels_saved: r.scissor_pixels_saved,
-                pipeline: r.pipeline,
                 frame_readback_bytes: timed.readback_bytes,
                 frames: timed.stats,
-                gpu_timings_ms: timed.gpu_timings.or(r.gpu_timings),
-                scene_parts: r.scene_parts,
-                surface_vertices: r.surface_vertices,
-                uncertain: r.uncertain,
-                uncertain_unit: r.uncertain_unit,
-                host_resolved: r.host_resolved,
-                map: report::MapFields::new(&args.input),
+                map: report::map_fields(&args.input),
                 peak_rss_bytes: peak_rss_bytes(),
                 table_bytes: table.total(),
                 table_bytes_parts: table,
@@ -362,7 +326,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 scene: &scene,
                 lights_source,
                 ground,
-                backend,
+                backend: frame.report.backend.as_deref(),
                 frame: &frame,
                 shadow_pixels,
                 cmp: cmp.as_ref(),

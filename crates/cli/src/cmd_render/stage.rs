@@ -183,26 +183,7 @@ impl SceneArgs {
     }
 }
 
-/// Where the lights of a render came from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub(crate) enum LightsSource {
-    /// The scene file or preset.
-    File,
-    /// `--light`.
-    Flags,
-    /// The default key light ([`shadowvol_scenes::Scene::key_light`]).
-    Default,
-}
-
-/// The receiver plane `y = ground_y` and why it is there.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub(crate) struct Ground {
-    pub(super) y: f32,
-    /// `scene` (the preset declares it), `auto` (nothing lay below the casters) or `flags`
-    /// (`--ground on`).
-    pub(super) source: &'static str,
-}
+pub(crate) use shadowvol_report::{Ground, LightsSource};
 
 /// Chooses the lights and the ground of `scene` from the flags: `--light` replaces the scene's
 /// lights, a scene without any gets [`shadowvol_scenes::Scene::key_light`] seen from its camera
@@ -242,20 +223,27 @@ fn stage(
     // The camera the renderer would frame the scene with, made explicit: every command after
     // this one sees the same view.
     scene.camera = Some(camera);
-    let own = scene.ground_y().map(|y| Ground { y, source: "scene" });
+    let own = scene.ground_y().map(|y| Ground {
+        y,
+        source: "scene".to_owned(),
+    });
     let ground = match ground {
         GroundArg::Off => None,
         GroundArg::On => own.or_else(|| {
-            scene
-                .ground_y_below()
-                .map(|y| Ground { y, source: "flags" })
+            scene.ground_y_below().map(|y| Ground {
+                y,
+                source: "flags".to_owned(),
+            })
         }),
         GroundArg::Auto if shadowvol_scenes::is_preset(scene_arg) => own,
-        GroundArg::Auto => {
-            own.or_else(|| scene.auto_ground_y().map(|y| Ground { y, source: "auto" }))
-        }
+        GroundArg::Auto => own.or_else(|| {
+            scene.auto_ground_y().map(|y| Ground {
+                y,
+                source: "auto".to_owned(),
+            })
+        }),
     };
-    scene.set_ground(ground.map(|g| g.y));
+    scene.set_ground(ground.as_ref().map(|g| g.y));
     Ok((lights_source, ground))
 }
 

@@ -7,18 +7,7 @@ use crate::Camera;
 use glam::{DVec3, Mat4, Vec3, Vec4};
 use shadowvol_scenes::SceneLight;
 
-/// The kind of map a light gets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum MapKind {
-    /// A directional light: one orthographic map fitted to the view and the casters.
-    Directional,
-    /// A spot light with an outer cone angle up to [`SPOT_MAX_HALF_ANGLE`]: one perspective map
-    /// over the cone.
-    Spot,
-    /// A point light (and a wider spot light): a cube map of 6 faces.
-    Cube,
-}
+pub use shadowvol_report::MapKind;
 
 /// The widest spot cone (half angle, radians) that gets a perspective map; wider cones get a
 /// cube map, as a point light does (a perspective map over 150° wastes most of its texels).
@@ -69,6 +58,22 @@ pub struct LightMap {
     pub cascade_far: [f32; 4],
     /// Per cascade: its normal offset in world units (its texel size differs).
     pub cascade_offset: [f32; 4],
+}
+
+impl LightMap {
+    /// What `--explain` and the report state of this map.
+    #[must_use]
+    pub fn summary(&self) -> shadowvol_report::MapSummary {
+        shadowvol_report::MapSummary {
+            kind: self.kind,
+            size: self.size,
+            cascades: self.cascades,
+            texel: self.texel,
+            near: self.near,
+            bias: self.bias,
+            normal_offset: self.normal_offset,
+        }
+    }
 }
 
 /// What a map is fitted to, in world space.

@@ -23,6 +23,7 @@ mod resources;
 
 pub use fit::{cube_face, light_map, FitBounds, LightMap, MapKind};
 pub(crate) use pass::MapPass;
+pub use shadowvol_report::{MapBias, MapFilter};
 
 /// `shaders/render_maps.wgsl`: the map, mask and lit passes (appended to `render_raster.wgsl`).
 pub const MAPS_WGSL: &str = include_str!("../../../../shaders/render_maps.wgsl");
@@ -30,7 +31,7 @@ pub const MAPS_WGSL: &str = include_str!("../../../../shaders/render_maps.wgsl")
 /// The map pipeline's module: the renderer's `render_raster.wgsl`, then `render_maps.wgsl`.
 #[must_use]
 pub fn maps_source() -> String {
-    format!("{}\n{MAPS_WGSL}", crate::resident::SHADER_WGSL)
+    format!("{}\n{MAPS_WGSL}", crate::raster::RASTER_WGSL)
 }
 
 /// Bevy 0.20's directional (and spot) map size, texels.
@@ -49,80 +50,6 @@ pub const BEVY_POINT_BIAS: MapBias = MapBias {
     slope: 0.0,
     normal: 0.6,
 };
-
-/// How a map is read.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum MapFilter {
-    /// One hardware comparison with nearest filtering: visibility 0 or 1.
-    Hard,
-    /// Percentage-closer filtering: 3x3 taps one texel apart, each a bilinear hardware
-    /// comparison (a soft edge over about 4 texels, like Bevy's default Gaussian filter).
-    #[default]
-    Pcf,
-}
-
-impl MapFilter {
-    /// `"hard"` or `"pcf"`.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            MapFilter::Hard => "hard",
-            MapFilter::Pcf => "pcf",
-        }
-    }
-}
-
-/// The three parts of a map's depth bias, in Bevy's units.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct MapBias {
-    /// Constant part: the looked-up point moves this far (world units) towards the light.
-    pub depth: f32,
-    /// Slope-scaled part: the map pass's [`wgpu::DepthBiasState::slope_scale`], pushing the
-    /// stored depth away from the light (0 in Bevy).
-    pub slope: f32,
-    /// Normal offset: the looked-up point moves this many texels (times `√2`, as Bevy scales
-    /// it) along the surface normal turned towards the light.
-    pub normal: f32,
-}
-
-impl MapBias {
-    /// No bias at all (acne everywhere a surface faces the light).
-    pub const NONE: MapBias = MapBias {
-        depth: 0.0,
-        slope: 0.0,
-        normal: 0.0,
-    };
-}
-
-impl std::str::FromStr for MapBias {
-    type Err = String;
-
-    /// `DEPTH,SLOPE,NORMAL`, three finite numbers.
-    fn from_str(s: &str) -> Result<Self, String> {
-        let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-        let [d, sl, n] = parts[..] else {
-            return Err(format!(
-                "map bias {s:?}: expected DEPTH,SLOPE,NORMAL, for example 0.02,0,1.8"
-            ));
-        };
-        let num = |v: &str, what: &str| -> Result<f32, String> {
-            let x: f32 = v
-                .parse()
-                .map_err(|e| format!("map bias {s:?}: {what} {v:?}: {e}"))?;
-            if x.is_finite() {
-                Ok(x)
-            } else {
-                Err(format!("map bias {s:?}: {what} must be finite"))
-            }
-        };
-        Ok(MapBias {
-            depth: num(d, "depth")?,
-            slope: num(sl, "slope")?,
-            normal: num(n, "normal")?,
-        })
-    }
-}
 
 /// What the shadow-map pipeline draws with.
 #[derive(Debug, Clone, Copy, PartialEq)]

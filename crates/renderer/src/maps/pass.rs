@@ -11,9 +11,9 @@ use crate::raster::{
 };
 use crate::{RenderDevice, RenderError};
 use glam::{Mat4, Vec3};
+use shadowvol_gpu::ErrorScopes;
 use shadowvol_scenes::Scene;
 use shadowvol_silhouette::{vec_bytes, PreparedBytes};
-use shadowvol_wgpu_compute::ErrorScopes;
 use std::ops::Range;
 
 /// Byte stride of the per-light map uniforms (`MapU`, 480 bytes).
@@ -94,7 +94,7 @@ impl MapScene {
     }
 }
 
-/// The GPU time of a frame's map passes, as [`crate::resident::GpuTimings`] splits it.
+/// The GPU time of a frame's map passes, as [`crate::GpuTimings`] splits it.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct MapTimings {
     pub(crate) maps: f64,

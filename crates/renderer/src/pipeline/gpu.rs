@@ -3,12 +3,11 @@
 //! in the frame's command encoder. The host writes only small per-frame inputs; no silhouette
 //! backend runs.
 
-use super::{FrameInputs, PassReport, Pipeline, ShadowPipeline};
-use crate::plan::{PlanEntry, SilhouetteSource, Technique};
+use super::{FrameInputs, Pipeline, ShadowPipeline};
+use crate::frame::{FrameReport, GpuTimings};
+use crate::plan::{SilhouetteSource, Technique};
 use crate::raster::{Attachments, BACKGROUND, COLOR_FORMAT, IDS_FORMAT};
-use crate::resident::{
-    GpuTimings, PassFormats, PassFrame, ResidentScene, ShadowPass, SurfaceVertices,
-};
+use crate::resident::{PassFormats, PassFrame, ResidentScene, ShadowPass, SurfaceVertices};
 use crate::{RenderDevice, RenderError};
 use glam::Affine3A;
 use shadowvol_silhouette::{PreparedBytes, SceneParts};
@@ -154,10 +153,11 @@ impl ShadowPipeline for GpuPipeline {
         &mut self,
         _device: &RenderDevice,
         frame: &FrameInputs<'_>,
-        plan: &mut [PlanEntry],
+        report: &mut FrameReport,
         target: &Attachments<'_>,
         enc: &mut wgpu::CommandEncoder,
-    ) -> Result<PassReport, RenderError> {
+    ) -> Result<(), RenderError> {
+        let plan = &mut report.plan;
         let Some(pass) = self.pass.as_ref().filter(|_| !self.parts.is_empty()) else {
             return Err(RenderError::InvalidInput(
                 "the GPU pipeline records before prepare".to_owned(),
@@ -207,28 +207,19 @@ impl ShadowPipeline for GpuPipeline {
         }
         // The first part clears the targets; the others draw over it, into the same depth and
         // stencil, so that the volumes of every part count for every pixel.
-        let (first, rest) = self.parts.split_first().expect("checked above");
-        pass.encode_prepass(
-            enc,
-            &first.rs,
-            target.color,
-            target.ids,
-            target.depth_stencil,
-            BACKGROUND,
-        );
-        for part in rest {
-            pass.encode_prepass_over(
-                enc,
-                &part.rs,
-                target.color,
-                target.ids,
-                target.depth_stencil,
-            );
+        for (k, part) in self.parts.iter().enumerate() {
+            let clear = (k == 0).then_some(BACKGROUND);
+            let (color, ids) = (target.color, target.ids);
+            pass.encode_prepass(enc, &part.rs, color, ids, target.depth_stencil, clear);
         }
         for li in 0..lights {
-            pass.encode_stencil(enc, &first.rs, li, target.depth_stencil);
-            for part in rest {
-                pass.encode_stencil_over(enc, &part.rs, li, target.depth_stencil);
+            for (k, part) in self.parts.iter().enumerate() {
+                let stencil = if k == 0 {
+                    wgpu::LoadOp::Clear(0)
+                } else {
+                    wgpu::LoadOp::Load
+                };
+                pass.encode_stencil(enc, &part.rs, li, target.depth_stencil, stencil);
             }
             target.after_stencil(enc, li);
             for part in &self.parts {
@@ -238,15 +229,14 @@ impl ShadowPipeline for GpuPipeline {
         for e in plan.iter_mut().filter(|e| e.technique != Technique::Culled) {
             e.silhouette = SilhouetteSource::Extracted;
         }
-        Ok(PassReport::default())
+        Ok(())
     }
 
     fn finish(
         &mut self,
         _device: &RenderDevice,
         frame: &FrameInputs<'_>,
-        plan: &mut [PlanEntry],
-        report: &mut PassReport,
+        report: &mut FrameReport,
     ) -> Result<(), RenderError> {
         let Some(pass) = self.pass.as_ref() else {
             return Ok(());
@@ -265,10 +255,14 @@ impl ShadowPipeline for GpuPipeline {
         }
         report.gpu_timings = timings;
         report.scene_parts = self.parts.len();
-        report.surface_vertices = self.parts.first().map(|p| p.rs.surface_vertices());
+        report.surface_vertices = self
+            .parts
+            .first()
+            .map(|p| p.rs.surface_vertices().to_owned());
         if !frame.count {
             return Ok(());
         }
+        let plan = &mut report.plan;
         let n = frame.world.surfaces().len();
         debug_assert_eq!(
             plan.len(),

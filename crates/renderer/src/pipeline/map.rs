@@ -4,12 +4,13 @@
 //! differ. Where the frame is read back, a mask pass writes each light's map test into the
 //! stencil, so the reference compares maps as it compares volumes.
 
-use super::{FrameInputs, PassReport, Pipeline, ShadowPipeline};
+use super::{FrameInputs, Pipeline, ShadowPipeline};
+use crate::frame::FrameReport;
 use crate::maps::pass::{MapFrame, MapLight, MapScene};
 use crate::maps::{light_map, FitBounds, LightMap, MapPass, MapSettings};
-use crate::plan::{PlanEntry, SilhouetteSource};
+use crate::plan::SilhouetteSource;
 use crate::raster::Attachments;
-use crate::resident::GpuTimings;
+use crate::GpuTimings;
 use crate::{Camera, RenderDevice, RenderError};
 use glam::Vec3;
 use shadowvol_silhouette::PreparedBytes;
@@ -86,10 +87,10 @@ impl ShadowPipeline for MapPipeline {
         &mut self,
         device: &RenderDevice,
         frame: &FrameInputs<'_>,
-        plan: &mut [PlanEntry],
+        report: &mut FrameReport,
         target: &Attachments<'_>,
         enc: &mut wgpu::CommandEncoder,
-    ) -> Result<PassReport, RenderError> {
+    ) -> Result<(), RenderError> {
         let (Some(pass), Some(ms)) = (self.pass.as_mut(), self.scene.as_mut()) else {
             return Err(RenderError::InvalidInput(
                 "the shadow-map pipeline records before prepare".to_owned(),
@@ -145,18 +146,17 @@ impl ShadowPipeline for MapPipeline {
         };
         pass.update(device, ms, &map_frame)?;
         self.written = pass.record(enc, ms, &map_frame, target);
-        for e in plan.iter_mut() {
+        for e in &mut report.plan {
             e.silhouette = SilhouetteSource::Skipped;
         }
-        Ok(PassReport::default())
+        Ok(())
     }
 
     fn finish(
         &mut self,
         device: &RenderDevice,
         _frame: &FrameInputs<'_>,
-        _plan: &mut [PlanEntry],
-        report: &mut PassReport,
+        report: &mut FrameReport,
     ) -> Result<(), RenderError> {
         let (Some(pass), Some(ms)) = (self.pass.as_ref(), self.scene.as_ref()) else {
             return Ok(());

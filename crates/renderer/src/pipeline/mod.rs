@@ -2,9 +2,9 @@
 //!
 //! A [`ShadowPipeline`] prepares a scene once ([`ShadowPipeline::prepare`]: upload, lay out),
 //! and per frame records the depth pre-pass, each light's shadow pass and its lit pass into the
-//! caller's command encoder and attachments ([`ShadowPipeline::record`]), returning a
-//! [`PassReport`] of one shape, which [`ShadowPipeline::finish`] completes once the frame was
-//! submitted and has finished on the device. Below the pipelines, and shared by all of them:
+//! caller's command encoder and attachments ([`ShadowPipeline::record`]), filling its part of
+//! the frame's [`FrameReport`] (one shape for every pipeline), which [`ShadowPipeline::finish`]
+//! completes once the frame was submitted and has finished on the device. Below the pipelines, and shared by all of them:
 //! the plan ([`crate::plan`]), the world positions ([`crate::world`]) and the raster states
 //! ([`crate::raster`]). No pipeline imports another.
 //!
@@ -23,41 +23,14 @@ pub use gpu::GpuPipeline;
 pub use host::{volume, HostPipeline};
 pub use map::MapPipeline;
 
-use crate::frame::UncertainUnit;
-use crate::plan::{PlanEntry, Scissor};
+use crate::frame::{FrameReport, UncertainUnit};
+use crate::plan::Scissor;
 use crate::raster::Attachments;
-use crate::resident::GpuTimings;
 use crate::world::{World, WorldChanges};
 use crate::{Accuracy, Camera, RenderDevice, RenderError};
+pub use shadowvol_report::Pipeline;
 use shadowvol_scenes::Scene;
 pub use shadowvol_silhouette::PreparedBytes;
-
-/// Which pipeline drew a frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Pipeline {
-    /// [`HostPipeline`]: the backend's multiplicities come back to the host, which builds sides
-    /// and caps and uploads them (any backend).
-    Host,
-    /// [`GpuPipeline`]: extraction, sides and caps on the renderer's device; nothing is read
-    /// back during a frame, and no backend runs.
-    Gpu,
-    /// [`MapPipeline`]: shadow maps instead of volumes, on the renderer's device; nothing is
-    /// read back during a frame, and no backend runs.
-    Map,
-}
-
-impl Pipeline {
-    /// `"host"` or `"gpu"`.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Pipeline::Host => "host",
-            Pipeline::Gpu => "gpu",
-            Pipeline::Map => "map",
-        }
-    }
-}
 
 /// One frame's inputs: the scene (borrowed, never converted), where its surfaces are, and the
 /// small per-frame values the renderer computed from it.
@@ -84,30 +57,6 @@ pub struct FrameInputs<'a> {
     pub count: bool,
 }
 
-/// What a pipeline reports of one frame, the same shape for every pipeline.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct PassReport {
-    /// Time in the backend's `extract`, milliseconds; `None` when no backend ran.
-    pub silhouette_ms: Option<f64>,
-    /// Time building volumes on the host, milliseconds; `None` when built on the device.
-    pub side_building_ms: Option<f64>,
-    /// Exact mode's evaluations the certified filter could not decide
-    /// ([`ShadowPipeline::uncertain_unit`]).
-    pub uncertain: u64,
-    /// Of those, the ones decided on the host.
-    pub host_resolved: u64,
-    /// Bytes brought to the host during the frame besides the image and the counts.
-    pub readback_bytes: u64,
-    /// GPU time of each pass, where the device has timestamp queries.
-    pub gpu_timings: Option<GpuTimings>,
-    /// Parts the scene was uploaded in (the GPU pipeline, for a scene beyond one storage
-    /// binding); 0 or 1: one.
-    pub scene_parts: usize,
-    /// Where the GPU pipeline's lit pass read the surface vertices: `"buffer"` or `"pulled"`
-    /// ([`crate::resident::SurfaceVertices`]); `None` for the other pipelines.
-    pub surface_vertices: Option<&'static str>,
-}
-
 /// A way to shadow a frame. See the [module documentation](self).
 pub trait ShadowPipeline {
     /// Which pipeline this is.
@@ -119,7 +68,7 @@ pub trait ShadowPipeline {
         None
     }
 
-    /// What [`PassReport::uncertain`] counts in this pipeline (by default (triangle, light)
+    /// What [`FrameReport::uncertain`] counts in this pipeline (by default (triangle, light)
     /// pairs, as a pipeline that decides signs on the device counts them).
     fn uncertain_unit(&self) -> UncertainUnit {
         UncertainUnit::TriangleLight
@@ -141,8 +90,9 @@ pub trait ShadowPipeline {
 
     /// Records one frame into `enc`: the pre-pass (colour = ambient × albedo, ids, depth), then
     /// per light its shadow pass into the stencil of `target`, [`Attachments::after_stencil`],
-    /// and its lit pass (stencil == 0). Fills each plan entry's silhouette source and, with
-    /// [`FrameInputs::count`], the counts it knows now.
+    /// and its lit pass (stencil == 0). Fills each of `report`'s plan entries' silhouette source
+    /// and, with [`FrameInputs::count`], the counts it knows now, and its own fields of `report`
+    /// (see [`FrameReport`]).
     ///
     /// # Errors
     /// [`RenderError::Backend`] when extraction fails, [`RenderError::InvalidInput`] for a
@@ -151,10 +101,10 @@ pub trait ShadowPipeline {
         &mut self,
         device: &RenderDevice,
         frame: &FrameInputs<'_>,
-        plan: &mut [PlanEntry],
+        report: &mut FrameReport,
         target: &Attachments<'_>,
         enc: &mut wgpu::CommandEncoder,
-    ) -> Result<PassReport, RenderError>;
+    ) -> Result<(), RenderError>;
 
     /// After the frame's submission finished: fills what only the device knows (the GPU
     /// pipeline's counts, when the frame counted them, and its timestamps).
@@ -165,10 +115,9 @@ pub trait ShadowPipeline {
         &mut self,
         device: &RenderDevice,
         frame: &FrameInputs<'_>,
-        plan: &mut [PlanEntry],
-        report: &mut PassReport,
+        report: &mut FrameReport,
     ) -> Result<(), RenderError> {
-        let _ = (device, frame, plan, report);
+        let _ = (device, frame, report);
         Ok(())
     }
 

@@ -2,7 +2,16 @@
 //! tests, and the exact per-triangle near-plane test.
 
 use glam::{DVec3, DVec4, Vec3};
-use shadowvol_reference::occlusion::light_side;
+use shadowvol_robust_math::orient_exact;
+
+/// Which side of triangle `t`'s plane the light `l` is on, as `sgn H(a, b, c, L)` with
+/// `H(a, b, c, X) = −(n · (X − a))` for a point `X` and `n = (b − a) × (c − a)`; 0 when the light
+/// lies in the plane (the triangle casts no shadow of it). Exact for any finite `f32` input.
+#[must_use]
+pub(super) fn light_side(t: [Vec3; 3], l: [f32; 4]) -> i8 {
+    // orient_exact(a, b, l, c) is sgn det(a 1; b 1; L; c 1): H's rows with the last two swapped.
+    -orient_exact(t[0].to_array(), t[1].to_array(), l, t[2].to_array())
+}
 
 /// A plane `n · x + d >= 0` is inside, as `(n, d)`.
 pub type Plane = DVec4;
@@ -158,7 +167,7 @@ pub fn near_rect_clear_of_shadows(
         if !nlen.is_finite() {
             return false;
         }
-        // sgn H(a, b, c, X) = −sgn(n · (X − a)) for a point X: the convention of light_side.
+        // sgn H(a, b, c, X) = −sgn(n · (X − a)) for a point X: light_side's convention.
         let side = light_side(v, light);
         let corners_clear = nlen > 0.0
             && near.iter().all(|&x| {
@@ -321,4 +330,25 @@ pub(super) fn points_outside(points: &[DVec3], planes: &[Plane]) -> bool {
 #[must_use]
 pub fn box_outside(lo: DVec3, hi: DVec3, planes: &[Plane]) -> bool {
     points_outside(&box_corners(lo, hi), planes)
+}
+
+#[cfg(test)]
+mod light_side_tests {
+    use super::light_side;
+    use glam::Vec3;
+
+    #[test]
+    fn the_side_follows_the_normal_and_is_zero_in_the_plane() {
+        // n = (b − a) × (c − a) = +z: H is negative above the plane, positive below.
+        let t = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        assert_eq!(light_side(t, [0.2, 0.3, 5.0, 1.0]), -1);
+        assert_eq!(light_side(t, [0.2, 0.3, -5.0, 1.0]), 1);
+        assert_eq!(light_side(t, [7.0, -3.0, 0.0, 1.0]), 0);
+        // A directional light towards +z, and one along the plane.
+        assert_eq!(light_side(t, [0.0, 0.0, 1.0, 0.0]), -1);
+        assert_eq!(light_side(t, [1.0, 1.0, 0.0, 0.0]), 0);
+        // An odd permutation of the vertices flips the side; a hair above the plane still counts.
+        assert_eq!(light_side([t[1], t[0], t[2]], [0.2, 0.3, 5.0, 1.0]), 1);
+        assert_eq!(light_side(t, [0.2, 0.3, f32::MIN_POSITIVE, 1.0]), -1);
+    }
 }

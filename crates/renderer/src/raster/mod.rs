@@ -3,6 +3,10 @@
 //! waits every GPU read goes through. Shared code below the pipelines: the host and GPU
 //! pipelines (and the resident pass) build on it, and neither imports the other.
 
+/// `shaders/render_raster.wgsl`: the raster shaders every pipeline builds on (fragment shaders
+/// and the uniforms they share).
+pub const RASTER_WGSL: &str = include_str!("../../../../shaders/render_raster.wgsl");
+
 pub(crate) mod pipelines;
 pub(crate) mod states;
 mod stencil_bits;

@@ -83,42 +83,15 @@ impl ShadowPass {
         pass.dispatch_workgroups(x, y, 1);
     }
 
-    /// Records the depth pre-pass (ambient colour, ids when [`PassFormats::ids`] is set), clearing
-    /// colour to `clear`, depth to 1 and stencil to 0.
+    /// Records the depth pre-pass (ambient colour, ids when [`PassFormats::ids`] is set). With
+    /// `clear`, colour is cleared to it, ids to 0, depth to 1 and stencil to 0; with `None`
+    /// every target is loaded (a later part of a scene drawn in parts, so that the parts'
+    /// surfaces meet in one depth buffer).
     ///
     /// # Panics
     /// Panics if [`ShadowPass::update`] was never called on `rs`, or `ids` is given without
     /// [`PassFormats::ids`] (or missing with it).
     pub fn encode_prepass(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        rs: &ResidentScene,
-        color: &wgpu::TextureView,
-        ids: Option<&wgpu::TextureView>,
-        depth: &wgpu::TextureView,
-        clear: wgpu::Color,
-    ) {
-        self.prepass(enc, rs, color, ids, depth, Some(clear));
-    }
-
-    /// [`ShadowPass::encode_prepass`] for a later part of a scene drawn in parts: colour, ids,
-    /// depth and stencil loaded, so that the parts' surfaces meet in one depth buffer.
-    ///
-    /// # Panics
-    /// As [`ShadowPass::encode_prepass`].
-    pub fn encode_prepass_over(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        rs: &ResidentScene,
-        color: &wgpu::TextureView,
-        ids: Option<&wgpu::TextureView>,
-        depth: &wgpu::TextureView,
-    ) {
-        self.prepass(enc, rs, color, ids, depth, None);
-    }
-
-    /// The pre-pass, clearing to `clear` or (`None`) loading every target.
-    fn prepass(
         &self,
         enc: &mut wgpu::CommandEncoder,
         rs: &ResidentScene,
@@ -164,38 +137,14 @@ impl ShadowPass {
         }
     }
 
-    /// Records light `light`'s stencil pass into `depth` (its stencil cleared to 0, depth
-    /// loaded): z-pass sides, z-fail sides, then the caps of its z-fail objects.
+    /// Records light `light`'s stencil pass into `depth` (depth loaded): z-pass sides, z-fail
+    /// sides, then the caps of its z-fail objects, counting from `stencil`:
+    /// `wgpu::LoadOp::Clear(0)`, or `Load` for a later part of a scene drawn in parts, so that
+    /// every part's volumes count into it.
     ///
     /// # Panics
     /// Panics if `light` is not a light of the last [`ShadowPass::update`].
     pub fn encode_stencil(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        rs: &ResidentScene,
-        light: usize,
-        depth: &wgpu::TextureView,
-    ) {
-        self.stencil(enc, rs, light, depth, wgpu::LoadOp::Clear(0));
-    }
-
-    /// [`ShadowPass::encode_stencil`] for a later part of a scene drawn in parts: the stencil
-    /// loaded, so that every part's volumes count into it.
-    ///
-    /// # Panics
-    /// As [`ShadowPass::encode_stencil`].
-    pub fn encode_stencil_over(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        rs: &ResidentScene,
-        light: usize,
-        depth: &wgpu::TextureView,
-    ) {
-        self.stencil(enc, rs, light, depth, wgpu::LoadOp::Load);
-    }
-
-    /// Light `light`'s stencil passes, the first starting from `stencil`.
-    fn stencil(
         &self,
         enc: &mut wgpu::CommandEncoder,
         rs: &ResidentScene,

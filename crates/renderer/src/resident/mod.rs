@@ -63,26 +63,21 @@ pub use layout::ResidentLayout;
 use crate::plan::Technique;
 use crate::{Camera, RenderError};
 use glam::{Affine3A, DAffine3};
+use shadowvol_gpu::shaders;
 use shadowvol_robust_math::Accuracy;
 use shadowvol_scenes::SceneLight;
 use shadowvol_silhouette::gpu::{mode_code, ExactFilter, FIRST_EDGE, FIRST_TRIANGLE};
 use shadowvol_silhouette::{object_light, vec_bytes, PreparedBytes};
-use shadowvol_wgpu_compute::shaders;
 use wgpu::util::DeviceExt;
 
 /// `shaders/resident_extract.wgsl`: the triangle, edge and reset kernels.
 pub const EXTRACT_WGSL: &str = include_str!("../../../../shaders/resident_extract.wgsl");
 /// `shaders/resident_draw.wgsl`: the vertex-pulling shaders of the surfaces, sides and caps.
 pub const DRAW_WGSL: &str = include_str!("../../../../shaders/resident_draw.wgsl");
-/// `shaders/render_raster.wgsl`: the renderer's raster shaders (fragment shaders and the
-/// uniforms both pipelines share).
-pub const SHADER_WGSL: &str = include_str!("../../../../shaders/render_raster.wgsl");
 
 /// Threads per workgroup of the triangle and edge passes (the `wgpu` backend's
 /// `WORKGROUP_SIZE`, whose module they join).
 const WORKGROUP: u32 = shaders::WORKGROUP_SIZE;
-/// Storage buffers the edge pass binds in one stage.
-const STORAGE_BUFFERS: u32 = 12;
 /// Byte stride of the per-light uniforms (dynamic offsets).
 const LIGHT_STRIDE: u64 = 256;
 /// Bytes of one light uniform (`LightU`).
@@ -101,7 +96,7 @@ pub fn extract_source(filter: ExactFilter) -> String {
 /// The draw module: the renderer's `render_raster.wgsl`, then the resident vertex shaders.
 #[must_use]
 pub fn draw_source() -> String {
-    format!("{SHADER_WGSL}\n{DRAW_WGSL}")
+    format!("{}\n{DRAW_WGSL}", crate::raster::RASTER_WGSL)
 }
 
 pub use crate::raster::texture_2d;
@@ -355,23 +350,6 @@ fn render_ts(
         })
 }
 
-/// GPU times of one frame's passes, milliseconds, from timestamp queries.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
-pub struct GpuTimings {
-    /// The extraction compute pass (reset, triangle pass, edge pass).
-    pub extract: f64,
-    /// The side passes of every light.
-    pub sides: f64,
-    /// The cap passes of every light.
-    pub caps: f64,
-    /// Sides and caps: the whole stencil passes.
-    pub stencil: f64,
-    /// The depth pre-pass and every light's lit pass.
-    pub lighting: f64,
-    /// The shadow-map pipeline's map passes (0 for the volume pipelines).
-    pub shadow_maps: f64,
-}
-
 /// What the last [`ShadowPass::update`] set, for the draws.
 #[derive(Debug, Clone)]
 struct FrameState {
@@ -419,7 +397,7 @@ pub struct ResidentScene {
     bases: Vec<[u32; 4]>,
     /// The extraction's tables, as the `wgpu` backend binds them (without the OV vertex list:
     /// this pass's `original` reads each OV through its triangle).
-    tables: shadowvol_wgpu_compute::TableBuffers,
+    tables: shadowvol_gpu::TableBuffers,
     /// The object of each global vertex.
     vertex_objects: wgpu::Buffer,
     world: wgpu::Buffer,

@@ -6,76 +6,26 @@ use crate::raster::pipelines::{
     bind_group_layout, color_target, pipeline_layout, storage, uniform, RenderPipelines,
 };
 use crate::raster::states;
-use shadowvol_wgpu_compute::ErrorScopes;
+use shadowvol_gpu::requirements::{self, RESIDENT};
+use shadowvol_gpu::ErrorScopes;
 
 impl ShadowPass {
-    /// Features the pass uses when the adapter has them: `DEPTH_CLIP_CONTROL` (depth clamp for
-    /// z-fail volumes), `SHADER_F64` (the `f64` exact filter) and `TIMESTAMP_QUERY`
-    /// ([`ShadowPass::read_timings`]). Request them on the device.
+    /// Features the pass uses when the adapter has them
+    /// ([`shadowvol_gpu::requirements::optional_features`]). Request them on the device.
     #[must_use]
     pub fn optional_features(adapter: &wgpu::Adapter) -> wgpu::Features {
-        adapter.features()
-            & (wgpu::Features::DEPTH_CLIP_CONTROL
-                | wgpu::Features::SHADER_F64
-                | wgpu::Features::TIMESTAMP_QUERY)
+        requirements::optional_features(adapter)
     }
 
-    /// Limits to request on the device: the downlevel defaults, with the adapter's storage
-    /// buffer counts and sizes (the pass binds up to 10 storage buffers in one stage), each size
-    /// at most [`crate::buffer_cap`] when it is set.
+    /// Limits to request on the device ([`RESIDENT`]'s), each buffer size at most
+    /// [`crate::buffer_cap`] when it is set.
     ///
     /// # Errors
     /// [`RenderError::Unsupported`] naming the limit or capability the adapter lacks.
     pub fn required_limits(adapter: &wgpu::Adapter) -> Result<wgpu::Limits, RenderError> {
-        let a = adapter.limits();
-        Self::check_adapter(adapter)?;
-        let cap = crate::device::buffer_cap().unwrap_or(u64::MAX);
-        let mut l = wgpu::Limits::downlevel_defaults().using_resolution(a.clone());
-        l.max_storage_buffers_per_shader_stage = a.max_storage_buffers_per_shader_stage;
-        l.max_storage_buffer_binding_size = a.max_storage_buffer_binding_size.min(cap);
-        l.max_buffer_size = a.max_buffer_size.min(cap);
-        l.max_compute_workgroups_per_dimension = a.max_compute_workgroups_per_dimension;
-        Ok(l)
-    }
-
-    fn check_adapter(adapter: &wgpu::Adapter) -> Result<(), RenderError> {
-        let down = adapter.get_downlevel_capabilities();
-        for (flag, name) in [
-            (
-                wgpu::DownlevelFlags::VERTEX_STORAGE,
-                "VERTEX_STORAGE (storage buffers in vertex shaders)",
-            ),
-            (
-                wgpu::DownlevelFlags::INDIRECT_EXECUTION,
-                "INDIRECT_EXECUTION (indirect draws)",
-            ),
-            (wgpu::DownlevelFlags::COMPUTE_SHADERS, "COMPUTE_SHADERS"),
-        ] {
-            if !down.flags.contains(flag) {
-                return Err(RenderError::Unsupported(format!(
-                    "the adapter lacks the downlevel capability {name}, which the GPU pipeline needs"
-                )));
-            }
-        }
-        Self::check_limits(&adapter.limits())
-    }
-
-    fn check_limits(l: &wgpu::Limits) -> Result<(), RenderError> {
-        if l.max_storage_buffers_per_shader_stage < STORAGE_BUFFERS {
-            return Err(RenderError::Unsupported(format!(
-                "max_storage_buffers_per_shader_stage is {}; the GPU pipeline needs {STORAGE_BUFFERS}",
-                l.max_storage_buffers_per_shader_stage
-            )));
-        }
-        if l.max_compute_invocations_per_workgroup < WORKGROUP
-            || l.max_compute_workgroup_size_x < WORKGROUP
-        {
-            return Err(RenderError::Unsupported(format!(
-                "the device allows {} invocations per workgroup; the GPU pipeline needs {WORKGROUP}",
-                l.max_compute_invocations_per_workgroup
-            )));
-        }
-        Ok(())
+        RESIDENT
+            .limits(adapter, crate::device::buffer_cap())
+            .map_err(RenderError::Unsupported)
     }
 
     /// Builds the pipelines on `device` (opened from `adapter` with
@@ -91,8 +41,10 @@ impl ShadowPass {
         queue: &wgpu::Queue,
         formats: PassFormats,
     ) -> Result<Self, RenderError> {
-        Self::check_adapter(adapter)?;
-        Self::check_limits(&device.limits())?;
+        RESIDENT
+            .check_adapter(adapter)
+            .and_then(|()| RESIDENT.check_limits(&device.limits()))
+            .map_err(RenderError::Unsupported)?;
         if !formats.depth.has_stencil_aspect() {
             return Err(RenderError::InvalidInput(format!(
                 "depth format {:?} has no stencil aspect",

@@ -2,6 +2,7 @@
 //! between timed frames.
 
 use super::*;
+use crate::frame::GpuTimings;
 
 impl ShadowPass {
     /// Reads back the counts of the last submitted frame (for tests and the final frame's plan;

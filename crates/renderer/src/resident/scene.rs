@@ -2,9 +2,9 @@
 //! ([`ShadowPass::update`]) and the buffers sized by the number of lights.
 
 use super::*;
+use shadowvol_gpu::TableBuffers;
 use shadowvol_silhouette::gpu::{TableBuffer, TableWriter, FIRST_VERTEX};
 use shadowvol_silhouette::TopologyScene;
-use shadowvol_wgpu_compute::TableBuffers;
 
 /// The usage of the scene's static buffers.
 const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE;

@@ -1,7 +1,7 @@
 //! The CPU twin of `shaders/resident_extract.wgsl`, for tests: the triangle pass and the edge
 //! pass, statement for statement, on a [`ResidentLayout`], with the `wgpu` backend's twins of
 //! the functions they share (`triangle_sign`, `edge_multiplicity` of
-//! [`shadowvol_wgpu_compute::twin`]). The pass never calls it.
+//! [`shadowvol_gpu::twin`]). The pass never calls it.
 //!
 //! The device appends side records in an unspecified order; [`side_records`] returns them sorted,
 //! and tests compare sorted lists. As for the `wgpu` backend's twin, the only intended difference
@@ -10,10 +10,10 @@
 
 use super::layout::{ResidentLayout, NEGATIVE};
 use super::{technique, LightRecords};
+use shadowvol_gpu::shaders::TOUCH;
+use shadowvol_gpu::twin;
 use shadowvol_robust_math::Accuracy;
 use shadowvol_silhouette::gpu::ExactFilter;
-use shadowvol_wgpu_compute::shaders::TOUCH;
-use shadowvol_wgpu_compute::twin;
 
 fn position(layout: &ResidentLayout, id: u32) -> [f32; 3] {
     layout.tables.position(id)

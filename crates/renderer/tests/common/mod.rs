@@ -36,7 +36,25 @@ pub fn gpu_renderer(opts: RenderOptions) -> Result<Renderer, Skip> {
 
 /// The reference's comparison of `frame`, a render of `scene`.
 pub fn compare(frame: &Frame, scene: &Scene) -> Comparison {
-    shadowvol_reference::compare(&frame.shot(scene).expect("a frame read back"))
+    shadowvol_reference::compare(&shot(frame, scene))
+}
+
+/// `frame`, a render of `scene`, as the reference reads it.
+///
+/// # Panics
+/// Panics if the frame was not read back.
+pub fn shot<'a>(frame: &'a Frame, scene: &'a Scene) -> shadowvol_reference::Shot<'a> {
+    let img = frame.read_image().expect("a frame read back");
+    shadowvol_reference::Shot::new(
+        scene,
+        frame.camera,
+        img.width,
+        img.height,
+        &img.rgba,
+        &img.ids,
+        &img.stencil,
+        &frame.report.light_colors,
+    )
 }
 
 /// A scene of `objects` (name, mesh, world transform; each its own table), lit by unit

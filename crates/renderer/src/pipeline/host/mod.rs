@@ -6,9 +6,8 @@ mod frame;
 mod raster;
 pub mod volume;
 
-use super::{FrameInputs, PassReport, Pipeline, ShadowPipeline};
-use crate::frame::UncertainUnit;
-use crate::plan::PlanEntry;
+use super::{FrameInputs, Pipeline, ShadowPipeline};
+use crate::frame::{FrameReport, UncertainUnit};
 use crate::raster::{push_surface, Attachments};
 use crate::{Camera, RenderDevice, RenderError};
 use glam::{Affine3A, Vec3};
@@ -201,10 +200,11 @@ impl ShadowPipeline for HostPipeline {
         &mut self,
         device: &RenderDevice,
         frame: &FrameInputs<'_>,
-        plan: &mut [PlanEntry],
+        report: &mut FrameReport,
         target: &Attachments<'_>,
         enc: &mut wgpu::CommandEncoder,
-    ) -> Result<PassReport, RenderError> {
+    ) -> Result<(), RenderError> {
+        let plan = &mut report.plan;
         self.sync_objects(frame.scene)?;
         let extracted = self.extract_silhouettes(frame, plan)?;
 
@@ -265,16 +265,12 @@ impl ShadowPipeline for HostPipeline {
         } else {
             Vec::new()
         };
-        Ok(PassReport {
-            silhouette_ms: Some(ms(extracted.time)),
-            side_building_ms: Some(ms(build_time)),
-            uncertain: extracted.uncertain,
-            host_resolved: extracted.uncertain,
-            readback_bytes: extracted.readback_bytes,
-            gpu_timings: None,
-            scene_parts: 1,
-            surface_vertices: None,
-        })
+        report.timings.silhouette_ms = Some(ms(extracted.time));
+        report.timings.side_building_ms = Some(ms(build_time));
+        report.uncertain = extracted.uncertain;
+        report.host_resolved = extracted.uncertain;
+        report.readback_bytes = extracted.readback_bytes;
+        Ok(())
     }
 
     fn volumes(&self) -> &[[f32; 4]] {

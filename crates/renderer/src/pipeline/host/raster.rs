@@ -14,8 +14,8 @@ use crate::raster::{
 };
 use crate::{RenderDevice, RenderError};
 use bytemuck::Zeroable;
+use shadowvol_gpu::ErrorScopes;
 use shadowvol_scenes::Emission;
-use shadowvol_wgpu_compute::ErrorScopes;
 use std::ops::Range;
 
 /// The draws of one light, as vertex ranges into the frame's volume vertex buffer.

@@ -55,7 +55,7 @@ pub const TRIANGLE_ENTRY_POINT: &str = "triangles";
 
 /// The entry point that decides, on the device, the `(triangle, light)` pairs a triangle step
 /// built with [`DEFER_INT_CONSTANT`] appended to the uncertain list (exact mode with
-/// [`WgpuOptions::exact_on_device`](crate::WgpuOptions::exact_on_device)), dispatched between
+/// `WgpuOptions::exact_on_device` of the `wgpu` backend), dispatched between
 /// [`TRIANGLE_ENTRY_POINT`] and [`ENTRY_POINT`]. It loops over the list with a grid stride.
 pub const RESOLVE_ENTRY_POINT: &str = "resolve_uncertain";
 
