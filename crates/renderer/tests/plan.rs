@@ -22,6 +22,7 @@ main!(
     directional_light_has_no_back_cap,
     off_screen_caster_is_culled_unless_its_shadow_reaches_the_view,
     static_light_reuses_silhouettes_and_a_moving_one_re_extracts,
+    moved_objects_eye_and_albedo_draw_as_a_fresh_renderer_does,
     many_objects_several_lights_match_the_reference
 );
 
@@ -303,6 +304,9 @@ fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() -> Outcome {
     assert_eq!(extracts.load(Ordering::SeqCst), 4, "one call for the box");
     assert_eq!(lights.load(Ordering::SeqCst), 7, "with both lights");
     assert_eq!(common::compare(&fourth, &scene).artifact_pixels, 0);
+    let mut fresh =
+        Renderer::host(Box::new(CpuBackend::new()), RenderOptions::new(96, 96)).unwrap();
+    assert_eq!(fourth.image, fresh.render(&scene).unwrap().image);
 
     // Both lights move, nothing else: one batched call again, and the image equals a fresh
     // renderer's (the batched multiplicities are the per-object ones).
@@ -326,6 +330,47 @@ fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() -> Outcome {
         .plan
         .iter()
         .all(|e| e.silhouette == SilhouetteSource::Extracted));
+    Ok(())
+}
+
+/// The host pipeline keeps its surface vertices between frames: after each change (an object
+/// moved, the eye moved, a receiver's colour, a receiver added), the kept renderer's image,
+/// ids and stencils equal those of a renderer that draws the scene for the first time.
+fn moved_objects_eye_and_albedo_draw_as_a_fresh_renderer_does() -> Outcome {
+    let opts = RenderOptions::new(96, 96);
+    let mut kept = common::renderer_with(opts)?;
+    let camera = Camera::look_at(Vec3::new(4.0, 5.0, 7.0), Vec3::new(0.0, 0.5, 0.0));
+    let mut scene = common::box_on_floor(Light::point(Vec3::new(1.5, 6.0, 1.0)), camera);
+    let mut step = |scene: &Scene, what: &str| {
+        let image = kept.render(scene).unwrap().image;
+        let mut fresh = common::renderer_with(opts).unwrap();
+        let expected = fresh.render(scene).unwrap().image;
+        assert!(
+            image == expected,
+            "after {what}, the image differs from a fresh renderer's"
+        );
+    };
+    step(&scene, "the first frame");
+    step(&scene, "a still frame");
+    scene.geometry.objects[1].world_from_object =
+        Affine3A::from_translation(Vec3::new(0.7, 0.8, -0.4));
+    step(&scene, "the box moved");
+    scene.camera = Some(Camera::look_at(
+        Vec3::new(-3.0, 4.0, 6.0),
+        Vec3::new(0.0, 0.5, 0.0),
+    ));
+    step(&scene, "the eye moved");
+    scene.receivers.push(shadowvol_scenes::Receiver::plane(
+        "wall",
+        Vec3::new(0.0, 1.0, -3.0),
+        Vec3::Z,
+        3.0,
+    ));
+    step(&scene, "a receiver was added");
+    scene.receivers[0].albedo = [0.9, 0.2, 0.1];
+    step(&scene, "the receiver's colour changed");
+    scene.geometry.objects[0].world_from_object = Affine3A::from_translation(Vec3::Y * -0.1);
+    step(&scene, "the floor moved");
     Ok(())
 }
 

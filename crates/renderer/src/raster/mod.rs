@@ -64,8 +64,25 @@ pub(crate) fn push_surface(
     albedo: [f32; 3],
     origin: glam::Vec3,
 ) {
-    out.reserve(3 * table.triangles.len());
-    for (ti, t) in table.triangles.iter().enumerate() {
+    let all = 0..table.triangles.len();
+    push_triangles(out, index, table, all, positions, albedo, origin);
+}
+
+/// [`push_surface`] for the triangles `triangles` of the surface only (their ids stay those
+/// within the surface): a surface written in blocks.
+pub(crate) fn push_triangles(
+    out: &mut Vec<SurfaceVertex>,
+    index: usize,
+    table: &shadowvol_mesh_topology::EdgeTable,
+    triangles: std::ops::Range<usize>,
+    positions: &[glam::Vec3],
+    albedo: [f32; 3],
+    origin: glam::Vec3,
+) {
+    out.reserve(3 * triangles.len());
+    let first = triangles.start;
+    for (k, t) in table.triangles[triangles].iter().enumerate() {
+        let ti = first + k;
         let mut k = *t;
         k.sort_unstable();
         let p = k.map(|k| positions[k as usize]);

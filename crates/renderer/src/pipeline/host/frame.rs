@@ -8,7 +8,8 @@ use crate::pipeline::FrameInputs;
 use crate::plan::{PlanEntry, SilhouetteSource, Technique};
 use crate::RenderError;
 use glam::Affine3A;
-use shadowvol_robust_math::Light;
+use shadowvol_mesh_topology::EdgeTable;
+use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::Multiplicities;
 use std::time::{Duration, Instant};
 
@@ -29,6 +30,38 @@ fn object_space_light(name: &str, transform: Affine3A, light: Light) -> Result<L
     Light::try_from(l).map_err(|e| {
         RenderError::InvalidInput(format!("object {name:?}: light in object space {l:?}: {e}"))
     })
+}
+
+impl LightCache {
+    /// The cache of `light`'s multiplicities `m` in `mode` for the object `name` (`table`,
+    /// placed by `transform`): the triangles touching the light found and taken out of `m` once,
+    /// here, instead of every frame. A light that is not finite in the object's space is left
+    /// for [`HostPipeline::build_volumes`] to refuse, as it draws.
+    fn new(
+        name: &str,
+        transform: Affine3A,
+        table: &EdgeTable,
+        light: Light,
+        mode: Accuracy,
+        mut m: Vec<i32>,
+    ) -> Self {
+        let silhouette_edges = m.iter().filter(|&&v| v != 0).count();
+        let mut touching = Vec::new();
+        if let Ok(ol) = object_space_light(name, transform, light) {
+            let ol = ol.to_array();
+            touching = touching_triangles(table, ol);
+            if !touching.is_empty() {
+                remove_triangles(table, ol, mode, &touching, &mut m);
+            }
+        }
+        Self {
+            light,
+            mode,
+            m,
+            silhouette_edges,
+            touching,
+        }
+    }
 }
 
 impl HostPipeline {
@@ -103,11 +136,17 @@ impl HostPipeline {
             let offsets = scene.geometry.edge_offsets();
             for &oi in &batch {
                 for (k, &li) in union.iter().enumerate() {
-                    self.objects[oi].lights[li] = Some(LightCache {
-                        light: scene.lights[li].light,
+                    let m = m_buf.values(k)[offsets[oi]..offsets[oi + 1]].to_vec();
+                    let c = &mut self.objects[oi];
+                    let light = scene.lights[li].light;
+                    c.lights[li] = Some(LightCache::new(
+                        &scene.geometry.objects[oi].name,
+                        c.transform,
+                        &c.table,
+                        light,
                         mode,
-                        m: m_buf.values(k)[offsets[oi]..offsets[oi + 1]].to_vec(),
-                    });
+                        m,
+                    ));
                     if entries[li * n_surfaces + oi].technique != Technique::Culled {
                         entries[li * n_surfaces + oi].silhouette = SilhouetteSource::Extracted;
                     }
@@ -134,11 +173,16 @@ impl HostPipeline {
             readback_bytes += 4 * (m_buf.edge_count() * m_buf.light_count()) as u64;
             let c = &mut self.objects[oi];
             for (k, &li) in stale.iter().enumerate() {
-                c.lights[li] = Some(LightCache {
-                    light: scene.lights[li].light,
+                let light = scene.lights[li].light;
+                let m = m_buf.values(k).to_vec();
+                c.lights[li] = Some(LightCache::new(
+                    &obj.name,
+                    c.transform,
+                    &c.table,
+                    light,
                     mode,
-                    m: m_buf.values(k).to_vec(),
-                });
+                    m,
+                ));
             }
         }
 
@@ -149,10 +193,10 @@ impl HostPipeline {
         })
     }
 
-    /// The volume geometry of every light, from the cached silhouettes (sides) and the
-    /// triangle signs (caps, z-fail only), and each light's draw ranges: z-pass sides, then
-    /// z-fail sides, back caps and counter-clockwise caps, then clockwise caps. Fills each
-    /// entry's edge, side and cap counts.
+    /// The volume geometry of every light, appended to `volumes`, from the cached silhouettes
+    /// (sides) and the triangle signs (caps, z-fail only), and each light's draw ranges: z-pass
+    /// sides, then z-fail sides, back caps and counter-clockwise caps, then clockwise caps.
+    /// Fills each entry's edge, side and cap counts.
     ///
     /// # Errors
     /// [`RenderError::InvalidInput`] for a light that is not finite in an object's space.
@@ -160,12 +204,12 @@ impl HostPipeline {
         &self,
         frame: &FrameInputs<'_>,
         entries: &mut [PlanEntry],
-    ) -> Result<(Vec<[f32; 4]>, Vec<LightDraws>), RenderError> {
+        volumes: &mut Vec<[f32; 4]>,
+    ) -> Result<Vec<LightDraws>, RenderError> {
         let scene = frame.scene;
         let mode = frame.mode;
         let n_lights = scene.lights.len();
         let n_surfaces = frame.world.surfaces().len();
-        let mut volumes: Vec<[f32; 4]> = Vec::new();
         let mut draws = Vec::with_capacity(n_lights);
         for (li, scene_light) in scene.lights.iter().enumerate() {
             let light = &scene_light.light;
@@ -187,31 +231,28 @@ impl HostPipeline {
                 }
                 let c = &self.objects[oi];
                 let world = &frame.world.surfaces()[oi].positions;
-                let m = &c.lights[li].as_ref().expect("extracted above").m;
-                e.silhouette_edges = m.iter().filter(|&&v| v != 0).count();
+                let cache = c.lights[li].as_ref().expect("extracted above");
+                e.silhouette_edges = cache.silhouette_edges;
                 let ol = object_space_light(&obj.name, c.transform, *light)?.to_array();
-                let touching = touching_triangles(&c.table, ol);
-                let mut m = m.clone();
-                if !touching.is_empty() {
-                    remove_triangles(&c.table, ol, mode, &touching, &mut m);
+                if !cache.touching.is_empty() {
                     e.reason
                         .push_str("; triangles touching the light are drawn without a volume");
                 }
                 if e.technique == Technique::ZPass {
-                    e.side_quads = build_sides(&c.table.edges, &m, world, l, &mut volumes);
+                    e.side_quads = build_sides(&c.table.edges, &cache.m, world, l, volumes);
                 } else {
-                    zfail_objects.push((oi, ol, touching, m));
+                    zfail_objects.push((oi, ol, cache));
                 }
             }
             d.zpass = start..volumes.len() as u32;
             let start = volumes.len() as u32;
             let mut cw_caps = Vec::new();
-            for (oi, ol, touching, m) in &zfail_objects {
-                let e = &mut entries[li * n_surfaces + *oi];
-                let c = &self.objects[*oi];
-                let world = &frame.world.surfaces()[*oi].positions;
-                e.side_quads = build_sides(&c.table.edges, m, world, l, &mut volumes);
-                let caps = build_caps(&c.table, *ol, world, l, mode, e.back_cap, touching);
+            for &(oi, ol, cache) in &zfail_objects {
+                let e = &mut entries[li * n_surfaces + oi];
+                let c = &self.objects[oi];
+                let world = &frame.world.surfaces()[oi].positions;
+                e.side_quads = build_sides(&c.table.edges, &cache.m, world, l, volumes);
+                let caps = build_caps(&c.table, ol, world, l, mode, e.back_cap, &cache.touching);
                 e.cap_triangles =
                     (caps.front_ccw.len() + caps.front_cw.len() + caps.back.len()) / 3;
                 volumes.extend_from_slice(&caps.back);
@@ -224,6 +265,6 @@ impl HostPipeline {
             d.zfail_cw = start..volumes.len() as u32;
             draws.push(d);
         }
-        Ok((volumes, draws))
+        Ok(draws)
     }
 }

@@ -1,6 +1,8 @@
 //! The host pipeline: any [`SilhouetteBackend`] extracts the multiplicities, which come back to
-//! the host; the host builds side quads and caps from them and uploads them with the surfaces.
-//! Silhouettes are kept per (object, light) and reused while neither moved.
+//! the host; the host builds side quads and caps from them and uploads them. Silhouettes are
+//! kept per (object, light) and reused while neither moved; the surfaces' vertices, laid out in
+//! `prepare`, stay on the device and are written again only where a surface moved (or the eye,
+//! their origin), so a frame's host work grows with the silhouettes, not with the scene.
 
 mod frame;
 mod raster;
@@ -8,10 +10,10 @@ pub mod volume;
 
 use super::{FrameInputs, Pipeline, ShadowPipeline};
 use crate::frame::{FrameReport, UncertainUnit};
-use crate::raster::{push_surface, Attachments};
+use crate::raster::{push_triangles, Attachments, SurfaceVertex};
 use crate::{Camera, RenderDevice, RenderError};
 use glam::{Affine3A, Vec3};
-use raster::{HostRaster, RasterInput};
+use raster::{HostBuffers, HostRaster, RasterInput};
 use shadowvol_mesh_topology::EdgeTable;
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_scenes::Scene;
@@ -21,11 +23,18 @@ use shadowvol_silhouette::{
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// One light's silhouette of one object, as last extracted.
+/// One light's silhouette of one object, as last extracted, and what the volumes take from it
+/// while neither moves.
 struct LightCache {
     light: Light,
     mode: Accuracy,
+    /// The multiplicities without the triangles that touch the light
+    /// ([`volume::remove_triangles`]): what the sides are built from.
     m: Vec<i32>,
+    /// Edges with a non-zero multiplicity as extracted.
+    silhouette_edges: usize,
+    /// Per triangle: it touches the light ([`volume::touching_triangles`]; empty: none does).
+    touching: Vec<bool>,
 }
 
 /// One caster as the backend knows it: its table prepared on its own (object space, identity
@@ -51,9 +60,57 @@ pub struct HostPipeline {
     /// each object it was prepared for: one `extract` serves every still object.
     whole: Option<(PreparedId, PreparedKey)>,
     raster: Option<HostRaster>,
+    /// The device buffers kept between frames, from `prepare`.
+    buffers: Option<HostBuffers>,
+    /// The surfaces as the device buffer holds them.
+    surfaces: SurfaceLayout,
     keep_volumes: bool,
+    /// The last frame's volume vertices (camera-relative), kept so that the next frame reuses
+    /// their room.
     volumes: Vec<[f32; 4]>,
 }
+
+/// What one surface's vertices in the device buffer were written from.
+#[derive(Clone)]
+struct SurfaceKey {
+    table: Arc<EdgeTable>,
+    transform: Affine3A,
+    albedo: [u32; 3],
+}
+
+impl SurfaceKey {
+    fn of(s: &shadowvol_scenes::Surface<'_>) -> Self {
+        Self {
+            table: Arc::clone(s.table),
+            transform: s.world_from_object,
+            albedo: s.albedo.map(f32::to_bits),
+        }
+    }
+}
+
+impl PartialEq<shadowvol_scenes::Surface<'_>> for SurfaceKey {
+    fn eq(&self, s: &shadowvol_scenes::Surface<'_>) -> bool {
+        Arc::ptr_eq(&self.table, s.table)
+            && self.transform == s.world_from_object
+            && self.albedo == s.albedo.map(f32::to_bits)
+    }
+}
+
+/// Where each surface's triangles lie in [`HostBuffers::surface`] and what they were written
+/// from.
+#[derive(Default)]
+struct SurfaceLayout {
+    /// Per surface: its first vertex and its vertex count (3 a triangle).
+    ranges: Vec<(u32, u32)>,
+    /// Per surface: what its vertices were last written from (`None`: not yet written).
+    written: Vec<Option<SurfaceKey>>,
+    /// The origin (the eye, as bits) the written vertices are relative to.
+    origin: Option<[u32; 3]>,
+}
+
+/// Triangles written to the device per queue write when surfaces are (re)written: bounds the
+/// host memory a frame that writes surfaces allocates (1 MiB of vertices).
+const SURFACE_BLOCK: usize = (1 << 20) / (3 * std::mem::size_of::<SurfaceVertex>());
 
 impl std::fmt::Debug for HostPipeline {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -75,6 +132,8 @@ impl HostPipeline {
             objects: Vec::new(),
             whole: None,
             raster: None,
+            buffers: None,
+            surfaces: SurfaceLayout::default(),
             keep_volumes: false,
             volumes: Vec::new(),
         }
@@ -153,6 +212,93 @@ impl HostPipeline {
         self.whole = Some((id, key));
         Ok(id)
     }
+
+    /// Lays the surfaces of `scene` out in a new device buffer (with the uniforms' and the
+    /// volumes') unless the kept one holds exactly their vertex counts; a new layout is written
+    /// in full by the next frame.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] before the raster exists, [`RenderError::TooLarge`] for
+    /// surfaces of more than `u32::MAX` vertices in all or a triangle beyond one buffer.
+    fn lay_out(&mut self, device: &RenderDevice, scene: &Scene) -> Result<(), RenderError> {
+        let raster = self.raster.as_ref().ok_or_else(|| {
+            RenderError::InvalidInput("the host pipeline records before prepare".to_owned())
+        })?;
+        let layout = &mut self.surfaces;
+        let same = self.buffers.is_some()
+            && layout.ranges.len() == scene.surfaces().len()
+            && layout
+                .ranges
+                .iter()
+                .zip(scene.surfaces())
+                .all(|(&(_, n), s)| n as usize == 3 * s.table.triangles.len());
+        if same {
+            return Ok(());
+        }
+        let mut ranges = Vec::with_capacity(scene.surfaces().len());
+        let mut first = 0u32;
+        for s in scene.surfaces() {
+            let n = u32::try_from(3 * s.table.triangles.len())
+                .ok()
+                .filter(|&n| first.checked_add(n).is_some())
+                .ok_or_else(|| {
+                    RenderError::TooLarge(format!(
+                        "the surfaces up to {:?} have more than {} vertices",
+                        s.name,
+                        u32::MAX
+                    ))
+                })?;
+            ranges.push((first, n));
+            first += n;
+        }
+        self.buffers = Some(raster.buffers(&device.device, first, scene.lights.len())?);
+        layout.written = vec![None; ranges.len()];
+        layout.ranges = ranges;
+        layout.origin = None;
+        Ok(())
+    }
+
+    /// Writes into the device buffer the vertices of every surface that moved (the world's
+    /// change list), whose table, transform or albedo differ from those it was written from, or
+    /// all of them when the eye (their origin) moved. A still scene writes nothing.
+    fn write_surfaces(&mut self, device: &RenderDevice, frame: &FrameInputs<'_>) {
+        let Some(buffers) = &self.buffers else {
+            return;
+        };
+        let layout = &mut self.surfaces;
+        let origin = frame.camera.eye;
+        let origin_bits = origin.to_array().map(f32::to_bits);
+        if layout.origin != Some(origin_bits) {
+            layout.written.fill(None);
+            layout.origin = Some(origin_bits);
+        }
+        let mut scratch: Vec<SurfaceVertex> = Vec::new();
+        let surfaces = frame.scene.surfaces().zip(frame.world.surfaces());
+        for (i, (s, w)) in surfaces.enumerate() {
+            let moved = frame.changes.moved.get(i).copied().unwrap_or(true);
+            if !moved && layout.written[i].as_ref().is_some_and(|k| *k == s) {
+                continue;
+            }
+            let first = layout.ranges[i].0;
+            let n = s.table.triangles.len();
+            for lo in (0..n).step_by(SURFACE_BLOCK) {
+                let hi = n.min(lo + SURFACE_BLOCK);
+                scratch.clear();
+                push_triangles(
+                    &mut scratch,
+                    i,
+                    s.table,
+                    lo..hi,
+                    &w.positions,
+                    s.albedo,
+                    origin,
+                );
+                let at = first + 3 * lo as u32;
+                buffers.surface.write(&device.queue, at, &scratch);
+            }
+            layout.written[i] = Some(SurfaceKey::of(&s));
+        }
+    }
 }
 
 impl ShadowPipeline for HostPipeline {
@@ -169,8 +315,9 @@ impl ShadowPipeline for HostPipeline {
     }
 
     fn prepared_bytes(&self) -> PreparedBytes {
-        // The backend's preparations (each object on its own, and the whole geometry), plus the
-        // volume vertices kept for viewers. A frame's vertex buffers live for that frame only.
+        // The backend's preparations (each object on its own, and the whole geometry), the
+        // device buffers kept between frames (surfaces, volumes, uniforms), and the host's
+        // volume vertices kept for the next frame.
         let ids = self
             .objects
             .iter()
@@ -178,7 +325,7 @@ impl ShadowPipeline for HostPipeline {
             .chain(self.whole.as_ref().map(|(id, _)| *id));
         let mut bytes = PreparedBytes {
             host: vec_bytes(&self.volumes),
-            device: 0,
+            device: self.buffers.as_ref().map_or(0, HostBuffers::device_bytes),
         };
         for id in ids {
             if let Ok(b) = self.backend.prepared_bytes(id) {
@@ -193,7 +340,8 @@ impl ShadowPipeline for HostPipeline {
         if self.raster.is_none() {
             self.raster = Some(HostRaster::new(device)?);
         }
-        self.sync_objects(scene)
+        self.sync_objects(scene)?;
+        self.lay_out(device, scene)
     }
 
     fn record(
@@ -205,17 +353,22 @@ impl ShadowPipeline for HostPipeline {
         enc: &mut wgpu::CommandEncoder,
     ) -> Result<(), RenderError> {
         let plan = &mut report.plan;
+        self.lay_out(device, frame.scene)?;
         self.sync_objects(frame.scene)?;
         let extracted = self.extract_silhouettes(frame, plan)?;
 
         let t_build = Instant::now();
-        let (mut volumes, mut draws) = self.build_volumes(frame, plan)?;
+        let mut volumes = std::mem::take(&mut self.volumes);
+        volumes.clear();
+        let built = self.build_volumes(frame, plan, &mut volumes);
+        self.volumes = volumes;
+        let mut draws = built?;
         // Camera-relative coordinates for the GPU: every finite vertex (surface and volume) is
         // shifted by the same f32 subtraction, so shared vertices stay bit-identical and depth
         // precision no longer suffers from large world coordinates (the 1e4-offset scenes).
         // Extrusion directions (w = 0) do not depend on the origin.
         let origin = frame.camera.eye;
-        for v in &mut volumes {
+        for v in &mut self.volumes {
             if v[3] != 0.0 {
                 v[0] -= origin.x;
                 v[1] -= origin.y;
@@ -227,22 +380,18 @@ impl ShadowPipeline for HostPipeline {
         }
         let build_time = t_build.elapsed();
 
-        let mut surface = Vec::new();
-        for (oi, (s, w)) in frame
-            .scene
-            .surfaces()
-            .zip(frame.world.surfaces())
-            .enumerate()
-        {
-            push_surface(&mut surface, oi, s.table, &w.positions, s.albedo, origin);
-        }
+        self.write_surfaces(device, frame);
         let (w, h) = frame.size;
         let aspect = (f64::from(w) / f64::from(h)) as f32;
-        let raster = self.raster.as_ref().ok_or_else(|| {
-            RenderError::InvalidInput("the host pipeline records before prepare".to_owned())
-        })?;
+        let (Some(raster), Some(buffers)) = (&self.raster, &mut self.buffers) else {
+            return Err(RenderError::InvalidInput(
+                "the host pipeline records before prepare".to_owned(),
+            ));
+        };
+        let surface_vertices = self.surfaces.ranges.last().map_or(0, |&(f, n)| f + n);
         raster.record(
-            &device.device,
+            device,
+            buffers,
             enc,
             target,
             &RasterInput {
@@ -255,16 +404,11 @@ impl ShadowPipeline for HostPipeline {
                 .to_cols_array(),
                 eye: [0.0; 3],
                 ambient: frame.scene.effects.ambient.clamp(0.0, 1.0),
-                surface: &surface,
-                volumes: &volumes,
+                surface_vertices: surface_vertices as usize,
+                volumes: &self.volumes,
                 lights: &draws,
             },
         )?;
-        self.volumes = if self.keep_volumes {
-            volumes
-        } else {
-            Vec::new()
-        };
         report.timings.silhouette_ms = Some(ms(extracted.time));
         report.timings.side_building_ms = Some(ms(build_time));
         report.uncertain = extracted.uncertain;
@@ -274,7 +418,11 @@ impl ShadowPipeline for HostPipeline {
     }
 
     fn volumes(&self) -> &[[f32; 4]] {
-        &self.volumes
+        if self.keep_volumes {
+            &self.volumes
+        } else {
+            &[]
+        }
     }
 }
 

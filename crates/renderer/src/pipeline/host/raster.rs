@@ -1,5 +1,6 @@
 //! The host pipeline's raster: the surfaces and the volumes the host built, drawn from vertex
-//! buffers uploaded each frame, with the render states every pipeline shares.
+//! buffers kept between frames ([`HostBuffers`]: the surfaces written where they moved, the
+//! volumes written each frame), with the render states every pipeline shares.
 //!
 //! Passes of a frame:
 //! 1. pre-pass: colour = ambient × albedo, ids (surface + 1, triangle), depth (less, write);
@@ -13,7 +14,6 @@ use crate::raster::{
     IDS_FORMAT, LIGHT_STRIDE,
 };
 use crate::{RenderDevice, RenderError};
-use bytemuck::Zeroable;
 use shadowvol_gpu::ErrorScopes;
 use shadowvol_scenes::Emission;
 use std::ops::Range;
@@ -46,8 +46,9 @@ pub(super) struct RasterInput<'a> {
     pub eye: [f32; 3],
     /// Ambient factor.
     pub ambient: f32,
-    /// Surface triangles (3 vertices each).
-    pub surface: &'a [SurfaceVertex],
+    /// Surface vertices to draw from [`HostBuffers::surface`] (3 a triangle; none: the passes
+    /// clear and draw nothing).
+    pub surface_vertices: usize,
     /// All volume vertices of all lights.
     pub volumes: &'a [[f32; 4]],
     /// Per-light draws.
@@ -152,30 +153,88 @@ impl HostRaster {
         })
     }
 
-    /// Records one frame into `enc` and `target`: buffers for `input` are created and filled
-    /// here, the passes recorded.
+    /// The buffers and bind groups kept between frames, for surfaces of `surface_vertices`
+    /// vertices in all and `lights` lights (both may grow later).
     ///
     /// # Errors
-    /// [`RenderError::InvalidInput`] when `target` has no ids attachment.
-    pub(super) fn record(
+    /// [`RenderError::TooLarge`] when not even one triangle's vertices fit the device's
+    /// `max_buffer_size`.
+    pub(super) fn buffers(
         &self,
         device: &wgpu::Device,
+        surface_vertices: u32,
+        lights: usize,
+    ) -> Result<HostBuffers, RenderError> {
+        let globals = uniform_buffer(device, "globals", GLOBALS_BYTES);
+        let globals_bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("globals"),
+            layout: &self.globals_bgl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: globals.as_entire_binding(),
+            }],
+        });
+        let light_slots = lights.max(1);
+        let (lights, lights_bg) = self.light_buffer(device, light_slots);
+        Ok(HostBuffers {
+            globals,
+            globals_bg,
+            light_slots,
+            lights,
+            lights_bg,
+            light_bytes: Vec::new(),
+            surface: Chunks::with_capacity::<SurfaceVertex>(device, "surface", surface_vertices)?,
+            volumes: Chunks::with_capacity::<[f32; 4]>(device, "volumes", 3)?,
+        })
+    }
+
+    /// A uniform buffer of `slots` lights, [`LIGHT_STRIDE`] apart, and its bind group (one
+    /// light bound at a time, by dynamic offset).
+    fn light_buffer(&self, device: &wgpu::Device, slots: usize) -> (wgpu::Buffer, wgpu::BindGroup) {
+        let buffer = uniform_buffer(device, "lights", slots as u64 * LIGHT_STRIDE);
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("light"),
+            layout: &self.light_bgl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &buffer,
+                    offset: 0,
+                    size: std::num::NonZeroU64::new(96),
+                }),
+            }],
+        });
+        (buffer, bind_group)
+    }
+
+    /// Records one frame into `enc` and `target`: the frame's uniforms and volumes are written
+    /// into `buffers` (grown where they do not fit), the surfaces drawn as `buffers` holds them,
+    /// and the passes recorded. The writes reach the device at the next submission, before
+    /// `enc`'s commands.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] when `target` has no ids attachment, [`RenderError::TooLarge`]
+    /// when not even one triangle's vertices fit the device's `max_buffer_size`.
+    pub(super) fn record(
+        &self,
+        rd: &RenderDevice,
+        buffers: &mut HostBuffers,
         enc: &mut wgpu::CommandEncoder,
         target: &Attachments<'_>,
         input: &RasterInput<'_>,
     ) -> Result<(), RenderError> {
-        let bindings = self.bindings(device, input)?;
         let ids = target.ids.ok_or_else(|| {
             RenderError::InvalidInput(
                 "the host pipeline draws surface ids: give it an ids attachment".to_owned(),
             )
         })?;
+        self.write_frame(rd, buffers, input)?;
         let frame = FrameRecording {
             raster: self,
             target,
             ids,
-            bindings,
-            surface_vertices: input.surface.len(),
+            bindings: buffers,
+            surface_vertices: input.surface_vertices,
         };
         frame.prepass(enc);
         for (li, l) in input.lights.iter().enumerate() {
@@ -186,126 +245,117 @@ impl HostRaster {
         Ok(())
     }
 
-    /// The frame's uniforms and vertex buffers; empty lists are padded to one zero vertex.
-    ///
-    /// # Errors
-    /// [`RenderError::TooLarge`] when not even one triangle's vertices fit the device's
-    /// `max_buffer_size`.
-    fn bindings(
+    /// Writes the frame's globals (`projection * view`, eye, ambient), every light's uniform
+    /// and the volume vertices into `buffers`.
+    fn write_frame(
         &self,
-        device: &wgpu::Device,
+        rd: &RenderDevice,
+        buffers: &mut HostBuffers,
         input: &RasterInput<'_>,
-    ) -> Result<FrameBindings, RenderError> {
-        let padded_surface;
-        let surface: &[SurfaceVertex] = if input.surface.is_empty() {
-            padded_surface = [SurfaceVertex::zeroed()];
-            &padded_surface
-        } else {
-            input.surface
-        };
-        let padded_vol;
-        let volumes: &[[f32; 4]] = if input.volumes.is_empty() {
-            padded_vol = [[0f32; 4]];
-            &padded_vol
-        } else {
-            input.volumes
-        };
-        Ok(FrameBindings {
-            globals: self.globals_bind_group(device, input),
-            lights: self.lights_bind_group(device, input.lights),
-            surface: Chunks::new(device, "surface", surface)?,
-            volumes: Chunks::new(device, "volumes", volumes)?,
-        })
-    }
-
-    /// The globals uniform (`projection * view`, eye, ambient) and its bind group.
-    fn globals_bind_group(
-        &self,
-        device: &wgpu::Device,
-        input: &RasterInput<'_>,
-    ) -> wgpu::BindGroup {
-        use wgpu::util::DeviceExt;
+    ) -> Result<(), RenderError> {
+        let (device, queue) = (&rd.device, &rd.queue);
         let mut globals = [0f32; 24];
         globals[..16].copy_from_slice(&input.view_proj);
         globals[16..19].copy_from_slice(&input.eye);
         globals[20] = input.ambient;
-        let globals_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("globals"),
-            contents: bytemuck::cast_slice(&globals),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("globals"),
-            layout: &self.globals_bgl,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: globals_buf.as_entire_binding(),
-            }],
-        })
-    }
+        queue.write_buffer(&buffers.globals, 0, bytemuck::cast_slice(&globals));
 
-    /// Every light's uniform, [`LIGHT_STRIDE`] apart, bound one at a time by dynamic offset.
-    fn lights_bind_group(&self, device: &wgpu::Device, lights: &[LightDraws]) -> wgpu::BindGroup {
-        use wgpu::util::DeviceExt;
-        let n_lights = lights.len().max(1);
-        let mut light_bytes = vec![0u8; n_lights * LIGHT_STRIDE as usize];
-        for (i, l) in lights.iter().enumerate() {
+        let n_lights = input.lights.len().max(1);
+        if n_lights > buffers.light_slots {
+            (buffers.lights, buffers.lights_bg) = self.light_buffer(device, n_lights);
+            buffers.light_slots = n_lights;
+        }
+        let bytes = &mut buffers.light_bytes;
+        bytes.clear();
+        bytes.resize(n_lights * LIGHT_STRIDE as usize, 0);
+        for (i, l) in input.lights.iter().enumerate() {
             let v = light_uniform(l.light, l.color, l.emission.as_ref());
             let o = i * LIGHT_STRIDE as usize;
-            light_bytes[o..o + v.len() * 4].copy_from_slice(bytemuck::cast_slice(&v));
+            bytes[o..o + v.len() * 4].copy_from_slice(bytemuck::cast_slice(&v));
         }
-        let light_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("lights"),
-            contents: &light_bytes,
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("light"),
-            layout: &self.light_bgl,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &light_buf,
-                    offset: 0,
-                    size: std::num::NonZeroU64::new(96),
-                }),
-            }],
-        })
+        queue.write_buffer(&buffers.lights, 0, bytes);
+
+        let need = u32::try_from(input.volumes.len()).map_err(|_| {
+            RenderError::TooLarge(format!(
+                "{} volume vertices; a frame draws at most {}",
+                input.volumes.len(),
+                u32::MAX
+            ))
+        })?;
+        if need > buffers.volumes.capacity {
+            let grown = need.max(buffers.volumes.capacity.saturating_mul(2));
+            buffers.volumes = Chunks::with_capacity::<[f32; 4]>(device, "volumes", grown)?;
+        }
+        buffers.volumes.write(queue, 0, input.volumes);
+        Ok(())
     }
 }
 
-/// The buffers and bind groups of one frame's [`RasterInput`], shared by all its passes.
-struct FrameBindings {
-    /// The globals uniform's bind group.
-    globals: wgpu::BindGroup,
-    /// The per-light uniforms' bind group (dynamic offset: the light's).
-    lights: wgpu::BindGroup,
-    /// Surface triangles (at least one vertex).
-    surface: Chunks,
-    /// All lights' volume vertices (at least one).
+/// The byte size of the globals uniform: `projection * view`, eye, ambient.
+const GLOBALS_BYTES: u64 = 96;
+
+/// A uniform buffer of `size` bytes written by the queue.
+fn uniform_buffer(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// What the host pipeline keeps on the device between frames: the uniforms and their bind
+/// groups, the surfaces' vertices (laid out in `prepare`, written where a surface moved) and a
+/// volume buffer that grows to the largest frame's volumes.
+pub(super) struct HostBuffers {
+    /// The globals uniform and its bind group.
+    globals: wgpu::Buffer,
+    globals_bg: wgpu::BindGroup,
+    /// The per-light uniforms, [`LIGHT_STRIDE`] apart, and their bind group (dynamic offset).
+    lights: wgpu::Buffer,
+    lights_bg: wgpu::BindGroup,
+    /// Lights the uniform buffer holds.
+    light_slots: usize,
+    /// The lights' uniform bytes, kept so that a frame does not allocate them.
+    light_bytes: Vec<u8>,
+    /// Every surface's triangles, at the ranges the pipeline laid out.
+    pub surface: Chunks,
+    /// The frame's volume vertices (all lights).
     volumes: Chunks,
+}
+
+impl HostBuffers {
+    /// Bytes these buffers hold on the device.
+    pub(super) fn device_bytes(&self) -> u64 {
+        self.globals.size() + self.lights.size() + self.surface.bytes() + self.volumes.bytes()
+    }
 }
 
 /// Triangle-list vertices in consecutive vertex buffers, each at most the device's
 /// `max_buffer_size` and holding whole triangles: a scene's 2.9 GB of surface vertices on a
 /// device whose buffers hold 2 GiB. Drawing a range draws its part in each buffer, in order, so
 /// the primitives reach the rasteriser in the same order as from one buffer.
-struct Chunks {
+pub(super) struct Chunks {
     /// Each buffer and the index of its first vertex.
     parts: Vec<(wgpu::Buffer, u32)>,
     /// Vertices per full buffer (a multiple of 3).
     per_buffer: u32,
+    /// Vertices the buffers hold in all.
+    capacity: u32,
+    /// Bytes per vertex.
+    stride: u64,
 }
 
 impl Chunks {
-    /// `vertices` in as few buffers as the device's `max_buffer_size` allows.
+    /// Room for `capacity` vertices of `T` (at least 3) in as few buffers as the device's
+    /// `max_buffer_size` allows, written with [`Chunks::write`].
     ///
     /// # Errors
     /// [`RenderError::TooLarge`] when one triangle's vertices do not fit one buffer.
-    fn new<T: bytemuck::Pod>(
+    fn with_capacity<T: bytemuck::Pod>(
         device: &wgpu::Device,
         label: &str,
-        vertices: &[T],
+        capacity: u32,
     ) -> Result<Self, RenderError> {
         let stride = std::mem::size_of::<T>() as u64;
         let fit = device.limits().max_buffer_size / stride / 3 * 3;
@@ -317,20 +367,58 @@ impl Chunks {
                 device.limits().max_buffer_size
             )));
         }
-        let parts = vertices
-            .chunks(per_buffer as usize)
-            .enumerate()
-            .map(|(k, c)| {
-                let buffer = crate::raster::vertex_buffer(
-                    device,
-                    label,
-                    bytemuck::cast_slice(c),
-                    wgpu::BufferUsages::empty(),
-                )?;
-                Ok((buffer, k as u32 * per_buffer))
+        let capacity = capacity.max(3);
+        let parts = (0..capacity)
+            .step_by(per_buffer as usize)
+            .map(|first| {
+                let n = u64::from(per_buffer.min(capacity - first));
+                let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: n * stride,
+                    usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                (buffer, first)
             })
-            .collect::<Result<_, RenderError>>()?;
-        Ok(Self { parts, per_buffer })
+            .collect();
+        Ok(Self {
+            parts,
+            per_buffer,
+            capacity,
+            stride,
+        })
+    }
+
+    /// Bytes the buffers hold.
+    fn bytes(&self) -> u64 {
+        u64::from(self.capacity) * self.stride
+    }
+
+    /// Queues the write of `vertices` from vertex `first` on, across the buffers they fall in.
+    ///
+    /// # Panics
+    /// Panics when `T` is not the vertex type of [`Chunks::with_capacity`] or the vertices run
+    /// past the capacity.
+    pub(super) fn write<T: bytemuck::Pod>(&self, queue: &wgpu::Queue, first: u32, vertices: &[T]) {
+        assert_eq!(std::mem::size_of::<T>() as u64, self.stride, "vertex type");
+        let end = u64::from(first) + vertices.len() as u64;
+        assert!(
+            end <= u64::from(self.capacity),
+            "vertices past the capacity"
+        );
+        let end = end as u32;
+        for (buffer, start) in &self.parts {
+            let lo = first.max(*start);
+            let hi = end.min(start.saturating_add(self.per_buffer));
+            if lo < hi {
+                let part = &vertices[(lo - first) as usize..(hi - first) as usize];
+                queue.write_buffer(
+                    buffer,
+                    u64::from(lo - start) * self.stride,
+                    bytemuck::cast_slice(part),
+                );
+            }
+        }
     }
 
     /// Draws the vertices `range` with the pass's current pipeline and bindings.
@@ -351,7 +439,7 @@ struct FrameRecording<'a> {
     raster: &'a HostRaster,
     target: &'a Attachments<'a>,
     ids: &'a wgpu::TextureView,
-    bindings: FrameBindings,
+    bindings: &'a HostBuffers,
     /// Surface vertices to draw (none: the passes clear and draw nothing).
     surface_vertices: usize,
 }
@@ -373,8 +461,8 @@ impl FrameRecording<'_> {
         );
         if self.surface_vertices != 0 {
             pass.set_pipeline(&self.raster.prepass);
-            pass.set_bind_group(0, &self.bindings.globals, &[]);
-            pass.set_bind_group(1, &self.bindings.lights, &[0]);
+            pass.set_bind_group(0, &self.bindings.globals_bg, &[]);
+            pass.set_bind_group(1, &self.bindings.lights_bg, &[0]);
             self.bindings
                 .surface
                 .draw(&mut pass, 0..self.surface_vertices as u32);
@@ -391,8 +479,8 @@ impl FrameRecording<'_> {
             l.scissor,
             None,
         );
-        pass.set_bind_group(0, &self.bindings.globals, &[]);
-        pass.set_bind_group(1, &self.bindings.lights, &[light_offset(li)]);
+        pass.set_bind_group(0, &self.bindings.globals_bg, &[]);
+        pass.set_bind_group(1, &self.bindings.lights_bg, &[light_offset(li)]);
         let raster = self.raster;
         for (pipe, range) in [
             (&raster.zpass, &l.zpass),
@@ -419,8 +507,8 @@ impl FrameRecording<'_> {
         if self.surface_vertices != 0 && !empty_scissor(l.scissor) {
             pass.set_pipeline(&self.raster.lit);
             pass.set_stencil_reference(0);
-            pass.set_bind_group(0, &self.bindings.globals, &[]);
-            pass.set_bind_group(1, &self.bindings.lights, &[light_offset(li)]);
+            pass.set_bind_group(0, &self.bindings.globals_bg, &[]);
+            pass.set_bind_group(1, &self.bindings.lights_bg, &[light_offset(li)]);
             self.bindings
                 .surface
                 .draw(&mut pass, 0..self.surface_vertices as u32);
