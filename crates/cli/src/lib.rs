@@ -3,12 +3,9 @@
 //! It holds what the subcommands, the conformance tests, the benches and `cargo xtask matrix`
 //! share, so that none of them keeps its own copy:
 //!
-//! * [`backends`]: **the** backend registry. Every tool that iterates over backends uses this list
-//!   and nothing else. Adding a backend means one new crate and one line in
-//!   [`registry`](registry::backends).
-//! * [`MemoryFloor`]: **the** memory floor (`floor_ms`): the time to stream the bytes any
-//!   extraction must touch, measured in the same run as the backends by `shadowvol bench` and by
-//!   the criterion benches.
+//! * [`backends`], [`find_backend`], [`MemoryFloor`]: **the** backend registry and memory floor,
+//!   re-exported from [`shadowvol_registry`] (the crate the conformance tests and the benches
+//!   use without this one's viewer). Adding a backend means one new crate and one line there.
 //! * [`load_input`]: the one function that turns a command-line mesh argument (`.obj`, `.gltf`,
 //!   `.glb`, `.stl`, `.ply` or a preset name; [`INPUT_FORMATS`] describes them) into one world-space [`Mesh`] and the input's own lights.
 //! * [`report`]: the silhouette report that `shadowvol silhouette --format json` prints (the JSON
@@ -30,16 +27,14 @@
 //! [`Mesh`]: shadowvol_mesh_topology::Mesh
 
 pub mod error;
-pub mod floor;
 pub mod input;
 pub mod memory;
-pub mod registry;
 pub mod report;
 
 pub use error::CliError;
-pub use floor::MemoryFloor;
 pub use input::{bounds_too_large, load_input, load_scene, Input, INPUT_FORMATS};
-pub use registry::{backend_names, backends, find_backend, BackendEntry};
+pub use shadowvol_registry as registry;
+pub use shadowvol_registry::{backend_names, backends, find_backend, BackendEntry, MemoryFloor};
 
 use shadowvol_robust_math::Accuracy;
 
