@@ -758,21 +758,7 @@ fn backend_auto_is_accepted_by_every_command_and_warns_on_fallback() -> Outcome 
         "json",
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let (out, _) = run(&[
-        "bench",
-        "--scene",
-        "hard-tetrahedron",
-        "--backend",
-        "auto",
-        "--mode",
-        "exact",
-        "--frames",
-        "2",
-        "--warmup",
-        "1",
-        "--format",
-        "json",
-    ]);
+    let (out, _) = run(&common::exact_bench("hard-tetrahedron", "auto", "2", "1"));
     assert!(out.status.success(), "{}", stderr(&out));
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["records"][0]["backend"], chosen.as_str());
