@@ -564,6 +564,8 @@ fn print_notes(notes: &Notes) {
 }
 
 fn main() {
+    // No `error: XDG_RUNTIME_DIR ...` line from Mesa on a machine without a display.
+    shadowvol_silhouette::gpu::quiet_without_display();
     let args = Arguments::from_args();
     let ci = is_ci();
     let cases = Arc::new(all_cases());

@@ -12,7 +12,7 @@
 //! reports absolute times; `shadowvol bench` gives the ratios (backend / floor, mode / original).
 
 use criterion::measurement::WallTime;
-use criterion::{criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput};
+use criterion::{criterion_group, BenchmarkGroup, BenchmarkId, Criterion, Throughput};
 use glam::Vec3;
 use shadowvol_cpu::baselines::{Baseline, ClosedMesh};
 use shadowvol_mesh_topology::EdgeTable;
@@ -125,4 +125,11 @@ fn baselines(c: &mut Criterion) {
 }
 
 criterion_group!(benches, extract, floor, baselines);
-criterion_main!(benches);
+
+/// `criterion_main!(benches)`, with Mesa's device-select layer turned off first where there is
+/// no display (no `error: XDG_RUNTIME_DIR ...` line when the GPU backends start).
+fn main() {
+    shadowvol_silhouette::gpu::quiet_without_display();
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}

@@ -35,6 +35,7 @@ pub use error::CliError;
 pub use input::{bounds_too_large, load_input, load_scene, Input, INPUT_FORMATS};
 pub use shadowvol_registry as registry;
 pub use shadowvol_registry::{backend_names, backends, find_backend, BackendEntry, MemoryFloor};
+pub use shadowvol_silhouette::gpu::{quiet_without_display, NODEVICE_SELECT};
 
 use shadowvol_robust_math::Accuracy;
 
@@ -79,20 +80,4 @@ pub fn mode_parser() -> impl clap::builder::TypedValueParser<Value = Accuracy> {
         })
     }))
     .try_map(|name| name.parse::<Accuracy>())
-}
-
-/// The environment variable that turns Mesa's Vulkan device-select layer off.
-pub const NODEVICE_SELECT: &str = "NODEVICE_SELECT";
-
-/// On a machine without a display (`DISPLAY` and `WAYLAND_DISPLAY` unset or empty), turns off
-/// Mesa's Vulkan device-select layer (`NODEVICE_SELECT=1`, unless the variable is set already).
-/// The layer, an implicit Vulkan layer of Debian's mesa-vulkan-drivers, orders the GPUs by the
-/// one the display uses; without a display it has nothing to order by, and its attempt to
-/// connect to Wayland prints `error: XDG_RUNTIME_DIR is invalid or not set in the environment.`
-/// although nothing failed. Call it first in `main`, before any thread or Vulkan instance.
-pub fn quiet_without_display() {
-    let set = |v: &str| std::env::var_os(v).is_some_and(|s| !s.is_empty());
-    if !set("DISPLAY") && !set("WAYLAND_DISPLAY") && std::env::var_os(NODEVICE_SELECT).is_none() {
-        std::env::set_var(NODEVICE_SELECT, "1");
-    }
 }
