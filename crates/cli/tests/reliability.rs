@@ -443,16 +443,7 @@ fn lights_of(args: &[&str]) -> Value {
 fn subnormal_lights(backend: &str, flushed: bool) -> Value {
     let (text, lights) = subnormal_obj(flushed);
     let path = write_tmp(&format!("subnormal_{backend}_{flushed}.obj"), &text);
-    let mut args = vec![
-        "silhouette",
-        path.to_str().unwrap(),
-        "--mode",
-        "exact",
-        "--format",
-        "json",
-        "--backend",
-        backend,
-    ];
+    let mut args = common::exact_silhouette(path.to_str().unwrap(), backend);
     args.extend(lights.iter().map(String::as_str));
     lights_of(&args)
 }

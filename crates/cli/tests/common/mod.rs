@@ -51,6 +51,14 @@ pub fn exact_bench<'a>(
     args
 }
 
+/// The arguments of `shadowvol silhouette` on `input` (a file or preset) with `backend` in exact
+/// mode, JSON output; lights may follow.
+pub fn exact_silhouette<'a>(input: &'a str, backend: &'a str) -> Vec<&'a str> {
+    let mut args = vec!["silhouette", input, "--backend", backend];
+    args.extend(["--mode", "exact", "--format", "json"]);
+    args
+}
+
 /// The rows of `shadowvol backends --format json`, read once per test binary.
 fn backend_rows() -> &'static [Value] {
     static ROWS: OnceLock<Vec<Value>> = OnceLock::new();
