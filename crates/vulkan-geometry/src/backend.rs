@@ -342,7 +342,7 @@ impl PartsBackend for VulkanBackend {
         Ok(self.prepared.insert(p))
     }
 
-    /// Runs the light batches of [`crate::dispatch`] on the scene or part `id`.
+    /// Runs the light batches (one geometry-shader pass each) on the scene or part `id`.
     fn extract_whole(
         &mut self,
         id: PreparedId,
