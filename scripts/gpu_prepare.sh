@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Run here before a lent GPU machine's call (see docs/GPU.md, "Measuring on a lent GPU"). That
+# Run here before a lent GPU machine's call (see docs/GPU.md, "Measuring on a GPU machine"). That
 # machine has neither cargo nor a network, so this builds the release CLI and strips it into
 # .gpu/shadowvol, fetches Debian's Vulkan and OpenCL loaders into .gl/, checks that the working
 # tree and both folders fit what one call carries (64 MiB), and prints the call to make.

@@ -27,15 +27,15 @@
 //! listed in [`EXPECTED_FAILURES`] show `[xfail]` before their name; they pass when their check
 //! fails and fail when it passes, so the list can't go stale.
 //!
-//! Backends come only from `shadowvol::backends()`; cases only from
+//! Backends come only from `shadowvol_registry::backends()`; cases only from
 //! `shadowvol_test_support::corpus::cases()`.
 
 use libtest_mimic::{Arguments, Completion, Failed, Trial};
 #[path = "support/values.rs"]
 mod values;
 
-use shadowvol::BackendEntry;
 use shadowvol_cpu::CpuBackend;
+use shadowvol_registry::BackendEntry;
 use shadowvol_robust_math::Accuracy;
 use shadowvol_silhouette::{
     extract_once, invariant, BackendError, ExtractStats, Light, Multiplicities, SilhouetteBackend,
@@ -249,16 +249,18 @@ fn check(
 }
 
 /// A real mesh of moderate size next to the small hard cases: the bundled bunny (about 3.7k
-/// triangles, loaded through the CLI's `load_input`), with lights outside, inside, directional
+/// triangles, loaded as the CLI loads it: one baked table), with lights outside, inside, directional
 /// and several per call, so that size- and light-count-dependent bugs (dispatch limits, buffer
 /// strides) show up.
 fn bunny_case() -> Case {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/bunny.obj");
-    let input = shadowvol::load_input(path).unwrap_or_else(|e| panic!("{e}"));
+    let table = shadowvol_scenes::Scene::from_name_or_path(path)
+        .and_then(shadowvol_scenes::Scene::into_baked_table)
+        .unwrap_or_else(|e| panic!("{e}"));
     let light = |x, y, z, w| Light::new(x, y, z, w).expect("finite light");
     Case {
         name: "asset-bunny",
-        scene: TopologyScene::one("bunny", input.table),
+        scene: TopologyScene::one("bunny", table),
         lights: vec![
             light(0.0, 0.3, 0.5, 1.0),
             light(1.0, 1.0, 1.0, 0.0),
@@ -562,6 +564,8 @@ fn print_notes(notes: &Notes) {
 }
 
 fn main() {
+    // No `error: XDG_RUNTIME_DIR ...` line from Mesa on a machine without a display.
+    shadowvol_silhouette::gpu::quiet_without_display();
     let args = Arguments::from_args();
     let ci = is_ci();
     let cases = Arc::new(all_cases());
@@ -573,7 +577,7 @@ fn main() {
     };
 
     // Start every backend in parallel, then wait for each to report.
-    let entries = shadowvol::backends();
+    let entries = shadowvol_registry::backends();
     let mut handles = Vec::new();
     let starting: Vec<(BackendEntry, Receiver<Started>)> = entries
         .iter()

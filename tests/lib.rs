@@ -3,7 +3,7 @@
 //! The tests live in `conformance.rs` (a `harness = false` test built on `libtest-mimic`): one
 //! test per (backend, corpus case, accuracy mode), named
 //! `conformance::<backend>::<case>::<mode>::<rule>` (the rule is in `conformance.rs`),
-//! generated from the backend registry (`shadowvol::backends()`) and the shared corpus
+//! generated from the backend registry (`shadowvol_registry::backends()`) and the shared corpus
 //! (`shadowvol_test_support::corpus::cases()`). Run them with
 //!
 //! ```text

@@ -1,7 +1,7 @@
 //! Silhouette extraction at 10^3 .. 10^6 triangles (icospheres from
-//! `shadowvol_scenes::procedural`): every backend of the registry (`shadowvol::backends()`) that
+//! `shadowvol_scenes::procedural`): every backend of the registry (`shadowvol_registry::backends()`) that
 //! starts here, in every mode; the `simd` backend also at the `wide` compile-time level; the
-//! seeds' baselines; and the memory floor (`shadowvol::MemoryFloor`) for the same scene.
+//! seeds' baselines; and the memory floor (`shadowvol_registry::MemoryFloor`) for the same scene.
 //!
 //! ```text
 //! cargo bench -p shadowvol-benches --bench extract
@@ -12,13 +12,11 @@
 //! reports absolute times; `shadowvol bench` gives the ratios (backend / floor, mode / original).
 
 use criterion::measurement::WallTime;
-use criterion::{
-    criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
-};
+use criterion::{criterion_group, BenchmarkGroup, BenchmarkId, Criterion, Throughput};
 use glam::Vec3;
-use shadowvol::MemoryFloor;
 use shadowvol_cpu::baselines::{Baseline, ClosedMesh};
 use shadowvol_mesh_topology::EdgeTable;
+use shadowvol_registry::MemoryFloor;
 use shadowvol_silhouette::{Accuracy, Light, Multiplicities, SilhouetteBackend, TopologyScene};
 use shadowvol_simd::{SimdBackend, SimdLevel};
 use std::hint::black_box;
@@ -70,7 +68,7 @@ fn bench_backend(c: &mut Criterion, group_name: &str, backend: &mut dyn Silhouet
 /// Every registered backend that starts, then `simd` at the `wide` level when the detected level
 /// is another.
 fn extract(c: &mut Criterion) {
-    for entry in shadowvol::backends() {
+    for entry in shadowvol_registry::backends() {
         match entry.start() {
             Ok(mut backend) => bench_backend(c, entry.name, backend.as_mut()),
             Err(e) => eprintln!("extract: skipping {}: {e}", entry.name),
@@ -127,4 +125,11 @@ fn baselines(c: &mut Criterion) {
 }
 
 criterion_group!(benches, extract, floor, baselines);
-criterion_main!(benches);
+
+/// `criterion_main!(benches)`, with Mesa's device-select layer turned off first where there is
+/// no display (no `error: XDG_RUNTIME_DIR ...` line when the GPU backends start).
+fn main() {
+    shadowvol_silhouette::gpu::quiet_without_display();
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}

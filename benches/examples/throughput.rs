@@ -1,6 +1,6 @@
 //! Quick throughput check of the `simd` backend: a UV sphere of about `N` triangles (default
 //! 10^6), every mode, every supported SIMD level, 1 and 4 lights, against the measured memory
-//! floor (`shadowvol::MemoryFloor`, the floor `shadowvol bench` reports).
+//! floor (`shadowvol_registry::MemoryFloor`, the floor `shadowvol bench` reports).
 //!
 //! ```text
 //! cargo run --release -p shadowvol-benches --example throughput -- 1000000
@@ -8,8 +8,8 @@
 //! ```
 
 use glam::Vec3;
-use shadowvol::MemoryFloor;
 use shadowvol_mesh_topology::EdgeTable;
+use shadowvol_registry::MemoryFloor;
 use shadowvol_silhouette::{Accuracy, Light, Multiplicities, SilhouetteBackend, TopologyScene};
 use shadowvol_simd::{SimdBackend, SimdLevel};
 use shadowvol_test_support::shapes::uv_sphere_y;

@@ -93,7 +93,23 @@ fn usage() -> String {
     s
 }
 
+/// On a machine without a display (`DISPLAY` and `WAYLAND_DISPLAY` unset or empty), turns Mesa's
+/// Vulkan device-select layer off (`NODEVICE_SELECT=1`, unless it is set) for every process
+/// xtask starts: cargo, the test binaries, the examples, the Bevy step. Without a display the
+/// layer prints `error: XDG_RUNTIME_DIR is invalid or not set in the environment.` for every
+/// wgpu instance although nothing failed. The rule of
+/// `shadowvol_silhouette::gpu::quiet_without_display`, which xtask does not depend on (it builds
+/// none of the workspace's crates); runs first, before any thread.
+fn quiet_children_without_display() {
+    let shown = |name| std::env::var_os(name).is_some_and(|v| !v.is_empty());
+    let quiet = !shown("DISPLAY") && !shown("WAYLAND_DISPLAY");
+    if quiet && std::env::var_os("NODEVICE_SELECT").is_none() {
+        std::env::set_var("NODEVICE_SELECT", "1");
+    }
+}
+
 fn main() -> ExitCode {
+    quiet_children_without_display();
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(name) = args.first() else {
         eprint!("{}", usage());

@@ -419,10 +419,17 @@ fn embed_example_run(root: &Path, ci: bool, png: &str, extra: Option<&str>) -> O
 }
 
 /// How the example's exit reads: a missing adapter is a warning outside CI (the GPU tests skip
-/// visibly for the same reason), every other failure fails the step.
+/// visibly for the same reason), every other failure fails the step, and so does a successful
+/// run that printed a line starting with `error` (a newcomer reads it as a failure: Mesa's
+/// `error: XDG_RUNTIME_DIR ...` without a display, which `NODEVICE_SELECT` now silences).
 fn example_outcome(success: bool, stderr: &str, ci: bool, line: &str) -> Outcome {
     if success {
-        return Outcome::Passed;
+        return match stderr.lines().find(|l| l.starts_with("error")) {
+            Some(error) => {
+                Outcome::Failed(format!("`{line}` succeeded but printed `{}`", error.trim()))
+            }
+            None => Outcome::Passed,
+        };
     }
     let no_adapter = stderr.lines().find(|l| l.contains("no GPU adapter"));
     match no_adapter {
@@ -673,6 +680,11 @@ mod tests {
         assert!(matches!(
             example_outcome(false, no_gpu, true, "x"),
             Outcome::Failed(_)
+        ));
+        let mesa = "error: XDG_RUNTIME_DIR is invalid or not set in the environment.\n";
+        assert!(matches!(
+            example_outcome(true, mesa, false, "x"),
+            Outcome::Failed(e) if e.contains("XDG_RUNTIME_DIR")
         ));
         let artifacts = "embed: 900 artifact pixels against the reference: over 0.05 %\n";
         assert!(matches!(

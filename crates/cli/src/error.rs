@@ -33,6 +33,13 @@ pub enum CliError {
     Other(String),
 }
 
+impl From<shadowvol_registry::UnknownBackend> for CliError {
+    /// A `--backend` value that names no backend is a usage error.
+    fn from(e: shadowvol_registry::UnknownBackend) -> Self {
+        CliError::Usage(e.to_string())
+    }
+}
+
 impl CliError {
     /// The process exit code for this error: [`EXIT_USAGE`] or [`EXIT_FAILURE`].
     #[must_use]

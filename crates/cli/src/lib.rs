@@ -3,12 +3,9 @@
 //! It holds what the subcommands, the conformance tests, the benches and `cargo xtask matrix`
 //! share, so that none of them keeps its own copy:
 //!
-//! * [`backends`]: **the** backend registry. Every tool that iterates over backends uses this list
-//!   and nothing else. Adding a backend means one new crate and one line in
-//!   [`registry`](registry::backends).
-//! * [`MemoryFloor`]: **the** memory floor (`floor_ms`): the time to stream the bytes any
-//!   extraction must touch, measured in the same run as the backends by `shadowvol bench` and by
-//!   the criterion benches.
+//! * [`backends`], [`find_backend`], [`MemoryFloor`]: **the** backend registry and memory floor,
+//!   re-exported from [`shadowvol_registry`] (the crate the conformance tests and the benches
+//!   use without this one's viewer). Adding a backend means one new crate and one line there.
 //! * [`load_input`]: the one function that turns a command-line mesh argument (`.obj`, `.gltf`,
 //!   `.glb`, `.stl`, `.ply` or a preset name; [`INPUT_FORMATS`] describes them) into one world-space [`Mesh`] and the input's own lights.
 //! * [`report`]: the silhouette report that `shadowvol silhouette --format json` prints (the JSON
@@ -30,16 +27,15 @@
 //! [`Mesh`]: shadowvol_mesh_topology::Mesh
 
 pub mod error;
-pub mod floor;
 pub mod input;
 pub mod memory;
-pub mod registry;
 pub mod report;
 
 pub use error::CliError;
-pub use floor::MemoryFloor;
 pub use input::{bounds_too_large, load_input, load_scene, Input, INPUT_FORMATS};
-pub use registry::{backend_names, backends, find_backend, BackendEntry};
+pub use shadowvol_registry as registry;
+pub use shadowvol_registry::{backend_names, backends, find_backend, BackendEntry, MemoryFloor};
+pub use shadowvol_silhouette::gpu::{quiet_without_display, NODEVICE_SELECT};
 
 use shadowvol_robust_math::Accuracy;
 
@@ -84,20 +80,4 @@ pub fn mode_parser() -> impl clap::builder::TypedValueParser<Value = Accuracy> {
         })
     }))
     .try_map(|name| name.parse::<Accuracy>())
-}
-
-/// The environment variable that turns Mesa's Vulkan device-select layer off.
-pub const NODEVICE_SELECT: &str = "NODEVICE_SELECT";
-
-/// On a machine without a display (`DISPLAY` and `WAYLAND_DISPLAY` unset or empty), turns off
-/// Mesa's Vulkan device-select layer (`NODEVICE_SELECT=1`, unless the variable is set already).
-/// The layer, an implicit Vulkan layer of Debian's mesa-vulkan-drivers, orders the GPUs by the
-/// one the display uses; without a display it has nothing to order by, and its attempt to
-/// connect to Wayland prints `error: XDG_RUNTIME_DIR is invalid or not set in the environment.`
-/// although nothing failed. Call it first in `main`, before any thread or Vulkan instance.
-pub fn quiet_without_display() {
-    let set = |v: &str| std::env::var_os(v).is_some_and(|s| !s.is_empty());
-    if !set("DISPLAY") && !set("WAYLAND_DISPLAY") && std::env::var_os(NODEVICE_SELECT).is_none() {
-        std::env::set_var(NODEVICE_SELECT, "1");
-    }
 }

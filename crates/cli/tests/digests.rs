@@ -55,16 +55,7 @@ fn expected(scene: &str) -> Option<&'static str> {
 
 /// Runs `silhouette SCENE --backend BACKEND --mode exact` and compares (or writes) its digest.
 fn check(scene: &str, backend: &str) {
-    let v = json_of(&[
-        "silhouette",
-        scene,
-        "--backend",
-        backend,
-        "--mode",
-        "exact",
-        "--format",
-        "json",
-    ]);
+    let v = json_of(&common::exact_silhouette(scene, backend));
     let d = digest(&v);
     if let Ok(path) = std::env::var(WRITE_ENV) {
         let mut f = std::fs::OpenOptions::new()

@@ -26,22 +26,8 @@ fn main() {
 }
 
 /// `shadowvol bench`: one exact frame without warm-up of [`SCENE`] on `backend`, as JSON.
-fn one_frame_bench(backend: &str) -> [&str; 13] {
-    [
-        "bench",
-        "--scene",
-        SCENE,
-        "--backend",
-        backend,
-        "--mode",
-        "exact",
-        "--frames",
-        "1",
-        "--warmup",
-        "0",
-        "--format",
-        "json",
-    ]
+fn one_frame_bench(backend: &str) -> Vec<&str> {
+    common::exact_bench(SCENE, backend, "1", "0")
 }
 
 fn u(v: &Value, key: &str) -> u64 {
@@ -107,7 +93,7 @@ fn silhouette_reports_what_the_prepared_scene_holds(backend: &str) {
 /// so only when asked.
 fn bench_build_runs_time_the_table_against_a_read() -> Outcome {
     let run = |extra: &[&str]| {
-        let mut args = one_frame_bench("cpu").to_vec();
+        let mut args = one_frame_bench("cpu");
         args.extend_from_slice(extra);
         json_of(&args)
     };
@@ -177,21 +163,7 @@ fn simd_reads_the_table_in_place_when_asked() -> Outcome {
 }
 
 fn bench_records_carry_their_backends_table() -> Outcome {
-    let v = json_of(&[
-        "bench",
-        "--scene",
-        SCENE,
-        "--backend",
-        "cpu,simd",
-        "--mode",
-        "exact",
-        "--frames",
-        "2",
-        "--warmup",
-        "1",
-        "--format",
-        "json",
-    ]);
+    let v = json_of(&common::exact_bench(SCENE, "cpu,simd", "2", "1"));
     let records = v["records"].as_array().expect("records");
     let table = |b: &str| {
         let r = records

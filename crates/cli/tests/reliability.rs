@@ -443,16 +443,7 @@ fn lights_of(args: &[&str]) -> Value {
 fn subnormal_lights(backend: &str, flushed: bool) -> Value {
     let (text, lights) = subnormal_obj(flushed);
     let path = write_tmp(&format!("subnormal_{backend}_{flushed}.obj"), &text);
-    let mut args = vec![
-        "silhouette",
-        path.to_str().unwrap(),
-        "--mode",
-        "exact",
-        "--format",
-        "json",
-        "--backend",
-        backend,
-    ];
+    let mut args = common::exact_silhouette(path.to_str().unwrap(), backend);
     args.extend(lights.iter().map(String::as_str));
     lights_of(&args)
 }
@@ -758,21 +749,7 @@ fn backend_auto_is_accepted_by_every_command_and_warns_on_fallback() -> Outcome 
         "json",
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let (out, _) = run(&[
-        "bench",
-        "--scene",
-        "hard-tetrahedron",
-        "--backend",
-        "auto",
-        "--mode",
-        "exact",
-        "--frames",
-        "2",
-        "--warmup",
-        "1",
-        "--format",
-        "json",
-    ]);
+    let (out, _) = run(&common::exact_bench("hard-tetrahedron", "auto", "2", "1"));
     assert!(out.status.success(), "{}", stderr(&out));
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["records"][0]["backend"], chosen.as_str());

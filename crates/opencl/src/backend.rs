@@ -13,10 +13,11 @@ use opencl3::kernel::Kernel;
 use opencl3::memory::CL_MEM_READ_ONLY;
 use opencl3::program::Program;
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::gpu::{self, ExactFilter, SceneIndex, SceneLayout};
+use shadowvol_silhouette::gpu::{self, ExactFilter};
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
-    PartsEntry, PreparedBytes, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
+    PartsBackend, PartsEntry, PreparedBytes, PreparedId, PreparedScenes, SilhouetteBackend,
+    TopologyScene, WholeScene,
 };
 use std::mem::ManuallyDrop;
 use std::num::NonZeroUsize;
@@ -119,13 +120,6 @@ impl OpenClBackend {
         self.last_batches
     }
 
-    /// Into how many parts scene `id` was cut (1: uploaded whole); for tests of the splitting.
-    #[doc(hidden)]
-    #[must_use]
-    pub fn parts_of_for_tests(&self, id: PreparedId) -> Option<usize> {
-        Some(self.entries.get(id).ok()?.ids().len())
-    }
-
     /// Pretends the device's largest allocation is `bytes` from now on (checks and batch sizes
     /// only; nothing is allocated differently), so that tests can reach the device limits.
     #[doc(hidden)]
@@ -134,30 +128,30 @@ impl OpenClBackend {
     }
 }
 
-impl OpenClBackend {
-    /// Triangles per part when `scene`'s largest buffer (positions 12 bytes a vertex, edge
-    /// records 16 an edge and one more, OVs 4 each) exceeds the device's largest allocation;
-    /// `None` when it fits whole. A part's edge records take at most 48 bytes a triangle.
-    fn part_triangles(&self, scene: &TopologyScene) -> Option<usize> {
-        let (v, e, ov) = (
-            scene.total_vertices() as u64,
-            scene.total_edges() as u64,
-            scene.total_ovs() as u64,
-        );
-        let largest = [12 * v, 16 * (e + 1), 4 * ov].into_iter().max()?;
-        (largest > self.max_alloc).then(|| (self.max_alloc.saturating_sub(64) / 48).max(1) as usize)
+/// The scenes in parts: the device's largest allocation bounds a part's buffers.
+impl PartsBackend for OpenClBackend {
+    const NAME: &'static str = NAME;
+
+    fn largest_buffer(&self) -> u64 {
+        self.max_alloc
     }
 
-    /// Lays out and uploads `scene` whole, then drops the host layout; returns its id in
-    /// [`OpenClBackend::scenes`].
-    /// The host's exact decisions read the tables through `index` ([`SceneIndex::new`] of
-    /// `scene`, or of the range a part of a cut scene is).
-    fn prepare_whole(
-        &mut self,
-        scene: &TopologyScene,
-        index: SceneIndex,
-    ) -> Result<PreparedId, BackendError> {
-        let layout = SceneLayout::build(scene, NAME)?;
+    fn entries(&self) -> &PreparedScenes<PartsEntry> {
+        &self.entries
+    }
+
+    fn entries_mut(&mut self) -> &mut PreparedScenes<PartsEntry> {
+        &mut self.entries
+    }
+
+    /// Uploads the layout's buffers, then drops the host layout; returns the scene's id among
+    /// the uploaded scenes.
+    fn prepare_whole(&mut self, whole: WholeScene<'_>) -> Result<PreparedId, BackendError> {
+        let WholeScene {
+            scene,
+            layout,
+            index,
+        } = whole;
         let edge_words = layout.edges.as_flattened();
         let hint = "; split the scene";
         self.check_alloc("the position buffer", layout.positions.len() * 4, hint)?;
@@ -184,8 +178,8 @@ impl OpenClBackend {
         Ok(self.scenes.insert(prepared))
     }
 
-    /// [`SilhouetteBackend::extract`] on the uploaded scene or part `id` of
-    /// [`OpenClBackend::scenes`], adding its light batches to `last_batches`.
+    /// [`SilhouetteBackend::extract`] on the uploaded scene or part `id`, counting its light
+    /// batches (`batches_of_last_extract_for_tests`).
     fn extract_whole(
         &mut self,
         id: PreparedId,
@@ -232,6 +226,14 @@ impl OpenClBackend {
         }
         Ok(stats)
     }
+
+    fn whole_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
+        Ok(self.scenes.get(id)?.bytes())
+    }
+
+    fn release_whole(&mut self, id: PreparedId) {
+        self.scenes.remove(id);
+    }
 }
 
 impl SilhouetteBackend for OpenClBackend {
@@ -263,16 +265,7 @@ impl SilhouetteBackend for OpenClBackend {
     }
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
-        let max = self.part_triangles(scene);
-        match PartsEntry::prepare(scene, max, |part, index| self.prepare_whole(part, index)) {
-            Ok(entry) => Ok(self.entries.insert(entry)),
-            Err((e, done)) => {
-                for id in done {
-                    self.scenes.remove(id);
-                }
-                Err(e)
-            }
-        }
+        self.prepare_parts(scene)
     }
 
     fn extract(
@@ -285,25 +278,14 @@ impl SilhouetteBackend for OpenClBackend {
         self.entries.get(id)?;
         check_lights(lights)?;
         self.last_batches = 0;
-        let entry = self.entries.take(id)?;
-        let result = entry.extract(lights.len(), out, |inner, out| {
-            self.extract_whole(inner, lights, mode, out)
-        });
-        self.entries.restore(id, entry);
-        result
+        self.extract_parts(id, lights, mode, out)
     }
 
     fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
-        self.entries
-            .get(id)?
-            .bytes(|inner| Ok(self.scenes.get(inner)?.bytes()))
+        self.parts_bytes(id)
     }
 
     fn release(&mut self, id: PreparedId) {
-        if let Some(entry) = self.entries.remove(id) {
-            for &inner in entry.ids() {
-                self.scenes.remove(inner);
-            }
-        }
+        self.release_parts(id);
     }
 }

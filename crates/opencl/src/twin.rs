@@ -4,12 +4,12 @@
 //!
 //! When the device and the `cpu` backend disagree, run the twin: if it agrees with `cpu`, the
 //! fault is in the kernel build or the driver; if not, in the logic shared by both. [`extract`]
-//! runs it through the same layout ([`SceneLayout`]) and host finishing ([`finish`]) as the
+//! runs it through the same layout ([`SceneLayout`](shadowvol_silhouette::gpu::SceneLayout)) and host finishing ([`finish`]) as the
 //! device path.
 //!
 //! The twins of the three GPU backends have the same shape: [`filter_f32`] and [`filter_f64`]
 //! (the device filters of exact mode, here as [`FILTERS`]), the per-work-item function
-//! ([`edge_multiplicity`], the loop this twin shares with the other per-edge kernel's),
+//! ([`edge_multiplicity`](shadowvol_silhouette::gpu::twin::edge_multiplicity), the loop this twin shares with the other per-edge kernel's),
 //! [`run_kernel`] (one launch: the device's raw output) and [`extract`] (the whole extraction on the CPU).
 //!
 //! ```
@@ -29,8 +29,8 @@ use crate::resolve::{finish, KernelOutput};
 use crate::NAME;
 use shadowvol_robust_math::filter::{self, TermsF32};
 use shadowvol_robust_math::{orient_filter_f64, Accuracy, Light, F32_FILTER_EPS};
-use shadowvol_silhouette::gpu::twin::{edge_multiplicity, DeviceFilters, TwinInputs};
-use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout, UncertainRecord};
+use shadowvol_silhouette::gpu::twin::{DeviceFilters, TwinInputs};
+use shadowvol_silhouette::gpu::{ExactFilter, UncertainRecord};
 use shadowvol_silhouette::{BackendError, Multiplicities, TopologyScene};
 
 const F32_PRODUCT_MIN: f32 = f32::from_bits(27 << 23); // 2^-100
@@ -91,51 +91,32 @@ pub const FILTERS: DeviceFilters = DeviceFilters {
 
 pub use shadowvol_silhouette::gpu::twin::EdgeResult;
 
-/// Runs the kernel's logic over the whole (edge, light) grid, like one launch: `lights` is
-/// object-major (`lights[object * light_count + light]`, object space, from [`object_lights`](shadowvol_silhouette::object_lights);
-/// the kernel reads the same values flattened to `f32`). The outputs are appended as the
-/// kernel's atomics append them (here in work-item order, lights outer, edges inner).
-///
-/// # Panics
-/// If `lights` has fewer than `layout.object_count() * light_count` entries.
+/// Runs the kernel's logic over the whole (edge, light) grid of `x`, like one launch
+/// ([`TwinInputs::each_edge_and_light`]; the kernel reads the same object-major lights flattened
+/// to `f32`). The outputs are appended as the kernel's atomics append them (here in work-item
+/// order, lights outer, edges inner).
 #[must_use]
-pub fn run_kernel(
-    layout: &SceneLayout,
-    lights: &[[f32; 4]],
-    light_count: usize,
-    mode: Accuracy,
-    filter: ExactFilter,
-) -> KernelOutput {
+pub fn run_kernel(x: &TwinInputs, mode: Accuracy, filter: ExactFilter) -> KernelOutput {
     let mut out = KernelOutput {
         counts: vec![0; 2],
         silhouettes: Vec::new(),
         uncertain: Vec::new(),
     };
-    let edges = layout.edge_count();
-    for l in 0..light_count {
-        for e in 0..edges {
-            let object = layout.edge(e).2 as usize;
-            let r = edge_multiplicity(
-                layout,
-                e,
-                lights[object * light_count + l],
-                mode,
-                FILTERS.get(filter),
-            );
-            for k in r.uncertain {
-                out.counts[0] += 1;
-                out.uncertain.push(UncertainRecord {
-                    edge: e as u32,
-                    ov_slot: k,
-                    light: l as u32,
-                });
-            }
-            if r.m != 0 {
-                out.counts[1] += 1;
-                out.silhouettes.push(((l * edges + e) as u32, r.m));
-            }
+    let edges = x.layout.edge_count();
+    x.each_edge_and_light(mode, FILTERS.get(filter), |l, e, r| {
+        for k in r.uncertain {
+            out.counts[0] += 1;
+            out.uncertain.push(UncertainRecord {
+                edge: e as u32,
+                ov_slot: k,
+                light: l as u32,
+            });
         }
-    }
+        if r.m != 0 {
+            out.counts[1] += 1;
+            out.silhouettes.push(((l * edges + e) as u32, r.m));
+        }
+    });
     out
 }
 
@@ -154,7 +135,7 @@ pub fn extract(
     out: &mut Multiplicities,
 ) -> Result<u64, BackendError> {
     let x = TwinInputs::new(scene, lights, NAME)?;
-    let output = run_kernel(&x.layout, &x.packed, lights.len(), mode, filter);
+    let output = run_kernel(&x, mode, filter);
     let uncertain = u64::from(output.counts[0]);
     finish(&x.layout, &x.object_lights, lights.len(), output, out, NAME)?;
     Ok(uncertain)

@@ -372,7 +372,6 @@ fn scene_beyond_the_largest_allocation_is_prepared_in_parts() -> Outcome {
             cut.set_max_alloc_for_tests(u64::MAX);
             id
         },
-        OpenClBackend::parts_of_for_tests,
     );
     Ok(())
 }

@@ -12,6 +12,8 @@ use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_scenes::Receiver;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    // No `error: XDG_RUNTIME_DIR ...` line from Mesa on a machine without a display.
+    shadowvol_silhouette::gpu::quiet_without_display();
     let out = std::env::args()
         .nth(1)
         .unwrap_or_else(|| "cube_on_floor.png".to_owned());

@@ -34,6 +34,8 @@ const MAX_ARTIFACT_FRACTION: f64 = 0.0005;
 const USAGE: &str = "usage: embed [OUT.png] [--check] [--maps]";
 
 fn main() -> std::process::ExitCode {
+    // No `error: XDG_RUNTIME_DIR ...` line from Mesa on a machine without a display.
+    shadowvol_silhouette::gpu::quiet_without_display();
     match run() {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {

@@ -19,6 +19,8 @@ use std::path::PathBuf;
 const MODES: [Accuracy; 3] = [Accuracy::Original, Accuracy::Robust, Accuracy::Exact];
 
 fn main() {
+    // No `error: XDG_RUNTIME_DIR ...` line from Mesa on a machine without a display.
+    shadowvol_silhouette::gpu::quiet_without_display();
     if let Err(e) = run() {
         eprintln!("error: {e}");
         std::process::exit(1);

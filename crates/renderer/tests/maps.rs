@@ -13,7 +13,19 @@ use shadowvol_renderer::{
 };
 use shadowvol_robust_math::Light;
 use shadowvol_scenes::{Emission, SpotCone};
-use shadowvol_test_support::Skip;
+use shadowvol_test_support::{main, Skip};
+
+main!(
+    a_box_on_a_floor_agrees_with_the_reference_under_every_light_type,
+    a_point_light_casts_through_every_cube_face,
+    cascades_agree_with_the_reference,
+    cascades_sharpen_a_deep_view,
+    a_homogeneous_point_light_casts_from_its_point,
+    without_bias_a_lit_floor_shadows_itself,
+    a_caster_out_of_view_still_shadows_what_the_view_sees,
+    higher_resolution_maps_leave_fewer_artifacts,
+    the_map_pipeline_reports_its_maps_and_repeats_its_image,
+);
 
 /// A map-pipeline renderer of `size` pixels with `settings`, or a visible skip.
 fn map_renderer(size: u32, settings: MapSettings) -> Result<Renderer, Skip> {
@@ -78,7 +90,6 @@ fn assert_shadowed(c: &Comparison, what: &str) {
 
 /// At 4096 texels a map texel is far smaller than a pixel: every disagreement with the reference
 /// lies within a pixel of a shadow boundary, and none counts.
-#[test]
 fn a_box_on_a_floor_agrees_with_the_reference_under_every_light_type() -> Result<(), Skip> {
     for kind in ["directional", "point", "spot"] {
         for filter in [MapFilter::Hard, MapFilter::Pcf] {
@@ -100,7 +111,6 @@ fn a_box_on_a_floor_agrees_with_the_reference_under_every_light_type() -> Result
 /// mirrored face shows: the shadows fall through
 /// the cube faces +X, -X, +Z and -Z; the same scene turned a quarter about x puts them behind
 /// +Y and -Y. Each face must render where the sampler reads it.
-#[test]
 fn a_point_light_casts_through_every_cube_face() -> Result<(), Skip> {
     for turn in [
         Affine3A::IDENTITY,
@@ -155,7 +165,6 @@ fn deep_floor() -> Scene {
 
 /// Each cascade of a directional map renders and is looked up where its slice of the view is:
 /// at 4096 texels, 4 cascades agree with the reference as one map does.
-#[test]
 fn cascades_agree_with_the_reference() -> Result<(), Skip> {
     let scene = deep_floor();
     for cascades in [1, 2, 4] {
@@ -173,7 +182,6 @@ fn cascades_agree_with_the_reference() -> Result<(), Skip> {
 
 /// Cascades spend the texels where the view needs them: at 256 texels, 4 cascades leave fewer
 /// artifact pixels than one map over the whole view.
-#[test]
 fn cascades_sharpen_a_deep_view() -> Result<(), Skip> {
     let scene = deep_floor();
     let with = |cascades| MapSettings {
@@ -193,7 +201,6 @@ fn cascades_sharpen_a_deep_view() -> Result<(), Skip> {
 
 /// A point light written with w != 1 (`(w P, w)`) casts from its point P, as
 /// the reference reads it.
-#[test]
 fn a_homogeneous_point_light_casts_from_its_point() -> Result<(), Skip> {
     let p = Vec3::new(0.5, 6.0, 0.3);
     for w in [2.5f32, 0.25] {
@@ -211,7 +218,6 @@ fn a_homogeneous_point_light_casts_from_its_point() -> Result<(), Skip> {
 }
 
 /// Without any bias the lit floor shadows itself (acne): the metric sees it.
-#[test]
 fn without_bias_a_lit_floor_shadows_itself() -> Result<(), Skip> {
     for kind in ["directional", "point"] {
         let settings = MapSettings {
@@ -231,7 +237,6 @@ fn without_bias_a_lit_floor_shadows_itself() -> Result<(), Skip> {
 
 /// A box above the view casts its shadow into it: the directional map's depth range holds every
 /// caster, not only what the view sees.
-#[test]
 fn a_caster_out_of_view_still_shadows_what_the_view_sees() -> Result<(), Skip> {
     let camera = Camera::look_at(Vec3::new(0.0, 2.0, 5.0), Vec3::new(0.0, 0.0, -1.0));
     let scene = scene_of(
@@ -255,7 +260,6 @@ fn a_caster_out_of_view_still_shadows_what_the_view_sees() -> Result<(), Skip> {
 
 /// Blocks and a real mesh on a floor, under a point and a directional light: at 4096 texels at
 /// most 0.3 % of the pixels are artifacts, and 512 texels leave no fewer.
-#[test]
 fn higher_resolution_maps_leave_fewer_artifacts() -> Result<(), Skip> {
     let blocks = scene_of(
         vec![
@@ -319,7 +323,6 @@ fn higher_resolution_maps_leave_fewer_artifacts() -> Result<(), Skip> {
 
 /// The report names the pipeline and one map per light; a timed frame reads nothing back, and
 /// the next frame repeats the image.
-#[test]
 fn the_map_pipeline_reports_its_maps_and_repeats_its_image() -> Result<(), Skip> {
     let scene = lit_box("point");
     let mut r = map_renderer(128, MapSettings::default())?;

@@ -34,7 +34,7 @@ mod prepared;
 mod scene;
 
 pub use multiplicities::{ExtractStats, Multiplicities};
-pub use parts::{PartsEntry, SceneParts};
+pub use parts::{PartsBackend, PartsEntry, SceneParts, WholeScene};
 pub use prepared::{check_lights, PreparedScenes};
 pub use scene::{object_light, object_lights, SceneObject, TopologyScene};
 pub use shadowvol_mesh_topology::{unique_arc_bytes, vec_bytes};

@@ -12,10 +12,10 @@
 //! vertices in ascending order of their ids in the object, so every `a < b` and every canonical
 //! (sorted) triangle keeps its order, and with it the sign convention.
 
-use crate::gpu::{SceneIndex, TableRange};
+use crate::gpu::{SceneIndex, SceneLayout, TableRange};
 use crate::{
-    BackendError, ExtractStats, Multiplicities, PreparedBytes, PreparedId, SceneObject,
-    TopologyScene,
+    Accuracy, BackendError, ExtractStats, Light, Multiplicities, PreparedBytes, PreparedId,
+    PreparedScenes, SceneObject, TopologyScene,
 };
 use shadowvol_mesh_topology::{EdgeTable, Mesh, MeshError};
 use std::sync::Arc;
@@ -367,6 +367,158 @@ impl PartsEntry {
                 parts.extract_each(lights, out, |k, part| extract(ids[k], part))
             }
         }
+    }
+}
+
+/// What [`PartsBackend::prepare_whole`] uploads: a scene, or one part of a cut scene, laid out.
+#[derive(Debug)]
+pub struct WholeScene<'a> {
+    /// The scene or part (its objects' transforms).
+    pub scene: &'a TopologyScene,
+    /// Its flat layout, which the backend uploads and may then drop.
+    pub layout: SceneLayout,
+    /// What the host's exact decisions read the tables through: [`SceneIndex::new`] of the
+    /// scene, or of the range a part of a cut scene is.
+    pub index: SceneIndex,
+}
+
+/// A backend that keeps its uploaded scenes under ids of its own and cuts a scene whose
+/// [`SceneLayout`](crate::gpu::SceneLayout) buffers exceed its device's largest buffer into
+/// parts: the caller's ids name [`PartsEntry`]s. `opencl` and `vulkan` implement the required
+/// methods (one uploaded scene each); the provided ones are their [`SilhouetteBackend`]
+/// `prepare`, `extract` (after the backend's own checks), `prepared_bytes` and `release`.
+///
+/// [`SilhouetteBackend`]: crate::SilhouetteBackend
+pub trait PartsBackend {
+    /// The backend's registry name, for errors.
+    const NAME: &'static str;
+
+    /// What the caller's ids name.
+    fn entries(&self) -> &PreparedScenes<PartsEntry>;
+
+    /// What the caller's ids name, to change.
+    fn entries_mut(&mut self) -> &mut PreparedScenes<PartsEntry>;
+
+    /// The largest buffer the device takes, bytes: a scene whose largest layout buffer exceeds
+    /// it is cut into parts.
+    fn largest_buffer(&self) -> u64;
+
+    /// Uploads a scene, or a part of one, whole ([`WholeScene`]: laid out, with its index).
+    /// Returns the uploaded scene's own id.
+    ///
+    /// # Errors
+    /// The backend's, naming what failed.
+    fn prepare_whole(&mut self, whole: WholeScene<'_>) -> Result<PreparedId, BackendError>;
+
+    /// The multiplicities of the uploaded scene (or part) `id` for `lights` in `mode`, in `out`.
+    ///
+    /// # Errors
+    /// The backend's, as [`SilhouetteBackend::extract`](crate::SilhouetteBackend::extract).
+    fn extract_whole(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError>;
+
+    /// What the uploaded scene (or part) `id` holds.
+    ///
+    /// # Errors
+    /// [`BackendError::UnknownScene`] for an unknown `id`.
+    fn whole_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError>;
+
+    /// Releases the uploaded scene (or part) `id`; an unknown `id` is ignored.
+    fn release_whole(&mut self, id: PreparedId);
+
+    /// Triangles per part when `scene`'s largest [`SceneLayout`](crate::gpu::SceneLayout)
+    /// buffer (positions 12 bytes a vertex, edge records 16 an edge and one more, OVs 4 each)
+    /// exceeds [`largest_buffer`](Self::largest_buffer); `None` when it fits whole. A part's
+    /// edge records take at most 48 bytes a triangle.
+    fn part_triangles(&self, scene: &TopologyScene) -> Option<usize> {
+        let limit = self.largest_buffer();
+        let (v, e, ov) = (
+            scene.total_vertices() as u64,
+            scene.total_edges() as u64,
+            scene.total_ovs() as u64,
+        );
+        let largest = [12 * v, 16 * (e + 1), 4 * ov].into_iter().max()?;
+        (largest > limit).then(|| (limit.saturating_sub(64) / 48).max(1) as usize)
+    }
+
+    /// Uploads `scene`, whole or in parts ([`PartsEntry::prepare`]), and returns the caller's id
+    /// for it; what was uploaded before a failure is released.
+    ///
+    /// # Errors
+    /// [`BackendError::Limit`] for a scene (or part) beyond the layout's `u32` indices, the
+    /// first error of [`prepare_whole`](Self::prepare_whole), or
+    /// [`BackendError::InvalidInput`] when a part's table cannot be built.
+    fn prepare_parts(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
+        let max = self.part_triangles(scene);
+        let prepare = |part: &TopologyScene, index| {
+            let layout = SceneLayout::build(part, Self::NAME)?;
+            self.prepare_whole(WholeScene {
+                scene: part,
+                layout,
+                index,
+            })
+        };
+        match PartsEntry::prepare(scene, max, prepare) {
+            Ok(entry) => Ok(self.entries_mut().insert(entry)),
+            Err((e, done)) => {
+                for id in done {
+                    self.release_whole(id);
+                }
+                Err(e)
+            }
+        }
+    }
+
+    /// The multiplicities of the caller's scene `id`: [`extract_whole`](Self::extract_whole) on
+    /// the uploaded scene, or on each part, added up ([`PartsEntry::extract`]).
+    ///
+    /// # Errors
+    /// [`BackendError::UnknownScene`] for an unknown `id`; the first error of `extract_whole`.
+    fn extract_parts(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        // Taken out while its parts are extracted, which borrow the backend.
+        let entry = self.entries_mut().take(id)?;
+        let result = entry.extract(lights.len(), out, |inner, out| {
+            self.extract_whole(inner, lights, mode, out)
+        });
+        self.entries_mut().restore(id, entry);
+        result
+    }
+
+    /// What the caller's scene `id` holds ([`PartsEntry::bytes`]).
+    ///
+    /// # Errors
+    /// [`BackendError::UnknownScene`] for an unknown `id`.
+    fn parts_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
+        self.entries()
+            .get(id)?
+            .bytes(|inner| self.whole_bytes(inner))
+    }
+
+    /// Releases the caller's scene `id` and every uploaded part of it; an unknown `id` is
+    /// ignored.
+    fn release_parts(&mut self, id: PreparedId) {
+        if let Some(entry) = self.entries_mut().remove(id) {
+            for &inner in entry.ids() {
+                self.release_whole(inner);
+            }
+        }
+    }
+
+    /// Into how many parts the caller's scene `id` was cut (1: uploaded whole); `None` for an
+    /// unknown or released `id`.
+    fn parts_of(&self, id: PreparedId) -> Option<usize> {
+        Some(self.entries().get(id).ok()?.ids().len())
     }
 }
 

@@ -193,7 +193,13 @@ pub fn per_backend<R: IntoOutcome>(
 
 /// Runs `trials` with the command line's arguments (filters, `--ignored`, `--test-threads`, ...)
 /// and exits with the run's status.
+///
+/// First, on a machine without a display, it turns Mesa's Vulkan device-select layer off
+/// ([`quiet_without_display`](shadowvol_silhouette::gpu::quiet_without_display)), so that a
+/// trial that starts Vulkan prints no `error: XDG_RUNTIME_DIR ...` line when nothing failed.
+/// Call it before the test binary starts a thread or a device.
 pub fn run(trials: Vec<Trial>) -> ! {
+    shadowvol_silhouette::gpu::quiet_without_display();
     libtest_mimic::run(&Arguments::from_args(), trials).exit()
 }
 

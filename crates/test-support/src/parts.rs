@@ -4,7 +4,8 @@
 
 use crate::corpus;
 use shadowvol_silhouette::{
-    extract_once, invariant, Accuracy, Multiplicities, PreparedId, SilhouetteBackend, TopologyScene,
+    extract_once, invariant, Accuracy, Multiplicities, PartsBackend, PreparedId, SilhouetteBackend,
+    TopologyScene,
 };
 
 /// A limit in bytes that a third of `scene`'s edge records (16 bytes an edge and one more)
@@ -15,25 +16,24 @@ pub fn third_of_the_edge_records(scene: &TopologyScene) -> u64 {
 }
 
 /// Runs the check on every corpus case: `prepare_cut(cut, scene, limit)` prepares the scene on
-/// `cut` held to `limit` bytes ([`third_of_the_edge_records`]) and `parts_of(cut, id)` says into
-/// how many parts it went (`None` once released). Each mode's result, silhouettes included,
+/// `cut` held to `limit` bytes ([`third_of_the_edge_records`]) and
+/// [`PartsBackend::parts_of`] says into how many parts it went (`None` once released). Each mode's result, silhouettes included,
 /// must equal `whole`'s (the same backend, unlimited), and `exact`'s in exact mode; some case
 /// must be cut into 3 parts or more.
 ///
 /// # Panics
 /// On the first difference, naming the case, the mode and the number of parts.
-pub fn check_parts_equal_whole<B: SilhouetteBackend>(
+pub fn check_parts_equal_whole<B: SilhouetteBackend + PartsBackend>(
     cut: &mut B,
     whole: &mut dyn SilhouetteBackend,
     exact: &mut dyn SilhouetteBackend,
     mut prepare_cut: impl FnMut(&mut B, &TopologyScene, u64) -> PreparedId,
-    parts_of: impl Fn(&B, PreparedId) -> Option<usize>,
 ) {
     let mut most_parts = 0;
     for case in corpus::cases() {
         let scene = case.scene().unwrap();
         let id = prepare_cut(cut, &scene, third_of_the_edge_records(&scene));
-        let parts = parts_of(cut, id).expect("a prepared scene");
+        let parts = cut.parts_of(id).expect("a prepared scene");
         most_parts = most_parts.max(parts);
         for mode in Accuracy::ALL {
             let what = format!("{} {mode}, {parts} parts", case.name);
@@ -53,7 +53,7 @@ pub fn check_parts_equal_whole<B: SilhouetteBackend>(
         }
         assert!(cut.prepared_bytes(id).is_ok());
         cut.release(id);
-        assert!(parts_of(cut, id).is_none(), "{}: released", case.name);
+        assert!(cut.parts_of(id).is_none(), "{}: released", case.name);
     }
     assert!(most_parts >= 3, "no case was cut into 3 parts or more");
 }

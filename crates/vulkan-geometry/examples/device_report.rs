@@ -74,6 +74,8 @@ fn time(
 }
 
 fn main() {
+    // No `error: XDG_RUNTIME_DIR ...` line from Mesa on a machine without a display.
+    shadowvol_silhouette::gpu::quiet_without_display();
     let mut vk = match VulkanBackend::new(VulkanOptions::from_env()) {
         Ok(v) => v,
         Err(e) => {

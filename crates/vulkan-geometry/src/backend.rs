@@ -9,10 +9,11 @@ use crate::pipeline::{Pipelines, BINDINGS};
 use crate::NAME;
 use ash::vk;
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_silhouette::gpu::{ExactFilter, SceneIndex, SceneLayout};
+use shadowvol_silhouette::gpu::ExactFilter;
 use shadowvol_silhouette::{
     check_lights, object_lights, BackendError, BackendInfo, ExtractStats, Multiplicities,
-    PartsEntry, PreparedBytes, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
+    PartsBackend, PartsEntry, PreparedBytes, PreparedId, PreparedScenes, SilhouetteBackend,
+    TopologyScene, WholeScene,
 };
 use std::num::NonZeroUsize;
 use std::time::Instant;
@@ -178,51 +179,6 @@ impl VulkanBackend {
         self.part_limit = bytes;
     }
 
-    /// Into how many parts scene `id` was cut (1: prepared whole); for tests of the splitting.
-    #[doc(hidden)]
-    #[must_use]
-    pub fn parts_of_for_tests(&self, id: PreparedId) -> Option<usize> {
-        Some(self.entries.get(id).ok()?.ids().len())
-    }
-
-    /// Triangles per part when `scene`'s largest static buffer (positions 12 bytes a vertex,
-    /// edge records 16 an edge and one more, OVs 4 each) exceeds the part limit; `None` when it
-    /// fits whole. A part's edge records take at most 48 bytes a triangle.
-    fn part_triangles(&self, scene: &TopologyScene) -> Option<usize> {
-        let (v, e, ov) = (
-            scene.total_vertices() as u64,
-            scene.total_edges() as u64,
-            scene.total_ovs() as u64,
-        );
-        let largest = [12 * v, 16 * (e + 1), 4 * ov].into_iter().max()?;
-        (largest > self.part_limit)
-            .then(|| (self.part_limit.saturating_sub(64) / 48).max(1) as usize)
-    }
-
-    /// Releases the buffers of the scene or part `id` of `prepared`.
-    fn release_inner(&mut self, id: PreparedId) {
-        if let Some(p) = self.prepared.remove(id) {
-            // A timed-out submission may still read this scene's buffers: free them later.
-            self.retire(move |ctx| p.destroy(ctx));
-        }
-    }
-
-    /// [`SilhouetteBackend::extract`] on the scene or part `id` of `prepared`.
-    fn extract_whole(
-        &mut self,
-        id: PreparedId,
-        lights: &[Light],
-        mode: Accuracy,
-        out: &mut Multiplicities,
-        stats: &mut ExtractStats,
-    ) -> Result<(), BackendError> {
-        let t = Instant::now();
-        let obj_lights = object_lights(self.scene(id)?.transforms.iter().copied(), lights);
-        stats.upload += t.elapsed();
-        out.reset(self.scene(id)?.index.edge_count(), lights.len());
-        self.extract_batches(id, &obj_lights, mode, out, stats)
-    }
-
     /// A descriptor pool with one set of the pipelines' layout; the pool is kept in `guard`
     /// until the caller takes it (so an error frees it), and returned with the set.
     fn allocate_set(
@@ -282,16 +238,7 @@ impl SilhouetteBackend for VulkanBackend {
     }
 
     fn prepare(&mut self, scene: &TopologyScene) -> Result<PreparedId, BackendError> {
-        let max = self.part_triangles(scene);
-        match PartsEntry::prepare(scene, max, |part, index| self.prepare_whole(part, index)) {
-            Ok(entry) => Ok(self.entries.insert(entry)),
-            Err((e, done)) => {
-                for id in done {
-                    self.release_inner(id);
-                }
-                Err(e)
-            }
-        }
+        self.prepare_parts(scene)
     }
 
     fn extract(
@@ -305,42 +252,39 @@ impl SilhouetteBackend for VulkanBackend {
         self.entries.get(id)?;
         self.settle()?;
         self.last_passes = 0;
-        let entry = self.entries.take(id)?;
-        let result = entry.extract(lights.len(), out, |inner, out| {
-            let mut stats = ExtractStats::default();
-            self.extract_whole(inner, lights, mode, out, &mut stats)
-                .map(|()| stats)
-        });
-        self.entries.restore(id, entry);
-        result
+        self.extract_parts(id, lights, mode, out)
     }
 
     fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
-        self.entries
-            .get(id)?
-            .bytes(|inner| Ok(self.prepared.get(inner)?.bytes()))
+        self.parts_bytes(id)
     }
 
     fn release(&mut self, id: PreparedId) {
-        if let Some(entry) = self.entries.remove(id) {
-            for &inner in entry.ids() {
-                self.release_inner(inner);
-            }
-        }
+        self.release_parts(id);
     }
 }
 
-impl VulkanBackend {
-    /// Creates the buffers of `scene`, whole, and drops its host layout; returns its id in
-    /// [`VulkanBackend::prepared`]. The host's exact decisions read the tables through `index`
-    /// ([`SceneIndex::new`] of `scene`, or of the range a part of a cut scene is).
-    fn prepare_whole(
-        &mut self,
-        scene: &TopologyScene,
-        index: SceneIndex,
-    ) -> Result<PreparedId, BackendError> {
-        let layout = SceneLayout::build(scene, NAME)?;
+/// The scenes in parts: `maxStorageBufferRange` (or the tests' limit) bounds a part's buffers.
+impl PartsBackend for VulkanBackend {
+    const NAME: &'static str = NAME;
+
+    fn entries(&self) -> &PreparedScenes<PartsEntry> {
+        &self.entries
+    }
+
+    fn entries_mut(&mut self) -> &mut PreparedScenes<PartsEntry> {
+        &mut self.entries
+    }
+
+    fn largest_buffer(&self) -> u64 {
+        self.part_limit
+    }
+
+    /// Creates the buffers of the layout, whole, and drops the host layout; returns the
+    /// scene's id among the prepared scenes.
+    fn prepare_whole(&mut self, whole: WholeScene<'_>) -> Result<PreparedId, BackendError> {
         let ctx = &self.ctx;
+        let (scene, layout) = (whole.scene, whole.layout);
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let positions: Vec<u32> = layout.positions.iter().map(|p| p.to_bits()).collect();
         // Everything created so far is freed if a later step fails.
@@ -383,7 +327,7 @@ impl VulkanBackend {
         drop(layout);
         let p = Prepared {
             transforms: scene.transforms().collect(),
-            index,
+            index: whole.index,
             positions,
             edges,
             ovs,
@@ -396,6 +340,35 @@ impl VulkanBackend {
         };
         p.write_set(ctx);
         Ok(self.prepared.insert(p))
+    }
+
+    /// Runs the light batches (one geometry-shader pass each) on the scene or part `id`.
+    fn extract_whole(
+        &mut self,
+        id: PreparedId,
+        lights: &[Light],
+        mode: Accuracy,
+        out: &mut Multiplicities,
+    ) -> Result<ExtractStats, BackendError> {
+        let mut stats = ExtractStats::default();
+        let t = Instant::now();
+        let obj_lights = object_lights(self.scene(id)?.transforms.iter().copied(), lights);
+        stats.upload += t.elapsed();
+        out.reset(self.scene(id)?.index.edge_count(), lights.len());
+        self.extract_batches(id, &obj_lights, mode, out, &mut stats)?;
+        Ok(stats)
+    }
+
+    fn whole_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
+        Ok(self.prepared.get(id)?.bytes())
+    }
+
+    /// Releases the buffers of the scene or part `id`; a timed-out submission may still read
+    /// them, so they are freed once it has finished.
+    fn release_whole(&mut self, id: PreparedId) {
+        if let Some(p) = self.prepared.remove(id) {
+            self.retire(move |ctx| p.destroy(ctx));
+        }
     }
 }
 

@@ -1,13 +1,13 @@
 //! The CPU twin of the geometry shader (`shaders/silhouette_gs.geom`), for tests: nothing in the
 //! backend calls it.
 //!
-//! The same buffers (a [`SceneLayout`] and object-major lights), the same per-edge loop, the same
+//! The same buffers (a [`SceneLayout`](shadowvol_silhouette::gpu::SceneLayout) and object-major lights), the same per-edge loop, the same
 //! filters, in Rust. When the device disagrees with the `cpu` backend, running the twin on the
 //! same input tells whether the shader logic or the device arithmetic is at fault.
 //!
 //! The twins of the three GPU backends have the same shape: [`filter_f32`] and [`filter_f64`]
 //! (the device filters of exact mode, here as [`FILTERS`]), the per-invocation function
-//! ([`edge_multiplicity`], the loop this twin shares with the other per-edge kernel's),
+//! ([`edge_multiplicity`](shadowvol_silhouette::gpu::twin::edge_multiplicity), the loop this twin shares with the other per-edge kernel's),
 //! [`run_kernel`] (one pass: the device's raw output) and [`extract`] (the whole extraction on the CPU, with the backend's own host side).
 //!
 //! ```
@@ -27,8 +27,8 @@ use crate::resolve::finish_batch;
 use crate::NAME;
 use shadowvol_robust_math::filter::{self, TermsF32};
 use shadowvol_robust_math::{orient_filter_f64, Accuracy, Light, F32_FILTER_EPS};
-use shadowvol_silhouette::gpu::twin::{edge_multiplicity, DeviceFilters, TwinInputs};
-use shadowvol_silhouette::gpu::{ExactFilter, SceneLayout, UncertainRecord};
+use shadowvol_silhouette::gpu::twin::{DeviceFilters, TwinInputs};
+use shadowvol_silhouette::gpu::{ExactFilter, UncertainRecord};
 use shadowvol_silhouette::{BackendError, Multiplicities, TopologyScene};
 
 /// Twin of the shader's `f32` filter (`orient_filter` with `SHADOWVOL_NO_F64`): robust-math's
@@ -85,43 +85,24 @@ pub struct KernelOutput {
     pub uncertain: Vec<UncertainRecord>,
 }
 
-/// Runs the shader's logic for every (edge, light) of one pass: `lights` is object-major
-/// (`lights[object * light_count + light]`, object space, from [`object_lights`](shadowvol_silhouette::object_lights)).
-///
-/// # Panics
-/// If `lights` has fewer than `layout.object_count() * light_count` entries.
+/// Runs the shader's logic for every (edge, light) of one pass over `x`
+/// ([`TwinInputs::each_edge_and_light`]).
 #[must_use]
-pub fn run_kernel(
-    layout: &SceneLayout,
-    lights: &[[f32; 4]],
-    light_count: usize,
-    mode: Accuracy,
-    filter: ExactFilter,
-) -> KernelOutput {
-    let edges = layout.edge_count();
+pub fn run_kernel(x: &TwinInputs, mode: Accuracy, filter: ExactFilter) -> KernelOutput {
+    let edges = x.layout.edge_count();
     let mut out = KernelOutput {
-        mult: vec![0; edges * light_count],
+        mult: vec![0; edges * x.light_count],
         uncertain: Vec::new(),
     };
-    for li in 0..light_count {
-        for e in 0..edges {
-            let object = layout.edge(e).2 as usize;
-            let r = edge_multiplicity(
-                layout,
-                e,
-                lights[object * light_count + li],
-                mode,
-                FILTERS.get(filter),
-            );
-            out.mult[li * edges + e] = r.m;
-            out.uncertain
-                .extend(r.uncertain.into_iter().map(|k| UncertainRecord {
-                    edge: e as u32,
-                    ov_slot: k,
-                    light: li as u32,
-                }));
-        }
-    }
+    x.each_edge_and_light(mode, FILTERS.get(filter), |li, e, r| {
+        out.mult[li * edges + e] = r.m;
+        out.uncertain
+            .extend(r.uncertain.into_iter().map(|k| UncertainRecord {
+                edge: e as u32,
+                ov_slot: k,
+                light: li as u32,
+            }));
+    });
     out
 }
 
@@ -139,7 +120,7 @@ pub fn extract(
     out: &mut Multiplicities,
 ) -> Result<u64, BackendError> {
     let x = TwinInputs::new(scene, lights, NAME)?;
-    let k = run_kernel(&x.layout, &x.packed, lights.len(), mode, filter);
+    let k = run_kernel(&x, mode, filter);
     out.reset(x.layout.edge_count(), lights.len());
     out.all_values_mut().copy_from_slice(&k.mult);
     finish_batch(

@@ -10,7 +10,7 @@ use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{extract_once, invariant, Accuracy, Multiplicities, SilhouetteBackend};
 use shadowvol_test_support::corpus;
 use shadowvol_test_support::{main, Outcome};
-use shadowvol_vulkan_geometry::{VulkanBackend, VulkanOptions};
+use shadowvol_vulkan_geometry::VulkanOptions;
 use std::num::NonZeroUsize;
 
 main!(
@@ -123,7 +123,6 @@ fn scene_beyond_the_storage_range_is_prepared_in_parts() -> Outcome {
             cut.set_part_limit_for_tests(limit);
             cut.prepare(scene).unwrap()
         },
-        VulkanBackend::parts_of_for_tests,
     );
     Ok(())
 }

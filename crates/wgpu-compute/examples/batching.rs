@@ -23,6 +23,8 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    // No `error: XDG_RUNTIME_DIR ...` line from Mesa on a machine without a display.
+    shadowvol_silhouette::gpu::quiet_without_display();
     let mut args = std::env::args().skip(1);
     let frames: usize = args.next().map(|s| s.parse()).transpose()?.unwrap_or(30);
     let mut names: Vec<String> = args.collect();

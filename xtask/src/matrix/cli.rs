@@ -46,6 +46,8 @@ pub struct BenchReport<T> {
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(default)]
 pub struct BenchHost {
+    /// The CPU model, as the CLI reads it (`/proc/cpuinfo`'s `model name`).
+    pub cpu: Option<String>,
     /// Target features enabled at compile time.
     pub compile_target_features: Vec<String>,
     /// Cargo profile of the binary.

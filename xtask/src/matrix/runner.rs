@@ -76,17 +76,9 @@ fn command_line(cmd: &str, args: &[&str], root: &Path) -> String {
         .unwrap_or_else(|| "unknown".into())
 }
 
-/// Host name, OS, CPU, cores, rustc, git revision and `RUSTFLAGS` of this machine and checkout.
+/// Host name, OS, cores, rustc, git revision and `RUSTFLAGS` of this machine and checkout (the
+/// CPU model comes from the CLI, in [`probe_build`]).
 pub(super) fn host_info(root: &Path) -> HostInfo {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|s| s.trim().to_owned())
-        })
-        .unwrap_or_else(|| std::env::consts::ARCH.to_owned());
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut rev = command_line("git", &["rev-parse", "--short=12", "HEAD"], root);
     if !command_line(
@@ -102,7 +94,6 @@ pub(super) fn host_info(root: &Path) -> HostInfo {
     HostInfo {
         host: Some(command_line("uname", &["-n"], root)),
         os: Some(command_line("uname", &["-sr"], root)),
-        cpu: Some(cpu),
         cores: Some(cores as u64),
         rustc: Some(command_line("rustc", &["-V"], root)),
         git_rev: Some(rev),
@@ -137,8 +128,9 @@ pub(super) fn scene_names(cli: &Cli) -> Result<Vec<String>, String> {
     Ok(names)
 }
 
-/// Asks the release CLI what it was built with (target features, profile) and which SIMD
-/// level the `simd` backend picks at run time, with one tiny `bench` run; adds them to `host`.
+/// Asks the release CLI what it was built with (target features, profile), the CPU it runs on
+/// and which SIMD level the `simd` backend picks at run time, with one tiny `bench` run; adds
+/// them to `host` (the CPU is the architecture's name when the probe fails).
 pub(super) fn probe_build(cli: &Cli, host: &mut HostInfo) {
     let probe: Result<BenchReport<Bench>, String> = cli.json(&[
         "bench",
@@ -156,20 +148,27 @@ pub(super) fn probe_build(cli: &Cli, host: &mut HostInfo) {
         "json",
     ]);
     let (level, features, profile) = match probe {
-        Ok(v) => (
-            v.records
+        Ok(v) => {
+            host.cpu = v.host.cpu;
+            let level = v
+                .records
                 .into_iter()
                 .next()
-                .and_then(|r| r.details.simd_level)
-                .unwrap_or_else(|| "unknown".into()),
-            v.host.compile_target_features.join("+"),
-            v.host.profile.unwrap_or_else(|| "release".into()),
-        ),
-        Err(e) => (
-            format!("unknown (simd probe failed: {e})"),
-            String::new(),
-            "release".to_owned(),
-        ),
+                .and_then(|r| r.details.simd_level);
+            (
+                level.unwrap_or_else(|| "unknown".into()),
+                v.host.compile_target_features.join("+"),
+                v.host.profile.unwrap_or_else(|| "release".into()),
+            )
+        }
+        Err(e) => {
+            host.cpu = Some(std::env::consts::ARCH.to_owned());
+            (
+                format!("unknown (simd probe failed: {e})"),
+                String::new(),
+                "release".to_owned(),
+            )
+        }
     };
     let rustflags = host.rustflags.clone().unwrap_or_default();
     host.flags = Some(format!(

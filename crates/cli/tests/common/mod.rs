@@ -37,6 +37,28 @@ pub fn json_of(args: &[&str]) -> Value {
     serde_json::from_slice(&out.stdout).expect("valid JSON on stdout")
 }
 
+/// The arguments of `shadowvol bench` on `scene` with `backends` (comma-separated) in exact mode:
+/// `frames` timed frames after `warmup`, JSON output.
+pub fn exact_bench<'a>(
+    scene: &'a str,
+    backends: &'a str,
+    frames: &'a str,
+    warmup: &'a str,
+) -> Vec<&'a str> {
+    let mut args = vec!["bench", "--scene", scene, "--backend", backends];
+    args.extend(["--mode", "exact", "--frames", frames]);
+    args.extend(["--warmup", warmup, "--format", "json"]);
+    args
+}
+
+/// The arguments of `shadowvol silhouette` on `input` (a file or preset) with `backend` in exact
+/// mode, JSON output; lights may follow.
+pub fn exact_silhouette<'a>(input: &'a str, backend: &'a str) -> Vec<&'a str> {
+    let mut args = vec!["silhouette", input, "--backend", backend];
+    args.extend(["--mode", "exact", "--format", "json"]);
+    args
+}
+
 /// The rows of `shadowvol backends --format json`, read once per test binary.
 fn backend_rows() -> &'static [Value] {
     static ROWS: OnceLock<Vec<Value>> = OnceLock::new();

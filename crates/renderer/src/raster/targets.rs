@@ -446,6 +446,8 @@ mod tests {
     #[test]
     fn every_stencil_value_reads_back_through_colour_as_copied(
     ) -> Result<(), shadowvol_test_support::Skip> {
+        // The one unit test that opens a device: no `error: XDG_RUNTIME_DIR ...` from Mesa.
+        shadowvol_silhouette::gpu::quiet_without_display();
         let rd = match RenderDevice::open() {
             Ok(rd) => rd,
             Err(e) => return Err(shadowvol_test_support::skip(format!("no GPU adapter: {e}"))),

@@ -14,6 +14,8 @@
 //!   records, over a [`HostScene`]: the layout itself, or a [`SceneIndex`] that reads the edge
 //!   tables (so a backend need not keep its layouts once they are uploaded);
 //! * [`wait_limit`]: the bound on every wait for a device;
+//! * [`quiet_without_display`]: Mesa's Vulkan device-select layer turned off where there is no
+//!   display, so that it prints no `error:` line when nothing failed;
 //! * [`lights_per_batch`] and [`batches`]: how the lights of one `extract` are split into batches
 //!   (a dispatch, a kernel launch, a geometry-shader pass) when they do not fit one;
 //! * [`twin`]: the per-edge loop the CPU twins of the `opencl` and `vulkan` kernels share.
@@ -25,6 +27,7 @@
 //! dependency edge and a README for the same ~400 lines.
 
 mod batches;
+mod display;
 mod host;
 mod layout;
 mod resolve;
@@ -33,6 +36,7 @@ pub mod twin;
 mod wait;
 
 pub use batches::{batches, lights_per_batch};
+pub use display::{device_select_value, quiet_without_display, NODEVICE_SELECT};
 pub use host::{HostScene, SceneIndex, TableRange};
 pub use layout::SceneLayout;
 pub use resolve::{check_batch, resolve_uncertain, UncertainRecord};

@@ -88,6 +88,8 @@ pub struct TwinInputs {
     pub object_lights: Vec<Vec<[f32; 4]>>,
     /// The same lights, object-major.
     pub packed: Vec<[f32; 4]>,
+    /// How many lights.
+    pub light_count: usize,
 }
 
 impl TwinInputs {
@@ -109,6 +111,30 @@ impl TwinInputs {
             layout,
             object_lights,
             packed,
+            light_count: lights.len(),
         })
+    }
+
+    /// One launch of a per-edge kernel on the CPU: [`edge_multiplicity`] for every (light,
+    /// edge), light by light and edge by edge, each edge with its object's light and the
+    /// kernel's exact-mode `filter`; `each(light, edge, result)` takes each result.
+    pub fn each_edge_and_light(
+        &self,
+        mode: Accuracy,
+        filter: FilterFn,
+        mut each: impl FnMut(usize, usize, EdgeResult),
+    ) {
+        let n = self.light_count;
+        for l in 0..n {
+            for e in 0..self.layout.edge_count() {
+                let object = self.layout.edge(e).2 as usize;
+                let light = self.packed[object * n + l];
+                each(
+                    l,
+                    e,
+                    edge_multiplicity(&self.layout, e, light, mode, filter),
+                );
+            }
+        }
     }
 }

@@ -13,7 +13,7 @@
 //! `shadowvol bench`) use it too.
 //!
 //! ```
-//! use shadowvol::MemoryFloor;
+//! use shadowvol_registry::MemoryFloor;
 //! use shadowvol_mesh_topology::{EdgeTable, Mesh};
 //! use shadowvol_silhouette::TopologyScene;
 //! use glam::Vec3;

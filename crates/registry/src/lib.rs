@@ -1,23 +1,50 @@
-//! The backend registry: the one list of silhouette backends.
+//! The backend registry: the one list of silhouette backends, and the memory floor they are
+//! timed against.
 //!
 //! `shadowvol backends`, `shadowvol silhouette --backend`, the conformance tests, the benches and
-//! `cargo xtask matrix` all iterate over [`backends`]; none has its own list. To add a backend,
-//! write a crate that exports
+//! `cargo xtask matrix` (through `shadowvol`) all iterate over [`backends`]; none has its own
+//! list. This crate depends on the backends and on nothing above them (no renderer, no window),
+//! so that tests and benches use it without the viewer.
+//!
+//! To add a backend, write a crate that exports
 //!
 //! ```text
 //! pub fn create_backend() -> Result<Box<dyn SilhouetteBackend>, BackendError>
 //! ```
 //!
 //! add it as an optional dependency behind a cargo feature of the same name as the backend in
-//! `crates/cli/Cargo.toml` (and pass the feature through in `tests/Cargo.toml`), and add one
-//! `backend!` line to [`backends`], saying whether it runs on the host or on a device.
+//! `crates/registry/Cargo.toml` (and pass the feature through in `crates/cli/Cargo.toml` and
+//! `tests/Cargo.toml`), and add one `backend!` line to [`backends`], saying whether it runs on
+//! the host or on a device.
 //!
 //! `--backend auto` ([`AUTO`]) is resolved here too, by [`find_backend`]: [`choose_auto`] picks
 //! the first backend of [`AUTO_GPU_ORDER`] that runs on a hardware GPU ([`cpu_emulated`] tells
 //! llvmpipe, lavapipe, PoCL and other CPU implementations apart), otherwise `simd`, and says on
 //! stderr what it skipped and why.
+//!
+//! [`MemoryFloor`] is **the** memory floor (`floor_ms`): the time to stream the bytes any
+//! extraction must touch, measured in the same run as the backends by `shadowvol bench` and by
+//! the criterion benches.
+//!
+//! ```
+//! // List the registered backends and start the reference one.
+//! let entries = shadowvol_registry::backends();
+//! let names: Vec<_> = entries.iter().map(|e| e.name).collect();
+//! assert_eq!(names, ["cpu", "simd", "wgpu", "opencl", "vulkan"]);
+//! let cpu = entries[0].start().expect("the cpu backend is always available");
+//! assert_eq!(cpu.info().name, "cpu");
+//! assert!(shadowvol_registry::find_backend("metal").is_err());
+//! ```
 
-use crate::CliError;
+pub mod floor;
+
+pub use floor::MemoryFloor;
+
+/// The README's example, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 use shadowvol_cpu::CpuBackend;
 use shadowvol_silhouette::{BackendError, BackendInfo, SilhouetteBackend};
 use std::sync::mpsc;
@@ -296,13 +323,34 @@ pub fn choose_auto() -> AutoChoice {
     }
 }
 
+/// A `--backend` value that names no registered backend.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UnknownBackend {
+    /// The value as given.
+    pub name: String,
+}
+
+impl std::fmt::Display for UnknownBackend {
+    /// `unknown backend "NAME"; known backends: cpu, simd, ..., or auto`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "unknown backend {:?}; known backends: {}, or {AUTO}",
+            self.name,
+            backend_names().join(", ")
+        )
+    }
+}
+
+impl std::error::Error for UnknownBackend {}
+
 /// The entry named `name` (case-insensitive, surrounding spaces ignored). `auto` ([`AUTO`])
 /// runs [`choose_auto`], prints its [`AutoChoice::message`] on stderr and returns the chosen
 /// entry, so every command that takes `--backend` accepts it.
 ///
 /// # Errors
-/// [`CliError::Usage`] naming the unknown backend and listing the known ones.
-pub fn find_backend(name: &str) -> Result<BackendEntry, CliError> {
+/// [`UnknownBackend`] naming the unknown backend; its message lists the known ones.
+pub fn find_backend(name: &str) -> Result<BackendEntry, UnknownBackend> {
     let wanted = name.trim().to_ascii_lowercase();
     if wanted == AUTO {
         let choice = choose_auto();
@@ -312,11 +360,8 @@ pub fn find_backend(name: &str) -> Result<BackendEntry, CliError> {
     backends()
         .into_iter()
         .find(|e| e.name == wanted)
-        .ok_or_else(|| {
-            CliError::Usage(format!(
-                "unknown backend {name:?}; known backends: {}, or {AUTO}",
-                backend_names().join(", ")
-            ))
+        .ok_or_else(|| UnknownBackend {
+            name: name.to_owned(),
         })
 }
 
@@ -329,7 +374,7 @@ mod tests {
         assert_eq!(backend_names(), ["cpu", "simd", "wgpu", "opencl", "vulkan"]);
         assert_eq!(find_backend(" CPU ").unwrap().name, "cpu");
         let err = find_backend("metal").unwrap_err();
-        assert_eq!(err.exit_code(), crate::error::EXIT_USAGE);
+        assert_eq!(err.name, "metal");
         assert!(err.to_string().contains("unknown backend \"metal\""));
         assert!(err.to_string().contains("cpu, simd, wgpu, opencl, vulkan"));
     }
@@ -390,28 +435,6 @@ mod tests {
         ] {
             assert_eq!(cpu_emulated(&i), None, "{}", i.device);
         }
-    }
-
-    #[test]
-    fn auto_choice_message_names_what_was_skipped() {
-        let choice = choose_auto();
-        let msg = choice.message();
-        if choice.fell_back() {
-            assert!(msg.starts_with("warning: --backend auto"), "{msg}");
-            for gpu in AUTO_GPU_ORDER {
-                assert!(
-                    choice.skipped.iter().any(|(n, _)| *n == gpu),
-                    "{gpu} not reported as skipped: {msg}"
-                );
-                assert!(msg.contains(&format!("  {gpu}: ")), "{msg}");
-            }
-        } else {
-            assert!(AUTO_GPU_ORDER.contains(&choice.entry.name));
-        }
-        // The chosen entry starts and is what was chosen.
-        let started = choice.entry.start().unwrap();
-        assert_eq!(started.info().name, choice.entry.name);
-        assert!(cpu_emulated(&started.info()).is_none(), "{msg}");
     }
 
     #[test]
