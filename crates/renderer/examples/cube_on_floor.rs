@@ -11,6 +11,9 @@ use shadowvol_renderer::{Camera, RenderOptions, Renderer, Scene};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_scenes::Receiver;
 
+#[path = "../tests/common/shot.rs"]
+mod shot;
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     // No `error: XDG_RUNTIME_DIR ...` line from Mesa on a machine without a display.
     shadowvol_silhouette::gpu::quiet_without_display();
@@ -66,18 +69,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let frame = renderer.render(&scene)?;
     frame.save_png(&out)?;
     print!("{}", frame.report.explain());
-    let img = frame.read_image()?;
-    let shot = shadowvol_reference::Shot::new(
-        &scene,
-        frame.camera,
-        img.width,
-        img.height,
-        &img.rgba,
-        &img.ids,
-        &img.stencil,
-        &frame.report.light_colors,
-    );
-    let cmp = shadowvol_reference::compare(&shot);
+    let cmp = shadowvol_reference::compare(&shot::shot(&frame, &scene)?);
     println!(
         "{out}: {} shadow pixels, {} artifact pixels against the ray-traced reference",
         cmp.shadow_pixels, cmp.artifact_pixels

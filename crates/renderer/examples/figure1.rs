@@ -18,6 +18,9 @@ use std::path::PathBuf;
 
 const MODES: [Accuracy; 3] = [Accuracy::Original, Accuracy::Robust, Accuracy::Exact];
 
+#[path = "../tests/common/shot.rs"]
+mod shot;
+
 fn main() {
     // No `error: XDG_RUNTIME_DIR ...` line from Mesa on a machine without a display.
     shadowvol_silhouette::gpu::quiet_without_display();
@@ -119,17 +122,7 @@ fn run() -> Result<(), String> {
             let frame = renderer
                 .render(scene)
                 .map_err(|e| format!("{name} {mode}: {e}"))?;
-            let img = frame.read_image().map_err(|e| e.to_string())?;
-            let shot = shadowvol_reference::Shot::new(
-                scene,
-                frame.camera,
-                img.width,
-                img.height,
-                &img.rgba,
-                &img.ids,
-                &img.stencil,
-                &frame.report.light_colors,
-            );
+            let shot = shot::shot(&frame, scene).map_err(|e| e.to_string())?;
             let cmp = shadowvol_reference::compare(&shot);
             eprintln!(
                 "{name:16} {mode:8}: {:6} artifact pixels ({} differing), raster {:.0} ms, silhouette {:.0} ms",

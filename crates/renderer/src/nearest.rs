@@ -153,28 +153,22 @@ fn enter(n: &Node, origin: DVec3, inv: DVec3) -> Option<f64> {
     (t0 <= t1).then_some(t0)
 }
 
-/// Möller–Trumbore in `f64`: the `t` at which the ray meets triangle `t`, `None` for a miss or
-/// a ray in its plane.
+/// Where the ray `o + t·d` meets triangle `tri`: `t` from the plane's equation, then the point
+/// inside all three edges (their cross products with the point agree with the normal); `None`
+/// for a miss or a ray parallel to the plane.
 fn meet(tri: &[DVec3; 3], o: DVec3, d: DVec3) -> Option<f64> {
-    let e1 = tri[1] - tri[0];
-    let e2 = tri[2] - tri[0];
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 || !det.is_finite() {
+    let [a, b, c] = *tri;
+    let n = (b - a).cross(c - a);
+    let along = n.dot(d);
+    if along == 0.0 || !along.is_finite() {
         return None;
     }
-    let inv = 1.0 / det;
-    let s = o - tri[0];
-    let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let v = d.dot(q) * inv;
-    if v < 0.0 || u + v > 1.0 {
-        return None;
-    }
-    Some(e2.dot(q) * inv)
+    let t = n.dot(a - o) / along;
+    let p = o + t * d;
+    let inside = [(a, b), (b, c), (c, a)]
+        .iter()
+        .all(|&(u, v)| (v - u).cross(p - u).dot(n) >= 0.0);
+    (inside && t.is_finite()).then_some(t)
 }
 
 #[cfg(test)]

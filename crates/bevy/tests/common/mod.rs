@@ -2,6 +2,9 @@
 //! scene: what the headless tests and the `headless` example share.
 #![allow(dead_code)]
 
+#[path = "../../../renderer/tests/common/shot.rs"]
+mod shot;
+
 use std::sync::{Arc, Mutex};
 
 use bevy::app::SubApps;
@@ -295,17 +298,7 @@ pub fn reference_from(
     ));
     let mut renderer = Renderer::gpu(RenderOptions::new(width, height)).expect("renderer");
     let frame = renderer.render(&scene).expect("render");
-    let img = frame.read_image().expect("a frame read back");
-    let shot = shadowvol_reference::Shot::new(
-        &scene,
-        frame.camera,
-        img.width,
-        img.height,
-        &img.rgba,
-        &img.ids,
-        &img.stencil,
-        &frame.report.light_colors,
-    );
+    let shot = shot::shot(&frame, &scene).expect("a frame read back");
     let points = shadowvol_reference::surface_points(&shot);
     shadowvol_reference::reference_states(&shot, &points)
 }

@@ -44,18 +44,10 @@ pub fn compare(frame: &Frame, scene: &Scene) -> Comparison {
 /// # Panics
 /// Panics if the frame was not read back.
 pub fn shot<'a>(frame: &'a Frame, scene: &'a Scene) -> shadowvol_reference::Shot<'a> {
-    let img = frame.read_image().expect("a frame read back");
-    shadowvol_reference::Shot::new(
-        scene,
-        frame.camera,
-        img.width,
-        img.height,
-        &img.rgba,
-        &img.ids,
-        &img.stencil,
-        &frame.report.light_colors,
-    )
+    shot::shot(frame, scene).expect("a frame read back")
 }
+
+mod shot;
 
 /// A scene of `objects` (name, mesh, world transform; each its own table), lit by unit
 /// `lights`, seen from `camera`, with ambient `ambient`.
