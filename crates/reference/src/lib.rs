@@ -51,12 +51,14 @@ pub struct ReadmeDoctests;
 
 mod bvh;
 mod compare;
+mod footprint;
 pub mod occlusion;
 mod states;
 
 pub use bvh::Bvh;
 pub use compare::{
-    compare, diff_image, save_diff, shading_check, shadow_pixels, Comparison, ShadingCheck,
+    compare, compare_with, diff_image, save_diff, shading_check, shadow_pixels, Comparison, Rule,
+    ShadingCheck,
 };
 pub use states::{
     faces_light, faces_light_geometric, light_attenuation, raster_states, raster_states_geometric,
