@@ -310,7 +310,7 @@ fn a_seam_inside_a_shadow_is_no_boundary() {
     }
 }
 
-/// A slit a thousandth of a pixel wide between two casters lets light through inside their
+/// A slit a few thousandths of a pixel wide between two casters lets light through inside their
 /// shadow: no pixel centre sees it, and a raster that lights the pixels it crosses is at a
 /// boundary by the footprint rule (the unshadowed part of the footprint has positive area).
 #[test]

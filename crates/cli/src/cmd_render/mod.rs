@@ -57,8 +57,12 @@ pub const LONG_ABOUT: &str =
     near-clip volume test proves the camera is outside the shadow volume) or z-fail with caps \
     (no back cap for directional lights). --explain prints the plan.\n\n\
     --reference ray-casts every pixel's surface point to every light (BVH, all cores) and counts \
-    artifact pixels: pixels whose lit/shadowed state differs from the reference and that are more \
-    than one pixel from a reference shadow boundary. Lit means the light changes the 8-bit pixel \
+    artifact pixels: pixels whose lit/shadowed state differs from the reference, where the \
+    reference's state is the same over the 3x3 pixels around it (more than one pixel from a \
+    reference shadow boundary) and no shadow boundary of that light crosses the pixel's \
+    footprint (its square seen on the plane of its triangle; decided exactly: the footprint \
+    holds both some area a caster shadows and some area none does, as where a shadow wedge \
+    narrower than a pixel passes between pixel centres). Lit means the light changes the 8-bit pixel \
     (albedo x intensity x cos >= 1/255); geometric_artifact_pixels counts the same with lit \
     meaning cos > 0, however dim (there even exact silhouettes leave raster z-fighting on faces \
     edge-on to the light, which is invisible in the image). --diff FILE writes the disagreement (red: \
@@ -73,7 +77,11 @@ pub const LONG_ABOUT: &str =
     the gpu pipeline, which runs none), \"mode\", \"size\": [w, h], \"adapter\", \"out\", \
     \"covered_pixels\", \"reference_shadow_pixels\", \"geometric_artifact_pixels\", \"undecidable_pixels\" \
     (covered pixels the reference could not decide), \"boundary_pixels\" (raster and reference differ \
-    within one pixel of a reference shadow boundary; neither is counted as an artifact), \
+    within one pixel of a reference shadow boundary or where one crosses the footprint; neither \
+    is counted as an artifact), \"footprint_boundary_pixels\" (of those, the pixels only the \
+    footprint rule kept out of artifact_pixels; artifact_pixels + footprint_boundary_pixels is \
+    the count by the 3x3 rule alone), \"geometric_footprint_boundary_pixels\" (the same for \
+    geometric_artifact_pixels), \
     \"lights\": [[x, y, z, w]] (the lights used), \"lights_source\": \"file\", \"flags\" or \
     \"default\", \"ground\": null or {\"y\", \"source\": \"scene\", \"auto\" or \"flags\"}, \
     \"exposure\": output per lux for the file's lights, null when all are unit lights, \
@@ -332,6 +340,10 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 geometric_artifact_pixels: cmp.as_ref().map(|c| c.geometric_artifact_pixels),
                 undecidable_pixels: cmp.as_ref().map(|c| c.undecidable_pixels),
                 boundary_pixels: cmp.as_ref().map(|c| c.boundary_pixels),
+                footprint_boundary_pixels: cmp.as_ref().map(|c| c.footprint_boundary_pixels),
+                geometric_footprint_boundary_pixels: cmp
+                    .as_ref()
+                    .map(|c| c.geometric_footprint_boundary_pixels),
                 lights: scene.lights.iter().map(|l| l.light.to_array()).collect(),
                 lights_source,
                 ground,

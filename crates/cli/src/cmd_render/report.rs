@@ -32,6 +32,12 @@ pub(super) struct Report<'a> {
     /// Pixels where raster and reference differ within one pixel of a reference shadow boundary
     /// (not counted as artifacts).
     pub(super) boundary_pixels: Option<usize>,
+    /// Of `boundary_pixels`, those the footprint rule kept out of `artifact_pixels`: the
+    /// reference is the same over the 3×3 neighbourhood, but a shadow boundary crosses the
+    /// pixel's footprint.
+    pub(super) footprint_boundary_pixels: Option<usize>,
+    /// The same for `geometric_artifact_pixels`.
+    pub(super) geometric_footprint_boundary_pixels: Option<usize>,
     /// The lights used, homogeneous `[x, y, z, w]`.
     pub(super) lights: Vec<[f32; 4]>,
     /// Where they came from.
@@ -211,10 +217,11 @@ pub(super) fn write_text(out: &mut dyn Write, r: &TextReport<'_>) -> std::io::Re
         let total = (width * height) as usize;
         writeln!(
             out,
-            "artifact pixels {} ({:.3}% of the image; {} differ at boundaries, {} undecidable: {:.1}% of covered pixels checked; reference shadow pixels {}; geometric, with no 1/255 threshold: {})",
+            "artifact pixels {} ({:.3}% of the image; {} differ at boundaries ({} of them where a shadow boundary crosses the pixel's footprint), {} undecidable: {:.1}% of covered pixels checked; reference shadow pixels {}; geometric, with no 1/255 threshold: {})",
             c.artifact_pixels,
             100.0 * c.artifact_fraction(total),
             c.boundary_pixels,
+            c.footprint_boundary_pixels,
             c.undecidable_pixels,
             100.0 * c.checked_fraction(),
             c.reference_shadow_pixels,
