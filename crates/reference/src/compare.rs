@@ -203,11 +203,22 @@ pub fn compare_with(shot: &Shot<'_>, rule: Rule) -> Comparison {
     let (w, h) = (shot.width as usize, shot.height as usize);
     let casters = Casters::new(shot);
     let footprints = Footprints::new(shot, &casters);
+    // Asked by both classifications (the facing differs, the shadows do not): once each.
+    let lights = shot.scene.lights.len();
+    let memo: Vec<std::sync::OnceLock<bool>> = if rule == Rule::Footprint {
+        (0..w * h * lights)
+            .map(|_| std::sync::OnceLock::new())
+            .collect()
+    } else {
+        Vec::new()
+    };
     let crosses = |i: usize, li: usize| {
         rule == Rule::Footprint
-            && points[i]
-                .as_ref()
-                .is_some_and(|sp| footprints.crosses(i, sp, li))
+            && *memo[i * lights + li].get_or_init(|| {
+                points[i]
+                    .as_ref()
+                    .is_some_and(|sp| footprints.crosses(i, sp, li))
+            })
     };
     let raster_geometric = raster_states_geometric(shot, &points);
     let reference_geometric = reference_states_with(shot, &points, &casters);

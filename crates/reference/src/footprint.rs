@@ -24,9 +24,11 @@
 //! convex hull of the light and the footprint (the footprint enlarged by 1/16 for the rounding
 //! of its `f64` corners); an `f64` filter with a margin of `2⁻³⁰` of its terms sets aside the
 //! candidates whose shadow clearly misses the footprint, and answers at once (no boundary) when
-//! one clearly covers it. Only when all of that cannot decide, and the pieces would pass 64, is
-//! the answer "no boundary": the rule may leave a pixel an artifact, it never moves one without
-//! an exact proof that shadow and light both lie inside its footprint.
+//! one clearly covers it; for a caster wholly between the light and the plane, the same filter
+//! runs on the plane, against the triangle of its vertices' projections. Only where more than
+//! 24 casters stay near one footprint, or the pieces would pass 64, does the rule give up and
+//! answer "no boundary": it may leave a pixel an artifact, it never moves one without an exact
+//! proof that shadow and light both lie inside its footprint.
 
 use crate::occlusion::decompose;
 use crate::states::{Casters, SurfacePoint};
@@ -44,6 +46,8 @@ const MARGIN: f64 = 1.0 / 1_073_741_824.0;
 const EXPAND: f64 = 1.0 / 16.0;
 /// The most convex pieces the unshadowed region may be kept in; beyond, the rule gives up.
 const MAX_PIECES: usize = 64;
+/// The most casters the exact test takes on one footprint; beyond, the rule gives up.
+const MAX_NEAR: usize = 24;
 
 /// What the rule reads of a shot, built once per comparison.
 pub(crate) struct Footprints<'s, 'a> {
@@ -109,7 +113,12 @@ impl<'s, 'a> Footprints<'s, 'a> {
                 if self.casters.ids[k] == sp.triangle || sides[k] == 0 {
                     return false;
                 }
-                match filter(self.casters.raw[k], l, sides[k], &corners, self.eye) {
+                let t = self.casters.raw[k];
+                let f = match filter(t, l, sides[k], &corners, self.eye) {
+                    Filtered::Near => projected(t, l, &corners, own, self.eye),
+                    f => f,
+                };
+                match f {
                     Filtered::Misses => false,
                     Filtered::Covers => {
                         covered = true;
@@ -122,8 +131,9 @@ impl<'s, 'a> Footprints<'s, 'a> {
                 }
             },
         );
-        if covered || near.is_empty() {
-            // One caster shadows the whole footprint, or none comes near it.
+        if covered || near.is_empty() || near.len() > MAX_NEAR {
+            // One caster shadows the whole footprint, none comes near it, or too many do for
+            // the exact test's cost (the pixel stays an artifact).
             return false;
         }
         self.exact(own, x, y, l, &near, sides)
@@ -409,6 +419,82 @@ fn filter(t: [Vec3; 3], l: [f32; 4], side: i8, corners: &[DVec3; 4], eye: DVec3)
         }
     }
     if all_inside {
+        Filtered::Covers
+    } else {
+        Filtered::Near
+    }
+}
+
+/// The `f64` filter on the footprint's plane, for a caster the half-spaces leave near it: when
+/// all three vertices lie strictly between the light and the plane (of the pixel's triangle
+/// `own`), the shadow there is the triangle of their projections from the light. An edge normal
+/// of either polygon that separates them by the margin says it misses; every corner inside it
+/// by the margin, that it covers the footprint. Otherwise (or when unsure) [`Filtered::Near`].
+fn projected(
+    t: [Vec3; 3],
+    l: [f32; 4],
+    corners: &[DVec3; 4],
+    own: [Vec3; 3],
+    eye: DVec3,
+) -> Filtered {
+    let o = own.map(Vec3::as_dvec3);
+    let n = (o[1] - o[0]).cross(o[2] - o[0]);
+    let g = corners.iter().copied().sum::<DVec3>() / 4.0;
+    let xyz = DVec3::new(f64::from(l[0]), f64::from(l[1]), f64::from(l[2]));
+    let w = f64::from(l[3]);
+    let mut p = [DVec3::ZERO; 3];
+    let mut stretch: f64 = 1.0;
+    for (k, v) in t.iter().enumerate() {
+        let v = v.as_dvec3();
+        if w == 0.0 {
+            // Along the direction away from the light, onto the plane.
+            let u = n.dot(v - g) / n.dot(xyz);
+            if !(u.is_finite() && u > 0.0) {
+                return Filtered::Near;
+            }
+            p[k] = v - xyz * u;
+        } else {
+            let lp = xyz / w;
+            let s = n.dot(g - lp) / n.dot(v - lp);
+            if !(s.is_finite() && s > 1.0 + 1e-9) {
+                return Filtered::Near;
+            }
+            stretch = stretch.max(s);
+            p[k] = lp + (v - lp) * s;
+        }
+    }
+    let scale = p
+        .iter()
+        .chain(corners)
+        .map(|x| x.abs().max_element())
+        .fold(eye.abs().max_element() + xyz.abs().max_element(), f64::max)
+        * stretch;
+    let margin = |axis: DVec3| MARGIN * axis.abs().element_sum() * scale;
+    let axes = (0..3)
+        .map(|k| n.cross(p[(k + 1) % 3] - p[k]))
+        .chain((0..4).map(|k| n.cross(corners[(k + 1) % 4] - corners[k])));
+    for axis in axes {
+        let range = |pts: &mut dyn Iterator<Item = DVec3>| {
+            pts.map(|x| axis.dot(x))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                })
+        };
+        let (tlo, thi) = range(&mut p.iter().copied());
+        let (qlo, qhi) = range(&mut corners.iter().copied());
+        let m = margin(axis);
+        if thi < qlo - m || qhi < tlo - m {
+            return Filtered::Misses;
+        }
+    }
+    // Each corner strictly inside every edge of the projected triangle (oriented inwards).
+    let inward = (p[1] - p[0]).cross(p[2] - p[0]).dot(n).signum();
+    let covers = (0..3).all(|k| {
+        let axis = n.cross(p[(k + 1) % 3] - p[k]) * inward;
+        let m = margin(axis);
+        corners.iter().all(|&c| axis.dot(c - p[k]) > m)
+    });
+    if covers {
         Filtered::Covers
     } else {
         Filtered::Near
