@@ -398,6 +398,9 @@ fn json_report_has_the_contract_keys() -> Outcome {
     assert!(v["geometric_artifact_pixels"].as_u64().is_some());
     assert!(v["undecidable_pixels"].as_u64().is_some());
     assert!(v["boundary_pixels"].as_u64().is_some());
+    let footprint = v["footprint_boundary_pixels"].as_u64().unwrap();
+    assert!(footprint <= v["boundary_pixels"].as_u64().unwrap());
+    assert!(v["geometric_footprint_boundary_pixels"].as_u64().is_some());
     assert!(v["shadow_pixels"].as_u64().unwrap() > 0);
     let plan = v["plan"].as_array().unwrap();
     assert!(!plan.is_empty());

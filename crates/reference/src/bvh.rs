@@ -166,6 +166,42 @@ impl Bvh {
         self.traverse(origin, dir, 0.0, t_max, visit)
     }
 
+    /// Calls `visit(index)` for every triangle whose (padded) box `overlaps(lo, hi)` accepts,
+    /// descending only into nodes whose boxes it accepts, until `visit` returns true; `index` is
+    /// the position of the triangle in the list given to [`Bvh::build_with_ids`]. Returns
+    /// whether some call returned true. `overlaps` must accept every box that holds a triangle
+    /// the caller wants (a conservative test).
+    pub fn visit_boxes(
+        &self,
+        overlaps: impl Fn(DVec3, DVec3) -> bool,
+        mut visit: impl FnMut(usize) -> bool,
+    ) -> bool {
+        if self.tris.is_empty() {
+            return false;
+        }
+        let mut stack = [0u32; 64];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let n = self.nodes[stack[sp] as usize];
+            if !overlaps(n.lo, n.hi) {
+                continue;
+            }
+            if n.count > 0 {
+                for &i in &self.order[n.first as usize..(n.first + n.count) as usize] {
+                    if visit(i as usize) {
+                        return true;
+                    }
+                }
+            } else if sp + 2 <= stack.len() {
+                stack[sp] = n.first;
+                stack[sp + 1] = n.first + 1;
+                sp += 2;
+            }
+        }
+        false
+    }
+
     /// Calls `visit(index)` for the triangles whose (padded) box meets the segment
     /// `t ∈ [t_min, t_max]`, until it returns true; returns whether some call did.
     fn traverse(

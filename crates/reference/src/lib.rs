@@ -21,10 +21,14 @@
 //! ([`faces_light_geometric`], any `cos θ > 0`), where rasterized volumes z-fight with faces the
 //! light grazes even for exact silhouettes (see the crate README). The raster state uses the same
 //! surface point and facing and the stencil (0 = lit). A pixel is an *artifact* when, for some
-//! light, the raster state differs from the reference and the reference state is the same over
+//! light, the raster state differs from the reference, the reference state is the same over
 //! the pixel's 3×3 neighbourhood (that is, the pixel is more than one pixel away from a reference
-//! shadow boundary); [`Comparison::boundary_pixels`] counts the differences within one pixel of
-//! a boundary and [`Comparison::undecidable_pixels`] the pixels the reference could not decide.
+//! shadow boundary), and no shadow boundary of that light crosses the pixel's footprint (its
+//! square seen on the plane of its triangle; decided exactly, the footprint rule, see the crate
+//! README); [`Comparison::boundary_pixels`] counts the differences within one pixel of a
+//! boundary or with one crossing the footprint ([`Comparison::footprint_boundary_pixels`] those
+//! only the footprint rule found), and [`Comparison::undecidable_pixels`] the pixels the
+//! reference could not decide.
 //!
 //! ```
 //! use shadowvol_reference::{compare, Shot};
@@ -51,12 +55,14 @@ pub struct ReadmeDoctests;
 
 mod bvh;
 mod compare;
+mod footprint;
 pub mod occlusion;
 mod states;
 
 pub use bvh::Bvh;
 pub use compare::{
-    compare, diff_image, save_diff, shading_check, shadow_pixels, Comparison, ShadingCheck,
+    compare, compare_with, diff_image, save_diff, shading_check, shadow_pixels, Comparison, Rule,
+    ShadingCheck,
 };
 pub use states::{
     faces_light, faces_light_geometric, light_attenuation, raster_states, raster_states_geometric,

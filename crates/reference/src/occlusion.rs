@@ -332,7 +332,7 @@ fn in_shewchuk_range(p: DVec3) -> bool {
 }
 
 /// `(m, e)` with `x = m · 2^e` exactly (`x` finite).
-fn decompose(x: f64) -> (i64, i32) {
+pub(crate) fn decompose(x: f64) -> (i64, i32) {
     let bits = x.to_bits();
     let exp = ((bits >> 52) & 0x7ff) as i32;
     let frac = (bits & ((1u64 << 52) - 1)) as i64;

@@ -220,30 +220,69 @@ pub fn reference_states_geometric(
     shot: &Shot<'_>,
     points: &[Option<SurfacePoint>],
 ) -> Vec<Vec<PixelState>> {
-    let mut tris: Vec<[DVec3; 3]> = Vec::new();
-    let mut casters: Vec<Caster> = Vec::new();
-    let mut raw: Vec<[glam::Vec3; 3]> = Vec::new();
-    let mut ids = Vec::new();
-    let mut next = 0u32;
-    for (oi, obj) in shot.triangles().iter().enumerate() {
-        for t in obj {
-            if shot.casts_shadows(oi) {
-                let c = Caster::new(*t);
-                tris.push(c.v);
-                casters.push(c);
-                raw.push(*t);
-                ids.push(next);
+    reference_states_with(shot, points, &Casters::new(shot))
+}
+
+/// Every caster triangle of a shot with what the shadow rays and the footprint rule reuse: the
+/// BVH, each triangle's exact-test data and, per light, which side of its plane the light is on.
+pub(crate) struct Casters {
+    /// The `f32` triangles (canonical vertex order), in BVH input order.
+    pub(crate) raw: Vec<[glam::Vec3; 3]>,
+    pub(crate) casters: Vec<Caster>,
+    /// Global triangle index of each (what [`SurfacePoint::triangle`] names).
+    pub(crate) ids: Vec<u32>,
+    pub(crate) bvh: Bvh,
+    /// Per light, per caster: [`light_side`] (0: the light is in its plane, it never blocks).
+    pub(crate) sides: Vec<Vec<i8>>,
+}
+
+impl Casters {
+    pub(crate) fn new(shot: &Shot<'_>) -> Self {
+        let mut tris: Vec<[DVec3; 3]> = Vec::new();
+        let mut casters: Vec<Caster> = Vec::new();
+        let mut raw: Vec<[glam::Vec3; 3]> = Vec::new();
+        let mut ids = Vec::new();
+        let mut next = 0u32;
+        for (oi, obj) in shot.triangles().iter().enumerate() {
+            for t in obj {
+                if shot.casts_shadows(oi) {
+                    let c = Caster::new(*t);
+                    tris.push(c.v);
+                    casters.push(c);
+                    raw.push(*t);
+                    ids.push(next);
+                }
+                next += 1;
             }
-            next += 1;
+        }
+        let bvh = Bvh::build_with_ids(tris, ids.clone());
+        let sides = (0..shot.scene.lights.len())
+            .map(|li| {
+                let l = shot.light(li);
+                raw.par_iter().map(|t| light_side(*t, l)).collect()
+            })
+            .collect();
+        Self {
+            raw,
+            casters,
+            ids,
+            bvh,
+            sides,
         }
     }
-    let bvh = Bvh::build_with_ids(tris, ids.clone());
+}
+
+/// [`reference_states_geometric`] over casters already gathered.
+pub(crate) fn reference_states_with(
+    shot: &Shot<'_>,
+    points: &[Option<SurfacePoint>],
+    set: &Casters,
+) -> Vec<Vec<PixelState>> {
     let eye = shot.camera.eye.as_dvec3();
     (0..shot.scene.lights.len())
         .map(|li| {
             let l = shot.light(li);
-            // Which side of each caster's plane the light is on (0: in it, never blocks).
-            let sides: Vec<i8> = raw.par_iter().map(|t| light_side(*t, l)).collect();
+            let sides = &set.sides[li];
             let t_max = if l[3] == 0.0 { f64::INFINITY } else { 1.0 };
             points
                 .par_iter()
@@ -256,19 +295,20 @@ pub fn reference_states_geometric(
                         let ray = ShadowRay::new(sp.position, l, eye);
                         let mut undecidable = false;
                         let blocked =
-                            bvh.visit(sp.position, light_vec(l, sp.position), t_max, |i| {
-                                if ids[i] == sp.triangle {
-                                    return false;
-                                }
-                                match ray.crossing(&casters[i], sides[i]) {
-                                    Crossing::Blocks => true,
-                                    Crossing::Clear => false,
-                                    Crossing::Undecidable => {
-                                        undecidable = true;
-                                        false
+                            set.bvh
+                                .visit(sp.position, light_vec(l, sp.position), t_max, |i| {
+                                    if set.ids[i] == sp.triangle {
+                                        return false;
                                     }
-                                }
-                            });
+                                    match ray.crossing(&set.casters[i], sides[i]) {
+                                        Crossing::Blocks => true,
+                                        Crossing::Clear => false,
+                                        Crossing::Undecidable => {
+                                            undecidable = true;
+                                            false
+                                        }
+                                    }
+                                });
                         if blocked {
                             PixelState::Unlit
                         } else if undecidable {

@@ -41,10 +41,19 @@ pub struct RenderReport {
     /// Covered pixels the reference could not decide (not counted as artifacts).
     #[serde(default)]
     pub undecidable_pixels: Option<usize>,
-    /// Pixels where raster and reference differ at a reference shadow boundary (not counted as
-    /// artifacts).
+    /// Pixels where raster and reference differ at a reference shadow boundary: within one
+    /// pixel of one, or where one crosses the pixel's footprint (not counted as artifacts).
     #[serde(default)]
     pub boundary_pixels: Option<usize>,
+    /// Of `boundary_pixels`, those only the footprint rule kept out of `artifact_pixels` (the
+    /// reference is the same over the 3×3 neighbourhood, but a shadow boundary crosses the
+    /// pixel's footprint): `artifact_pixels + footprint_boundary_pixels` is the 3×3 rule's
+    /// count.
+    #[serde(default)]
+    pub footprint_boundary_pixels: Option<usize>,
+    /// The same for `geometric_artifact_pixels`.
+    #[serde(default)]
+    pub geometric_footprint_boundary_pixels: Option<usize>,
     /// The lights used, homogeneous `[x, y, z, w]`.
     #[serde(default)]
     pub lights: Vec<[f32; 4]>,
@@ -210,6 +219,8 @@ mod tests {
             geometric_artifact_pixels: Some(0),
             undecidable_pixels: Some(0),
             boundary_pixels: Some(3),
+            footprint_boundary_pixels: Some(1),
+            geometric_footprint_boundary_pixels: Some(1),
             lights: vec![[1.0, 2.0, 3.0, 1.0]],
             lights_source: LightsSource::Flags,
             ground: Some(Ground {

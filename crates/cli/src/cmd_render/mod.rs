@@ -58,8 +58,12 @@ pub const LONG_ABOUT: &str =
     near-clip volume test proves the camera is outside the shadow volume) or z-fail with caps \
     (no back cap for directional lights). --explain prints the plan.\n\n\
     --reference ray-casts every pixel's surface point to every light (BVH, all cores) and counts \
-    artifact pixels: pixels whose lit/shadowed state differs from the reference and that are more \
-    than one pixel from a reference shadow boundary. Lit means the light changes the 8-bit pixel \
+    artifact pixels: pixels whose lit/shadowed state differs from the reference, where the \
+    reference's state is the same over the 3x3 pixels around it (more than one pixel from a \
+    reference shadow boundary) and no shadow boundary of that light crosses the pixel's \
+    footprint (its square seen on the plane of its triangle; decided exactly: the footprint \
+    holds both some area a caster shadows and some area none does, as where a shadow wedge \
+    narrower than a pixel passes between pixel centres). Lit means the light changes the 8-bit pixel \
     (albedo x intensity x cos >= 1/255); geometric_artifact_pixels counts the same with lit \
     meaning cos > 0, however dim (there even exact silhouettes leave raster z-fighting on faces \
     edge-on to the light, which is invisible in the image). --diff FILE writes the disagreement (red: \
@@ -68,7 +72,8 @@ pub const LONG_ABOUT: &str =
     JSON (--format json): the fields of shadowvol_report::RenderReport, described once in \
     docs/DESIGN.md (\"CLI contract\"): artifact_pixels (null without --reference), \
     shadow_pixels, the plan, timings, pipeline, backend (null for the gpu and map pipelines), \
-    mode, adapter, the reference's counts, the lights and where they came from, the ground, \
+    mode, adapter, the reference's counts (boundary_pixels, and footprint_boundary_pixels: the \
+    pixels only the footprint rule kept out of artifact_pixels), the lights and where they came from, the ground, \
     exposure, uncertain and host_resolved, frames and gpu_timings_ms, the map settings, \
     peak_rss_bytes and table_bytes.\n\n\
     --shadows map draws shadow maps instead of volumes (the map pipeline, on the renderer's \
@@ -305,6 +310,10 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 geometric_artifact_pixels: cmp.as_ref().map(|c| c.geometric_artifact_pixels),
                 undecidable_pixels: cmp.as_ref().map(|c| c.undecidable_pixels),
                 boundary_pixels: cmp.as_ref().map(|c| c.boundary_pixels),
+                footprint_boundary_pixels: cmp.as_ref().map(|c| c.footprint_boundary_pixels),
+                geometric_footprint_boundary_pixels: cmp
+                    .as_ref()
+                    .map(|c| c.geometric_footprint_boundary_pixels),
                 lights: scene.lights.iter().map(|l| l.light.to_array()).collect(),
                 lights_source,
                 ground,

@@ -97,10 +97,11 @@ pub(super) fn write_text(out: &mut dyn Write, r: &TextReport<'_>) -> std::io::Re
         let total = (width * height) as usize;
         writeln!(
             out,
-            "artifact pixels {} ({:.3}% of the image; {} differ at boundaries, {} undecidable: {:.1}% of covered pixels checked; reference shadow pixels {}; geometric, with no 1/255 threshold: {})",
+            "artifact pixels {} ({:.3}% of the image; {} differ at boundaries ({} of them where a shadow boundary crosses the pixel's footprint), {} undecidable: {:.1}% of covered pixels checked; reference shadow pixels {}; geometric, with no 1/255 threshold: {})",
             c.artifact_pixels,
             100.0 * c.artifact_fraction(total),
             c.boundary_pixels,
+            c.footprint_boundary_pixels,
             c.undecidable_pixels,
             100.0 * c.checked_fraction(),
             c.reference_shadow_pixels,
