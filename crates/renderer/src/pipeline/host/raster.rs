@@ -158,8 +158,26 @@ impl HostRaster {
     ///
     /// # Errors
     /// [`RenderError::TooLarge`] when not even one triangle's vertices fit the device's
-    /// `max_buffer_size`.
+    /// `max_buffer_size`, [`RenderError::Device`] when the device cannot make them (out of
+    /// memory).
     pub(super) fn buffers(
+        &self,
+        device: &wgpu::Device,
+        surface_vertices: u32,
+        lights: usize,
+    ) -> Result<HostBuffers, RenderError> {
+        let scope = ErrorScopes::push(device);
+        let buffers = self.make_buffers(device, surface_vertices, lights);
+        if let Some(err) = scope.pop() {
+            return Err(RenderError::Device(format!(
+                "the host pipeline's buffers: {err}"
+            )));
+        }
+        buffers
+    }
+
+    /// [`HostRaster::buffers`] without the error scope.
+    fn make_buffers(
         &self,
         device: &wgpu::Device,
         surface_vertices: u32,
