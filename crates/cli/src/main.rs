@@ -19,6 +19,7 @@ mod cmd_render;
 mod cmd_scenes;
 mod cmd_silhouette;
 mod cmd_view;
+mod shot;
 
 /// Robust silhouette shadow volumes: silhouette edges with multiplicities on five
 /// interchangeable backends (cpu, simd, wgpu, opencl, vulkan), in four accuracy modes.

@@ -9,7 +9,7 @@
 //! adapter.
 
 mod common;
-#[path = "../../renderer/tests/common/shot.rs"]
+#[path = "../src/shot.rs"]
 mod shot;
 
 use glam::{Affine3A, DVec2, DVec3, Vec3};

@@ -11,7 +11,7 @@ use shadowvol_renderer::{Camera, RenderOptions, Renderer, Scene};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_scenes::Receiver;
 
-#[path = "../tests/common/shot.rs"]
+#[path = "../../cli/src/shot.rs"]
 mod shot;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

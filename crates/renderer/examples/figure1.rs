@@ -18,7 +18,7 @@ use std::path::PathBuf;
 
 const MODES: [Accuracy; 3] = [Accuracy::Original, Accuracy::Robust, Accuracy::Exact];
 
-#[path = "../tests/common/shot.rs"]
+#[path = "../../cli/src/shot.rs"]
 mod shot;
 
 fn main() {

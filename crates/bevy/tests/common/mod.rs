@@ -2,7 +2,7 @@
 //! scene: what the headless tests and the `headless` example share.
 #![allow(dead_code)]
 
-#[path = "../../../renderer/tests/common/shot.rs"]
+#[path = "../../../cli/src/shot.rs"]
 mod shot;
 
 use std::sync::{Arc, Mutex};

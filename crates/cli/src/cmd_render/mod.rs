@@ -266,17 +266,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let timed = frames::timed_frames(&mut renderer, &mut scene, args.frames)?;
     let table = table_bytes(scene.table_bytes(), renderer.pipeline().prepared_bytes());
 
-    let img = frame.read_image().map_err(render_error)?;
-    let shot = shadowvol_reference::Shot::new(
-        &scene,
-        frame.camera,
-        img.width,
-        img.height,
-        &img.rgba,
-        &img.ids,
-        &img.stencil,
-        &frame.report.light_colors,
-    );
+    let shot = crate::shot::shot(&frame, &scene).map_err(render_error)?;
     let want_reference = args.reference || args.diff.is_some();
     let (cmp, reference_ms) = if want_reference {
         let t = Instant::now();

@@ -47,6 +47,7 @@ pub fn shot<'a>(frame: &'a Frame, scene: &'a Scene) -> shadowvol_reference::Shot
     shot::shot(frame, scene).expect("a frame read back")
 }
 
+#[path = "../../../cli/src/shot.rs"]
 mod shot;
 
 /// A scene of `objects` (name, mesh, world transform; each its own table), lit by unit

@@ -1,6 +1,6 @@
 //! A rendered frame as the exact reference reads it. The renderer and its judge share no code,
-//! so the frame is handed over here: once for the renderer's tests and examples and the Bevy
-//! plugin's tests (which include this file), once in the CLI.
+//! so the frame is handed over here, once: `render --reference` uses it, and the renderer's
+//! tests and examples, the CLI's tests and the Bevy plugin's tests include this file.
 
 use shadowvol_renderer::{Frame, RenderError, Scene};
 
