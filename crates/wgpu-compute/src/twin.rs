@@ -78,7 +78,7 @@ pub fn run_kernel(
 }
 
 /// [`run_kernel`] for the module of
-/// [`module_source_with`](crate::shaders::module_source_with): with `device_exact`, the backend's
+/// [`module_source_with`](shadowvol_gpu::shaders::module_source_with): with `device_exact`, the backend's
 /// exact pipelines. The triangle step (built with `DEFER_INT`) appends what the filter cannot
 /// certify, with sign 0; `resolve_uncertain` then decides each appended pair with
 /// [`orient_int`] ([`KernelOutput::resolved`]), and nothing is left

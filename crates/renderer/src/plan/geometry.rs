@@ -137,8 +137,8 @@ pub const ZPASS_TRIANGLE_TEST_MAX: usize = 1 << 18;
 /// correct for this object whatever its silhouette.
 ///
 /// A triangle's shadow lies on the far side of its plane from the light, so the rectangle is
-/// clear of it when each of its corners is strictly on the light's side ([`light_side`], exact),
-/// or, for a light in the plane (a shadow of no volume), strictly off the plane; or when the
+/// clear of it when each of its corners is strictly on the light's side (which side the light is
+/// on: `orient_exact`'s exact sign), or, for a light in the plane (a shadow of no volume), strictly off the plane; or when the
 /// triangle lies strictly outside one of the near-clip volume's inward `planes` (see
 /// [`near_clip_volume`]; then no ray from the light to the rectangle passes through it). The
 /// corners' sides are evaluated in `f64` with a relative margin of `10⁻⁹`, so the test is
