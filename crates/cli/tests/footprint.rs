@@ -13,10 +13,10 @@ mod common;
 mod shot;
 
 use glam::{Affine3A, DVec2, DVec3, Vec3};
-use serde_json::Value;
 use shadowvol_mesh_topology::Mesh;
 use shadowvol_reference::{self as reference, Rule};
 use shadowvol_renderer::{Accuracy, Camera, Light, RenderError, RenderOptions, Renderer, Scene};
+use shadowvol_test_support::shapes::Lcg;
 use shadowvol_test_support::{main, Outcome};
 use std::fmt::Write as _;
 
@@ -27,19 +27,6 @@ main!(
 
 const LIGHT: [f32; 3] = [0.37, 6.1, -0.23];
 
-/// A deterministic generator of numbers in [0, 1).
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// `n` triangles over y = 0, each with one edge on a line through the light (in `f64`, before
 /// the vertices are rounded to `f32`).
 fn soup(n: usize) -> Vec<[Vec3; 3]> {
@@ -48,12 +35,16 @@ fn soup(n: usize) -> Vec<[Vec3; 3]> {
     (0..n)
         .map(|_| {
             let p0 = DVec3::new(
-                rng.next() * 6.0 - 3.0,
-                0.5 + rng.next() * 2.5,
-                rng.next() * 6.0 - 3.0,
+                rng.next_f64() * 6.0 - 3.0,
+                0.5 + rng.next_f64() * 2.5,
+                rng.next_f64() * 6.0 - 3.0,
             );
-            let p1 = p0 + (p0 - l) * (0.05 + 0.1 * rng.next());
-            let d = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
+            let p1 = p0 + (p0 - l) * (0.05 + 0.1 * rng.next_f64());
+            let d = DVec3::new(
+                rng.next_f64() - 0.5,
+                rng.next_f64() - 0.5,
+                rng.next_f64() - 0.5,
+            );
             [p0, p1, p0 + d * 0.8].map(|p| p.as_vec3())
         })
         .collect()
@@ -208,7 +199,7 @@ fn json_counts_the_pixels_the_footprint_rule_moved() -> Outcome {
     }
     std::fs::write(&obj, text).unwrap();
     let light = format!("--light={},{},{},1", LIGHT[0], LIGHT[1], LIGHT[2]);
-    let out = common::run(&[
+    let (v, _) = common::json_ok(&[
         "render",
         obj.to_str().unwrap(),
         &light,
@@ -221,13 +212,7 @@ fn json_counts_the_pixels_the_footprint_rule_moved() -> Outcome {
         dir.join("soup.png").to_str().unwrap(),
         "--format",
         "json",
-    ]);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    if !out.status.success() {
-        common::no_adapter("render", &stderr)?;
-    }
-    assert!(out.status.success(), "{stderr}");
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    ])?;
     let n = |k: &str| v[k].as_u64().unwrap_or_else(|| panic!("{k}: {v}"));
     eprintln!(
         "render soup.obj: artifact {}, footprint {}, boundary {}, geometric {} (footprint {})",

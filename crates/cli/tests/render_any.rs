@@ -372,7 +372,7 @@ fn json_report_has_the_contract_keys() -> Outcome {
     std::fs::create_dir_all(&dir).unwrap();
     let out_png = dir.join("r.png");
     let diff_png = dir.join("d.png");
-    let out = run(&[
+    let (v, _) = common::json_ok(&[
         "render",
         "hard-double-sided-sheet",
         "--out",
@@ -384,13 +384,7 @@ fn json_report_has_the_contract_keys() -> Outcome {
         diff_png.to_str().unwrap(),
         "--format",
         "json",
-    ]);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    if !out.status.success() {
-        common::no_adapter("render", &stderr)?;
-    }
-    assert!(out.status.success(), "{stderr}");
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    ])?;
     for key in ["artifact_pixels", "shadow_pixels", "plan", "timings"] {
         assert!(v.get(key).is_some(), "missing {key}: {v}");
     }

@@ -210,33 +210,10 @@ impl Bvh {
         dir: DVec3,
         t_min: f64,
         t_max: f64,
-        mut visit: impl FnMut(usize) -> bool,
+        visit: impl FnMut(usize) -> bool,
     ) -> bool {
-        if self.tris.is_empty() {
-            return false;
-        }
         let inv = DVec3::ONE / dir;
-        let mut stack = [0u32; 64];
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let n = self.nodes[stack[sp] as usize];
-            if !slab(n.lo, n.hi, origin, inv, t_min, t_max) {
-                continue;
-            }
-            if n.count > 0 {
-                for &i in &self.order[n.first as usize..(n.first + n.count) as usize] {
-                    if visit(i as usize) {
-                        return true;
-                    }
-                }
-            } else if sp + 2 <= stack.len() {
-                stack[sp] = n.first;
-                stack[sp + 1] = n.first + 1;
-                sp += 2;
-            }
-        }
-        false
+        self.visit_boxes(|lo, hi| slab(lo, hi, origin, inv, t_min, t_max), visit)
     }
 }
 

@@ -9,6 +9,7 @@ use shadowvol_reference::occlusion::light_side;
 use shadowvol_reference::{self as reference, Comparison, PixelState, Rule, Shot};
 use shadowvol_robust_math::Light;
 use shadowvol_scenes::{Camera, Receiver, Scene, SceneLight};
+use shadowvol_test_support::shapes::Lcg;
 use std::sync::Arc;
 
 const SIZE: u32 = 96;
@@ -83,19 +84,6 @@ impl Frame {
     }
 }
 
-/// A deterministic generator of numbers in [0, 1).
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// `n` triangles, each in a plane through the light as written (`p1` on the line from the light
 /// through `p0`); rounding the vertices to `f32` leaves each plane a hair off the light, so each
 /// casts a shadow wedge a tiny fraction of a pixel wide.
@@ -109,12 +97,16 @@ fn soup(n: usize, seed: u64) -> Vec<[Vec3; 3]> {
     let mut out = Vec::new();
     while out.len() < n {
         let p0 = DVec3::new(
-            rng.next() * 4.0 - 2.0,
-            rng.next() * 4.0 - 2.0,
-            0.5 + rng.next() * 2.0,
+            rng.next_f64() * 4.0 - 2.0,
+            rng.next_f64() * 4.0 - 2.0,
+            0.5 + rng.next_f64() * 2.0,
         );
-        let p1 = p0 + (p0 - l) * (0.05 + 0.1 * rng.next());
-        let dir = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
+        let p1 = p0 + (p0 - l) * (0.05 + 0.1 * rng.next_f64());
+        let dir = DVec3::new(
+            rng.next_f64() - 0.5,
+            rng.next_f64() - 0.5,
+            rng.next_f64() - 0.5,
+        );
         let p2 = p0 + dir * 0.8;
         let t = [p0, p1, p2].map(|p| p.as_vec3());
         // Only triangles whose f32 plane misses the light cast a shadow (the others cast none,

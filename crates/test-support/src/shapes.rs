@@ -113,3 +113,19 @@ mod tests {
         let _ = uv_sphere_y(1, 8, 1.0);
     }
 }
+
+/// Deterministic pseudo-random numbers for test shapes: a 64-bit linear congruential generator
+/// (Knuth's MMIX constants), the same sequence on every machine.
+#[derive(Debug, Clone)]
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    /// The next number in `[0, 1)`, from the state's top 53 bits.
+    pub fn next_f64(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}

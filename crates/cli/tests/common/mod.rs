@@ -155,6 +155,22 @@ pub fn backend_available(backend: &str) -> Result<(), Skip> {
     }
 }
 
+/// `shadowvol ARGS` with `--format json` among them, which must succeed: its JSON and stderr. A
+/// visible skip where it found no GPU adapter ([`no_adapter`]).
+///
+/// # Panics
+/// When the command fails otherwise or prints no JSON.
+pub fn json_ok(args: &[&str]) -> Result<(Value, String), Skip> {
+    let out = run(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    if !out.status.success() {
+        no_adapter(args[0], &stderr)?;
+    }
+    assert!(out.status.success(), "{args:?} failed:\n{stderr}");
+    let v = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("{args:?}: {e}"));
+    Ok((v, stderr))
+}
+
 /// A visible skip ([`shadowvol_test_support::skip`]: ignored with the reason, a failure under
 /// CI) when a command's `stderr` says it found no GPU adapter; `what` names the command.
 pub fn no_adapter(what: &str, stderr: &str) -> Result<(), Skip> {
