@@ -16,7 +16,7 @@ use glam::{Affine3A, DVec2, DVec3, Vec3};
 use shadowvol_mesh_topology::Mesh;
 use shadowvol_reference::{self as reference, Rule};
 use shadowvol_renderer::{Accuracy, Camera, Light, RenderError, RenderOptions, Renderer, Scene};
-use shadowvol_test_support::shapes::Lcg;
+use shadowvol_test_support::shapes::{distance_to_triangles, Lcg};
 use shadowvol_test_support::{main, Outcome};
 use std::fmt::Write as _;
 
@@ -62,29 +62,6 @@ fn wedges(soup: &[[Vec3; 3]]) -> Vec<[DVec2; 3]> {
             })
         })
         .collect()
-}
-
-/// Distance on the floor from `p` to the nearest wedge.
-fn distance_to_wedge(p: DVec2, wedges: &[[DVec2; 3]]) -> f64 {
-    let segment = |a: DVec2, b: DVec2| {
-        let ab = b - a;
-        let t = ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
-        (a + ab * t - p).length()
-    };
-    wedges
-        .iter()
-        .map(|s| {
-            let side = |a: DVec2, b: DVec2| (b - a).perp_dot(p - a);
-            let d = [side(s[0], s[1]), side(s[1], s[2]), side(s[2], s[0])];
-            if d.iter().all(|&x| x >= 0.0) || d.iter().all(|&x| x <= 0.0) {
-                0.0
-            } else {
-                (0..3)
-                    .map(|k| segment(s[k], s[(k + 1) % 3]))
-                    .fold(f64::INFINITY, f64::min)
-            }
-        })
-        .fold(f64::INFINITY, f64::min)
 }
 
 fn soup_mesh(tris: &[[Vec3; 3]]) -> Mesh {
@@ -174,7 +151,7 @@ fn a_soup_through_its_light_leaves_no_artifact_pixel() -> Outcome {
             .filter(|&&j| j < w * w && on_floor(j))
             .map(|&j| (points[j].expect("covered").position - p).length())
             .fold(f64::INFINITY, f64::min);
-        let d = distance_to_wedge(DVec2::new(p.x, p.z), &wedges);
+        let d = distance_to_triangles(DVec2::new(p.x, p.z), &wedges);
         let _ = write!(report, " {:.3}", d / width);
         assert!(d < width, "pixel {i}: {d} from a wedge, a pixel is {width}");
     }

@@ -9,7 +9,7 @@ use shadowvol_reference::occlusion::light_side;
 use shadowvol_reference::{self as reference, Comparison, PixelState, Rule, Shot};
 use shadowvol_robust_math::Light;
 use shadowvol_scenes::{Camera, Receiver, Scene, SceneLight};
-use shadowvol_test_support::shapes::Lcg;
+use shadowvol_test_support::shapes::{distance_to_triangles, Lcg};
 use std::sync::Arc;
 
 const SIZE: u32 = 96;
@@ -27,6 +27,18 @@ struct Frame {
 }
 
 impl Frame {
+    /// Every pixel's stencil as the reference states it (a raster with no error); the states.
+    fn draw_as_the_reference(&mut self) -> Vec<Vec<PixelState>> {
+        let shot = self.shot();
+        let sp = reference::surface_points(&shot);
+        let states = reference::reference_states(&shot, &sp);
+        drop(shot);
+        for (i, s) in states[0].iter().enumerate() {
+            self.stencil[0][i] = u8::from(*s != PixelState::Lit);
+        }
+        states
+    }
+
     fn new(casters: &[[Vec3; 3]]) -> Self {
         let soup = |tris: &[[Vec3; 3]]| Mesh {
             positions: tris.iter().flatten().copied().collect(),
@@ -137,30 +149,6 @@ fn shadows(casters: &[[Vec3; 3]]) -> Vec<[DVec2; 3]> {
         .collect()
 }
 
-fn segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
-    let ab = b - a;
-    let t = ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
-    (a + ab * t - p).length()
-}
-
-/// Distance on the ground from `p` to the nearest projected shadow.
-fn distance_to_shadow(p: DVec2, shadows: &[[DVec2; 3]]) -> f64 {
-    shadows
-        .iter()
-        .map(|s| {
-            let side = |a: DVec2, b: DVec2| (b - a).perp_dot(p - a);
-            let d = [side(s[0], s[1]), side(s[1], s[2]), side(s[2], s[0])];
-            if d.iter().all(|&x| x >= 0.0) || d.iter().all(|&x| x <= 0.0) {
-                0.0
-            } else {
-                (0..3)
-                    .map(|k| segment_distance(p, s[k], s[(k + 1) % 3]))
-                    .fold(f64::INFINITY, f64::min)
-            }
-        })
-        .fold(f64::INFINITY, f64::min)
-}
-
 /// Per pixel: the ground point under its centre and the pixel's width there (the distance to
 /// the next pixel's point).
 fn ground_points(frame: &Frame) -> (Vec<DVec2>, Vec<f64>) {
@@ -196,7 +184,7 @@ fn sub_pixel_wedges_are_boundaries_and_errors_away_from_them_are_not() {
     let wedges = shadows(&casters);
     let (points, width) = ground_points(&frame);
     let near: Vec<usize> = (0..points.len())
-        .filter(|&i| distance_to_shadow(points[i], &wedges) < 0.2 * width[i])
+        .filter(|&i| distance_to_triangles(points[i], &wedges) < 0.2 * width[i])
         .collect();
     assert!(near.len() >= 40, "only {} pixels near a wedge", near.len());
     for &i in &near {
@@ -219,7 +207,7 @@ fn sub_pixel_wedges_are_boundaries_and_errors_away_from_them_are_not() {
     assert_eq!(after.boundary_pixels, near.len());
     assert_eq!(after.geometric_artifact_pixels, 0);
     for &i in &after.footprint_moved {
-        let d = distance_to_shadow(points[i], &wedges);
+        let d = distance_to_triangles(points[i], &wedges);
         assert!(
             d < width[i],
             "pixel {i}: {d} from a wedge, {} wide",
@@ -236,7 +224,7 @@ fn sub_pixel_wedges_are_boundaries_and_errors_away_from_them_are_not() {
                 && y > 0
                 && x + 1 < w
                 && y + 1 < w
-                && distance_to_shadow(points[i], &wedges) > 2.0 * width[i]
+                && distance_to_triangles(points[i], &wedges) > 2.0 * width[i]
         })
         .expect("a pixel away from the wedges");
     frame.stencil[0][planted] = 1;
@@ -263,15 +251,9 @@ fn a_seam_inside_a_shadow_is_no_boundary() {
     let mut frame = Frame::new(&casters);
     let wedges = shadows(&casters);
     let (points, width) = ground_points(&frame);
-    let shot = frame.shot();
-    let sp = reference::surface_points(&shot);
-    let states = reference::reference_states(&shot, &sp);
-    drop(shot);
     // The raster equals the reference, except at pixels on the seam's shadow (the diagonal
     // through the light's projection), deep inside the square.
-    for (i, s) in states[0].iter().enumerate() {
-        frame.stencil[0][i] = u8::from(*s != PixelState::Lit);
-    }
+    let states = frame.draw_as_the_reference();
     let l = DVec2::new(f64::from(LIGHT[0]), f64::from(LIGHT[1]));
     let seam = |p: DVec2| {
         let s = wedges[0];
@@ -332,13 +314,7 @@ fn a_lit_slit_inside_a_shadow_is_a_boundary() {
     ];
     let mut frame = Frame::new(&casters);
     let (points, width) = ground_points(&frame);
-    let shot = frame.shot();
-    let sp = reference::surface_points(&shot);
-    let states = reference::reference_states(&shot, &sp);
-    drop(shot);
-    for (i, s) in states[0].iter().enumerate() {
-        frame.stencil[0][i] = u8::from(*s != PixelState::Lit);
-    }
+    let states = frame.draw_as_the_reference();
     // The slit's shadow on the ground: x = ±gap · 6/5 scaled about the light, a line x ≈ 0.06.
     let slit_x = f64::from(LIGHT[0]) * (1.0 - 6.0 / 5.0);
     let mut lit = Vec::new();

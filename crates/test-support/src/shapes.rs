@@ -129,3 +129,27 @@ impl Lcg {
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
 }
+
+/// Distance in the plane from `p` to the nearest of `triangles` (0 inside one, either winding).
+#[must_use]
+pub fn distance_to_triangles(p: glam::DVec2, triangles: &[[glam::DVec2; 3]]) -> f64 {
+    let segment = |a: glam::DVec2, b: glam::DVec2| {
+        let ab = b - a;
+        let t = ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+        (a + ab * t - p).length()
+    };
+    triangles
+        .iter()
+        .map(|s| {
+            let side = |a: glam::DVec2, b: glam::DVec2| (b - a).perp_dot(p - a);
+            let d = [side(s[0], s[1]), side(s[1], s[2]), side(s[2], s[0])];
+            if d.iter().all(|&x| x >= 0.0) || d.iter().all(|&x| x <= 0.0) {
+                0.0
+            } else {
+                (0..3)
+                    .map(|k| segment(s[k], s[(k + 1) % 3]))
+                    .fold(f64::INFINITY, f64::min)
+            }
+        })
+        .fold(f64::INFINITY, f64::min)
+}
