@@ -30,7 +30,7 @@
 //! answer "no boundary": it may leave a pixel an artifact, it never moves one without an exact
 //! proof that shadow and light both lie inside its footprint.
 
-use crate::occlusion::decompose;
+use crate::occlusion::scaled_ints;
 use crate::states::{Casters, SurfacePoint};
 use crate::Shot;
 use glam::{DMat4, DVec3, DVec4, Vec3};
@@ -517,27 +517,6 @@ fn homogeneous(v: Vec3) -> [f64; 4] {
 /// The plane through the triangle's three points.
 fn point_plane(t: [Vec3; 3]) -> Plane {
     plane_through(t.map(homogeneous))
-}
-
-/// `f64` values as integers, all scaled by one power of two (a positive factor).
-fn scaled_ints(values: &[f64]) -> Vec<BigInt> {
-    let parts: Vec<(i64, i32)> = values.iter().map(|&x| decompose(x)).collect();
-    let e_min = parts
-        .iter()
-        .filter(|(m, _)| *m != 0)
-        .map(|&(_, e)| e)
-        .min()
-        .unwrap_or(0);
-    parts
-        .iter()
-        .map(|&(m, e)| {
-            if m == 0 {
-                BigInt::from(0)
-            } else {
-                BigInt::from(m) << ((e - e_min) as usize)
-            }
-        })
-        .collect()
 }
 
 /// The plane through three homogeneous points (finite `f64` rows), with `π · X = det₄(X₁; X₂;

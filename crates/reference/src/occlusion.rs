@@ -344,32 +344,32 @@ pub(crate) fn decompose(x: f64) -> (i64, i32) {
     (if x < 0.0 { -m } else { m }, e)
 }
 
+/// `f64` values as integers, all scaled by one power of two (a positive factor).
+pub(crate) fn scaled_ints(values: &[f64]) -> Vec<BigInt> {
+    let parts: Vec<(i64, i32)> = values.iter().map(|&x| decompose(x)).collect();
+    let e_min = parts
+        .iter()
+        .filter(|(m, _)| *m != 0)
+        .map(|&(_, e)| e)
+        .min()
+        .unwrap_or(0);
+    parts
+        .iter()
+        .map(|&(m, e)| {
+            if m == 0 {
+                BigInt::from(0)
+            } else {
+                BigInt::from(m) << ((e - e_min) as usize)
+            }
+        })
+        .collect()
+}
+
 /// Exact sign of the 4×4 determinant of finite `f64` rows, in big integers: each row is scaled by
 /// a power of two that makes its entries integers (a positive factor, so the sign is kept), then
 /// the determinant is expanded by its 2×2 minors of rows {0, 1} and {2, 3}.
 fn det4_sign(rows: [[f64; 4]; 4]) -> i8 {
-    let ints: Vec<Vec<BigInt>> = rows
-        .iter()
-        .map(|r| {
-            let parts = r.map(decompose);
-            let e_min = parts
-                .iter()
-                .filter(|(m, _)| *m != 0)
-                .map(|&(_, e)| e)
-                .min()
-                .unwrap_or(0);
-            parts
-                .iter()
-                .map(|&(m, e)| {
-                    if m == 0 {
-                        BigInt::from(0)
-                    } else {
-                        BigInt::from(m) << ((e - e_min) as usize)
-                    }
-                })
-                .collect()
-        })
-        .collect();
+    let ints: Vec<Vec<BigInt>> = rows.iter().map(|r| scaled_ints(r)).collect();
     let minor = |r1: usize, r2: usize, i: usize, j: usize| {
         &ints[r1][i] * &ints[r2][j] - &ints[r1][j] * &ints[r2][i]
     };
