@@ -16,7 +16,7 @@
 use glam::{Affine3A, Vec3};
 use shadowvol_mesh_topology::Mesh;
 use shadowvol_reference::Shot;
-use shadowvol_renderer::pipeline::FrameInputs;
+use shadowvol_renderer::pipeline::{FrameInputs, Recording};
 use shadowvol_renderer::plan::plan_frame;
 use shadowvol_renderer::raster::{read_texture, Attachments};
 use shadowvol_renderer::resident::{texture_2d, PassFormats, PassFrame, ShadowPass};
@@ -281,6 +281,7 @@ fn map_frames(
         let mut report = FrameReport::new(Pipeline::Map, Accuracy::Exact);
         report.plan = plan.entries;
         let inputs = FrameInputs {
+            device: rd,
             scene,
             world: &world,
             changes: &changes,
@@ -292,7 +293,12 @@ fn map_frames(
             count: false,
         };
         let mut enc = rd.device.create_command_encoder(&Default::default());
-        pipeline.record(rd, &inputs, &mut report, &targets, &mut enc)?;
+        let rec = Recording {
+            report: &mut report,
+            target: &targets,
+            enc: &mut enc,
+        };
+        pipeline.record(&inputs, rec)?;
         rd.queue.submit([enc.finish()]);
     }
     Ok(t)

@@ -3,7 +3,7 @@
 
 use crate::frame::{Frame, FrameImage, FrameReport, FrameTime};
 use crate::lighting::{self, Exposure};
-use crate::pipeline::{FrameInputs, GpuPipeline, HostPipeline, ShadowPipeline};
+use crate::pipeline::{FrameInputs, GpuPipeline, HostPipeline, Recording, ShadowPipeline};
 use crate::plan::{plan_frame, FramePlan, PlanPolicy};
 use crate::raster::{FrameTargets, COLOR_FORMAT};
 use crate::world::{World, WorldChanges};
@@ -318,6 +318,7 @@ impl Renderer {
             ));
         }
         let inputs = FrameInputs {
+            device: &self.device,
             scene,
             world: &self.world,
             changes: &setup.changes,
@@ -334,7 +335,14 @@ impl Renderer {
         let device = &self.device;
         let drawn = device
             .submit("frame", |enc| {
-                pipeline.record(device, &inputs, report, &attachments, enc)?;
+                pipeline.record(
+                    &inputs,
+                    Recording {
+                        report: &mut *report,
+                        target: &attachments,
+                        enc,
+                    },
+                )?;
                 if into.is_none() {
                     targets.copy_color_ids(enc);
                 }
@@ -350,7 +358,7 @@ impl Renderer {
                 return Err(e);
             }
         };
-        pipeline.finish(device, &inputs, report)?;
+        pipeline.finish(&inputs, report)?;
         report.shadow_maps = pipeline
             .maps()
             .iter()

@@ -3,10 +3,10 @@
 //! in the frame's command encoder. The host writes only small per-frame inputs; no silhouette
 //! backend runs.
 
-use super::{FrameInputs, Pipeline, ShadowPipeline};
+use super::{FrameInputs, Pipeline, Recording, ShadowPipeline};
 use crate::frame::{FrameReport, GpuTimings};
 use crate::plan::{SilhouetteSource, Technique};
-use crate::raster::{Attachments, BACKGROUND, COLOR_FORMAT, IDS_FORMAT};
+use crate::raster::{BACKGROUND, COLOR_FORMAT, IDS_FORMAT};
 use crate::resident::{PassFormats, PassFrame, ResidentScene, ShadowPass, SurfaceVertices};
 use crate::{RenderDevice, RenderError};
 use glam::Affine3A;
@@ -149,14 +149,8 @@ impl ShadowPipeline for GpuPipeline {
         Ok(())
     }
 
-    fn record(
-        &mut self,
-        _device: &RenderDevice,
-        frame: &FrameInputs<'_>,
-        report: &mut FrameReport,
-        target: &Attachments<'_>,
-        enc: &mut wgpu::CommandEncoder,
-    ) -> Result<(), RenderError> {
+    fn record(&mut self, frame: &FrameInputs<'_>, rec: Recording<'_>) -> Result<(), RenderError> {
+        let (report, target, enc) = (rec.report, rec.target, rec.enc);
         let plan = &mut report.plan;
         let Some(pass) = self.pass.as_ref().filter(|_| !self.parts.is_empty()) else {
             return Err(RenderError::InvalidInput(
@@ -234,9 +228,8 @@ impl ShadowPipeline for GpuPipeline {
 
     fn finish(
         &mut self,
-        _device: &RenderDevice,
         frame: &FrameInputs<'_>,
-        report: &mut FrameReport,
+        out: &mut FrameReport,
     ) -> Result<(), RenderError> {
         let Some(pass) = self.pass.as_ref() else {
             return Ok(());
@@ -253,16 +246,16 @@ impl ShadowPipeline for GpuPipeline {
                 sum.shadow_maps += t.shadow_maps;
             }
         }
-        report.gpu_timings = timings;
-        report.scene_parts = self.parts.len();
-        report.surface_vertices = self
+        out.gpu_timings = timings;
+        out.scene_parts = self.parts.len();
+        out.surface_vertices = self
             .parts
             .first()
             .map(|p| p.rs.surface_vertices().to_owned());
         if !frame.count {
             return Ok(());
         }
-        let plan = &mut report.plan;
+        let plan = &mut out.plan;
         let n = frame.world.surfaces().len();
         debug_assert_eq!(
             plan.len(),
@@ -274,7 +267,7 @@ impl ShadowPipeline for GpuPipeline {
             e.side_quads = 0;
             e.cap_triangles = 0;
         }
-        report.uncertain = 0;
+        out.uncertain = 0;
         for part in &self.parts {
             let counts = pass.read_counts(&part.rs)?;
             let m = part.objects.len();
@@ -291,7 +284,7 @@ impl ShadowPipeline for GpuPipeline {
                     e.cap_triangles += if e.back_cap { 2 * front } else { front };
                 }
             }
-            report.uncertain += counts.integer_decided;
+            out.uncertain += counts.integer_decided;
         }
         Ok(())
     }

@@ -4,12 +4,11 @@
 //! differ. Where the frame is read back, a mask pass writes each light's map test into the
 //! stencil, so the reference compares maps as it compares volumes.
 
-use super::{FrameInputs, Pipeline, ShadowPipeline};
+use super::{FrameInputs, Pipeline, Recording, ShadowPipeline};
 use crate::frame::FrameReport;
 use crate::maps::pass::{MapFrame, MapLight, MapScene};
 use crate::maps::{light_map, FitBounds, LightMap, MapPass, MapSettings};
 use crate::plan::SilhouetteSource;
-use crate::raster::Attachments;
 use crate::GpuTimings;
 use crate::{Camera, RenderDevice, RenderError};
 use glam::Vec3;
@@ -18,8 +17,8 @@ use shadowvol_silhouette::PreparedBytes;
 /// The shadow-map pipeline: each light gets a map ([`crate::maps`]) on the renderer's device,
 /// in the frame's encoder; the pre-pass and the lit pass are the volume pipelines', so that only
 /// the shadows differ. Where the frame is read back (or the attachments ask for it,
-/// [`Attachments::with_shadow_stencil`]), a mask pass writes each light's map test into the
-/// stencil, so the reference compares maps as it compares volumes.
+/// [`crate::raster::Attachments::with_shadow_stencil`]), a mask pass writes each light's map
+/// test into the stencil, so the reference compares maps as it compares volumes.
 #[derive(Debug, Default)]
 pub struct MapPipeline {
     settings: MapSettings,
@@ -83,14 +82,9 @@ impl ShadowPipeline for MapPipeline {
         crate::raster::finish_uploads(&device.device, &device.queue)
     }
 
-    fn record(
-        &mut self,
-        device: &RenderDevice,
-        frame: &FrameInputs<'_>,
-        report: &mut FrameReport,
-        target: &Attachments<'_>,
-        enc: &mut wgpu::CommandEncoder,
-    ) -> Result<(), RenderError> {
+    fn record(&mut self, frame: &FrameInputs<'_>, rec: Recording<'_>) -> Result<(), RenderError> {
+        let (report, target, enc) = (rec.report, rec.target, rec.enc);
+        let device = frame.device;
         let (Some(pass), Some(ms)) = (self.pass.as_mut(), self.scene.as_mut()) else {
             return Err(RenderError::InvalidInput(
                 "the shadow-map pipeline records before prepare".to_owned(),
@@ -154,14 +148,14 @@ impl ShadowPipeline for MapPipeline {
 
     fn finish(
         &mut self,
-        device: &RenderDevice,
-        _frame: &FrameInputs<'_>,
-        report: &mut FrameReport,
+        frame: &FrameInputs<'_>,
+        out: &mut FrameReport,
     ) -> Result<(), RenderError> {
+        let device = frame.device;
         let (Some(pass), Some(ms)) = (self.pass.as_ref(), self.scene.as_ref()) else {
             return Ok(());
         };
-        report.gpu_timings = pass
+        out.gpu_timings = pass
             .read_timings(device, ms, &self.written)?
             .map(|t| GpuTimings {
                 stencil: t.mask,

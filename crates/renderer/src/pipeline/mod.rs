@@ -36,6 +36,8 @@ pub use shadowvol_silhouette::PreparedBytes;
 /// small per-frame values the renderer computed from it.
 #[derive(Debug, Clone, Copy)]
 pub struct FrameInputs<'a> {
+    /// The device the scene was prepared on.
+    pub device: &'a RenderDevice,
     /// The scene: surfaces, transforms, lights with their emission, ambient.
     pub scene: &'a Scene,
     /// The surfaces' world positions and boxes.
@@ -55,6 +57,19 @@ pub struct FrameInputs<'a> {
     /// Fill the plan's counts (silhouette edges, side quads, cap triangles). The GPU pipeline
     /// pays for them with atomics and a read after the frame, so timed frames leave it off.
     pub count: bool,
+}
+
+/// Where a frame is recorded: the caller's attachments and command encoder, and the frame's
+/// report, which the pipeline fills.
+#[derive(Debug)]
+pub struct Recording<'a> {
+    /// The frame's report: the plan (each entry's silhouette source and, with
+    /// [`FrameInputs::count`], its counts) and the pipeline's own fields (see [`FrameReport`]).
+    pub report: &'a mut FrameReport,
+    /// The attachments: colour, ids, depth and stencil.
+    pub target: &'a Attachments<'a>,
+    /// The encoder the passes are recorded into.
+    pub enc: &'a mut wgpu::CommandEncoder,
 }
 
 /// A way to shadow a frame. See the [module documentation](self).
@@ -88,36 +103,28 @@ pub trait ShadowPipeline {
     /// or [`RenderError::Unsupported`] when the scene does not fit the device.
     fn prepare(&mut self, device: &RenderDevice, scene: &Scene) -> Result<(), RenderError>;
 
-    /// Records one frame into `enc`: the pre-pass (colour = ambient × albedo, ids, depth), then
-    /// per light its shadow pass into the stencil of `target`, [`Attachments::after_stencil`],
-    /// and its lit pass (stencil == 0). Fills each of `report`'s plan entries' silhouette source
-    /// and, with [`FrameInputs::count`], the counts it knows now, and its own fields of `report`
-    /// (see [`FrameReport`]).
+    /// Records one frame into `rec`'s encoder: the pre-pass (colour = ambient × albedo, ids,
+    /// depth), then per light its shadow pass into the stencil of `rec`'s target,
+    /// [`Attachments::after_stencil`], and its lit pass (stencil == 0). Fills each of the report's
+    /// plan entries' silhouette source and, with [`FrameInputs::count`], the counts it knows now,
+    /// and its own fields of the report (see [`FrameReport`]).
     ///
     /// # Errors
     /// [`RenderError::Backend`] when extraction fails, [`RenderError::InvalidInput`] for a
     /// light that is not finite in an object's space.
-    fn record(
-        &mut self,
-        device: &RenderDevice,
-        frame: &FrameInputs<'_>,
-        report: &mut FrameReport,
-        target: &Attachments<'_>,
-        enc: &mut wgpu::CommandEncoder,
-    ) -> Result<(), RenderError>;
+    fn record(&mut self, frame: &FrameInputs<'_>, rec: Recording<'_>) -> Result<(), RenderError>;
 
-    /// After the frame's submission finished: fills what only the device knows (the GPU
-    /// pipeline's counts, when the frame counted them, and its timestamps).
+    /// After the frame's submission finished: fills what only the device knows into `out` (the
+    /// GPU pipeline's counts, when the frame counted them, and its timestamps).
     ///
     /// # Errors
     /// [`RenderError::Device`] when reading them back fails.
     fn finish(
         &mut self,
-        device: &RenderDevice,
         frame: &FrameInputs<'_>,
-        report: &mut FrameReport,
+        out: &mut FrameReport,
     ) -> Result<(), RenderError> {
-        let _ = (device, frame, report);
+        let _ = (frame, out);
         Ok(())
     }
 

@@ -8,9 +8,9 @@ mod frame;
 mod raster;
 pub mod volume;
 
-use super::{FrameInputs, Pipeline, ShadowPipeline};
-use crate::frame::{FrameReport, UncertainUnit};
-use crate::raster::{push_triangles, Attachments, SurfaceVertex};
+use super::{FrameInputs, Pipeline, Recording, ShadowPipeline};
+use crate::frame::UncertainUnit;
+use crate::raster::{push_triangles, SurfaceVertex};
 use crate::{Camera, RenderDevice, RenderError};
 use glam::{Affine3A, Vec3};
 use raster::{HostBuffers, HostRaster, RasterInput};
@@ -344,14 +344,9 @@ impl ShadowPipeline for HostPipeline {
         self.lay_out(device, scene)
     }
 
-    fn record(
-        &mut self,
-        device: &RenderDevice,
-        frame: &FrameInputs<'_>,
-        report: &mut FrameReport,
-        target: &Attachments<'_>,
-        enc: &mut wgpu::CommandEncoder,
-    ) -> Result<(), RenderError> {
+    fn record(&mut self, frame: &FrameInputs<'_>, rec: Recording<'_>) -> Result<(), RenderError> {
+        let (report, target, enc) = (rec.report, rec.target, rec.enc);
+        let device = frame.device;
         let plan = &mut report.plan;
         self.lay_out(device, frame.scene)?;
         self.sync_objects(frame.scene)?;
