@@ -44,6 +44,7 @@ fn lights(positions: &[Vec3], emissions: &[Emission]) -> Vec<SceneLight> {
         .map(|(&p, &e)| SceneLight {
             light: Light::point(p),
             emission: Some(e),
+            radius: 0.0,
         })
         .collect()
 }

@@ -132,6 +132,12 @@ pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, SceneError> {
             nodes.push(json!({"name": name, "translation": v3(p),
                 "extensions": {"KHR_lights_punctual": {"light": i}}}));
         }
+        if l.radius > 0.0 {
+            // KHR_lights_punctual has no size; the loader reads it back from here.
+            if let Some(last) = lights.last_mut() {
+                last["extras"] = json!({"radius": l.radius});
+            }
+        }
     }
 
     let mut cameras = Vec::new();

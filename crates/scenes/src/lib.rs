@@ -38,6 +38,7 @@
 //! ```
 
 mod camera;
+mod disk;
 pub mod emission;
 mod glb_write;
 pub mod gltf_load;
@@ -54,6 +55,7 @@ pub mod staging;
 pub mod stl;
 
 pub use camera::{box_centre_radius, Camera, InvalidCamera};
+pub use disk::{LightDisk, GOLDEN_ANGLE};
 pub use emission::{Emission, SpotCone};
 pub use glb_write::{export_glb, glb_container, to_glb};
 pub use gltf_load::{
@@ -138,6 +140,14 @@ pub enum SceneError {
     UnsupportedFormat {
         /// The path given.
         path: String,
+    },
+    /// A light's radius is out of range ([`SceneLight::radius`]).
+    #[error("light {light}: {message}")]
+    LightRadius {
+        /// The light's index in [`Scene::lights`].
+        light: usize,
+        /// What is wrong, with the value.
+        message: String,
     },
     /// The scene cannot be encoded as glTF.
     #[error("cannot export: {message}")]

@@ -36,15 +36,37 @@ pub struct SceneLight {
     /// glTF `KHR_lights_punctual` colour, intensity, range and cone; `None` for a unit light
     /// (white, no falloff: presets, `--light`, the default key light).
     pub emission: Option<Emission>,
+    /// The light's size ([`crate::LightDisk`]): for a point or spot light the radius of a disk
+    /// in world units, for a directional light an angular radius in radians (the sun's is about
+    /// 0.0047). 0 (the default) is a point light, casting hard shadows.
+    pub radius: f32,
 }
 
 impl SceneLight {
-    /// A unit light (no [`Emission`]).
+    /// A unit light (no [`Emission`]) of radius 0.
     #[must_use]
     pub fn unit(light: Light) -> Self {
         Self {
             light,
             emission: None,
+            radius: 0.0,
+        }
+    }
+
+    /// The disk this light's samples lie on, aimed at `aim` (the scene's bounding-box centre,
+    /// [`Scene::light_aim`]); `None` for radius 0. See [`crate::LightDisk`].
+    #[must_use]
+    pub fn disk(&self, aim: Vec3) -> Option<crate::LightDisk> {
+        crate::LightDisk::of(self, aim)
+    }
+
+    /// `n` point (or directional) lights sampling this light's disk aimed at `aim`
+    /// ([`crate::LightDisk::samples`]); the light itself when `n <= 1` or the radius is 0.
+    #[must_use]
+    pub fn samples(&self, n: u32, aim: Vec3) -> Vec<Light> {
+        match self.disk(aim) {
+            Some(d) if n > 1 => d.samples(n),
+            _ => vec![self.light],
         }
     }
 }
@@ -528,6 +550,28 @@ impl Scene {
             geometry,
             ..self.clone()
         })
+    }
+
+    /// The point a light with a size faces ([`SceneLight::disk`]): the centre of
+    /// [`Scene::surface_bounds`], the origin for a scene without vertices.
+    #[must_use]
+    pub fn light_aim(&self) -> Vec3 {
+        self.surface_bounds()
+            .map_or(Vec3::ZERO, |(lo, hi)| (lo + hi) * 0.5)
+    }
+
+    /// Sets every light's radius ([`SceneLight::radius`]) to `radius`.
+    ///
+    /// # Errors
+    /// [`SceneError::LightRadius`] when `radius` is negative or not finite, or not under a
+    /// quarter turn (π/2) for a directional light.
+    pub fn set_light_radius(&mut self, radius: f32) -> Result<(), SceneError> {
+        for (i, l) in self.lights.iter_mut().enumerate() {
+            crate::disk::check_radius(l.light, radius)
+                .map_err(|message| SceneError::LightRadius { light: i, message })?;
+            l.radius = radius;
+        }
+        Ok(())
     }
 
     /// World-space axis-aligned bounds `(min, max)` of all objects' vertices (each object's

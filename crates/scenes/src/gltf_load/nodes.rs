@@ -180,9 +180,18 @@ impl Loader<'_> {
         })?;
         let emission = crate::emission::from_gltf(light, &world)
             .map_err(|m| self.err(format!("{label}, light {}", light.index()), m))?;
+        // KHR_lights_punctual has no size: `extras.radius` on the light (or its node) gives one.
+        let radius = extras_f32(light.extras(), "radius").unwrap_or(0.0);
+        crate::disk::check_radius(l, radius).map_err(|m| {
+            self.err(
+                format!("{label}, light {}", light.index()),
+                format!("extras.radius: {m}"),
+            )
+        })?;
         self.scene.lights.push(SceneLight {
             light: l,
             emission: Some(emission),
+            radius,
         });
         Ok(())
     }
@@ -245,6 +254,13 @@ pub(super) fn root_nodes(document: &gltf::Document) -> Vec<gltf::Node<'_>> {
             document.nodes().filter(|n| !is_child[n.index()]).collect()
         }
     }
+}
+
+/// Reads `extras[key]` as a number (`None` when absent or not a number).
+fn extras_f32(extras: &gltf::json::Extras, key: &str) -> Option<f32> {
+    let raw = extras.as_ref()?;
+    let v: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
+    v.get(key)?.as_f64().map(|x| x as f32)
 }
 
 /// Reads `extras[key]` as a finite `[x, y, z]`.
