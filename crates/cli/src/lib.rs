@@ -28,11 +28,13 @@
 
 pub mod error;
 pub mod input;
+pub mod light_size;
 pub mod memory;
 pub mod report;
 
 pub use error::CliError;
 pub use input::{bounds_too_large, load_input, load_scene, Input, INPUT_FORMATS};
+pub use light_size::LightSizeArgs;
 pub use shadowvol_registry as registry;
 pub use shadowvol_registry::{backend_names, backends, find_backend, BackendEntry, MemoryFloor};
 pub use shadowvol_silhouette::gpu::{quiet_without_display, NODEVICE_SELECT};

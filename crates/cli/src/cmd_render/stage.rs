@@ -26,6 +26,9 @@ pub(crate) struct SceneArgs {
     )]
     pub(crate) lights: Vec<Light>,
 
+    #[command(flatten)]
+    pub(crate) light_size: shadowvol::LightSizeArgs,
+
     /// A receiver plane under the scene: auto (under files with nothing below their casters),
     /// on or off.
     #[arg(long, value_enum, default_value_t = GroundArg::Auto)]
@@ -179,6 +182,7 @@ impl SceneArgs {
             eprintln!("note: {n}");
         }
         let (lights_source, ground) = stage(&mut scene, &self.scene, &self.lights, self.ground)?;
+        self.light_size.apply(&mut scene)?;
         Ok((scene, lights_source, ground))
     }
 }
