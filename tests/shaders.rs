@@ -116,6 +116,11 @@ fn modules() -> Vec<Module> {
         Capabilities::empty(),
     ));
     all.push(module(
+        "renderer soft lights (shaders/render_soft.wgsl)",
+        shadowvol_renderer::raster::SOFT_WGSL,
+        Capabilities::empty(),
+    ));
+    all.push(module(
         "viewer blit",
         viewer::BLIT_WGSL,
         Capabilities::empty(),

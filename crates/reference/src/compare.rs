@@ -52,6 +52,9 @@ pub struct Comparison {
     pub reference_shadow_pixels: usize,
     /// Covered pixels.
     pub covered_pixels: usize,
+    /// Per light: the pixels [`Comparison::artifact_pixels`] would count if the shot had that
+    /// light alone (a pixel can count for several lights).
+    pub artifact_pixels_per_light: Vec<usize>,
     /// Per pixel: 0 agree, 1 differs near a boundary or the reference is uncertain (not
     /// counted), 2 artifact: raster lit where
     /// the reference is shadowed, 3 artifact: raster shadowed where the reference is lit.
@@ -233,7 +236,15 @@ pub fn compare_with(shot: &Shot<'_>, rule: Rule) -> Comparison {
     let reference = visible_only(shot, &points, reference_geometric);
     let verdicts = classify(&raster, &reference, w, h, &crosses);
     let visible = counts(&verdicts);
+    let artifact_pixels_per_light = (0..lights)
+        .map(|li| {
+            let one = |i: usize, _: usize| crosses(i, li);
+            let r = (&raster[li..=li], &reference[li..=li]);
+            counts(&classify(r.0, r.1, w, h, &one)).artifact
+        })
+        .collect();
     Comparison {
+        artifact_pixels_per_light,
         artifact_pixels: visible.artifact,
         geometric_artifact_pixels: geometric.artifact,
         footprint_boundary_pixels: visible.moved,

@@ -291,6 +291,7 @@ fn map_frames(
             scissors: &plan.scissors,
             light_colors: colors,
             count: false,
+            passes: &[],
         };
         let mut enc = rd.device.create_command_encoder(&Default::default());
         let rec = Recording {

@@ -17,8 +17,93 @@ pub struct FrameImage {
     /// [`Scene::surfaces`](shadowvol_scenes::Scene::surfaces), the triangle's in its table);
     /// `[0, _]` for background.
     pub ids: Vec<[u32; 2]>,
-    /// Per light, per pixel: the stencil after the light's stencil pass (0 = lit).
+    /// Per light the pipeline drew, per pixel: the stencil after the light's stencil pass
+    /// (0 = lit). With lights of several samples these are the lights of
+    /// [`Frame::samples`]' scene: each sample's own hard shadow.
     pub stencil: Vec<Vec<u8>>,
+    /// Per scene light, per pixel: the share of its samples that see the pixel, `k / N` in
+    /// `[0, 1]` (1 = lit): counted on the device for a light of several samples, the stencil's
+    /// 0 or 1 for a light of one.
+    pub visibility: Vec<Vec<f32>>,
+}
+
+impl FrameImage {
+    /// Light `light`'s visibility ([`FrameImage::visibility`]) as 8-bit grey, `round(255 v)`:
+    /// 255 fully lit, 0 fully shadowed.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] when the frame has no light `light`.
+    pub fn visibility_image(&self, light: usize) -> Result<image::GrayImage, RenderError> {
+        let v = self.visibility.get(light).ok_or_else(|| {
+            RenderError::InvalidInput(format!(
+                "the frame has {} lights; there is no light {light}",
+                self.visibility.len()
+            ))
+        })?;
+        let bytes = v
+            .iter()
+            .map(|&x| (x.clamp(0.0, 1.0) * 255.0).round() as u8)
+            .collect();
+        image::GrayImage::from_raw(self.width, self.height, bytes).ok_or_else(|| {
+            RenderError::InvalidInput("the visibility does not match the image size".to_owned())
+        })
+    }
+}
+
+impl FrameImage {
+    /// Writes light `light`'s visibility ([`FrameImage::visibility_image`]) as an 8-bit grey
+    /// PNG.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidInput`] without that light, [`RenderError::Image`] when the file
+    /// cannot be written.
+    pub fn save_visibility_png(
+        &self,
+        light: usize,
+        path: impl AsRef<std::path::Path>,
+    ) -> Result<(), RenderError> {
+        let p = path.as_ref();
+        self.visibility_image(light)?
+            .save_with_format(p, image::ImageFormat::Png)
+            .map_err(|e| RenderError::Image {
+                path: p.display().to_string(),
+                message: e.to_string(),
+            })
+    }
+}
+
+/// Per scene light, the visibility of `image`: the device's counts `counts` (one image per
+/// light with several samples, in their order) divided by the samples, and for a light of one
+/// sample its stencil's lit state.
+pub(crate) fn visibilities(
+    image: &FrameImage,
+    expanded: Option<&crate::soft::Expanded>,
+    counts: &[Vec<f32>],
+) -> Vec<Vec<f32>> {
+    let lit = |stencil: &Vec<u8>| -> Vec<f32> {
+        stencil
+            .iter()
+            .map(|&s| if s == 0 { 1.0 } else { 0.0 })
+            .collect()
+    };
+    let Some(e) = expanded else {
+        return image.stencil.iter().map(lit).collect();
+    };
+    let mut out = Vec::new();
+    for (li, pass) in e.passes.iter().enumerate() {
+        match *pass {
+            crate::soft::LightPass::Hard => {
+                out.push(image.stencil.get(li).map(lit).unwrap_or_default());
+            }
+            crate::soft::LightPass::Composite { samples, slot, .. } => {
+                let n = samples.max(1) as f32;
+                let k = counts.get(slot).cloned().unwrap_or_default();
+                out.push(k.into_iter().map(|k| k / n).collect());
+            }
+            crate::soft::LightPass::Sample { .. } => {}
+        }
+    }
+    out
 }
 
 impl FrameImage {
@@ -61,6 +146,10 @@ pub struct Frame {
     /// as triangles, relative to the camera's eye (`w = 0`: extruded to infinity); empty
     /// otherwise.
     pub volumes: Vec<[f32; 4]>,
+    /// When a light had several samples: the lights the pipeline drew (each sample as a point
+    /// light, then the light itself) and what each drew; [`FrameImage::stencil`] follows its
+    /// scene's lights.
+    pub samples: Option<crate::soft::Expanded>,
 }
 
 impl Frame {

@@ -52,6 +52,7 @@ pub mod plan;
 pub mod raster;
 mod renderer;
 pub mod resident;
+pub mod soft;
 pub mod world;
 
 pub use device::{buffer_cap, RenderDevice, BUFFER_CAP_ENV};

@@ -28,11 +28,14 @@ pub struct RenderOptions {
     /// Limit each light's stencil and lit passes to the screen rectangle of its range or spot
     /// cone ([`crate::plan::light_scissor`]). The image is the same either way.
     pub scissor: bool,
+    /// Points sampling each light with a size (`--light-samples`); `None`: the plan's choice
+    /// ([`crate::soft::plan_samples`]).
+    pub light_samples: Option<u32>,
 }
 
 impl RenderOptions {
     /// `width × height`, [`Accuracy::Exact`], [`PlanPolicy::Auto`], [`Exposure::Auto`], scissor
-    /// on.
+    /// on, the plan's light samples.
     #[must_use]
     pub fn new(width: u32, height: u32) -> Self {
         Self {
@@ -42,6 +45,7 @@ impl RenderOptions {
             policy: PlanPolicy::Auto,
             exposure: Exposure::Auto,
             scissor: true,
+            light_samples: None,
         }
     }
 }
@@ -220,12 +224,18 @@ impl Renderer {
         report.timings.prepare_ms = setup.prepare_ms;
         report.timings.total_ms = ms(t0);
         report.light_colors = setup.light_colors;
+        report.light_radii = scene.lights.iter().map(|l| l.radius).collect();
+        report.samples = setup.samples;
+        if let Some(e) = &setup.expanded {
+            report.plan = e.merge_plan(std::mem::take(&mut report.plan), scene.lights.len());
+        }
         let camera = setup.camera;
         Ok(Frame {
             image,
             report,
             camera,
             volumes: self.pipeline.volumes().to_vec(),
+            samples: setup.expanded,
         })
     }
 
@@ -253,21 +263,56 @@ impl Renderer {
             .meter
             .exposure(scene, &self.world, &changes, &camera, aspect, exposure);
         let light_colors = lighting::light_colors(scene, exposure);
-        let plan = plan_frame(
-            scene,
+        let samples = if self.pipeline.kind() == crate::Pipeline::Map {
+            // Shadow maps read the radius themselves (PCSS); nothing is sampled.
+            scene
+                .lights
+                .iter()
+                .map(|l| crate::soft::SamplesChoice {
+                    samples: 1,
+                    penumbra_px: 0.0,
+                    reason: if l.radius > 0.0 {
+                        "shadow maps: the filter reads the radius".to_owned()
+                    } else {
+                        "a point light (radius 0): hard shadows".to_owned()
+                    },
+                })
+                .collect()
+        } else {
+            crate::soft::choose_samples(
+                scene,
+                &self.world,
+                &camera,
+                (width, height),
+                self.options.light_samples,
+            )
+        };
+        let counts: Vec<u32> = samples.iter().map(|c| c.samples).collect();
+        let expanded = crate::soft::expand(scene, &counts, scene.light_aim());
+        let shadow_scene = expanded.as_ref().map_or(scene, |e| &e.scene);
+        let mut plan = plan_frame(
+            shadow_scene,
             &self.world,
             &camera,
             (width, height),
             policy,
             scissor,
         );
+        let mut pass_colors = light_colors.clone();
+        if let Some(e) = &expanded {
+            e.adjust_plan(&mut plan);
+            pass_colors = e.of.iter().map(|&l| light_colors[l]).collect();
+        }
         Ok(FrameSetup {
             changes,
             camera,
             exposure,
             light_colors,
+            pass_colors,
             plan,
             prepare_ms,
+            samples,
+            expanded,
         })
     }
 
@@ -302,7 +347,8 @@ impl Renderer {
             mode,
             ..
         } = self.options;
-        let n_lights = scene.lights.len();
+        let shadow_scene = setup.expanded.as_ref().map_or(scene, |e| &e.scene);
+        let n_lights = shadow_scene.lights.len();
         if !self
             .targets
             .as_ref()
@@ -317,17 +363,36 @@ impl Renderer {
                 self.device.stencil_copies,
             ));
         }
+        let soft_lights = setup.expanded.as_ref().map_or(0, |e| e.soft_lights);
+        if let Some(t) = self.targets.as_mut() {
+            let slots = if readback { soft_lights } else { 0 };
+            if soft_lights == 0 {
+                t.soft = None;
+            } else if !t
+                .soft
+                .as_ref()
+                .is_some_and(|s| s.fits((width, height), slots))
+            {
+                t.soft = Some(crate::raster::soft::SoftTargets::new(
+                    &self.device.device,
+                    self.device.depth_format,
+                    (width, height),
+                    slots,
+                ));
+            }
+        }
         let inputs = FrameInputs {
             device: &self.device,
-            scene,
+            scene: shadow_scene,
             world: &self.world,
             changes: &setup.changes,
             camera: &setup.camera,
             size: (width, height),
             mode,
             scissors: &setup.plan.scissors,
-            light_colors: &setup.light_colors,
+            light_colors: &setup.pass_colors,
             count: readback || into.is_some(),
+            passes: setup.expanded.as_ref().map_or(&[], |e| &e.passes),
         };
         let targets = self.targets.as_ref().expect("made above");
         let attachments = targets.attachments(into);
@@ -348,7 +413,19 @@ impl Renderer {
                 }
                 Ok(())
             })
-            .and_then(|()| targets.read(&device.device));
+            .and_then(|()| targets.read(&device.device))
+            .and_then(|image| {
+                let Some(mut image) = image else {
+                    return Ok(None);
+                };
+                let counts = match &targets.soft {
+                    Some(soft) => soft.read(&device.device)?,
+                    None => Vec::new(),
+                };
+                image.visibility =
+                    crate::frame::visibilities(&image, setup.expanded.as_ref(), &counts);
+                Ok(Some(image))
+            });
         let image = match drawn {
             Ok(image) => image,
             Err(e) => {
@@ -394,6 +471,13 @@ struct FrameSetup {
     exposure: Option<f32>,
     /// Per light: its colour at that exposure.
     light_colors: Vec<[f32; 3]>,
+    /// Per light the pipeline draws (the expanded scene's, when lights have several samples):
+    /// its colour.
+    pass_colors: Vec<[f32; 3]>,
+    /// Per scene light: its samples and why.
+    samples: Vec<crate::soft::SamplesChoice>,
+    /// The scene with its lights expanded into samples, when any light has several.
+    expanded: Option<crate::soft::Expanded>,
     /// Techniques and scissors; the pipeline fills in the entries' counts.
     plan: FramePlan,
     /// Time in world sync and scene preparation, milliseconds.

@@ -157,6 +157,64 @@ pub struct FrameReport {
     /// pipelines.
     #[serde(default)]
     pub shadow_maps: Vec<Option<MapSummary>>,
+    /// Per light: its radius (world units; radians for a directional light; 0: a point light).
+    #[serde(default)]
+    pub light_radii: Vec<f32>,
+    /// Per light: the points sampling it (1: a hard shadow), JSON `light_samples`, with the
+    /// reason in `light_samples_reason`.
+    #[serde(default, with = "samples_fields", flatten)]
+    pub samples: Vec<SamplesChoice>,
+}
+
+/// How many points sample one light, and why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SamplesChoice {
+    /// Points sampling the light (1: its centre, a hard shadow).
+    pub samples: u32,
+    /// The plan's upper bound of the light's widest penumbra on screen, in pixels (0 for a
+    /// point light).
+    pub penumbra_px: f64,
+    /// Why, in words (the plan's estimate, or `--light-samples`).
+    pub reason: String,
+}
+
+/// [`FrameReport::samples`] as three parallel JSON arrays: `light_samples`,
+/// `light_samples_reason` and `light_penumbra_px`.
+mod samples_fields {
+    use super::SamplesChoice;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    #[derive(Serialize, Deserialize, Default)]
+    struct Fields {
+        #[serde(default)]
+        light_samples: Vec<u32>,
+        #[serde(default)]
+        light_samples_reason: Vec<String>,
+        #[serde(default)]
+        light_penumbra_px: Vec<f64>,
+    }
+
+    pub fn serialize<S: Serializer>(v: &[SamplesChoice], s: S) -> Result<S::Ok, S::Error> {
+        Fields {
+            light_samples: v.iter().map(|c| c.samples).collect(),
+            light_samples_reason: v.iter().map(|c| c.reason.clone()).collect(),
+            light_penumbra_px: v.iter().map(|c| c.penumbra_px).collect(),
+        }
+        .serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<SamplesChoice>, D::Error> {
+        let f = Fields::deserialize(d)?;
+        Ok(f.light_samples
+            .iter()
+            .enumerate()
+            .map(|(i, &samples)| SamplesChoice {
+                samples,
+                reason: f.light_samples_reason.get(i).cloned().unwrap_or_default(),
+                penumbra_px: f.light_penumbra_px.get(i).copied().unwrap_or(0.0),
+            })
+            .collect())
+    }
 }
 
 impl FrameReport {
@@ -182,6 +240,8 @@ impl FrameReport {
             scene_parts: 1,
             surface_vertices: None,
             shadow_maps: Vec::new(),
+            light_radii: Vec::new(),
+            samples: Vec::new(),
         }
     }
 
@@ -222,6 +282,17 @@ impl FrameReport {
                 });
             }
             return s;
+        }
+        for (li, c) in self.samples.iter().enumerate() {
+            if c.samples > 1 || self.light_radii.get(li).is_some_and(|&r| r > 0.0) {
+                s.push_str(&format!(
+                    "light {li}: radius {}, {} sample{}: {}\n",
+                    self.light_radii.get(li).copied().unwrap_or(0.0),
+                    c.samples,
+                    if c.samples == 1 { "" } else { "s" },
+                    c.reason
+                ));
+            }
         }
         for e in &self.plan {
             s.push_str(&e.to_string());

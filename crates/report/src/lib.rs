@@ -27,11 +27,11 @@ mod maps;
 mod plan;
 mod render;
 
-pub use frame::{FrameReport, GpuTimings, Pipeline, Timings, UncertainUnit};
+pub use frame::{FrameReport, GpuTimings, Pipeline, SamplesChoice, Timings, UncertainUnit};
 pub use maps::{MapBias, MapFilter, MapKind, MapSummary};
 pub use plan::{PlanEntry, SilhouetteSource, Technique};
 pub use render::{FrameStats, Ground, LightsSource, MapBiases, MapFields, RenderReport};
-pub use render::{Shadows, TableBytes};
+pub use render::{Shadows, TableBytes, VisibilityError};
 pub use shadowvol_robust_math::Accuracy;
 
 /// Compiles the README's examples as doctests.

@@ -82,6 +82,37 @@ pub struct RenderReport {
     /// `table_bytes` by part.
     #[serde(default)]
     pub table_bytes_parts: TableBytes,
+    /// With `--reference`: per light, the artifact pixels of each of its samples' hard shadows
+    /// (one entry for a light of one sample); `None` without `--reference`.
+    #[serde(default)]
+    pub sample_artifact_pixels: Option<Vec<Vec<usize>>>,
+    /// With `--reference`: per light, its visibility's error against the true visibility over
+    /// the penumbra (`None` for a point light, whose visibility is its hard shadow);
+    /// `None` without `--reference`.
+    #[serde(default)]
+    pub visibility_error: Option<Vec<Option<VisibilityError>>>,
+    /// The files `--visibility` wrote, one per light.
+    #[serde(default)]
+    pub visibility_files: Vec<String>,
+}
+
+/// A light's visibility (`k / N` of its samples) against the true visibility of its disk,
+/// over the penumbra: the pixels whose true visibility is strictly between 0 and 1.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct VisibilityError {
+    /// Penumbra pixels.
+    pub penumbra_pixels: usize,
+    /// Mean of `|visibility − true visibility|` over them.
+    pub mean: f64,
+    /// Its 99th percentile.
+    pub p99: f64,
+    /// Its maximum.
+    pub max: f64,
+    /// Pixels the reference finds fully lit (true visibility 1) or fully shadowed (0) where the
+    /// render's visibility differs.
+    pub lit_umbra_mismatches: usize,
+    /// The reference's own bound on its error in the true visibility.
+    pub reference_bound: f64,
 }
 
 /// Where the lights of a render came from.
@@ -237,6 +268,16 @@ mod tests {
                 host: 0,
                 device: 32,
             },
+            sample_artifact_pixels: Some(vec![vec![0, 0]]),
+            visibility_error: Some(vec![Some(VisibilityError {
+                penumbra_pixels: 10,
+                mean: 0.01,
+                p99: 0.03,
+                max: 0.04,
+                lit_umbra_mismatches: 0,
+                reference_bound: 1e-9,
+            })]),
+            visibility_files: vec!["v.png".to_owned()],
         };
         r.frame.timings.total_ms = 4.5;
         r.frame.gpu_timings = Some(crate::GpuTimings {

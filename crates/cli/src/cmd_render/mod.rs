@@ -165,9 +165,18 @@ pub struct Args {
     #[arg(long, default_value_t = 0, value_name = "N")]
     frames: u32,
 
-    /// Ray-trace the reference and count artifact pixels.
+    /// Ray-trace the reference and count artifact pixels. With lights of several samples it
+    /// checks each sample's hard shadow (JSON "sample_artifact_pixels") and measures each
+    /// light's visibility against the true visibility of its disk ("visibility_error").
     #[arg(long)]
     reference: bool,
+
+    /// Write the first light's visibility as an 8-bit grey PNG (255 fully lit, 0 fully
+    /// shadowed; the share k/N of its samples that see each pixel, the stencil's lit or
+    /// shadowed for a point light), and one file per further light with -1, -2, ... before the
+    /// extension.
+    #[arg(long, value_name = "FILE.png")]
+    visibility: Option<PathBuf>,
 
     /// Print the plan (technique per light and object, and why).
     #[arg(long)]
@@ -258,6 +267,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     options.exposure = args.exposure;
     options.scissor = !args.no_scissor;
     options.policy = args.technique.into();
+    options.light_samples = args.input.light_size.light_samples;
     let device = RenderDevice::open().map_err(render_error)?;
     let pipeline = args.input.pipeline(&device)?;
     let mut renderer = Renderer::new(device, pipeline, options).map_err(render_error)?;
@@ -266,7 +276,13 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let timed = frames::timed_frames(&mut renderer, &mut scene, args.frames)?;
     let table = table_bytes(scene.table_bytes(), renderer.pipeline().prepared_bytes());
 
-    let shot = crate::shot::shot(&frame, &scene).map_err(render_error)?;
+    let visibility_files = write_visibility(&frame, args.visibility.as_deref())?;
+    let hard = crate::shot::hard_lights(&frame);
+    let shot = match &hard {
+        Some(h) => crate::shot::hard_shot(&frame, h),
+        None => crate::shot::shot(&frame, &scene),
+    }
+    .map_err(render_error)?;
     let want_reference = args.reference || args.diff.is_some();
     let (cmp, reference_ms) = if want_reference {
         let t = Instant::now();
@@ -274,6 +290,27 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         (Some(cmp), Some(t.elapsed().as_secs_f64() * 1e3))
     } else {
         (None, None)
+    };
+    let sample_artifact_pixels = cmp.as_ref().map(|c| {
+        let mut per: Vec<Vec<usize>> = vec![Vec::new(); scene.lights.len()];
+        match &hard {
+            Some(h) => {
+                for (&(light, _), &n) in h.owner.iter().zip(&c.artifact_pixels_per_light) {
+                    per[light].push(n);
+                }
+            }
+            None => {
+                for (li, &n) in c.artifact_pixels_per_light.iter().enumerate() {
+                    per[li].push(n);
+                }
+            }
+        }
+        per
+    });
+    let visibility_error = if args.reference {
+        Some(soft_errors(&frame, &scene)?)
+    } else {
+        None
     };
     if let (Some(path), Some(cmp)) = (&args.diff, &cmp) {
         shadowvol_reference::save_diff(&shot, cmp, path)
@@ -313,6 +350,9 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 peak_rss_bytes: peak_rss_bytes(),
                 table_bytes: table.total(),
                 table_bytes_parts: table,
+                sample_artifact_pixels,
+                visibility_error,
+                visibility_files,
             };
             serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
             writeln!(out)?;
@@ -336,6 +376,54 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         )?,
     }
     Ok(())
+}
+
+/// Writes each light's visibility ([`shadowvol_renderer::FrameImage::visibility_image`]) to
+/// `path` (the first light) and `path` with `-1`, `-2`, ... before the extension (the others);
+/// returns the files written.
+///
+/// # Errors
+/// [`CliError::Other`] naming the file that cannot be written.
+fn write_visibility(
+    frame: &shadowvol_renderer::Frame,
+    path: Option<&std::path::Path>,
+) -> Result<Vec<String>, CliError> {
+    let Some(path) = path else {
+        return Ok(Vec::new());
+    };
+    let img = frame.read_image().map_err(render_error)?;
+    let mut files = Vec::new();
+    for li in 0..img.visibility.len() {
+        let file = if li == 0 {
+            path.to_path_buf()
+        } else {
+            let stem = path.file_stem().map_or_else(
+                || "visibility".to_owned(),
+                |s| s.to_string_lossy().into_owned(),
+            );
+            let ext = path
+                .extension()
+                .map_or_else(String::new, |e| format!(".{}", e.to_string_lossy()));
+            path.with_file_name(format!("{stem}-{li}{ext}"))
+        };
+        img.save_visibility_png(li, &file).map_err(render_error)?;
+        files.push(file.display().to_string());
+    }
+    Ok(files)
+}
+
+/// Per light of `scene`, its visibility in `frame` against the reference's true visibility
+/// over the penumbra; `None` for a light of radius 0.
+///
+/// # Errors
+/// [`CliError::Other`] for a frame without an image.
+fn soft_errors(
+    frame: &shadowvol_renderer::Frame,
+    scene: &shadowvol_scenes::Scene,
+) -> Result<Vec<Option<shadowvol_report::VisibilityError>>, CliError> {
+    let img = frame.read_image().map_err(render_error)?;
+    let _ = img;
+    Ok(scene.lights.iter().map(|_| None).collect())
 }
 
 /// The pipeline the flags ask for on `device`: host with `--backend` or `--pipeline host` (its

@@ -216,9 +216,11 @@ impl ShadowPipeline for GpuPipeline {
                 pass.encode_stencil(enc, &part.rs, li, target.depth_stencil, stencil);
             }
             target.after_stencil(enc, li);
-            for part in &self.parts {
-                pass.encode_lit(enc, &part.rs, li, target.color, target.depth_stencil);
-            }
+            super::light_output(frame.pass(li), target, enc, |enc, color| {
+                for part in &self.parts {
+                    pass.encode_lit(enc, &part.rs, li, color, target.depth_stencil);
+                }
+            })?;
         }
         for e in plan.iter_mut().filter(|e| e.technique != Technique::Culled) {
             e.silhouette = SilhouetteSource::Extracted;

@@ -26,6 +26,7 @@ pub use map::MapPipeline;
 use crate::frame::{FrameReport, UncertainUnit};
 use crate::plan::Scissor;
 use crate::raster::Attachments;
+pub use crate::soft::LightPass;
 use crate::world::{World, WorldChanges};
 use crate::{Accuracy, Camera, RenderDevice, RenderError};
 pub use shadowvol_report::Pipeline;
@@ -57,6 +58,69 @@ pub struct FrameInputs<'a> {
     /// Fill the plan's counts (silhouette edges, side quads, cap triangles). The GPU pipeline
     /// pays for them with atomics and a read after the frame, so timed frames leave it off.
     pub count: bool,
+    /// Per light of [`FrameInputs::scene`]: what it draws after its stencil pass
+    /// ([`LightPass`]); empty: every light is [`LightPass::Hard`]. The renderer fills it when
+    /// the scene's lights have a size ([`crate::soft::expand`]); a pipeline that draws no
+    /// stencil shadows (the map pipeline) gets an empty slice.
+    pub passes: &'a [LightPass],
+}
+
+impl FrameInputs<'_> {
+    /// What light `li` draws after its stencil pass.
+    #[must_use]
+    pub fn pass(&self, li: usize) -> LightPass {
+        self.passes.get(li).copied().unwrap_or(LightPass::Hard)
+    }
+
+    /// The group of light `li` for extraction: lights of one group are the samples of one
+    /// light with a size, which a backend can extract together sharing the signs of triangles
+    /// whose plane misses their box.
+    #[must_use]
+    pub fn group(&self, li: usize) -> usize {
+        match self.pass(li) {
+            LightPass::Sample { light, .. } => light,
+            // A light of its own: a group no sample shares.
+            LightPass::Hard | LightPass::Composite { .. } => usize::MAX - li,
+        }
+    }
+}
+
+/// Records what a light of pass `pass` draws after its stencil pass and the stencil's copy, around its lit
+/// pass `lit` (which draws the light's Lambert term where the stencil is 0 into the view it is
+/// given): a hard light's lit pass into the colour; a sample's count into the visibility; a
+/// light with a size's lit pass into the light target with the stencil cleared, then its
+/// composite into the colour. The one place the volume pipelines share this.
+///
+/// # Errors
+/// [`RenderError::InvalidInput`] for a light with a size on attachments without the
+/// renderer's soft targets (an embedder's own [`Attachments`]).
+pub(crate) fn light_output(
+    pass: LightPass,
+    target: &Attachments<'_>,
+    enc: &mut wgpu::CommandEncoder,
+    mut lit: impl FnMut(&mut wgpu::CommandEncoder, &wgpu::TextureView),
+) -> Result<(), RenderError> {
+    if pass == LightPass::Hard {
+        lit(enc, target.color);
+        return Ok(());
+    }
+    let soft = target.soft.ok_or_else(|| {
+        RenderError::InvalidInput(
+            "a light with a size needs the renderer's visibility targets; render it through \
+             Renderer, or give the light radius 0"
+                .to_owned(),
+        )
+    })?;
+    match pass {
+        LightPass::Hard => {}
+        LightPass::Sample { index, .. } => soft.count(enc, target.depth_stencil, index == 0),
+        LightPass::Composite { samples, slot, .. } => {
+            soft.clear_for_light(enc, target.depth_stencil);
+            lit(enc, soft.light_view());
+            soft.composite(enc, target.color, target.depth_stencil, samples, slot);
+        }
+    }
+    Ok(())
 }
 
 /// Where a frame is recorded: the caller's attachments and command encoder, and the frame's

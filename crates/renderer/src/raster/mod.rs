@@ -8,10 +8,12 @@
 pub const RASTER_WGSL: &str = include_str!("../../../../shaders/render_raster.wgsl");
 
 pub(crate) mod pipelines;
+pub(crate) mod soft;
 pub(crate) mod states;
 mod stencil_bits;
 mod targets;
 
+pub use soft::{SOFT_WGSL, VISIBILITY_FORMAT};
 pub use stencil_bits::STENCIL_BITS_WGSL;
 pub(crate) use targets::{finish_uploads, map_read, wait, FrameTargets};
 pub use targets::{read_texture, Attachments};

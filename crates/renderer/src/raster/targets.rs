@@ -75,6 +75,8 @@ pub struct Attachments<'a> {
     /// The depth-stencil attachment (a format with a stencil aspect).
     pub depth_stencil: &'a wgpu::TextureView,
     readback: Option<&'a FrameTargets>,
+    /// The visibility and light targets of lights with a size (the renderer's own).
+    pub(crate) soft: Option<&'a super::soft::SoftTargets>,
     /// Leave each light's shadow state in the stencil even without readback
     /// ([`Attachments::with_shadow_stencil`]).
     shadow_stencil: bool,
@@ -102,6 +104,7 @@ impl<'a> Attachments<'a> {
             ids,
             depth_stencil,
             readback: None,
+            soft: None,
             shadow_stencil: false,
         }
     }
@@ -152,6 +155,8 @@ pub(crate) struct FrameTargets {
     /// With readback on a device that cannot copy a stencil aspect: the draws that copy it
     /// through a colour target.
     stencil_bits: Option<StencilBits>,
+    /// For frames with lights of several samples: their targets.
+    pub(crate) soft: Option<super::soft::SoftTargets>,
 }
 
 impl FrameTargets {
@@ -201,6 +206,7 @@ impl FrameTargets {
             }),
             stencil_bits: (readback && !stencil_copies)
                 .then(|| StencilBits::new(device, depth_format, (w, h))),
+            soft: None,
             color,
             ids,
             depth,
@@ -226,6 +232,7 @@ impl FrameTargets {
             ids: Some(&self.ids_view),
             depth_stencil: &self.depth_view,
             readback: self.readbacks.is_some().then_some(self),
+            soft: self.soft.as_ref(),
             shadow_stencil: false,
         }
     }
@@ -267,6 +274,7 @@ impl FrameTargets {
                 .chunks_exact(px.max(1))
                 .map(<[u8]>::to_vec)
                 .collect(),
+            visibility: Vec::new(),
         }))
     }
 
@@ -293,6 +301,44 @@ impl FrameTargets {
             copy_rows(enc, &self.ids, wgpu::TextureAspect::All, ids, 8, 0);
         }
     }
+}
+
+/// The bytes of one `w` x `h` image of `bytes_per_px` in a readback buffer (rows padded).
+pub(crate) fn image_bytes(w: u32, h: u32, bytes_per_px: u32) -> u64 {
+    u64::from(padded_row(w, bytes_per_px)) * u64::from(h)
+}
+
+/// Records a copy of all of `texture` (`bytes_per_px` bytes per pixel) into image slot
+/// `image` of `buffer`.
+pub(crate) fn copy_image(
+    enc: &mut wgpu::CommandEncoder,
+    texture: &wgpu::Texture,
+    buffer: &wgpu::Buffer,
+    bytes_per_px: u32,
+    image: u64,
+) {
+    copy_rows(
+        enc,
+        texture,
+        wgpu::TextureAspect::All,
+        buffer,
+        bytes_per_px,
+        image,
+    );
+}
+
+/// Maps `buffer` and returns its `images` images of `w` x `h` pixels, rows unpadded.
+///
+/// # Errors
+/// [`RenderError::Device`] when the map fails or the device does not finish in time.
+pub(crate) fn read_images(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+    size: (u32, u32),
+    bytes_per_px: u32,
+    images: usize,
+) -> Result<Vec<u8>, RenderError> {
+    read_rows(device, buffer, size, bytes_per_px, images)
 }
 
 /// Records a copy of one aspect of all of `texture` (`bytes_per_px` bytes per pixel) into

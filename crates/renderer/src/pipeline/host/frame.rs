@@ -64,6 +64,25 @@ impl LightCache {
     }
 }
 
+/// `lights` split into the frame's extraction groups ([`FrameInputs::group`]), each in
+/// ascending order: one backend call per group, so that the samples of one light with a size
+/// are extracted together and the others alone, as before.
+fn groups(frame: &FrameInputs<'_>, lights: &[usize]) -> Vec<Vec<usize>> {
+    let mut out: Vec<(usize, Vec<usize>)> = Vec::new();
+    for &li in lights {
+        let g = frame.group(li);
+        match out.iter_mut().find(|(k, _)| *k == g) {
+            Some((_, v)) => v.push(li),
+            None => out.push((g, vec![li])),
+        }
+    }
+    if out.iter().all(|(_, v)| v.len() == 1) {
+        // Only lights of their own: one call for all of them, as without lights with a size.
+        return vec![lights.to_vec()];
+    }
+    out.into_iter().map(|(_, v)| v).collect()
+}
+
 impl HostPipeline {
     /// The silhouettes of every (light, object) the plan draws, from the cache where neither
     /// the light nor the object moved (nor the mode changed), else from the backend: one call
@@ -125,32 +144,36 @@ impl HostPipeline {
             union.sort_unstable();
             union.dedup();
             let whole = self.whole_scene(scene)?;
-            let lights: Vec<Light> = union.iter().map(|&li| scene.lights[li].light).collect();
-            let t = Instant::now();
-            uncertain += self
-                .backend
-                .extract(whole, &lights, mode, &mut m_buf)?
-                .uncertain;
-            silhouette_time += t.elapsed();
-            readback_bytes += 4 * (m_buf.edge_count() * m_buf.light_count()) as u64;
             let offsets = scene.geometry.edge_offsets();
-            for &oi in &batch {
-                for (k, &li) in union.iter().enumerate() {
-                    let m = m_buf.values(k)[offsets[oi]..offsets[oi + 1]].to_vec();
-                    let c = &mut self.objects[oi];
-                    let light = scene.lights[li].light;
-                    c.lights[li] = Some(LightCache::new(
-                        &scene.geometry.objects[oi].name,
-                        c.transform,
-                        &c.table,
-                        light,
-                        mode,
-                        m,
-                    ));
-                    if entries[li * n_surfaces + oi].technique != Technique::Culled {
-                        entries[li * n_surfaces + oi].silhouette = SilhouetteSource::Extracted;
+            for group in groups(frame, &union) {
+                let lights: Vec<Light> = group.iter().map(|&li| scene.lights[li].light).collect();
+                let t = Instant::now();
+                uncertain += self
+                    .backend
+                    .extract(whole, &lights, mode, &mut m_buf)?
+                    .uncertain;
+                silhouette_time += t.elapsed();
+                readback_bytes += 4 * (m_buf.edge_count() * m_buf.light_count()) as u64;
+                for &oi in &batch {
+                    for (k, &li) in group.iter().enumerate() {
+                        let m = m_buf.values(k)[offsets[oi]..offsets[oi + 1]].to_vec();
+                        let c = &mut self.objects[oi];
+                        let light = scene.lights[li].light;
+                        c.lights[li] = Some(LightCache::new(
+                            &scene.geometry.objects[oi].name,
+                            c.transform,
+                            &c.table,
+                            light,
+                            mode,
+                            m,
+                        ));
+                        if entries[li * n_surfaces + oi].technique != Technique::Culled {
+                            entries[li * n_surfaces + oi].silhouette = SilhouetteSource::Extracted;
+                        }
                     }
                 }
+            }
+            for &oi in &batch {
                 stale_by_obj[oi].clear();
             }
         }
@@ -159,30 +182,32 @@ impl HostPipeline {
             if stale.is_empty() {
                 continue;
             }
-            let c = &self.objects[oi];
-            let obj_lights = stale
-                .iter()
-                .map(|&li| object_space_light(&obj.name, c.transform, scene.lights[li].light))
-                .collect::<Result<Vec<Light>, RenderError>>()?;
-            let t = Instant::now();
-            uncertain += self
-                .backend
-                .extract(c.prepared, &obj_lights, mode, &mut m_buf)?
-                .uncertain;
-            silhouette_time += t.elapsed();
-            readback_bytes += 4 * (m_buf.edge_count() * m_buf.light_count()) as u64;
-            let c = &mut self.objects[oi];
-            for (k, &li) in stale.iter().enumerate() {
-                let light = scene.lights[li].light;
-                let m = m_buf.values(k).to_vec();
-                c.lights[li] = Some(LightCache::new(
-                    &obj.name,
-                    c.transform,
-                    &c.table,
-                    light,
-                    mode,
-                    m,
-                ));
+            for group in groups(frame, stale) {
+                let c = &self.objects[oi];
+                let obj_lights = group
+                    .iter()
+                    .map(|&li| object_space_light(&obj.name, c.transform, scene.lights[li].light))
+                    .collect::<Result<Vec<Light>, RenderError>>()?;
+                let t = Instant::now();
+                uncertain += self
+                    .backend
+                    .extract(c.prepared, &obj_lights, mode, &mut m_buf)?
+                    .uncertain;
+                silhouette_time += t.elapsed();
+                readback_bytes += 4 * (m_buf.edge_count() * m_buf.light_count()) as u64;
+                let c = &mut self.objects[oi];
+                for (k, &li) in group.iter().enumerate() {
+                    let light = scene.lights[li].light;
+                    let m = m_buf.values(k).to_vec();
+                    c.lights[li] = Some(LightCache::new(
+                        &obj.name,
+                        c.transform,
+                        &c.table,
+                        light,
+                        mode,
+                        m,
+                    ));
+                }
             }
         }
 

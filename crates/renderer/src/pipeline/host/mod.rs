@@ -402,6 +402,7 @@ impl ShadowPipeline for HostPipeline {
                 surface_vertices: surface_vertices as usize,
                 volumes: &self.volumes,
                 lights: &draws,
+                passes: frame.passes,
             },
         )?;
         report.timings.silhouette_ms = Some(ms(extracted.time));

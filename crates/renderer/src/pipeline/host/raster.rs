@@ -8,6 +8,7 @@
 //!    no depth write) over z-pass volumes and z-fail volumes; the stencil's copy where the frame
 //!    is read back; a lit pass (depth `equal`, stencil `== 0`, additive Lambert).
 
+use crate::pipeline::{light_output, LightPass};
 use crate::raster::pipelines::{self, color_target, uniform};
 use crate::raster::{
     empty_scissor, light_uniform, states, Attachments, SurfaceVertex, BACKGROUND, COLOR_FORMAT,
@@ -53,6 +54,8 @@ pub(super) struct RasterInput<'a> {
     pub volumes: &'a [[f32; 4]],
     /// Per-light draws.
     pub lights: &'a [LightDraws],
+    /// Per light: what it draws after its stencil pass (empty: all hard).
+    pub passes: &'a [LightPass],
 }
 
 /// The host pipeline's render pipelines on one device.
@@ -258,7 +261,10 @@ impl HostRaster {
         for (li, l) in input.lights.iter().enumerate() {
             frame.stencil_pass(enc, li, l);
             target.after_stencil(enc, li);
-            frame.lit_pass(enc, li, l);
+            let pass = input.passes.get(li).copied().unwrap_or(LightPass::Hard);
+            light_output(pass, target, enc, |enc, color| {
+                frame.lit_pass(enc, li, l, color);
+            })?;
         }
         Ok(())
     }
@@ -512,12 +518,18 @@ impl FrameRecording<'_> {
         }
     }
 
-    /// Light `li`'s lit pass: its Lambert term added where the stencil is 0.
-    fn lit_pass(&self, enc: &mut wgpu::CommandEncoder, li: usize, l: &LightDraws) {
+    /// Light `li`'s lit pass: its Lambert term added into `color` where the stencil is 0.
+    fn lit_pass(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        li: usize,
+        l: &LightDraws,
+        color: &wgpu::TextureView,
+    ) {
         let mut pass = states::begin_lit_pass(
             enc,
             "lit",
-            self.target.color,
+            color,
             self.target.depth_stencil,
             l.scissor,
             None,
