@@ -17,9 +17,11 @@ pub const LONG_ABOUT: &str = "Open a window onto SCENE (a preset, a .gltf/.glb s
     shift + left drag move the first light around the scene; 1-4 pick the accuracy mode \
     (original, ordered, robust, exact); T cycles the technique (auto, z-pass, z-fail); V cycles \
     how the volumes show (hidden, translucent, wire: cracks become visible); M switches between \
-    volumes and shadow maps (--shadows and the --map-* flags as for `render`); Esc or Q quits. \
+    volumes and shadow maps (--shadows and the --map-* flags as for `render`); [ and ] halve \
+    and double every light's radius (from 0, ] starts at 1 % of the scene's size; soft shadows, \
+    sampled as the plan decides unless --light-samples says); Esc or Q quits. \
     The overlay shows fps, frame ms, silhouette edges, the uncertain and host-resolved pairs, \
-    the pipeline and each object's technique.\n\n\
+    the pipeline, each light's radius and samples, and each object's technique.\n\n\
     The renderer runs on the window's device: in the GPU pipeline it draws each frame into a \
     texture the window samples, and nothing comes back to the host but the plan's counts. The \
     host pipeline (and the volume view, V) reads each image back and uploads it; the map \
@@ -102,6 +104,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let mut options = ViewOptions::new(args.size.0, args.size.1);
     options.render.mode = args.input.mode;
     options.render.policy = args.technique.into();
+    options.render.light_samples = args.input.light_size.light_samples;
     options.frames = args.frames;
     options.screenshot.clone_from(&args.screenshot);
     options

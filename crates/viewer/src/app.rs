@@ -231,6 +231,20 @@ impl App {
         Ok(())
     }
 
+    /// Doubles (`grow`) or halves every light's radius ([`controls::step_radius`]), from 1 %
+    /// of the scene's size (0.01 rad for a directional light) at radius 0.
+    fn step_radius(&mut self, grow: bool) {
+        let size = self
+            .scene
+            .surface_bounds()
+            .map_or(1.0, |(lo, hi)| (hi - lo).length());
+        for l in &mut self.scene.lights {
+            let directional = l.light.is_directional();
+            let start = if directional { 0.01 } else { 0.01 * size };
+            l.radius = controls::step_radius(l.radius, start, grow, directional);
+        }
+    }
+
     fn key(&mut self, key: &Key, el: &ActiveEventLoop) {
         let step = 5f32.to_radians();
         let light = |app: &mut Self, yaw: f32, pitch: f32| {
@@ -249,6 +263,7 @@ impl App {
                 "t" | "T" => self.policy = controls::next_policy(self.policy),
                 "v" | "V" => self.volumes = self.volumes.next(),
                 "m" | "M" => self.maps = !self.maps,
+                "[" | "]" => self.step_radius(s_is_grow(c.as_str())),
                 s => {
                     if let Some(m) = s.parse::<u8>().ok().and_then(controls::mode_of_key) {
                         self.options.render.mode = m;
@@ -258,6 +273,11 @@ impl App {
             _ => {}
         }
     }
+}
+
+/// True for the key that grows the lights' radius (`]`), false for `[`.
+fn s_is_grow(key: &str) -> bool {
+    key == "]"
 }
 
 /// Renders into the frame texture; `read_back` (the screenshot frame) reads it back first.

@@ -178,9 +178,38 @@ pub fn orbit_light(light: Light, centre: Vec3, yaw: f32, pitch: f32) -> Light {
     Light::new(p.x, p.y, p.z, w).unwrap_or(light)
 }
 
+/// The next radius of a light of radius `radius` after the key `]` (`grow`) or `[`: doubled
+/// or halved, starting from `start` (a size for the scene: world units for a point light,
+/// radians for a directional one) at 0 and back to 0 below a sixteenth of it; a directional
+/// light's stays under 0.5 rad.
+#[must_use]
+pub fn step_radius(radius: f32, start: f32, grow: bool, directional: bool) -> f32 {
+    let r = match (grow, radius == 0.0) {
+        (true, true) => start,
+        (true, false) => radius * 2.0,
+        (false, _) if radius <= start / 16.0 => 0.0,
+        (false, _) => radius * 0.5,
+    };
+    if directional {
+        r.min(0.5)
+    } else {
+        r
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn radius_steps_double_halve_and_reach_zero() {
+        assert_eq!(step_radius(0.0, 0.1, true, false), 0.1);
+        assert_eq!(step_radius(0.1, 0.1, true, false), 0.2);
+        assert_eq!(step_radius(0.2, 0.1, false, false), 0.1);
+        assert_eq!(step_radius(0.1 / 16.0, 0.1, false, false), 0.0);
+        assert_eq!(step_radius(0.0, 0.1, false, false), 0.0);
+        assert_eq!(step_radius(0.4, 0.1, true, true), 0.5);
+    }
 
     #[test]
     fn an_orbit_reproduces_its_camera() {

@@ -16,6 +16,8 @@ pub(crate) struct Stats {
     policy: PlanPolicy,
     volumes: VolumeView,
     techniques: Vec<String>,
+    /// Per light: radius and samples.
+    soft: Vec<(f32, u32)>,
 }
 
 impl Stats {
@@ -43,6 +45,13 @@ impl Stats {
             pipeline: frame.report.pipeline,
             policy,
             volumes,
+            soft: frame
+                .report
+                .light_radii
+                .iter()
+                .zip(&frame.report.samples)
+                .map(|(&r, c)| (r, c.samples))
+                .collect(),
             techniques: frame
                 .report
                 .plan
@@ -91,6 +100,18 @@ impl Stats {
                         self.uncertain,
                         self.host_resolved,
                         self.pipeline.name()
+                    ),
+                );
+                let sizes: Vec<String> = self
+                    .soft
+                    .iter()
+                    .map(|(r, n)| format!("{r:.3} ({n} sample{})", if *n == 1 { "" } else { "s" }))
+                    .collect();
+                line(
+                    ui,
+                    format!(
+                        "light radius {} ([ and ] halve and double)",
+                        sizes.join(", ")
                     ),
                 );
                 for t in self.techniques.iter().take(6) {
