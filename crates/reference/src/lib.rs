@@ -57,12 +57,18 @@ mod bvh;
 mod compare;
 mod footprint;
 pub mod occlusion;
+pub mod soft;
 mod states;
 
 pub use bvh::Bvh;
 pub use compare::{
     compare, compare_with, diff_image, save_diff, shading_check, shadow_pixels, Comparison, Rule,
     ShadingCheck,
+};
+pub use soft::{
+    compare_visibility, compare_with_reference, disk_visibility, polygon_disk_area,
+    visibility_reference, visibility_reference_with, Integration, SoftCasters, SoftComparison,
+    SoftReference, Visibility,
 };
 pub use states::{
     faces_light, faces_light_geometric, light_attenuation, raster_states, raster_states_geometric,
