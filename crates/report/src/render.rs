@@ -108,9 +108,13 @@ pub struct VisibilityError {
     pub p99: f64,
     /// Its maximum.
     pub max: f64,
-    /// Pixels the reference finds fully lit (true visibility 1) or fully shadowed (0) where the
-    /// render's visibility differs.
+    /// Pixels the reference finds fully lit (true visibility 1) or fully shadowed (0), not on
+    /// the border of another class, where the render's visibility differs.
     pub lit_umbra_mismatches: usize,
+    /// The same on a border (a 3x3 neighbour of another class), where a sample's hard shadow
+    /// boundary may pass within rounding of the pixel's point: not counted above.
+    #[serde(default)]
+    pub border_mismatches: usize,
     /// The reference's own bound on its error in the true visibility.
     pub reference_bound: f64,
 }
@@ -275,6 +279,7 @@ mod tests {
                 p99: 0.03,
                 max: 0.04,
                 lit_umbra_mismatches: 0,
+                border_mismatches: 2,
                 reference_bound: 1e-9,
             })]),
             visibility_files: vec!["v.png".to_owned()],

@@ -412,8 +412,8 @@ fn write_visibility(
     Ok(files)
 }
 
-/// Per light of `scene`, its visibility in `frame` against the reference's true visibility
-/// over the penumbra; `None` for a light of radius 0.
+/// Per light of `scene`, its visibility in `frame` (`k / N` of its samples) against the
+/// reference's true visibility of its disk over the penumbra; `None` for a light of radius 0.
 ///
 /// # Errors
 /// [`CliError::Other`] for a frame without an image.
@@ -422,8 +422,54 @@ fn soft_errors(
     scene: &shadowvol_scenes::Scene,
 ) -> Result<Vec<Option<shadowvol_report::VisibilityError>>, CliError> {
     let img = frame.read_image().map_err(render_error)?;
-    let _ = img;
-    Ok(scene.lights.iter().map(|_| None).collect())
+    if scene.lights.iter().all(|l| l.radius == 0.0) {
+        return Ok(vec![None; scene.lights.len()]);
+    }
+    // The reference reads the scene's surfaces, the camera and the pixels' ids; the stencils
+    // (one per scene light, from the visibility) only complete the shot.
+    let stencils: Vec<Vec<u8>> = img
+        .visibility
+        .iter()
+        .map(|v| v.iter().map(|&x| u8::from(x < 1.0)).collect())
+        .collect();
+    let shot = shadowvol_reference::Shot::new(
+        scene,
+        frame.camera,
+        img.width,
+        img.height,
+        &img.rgba,
+        &img.ids,
+        &stencils,
+        &frame.report.light_colors,
+    );
+    let casters = shadowvol_reference::soft::SoftCasters::new(&shot);
+    let aim = scene.light_aim();
+    Ok(scene
+        .lights
+        .iter()
+        .enumerate()
+        .map(|(li, l)| {
+            let disk = l.disk(aim)?;
+            let reference = shadowvol_reference::soft::visibility_reference_with(
+                &shot,
+                &casters,
+                li,
+                &disk,
+                shadowvol_reference::soft::Integration::Auto,
+            );
+            let c =
+                shadowvol_reference::soft::compare_with_reference(&reference, &img.visibility[li]);
+            Some(shadowvol_report::VisibilityError {
+                penumbra_pixels: c.penumbra_pixels,
+                mean: c.penumbra_mean_error,
+                p99: c.penumbra_p99_error,
+                max: c.penumbra_max_error,
+                lit_umbra_mismatches: c.lit_mismatched + c.umbra_mismatched,
+                border_mismatches: c.border_mismatched,
+                reference_bound: c.reference_bound,
+            })
+        })
+        .collect())
 }
 
 /// The pipeline the flags ask for on `device`: host with `--backend` or `--pipeline host` (its
