@@ -12,6 +12,7 @@ main!(
     map_json_names_the_settings_and_frames_read_nothing_back,
     explain_lists_each_lights_map,
     maps_and_volumes_light_the_scene_alike,
+    pcss_names_the_filter_and_each_lights_size,
     bad_map_flags_are_refused
 );
 
@@ -178,6 +179,52 @@ fn maps_and_volumes_light_the_scene_alike() -> Outcome {
     assert!(
         differ * 100 <= total * 3,
         "{differ} of {total} pixels differ"
+    );
+    Ok(())
+}
+
+/// `--map-filter pcss`: the JSON names the filter and each map's PCSS size (Bevy's
+/// `soft_shadow_size`: the radius of a point light, more than `tan θ` for a directional one);
+/// with every radius 0 a note says the maps are read with pcf, and the image is pcf's.
+fn pcss_names_the_filter_and_each_lights_size() -> Outcome {
+    let help = run(&["render", "--help"]);
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(help.contains("pcss") && help.contains("blocker"), "{help}");
+    let png = scratch("pcss.png");
+    let args = ["hard-book-3", "--size", "64x48", "--shadows", "map"];
+    let v = json(
+        &[
+            &args[..],
+            &[
+                "--map-filter",
+                "pcss",
+                "--light-radius",
+                "0.05",
+                "--out",
+                &png,
+            ],
+        ]
+        .concat(),
+    )?;
+    assert_eq!(v["map_filter"], "pcss", "{v}");
+    let maps = v["shadow_maps"].as_array().expect("shadow_maps");
+    assert_eq!(maps.len(), 6);
+    for m in maps {
+        let size = m["soft_shadow_size"].as_f64().expect("soft_shadow_size");
+        match m["kind"].as_str() {
+            Some("cube") => assert!((size - 0.05).abs() < 1e-6, "{m}"),
+            Some("directional") => assert!(size > 0.05f64.tan(), "{m}"),
+            other => panic!("{other:?}"),
+        }
+    }
+    let (a, b) = (scratch("pcss0.png"), scratch("pcf0.png"));
+    let out = render(&[&args[..], &["--map-filter", "pcss", "--out", &a]].concat())?;
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(e.contains("every light has radius 0"), "{e}");
+    render(&[&args[..], &["--out", &b]].concat())?;
+    assert!(
+        image::open(&a).unwrap().to_rgba8() == image::open(&b).unwrap().to_rgba8(),
+        "pcss with radius 0 differs from pcf"
     );
     Ok(())
 }

@@ -24,7 +24,8 @@ pub enum RenderError {
         /// What is wrong.
         source: MeshError,
     },
-    /// The device lacks a feature, capability or limit the GPU pipeline needs (named).
+    /// The device lacks a feature, capability or limit the GPU pipeline (or the map pipeline's
+    /// PCSS) needs (named).
     #[error("unsupported device: {0}")]
     Unsupported(String),
     /// Bad parameters (size, camera, light).

@@ -24,15 +24,22 @@ pub enum MapFilter {
     /// comparison (a soft edge over about 4 texels, like Bevy's default Gaussian filter).
     #[default]
     Pcf,
+    /// Percentage-closer soft shadows as Bevy 0.20 ships them (`experimental_pbr_pcss`): a
+    /// blocker search over a region sized by the light's size, then 8 rotated bilinear
+    /// comparisons over a kernel sized from the average blocker depth. A light of radius 0 is
+    /// read as with [`MapFilter::Pcf`], as Bevy reads a light without a soft shadow size with
+    /// its normal filter.
+    Pcss,
 }
 
 impl MapFilter {
-    /// `"hard"` or `"pcf"`.
+    /// `"hard"`, `"pcf"` or `"pcss"`.
     #[must_use]
     pub fn name(self) -> &'static str {
         match self {
             MapFilter::Hard => "hard",
             MapFilter::Pcf => "pcf",
+            MapFilter::Pcss => "pcss",
         }
     }
 }
@@ -107,4 +114,10 @@ pub struct MapSummary {
     /// Normal bias in world units: times the texel size for a directional map, per unit of
     /// distance from the light for spot and cube maps.
     pub normal_offset: f32,
+    /// Bevy's PCSS light size this light's map is read with under [`MapFilter::Pcss`]: world
+    /// units (a point or spot light's radius; for a directional light its angular radius's
+    /// tangent times the depth of the view's box along the light). 0 for a light of radius 0,
+    /// and in records written before PCSS.
+    #[serde(default)]
+    pub soft_shadow_size: f32,
 }

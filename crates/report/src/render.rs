@@ -197,7 +197,7 @@ pub struct MapFields {
     pub map_size: Option<u32>,
     /// Side of each cube face (point lights), texels.
     pub map_size_point: Option<u32>,
-    /// `hard` or `pcf`.
+    /// `hard`, `pcf` or `pcss`.
     pub map_filter: Option<MapFilter>,
     /// The bias of directional and spot maps, and of cube maps.
     pub map_bias: Option<MapBiases>,

@@ -63,8 +63,11 @@ pub(crate) struct SceneArgs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub(crate) map_size: Option<u32>,
 
-    /// --shadows map: how maps are read: `hard` (one hardware comparison) or `pcf` (3x3
-    /// bilinear comparisons, the soft edge of Bevy's default filter).
+    /// --shadows map: how maps are read: `hard` (one hardware comparison), `pcf` (3x3 bilinear
+    /// comparisons, the soft edge of Bevy's default filter) or `pcss` (percentage-closer soft
+    /// shadows as Bevy 0.20's experimental_pbr_pcss: a blocker search over a region the size of
+    /// the light (--light-radius), then 8 bilinear comparisons over a kernel sized from the mean
+    /// blocker depth; a light of radius 0 is read with pcf, as Bevy does).
     #[arg(long, value_enum, default_value_t = MapFilterArg::Pcf)]
     pub(crate) map_filter: MapFilterArg,
 
@@ -100,6 +103,8 @@ pub(crate) enum MapFilterArg {
     /// Percentage-closer filtering over 3x3 bilinear comparisons.
     #[default]
     Pcf,
+    /// Percentage-closer soft shadows (Bevy's PCSS), sized by each light's radius.
+    Pcss,
 }
 
 impl SceneArgs {
@@ -147,6 +152,7 @@ impl SceneArgs {
             filter: match self.map_filter {
                 MapFilterArg::Hard => shadowvol_renderer::MapFilter::Hard,
                 MapFilterArg::Pcf => shadowvol_renderer::MapFilter::Pcf,
+                MapFilterArg::Pcss => shadowvol_renderer::MapFilter::Pcss,
             },
             bias: self.map_bias,
             cascades: self.map_cascades,
@@ -183,6 +189,15 @@ impl SceneArgs {
         }
         let (lights_source, ground) = stage(&mut scene, &self.scene, &self.lights, self.ground)?;
         self.light_size.apply(&mut scene)?;
+        if self.shadows == ShadowsArg::Map
+            && self.map_filter == MapFilterArg::Pcss
+            && scene.lights.iter().all(|l| l.radius == 0.0)
+        {
+            eprintln!(
+                "note: --map-filter pcss: every light has radius 0, so every map is read with pcf \
+                 (as Bevy reads a light without a soft shadow size); give --light-radius"
+            );
+        }
         Ok((scene, lights_source, ground))
     }
 }

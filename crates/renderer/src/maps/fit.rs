@@ -58,6 +58,14 @@ pub struct LightMap {
     pub cascade_far: [f32; 4],
     /// Per cascade: its normal offset in world units (its texel size differs).
     pub cascade_offset: [f32; 4],
+    /// Bevy's PCSS light size for this light ([`super::pcss::soft_shadow_size`]), world units;
+    /// 0 for a light of radius 0.
+    pub soft_shadow_size: f32,
+    /// Per cascade of a directional map, what its PCSS lookup needs: the map's width and height
+    /// in world units, then `a, b` taking its depth `d` to Bevy's, `a d + b`: Bevy's depth runs
+    /// from 0 at the bottom to 1 at the top of the box of the cascade's slice of the view
+    /// (light space), ours from the scene's bottom to the casters' top. Zero for other maps.
+    pub cascade_soft: [[f32; 4]; 4],
 }
 
 impl LightMap {
@@ -72,6 +80,7 @@ impl LightMap {
             near: self.near,
             bias: self.bias,
             normal_offset: self.normal_offset,
+            soft_shadow_size: self.soft_shadow_size,
         }
     }
 }
@@ -113,17 +122,25 @@ pub fn light_map(
         let mut view_proj = [Mat4::IDENTITY; 6];
         let mut cascade_far = [far; 4];
         let mut cascade_offset = [0.0; 4];
+        let mut cascade_soft = [[0.0; 4]; 4];
         let mut texel0 = 0.0;
         for i in 0..n {
             let slice = (f64::from(splits[i]), f64::from(splits[i + 1]));
-            let (vp, texel) = directional(to_light, camera, aspect, bounds, casters, size, slice)?;
-            view_proj[i] = vp;
+            let m = directional(to_light, camera, aspect, bounds, casters, size, slice)?;
+            view_proj[i] = m.view_proj;
             cascade_far[i] = splits[i + 1];
-            cascade_offset[i] = bias.normal * texel * std::f32::consts::SQRT_2;
+            cascade_offset[i] = bias.normal * m.texel * std::f32::consts::SQRT_2;
+            cascade_soft[i] = m.soft;
             if i == 0 {
-                texel0 = texel;
+                texel0 = m.texel;
             }
         }
+        let view = LightSpace::new(to_light, camera.eye).frustum_box(
+            camera,
+            aspect,
+            (f64::from(camera.near), f64::from(far)),
+        );
+        let view_depth = (view.1.z - view.0.z) as f32;
         return Some(LightMap {
             kind: MapKind::Directional,
             size,
@@ -136,8 +153,11 @@ pub fn light_map(
             cascades: n as u32,
             cascade_far,
             cascade_offset,
+            soft_shadow_size: super::pcss::soft_shadow_size(light, view_depth),
+            cascade_soft,
         });
     }
+    let soft_shadow_size = super::pcss::soft_shadow_size(light, 0.0);
     let pos = Vec3::new(x, y, z) / w;
     if !pos.is_finite() {
         return None;
@@ -174,6 +194,8 @@ pub fn light_map(
                 cascades: 1,
                 cascade_far: [0.0; 4],
                 cascade_offset: [0.0; 4],
+                soft_shadow_size,
+                cascade_soft: [[0.0; 4]; 4],
             })
         }
         _ => {
@@ -198,6 +220,8 @@ pub fn light_map(
                 cascades: 1,
                 cascade_far: [0.0; 4],
                 cascade_offset: [0.0; 4],
+                soft_shadow_size,
+                cascade_soft: [[0.0; 4]; 4],
             })
         }
     }
@@ -230,11 +254,70 @@ fn near_plane(light: Vec3, scene: (Vec3, Vec3), casters: (Vec3, Vec3)) -> f32 {
     (0.5 * d).max(1e-6 * size)
 }
 
-/// A directional light's orthographic map towards `-to_light`, and its texel size (world
-/// units): across, the part of the scene box the view can see (the box of the frustum up to the
-/// farthest scene point, met with the scene's box, both in light space); along the light, from
-/// the casters' top to the scene's bottom, so that every caster that can shadow a visible point
-/// is in the map (such a caster lies on the same light-space column as the point).
+/// A directional light's orthographic map for one slice of the view.
+struct Directional {
+    /// Clip from camera-relative world.
+    view_proj: Mat4,
+    /// World size of a texel.
+    texel: f32,
+    /// [`LightMap::cascade_soft`] of the slice.
+    soft: [f32; 4],
+}
+
+/// Light space of a directional light about the eye: `x` right, `y` top, `z` towards the light.
+struct LightSpace {
+    right: DVec3,
+    top: DVec3,
+    d: DVec3,
+    eye: DVec3,
+}
+
+impl LightSpace {
+    fn new(to_light: Vec3, eye: Vec3) -> Self {
+        let d = to_light.as_dvec3();
+        let up = if d.y.abs() > 0.99 { DVec3::X } else { DVec3::Y };
+        let right = up.cross(d).normalize();
+        let top = d.cross(right);
+        Self {
+            right,
+            top,
+            d,
+            eye: eye.as_dvec3(),
+        }
+    }
+
+    /// World point `p` in light space.
+    fn of(&self, p: DVec3) -> DVec3 {
+        let q = p - self.eye;
+        DVec3::new(self.right.dot(q), self.top.dot(q), self.d.dot(q))
+    }
+
+    /// The light-space box of the camera's frustum between the view distances `slice`.
+    fn frustum_box(
+        &self,
+        camera: &Camera,
+        aspect: f32,
+        (slice_near, slice_far): (f64, f64),
+    ) -> (DVec3, DVec3) {
+        let near = camera.near_corners(f64::from(aspect));
+        let (a, b) = (
+            slice_near / f64::from(camera.near),
+            slice_far / f64::from(camera.near),
+        );
+        near.iter()
+            .flat_map(|&c| [self.eye + (c - self.eye) * a, self.eye + (c - self.eye) * b])
+            .map(|p| self.of(p))
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p), hi.max(p))
+            })
+    }
+}
+
+/// A directional light's orthographic map towards `-to_light`, its texel size (world units) and
+/// its PCSS data: across, the part of the scene box the view can see (the box of the frustum up
+/// to the farthest scene point, met with the scene's box, both in light space); along the light,
+/// from the casters' top to the scene's bottom, so that every caster that can shadow a visible
+/// point is in the map (such a caster lies on the same light-space column as the point).
 fn directional(
     to_light: Vec3,
     camera: &Camera,
@@ -242,29 +325,12 @@ fn directional(
     bounds: &FitBounds,
     casters: (Vec3, Vec3),
     size: u32,
-    (slice_near, slice_far): (f64, f64),
-) -> Option<(Mat4, f32)> {
-    let d = to_light.as_dvec3();
-    let up = if d.y.abs() > 0.99 { DVec3::X } else { DVec3::Y };
-    let right = up.cross(d).normalize();
-    let top = d.cross(right);
-    let eye = camera.eye.as_dvec3();
-    let to_light_space =
-        |p: DVec3| DVec3::new(right.dot(p - eye), top.dot(p - eye), d.dot(p - eye));
-    let scene = box_in(bounds.scene, to_light_space);
-    let caster_box = box_in(casters, to_light_space);
-    let near = camera.near_corners(f64::from(aspect));
-    let (a, b) = (
-        slice_near / f64::from(camera.near),
-        slice_far / f64::from(camera.near),
-    );
-    let frustum = near
-        .iter()
-        .flat_map(|&c| [eye + (c - eye) * a, eye + (c - eye) * b])
-        .map(to_light_space)
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p), hi.max(p))
-        });
+    slice: (f64, f64),
+) -> Option<Directional> {
+    let ls = LightSpace::new(to_light, camera.eye);
+    let scene = box_in(bounds.scene, |p| ls.of(p));
+    let caster_box = box_in(casters, |p| ls.of(p));
+    let frustum = ls.frustum_box(camera, aspect, slice);
     let (mut lo, mut hi) = (scene.0.max(frustum.0), scene.1.min(frustum.1));
     if lo.x > hi.x || lo.y > hi.y {
         // A slice of the view that holds no part of the scene: the whole scene, so that the
@@ -284,6 +350,7 @@ fn directional(
     let z_bottom = scene.0.z - 4.0 * m;
     // Light space (right, top, d) about the eye, then x, y to [-1, 1] and z to depth: 1 at the
     // top (nearest the light), 0 at the bottom.
+    let (right, top, d) = (ls.right, ls.top, ls.d);
     let view = glam::DMat4::from_cols(
         glam::DVec4::new(right.x, top.x, d.x, 0.0),
         glam::DVec4::new(right.y, top.y, d.y, 0.0),
@@ -305,7 +372,19 @@ fn directional(
         ),
     );
     let texel = ((x1 - x0).max(y1 - y0) / f64::from(size)) as f32;
-    Some(((proj * view).as_mat4(), texel))
+    // Bevy's depth of a cascade is 0 at the bottom and 1 at the top of its slice's box.
+    let bevy = (frustum.1.z - frustum.0.z).max(1e-30);
+    let soft = [
+        (x1 - x0) as f32,
+        (y1 - y0) as f32,
+        ((z_top - z_bottom) / bevy) as f32,
+        ((z_bottom - frustum.0.z) / bevy) as f32,
+    ];
+    Some(Directional {
+        view_proj: (proj * view).as_mat4(),
+        texel,
+        soft,
+    })
 }
 
 /// The `n + 1` ends of `n` cascades over the view distances `near..far`: the practical split

@@ -14,11 +14,13 @@
 //! surface point as Bevy's does: by the depth bias along the direction to the light, and by the
 //! normal bias times the texel size along the normal; the slope-scaled part is the map pass's
 //! [`wgpu::DepthBiasState::slope_scale`]. The comparison is the hardware's: one tap
-//! ([`MapFilter::Hard`]) or 3x3 bilinear taps ([`MapFilter::Pcf`]). The defaults are Bevy
+//! ([`MapFilter::Hard`]), 3x3 bilinear taps ([`MapFilter::Pcf`]), or Bevy's percentage-closer
+//! soft shadows for lights with a size ([`MapFilter::Pcss`], [`pcss`]). The defaults are Bevy
 //! 0.20's ([`MapSettings::default`]).
 
 pub mod fit;
 pub(crate) mod pass;
+pub mod pcss;
 mod resources;
 
 pub use fit::{cube_face, light_map, FitBounds, LightMap, MapKind};

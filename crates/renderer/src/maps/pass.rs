@@ -16,11 +16,14 @@ use shadowvol_scenes::Scene;
 use shadowvol_silhouette::{vec_bytes, PreparedBytes};
 use std::ops::Range;
 
-/// Byte stride of the per-light map uniforms (`MapU`, 480 bytes).
-const MAP_STRIDE: u64 = 512;
+/// Byte stride of the per-light map uniforms (`MapU`, 560 bytes, at a 256-byte alignment).
+const MAP_STRIDE: u64 = 768;
 /// Bytes of one `MapU`.
-const MAP_BYTES: u64 = 480;
-use super::resources::{bind, map_uniform, queries, texture_entries, MapTextures, Queries};
+const MAP_BYTES: u64 = 4 * MAP_WORDS as u64;
+use super::resources::{
+    bind, light_filter, map_uniform, pcss_texture_entries, queries, texture_entries, MapTextures,
+    Queries, MAP_WORDS,
+};
 use crate::raster::empty_scissor;
 use crate::raster::pipelines::uniform_buffer;
 
@@ -36,11 +39,24 @@ pub(crate) struct MapPass {
     prepass_color: wgpu::RenderPipeline,
     mask: wgpu::RenderPipeline,
     lit: wgpu::RenderPipeline,
+    /// The maps' bind group layout under PCSS (a second, filtering sampler).
+    pcss_bgl: wgpu::BindGroupLayout,
+    pcss_layout: wgpu::PipelineLayout,
+    /// PCSS's mask and lit passes, built at the first frame that reads a map with PCSS.
+    pcss: Option<PcssPipelines>,
     /// The map passes by slope-scaled bias (the only pipeline state a setting changes).
     depth: Vec<(f32, wgpu::RenderPipeline)>,
     hard: wgpu::Sampler,
     pcf: wgpu::Sampler,
+    /// Bilinear, without comparison: PCSS's blocker search reads depths with it.
+    linear: wgpu::Sampler,
     timestamps: bool,
+}
+
+/// The mask and lit passes that read maps with PCSS (`fs_map_mask_pcss`, `fs_map_lit_pcss`).
+struct PcssPipelines {
+    mask: wgpu::RenderPipeline,
+    lit: wgpu::RenderPipeline,
 }
 
 impl std::fmt::Debug for MapPass {
@@ -124,6 +140,13 @@ impl MapPass {
             "maps",
             &[&globals_bgl, &light_bgl, &map_bgl, &tex_bgl],
         );
+        let pcss_bgl =
+            pipelines::bind_group_layout(device, "map textures (pcss)", &pcss_texture_entries());
+        let pcss_layout = pipelines::pipeline_layout(
+            device,
+            "maps (pcss)",
+            &[&globals_bgl, &light_bgl, &map_bgl, &pcss_bgl],
+        );
         let depth_layout =
             pipelines::pipeline_layout(device, "map depth", &[&globals_bgl, &light_bgl, &map_bgl]);
         let surface_layout = [Some(states::surface_layout())];
@@ -168,7 +191,7 @@ impl MapPass {
         if let Some(err) = scope.pop() {
             return Err(RenderError::Device(format!("map pipelines: {err}")));
         }
-        let sampler = |label, filter| {
+        let sampler = |label, filter, compare| {
             device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some(label),
                 address_mode_u: wgpu::AddressMode::ClampToEdge,
@@ -176,13 +199,18 @@ impl MapPass {
                 address_mode_w: wgpu::AddressMode::ClampToEdge,
                 mag_filter: filter,
                 min_filter: filter,
-                compare: Some(wgpu::CompareFunction::GreaterEqual),
+                compare,
                 ..Default::default()
             })
         };
+        let greater_equal = Some(wgpu::CompareFunction::GreaterEqual);
         Ok(Self {
-            hard: sampler("map hard", wgpu::FilterMode::Nearest),
-            pcf: sampler("map pcf", wgpu::FilterMode::Linear),
+            hard: sampler("map hard", wgpu::FilterMode::Nearest, greater_equal),
+            pcf: sampler("map pcf", wgpu::FilterMode::Linear, greater_equal),
+            linear: sampler("map pcss search", wgpu::FilterMode::Linear, None),
+            pcss_bgl,
+            pcss_layout,
+            pcss: None,
             globals_bgl,
             light_bgl,
             map_bgl,
@@ -223,6 +251,59 @@ impl MapPass {
         );
         self.depth.push((slope, pipeline));
         self.depth.len() - 1
+    }
+
+    /// Builds PCSS's mask and lit passes on first use.
+    ///
+    /// # Errors
+    /// [`RenderError::Unsupported`] on OpenGL, which samples a texture with one sampler only
+    /// (PCSS reads each map with the comparison sampler and a bilinear one); [`RenderError::Device`]
+    /// when the device rejects them.
+    fn pcss_pipelines(&mut self, rd: &RenderDevice) -> Result<(), RenderError> {
+        if self.pcss.is_some() {
+            return Ok(());
+        }
+        if rd.adapter.get_info().backend == wgpu::Backend::Gl {
+            return Err(RenderError::Unsupported(
+                "--map-filter pcss on OpenGL: PCSS reads each shadow map with two samplers (a \
+                 comparison for the filter, a bilinear one for the blocker search), and OpenGL \
+                 samples a texture with one only (Bevy's WebGL 2 build skips the blocker search); \
+                 use a Vulkan, Metal or DX12 adapter, or --map-filter pcf"
+                    .to_owned(),
+            ));
+        }
+        let device = &rd.device;
+        let scope = ErrorScopes::push(device);
+        let make = pipelines::RenderPipelines {
+            device,
+            layout: &self.pcss_layout,
+            module: &self.module,
+            depth: rd.depth_format,
+        };
+        let surface_layout = [Some(states::surface_layout())];
+        let mask = make.surface(
+            "map mask (pcss)",
+            "vs_map_surface",
+            &surface_layout,
+            states::map_mask_depth(rd.depth_format),
+            "fs_map_mask_pcss",
+            &[],
+        );
+        let lit = make.surface(
+            "map lit (pcss)",
+            "vs_map_surface",
+            &surface_layout,
+            states::map_lit_depth(rd.depth_format),
+            "fs_map_lit_pcss",
+            &[color_target(COLOR_FORMAT, Some(states::additive()))],
+        );
+        if let Some(err) = scope.pop() {
+            return Err(RenderError::Device(format!(
+                "map pipelines for --map-filter pcss: {err}"
+            )));
+        }
+        self.pcss = Some(PcssPipelines { mask, lit });
+        Ok(())
     }
 
     /// Uploads `scene`'s surfaces in world space.
@@ -339,7 +420,8 @@ impl MapPass {
             let v = light_uniform(l.light, l.color, l.emission.as_ref());
             let o = i * LIGHT_STRIDE as usize;
             light_bytes[o..o + 64].copy_from_slice(bytemuck::cast_slice(&v));
-            let u = map_uniform(l.map.as_ref(), frame.eye, frame.filter);
+            let filter = light_filter(frame.filter, l.map.as_ref());
+            let u = map_uniform(l.map.as_ref(), frame.eye, filter);
             let o = i * MAP_STRIDE as usize;
             map_bytes[o..o + MAP_BYTES as usize].copy_from_slice(bytemuck::cast_slice(&u));
         }
@@ -385,6 +467,13 @@ impl MapPass {
         }
         for l in frame.lights.iter().filter_map(|l| l.map) {
             self.depth_pipeline(device, l.bias.slope);
+        }
+        if frame
+            .lights
+            .iter()
+            .any(|l| light_filter(frame.filter, l.map.as_ref()) == MapFilter::Pcss)
+        {
+            self.pcss_pipelines(rd)?;
         }
         if self.timestamps && ms.queries.is_none() {
             ms.queries = Some(queries(device, ms.slots));
@@ -463,12 +552,35 @@ impl MapPass {
             })
         };
         let bind_groups = [bind_group(&self.hard), bind_group(&self.pcf)];
+        let pcss = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("map textures (pcss)"),
+            layout: &self.pcss_bgl,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&view_2d),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&cube),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&self.pcf),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::Sampler(&self.linear),
+                },
+            ],
+        });
         MapTextures {
             size_2d,
             size_cube,
             layers_2d,
             faces,
             bind_groups,
+            pcss,
         }
     }
 
@@ -485,7 +597,8 @@ impl MapPass {
         let Some(tex) = ms.textures.as_ref() else {
             return written;
         };
-        let maps = tex.bind_group(frame.filter);
+        // The pre-pass reads no map; its layout is the hard and PCF passes'.
+        let maps = tex.bind_group(light_filter(frame.filter, None));
         written[0] = true;
         let q = |slot: usize, begin: bool, end: bool| {
             if !(begin || end) {
@@ -534,6 +647,15 @@ impl MapPass {
                 self.record_map(enc, ms, tex, li, map, |first, last| q(slot, first, last));
             }
             let drawn = l.map.is_some() && !empty_scissor(l.scissor) && !all.is_empty();
+            // Each light's own filter: under PCSS a light of size 0 is read with PCF.
+            let (mask, lit, light_maps) =
+                match (light_filter(frame.filter, l.map.as_ref()), &self.pcss) {
+                    (MapFilter::Pcss, Some(p)) => {
+                        (&p.mask, &p.lit, tex.bind_group(MapFilter::Pcss))
+                    }
+                    (MapFilter::Pcss, None) => (&self.mask, &self.lit, maps),
+                    (f, _) => (&self.mask, &self.lit, tex.bind_group(f)),
+                };
             if target.reads_stencil() {
                 let mut pass = states::begin_stencil_pass(
                     enc,
@@ -544,9 +666,9 @@ impl MapPass {
                     q(slot + 1, true, true),
                 );
                 if drawn {
-                    pass.set_pipeline(&self.mask);
+                    pass.set_pipeline(mask);
                     pass.set_stencil_reference(1);
-                    self.bind_surface(&mut pass, ms, li, Some(maps));
+                    self.bind_surface(&mut pass, ms, li, Some(light_maps));
                     pass.draw(all.clone(), 0..1);
                 }
             }
@@ -560,8 +682,8 @@ impl MapPass {
                 q(slot + 2, true, true),
             );
             if !empty_scissor(l.scissor) && !all.is_empty() {
-                pass.set_pipeline(&self.lit);
-                self.bind_surface(&mut pass, ms, li, Some(maps));
+                pass.set_pipeline(lit);
+                self.bind_surface(&mut pass, ms, li, Some(light_maps));
                 pass.draw(all.clone(), 0..1);
             }
         }

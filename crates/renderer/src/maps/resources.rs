@@ -18,6 +18,9 @@ pub(super) struct MapTextures {
     pub(super) faces: Vec<wgpu::TextureView>,
     /// The maps with the comparison sampler of each filter: `[hard, pcf]`.
     pub(super) bind_groups: [wgpu::BindGroup; 2],
+    /// The maps for PCSS ([`pcss_texture_entries`]): PCF's comparison sampler and a bilinear
+    /// one for the blocker search.
+    pub(super) pcss: wgpu::BindGroup,
 }
 
 impl MapTextures {
@@ -26,7 +29,18 @@ impl MapTextures {
         match filter {
             MapFilter::Hard => &self.bind_groups[0],
             MapFilter::Pcf => &self.bind_groups[1],
+            MapFilter::Pcss => &self.pcss,
         }
+    }
+}
+
+/// The filter a light's map is read with in a frame of `filter`: PCSS reads a light of size 0
+/// with PCF, as Bevy reads a light without a soft shadow size with its normal filter.
+pub(super) fn light_filter(filter: MapFilter, map: Option<&LightMap>) -> MapFilter {
+    match (filter, map) {
+        (MapFilter::Pcss, Some(m)) if m.soft_shadow_size > 0.0 => MapFilter::Pcss,
+        (MapFilter::Pcss, _) => MapFilter::Pcf,
+        (f, _) => f,
     }
 }
 
@@ -38,9 +52,17 @@ pub(super) struct Queries {
     pub(super) lights: usize,
 }
 
-/// The `MapU` of a light: face matrices, eye, mode, bias, axis.
-pub(super) fn map_uniform(map: Option<&LightMap>, eye: Vec3, filter: MapFilter) -> [u32; 120] {
-    let mut u = [0u32; 120];
+/// `u32`s of one `MapU`.
+pub(super) const MAP_WORDS: usize = 140;
+
+/// The `MapU` of a light read with `filter` ([`light_filter`]): face matrices, eye, mode, bias,
+/// axis, cascades and PCSS sizes.
+pub(super) fn map_uniform(
+    map: Option<&LightMap>,
+    eye: Vec3,
+    filter: MapFilter,
+) -> [u32; MAP_WORDS] {
+    let mut u = [0u32; MAP_WORDS];
     let f = |x: f32| x.to_bits();
     let (kind, size) = match map {
         Some(m) => {
@@ -63,6 +85,7 @@ pub(super) fn map_uniform(map: Option<&LightMap>, eye: Vec3, filter: MapFilter) 
     u[101] = match filter {
         MapFilter::Hard => 0,
         MapFilter::Pcf => 1,
+        MapFilter::Pcss => 2,
     };
     u[102] = size;
     if let Some(m) = map {
@@ -74,6 +97,12 @@ pub(super) fn map_uniform(map: Option<&LightMap>, eye: Vec3, filter: MapFilter) 
         for k in 0..4 {
             u[112 + k] = f(m.cascade_far[k]);
             u[116 + k] = f(m.cascade_offset[k]);
+        }
+        u[120] = f(m.soft_shadow_size);
+        for (k, c) in m.cascade_soft.iter().enumerate() {
+            for (j, x) in c.iter().enumerate() {
+                u[124 + 4 * k + j] = f(*x);
+            }
         }
     }
     u
@@ -101,6 +130,22 @@ pub(super) fn texture_entries() -> [wgpu::BindGroupLayoutEntry; 3] {
         texture(0, wgpu::TextureViewDimension::D2Array),
         texture(1, wgpu::TextureViewDimension::Cube),
         sampler(2),
+    ]
+}
+
+/// [`texture_entries`] and, for the PCSS blocker search, a filtering sampler (binding 3).
+pub(super) fn pcss_texture_entries() -> [wgpu::BindGroupLayoutEntry; 4] {
+    let [t2, tc, cmp] = texture_entries();
+    [
+        t2,
+        tc,
+        cmp,
+        wgpu::BindGroupLayoutEntry {
+            binding: 3,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+            count: None,
+        },
     ]
 }
 
