@@ -371,6 +371,19 @@ fn fs_map_lit(i: SurfaceOut) -> @location(0) vec4<f32> {
     return vec4<f32>(lambert(i) * map_visibility(i.world, i.normal), 0.0);
 }
 
+// The visibility pass (a frame read back): the map's visibility of the surface point, for the
+// reference's soft metric (`FrameImage::visibility`).
+@fragment
+fn fs_map_visibility(i: SurfaceOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(map_visibility(i.world, i.normal), 0.0, 0.0, 0.0);
+}
+
+// The visibility pass under PCSS.
+@fragment
+fn fs_map_visibility_pcss(i: SurfaceOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(map_visibility_pcss(i.world, i.normal, i.clip.xy), 0.0, 0.0, 0.0);
+}
+
 // The mask pass under PCSS.
 @fragment
 fn fs_map_mask_pcss(i: SurfaceOut) {

@@ -13,6 +13,7 @@ main!(
     radius_zero_and_one_sample_leave_the_png_unchanged,
     every_samples_hard_shadow_matches_the_reference,
     visibility_error_of_a_plate_shrinks_with_samples,
+    shadow_maps_report_their_fractional_visibility,
     bad_radii_are_refused_with_the_light_named
 );
 
@@ -156,11 +157,8 @@ fn bad_radii_are_refused_with_the_light_named() -> Outcome {
     Ok(())
 }
 
-/// A square plate over a floor (an OBJ) under a disk light straight above: the reference's
-/// visibility error over the penumbra is under 0.03 at 64 samples and shrinks from 4 to 64, and
-/// no lit or umbra pixel differs, on both volume pipelines.
-fn visibility_error_of_a_plate_shrinks_with_samples() -> Outcome {
-    let d = dir("plate");
+/// The plate scene of [`visibility_error_of_a_plate_shrinks_with_samples`], written to `d`.
+fn plate_obj(d: &std::path::Path) -> PathBuf {
     let obj = d.join("plate.obj");
     std::fs::write(
         &obj,
@@ -169,6 +167,64 @@ fn visibility_error_of_a_plate_shrinks_with_samples() -> Outcome {
          f 1 3 2\nf 1 4 3\nf 5 7 6\nf 5 8 7\n",
     )
     .unwrap();
+    obj
+}
+
+/// Shadow maps give the reference their own fractional visibility (the filter's, read back per
+/// light), not the mask's 0 or 1: under PCF and PCSS the visibility image has grey levels
+/// between 0 and 255, and the JSON measures it against the true visibility.
+fn shadow_maps_report_their_fractional_visibility() -> Outcome {
+    let d = dir("maps");
+    let obj = plate_obj(&d);
+    for filter in ["pcf", "pcss"] {
+        let vis = d.join(format!("v-{filter}.png"));
+        let (v, _) = common::json_ok(&[
+            "render",
+            obj.to_str().unwrap(),
+            "--light=0,4,0,1",
+            "--light-radius",
+            "0.5",
+            "--ground",
+            "off",
+            "--shadows",
+            "map",
+            "--map-filter",
+            filter,
+            "--map-size",
+            "512",
+            "--size",
+            "160x160",
+            "--reference",
+            "--visibility",
+            vis.to_str().unwrap(),
+            "--out",
+            d.join("m.png").to_str().unwrap(),
+            "--format",
+            "json",
+        ])?;
+        assert_eq!(v["light_samples"], serde_json::json!([1]));
+        let e = &v["visibility_error"][0];
+        let mean = e["mean"].as_f64().unwrap();
+        assert!(
+            e["penumbra_pixels"].as_u64().unwrap() > 60 && mean > 0.0 && mean < 1.0,
+            "{e}"
+        );
+        let grey = image::open(&vis).expect("a PNG").to_luma8();
+        let between = grey.pixels().filter(|p| p.0[0] > 0 && p.0[0] < 255).count();
+        assert!(
+            between > 2,
+            "{filter}: {between} pixels between lit and shadowed"
+        );
+    }
+    Ok(())
+}
+
+/// A square plate over a floor (an OBJ) under a disk light straight above: the reference's
+/// visibility error over the penumbra is under 0.03 at 64 samples and shrinks from 4 to 64, and
+/// no lit or umbra pixel differs, on both volume pipelines.
+fn visibility_error_of_a_plate_shrinks_with_samples() -> Outcome {
+    let d = dir("plate");
+    let obj = plate_obj(&d);
     for pipeline in ["host", "gpu"] {
         let mut means = Vec::new();
         for n in ["4", "64"] {

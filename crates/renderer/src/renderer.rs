@@ -363,7 +363,14 @@ impl Renderer {
                 self.device.stencil_copies,
             ));
         }
-        let soft_lights = setup.expanded.as_ref().map_or(0, |e| e.soft_lights);
+        let is_map = self.pipeline.kind() == crate::Pipeline::Map;
+        // The map pipeline writes each light's fractional visibility where the frame is read
+        // back (its stencil holds only the map test).
+        let soft_lights = match setup.expanded.as_ref() {
+            Some(e) => e.soft_lights,
+            None if is_map && readback => n_lights,
+            None => 0,
+        };
         if let Some(t) = self.targets.as_mut() {
             let slots = if readback { soft_lights } else { 0 };
             if soft_lights == 0 {
@@ -422,8 +429,11 @@ impl Renderer {
                     Some(soft) => soft.read(&device.device)?,
                     None => Vec::new(),
                 };
-                image.visibility =
-                    crate::frame::visibilities(&image, setup.expanded.as_ref(), &counts);
+                image.visibility = if is_map && counts.len() == n_lights {
+                    counts
+                } else {
+                    crate::frame::visibilities(&image, setup.expanded.as_ref(), &counts)
+                };
                 Ok(Some(image))
             });
         let image = match drawn {

@@ -7,7 +7,7 @@ use super::MapFilter;
 use crate::raster::pipelines::{self, color_target, uniform};
 use crate::raster::{
     light_uniform, push_surface, states, Attachments, SurfaceVertex, BACKGROUND, COLOR_FORMAT,
-    IDS_FORMAT, LIGHT_STRIDE,
+    IDS_FORMAT, LIGHT_STRIDE, VISIBILITY_FORMAT,
 };
 use crate::{RenderDevice, RenderError};
 use glam::{Mat4, Vec3};
@@ -39,6 +39,8 @@ pub(crate) struct MapPass {
     prepass_color: wgpu::RenderPipeline,
     mask: wgpu::RenderPipeline,
     lit: wgpu::RenderPipeline,
+    /// The map's visibility into the frame's visibility target (a frame read back).
+    visibility: wgpu::RenderPipeline,
     /// The maps' bind group layout under PCSS (a second, filtering sampler).
     pcss_bgl: wgpu::BindGroupLayout,
     pcss_layout: wgpu::PipelineLayout,
@@ -57,6 +59,7 @@ pub(crate) struct MapPass {
 struct PcssPipelines {
     mask: wgpu::RenderPipeline,
     lit: wgpu::RenderPipeline,
+    visibility: wgpu::RenderPipeline,
 }
 
 impl std::fmt::Debug for MapPass {
@@ -188,6 +191,12 @@ impl MapPass {
             "fs_map_lit",
             &[color_target(COLOR_FORMAT, Some(states::additive()))],
         );
+        let visibility = surface(
+            "map visibility",
+            states::map_lit_depth(rd.depth_format),
+            "fs_map_visibility",
+            &[color_target(VISIBILITY_FORMAT, None)],
+        );
         if let Some(err) = scope.pop() {
             return Err(RenderError::Device(format!("map pipelines: {err}")));
         }
@@ -221,6 +230,7 @@ impl MapPass {
             prepass_color,
             mask,
             lit,
+            visibility,
             depth: Vec::new(),
             timestamps: device.features().contains(wgpu::Features::TIMESTAMP_QUERY),
         })
@@ -297,12 +307,24 @@ impl MapPass {
             "fs_map_lit_pcss",
             &[color_target(COLOR_FORMAT, Some(states::additive()))],
         );
+        let visibility = make.surface(
+            "map visibility (pcss)",
+            "vs_map_surface",
+            &surface_layout,
+            states::map_lit_depth(rd.depth_format),
+            "fs_map_visibility_pcss",
+            &[color_target(VISIBILITY_FORMAT, None)],
+        );
         if let Some(err) = scope.pop() {
             return Err(RenderError::Device(format!(
                 "map pipelines for --map-filter pcss: {err}"
             )));
         }
-        self.pcss = Some(PcssPipelines { mask, lit });
+        self.pcss = Some(PcssPipelines {
+            mask,
+            lit,
+            visibility,
+        });
         Ok(())
     }
 
@@ -648,13 +670,16 @@ impl MapPass {
             }
             let drawn = l.map.is_some() && !empty_scissor(l.scissor) && !all.is_empty();
             // Each light's own filter: under PCSS a light of size 0 is read with PCF.
-            let (mask, lit, light_maps) =
+            let (mask, lit, visible, light_maps) =
                 match (light_filter(frame.filter, l.map.as_ref()), &self.pcss) {
-                    (MapFilter::Pcss, Some(p)) => {
-                        (&p.mask, &p.lit, tex.bind_group(MapFilter::Pcss))
-                    }
-                    (MapFilter::Pcss, None) => (&self.mask, &self.lit, maps),
-                    (f, _) => (&self.mask, &self.lit, tex.bind_group(f)),
+                    (MapFilter::Pcss, Some(p)) => (
+                        &p.mask,
+                        &p.lit,
+                        &p.visibility,
+                        tex.bind_group(MapFilter::Pcss),
+                    ),
+                    (MapFilter::Pcss, None) => (&self.mask, &self.lit, &self.visibility, maps),
+                    (f, _) => (&self.mask, &self.lit, &self.visibility, tex.bind_group(f)),
                 };
             if target.reads_stencil() {
                 let mut pass = states::begin_stencil_pass(
@@ -673,6 +698,17 @@ impl MapPass {
                 }
             }
             target.after_stencil(enc, li);
+            if let Some(soft) = target.soft.filter(|s| s.reads_back()) {
+                // The map's visibility, 1 where no surface or no map, read back for the reference.
+                let mut pass = soft.begin_visibility(enc, "map visibility", target.depth_stencil);
+                if drawn {
+                    pass.set_pipeline(visible);
+                    self.bind_surface(&mut pass, ms, li, Some(light_maps));
+                    pass.draw(all.clone(), 0..1);
+                }
+                drop(pass);
+                soft.copy_visibility(enc, li);
+            }
             let mut pass = states::begin_lit_pass(
                 enc,
                 "map lit",

@@ -134,6 +134,33 @@ impl SoftTargets {
         self.size == size && self.readback.as_ref().map_or(0, |r| r.1) == readback_lights
     }
 
+    /// True when each light's visibility is read back.
+    pub(crate) fn reads_back(&self) -> bool {
+        self.readback.is_some()
+    }
+
+    /// A pass over the visibility target cleared to 1 (nothing shadows the background), which
+    /// reads the depth and stencil of `depth_stencil`: where the map pipeline writes each
+    /// light's visibility of its map.
+    pub(crate) fn begin_visibility<'e>(
+        &self,
+        enc: &'e mut wgpu::CommandEncoder,
+        label: &str,
+        depth_stencil: &wgpu::TextureView,
+    ) -> wgpu::RenderPass<'e> {
+        let color = states::cleared(&self.visibility_view, wgpu::Color::WHITE);
+        read_only_pass(enc, label, color, depth_stencil)
+    }
+
+    /// With readback: copies the visibility target into slot `slot` (nothing otherwise).
+    pub(crate) fn copy_visibility(&self, enc: &mut wgpu::CommandEncoder, slot: usize) {
+        if let Some((buffer, slots)) = &self.readback {
+            if slot < *slots {
+                super::targets::copy_image(enc, &self.visibility, buffer, 2, slot as u64);
+            }
+        }
+    }
+
     /// The target a soft light's unshadowed lit pass draws into.
     pub(crate) fn light_view(&self) -> &wgpu::TextureView {
         &self.light_view
@@ -204,11 +231,7 @@ impl SoftTargets {
             let n = samples.max(1);
             pass.draw(0..3, n..n + 1);
         }
-        if let Some((buffer, slots)) = &self.readback {
-            if slot < *slots {
-                super::targets::copy_image(enc, &self.visibility, buffer, 2, slot as u64);
-            }
-        }
+        self.copy_visibility(enc, slot);
     }
 
     /// Reads back each soft light's visibility counts (`k`, one `f32` a pixel, top row first),
