@@ -842,6 +842,13 @@ impl Poly {
             let (p, q, fp, fq) = (&src[i], &src[j], vals[i], vals[j]);
             if fp >= 0.0 && self.n < MAX_POLY {
                 self.v[self.n] = *p;
+                if fp == 0.0 {
+                    self.v[self.n].on |= bit;
+                    if fq < 0.0 {
+                        // Leaving through a point on the plane: on along the clip line.
+                        self.v[self.n].line = CLIP_LINE + plane;
+                    }
+                }
                 self.n += 1;
             }
             if ((fp > 0.0 && fq < 0.0) || (fp < 0.0 && fq > 0.0)) && self.n < MAX_POLY {
@@ -1685,4 +1692,74 @@ pub fn compare_with_reference(reference: &SoftReference, visibility: &[f32]) -> 
         out.penumbra_p99_error = errors[(n * 99).div_ceil(100).max(1) - 1];
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every edge of a clipped polygon lies on the line it is labelled with (the triangle's
+    /// edge, or the clip plane), also when a vertex lies exactly on a clip plane: the labels
+    /// choose the line each edge's error is measured against.
+    #[test]
+    fn clipped_edges_lie_on_their_labelled_lines() {
+        let rr = 1.0;
+        let forms = [
+            Form([-1.0, 0.0, rr, 0.0]),
+            Form([1.0, 0.0, rr, 0.0]),
+            Form([0.0, -1.0, rr, 0.0]),
+            Form([0.0, 1.0, rr, 0.0]),
+            Form([0.0, 0.0, -1.0, 3.0]),
+        ];
+        let hv = |a: f64, b: f64, w: f64| Hv {
+            h: [a, b, w],
+            e: 0.0,
+            on: 0,
+            line: 0,
+        };
+        // Small integers: many vertices exactly on a plane (A = ±W, B = ±W, W = 0 or 3).
+        let mut rng = shadowvol_scenes::shapes::Rng::new(3);
+        let mut int = || f64::from(rng.below(9) as u32) - 4.0;
+        let mut on_plane = 0;
+        for _ in 0..20_000 {
+            let tri = [0, 1, 2].map(|_| hv(int(), int(), int().abs()));
+            on_plane += usize::from(tri.iter().any(|v| forms.iter().any(|f| f.eval(v) == 0.0)));
+            let mut poly = Poly::new(&tri);
+            for (k, f) in forms.iter().enumerate() {
+                poly.clip(f, k as u8);
+                if poly.n < 3 {
+                    break;
+                }
+            }
+            if poly.n < 3 {
+                continue;
+            }
+            for i in 0..poly.n {
+                let (p, q) = (poly.v[i], poly.v[(i + 1) % poly.n]);
+                let line = p.line;
+                let off = |x: &Hv| {
+                    if line < 3 {
+                        let (a, b) = (tri[line as usize].h, tri[(line as usize + 1) % 3].h);
+                        let n = [
+                            a[1] * b[2] - a[2] * b[1],
+                            a[2] * b[0] - a[0] * b[2],
+                            a[0] * b[1] - a[1] * b[0],
+                        ];
+                        (n[0] * x.h[0] + n[1] * x.h[1] + n[2] * x.h[2]).abs()
+                    } else {
+                        forms[(line - CLIP_LINE) as usize].eval(x).abs()
+                    }
+                };
+                assert!(
+                    off(&p) < 1e-9 && off(&q) < 1e-9,
+                    "{tri:?}: edge {i} of {:?} is not on line {line}",
+                    &poly.v[..poly.n]
+                );
+            }
+        }
+        assert!(
+            on_plane > 1000,
+            "{on_plane} triangles touch a plane exactly"
+        );
+    }
 }
