@@ -55,7 +55,10 @@
 //! projection then degenerates, and the method works in the plane instead: a caster crossing
 //! it meets it in a segment, which hides the part of the disk behind it as seen from `P`'s foot
 //! (a wedge beyond the segment, clipped to the square); the same cancellation and integration
-//! follow.
+//! follow. A caster lying in the plane never blocks (the hard reference's convention for a light
+//! in a caster's plane); one within `h` of the plane on `P`'s side that does not cross it is not
+//! seen by this model, and the bound does not cover it (it would have to be parallel to the
+//! disk's plane to `2⁻²⁶`).
 //!
 //! # Error bound
 //!
@@ -77,7 +80,7 @@
 //!   length over its distance from `P` (first order in `h`).
 //!
 //! Measured (`tests/soft.rs`): against the closed form on plates the error is at most
-//! `2·10⁻¹⁵`, the bound about `10⁻¹³`; the bound grows like `u |C − P| / h` as `P` nears the
+//! `2·10⁻¹⁵`, the bound `3·10⁻¹⁵` to `10⁻¹³`; the bound grows like `u |C − P| / h` as `P` nears the
 //! disk's plane (about `10⁻⁶` at [`EDGE_ON`] on the tests' scene); on a 256² bunny on a floor
 //! the largest is `4·10⁻⁹`. Exactly 0 or 1 (bound 0) is reported only as step 4 says.
 //! [`Visibility::is_penumbra`] is strictly between, beyond the bound.
@@ -221,7 +224,8 @@ impl SoftCasters {
     }
 
     /// The visibility of `disk` from `point`, ignoring the caster with id `skip` (the point's
-    /// own triangle; `u32::MAX` for none). See the module documentation.
+    /// own triangle; `u32::MAX` for none). See the module documentation. A disk or point that is
+    /// not finite gives value 0 with bound 1 (nothing known).
     #[must_use]
     pub fn visibility(
         &self,
