@@ -23,7 +23,8 @@ main!(
     off_screen_caster_is_culled_unless_its_shadow_reaches_the_view,
     static_light_reuses_silhouettes_and_a_moving_one_re_extracts,
     moved_objects_eye_and_albedo_draw_as_a_fresh_renderer_does,
-    many_objects_several_lights_match_the_reference
+    many_objects_several_lights_match_the_reference,
+    a_light_with_a_size_is_extracted_in_one_call_per_light
 );
 
 fn entry<'a>(
@@ -200,6 +201,8 @@ struct Counting {
     inner: CpuBackend,
     extracts: Arc<AtomicUsize>,
     lights: Arc<AtomicUsize>,
+    /// The light count of each call, in order.
+    sizes: Arc<std::sync::Mutex<Vec<usize>>>,
 }
 
 impl SilhouetteBackend for Counting {
@@ -218,6 +221,7 @@ impl SilhouetteBackend for Counting {
     ) -> Result<ExtractStats, BackendError> {
         self.extracts.fetch_add(1, Ordering::SeqCst);
         self.lights.fetch_add(lights.len(), Ordering::SeqCst);
+        self.sizes.lock().unwrap().push(lights.len());
         self.inner.extract(id, lights, mode, out)
     }
     fn prepared_bytes(&self, id: PreparedId) -> Result<PreparedBytes, BackendError> {
@@ -235,6 +239,7 @@ fn static_light_reuses_silhouettes_and_a_moving_one_re_extracts() -> Outcome {
         inner: CpuBackend::new(),
         extracts: extracts.clone(),
         lights: lights.clone(),
+        sizes: Arc::default(),
     };
     // Same policy as common::renderer.
     let mut r = common::started(Renderer::host(
@@ -431,4 +436,36 @@ fn many_objects_several_lights_match_the_reference() -> Outcome {
 fn add(scene: &mut Scene, name: &str, mesh: shadowvol_mesh_topology::Mesh, t: Affine3A) {
     let table = scene.add_mesh(name, &mesh).unwrap();
     scene.add_object(name, table, t);
+}
+
+/// The host pipeline gives a backend the samples of one light with a size in one `extract`
+/// call of their own (so that it can share the signs of triangles whose plane misses their
+/// box), and the other lights together, as before; the light itself, drawn after its samples,
+/// is never extracted.
+fn a_light_with_a_size_is_extracted_in_one_call_per_light() -> Outcome {
+    let sizes: Arc<std::sync::Mutex<Vec<usize>>> = Arc::default();
+    let backend = Counting {
+        inner: CpuBackend::new(),
+        extracts: Arc::default(),
+        lights: Arc::default(),
+        sizes: sizes.clone(),
+    };
+    let mut opts = RenderOptions::new(64, 64);
+    opts.light_samples = Some(8);
+    let mut r = common::started(Renderer::host(Box::new(backend), opts))?;
+    let camera = Camera::look_at(Vec3::new(4.0, 5.0, 7.0), Vec3::new(0.0, 0.5, 0.0));
+    let mut scene = common::box_on_floor(Light::point(Vec3::new(1.5, 6.0, 1.0)), camera);
+    scene.add_unit_lights([
+        Light::directional(Vec3::new(-0.5, 1.0, 0.3)),
+        Light::point(Vec3::new(-2.0, 5.0, 0.0)),
+    ]);
+    scene.lights[0].radius = 0.3;
+    r.render(&scene).unwrap();
+    // Two objects, each on its own (the first frame): the samples, then the two others.
+    assert_eq!(*sizes.lock().unwrap(), [8, 2, 8, 2]);
+    // The light with a size moves, nothing else: one call over the whole scene, its samples.
+    scene.lights[0].light = Light::point(Vec3::new(-1.0, 6.0, 1.5));
+    r.render(&scene).unwrap();
+    assert_eq!(*sizes.lock().unwrap(), [8, 2, 8, 2, 8]);
+    Ok(())
 }

@@ -65,8 +65,8 @@ impl LightCache {
 }
 
 /// `lights` split into the frame's extraction groups ([`FrameInputs::group`]), each in
-/// ascending order: one backend call per group, so that the samples of one light with a size
-/// are extracted together and the others alone, as before.
+/// ascending order: one backend call per light with a size (its samples together), and one for
+/// all the other lights, as before.
 fn groups(frame: &FrameInputs<'_>, lights: &[usize]) -> Vec<Vec<usize>> {
     let mut out: Vec<(usize, Vec<usize>)> = Vec::new();
     for &li in lights {
@@ -76,11 +76,14 @@ fn groups(frame: &FrameInputs<'_>, lights: &[usize]) -> Vec<Vec<usize>> {
             None => out.push((g, vec![li])),
         }
     }
-    if out.iter().all(|(_, v)| v.len() == 1) {
-        // Only lights of their own: one call for all of them, as without lights with a size.
-        return vec![lights.to_vec()];
+    // The lights of their own share one call, as without lights with a size.
+    let (alone, samples): (Vec<_>, Vec<_>) = out.into_iter().partition(|(_, v)| v.len() == 1);
+    let alone: Vec<usize> = alone.into_iter().flat_map(|(_, v)| v).collect();
+    let mut calls: Vec<Vec<usize>> = samples.into_iter().map(|(_, v)| v).collect();
+    if !alone.is_empty() {
+        calls.push(alone);
     }
-    out.into_iter().map(|(_, v)| v).collect()
+    calls
 }
 
 impl HostPipeline {
