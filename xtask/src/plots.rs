@@ -42,6 +42,7 @@ pub fn all(out: &Path, records: &[Record]) -> PlotResult {
     individual_vs_baked(&out.join("individual_vs_baked.png"), records)?;
     maps_vs_volumes(&out.join("maps_vs_volumes.png"), records)?;
     memory_per_triangle(&out.join("memory_per_triangle.png"), records)?;
+    soft_error_vs_time(&out.join("soft_error_vs_time.png"), records)?;
     Ok(())
 }
 
@@ -574,6 +575,49 @@ fn maps_vs_volumes(path: &Path, records: &[Record]) -> PlotResult {
                     ("sans-serif", 13).into_font().color(&c),
                 )
         }))?;
+    }
+    legend(&mut chart, SeriesLabelPosition::UpperRight, 0.85, 15)?;
+    root.present()?;
+    Ok(())
+}
+
+/// Visibility error against frame time, log-log: one series per technique of the soft-shadow
+/// table (volumes per `--light-samples` and the plan's choice, circles; PCSS per map size,
+/// crosses), one point per scene and light size. An error of 0 is drawn at the axis floor.
+fn soft_error_vs_time(path: &Path, records: &[Record]) -> PlotResult {
+    const FLOOR: f64 = 1e-5;
+    let series = crate::matrix::soft_table::plot_points(records);
+    let title = "Soft shadows: mean visibility error against frame time";
+    let all = || series.iter().flat_map(|s| s.2.iter());
+    if all().next().is_none() {
+        return no_data(path, title);
+    }
+    let x0 = all().map(|p| p.0).fold(f64::INFINITY, f64::min);
+    let x1 = all().map(|p| p.0).fold(0.0f64, f64::max);
+    let y0 = all().map(|p| p.1.max(FLOOR)).fold(f64::INFINITY, f64::min);
+    let y1 = all().map(|p| p.1).fold(FLOOR * 10.0, f64::max);
+    let root = canvas(path, (1200, 800))?;
+    let mut chart = chart_on(&root)
+        .caption(title, ("sans-serif", 24))
+        .build_cartesian_2d(
+            (x0 * 0.7..x1 * 1.6).log_scale(),
+            (y0 * 0.5..y1 * 2.0).log_scale(),
+        )?;
+    chart
+        .configure_mesh()
+        .x_desc("frame ms (median), one point per scene and light size")
+        .y_desc("mean |visibility - true visibility| over the penumbra")
+        .x_labels(12)
+        .x_label_formatter(&tick)
+        .y_label_formatter(&|v: &f64| format!("{v:.0e}"))
+        .label_style(("sans-serif", 14))
+        .draw()?;
+    for (i, (label, pcss, pts)) in series.iter().enumerate() {
+        let c = palette(i);
+        let shape = if *pcss { 3 } else { 0 };
+        let xy: Vec<(f64, f64)> = pts.iter().map(|&(x, y)| (x, y.max(FLOOR))).collect();
+        let anno = markers!(chart, shape, xy, c);
+        marker_legend!(anno.label(label.clone()), shape, c);
     }
     legend(&mut chart, SeriesLabelPosition::UpperRight, 0.85, 15)?;
     root.present()?;

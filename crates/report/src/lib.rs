@@ -31,7 +31,7 @@ pub use frame::{FrameReport, GpuTimings, Pipeline, SamplesChoice, Timings, Uncer
 pub use maps::{MapBias, MapFilter, MapKind, MapSummary};
 pub use plan::{PlanEntry, SilhouetteSource, Technique};
 pub use render::{FrameStats, Ground, LightsSource, MapBiases, MapFields, RenderReport};
-pub use render::{Shadows, TableBytes, VisibilityError};
+pub use render::{SceneBounds, Shadows, TableBytes, VisibilityError};
 pub use shadowvol_robust_math::Accuracy;
 
 /// Compiles the README's examples as doctests.

@@ -94,6 +94,30 @@ pub struct RenderReport {
     /// The files `--visibility` wrote, one per light.
     #[serde(default)]
     pub visibility_files: Vec<String>,
+    /// World-space bounds of the scene's casters (receivers, the ground and the backdrop not
+    /// included): the size a light's radius compares with. `None` for a scene without vertices.
+    #[serde(default)]
+    pub scene_bounds: Option<SceneBounds>,
+}
+
+/// An axis-aligned box in world units.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SceneBounds {
+    /// The smallest corner.
+    pub min: [f32; 3],
+    /// The largest corner.
+    pub max: [f32; 3],
+}
+
+impl SceneBounds {
+    /// The length of the box's diagonal.
+    #[must_use]
+    pub fn diagonal(&self) -> f64 {
+        (0..3)
+            .map(|i| f64::from(self.max[i] - self.min[i]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    }
 }
 
 /// A light's visibility (`k / N` of its samples) against the true visibility of its disk,
@@ -283,6 +307,10 @@ mod tests {
                 reference_bound: 1e-9,
             })]),
             visibility_files: vec!["v.png".to_owned()],
+            scene_bounds: Some(SceneBounds {
+                min: [-1.0, 0.0, -1.0],
+                max: [1.0, 2.0, 1.0],
+            }),
         };
         r.frame.timings.total_ms = 4.5;
         r.frame.gpu_timings = Some(crate::GpuTimings {
@@ -303,6 +331,8 @@ mod tests {
         assert_eq!(json["gpu_timings_ms"]["extract"], 1.0);
         assert_eq!(json["frames"]["median_ms"], 2.0);
         assert_eq!(json["shadows"], "volumes");
+        assert_eq!(json["scene_bounds"]["max"][1], 2.0);
+        assert!((r.scene_bounds.unwrap().diagonal() - 12f64.sqrt()).abs() < 1e-12);
         let back: RenderReport = serde_json::from_value(json).unwrap();
         assert_eq!(back, r);
     }

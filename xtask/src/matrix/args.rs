@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 pub(super) const USAGE: &str = "\
 cargo xtask matrix [--quick] [--out DIR] [--backends LIST] [--modes LIST] [--frames N]
-                   [--only maps|memory]
+                   [--only maps|memory|soft]
 
 Runs the paper's experiment matrix with the release `shadowvol` binary on every available
 backend and writes DIR/tables.md, DIR/results.json, DIR/results.csv and PNG plots.
@@ -18,6 +18,14 @@ backend and writes DIR/tables.md, DIR/results.json, DIR/results.csv and PNG plot
   --only maps      only the volumes-against-maps table (every hard-* preset, town,
                    bunnies-10-individual and sphere-1m at 1280x720; maps of 512 to 8192 texels,
                    hard and PCF, Bevy's bias and a bias sweep; about 110 minutes on 2 cores with --frames 10)
+  --only soft      only the soft-shadow table (docs/SOFT.md): lights of three sizes (0.01, 0.03
+                   and 0.1 of the scene's box for point lights, 0.0047, 0.02 and 0.05 rad for
+                   town's sun) on hard-tetrahedron and hard-book-3 (their point lights, with a
+                   backdrop), bunny on a floor and town at 960x540; exact volumes at
+                   --light-samples 1, 4, 16, 64 and the plan's choice, PCSS maps of 2048 and 4096:
+                   error against the true visibility and frame time (town at N = 64 takes about
+                   20 s a frame on 2 cores with lavapipe). With --quick, and inside --quick:
+                   hard-tetrahedron at 0.03, N = 1 and 16, PCSS 2048, 320x180 (seconds)
   --only memory    only the memory table: peak RSS and prepared bytes per triangle of
                    `silhouette` on every backend and of `render` on each pipeline, on spheres of
                    10^5 to 10^7 triangles (10^5 and 10^6 with --quick)
@@ -51,6 +59,8 @@ pub(super) enum Only {
     Maps,
     /// The memory table.
     Memory,
+    /// The soft-shadow table: volumes against PCSS for lights with a size.
+    Soft,
 }
 
 /// Parses the arguments after `matrix`; `None` after `--help` (the usage is printed).
@@ -84,10 +94,11 @@ pub(super) fn parse_args(args: &[String]) -> Result<Option<Options>, String> {
                 o.only = Some(match v.as_str() {
                     "maps" => Only::Maps,
                     "memory" => Only::Memory,
+                    "soft" => Only::Soft,
                     _ => {
                         return Err(format!(
                             "--only {v:?}: the tables that run alone are `maps` (volumes against \
-                             maps) and `memory`"
+                             maps), `memory` and `soft` (volumes against PCSS)"
                         ))
                     }
                 });
@@ -158,6 +169,8 @@ mod tests {
         assert_eq!((o.frames, o.warmup), (7, 3));
         assert!(parse_args(&args(&["--modes", "fast"])).is_err());
         assert!(parse_args(&args(&["--frames", "0"])).is_err());
+        let o = parse_args(&args(&["--only", "soft"])).unwrap().unwrap();
+        assert_eq!(o.only, Some(Only::Soft));
         let e = parse_args(&args(&["--out"])).unwrap_err();
         assert!(e.starts_with("--out needs a value"), "{e}");
     }

@@ -8,13 +8,15 @@
 //!
 //! Output in `--out DIR` (default `matrix-out`): `tables.md`, `results.json`, `results.csv` and
 //! PNG plots (`time_vs_triangles.png`, `time_vs_lights.png`, `accuracy_cost.png`,
-//! `individual_vs_baked.png`, `maps_vs_volumes.png`).
+//! `individual_vs_baked.png`, `maps_vs_volumes.png`, `memory_per_triangle.png`,
+//! `soft_error_vs_time.png`).
 //!
 //! Where things are, from the command line to the files:
 //! - [`args`]: the command line;
 //! - [`plan`]: which scenes each table uses, and what one run measures;
 //! - [`runner`]: the CLI as a subprocess, the host, one record per measurement ([`progress`]:
-//!   the progress bar; [`maps`]: the volumes-against-maps renders);
+//!   the progress bar; [`maps`]: the volumes-against-maps renders; [`soft`]: the soft-shadow
+//!   renders);
 //! - [`cli`]: the JSON the CLI prints, typed; [`records`]: the matrix's records and
 //!   `results.json`, typed;
 //! - [`tables`]: `tables.md`; [`csv`]: `results.csv`; the plots are in `crate::plots`.
@@ -30,8 +32,12 @@ mod plan;
 mod progress;
 pub(crate) mod records;
 mod runner;
+mod soft;
+pub(crate) mod soft_table;
 mod tables;
 
+#[cfg(test)]
+mod soft_tests;
 #[cfg(test)]
 mod tests;
 

@@ -89,6 +89,112 @@ pub(super) const BUILD_RUNS: &str = "3";
 /// Image size of the memory table's renders.
 pub(super) const MEMORY_RENDER_SIZE: &str = "1280x720";
 
+/// Scenes of the soft-shadow table, each with the flags that give it a receiver: the hard-*
+/// presets have no ground (a backdrop receives their shadows), the bunny stands on a floor; town
+/// has its own ground.
+pub(super) const SOFT_SCENES: [(&str, &[&str]); 4] = [
+    ("hard-tetrahedron", &["--backdrop"]),
+    ("hard-book-3", &["--backdrop"]),
+    ("bunny", &["--ground", "on"]),
+    ("town", &[]),
+];
+/// The `--quick` scene of the soft-shadow table.
+pub(super) const SOFT_SCENES_QUICK: [(&str, &[&str]); 1] = [("hard-tetrahedron", &["--backdrop"])];
+/// The light sizes of the soft-shadow table, small to large: for point and spot lights a
+/// fraction of the diagonal of the scene's caster box ([`shadowvol_report::SceneBounds`]), for
+/// directional lights an angular radius in radians (0.0047: the sun).
+pub(super) const SOFT_RADII: [SoftRadius; 3] = [
+    SoftRadius {
+        fraction: 0.01,
+        radians: 0.0047,
+    },
+    SoftRadius {
+        fraction: 0.03,
+        radians: 0.02,
+    },
+    SoftRadius {
+        fraction: 0.1,
+        radians: 0.05,
+    },
+];
+/// The `--quick` light size: the middle one.
+pub(super) const SOFT_RADII_QUICK: [SoftRadius; 1] = [SOFT_RADII[1]];
+/// `--light-samples` of the volumes' rows; the plan's choice (no flag) is a row of its own.
+pub(super) const SOFT_SAMPLES: [u32; 4] = [1, 4, 16, 64];
+/// The `--quick` sample counts (no plan's-choice row).
+pub(super) const SOFT_SAMPLES_QUICK: [u32; 2] = [1, 16];
+/// PCSS map sizes (`--map-size`, texels a side).
+pub(super) const SOFT_PCSS_SIZES: [u32; 2] = [2048, 4096];
+/// The `--quick` PCSS size.
+pub(super) const SOFT_PCSS_SIZES_QUICK: [u32; 1] = [2048];
+/// Image size of the soft-shadow table.
+pub(super) const SOFT_RENDER_SIZE: &str = "960x540";
+/// The `--quick` image size.
+pub(super) const SOFT_RENDER_SIZE_QUICK: &str = "320x180";
+/// The key `backend` of the soft-shadow table's volume rows (the default pipeline).
+pub(super) const SOFT_VOLUMES_KEY: &str = "volumes";
+
+/// One light size of the soft-shadow table, by the kind of light it is given to.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct SoftRadius {
+    /// Point and spot lights: the radius over the diagonal of the scene's caster box.
+    pub fraction: f64,
+    /// Directional lights: the angular radius, radians.
+    pub radians: f64,
+}
+
+/// What the soft-shadow table measures.
+#[derive(Debug, Clone)]
+pub(super) struct SoftPlan {
+    /// Scenes and the flags that give each a receiver.
+    pub scenes: Vec<(&'static str, &'static [&'static str])>,
+    /// Light sizes.
+    pub radii: Vec<SoftRadius>,
+    /// `--light-samples` of the volumes' rows.
+    pub samples: Vec<u32>,
+    /// Whether the plan's choice (no `--light-samples`) is a row.
+    pub plan_choice: bool,
+    /// PCSS map sizes.
+    pub pcss_sizes: Vec<u32>,
+    /// Image size, `WxH`.
+    pub size: &'static str,
+}
+
+impl SoftPlan {
+    /// The full table, or its short form with `quick`.
+    pub fn new(quick: bool) -> Self {
+        if quick {
+            Self {
+                scenes: SOFT_SCENES_QUICK.to_vec(),
+                radii: SOFT_RADII_QUICK.to_vec(),
+                samples: SOFT_SAMPLES_QUICK.to_vec(),
+                plan_choice: false,
+                pcss_sizes: SOFT_PCSS_SIZES_QUICK.to_vec(),
+                size: SOFT_RENDER_SIZE_QUICK,
+            }
+        } else {
+            Self {
+                scenes: SOFT_SCENES.to_vec(),
+                radii: SOFT_RADII.to_vec(),
+                samples: SOFT_SAMPLES.to_vec(),
+                plan_choice: true,
+                pcss_sizes: SOFT_PCSS_SIZES.to_vec(),
+                size: SOFT_RENDER_SIZE,
+            }
+        }
+    }
+
+    /// Renders per scene and light size.
+    pub fn renders_per_radius(&self) -> u64 {
+        (self.samples.len() + usize::from(self.plan_choice) + self.pcss_sizes.len()) as u64
+    }
+
+    /// Progress steps: per scene one probe (its lights and box), then every render.
+    pub fn steps(&self) -> u64 {
+        self.scenes.len() as u64 * (1 + self.radii.len() as u64 * self.renders_per_radius())
+    }
+}
+
 /// Scenes of the Toy Wars table (closed manifold meshes, which the seeds' algorithms need).
 pub(super) const TOYWARS_SCENES: [&str; 2] = ["bunny", "bunny-subdivided"];
 
@@ -118,6 +224,8 @@ pub(super) struct Plan {
     pub memory_scenes: Vec<&'static str>,
     /// Whether the memory table adds [`MEMORY_BUNNY`] and [`MEMORY_HUGE`] (full run).
     pub memory_large: bool,
+    /// The soft-shadow table.
+    pub soft: SoftPlan,
     /// The one table that runs (`--only`), if any.
     pub only: Option<Only>,
 }
@@ -167,6 +275,7 @@ impl Plan {
                 MEMORY_SCENES.to_vec()
             },
             memory_large: !o.quick,
+            soft: SoftPlan::new(o.quick),
             only: o.only,
             map_biases: if o.quick {
                 MAP_BIAS_SWEEP_QUICK.to_vec()
@@ -182,6 +291,7 @@ impl Plan {
         match self.only {
             Some(Only::Maps) => return self.map_steps(),
             Some(Only::Memory) => return self.memory_steps(),
+            Some(Only::Soft) => return self.soft.steps(),
             None => {}
         }
         let b = self.backends.len() as u64;
@@ -207,6 +317,7 @@ impl Plan {
             + 2 * self.frame_scenes.len() as u64
             + self.map_steps()
             + self.memory_steps()
+            + self.soft.steps()
     }
 
     /// Progress steps of the memory table: per scene one `silhouette` per backend and one

@@ -123,6 +123,40 @@ pub struct Render {
     /// GPU time of the map passes, ms (median of the `--frames` frames).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gpu_shadow_maps_ms: Option<f64>,
+    /// `--light-radius` (the soft-shadow table): world units for point and spot lights,
+    /// radians for directional ones.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_radius: Option<f64>,
+    /// For point and spot lights, `light_radius` over the diagonal of the scene's caster box.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_radius_fraction: Option<f64>,
+    /// `--light-samples` as asked: a count, or `plan` for the plan's choice (volumes only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_samples_setting: Option<String>,
+    /// See [`SoftFields::light_samples_used`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_samples_used: Option<u64>,
+    /// See [`SoftFields::light_penumbra_px`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_penumbra_px: Option<f64>,
+    /// See [`SoftFields::penumbra_pixels`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub penumbra_pixels: Option<u64>,
+    /// See [`SoftFields::visibility_mean`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub visibility_mean: Option<f64>,
+    /// See [`SoftFields::visibility_p99`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub visibility_p99: Option<f64>,
+    /// See [`SoftFields::visibility_max`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub visibility_max: Option<f64>,
+    /// See [`SoftFields::lit_umbra_mismatches`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lit_umbra_mismatches: Option<u64>,
+    /// See [`SoftFields::sample_artifact_pixels`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sample_artifact_pixels: Option<u64>,
     /// Where the image was written.
     pub png: String,
     /// The report's timings as `timing_<stage>` columns.
@@ -155,6 +189,17 @@ impl Render {
             map_size,
             map_filter: report.map.map_filter.map(|f| f.name().to_owned()),
             map_bias: None,
+            light_radius: None,
+            light_radius_fraction: None,
+            light_samples_setting: None,
+            light_samples_used: None,
+            light_penumbra_px: None,
+            penumbra_pixels: None,
+            visibility_mean: None,
+            visibility_p99: None,
+            visibility_max: None,
+            lit_umbra_mismatches: None,
+            sample_artifact_pixels: None,
             gpu_shadow_maps_ms: report
                 .frame
                 .gpu_timings
@@ -163,6 +208,115 @@ impl Render {
             png,
             timing: timing_columns(&report.frame.timings),
         }
+    }
+}
+
+impl Render {
+    /// Adds the soft-shadow table's fields: `soft` from the report, the radius as a `fraction`
+    /// of the scene's box (point lights) and the `--light-samples` setting (`None` for maps).
+    pub fn set_soft(&mut self, soft: SoftFields, fraction: Option<f64>, setting: Option<String>) {
+        self.light_radius = Some(soft.light_radius);
+        self.light_radius_fraction = fraction;
+        self.light_samples_setting = setting;
+        self.light_samples_used = soft.light_samples_used;
+        self.light_penumbra_px = soft.light_penumbra_px;
+        self.penumbra_pixels = soft.penumbra_pixels;
+        self.visibility_mean = soft.visibility_mean;
+        self.visibility_p99 = soft.visibility_p99;
+        self.visibility_max = soft.visibility_max;
+        self.lit_umbra_mismatches = soft.lit_umbra_mismatches;
+        self.sample_artifact_pixels = soft.sample_artifact_pixels;
+    }
+}
+
+/// A render's soft-shadow figures over its lights with a size, from its report. A figure the
+/// report lacks is `None`, never a guess; `missing` says why the visibility error is.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SoftFields {
+    /// The radius asked for with `--light-radius`.
+    pub light_radius: f64,
+    /// The most points any light was sampled with (`light_samples`).
+    pub light_samples_used: Option<u64>,
+    /// The plan's bound on the widest penumbra on screen over the lights, px
+    /// (`light_penumbra_px`).
+    pub light_penumbra_px: Option<f64>,
+    /// Penumbra pixels (true visibility in (0, 1)), summed over the lights.
+    pub penumbra_pixels: Option<u64>,
+    /// Mean `|visibility - true visibility|` over all those pixels: the lights' means weighted
+    /// by their penumbra pixels (unweighted when no light has any).
+    pub visibility_mean: Option<f64>,
+    /// The largest of the lights' 99th percentiles (the pooled percentile is not in the JSON).
+    pub visibility_p99: Option<f64>,
+    /// The largest error of any light.
+    pub visibility_max: Option<f64>,
+    /// Fully lit or fully shadowed pixels whose visibility differs, summed over the lights.
+    pub lit_umbra_mismatches: Option<u64>,
+    /// Each sample's hard shadow against the reference, artifact pixels summed over the lights
+    /// and samples (`sample_artifact_pixels`; `None` where the report has none, as for maps).
+    pub sample_artifact_pixels: Option<u64>,
+    /// Why the visibility error is `None`, in words.
+    pub missing: Option<String>,
+}
+
+impl SoftFields {
+    /// The figures of `report`, rendered with every light's radius set to `radius`.
+    #[must_use]
+    pub fn of(report: &RenderReport, radius: f64) -> Self {
+        let f = &report.frame;
+        let mut out = Self {
+            light_radius: radius,
+            light_samples_used: f.samples.iter().map(|c| u64::from(c.samples)).max(),
+            light_penumbra_px: f
+                .samples
+                .iter()
+                .map(|c| c.penumbra_px)
+                .max_by(f64::total_cmp),
+            sample_artifact_pixels: report
+                .sample_artifact_pixels
+                .as_ref()
+                .map(|v| v.iter().flatten().map(|&n| n as u64).sum()),
+            ..Self::default()
+        };
+        let Some(errors) = &report.visibility_error else {
+            out.missing = Some("the render JSON has no visibility_error".to_owned());
+            return out;
+        };
+        let lights = report.lights.len().max(errors.len());
+        let mut sized = Vec::new();
+        for i in 0..lights {
+            let r = f.light_radii.get(i).map_or(radius, |&r| f64::from(r));
+            if r <= 0.0 {
+                continue;
+            }
+            match errors.get(i).and_then(Option::as_ref) {
+                Some(e) => sized.push(e),
+                None => {
+                    out.missing = Some(format!(
+                        "visibility_error is null for light {i} of radius {r}"
+                    ));
+                    return out;
+                }
+            }
+        }
+        if sized.is_empty() {
+            out.missing = Some("no light has a radius".to_owned());
+            return out;
+        }
+        let pixels: usize = sized.iter().map(|e| e.penumbra_pixels).sum();
+        out.penumbra_pixels = Some(pixels as u64);
+        out.visibility_mean = Some(if pixels > 0 {
+            sized
+                .iter()
+                .map(|e| e.mean * e.penumbra_pixels as f64)
+                .sum::<f64>()
+                / pixels as f64
+        } else {
+            sized.iter().map(|e| e.mean).sum::<f64>() / sized.len() as f64
+        });
+        out.visibility_p99 = sized.iter().map(|e| e.p99).max_by(f64::total_cmp);
+        out.visibility_max = sized.iter().map(|e| e.max).max_by(f64::total_cmp);
+        out.lit_umbra_mismatches = Some(sized.iter().map(|e| e.lit_umbra_mismatches as u64).sum());
+        out
     }
 }
 
@@ -233,7 +387,7 @@ impl Data {
         let v = Value::Object(fields);
         Ok(match experiment {
             "accuracy" => Self::ModeErrors(serde_json::from_value(v)?),
-            "artifacts" | "table1-frame" | "frames" | "maps" | "maps-sweep" => {
+            "artifacts" | "table1-frame" | "frames" | "maps" | "maps-sweep" | "soft" => {
                 Self::Render(serde_json::from_value(v)?)
             }
             "toywars" => Self::Baseline(serde_json::from_value(v)?),

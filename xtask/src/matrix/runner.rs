@@ -4,8 +4,8 @@
 use super::args::{Only, Options};
 use super::cli::{BenchReport, RecordList, RenderReport, SceneRow};
 use super::plan::{
-    Plan, FRAME_GPU_KEY, FRAME_HOST_BACKEND, LIGHT_SCENE, RENDER_SCENES_EXTRA, T1_SCENE, T2_SCENES,
-    T3_SCENES, TOYWARS_SCENES, TRI_SCENES,
+    Plan, FRAME_GPU_KEY, FRAME_HOST_BACKEND, LIGHT_SCENE, RENDER_SCENES_EXTRA, SOFT_SCENES,
+    T1_SCENE, T2_SCENES, T3_SCENES, TOYWARS_SCENES, TRI_SCENES,
 };
 use super::progress::Progress;
 use super::records::{Baseline, Bench, Data, HostInfo, Key, ModeErrors, Record, Render, Results};
@@ -114,7 +114,8 @@ pub(super) fn scene_names(cli: &Cli) -> Result<Vec<String>, String> {
         .chain(TRI_SCENES)
         .chain([LIGHT_SCENE])
         .chain(RENDER_SCENES_EXTRA)
-        .chain(TOYWARS_SCENES);
+        .chain(TOYWARS_SCENES)
+        .chain(SOFT_SCENES.map(|(s, _)| s));
     let missing: BTreeSet<&str> = needed.filter(|n| !names.iter().any(|x| x == n)).collect();
     if !missing.is_empty() {
         return Err(format!(
@@ -340,6 +341,7 @@ impl Matrix {
         match self.opts.only {
             Some(Only::Maps) => return self.maps_table(plan),
             Some(Only::Memory) => return self.memory_table(plan),
+            Some(Only::Soft) => return self.soft_table(&plan.soft),
             None => {}
         }
         let modes = plan.modes.clone();
@@ -411,6 +413,7 @@ impl Matrix {
         self.frame_table(plan);
         self.maps_table(plan);
         self.memory_table(plan);
+        self.soft_table(&plan.soft);
         // The seeds' CPU algorithms against our modes on cpu and simd.
         for s in &plan.toywars_scenes {
             self.progress.step(&format!("toywars: {s}"));

@@ -66,6 +66,10 @@ pub(super) fn tables(r: &Results, modes: &[String]) -> String {
     if !r.records.is_empty() && r.records.iter().all(|x| x.experiment == "memory") {
         return s + &super::memory_table::memory_tables(r) + &t.failures();
     }
+    // `--only soft`.
+    if !r.records.is_empty() && r.records.iter().all(|x| x.experiment == "soft") {
+        return s + &super::soft_table::soft_tables(&r.records) + &t.failures();
+    }
     s += &t.table1();
     s += "\n## Table 2: individual vs baked objects (~6.5*10^5 triangles)\n\n";
     s += &t.scene_table("table2", &T2_SCENES);
@@ -81,6 +85,7 @@ pub(super) fn tables(r: &Results, modes: &[String]) -> String {
     s += &t.frame_table();
     s += &super::maps_table::maps_tables(r);
     s += &super::memory_table::memory_tables(r);
+    s += &super::soft_table::soft_tables(&r.records);
     s += "\n## Seed \"Toy Wars\" table: the seeds' CPU algorithms against ours\n\n";
     s += &t.toywars_table();
     s += "\nThe Toy Wars notes (PSP-era hardware, ms):\n\n";

@@ -14,7 +14,7 @@ use shadowvol_renderer::{
     Exposure, GpuPipeline, HostPipeline, PlanPolicy, RenderDevice, RenderError, RenderOptions,
     Renderer, ShadowPipeline,
 };
-use shadowvol_report::RenderReport;
+use shadowvol_report::{RenderReport, SceneBounds};
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -353,6 +353,10 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
                 sample_artifact_pixels,
                 visibility_error,
                 visibility_files,
+                scene_bounds: scene.bounds().map(|(lo, hi)| SceneBounds {
+                    min: lo.to_array(),
+                    max: hi.to_array(),
+                }),
             };
             serde_json::to_writer(&mut *out, &report).map_err(|e| CliError::Output(e.into()))?;
             writeln!(out)?;
