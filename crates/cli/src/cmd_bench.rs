@@ -90,6 +90,9 @@ pub struct Args {
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
+
+    #[command(flatten)]
+    light_size: shadowvol::LightSizeArgs,
 }
 
 /// Where and how the numbers were taken.
@@ -141,6 +144,19 @@ struct Record {
     /// What the prepared scene held on this backend (edge tables, host layout, device buffers).
     table_bytes: u64,
     table_bytes_parts: TableBytes,
+    /// Per original light, its radius (0 for a point light).
+    light_radii: Vec<f32>,
+    /// Per original light, its samples in this record's call.
+    light_samples: Vec<u32>,
+    /// A record of samples: the median of the same lights as point lights.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    point_median_ms: Option<f64>,
+    /// A record of samples: `median_ms / point_median_ms`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    samples_vs_point: Option<f64>,
+    /// The record times the point lights of another record's samples.
+    #[serde(skip)]
+    point_reference: bool,
 }
 
 /// The floor of one light count.
@@ -294,12 +310,25 @@ struct Samples {
     uncertain: u64,
 }
 
+/// The lights of one call, and where they came from.
+struct LightSet {
+    lights: Vec<Light>,
+    /// Per original light, its radius.
+    radii: Vec<f32>,
+    /// Per original light, how many of `lights` are its samples.
+    samples: Vec<u32>,
+    /// For samples: the index of the set of the same lights as point lights.
+    point_set: Option<usize>,
+    /// The set holds the point lights of another set's samples.
+    point_reference: bool,
+}
+
 /// What the command line names, resolved and loaded before any timing.
 struct Setup {
     entries: Vec<BackendEntry>,
     scene_name: String,
     topo: TopologyScene,
-    light_sets: Vec<Vec<Light>>,
+    light_sets: Vec<LightSet>,
     /// (mode, index into `light_sets`) in the order of the records.
     combos: Vec<(Accuracy, usize)>,
 }
@@ -335,16 +364,48 @@ impl Setup {
             eprintln!("note: {n}");
         }
         let scene_lights = scene.light_positions();
+        let own_radii: Vec<f32> = scene.lights.iter().map(|l| l.radius).collect();
+        let aim = scene.light_aim();
         let topo = scene.geometry;
         let counts: Vec<Option<u32>> = if args.lights.is_empty() {
             vec![None]
         } else {
             args.lights.iter().map(|&n| Some(n)).collect()
         };
-        let light_sets: Vec<Vec<Light>> = counts
-            .iter()
-            .map(|&n| bench_lights(&args.scene, &scene_lights, &topo, n))
-            .collect::<Result<_, _>>()?;
+        let mut light_sets = Vec::new();
+        for &n in &counts {
+            let base = bench_lights(&args.scene, &scene_lights, &topo, n)?;
+            let sampled = args.light_size.sampled(
+                &base,
+                &own_radii,
+                aim,
+                shadowvol::light_size::DEFAULT_SAMPLES,
+            )?;
+            if sampled.is_sampled() {
+                light_sets.push(LightSet {
+                    lights: sampled.lights,
+                    radii: sampled.radii,
+                    samples: sampled.samples,
+                    point_set: Some(light_sets.len() + 1),
+                    point_reference: false,
+                });
+                light_sets.push(LightSet {
+                    radii: vec![0.0; base.len()],
+                    samples: vec![1; base.len()],
+                    lights: base,
+                    point_set: None,
+                    point_reference: true,
+                });
+            } else {
+                light_sets.push(LightSet {
+                    lights: sampled.lights,
+                    radii: sampled.radii,
+                    samples: sampled.samples,
+                    point_set: None,
+                    point_reference: false,
+                });
+            }
+        }
         let combos = modes
             .iter()
             .flat_map(|&m| (0..light_sets.len()).map(move |k| (m, k)))
@@ -391,7 +452,7 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     let mut floors: Vec<(MemoryFloor, Vec<Duration>)> = setup
         .light_sets
         .iter()
-        .map(|l| (MemoryFloor::new(&setup.topo, l.len()), Vec::new()))
+        .map(|l| (MemoryFloor::new(&setup.topo, l.lights.len()), Vec::new()))
         .collect();
     let run_floors = |floors: &mut Vec<(MemoryFloor, Vec<Duration>)>| {
         for (floor, times) in floors.iter_mut() {
@@ -483,7 +544,7 @@ fn bench_backend(
     let mut frame = |c: usize, timed: bool| -> Result<(), CliError> {
         let (mode, k) = combos[c];
         let t = Instant::now();
-        let stats = backend.extract(id, &light_sets[k], mode, &mut results[k])?;
+        let stats = backend.extract(id, &light_sets[k].lights, mode, &mut results[k])?;
         let wall = t.elapsed();
         bar.inc(1);
         if timed {
@@ -500,7 +561,7 @@ fn bench_backend(
     run_schedule(args, entry.name, combos, bar, &mut frame)?;
     let table = table_bytes(topo.table_bytes(), backend.prepared_bytes(id)?);
     let peak = peak_rss_bytes();
-    let records = combos
+    let mut records: Vec<Record> = combos
         .iter()
         .zip(&mut samples)
         .map(|(&(mode, k), s)| {
@@ -512,7 +573,7 @@ fn bench_backend(
                 triangles: topo.total_triangles(),
                 edges: topo.total_edges(),
                 objects: topo.objects.len(),
-                lights: light_sets[k].len(),
+                lights: light_sets[k].lights.len(),
                 median_ms: median,
                 p10_ms: p10,
                 p90_ms: p90,
@@ -529,9 +590,25 @@ fn bench_backend(
                 peak_rss_bytes: peak,
                 table_bytes: table.total(),
                 table_bytes_parts: table,
+                light_radii: light_sets[k].radii.clone(),
+                light_samples: light_sets[k].samples.clone(),
+                point_median_ms: None,
+                samples_vs_point: None,
+                point_reference: light_sets[k].point_reference,
             }
         })
         .collect();
+    // Each record of samples against its point lights, same mode.
+    for (c, &(mode, k)) in combos.iter().enumerate() {
+        let Some(j) = light_sets[k].point_set else {
+            continue;
+        };
+        if let Some(p) = combos.iter().position(|&x| x == (mode, j)) {
+            let point = records[p].median_ms;
+            records[c].point_median_ms = Some(point);
+            records[c].samples_vs_point = (point > 0.0).then(|| records[c].median_ms / point);
+        }
+    }
     backend.release(id);
     Ok(records)
 }
@@ -589,7 +666,7 @@ fn run_schedule(
 fn report(
     args: &Args,
     mut floors: Vec<(MemoryFloor, Vec<Duration>)>,
-    light_sets: &[Vec<Light>],
+    light_sets: &[LightSet],
     mut records: Vec<Record>,
 ) -> Report {
     let floor_records: Vec<FloorRecord> = floors
@@ -598,7 +675,7 @@ fn report(
         .map(|((floor, times), lights)| {
             let (floor_ms, p10, p90) = percentiles(times);
             FloorRecord {
-                lights: lights.len(),
+                lights: lights.lights.len(),
                 floor_ms,
                 floor_p10_ms: p10,
                 floor_p90_ms: p90,
@@ -694,13 +771,27 @@ fn print_text(r: &Report, out: &mut dyn Write) -> Result<(), CliError> {
             rec.uncertain
         )?;
     }
+    // Samples against their point lights.
+    for rec in &r.records {
+        if let (Some(ratio), Some(point)) = (rec.samples_vs_point, rec.point_median_ms) {
+            writeln!(
+                out,
+                "{} {}: {} light(s) as {} samples (radius {:?}) / as point lights ({point:.3} \
+                 ms) = {ratio:.2}",
+                rec.backend,
+                rec.mode,
+                rec.light_samples.len(),
+                rec.lights,
+                rec.light_radii
+            )?;
+        }
+    }
     // Light scaling: each light count's median over the first count's, per backend and mode.
+    let counted = || r.records.iter().filter(|x| !x.point_reference);
     if r.floors.len() > 1 {
         let base = r.floors[0].lights;
-        for rec in r.records.iter().filter(|x| x.lights != base) {
-            if let Some(b) = r
-                .records
-                .iter()
+        for rec in counted().filter(|x| x.lights != base) {
+            if let Some(b) = counted()
                 .find(|x| x.lights == base && x.backend == rec.backend && x.mode == rec.mode)
             {
                 writeln!(

@@ -23,7 +23,13 @@ pub const LONG_ABOUT: &str =
                   VmHWM, null off Linux; on lavapipe and PoCL it includes device memory); \
                   \"table_bytes\" what the prepared scene held, the sum of \
                   \"table_bytes_parts\": \"topology\" (the welded edge table), \"host\" (the \
-                  backend's own layout of it) and \"device\" (its device buffers).";
+                  backend's own layout of it) and \"device\" (its device buffers).\n\n\
+                  Lights with a size: with --light-radius R > 0 (or a glTF light's own \
+                  extras.radius) each light is replaced by its --light-samples N samples \
+                  (default 16 here: there is no camera whose penumbra could choose), points on \
+                  its disk facing the scene's bounding-box centre, all in one call; \"lights\" \
+                  then lists every sample in order, and \"light_radii\" and \"light_samples\" \
+                  give each original light's radius and sample count.";
 
 /// Examples shown after the help.
 pub const AFTER_HELP: &str =
@@ -68,6 +74,9 @@ pub struct Args {
     /// Text format only: list at most this many edges per light (0 = all).
     #[arg(long, default_value_t = 40, value_name = "N")]
     max_edges: usize,
+
+    #[command(flatten)]
+    light_size: shadowvol::LightSizeArgs,
 }
 
 fn parse_light(s: &str) -> Result<Light, String> {
@@ -89,15 +98,29 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
             input.name
         )));
     }
+    // The file's own radii belong to its own lights only.
+    let own_radii: &[f32] = if args.lights.is_empty() {
+        &input.light_radii
+    } else {
+        &[]
+    };
+    let sampled = args.light_size.sampled(
+        &lights,
+        own_radii,
+        input.light_aim,
+        shadowvol::light_size::DEFAULT_SAMPLES,
+    )?;
     let mut backend = entry.start()?;
     let mode = args.mode;
-    let report = silhouette_report(backend.as_mut(), &input.table, &lights, mode)?;
+    let report = silhouette_report(backend.as_mut(), &input.table, &sampled.lights, mode)?;
     match args.format {
         Format::Json => {
             let mut json = serde_json::to_value(&report).map_err(|e| CliError::Output(e.into()))?;
             if !input.notes.is_empty() {
                 json["notes"] = serde_json::Value::from(input.notes.clone());
             }
+            json["light_radii"] = serde_json::Value::from(sampled.radii.clone());
+            json["light_samples"] = serde_json::Value::from(sampled.samples.clone());
             // The peak once the whole report, the JSON value included, is built.
             json["peak_rss_bytes"] = serde_json::Value::from(shadowvol::memory::peak_rss_bytes());
             serde_json::to_writer(&mut *out, &json).map_err(|e| CliError::Output(e.into()))?;
@@ -106,6 +129,14 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         Format::Text => {
             for n in &input.notes {
                 writeln!(out, "note     {n}")?;
+            }
+            if sampled.is_sampled() {
+                for (i, (r, n)) in sampled.radii.iter().zip(&sampled.samples).enumerate() {
+                    writeln!(
+                        out,
+                        "size     light {i}: radius {r}, {n} sample(s), listed below in order"
+                    )?;
+                }
             }
             write_text(out, &input.name, &report, args.max_edges)?;
         }

@@ -20,6 +20,10 @@ pub struct Input {
     /// Lights defined by the input (glTF `KHR_lights_punctual`, preset lights; none for OBJ).
     /// Used when no `--light` is given.
     pub lights: Vec<Light>,
+    /// The radius of each of `lights` (glTF `extras.radius`; 0 for a point light).
+    pub light_radii: Vec<f32>,
+    /// The point a light with a size faces ([`Scene::light_aim`]).
+    pub light_aim: glam::Vec3,
     /// What the loader skipped, one sentence each naming the file and element (glTF primitives
     /// that are not triangles or have no positions, nodes left without triangles; OBJ lines,
     /// points, curves and surfaces); empty for STL, PLY and presets.
@@ -47,10 +51,14 @@ pub const INPUT_FORMATS: &str = "Input formats (by extension, case-insensitive):
 pub fn load_input(path_or_name: &str) -> Result<Input, CliError> {
     let (scene, notes) = load_scene(path_or_name)?;
     let lights = scene.light_positions();
+    let light_radii = scene.lights.iter().map(|l| l.radius).collect();
+    let light_aim = scene.light_aim();
     Ok(Input {
         name: path_or_name.to_owned(),
         table: scene.into_baked_table()?,
         lights,
+        light_radii,
+        light_aim,
         notes,
     })
 }

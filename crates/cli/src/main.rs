@@ -38,13 +38,22 @@ struct Cli {
     command: Command,
 }
 
+/// `--light-samples` of the commands without a camera (`silhouette`, `bench`).
+const SAMPLES_HELP: &str = "Points sampling each light with a size (--light-radius, or a glTF \
+    light's own radius), all in one extraction call [default: 16; these commands have no camera, \
+    so no plan chooses from a penumbra's width]";
+
 #[derive(Debug, Subcommand)]
 enum Command {
     /// List the backends, whether each can start here, its device, or why it can't.
     #[command(long_about = cmd_backends::LONG_ABOUT)]
     Backends(cmd_backends::Args),
     /// Compute the silhouette edges of a mesh, with multiplicities, for one or more lights.
-    #[command(long_about = cmd_silhouette::LONG_ABOUT, after_help = cmd_silhouette::AFTER_HELP)]
+    #[command(
+        long_about = cmd_silhouette::LONG_ABOUT,
+        after_help = cmd_silhouette::AFTER_HELP,
+        mut_arg("light_samples", |a| a.help(SAMPLES_HELP))
+    )]
     Silhouette(cmd_silhouette::Args),
     /// Measure what each accuracy mode gets wrong on the hard scenes (open vertices, signs
     /// that differ from exact).
@@ -52,7 +61,10 @@ enum Command {
     Accuracy(cmd_accuracy::Args),
     /// Time silhouette extraction per backend and mode on a scene, next to the measured memory
     /// floor (median, p10, p90).
-    #[command(long_about = cmd_bench::LONG_ABOUT)]
+    #[command(
+        long_about = cmd_bench::LONG_ABOUT,
+        mut_arg("light_samples", |a| a.help(SAMPLES_HELP))
+    )]
     Bench(cmd_bench::Args),
     /// Time the seeds' CPU silhouette algorithms (Toy Wars, the thesis) next to our modes.
     #[command(long_about = cmd_baselines::LONG_ABOUT, after_help = cmd_baselines::AFTER_HELP)]

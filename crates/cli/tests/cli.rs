@@ -25,6 +25,7 @@ fn main() {
         presets_load_with_their_own_lights,
         help_describes_commands_and_contract,
         bench_json_follows_the_contract_for_several_light_counts,
+        light_samples_replace_each_light_in_silhouette_and_bench,
     ];
     trials.extend(per_backend!(exact_mode_matches_the_integer_reference));
     shadowvol_test_support::run(trials)
@@ -628,4 +629,105 @@ fn bench_json_follows_the_contract_for_several_light_counts() {
     let (code, stderr) = failure(&["bench", "--scene", path, "--lights", "2,2"]);
     assert_eq!(code, 2);
     assert!(stderr.contains("--lights lists 2 twice"), "{stderr}");
+}
+
+/// `--light-radius` and `--light-samples` on `silhouette` and `bench`: each light is replaced by
+/// its samples in one call, each sample's edges are those of a one-light call for that sample,
+/// the JSON gives each original light's radius and sample count, and `bench` times the point
+/// lights next to the samples.
+fn light_samples_replace_each_light_in_silhouette_and_bench() {
+    for backend in ["cpu", "simd"] {
+        let v = json_of(&[
+            "silhouette",
+            "hard-light-at-vertex",
+            "--backend",
+            backend,
+            "--light-radius",
+            "0.25",
+            "--light-samples",
+            "5",
+            "--format",
+            "json",
+        ]);
+        let radii = v["light_radii"].as_array().unwrap();
+        let samples = v["light_samples"].as_array().unwrap();
+        let lights = v["lights"].as_array().unwrap();
+        assert_eq!(radii.len(), 4, "the preset has 4 lights");
+        assert!(radii.iter().all(|r| r.as_f64() == Some(0.25)), "{radii:?}");
+        assert!(samples.iter().all(|n| n.as_u64() == Some(5)), "{samples:?}");
+        assert_eq!(lights.len(), 4 * 5);
+        // Distinct samples, each equal to its own one-light call.
+        for (i, l) in lights.iter().enumerate() {
+            let [x, y, z, w] = [0, 1, 2, 3].map(|c| l["light"][c].as_f64().unwrap() as f32);
+            assert!(lights[..i].iter().all(|o| o["light"] != l["light"]));
+            let one = json_of(&[
+                "silhouette",
+                "hard-light-at-vertex",
+                "--backend",
+                backend,
+                "--light",
+                &format!("{x},{y},{z},{w}"),
+                "--format",
+                "json",
+            ]);
+            assert_eq!(one["light_samples"], serde_json::json!([1]));
+            assert_eq!(
+                edges_of(&one["lights"][0]),
+                edges_of(l),
+                "{backend}: sample {i} ({x},{y},{z},{w})"
+            );
+        }
+    }
+    // Without a size: one sample each, radius 0; the help names the default count.
+    let v = json_of(&["silhouette", "hard-tetrahedron", "--format", "json"]);
+    assert_eq!(v["light_radii"], serde_json::json!([0.0, 0.0]));
+    assert_eq!(v["light_samples"], serde_json::json!([1, 1]));
+    let help = String::from_utf8(run(&["silhouette", "--help"]).stdout).unwrap();
+    assert!(
+        help.contains("--light-samples") && help.contains("default: 16"),
+        "{help}"
+    );
+    let (code, stderr) = failure(&["silhouette", "hard-tetrahedron", "--light-radius", "-1"]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("--light-radius -1"), "{stderr}");
+    // bench: the samples' record against the point lights', same mode, in one run.
+    let v = json_of(&[
+        "bench",
+        "--scene",
+        "hard-tetrahedron",
+        "--backend",
+        "simd",
+        "--mode",
+        "exact,ordered",
+        "--frames",
+        "5",
+        "--warmup",
+        "1",
+        "--light-radius",
+        "0.1",
+        "--format",
+        "json",
+    ]);
+    let records = v["records"].as_array().unwrap();
+    assert_eq!(records.len(), 4);
+    for mode in ["exact", "ordered"] {
+        let of = |lights: u64| {
+            records
+                .iter()
+                .find(|r| r["mode"] == mode && r["lights"] == lights)
+                .unwrap_or_else(|| panic!("no {mode} record of {lights} lights"))
+        };
+        let (sampled, point) = (of(2 * 16), of(2));
+        assert_eq!(sampled["light_samples"], serde_json::json!([16, 16]));
+        assert_eq!(point["light_samples"], serde_json::json!([1, 1]));
+        assert_eq!(point["light_radii"], serde_json::json!([0.0, 0.0]));
+        assert!(point.get("samples_vs_point").is_none(), "{point}");
+        assert_eq!(sampled["point_median_ms"], point["median_ms"]);
+        let ratio = sampled["samples_vs_point"].as_f64().unwrap();
+        let (a, b) = (
+            sampled["median_ms"].as_f64().unwrap(),
+            point["median_ms"].as_f64().unwrap(),
+        );
+        assert!((ratio - a / b).abs() <= 1e-9 * ratio, "{sampled}");
+    }
 }

@@ -14,9 +14,14 @@
 //! ```
 //!
 //! See the README (its example runs as a doctest) for the edge-on case.
+//!
+//! In `exact` mode, several lights of one `w` in one call (a light's samples) are extracted
+//! together ([`extract_table_shared`]): each triangle is classified once against the box of the
+//! lights ([`LightBox::sign`]), and an edge whose triangles all have one sign for the whole box
+//! is computed once for every light. The results are those of one call per light, bit for bit.
 
 use shadowvol_mesh_topology::EdgeTable;
-use shadowvol_robust_math::{ov_sign, Accuracy, Light};
+use shadowvol_robust_math::{ov_sign, Accuracy, Light, LightBox};
 use shadowvol_silhouette::{
     check_lights, object_lights, vec_bytes, BackendError, BackendInfo, ExtractStats,
     Multiplicities, PreparedBytes, PreparedId, PreparedScenes, SilhouetteBackend, TopologyScene,
@@ -122,6 +127,62 @@ fn extract_listed(
     }
 }
 
+/// Computes the multiplicities of one object's edges for every light of `lights` in exact mode,
+/// as [`extract_table`] does for each light, sharing the work between lights of one `w`.
+///
+/// Each triangle, in canonical order, gets the sign it shares with every light in the box of
+/// `lights` ([`LightBox::sign`]: a certified filter, then the exact predicate at the box's
+/// corners), or none when its plane cuts the box. An edge whose triangles all have a shared sign
+/// gets `Σ sign · parity` once, for every light; every other edge is computed per light with
+/// [`ov_sign`]. `out[l][e]` receives the multiplicity of `table.edges[e]` for `lights[l]`.
+/// Returns the number of triangles whose plane cuts the box, or `None` (writing nothing) when
+/// the lights span no box (none, or different `w`).
+///
+/// # Panics
+/// Panics unless `out` holds one slice of `table.edges.len()` values per light.
+pub fn extract_table_shared(
+    table: &EdgeTable,
+    lights: &[[f32; 4]],
+    out: &mut [&mut [i32]],
+) -> Option<usize> {
+    assert!(
+        out.len() == lights.len() && out.iter().all(|o| o.len() == table.edges.len()),
+        "extract_table_shared: one output slice per light, one slot per edge"
+    );
+    let bx = LightBox::of(lights)?;
+    let p = |i: u32| table.positions[i as usize].to_array();
+    let shared: Vec<Option<i8>> = table
+        .triangles
+        .iter()
+        .map(|&[a, b, c]| {
+            let mut t = [a, b, c];
+            t.sort_unstable();
+            bx.sign(p(t[0]), p(t[1]), p(t[2]))
+        })
+        .collect();
+    let cut = shared.iter().filter(|s| s.is_none()).count();
+    for (e, &[a, b]) in table.edges.iter().enumerate() {
+        let refs = table.ov_refs_of(e);
+        let once: Option<i32> = refs
+            .iter()
+            .map(|&r| {
+                let s = shared[EdgeTable::ov_triangle(r) as usize]?;
+                let parity = if r & 3 == 1 { -1 } else { 1 };
+                Some(i32::from(s) * parity)
+            })
+            .sum();
+        for (row, &light) in out.iter_mut().zip(lights) {
+            row[e] = once.unwrap_or_else(|| {
+                table
+                    .ovs_of(e)
+                    .map(|o| i32::from(ov_sign(Accuracy::Exact, &table.positions, a, b, o, light)))
+                    .sum()
+            });
+        }
+    }
+    Some(cut)
+}
+
 /// Each OV slot's vertex id (`EdgeTable::ov_vertex` of each reference), in slot order: 12 bytes
 /// a triangle of a closed mesh.
 #[must_use]
@@ -166,7 +227,19 @@ impl SilhouetteBackend for CpuBackend {
         let obj_lights = object_lights(scene.transforms(), lights);
         let offsets = scene.edge_offsets();
         out.reset(scene.total_edges(), lights.len());
+        let (edges, nl) = (scene.total_edges(), lights.len());
         for (i, (o, per_light)) in scene.objects.iter().zip(&obj_lights).enumerate() {
+            if mode == Accuracy::Exact && nl > 1 && edges > 0 {
+                let range = offsets[i]..offsets[i + 1];
+                let mut rows: Vec<&mut [i32]> = out
+                    .all_values_mut()
+                    .chunks_mut(edges)
+                    .map(|row| &mut row[range.clone()])
+                    .collect();
+                if extract_table_shared(&o.table, per_light, &mut rows).is_some() {
+                    continue;
+                }
+            }
             for (l, &light) in per_light.iter().enumerate() {
                 let values = &mut out.values_mut(l)[offsets[i]..offsets[i + 1]];
                 match ov_vertices[i].as_deref() {

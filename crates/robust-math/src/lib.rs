@@ -24,6 +24,9 @@
 //!
 //! The canonical order of a triangle is its vertex ids sorted ascending.
 //!
+//! [`LightBox`] decides, exactly, the sign a triangle shares with every light of a box (a light's
+//! samples): see [`light_box`].
+//!
 //! ```
 //! use shadowvol_robust_math::{ov_sign, Accuracy, Light};
 //! use glam::Vec3;
@@ -39,6 +42,7 @@
 mod exact;
 pub mod filter;
 mod light;
+pub mod light_box;
 
 pub use exact::{
     orient_exact, orient_exact_expansion, orient_filter_f32, orient_filter_f64, F32_FILTER_EPS,
@@ -46,6 +50,7 @@ pub use exact::{
 };
 pub use filter::{F32_FILTER_MAX, F32_FILTER_MIN};
 pub use light::{Light, LightError};
+pub use light_box::{BoxFilter, LightBox, BOX_FILTER_EPS};
 
 use glam::Vec3;
 

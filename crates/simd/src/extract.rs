@@ -4,6 +4,7 @@
 use crate::dispatch;
 use crate::kernel::edge_pass::{EdgeSums, PackedSigns};
 use crate::kernel::original::EdgeOriginal;
+use crate::kernel::shared::{worth_sharing, SharedTriPass, SHARE_MIN_LIGHTS};
 use crate::kernel::signs::PACK;
 use crate::kernel::tri_pass::TriPass;
 use crate::kernel::EdgeOut;
@@ -12,6 +13,7 @@ use crate::SimdLevel;
 use glam::{Affine3A, DAffine3, DVec3};
 use rayon::prelude::*;
 use shadowvol_mesh_topology::EdgeTable;
+use shadowvol_robust_math::LightBox;
 use shadowvol_silhouette::{Accuracy, BackendError, Light, Multiplicities, TopologyScene};
 use std::collections::HashMap;
 use std::ops::Range;
@@ -106,6 +108,11 @@ pub(crate) struct Scratch {
     sil: Vec<Vec<u32>>,
     /// Per object and light (object-major): the light in the object's frame.
     lights: Vec<[f32; 4]>,
+    /// Exact mode with several lights of one `w`: per object, the box of its lights where
+    /// sharing pays ([`worth_sharing`]); empty when the lights span no box.
+    boxes: Vec<Option<LightBox>>,
+    /// With `boxes`: per triangle slot, the sign the object's box shares, or `NOT_SHARED`.
+    shared: Vec<i8>,
 }
 
 /// Splits `buf` (`parts` equal light slices of `len`) at the item `bounds` (ascending, from 0
@@ -270,31 +277,78 @@ pub(crate) fn run_extract(
             .extend(lights.iter().map(|l| o.to_object.light(l)));
     }
     let obj_lights = |object: usize| &scratch.lights[object * nl..(object + 1) * nl];
+    // Exact mode with several lights of one `w`: each triangle of an object where it pays is
+    // classified once against the box of the lights in the object's frame (`kernel::shared`).
+    scratch.boxes.clear();
+    if mode == Accuracy::Exact && nl >= SHARE_MIN_LIGHTS {
+        for (object, o) in p.objects.iter().enumerate() {
+            let bx = LightBox::of(obj_lights(object));
+            if bx.is_none() {
+                scratch.boxes.clear();
+                break;
+            }
+            scratch
+                .boxes
+                .push(bx.filter(|bx| with_geometry!(&*o.layout, lay => worth_sharing(lay, bx))));
+        }
+    }
+    let boxes = &scratch.boxes;
+    let share_any = boxes.iter().any(Option::is_some);
+    if share_any && !out.zero_listed(ne, nl) {
+        // The shared edge pass writes only the multiplicities that are not 0.
+        out.reset(ne, nl);
+    }
     let mut uncertain = 0u64;
     if mode != Accuracy::Original {
-        // Phase 1: one sign per (canonical triangle, light).
-        // One byte per triangle slot in each pack of up to `PACK` lights.
+        // Phase 1: one sign per (canonical triangle, light): one byte per triangle slot in
+        // each pack of up to `PACK` lights; with sharing, also one shared byte per slot.
         let signs = &mut scratch.signs;
-        signs.clear();
-        signs.resize(slots * packs, 0);
-        let mut parts = split_rows(signs, slots, &p.tri_bounds);
+        if share_any {
+            // Not cleared: every pass writes the sign bytes the edge pass reads (a shared pass
+            // those of the blocks with a cut triangle) and every shared byte of its object.
+            if signs.len() < slots * packs {
+                signs.resize(slots * packs, 0);
+            }
+        } else {
+            signs.clear();
+            signs.resize(slots * packs, 0);
+        }
+        let shared = &mut scratch.shared;
+        shared.resize(slots, 0);
+        let mut parts = split_rows(&mut signs[..slots * packs], slots, &p.tri_bounds);
+        let mut shared_parts = split_rows(shared, slots, &p.tri_bounds);
         if !parts.is_empty() {
             uncertain = p
                 .tri_items
                 .par_iter()
                 .zip(parts.par_chunks_mut(packs))
-                .map(|(it, dst)| {
+                .zip(shared_parts.par_iter_mut())
+                .map(|((it, dst), sh)| {
                     let o = &p.objects[it.object];
-                    with_geometry!(&*o.layout, lay => {
-                        let pass = TriPass {
-                            lay,
-                            blocks: it.blocks.clone(),
-                            lights: obj_lights(it.object),
-                            mode,
-                            out: dst,
-                        };
-                        dispatch::run(level, pass)
-                    })
+                    let (blocks, lights) = (it.blocks.clone(), obj_lights(it.object));
+                    match boxes.get(it.object).copied().flatten() {
+                        Some(bx) => with_geometry!(&*o.layout, lay => {
+                            let pass = SharedTriPass {
+                                lay,
+                                blocks,
+                                lights,
+                                bx: &bx,
+                                out: dst,
+                                shared: sh,
+                            };
+                            dispatch::run(level, pass)
+                        }),
+                        None => with_geometry!(&*o.layout, lay => {
+                            let pass = TriPass {
+                                lay,
+                                blocks,
+                                lights,
+                                mode,
+                                out: dst,
+                            };
+                            dispatch::run(level, pass)
+                        }),
+                    }
                 })
                 .sum();
         }
@@ -309,6 +363,7 @@ pub(crate) fn run_extract(
     let mut rows = split_rows(out.all_values_mut(), ne, &p.edge_bounds);
     if !rows.is_empty() {
         let signs: &[i8] = &scratch.signs;
+        let shared: &[i8] = &scratch.shared;
         p.edge_items
             .par_iter()
             .zip(rows.par_chunks_mut(nl))
@@ -348,7 +403,14 @@ pub(crate) fn run_extract(
                         let pass = EdgeSums {
                             lay,
                             blocks: it.blocks.clone(),
-                            signs: PackedSigns { all: signs, bases },
+                            signs: PackedSigns {
+                                all: signs,
+                                bases,
+                                shared: boxes
+                                    .get(it.object)
+                                    .is_some_and(Option::is_some)
+                                    .then(|| &shared[o.tri_base..]),
+                            },
                             out,
                         };
                         dispatch::run(level, pass);
@@ -365,6 +427,7 @@ pub(crate) fn run_extract(
         }
         out.set_silhouette(l, all);
     }
+    out.mark_silhouettes_complete();
     uncertain * 3
 }
 

@@ -20,6 +20,7 @@
 pub(crate) mod edge_pass;
 pub(crate) mod filter;
 pub(crate) mod original;
+pub(crate) mod shared;
 pub(crate) mod signs;
 pub(crate) mod tri_pass;
 

@@ -26,6 +26,17 @@
 //!   filter of `orient_filter_f64` four lanes at a time, and decides the lanes neither certifies
 //!   with the scalar `orient_exact`; those are counted in [`ExtractStats::uncertain`] (three
 //!   (edge, OV) pairs per uncertain triangle evaluation).
+//! * **A light's samples**: in `exact`, a call with at least four lights of one `w` (a light's
+//!   samples, in one object's frame) classifies each triangle once against the lights' box
+//!   ([`shadowvol_robust_math::LightBox`]: its certified filter on four `f64` lanes, the exact
+//!   predicate at the box's corners for the lanes it leaves; the corner tests are not counted in
+//!   `uncertain`), evaluates per light only the blocks with a triangle whose plane cuts the box,
+//!   and computes an edge whose triangles are all shared once for every light, writing it only
+//!   where it is not 0: a reused result is cleared by its compact lists
+//!   ([`Multiplicities::zero_listed`]). An object where a sample of its triangles is mostly cut
+//!   (lights spread around it) keeps the per-light pass. The other modes always evaluate per
+//!   light: their `f32` signs near a plane are not the exact ones, so no box argument holds
+//!   for them.
 //!
 //! Results are bit-identical to the `cpu` backend in every mode (all four evaluate the same IEEE
 //! operations on the same inputs).

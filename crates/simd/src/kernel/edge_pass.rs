@@ -2,8 +2,12 @@
 //! the triangles of each edge, from the triangle pass's signs. Each (edge, OV) pair's triangle
 //! slot `s` and parity come from its reference `4 s + r` (odd for `r = 1`). Scalar at the `wide`
 //! level; with AVX2, 8 edges per vector ([`edge_sums_avx2`]).
+//!
+//! With the shared bytes of the shared triangle pass ([`PackedSigns::shared`]), an edge whose
+//! triangles are all shared by the box of the lights has one multiplicity for every light: it is
+//! computed once, and written to every light's row where it is not 0 (the rows start all 0).
 
-use super::signs::{pack_sign, signed, PACK};
+use super::signs::{pack_sign, signed, NOT_SHARED, PACK};
 use super::{push_bits, EdgeOut};
 use crate::dispatch::Pass;
 use crate::lanes::Level;
@@ -18,6 +22,10 @@ pub(crate) struct PackedSigns<'a> {
     pub all: &'a [i8],
     /// Per pack of lights, the index in `all` of the object's slot 0.
     pub bases: &'a [usize],
+    /// In exact mode with the lights' box: the object's shared bytes from its slot 0 (each
+    /// triangle's sign for the whole box, or [`NOT_SHARED`]). Then every row starts all 0, and
+    /// an edge whose triangles are all shared is written only where its multiplicity is not 0.
+    pub shared: Option<&'a [i8]>,
 }
 
 /// The edge pass over the blocks `blocks` of one object: `out.rows[l]` receives the range's
@@ -52,9 +60,10 @@ impl<G: Geometry> EdgeSums<'_, '_, G> {
     /// object's `tri_count` slots) and returns the range's first edge, where `out.rows` start.
     #[inline(always)]
     fn check(&self) -> usize {
-        let PackedSigns { all, bases } = self.signs;
+        let PackedSigns { all, bases, shared } = self.signs;
         // Every reference names a triangle slot < tri_count (`Layout::build`).
         assert!(bases.iter().all(|&b| b + self.lay.tri_count() <= all.len()));
+        assert!(shared.is_none_or(|s| self.lay.tri_count() <= s.len()));
         assert!(bases.len() == self.out.rows.len().div_ceil(PACK));
         self.blocks.start * LANES
     }
@@ -74,6 +83,16 @@ fn edge_sums<G: Geometry>(pass: EdgeSums<G>) {
         if lay.block_fast(blk) {
             // Block-outer, light-inner: the block's OV references are read once.
             let [first, second] = *lay.fast_refs(blk);
+            if let Some(sh) = ps.shared {
+                if let Some(m) = shared_block(&[first, second], sh) {
+                    let nz = m
+                        .iter()
+                        .enumerate()
+                        .fold(0u32, |bits, (i, &x)| bits | u32::from(x != 0) << i);
+                    write_nonzero(&m, nz, e0 - e_start, e0, &mut out);
+                    continue;
+                }
+            }
             for (l, row) in out.rows.iter_mut().enumerate() {
                 let base = bases[l / PACK];
                 let s = &signs[base..base + lay.tri_count()];
@@ -83,7 +102,7 @@ fn edge_sums<G: Geometry>(pass: EdgeSums<G>) {
                 let dst = &mut row[e0 - e_start..end];
                 let mut any = 0;
                 for (i, d) in dst.iter_mut().enumerate() {
-                    let sign = |r: u32| signed(pack_sign(s[ref_slot(r)], nl, l), ref_odd(r));
+                    let sign = |r: u32| signed(light_sign(&ps, s, r, nl, l), ref_odd(r));
                     let m = sign(first[i]) + sign(second[i]);
                     *d = m;
                     any |= m;
@@ -115,17 +134,83 @@ fn edge_sums_general<G: Geometry>(
     let nl = out.rows.len();
     for e in e0..(e0 + LANES).min(lay.edge_count()) {
         let refs = lay.general_refs(e);
+        if let Some(sh) = ps.shared {
+            if refs.iter().all(|&r| sh[ref_slot(r)] != NOT_SHARED) {
+                let m: i32 = refs
+                    .iter()
+                    .map(|&r| signed(sh[ref_slot(r)], ref_odd(r)))
+                    .sum();
+                for (row, sil) in out.rows.iter_mut().zip(out.sil.iter_mut()) {
+                    row[e - e_start] = m;
+                    if m != 0 {
+                        sil.push((out.edge_base + e) as u32);
+                    }
+                }
+                continue;
+            }
+        }
         for (l, row) in out.rows.iter_mut().enumerate() {
             let base = ps.bases[l / PACK];
+            let s = &ps.all[base..];
             let m: i32 = refs
                 .iter()
-                .map(|&r| signed(pack_sign(ps.all[base + ref_slot(r)], nl, l), ref_odd(r)))
+                .map(|&r| signed(light_sign(ps, s, r, nl, l), ref_odd(r)))
                 .sum();
             row[e - e_start] = m;
             if m != 0 {
                 out.sil[l].push((out.edge_base + e) as u32);
             }
         }
+    }
+}
+
+/// Light `l`'s sign (of `nl`) of the triangle of reference `r`: its shared sign when the box
+/// shares it (`ps.shared`), else from its pack byte in `s` (the light's pack, from the object's
+/// slot 0).
+#[inline(always)]
+fn light_sign(ps: &PackedSigns, s: &[i8], r: u32, nl: usize, l: usize) -> i8 {
+    let t = ref_slot(r);
+    match ps.shared.map(|sh| sh[t]) {
+        Some(x) if x != NOT_SHARED => x,
+        _ => pack_sign(s[t], nl, l),
+    }
+}
+
+/// The multiplicities of a fast block whose triangles are all shared (`sh`: the object's shared
+/// bytes), or `None` when one is not.
+#[inline(always)]
+fn shared_block(refs: &FastRefs, sh: &[i8]) -> Option<[i32; LANES]> {
+    let mut m = [0i32; LANES];
+    for (i, m) in m.iter_mut().enumerate() {
+        let (r1, r2) = (refs[0][i], refs[1][i]);
+        let (s1, s2) = (sh[ref_slot(r1)], sh[ref_slot(r2)]);
+        if s1 == NOT_SHARED || s2 == NOT_SHARED {
+            return None;
+        }
+        *m = signed(s1, ref_odd(r1)) + signed(s2, ref_odd(r2));
+    }
+    Some(m)
+}
+
+/// Writes the non-zero lanes `nz` of one block's multiplicities `m` (edges `e0 ..`, at `at`
+/// in each row; fewer where the rows end) to every light's row, and those edges to every
+/// light's list. With shared triangles the rows start all 0 (see [`PackedSigns::shared`]), so
+/// the zero lanes need no store.
+#[inline(always)]
+fn write_nonzero(m: &[i32; LANES], nz: u32, at: usize, e0: usize, out: &mut EdgeOut) {
+    let real = (out.rows[0].len() - at).min(LANES);
+    let nz = nz & ((1u32 << real) - 1);
+    if nz == 0 {
+        return;
+    }
+    for (row, sil) in out.rows.iter_mut().zip(out.sil.iter_mut()) {
+        let mut bits = nz;
+        while bits != 0 {
+            let i = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            row[at + i] = m[i];
+        }
+        push_bits(sil, nz, out.edge_base + e0);
     }
 }
 
@@ -204,12 +289,37 @@ unsafe fn edge_sums_avx2<G: Geometry>(pass: EdgeSums<G>) {
         if lay.block_fast(blk) {
             let refs = lay.fast_refs(blk);
             let refs: &FastRefs = &refs;
+            // The shared bytes of the block's triangles.
+            // SAFETY: AVX2 is enabled here; every reference's triangle is < tri_count <=
+            // sh.len() (`EdgeSums::check`).
+            let shared = ps
+                .shared
+                .map(|sh| unsafe { sign_bytes_of_block(sh.as_ptr(), refs) });
+            if let Some(g) = &shared {
+                // SAFETY: AVX2 is enabled here.
+                if let Some((m, nz)) = unsafe { shared_block_avx2(g) } {
+                    if nz != 0 {
+                        let mut lanes = [0i32; LANES];
+                        // SAFETY: `lanes` is 32 writable bytes; unaligned store.
+                        unsafe { _mm256_storeu_si256(lanes.as_mut_ptr().cast(), m) };
+                        write_nonzero(&lanes, nz, e0 - e_start, e0, &mut out);
+                    }
+                    continue;
+                }
+            }
             for (pack, &base) in bases.iter().enumerate() {
                 // The 16 sign bytes of the block's triangles, as in the one-light loop.
                 // SAFETY: every reference's triangle is < tri_count (`Layout::build`), and
                 // base + tri_count <= signs.len() (asserted above).
                 let [g1, g2, k1, k2] =
                     unsafe { sign_bytes_of_block(signs.as_ptr().add(base), refs) };
+                // A shared triangle's pack byte was not written: its shared sign, for every
+                // light of the pack.
+                let (g1, g2) = match &shared {
+                    // SAFETY: AVX2 is enabled here.
+                    Some([s1, s2, _, _]) => unsafe { (with_shared(g1, *s1), with_shared(g2, *s2)) },
+                    None => (g1, g2),
+                };
                 // Each byte holds four lights' signs as bits (`PACK`; the loads sign-extended
                 // it, the shuffle reads byte 0 only). Copy it to the four
                 // bytes of its lane, and make byte `j` the sign of light `4 pack + j`: `+1`
@@ -282,6 +392,60 @@ unsafe fn edge_sums_avx2<G: Geometry>(pass: EdgeSums<G>) {
     // The streaming stores above are weakly ordered: make them visible before the caller
     // (another thread, after rayon's join) reads the output.
     _mm_sfence();
+}
+
+/// [`shared_block`] in AVX2 lanes, from the block's shared bytes as [`sign_bytes_of_block`]
+/// gathers them: when every triangle of the fast block is shared, its multiplicities and the
+/// bits of its non-zero lanes.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn shared_block_avx2(
+    [g1, g2, k1, k2]: &[std::arch::x86_64::__m256i; 4],
+) -> Option<(std::arch::x86_64::__m256i, u32)> {
+    use std::arch::x86_64::*;
+    let mark = _mm256_set1_epi32(i32::from(NOT_SHARED));
+    let cut = _mm256_or_si256(_mm256_cmpeq_epi32(*g1, mark), _mm256_cmpeq_epi32(*g2, mark));
+    if _mm256_movemask_epi8(cut) != 0 {
+        return None;
+    }
+    let s1 = _mm256_sub_epi32(_mm256_xor_si256(*g1, *k1), *k1);
+    let s2 = _mm256_sub_epi32(_mm256_xor_si256(*g2, *k2), *k2);
+    let m = _mm256_add_epi32(s1, s2);
+    let zero = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
+        m,
+        _mm256_setzero_si256(),
+    ))) as u32;
+    Some((m, !zero & 0xFF))
+}
+
+/// The pack bytes `g` (one per 32-bit lane, sign-extended) with each shared triangle's byte
+/// (its shared byte in `s` is not [`NOT_SHARED`]) made from its shared sign: `0x0F` for `+1`,
+/// `0xF0` for `-1`, 0 for 0 (every light of the pack; the bits of absent lights are not read).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn with_shared(
+    g: std::arch::x86_64::__m256i,
+    s: std::arch::x86_64::__m256i,
+) -> std::arch::x86_64::__m256i {
+    use std::arch::x86_64::*;
+    let pos = _mm256_and_si256(
+        _mm256_cmpeq_epi32(s, _mm256_set1_epi32(1)),
+        _mm256_set1_epi32(0x0F),
+    );
+    let neg = _mm256_and_si256(
+        _mm256_cmpeq_epi32(s, _mm256_set1_epi32(-1)),
+        _mm256_set1_epi32(0xF0),
+    );
+    let cut = _mm256_cmpeq_epi32(s, _mm256_set1_epi32(i32::from(NOT_SHARED)));
+    _mm256_blendv_epi8(_mm256_or_si256(pos, neg), g, cut)
 }
 
 /// The one-light case of [`edge_sums_avx2`] (the common case): its loop without the pack and

@@ -267,7 +267,7 @@ impl<'a, Lv: Level, G: Geometry> Fallback<'a, Lv, G> {
 /// Lanes 0..4 and 4..8 of a point vector, widened to `f64`. (A function, not a closure: closures
 /// are not `#[inline(always)]`, and an intrinsic left in a non-inlined closure is not inlined.)
 #[inline(always)]
-fn widen3<Lv: Level>(p: &[Lv::F; 3]) -> ([Lv::D; 3], [Lv::D; 3]) {
+pub(super) fn widen3<Lv: Level>(p: &[Lv::F; 3]) -> ([Lv::D; 3], [Lv::D; 3]) {
     let (x, y, z) = (Lv::widen(p[0]), Lv::widen(p[1]), Lv::widen(p[2]));
     ([x.0, y.0, z.0], [x.1, y.1, z.1])
 }

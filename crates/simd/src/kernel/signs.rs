@@ -18,6 +18,11 @@ use crate::layout::LANES;
 /// light (see [`pack_sign`]).
 pub(crate) const PACK: usize = 4;
 
+/// The shared byte of a triangle whose plane cuts the box of the call's lights (the shared
+/// triangle pass, `super::shared`): its signs are per light. A shared triangle's byte is its
+/// sign (`1`, `0`, `-1`).
+pub(crate) const NOT_SHARED: i8 = 0x40;
+
 /// Light `l`'s sign from its slot byte `b` in a call with `lights` lights (see [`PACK`]).
 #[inline(always)]
 pub(super) fn pack_sign(b: i8, lights: usize, l: usize) -> i8 {

@@ -132,7 +132,7 @@ fn tri_signs<Lv: Level, G: Geometry>(pass: TriPass<G>) -> u64 {
 /// The `f32` filter's stage of each light in exact mode (none in the other modes): in `buf` for
 /// up to 8 lights, in `spill` beyond, so that the common case allocates nothing.
 #[inline(always)]
-fn f32_stages<'s, G: Geometry>(
+pub(super) fn f32_stages<'s, G: Geometry>(
     lay: &G,
     lights: &[[f32; 4]],
     mode: Accuracy,
@@ -158,13 +158,19 @@ fn f32_stages<'s, G: Geometry>(
 
 /// One block of 8 canonical triangles: their vertex ids, where its sign bytes go (`dst`), the
 /// lanes that are triangles (`valid`), and its corners.
-struct Block<'i, F> {
-    ids: &'i CanonBlock,
-    dst: usize,
-    valid: u32,
-    a: [F; 3],
-    b: [F; 3],
-    o: [F; 3],
+pub(super) struct Block<'i, F> {
+    /// The canonical triangles' vertex ids.
+    pub ids: &'i CanonBlock,
+    /// Where the block's sign bytes go in each pack.
+    pub dst: usize,
+    /// The lanes that are triangles.
+    pub valid: u32,
+    /// The first corners.
+    pub a: [F; 3],
+    /// The second corners.
+    pub b: [F; 3],
+    /// The third corners.
+    pub o: [F; 3],
 }
 
 /// `ordered` with one light on a full block (the common case): `plane`'s operations with fewer
@@ -282,7 +288,7 @@ fn robust<Lv: Level>(block: &Block<'_, Lv::F>, lights: &[[f32; 4]], out: &mut [&
 /// one store. The block's points are widened to f64 (by `fallback`) only when some lane needs
 /// the f64 filter. Returns the evaluations decided by the scalar exact predicate.
 #[inline(always)]
-fn exact_packs<Lv: Level, G: Geometry>(
+pub(super) fn exact_packs<Lv: Level, G: Geometry>(
     lay: &G,
     block: &Block<'_, Lv::F>,
     (lights, stages): (&[[f32; 4]], &[F32Stage]),
