@@ -153,7 +153,7 @@ impl Verdict {
     fn words(&self) -> String {
         match self {
             Self::Reached { ratio, .. } if self.pcss_wins() => format!(
-                "**PCSS wins**: lower error at lower time (the volumes' equal error costs {ratio:.2}x)"
+                "**PCSS wins** on time: every volume setting as fast has a larger error; equal or lower error costs {ratio:.2}x"
             ),
             Self::Reached { ratio, .. } => {
                 format!("volumes win: equal or lower error at {ratio:.2}x PCSS's time")

@@ -298,7 +298,7 @@ fn soft_table_finds_the_cheapest_volumes_at_pcss_error_and_says_who_wins() {
     };
     let t = tables(&results, &["exact".to_owned()]);
     for line in [
-        "| a | 0.03 of the box (0.150) | PCSS 2048 | 0.0800, 12.0 | volumes, plan's N (12) | 0.0600, 24.0 | 2.00 | **PCSS wins**: lower error at lower time (the volumes' equal error costs 2.00x) |",
+        "| a | 0.03 of the box (0.150) | PCSS 2048 | 0.0800, 12.0 | volumes, plan's N (12) | 0.0600, 24.0 | 2.00 | **PCSS wins** on time: every volume setting as fast has a larger error; equal or lower error costs 2.00x |",
         "| a | 0.03 of the box (0.150) | PCSS 4096 | 0.1000, 20.0 | volumes N=4 | 0.1000, 10.0 | 0.50 | volumes win: equal or lower error at 0.50x PCSS's time |",
         "| town | 0.02 rad | PCSS 2048 | 0.0100, 8.00 | none | n/a | n/a | no volume N reaches PCSS's error (some are faster) |",
         "| town | 0.02 rad | PCSS 4096 | 0.0100, 4.00 | none | n/a | n/a | **PCSS wins**: lower error and lower time than every volume N |",
