@@ -45,6 +45,45 @@ fn v3(v: Vec3) -> Value {
     json!([f64::from(v.x), f64::from(v.y), f64::from(v.z)])
 }
 
+/// The scene's lights as `KHR_lights_punctual` lights, each placed by a node appended to
+/// `nodes`; a light with a size keeps its radius in its `extras`.
+fn light_nodes(scene: &Scene, nodes: &mut Vec<Value>) -> Vec<Value> {
+    let mut lights = Vec::new();
+    for (i, l) in scene.lights.iter().enumerate() {
+        let [x, y, z, w] = l.light.to_array();
+        let name = format!("light{i}");
+        if w == 0.0 {
+            let d = Vec3::new(x, y, z);
+            let n = d.normalize_or(Vec3::Z);
+            let helper = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+            let xa = helper.cross(n).normalize();
+            let ya = n.cross(xa).normalize();
+            let t = Affine3A::from_cols(xa.into(), ya.into(), d.into(), glam::Vec3A::ZERO);
+            lights.push(
+                json!({"name": name, "type": "directional", "color": [1.0, 1.0, 1.0],
+            "intensity": 3.0}),
+            );
+            nodes.push(json!({"name": name, "matrix": matrix(&t),
+            "extensions": {"KHR_lights_punctual": {"light": i}}}));
+        } else {
+            let p = Vec3::new(x, y, z) / w;
+            lights.push(
+                json!({"name": name, "type": "point", "color": [1.0, 1.0, 1.0],
+            "intensity": 100.0}),
+            );
+            nodes.push(json!({"name": name, "translation": v3(p),
+            "extensions": {"KHR_lights_punctual": {"light": i}}}));
+        }
+        if l.radius > 0.0 {
+            // KHR_lights_punctual has no size; the loader reads it back from here.
+            if let Some(last) = lights.last_mut() {
+                last["extras"] = json!({"radius": l.radius});
+            }
+        }
+    }
+    lights
+}
+
 fn matrix(t: &Affine3A) -> Value {
     let m = glam::Mat4::from(*t).to_cols_array();
     Value::Array(m.iter().map(|&x| f(x)).collect())
@@ -106,39 +145,7 @@ pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, SceneError> {
         nodes.push(node);
     }
 
-    let mut lights = Vec::new();
-    for (i, l) in scene.lights.iter().enumerate() {
-        let [x, y, z, w] = l.light.to_array();
-        let name = format!("light{i}");
-        if w == 0.0 {
-            let d = Vec3::new(x, y, z);
-            let n = d.normalize_or(Vec3::Z);
-            let helper = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
-            let xa = helper.cross(n).normalize();
-            let ya = n.cross(xa).normalize();
-            let t = Affine3A::from_cols(xa.into(), ya.into(), d.into(), glam::Vec3A::ZERO);
-            lights.push(
-                json!({"name": name, "type": "directional", "color": [1.0, 1.0, 1.0],
-                "intensity": 3.0}),
-            );
-            nodes.push(json!({"name": name, "matrix": matrix(&t),
-                "extensions": {"KHR_lights_punctual": {"light": i}}}));
-        } else {
-            let p = Vec3::new(x, y, z) / w;
-            lights.push(
-                json!({"name": name, "type": "point", "color": [1.0, 1.0, 1.0],
-                "intensity": 100.0}),
-            );
-            nodes.push(json!({"name": name, "translation": v3(p),
-                "extensions": {"KHR_lights_punctual": {"light": i}}}));
-        }
-        if l.radius > 0.0 {
-            // KHR_lights_punctual has no size; the loader reads it back from here.
-            if let Some(last) = lights.last_mut() {
-                last["extras"] = json!({"radius": l.radius});
-            }
-        }
-    }
+    let lights = light_nodes(scene, &mut nodes);
 
     let mut cameras = Vec::new();
     if let Some(c) = scene.camera {

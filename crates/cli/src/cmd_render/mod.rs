@@ -291,22 +291,9 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
     } else {
         (None, None)
     };
-    let sample_artifact_pixels = cmp.as_ref().map(|c| {
-        let mut per: Vec<Vec<usize>> = vec![Vec::new(); scene.lights.len()];
-        match &hard {
-            Some(h) => {
-                for (&(light, _), &n) in h.owner.iter().zip(&c.artifact_pixels_per_light) {
-                    per[light].push(n);
-                }
-            }
-            None => {
-                for (li, &n) in c.artifact_pixels_per_light.iter().enumerate() {
-                    per[li].push(n);
-                }
-            }
-        }
-        per
-    });
+    let sample_artifact_pixels = cmp
+        .as_ref()
+        .map(|c| sample_artifacts(c, hard.as_ref(), scene.lights.len()));
     let visibility_error = if args.reference {
         Some(soft_errors(&frame, &scene)?)
     } else {
@@ -380,6 +367,30 @@ pub fn run(args: &Args, out: &mut dyn Write) -> Result<(), CliError> {
         )?,
     }
     Ok(())
+}
+
+/// Per scene light, the artifact pixels of each of its samples' hard shadows in `cmp` (made
+/// with `hard`'s lights when the frame had lights of several samples, else with the scene's:
+/// one entry per light).
+fn sample_artifacts(
+    cmp: &shadowvol_reference::Comparison,
+    hard: Option<&crate::shot::HardLights>,
+    lights: usize,
+) -> Vec<Vec<usize>> {
+    let mut per: Vec<Vec<usize>> = vec![Vec::new(); lights];
+    match hard {
+        Some(h) => {
+            for (&(light, _), &n) in h.owner.iter().zip(&cmp.artifact_pixels_per_light) {
+                per[light].push(n);
+            }
+        }
+        None => {
+            for (li, &n) in cmp.artifact_pixels_per_light.iter().enumerate() {
+                per[li].push(n);
+            }
+        }
+    }
+    per
 }
 
 /// Writes each light's visibility ([`shadowvol_renderer::FrameImage::visibility_image`]) to

@@ -94,6 +94,67 @@ pub struct FitBounds {
     pub casters: Option<(Vec3, Vec3)>,
 }
 
+/// The cascaded map of the directional light `light` (towards `towards`), fitted to the view of
+/// `camera` and the casters of `bounds`; `None` when it cannot cast.
+fn directional_map(
+    light: &SceneLight,
+    towards: Vec3,
+    camera: &Camera,
+    aspect: f32,
+    bounds: &FitBounds,
+    settings: &MapSettings,
+) -> Option<LightMap> {
+    let casters = bounds.casters?;
+    let eye = camera.eye;
+    let to_light = towards.try_normalize()?;
+    let size = settings.size_for(MapKind::Directional);
+    let bias = settings.bias_for(MapKind::Directional);
+    let n = settings.cascades.clamp(1, 4) as usize;
+    let forward = (camera.target - camera.eye).normalize_or_zero();
+    let far = corners(bounds.scene)
+        .iter()
+        .map(|c| (*c - eye).dot(forward))
+        .fold(camera.near, f32::max);
+    let splits = cascade_splits(camera.near, far, n);
+    let mut view_proj = [Mat4::IDENTITY; 6];
+    let mut cascade_far = [far; 4];
+    let mut cascade_offset = [0.0; 4];
+    let mut cascade_soft = [[0.0; 4]; 4];
+    let mut texel0 = 0.0;
+    for i in 0..n {
+        let slice = (f64::from(splits[i]), f64::from(splits[i + 1]));
+        let m = directional(to_light, camera, aspect, bounds, casters, size, slice)?;
+        view_proj[i] = m.view_proj;
+        cascade_far[i] = splits[i + 1];
+        cascade_offset[i] = bias.normal * m.texel * std::f32::consts::SQRT_2;
+        cascade_soft[i] = m.soft;
+        if i == 0 {
+            texel0 = m.texel;
+        }
+    }
+    let view = LightSpace::new(to_light, camera.eye).frustum_box(
+        camera,
+        aspect,
+        (f64::from(camera.near), f64::from(far)),
+    );
+    let view_depth = (view.1.z - view.0.z) as f32;
+    Some(LightMap {
+        kind: MapKind::Directional,
+        size,
+        view_proj,
+        bias,
+        normal_offset: cascade_offset[0],
+        near: 0.0,
+        texel: texel0,
+        axis: if n > 1 { forward } else { Vec3::ZERO },
+        cascades: n as u32,
+        cascade_far,
+        cascade_offset,
+        soft_shadow_size: super::pcss::soft_shadow_size(light, view_depth),
+        cascade_soft,
+    })
+}
+
 /// The map of `light` for this frame, `None` for a light that cannot cast (no caster, or a
 /// light that is not finite).
 #[must_use]
@@ -109,53 +170,7 @@ pub fn light_map(
     let spot = light.emission.as_ref().and_then(|e| e.spot);
     let eye = camera.eye;
     if w == 0.0 {
-        let to_light = Vec3::new(x, y, z).try_normalize()?;
-        let size = settings.size_for(MapKind::Directional);
-        let bias = settings.bias_for(MapKind::Directional);
-        let n = settings.cascades.clamp(1, 4) as usize;
-        let forward = (camera.target - camera.eye).normalize_or_zero();
-        let far = corners(bounds.scene)
-            .iter()
-            .map(|c| (*c - eye).dot(forward))
-            .fold(camera.near, f32::max);
-        let splits = cascade_splits(camera.near, far, n);
-        let mut view_proj = [Mat4::IDENTITY; 6];
-        let mut cascade_far = [far; 4];
-        let mut cascade_offset = [0.0; 4];
-        let mut cascade_soft = [[0.0; 4]; 4];
-        let mut texel0 = 0.0;
-        for i in 0..n {
-            let slice = (f64::from(splits[i]), f64::from(splits[i + 1]));
-            let m = directional(to_light, camera, aspect, bounds, casters, size, slice)?;
-            view_proj[i] = m.view_proj;
-            cascade_far[i] = splits[i + 1];
-            cascade_offset[i] = bias.normal * m.texel * std::f32::consts::SQRT_2;
-            cascade_soft[i] = m.soft;
-            if i == 0 {
-                texel0 = m.texel;
-            }
-        }
-        let view = LightSpace::new(to_light, camera.eye).frustum_box(
-            camera,
-            aspect,
-            (f64::from(camera.near), f64::from(far)),
-        );
-        let view_depth = (view.1.z - view.0.z) as f32;
-        return Some(LightMap {
-            kind: MapKind::Directional,
-            size,
-            view_proj,
-            bias,
-            normal_offset: cascade_offset[0],
-            near: 0.0,
-            texel: texel0,
-            axis: if n > 1 { forward } else { Vec3::ZERO },
-            cascades: n as u32,
-            cascade_far,
-            cascade_offset,
-            soft_shadow_size: super::pcss::soft_shadow_size(light, view_depth),
-            cascade_soft,
-        });
+        return directional_map(light, Vec3::new(x, y, z), camera, aspect, bounds, settings);
     }
     let soft_shadow_size = super::pcss::soft_shadow_size(light, 0.0);
     let pos = Vec3::new(x, y, z) / w;

@@ -10,7 +10,7 @@ use crate::raster::{
     IDS_FORMAT, LIGHT_STRIDE, VISIBILITY_FORMAT,
 };
 use crate::{RenderDevice, RenderError};
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 use shadowvol_gpu::ErrorScopes;
 use shadowvol_scenes::Scene;
 use shadowvol_silhouette::{vec_bytes, PreparedBytes};
@@ -26,6 +26,10 @@ use super::resources::{
 };
 use crate::raster::empty_scissor;
 use crate::raster::pipelines::uniform_buffer;
+
+mod frame;
+mod timings;
+pub(crate) use frame::{MapFrame, MapLight};
 
 /// The shadow-map passes' pipelines on one device.
 pub(crate) struct MapPass {
@@ -111,14 +115,6 @@ impl MapScene {
             device,
         }
     }
-}
-
-/// The GPU time of a frame's map passes, as [`crate::GpuTimings`] splits it.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct MapTimings {
-    pub(crate) maps: f64,
-    pub(crate) mask: f64,
-    pub(crate) lighting: f64,
 }
 
 impl MapPass {
@@ -788,90 +784,4 @@ impl MapPass {
         }
         pass.set_vertex_buffer(0, ms.surface.slice(..));
     }
-
-    /// Resolves the last frame's timestamps (after its submission finished); `None` without
-    /// timestamp queries.
-    ///
-    /// # Errors
-    /// [`RenderError::Device`] when mapping fails.
-    pub(crate) fn read_timings(
-        &self,
-        rd: &RenderDevice,
-        ms: &MapScene,
-        written: &[bool],
-    ) -> Result<Option<MapTimings>, RenderError> {
-        let Some(q) = ms.queries.as_ref() else {
-            return Ok(None);
-        };
-        if written.is_empty() || written.len() > 1 + 3 * q.lights {
-            return Ok(None);
-        }
-        let mut enc = rd
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("map timestamps"),
-            });
-        // Each written pair on its own (resolve offsets are 256-aligned): an unwritten query
-        // has no value to resolve.
-        for (slot, _) in written.iter().enumerate().filter(|(_, w)| **w) {
-            let first = 2 * slot as u32;
-            enc.resolve_query_set(&q.set, first..first + 2, &q.resolve, 256 * slot as u64);
-        }
-        enc.copy_buffer_to_buffer(&q.resolve, 0, &q.read, 0, 256 * written.len() as u64);
-        rd.queue.submit([enc.finish()]);
-        let bytes = crate::raster::map_read(&rd.device, &q.read)?;
-        let tick = |i: usize| {
-            let o = 256 * (i / 2) + 8 * (i % 2);
-            u64::from_le_bytes(bytes[o..o + 8].try_into().expect("8 bytes"))
-        };
-        let period_ms = f64::from(rd.queue.get_timestamp_period()) * 1e-6;
-        // Only the pairs the frame wrote: the others hold no defined value.
-        let span = |slot: usize| {
-            if written[slot] {
-                tick(2 * slot + 1).saturating_sub(tick(2 * slot)) as f64 * period_ms
-            } else {
-                0.0
-            }
-        };
-        let mut t = MapTimings {
-            lighting: span(0),
-            ..MapTimings::default()
-        };
-        for slot in (1..written.len()).step_by(3) {
-            t.maps += span(slot);
-            t.mask += span(slot + 1);
-            t.lighting += span(slot + 2);
-        }
-        Ok(Some(t))
-    }
-}
-
-/// One light of a frame, as the map passes draw it.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct MapLight {
-    /// Camera-relative homogeneous light.
-    pub(crate) light: [f32; 4],
-    /// Colour times gain.
-    pub(crate) color: [f32; 3],
-    /// Range and cone.
-    pub(crate) emission: Option<shadowvol_scenes::Emission>,
-    /// Its map, `None` when nothing casts.
-    pub(crate) map: Option<LightMap>,
-    /// Scissor of its mask and lit passes.
-    pub(crate) scissor: Option<[u32; 4]>,
-}
-
-/// One frame's inputs to the map passes.
-#[derive(Debug, Clone)]
-pub(crate) struct MapFrame<'a> {
-    /// The camera's `projection * view` at the origin (camera-relative).
-    pub(crate) view_proj: Mat4,
-    /// The eye in world space.
-    pub(crate) eye: Vec3,
-    /// Ambient factor.
-    pub(crate) ambient: f32,
-    /// How the maps are read.
-    pub(crate) filter: MapFilter,
-    /// The lights.
-    pub(crate) lights: &'a [MapLight],
 }

@@ -102,7 +102,6 @@ impl HostPipeline {
     ) -> Result<Extracted, RenderError> {
         let scene = frame.scene;
         let mode = frame.mode;
-        let n_lights = scene.lights.len();
         // Plan entries cover every surface; only casters (the first ones) are extracted.
         let n_surfaces = frame.world.surfaces().len();
         let n_obj = self.objects.len();
@@ -110,27 +109,7 @@ impl HostPipeline {
         let mut m_buf = Multiplicities::default();
         let mut uncertain = 0u64;
         let mut readback_bytes = 0u64;
-        let mut stale_by_obj: Vec<Vec<usize>> = Vec::with_capacity(n_obj);
-        for oi in 0..n_obj {
-            let needed: Vec<usize> = (0..n_lights)
-                .filter(|&li| entries[li * n_surfaces + oi].technique != Technique::Culled)
-                .collect();
-            let stale: Vec<usize> = needed
-            .iter()
-            .copied()
-            .filter(|&li| {
-                !matches!(&self.objects[oi].lights[li], Some(c) if c.light == scene.lights[li].light && c.mode == mode)
-            })
-            .collect();
-            for &li in &needed {
-                entries[li * n_surfaces + oi].silhouette = if stale.contains(&li) {
-                    SilhouetteSource::Extracted
-                } else {
-                    SilhouetteSource::Reused
-                };
-            }
-            stale_by_obj.push(stale);
-        }
+        let mut stale_by_obj = self.stale_lights(frame, entries);
         // When no object moved and several objects need new silhouettes (a light moved), one
         // call over the whole prepared scene serves them all: no per-object round trips, which
         // is what costs GPU backends most (the paper's OpenCL path lost up to 4x on 100 objects
@@ -219,6 +198,37 @@ impl HostPipeline {
             uncertain,
             readback_bytes,
         })
+    }
+
+    /// Per object, the lights whose silhouette must be extracted again (the plan draws it and
+    /// the cache holds another light or mode); marks each drawn entry extracted or reused.
+    fn stale_lights(&self, frame: &FrameInputs<'_>, entries: &mut [PlanEntry]) -> Vec<Vec<usize>> {
+        let scene = frame.scene;
+        let n_lights = scene.lights.len();
+        let n_surfaces = frame.world.surfaces().len();
+        let n_obj = self.objects.len();
+        let mut stale_by_obj: Vec<Vec<usize>> = Vec::with_capacity(n_obj);
+        for oi in 0..n_obj {
+            let needed: Vec<usize> = (0..n_lights)
+                .filter(|&li| entries[li * n_surfaces + oi].technique != Technique::Culled)
+                .collect();
+            let stale: Vec<usize> = needed
+            .iter()
+            .copied()
+            .filter(|&li| {
+                !matches!(&self.objects[oi].lights[li], Some(c) if c.light == scene.lights[li].light && c.mode == frame.mode)
+            })
+            .collect();
+            for &li in &needed {
+                entries[li * n_surfaces + oi].silhouette = if stale.contains(&li) {
+                    SilhouetteSource::Extracted
+                } else {
+                    SilhouetteSource::Reused
+                };
+            }
+            stale_by_obj.push(stale);
+        }
+        stale_by_obj
     }
 
     /// The volume geometry of every light, appended to `volumes`, from the cached silhouettes
