@@ -268,21 +268,37 @@ pub(crate) fn run_extract(
     if nl == 0 {
         return 0;
     }
-    let slots = p.total_tri_slots;
-    let packs = nl.div_ceil(PACK);
+    stage_lights(p, scratch, lights, mode);
+    let share_any = scratch.boxes.iter().any(Option::is_some);
+    if share_any && !out.zero_listed(ne, nl) {
+        // The shared edge pass writes only the multiplicities that are not 0.
+        out.reset(ne, nl);
+    }
+    let uncertain = if mode == Accuracy::Original {
+        0
+    } else {
+        tri_signs(level, p, scratch, nl, mode, share_any)
+    };
+    edge_pass(level, p, scratch, nl, mode, out);
+    collect_silhouettes(&scratch.sil, p.edge_items.len(), nl, out);
+    uncertain * 3
+}
+
+/// Fills `scratch.lights` with every light in every object's frame and, in exact mode with
+/// several lights of one `w`, `scratch.boxes`: each triangle of an object where it pays is
+/// classified once against the box of the lights in the object's frame (`kernel::shared`).
+fn stage_lights(p: &Prepared, scratch: &mut Scratch, lights: &[Light], mode: Accuracy) {
+    let nl = lights.len();
     scratch.lights.clear();
     for o in &p.objects {
         scratch
             .lights
             .extend(lights.iter().map(|l| o.to_object.light(l)));
     }
-    let obj_lights = |object: usize| &scratch.lights[object * nl..(object + 1) * nl];
-    // Exact mode with several lights of one `w`: each triangle of an object where it pays is
-    // classified once against the box of the lights in the object's frame (`kernel::shared`).
     scratch.boxes.clear();
     if mode == Accuracy::Exact && nl >= SHARE_MIN_LIGHTS {
         for (object, o) in p.objects.iter().enumerate() {
-            let bx = LightBox::of(obj_lights(object));
+            let bx = LightBox::of(&scratch.lights[object * nl..(object + 1) * nl]);
             if bx.is_none() {
                 scratch.boxes.clear();
                 break;
@@ -292,133 +308,160 @@ pub(crate) fn run_extract(
                 .push(bx.filter(|bx| with_geometry!(&*o.layout, lay => worth_sharing(lay, bx))));
         }
     }
+}
+
+/// Phase 1: one sign per (canonical triangle, light) of the `nl` staged lights: one byte per
+/// triangle slot in each pack of up to `PACK` lights; with sharing (`share_any`), also one
+/// shared byte per slot. Returns the triangles decided by the scalar exact predicate.
+fn tri_signs(
+    level: SimdLevel,
+    p: &Prepared,
+    scratch: &mut Scratch,
+    nl: usize,
+    mode: Accuracy,
+    share_any: bool,
+) -> u64 {
+    let slots = p.total_tri_slots;
+    let packs = nl.div_ceil(PACK);
+    let obj_lights = |object: usize| &scratch.lights[object * nl..(object + 1) * nl];
     let boxes = &scratch.boxes;
-    let share_any = boxes.iter().any(Option::is_some);
-    if share_any && !out.zero_listed(ne, nl) {
-        // The shared edge pass writes only the multiplicities that are not 0.
-        out.reset(ne, nl);
-    }
-    let mut uncertain = 0u64;
-    if mode != Accuracy::Original {
-        // Phase 1: one sign per (canonical triangle, light): one byte per triangle slot in
-        // each pack of up to `PACK` lights; with sharing, also one shared byte per slot.
-        let signs = &mut scratch.signs;
-        if share_any {
-            // Not cleared: every pass writes the sign bytes the edge pass reads (a shared pass
-            // those of the blocks with a cut triangle) and every shared byte of its object.
-            if signs.len() < slots * packs {
-                signs.resize(slots * packs, 0);
-            }
-        } else {
-            signs.clear();
+    let signs = &mut scratch.signs;
+    if share_any {
+        // Not cleared: every pass writes the sign bytes the edge pass reads (a shared pass
+        // those of the blocks with a cut triangle) and every shared byte of its object.
+        if signs.len() < slots * packs {
             signs.resize(slots * packs, 0);
         }
-        let shared = &mut scratch.shared;
-        shared.resize(slots, 0);
-        let mut parts = split_rows(&mut signs[..slots * packs], slots, &p.tri_bounds);
-        let mut shared_parts = split_rows(shared, slots, &p.tri_bounds);
-        if !parts.is_empty() {
-            uncertain = p
-                .tri_items
-                .par_iter()
-                .zip(parts.par_chunks_mut(packs))
-                .zip(shared_parts.par_iter_mut())
-                .map(|((it, dst), sh)| {
-                    let o = &p.objects[it.object];
-                    let (blocks, lights) = (it.blocks.clone(), obj_lights(it.object));
-                    match boxes.get(it.object).copied().flatten() {
-                        Some(bx) => with_geometry!(&*o.layout, lay => {
-                            let pass = SharedTriPass {
-                                lay,
-                                blocks,
-                                lights,
-                                bx: &bx,
-                                out: dst,
-                                shared: sh,
-                            };
-                            dispatch::run(level, pass)
-                        }),
-                        None => with_geometry!(&*o.layout, lay => {
-                            let pass = TriPass {
-                                lay,
-                                blocks,
-                                lights,
-                                mode,
-                                out: dst,
-                            };
-                            dispatch::run(level, pass)
-                        }),
-                    }
-                })
-                .sum();
-        }
+    } else {
+        signs.clear();
+        signs.resize(slots * packs, 0);
     }
-    // Phase 2: one pass over all edges of all objects.
+    let shared = &mut scratch.shared;
+    shared.resize(slots, 0);
+    let mut parts = split_rows(&mut signs[..slots * packs], slots, &p.tri_bounds);
+    let mut shared_parts = split_rows(shared, slots, &p.tri_bounds);
+    if parts.is_empty() {
+        return 0;
+    }
+    p.tri_items
+        .par_iter()
+        .zip(parts.par_chunks_mut(packs))
+        .zip(shared_parts.par_iter_mut())
+        .map(|((it, dst), sh)| {
+            let o = &p.objects[it.object];
+            let (blocks, lights) = (it.blocks.clone(), obj_lights(it.object));
+            match boxes.get(it.object).copied().flatten() {
+                Some(bx) => with_geometry!(&*o.layout, lay => {
+                    let pass = SharedTriPass {
+                        lay,
+                        blocks,
+                        lights,
+                        bx: &bx,
+                        out: dst,
+                        shared: sh,
+                    };
+                    dispatch::run(level, pass)
+                }),
+                None => with_geometry!(&*o.layout, lay => {
+                    let pass = TriPass {
+                        lay,
+                        blocks,
+                        lights,
+                        mode,
+                        out: dst,
+                    };
+                    dispatch::run(level, pass)
+                }),
+            }
+        })
+        .sum()
+}
+
+/// Phase 2: one pass over all edges of all objects for the `nl` staged lights, from the
+/// triangle signs of phase 1 (or, in original mode, from the lights): multiplicities into
+/// `out`, each edge item's silhouette edges into `scratch.sil`.
+fn edge_pass(
+    level: SimdLevel,
+    p: &Prepared,
+    scratch: &mut Scratch,
+    nl: usize,
+    mode: Accuracy,
+    out: &mut Multiplicities,
+) {
+    let slots = p.total_tri_slots;
+    let packs = nl.div_ceil(PACK);
     let items = p.edge_items.len();
     let sil = &mut scratch.sil;
     sil.resize_with(items * nl, Vec::new);
     for s in sil.iter_mut() {
         s.clear();
     }
-    let mut rows = split_rows(out.all_values_mut(), ne, &p.edge_bounds);
-    if !rows.is_empty() {
-        let signs: &[i8] = &scratch.signs;
-        let shared: &[i8] = &scratch.shared;
-        p.edge_items
-            .par_iter()
-            .zip(rows.par_chunks_mut(nl))
-            .zip(sil.par_chunks_mut(nl))
-            .for_each(|((it, rows), sil)| {
-                let o = &p.objects[it.object];
-                let out = EdgeOut {
-                    rows,
-                    sil,
-                    edge_base: o.edge_base,
-                };
-                if mode == Accuracy::Original {
-                    with_geometry!(&*o.layout, lay => {
-                        let pass = EdgeOriginal {
-                            lay,
-                            blocks: it.blocks.clone(),
-                            lights: obj_lights(it.object),
-                            out,
-                        };
-                        dispatch::run(level, pass);
-                    });
-                } else {
-                    // Per pack of lights, where the object's slot 0 is (up to 64 lights on the
-                    // stack).
-                    let mut small = [0usize; 16];
-                    let mut large = Vec::new();
-                    let bases: &mut [usize] = if packs <= small.len() {
-                        &mut small[..packs]
-                    } else {
-                        large.resize(packs, 0);
-                        &mut large
-                    };
-                    for (pack, b) in bases.iter_mut().enumerate() {
-                        *b = pack * slots + o.tri_base;
-                    }
-                    with_geometry!(&*o.layout, lay => {
-                        let pass = EdgeSums {
-                            lay,
-                            blocks: it.blocks.clone(),
-                            signs: PackedSigns {
-                                all: signs,
-                                bases,
-                                shared: boxes
-                                    .get(it.object)
-                                    .is_some_and(Option::is_some)
-                                    .then(|| &shared[o.tri_base..]),
-                            },
-                            out,
-                        };
-                        dispatch::run(level, pass);
-                    });
-                }
-            });
+    let mut rows = split_rows(out.all_values_mut(), p.total_edges, &p.edge_bounds);
+    if rows.is_empty() {
+        return;
     }
-    drop(rows);
+    let obj_lights = |object: usize| &scratch.lights[object * nl..(object + 1) * nl];
+    let boxes: &[Option<LightBox>] = &scratch.boxes;
+    let signs: &[i8] = &scratch.signs;
+    let shared: &[i8] = &scratch.shared;
+    p.edge_items
+        .par_iter()
+        .zip(rows.par_chunks_mut(nl))
+        .zip(sil.par_chunks_mut(nl))
+        .for_each(|((it, rows), sil)| {
+            let o = &p.objects[it.object];
+            let out = EdgeOut {
+                rows,
+                sil,
+                edge_base: o.edge_base,
+            };
+            if mode == Accuracy::Original {
+                with_geometry!(&*o.layout, lay => {
+                    let pass = EdgeOriginal {
+                        lay,
+                        blocks: it.blocks.clone(),
+                        lights: obj_lights(it.object),
+                        out,
+                    };
+                    dispatch::run(level, pass);
+                });
+            } else {
+                // Per pack of lights, where the object's slot 0 is (up to 64 lights on the
+                // stack).
+                let mut small = [0usize; 16];
+                let mut large = Vec::new();
+                let bases: &mut [usize] = if packs <= small.len() {
+                    &mut small[..packs]
+                } else {
+                    large.resize(packs, 0);
+                    &mut large
+                };
+                for (pack, b) in bases.iter_mut().enumerate() {
+                    *b = pack * slots + o.tri_base;
+                }
+                with_geometry!(&*o.layout, lay => {
+                    let pass = EdgeSums {
+                        lay,
+                        blocks: it.blocks.clone(),
+                        signs: PackedSigns {
+                            all: signs,
+                            bases,
+                            shared: boxes
+                                .get(it.object)
+                                .is_some_and(Option::is_some)
+                                .then(|| &shared[o.tri_base..]),
+                        },
+                        out,
+                    };
+                    dispatch::run(level, pass);
+                });
+            }
+        });
+}
+
+/// Gives `out` each of the `nl` lights' silhouette: the lists of the `items` edge items in
+/// `sil` (item-major), concatenated in item order.
+fn collect_silhouettes(sil: &[Vec<u32>], items: usize, nl: usize, out: &mut Multiplicities) {
     for l in 0..nl {
         let lists = || (0..items).map(|i| &sil[i * nl + l]);
         let mut all = Vec::with_capacity(lists().map(Vec::len).sum());
@@ -428,7 +471,6 @@ pub(crate) fn run_extract(
         out.set_silhouette(l, all);
     }
     out.mark_silhouettes_complete();
-    uncertain * 3
 }
 
 #[cfg(test)]
