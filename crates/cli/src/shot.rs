@@ -17,6 +17,21 @@ pub fn shot<'a>(
     scene: &'a Scene,
 ) -> Result<shadowvol_reference::Shot<'a>, RenderError> {
     let img = frame.read_image()?;
+    shot_with(frame, scene, &img.stencil, &frame.report.light_colors)
+}
+
+/// `frame` as the reference reads it, drawn from `scene`'s lights with `stencil` and
+/// `light_colors` (one each per light of `scene`) instead of the frame's own.
+///
+/// # Errors
+/// [`RenderError::InvalidInput`] for a frame drawn into the caller's view (no image).
+pub fn shot_with<'a>(
+    frame: &'a Frame,
+    scene: &'a Scene,
+    stencil: &'a [Vec<u8>],
+    light_colors: &'a [[f32; 3]],
+) -> Result<shadowvol_reference::Shot<'a>, RenderError> {
+    let img = frame.read_image()?;
     Ok(shadowvol_reference::Shot::new(
         scene,
         frame.camera,
@@ -24,8 +39,8 @@ pub fn shot<'a>(
         img.height,
         &img.rgba,
         &img.ids,
-        &img.stencil,
-        &frame.report.light_colors,
+        stencil,
+        light_colors,
     ))
 }
 
@@ -85,15 +100,5 @@ pub fn hard_shot<'a>(
     frame: &'a Frame,
     hard: &'a HardLights,
 ) -> Result<shadowvol_reference::Shot<'a>, RenderError> {
-    let img = frame.read_image()?;
-    Ok(shadowvol_reference::Shot::new(
-        &hard.scene,
-        frame.camera,
-        img.width,
-        img.height,
-        &img.rgba,
-        &img.ids,
-        &hard.stencil,
-        &hard.colors,
-    ))
+    shot_with(frame, &hard.scene, &hard.stencil, &hard.colors)
 }

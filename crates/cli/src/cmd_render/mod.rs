@@ -447,16 +447,8 @@ fn soft_errors(
         .iter()
         .map(|v| v.iter().map(|&x| u8::from(x < 1.0)).collect())
         .collect();
-    let shot = shadowvol_reference::Shot::new(
-        scene,
-        frame.camera,
-        img.width,
-        img.height,
-        &img.rgba,
-        &img.ids,
-        &stencils,
-        &frame.report.light_colors,
-    );
+    let shot = crate::shot::shot_with(frame, scene, &stencils, &frame.report.light_colors)
+        .map_err(render_error)?;
     let casters = shadowvol_reference::soft::SoftCasters::new(&shot);
     let aim = scene.light_aim();
     Ok(scene

@@ -192,24 +192,14 @@ impl SoftTargets {
         enc: &mut wgpu::CommandEncoder,
         depth_stencil: &wgpu::TextureView,
     ) {
-        let _ = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("soft clear"),
-            color_attachments: &[states::cleared(&self.light_view, wgpu::Color::TRANSPARENT)],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth_stencil,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(0),
-                    store: wgpu::StoreOp::Store,
-                }),
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let color = states::cleared(&self.light_view, wgpu::Color::TRANSPARENT);
+        let _ = pass_over(
+            enc,
+            "soft clear",
+            color,
+            depth_stencil,
+            wgpu::LoadOp::Clear(0),
+        );
     }
 
     /// Records the composite of a soft light of `samples` samples into `color` (limited to
@@ -279,6 +269,18 @@ fn read_only_pass<'e>(
     color: Option<wgpu::RenderPassColorAttachment<'_>>,
     depth_stencil: &wgpu::TextureView,
 ) -> wgpu::RenderPass<'e> {
+    pass_over(enc, label, color, depth_stencil, wgpu::LoadOp::Load)
+}
+
+/// A pass over `color` and `depth_stencil`, its depth loaded and its stencil loaded or cleared
+/// by `stencil`.
+fn pass_over<'e>(
+    enc: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    color: Option<wgpu::RenderPassColorAttachment<'_>>,
+    depth_stencil: &wgpu::TextureView,
+    stencil: wgpu::LoadOp<u32>,
+) -> wgpu::RenderPass<'e> {
     enc.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
         color_attachments: &[color],
@@ -289,7 +291,7 @@ fn read_only_pass<'e>(
                 store: wgpu::StoreOp::Store,
             }),
             stencil_ops: Some(wgpu::Operations {
-                load: wgpu::LoadOp::Load,
+                load: stencil,
                 store: wgpu::StoreOp::Store,
             }),
         }),
