@@ -170,38 +170,54 @@ fn plate_obj(d: &std::path::Path) -> PathBuf {
     obj
 }
 
+/// `render` of the plate in `d` under its disk light (radius 0.5, straight above), 160x160,
+/// with `--reference` and `extra`: its JSON.
+fn render_plate(
+    d: &std::path::Path,
+    extra: &[&str],
+) -> Result<serde_json::Value, shadowvol_test_support::Skip> {
+    let obj = plate_obj(d);
+    let out = d.join("p.png");
+    let mut args = vec![
+        "render",
+        obj.to_str().unwrap(),
+        "--light=0,4,0,1",
+        "--light-radius",
+        "0.5",
+        "--ground",
+        "off",
+        "--size",
+        "160x160",
+        "--reference",
+        "--out",
+        out.to_str().unwrap(),
+        "--format",
+        "json",
+    ];
+    args.extend_from_slice(extra);
+    Ok(common::json_ok(&args)?.0)
+}
+
 /// Shadow maps give the reference their own fractional visibility (the filter's, read back per
 /// light), not the mask's 0 or 1: under PCF and PCSS the visibility image has grey levels
 /// between 0 and 255, and the JSON measures it against the true visibility.
 fn shadow_maps_report_their_fractional_visibility() -> Outcome {
     let d = dir("maps");
-    let obj = plate_obj(&d);
     for filter in ["pcf", "pcss"] {
         let vis = d.join(format!("v-{filter}.png"));
-        let (v, _) = common::json_ok(&[
-            "render",
-            obj.to_str().unwrap(),
-            "--light=0,4,0,1",
-            "--light-radius",
-            "0.5",
-            "--ground",
-            "off",
-            "--shadows",
-            "map",
-            "--map-filter",
-            filter,
-            "--map-size",
-            "512",
-            "--size",
-            "160x160",
-            "--reference",
-            "--visibility",
-            vis.to_str().unwrap(),
-            "--out",
-            d.join("m.png").to_str().unwrap(),
-            "--format",
-            "json",
-        ])?;
+        let v = render_plate(
+            &d,
+            &[
+                "--shadows",
+                "map",
+                "--map-filter",
+                filter,
+                "--map-size",
+                "512",
+                "--visibility",
+                vis.to_str().unwrap(),
+            ],
+        )?;
         assert_eq!(v["light_samples"], serde_json::json!([1]));
         let e = &v["visibility_error"][0];
         let mean = e["mean"].as_f64().unwrap();
@@ -224,30 +240,10 @@ fn shadow_maps_report_their_fractional_visibility() -> Outcome {
 /// no lit or umbra pixel differs, on both volume pipelines.
 fn visibility_error_of_a_plate_shrinks_with_samples() -> Outcome {
     let d = dir("plate");
-    let obj = plate_obj(&d);
     for pipeline in ["host", "gpu"] {
         let mut means = Vec::new();
         for n in ["4", "64"] {
-            let (v, _) = common::json_ok(&[
-                "render",
-                obj.to_str().unwrap(),
-                "--light=0,4,0,1",
-                "--light-radius",
-                "0.5",
-                "--light-samples",
-                n,
-                "--ground",
-                "off",
-                "--pipeline",
-                pipeline,
-                "--size",
-                "160x160",
-                "--reference",
-                "--out",
-                d.join("p.png").to_str().unwrap(),
-                "--format",
-                "json",
-            ])?;
+            let v = render_plate(&d, &["--light-samples", n, "--pipeline", pipeline])?;
             let e = &v["visibility_error"][0];
             assert!(e["penumbra_pixels"].as_u64().unwrap() > 60, "{e}");
             assert_eq!(e["lit_umbra_mismatches"], 0, "{pipeline} {n}: {e}");
