@@ -24,6 +24,17 @@ pub(crate) mod shared;
 pub(crate) mod signs;
 pub(crate) mod tri_pass;
 
+/// A xorshift32 generator: the deterministic inputs of the kernels' unit tests.
+#[cfg(test)]
+pub(crate) fn xorshift(mut x: u32) -> impl FnMut() -> u32 {
+    move || {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        x
+    }
+}
+
 use crate::lanes::{Arith, Level, F32V};
 use crate::layout::{Geometry, LANES};
 

@@ -276,19 +276,10 @@ pub(super) fn widen3<Lv: Level>(p: &[Lv::F; 3]) -> ([Lv::D; 3], [Lv::D; 3]) {
 mod tests {
     use super::*;
     use crate::kernel::splat4;
+    use crate::kernel::xorshift;
     use crate::lanes::Wide;
     use crate::layout::COORD_MAX;
     use shadowvol_robust_math::{orient_filter_f32, orient_filter_f64};
-
-    /// A xorshift32 generator (deterministic test inputs).
-    fn xorshift(mut x: u32) -> impl FnMut() -> u32 {
-        move || {
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
-            x
-        }
-    }
 
     /// The 4-lane filter makes exactly the decisions of the scalar `orient_filter_f64`
     /// (certified sign, certified zero, or uncertain) on random and on coplanar inputs.

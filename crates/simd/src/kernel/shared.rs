@@ -244,17 +244,8 @@ fn shared_signs<Lv: Level, G: Geometry>(pass: SharedTriPass<G>) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kernel::xorshift;
     use crate::lanes::Wide;
-
-    /// A xorshift32 generator (deterministic test inputs).
-    fn xorshift(mut x: u32) -> impl FnMut() -> u32 {
-        move || {
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
-            x
-        }
-    }
 
     /// The 4-lane box filter makes exactly the decisions of the scalar `LightBox::filter` on
     /// random boxes and triangles, boxes touching a plane at a vertex, and flat boxes.
