@@ -547,51 +547,57 @@ impl MapPass {
             dimension: Some(wgpu::TextureViewDimension::Cube),
             ..Default::default()
         });
-        // One comparison sampler a bind group, of the frame's filter: OpenGL samples a texture
-        // with one sampler only.
-        let bind_group = |sampler: &wgpu::Sampler| {
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("map textures"),
-                layout: &self.tex_bgl,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&view_2d),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(&cube),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: wgpu::BindingResource::Sampler(sampler),
-                    },
-                ],
-            })
-        };
-        let bind_groups = [bind_group(&self.hard), bind_group(&self.pcf)];
-        let pcss = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("map textures (pcss)"),
-            layout: &self.pcss_bgl,
-            entries: &[
+        // The maps and one comparison sampler, of the frame's filter (OpenGL samples a texture
+        // with one sampler only); PCSS adds a bilinear sampler for its blocker search.
+        fn entries<'a>(
+            view_2d: &'a wgpu::TextureView,
+            cube: &'a wgpu::TextureView,
+            sampler: &'a wgpu::Sampler,
+        ) -> [wgpu::BindGroupEntry<'a>; 3] {
+            [
                 wgpu::BindGroupEntry {
                     binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&view_2d),
+                    resource: wgpu::BindingResource::TextureView(view_2d),
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&cube),
+                    resource: wgpu::BindingResource::TextureView(cube),
                 },
                 wgpu::BindGroupEntry {
                     binding: 2,
-                    resource: wgpu::BindingResource::Sampler(&self.pcf),
+                    resource: wgpu::BindingResource::Sampler(sampler),
                 },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::Sampler(&self.linear),
-                },
-            ],
-        });
+            ]
+        }
+        let bind_group = |label, layout, entries: &[wgpu::BindGroupEntry<'_>]| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(label),
+                layout,
+                entries,
+            })
+        };
+        let bind_groups = [
+            bind_group(
+                "map textures",
+                &self.tex_bgl,
+                &entries(&view_2d, &cube, &self.hard),
+            ),
+            bind_group(
+                "map textures",
+                &self.tex_bgl,
+                &entries(&view_2d, &cube, &self.pcf),
+            ),
+        ];
+        let [maps, cube_map, compare] = entries(&view_2d, &cube, &self.pcf);
+        let search = wgpu::BindGroupEntry {
+            binding: 3,
+            resource: wgpu::BindingResource::Sampler(&self.linear),
+        };
+        let pcss = bind_group(
+            "map textures (pcss)",
+            &self.pcss_bgl,
+            &[maps, cube_map, compare, search],
+        );
         MapTextures {
             size_2d,
             size_cube,
