@@ -24,6 +24,15 @@
 //    of its region) or z-fail list (from the back), by the plan's technique for the edge's
 //    object. The append is aggregated per workgroup: one global atomic per workgroup, light and
 //    list.
+//
+// Lights with a size (exact mode): the host passes runs of consecutive lights that sample one
+// light (a sharing group, `light_group`) and, per group and object, the box of its object-space
+// samples. The triangle pass decides each triangle once per group with `box_sign` (an f32 filter
+// certified for every light in the box; robust-math's `box_sign_f32`); a triangle it certifies
+// has that sign for every sample, and only the others are decided per sample. The edge pass
+// computes m once for the group where every opposite triangle is shared and appends its records
+// for every sample of the group in one round; the other edges go per sample, and a workgroup
+// with none skips that loop.
 
 struct ResidentParams {
     object_count: u32,
@@ -44,6 +53,15 @@ struct ResidentParams {
 // [light * capacity + slot]: global edge, NEGATIVE set when m < 0.
 @group(1) @binding(6) var<storage, read_write> records: array<u32>;
 
+// After the (light, object) codes of `technique`, one word per light: NO_GROUP, or its sharing
+// group (bits 0-15), the group's light count (bits 16-23) and its index in the group (24-31).
+const NO_GROUP: u32 = 0xffffffffu;
+// A group's triangle that `box_sign` left (shared signs, `signs[light_count * tri_count + group
+// * tri_count + t]`, hold -1, 1 or this).
+const NOT_SHARED: i32 = 4;
+const BOX_INPUT_MAX: f32 = 0x1p39f;
+const BOX_PERM_MIN: f32 = 0x1p-60f;
+
 // The indirect dispatch `resident_pending_args` writes (group 2 of that entry only).
 @group(2) @binding(0) var<storage, read_write> pending_dispatch: array<u32, 3>;
 
@@ -54,6 +72,91 @@ override PENDING_GROUPS_X: u32 = 65535u;
 
 var<workgroup> wg_count: array<atomic<u32>, 2>;
 var<workgroup> wg_base: array<u32, 2>;
+// A sharing group's first z-pass and z-fail slot per light.
+const MAX_GROUP: u32 = 64u;
+var<workgroup> wg_group_base: array<vec2<u32>, MAX_GROUP>;
+
+fn light_group(li: u32) -> u32 {
+    return technique[params.light_count * rp.object_count + li];
+}
+
+// Row of group `g`'s shared signs in `signs`.
+fn shared_row(g: u32) -> u32 {
+    return (params.light_count + g) * params.tri_count;
+}
+
+fn box_input_ok(x: f32) -> bool {
+    let m = abs(x);
+    return x == 0.0 || (m >= F32_FILTER_MIN && m <= BOX_INPUT_MAX);
+}
+
+fn box_inputs_ok(v: vec3<f32>) -> bool {
+    return box_input_ok(v.x) && box_input_ok(v.y) && box_input_ok(v.z);
+}
+
+fn box_diff_ok(x: f32) -> bool {
+    return x == 0.0 || abs(x) >= F32_FILTER_MIN;
+}
+
+// The sign every light of group `g`'s box gives `tri` (canonical order), or NOT_SHARED:
+// robust-math's `box_sign_f32`, operation for operation. The box is (centre, w) and
+// (half-extent, 1 when valid) after the lights in `lights`.
+fn box_sign(tri: Triangle, g: u32) -> i32 {
+    let k = params.light_count * rp.object_count + 2u * (g * rp.object_count + tri.object);
+    let cw = lights[k];
+    let hv = lights[k + 1u];
+    let c = cw.xyz;
+    let h = hv.xyz;
+    let w = cw.w;
+    let a = tri.p0;
+    let b = tri.p1;
+    let o = tri.p2;
+    if hv.w != 1.0 || (w != 0.0 && w != 1.0) {
+        return NOT_SHARED;
+    }
+    if !(box_inputs_ok(a) && box_inputs_ok(b) && box_inputs_ok(o) && box_inputs_ok(c) && box_inputs_ok(h)) {
+        return NOT_SHARED;
+    }
+    let ex = a.x - b.x;
+    let ey = a.y - b.y;
+    let ez = a.z - b.z;
+    let dx = o.x - a.x;
+    let dy = o.y - a.y;
+    let dz = o.z - a.z;
+    let vx = c.x - w * a.x;
+    let vy = c.y - w * a.y;
+    let vz = c.z - w * a.z;
+    if !(box_diff_ok(ex) && box_diff_ok(ey) && box_diff_ok(ez) && box_diff_ok(dx) && box_diff_ok(dy)
+        && box_diff_ok(dz) && box_diff_ok(vx) && box_diff_ok(vy) && box_diff_ok(vz)) {
+        return NOT_SHARED;
+    }
+    let p1 = dy * ez;
+    let q1 = dz * ey;
+    let p2 = dz * ex;
+    let q2 = dx * ez;
+    let p3 = dx * ey;
+    let q3 = dy * ex;
+    let nx = p1 - q1;
+    let ny = p2 - q2;
+    let nz = p3 - q3;
+    let mx = abs(p1) + abs(q1);
+    let my = abs(p2) + abs(q2);
+    let mz = abs(p3) + abs(q3);
+    let gx = h.x + abs(c.x);
+    let gy = h.y + abs(c.y);
+    let gz = h.z + abs(c.z);
+    let f = (nx * vx + ny * vy) + nz * vz;
+    let r = (abs(nx) * h.x + abs(ny) * h.y) + abs(nz) * h.z;
+    let p = (mx * (abs(vx) + gx) + my * (abs(vy) + gy)) + mz * (abs(vz) + gz);
+    if p < BOX_PERM_MIN {
+        return NOT_SHARED;
+    }
+    let bound = F32_FILTER_EPS * p;
+    if f - r > bound || -(f + r) > bound {
+        return sgn(f);
+    }
+    return NOT_SHARED;
+}
 
 fn stats_base() -> u32 {
     return params.light_count * 8u;
@@ -138,21 +241,67 @@ fn resident_triangles(inv: Invocation) {
     let tri = load_triangle(t);
     for (var li = 0u; li < params.light_count; li++) {
         let tech = technique[li * rp.object_count + tri.object];
-        var s = 0;
-        if tech != 0u {
-            let l = object_light(tri.object, li);
-            if touches(tri.p0, l) || touches(tri.p1, l) || touches(tri.p2, l) {
-                s = TOUCH;
-            } else {
-                let traced = triangle_sign_traced(tri, l);
-                s = select(traced.x, PENDING, traced.x == UNCERTAIN);
-                if traced.y != 0 {
-                    atomicAdd(&args[stats_base()], 1u);
-                }
+        signs[li * params.tri_count + t] = triangle_light(li, tri, tech);
+    }
+}
+
+// Light `li`'s sign of `tri` (0 for a culled object, TOUCH, PENDING for the integer pass), and
+// its cap counted.
+fn triangle_light(li: u32, tri: Triangle, tech: u32) -> i32 {
+    var s = 0;
+    if tech != 0u {
+        let l = object_light(tri.object, li);
+        if touches(tri.p0, l) || touches(tri.p1, l) || touches(tri.p2, l) {
+            s = TOUCH;
+        } else {
+            let traced = triangle_sign_traced(tri, l);
+            s = select(traced.x, PENDING, traced.x == UNCERTAIN);
+            if traced.y != 0 {
+                atomicAdd(&args[stats_base()], 1u);
             }
-            count_cap(li, tri.object, tech, s);
         }
-        signs[li * params.tri_count + t] = s;
+        count_cap(li, tri.object, tech, s);
+    }
+    return s;
+}
+
+// `resident_triangles` for a frame with sharing groups (exact mode): per group, `box_sign` on
+// the group's box; where it certifies a sign, that is every light's, else each light decides.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn resident_triangles_shared(inv: Invocation) {
+    let t = flat_index(inv);
+    if t >= params.tri_count {
+        return;
+    }
+    let tri = load_triangle(t);
+    var li = 0u;
+    while li < params.light_count {
+        let tech = technique[li * rp.object_count + tri.object];
+        let group = light_group(li);
+        if group == NO_GROUP {
+            signs[li * params.tri_count + t] = triangle_light(li, tri, tech);
+            li += 1u;
+            continue;
+        }
+        // A group's lights are consecutive and have the same techniques.
+        let g = group & 0xffffu;
+        let count = max((group >> 16u) & 0xffu, 1u);
+        var s = NOT_SHARED;
+        if tech != 0u {
+            s = box_sign(tri, g);
+        }
+        signs[shared_row(g) + t] = s;
+        if s != NOT_SHARED {
+            for (var j = 0u; j < count; j++) {
+                signs[(li + j) * params.tri_count + t] = s;
+                count_cap(li + j, tri.object, tech, s);
+            }
+        } else {
+            for (var j = 0u; j < count; j++) {
+                signs[(li + j) * params.tri_count + t] = triangle_light(li + j, tri, tech);
+            }
+        }
+        li += count;
     }
 }
 
@@ -184,72 +333,208 @@ fn resident_pending(inv: Invocation) {
     }
 }
 
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn resident_edges(inv: Invocation) {
-    let e = flat_index(inv);
-    let lid = inv.lid;
-    let valid = e < params.edge_count;
-    var edge = Edge(0u, 0u, 0u, 0u);
-    var object = 0u;
-    var a = vec3<f32>(0.0);
-    var b = vec3<f32>(0.0);
-    if valid {
-        edge = load_edge(e);
-        object = object_of(FIRST_EDGE, e);
-        a = position(edge.a);
-        b = position(edge.b);
+// One light's side records for this invocation's edge: `n` records of `m`'s sign in list
+// `list`, placed after one global atomic per workgroup and list. Called in uniform control flow
+// by every invocation of the workgroup (`n` = 0 where there is nothing to append).
+fn append_light(li: u32, lid: u32, e: u32, object: u32, m: i32, list: u32) {
+    let n = u32(abs(m));
+    if lid == 0u {
+        atomicStore(&wg_count[0], 0u);
+        atomicStore(&wg_count[1], 0u);
     }
-    let light_count = params.light_count;
-    // Uniform loop: every invocation of the workgroup takes part in the barriers.
-    for (var li = 0u; li < light_count; li++) {
-        var m = 0;
-        var tech = 0u;
-        if valid {
-            tech = technique[li * rp.object_count + object];
+    workgroupBarrier();
+    var local = 0u;
+    if n != 0u {
+        local = atomicAdd(&wg_count[list], n);
+        if (rp.flags & 1u) != 0u {
+            let c = count_slot(li, object);
+            atomicAdd(&args[c], 1u);
+            atomicAdd(&args[c + 1u], n);
         }
-        if tech != 0u {
-            m = edge_multiplicity(edge, object, li, a, b);
+    }
+    workgroupBarrier();
+    if lid == 0u {
+        let zp = atomicLoad(&wg_count[0]);
+        let zf = atomicLoad(&wg_count[1]);
+        if zp != 0u {
+            wg_base[0] = atomicAdd(&args[li * 8u + 1u], zp);
         }
-        let n = u32(abs(m));
-        let list = select(0u, 1u, tech == 2u);
-        if lid == 0u {
-            atomicStore(&wg_count[0], 0u);
-            atomicStore(&wg_count[1], 0u);
+        if zf != 0u {
+            wg_base[1] = atomicAdd(&args[li * 8u + 5u], zf);
         }
-        workgroupBarrier();
-        var local = 0u;
-        if n != 0u {
-            local = atomicAdd(&wg_count[list], n);
-            if (rp.flags & 1u) != 0u {
-                let c = count_slot(li, object);
+    }
+    workgroupBarrier();
+    if n != 0u {
+        write_records(li, e, m, list, wg_base[list] + local);
+    }
+    workgroupBarrier();
+}
+
+// |m| records of edge `e` into light `li`'s list `list` from its slot `first`.
+fn write_records(li: u32, e: u32, m: i32, list: u32, first: u32) {
+    let r = e | select(0u, NEGATIVE, m < 0);
+    let region = li * rp.capacity;
+    for (var j = 0u; j < u32(abs(m)); j++) {
+        var slot = first + j;
+        if list == 1u {
+            slot = rp.capacity - 1u - slot;
+        }
+        records[region + slot] = r;
+    }
+}
+
+// m of `edge` for sharing group `g` when every opposite triangle has a shared sign (x), and
+// whether one has not (y = 1): then each light of the group computes its own.
+fn shared_multiplicity(edge: Edge, g: u32) -> vec2<i32> {
+    let row = shared_row(g);
+    var m = 0;
+    for (var k = edge.ov_begin; k < edge.ov_end; k++) {
+        let r = ov_refs[k];
+        let s = signs[row + (r >> 2u)];
+        if s == NOT_SHARED {
+            return vec2<i32>(0, 1);
+        }
+        m += select(s, -s, (r & 3u) == 1u);
+    }
+    return vec2<i32>(m, 0);
+}
+
+// The records of a sharing group's lights `first .. first + count` (same techniques): an edge
+// whose opposite triangles are all shared appends its records to every light of the group in
+// one round (one global atomic per light and list); the others go light by light, a loop the
+// workgroup skips when it has none.
+fn append_group(first: u32, count: u32, g: u32, lid: u32, e: u32, it: EdgeItem) {
+    let edge = it.edge;
+    let object = it.object;
+    var tech = 0u;
+    if it.valid {
+        tech = technique[first * rp.object_count + object];
+    }
+    var m = 0;
+    var unshared = false;
+    if tech != 0u {
+        let sm = shared_multiplicity(edge, g);
+        m = sm.x;
+        unshared = sm.y != 0;
+    }
+    let n = u32(abs(m));
+    let list = select(0u, 1u, tech == 2u);
+    if lid == 0u {
+        atomicStore(&wg_count[0], 0u);
+        atomicStore(&wg_count[1], 0u);
+    }
+    workgroupBarrier();
+    var local = 0u;
+    if n != 0u {
+        local = atomicAdd(&wg_count[list], n);
+        if (rp.flags & 1u) != 0u {
+            for (var j = 0u; j < count; j++) {
+                let c = count_slot(first + j, object);
                 atomicAdd(&args[c], 1u);
                 atomicAdd(&args[c + 1u], n);
             }
         }
-        workgroupBarrier();
-        if lid == 0u {
-            let zp = atomicLoad(&wg_count[0]);
-            let zf = atomicLoad(&wg_count[1]);
+    }
+    workgroupBarrier();
+    if lid == 0u {
+        let zp = atomicLoad(&wg_count[0]);
+        let zf = atomicLoad(&wg_count[1]);
+        for (var j = 0u; j < count; j++) {
+            let li = first + j;
             if zp != 0u {
-                wg_base[0] = atomicAdd(&args[li * 8u + 1u], zp);
+                wg_group_base[j].x = atomicAdd(&args[li * 8u + 1u], zp);
             }
             if zf != 0u {
-                wg_base[1] = atomicAdd(&args[li * 8u + 5u], zf);
+                wg_group_base[j].y = atomicAdd(&args[li * 8u + 5u], zf);
             }
         }
-        workgroupBarrier();
-        if n != 0u {
-            let r = e | select(0u, NEGATIVE, m < 0);
-            let region = li * rp.capacity;
-            let first = wg_base[list] + local;
-            for (var j = 0u; j < n; j++) {
-                var slot = first + j;
-                if list == 1u {
-                    slot = rp.capacity - 1u - slot;
+    }
+    workgroupBarrier();
+    if n != 0u {
+        for (var j = 0u; j < count; j++) {
+            write_records(first + j, e, m, list, wg_group_base[j][list] + local);
+        }
+    }
+    // The few edges next to a triangle the box cuts: per light, with one global atomic each.
+    if unshared {
+        for (var j = 0u; j < count; j++) {
+            let li = first + j;
+            let mj = edge_multiplicity(edge, object, li, it.a, it.b);
+            let nj = u32(abs(mj));
+            if nj != 0u {
+                if (rp.flags & 1u) != 0u {
+                    let c = count_slot(li, object);
+                    atomicAdd(&args[c], 1u);
+                    atomicAdd(&args[c + 1u], nj);
                 }
-                records[region + slot] = r;
+                let slot = atomicAdd(&args[li * 8u + 1u + 4u * list], nj);
+                write_records(li, e, mj, list, slot);
             }
         }
-        workgroupBarrier();
+    }
+    workgroupBarrier();
+}
+
+// The invocation's edge, its object and its ends' positions (zeros past the last edge).
+struct EdgeItem {
+    valid: bool,
+    edge: Edge,
+    object: u32,
+    a: vec3<f32>,
+    b: vec3<f32>,
+}
+
+fn edge_item(e: u32) -> EdgeItem {
+    var it = EdgeItem(false, Edge(0u, 0u, 0u, 0u), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
+    if e < params.edge_count {
+        it.valid = true;
+        it.edge = load_edge(e);
+        it.object = object_of(FIRST_EDGE, e);
+        it.a = position(it.edge.a);
+        it.b = position(it.edge.b);
+    }
+    return it;
+}
+
+// Light `li`'s records of the invocation's edge, aggregated per workgroup (`append_light`).
+fn edge_light(li: u32, lid: u32, e: u32, it: EdgeItem) {
+    var m = 0;
+    var tech = 0u;
+    if it.valid {
+        tech = technique[li * rp.object_count + it.object];
+    }
+    if tech != 0u {
+        m = edge_multiplicity(it.edge, it.object, li, it.a, it.b);
+    }
+    append_light(li, lid, e, it.object, m, select(0u, 1u, tech == 2u));
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn resident_edges(inv: Invocation) {
+    let e = flat_index(inv);
+    let it = edge_item(e);
+    // Uniform loop: every invocation of the workgroup takes part in the barriers.
+    for (var li = 0u; li < params.light_count; li++) {
+        edge_light(li, inv.lid, e, it);
+    }
+}
+
+// `resident_edges` for a frame with sharing groups (exact mode): a group's lights together.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn resident_edges_shared(inv: Invocation) {
+    let e = flat_index(inv);
+    let it = edge_item(e);
+    // Uniform loop (the group words are uniform).
+    var li = 0u;
+    while li < params.light_count {
+        let group = light_group(li);
+        if group != NO_GROUP {
+            let count = max((group >> 16u) & 0xffu, 1u);
+            append_group(li, count, group & 0xffffu, inv.lid, e, it);
+            li += count;
+        } else {
+            edge_light(li, inv.lid, e, it);
+            li += 1u;
+        }
     }
 }

@@ -291,6 +291,7 @@ fn record(
                 .camera
                 .map_or(shadowvol_robust_math::Accuracy::Exact, |c| c.1),
             count: false,
+            sample_groups: &[],
         },
     )
     .map_err(|e| format!("GPU: the frame's inputs: {e}"))?;

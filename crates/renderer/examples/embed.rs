@@ -176,6 +176,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 ambient: scene.effects.ambient,
                 mode: Accuracy::Exact,
                 count: false,
+                sample_groups: &[],
             },
         )?;
         let mut enc = device.create_command_encoder(&Default::default());

@@ -79,6 +79,8 @@ fn unit(lights: &[Light]) -> Vec<SceneLight> {
 /// What one extraction on the device gave, and what the twin gives for the same input.
 struct Run {
     signs: Vec<i32>,
+    shared: Vec<i32>,
+    twin_shared: Vec<i32>,
     records: Vec<LightRecords>,
     twin_signs: Vec<i32>,
     twin_records: Vec<LightRecords>,
@@ -92,6 +94,7 @@ fn extract(
     lights: &[Light],
     mode: Accuracy,
     techniques: &[Technique],
+    groups: &[std::ops::Range<usize>],
 ) -> (ResidentScene, Run) {
     let (pass, device, queue) = gpu;
     // The layout is object space; the transforms are per-frame inputs of the pass.
@@ -115,6 +118,7 @@ fn extract(
             ambient: 0.1,
             mode,
             count: true,
+            sample_groups: groups,
         },
     )
     .unwrap();
@@ -122,6 +126,7 @@ fn extract(
     pass.encode_extract(&mut enc, &rs);
     queue.submit([enc.finish()]);
     let signs = pass.read_signs(&rs).unwrap();
+    let shared = pass.read_shared_signs(&rs).unwrap();
     let records = pass.read_records(&rs).unwrap();
     let integer = pass.read_counts(&rs).unwrap().integer_decided;
     let ol: Vec<[f32; 4]> = object_lights(scene.transforms(), lights)
@@ -131,14 +136,22 @@ fn extract(
     let codes: Vec<u32> = techniques.iter().map(|&t| technique::code(t)).collect();
     // The pass keeps only the layout's sizes; the twin reads the same layout, built again.
     let layout = &ResidentLayout::build(scene).unwrap();
-    let (twin_signs, twin_integer) =
-        twin::triangle_signs(layout, &ol, lights.len(), &codes, mode, pass.exact_filter());
+    let (twin_signs, twin_shared, twin_integer) = twin::triangle_signs_shared(
+        layout,
+        &ol,
+        lights.len(),
+        &codes,
+        (mode, pass.exact_filter()),
+        rs.sharing_groups(),
+    );
     let (_, twin_records) =
         twin::side_records(layout, &twin_signs, &ol, lights.len(), &codes, mode);
     (
         rs,
         Run {
             signs,
+            shared,
+            twin_shared,
             records,
             twin_signs,
             twin_records,
@@ -183,7 +196,14 @@ fn exact_multiplicities_equal_cpu_bit_for_bit_on_the_corpus_with_no_host_resolut
         let scene = case.scene().unwrap();
         let n_obj = scene.objects.len();
         let techniques = vec![Technique::ZFail; case.lights.len() * n_obj];
-        let (rs, run) = extract(&gpu, &scene, &case.lights, Accuracy::Exact, &techniques);
+        let (rs, run) = extract(
+            &gpu,
+            &scene,
+            &case.lights,
+            Accuracy::Exact,
+            &techniques,
+            &[],
+        );
         let (want, _) =
             shadowvol_silhouette::extract_once(&mut cpu, &scene, &case.lights, Accuracy::Exact)
                 .unwrap();
@@ -226,34 +246,70 @@ fn exact_multiplicities_equal_cpu_bit_for_bit_on_the_corpus_with_no_host_resolut
     Ok(())
 }
 
-/// Lights with a size: the GPU pipeline extracts each of a light's samples in one dispatch with
-/// the others; each sample's multiplicities equal the `cpu` backend's for that sample alone, as
-/// a point light, on every corpus case (8 samples of radius 0.05 world units or 0.05 rad).
+/// Lights with a size: the GPU pipeline extracts each light's samples as one sharing group; each
+/// sample's multiplicities equal the `cpu` backend's for that sample alone, as a point light, on
+/// every corpus case (8 samples of radius 0.05 world units or 0.05 rad) and on spheres with
+/// samples near and far; the device's shared signs equal the twin's, and each is the exact sign
+/// of every sample of its group.
 fn each_sample_of_a_light_with_a_size_equals_cpu_as_a_point_light() -> Outcome {
     let gpu = device()?;
     let mut cpu = shadowvol_cpu::CpuBackend::new();
-    for case in corpus::cases() {
-        let scene = case.scene().unwrap();
+    let (mut shared, mut left) = (0usize, 0usize);
+    let mut cases: Vec<(String, TopologyScene, Vec<SceneLight>)> = corpus::cases()
+        .iter()
+        .map(|case| {
+            let lights = case.lights.iter().map(|&l| with_radius(l, 0.05)).collect();
+            (case.name.to_string(), case.scene().unwrap(), lights)
+        })
+        .collect();
+    let sphere = shadowvol_test_support::shapes::uv_sphere_y(24, 31, 1.5);
+    for (light, r) in [
+        (Light::point(Vec3::new(3.0, 4.0, -2.0)), 0.02),
+        (Light::point(Vec3::new(0.4, 1.9, 0.3)), 0.3),
+        (Light::directional(Vec3::new(-0.3, 1.0, 0.45)), 0.01),
+    ] {
+        let table = shadowvol_mesh_topology::EdgeTable::build(&sphere).unwrap();
+        let scene = TopologyScene::single(table);
+        cases.push((
+            format!("sphere, light {light}"),
+            scene,
+            vec![with_radius(light, r)],
+        ));
+    }
+    for (name, scene, lights) in &cases {
         let n_obj = scene.objects.len();
-        let samples: Vec<Light> = case
-            .lights
+        let per = if name.starts_with("sphere") { 16 } else { 8 };
+        let samples: Vec<Light> = lights
             .iter()
-            .flat_map(|&l| {
-                let mut sl = SceneLight::unit(l);
-                sl.radius = 0.05;
-                sl.samples(8, Vec3::ZERO)
-            })
+            .flat_map(|sl| sl.samples(per, Vec3::ZERO))
             .collect();
-        assert_eq!(samples.len(), 8 * case.lights.len());
+        let groups: Vec<std::ops::Range<usize>> = (0..lights.len())
+            .map(|k| k * per as usize..(k + 1) * per as usize)
+            .collect();
         let techniques = vec![Technique::ZFail; samples.len() * n_obj];
-        let (rs, run) = extract(&gpu, &scene, &samples, Accuracy::Exact, &techniques);
-        let got = multiplicities(&run.records, rs.edge_count());
+        let (rs, run) = extract(&gpu, scene, &samples, Accuracy::Exact, &techniques, &groups);
+        assert_eq!(rs.sharing_groups().len(), lights.len(), "{name}");
+        for (what, got, twin) in [
+            ("shared sign", &run.shared, &run.twin_shared),
+            ("sign", &run.signs, &run.twin_signs),
+        ] {
+            assert_eq!(got.len(), twin.len(), "{name}: {what}s");
+            if let Some(k) = (0..got.len()).find(|&k| got[k] != twin[k]) {
+                panic!(
+                    "{name}: {what} {k} is {} on the device, {} in the twin",
+                    got[k], twin[k]
+                );
+            }
+        }
         let ol = object_lights(scene.transforms(), &samples);
+        let (s, l) = check_shared_signs(scene, &rs, &run.shared, &ol);
+        (shared, left) = (shared + s, left + l);
+        let got = multiplicities(&run.records, rs.edge_count());
         let offsets = scene.edge_offsets();
         for (si, m) in got.iter().enumerate() {
             let (one, _) = shadowvol_silhouette::extract_once(
                 &mut cpu,
-                &scene,
+                scene,
                 &samples[si..=si],
                 Accuracy::Exact,
             )
@@ -271,10 +327,52 @@ fn each_sample_of_a_light_with_a_size_equals_cpu_as_a_point_light() -> Outcome {
                     );
                 }
             }
-            assert_eq!(m, &want, "{}: sample {si}", case.name);
+            assert_eq!(m, &want, "{name}: sample {si}");
         }
     }
+    // Both paths ran: triangles decided once for a group, and triangles decided per sample.
+    assert!(
+        shared > 10_000 && left > 100,
+        "shared {shared}, left {left}"
+    );
     Ok(())
+}
+
+/// `light` with a disk of radius `r` (world units, or radians for a directional light).
+fn with_radius(light: Light, r: f32) -> SceneLight {
+    let mut sl = SceneLight::unit(light);
+    sl.radius = r;
+    sl
+}
+
+/// Every shared sign the device certified is the exact sign (`orient_exact` on the canonical
+/// triangle) of every sample of its group; returns the triangles shared and left.
+fn check_shared_signs(
+    scene: &TopologyScene,
+    rs: &ResidentScene,
+    shared: &[i32],
+    ol: &[Vec<[f32; 4]>],
+) -> (usize, usize) {
+    let layout = ResidentLayout::build(scene).unwrap();
+    let n = layout.tri_count();
+    let (mut yes, mut no) = (0, 0);
+    for (g, grp) in rs.sharing_groups().iter().enumerate() {
+        for (t, tr) in layout.tables.tris.iter().enumerate() {
+            let s = shared[g * n + t];
+            if s == shadowvol_renderer::resident::NOT_SHARED {
+                no += 1;
+                continue;
+            }
+            yes += 1;
+            let p = tr.map(|v| layout.tables.position(v));
+            let obj = layout.tables.tri_object(t);
+            for l in &ol[obj][grp.first..grp.first + grp.count] {
+                let exact = shadowvol_robust_math::orient_exact(p[0], p[1], *l, p[2]);
+                assert_eq!(i32::from(exact), s, "group {g} triangle {t} light {l:?}");
+            }
+        }
+    }
+    (yes, no)
 }
 
 fn every_mode_matches_its_twin_and_the_consistent_modes_close_their_chains() -> Outcome {
@@ -284,7 +382,7 @@ fn every_mode_matches_its_twin_and_the_consistent_modes_close_their_chains() -> 
         for case in corpus::cases() {
             let scene = case.scene().unwrap();
             let techniques = mixed_techniques(case.lights.len(), scene.objects.len());
-            let (rs, run) = extract(&gpu, &scene, &case.lights, mode, &techniques);
+            let (rs, run) = extract(&gpu, &scene, &case.lights, mode, &techniques, &[]);
             // WGSL may contract f32 arithmetic where Rust does not; lavapipe does not, so the
             // f32 modes are compared exactly too (a driver that contracts would show here).
             assert_eq!(run.signs, run.twin_signs, "{mode} {}: signs", case.name);
@@ -363,7 +461,14 @@ fn exact_mode_decides_subnormal_and_huge_inputs_on_the_device() -> Outcome {
             }],
         };
         let lights = [light];
-        let (rs, run) = extract(&gpu, &scene, &lights, Accuracy::Exact, &[Technique::ZFail]);
+        let (rs, run) = extract(
+            &gpu,
+            &scene,
+            &lights,
+            Accuracy::Exact,
+            &[Technique::ZFail],
+            &[],
+        );
         let (want, _) =
             shadowvol_silhouette::extract_once(&mut cpu, &scene, &lights, Accuracy::Exact).unwrap();
         let got = multiplicities(&run.records, rs.edge_count());
@@ -518,7 +623,7 @@ proptest::proptest! {
             }],
         };
         let lights = [l];
-        let (rs, run) = extract(gpu, &scene, &lights, Accuracy::Exact, &[Technique::ZFail]);
+        let (rs, run) = extract(gpu, &scene, &lights, Accuracy::Exact, &[Technique::ZFail], &[]);
         proptest::prop_assert_eq!(&run.signs, &run.twin_signs);
         let mut cpu = shadowvol_cpu::CpuBackend::new();
         let (want, _) =
@@ -587,6 +692,7 @@ fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> Vec<u8> {
             ambient: 0.1,
             mode: Accuracy::Exact,
             count: false,
+            sample_groups: &[],
         },
     )
     .unwrap();

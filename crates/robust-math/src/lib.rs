@@ -50,7 +50,7 @@ pub use exact::{
 };
 pub use filter::{F32_FILTER_MAX, F32_FILTER_MIN};
 pub use light::{Light, LightError};
-pub use light_box::{BoxFilter, LightBox, BOX_FILTER_EPS};
+pub use light_box::{box_sign_f32, BoxFilter, DeviceBox, LightBox, BOX_FILTER_EPS};
 
 use glam::Vec3;
 

@@ -47,6 +47,10 @@
 //! light's determinant is 0. [`BoxFilter::Cut`] is proven the same way against the exact box
 //! (`17.1 u p`): the determinant is negative at one corner and positive at another.
 
+mod device;
+
+pub use device::{box_sign_f32, device_input_ok, DeviceBox, BOX_INPUT_MAX, BOX_PERM_MIN};
+
 use crate::exact::orient_exact;
 use crate::filter::sign_of_f64;
 

@@ -172,6 +172,7 @@ impl ShadowPipeline for GpuPipeline {
         let (w, h) = frame.size;
         let n = self.transforms.len();
         let lights = frame.scene.lights.len();
+        let sample_groups = frame.sample_groups();
         for part in &mut self.parts {
             // This part's objects' inputs, from their surfaces' (the identity for one part).
             let transforms: Vec<Affine3A> =
@@ -195,6 +196,7 @@ impl ShadowPipeline for GpuPipeline {
                     ambient: frame.scene.effects.ambient.clamp(0.0, 1.0),
                     mode: frame.mode,
                     count: frame.count,
+                    sample_groups: &sample_groups,
                 },
             )?;
             pass.encode_extract(enc, &part.rs);

@@ -83,6 +83,24 @@ impl FrameInputs<'_> {
             LightPass::Hard | LightPass::Composite { .. } => usize::MAX - li,
         }
     }
+
+    /// The runs of consecutive lights that sample one light with a size (the lights of one
+    /// [`FrameInputs::group`] of several lights), in light order.
+    #[must_use]
+    pub fn sample_groups(&self) -> Vec<std::ops::Range<usize>> {
+        let mut out: Vec<std::ops::Range<usize>> = Vec::new();
+        for li in 0..self.passes.len() {
+            if !matches!(self.pass(li), LightPass::Sample { .. }) {
+                continue;
+            }
+            match out.last_mut() {
+                Some(r) if r.end == li && self.group(r.start) == self.group(li) => r.end += 1,
+                _ => out.push(li..li + 1),
+            }
+        }
+        out.retain(|r| r.len() > 1);
+        out
+    }
 }
 
 /// Records what a light of pass `pass` draws after its stencil pass and the stencil's copy, around its lit

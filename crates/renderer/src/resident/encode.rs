@@ -67,7 +67,13 @@ impl ShadowPass {
         }
         let mode = mode_index(rs.state.mode);
         let (x, y) = grid(rs.counts.tris as u32);
-        pass.set_pipeline(&self.extract.triangles[mode]);
+        // Sharing groups exist only in exact mode.
+        let shared = !rs.state.groups.is_empty();
+        pass.set_pipeline(if shared {
+            &self.extract.triangles_shared
+        } else {
+            &self.extract.triangles[mode]
+        });
         pass.dispatch_workgroups(x, y, 1);
         if rs.state.mode == Accuracy::Exact {
             let (args, out) = &rs.pending_dispatch;
@@ -79,7 +85,11 @@ impl ShadowPass {
             pass.dispatch_workgroups_indirect(args, 0);
         }
         let (x, y) = grid(rs.counts.edges as u32);
-        pass.set_pipeline(&self.extract.edges[mode]);
+        pass.set_pipeline(if shared {
+            &self.extract.edges_shared
+        } else {
+            &self.extract.edges[mode]
+        });
         pass.dispatch_workgroups(x, y, 1);
     }
 

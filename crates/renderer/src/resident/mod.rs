@@ -52,12 +52,14 @@
 //! `examples/embed.rs` renders a whole frame this way.
 
 mod encode;
+mod groups;
 pub mod layout;
 mod pipeline;
 mod readback;
 mod scene;
 pub mod twin;
 
+pub use groups::NOT_SHARED;
 pub use layout::ResidentLayout;
 
 use crate::plan::Technique;
@@ -139,6 +141,26 @@ pub struct PassFrame<'a> {
     /// Count silhouette edges, side quads and cap triangles per (light, object) (read them with
     /// [`ShadowPass::read_counts`]; costs atomics, so leave it off in timed frames).
     pub count: bool,
+    /// Runs of consecutive lights that sample one light with a size (indices into `lights`;
+    /// empty: none). In exact mode the pass decides a triangle once for each run of lights with
+    /// the same techniques (up to [`MAX_SHARING_GROUP`] lights) when its plane misses their box,
+    /// and each edge whose triangles are all so decided once for the run; every light's signs
+    /// and records stay exactly its own ([`SharingGroup`]).
+    pub sample_groups: &'a [std::ops::Range<usize>],
+}
+
+/// Lights per [`SharingGroup`] at most (the edge pass keeps a slot per light of a group in
+/// workgroup memory).
+pub const MAX_SHARING_GROUP: usize = 64;
+
+/// Consecutive lights `first .. first + count` that the pass extracts together (exact mode):
+/// lights of one of [`PassFrame::sample_groups`] with the same techniques for every object.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SharingGroup {
+    /// The group's first light.
+    pub first: usize,
+    /// Its number of lights (2 to [`MAX_SHARING_GROUP`]).
+    pub count: usize,
 }
 
 /// Per-(light, object) counts of one frame, from [`ShadowPass::read_counts`].
@@ -354,6 +376,8 @@ fn render_ts(
 #[derive(Debug, Clone)]
 struct FrameState {
     lights: usize,
+    /// The sharing groups of the frame ([`PassFrame::sample_groups`], split).
+    groups: Vec<SharingGroup>,
     mode: Accuracy,
     techniques: Vec<Technique>,
     scissors: Vec<Option<[u32; 4]>>,
@@ -472,6 +496,12 @@ impl ResidentScene {
     #[must_use]
     pub fn edge_count(&self) -> usize {
         self.counts.edges
+    }
+
+    /// The sharing groups of the last [`ShadowPass::update`] (empty outside exact mode).
+    #[must_use]
+    pub fn sharing_groups(&self) -> &[SharingGroup] {
+        &self.state.groups
     }
 
     /// Where the lit pass and the pre-pass read this scene's surface vertices: `"buffer"` (the

@@ -110,11 +110,15 @@ pub(super) struct ExtractPipelines {
     pub(super) v2: wgpu::BindGroupLayout,
     pub(super) reset: wgpu::ComputePipeline,
     pub(super) triangles: Vec<wgpu::ComputePipeline>,
+    /// Exact mode with sharing groups: the triangle pass that decides a group's box first.
+    pub(super) triangles_shared: wgpu::ComputePipeline,
     /// Exact mode: writes the indirect arguments of `pending`.
     pub(super) pending_args: wgpu::ComputePipeline,
     /// Exact mode: decides the pairs the triangle pass's filter left, with `orient_int`.
     pub(super) pending: wgpu::ComputePipeline,
     pub(super) edges: Vec<wgpu::ComputePipeline>,
+    /// Exact mode with sharing groups: the edge pass that extracts a group's lights together.
+    pub(super) edges_shared: wgpu::ComputePipeline,
 }
 
 impl ExtractPipelines {
@@ -187,6 +191,12 @@ impl ExtractPipelines {
             // Exact mode's triangle pass leaves `orient_int` out (DEFER_INT); `pending` decides
             // what its filter leaves.
             triangles: per_mode("resident_triangles", true),
+            triangles_shared: compute_pipeline(
+                "resident_triangles_shared",
+                &c_layout,
+                Accuracy::Exact,
+                true,
+            ),
             pending_args: compute_pipeline(
                 "resident_pending_args",
                 &args_layout,
@@ -195,6 +205,12 @@ impl ExtractPipelines {
             ),
             pending: compute_pipeline("resident_pending", &pending_layout, Accuracy::Exact, false),
             edges: per_mode("resident_edges", false),
+            edges_shared: compute_pipeline(
+                "resident_edges_shared",
+                &c_layout,
+                Accuracy::Exact,
+                false,
+            ),
             c0,
             c1,
             v2,

@@ -92,6 +92,22 @@ impl ShadowPass {
         Ok(words[..n].iter().map(|&w| w as i32).collect())
     }
 
+    /// Reads back the sharing groups' signs of the last submitted frame (tests only): the groups
+    /// ([`ResidentScene::sharing_groups`]) and `[group * tri_count + triangle]`, the sign the
+    /// triangle pass certified for every light of the group, or [`NOT_SHARED`].
+    ///
+    /// # Errors
+    /// [`RenderError::Device`] when mapping fails.
+    pub fn read_shared_signs(&self, rs: &ResidentScene) -> Result<Vec<i32>, RenderError> {
+        let Some(fb) = rs.frame.as_ref() else {
+            return Ok(Vec::new());
+        };
+        let t = rs.counts.tris;
+        let (first, n) = (rs.state.lights * t, rs.state.groups.len() * t);
+        let words = read_buffer(&self.device, &self.queue, &fb.buffers.signs)?;
+        Ok(words[first..first + n].iter().map(|&w| w as i32).collect())
+    }
+
     /// Reads back each light's side records of the last submitted frame, sorted (tests only).
     ///
     /// # Errors

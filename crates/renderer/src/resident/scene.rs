@@ -103,6 +103,7 @@ impl ShadowPass {
             frame: None,
             state: FrameState {
                 lights: 0,
+                groups: Vec::new(),
                 mode: Accuracy::Exact,
                 techniques: Vec::new(),
                 scissors: Vec::new(),
@@ -296,12 +297,13 @@ impl ShadowPass {
     /// `max_storage_buffer_binding_size`.
     pub fn update(&self, rs: &mut ResidentScene, f: &PassFrame<'_>) -> Result<(), RenderError> {
         check_frame_lengths(rs, f)?;
+        let groups = groups::sharing_groups(f, rs.counts.objects)?;
         let slots = f.lights.len().max(1);
         if rs.frame.as_ref().is_none_or(|b| b.lights < slots) {
             rs.frame = Some(self.frame_buffers(rs, slots)?);
         }
         let fb = rs.frame.as_ref().expect("allocated above");
-        self.write_lights(rs, fb, f)?;
+        self.write_lights(rs, fb, f, &groups)?;
         let q = &self.queue;
         q.write_buffer(
             &fb.buffers.objects,
@@ -312,6 +314,7 @@ impl ShadowPass {
         q.write_buffer(&fb.buffers.light_u, 0, &light_uniforms(rs, f, slots));
         rs.state = FrameState {
             lights: f.lights.len(),
+            groups,
             mode: f.mode,
             techniques: f.techniques.to_vec(),
             scissors: f.scissors.to_vec(),
@@ -319,12 +322,14 @@ impl ShadowPass {
         Ok(())
     }
 
-    /// Writes the object-space lights, their extrusion points and the plan's technique codes.
+    /// Writes the object-space lights, their extrusion points and the plan's technique codes,
+    /// and the sharing groups' words and boxes after the codes and the lights.
     fn write_lights(
         &self,
         rs: &ResidentScene,
         fb: &FrameBuffers,
         f: &PassFrame<'_>,
+        groups: &[SharingGroup],
     ) -> Result<(), RenderError> {
         let objects = rs.counts.objects;
         let n_lights = f.lights.len();
@@ -343,13 +348,15 @@ impl ShadowPass {
                 lights.push(l);
             }
         }
+        let points = light_points(&lights, objects, n_lights);
+        q.write_buffer(&fb.buffers.light_points, 0, bytemuck::cast_slice(&points));
+        lights.extend(groups::group_boxes(groups, &lights, n_lights, objects));
         if lights.is_empty() {
             lights.push([0.0; 4]);
         }
         q.write_buffer(&fb.buffers.lights, 0, bytemuck::cast_slice(&lights));
-        let points = light_points(&lights, objects, n_lights);
-        q.write_buffer(&fb.buffers.light_points, 0, bytemuck::cast_slice(&points));
-        let codes: Vec<u32> = f.techniques.iter().map(|&t| technique::code(t)).collect();
+        let mut codes: Vec<u32> = f.techniques.iter().map(|&t| technique::code(t)).collect();
+        codes.extend(groups::group_words(groups, n_lights));
         if !codes.is_empty() {
             q.write_buffer(&fb.buffers.technique, 0, bytemuck::cast_slice(&codes));
         }
@@ -439,11 +446,15 @@ impl ShadowPass {
         let indirect = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::INDIRECT
             | wgpu::BufferUsages::COPY_SRC;
+        // Sharing groups have two lights or more: at most `s / 2` of them, each with a box per
+        // object after the lights, a word per light after the techniques, and a row of shared
+        // signs after the lights' rows.
+        let g = s / 2;
         Ok(LightBuffers {
-            lights: sized("object-space lights", 16 * s * objects, st)?,
+            lights: sized("object-space lights", 16 * (s + 2 * g) * objects, st)?,
             light_points: sized("light points", 32 * s * objects, st)?,
-            technique: sized("techniques", 4 * s * objects, st)?,
-            signs: sized("triangle signs", 4 * s * tri, readable)?,
+            technique: sized("techniques", 4 * s * (objects + 1), st)?,
+            signs: sized("triangle signs", 4 * (s + g) * tri, readable)?,
             args: sized(
                 "indirect draws",
                 4 * (8 * s + 1 + 3 * s * objects),

@@ -9,10 +9,11 @@
 //! bits but never the exact mode.
 
 use super::layout::{ResidentLayout, NEGATIVE};
-use super::{technique, LightRecords};
+use super::{technique, LightRecords, SharingGroup, NOT_SHARED};
 use shadowvol_gpu::shaders::TOUCH;
 use shadowvol_gpu::twin;
 use shadowvol_robust_math::Accuracy;
+use shadowvol_robust_math::{box_sign_f32, DeviceBox};
 use shadowvol_silhouette::gpu::ExactFilter;
 
 fn position(layout: &ResidentLayout, id: u32) -> [f32; 3] {
@@ -42,9 +43,34 @@ pub fn triangle_signs(
     mode: Accuracy,
     filter: ExactFilter,
 ) -> (Vec<i32>, u64) {
+    let (signs, _, integer) =
+        triangle_signs_shared(layout, lights, light_count, techniques, (mode, filter), &[]);
+    (signs, integer)
+}
+
+/// [`triangle_signs`] with sharing groups (exact mode; [`super::SharingGroup`], as
+/// [`super::ResidentScene::sharing_groups`] gives them): also returns the groups' shared signs
+/// `[group * tri_count + triangle]` (−1, 1 or [`NOT_SHARED`]), from the `f32` box filter
+/// ([`box_sign_f32`], the twin of `box_sign`) on each group's box. A light of a group takes the
+/// shared sign where there is one; the per-light signs are the same either way, since a certified
+/// sign is every light's exact sign.
+///
+/// # Panics
+/// As [`triangle_signs`].
+#[must_use]
+pub fn triangle_signs_shared(
+    layout: &ResidentLayout,
+    lights: &[[f32; 4]],
+    light_count: usize,
+    techniques: &[u32],
+    (mode, filter): (Accuracy, ExactFilter),
+    groups: &[SharingGroup],
+) -> (Vec<i32>, Vec<i32>, u64) {
     let n = layout.tri_count();
     let objects = layout.object_count();
     let mut signs = vec![0i32; n * light_count];
+    let mut shared = vec![NOT_SHARED; n * groups.len()];
+    let boxes = super::groups::group_boxes(groups, lights, light_count, objects);
     let mut integer = 0u64;
     for (t, tr) in layout.tables.tris.iter().enumerate() {
         let (p0, p1, p2) = (
@@ -53,12 +79,35 @@ pub fn triangle_signs(
             position(layout, tr[2]),
         );
         let obj = layout.tables.tri_object(t);
+        let group_of = |li: usize| {
+            groups
+                .iter()
+                .position(|g| (g.first..g.first + g.count).contains(&li))
+        };
         for li in 0..light_count {
-            if techniques[li * objects + obj] == technique::CULLED {
+            let tech = techniques[li * objects + obj];
+            let group = group_of(li);
+            if let Some(g) = group.filter(|&g| groups[g].first == li) {
+                let k = 2 * (g * objects + obj);
+                let (cw, hv) = (boxes[k], boxes[k + 1]);
+                let bx = DeviceBox {
+                    centre: [cw[0], cw[1], cw[2]],
+                    half: [hv[0], hv[1], hv[2]],
+                    w: cw[3],
+                };
+                let s = (mode == Accuracy::Exact && tech != technique::CULLED && hv[3] == 1.0)
+                    .then(|| box_sign_f32(p0, p1, p2, &bx))
+                    .flatten();
+                shared[g * n + t] = s.map_or(NOT_SHARED, i32::from);
+            }
+            if tech == technique::CULLED {
                 continue;
             }
             let l = lights[obj * light_count + li];
-            signs[li * n + t] = if touches(p0, l) || touches(p1, l) || touches(p2, l) {
+            let s = group.map_or(NOT_SHARED, |g| shared[g * n + t]);
+            signs[li * n + t] = if s != NOT_SHARED {
+                s
+            } else if touches(p0, l) || touches(p1, l) || touches(p2, l) {
                 TOUCH
             } else {
                 let (s, int) = twin::triangle_sign(mode, filter, true, [p0, p1, p2], l);
@@ -67,7 +116,7 @@ pub fn triangle_signs(
             };
         }
     }
-    (signs, integer)
+    (signs, shared, integer)
 }
 
 /// Twin of `resident_edges`: the multiplicities `m[light * edge_count + edge]` and each light's
