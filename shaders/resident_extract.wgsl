@@ -53,9 +53,12 @@ struct ResidentParams {
 // [light * capacity + slot]: global edge, NEGATIVE set when m < 0.
 @group(1) @binding(6) var<storage, read_write> records: array<u32>;
 
-// After the (light, object) codes of `technique`, one word per light: NO_GROUP, or its sharing
-// group (bits 0-15), the group's light count (bits 16-23) and its index in the group (24-31).
+// After the (light, object) codes of `technique`, one word per light: NO_GROUP (or ALL_CULLED),
+// or its sharing group (bits 0-15), the group's light count (bits 16-23) and its index in the
+// group (24-31).
 const NO_GROUP: u32 = 0xffffffffu;
+// The word of a light outside every group whose objects are all culled: no edge work.
+const ALL_CULLED: u32 = 0xfffffffeu;
 // A group's triangle that `box_sign` left (shared signs, `signs[light_count * tri_count + group
 // * tri_count + t]`, hold -1, 1 or this).
 const NOT_SHARED: i32 = 4;
@@ -278,7 +281,7 @@ fn resident_triangles_shared(inv: Invocation) {
     while li < params.light_count {
         let tech = technique[li * rp.object_count + tri.object];
         let group = light_group(li);
-        if group == NO_GROUP {
+        if group >= ALL_CULLED {
             signs[li * params.tri_count + t] = triangle_light(li, tri, tech);
             li += 1u;
             continue;
@@ -528,12 +531,14 @@ fn resident_edges_shared(inv: Invocation) {
     var li = 0u;
     while li < params.light_count {
         let group = light_group(li);
-        if group != NO_GROUP {
+        if group < ALL_CULLED {
             let count = max((group >> 16u) & 0xffu, 1u);
             append_group(li, count, group & 0xffffu, inv.lid, e, it);
             li += count;
         } else {
-            edge_light(li, inv.lid, e, it);
+            if group == NO_GROUP {
+                edge_light(li, inv.lid, e, it);
+            }
             li += 1u;
         }
     }

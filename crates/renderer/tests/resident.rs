@@ -27,7 +27,7 @@ main!(
     gpu_pipeline_matches_the_host_pipeline_and_the_reference_on_hard_scenes,
     timed_gpu_frames_read_nothing_back,
     exact_gpu_multiplicities_equal_cpu_on_random_lattice_soups,
-    chunked_and_pulled_surfaces_draw_the_same_image
+    chunked_pulled_and_batched_frames_draw_the_same_image
 );
 
 /// The first adapter, or a visible skip without one; under `CI=true` a missing adapter fails
@@ -252,7 +252,9 @@ fn exact_multiplicities_equal_cpu_bit_for_bit_on_the_corpus_with_no_host_resolut
 /// samples near and far; the device's shared signs equal the twin's, and each is the exact sign
 /// of every sample of its group.
 fn each_sample_of_a_light_with_a_size_equals_cpu_as_a_point_light() -> Outcome {
-    let gpu = device()?;
+    let one = device_with(|_| {})?;
+    // A binding of 64 KiB: the sphere's samples go in batches of 3 lights.
+    let small = device_with(|l| l.max_storage_buffer_binding_size = 64 << 10)?;
     let mut cpu = shadowvol_cpu::CpuBackend::new();
     let (mut shared, mut left) = (0usize, 0usize);
     let mut cases: Vec<(String, TopologyScene, Vec<SceneLight>)> = corpus::cases()
@@ -276,7 +278,8 @@ fn each_sample_of_a_light_with_a_size_equals_cpu_as_a_point_light() -> Outcome {
             vec![with_radius(light, r)],
         ));
     }
-    for (name, scene, lights) in &cases {
+    let mut batched = 0;
+    for ((name, scene, lights), gpu) in cases.iter().flat_map(|c| [(c, &one), (c, &small)]) {
         let n_obj = scene.objects.len();
         let per = if name.starts_with("sphere") { 16 } else { 8 };
         let samples: Vec<Light> = lights
@@ -287,8 +290,12 @@ fn each_sample_of_a_light_with_a_size_equals_cpu_as_a_point_light() -> Outcome {
             .map(|k| k * per as usize..(k + 1) * per as usize)
             .collect();
         let techniques = vec![Technique::ZFail; samples.len() * n_obj];
-        let (rs, run) = extract(&gpu, scene, &samples, Accuracy::Exact, &techniques, &groups);
-        assert_eq!(rs.sharing_groups().len(), lights.len(), "{name}");
+        let (rs, run) = extract(gpu, scene, &samples, Accuracy::Exact, &techniques, &groups);
+        if rs.light_batches() > 1 {
+            batched += 1;
+        } else {
+            assert_eq!(rs.sharing_groups().len(), lights.len(), "{name}");
+        }
         for (what, got, twin) in [
             ("shared sign", &run.shared, &run.twin_shared),
             ("sign", &run.signs, &run.twin_signs),
@@ -330,6 +337,8 @@ fn each_sample_of_a_light_with_a_size_equals_cpu_as_a_point_light() -> Outcome {
             assert_eq!(m, &want, "{name}: sample {si}");
         }
     }
+    // The sphere's samples went in batches.
+    assert!(batched >= 3, "{batched} runs in batches");
     // Both paths ran: triangles decided once for a group, and triangles decided per sample.
     assert!(
         shared > 10_000 && left > 100,
@@ -660,9 +669,9 @@ fn device_with(
     Ok(open_pass(&adapter, limits))
 }
 
-/// One frame of a sphere over a floor through the pass, as an application records it; returns
-/// the colour image (RGBA8, `64 x 48`).
-fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> Vec<u8> {
+/// One frame of a sphere over a floor under three lights through the pass, as an application
+/// records it; returns the colour image (RGBA8, `64 x 48`) and the number of light batches.
+fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> (Vec<u8>, usize) {
     let (pass, device, queue) = gpu;
     let (w, h) = (64u32, 48u32);
     let sphere = shadowvol_scenes::procedural::icosphere(20_000, 1.0);
@@ -674,21 +683,26 @@ fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> Vec<u8> {
     }
     let mut rs = pass.prepare(&scene).unwrap();
     let camera = Camera::look_at(Vec3::new(3.0, 4.0, 5.0), Vec3::ZERO);
-    let lights = [Light::point(Vec3::new(1.0, 6.0, 0.5))];
+    // Three lights, so that a device with small bindings extracts them in batches.
+    let lights = [
+        Light::point(Vec3::new(1.0, 6.0, 0.5)),
+        Light::point(Vec3::new(1.3, 6.0, 0.5)),
+        Light::point(Vec3::new(0.8, 6.2, 0.3)),
+    ];
     pass.update(
         &mut rs,
         &PassFrame {
             camera: &camera,
             aspect: w as f32 / h as f32,
             lights: &unit(&lights),
-            colors: &[[1.0; 3]],
+            colors: &[[0.34; 3]; 3],
             transforms: &[
                 Affine3A::IDENTITY,
                 Affine3A::from_translation(Vec3::Y * 1.5),
             ],
             albedo: &[[0.8; 3], [0.9, 0.5, 0.4]],
-            techniques: &[Technique::ZFail, Technique::ZFail],
-            scissors: &[None],
+            techniques: &[Technique::ZFail; 6],
+            scissors: &[None; 3],
             ambient: 0.1,
             mode: Accuracy::Exact,
             count: false,
@@ -714,20 +728,29 @@ fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> Vec<u8> {
     let mut enc = device.create_command_encoder(&Default::default());
     pass.encode_extract(&mut enc, &rs);
     pass.encode_prepass(&mut enc, &rs, &cv, None, &dv, Some(wgpu::Color::BLACK));
-    pass.encode_stencil(&mut enc, &rs, 0, &dv, wgpu::LoadOp::Clear(0));
-    pass.encode_lit(&mut enc, &rs, 0, &cv, &dv);
+    for li in 0..lights.len() {
+        pass.encode_stencil(&mut enc, &rs, li, &dv, wgpu::LoadOp::Clear(0));
+        pass.encode_lit(&mut enc, &rs, li, &cv, &dv);
+    }
     queue.submit([enc.finish()]);
-    read_texture(device, queue, &color, wgpu::TextureAspect::All, 4).unwrap()
+    let batches = rs.light_batches();
+    (
+        read_texture(device, queue, &color, wgpu::TextureAspect::All, 4).unwrap(),
+        batches,
+    )
 }
 
 /// The surface vertex buffer written in several chunks (a 1 MiB storage-binding limit against
 /// 3.8 MB of surface vertices), and the vertex-pulling fallback (a 2 MiB buffer limit), draw the
 /// same image as one chunk: the same shadow, pixel for pixel up to shading rounding.
-fn chunked_and_pulled_surfaces_draw_the_same_image() -> Outcome {
+fn chunked_pulled_and_batched_frames_draw_the_same_image() -> Outcome {
     let one = device_with(|_| {})?;
     let chunked = device_with(|l| l.max_storage_buffer_binding_size = 1 << 20)?;
     let pulled = device_with(|l| l.max_buffer_size = 2 << 20)?;
-    let want = embedded_frame(&one);
+    // Bindings of 256 KiB: one light's side records (240 KB) a batch.
+    let batched = device_with(|l| l.max_storage_buffer_binding_size = 256 << 10)?;
+    let (want, batches) = embedded_frame(&one);
+    assert_eq!(batches, 1);
     let lit = want.chunks_exact(4).filter(|p| p[0] > 60).count();
     let dark = want
         .chunks_exact(4)
@@ -737,8 +760,13 @@ fn chunked_and_pulled_surfaces_draw_the_same_image() -> Outcome {
         lit > 100 && dark > 20,
         "a lit scene with a shadow: {lit} lit, {dark} dark"
     );
-    for (name, gpu) in [("chunked", &chunked), ("pulled", &pulled)] {
-        let got = embedded_frame(gpu);
+    for (name, gpu, want_batches) in [
+        ("chunked", &chunked, 1),
+        ("pulled", &pulled, 1),
+        ("batched", &batched, 3),
+    ] {
+        let (got, batches) = embedded_frame(gpu);
+        assert_eq!(batches, want_batches, "{name}");
         let differ = want
             .chunks_exact(4)
             .zip(got.chunks_exact(4))

@@ -18,7 +18,7 @@ impl ShadowPass {
             .frame
             .as_ref()
             .expect("ShadowPass::update before encode_extract");
-        let n_lights = rs.state.lights as u32;
+        let n_lights = rs.state.lights;
         let objects = rs.counts.objects as u32;
         let max_dim = self
             .device
@@ -57,40 +57,41 @@ impl ShadowPass {
                 pass.dispatch_workgroups(x, y, 1);
             }
         }
-        pass.set_bind_group(0, &fb.c0, &[]);
-        pass.set_bind_group(1, &fb.c1, &[]);
-        pass.set_pipeline(&self.extract.reset);
-        let total = n_lights * 8 + 1 + 3 * n_lights * objects;
-        pass.dispatch_workgroups(total.div_ceil(64).max(1), 1, 1);
-        if n_lights == 0 {
-            return;
-        }
-        let mode = mode_index(rs.state.mode);
-        let (x, y) = grid(rs.counts.tris as u32);
-        // Sharing groups exist only in exact mode.
         let shared = !rs.state.groups.is_empty();
-        pass.set_pipeline(if shared {
-            &self.extract.triangles_shared
-        } else {
-            &self.extract.triangles[mode]
-        });
-        pass.dispatch_workgroups(x, y, 1);
-        if rs.state.mode == Accuracy::Exact {
-            let (args, out) = &rs.pending_dispatch;
-            pass.set_pipeline(&self.extract.pending_args);
-            pass.set_bind_group(2, out, &[]);
-            pass.dispatch_workgroups(1, 1, 1);
-            pass.set_pipeline(&self.extract.pending);
-            pass.set_bind_group(2, &self.world.empty, &[]);
-            pass.dispatch_workgroups_indirect(args, 0);
+        let mode = mode_index(rs.state.mode);
+        for b in fb.batches.iter().filter(|b| b.lights_of(n_lights) > 0) {
+            let nb = b.lights_of(n_lights) as u32;
+            pass.set_bind_group(0, &b.c0, &[]);
+            pass.set_bind_group(1, &b.c1, &[]);
+            pass.set_pipeline(&self.extract.reset);
+            let total = nb * 8 + 1 + 3 * nb * objects;
+            pass.dispatch_workgroups(total.div_ceil(64).max(1), 1, 1);
+            // Sharing groups exist only in exact mode; a batch without any of them runs the
+            // shared kernels as the plain ones.
+            let (x, y) = grid(rs.counts.tris as u32);
+            pass.set_pipeline(if shared {
+                &self.extract.triangles_shared
+            } else {
+                &self.extract.triangles[mode]
+            });
+            pass.dispatch_workgroups(x, y, 1);
+            if rs.state.mode == Accuracy::Exact {
+                let (args, out) = &rs.pending_dispatch;
+                pass.set_pipeline(&self.extract.pending_args);
+                pass.set_bind_group(2, out, &[]);
+                pass.dispatch_workgroups(1, 1, 1);
+                pass.set_pipeline(&self.extract.pending);
+                pass.set_bind_group(2, &self.world.empty, &[]);
+                pass.dispatch_workgroups_indirect(args, 0);
+            }
+            let (x, y) = grid(rs.counts.edges as u32);
+            pass.set_pipeline(if shared {
+                &self.extract.edges_shared
+            } else {
+                &self.extract.edges[mode]
+            });
+            pass.dispatch_workgroups(x, y, 1);
         }
-        let (x, y) = grid(rs.counts.edges as u32);
-        pass.set_pipeline(if shared {
-            &self.extract.edges_shared
-        } else {
-            &self.extract.edges[mode]
-        });
-        pass.dispatch_workgroups(x, y, 1);
     }
 
     /// Records the depth pre-pass (ambient colour, ids when [`PassFormats::ids`] is set). With
@@ -141,8 +142,10 @@ impl ShadowPass {
             if let Some((vertices, _)) = &rs.surface {
                 pass.set_vertex_buffer(0, vertices.slice(..));
             }
-            pass.set_bind_group(0, &fb.d0, &[]);
-            pass.set_bind_group(1, &fb.dl, &[0]);
+            // Any batch's bind groups: the pre-pass reads no light.
+            let b = &fb.batches[0];
+            pass.set_bind_group(0, &b.d0, &[]);
+            pass.set_bind_group(1, &b.dl, &[0]);
             pass.draw(0..tris * 3, 0..1);
         }
     }
@@ -164,7 +167,8 @@ impl ShadowPass {
     ) {
         let (fb, scissor) = light_frame(rs, light, "encode_stencil");
         let empty = scissor.is_some_and(|r| r[2] == 0 || r[3] == 0);
-        let offset = (light as u64 * LIGHT_STRIDE) as u32;
+        let (b, local) = fb.batch_of(light);
+        let offset = (local as u64 * LIGHT_STRIDE) as u32;
         // Two passes, sides then caps, so that each has its own timestamps; the first starts
         // from `stencil` (cleared, or another part's counts), the second keeps counting.
         let begin = |enc: &mut wgpu::CommandEncoder, label, stencil, slot| {
@@ -177,18 +181,18 @@ impl ShadowPass {
                 render_ts(fb, slot),
             )
             .forget_lifetime();
-            pass.set_bind_group(0, &fb.d0, &[]);
-            pass.set_bind_group(1, &fb.dl, &[offset]);
+            pass.set_bind_group(0, &b.d0, &[]);
+            pass.set_bind_group(1, &b.dl, &[offset]);
             pass
         };
         {
             let mut pass = begin(enc, "resident sides", stencil, TimestampSlot::Sides(light));
             if !empty {
-                let base = light as u64 * 32;
+                let base = local as u64 * 32;
                 pass.set_pipeline(&self.draw.side_zpass);
-                pass.draw_indirect(&fb.buffers.args, base);
+                pass.draw_indirect(&b.buffers.args, base);
                 pass.set_pipeline(&self.draw.side_zfail);
-                pass.draw_indirect(&fb.buffers.args, base + 16);
+                pass.draw_indirect(&b.buffers.args, base + 16);
             }
         }
         let mut pass = begin(
@@ -252,8 +256,9 @@ impl ShadowPass {
             pass.set_vertex_buffer(0, vertices.slice(..));
         }
         pass.set_stencil_reference(0);
-        pass.set_bind_group(0, &fb.d0, &[]);
-        pass.set_bind_group(1, &fb.dl, &[(light as u64 * LIGHT_STRIDE) as u32]);
+        let (b, local) = fb.batch_of(light);
+        pass.set_bind_group(0, &b.d0, &[]);
+        pass.set_bind_group(1, &b.dl, &[(local as u64 * LIGHT_STRIDE) as u32]);
         pass.draw(0..tris * 3, 0..1);
     }
 }

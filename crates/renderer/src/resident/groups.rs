@@ -19,8 +19,8 @@ pub(super) const NO_GROUP: u32 = u32::MAX;
 const MAX_GROUPS: usize = 1 << 16;
 
 /// The sharing groups of frame `f` over `objects` objects: each of its sample groups split into
-/// runs of at most [`MAX_SHARING_GROUP`] lights whose techniques are the same for every object;
-/// runs of one light are left out. None outside exact mode (the `f32` modes' signs near a plane
+/// runs of at most [`MAX_SHARING_GROUP`] lights whose techniques are the same for every object,
+/// and at the boundaries of batches of `per_batch` lights; runs of one light are left out. None outside exact mode (the `f32` modes' signs near a plane
 /// are not the exact ones a box decides).
 ///
 /// # Errors
@@ -29,6 +29,7 @@ const MAX_GROUPS: usize = 1 << 16;
 pub(crate) fn sharing_groups(
     f: &PassFrame<'_>,
     objects: usize,
+    per_batch: usize,
 ) -> Result<Vec<SharingGroup>, RenderError> {
     let n = f.lights.len();
     let mut taken = vec![false; n];
@@ -54,7 +55,11 @@ pub(crate) fn sharing_groups(
         let mut first = r.start;
         while first < r.end && out.len() < MAX_GROUPS {
             let mut end = first + 1;
-            while end < r.end && end - first < MAX_SHARING_GROUP && row(end) == row(first) {
+            while end < r.end
+                && end - first < MAX_SHARING_GROUP
+                && end % per_batch.max(1) != 0
+                && row(end) == row(first)
+            {
                 end += 1;
             }
             let culled = row(first).iter().all(|&t| t == Technique::Culled);
@@ -70,10 +75,20 @@ pub(crate) fn sharing_groups(
     Ok(out)
 }
 
-/// One word per light of `n`: [`NO_GROUP`], or its group (bits 0-15), the group's light count
-/// (bits 16-23) and the light's index in it (bits 24-31).
-pub(super) fn group_words(groups: &[SharingGroup], n: usize) -> Vec<u32> {
-    let mut words = vec![NO_GROUP; n];
+/// The word of a light outside every group whose objects are all culled: the edge pass skips it
+/// (`ALL_CULLED` in `shaders/resident_extract.wgsl`).
+pub(super) const ALL_CULLED: u32 = u32::MAX - 1;
+
+/// One word per light of `n`: [`NO_GROUP`] ([`ALL_CULLED`] where `culled(light)`), or its group
+/// (bits 0-15), the group's light count (bits 16-23) and the light's index in it (bits 24-31).
+pub(super) fn group_words(
+    groups: &[SharingGroup],
+    n: usize,
+    culled: impl Fn(usize) -> bool,
+) -> Vec<u32> {
+    let mut words: Vec<u32> = (0..n)
+        .map(|li| if culled(li) { ALL_CULLED } else { NO_GROUP })
+        .collect();
     for (g, grp) in groups.iter().enumerate() {
         for j in 0..grp.count {
             words[grp.first + j] = g as u32 | (grp.count as u32) << 16 | (j as u32) << 24;
@@ -148,20 +163,27 @@ mod tests {
         t[11] = Technique::ZPass;
         t[149] = Technique::Culled;
         let groups = [0..70, 70..150];
-        let g = sharing_groups(&frame(&lights, &t, &groups, &camera), 1).unwrap();
+        let g = sharing_groups(&frame(&lights, &t, &groups, &camera), 1, 1000).unwrap();
         let runs: Vec<(usize, usize)> = g.iter().map(|g| (g.first, g.count)).collect();
         assert_eq!(runs, [(0, 10), (10, 2), (12, 58), (70, 64), (134, 15)]);
-        let w = group_words(&g, 150);
+        let w = group_words(&g, 150, |li| t[li] == Technique::Culled);
         assert_eq!(w[70], 3 | 64 << 16);
         assert_eq!(w[71], 3 | 64 << 16 | 1 << 24);
-        assert_eq!(w[149], NO_GROUP);
+        assert_eq!((w[149], w[148]), (ALL_CULLED, 4 | 15 << 16 | 14 << 24));
         // Overlapping or out-of-range groups are refused; other modes share nothing.
         let bad = [0..4, 3..6];
-        assert!(sharing_groups(&frame(&lights, &t, &bad, &camera), 1).is_err());
+        assert!(sharing_groups(&frame(&lights, &t, &bad, &camera), 1, 1000).is_err());
         let bad = [0..2, 140..151];
-        assert!(sharing_groups(&frame(&lights, &t, &bad, &camera), 1).is_err());
+        assert!(sharing_groups(&frame(&lights, &t, &bad, &camera), 1, 1000).is_err());
         let mut f = frame(&lights, &t, &groups, &camera);
         f.mode = Accuracy::Ordered;
-        assert!(sharing_groups(&f, 1).unwrap().is_empty());
+        assert!(sharing_groups(&f, 1, 1000).unwrap().is_empty());
+        // Batches of 50 lights split the groups at 50, 100 and 150.
+        let g = sharing_groups(&frame(&lights, &t, &groups, &camera), 1, 50).unwrap();
+        let runs: Vec<(usize, usize)> = g.iter().map(|g| (g.first, g.count)).collect();
+        assert_eq!(
+            runs,
+            [(0, 10), (10, 2), (12, 38), (50, 20), (70, 30), (100, 49)]
+        );
     }
 }

@@ -51,6 +51,7 @@
 //! ```
 //! `examples/embed.rs` renders a whole frame this way.
 
+mod batch;
 mod encode;
 mod groups;
 pub mod layout;
@@ -59,6 +60,7 @@ mod readback;
 mod scene;
 pub mod twin;
 
+use batch::FrameBuffers;
 pub use groups::NOT_SHARED;
 pub use layout::ResidentLayout;
 
@@ -383,34 +385,6 @@ struct FrameState {
     scissors: Vec<Option<[u32; 4]>>,
 }
 
-/// Buffers sized by the number of lights: object-space lights, light points, techniques,
-/// triangle signs, indirect arguments, side records, object rows, light uniforms.
-struct LightBuffers {
-    lights: wgpu::Buffer,
-    light_points: wgpu::Buffer,
-    technique: wgpu::Buffer,
-    signs: wgpu::Buffer,
-    args: wgpu::Buffer,
-    records: wgpu::Buffer,
-    objects: wgpu::Buffer,
-    light_u: wgpu::Buffer,
-}
-
-/// The [`LightBuffers`] for `lights` lights, and the bind groups over them.
-struct FrameBuffers {
-    lights: usize,
-    /// With `TIMESTAMP_QUERY`: begin/end of the extraction, the pre-pass, and per light its
-    /// side, cap and lit passes (see `TimestampSlot`), and the buffer they resolve into.
-    queries: Option<(wgpu::QuerySet, wgpu::Buffer, u32)>,
-    buffers: LightBuffers,
-    c0: wgpu::BindGroup,
-    c1: wgpu::BindGroup,
-    d0: wgpu::BindGroup,
-    dl: wgpu::BindGroup,
-    v0: wgpu::BindGroup,
-    s0: wgpu::BindGroup,
-}
-
 /// A scene uploaded by [`ShadowPass::prepare`], with its per-frame buffers.
 pub struct ResidentScene {
     /// Per object, the pixel ids' `[surface, first triangle]` where they are not
@@ -432,8 +406,6 @@ pub struct ResidentScene {
     /// The per-frame surface vertex buffer and the bind groups of its chunks with their
     /// triangle counts (`None`: vertex pulling).
     surface: Option<(wgpu::Buffer, Vec<(wgpu::BindGroup, u32)>)>,
-    params: wgpu::Buffer,
-    rparams: wgpu::Buffer,
     globals: wgpu::Buffer,
     frame: Option<FrameBuffers>,
     state: FrameState,
@@ -451,28 +423,13 @@ impl ResidentScene {
             &self.vertex_objects,
             &self.world,
             &self.pending_dispatch.0,
-            &self.params,
-            &self.rparams,
             &self.globals,
         ]);
         if let Some((b, _)) = &self.surface {
             buffers.push(b);
         }
         if let Some(f) = &self.frame {
-            let b = &f.buffers;
-            buffers.extend([
-                &b.lights,
-                &b.light_points,
-                &b.technique,
-                &b.signs,
-                &b.args,
-                &b.records,
-                &b.objects,
-                &b.light_u,
-            ]);
-            if let Some((_, q, _)) = &f.queries {
-                buffers.push(q);
-            }
+            buffers.extend(f.all());
         }
         PreparedBytes {
             host,
@@ -502,6 +459,19 @@ impl ResidentScene {
     #[must_use]
     pub fn sharing_groups(&self) -> &[SharingGroup] {
         &self.state.groups
+    }
+
+    /// How many batches the lights of the last [`ShadowPass::update`] are extracted in: more
+    /// than one where their buffers would exceed one storage binding of the device
+    /// (`max_storage_buffer_binding_size`); 0 before the first update.
+    #[must_use]
+    pub fn light_batches(&self) -> usize {
+        self.frame.as_ref().map_or(0, |f| {
+            f.batches
+                .iter()
+                .filter(|b| b.lights_of(self.state.lights) > 0)
+                .count()
+        })
     }
 
     /// Where the lit pass and the pre-pass read this scene's surface vertices: `"buffer"` (the

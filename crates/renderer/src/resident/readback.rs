@@ -14,22 +14,25 @@ impl ShadowPass {
         let Some(fb) = rs.frame.as_ref() else {
             return Ok(PassCounts::default());
         };
-        let words = read_buffer(&self.device, &self.queue, &fb.buffers.args)?;
-        let l = rs.state.lights;
         let objects = rs.counts.objects;
-        let base = 8 * l;
-        let mut c = PassCounts {
-            integer_decided: u64::from(words[base]),
-            records: (0..l)
-                .map(|li| [words[li * 8 + 1], words[li * 8 + 5]])
-                .collect(),
-            ..PassCounts::default()
-        };
-        for i in 0..l * objects {
-            let k = base + 1 + 3 * i;
-            c.silhouette_edges.push(words[k]);
-            c.side_quads.push(words[k + 1]);
-            c.cap_triangles.push(words[k + 2]);
+        let mut c = PassCounts::default();
+        for b in fb
+            .batches
+            .iter()
+            .filter(|b| b.lights_of(rs.state.lights) > 0)
+        {
+            let l = b.lights_of(rs.state.lights);
+            let words = read_buffer(&self.device, &self.queue, &b.buffers.args)?;
+            let base = 8 * l;
+            c.integer_decided += u64::from(words[base]);
+            c.records
+                .extend((0..l).map(|li| [words[li * 8 + 1], words[li * 8 + 5]]));
+            for i in 0..l * objects {
+                let k = base + 1 + 3 * i;
+                c.silhouette_edges.push(words[k]);
+                c.side_quads.push(words[k + 1]);
+                c.cap_triangles.push(words[k + 2]);
+            }
         }
         Ok(c)
     }
@@ -84,28 +87,46 @@ impl ShadowPass {
     /// # Errors
     /// [`RenderError::Device`] when mapping fails.
     pub fn read_signs(&self, rs: &ResidentScene) -> Result<Vec<i32>, RenderError> {
-        let Some(fb) = rs.frame.as_ref() else {
-            return Ok(Vec::new());
-        };
-        let n = rs.state.lights * rs.counts.tris;
-        let words = read_buffer(&self.device, &self.queue, &fb.buffers.signs)?;
-        Ok(words[..n].iter().map(|&w| w as i32).collect())
+        self.read_sign_rows(rs, |_, nb| (0, nb))
     }
 
-    /// Reads back the sharing groups' signs of the last submitted frame (tests only): the groups
-    /// ([`ResidentScene::sharing_groups`]) and `[group * tri_count + triangle]`, the sign the
+    /// Reads back the sharing groups' signs of the last submitted frame (tests only): for each
+    /// of [`ResidentScene::sharing_groups`], `[group * tri_count + triangle]`, the sign the
     /// triangle pass certified for every light of the group, or [`NOT_SHARED`].
     ///
     /// # Errors
     /// [`RenderError::Device`] when mapping fails.
     pub fn read_shared_signs(&self, rs: &ResidentScene) -> Result<Vec<i32>, RenderError> {
+        let groups = &rs.state.groups;
+        self.read_sign_rows(rs, |b, nb| (nb, b.groups(groups, nb).len()))
+    }
+
+    /// Rows `first .. first + count` of each batch's signs (`rows(batch, its lights)`), in
+    /// batch order.
+    fn read_sign_rows(
+        &self,
+        rs: &ResidentScene,
+        rows: impl Fn(&batch::Batch, usize) -> (usize, usize),
+    ) -> Result<Vec<i32>, RenderError> {
         let Some(fb) = rs.frame.as_ref() else {
             return Ok(Vec::new());
         };
         let t = rs.counts.tris;
-        let (first, n) = (rs.state.lights * t, rs.state.groups.len() * t);
-        let words = read_buffer(&self.device, &self.queue, &fb.buffers.signs)?;
-        Ok(words[first..first + n].iter().map(|&w| w as i32).collect())
+        let mut out = Vec::new();
+        for b in fb
+            .batches
+            .iter()
+            .filter(|b| b.lights_of(rs.state.lights) > 0)
+        {
+            let (first, count) = rows(b, b.lights_of(rs.state.lights));
+            let words = read_buffer(&self.device, &self.queue, &b.buffers.signs)?;
+            out.extend(
+                words[first * t..(first + count) * t]
+                    .iter()
+                    .map(|&w| w as i32),
+            );
+        }
+        Ok(out)
     }
 
     /// Reads back each light's side records of the last submitted frame, sorted (tests only).
@@ -118,27 +139,31 @@ impl ShadowPass {
             return Ok(Vec::new());
         };
         let counts = self.read_counts(rs)?;
-        let words = read_buffer(&self.device, &self.queue, &fb.buffers.records)?;
         let cap = rs.counts.capacity;
-        counts
-            .records
+        let mut out = Vec::with_capacity(counts.records.len());
+        for b in fb
+            .batches
             .iter()
-            .enumerate()
-            .map(|(li, &[zp, zf])| {
-                let (zp, zf) = (zp as usize, zf as usize);
+            .filter(|b| b.lights_of(rs.state.lights) > 0)
+        {
+            let words = read_buffer(&self.device, &self.queue, &b.buffers.records)?;
+            for j in 0..b.lights_of(rs.state.lights) {
+                let li = b.first + j;
+                let [zp, zf] = counts.records[li].map(|c| c as usize);
                 if zp + zf > cap {
                     return Err(RenderError::Device(format!(
                         "light {li}: {zp} z-pass and {zf} z-fail side records exceed the region of {cap}"
                     )));
                 }
-                let region = &words[li * cap..(li + 1) * cap];
+                let region = &words[j * cap..(j + 1) * cap];
                 let mut zpass = region[..zp].to_vec();
                 let mut zfail = region[cap - zf..].to_vec();
                 zpass.sort_unstable();
                 zfail.sort_unstable();
-                Ok(LightRecords { zpass, zfail })
-            })
-            .collect()
+                out.push(LightRecords { zpass, zfail });
+            }
+        }
+        Ok(out)
     }
 }
 

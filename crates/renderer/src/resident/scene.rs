@@ -97,8 +97,6 @@ impl ShadowPass {
             world_out,
             pending_dispatch,
             surface,
-            params: self.uniform_buffer("resident params", 32),
-            rparams: self.uniform_buffer("resident frame params", 16),
             globals: self.uniform_buffer("resident globals", 96),
             frame: None,
             state: FrameState {
@@ -284,7 +282,7 @@ impl ShadowPass {
     }
 
     /// A uniform buffer of `size` bytes that the host writes each frame.
-    fn uniform_buffer(&self, label: &str, size: u64) -> wgpu::Buffer {
+    pub(super) fn uniform_buffer(&self, label: &str, size: u64) -> wgpu::Buffer {
         crate::raster::pipelines::uniform_buffer(&self.device, label, size)
     }
 
@@ -297,23 +295,28 @@ impl ShadowPass {
     /// `max_storage_buffer_binding_size`.
     pub fn update(&self, rs: &mut ResidentScene, f: &PassFrame<'_>) -> Result<(), RenderError> {
         check_frame_lengths(rs, f)?;
-        let groups = groups::sharing_groups(f, rs.counts.objects)?;
-        let slots = f.lights.len().max(1);
+        let n = f.lights.len();
+        let slots = n.max(1);
         if rs.frame.as_ref().is_none_or(|b| b.lights < slots) {
             rs.frame = Some(self.frame_buffers(rs, slots)?);
         }
         let fb = rs.frame.as_ref().expect("allocated above");
-        self.write_lights(rs, fb, f, &groups)?;
+        let groups = groups::sharing_groups(f, rs.counts.objects, fb.per_batch)?;
+        let lights = object_space_lights(f)?;
         let q = &self.queue;
         q.write_buffer(
-            &fb.buffers.objects,
+            &fb.objects,
             0,
             bytemuck::cast_slice(&object_rows(f, &rs.bases, &rs.ids)),
         );
-        self.write_params(rs, f);
-        q.write_buffer(&fb.buffers.light_u, 0, &light_uniforms(rs, f, slots));
+        self.write_globals(rs, f);
+        for b in fb.batches.iter().filter(|b| b.lights_of(n) > 0) {
+            let nb = b.lights_of(n);
+            self.write_batch(rs, b, f, &lights, b.groups(&groups, nb));
+            q.write_buffer(&b.buffers.light_u, 0, &light_uniforms(rs, f, b.first, nb));
+        }
         rs.state = FrameState {
-            lights: f.lights.len(),
+            lights: n,
             groups,
             mode: f.mode,
             techniques: f.techniques.to_vec(),
@@ -322,73 +325,56 @@ impl ShadowPass {
         Ok(())
     }
 
-    /// Writes the object-space lights, their extrusion points and the plan's technique codes,
-    /// and the sharing groups' words and boxes after the codes and the lights.
-    fn write_lights(
+    /// Writes batch `b`'s inputs: its object-space lights (`lights[object * n + light]` of the
+    /// frame's `n`), their extrusion points, the plan's technique codes, the extraction's
+    /// parameters, and its sharing groups' words and boxes after the codes and the lights.
+    fn write_batch(
         &self,
         rs: &ResidentScene,
-        fb: &FrameBuffers,
+        b: &batch::Batch,
         f: &PassFrame<'_>,
+        lights: &[[f32; 4]],
         groups: &[SharingGroup],
-    ) -> Result<(), RenderError> {
-        let objects = rs.counts.objects;
-        let n_lights = f.lights.len();
+    ) {
+        let (objects, n) = (rs.counts.objects, f.lights.len());
+        let nb = b.lights_of(n);
         let q = &self.queue;
-        // Object-space lights, [object * light_count + light], through the one shared
-        // conversion (f64, rounded once), as every backend does.
-        let mut lights: Vec<[f32; 4]> = Vec::with_capacity(objects * n_lights);
-        for (oi, &t) in f.transforms.iter().enumerate() {
-            for light in f.lights {
-                let l = object_light(t, light.light);
-                if !l.iter().all(|v| v.is_finite()) {
-                    return Err(RenderError::InvalidInput(format!(
-                        "object {oi}: the light in object space {l:?} is not finite"
-                    )));
-                }
-                lights.push(l);
-            }
+        let mut bl: Vec<[f32; 4]> = (0..objects)
+            .flat_map(|o| &lights[o * n + b.first..o * n + b.first + nb])
+            .copied()
+            .collect();
+        let points = light_points(&bl, objects, nb);
+        q.write_buffer(&b.buffers.light_points, 0, bytemuck::cast_slice(&points));
+        let local: Vec<SharingGroup> = groups
+            .iter()
+            .map(|g| SharingGroup {
+                first: g.first - b.first,
+                count: g.count,
+            })
+            .collect();
+        bl.extend(groups::group_boxes(&local, &bl, nb, objects));
+        if bl.is_empty() {
+            bl.push([0.0; 4]);
         }
-        let points = light_points(&lights, objects, n_lights);
-        q.write_buffer(&fb.buffers.light_points, 0, bytemuck::cast_slice(&points));
-        lights.extend(groups::group_boxes(groups, &lights, n_lights, objects));
-        if lights.is_empty() {
-            lights.push([0.0; 4]);
-        }
-        q.write_buffer(&fb.buffers.lights, 0, bytemuck::cast_slice(&lights));
-        let mut codes: Vec<u32> = f.techniques.iter().map(|&t| technique::code(t)).collect();
-        codes.extend(groups::group_words(groups, n_lights));
-        if !codes.is_empty() {
-            q.write_buffer(&fb.buffers.technique, 0, bytemuck::cast_slice(&codes));
-        }
-        Ok(())
+        q.write_buffer(&b.buffers.lights, 0, bytemuck::cast_slice(&bl));
+        let rows = &f.techniques[b.first * objects..(b.first + nb) * objects];
+        let mut codes: Vec<u32> = rows.iter().map(|&t| technique::code(t)).collect();
+        let culled = |j: usize| {
+            let row = &rows[j * objects..(j + 1) * objects];
+            row.iter().all(|&t| t == Technique::Culled)
+        };
+        codes.extend(groups::group_words(&local, nb, culled));
+        q.write_buffer(&b.buffers.technique, 0, bytemuck::cast_slice(&codes));
+        let (edges, tris) = (rs.counts.edges as u32, rs.counts.tris as u32);
+        let params = [edges, nb as u32, 0, tris, 0, objects as u32, 0, 0];
+        q.write_buffer(&b.params, 0, bytemuck::cast_slice(&params));
+        let capacity = rs.counts.capacity as u32;
+        let rparams = [objects as u32, capacity, u32::from(f.count), 0];
+        q.write_buffer(&b.rparams, 0, bytemuck::cast_slice(&rparams));
     }
 
-    /// Writes the extraction's parameters and the globals of the camera moved to the origin.
-    fn write_params(&self, rs: &ResidentScene, f: &PassFrame<'_>) {
-        let q = &self.queue;
-        let edge_count = rs.counts.edges as u32;
-        let tri_count = rs.counts.tris as u32;
-        q.write_buffer(
-            &rs.params,
-            0,
-            bytemuck::cast_slice(&[
-                edge_count,
-                f.lights.len() as u32,
-                0,
-                tri_count,
-                0,
-                rs.counts.objects as u32,
-                0,
-                0,
-            ]),
-        );
-        let objects = rs.counts.objects;
-        let capacity = rs.counts.capacity as u32;
-        q.write_buffer(
-            &rs.rparams,
-            0,
-            bytemuck::cast_slice(&[objects as u32, capacity, u32::from(f.count), 0]),
-        );
+    /// Writes the globals of the camera moved to the origin.
+    fn write_globals(&self, rs: &ResidentScene, f: &PassFrame<'_>) {
         let rel_cam = Camera {
             eye: glam::Vec3::ZERO,
             target: f.camera.target - f.camera.eye,
@@ -397,179 +383,30 @@ impl ShadowPass {
         let mut globals = [0f32; 24];
         globals[..16].copy_from_slice(&rel_cam.view_proj(f.aspect).to_cols_array());
         globals[20] = f.ambient;
-        q.write_buffer(&rs.globals, 0, bytemuck::cast_slice(&globals));
+        self.queue
+            .write_buffer(&rs.globals, 0, bytemuck::cast_slice(&globals));
     }
+}
 
-    /// The buffers sized by `slots` lights, and the bind groups over them and the scene's.
-    fn frame_buffers(&self, rs: &ResidentScene, slots: usize) -> Result<FrameBuffers, RenderError> {
-        let b = self.light_buffers(rs, slots)?;
-        let [c0, c1] = self.extract_groups(rs, &b);
-        let [d0, dl] = self.draw_groups(rs, &b);
-        let [s0, v0] = self.world_groups(rs, &b);
-        Ok(FrameBuffers {
-            lights: slots,
-            queries: self.timestamp_queries(slots),
-            buffers: b,
-            c0,
-            c1,
-            d0,
-            dl,
-            v0,
-            s0,
-        })
-    }
-
-    /// The buffers sized by `slots` lights, each checked against what the device binds.
-    fn light_buffers(&self, rs: &ResidentScene, slots: usize) -> Result<LightBuffers, RenderError> {
-        let objects = rs.counts.objects.max(1) as u64;
-        let max = self.device.limits().max_storage_buffer_binding_size;
-        let sized = |label: &str,
-                     size: u64,
-                     usage: wgpu::BufferUsages|
-         -> Result<wgpu::Buffer, RenderError> {
-            if size > max {
+/// The frame's object-space lights, `[object * light_count + light]`, through the one shared
+/// conversion (f64, rounded once), as every backend does.
+///
+/// # Errors
+/// [`RenderError::InvalidInput`] naming the object when a light is not finite in its space.
+fn object_space_lights(f: &PassFrame<'_>) -> Result<Vec<[f32; 4]>, RenderError> {
+    let mut lights: Vec<[f32; 4]> = Vec::with_capacity(f.transforms.len() * f.lights.len());
+    for (oi, &t) in f.transforms.iter().enumerate() {
+        for light in f.lights {
+            let l = object_light(t, light.light);
+            if !l.iter().all(|v| v.is_finite()) {
                 return Err(RenderError::InvalidInput(format!(
-                    "the GPU pipeline's {label} for {slots} light(s) take {size} bytes; the device binds at most {max} (max_storage_buffer_binding_size): use fewer lights per frame"
+                    "object {oi}: the light in object space {l:?} is not finite"
                 )));
             }
-            Ok(self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: size.max(16),
-                usage,
-                mapped_at_creation: false,
-            }))
-        };
-        let st = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
-        let s = slots as u64;
-        let tri = rs.counts.tris.max(1) as u64;
-        let readable = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-        let indirect = wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::INDIRECT
-            | wgpu::BufferUsages::COPY_SRC;
-        // Sharing groups have two lights or more: at most `s / 2` of them, each with a box per
-        // object after the lights, a word per light after the techniques, and a row of shared
-        // signs after the lights' rows.
-        let g = s / 2;
-        Ok(LightBuffers {
-            lights: sized("object-space lights", 16 * (s + 2 * g) * objects, st)?,
-            light_points: sized("light points", 32 * s * objects, st)?,
-            technique: sized("techniques", 4 * s * (objects + 1), st)?,
-            signs: sized("triangle signs", 4 * (s + g) * tri, readable)?,
-            args: sized(
-                "indirect draws",
-                4 * (8 * s + 1 + 3 * s * objects),
-                indirect,
-            )?,
-            records: sized("side records", 4 * s * rs.counts.capacity as u64, readable)?,
-            objects: sized("objects", 80 * objects, st)?,
-            light_u: self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("resident lights"),
-                size: LIGHT_STRIDE * s,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
-        })
+            lights.push(l);
+        }
     }
-
-    /// The extraction's bind groups: `c0` (scene, lights, signs), `c1` (frame, records).
-    fn extract_groups(&self, rs: &ResidentScene, b: &LightBuffers) -> [wgpu::BindGroup; 2] {
-        let mut entries = vec![
-            entry(0, &rs.params),
-            entry(4, &b.lights),
-            entry(11, &b.signs),
-        ];
-        entries.extend(rs.tables.entries());
-        let c0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("resident extract scene"),
-            layout: &self.extract.c0,
-            entries: &entries,
-        });
-        let c1 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("resident extract frame"),
-            layout: &self.extract.c1,
-            entries: &[
-                entry(0, &rs.rparams),
-                entry(3, &b.technique),
-                entry(5, &b.args),
-                entry(6, &b.records),
-            ],
-        });
-        [c0, c1]
-    }
-
-    /// The draws' bind groups: `d0` (what sides and caps read), `dl` (one light's uniform).
-    fn draw_groups(&self, rs: &ResidentScene, b: &LightBuffers) -> [wgpu::BindGroup; 2] {
-        let d0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("resident draw"),
-            layout: &self.draw.d0,
-            entries: &[
-                entry(0, &rs.globals),
-                entry(1, &rs.tables.positions),
-                entry(2, &rs.tables.edges),
-                entry(3, &rs.tables.tris),
-                entry(4, &b.signs),
-                entry(5, &b.records),
-                entry(6, &b.objects),
-                entry(7, &rs.world),
-                entry(12, &b.light_points),
-            ],
-        });
-        let dl = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("resident light"),
-            layout: &self.draw.dl,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &b.light_u,
-                    offset: 0,
-                    size: std::num::NonZeroU64::new(LIGHT_BYTES),
-                }),
-            }],
-        });
-        [d0, dl]
-    }
-
-    /// The bind groups of the surface pass (`s0`) and of the vertex pass (`v0`).
-    fn world_groups(&self, rs: &ResidentScene, b: &LightBuffers) -> [wgpu::BindGroup; 2] {
-        let s0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("resident surfaces"),
-            layout: &self.world.s0,
-            entries: &[
-                entry(3, &rs.tables.tris),
-                entry(6, &b.objects),
-                entry(7, &rs.world),
-            ],
-        });
-        let v0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("resident vertices"),
-            layout: &self.world.v0,
-            entries: &[
-                entry(1, &rs.tables.positions),
-                entry(6, &b.objects),
-                entry(8, &rs.vertex_objects),
-            ],
-        });
-        [s0, v0]
-    }
-
-    /// With `TIMESTAMP_QUERY`: the query set of a frame's passes and its resolve buffer.
-    fn timestamp_queries(&self, slots: usize) -> Option<(wgpu::QuerySet, wgpu::Buffer, u32)> {
-        self.timestamps.then(|| {
-            let count = 2 * (2 + 3 * slots as u32);
-            let set = self.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("resident timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count,
-            });
-            let resolve = self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("resident timestamps resolve"),
-                size: 8 * u64::from(count),
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            (set, resolve, count)
-        })
-    }
+    Ok(lights)
 }
 
 /// Checks that the frame's per-object and per-light slices match the scene and lights.
@@ -629,25 +466,27 @@ fn object_rows(f: &PassFrame<'_>, bases: &[[u32; 4]], ids: &[[u32; 2]]) -> Vec<[
     objs
 }
 
-/// Per light: camera-relative light, colour and emission, draw ranges, first point.
-fn light_uniforms(rs: &ResidentScene, f: &PassFrame<'_>, slots: usize) -> Vec<u8> {
+/// Per light of a batch (`first .. first + nb`): camera-relative light, colour and emission,
+/// draw ranges and first point in the batch's buffers.
+fn light_uniforms(rs: &ResidentScene, f: &PassFrame<'_>, first: usize, nb: usize) -> Vec<u8> {
     let objects = rs.counts.objects;
     let capacity = rs.counts.capacity as u32;
     let tri_count = rs.counts.tris as u32;
-    let mut light_bytes = vec![0u8; slots * LIGHT_STRIDE as usize];
-    for (li, light) in f.lights.iter().enumerate() {
+    let mut light_bytes = vec![0u8; nb * LIGHT_STRIDE as usize];
+    for j in 0..nb {
+        let light = &f.lights[first + j];
         let l = crate::raster::relative_light(light.light.to_array(), f.camera.eye);
-        let v = crate::raster::light_uniform(l, f.colors[li], light.emission.as_ref());
+        let v = crate::raster::light_uniform(l, f.colors[first + j], light.emission.as_ref());
         let draw = [
-            li as u32 * capacity,
+            j as u32 * capacity,
             capacity,
-            li as u32 * tri_count,
+            j as u32 * tri_count,
             u32::from(l[3] != 0.0),
         ];
-        let o = li * LIGHT_STRIDE as usize;
+        let o = j * LIGHT_STRIDE as usize;
         light_bytes[o..o + 64].copy_from_slice(bytemuck::cast_slice(&v));
         light_bytes[o + 64..o + 80].copy_from_slice(bytemuck::cast_slice(&draw));
-        let first_point = [(li * objects) as u32, 0, 0, 0];
+        let first_point = [(j * objects) as u32, 0, 0, 0];
         light_bytes[o + 80..o + 96].copy_from_slice(bytemuck::cast_slice(&first_point));
     }
     light_bytes
