@@ -21,8 +21,8 @@ struct LightU {
     // GPU-resident pass only (resident_draw.wgsl): (record region start, region size, first sign of
     // this light, 1 when it has a back cap). Zero in the host pipeline.
     draw: vec4<u32>,
-    // GPU-resident pass only: (first light point of this light, 0, 0, 0), see `r_light_points`.
-    // Zero in the host pipeline.
+    // GPU-resident pass only: (first light point of this light, 1 + the first shared sign of its
+    // sharing group or 0, 0, 0), see `r_light_points` and `cap_sign`. Zero in the host pipeline.
     points: vec4<u32>,
 };
 

@@ -245,12 +245,27 @@ fn vs_resident_side_zfail(@builtin(vertex_index) v: u32, @builtin(instance_index
     return side_vertex(r_records[lt.draw.x + lt.draw.y - 1u - i], v);
 }
 
+// A shared sign the triangle pass left (NOT_SHARED in resident_extract.wgsl).
+const R_NOT_SHARED: i32 = 4;
+
+// The light's sign of triangle `t`: its sharing group's where the group has one (the triangle
+// pass writes no per-light sign there), else its own.
+fn cap_sign(t: u32) -> i32 {
+    if lt.points.y != 0u {
+        let s = r_signs[lt.points.y - 1u + t];
+        if s != R_NOT_SHARED {
+            return s;
+        }
+    }
+    return r_signs[lt.draw.z + t];
+}
+
 // 6 vertices per triangle: the sigma = +1 front cap, then the back cap (sigma != 0, point lights).
 @vertex
 fn vs_resident_cap_ccw(@builtin(vertex_index) vi: u32) -> VolumeOut {
     let t = vi / 6u;
     let k = vi % 6u;
-    let s = r_signs[lt.draw.z + t];
+    let s = cap_sign(t);
     if s == 0 || s == R_TOUCH {
         return degenerate();
     }
@@ -276,7 +291,7 @@ fn vs_resident_cap_ccw(@builtin(vertex_index) vi: u32) -> VolumeOut {
 @vertex
 fn vs_resident_cap_cw(@builtin(vertex_index) vi: u32) -> VolumeOut {
     let t = vi / 3u;
-    if r_signs[lt.draw.z + t] != -1 {
+    if cap_sign(t) != -1 {
         return degenerate();
     }
     let tr = r_triangle(t);

@@ -75,9 +75,6 @@ override PENDING_GROUPS_X: u32 = 65535u;
 
 var<workgroup> wg_count: array<atomic<u32>, 2>;
 var<workgroup> wg_base: array<u32, 2>;
-// A sharing group's first z-pass and z-fail slot per light.
-const MAX_GROUP: u32 = 64u;
-var<workgroup> wg_group_base: array<vec2<u32>, MAX_GROUP>;
 
 fn light_group(li: u32) -> u32 {
     return technique[params.light_count * rp.object_count + li];
@@ -295,9 +292,11 @@ fn resident_triangles_shared(inv: Invocation) {
         }
         signs[shared_row(g) + t] = s;
         if s != NOT_SHARED {
-            for (var j = 0u; j < count; j++) {
-                signs[(li + j) * params.tri_count + t] = s;
-                count_cap(li + j, tri.object, tech, s);
+            // No per-light sign: the edge pass, the pending pass and the caps read the group's.
+            if (rp.flags & 1u) != 0u {
+                for (var j = 0u; j < count; j++) {
+                    count_cap(li + j, tri.object, tech, s);
+                }
             }
         } else {
             for (var j = 0u; j < count; j++) {
@@ -326,6 +325,13 @@ fn resident_pending(inv: Invocation) {
     }
     let tri = load_triangle(t);
     for (var li = 0u; li < params.light_count; li++) {
+        // A triangle its group shares has no per-light sign of this frame.
+        let group = light_group(li);
+        if group < ALL_CULLED {
+            if signs[shared_row(group & 0xffffu) + t] != NOT_SHARED {
+                continue;
+            }
+        }
         let k = li * params.tri_count + t;
         if signs[k] != PENDING {
             continue;
@@ -402,80 +408,62 @@ fn shared_multiplicity(edge: Edge, g: u32) -> vec2<i32> {
     return vec2<i32>(m, 0);
 }
 
-// The records of a sharing group's lights `first .. first + count` (same techniques): an edge
-// whose opposite triangles are all shared appends its records to every light of the group in
-// one round (one global atomic per light and list); the others go light by light, a loop the
-// workgroup skips when it has none.
-fn append_group(first: u32, count: u32, g: u32, lid: u32, e: u32, it: EdgeItem) {
-    let edge = it.edge;
-    let object = it.object;
-    var tech = 0u;
-    if it.valid {
-        tech = technique[first * rp.object_count + object];
-    }
-    var m = 0;
-    var unshared = false;
-    if tech != 0u {
-        let sm = shared_multiplicity(edge, g);
-        m = sm.x;
-        unshared = sm.y != 0;
-    }
+// Light `li`'s `|m|` records of edge `e` in list `list`, placed with one global atomic (the
+// shared edge pass has no workgroup barrier: a silhouette edge is rare, and a device that runs
+// a workgroup's invocations as coroutines, as lavapipe does, pays for every barrier).
+fn append_global(li: u32, e: u32, object: u32, m: i32, list: u32) {
     let n = u32(abs(m));
+    if n == 0u {
+        return;
+    }
+    if (rp.flags & 1u) != 0u {
+        let c = count_slot(li, object);
+        atomicAdd(&args[c], 1u);
+        atomicAdd(&args[c + 1u], n);
+    }
+    let slot = atomicAdd(&args[li * 8u + 1u + 4u * list], n);
+    write_records(li, e, m, list, slot);
+}
+
+// The records of a sharing group's lights `first .. first + count` (same techniques): m once
+// for the group where every opposite triangle is shared, else each light's own.
+fn append_group(first: u32, count: u32, g: u32, e: u32, it: EdgeItem) {
+    let tech = technique[first * rp.object_count + it.object];
+    if tech == 0u {
+        return;
+    }
     let list = select(0u, 1u, tech == 2u);
-    if lid == 0u {
-        atomicStore(&wg_count[0], 0u);
-        atomicStore(&wg_count[1], 0u);
-    }
-    workgroupBarrier();
-    var local = 0u;
-    if n != 0u {
-        local = atomicAdd(&wg_count[list], n);
-        if (rp.flags & 1u) != 0u {
+    let sm = shared_multiplicity(it.edge, g);
+    if sm.y == 0 {
+        if sm.x != 0 {
             for (var j = 0u; j < count; j++) {
-                let c = count_slot(first + j, object);
-                atomicAdd(&args[c], 1u);
-                atomicAdd(&args[c + 1u], n);
+                append_global(first + j, e, it.object, sm.x, list);
             }
         }
+        return;
     }
-    workgroupBarrier();
-    if lid == 0u {
-        let zp = atomicLoad(&wg_count[0]);
-        let zf = atomicLoad(&wg_count[1]);
-        for (var j = 0u; j < count; j++) {
-            let li = first + j;
-            if zp != 0u {
-                wg_group_base[j].x = atomicAdd(&args[li * 8u + 1u], zp);
-            }
-            if zf != 0u {
-                wg_group_base[j].y = atomicAdd(&args[li * 8u + 5u], zf);
-            }
+    for (var j = 0u; j < count; j++) {
+        append_global(first + j, e, it.object, group_multiplicity(it.edge, first + j, g), list);
+    }
+}
+
+// m of `edge` for light `li` of sharing group `g` (exact mode): each opposite triangle's sign is
+// the group's where it has one, else the light's own.
+fn group_multiplicity(edge: Edge, li: u32, g: u32) -> i32 {
+    let row = li * params.tri_count;
+    let group_row = shared_row(g);
+    var m = 0;
+    for (var k = edge.ov_begin; k < edge.ov_end; k++) {
+        let r = ov_refs[k];
+        var s = signs[group_row + (r >> 2u)];
+        if s == NOT_SHARED {
+            s = signs[row + (r >> 2u)];
+        }
+        if s != TOUCH {
+            m += select(s, -s, (r & 3u) == 1u);
         }
     }
-    workgroupBarrier();
-    if n != 0u {
-        for (var j = 0u; j < count; j++) {
-            write_records(first + j, e, m, list, wg_group_base[j][list] + local);
-        }
-    }
-    // The few edges next to a triangle the box cuts: per light, with one global atomic each.
-    if unshared {
-        for (var j = 0u; j < count; j++) {
-            let li = first + j;
-            let mj = edge_multiplicity(edge, object, li, it.a, it.b);
-            let nj = u32(abs(mj));
-            if nj != 0u {
-                if (rp.flags & 1u) != 0u {
-                    let c = count_slot(li, object);
-                    atomicAdd(&args[c], 1u);
-                    atomicAdd(&args[c + 1u], nj);
-                }
-                let slot = atomicAdd(&args[li * 8u + 1u + 4u * list], nj);
-                write_records(li, e, mj, list, slot);
-            }
-        }
-    }
-    workgroupBarrier();
+    return m;
 }
 
 // The invocation's edge, its object and its ends' positions (zeros past the last edge).
@@ -522,24 +510,29 @@ fn resident_edges(inv: Invocation) {
     }
 }
 
-// `resident_edges` for a frame with sharing groups (exact mode): a group's lights together.
+// `resident_edges` for a frame with sharing groups (exact mode): a group's lights together, and
+// every record placed with a global atomic (no barrier).
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn resident_edges_shared(inv: Invocation) {
     let e = flat_index(inv);
+    if e >= params.edge_count {
+        return;
+    }
     let it = edge_item(e);
-    // Uniform loop (the group words are uniform).
     var li = 0u;
     while li < params.light_count {
         let group = light_group(li);
         if group < ALL_CULLED {
             let count = max((group >> 16u) & 0xffu, 1u);
-            append_group(li, count, group & 0xffffu, inv.lid, e, it);
+            append_group(li, count, group & 0xffffu, e, it);
             li += count;
-        } else {
-            if group == NO_GROUP {
-                edge_light(li, inv.lid, e, it);
-            }
-            li += 1u;
+            continue;
         }
+        let tech = technique[li * rp.object_count + it.object];
+        if group == NO_GROUP && tech != 0u {
+            let m = edge_multiplicity(it.edge, it.object, li, it.a, it.b);
+            append_global(li, e, it.object, m, select(0u, 1u, tech == 2u));
+        }
+        li += 1u;
     }
 }

@@ -27,7 +27,7 @@ main!(
     gpu_pipeline_matches_the_host_pipeline_and_the_reference_on_hard_scenes,
     timed_gpu_frames_read_nothing_back,
     exact_gpu_multiplicities_equal_cpu_on_random_lattice_soups,
-    chunked_pulled_and_batched_frames_draw_the_same_image
+    grouped_chunked_pulled_and_batched_frames_draw_the_same_image
 );
 
 /// The first adapter, or a visible skip without one; under `CI=true` a missing adapter fails
@@ -670,8 +670,12 @@ fn device_with(
 }
 
 /// One frame of a sphere over a floor under three lights through the pass, as an application
-/// records it; returns the colour image (RGBA8, `64 x 48`) and the number of light batches.
-fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> (Vec<u8>, usize) {
+/// records it (with `grouped`, the three as one light's samples); returns the colour image
+/// (RGBA8, `64 x 48`), the number of light batches and of sharing groups.
+fn embedded_frame(
+    gpu: &(ShadowPass, wgpu::Device, wgpu::Queue),
+    grouped: bool,
+) -> (Vec<u8>, usize, usize) {
     let (pass, device, queue) = gpu;
     let (w, h) = (64u32, 48u32);
     let sphere = shadowvol_scenes::procedural::icosphere(20_000, 1.0);
@@ -683,6 +687,7 @@ fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> (Vec<u8>, us
     }
     let mut rs = pass.prepare(&scene).unwrap();
     let camera = Camera::look_at(Vec3::new(3.0, 4.0, 5.0), Vec3::ZERO);
+    let groups = [std::ops::Range { start: 0, end: 3 }];
     // Three lights, so that a device with small bindings extracts them in batches.
     let lights = [
         Light::point(Vec3::new(1.0, 6.0, 0.5)),
@@ -706,7 +711,7 @@ fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> (Vec<u8>, us
             ambient: 0.1,
             mode: Accuracy::Exact,
             count: false,
-            sample_groups: &[],
+            sample_groups: &groups[..usize::from(grouped)],
         },
     )
     .unwrap();
@@ -733,24 +738,24 @@ fn embedded_frame(gpu: &(ShadowPass, wgpu::Device, wgpu::Queue)) -> (Vec<u8>, us
         pass.encode_lit(&mut enc, &rs, li, &cv, &dv);
     }
     queue.submit([enc.finish()]);
-    let batches = rs.light_batches();
     (
         read_texture(device, queue, &color, wgpu::TextureAspect::All, 4).unwrap(),
-        batches,
+        rs.light_batches(),
+        rs.sharing_groups().len(),
     )
 }
 
 /// The surface vertex buffer written in several chunks (a 1 MiB storage-binding limit against
 /// 3.8 MB of surface vertices), and the vertex-pulling fallback (a 2 MiB buffer limit), draw the
 /// same image as one chunk: the same shadow, pixel for pixel up to shading rounding.
-fn chunked_pulled_and_batched_frames_draw_the_same_image() -> Outcome {
+fn grouped_chunked_pulled_and_batched_frames_draw_the_same_image() -> Outcome {
     let one = device_with(|_| {})?;
     let chunked = device_with(|l| l.max_storage_buffer_binding_size = 1 << 20)?;
     let pulled = device_with(|l| l.max_buffer_size = 2 << 20)?;
     // Bindings of 256 KiB: one light's side records (240 KB) a batch.
     let batched = device_with(|l| l.max_storage_buffer_binding_size = 256 << 10)?;
-    let (want, batches) = embedded_frame(&one);
-    assert_eq!(batches, 1);
+    let (want, batches, groups) = embedded_frame(&one, false);
+    assert_eq!((batches, groups), (1, 0));
     let lit = want.chunks_exact(4).filter(|p| p[0] > 60).count();
     let dark = want
         .chunks_exact(4)
@@ -760,13 +765,15 @@ fn chunked_pulled_and_batched_frames_draw_the_same_image() -> Outcome {
         lit > 100 && dark > 20,
         "a lit scene with a shadow: {lit} lit, {dark} dark"
     );
-    for (name, gpu, want_batches) in [
-        ("chunked", &chunked, 1),
-        ("pulled", &pulled, 1),
-        ("batched", &batched, 3),
+    // Grouped, the z-fail caps of the triangles the group shares read the group's signs.
+    for (name, gpu, grouped, want_batches, want_groups) in [
+        ("grouped", &one, true, 1, 1),
+        ("chunked", &chunked, true, 1, 1),
+        ("pulled", &pulled, false, 1, 0),
+        ("batched", &batched, true, 3, 0),
     ] {
-        let (got, batches) = embedded_frame(gpu);
-        assert_eq!(batches, want_batches, "{name}");
+        let (got, batches, groups) = embedded_frame(gpu, grouped);
+        assert_eq!((batches, groups), (want_batches, want_groups), "{name}");
         let differ = want
             .chunks_exact(4)
             .zip(got.chunks_exact(4))

@@ -82,12 +82,25 @@ impl ShadowPass {
     }
 
     /// Reads back the triangle signs `[light * tri_count + triangle]` of the last submitted frame
-    /// (tests only).
+    /// (tests only); a sharing group's shared sign stands for each of its lights'.
     ///
     /// # Errors
     /// [`RenderError::Device`] when mapping fails.
     pub fn read_signs(&self, rs: &ResidentScene) -> Result<Vec<i32>, RenderError> {
-        self.read_sign_rows(rs, |_, nb| (0, nb))
+        let mut signs = self.read_sign_rows(rs, |_, nb| (0, nb))?;
+        // The triangle pass writes no per-light sign where a group shares one: fill them in.
+        let shared = self.read_shared_signs(rs)?;
+        let t = rs.counts.tris;
+        for (k, g) in rs.state.groups.iter().enumerate() {
+            for (tri, &s) in shared[k * t..(k + 1) * t].iter().enumerate() {
+                if s != NOT_SHARED {
+                    for li in g.first..g.first + g.count {
+                        signs[li * t + tri] = s;
+                    }
+                }
+            }
+        }
+        Ok(signs)
     }
 
     /// Reads back the sharing groups' signs of the last submitted frame (tests only): for each

@@ -313,7 +313,8 @@ impl ShadowPass {
         for b in fb.batches.iter().filter(|b| b.lights_of(n) > 0) {
             let nb = b.lights_of(n);
             self.write_batch(rs, b, f, &lights, b.groups(&groups, nb));
-            q.write_buffer(&b.buffers.light_u, 0, &light_uniforms(rs, f, b.first, nb));
+            let uniforms = light_uniforms(rs, f, (b.first, nb), b.groups(&groups, nb));
+            q.write_buffer(&b.buffers.light_u, 0, &uniforms);
         }
         rs.state = FrameState {
             lights: n,
@@ -466,9 +467,15 @@ fn object_rows(f: &PassFrame<'_>, bases: &[[u32; 4]], ids: &[[u32; 2]]) -> Vec<[
     objs
 }
 
-/// Per light of a batch (`first .. first + nb`): camera-relative light, colour and emission,
-/// draw ranges and first point in the batch's buffers.
-fn light_uniforms(rs: &ResidentScene, f: &PassFrame<'_>, first: usize, nb: usize) -> Vec<u8> {
+/// Per light of a batch (`first .. first + nb`, with its sharing `groups`): camera-relative
+/// light, colour and emission, draw ranges, first point, and where its group's shared signs
+/// start (plus 1; 0 outside a group) in the batch's buffers.
+fn light_uniforms(
+    rs: &ResidentScene,
+    f: &PassFrame<'_>,
+    (first, nb): (usize, usize),
+    groups: &[SharingGroup],
+) -> Vec<u8> {
     let objects = rs.counts.objects;
     let capacity = rs.counts.capacity as u32;
     let tri_count = rs.counts.tris as u32;
@@ -486,7 +493,11 @@ fn light_uniforms(rs: &ResidentScene, f: &PassFrame<'_>, first: usize, nb: usize
         let o = j * LIGHT_STRIDE as usize;
         light_bytes[o..o + 64].copy_from_slice(bytemuck::cast_slice(&v));
         light_bytes[o + 64..o + 80].copy_from_slice(bytemuck::cast_slice(&draw));
-        let first_point = [(j * objects) as u32, 0, 0, 0];
+        let shared = groups
+            .iter()
+            .position(|g| (g.first..g.first + g.count).contains(&(first + j)))
+            .map_or(0, |k| (nb + k) as u32 * tri_count + 1);
+        let first_point = [(j * objects) as u32, shared, 0, 0];
         light_bytes[o + 80..o + 96].copy_from_slice(bytemuck::cast_slice(&first_point));
     }
     light_bytes
