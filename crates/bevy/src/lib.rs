@@ -83,25 +83,56 @@ pub use shadowvol_robust_math::Accuracy;
 /// The most lights one camera shadows with volumes: the layers of the mask.
 pub const MAX_LIGHTS: usize = 8;
 
-/// Marks a mesh entity (`Mesh3d`, with a `MeshMaterial3d<StandardMaterial>`) whose triangles
-/// cast shadow volumes and receive the marked lights' shadows. On an entity with children (a
-/// glTF `WorldAssetRoot`, say) it marks every mesh below it as well. Its mesh needs its positions in
-/// the main world (`RenderAssetUsages::MAIN_WORLD`, Bevy's default for meshes it builds and
-/// loads), as a triangle list.
-#[derive(Component, Debug, Default, Clone, Copy, PartialEq, Eq)]
+/// Marks a mesh entity as a caster where the plugin's [`ShadowCasters`] setting is
+/// [`ShadowCasters::Marked`] (the opt-in for large scenes); with the default,
+/// [`ShadowCasters::AllMeshes`], every `Mesh3d` casts and the marker changes nothing. On an entity
+/// with children (a glTF `WorldAssetRoot`, say) it marks every mesh below it as well. Its mesh
+/// needs its positions in the main world (`RenderAssetUsages::MAIN_WORLD`, Bevy's default for
+/// meshes it builds and loads), as a triangle list.
+#[derive(Component, Reflect, Debug, Default, Clone, Copy, PartialEq, Eq)]
+#[reflect(Component, Default, Debug, Clone, PartialEq)]
 pub struct ShadowCaster;
 
+/// Which meshes cast shadow volumes: a resource the plugin adds with its default; insert another
+/// value to change it.
+///
+/// In both cases a mesh casts and receives only as Bevy's shadows would have it: it is skipped
+/// while its `InheritedVisibility` is false (`Visibility::Hidden`, itself or an ancestor) or its
+/// `RenderLayers` do not meet the [`ShadowVolumes`] camera's, and one with `NotShadowCaster`
+/// receives but does not cast. A mesh that is only outside the camera's frustum still casts
+/// (its shadow may fall into view), as with Bevy's shadow maps.
+#[derive(Resource, Reflect, Debug, Default, Clone, Copy, PartialEq, Eq)]
+#[reflect(Resource, Default, Debug, Clone, PartialEq)]
+pub enum ShadowCasters {
+    /// Every `Mesh3d` casts (Bevy's habit: opt out with `NotShadowCaster`).
+    #[default]
+    AllMeshes,
+    /// Only meshes marked [`ShadowCaster`] (or below a marked entity) cast and receive; the
+    /// others keep `StandardMaterial` and are lit unshadowed by the marked lights. For scenes
+    /// whose edge tables would cost too much to build for every mesh.
+    Marked,
+}
+
 /// Marks a `PointLight`, `SpotLight` or `DirectionalLight` whose shadows are drawn with
-/// volumes. The plugin turns its Bevy shadow maps off (`shadow_maps_enabled = false`).
-#[derive(Component, Debug, Default, Clone, Copy, PartialEq, Eq)]
+/// volumes. While the plugin shadows it, its Bevy shadow maps are off
+/// (`shadow_maps_enabled = false`); in a frame where it cannot (too many lights, no usable
+/// camera, a skinned caster, ...), they are on, and the reason is logged once and kept in
+/// [`ShadowVolumeStats::error`]. Removing the marker gives the light back its own
+/// `shadow_maps_enabled`, as it was when the marker was added.
+#[derive(Component, Reflect, Debug, Default, Clone, Copy, PartialEq, Eq)]
+#[reflect(Component, Default, Debug, Clone, PartialEq)]
+#[component(on_remove = extract::restore_own_shadow_maps)]
 pub struct ShadowVolumeLight;
 
 /// On a `Camera3d`: draw shadow volumes for this view, in this accuracy mode.
-#[derive(Component, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Component, Reflect, Debug, Clone, Copy, PartialEq, Eq)]
+#[reflect(Component, Default, Debug, Clone, PartialEq)]
 pub struct ShadowVolumes {
     /// How silhouette signs are decided (`Accuracy::Exact` by default: exact signs, closed
     /// volumes, however degenerate the mesh). `Original` is the naive float test whose cracks
-    /// the paper measures.
+    /// the paper measures. Not reflected (`Accuracy` is shadowvol's type, which has no
+    /// `Reflect`): a reflected or deserialized `ShadowVolumes` is exact.
+    #[reflect(ignore)]
     pub mode: Accuracy,
 }
 
@@ -177,6 +208,11 @@ impl ShadowVolumeStats {
         });
     }
 
+    /// The render world's current error: the pass failed on the device or refused the view.
+    fn render_error(&self) -> Option<String> {
+        self.with(|s| s.errors[Side::Render as usize].clone())
+    }
+
     /// `side` is well again.
     fn clear(&self, side: Side) {
         self.with(|s| s.errors[side as usize] = None);
@@ -191,12 +227,13 @@ pub struct ShadowVolumesPlugin;
 
 impl Plugin for ShadowVolumesPlugin {
     fn build(&self, app: &mut App) {
+        app.register_type::<ShadowCaster>()
+            .register_type::<ShadowVolumeLight>()
+            .register_type::<ShadowVolumes>()
+            .register_type::<ShadowCasters>()
+            .init_resource::<ShadowCasters>();
         material::build(app);
         extract::build(app);
         render::build(app);
-    }
-
-    fn finish(&self, app: &mut App) {
-        material::finish(app);
     }
 }
