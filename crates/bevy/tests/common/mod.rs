@@ -111,9 +111,15 @@ impl Driver {
 
     /// The next frame's image, RGBA8 sRGB, row-major from the top.
     pub fn capture(&mut self) -> Vec<u8> {
+        let target = self.target.clone();
+        self.capture_of(&target)
+    }
+
+    /// The next frame's image of another target (a second camera's), as [`Driver::capture`].
+    pub fn capture_of(&mut self, target: &Handle<Image>) -> Vec<u8> {
         let slot: Arc<Mutex<Option<Vec<u8>>>> = Arc::default();
         let s = slot.clone();
-        let target = self.target.clone();
+        let target = target.clone();
         self.world()
             .spawn(Screenshot::image(target))
             .observe(move |ev: On<ScreenshotCaptured>| {
@@ -130,8 +136,22 @@ impl Driver {
 
     /// Adds a mesh entity with a white `StandardMaterial`, marked as a caster.
     pub fn spawn_caster(&mut self, mesh: Mesh, transform: Transform) -> Entity {
+        let e = self.spawn_mesh(mesh, transform);
+        self.world().entity_mut(e).insert(ShadowCaster);
+        e
+    }
+
+    /// Adds a mesh entity with a white `StandardMaterial`, unmarked (as a Bevy user writes it:
+    /// with the plugin's default, every mesh casts).
+    pub fn spawn_mesh(&mut self, mesh: Mesh, transform: Transform) -> Entity {
+        let mesh = self.world().resource_mut::<Assets<Mesh>>().add(mesh);
+        self.spawn_handle(mesh, transform)
+    }
+
+    /// Adds an unmarked entity with this mesh handle (loaded or not) and a white
+    /// `StandardMaterial`.
+    pub fn spawn_handle(&mut self, mesh: Handle<Mesh>, transform: Transform) -> Entity {
         let world = self.world();
-        let mesh = world.resource_mut::<Assets<Mesh>>().add(mesh);
         let material = world
             .resource_mut::<Assets<StandardMaterial>>()
             .add(StandardMaterial {
@@ -141,13 +161,38 @@ impl Driver {
                 ..default()
             });
         world
-            .spawn((
-                Mesh3d(mesh),
-                MeshMaterial3d(material),
-                transform,
-                ShadowCaster,
-            ))
+            .spawn((Mesh3d(mesh), MeshMaterial3d(material), transform))
             .id()
+    }
+
+    /// Adds a second 3D camera without `ShadowVolumes` at `eye` looking at [`TARGET`], drawn
+    /// after the first into its own `width × height` image (as a minimap or a render-to-texture
+    /// view), with the first camera's settings otherwise. Returns the camera and its image.
+    pub fn spawn_plain_camera(
+        &mut self,
+        eye: Vec3,
+        width: u32,
+        height: u32,
+    ) -> (Entity, Handle<Image>) {
+        let mut image =
+            Image::new_target_texture(width, height, TextureFormat::Rgba8UnormSrgb, None);
+        image.asset_usage = RenderAssetUsages::RENDER_WORLD;
+        let world = self.world();
+        let target = world.resource_mut::<Assets<Image>>().add(image);
+        let camera = world
+            .spawn((
+                Camera3d::default(),
+                Camera {
+                    clear_color: ClearColorConfig::Custom(Color::BLACK),
+                    order: 1,
+                    ..default()
+                },
+                RenderTarget::from(target.clone()),
+                Tonemapping::None,
+                Transform::from_translation(eye).looking_at(TARGET, Vec3::Y),
+            ))
+            .id();
+        (camera, target)
     }
 
     /// Adds a marked point light of this colour.
