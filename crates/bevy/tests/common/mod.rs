@@ -41,22 +41,35 @@ impl Driver {
     /// no tonemapping and a black background, drawing into a `width × height` sRGB image. No
     /// ambient light.
     pub fn new(width: u32, height: u32) -> Self {
+        Self::build(width, height, true)
+    }
+
+    /// The same app without `ShadowVolumesPlugin` (its components, added by the helpers, do
+    /// nothing there), and without Bevy's logger, which a process sets once: what a scene looks
+    /// like to Bevy alone.
+    pub fn without_plugin(width: u32, height: u32) -> Self {
+        Self::build(width, height, false)
+    }
+
+    fn build(width: u32, height: u32, plugin: bool) -> Self {
         let mut app = App::new();
-        app.add_plugins(
-            DefaultPlugins
-                .set(WindowPlugin {
-                    primary_window: None,
-                    exit_condition: ExitCondition::DontExit,
-                    ..default()
-                })
-                .set(RenderPlugin {
-                    synchronous_pipeline_compilation: true,
-                    ..default()
-                })
-                .disable::<WinitPlugin>(),
-        )
-        .add_plugins(ShadowVolumesPlugin)
-        .insert_resource(GlobalAmbientLight {
+        let defaults = DefaultPlugins
+            .set(WindowPlugin {
+                primary_window: None,
+                exit_condition: ExitCondition::DontExit,
+                ..default()
+            })
+            .set(RenderPlugin {
+                synchronous_pipeline_compilation: true,
+                ..default()
+            })
+            .disable::<WinitPlugin>();
+        if plugin {
+            app.add_plugins(defaults).add_plugins(ShadowVolumesPlugin);
+        } else {
+            app.add_plugins(defaults.disable::<bevy::log::LogPlugin>());
+        }
+        app.insert_resource(GlobalAmbientLight {
             brightness: 0.0,
             ..default()
         });
