@@ -197,7 +197,6 @@ fn volume_camera(
     cameras: &SvCameras,
     deformed: &Deformed,
     setting: ShadowCasters,
-    stats: &ShadowVolumeStats,
     warned: &mut HashSet<Entity>,
 ) -> Result<(Entity, Accuracy, RenderLayers), String> {
     let mut cams: Vec<_> = cameras.iter().filter(|c| c.1.is_active).collect();
@@ -266,9 +265,6 @@ fn volume_camera(
             "skinned or morphed caster {list}: volumes would cast its bind pose"
         ));
     }
-    if let Some(e) = stats.render_error() {
-        return Err(format!("the pass failed in the last frame ({e})"));
-    }
     Ok((e, sv.mode, layers.cloned().unwrap_or_default()))
 }
 
@@ -289,20 +285,26 @@ fn settle_lights(
 ) {
     decision.problems.clear();
     decision.lights.clear();
-    decision.camera = match volume_camera(&cameras, &deformed, *setting, &stats, &mut warned) {
-        Ok(c) => Some(c),
-        Err(e) => {
-            if !lights.is_empty() {
-                decision
-                    .problems
-                    .push(format!("{e}; the marked lights use Bevy's shadow maps"));
-            }
-            None
-        }
+    let camera = volume_camera(&cameras, &deformed, *setting, &mut warned);
+    // After a failure on the device the camera stays, with no volume light: the render world
+    // tries the pass again (pre-pass only) and clears its error when it works.
+    let refusal = match (&camera, stats.render_error()) {
+        (Err(e), _) => Some(e.clone()),
+        (Ok(_), Some(e)) => Some(format!("the pass failed in the last frame ({e})")),
+        (Ok(_), None) => None,
     };
+    if let Some(e) = &refusal {
+        if !lights.is_empty() {
+            decision
+                .problems
+                .push(format!("{e}; the marked lights use Bevy's shadow maps"));
+        }
+    }
+    decision.camera = camera.ok();
+    let allowed = refusal.is_none();
     let mut marked: Vec<_> = lights.iter_mut().collect();
     marked.sort_by_key(|l| l.0);
-    if decision.camera.is_some() && marked.len() > MAX_LIGHTS {
+    if allowed && marked.len() > MAX_LIGHTS {
         let rest: Vec<String> = marked[MAX_LIGHTS..]
             .iter()
             .map(|l| l.0.to_string())
@@ -315,7 +317,7 @@ fn settle_lights(
         ));
     }
     for (i, (entity, own, point, spot, sun)) in marked.into_iter().enumerate() {
-        let volumes = decision.camera.is_some() && i < MAX_LIGHTS;
+        let volumes = allowed && i < MAX_LIGHTS;
         let current = point
             .as_ref()
             .map(|l| l.shadow_maps_enabled)

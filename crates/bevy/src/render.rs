@@ -142,6 +142,9 @@ fn draw_masks(
     // takes nothing away.
     write_light_table(&queue, &table.texture, &frame);
     let enc = ctx.command_encoder();
+    if frame.camera.is_none() {
+        frame.stats.clear(Side::Render); // no view draws volumes: nothing can be failing
+    }
     if frame.camera.is_none_or(|(e, _)| main.id() != e) {
         // Another view, which shares the casters' material: its masks say lit. Recorded in this
         // view's pre-pass, so after an earlier view's main pass and before this view's.
