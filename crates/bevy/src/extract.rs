@@ -45,6 +45,8 @@ pub(crate) struct VolumeFrame {
     pub generation: u64,
     /// The candidate (entity, mesh) pairs `scene` was built from (loaded or not).
     pub key: Vec<(Entity, AssetId<Mesh>)>,
+    /// The candidates' meshes that were not loaded at the last build: built again once one is.
+    pending: Vec<AssetId<Mesh>>,
     /// Which entity each scene object is (the candidates whose meshes could be read).
     pub objects: Vec<Entity>,
     /// The casters left out of `scene`, and why: reported every frame until the next build.
@@ -395,15 +397,21 @@ pub(crate) fn gather(
     candidates.sort_by_key(|c| c.0);
     let key: Vec<_> = candidates.iter().map(|c| (c.0, c.1.id())).collect();
     let changed = events.read().any(|ev| match ev {
-        AssetEvent::Added { id }
-        | AssetEvent::Modified { id }
-        | AssetEvent::LoadedWithDependencies { id } => key.iter().any(|(_, m)| m == id),
+        AssetEvent::Modified { id } | AssetEvent::LoadedWithDependencies { id } => {
+            key.iter().any(|(_, m)| m == id)
+        }
         _ => false,
     });
-    if key != frame.key || changed {
+    let arrived = frame.pending.iter().any(|id| meshes.contains(*id));
+    if key != frame.key || changed || arrived {
         let built = build_scene(&candidates, &meshes, *setting == ShadowCasters::Marked);
         frame.scene = (!built.objects.is_empty()).then(|| Arc::new(built.scene));
         frame.generation += 1;
+        frame.pending = key
+            .iter()
+            .map(|k| k.1)
+            .filter(|id| !meshes.contains(*id))
+            .collect();
         frame.key = key;
         frame.objects = built.objects;
         frame.left_out = built.left_out;

@@ -111,6 +111,15 @@ fn shadows_match_the_reference() {
         &mut failures,
     );
 
+    // Two casters spawned together are prepared once (not again when their meshes' `Added`
+    // events come a frame later).
+    if d.stats().prepares() != 1 {
+        failures.push(format!(
+            "the floor and the box were prepared {} times, not once",
+            d.stats().prepares()
+        ));
+    }
+
     // 1b. Bevy's rules for casters. Two plates over the box, unmarked (every mesh casts by
     // default): one hidden, one on another render layer than the camera. Neither is drawn by
     // Bevy, so neither may cast or stand in the pre-pass: the image is the one without them.
@@ -134,6 +143,23 @@ fn shadows_match_the_reference() {
     }
     d.world().entity_mut(hidden).despawn();
     d.world().entity_mut(layered).despawn();
+    // Hiding and showing a caster changes no edge table: nothing is prepared. (The render
+    // world's count lags the main world's frame by one update here: two updates a step.)
+    let twice = |d: &mut Driver| {
+        d.update();
+        d.update();
+    };
+    twice(&mut d); // the plates' removal is prepared here
+    let shown = d.stats().prepares();
+    d.world().entity_mut(cube_entity).insert(Visibility::Hidden);
+    twice(&mut d);
+    d.world()
+        .entity_mut(cube_entity)
+        .insert(Visibility::Inherited);
+    twice(&mut d);
+    if d.stats().prepares() != shown {
+        failures.push("hiding and showing the box prepared the casters again".into());
+    }
 
     // 1c. NotShadowCaster: the box opts out and casts nothing: against the reference of the
     // floor alone, where nothing is in shadow (the box's own pixels are lit in both where a light
@@ -420,8 +446,8 @@ fn shadows_match_the_reference() {
     let mut gpu_only = common::unit_box();
     gpu_only.asset_usage = bevy::asset::RenderAssetUsages::RENDER_WORLD;
     let gpu_only = d.spawn_mesh(gpu_only, Transform::from_xyz(2.6, 0.5, -1.0));
-    let never = d.world().resource::<Assets<Mesh>>().reserve_handle();
-    let never = d.spawn_handle(never, Transform::from_xyz(-1.0, 0.5, 2.5));
+    let late = d.world().resource::<Assets<Mesh>>().reserve_handle();
+    let never = d.spawn_handle(late.clone(), Transform::from_xyz(-1.0, 0.5, 2.5));
     let good_at = Transform::from_xyz(-2.5, 0.5, 1.5);
     let good = d.spawn_caster(common::unit_box(), good_at);
     d.update();
@@ -455,6 +481,17 @@ fn shadows_match_the_reference() {
     );
     if maps_on(&mut d, &sun) != 0 {
         failures.push("a left-out caster turned the light's shadow maps on".into());
+    }
+    // The mesh that had not loaded arrives: the casters are prepared again, with it.
+    let before_late = d.stats().prepares();
+    let _ = d
+        .world()
+        .resource_mut::<Assets<Mesh>>()
+        .insert(&late, common::unit_box());
+    d.update();
+    d.update();
+    if d.stats().prepares() <= before_late {
+        failures.push("a mesh that arrived late was not prepared".into());
     }
     for e in [bad_entity, good, flat, gpu_only, never] {
         d.world().entity_mut(e).despawn();
