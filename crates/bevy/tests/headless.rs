@@ -262,6 +262,27 @@ fn shadows_match_the_reference() {
         &points(),
         &mut failures,
     );
+    // The second camera gets ShadowVolumes too: volumes draw for one view only, so both lights
+    // go back to their shadow maps (named), and the first camera shows the maps' shadows.
+    d.world()
+        .entity_mut(second)
+        .insert(shadowvol_bevy::ShadowVolumes::default());
+    d.update();
+    d.update();
+    match d.stats().error() {
+        Some(e) if e.contains("2 active cameras have ShadowVolumes") => {
+            println!("two ShadowVolumes cameras: {e}")
+        }
+        other => failures.push(format!("two ShadowVolumes cameras gave {other:?}")),
+    }
+    fallback_check(
+        &mut d,
+        "two ShadowVolumes cameras, Bevy's shadow maps",
+        &[(&floor, Transform::IDENTITY), (&cube, box_at)],
+        &lights,
+        &points(),
+        &mut failures,
+    );
     d.world().entity_mut(second).despawn();
 
     // 2. The box moves: the next frame shows its new shadow, with no new preparation.
