@@ -56,7 +56,8 @@ pub(crate) struct VolumeFrame {
     /// Per scene object: in the pre-pass this frame (visible, on the camera's layers, with an
     /// invertible transform). The render world parks the others where nothing draws them.
     pub drawn: Vec<bool>,
-    /// Per scene object: casts this frame (drawn, without `NotShadowCaster`).
+    /// Per (light, object), light-major: the object casts for that light this frame (drawn,
+    /// without `NotShadowCaster`, its `RenderLayers` meeting the light's, as for Bevy's maps).
     pub casts: Vec<bool>,
     /// The lights the volumes shadow this frame, in entity order, at most [`MAX_LIGHTS`].
     pub lights: Vec<VolumeLight>,
@@ -381,7 +382,7 @@ pub(crate) fn gather(
     decision: Res<Decision>,
     setting: Res<ShadowCasters>,
     casters: Candidates,
-    lights: Query<(&GlobalTransform, LightKinds), With<ShadowVolumeLight>>,
+    lights: Query<(&GlobalTransform, LightKinds, Option<&RenderLayers>), With<ShadowVolumeLight>>,
     meshes: Res<Assets<Mesh>>,
     server: Option<Res<AssetServer>>,
     mut events: MessageReader<AssetEvent<Mesh>>,
@@ -437,12 +438,20 @@ pub(crate) fn gather(
     let by_entity: HashMap<Entity, &CandidateItem<'_>> =
         candidates.iter().map(|c| (c.0, c)).collect();
     let n = frame.objects.len();
-    let (mut transforms, mut drawn, mut casts) = (
+    let (mut transforms, mut drawn, mut casts, mut their_layers) = (
+        Vec::with_capacity(n),
         Vec::with_capacity(n),
         Vec::with_capacity(n),
         Vec::with_capacity(n),
     );
     for e in &frame.objects {
+        their_layers.push(
+            by_entity
+                .get(e)
+                .and_then(|c| c.4)
+                .unwrap_or(&everywhere)
+                .clone(),
+        );
         let (t, d, c) = by_entity.get(e).map_or(
             (glam::Affine3A::IDENTITY, false, false),
             |&&(_, _, t, visible, theirs, not_caster, _)| {
@@ -464,18 +473,28 @@ pub(crate) fn gather(
     }
     frame.transforms = transforms;
     frame.drawn = drawn;
-    frame.casts = casts;
 
     frame.lights.clear();
+    let mut per_light = Vec::with_capacity(decision.lights.len() * n);
     for &entity in &decision.lights {
-        let Ok((t, (point, spot, sun))) = lights.get(entity) else {
+        let Ok((t, (point, spot, sun), light_layers)) = lights.get(entity) else {
             continue;
         };
         match volume_light(t, point.is_some() || spot.is_some(), sun.is_some()) {
-            Ok(l) => frame.lights.push(l),
+            Ok(l) => {
+                frame.lights.push(l);
+                let light_layers = light_layers.unwrap_or(&everywhere);
+                per_light.extend(
+                    casts
+                        .iter()
+                        .zip(&their_layers)
+                        .map(|(&c, o)| c && o.intersects(light_layers)),
+                );
+            }
             Err(e) => problems.push(format!("light {entity}: {e}")),
         }
     }
+    frame.casts = per_light;
     if problems.is_empty() {
         stats.clear(Side::Main);
     } else {

@@ -255,7 +255,7 @@ fn record(
         return Ok(());
     };
     let objects = scene.geometry.objects.len();
-    if frame.transforms.len() != objects || frame.casts.len() != objects {
+    if frame.transforms.len() != objects || frame.casts.len() != objects * frame.lights.len() {
         return Ok(()); // a rebuild is pending; the last masks stay
     }
     let n = frame.lights.len();
@@ -288,14 +288,15 @@ fn record(
         .sync(plan_scene)
         .map_err(|e| format!("the casters' world positions: {e}"))?;
     let plan = plan_frame(plan_scene, world, &camera, size, PlanPolicy::Auto, true);
-    // Light-major: an object that does not cast (`NotShadowCaster`, or not drawn) draws no
-    // volume for any light; it still receives, through the pre-pass.
+    // Light-major: an object that does not cast for a light (`NotShadowCaster`, not drawn, or
+    // on no render layer of the light) draws no volume for it; it still receives, through the
+    // pre-pass.
     let techniques: Vec<_> = plan
         .entries
         .iter()
         .enumerate()
         .map(|(i, e)| {
-            if frame.casts[i % objects] {
+            if frame.casts[i] {
                 e.technique
             } else {
                 Technique::Culled

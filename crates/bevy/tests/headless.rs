@@ -205,6 +205,47 @@ fn shadows_match_the_reference() {
         .entity_mut(floor_entity)
         .remove::<NotShadowCaster>();
 
+    // 1e. Render layers of lights: the camera sees layers 0 and 1, the box is on layer 1, the
+    // red light on layer 0 (the default), the green one on both. As with Bevy's maps, the box
+    // casts for the green light only: the red light against the floor alone, the green one
+    // against floor and box.
+    use bevy::camera::visibility::RenderLayers;
+    let camera = d.camera;
+    d.world()
+        .entity_mut(camera)
+        .insert(RenderLayers::from_layers(&[0, 1]));
+    d.world()
+        .entity_mut(cube_entity)
+        .insert(RenderLayers::layer(1));
+    d.world()
+        .entity_mut(lights[1])
+        .insert(RenderLayers::from_layers(&[0, 1]));
+    let (shadowed, unshadowed) = with_and_without(&mut d, &lights);
+    let both = reference_from(
+        HOME.0,
+        HOME.1,
+        &[(&floor, Transform::IDENTITY), (&cube, box_at)],
+        &points(),
+        W,
+        H,
+    );
+    for (li, states) in [&alone[0], &both[1]].into_iter().enumerate() {
+        let a = agreement(&shadowed, &unshadowed, states, li);
+        println!(
+            "the box on layer 1, light {li}: {} artifact pixels of {} compared ({} in shadow)",
+            a.artifacts, a.compared, a.shadowed
+        );
+        if a.artifacts > max_artifacts(W, H) || a.compared < 10_000 {
+            failures.push(format!(
+                "the box on layer 1, light {li}: {} artifact pixels of {}",
+                a.artifacts, a.compared
+            ));
+        }
+    }
+    for e in [camera, cube_entity, lights[1]] {
+        d.world().entity_mut(e).remove::<RenderLayers>();
+    }
+
     // 1d. A second 3D camera without ShadowVolumes, drawn after the first into its own image
     // from elsewhere: the same image as the same app's without the plugin, and the first camera
     // still matches the reference.
