@@ -108,8 +108,9 @@ pub struct ShadowCaster;
 ///
 /// In both cases a mesh casts and receives only as Bevy's shadows would have it: it is skipped
 /// while its `InheritedVisibility` is false (`Visibility::Hidden`, itself or an ancestor) or its
-/// `RenderLayers` do not meet the [`ShadowVolumes`] camera's, and one with `NotShadowCaster`
-/// receives but does not cast. A mesh that is only outside the camera's frustum still casts
+/// `RenderLayers` do not meet the [`ShadowVolumes`] camera's, one with `NotShadowCaster`
+/// receives but does not cast, and one casts for a light only where its `RenderLayers` meet the
+/// light's. A mesh that is only outside the camera's frustum still casts
 /// (its shadow may fall into view), as with Bevy's shadow maps.
 #[derive(Resource, Reflect, Debug, Default, Clone, Copy, PartialEq, Eq)]
 #[reflect(Resource, Default, Debug, Clone, PartialEq)]
