@@ -510,7 +510,13 @@ fn volume_light(
     directional: bool,
 ) -> Result<VolumeLight, String> {
     let (v, w, kind) = if directional {
-        (t.back().as_vec3(), 0.0, 2.0)
+        // Not `t.back()`: its `Dir3` asserts a unit vector (a panic in debug builds) and a zero
+        // scale has none. A zero axis gives the light error below instead.
+        (
+            Vec3::from(t.affine().matrix3.z_axis).normalize_or_zero(),
+            0.0,
+            2.0,
+        )
     } else if positional {
         (t.translation(), 1.0, 1.0)
     } else {
