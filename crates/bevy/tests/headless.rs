@@ -667,6 +667,28 @@ fn shadows_match_the_reference() {
         ));
     }
     d.world().entity_mut(own).despawn();
+    // 12. Bevy's habits: the components and the setting are reflected and registered, with
+    // their component and resource data (what scenes and inspectors use).
+    {
+        use bevy::ecs::reflect::{ReflectComponent, ReflectResource};
+        use std::any::TypeId;
+        let registry = d.world().resource::<AppTypeRegistry>().clone();
+        let registry = registry.read();
+        let component = |t: TypeId| {
+            registry
+                .get(t)
+                .is_some_and(|r| r.data::<ReflectComponent>().is_some())
+        };
+        let reflected = component(TypeId::of::<shadowvol_bevy::ShadowCaster>())
+            && component(TypeId::of::<ShadowVolumeLight>())
+            && component(TypeId::of::<shadowvol_bevy::ShadowVolumes>())
+            && registry
+                .get(TypeId::of::<shadowvol_bevy::ShadowCasters>())
+                .is_some_and(|r| r.data::<ReflectResource>().is_some());
+        if !reflected {
+            failures.push("a component or the setting is not reflected and registered".into());
+        }
+    }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
