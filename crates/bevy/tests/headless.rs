@@ -667,6 +667,34 @@ fn shadows_match_the_reference() {
         ));
     }
     d.world().entity_mut(own).despawn();
+    // 11b. ShadowCasters::Marked (the opt-in): an unmarked mesh is no candidate (nothing is
+    // prepared, it keeps its StandardMaterial); back to AllMeshes, it is prepared and swapped.
+    d.world()
+        .insert_resource(shadowvol_bevy::ShadowCasters::Marked);
+    let twice = |d: &mut Driver| {
+        d.update();
+        d.update();
+    };
+    twice(&mut d);
+    let marked_only = d.stats().prepares();
+    let unmarked = d.spawn_mesh(common::unit_box(), Transform::from_xyz(-2.0, 0.5, -2.0));
+    twice(&mut d);
+    let plain = |d: &mut Driver| {
+        d.world()
+            .get::<MeshMaterial3d<StandardMaterial>>(unmarked)
+            .is_some()
+    };
+    if d.stats().prepares() != marked_only || !plain(&mut d) {
+        failures.push("ShadowCasters::Marked took an unmarked mesh as a caster".into());
+    }
+    d.world()
+        .insert_resource(shadowvol_bevy::ShadowCasters::AllMeshes);
+    twice(&mut d);
+    if d.stats().prepares() == marked_only || plain(&mut d) {
+        failures.push("ShadowCasters::AllMeshes left an unmarked mesh out".into());
+    }
+    d.world().entity_mut(unmarked).despawn();
+
     // 12. Bevy's habits: the components and the setting are reflected and registered, with
     // their component and resource data (what scenes and inspectors use).
     {
