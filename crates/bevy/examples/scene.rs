@@ -13,9 +13,7 @@ use bevy::diagnostic::FrameCount;
 use bevy::prelude::*;
 use bevy::render::view::screenshot::{save_to_disk, Screenshot};
 use bevy::window::PrimaryWindow;
-use shadowvol_bevy::{
-    Accuracy, ShadowCaster, ShadowVolumeLight, ShadowVolumes, ShadowVolumesPlugin,
-};
+use shadowvol_bevy::{Accuracy, ShadowVolumeLight, ShadowVolumes, ShadowVolumesPlugin};
 
 /// `--screenshot PATH`: where to save the window, then exit.
 #[derive(Resource)]
@@ -87,18 +85,19 @@ fn setup(
     commands.spawn((
         Mesh3d(meshes.add(Plane3d::default().mesh().size(12.0, 12.0))),
         MeshMaterial3d(materials.add(Color::srgb(0.8, 0.8, 0.75))),
-        ShadowCaster,
     ));
-    // ShadowCaster on the glTF scene's root marks every mesh below it.
+    // Every mesh casts, the glTF scene's too (`ShadowCasters::Marked` would make it opt-in).
     commands.spawn((
         WorldAssetRoot(assets.load(GltfAssetLabel::Scene(0).from_asset("bunny.glb"))),
         Transform::from_scale(Vec3::splat(0.25)),
-        ShadowCaster,
     ));
     commands.spawn((
         PointLight {
             intensity: 3.0e6,
             range: 40.0,
+            // The light's own setting: shadow maps. Marked, it has volumes instead; the V key
+            // removes the marker, which gives it its maps back.
+            shadow_maps_enabled: true,
             ..default()
         },
         Transform::from_xyz(3.0, 5.0, 0.0),
@@ -111,7 +110,7 @@ fn keys(
     input: Res<ButtonInput<KeyCode>>,
     mut commands: Commands,
     mut cameras: Query<&mut ShadowVolumes>,
-    mut lights: Query<(Entity, &mut PointLight, Has<ShadowVolumeLight>), With<Circling>>,
+    mut lights: Query<(Entity, Has<ShadowVolumeLight>), With<Circling>>,
     mut paused: ResMut<Paused>,
 ) {
     if input.just_pressed(KeyCode::KeyM) {
@@ -121,10 +120,9 @@ fn keys(
         }
     }
     if input.just_pressed(KeyCode::KeyV) {
-        for (e, mut light, volumes) in &mut lights {
+        for (e, volumes) in &mut lights {
             if volumes {
                 commands.entity(e).remove::<ShadowVolumeLight>();
-                light.shadow_maps_enabled = true;
             } else {
                 commands.entity(e).insert(ShadowVolumeLight);
             }

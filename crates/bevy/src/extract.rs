@@ -1,19 +1,31 @@
-//! The main world's side: marked casters, lights and camera become shadowvol's scene model
-//! (built again only when the casters' meshes change) and small per-frame inputs, which the
-//! render world copies each frame.
+//! The main world's side: which marked lights the volumes shadow this frame (the others get
+//! Bevy's shadow maps back), the casters and receivers by Bevy's rules, and small per-frame
+//! inputs, which the render world copies each frame. The scene model is built again only when
+//! the candidate casters or their meshes change.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
+use bevy::asset::{LoadState, RenderAssetUsages};
+use bevy::camera::visibility::{RenderLayers, VisibilitySystems};
+use bevy::ecs::lifecycle::HookContext;
+use bevy::ecs::world::DeferredWorld;
+use bevy::light::{NotShadowCaster, SimulationLightSystems};
+use bevy::mesh::morph::MeshMorphWeights;
+use bevy::mesh::skinning::SkinnedMesh;
 use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
 use bevy::prelude::*;
+use bevy::render::camera::TemporalJitter;
 use bevy::render::{Extract, ExtractSchedule, RenderApp};
 use bevy::transform::TransformSystems;
 use shadowvol_mesh_topology::Mesh as TopoMesh;
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_scenes::Scene;
 
-use crate::{ShadowCaster, ShadowVolumeLight, ShadowVolumeStats, ShadowVolumes, Side, MAX_LIGHTS};
+use crate::{
+    ShadowCaster, ShadowCasters, ShadowVolumeLight, ShadowVolumeStats, ShadowVolumes, Side,
+    MAX_LIGHTS,
+};
 
 /// A marked light as the pass and the material see it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -27,35 +39,67 @@ pub(crate) struct VolumeLight {
 /// Everything the pass needs from the main world, copied into the render world each frame.
 #[derive(Resource, Debug, Clone, Default)]
 pub(crate) struct VolumeFrame {
-    /// The casters' scene model; `None` until the first caster's mesh is read.
+    /// The casters' scene model; `None` while no caster's mesh could be read.
     pub scene: Option<Arc<Scene>>,
     /// Bumped each time `scene` is rebuilt: the render world prepares again when it changes.
     pub generation: u64,
-    /// The marked (entity, mesh) pairs `scene` was built from.
-    key: Vec<(Entity, AssetId<Mesh>)>,
-    /// Which entity each scene object is (the marked casters whose meshes could be read).
-    objects: Vec<Entity>,
+    /// The candidate (entity, mesh) pairs `scene` was built from (loaded or not).
+    pub key: Vec<(Entity, AssetId<Mesh>)>,
+    /// The candidates' meshes that were not loaded at the last build: built again once one is.
+    pending: Vec<AssetId<Mesh>>,
+    /// Which entity each scene object is (the candidates whose meshes could be read).
+    pub objects: Vec<Entity>,
     /// The casters left out of `scene`, and why: reported every frame until the next build.
     left_out: Vec<String>,
-    /// Per scene object: world from object, this frame.
+    /// Per scene object: world from object, this frame (the identity where `drawn` is false).
     pub transforms: Vec<glam::Affine3A>,
-    /// The marked lights, by entity, at most [`MAX_LIGHTS`].
+    /// Per scene object: in the pre-pass this frame (visible, on the camera's layers, with an
+    /// invertible transform). The render world parks the others where nothing draws them.
+    pub drawn: Vec<bool>,
+    /// Per (light, object), light-major: the object casts for that light this frame (drawn,
+    /// without `NotShadowCaster`, its `RenderLayers` meeting the light's, as for Bevy's maps).
+    pub casts: Vec<bool>,
+    /// The lights the volumes shadow this frame, in entity order, at most [`MAX_LIGHTS`].
     pub lights: Vec<VolumeLight>,
-    /// The camera that gets the masks, and its mode.
+    /// The camera that gets the masks, and its mode; `None` in a frame where no camera can.
     pub camera: Option<(Entity, Accuracy)>,
     /// Shared with the render world.
     pub stats: ShadowVolumeStats,
+}
+
+/// A marked light's own `shadow_maps_enabled`, from when it was marked: given back when the
+/// marker goes.
+#[derive(Component, Debug, Clone, Copy)]
+pub(crate) struct OwnShadowMaps(bool);
+
+/// This frame's decision, made before Bevy's light systems read `shadow_maps_enabled`.
+#[derive(Resource, Debug, Default)]
+pub(crate) struct Decision {
+    /// The camera that draws volumes, its mode and render layers.
+    camera: Option<(Entity, Accuracy, RenderLayers)>,
+    /// The lights shadowed with volumes, in entity order.
+    lights: Vec<Entity>,
+    /// Why other lights fell back to Bevy's shadow maps.
+    problems: Vec<String>,
 }
 
 pub(crate) fn build(app: &mut App) {
     let stats = ShadowVolumeStats::default();
     app.insert_resource(stats.clone())
         .insert_resource(VolumeFrame { stats, ..default() })
+        .init_resource::<Decision>()
         .add_systems(
             PostUpdate,
-            (disable_shadow_maps, propagate_casters, gather)
-                .chain()
-                .after(TransformSystems::Propagate),
+            (
+                settle_lights
+                    .after(VisibilitySystems::VisibilityPropagate)
+                    .before(VisibilitySystems::CheckVisibility)
+                    .before(SimulationLightSystems::UpdateDirectionalLightCascades),
+                (propagate_casters, gather)
+                    .chain()
+                    .after(settle_lights)
+                    .after(TransformSystems::Propagate),
+            ),
         );
     if let Some(render_app) = app.get_sub_app_mut(RenderApp) {
         render_app.add_systems(ExtractSchedule, extract_frame);
@@ -94,25 +138,216 @@ fn propagate_casters(
     }
 }
 
-/// Marked lights draw no Bevy shadow maps: the volumes replace them.
-fn disable_shadow_maps(
-    mut points: Query<&mut PointLight, With<ShadowVolumeLight>>,
-    mut spots: Query<&mut SpotLight, With<ShadowVolumeLight>>,
-    mut suns: Query<&mut DirectionalLight, With<ShadowVolumeLight>>,
+/// The `on_remove` hook of [`ShadowVolumeLight`]: the light gets its own `shadow_maps_enabled`
+/// back, as it was when it was marked.
+pub(crate) fn restore_own_shadow_maps(mut world: DeferredWorld, ctx: HookContext) {
+    let e = ctx.entity;
+    let Some(&OwnShadowMaps(own)) = world.get::<OwnShadowMaps>(e) else {
+        return;
+    };
+    if let Some(mut l) = world.get_mut::<PointLight>(e) {
+        l.shadow_maps_enabled = own;
+    }
+    if let Some(mut l) = world.get_mut::<SpotLight>(e) {
+        l.shadow_maps_enabled = own;
+    }
+    if let Some(mut l) = world.get_mut::<DirectionalLight>(e) {
+        l.shadow_maps_enabled = own;
+    }
+    world.commands().entity(e).try_remove::<OwnShadowMaps>();
+}
+
+type SvCameras<'w, 's> = Query<
+    'w,
+    's,
+    (
+        Entity,
+        &'static Camera,
+        &'static ShadowVolumes,
+        Option<&'static Projection>,
+        Has<TemporalJitter>,
+        Option<&'static RenderLayers>,
+    ),
+>;
+
+/// Skinned or morphed meshes that would cast: volumes would cast their bind pose.
+type Deformed<'w, 's> = Query<
+    'w,
+    's,
+    (Entity, &'static InheritedVisibility, Has<ShadowCaster>),
+    (
+        With<Mesh3d>,
+        Without<NotShadowCaster>,
+        Or<(With<SkinnedMesh>, With<MeshMorphWeights>)>,
+    ),
+>;
+
+type MarkedLights<'w, 's> = Query<
+    'w,
+    's,
+    (
+        Entity,
+        Option<&'static OwnShadowMaps>,
+        Option<&'static mut PointLight>,
+        Option<&'static mut SpotLight>,
+        Option<&'static mut DirectionalLight>,
+    ),
+    With<ShadowVolumeLight>,
+>;
+
+/// The camera that draws volumes this frame, or why none can.
+fn volume_camera(
+    cameras: &SvCameras,
+    deformed: &Deformed,
+    setting: ShadowCasters,
+    warned: &mut HashSet<Entity>,
+) -> Result<(Entity, Accuracy, RenderLayers), String> {
+    let mut cams: Vec<_> = cameras.iter().filter(|c| c.1.is_active).collect();
+    cams.sort_by_key(|c| c.0);
+    let (e, camera, sv, projection, jittered, layers) = match cams.as_slice() {
+        [] => return Err("no active camera has ShadowVolumes".into()),
+        [one] => *one,
+        more => {
+            let list: Vec<String> = more.iter().map(|c| c.0.to_string()).collect();
+            return Err(format!(
+                "{} active cameras have ShadowVolumes ({}); volumes draw for one view only",
+                more.len(),
+                list.join(", ")
+            ));
+        }
+    };
+    match projection {
+        Some(Projection::Orthographic(_)) => {
+            return Err(
+                "the ShadowVolumes camera is orthographic; shadow volumes support \
+                        perspective cameras only"
+                    .into(),
+            )
+        }
+        Some(Projection::Custom(_)) => {
+            return Err(
+                "the ShadowVolumes camera has a custom projection; shadow volumes \
+                        support Bevy's perspective projection only"
+                    .into(),
+            )
+        }
+        _ => {}
+    }
+    if camera.sub_camera_view.is_some() {
+        return Err(
+            "the ShadowVolumes camera's projection is off-centre (a sub-view): \
+                    shadow volumes need a centred perspective projection"
+                .into(),
+        );
+    }
+    if jittered {
+        return Err(
+            "the ShadowVolumes camera has TemporalJitter (TAA's sub-pixel jitter): \
+                    the one-sample mask would not line up with the jittered image; remove \
+                    TemporalJitter and TemporalAntiAliasing from that camera"
+                .into(),
+        );
+    }
+    let mut skinned: Vec<Entity> = deformed
+        .iter()
+        .filter(|(_, v, marked)| v.get() && (*marked || setting == ShadowCasters::AllMeshes))
+        .map(|(e, _, _)| e)
+        .collect();
+    if !skinned.is_empty() {
+        skinned.sort();
+        let list: Vec<String> = skinned.iter().map(ToString::to_string).collect();
+        let list = list.join(", ");
+        if skinned.iter().any(|e| warned.insert(*e)) {
+            warn!(
+                "shadowvol: mesh {list} is skinned or morphed; shadow volumes would cast its \
+                 bind pose, so the marked lights use Bevy's shadow maps while it is visible \
+                 (give it NotShadowCaster to keep the volumes)"
+            );
+        }
+        return Err(format!(
+            "skinned or morphed caster {list}: volumes would cast its bind pose"
+        ));
+    }
+    Ok((e, sv.mode, layers.cloned().unwrap_or_default()))
+}
+
+/// Decides which marked lights the volumes shadow this frame: the first [`MAX_LIGHTS`] by
+/// entity, when one camera can draw them. Every other marked light gets Bevy's shadow maps for
+/// this frame, and the reason goes to the stats (logged once). Runs before Bevy's light systems
+/// read `shadow_maps_enabled`, so the maps are drawn in this very frame.
+#[allow(clippy::too_many_arguments)]
+fn settle_lights(
+    mut commands: Commands,
+    mut decision: ResMut<Decision>,
+    stats: Res<ShadowVolumeStats>,
+    setting: Res<ShadowCasters>,
+    cameras: SvCameras,
+    deformed: Deformed,
+    mut lights: MarkedLights,
+    mut warned: Local<HashSet<Entity>>,
 ) {
-    for mut l in &mut points {
-        if l.shadow_maps_enabled {
-            l.shadow_maps_enabled = false;
+    decision.problems.clear();
+    decision.lights.clear();
+    let camera = volume_camera(&cameras, &deformed, *setting, &mut warned);
+    // After a failure on the device the camera stays, with no volume light: the render world
+    // tries the pass again (pre-pass only) and clears its error when it works.
+    let refusal = match (&camera, stats.render_error()) {
+        (Err(e), _) => Some(e.clone()),
+        (Ok(_), Some(e)) => Some(format!("the pass failed in the last frame ({e})")),
+        (Ok(_), None) => None,
+    };
+    if let Some(e) = &refusal {
+        if !lights.is_empty() {
+            decision
+                .problems
+                .push(format!("{e}; the marked lights use Bevy's shadow maps"));
         }
     }
-    for mut l in &mut spots {
-        if l.shadow_maps_enabled {
-            l.shadow_maps_enabled = false;
-        }
+    decision.camera = camera.ok();
+    let allowed = refusal.is_none();
+    let mut marked: Vec<_> = lights.iter_mut().collect();
+    marked.sort_by_key(|l| l.0);
+    if allowed && marked.len() > MAX_LIGHTS {
+        let rest: Vec<String> = marked[MAX_LIGHTS..]
+            .iter()
+            .map(|l| l.0.to_string())
+            .collect();
+        decision.problems.push(format!(
+            "{} lights have ShadowVolumeLight; the first {MAX_LIGHTS} are shadowed with \
+             volumes, the others ({}) with Bevy's shadow maps",
+            marked.len(),
+            rest.join(", ")
+        ));
     }
-    for mut l in &mut suns {
-        if l.shadow_maps_enabled {
-            l.shadow_maps_enabled = false;
+    for (i, (entity, own, point, spot, sun)) in marked.into_iter().enumerate() {
+        let volumes = allowed && i < MAX_LIGHTS;
+        let current = point
+            .as_ref()
+            .map(|l| l.shadow_maps_enabled)
+            .or(spot.as_ref().map(|l| l.shadow_maps_enabled))
+            .or(sun.as_ref().map(|l| l.shadow_maps_enabled));
+        let Some(current) = current else {
+            decision.problems.push(format!(
+                "light {entity} has ShadowVolumeLight but no PointLight, SpotLight or \
+                 DirectionalLight"
+            ));
+            continue;
+        };
+        if own.is_none() {
+            commands.entity(entity).insert(OwnShadowMaps(current));
+        }
+        if volumes {
+            decision.lights.push(entity);
+        }
+        let wanted = !volumes;
+        if let Some(mut l) = point.filter(|l| l.shadow_maps_enabled != wanted) {
+            l.shadow_maps_enabled = wanted;
+        }
+        if let Some(mut l) = spot.filter(|l| l.shadow_maps_enabled != wanted) {
+            l.shadow_maps_enabled = wanted;
+        }
+        if let Some(mut l) = sun.filter(|l| l.shadow_maps_enabled != wanted) {
+            l.shadow_maps_enabled = wanted;
         }
     }
 }
@@ -123,79 +358,143 @@ type LightKinds<'a> = (
     Option<&'a DirectionalLight>,
 );
 
-/// Reads the marked entities into [`VolumeFrame`].
+/// A candidate caster: its mesh, transform, visibility, layers, whether it opts out of
+/// casting (`NotShadowCaster`: it still receives), and whether it is marked.
+type Candidates<'w, 's> = Query<
+    'w,
+    's,
+    (
+        Entity,
+        &'static Mesh3d,
+        &'static GlobalTransform,
+        &'static InheritedVisibility,
+        Option<&'static RenderLayers>,
+        Has<NotShadowCaster>,
+        Has<ShadowCaster>,
+    ),
+    (Without<SkinnedMesh>, Without<MeshMorphWeights>),
+>;
+
+/// Reads the casters and the decided lights into [`VolumeFrame`].
 #[allow(clippy::too_many_arguments)]
-fn gather(
+pub(crate) fn gather(
     mut frame: ResMut<VolumeFrame>,
-    casters: Query<(Entity, &Mesh3d, &GlobalTransform), With<ShadowCaster>>,
-    lights: Query<(Entity, &GlobalTransform, LightKinds), With<ShadowVolumeLight>>,
-    cameras: Query<(Entity, &ShadowVolumes)>,
+    decision: Res<Decision>,
+    setting: Res<ShadowCasters>,
+    casters: Candidates,
+    lights: Query<(&GlobalTransform, LightKinds, Option<&RenderLayers>), With<ShadowVolumeLight>>,
     meshes: Res<Assets<Mesh>>,
+    server: Option<Res<AssetServer>>,
     mut events: MessageReader<AssetEvent<Mesh>>,
 ) {
     let stats = frame.stats.clone();
-    let mut problems = Vec::new();
+    let mut problems = decision.problems.clone();
+    frame.camera = decision.camera.as_ref().map(|(e, m, _)| (*e, *m));
 
-    let mut cams: Vec<_> = cameras.iter().collect();
-    cams.sort_by_key(|(e, _)| *e);
-    frame.camera = cams.first().map(|(e, s)| (*e, s.mode));
-    if cams.len() > 1 {
-        problems.push(format!(
-            "{} cameras have ShadowVolumes; only the first, {}, gets shadow volumes",
-            cams.len(),
-            cams[0].0
-        ));
-    }
-
-    let mut marked: Vec<_> = casters.iter().collect();
-    marked.sort_by_key(|(e, _, _)| *e);
-    let key: Vec<_> = marked.iter().map(|(e, m, _)| (*e, m.id())).collect();
+    let mut candidates: Vec<CandidateItem<'_>> = casters
+        .iter()
+        .filter(|c| c.6 || *setting == ShadowCasters::AllMeshes)
+        .collect();
+    candidates.sort_by_key(|c| c.0);
+    let key: Vec<_> = candidates.iter().map(|c| (c.0, c.1.id())).collect();
     let changed = events.read().any(|ev| match ev {
         AssetEvent::Modified { id } | AssetEvent::LoadedWithDependencies { id } => {
             key.iter().any(|(_, m)| m == id)
         }
         _ => false,
     });
-    if key != frame.key || changed || frame.scene.is_none() && !key.is_empty() {
-        if let Some(built) = build_scene(&marked, &meshes) {
-            frame.scene = Some(Arc::new(built.scene));
-            frame.generation += 1;
-            frame.key = key;
-            frame.objects = built.objects;
-            frame.left_out = built.left_out;
-        } // else a mesh is still loading: try again next frame
+    let arrived = frame.pending.iter().any(|id| meshes.contains(*id));
+    if key != frame.key || changed || arrived {
+        let built = build_scene(&candidates, &meshes, *setting == ShadowCasters::Marked);
+        frame.scene = (!built.objects.is_empty()).then(|| Arc::new(built.scene));
+        frame.generation += 1;
+        frame.pending = key
+            .iter()
+            .map(|k| k.1)
+            .filter(|id| !meshes.contains(*id))
+            .collect();
+        frame.key = key;
+        frame.objects = built.objects;
+        frame.left_out = built.left_out;
     }
     problems.extend(frame.left_out.iter().cloned());
-    // Per object of the current scene; an object whose entity is gone while its rebuild waits
-    // is collapsed to a point, which casts nothing.
-    let by_entity: HashMap<Entity, &GlobalTransform> =
-        marked.iter().map(|&(e, _, t)| (e, t)).collect();
-    let transforms = frame
-        .objects
-        .iter()
-        .map(|k| {
-            by_entity
-                .get(k)
-                .map_or(glam::Affine3A::ZERO, |t| to_affine(t))
-        })
-        .collect();
-    frame.transforms = transforms;
-
-    let mut marked_lights: Vec<_> = lights.iter().collect();
-    marked_lights.sort_by_key(|(e, _, _)| *e);
-    if marked_lights.len() > MAX_LIGHTS {
-        problems.push(format!(
-            "{} lights have ShadowVolumeLight; the first {MAX_LIGHTS} are shadowed",
-            marked_lights.len()
-        ));
+    if let Some(server) = &server {
+        for (e, m) in &frame.key {
+            if matches!(server.get_load_state(*m), Some(LoadState::Failed(_))) {
+                problems.push(format!(
+                    "caster {e}: its mesh failed to load; it casts nothing"
+                ));
+            }
+        }
     }
+    // Per object of the current scene: its transform, whether it is in the pre-pass and whether
+    // it casts. An object whose entity is gone while its rebuild waits, is hidden, is on other
+    // layers than the camera or has a singular transform (a zero scale) is neither.
+    let layers = decision
+        .camera
+        .as_ref()
+        .map_or_else(RenderLayers::default, |c| c.2.clone());
+    let everywhere = RenderLayers::default();
+    let by_entity: HashMap<Entity, &CandidateItem<'_>> =
+        candidates.iter().map(|c| (c.0, c)).collect();
+    let n = frame.objects.len();
+    let (mut transforms, mut drawn, mut casts, mut their_layers) = (
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+    );
+    for e in &frame.objects {
+        their_layers.push(
+            by_entity
+                .get(e)
+                .and_then(|c| c.4)
+                .unwrap_or(&everywhere)
+                .clone(),
+        );
+        let (t, d, c) = by_entity.get(e).map_or(
+            (glam::Affine3A::IDENTITY, false, false),
+            |&&(_, _, t, visible, theirs, not_caster, _)| {
+                let t = to_affine(t);
+                let invertible = t.is_finite() && t.matrix3.determinant() != 0.0;
+                let seen = visible.get() && theirs.unwrap_or(&everywhere).intersects(&layers);
+                let d = seen && invertible;
+                let t = if invertible {
+                    t
+                } else {
+                    glam::Affine3A::IDENTITY
+                };
+                (t, d, d && !not_caster)
+            },
+        );
+        transforms.push(t);
+        drawn.push(d);
+        casts.push(c);
+    }
+    frame.transforms = transforms;
+    frame.drawn = drawn;
+
     frame.lights.clear();
-    for (entity, t, (point, spot, sun)) in marked_lights.into_iter().take(MAX_LIGHTS) {
+    let mut per_light = Vec::with_capacity(decision.lights.len() * n);
+    for &entity in &decision.lights {
+        let Ok((t, (point, spot, sun), light_layers)) = lights.get(entity) else {
+            continue;
+        };
         match volume_light(t, point.is_some() || spot.is_some(), sun.is_some()) {
-            Ok(l) => frame.lights.push(l),
+            Ok(l) => {
+                frame.lights.push(l);
+                let light_layers = light_layers.unwrap_or(&everywhere);
+                per_light.extend(
+                    casts
+                        .iter()
+                        .zip(&their_layers)
+                        .map(|(&c, o)| c && o.intersects(light_layers)),
+                );
+            }
             Err(e) => problems.push(format!("light {entity}: {e}")),
         }
     }
+    frame.casts = per_light;
     if problems.is_empty() {
         stats.clear(Side::Main);
     } else {
@@ -211,7 +510,13 @@ fn volume_light(
     directional: bool,
 ) -> Result<VolumeLight, String> {
     let (v, w, kind) = if directional {
-        (t.back().as_vec3(), 0.0, 2.0)
+        // Not `t.back()`: its `Dir3` asserts a unit vector (a panic in debug builds) and a zero
+        // scale has none. A zero axis gives the light error below instead.
+        (
+            Vec3::from(t.affine().matrix3.z_axis).normalize_or_zero(),
+            0.0,
+            2.0,
+        )
     } else if positional {
         (t.translation(), 1.0, 1.0)
     } else {
@@ -231,61 +536,90 @@ fn to_affine(t: &GlobalTransform) -> glam::Affine3A {
     glam::Affine3A::from_cols_array(&t.affine().to_cols_array())
 }
 
-/// The scene model of the marked casters, the entity of each object, and the casters left out.
+/// The scene model of the candidate casters, the entity of each object, and the casters left
+/// out.
 struct Built {
     scene: Scene,
     objects: Vec<Entity>,
     left_out: Vec<String>,
 }
 
-/// The scene model of the marked casters: one edge table per distinct mesh, one object per
-/// entity. A caster whose mesh cannot be read is left out, with the reason; the others are
-/// built. `None` while a mesh is not loaded yet.
-fn build_scene(
-    casters: &[(Entity, &Mesh3d, &GlobalTransform)],
-    meshes: &Assets<Mesh>,
-) -> Option<Built> {
+/// The scene model of the candidate casters: one edge table per distinct mesh, one object per
+/// entity. A caster whose mesh cannot be read is left out, with the reason (where it is not
+/// marked, in [`ShadowCasters::AllMeshes`], a mesh of lines or points is left out in silence);
+/// the others are built. A mesh not loaded yet is skipped: a new build comes when it loads.
+fn build_scene(casters: &[CandidateItem<'_>], meshes: &Assets<Mesh>, marked_only: bool) -> Built {
     let mut built = Built {
         scene: Scene::new("bevy"),
         objects: Vec::new(),
         left_out: Vec::new(),
     };
     let mut tables = HashMap::new();
-    for (entity, mesh, t) in casters {
+    for &(entity, mesh, t, _, _, _, marked) in casters {
         let id = mesh.id();
         if let std::collections::hash_map::Entry::Vacant(slot) = tables.entry(id) {
-            let m = meshes.get(id)?;
-            slot.insert(to_topology(m).and_then(|topo| {
-                built
-                    .scene
-                    .add_mesh_owned(&format!("{id}"), topo)
-                    .map_err(|e| e.to_string())
+            let Some(m) = meshes.get(id) else {
+                continue; // not loaded (yet): skipped, the others are built
+            };
+            let quiet = !marked_only
+                && !marked
+                && m.primitive_topology() != PrimitiveTopology::TriangleList;
+            slot.insert((!quiet).then(|| {
+                to_topology(m).and_then(|topo| {
+                    built
+                        .scene
+                        .add_mesh_owned(&format!("{id}"), topo)
+                        .map_err(|e| e.to_string())
+                })
             }));
         }
-        match &tables[&id] {
-            Ok(table) => {
+        match tables.get(&id) {
+            Some(Some(Ok(table))) => {
                 let name = format!("{entity}");
                 built.scene.add_object(name, table.clone(), to_affine(t));
-                built.objects.push(*entity);
+                built.objects.push(entity);
             }
-            Err(e) => built
+            Some(Some(Err(e))) => built
                 .left_out
                 .push(format!("caster {entity} is left out: {e}")),
+            Some(None) | None => {}
         }
     }
-    Some(built)
+    built
 }
+
+/// One item of [`Candidates`].
+type CandidateItem<'a> = (
+    Entity,
+    &'a Mesh3d,
+    &'a GlobalTransform,
+    &'a InheritedVisibility,
+    Option<&'a RenderLayers>,
+    bool,
+    bool,
+);
 
 /// A Bevy mesh's positions and triangles, checked: a triangle list with `Float32x3` positions
 /// and in-range indices (none: consecutive triples).
 pub(crate) fn to_topology(m: &Mesh) -> Result<TopoMesh, String> {
+    if !m.asset_usage.contains(RenderAssetUsages::MAIN_WORLD) {
+        return Err(
+            "its mesh lives in the render world only (RenderAssetUsages::RENDER_WORLD); \
+                    casters need RenderAssetUsages::MAIN_WORLD too"
+                .into(),
+        );
+    }
     if m.primitive_topology() != PrimitiveTopology::TriangleList {
         return Err(format!(
             "its mesh is a {:?}; shadow volumes need a triangle list",
             m.primitive_topology()
         ));
     }
-    let positions: Vec<glam::Vec3> = match m.attribute(Mesh::ATTRIBUTE_POSITION) {
+    let unreadable = |e| format!("its mesh cannot be read in the main world: {e}");
+    let positions: Vec<glam::Vec3> = match m
+        .try_attribute_option(Mesh::ATTRIBUTE_POSITION)
+        .map_err(unreadable)?
+    {
         Some(VertexAttributeValues::Float32x3(p)) => {
             p.iter().map(|&v| glam::Vec3::from(v)).collect()
         }
@@ -296,7 +630,7 @@ pub(crate) fn to_topology(m: &Mesh) -> Result<TopoMesh, String> {
                 .into())
         }
     };
-    let indices: Vec<u32> = match m.indices() {
+    let indices: Vec<u32> = match m.try_indices_option().map_err(unreadable)? {
         Some(Indices::U16(i)) => i.iter().map(|&i| u32::from(i)).collect(),
         Some(Indices::U32(i)) => i.clone(),
         None => (0..positions.len() as u32).collect(),

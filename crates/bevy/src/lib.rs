@@ -1,34 +1,38 @@
 //! Exact, crack-free stencil shadow volumes for Bevy 0.20.
 //!
 //! [`ShadowVolumesPlugin`] draws shadow volumes for the lights an application marks with
-//! [`ShadowVolumeLight`], cast by the meshes it marks with [`ShadowCaster`], seen by the camera
-//! it marks with [`ShadowVolumes`]. It runs shadowvol's GPU-resident pass
-//! (`shadowvol_renderer::resident::ShadowPass`) on Bevy's own device and in Bevy's own command
-//! encoder, in the `Core3d` schedule before the main pass:
+//! [`ShadowVolumeLight`], cast by its meshes as Bevy's shadows would be (every `Mesh3d` unless
+//! it has `NotShadowCaster`, is hidden or is on other render layers than the camera; see
+//! [`ShadowCasters`] for the opt-in), seen by the camera it marks with [`ShadowVolumes`]. It
+//! runs shadowvol's GPU-resident pass (`shadowvol_renderer::resident::ShadowPass`) on Bevy's own
+//! device and in Bevy's own command encoder, in the `Core3d` schedule before the main pass:
 //!
-//! 1. a depth-stencil pre-pass of the casters, one sample per pixel, forward-Z, in its own
-//!    target (Bevy's main depth is reverse-Z `Depth32Float`, which has no stencil);
+//! 1. a depth-stencil pre-pass of the casters and receivers, one sample per pixel, forward-Z, in
+//!    its own target (Bevy's main depth is reverse-Z `Depth32Float`, which has no stencil);
 //! 2. per light, the silhouette extraction and the stencil volumes (z-pass or z-fail per object,
 //!    as shadowvol's plan chooses from where the camera stands) in the accuracy mode
 //!    of [`ShadowVolumes::mode`] (exact by default: bit-identical signs on every device);
 //! 3. per light, a resolve of the stencil into one layer of a screen-space mask (1 lit, 0 in
-//!    shadow).
+//!    shadow). Every other 3D view clears the masks to lit before its own main pass, so a second
+//!    camera is not darkened by this view's mask.
 //!
-//! The casters' materials become [`ShadowVolumeMaterial`], a `StandardMaterial` extended with
-//! the mask: its fragment shader runs Bevy's own PBR lighting and then takes away, per marked
-//! light, the share the mask says is blocked, computed with Bevy's own light functions. So the
-//! mask replaces exactly that light's shadow factor; other lights, ambient, emissive and
-//! specular stay Bevy's. A surface whose geometric normal faces away from a marked light takes
-//! none of it, as in shadowvol's renderer and reference (smooth normals would light it, and the
-//! volumes cannot shadow it). The marked lights' Bevy shadow maps are turned off.
+//! The candidates' `StandardMaterial`s become [`ShadowVolumeMaterial`], a `StandardMaterial`
+//! extended with the mask: its fragment shader (an embedded asset) runs Bevy's own PBR lighting
+//! and then takes away, per volume light, the share the mask says is blocked, computed with
+//! Bevy's own light functions. So the mask replaces exactly that light's shadow factor; other
+//! lights, ambient, emissive and specular stay Bevy's. A surface whose geometric normal faces
+//! away from a marked light takes none of it, as in shadowvol's renderer and reference (smooth
+//! normals would light it, and the volumes cannot shadow it). While the volumes shadow a light,
+//! its Bevy shadow maps are off; in a frame where they cannot, its maps are on (never no
+//! shadow), and the reason is in [`ShadowVolumeStats::error`], logged once.
 //!
 //! A caster whose mesh is added, removed or changed is prepared again (edge tables built and
-//! uploaded); a caster or light that only moves costs a few small uploads in the next frame.
-//! [`ShadowVolumeStats`] counts both.
+//! uploaded); a caster or light that only moves, or is hidden, costs a few small uploads in the
+//! next frame. [`ShadowVolumeStats`] counts both.
 //!
 //! ```no_run
 //! use bevy::prelude::*;
-//! use shadowvol_bevy::{ShadowCaster, ShadowVolumeLight, ShadowVolumes, ShadowVolumesPlugin};
+//! use shadowvol_bevy::{ShadowVolumeLight, ShadowVolumes, ShadowVolumesPlugin};
 //!
 //! fn main() {
 //!     App::new()
@@ -44,23 +48,29 @@
 //! ) {
 //!     let white = materials.add(Color::WHITE);
 //!     commands.spawn((Mesh3d(meshes.add(Cuboid::default())), MeshMaterial3d(white.clone()),
-//!         Transform::from_xyz(0.0, 0.5, 0.0), ShadowCaster));
+//!         Transform::from_xyz(0.0, 0.5, 0.0)));
 //!     commands.spawn((Mesh3d(meshes.add(Plane3d::default().mesh().size(8.0, 8.0))),
-//!         MeshMaterial3d(white), ShadowCaster));
+//!         MeshMaterial3d(white)));
 //!     commands.spawn((PointLight::default(), Transform::from_xyz(2.0, 5.0, 1.0), ShadowVolumeLight));
 //!     commands.spawn((Camera3d::default(), ShadowVolumes::default(),
 //!         Transform::from_xyz(4.0, 5.0, 7.0).looking_at(Vec3::ZERO, Vec3::Y)));
 //! }
 //! ```
 //!
-//! Limits, each reported rather than drawn wrong:
-//! - one camera: the first [`ShadowVolumes`] camera by entity; others are named in
-//!   [`ShadowVolumeStats::error`];
-//! - at most [`MAX_LIGHTS`] marked lights; perspective cameras only, without sub-pixel jitter
-//!   (`TemporalJitter`, as TAA uses), which would misalign the mask by up to a pixel;
-//! - a surface receives volume shadows only where it is a caster (in the pre-pass): mark the
-//!   ground too. Meshes without the marker keep `StandardMaterial` and are lit unshadowed by
-//!   the marked lights;
+//! Limits, each reported (and logged once) rather than drawn wrong; a light the volumes cannot
+//! shadow gets Bevy's shadow maps for that frame:
+//! - one active [`ShadowVolumes`] camera (with none or several, every marked light is on its
+//!   maps); a 3D camera without it sees the volume lights unshadowed, not darkened;
+//! - at most [`MAX_LIGHTS`] lights with volumes, by entity order; perspective cameras only,
+//!   without sub-pixel jitter (`TemporalJitter`, as TAA uses), which would misalign the mask by
+//!   up to a pixel;
+//! - a visible skinned or morphed caster puts every marked light on its maps (volumes would cast
+//!   its bind pose; a warning once); with `NotShadowCaster` it is left out instead;
+//! - a caster's mesh must be a triangle list with its positions in the main world; one that
+//!   cannot be read (render-world-only, NaN) is left out and named, one still loading is
+//!   skipped; the others cast as before;
+//! - a surface receives volume shadows only where it is in the pre-pass (a candidate); a material
+//!   other than `StandardMaterial` does not read the mask;
 //! - forward rendering only (not the deferred path); clearcoat and diffuse transmission take
 //!   the base layer's share.
 
@@ -83,25 +93,57 @@ pub use shadowvol_robust_math::Accuracy;
 /// The most lights one camera shadows with volumes: the layers of the mask.
 pub const MAX_LIGHTS: usize = 8;
 
-/// Marks a mesh entity (`Mesh3d`, with a `MeshMaterial3d<StandardMaterial>`) whose triangles
-/// cast shadow volumes and receive the marked lights' shadows. On an entity with children (a
-/// glTF `WorldAssetRoot`, say) it marks every mesh below it as well. Its mesh needs its positions in
-/// the main world (`RenderAssetUsages::MAIN_WORLD`, Bevy's default for meshes it builds and
-/// loads), as a triangle list.
-#[derive(Component, Debug, Default, Clone, Copy, PartialEq, Eq)]
+/// Marks a mesh entity as a caster where the plugin's [`ShadowCasters`] setting is
+/// [`ShadowCasters::Marked`] (the opt-in for large scenes); with the default,
+/// [`ShadowCasters::AllMeshes`], every `Mesh3d` casts and the marker changes nothing. On an entity
+/// with children (a glTF `WorldAssetRoot`, say) it marks every mesh below it as well. Its mesh
+/// needs its positions in the main world (`RenderAssetUsages::MAIN_WORLD`, Bevy's default for
+/// meshes it builds and loads), as a triangle list.
+#[derive(Component, Reflect, Debug, Default, Clone, Copy, PartialEq, Eq)]
+#[reflect(Component, Default, Debug, Clone, PartialEq)]
 pub struct ShadowCaster;
 
+/// Which meshes cast shadow volumes: a resource the plugin adds with its default; insert another
+/// value to change it.
+///
+/// In both cases a mesh casts and receives only as Bevy's shadows would have it: it is skipped
+/// while its `InheritedVisibility` is false (`Visibility::Hidden`, itself or an ancestor) or its
+/// `RenderLayers` do not meet the [`ShadowVolumes`] camera's, one with `NotShadowCaster`
+/// receives but does not cast, and one casts for a light only where its `RenderLayers` meet the
+/// light's. A mesh that is only outside the camera's frustum still casts
+/// (its shadow may fall into view), as with Bevy's shadow maps.
+#[derive(Resource, Reflect, Debug, Default, Clone, Copy, PartialEq, Eq)]
+#[reflect(Resource, Default, Debug, Clone, PartialEq)]
+pub enum ShadowCasters {
+    /// Every `Mesh3d` casts (Bevy's habit: opt out with `NotShadowCaster`).
+    #[default]
+    AllMeshes,
+    /// Only meshes marked [`ShadowCaster`] (or below a marked entity) cast and receive; the
+    /// others keep `StandardMaterial` and are lit unshadowed by the marked lights. For scenes
+    /// whose edge tables would cost too much to build for every mesh.
+    Marked,
+}
+
 /// Marks a `PointLight`, `SpotLight` or `DirectionalLight` whose shadows are drawn with
-/// volumes. The plugin turns its Bevy shadow maps off (`shadow_maps_enabled = false`).
-#[derive(Component, Debug, Default, Clone, Copy, PartialEq, Eq)]
+/// volumes. While the plugin shadows it, its Bevy shadow maps are off
+/// (`shadow_maps_enabled = false`); in a frame where it cannot (too many lights, no usable
+/// camera, a skinned caster, ...), they are on, and the reason is logged once and kept in
+/// [`ShadowVolumeStats::error`]. Removing the marker gives the light back its own
+/// `shadow_maps_enabled`, as it was when the marker was added.
+#[derive(Component, Reflect, Debug, Default, Clone, Copy, PartialEq, Eq)]
+#[reflect(Component, Default, Debug, Clone, PartialEq)]
+#[component(on_remove = extract::restore_own_shadow_maps)]
 pub struct ShadowVolumeLight;
 
 /// On a `Camera3d`: draw shadow volumes for this view, in this accuracy mode.
-#[derive(Component, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Component, Reflect, Debug, Clone, Copy, PartialEq, Eq)]
+#[reflect(Component, Default, Debug, Clone, PartialEq)]
 pub struct ShadowVolumes {
     /// How silhouette signs are decided (`Accuracy::Exact` by default: exact signs, closed
     /// volumes, however degenerate the mesh). `Original` is the naive float test whose cracks
-    /// the paper measures.
+    /// the paper measures. Not reflected (`Accuracy` is shadowvol's type, which has no
+    /// `Reflect`): a reflected or deserialized `ShadowVolumes` is exact.
+    #[reflect(ignore)]
     pub mode: Accuracy,
 }
 
@@ -177,6 +219,11 @@ impl ShadowVolumeStats {
         });
     }
 
+    /// The render world's current error: the pass failed on the device or refused the view.
+    fn render_error(&self) -> Option<String> {
+        self.with(|s| s.errors[Side::Render as usize].clone())
+    }
+
     /// `side` is well again.
     fn clear(&self, side: Side) {
         self.with(|s| s.errors[side as usize] = None);
@@ -191,12 +238,13 @@ pub struct ShadowVolumesPlugin;
 
 impl Plugin for ShadowVolumesPlugin {
     fn build(&self, app: &mut App) {
+        app.register_type::<ShadowCaster>()
+            .register_type::<ShadowVolumeLight>()
+            .register_type::<ShadowVolumes>()
+            .register_type::<ShadowCasters>()
+            .init_resource::<ShadowCasters>();
         material::build(app);
         extract::build(app);
         render::build(app);
-    }
-
-    fn finish(&self, app: &mut App) {
-        material::finish(app);
     }
 }

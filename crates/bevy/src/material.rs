@@ -3,7 +3,8 @@
 
 use std::collections::HashMap;
 
-use bevy::asset::{uuid_handle, RenderAssetUsages};
+use bevy::asset::io::embedded::EmbeddedAssetRegistry;
+use bevy::asset::RenderAssetUsages;
 use bevy::image::TextureFormatPixelInfo as _;
 use bevy::pbr::{ExtendedMaterial, MaterialExtension};
 use bevy::prelude::*;
@@ -11,9 +12,10 @@ use bevy::render::render_resource::{
     AsBindGroup, Extent3d, TextureDimension, TextureFormat, TextureUsages, TextureViewDescriptor,
     TextureViewDimension,
 };
-use bevy::shader::{Shader, ShaderRef};
+use bevy::shader::ShaderRef;
 
-use crate::{ShadowCaster, ShadowVolumes, MAX_LIGHTS};
+use crate::extract::VolumeFrame;
+use crate::{ShadowVolumes, MAX_LIGHTS};
 
 /// The extension's binding of the mask (binding 100) and of the light table (101); the
 /// `StandardMaterial` keeps its own bindings below 100.
@@ -30,18 +32,24 @@ pub struct ShadowMask {
 
 /// The material of every caster: Bevy's `StandardMaterial` with each marked light's shadow
 /// factor taken from the mask. The plugin puts it in place of a caster's
-/// `MeshMaterial3d<StandardMaterial>` and keeps it equal to that material when it changes.
+/// `MeshMaterial3d<StandardMaterial>` and keeps it equal to that material when it changes; a
+/// mesh that stops being a candidate caster gets its `StandardMaterial` back.
 pub type ShadowVolumeMaterial = ExtendedMaterial<StandardMaterial, ShadowMask>;
 
 /// The extension's fragment shader, `shaders/bevy_mask.wesl` (WESL, as Bevy 0.20's own shaders:
-/// it imports `bevy_pbr`'s lighting), under a fixed handle.
-const MASK_SHADER: Handle<Shader> = uuid_handle!("6f1d3c1e-52a4-4c8e-9a57-3f2b8d0e7a41");
+/// it imports `bevy_pbr`'s lighting): an embedded asset, as Bevy's own shaders are, at this
+/// path of the `embedded://` source.
+const MASK_SHADER: &str = "shadowvol_bevy/bevy_mask.wesl";
 
 impl MaterialExtension for ShadowMask {
     fn fragment_shader() -> ShaderRef {
-        MASK_SHADER.into()
+        ShaderRef::Path(format!("embedded://{MASK_SHADER}").into())
     }
 }
+
+/// A caster's own `StandardMaterial`, kept while the plugin's copy is in its place.
+#[derive(Component, Debug, Clone)]
+pub(crate) struct SwappedFrom(Handle<StandardMaterial>);
 
 /// The mask and the light table, one pair for the [`ShadowVolumes`] camera.
 #[derive(Resource, Debug, Clone)]
@@ -58,28 +66,28 @@ pub(crate) struct MaskTextures {
 struct Swapped(HashMap<AssetId<StandardMaterial>, Handle<ShadowVolumeMaterial>>);
 
 pub(crate) fn build(app: &mut App) {
+    // The shader as an embedded asset (what `embedded_asset!` does, for a file outside `src`).
+    match app.world().get_resource::<EmbeddedAssetRegistry>() {
+        Some(registry) => registry.insert_asset(
+            std::path::PathBuf::from(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../../shaders/bevy_mask.wesl"
+            )),
+            std::path::Path::new(MASK_SHADER),
+            include_bytes!("../../../shaders/bevy_mask.wesl").as_slice(),
+        ),
+        None => error!(
+            "shadowvol: ShadowVolumesPlugin needs Bevy's asset plugin (DefaultPlugins, added \
+             before it); the casters will not draw"
+        ),
+    }
     app.add_plugins(MaterialPlugin::<ShadowVolumeMaterial>::default())
         .init_resource::<Swapped>()
         .add_systems(PreStartup, make_textures)
-        .add_systems(PostUpdate, (swap_materials, size_mask));
-}
-
-/// Adds the extension's shader, once every plugin is built (the shader assets come with
-/// `DefaultPlugins`).
-pub(crate) fn finish(app: &mut App) {
-    let shader = Shader::from_wesl(
-        include_str!("../../../shaders/bevy_mask.wesl"),
-        "shadowvol_bevy/bevy_mask.wesl",
-    );
-    match app.world_mut().get_resource_mut::<Assets<Shader>>() {
-        Some(mut shaders) => {
-            let _ = shaders.insert(&MASK_SHADER, shader);
-        }
-        None => error!(
-            "shadowvol: ShadowVolumesPlugin needs Bevy's shader assets (DefaultPlugins, or \
-             RenderPlugin with its asset plugins); the casters will not draw"
-        ),
-    }
+        .add_systems(
+            PostUpdate,
+            (swap_materials.after(crate::extract::gather), size_mask),
+        );
 }
 
 /// A mask of `width × height` pixels and [`MAX_LIGHTS`] layers, drawn by the pass and sampled by
@@ -126,11 +134,15 @@ fn make_textures(mut commands: Commands, mut images: ResMut<Assets<Image>>) {
     });
 }
 
-/// Gives every caster with a `StandardMaterial` the extended copy of it, and keeps the copies
-/// equal to their bases when a base changes.
+/// Gives every candidate caster (see [`crate::ShadowCasters`]; not skinned or morphed) with a
+/// `StandardMaterial` the extended copy of it, keeps the copies equal to their bases when a base
+/// changes, and gives an entity that is no longer a candidate its own material back.
+#[allow(clippy::too_many_arguments)]
 fn swap_materials(
     mut commands: Commands,
-    casters: Query<(Entity, &MeshMaterial3d<StandardMaterial>), With<ShadowCaster>>,
+    frame: Res<VolumeFrame>,
+    plain: Query<(Entity, &MeshMaterial3d<StandardMaterial>)>,
+    swapped_entities: Query<(Entity, &SwappedFrom)>,
     mut events: MessageReader<AssetEvent<StandardMaterial>>,
     standard: Res<Assets<StandardMaterial>>,
     mut extended: ResMut<Assets<ShadowVolumeMaterial>>,
@@ -147,7 +159,19 @@ fn swap_materials(
             }
         }
     }
-    for (entity, material) in &casters {
+    let receivers: std::collections::HashSet<Entity> = frame.key.iter().map(|k| k.0).collect();
+    for (entity, from) in &swapped_entities {
+        if !receivers.contains(&entity) {
+            commands
+                .entity(entity)
+                .remove::<(MeshMaterial3d<ShadowVolumeMaterial>, SwappedFrom)>()
+                .insert(MeshMaterial3d(from.0.clone()));
+        }
+    }
+    for (entity, material) in &plain {
+        if !receivers.contains(&entity) {
+            continue;
+        }
         let id = material.id();
         let Some(base) = standard.get(id) else {
             continue; // not loaded yet
@@ -168,7 +192,7 @@ fn swap_materials(
         commands
             .entity(entity)
             .remove::<MeshMaterial3d<StandardMaterial>>()
-            .insert(MeshMaterial3d(handle));
+            .insert((MeshMaterial3d(handle), SwappedFrom(material.0.clone())));
     }
 }
 

@@ -14,7 +14,7 @@ use bevy::render::{Extract, ExtractSchedule, RenderApp};
 use shadowvol_renderer::plan::plan_frame;
 use shadowvol_renderer::resident::{texture_2d, PassFormats, PassFrame, ResidentScene, ShadowPass};
 use shadowvol_renderer::world::World;
-use shadowvol_renderer::{Camera, PlanPolicy};
+use shadowvol_renderer::{Camera, PlanPolicy, Technique};
 use shadowvol_scenes::{Scene, SceneLight};
 
 use crate::extract::VolumeFrame;
@@ -115,8 +115,9 @@ fn view_camera(view: &ExtractedView, jittered: bool) -> Result<(Camera, f32), St
 }
 
 /// The `Core3d` system: for the [`crate::ShadowVolumes`] camera's view, the pass and the
-/// masks. On any failure the masks say lit (the marked lights shine unshadowed) and the error
-/// goes to [`crate::ShadowVolumeStats`].
+/// masks; for any other view, masks that say lit. On a failure the masks say lit, the error
+/// goes to [`crate::ShadowVolumeStats`], and the main world gives the marked lights Bevy's
+/// shadow maps from the next frame until the pass works again.
 #[allow(clippy::too_many_arguments)]
 fn draw_masks(
     view: ViewQuery<(&MainEntity, &ExtractedView, Has<TemporalJitter>)>,
@@ -133,20 +134,28 @@ fn draw_masks(
     let (Some(frame), Some(textures)) = (frame, textures) else {
         return;
     };
-    if frame.camera.is_none_or(|(e, _)| main.id() != e) {
-        return;
-    }
     let (Some(mask), Some(table)) = (images.get(&textures.mask), images.get(&textures.lights))
     else {
         return; // the textures reach the GPU in a later frame
     };
+    // Every view writes the same table: with no volume lights it is empty, and the material
+    // takes nothing away.
+    write_light_table(&queue, &table.texture, &frame);
+    let enc = ctx.command_encoder();
+    if frame.camera.is_none() {
+        frame.stats.clear(Side::Render); // no view draws volumes: nothing can be failing
+    }
+    if frame.camera.is_none_or(|(e, _)| main.id() != e) {
+        // Another view, which shares the casters' material: its masks say lit. Recorded in this
+        // view's pre-pass, so after an earlier view's main pass and before this view's.
+        clear_masks(enc, &mask.texture, MAX_LIGHTS);
+        return;
+    }
     let gpu = Gpu {
         device: device.wgpu_device(),
         queue: &queue,
         adapter: &adapter,
     };
-    write_light_table(gpu.queue, &table.texture, &frame);
-    let enc = ctx.command_encoder();
     let outcome = view_camera(extracted, jittered)
         .and_then(|camera| record(&gpu, &mut state, &frame, camera, &mask.texture, enc));
     match outcome {
@@ -246,7 +255,7 @@ fn record(
         return Ok(());
     };
     let objects = scene.geometry.objects.len();
-    if frame.transforms.len() != objects {
+    if frame.transforms.len() != objects || frame.casts.len() != objects * frame.lights.len() {
         return Ok(()); // a rebuild is pending; the last masks stay
     }
     let n = frame.lights.len();
@@ -261,12 +270,17 @@ fn record(
     let (plan_scene, world) = state
         .planned
         .get_or_insert_with(|| ((**scene).clone(), World::default()));
-    for (o, t) in plan_scene
-        .geometry
-        .objects
-        .iter_mut()
-        .zip(&frame.transforms)
-    {
+    // Objects that are not drawn this frame (hidden, on other layers, a zero scale, gone) are
+    // parked behind the eye, scaled down: clipped from the pre-pass, and invertible for the
+    // plan's world positions.
+    let parked = park(&camera);
+    let transforms: Vec<glam::Affine3A> = frame
+        .transforms
+        .iter()
+        .zip(&frame.drawn)
+        .map(|(t, &drawn)| if drawn { *t } else { parked })
+        .collect();
+    for (o, t) in plan_scene.geometry.objects.iter_mut().zip(&transforms) {
         o.world_from_object = *t;
     }
     plan_scene.lights.clone_from(&lights);
@@ -274,7 +288,21 @@ fn record(
         .sync(plan_scene)
         .map_err(|e| format!("the casters' world positions: {e}"))?;
     let plan = plan_frame(plan_scene, world, &camera, size, PlanPolicy::Auto, true);
-    let techniques: Vec<_> = plan.entries.iter().map(|e| e.technique).collect();
+    // Light-major: an object that does not cast for a light (`NotShadowCaster`, not drawn, or
+    // on no render layer of the light) draws no volume for it; it still receives, through the
+    // pre-pass.
+    let techniques: Vec<_> = plan
+        .entries
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            if frame.casts[i] {
+                e.technique
+            } else {
+                Technique::Culled
+            }
+        })
+        .collect();
     pass.update(
         resident,
         &PassFrame {
@@ -282,7 +310,7 @@ fn record(
             aspect,
             lights: &lights,
             colors: &vec![[1.0f32; 3]; n],
-            transforms: &frame.transforms,
+            transforms: &transforms,
             albedo: &vec![[1.0f32; 3]; objects],
             techniques: &techniques,
             scissors: &plan.scissors,
@@ -315,6 +343,17 @@ fn record(
         resolve_layer(enc, resolve, mask, k, &targets.depth);
     }
     Ok(())
+}
+
+/// Where an object that is not drawn goes: a millionth of its size, one unit behind the eye, so
+/// the pre-pass clips it whole and its transform stays invertible.
+fn park(camera: &Camera) -> glam::Affine3A {
+    let back = (camera.eye - camera.target).normalize_or(glam::Vec3::Z);
+    glam::Affine3A::from_scale_rotation_translation(
+        glam::Vec3::splat(1e-6),
+        glam::Quat::IDENTITY,
+        camera.eye + back,
+    )
 }
 
 fn make_targets(device: &wgpu::Device, (w, h): (u32, u32)) -> Targets {

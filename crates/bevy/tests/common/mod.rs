@@ -41,22 +41,35 @@ impl Driver {
     /// no tonemapping and a black background, drawing into a `width × height` sRGB image. No
     /// ambient light.
     pub fn new(width: u32, height: u32) -> Self {
+        Self::build(width, height, true)
+    }
+
+    /// The same app without `ShadowVolumesPlugin` (its components, added by the helpers, do
+    /// nothing there), and without Bevy's logger, which a process sets once: what a scene looks
+    /// like to Bevy alone.
+    pub fn without_plugin(width: u32, height: u32) -> Self {
+        Self::build(width, height, false)
+    }
+
+    fn build(width: u32, height: u32, plugin: bool) -> Self {
         let mut app = App::new();
-        app.add_plugins(
-            DefaultPlugins
-                .set(WindowPlugin {
-                    primary_window: None,
-                    exit_condition: ExitCondition::DontExit,
-                    ..default()
-                })
-                .set(RenderPlugin {
-                    synchronous_pipeline_compilation: true,
-                    ..default()
-                })
-                .disable::<WinitPlugin>(),
-        )
-        .add_plugins(ShadowVolumesPlugin)
-        .insert_resource(GlobalAmbientLight {
+        let defaults = DefaultPlugins
+            .set(WindowPlugin {
+                primary_window: None,
+                exit_condition: ExitCondition::DontExit,
+                ..default()
+            })
+            .set(RenderPlugin {
+                synchronous_pipeline_compilation: true,
+                ..default()
+            })
+            .disable::<WinitPlugin>();
+        if plugin {
+            app.add_plugins(defaults).add_plugins(ShadowVolumesPlugin);
+        } else {
+            app.add_plugins(defaults.disable::<bevy::log::LogPlugin>());
+        }
+        app.insert_resource(GlobalAmbientLight {
             brightness: 0.0,
             ..default()
         });
@@ -111,9 +124,15 @@ impl Driver {
 
     /// The next frame's image, RGBA8 sRGB, row-major from the top.
     pub fn capture(&mut self) -> Vec<u8> {
+        let target = self.target.clone();
+        self.capture_of(&target)
+    }
+
+    /// The next frame's image of another target (a second camera's), as [`Driver::capture`].
+    pub fn capture_of(&mut self, target: &Handle<Image>) -> Vec<u8> {
         let slot: Arc<Mutex<Option<Vec<u8>>>> = Arc::default();
         let s = slot.clone();
-        let target = self.target.clone();
+        let target = target.clone();
         self.world()
             .spawn(Screenshot::image(target))
             .observe(move |ev: On<ScreenshotCaptured>| {
@@ -130,8 +149,22 @@ impl Driver {
 
     /// Adds a mesh entity with a white `StandardMaterial`, marked as a caster.
     pub fn spawn_caster(&mut self, mesh: Mesh, transform: Transform) -> Entity {
+        let e = self.spawn_mesh(mesh, transform);
+        self.world().entity_mut(e).insert(ShadowCaster);
+        e
+    }
+
+    /// Adds a mesh entity with a white `StandardMaterial`, unmarked (as a Bevy user writes it:
+    /// with the plugin's default, every mesh casts).
+    pub fn spawn_mesh(&mut self, mesh: Mesh, transform: Transform) -> Entity {
+        let mesh = self.world().resource_mut::<Assets<Mesh>>().add(mesh);
+        self.spawn_handle(mesh, transform)
+    }
+
+    /// Adds an unmarked entity with this mesh handle (loaded or not) and a white
+    /// `StandardMaterial`.
+    pub fn spawn_handle(&mut self, mesh: Handle<Mesh>, transform: Transform) -> Entity {
         let world = self.world();
-        let mesh = world.resource_mut::<Assets<Mesh>>().add(mesh);
         let material = world
             .resource_mut::<Assets<StandardMaterial>>()
             .add(StandardMaterial {
@@ -141,13 +174,38 @@ impl Driver {
                 ..default()
             });
         world
-            .spawn((
-                Mesh3d(mesh),
-                MeshMaterial3d(material),
-                transform,
-                ShadowCaster,
-            ))
+            .spawn((Mesh3d(mesh), MeshMaterial3d(material), transform))
             .id()
+    }
+
+    /// Adds a second 3D camera without `ShadowVolumes` at `eye` looking at [`TARGET`], drawn
+    /// after the first into its own `width × height` image (as a minimap or a render-to-texture
+    /// view), with the first camera's settings otherwise. Returns the camera and its image.
+    pub fn spawn_plain_camera(
+        &mut self,
+        eye: Vec3,
+        width: u32,
+        height: u32,
+    ) -> (Entity, Handle<Image>) {
+        let mut image =
+            Image::new_target_texture(width, height, TextureFormat::Rgba8UnormSrgb, None);
+        image.asset_usage = RenderAssetUsages::RENDER_WORLD;
+        let world = self.world();
+        let target = world.resource_mut::<Assets<Image>>().add(image);
+        let camera = world
+            .spawn((
+                Camera3d::default(),
+                Camera {
+                    clear_color: ClearColorConfig::Custom(Color::BLACK),
+                    order: 1,
+                    ..default()
+                },
+                RenderTarget::from(target.clone()),
+                Tonemapping::None,
+                Transform::from_translation(eye).looking_at(TARGET, Vec3::Y),
+            ))
+            .id();
+        (camera, target)
     }
 
     /// Adds a marked point light of this colour.
