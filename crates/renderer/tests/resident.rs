@@ -161,6 +161,25 @@ fn extract(
     )
 }
 
+/// The host pipeline's multiplicities of light `li` (`ol[object][light]` object-space) from a
+/// backend's `m`: less the triangles touching the point light (they have no volume).
+fn without_touching(
+    scene: &TopologyScene,
+    ol: &[Vec<[f32; 4]>],
+    li: usize,
+    mut m: Vec<i32>,
+) -> Vec<i32> {
+    let offsets = scene.edge_offsets();
+    for (oi, o) in scene.objects.iter().enumerate() {
+        let touching = volume::touching_triangles(&o.table, ol[oi][li]);
+        if !touching.is_empty() {
+            let row = &mut m[offsets[oi]..offsets[oi + 1]];
+            volume::remove_triangles(&o.table, ol[oi][li], Accuracy::Exact, &touching, row);
+        }
+    }
+    m
+}
+
 /// Per light, the multiplicity of every global edge from the side records.
 fn multiplicities(records: &[LightRecords], edges: usize) -> Vec<Vec<i32>> {
     records
@@ -209,23 +228,10 @@ fn exact_multiplicities_equal_cpu_bit_for_bit_on_the_corpus_with_no_host_resolut
                 .unwrap();
         let got = multiplicities(&run.records, rs.edge_count());
         let ol = object_lights(scene.transforms(), &case.lights);
-        let offsets = scene.edge_offsets();
         for (li, m) in got.iter().enumerate() {
             // The host pipeline's multiplicities: the backend's, less the triangles touching a
             // point light (they have no volume).
-            let mut want = want.values(li).to_vec();
-            for (oi, o) in scene.objects.iter().enumerate() {
-                let touching = volume::touching_triangles(&o.table, ol[oi][li]);
-                if !touching.is_empty() {
-                    volume::remove_triangles(
-                        &o.table,
-                        ol[oi][li],
-                        Accuracy::Exact,
-                        &touching,
-                        &mut want[offsets[oi]..offsets[oi + 1]],
-                    );
-                }
-            }
+            let want = without_touching(&scene, &ol, li, want.values(li).to_vec());
             assert_eq!(m, &want, "{}: light {li}", case.name);
         }
         assert_eq!(
@@ -312,7 +318,6 @@ fn each_sample_of_a_light_with_a_size_equals_cpu_as_a_point_light() -> Outcome {
         let (s, l) = check_shared_signs(scene, &rs, &run.shared, &ol);
         (shared, left) = (shared + s, left + l);
         let got = multiplicities(&run.records, rs.edge_count());
-        let offsets = scene.edge_offsets();
         for (si, m) in got.iter().enumerate() {
             let (one, _) = shadowvol_silhouette::extract_once(
                 &mut cpu,
@@ -321,19 +326,7 @@ fn each_sample_of_a_light_with_a_size_equals_cpu_as_a_point_light() -> Outcome {
                 Accuracy::Exact,
             )
             .unwrap();
-            let mut want = one.values(0).to_vec();
-            for (oi, o) in scene.objects.iter().enumerate() {
-                let touching = volume::touching_triangles(&o.table, ol[oi][si]);
-                if !touching.is_empty() {
-                    volume::remove_triangles(
-                        &o.table,
-                        ol[oi][si],
-                        Accuracy::Exact,
-                        &touching,
-                        &mut want[offsets[oi]..offsets[oi + 1]],
-                    );
-                }
-            }
+            let want = without_touching(scene, &ol, si, one.values(0).to_vec());
             assert_eq!(m, &want, "{name}: sample {si}");
         }
     }

@@ -287,8 +287,8 @@ pub fn decide(f: f64, r: f64, p: f64) -> BoxFilter {
 mod tests {
     use super::*;
 
-    /// A xorshift32 generator (deterministic test inputs).
-    fn xorshift(mut x: u32) -> impl FnMut() -> u32 {
+    /// A xorshift32 generator (deterministic test inputs; the device filter's tests use it too).
+    pub(super) fn xorshift(mut x: u32) -> impl FnMut() -> u32 {
         move || {
             x ^= x << 13;
             x ^= x >> 17;

@@ -167,17 +167,9 @@ pub fn box_sign_f32(a: [f32; 3], b: [f32; 3], o: [f32; 3], bx: &DeviceBox) -> Op
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests::xorshift;
     use super::*;
     use crate::exact::orient_exact;
-
-    fn xorshift(mut x: u32) -> impl FnMut() -> u32 {
-        move || {
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
-            x
-        }
-    }
 
     #[test]
     fn the_device_box_contains_the_lights_box() {
