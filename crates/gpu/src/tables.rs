@@ -383,7 +383,7 @@ fn upload_section<E>(
         queue.write_buffer(buffer, offset, bytemuck::cast_slice(&words));
         first += n;
         *staged += 1;
-        if *staged % CHUNKS_PER_WAIT == 0 {
+        if staged.is_multiple_of(CHUNKS_PER_WAIT) {
             wait(queue.submit([]))?;
         }
     }
