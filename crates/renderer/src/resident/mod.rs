@@ -29,6 +29,12 @@
 //! `shaders/render_raster.wgsl` with `shaders/resident_draw.wgsl` appended. [`twin`] is the CPU
 //! port of the new kernels.
 //!
+//! Every pipeline fits `wgpu::Limits::default()` (WebGPU's 8 storage buffers per stage): the
+//! scene's tables and the object of each vertex are one storage buffer
+//! ([`shadowvol_gpu::TablePacking`]) with the word offsets in a uniform, shared by the compute
+//! passes and the draws. The most storage buffers in one stage is 7 (the pending dispatch's
+//! arguments); the side and cap draws bind 6 in the vertex stage.
+//!
 //! ```no_run
 //! # fn main() -> Result<(), shadowvol_renderer::RenderError> {
 //! use shadowvol_renderer::resident::{PassFormats, ShadowPass};
