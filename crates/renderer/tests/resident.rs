@@ -747,12 +747,16 @@ fn embedded_frame(
 }
 
 /// The surface vertex buffer written in several chunks (a 1 MiB storage-binding limit against
-/// 3.8 MB of surface vertices), and the vertex-pulling fallback (a 2 MiB buffer limit), draw the
-/// same image as one chunk: the same shadow, pixel for pixel up to shading rounding.
+/// 3.8 MB of surface vertices), the vertex-pulling fallback (a 2 MiB buffer limit) and a device
+/// with exactly `wgpu::Limits::default()` draw the same image as one chunk: the same shadow,
+/// pixel for pixel up to shading rounding.
 fn grouped_chunked_pulled_and_batched_frames_draw_the_same_image() -> Outcome {
     let one = device_with(|_| {})?;
     let chunked = device_with(|l| l.max_storage_buffer_binding_size = 1 << 20)?;
     let pulled = device_with(|l| l.max_buffer_size = 2 << 20)?;
+    // Exactly WebGPU's guaranteed limits (8 storage buffers per stage), not the adapter's.
+    let webgpu = device_with(|l| *l = wgpu::Limits::default())?;
+    assert_eq!(webgpu.1.limits(), wgpu::Limits::default());
     // No batched device here: the scene's tables, packed into one binding (1.0 MB), are four
     // times one light's side records (240 KB), so a binding that holds them holds the three
     // lights' records too. Batches are compared bit for bit with `cpu` in
@@ -773,6 +777,7 @@ fn grouped_chunked_pulled_and_batched_frames_draw_the_same_image() -> Outcome {
         ("grouped", &one, true, 1, 1),
         ("chunked", &chunked, true, 1, 1),
         ("pulled", &pulled, false, 1, 0),
+        ("default limits", &webgpu, true, 1, 1),
     ] {
         let (got, batches, groups) = embedded_frame(gpu, grouped);
         assert_eq!((batches, groups), (want_batches, want_groups), "{name}");
