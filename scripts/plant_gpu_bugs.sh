@@ -60,6 +60,7 @@ resident-pending-sign-dropped	shaders/resident_extract.wgsl	signs[k] = s;	signs[
 resident-touch-skip-dropped	crates/renderer/src/resident/pipeline.rs	(shaders::TOUCH_SIGNS_CONSTANT, 1.0),	(shaders::TOUCH_SIGNS_CONSTANT, 0.0),	resident
 resident-chunk-offset-dropped	shaders/resident_draw.wgsl	let t = r_chunk.first + k;	let t = k;	resident
 wgsl-resolve-sign-dropped	shaders/silhouette.wgsl	signs[r.light * params.tri_count + r.triangle] = s;	signs[r.light * params.tri_count + r.triangle] = 0;	gpu_lavapipe
+wgsl-table-offset-shifted	shaders/silhouette.wgsl	return tables[table_at.tris + 3u * t + r];	return tables[table_at.tris + 3u * t + r + 3u];	default_limits gpu_lavapipe resident
 dispatch-inline-fallback-dropped	crates/wgpu-compute/src/dispatch.rs	if steps.deferred.is_none() {	if true {	gpu_lavapipe
 twin-resolve-skipped	crates/wgpu-compute/src/twin.rs	for r in &out.uncertain {	for r in out.uncertain.iter().take(0) {	twin
 LIST

@@ -17,17 +17,26 @@
 const R_NEGATIVE: u32 = 0x80000000u;
 const R_TOUCH: i32 = 2;
 
-// Object-space positions of all objects, xyz per global vertex id (the extraction's layout).
-@group(0) @binding(1) var<storage, read> r_positions: array<array<f32, 3>>;
+// The scene's tables packed as the extraction binds them (`tables` of shaders/silhouette.wgsl,
+// shadowvol-gpu's `TablePacking`), each at the word offset `r_at` gives: here object-space
+// positions (f32 bits, xyz per global vertex id), edge ends, canonical triangles and the object
+// of each vertex, read through `r_position`, `r_edge`, `r_triangle` and `r_vertex_object`.
+@group(0) @binding(1) var<storage, read> r_tables: array<u32>;
+// shadowvol-gpu's `TableOffsets`, field for field (`TableOffsets` of shaders/silhouette.wgsl).
+struct RTables {
+    objects: u32,
+    positions: u32,
+    edges: u32,
+    ov_offsets: u32,
+    ov_refs: u32,
+    tris: u32,
+    ov_vertices: u32,
+    vertex_objects: u32,
+}
+@group(0) @binding(9) var<uniform> r_at: RTables;
 // Camera-relative world positions per global vertex id, written by `resident_vertices`.
 @group(0) @binding(7) var<storage, read> r_world: array<vec4<f32>>;
-// The object of each global vertex (for `resident_vertices`).
-@group(0) @binding(8) var<storage, read> r_vertex_objects: array<u32>;
 @group(2) @binding(0) var<storage, read_write> r_world_out: array<vec4<f32>>;
-// Global edges: their ends (a, b) (the extraction's `edges`).
-@group(0) @binding(2) var<storage, read> r_edges: array<vec2<u32>>;
-// Global triangles: canonical global vertex ids (the extraction's `tris`).
-@group(0) @binding(3) var<storage, read> r_tris: array<array<u32, 3>>;
 // [light * tri_count + triangle] signs from resident_triangles.
 @group(0) @binding(4) var<storage, read> r_signs: array<i32>;
 // [light * capacity + slot] side records from resident_edges.
@@ -63,14 +72,25 @@ fn r_object_of(field: u32, id: u32) -> u32 {
 
 // The canonical vertex ids of global triangle `t`.
 fn r_triangle(t: u32) -> vec3<u32> {
-    let tr = r_tris[t];
-    return vec3<u32>(tr[0], tr[1], tr[2]);
+    let k = r_at.tris + 3u * t;
+    return vec3<u32>(r_tables[k], r_tables[k + 1u], r_tables[k + 2u]);
+}
+
+// The ends (a, b) of global edge `e`.
+fn r_edge(e: u32) -> vec2<u32> {
+    let k = r_at.edges + 2u * e;
+    return vec2<u32>(r_tables[k], r_tables[k + 1u]);
+}
+
+// The object of global vertex `v`.
+fn r_vertex_object(v: u32) -> u32 {
+    return r_tables[r_at.vertex_objects + v];
 }
 
 // The object-space position of global vertex `id`.
 fn r_position(id: u32) -> vec3<f32> {
-    let p = r_positions[id];
-    return vec3<f32>(p[0], p[1], p[2]);
+    let k = r_at.positions + 3u * id;
+    return vec3<f32>(bitcast<f32>(r_tables[k]), bitcast<f32>(r_tables[k + 1u]), bitcast<f32>(r_tables[k + 2u]));
 }
 
 // The camera-relative world position of global vertex `id` of object `obj`, once per vertex and
@@ -93,7 +113,7 @@ fn resident_vertices(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     if v >= arrayLength(&r_world_out) {
         return;
     }
-    r_world_out[v] = vec4<f32>(transform(r_vertex_objects[v], v), 1.0);
+    r_world_out[v] = vec4<f32>(transform(r_vertex_object(v), v), 1.0);
 }
 
 // The host pipeline's SurfaceVertex (gpu.rs), 3 per triangle, for `vs_surface`.
@@ -209,7 +229,7 @@ fn vs_resident_surface(@builtin(vertex_index) vi: u32) -> SurfaceOut {
 
 fn side_vertex(record: u32, v: u32) -> VolumeOut {
     let e = record & ~R_NEGATIVE;
-    let er = r_edges[e];
+    let er = r_edge(e);
     var p = er.y;
     var q = er.x;
     if (record & R_NEGATIVE) != 0u {

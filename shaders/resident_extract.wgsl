@@ -2,8 +2,8 @@
 //
 // Appended to the `wgpu` silhouette backend's module (shaders/silhouette.wgsl, composed by
 // `shadowvol_wgpu_compute::shaders::module_source`) and to shaders/exact_int.wgsl, so it shares
-// their bindings in group 0 (params, the scene's tables as the `wgpu` backend uploads them:
-// positions, edges, ov_refs, tris, ov_offsets, objects; lights and signs), their MODE constant
+// their bindings in group 0 (params, the scene's tables packed as the `wgpu` backend uploads
+// them, read through its accessors; lights and signs), their MODE constant
 // and their functions (`Invocation`, `load_edge`, `load_triangle`, `triangle_sign_traced`,
 // `edge_multiplicity`, with TOUCH_SIGNS set). The CPU twin is `shadowvol_renderer::resident::twin`: keep the two in step.
 //
@@ -398,7 +398,7 @@ fn shared_multiplicity(edge: Edge, g: u32) -> vec2<i32> {
     let row = shared_row(g);
     var m = 0;
     for (var k = edge.ov_begin; k < edge.ov_end; k++) {
-        let r = ov_refs[k];
+        let r = ov_ref(k);
         let s = signs[row + (r >> 2u)];
         if s == NOT_SHARED {
             return vec2<i32>(0, 1);
@@ -454,7 +454,7 @@ fn group_multiplicity(edge: Edge, li: u32, g: u32) -> i32 {
     let group_row = shared_row(g);
     var m = 0;
     for (var k = edge.ov_begin; k < edge.ov_end; k++) {
-        let r = ov_refs[k];
+        let r = ov_ref(k);
         var s = signs[group_row + (r >> 2u)];
         if s == NOT_SHARED {
             s = signs[row + (r >> 2u)];

@@ -91,14 +91,36 @@ struct Uncertain {
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
-// The scene's edge tables concatenated, with global ids (silhouette's `gpu::TableBuffer`).
-// Object-space positions of all objects, xyz per global vertex id (an element of 3 words: one
-// bounds check a vertex, not three).
-@group(0) @binding(1) var<storage, read> positions: array<array<f32, 3>>;
-// Per global edge: its ends (a, b), a < b global vertex ids.
-@group(0) @binding(2) var<storage, read> edges: array<vec2<u32>>;
-// Per OV slot: 4 t + r, the global triangle t whose vertex r (canonical order) is the OV.
-@group(0) @binding(3) var<storage, read> ov_refs: array<u32>;
+// The scene's edge tables (silhouette's `gpu::TableBuffer`), packed into one buffer of words
+// (shadowvol-gpu's `TablePacking`: one storage binding for all of them, so that every pipeline
+// stays within WebGPU's 8 storage buffers per stage), each table at the word offset
+// `table_at` gives, with global ids:
+// - positions: object-space xyz (f32 bits) per global vertex id;
+// - edges: per global edge, its ends (a, b), a < b global vertex ids;
+// - ov_offsets: per global edge, its first OV slot; one sentinel at the end: the OV count;
+// - ov_refs: per OV slot, 4 t + r, the global triangle t whose vertex r (canonical order) is
+//   the OV;
+// - tris: per global triangle, its global vertex ids in ascending (canonical) order;
+// - objects: per object (first edge, first triangle, first vertex, first OV slot), plus a
+//   sentinel;
+// - ov_vertices: with OV_VERTICES, per OV slot, the OV's global vertex id (else absent, never
+//   read);
+// - vertex_objects: the renderer's resident pass only, per global vertex its object.
+// Read them only through the accessors below (`position`, `load_edge`, `ov_ref`,
+// `tri_vertex`, `object_base`, `ov_vertex`); their CPU twin is shadowvol-gpu's `PackedView`.
+@group(0) @binding(1) var<storage, read> tables: array<u32>;
+// Word offsets of the tables in `tables` (shadowvol-gpu's `TableOffsets`, field for field).
+struct TableOffsets {
+    objects: u32,
+    positions: u32,
+    edges: u32,
+    ov_offsets: u32,
+    ov_refs: u32,
+    tris: u32,
+    ov_vertices: u32,
+    vertex_objects: u32,
+}
+@group(0) @binding(2) var<uniform> table_at: TableOffsets;
 // Object-space lights, [object * light_count + light].
 @group(0) @binding(4) var<storage, read> lights: array<vec4<f32>>;
 // Multiplicities, [light * edge_count + edge].
@@ -110,16 +132,8 @@ struct Uncertain {
 // runs the dispatch again with longer lists.
 @group(0) @binding(7) var<storage, read_write> silhouettes: array<vec2<u32>>;
 @group(0) @binding(8) var<storage, read_write> uncertain: array<Uncertain>;
-// Per global triangle: its global vertex ids in ascending (canonical) order.
-@group(0) @binding(9) var<storage, read> tris: array<array<u32, 3>>;
-// Per global edge, its first OV slot; one sentinel at the end: the OV count.
-@group(0) @binding(10) var<storage, read> ov_offsets: array<u32>;
 // [light * tri_count + triangle]: -1, 0, 1 (TOUCH in the resident pass).
 @group(0) @binding(11) var<storage, read_write> signs: array<i32>;
-// Per object (first edge, first triangle, first vertex, first OV slot), plus a sentinel.
-@group(0) @binding(12) var<storage, read> objects: array<vec4<u32>>;
-// With OV_VERTICES: per OV slot, the OV's global vertex id (else a placeholder, never read).
-@group(0) @binding(13) var<storage, read> ov_vertices: array<u32>;
 
 // The builtins of one invocation of a triangle or edge kernel (every kernel of the module and of
 // the renderer's resident pass takes them so).
@@ -135,8 +149,29 @@ fn flat_index(inv: Invocation) -> u32 {
 }
 
 fn position(id: u32) -> vec3<f32> {
-    let p = positions[id];
-    return vec3<f32>(p[0], p[1], p[2]);
+    let k = table_at.positions + 3u * id;
+    return vec3<f32>(bitcast<f32>(tables[k]), bitcast<f32>(tables[k + 1u]), bitcast<f32>(tables[k + 2u]));
+}
+
+// Field `field` (FIRST_EDGE, FIRST_TRIANGLE, ...) of object `obj`'s entry (the sentinel at
+// `object_count`).
+fn object_base(obj: u32, field: u32) -> u32 {
+    return tables[table_at.objects + 4u * obj + field];
+}
+
+// OV slot `k`'s reference, 4 t + r.
+fn ov_ref(k: u32) -> u32 {
+    return tables[table_at.ov_refs + k];
+}
+
+// Vertex `r` (canonical order) of global triangle `t`.
+fn tri_vertex(t: u32, r: u32) -> u32 {
+    return tables[table_at.tris + 3u * t + r];
+}
+
+// With OV_VERTICES: OV slot `k`'s global vertex.
+fn ov_vertex(k: u32) -> u32 {
+    return tables[table_at.ov_vertices + k];
 }
 
 // Light `li` of the dispatch in object `obj`'s space.
@@ -158,7 +193,7 @@ fn object_of(field: u32, id: u32) -> u32 {
     var hi = params.object_count;
     while hi - lo > 1u {
         let mid = (lo + hi) / 2u;
-        if objects[mid][field] <= id {
+        if object_base(mid, field) <= id {
             lo = mid;
         } else {
             hi = mid;
@@ -177,8 +212,9 @@ struct Edge {
 }
 
 fn load_edge(e: u32) -> Edge {
-    let ab = edges[e];
-    return Edge(ab.x, ab.y, ov_offsets[e], ov_offsets[e + 1u]);
+    let k = table_at.edges + 2u * e;
+    let o = table_at.ov_offsets + e;
+    return Edge(tables[k], tables[k + 1u], tables[o], tables[o + 1u]);
 }
 
 // Global triangle `t`: its canonical (ascending) vertices' positions and its object.
@@ -190,11 +226,10 @@ struct Triangle {
 }
 
 fn load_triangle(t: u32) -> Triangle {
-    let tr = tris[t];
     return Triangle(
-        position(tr[0]),
-        position(tr[1]),
-        position(tr[2]),
+        position(tri_vertex(t, 0u)),
+        position(tri_vertex(t, 1u)),
+        position(tri_vertex(t, 2u)),
         object_of(FIRST_TRIANGLE, t),
     );
 }
@@ -342,22 +377,22 @@ fn edge_multiplicity(edge: Edge, object: u32, li: u32, a: vec3<f32>, b: vec3<f32
             // Nested, not `&&`: WGSL's `&&` may be compiled without short-circuit, and the
             // backend's `original` must not read the sign buffers.
             if TOUCH_SIGNS {
-                if signs[row + (ov_refs[k] >> 2u)] == TOUCH {
+                if signs[row + (ov_ref(k) >> 2u)] == TOUCH {
                     continue;
                 }
             }
             var o = 0u;
             if OV_VERTICES {
-                o = ov_vertices[k];
+                o = ov_vertex(k);
             } else {
-                let r = ov_refs[k];
-                o = tris[r >> 2u][r & 3u];
+                let r = ov_ref(k);
+                o = tri_vertex(r >> 2u, r & 3u);
             }
             m += sign_f32(a, b, l, position(o));
         }
     } else {
         for (var k = edge.ov_begin; k < edge.ov_end; k++) {
-            let r = ov_refs[k];
+            let r = ov_ref(k);
             let s = signs[row + (r >> 2u)];
             if s != TOUCH {
                 m += select(s, -s, (r & 3u) == 1u);

@@ -1,9 +1,10 @@
 //! A scene cut into parts that each fit a backend's buffers, and the parts' multiplicities added
 //! back onto the scene's edges.
 //!
-//! A backend whose device cannot bind the whole scene's arrays (a storage binding of 128 MiB on
-//! lavapipe holds the edge records of 5.6 million triangles) prepares and extracts each part on
-//! its own and adds the parts up with [`SceneParts::add_part`].
+//! A backend whose device cannot bind the whole scene's arrays (the `wgpu` backend packs its
+//! tables into one storage binding: 128 MiB, lavapipe's and WebGPU's default, holds those of
+//! about 2.2 million triangles of a closed mesh) prepares and extracts each part on its own and
+//! adds the parts up with [`SceneParts::add_part`].
 //!
 //! Why the sum is the scene's result, bit for bit, in every mode: a multiplicity is a sum over
 //! the edge's (edge, opposite vertex) pairs, and each pair's term depends only on the edge's two

@@ -2,12 +2,12 @@
 //! results) and the [`SilhouetteBackend`] implementation (`prepare` uploads the static buffers,
 //! `extract` runs [`crate::dispatch`]).
 
-use crate::device::{device_error, Health, WgpuOptions};
+use crate::device::{device_error, limit_error, Health, WgpuOptions};
 use crate::layout::Prepared;
 use crate::pipeline::Pipelines;
 use crate::NAME;
 use shadowvol_gpu::shaders;
-use shadowvol_gpu::{ErrorScopes, TableBuffers};
+use shadowvol_gpu::{ErrorScopes, Extras, TableBuffers, TablePacking};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_silhouette::gpu::{self, ExactFilter, SceneIndex, TableBuffer, TableWriter};
 use shadowvol_silhouette::{
@@ -46,10 +46,10 @@ pub struct GpuResults<'a> {
     pub counters: &'a wgpu::Buffer,
     /// Compact lists (`vec2<u32>`).
     pub silhouettes: &'a wgpu::Buffer,
-    /// Edge ends (`vec2<u32>`, global vertex ids).
-    pub edges: &'a wgpu::Buffer,
-    /// Positions (`f32` × 3).
-    pub positions: &'a wgpu::Buffer,
+    /// The scene's tables packed into one buffer of `u32` words: edge ends (two global vertex
+    /// ids each) from word `tables.packing.at.edges`, positions (`f32` bits, three per vertex)
+    /// from word `tables.packing.at.positions` ([`shadowvol_gpu::TablePacking`]).
+    pub tables: &'a TableBuffers,
     /// Number of edges `E` (the stride between lights in `multiplicities`).
     pub edge_count: u32,
     /// Entries `C` of each light's compact list (the stride between lights in `silhouettes`):
@@ -151,8 +151,7 @@ impl WgpuBackend {
             multiplicities: &frame.mult,
             counters: &frame.counters,
             silhouettes: &frame.silhouettes,
-            edges: &gpu.edges,
-            positions: &gpu.positions,
+            tables: gpu,
             edge_count: p.index.edge_count() as u32,
             list_capacity: frame.list_capacity as u32,
             first_light,
@@ -285,26 +284,36 @@ impl SilhouetteBackend for WgpuBackend {
 }
 
 impl WgpuBackend {
-    /// Triangles per part when `scene`'s static buffers exceed one buffer or storage binding of
-    /// the device (or [`WgpuOptions::max_buffer_bytes`](crate::WgpuOptions::max_buffer_bytes));
-    /// `None` when it fits whole. A part of `N` triangles has at most `3 N` vertices of 12 bytes
-    /// (a soup), `3 N` edges of 8 and `3 N` OV slots of 4: its positions are its largest buffer
-    /// at worst, 36 bytes a triangle.
+    /// Triangles per part when `scene`'s tables, packed into one storage buffer
+    /// ([`TablePacking`]), exceed one buffer or storage binding of the device (or
+    /// [`WgpuOptions::max_buffer_bytes`](crate::WgpuOptions::max_buffer_bytes)); `None` when
+    /// they fit whole. A part of `N` triangles has at most `3 N` vertices (a soup) and `3 N`
+    /// edges, and exactly `3 N` OV slots: positions 36 bytes a triangle, edge ends 24, OV
+    /// offsets 12, OV references 12, triangles 12 and the OV vertex list 12, so 108 bytes a
+    /// triangle at most, besides the object bases (16 bytes an object) and a sentinel.
     fn part_triangles(&self, scene: &TopologyScene) -> Option<usize> {
-        let limit = self
-            .limits
+        let limit = self.table_limit();
+        let packed = TableWriter::new(scene, NAME)
+            .map(|w| TablePacking::new(&w, self.extras(&w)).bytes())
+            .unwrap_or(u64::MAX);
+        let objects = 16 * (scene.objects.len() as u64 + 1);
+        (packed > limit).then(|| (limit.saturating_sub(64 + objects) / 108).max(1) as usize)
+    }
+
+    /// The largest packed table buffer the device binds.
+    fn table_limit(&self) -> u64 {
+        self.limits
             .max_storage_buffer_binding_size
-            .min(self.limits.max_buffer_size);
-        let (v, e, ov, t) = (
-            scene.total_vertices() as u64,
-            scene.total_edges() as u64,
-            scene.total_ovs() as u64,
-            scene.total_triangles() as u64,
-        );
-        let largest = [12 * v, 8 * e, 4 * (e + 1), 4 * ov, 12 * t]
-            .into_iter()
-            .max()?;
-        (largest > limit).then(|| (limit.saturating_sub(64) / 36).max(1) as usize)
+            .min(self.limits.max_buffer_size)
+    }
+
+    /// The optional tables the scene `writer` writes is uploaded with: the OV vertex list up
+    /// to [`WgpuOptions::ov_vertices_up_to`](crate::WgpuOptions::ov_vertices_up_to) triangles.
+    fn extras(&self, writer: &TableWriter<'_>) -> Extras {
+        Extras {
+            ov_vertices: writer.elements(TableBuffer::Triangles) <= self.options.ov_vertices_up_to,
+            vertex_objects: false,
+        }
     }
 
     /// [`SilhouetteBackend::extract`] on a scene prepared in parts: each part extracted, its
@@ -334,27 +343,17 @@ impl WgpuBackend {
         let gpu = if writer.elements(TableBuffer::Edges) == 0 {
             None
         } else {
-            let tris = writer.elements(TableBuffer::Triangles);
-            let has_ov_vertices = tris <= self.options.ov_vertices_up_to;
-            for b in TableBuffer::ALL
-                .into_iter()
-                .chain(has_ov_vertices.then_some(TableBuffer::OvVertices))
-            {
-                self.check_buffer(&format!("the {}", b.label()), writer.bytes(b), true)?;
-            }
+            let extras = self.extras(&writer);
+            TablePacking::new(&writer, extras)
+                .check("the kernels", self.table_limit())
+                .map_err(limit_error)?;
             let scope = ErrorScopes::push(&self.device);
             let usage = wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::VERTEX;
             let wait = |i| self.wait(i);
-            let buffers = TableBuffers::upload(
-                &self.device,
-                &self.queue,
-                &writer,
-                usage,
-                has_ov_vertices,
-                wait,
-            );
+            let buffers =
+                TableBuffers::upload(&self.device, &self.queue, &writer, usage, extras, wait);
             if let Some(e) = scope.pop() {
                 return Err(device_error(format!("uploading the scene: {e}")));
             }

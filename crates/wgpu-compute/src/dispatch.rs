@@ -149,7 +149,7 @@ impl WgpuBackend {
         let set = self.pipelines.steps(p.index.object_count());
         let steps = Steps {
             triangles: set.triangles[m].as_ref(),
-            edges: if mode == Accuracy::Original && !gpu.has_ov_vertices {
+            edges: if mode == Accuracy::Original && !gpu.has_ov_vertices() {
                 &set.original_by_triangles
             } else {
                 &set.edges[m]

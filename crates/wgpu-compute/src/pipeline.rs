@@ -204,7 +204,10 @@ pub(crate) fn create_pipelines(
     })
 }
 
-fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 14] {
+/// Group 0 of `shaders/silhouette.wgsl`: the params (0), the packed tables (1) and their
+/// offsets (2), lights (4), multiplicities (5), counters (6), compact lists (7), uncertain pairs
+/// (8) and signs (11): 7 storage buffers, within `wgpu::Limits::default()`'s 8.
+fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 9] {
     let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -215,29 +218,25 @@ fn bind_group_layout_entries() -> [wgpu::BindGroupLayoutEntry; 14] {
         },
         count: None,
     };
-    [
-        wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: wgpu::BufferSize::new(32),
-            },
-            count: None,
+    let uniform = |binding: u32, size: u64| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: wgpu::BufferSize::new(size),
         },
+        count: None,
+    };
+    [
+        uniform(0, 32),
         storage(1, true),
-        storage(2, true),
-        storage(3, true),
+        uniform(2, shadowvol_gpu::TableOffsets::BYTES),
         storage(4, true),
         storage(5, false),
         storage(6, false),
         storage(7, false),
         storage(8, false),
-        storage(9, true),
-        storage(10, true),
         storage(11, false),
-        storage(12, true),
-        storage(13, true),
     ]
 }

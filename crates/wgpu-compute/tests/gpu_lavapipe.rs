@@ -10,7 +10,7 @@ mod values;
 use common::backend;
 use shadowvol_cpu::CpuBackend;
 use shadowvol_robust_math::Accuracy;
-use shadowvol_silhouette::gpu::{ExactFilter, TableBuffer, TableWriter};
+use shadowvol_silhouette::gpu::{ExactFilter, TableWriter};
 use shadowvol_silhouette::{
     extract_once, invariant, BackendError, Light, Multiplicities, SilhouetteBackend, TopologyScene,
 };
@@ -124,26 +124,31 @@ fn gpu_exact_on_device_regrows_its_list_or_decides_inline() -> Outcome {
 
     // Every pair of a light with w = 0.5 is left by the f32 filter (w not in {0, 1}).
     let case = common::case("many-objects-transformed");
+    // Its point lights, each written with w = 0.5, four times over.
     let lights: Vec<Light> = case
         .lights
         .iter()
+        .filter(|l| l.to_vec4().w != 0.0)
         .map(|&l| {
             let v = l.to_vec4();
-            if v.w == 0.0 {
-                return l;
-            }
             // The same point, written with w = 0.5.
             let h = v * (0.5 / v.w);
             Light::new(h.x, h.y, h.z, h.w).unwrap()
         })
+        .cycle()
+        .take(12)
         .collect();
-    assert!(lights.iter().any(|l| l.to_vec4().w == 0.5));
+    assert!(lights.iter().all(|l| l.to_vec4().w == 0.5));
     let edges = case.scene.total_edges() as u64;
     let tris = case.scene.total_triangles() as u64;
-    // The cap of the buffer-limit test: two lights' compact lists per dispatch, and an
-    // uncertain list of E + 1 records, fewer than the 2 T pairs of a batch.
-    let cap = (edges + 1) * 16;
-    assert!(edges + 1 < 2 * tris, "the list would hold the batch");
+    // The cap of the buffer-limit test: the scene's packed tables in one binding, as many
+    // lights per dispatch as their compact lists (8 bytes an edge) allow, and an uncertain list
+    // of cap / 16 records, fewer than the pairs of a batch.
+    let cap = packed_bytes(&case.scene);
+    let per_batch = (cap / (8 * edges))
+        .min(cap / (4 * tris))
+        .min(lights.len() as u64);
+    assert!(per_batch * tris > cap / 16, "the list would hold the batch");
     let capped = |exact_on_device| WgpuOptions {
         max_buffer_bytes: Some(cap),
         force_f32_filter: true,
@@ -359,6 +364,17 @@ fn gpu_full_readback_chunking_and_device_buffers_agree() -> Outcome {
     Ok(())
 }
 
+/// Bytes of `scene`'s tables packed into one storage binding, as the backend uploads them
+/// (with the OV vertex list, as [`WgpuOptions::default`] does for small scenes).
+fn packed_bytes(scene: &TopologyScene) -> u64 {
+    let writer = TableWriter::new(scene, "wgpu").unwrap();
+    let extras = shadowvol_gpu::Extras {
+        ov_vertices: true,
+        vertex_objects: false,
+    };
+    shadowvol_gpu::TablePacking::new(&writer, extras).bytes()
+}
+
 /// Reads the device result buffers back (test helper).
 fn read_results(
     b: &WgpuBackend,
@@ -443,14 +459,10 @@ fn gpu_buffer_limits_chunk_lights_or_split_the_scene() -> Outcome {
     )?;
     let case = common::case("many-objects-transformed");
     let edges = case.scene.total_edges() as u64;
-    let writer = TableWriter::new(&case.scene, "wgpu").unwrap();
-    let largest = TableBuffer::ALL
-        .map(|b| writer.bytes(b))
-        .into_iter()
-        .max()
-        .unwrap();
-    // A cap below the largest static buffer prepares the scene in parts, with the same results
-    // in every mode.
+    // The scene's tables, packed into one storage binding.
+    let largest = packed_bytes(&case.scene);
+    // A cap below the packed tables prepares the scene in parts, with the same results in
+    // every mode.
     let mut small = WgpuBackend::new(WgpuOptions {
         max_buffer_bytes: Some(largest - 4),
         ..WgpuOptions::default()
@@ -467,8 +479,8 @@ fn gpu_buffer_limits_chunk_lights_or_split_the_scene() -> Outcome {
         let (expected, _) = extract_once(&mut unlimited, &case.scene, &case.lights, mode).unwrap();
         assert_eq!(got, expected, "{mode}");
     }
-    // A soup (three vertices of its own a triangle) cut under a cap of half its positions:
-    // a part's positions, not its edges, are its largest buffer, and every part must fit.
+    // A soup (three vertices of its own a triangle) cut under a cap of half its packed tables
+    // (108 bytes a triangle, the most a triangle can take): every part must fit.
     let n = 200u32;
     let soup = shadowvol_mesh_topology::Mesh::new(
         (0..n)
@@ -486,7 +498,7 @@ fn gpu_buffer_limits_chunk_lights_or_split_the_scene() -> Outcome {
     .unwrap();
     let soup = TopologyScene::single(shadowvol_mesh_topology::EdgeTable::build(&soup).unwrap());
     let mut halved = WgpuBackend::new(WgpuOptions {
-        max_buffer_bytes: Some(36 * u64::from(n) / 2),
+        max_buffer_bytes: Some(108 * u64::from(n) / 2),
         ..WgpuOptions::default()
     })
     .unwrap();
@@ -500,24 +512,31 @@ fn gpu_buffer_limits_chunk_lights_or_split_the_scene() -> Outcome {
         let (expected, _) = extract_once(&mut unlimited, &soup, &case.lights, mode).unwrap();
         assert_eq!(got, expected, "soup {mode}");
     }
-    // A cap that holds the scene but only two lights' compact lists (8 bytes per edge each):
-    // the lights run two per dispatch, with the same result.
+    // A cap that holds the packed scene but fewer lights' compact lists (8 bytes per edge
+    // each) than the call has: the lights run `per` per dispatch, with the same result.
+    let cap = largest.max((edges + 1) * 16);
+    let tris = case.scene.total_triangles() as u64;
+    let per = (cap / (8 * edges)).min(cap / (4 * tris)) as usize;
     let mut capped = WgpuBackend::new(WgpuOptions {
-        max_buffer_bytes: Some(largest.max((edges + 1) * 16)),
+        max_buffer_bytes: Some(cap),
         ..WgpuOptions::default()
     })
     .unwrap();
     let id = capped.prepare(&case.scene).unwrap();
     let mut lights = case.lights.clone();
     lights.extend(case.lights.iter().copied());
-    assert!(lights.len() > 2);
+    assert!(per >= 1 && lights.len() > per, "{per} lights per dispatch");
+    let last = match lights.len() % per {
+        0 => per,
+        r => r,
+    };
     for mode in Accuracy::ALL {
         let mut got = Multiplicities::default();
         capped.extract(id, &lights, mode, &mut got).unwrap();
         let (expected, _) = extract_once(&mut unlimited, &case.scene, &lights, mode).unwrap();
         assert_eq!(got, expected, "{mode}");
         let res = capped.gpu_results(id).unwrap();
-        assert_eq!(res.light_count, 2 - lights.len() % 2);
+        assert_eq!(res.light_count, last);
         assert_eq!(res.first_light + res.light_count, lights.len());
     }
     Ok(())
@@ -533,8 +552,10 @@ fn gpu_scenes_in_parts_equal_whole_scenes_on_the_corpus() -> Outcome {
     )?;
     let (mut split_somewhere, mut host_decided) = (false, 0);
     for case in common::all_cases() {
-        // A third of the edge records: at least three parts of cap / 48 triangles.
-        let cap = ((case.scene.total_edges() as u64 + 1) * 16 / 3).max(64);
+        // A third of the packed tables: at least three parts, each of at least one triangle
+        // (108 bytes at most) with its object bases.
+        let objects = 16 * (case.scene.objects.len() as u64 + 1);
+        let cap = (packed_bytes(&case.scene) / 3).max(256 + objects);
         let mut parts = WgpuBackend::new(WgpuOptions {
             max_buffer_bytes: Some(cap),
             ..WgpuOptions::default()

@@ -47,8 +47,12 @@ impl GpuPipeline {
     }
 
     /// Uploads `scene` in parts ([`SceneParts`]) of whole triangles that each fit the device's
-    /// storage bindings: a part of `N` triangles binds at most 3 `N` edge records and world
-    /// positions of 16 bytes.
+    /// storage bindings. The largest binding of a part of `N` triangles is its packed tables
+    /// ([`shadowvol_gpu::TablePacking`]): at most `3 N` vertices (a soup) and `3 N` edges, and
+    /// `3 N` OV slots, so positions 36 bytes a triangle, edge ends 24, OV offsets 12, OV
+    /// references 12, triangles 12 and vertex objects 12: 108 bytes a triangle, besides the
+    /// object bases (16 bytes an object); its world positions (48) and a light's side records
+    /// (12) are smaller.
     fn prepare_parts(
         pass: &ShadowPass,
         device: &RenderDevice,
@@ -58,7 +62,8 @@ impl GpuPipeline {
         let limit = limits
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
-        let budget = (limit.saturating_sub(64) / 48).max(1) as usize;
+        let objects = 16 * (scene.surfaces().count() as u64 + 1);
+        let budget = (limit.saturating_sub(64 + objects) / 108).max(1) as usize;
         let parts = SceneParts::split(&scene.surface_geometry(), budget);
         // Each part's table is built, uploaded and dropped in turn.
         (0..parts.len())

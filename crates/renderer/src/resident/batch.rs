@@ -280,9 +280,8 @@ impl ShadowPass {
             layout: &self.draw.d0,
             entries: &[
                 entry(0, &rs.globals),
-                entry(1, &rs.tables.positions),
-                entry(2, &rs.tables.edges),
-                entry(3, &rs.tables.tris),
+                entry(1, &rs.tables.tables),
+                entry(9, &rs.tables.offsets),
                 entry(4, &b.signs),
                 entry(5, &b.records),
                 entry(6, objects),
@@ -311,18 +310,19 @@ impl ShadowPass {
             label: Some("resident surfaces"),
             layout: &self.world.s0,
             entries: &[
-                entry(3, &rs.tables.tris),
+                entry(1, &rs.tables.tables),
                 entry(6, objects),
                 entry(7, &rs.world),
+                entry(9, &rs.tables.offsets),
             ],
         });
         let v0 = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("resident vertices"),
             layout: &self.world.v0,
             entries: &[
-                entry(1, &rs.tables.positions),
+                entry(1, &rs.tables.tables),
                 entry(6, objects),
-                entry(8, &rs.vertex_objects),
+                entry(9, &rs.tables.offsets),
             ],
         });
         [s0, v0]

@@ -29,6 +29,12 @@
 //! `shaders/render_raster.wgsl` with `shaders/resident_draw.wgsl` appended. [`twin`] is the CPU
 //! port of the new kernels.
 //!
+//! Every pipeline fits `wgpu::Limits::default()` (WebGPU's 8 storage buffers per stage): the
+//! scene's tables and the object of each vertex are one storage buffer
+//! ([`shadowvol_gpu::TablePacking`]) with the word offsets in a uniform, shared by the compute
+//! passes and the draws. The most storage buffers in one stage is 7 (the pending dispatch's
+//! arguments); the side and cap draws bind 6 in the vertex stage.
+//!
 //! ```no_run
 //! # fn main() -> Result<(), shadowvol_renderer::RenderError> {
 //! use shadowvol_renderer::resident::{PassFormats, ShadowPass};
@@ -393,11 +399,10 @@ pub struct ResidentScene {
     counts: LayoutCounts,
     /// Per object `(first edge, first triangle, first vertex, first OV slot)`, plus a sentinel.
     bases: Vec<[u32; 4]>,
-    /// The extraction's tables, as the `wgpu` backend binds them (without the OV vertex list:
-    /// this pass's `original` reads each OV through its triangle).
+    /// The extraction's tables, packed as the `wgpu` backend binds them (without the OV vertex
+    /// list: this pass's `original` reads each OV through its triangle), with the object of
+    /// each global vertex.
     tables: shadowvol_gpu::TableBuffers,
-    /// The object of each global vertex.
-    vertex_objects: wgpu::Buffer,
     world: wgpu::Buffer,
     world_out: wgpu::BindGroup,
     /// The indirect arguments of the pending dispatch (`STORAGE | INDIRECT`) and the bind group
@@ -419,12 +424,7 @@ impl ResidentScene {
     pub fn bytes(&self) -> PreparedBytes {
         let host = vec_bytes(&self.bases);
         let mut buffers = self.tables.all().to_vec();
-        buffers.extend([
-            &self.vertex_objects,
-            &self.world,
-            &self.pending_dispatch.0,
-            &self.globals,
-        ]);
+        buffers.extend([&self.world, &self.pending_dispatch.0, &self.globals]);
         if let Some((b, _)) = &self.surface {
             buffers.push(b);
         }

@@ -124,22 +124,17 @@ pub(super) struct ExtractPipelines {
 impl ExtractPipelines {
     fn new(device: &wgpu::Device, filter: ExactFilter, v1: &wgpu::BindGroupLayout) -> Self {
         let compute = wgpu::ShaderStages::COMPUTE;
-        // Group 0: the wgpu backend's bindings the resident kernels use (its scene and triangle
-        // layouts, lights and signs).
+        // Group 0: the wgpu backend's bindings the resident kernels use (its packed tables and
+        // their offsets, lights and signs).
         let c0 = bind_group_layout(
             device,
             "resident extract scene",
             &[
                 uniform(0, compute, false),
                 storage(1, compute, true),
-                storage(2, compute, true),
-                storage(3, compute, true),
+                uniform(2, compute, false),
                 storage(4, compute, true),
-                storage(9, compute, true),
-                storage(10, compute, true),
                 storage(11, compute, false),
-                storage(12, compute, true),
-                storage(13, compute, true),
             ],
         );
         let c1 = bind_group_layout(
@@ -248,7 +243,7 @@ impl SurfacePipelines {
             &[
                 storage(1, compute, true),
                 storage(6, compute, true),
-                storage(8, compute, true),
+                uniform(9, compute, false),
             ],
         );
         let empty = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -261,9 +256,10 @@ impl SurfacePipelines {
             device,
             "resident surfaces",
             &[
-                storage(3, compute, true),
+                storage(1, compute, true),
                 storage(6, compute, true),
                 storage(7, compute, true),
+                uniform(9, compute, false),
             ],
         );
         let s2 = bind_group_layout(
@@ -313,13 +309,12 @@ impl DrawPipelines {
             &[
                 uniform(0, vf, false),
                 storage(1, vs, true),
-                storage(2, vs, true),
-                storage(3, vs, true),
                 storage(4, vs, true),
                 storage(5, vs, true),
                 storage(6, vs, true),
                 storage(7, vs, true),
                 storage(12, vs, true),
+                uniform(9, vs, false),
             ],
         );
         let dl = bind_group_layout(device, "resident light", &[uniform(0, vf, true)]);

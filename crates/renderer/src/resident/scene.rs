@@ -2,12 +2,16 @@
 //! ([`ShadowPass::update`]) and the buffers sized by the number of lights.
 
 use super::*;
-use shadowvol_gpu::TableBuffers;
-use shadowvol_silhouette::gpu::{TableBuffer, TableWriter, FIRST_VERTEX};
+use shadowvol_gpu::{Extras, TableBuffers, TablePacking};
+use shadowvol_silhouette::gpu::{TableBuffer, TableWriter};
 use shadowvol_silhouette::TopologyScene;
 
-/// The usage of the scene's static buffers.
-const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE;
+/// The optional tables the pass packs: the object of each vertex (for the vertex pass), no OV
+/// vertex list (its `original` reads each OV through its triangle).
+const EXTRAS: Extras = Extras {
+    ov_vertices: false,
+    vertex_objects: true,
+};
 
 impl ShadowPass {
     /// Uploads `scene` once: every surface's ([`shadowvol_scenes::Scene::surfaces`], casters
@@ -17,8 +21,8 @@ impl ShadowPass {
     ///
     /// # Errors
     /// [`RenderError::InvalidInput`] when the scene is too large to index with `u32`;
-    /// [`RenderError::TooLarge`] when a buffer exceeds the device's
-    /// `max_storage_buffer_binding_size`.
+    /// [`RenderError::TooLarge`] when the packed tables ([`TablePacking`]) exceed the device's
+    /// `max_storage_buffer_binding_size` (the GPU pipeline then uploads the scene in parts).
     pub fn prepare(&self, scene: &shadowvol_scenes::Scene) -> Result<ResidentScene, RenderError> {
         self.prepare_topology(&scene.surface_geometry())
     }
@@ -34,24 +38,25 @@ impl ShadowPass {
         let writer = TableWriter::new(scene, layout::NAME)
             .map_err(|e| RenderError::InvalidInput(e.to_string()))?;
         layout::check_edge_count(writer.elements(TableBuffer::Edges))?;
-        let vertices = writer.elements(TableBuffer::Positions);
-        for b in TableBuffer::ALL {
-            self.check_scene_buffer(b.label(), writer.bytes(b))?;
-        }
-        self.check_scene_buffer("vertex objects", 4 * vertices as u64)?;
+        self.check_tables(&TablePacking::new(&writer, EXTRAS))?;
         let wait = |_| crate::raster::wait(&self.device);
-        let tables =
-            TableBuffers::upload(&self.device, &self.queue, &writer, STORAGE, false, wait)?;
-        let vertex_objects = self.vertex_objects(writer.objects())?;
+        let tables = TableBuffers::upload(
+            &self.device,
+            &self.queue,
+            &writer,
+            wgpu::BufferUsages::empty(),
+            EXTRAS,
+            wait,
+        )?;
         let bases = writer.objects().to_vec();
         let counts = LayoutCounts {
             objects: bases.len() - 1,
             tris: writer.elements(TableBuffer::Triangles),
-            vertices,
+            vertices: writer.elements(TableBuffer::Positions),
             edges: writer.elements(TableBuffer::Edges),
             capacity: writer.elements(TableBuffer::OvRefs).max(1),
         };
-        self.finish_prepare((tables, vertex_objects), counts, bases)
+        self.finish_prepare(tables, counts, bases)
     }
 
     /// Uploads a laid-out scene ([`ResidentLayout::build`] of any topology).
@@ -59,26 +64,18 @@ impl ShadowPass {
     /// # Errors
     /// As [`ShadowPass::prepare`].
     pub fn prepare_layout(&self, layout: ResidentLayout) -> Result<ResidentScene, RenderError> {
-        let t = &layout.tables;
-        let tables = TableBuffers {
-            positions: self.scene_buffer(TableBuffer::Positions.label(), &t.positions)?,
-            edges: self.scene_buffer(TableBuffer::Edges.label(), &t.edges)?,
-            ov_refs: self.scene_buffer(TableBuffer::OvRefs.label(), &t.ov_refs)?,
-            tris: self.scene_buffer(TableBuffer::Triangles.label(), &t.tris)?,
-            ov_offsets: self.scene_buffer(TableBuffer::OvOffsets.label(), &t.ov_offsets)?,
-            objects: self.scene_buffer(TableBuffer::Objects.label(), &t.objects)?,
-            ov_vertices: TableBuffers::no_ov_vertices(&self.device),
-            has_ov_vertices: false,
-        };
-        let vertex_objects = self.scene_buffer("vertex objects", &layout.vertex_objects)?;
+        let packing = TablePacking::of_layout(&layout.tables, true);
+        self.check_tables(&packing)?;
+        let words = packing.pack_layout(&layout.tables, &layout.vertex_objects);
+        let tables = TableBuffers::from_words(&self.device, &words, packing);
         let counts = LayoutCounts::of(&layout);
-        self.finish_prepare((tables, vertex_objects), counts, layout.tables.objects)
+        self.finish_prepare(tables, counts, layout.tables.objects)
     }
 
-    /// The scene uploaded: its frame-independent buffers beside `tables` and `vertex_objects`.
+    /// The scene uploaded: its frame-independent buffers beside `tables`.
     fn finish_prepare(
         &self,
-        (tables, vertex_objects): (TableBuffers, wgpu::Buffer),
+        tables: TableBuffers,
         counts: LayoutCounts,
         bases: Vec<[u32; 4]>,
     ) -> Result<ResidentScene, RenderError> {
@@ -92,7 +89,6 @@ impl ShadowPass {
             counts,
             bases,
             tables,
-            vertex_objects,
             world,
             world_out,
             pending_dispatch,
@@ -109,64 +105,15 @@ impl ShadowPass {
         })
     }
 
-    /// [`RenderError::TooLarge`] when a scene buffer of `bytes` exceeds one storage binding.
-    fn check_scene_buffer(&self, label: &str, bytes: u64) -> Result<(), RenderError> {
-        let max = self.device.limits().max_storage_buffer_binding_size;
-        if bytes > max {
-            return Err(RenderError::TooLarge(format!(
-                "the scene's {label} take {bytes} bytes; the device binds at most {max} (max_storage_buffer_binding_size)"
-            )));
-        }
-        Ok(())
-    }
-
-    /// The object of each global vertex, from the objects' bases (`objects`, with their
-    /// sentinel), written in chunks.
-    fn vertex_objects(&self, objects: &[[u32; 4]]) -> Result<wgpu::Buffer, RenderError> {
-        let total = objects.last().map_or(0, |b| b[FIRST_VERTEX]) as u64;
-        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("vertex objects"),
-            size: (4 * total).max(16),
-            usage: STORAGE | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        const CHUNK: u32 = 1 << 20;
-        for (oi, w) in objects.windows(2).enumerate() {
-            let (mut v, end) = (w[0][FIRST_VERTEX], w[1][FIRST_VERTEX]);
-            while v < end {
-                let n = CHUNK.min(end - v);
-                let ids = vec![oi as u32; n as usize];
-                self.queue
-                    .write_buffer(&buffer, 4 * u64::from(v), bytemuck::cast_slice(&ids));
-                crate::raster::finish_uploads(&self.device, &self.queue)?;
-                v += n;
-            }
-        }
-        Ok(buffer)
-    }
-
-    /// A storage buffer of one scene array (16 zero bytes if empty), if the device binds it.
-    fn scene_buffer<T: bytemuck::Pod>(
-        &self,
-        label: &str,
-        data: &[T],
-    ) -> Result<wgpu::Buffer, RenderError> {
-        let bytes: &[u8] = bytemuck::cast_slice(data);
-        self.check_scene_buffer(label, bytes.len() as u64)?;
-        let padded;
-        let bytes = if bytes.is_empty() {
-            padded = [0u8; 16];
-            &padded[..]
-        } else {
-            bytes
-        };
-        Ok(self
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage: STORAGE,
-            }))
+    /// [`RenderError::TooLarge`] when the scene's packed tables exceed one storage binding.
+    fn check_tables(&self, packing: &TablePacking) -> Result<(), RenderError> {
+        let limits = self.device.limits();
+        let max = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        packing
+            .check(layout::NAME, max)
+            .map_err(RenderError::TooLarge)
     }
 
     /// The world positions that the vertex pass writes each frame, and its output bind group.
