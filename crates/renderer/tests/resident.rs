@@ -663,8 +663,8 @@ fn device_with(
     Ok(open_pass(&adapter, limits))
 }
 
-/// One frame of a sphere over a floor under three lights through the pass, as an application
-/// records it (with `grouped`, the three as one light's samples); returns the colour image
+/// One frame of a sphere over a floor under eight lights through the pass, as an application
+/// records it (with `grouped`, the eight as one light's samples); returns the colour image
 /// (RGBA8, `64 x 48`), the number of light batches and of sharing groups.
 fn embedded_frame(
     gpu: &(ShadowPass, wgpu::Device, wgpu::Queue),
@@ -681,27 +681,36 @@ fn embedded_frame(
     }
     let mut rs = pass.prepare(&scene).unwrap();
     let camera = Camera::look_at(Vec3::new(3.0, 4.0, 5.0), Vec3::ZERO);
-    let groups = [std::ops::Range { start: 0, end: 3 }];
-    // Three lights, so that a device with small bindings extracts them in batches.
-    let lights = [
-        Light::point(Vec3::new(1.0, 6.0, 0.5)),
-        Light::point(Vec3::new(1.3, 6.0, 0.5)),
-        Light::point(Vec3::new(0.8, 6.2, 0.3)),
-    ];
+    // Eight lights close together, so that a device with small bindings extracts them in
+    // batches, and grouped they share most triangles.
+    let lights: Vec<Light> = (0..8)
+        .map(|k| {
+            let a = k as f32 * 0.8;
+            Light::point(Vec3::new(
+                1.0 + 0.3 * a.cos(),
+                6.0 + 0.02 * k as f32,
+                0.5 + 0.3 * a.sin(),
+            ))
+        })
+        .collect();
+    let groups = [std::ops::Range {
+        start: 0,
+        end: lights.len(),
+    }];
     pass.update(
         &mut rs,
         &PassFrame {
             camera: &camera,
             aspect: w as f32 / h as f32,
             lights: &unit(&lights),
-            colors: &[[0.34; 3]; 3],
+            colors: &[[0.125; 3]; 8],
             transforms: &[
                 Affine3A::IDENTITY,
                 Affine3A::from_translation(Vec3::Y * 1.5),
             ],
             albedo: &[[0.8; 3], [0.9, 0.5, 0.4]],
-            techniques: &[Technique::ZFail; 6],
-            scissors: &[None; 3],
+            techniques: &[Technique::ZFail; 16],
+            scissors: &[None; 8],
             ambient: 0.1,
             mode: Accuracy::Exact,
             count: false,
@@ -740,9 +749,10 @@ fn embedded_frame(
 }
 
 /// The surface vertex buffer written in several chunks (a 1 MiB storage-binding limit against
-/// 3.8 MB of surface vertices), the vertex-pulling fallback (a 2 MiB buffer limit) and a device
-/// with exactly `wgpu::Limits::default()` draw the same image as one chunk: the same shadow,
-/// pixel for pixel up to shading rounding.
+/// 3.8 MB of surface vertices), the vertex-pulling fallback (a 2 MiB buffer limit), a device
+/// with exactly `wgpu::Limits::default()`, lights in batches and lights as one light's samples
+/// draw the same image as eight point lights in one batch: the same shadows, pixel for pixel up
+/// to shading rounding.
 fn grouped_chunked_pulled_and_batched_frames_draw_the_same_image() -> Outcome {
     let one = device_with(|_| {})?;
     let chunked = device_with(|l| l.max_storage_buffer_binding_size = 1 << 20)?;
@@ -750,10 +760,9 @@ fn grouped_chunked_pulled_and_batched_frames_draw_the_same_image() -> Outcome {
     // Exactly WebGPU's guaranteed limits (8 storage buffers per stage), not the adapter's.
     let webgpu = device_with(|l| *l = wgpu::Limits::default())?;
     assert_eq!(webgpu.1.limits(), wgpu::Limits::default());
-    // No batched device here: the scene's tables, packed into one binding (1.0 MB), are four
-    // times one light's side records (240 KB), so a binding that holds them holds the three
-    // lights' records too. Batches are compared bit for bit with `cpu` in
-    // `each_sample_of_a_light_with_a_size_equals_cpu_as_a_point_light`.
+    // Bindings of 1.2 MiB: the scene's tables, packed into one binding (1.0 MB), fit, and the
+    // eight lights' side records (240 KB each) go in batches of 5.
+    let batched = device_with(|l| l.max_storage_buffer_binding_size = 1200 << 10)?;
     let (want, batches, groups) = embedded_frame(&one, false);
     assert_eq!((batches, groups), (1, 0));
     let lit = want.chunks_exact(4).filter(|p| p[0] > 60).count();
@@ -768,9 +777,11 @@ fn grouped_chunked_pulled_and_batched_frames_draw_the_same_image() -> Outcome {
     // Grouped, the z-fail caps of the triangles the group shares read the group's signs.
     for (name, gpu, grouped, want_batches, want_groups) in [
         ("grouped", &one, true, 1, 1),
-        ("chunked", &chunked, true, 1, 1),
+        ("chunked", &chunked, true, 2, 2),
         ("pulled", &pulled, false, 1, 0),
         ("default limits", &webgpu, true, 1, 1),
+        ("batched", &batched, false, 2, 0),
+        ("batched and grouped", &batched, true, 2, 2),
     ] {
         let (got, batches, groups) = embedded_frame(gpu, grouped);
         assert_eq!((batches, groups), (want_batches, want_groups), "{name}");
