@@ -13,8 +13,10 @@
 //!    as shadowvol's plan chooses from where the camera stands) in the accuracy mode
 //!    of [`ShadowVolumes::mode`] (exact by default: bit-identical signs on every device);
 //! 3. per light, a resolve of the stencil into one layer of a screen-space mask (1 lit, 0 in
-//!    shadow). Every other 3D view clears the masks to lit before its own main pass, so a second
-//!    camera is not darkened by this view's mask.
+//!    shadow). A light with a size (soft shadows: see [`SoftShadowSamples`]) is sampled by `N`
+//!    points, each with its own stencil, and its layer holds the share that sees the pixel,
+//!    `k / N`. Every other 3D view clears the masks to lit before its own main pass, so a
+//!    second camera is not darkened by this view's mask.
 //!
 //! The candidates' `StandardMaterial`s become [`ShadowVolumeMaterial`], a `StandardMaterial`
 //! extended with the mask: its fragment shader (an embedded asset) runs Bevy's own PBR lighting
@@ -122,6 +124,40 @@ pub enum ShadowCasters {
     /// others keep `StandardMaterial` and are lit unshadowed by the marked lights. For scenes
     /// whose edge tables would cost too much to build for every mesh.
     Marked,
+}
+
+/// How many points sample a marked light with a size (soft shadows): a resource the plugin adds
+/// with its default, 16; insert another value to change it.
+///
+/// A marked `PointLight` or `SpotLight` with `soft_shadows_enabled` and a `radius` over 0 is a
+/// disk of that radius (world units), and a marked `DirectionalLight` whose `soft_shadow_size`
+/// is `Some` is a cone of directions of half its `SunDisk`'s angular size (the Earth's sun
+/// without a `SunDisk`): shadowvol's lights with a size. Each is sampled by this many points,
+/// each casting its exact hard shadow, and its mask holds the share of them that sees the pixel,
+/// `k / N`, so the penumbra has `N + 1` levels. Every sample costs one more stencil pass.
+///
+/// The value is rounded up to a power of two, at most [`MAX_SAMPLES`]: the mask adds `1 / N`
+/// per sample in `R16Float`, which is exact for a power of two; 1 gives hard shadows.
+#[derive(Resource, Reflect, Debug, Clone, Copy, PartialEq, Eq)]
+#[reflect(Resource, Default, Debug, Clone, PartialEq)]
+pub struct SoftShadowSamples(pub u32);
+
+/// The most samples a light with a size gets (the renderer's plan picks at most as many).
+pub const MAX_SAMPLES: u32 = 64;
+
+impl Default for SoftShadowSamples {
+    fn default() -> Self {
+        Self(16)
+    }
+}
+
+impl SoftShadowSamples {
+    /// The samples a light with a size gets: the setting rounded up to a power of two, from 1
+    /// to [`MAX_SAMPLES`].
+    #[must_use]
+    pub fn per_light(self) -> u32 {
+        self.0.clamp(1, MAX_SAMPLES).next_power_of_two()
+    }
 }
 
 /// Marks a `PointLight`, `SpotLight` or `DirectionalLight` whose shadows are drawn with
@@ -242,7 +278,9 @@ impl Plugin for ShadowVolumesPlugin {
             .register_type::<ShadowVolumeLight>()
             .register_type::<ShadowVolumes>()
             .register_type::<ShadowCasters>()
-            .init_resource::<ShadowCasters>();
+            .register_type::<SoftShadowSamples>()
+            .init_resource::<ShadowCasters>()
+            .init_resource::<SoftShadowSamples>();
         material::build(app);
         extract::build(app);
         render::build(app);

@@ -695,6 +695,120 @@ fn shadows_match_the_reference() {
     }
     d.world().entity_mut(unmarked).despawn();
 
+    // 13. Soft shadows: the roof's light gets a radius. Without `soft_shadows_enabled` (or with
+    // one sample) it is the same hard light, to the byte; with it, its mask holds k / N of 16
+    // samples, checked against the exact soft reference and the renderer's own visibility.
+    let hard = d.capture();
+    let hard_mask = d.mask_layer(0);
+    let radius = 0.6;
+    d.world()
+        .get_mut::<PointLight>(sun[0])
+        .expect("a point light")
+        .radius = radius;
+    let same = d.capture();
+    if differing(&hard, &same) > 0 {
+        failures.push("a radius without soft_shadows_enabled changed the image".into());
+    }
+    d.world()
+        .get_mut::<PointLight>(sun[0])
+        .expect("a point light")
+        .soft_shadows_enabled = true;
+    d.world()
+        .insert_resource(shadowvol_bevy::SoftShadowSamples(1));
+    let one = d.capture();
+    if differing(&hard, &one) > 0 || d.mask_layer(0) != hard_mask {
+        failures.push("a soft light of one sample is not the hard light".into());
+    }
+    d.world()
+        .insert_resource(shadowvol_bevy::SoftShadowSamples::default());
+    let roof_scene = [(&floor, Transform::IDENTITY), (&roof, roof_at)];
+    let soft = |d: &mut Driver,
+                what: &str,
+                light: shadowvol_scenes::SceneLight,
+                failures: &mut Vec<String>| {
+        let image = d.capture();
+        let mask = d.mask_layer(0);
+        let c = common::soft_check(HOME, &roof_scene, light, 16, (d.width, d.height), &mask);
+        let r = &c.reference;
+        println!(
+            "{what}: penumbra {} px, error mean {:.4} p99 {:.4} max {:.4}; lit {} umbra {} px, \
+             {} + {} mismatched, {} on borders; {} of {} covered pixels differ from the \
+             renderer's k / N",
+            r.penumbra_pixels,
+            r.penumbra_mean_error,
+            r.penumbra_p99_error,
+            r.penumbra_max_error,
+            r.lit_pixels,
+            r.umbra_pixels,
+            r.lit_mismatched,
+            r.umbra_mismatched,
+            r.border_mismatched,
+            c.differ_from_renderer,
+            c.covered
+        );
+        let bound = max_artifacts(d.width, d.height);
+        if r.penumbra_pixels < 300
+            || r.lit_pixels < 5000
+            || r.umbra_pixels < 300
+            || r.lit_mismatched + r.umbra_mismatched > bound
+            || r.penumbra_mean_error > 0.05
+            || r.penumbra_max_error > 0.25
+            || c.differ_from_renderer > c.covered / 200
+        {
+            failures.push(format!(
+                "{what}: penumbra {} px, mean error {:.4}, {} + {} lit and umbra mismatches, \
+                 {} pixels differ from the renderer",
+                r.penumbra_pixels,
+                r.penumbra_mean_error,
+                r.lit_mismatched,
+                r.umbra_mismatched,
+                c.differ_from_renderer
+            ));
+        }
+        image
+    };
+    let mut point = shadowvol_scenes::SceneLight::unit(shadowvol_robust_math::Light::point(
+        glam::Vec3::from(above.to_array()),
+    ));
+    point.radius = radius;
+    let soft_image = soft(&mut d, "soft point light, radius 0.6", point, &mut failures);
+    if differing(&hard, &soft_image) < 500 {
+        failures.push("the soft point light's image is the hard one's".into());
+    }
+    // A directional light with Bevy's soft_shadow_size: the cone of half its SunDisk's angular
+    // size.
+    d.world().entity_mut(sun[0]).despawn();
+    let towards = Vec3::new(0.5, 4.0, 1.0);
+    let sun_disk = 0.16;
+    let directional = d.spawn_directional(towards, Color::srgb(1.0, 0.0, 0.0), 3000.0);
+    d.world()
+        .entity_mut(directional)
+        .insert(bevy::light::SunDisk {
+            angular_size: sun_disk,
+            intensity: 1.0,
+        });
+    d.world()
+        .get_mut::<DirectionalLight>(directional)
+        .expect("a directional light")
+        .soft_shadow_size = Some(1.0);
+    let mut cone = shadowvol_scenes::SceneLight::unit(
+        shadowvol_robust_math::Light::new(
+            towards.normalize().x,
+            towards.normalize().y,
+            towards.normalize().z,
+            0.0,
+        )
+        .expect("a direction"),
+    );
+    cone.radius = sun_disk / 2.0;
+    soft(
+        &mut d,
+        "soft directional light, SunDisk 0.16 rad",
+        cone,
+        &mut failures,
+    );
+    d.world().entity_mut(directional).despawn();
+
     // 12. Bevy's habits: the components and the setting are reflected and registered, with
     // their component and resource data (what scenes and inspectors use).
     {
