@@ -18,7 +18,7 @@ use bevy::prelude::*;
 use bevy::render::camera::TemporalJitter;
 use bevy::render::{Extract, ExtractSchedule, RenderApp};
 use bevy::transform::TransformSystems;
-use shadowvol_mesh_topology::Mesh as TopoMesh;
+use shadowvol_mesh_topology::{EdgeTable, Mesh as TopoMesh};
 use shadowvol_robust_math::{Accuracy, Light};
 use shadowvol_scenes::{Emission, Scene, SceneLight, SpotCone};
 
@@ -92,6 +92,13 @@ pub(crate) struct VolumeFrame {
     /// Shared with the render world.
     pub stats: ShadowVolumeStats,
 }
+
+/// The edge tables of the candidates' meshes, by mesh, kept between builds of the scene: a new
+/// build makes tables only for meshes it has not got (new, or changed since), and drops those
+/// that no candidate uses any more. A mesh left out in silence (lines or points, not marked)
+/// or one that cannot cast is not kept: it is looked at again at each build.
+#[derive(Debug, Default)]
+pub(crate) struct Tables(HashMap<AssetId<Mesh>, Arc<EdgeTable>>);
 
 /// A marked light's own `shadow_maps_enabled`, from when it was marked: given back when the
 /// marker goes.
@@ -426,6 +433,7 @@ pub(crate) fn gather(
     meshes: Res<Assets<Mesh>>,
     server: Option<Res<AssetServer>>,
     mut events: MessageReader<AssetEvent<Mesh>>,
+    mut tables: Local<Tables>,
 ) {
     let stats = frame.stats.clone();
     let mut problems = decision.problems.clone();
@@ -437,15 +445,31 @@ pub(crate) fn gather(
         .collect();
     candidates.sort_by_key(|c| c.0);
     let key: Vec<_> = candidates.iter().map(|c| (c.0, c.1.id())).collect();
-    let changed = events.read().any(|ev| match ev {
-        AssetEvent::Modified { id } | AssetEvent::LoadedWithDependencies { id } => {
-            key.iter().any(|(_, m)| m == id)
-        }
-        _ => false,
-    });
+    // A mesh changed in place (or loaded again) has its table made again, at the next build.
+    let touched: Vec<AssetId<Mesh>> = events
+        .read()
+        .filter_map(|ev| match ev {
+            AssetEvent::Modified { id } | AssetEvent::LoadedWithDependencies { id } => Some(*id),
+            _ => None,
+        })
+        .collect();
+    for id in &touched {
+        tables.0.remove(id);
+    }
+    let changed = touched.iter().any(|id| key.iter().any(|(_, m)| m == id));
     let arrived = frame.pending.iter().any(|id| meshes.contains(*id));
     if key != frame.key || changed || arrived {
-        let built = build_scene(&candidates, &meshes, *setting == ShadowCasters::Marked);
+        let built = build_scene(
+            &candidates,
+            &meshes,
+            *setting == ShadowCasters::Marked,
+            &mut tables,
+        );
+        let live = tables.0.len();
+        stats.with(|s| {
+            s.tables_built += built.made;
+            s.tables = live;
+        });
         frame.scene = (!built.objects.is_empty()).then(|| Arc::new(built.scene));
         frame.generation += 1;
         frame.pending = key
@@ -642,36 +666,57 @@ struct Built {
     scene: Scene,
     objects: Vec<Entity>,
     left_out: Vec<String>,
+    /// Edge tables made for this build (the others came from [`Tables`]).
+    made: u64,
 }
 
 /// The scene model of the candidate casters: one edge table per distinct mesh, one object per
 /// entity. A caster whose mesh cannot be read is left out, with the reason (where it is not
 /// marked, in [`ShadowCasters::AllMeshes`], a mesh of lines or points is left out in silence);
 /// the others are built. A mesh not loaded yet is skipped: a new build comes when it loads.
-fn build_scene(casters: &[CandidateItem<'_>], meshes: &Assets<Mesh>, marked_only: bool) -> Built {
+/// Edge tables come from `cache` where it has them; only the other meshes' are made, and the
+/// tables of meshes no candidate uses any more are dropped from it.
+fn build_scene(
+    casters: &[CandidateItem<'_>],
+    meshes: &Assets<Mesh>,
+    marked_only: bool,
+    cache: &mut Tables,
+) -> Built {
     let mut built = Built {
         scene: Scene::new("bevy"),
         objects: Vec::new(),
         left_out: Vec::new(),
+        made: 0,
     };
-    let mut tables = HashMap::new();
+    let used: HashSet<AssetId<Mesh>> = casters.iter().map(|c| c.1.id()).collect();
+    cache.0.retain(|id, _| used.contains(id));
+    let mut tables: HashMap<AssetId<Mesh>, Option<Result<Arc<EdgeTable>, String>>> = HashMap::new();
     for &(entity, mesh, t, _, _, _, marked) in casters {
         let id = mesh.id();
         if let std::collections::hash_map::Entry::Vacant(slot) = tables.entry(id) {
-            let Some(m) = meshes.get(id) else {
-                continue; // not loaded (yet): skipped, the others are built
-            };
-            let quiet = !marked_only
-                && !marked
-                && m.primitive_topology() != PrimitiveTopology::TriangleList;
-            slot.insert((!quiet).then(|| {
-                to_topology(m).and_then(|topo| {
-                    built
-                        .scene
-                        .add_mesh_owned(&format!("{id}"), topo)
-                        .map_err(|e| e.to_string())
-                })
-            }));
+            if let Some(table) = cache.0.get(&id) {
+                slot.insert(Some(Ok(table.clone())));
+            } else {
+                let Some(m) = meshes.get(id) else {
+                    continue; // not loaded (yet): skipped, the others are built
+                };
+                let quiet = !marked_only
+                    && !marked
+                    && m.primitive_topology() != PrimitiveTopology::TriangleList;
+                let table = (!quiet).then(|| {
+                    to_topology(m).and_then(|topo| {
+                        built
+                            .scene
+                            .add_mesh_owned(&format!("{id}"), topo)
+                            .map_err(|e| e.to_string())
+                    })
+                });
+                if let Some(Ok(table)) = &table {
+                    cache.0.insert(id, table.clone());
+                    built.made += 1;
+                }
+                slot.insert(table);
+            }
         }
         match tables.get(&id) {
             Some(Some(Ok(table))) => {

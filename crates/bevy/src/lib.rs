@@ -199,6 +199,8 @@ pub struct ShadowVolumeStats(Arc<Mutex<StatsInner>>);
 #[derive(Debug, Default)]
 struct StatsInner {
     prepares: u64,
+    tables_built: u64,
+    tables: usize,
     frames: u64,
     /// Per side (`[main world, render world]`): its current error.
     errors: [Option<String>; 2],
@@ -225,6 +227,21 @@ impl ShadowVolumeStats {
     #[must_use]
     pub fn prepares(&self) -> u64 {
         self.with(|s| s.prepares)
+    }
+
+    /// How many edge tables (the welded edges of one mesh, what casting needs) were built on
+    /// the CPU so far. One is built per distinct mesh when a caster with that mesh arrives or
+    /// the mesh changes; adding or removing a caster builds no other mesh's table.
+    #[must_use]
+    pub fn tables_built(&self) -> u64 {
+        self.with(|s| s.tables_built)
+    }
+
+    /// How many edge tables are kept now: one per distinct mesh among the casters (a table is
+    /// dropped when no caster uses its mesh any more).
+    #[must_use]
+    pub fn tables(&self) -> usize {
+        self.with(|s| s.tables)
     }
 
     /// How many frames drew their masks.

@@ -809,6 +809,48 @@ fn shadows_match_the_reference() {
     );
     d.world().entity_mut(directional).despawn();
 
+    // 14. Incremental: a caster with a new mesh builds that mesh's edge table only; a second
+    // entity with the same mesh builds none; a mesh changed in place builds its own again;
+    // removing the casters drops the table once no caster uses its mesh.
+    twice(&mut d);
+    let stats = d.stats();
+    let (built, kept) = (stats.tables_built(), stats.tables());
+    let counts = |what: &str, want: (u64, usize), failures: &mut Vec<String>| {
+        let got = (
+            stats.tables_built() - built,
+            stats.tables() as isize - kept as isize,
+        );
+        println!(
+            "incremental, {what}: {} table(s) built, {:+} kept",
+            got.0, got.1
+        );
+        if got != (want.0, want.1 as isize) {
+            failures.push(format!(
+                "incremental, {what}: {} built and {:+} kept, not {} and +{}",
+                got.0, got.1, want.0, want.1
+            ));
+        }
+    };
+    let first = d.spawn_mesh(common::unit_box(), Transform::from_xyz(-2.0, 0.5, -2.0));
+    twice(&mut d);
+    counts("a caster with a new mesh", (1, 1), &mut failures);
+    let shared = d.world().get::<Mesh3d>(first).expect("Mesh3d").0.clone();
+    let second = d.spawn_handle(shared.clone(), Transform::from_xyz(2.0, 0.5, -2.0));
+    twice(&mut d);
+    counts("a second caster with that mesh", (1, 1), &mut failures);
+    *d.world()
+        .resource_mut::<Assets<Mesh>>()
+        .get_mut(&shared)
+        .expect("the shared mesh") = stretch_x(&common::unit_box(), 0.5);
+    twice(&mut d);
+    counts("that mesh changed in place", (2, 1), &mut failures);
+    d.world().entity_mut(first).despawn();
+    twice(&mut d);
+    counts("one of the two removed", (2, 1), &mut failures);
+    d.world().entity_mut(second).despawn();
+    twice(&mut d);
+    counts("both removed", (2, 0), &mut failures);
+
     // 12. Bevy's habits: the components and the setting are reflected and registered, with
     // their component and resource data (what scenes and inspectors use).
     {
