@@ -28,9 +28,10 @@
 //! its Bevy shadow maps are off; in a frame where they cannot, its maps are on (never no
 //! shadow), and the reason is in [`ShadowVolumeStats::error`], logged once.
 //!
-//! A caster whose mesh is added, removed or changed is prepared again (edge tables built and
-//! uploaded); a caster or light that only moves, or is hidden, costs a few small uploads in the
-//! next frame. [`ShadowVolumeStats`] counts both.
+//! A caster whose mesh is added, removed or changed is prepared again: the edge table of a new
+//! or changed mesh is built (the others are kept per mesh), and the casters are uploaded; a
+//! caster or light that only moves, or is hidden, costs a few small uploads in the next frame.
+//! [`ShadowVolumeStats`] counts tables built and preparations.
 //!
 //! ```no_run
 //! use bevy::prelude::*;
@@ -221,9 +222,10 @@ impl ShadowVolumeStats {
             .unwrap_or_else(std::sync::PoisonError::into_inner))
     }
 
-    /// How many times the casters were prepared: edge tables built and uploaded to the GPU.
-    /// Moving a caster or a light does not prepare again; adding, removing or changing a
-    /// caster's mesh does.
+    /// How many times the casters were prepared: uploaded to the GPU, all of them (the edge
+    /// tables built for that are counted by [`ShadowVolumeStats::tables_built`]). Moving a
+    /// caster or a light does not prepare again; adding, removing or changing a caster's mesh
+    /// does.
     #[must_use]
     pub fn prepares(&self) -> u64 {
         self.with(|s| s.prepares)
