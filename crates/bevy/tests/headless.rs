@@ -746,6 +746,9 @@ fn shadows_match_the_reference() {
             c.differ_from_renderer,
             c.covered
         );
+        if let Some(w) = c.worst {
+            println!("{what}: largest error: {w:?}");
+        }
         let bound = max_artifacts(d.width, d.height);
         if r.penumbra_pixels < 300
             || r.lit_pixels < 5000
@@ -808,6 +811,30 @@ fn shadows_match_the_reference() {
         &mut failures,
     );
     d.world().entity_mut(directional).despawn();
+    // A spot light with a radius: its disk faces along its axis (not towards the scene).
+    let (spot_at, spot_to) = (Vec3::new(0.3, 5.0, -1.8), Vec3::new(0.0, 0.0, 1.0));
+    let spot = d.spawn_spot(spot_at, spot_to, Color::srgb(1.0, 0.0, 0.0), 1.2);
+    {
+        let mut l = d.world().get_mut::<SpotLight>(spot).expect("a spot light");
+        l.radius = 0.4;
+        l.soft_shadows_enabled = true;
+    }
+    let mut cone = shadowvol_scenes::SceneLight::unit(shadowvol_robust_math::Light::point(
+        glam::Vec3::from(spot_at.to_array()),
+    ));
+    cone.radius = 0.4;
+    cone.emission = Some(shadowvol_scenes::Emission {
+        color: [1.0; 3],
+        intensity: 1.0,
+        range: None,
+        spot: Some(shadowvol_scenes::SpotCone {
+            direction: glam::Vec3::from((spot_to - spot_at).normalize().to_array()),
+            inner_cone_angle: 0.0,
+            outer_cone_angle: 1.2,
+        }),
+    });
+    soft(&mut d, "soft spot light, radius 0.4", cone, &mut failures);
+    d.world().entity_mut(spot).despawn();
 
     // 14. Incremental: a caster with a new mesh builds that mesh's edge table only; a second
     // entity with the same mesh builds none; a mesh changed in place builds its own again;

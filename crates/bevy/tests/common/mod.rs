@@ -579,6 +579,21 @@ fn f16_to_f32(h: u16) -> f32 {
     sign * v
 }
 
+/// One pixel of a [`SoftCheck`].
+#[derive(Debug, Clone, Copy)]
+pub struct Worst {
+    /// Where: `(x, y)` from the top left.
+    pub at: (usize, usize),
+    /// The renderer's `[surface + 1, triangle]` there (the reference's surface point).
+    pub id: [u32; 2],
+    /// The true visibility and its bound.
+    pub truth: (f64, f64),
+    /// The plugin's mask there.
+    pub mask: f32,
+    /// The renderer's `k / N` there.
+    pub renderer: f32,
+}
+
 /// A soft light's visibility in the plugin's mask against the project's exact soft reference
 /// and against the renderer's own visibility for the same scene, camera and light.
 pub struct SoftCheck {
@@ -588,6 +603,8 @@ pub struct SoftCheck {
     pub differ_from_renderer: usize,
     /// Covered pixels.
     pub covered: usize,
+    /// The penumbra pixel where the mask is farthest from the truth.
+    pub worst: Option<Worst>,
 }
 
 /// Checks `mask` (one light's visibility from the plugin, `width × height`) for these meshes
@@ -632,8 +649,27 @@ pub fn soft_check(
     let disk = scene.lights[0]
         .disk(scene.light_aim())
         .expect("a light with a size");
-    let reference = shadowvol_reference::soft::compare_visibility(&shot, 0, &disk, mask);
+    let truth = shadowvol_reference::soft::visibility_reference(&shot, 0, &disk);
+    let reference = shadowvol_reference::soft::compare_with_reference(&truth, mask);
     let ours = &img.visibility[0];
+    let worst = truth
+        .pixels
+        .iter()
+        .enumerate()
+        .filter_map(|(i, v)| v.filter(|v| v.is_penumbra()).map(|v| (i, v)))
+        .max_by(|a, b| {
+            let e = |(i, v): &(usize, shadowvol_reference::soft::Visibility)| {
+                (f64::from(mask[*i]) - v.value).abs()
+            };
+            e(a).total_cmp(&e(b))
+        })
+        .map(|(i, v)| Worst {
+            at: (i % width as usize, i / width as usize),
+            id: img.ids[i],
+            truth: (v.value, v.bound),
+            mask: mask[i],
+            renderer: ours[i],
+        });
     let covered: Vec<usize> = (0..mask.len())
         .filter(|&i| img.ids.get(i).is_some_and(|id| id[0] != 0))
         .collect();
@@ -641,5 +677,6 @@ pub fn soft_check(
         reference,
         differ_from_renderer: covered.iter().filter(|&&i| ours[i] != mask[i]).count(),
         covered: covered.len(),
+        worst,
     }
 }
