@@ -721,6 +721,25 @@ fn shadows_match_the_reference() {
     }
     d.world()
         .insert_resource(shadowvol_bevy::SoftShadowSamples::default());
+    // A size that is not one: named, and the light's shadow stays hard (not none).
+    d.world()
+        .get_mut::<PointLight>(sun[0])
+        .expect("a point light")
+        .radius = -1.0;
+    let negative = d.capture();
+    match d.stats().error() {
+        Some(e) if e.contains("is not one") && differing(&hard, &negative) == 0 => {
+            println!("a negative radius: {e}")
+        }
+        other => failures.push(format!(
+            "a negative radius gave {other:?} and {} pixels off the hard image",
+            differing(&hard, &negative)
+        )),
+    }
+    d.world()
+        .get_mut::<PointLight>(sun[0])
+        .expect("a point light")
+        .radius = radius;
     let roof_scene = [(&floor, Transform::IDENTITY), (&roof, roof_at)];
     let soft = |d: &mut Driver,
                 what: &str,
