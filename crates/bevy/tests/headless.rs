@@ -752,7 +752,7 @@ fn shadows_match_the_reference() {
         println!(
             "{what}: penumbra {} px, error mean {:.4} p99 {:.4} max {:.4}; lit {} umbra {} px, \
              {} + {} mismatched, {} on borders; {} of {} covered pixels differ from the \
-             renderer's k / N",
+             renderer's k / N ({} on its triangles' edges; elsewhere by at most {})",
             r.penumbra_pixels,
             r.penumbra_mean_error,
             r.penumbra_p99_error,
@@ -763,7 +763,9 @@ fn shadows_match_the_reference() {
             r.umbra_mismatched,
             r.border_mismatched,
             c.differ_from_renderer,
-            c.covered
+            c.covered,
+            c.differ_on_edges,
+            c.largest_off_edges
         );
         if let Some(w) = c.worst {
             println!("{what}: largest error: {w:?}");
@@ -776,15 +778,17 @@ fn shadows_match_the_reference() {
             || r.penumbra_mean_error > 0.05
             || r.penumbra_max_error > 0.25
             || c.differ_from_renderer > c.covered / 200
+            || c.largest_off_edges > 2.0 / 16.0
         {
             failures.push(format!(
                 "{what}: penumbra {} px, mean error {:.4}, {} + {} lit and umbra mismatches, \
-                 {} pixels differ from the renderer",
+                 {} pixels differ from the renderer (off its edges by up to {})",
                 r.penumbra_pixels,
                 r.penumbra_mean_error,
                 r.lit_mismatched,
                 r.umbra_mismatched,
-                c.differ_from_renderer
+                c.differ_from_renderer,
+                c.largest_off_edges
             ));
         }
         image

@@ -601,6 +601,13 @@ pub struct SoftCheck {
     pub reference: shadowvol_reference::soft::SoftComparison,
     /// Covered pixels where the mask differs from the renderer's `k / N`.
     pub differ_from_renderer: usize,
+    /// Of those, pixels on an edge of the renderer's triangles (a 3×3 neighbour shows another
+    /// triangle or the background), where the two pre-passes may pick different triangles.
+    pub differ_on_edges: usize,
+    /// The largest `|mask − renderer|` off the renderer's triangle edges: a multiple of `1 / N`,
+    /// where a sample's hard shadow boundary passes between the two surface points of a pixel
+    /// (the two cameras round differently).
+    pub largest_off_edges: f32,
     /// Covered pixels.
     pub covered: usize,
     /// The penumbra pixel where the mask is farthest from the truth.
@@ -673,9 +680,27 @@ pub fn soft_check(
     let covered: Vec<usize> = (0..mask.len())
         .filter(|&i| img.ids.get(i).is_some_and(|id| id[0] != 0))
         .collect();
+    let w = width as usize;
+    let on_edge = |i: usize| {
+        let (x, y) = (i % w, i / w);
+        (y.saturating_sub(1)..=(y + 1).min(height as usize - 1)).any(|ny| {
+            (x.saturating_sub(1)..=(x + 1).min(w - 1)).any(|nx| img.ids[ny * w + nx] != img.ids[i])
+        })
+    };
+    let differ: Vec<usize> = covered
+        .iter()
+        .copied()
+        .filter(|&i| ours[i] != mask[i])
+        .collect();
     SoftCheck {
         reference,
-        differ_from_renderer: covered.iter().filter(|&&i| ours[i] != mask[i]).count(),
+        differ_from_renderer: differ.len(),
+        differ_on_edges: differ.iter().filter(|&&i| on_edge(i)).count(),
+        largest_off_edges: differ
+            .iter()
+            .filter(|&&i| !on_edge(i))
+            .map(|&i| (ours[i] - mask[i]).abs())
+            .fold(0.0, f32::max),
         covered: covered.len(),
         worst,
     }
