@@ -10,7 +10,7 @@ use bevy::asset::{LoadState, RenderAssetUsages};
 use bevy::camera::visibility::{RenderLayers, VisibilitySystems};
 use bevy::ecs::lifecycle::HookContext;
 use bevy::ecs::world::DeferredWorld;
-use bevy::light::{NotShadowCaster, SimulationLightSystems};
+use bevy::light::{NotShadowCaster, SimulationLightSystems, SunDisk};
 use bevy::mesh::morph::MeshMorphWeights;
 use bevy::mesh::skinning::SkinnedMesh;
 use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
@@ -18,13 +18,13 @@ use bevy::prelude::*;
 use bevy::render::camera::TemporalJitter;
 use bevy::render::{Extract, ExtractSchedule, RenderApp};
 use bevy::transform::TransformSystems;
-use shadowvol_mesh_topology::Mesh as TopoMesh;
+use shadowvol_mesh_topology::{EdgeTable, Mesh as TopoMesh};
 use shadowvol_robust_math::{Accuracy, Light};
-use shadowvol_scenes::Scene;
+use shadowvol_scenes::{Emission, Scene, SceneLight, SpotCone};
 
 use crate::{
     ShadowCaster, ShadowCasters, ShadowVolumeLight, ShadowVolumeStats, ShadowVolumes, Side,
-    MAX_LIGHTS,
+    SoftShadowSamples, MAX_LIGHTS,
 };
 
 /// A marked light as the pass and the material see it.
@@ -34,6 +34,32 @@ pub(crate) struct VolumeLight {
     pub light: Light,
     /// The light-table texel: position or direction, `w` = 1 point or spot, 2 directional.
     pub texel: [f32; 4],
+    /// Its size ([`SceneLight::radius`]): a disk's radius in world units (point, spot) or an
+    /// angular radius in radians (directional); 0 for a light without soft shadows.
+    pub radius: f32,
+    /// A spot light's axis (where it shines): its disk faces along it.
+    pub spot: Option<glam::Vec3>,
+    /// How many points sample it: 1 (the light itself) where `radius` is 0.
+    pub samples: u32,
+}
+
+impl VolumeLight {
+    /// shadowvol's light with its size: what [`SceneLight::samples`] samples.
+    pub fn scene_light(&self) -> SceneLight {
+        let mut l = SceneLight::unit(self.light);
+        l.radius = self.radius;
+        l.emission = self.spot.map(|direction| Emission {
+            color: [1.0; 3],
+            intensity: 1.0,
+            range: None,
+            spot: Some(SpotCone {
+                direction,
+                inner_cone_angle: 0.0,
+                outer_cone_angle: std::f32::consts::FRAC_PI_4,
+            }),
+        });
+        l
+    }
 }
 
 /// Everything the pass needs from the main world, copied into the render world each frame.
@@ -66,6 +92,13 @@ pub(crate) struct VolumeFrame {
     /// Shared with the render world.
     pub stats: ShadowVolumeStats,
 }
+
+/// The edge tables of the candidates' meshes, by mesh, kept between builds of the scene: a new
+/// build makes tables only for meshes it has not got (new, or changed since), and drops those
+/// that no candidate uses any more. A mesh left out in silence (lines or points, not marked)
+/// or one that cannot cast is not kept: it is looked at again at each build.
+#[derive(Debug, Default)]
+pub(crate) struct Tables(HashMap<AssetId<Mesh>, Arc<EdgeTable>>);
 
 /// A marked light's own `shadow_maps_enabled`, from when it was marked: given back when the
 /// marker goes.
@@ -358,6 +391,19 @@ type LightKinds<'a> = (
     Option<&'a DirectionalLight>,
 );
 
+/// The marked lights as [`gather`] reads them: where, which kind, layers, and the sun's size.
+type VolumeLights<'w, 's> = Query<
+    'w,
+    's,
+    (
+        &'static GlobalTransform,
+        LightKinds<'static>,
+        Option<&'static RenderLayers>,
+        Option<&'static SunDisk>,
+    ),
+    With<ShadowVolumeLight>,
+>;
+
 /// A candidate caster: its mesh, transform, visibility, layers, whether it opts out of
 /// casting (`NotShadowCaster`: it still receives), and whether it is marked.
 type Candidates<'w, 's> = Query<
@@ -382,10 +428,12 @@ pub(crate) fn gather(
     decision: Res<Decision>,
     setting: Res<ShadowCasters>,
     casters: Candidates,
-    lights: Query<(&GlobalTransform, LightKinds, Option<&RenderLayers>), With<ShadowVolumeLight>>,
+    lights: VolumeLights,
+    samples: Res<SoftShadowSamples>,
     meshes: Res<Assets<Mesh>>,
     server: Option<Res<AssetServer>>,
     mut events: MessageReader<AssetEvent<Mesh>>,
+    mut tables: Local<Tables>,
 ) {
     let stats = frame.stats.clone();
     let mut problems = decision.problems.clone();
@@ -397,15 +445,31 @@ pub(crate) fn gather(
         .collect();
     candidates.sort_by_key(|c| c.0);
     let key: Vec<_> = candidates.iter().map(|c| (c.0, c.1.id())).collect();
-    let changed = events.read().any(|ev| match ev {
-        AssetEvent::Modified { id } | AssetEvent::LoadedWithDependencies { id } => {
-            key.iter().any(|(_, m)| m == id)
-        }
-        _ => false,
-    });
+    // A mesh changed in place (or loaded again) has its table made again, at the next build.
+    let touched: Vec<AssetId<Mesh>> = events
+        .read()
+        .filter_map(|ev| match ev {
+            AssetEvent::Modified { id } | AssetEvent::LoadedWithDependencies { id } => Some(*id),
+            _ => None,
+        })
+        .collect();
+    for id in &touched {
+        tables.0.remove(id);
+    }
+    let changed = touched.iter().any(|id| key.iter().any(|(_, m)| m == id));
     let arrived = frame.pending.iter().any(|id| meshes.contains(*id));
     if key != frame.key || changed || arrived {
-        let built = build_scene(&candidates, &meshes, *setting == ShadowCasters::Marked);
+        let built = build_scene(
+            &candidates,
+            &meshes,
+            *setting == ShadowCasters::Marked,
+            &mut tables,
+        );
+        let live = tables.0.len();
+        stats.with(|s| {
+            s.tables_built += built.made;
+            s.tables = live;
+        });
         frame.scene = (!built.objects.is_empty()).then(|| Arc::new(built.scene));
         frame.generation += 1;
         frame.pending = key
@@ -477,10 +541,17 @@ pub(crate) fn gather(
     frame.lights.clear();
     let mut per_light = Vec::with_capacity(decision.lights.len() * n);
     for &entity in &decision.lights {
-        let Ok((t, (point, spot, sun), light_layers)) = lights.get(entity) else {
+        let Ok((t, kinds, light_layers, disk)) = lights.get(entity) else {
             continue;
         };
-        match volume_light(t, point.is_some() || spot.is_some(), sun.is_some()) {
+        let (point, spot, sun) = kinds;
+        let light = volume_light(t, point.is_some() || spot.is_some(), sun.is_some()).map(|l| {
+            with_size(l, t, kinds, disk, samples.per_light()).unwrap_or_else(|e| {
+                problems.push(format!("light {entity}: {e}"));
+                l
+            })
+        });
+        match light {
             Ok(l) => {
                 frame.lights.push(l);
                 let light_layers = light_layers.unwrap_or(&everywhere);
@@ -528,7 +599,60 @@ fn volume_light(
     Ok(VolumeLight {
         light,
         texel: [v.x, v.y, v.z, kind],
+        radius: 0.0,
+        spot: None,
+        samples: 1,
     })
+}
+
+/// `l` with Bevy's size of the light, where its soft shadows are on: a point or spot light's
+/// `radius` (world units) with `soft_shadows_enabled`; a directional light's angular radius,
+/// half its `SunDisk`'s angular diameter (`SunDisk::EARTH` without one), where its
+/// `soft_shadow_size` is `Some` (that value is the maps' filter size, which has no unit; see
+/// the crate's README). Sampled by `samples` points.
+///
+/// # Errors
+/// A size that is not one: negative or not finite, or an angle of a quarter turn or more.
+fn with_size(
+    mut l: VolumeLight,
+    t: &GlobalTransform,
+    (point, spot, sun): LightKinds,
+    disk: Option<&SunDisk>,
+    samples: u32,
+) -> Result<VolumeLight, String> {
+    let radius = if let Some(p) = point {
+        if p.soft_shadows_enabled {
+            p.radius
+        } else {
+            0.0
+        }
+    } else if let Some(s) = spot {
+        if s.soft_shadows_enabled {
+            let axis = Vec3::from(t.affine().matrix3.z_axis).normalize_or_zero();
+            l.spot = Some(glam::Vec3::from((-axis).to_array()));
+            s.radius
+        } else {
+            0.0
+        }
+    } else if sun.is_some_and(|d| d.soft_shadow_size.is_some()) {
+        0.5 * disk.map_or(SunDisk::EARTH.angular_size, |d| d.angular_size)
+    } else {
+        0.0
+    };
+    let quarter = std::f32::consts::FRAC_PI_2;
+    if !radius.is_finite() || radius < 0.0 || (sun.is_some() && radius >= quarter) {
+        return Err(format!(
+            "its size {radius} is not one (a radius of at least 0 in world units, or for a \
+             directional light an angular radius under a quarter turn); its shadow is hard"
+        ));
+    }
+    if radius > 0.0 && samples > 1 {
+        l.radius = radius;
+        l.samples = samples;
+    } else {
+        l.spot = None;
+    }
+    Ok(l)
 }
 
 /// Bevy's transform (glam 0.33) as shadowvol's (glam 0.34), column by column.
@@ -542,36 +666,57 @@ struct Built {
     scene: Scene,
     objects: Vec<Entity>,
     left_out: Vec<String>,
+    /// Edge tables made for this build (the others came from [`Tables`]).
+    made: u64,
 }
 
 /// The scene model of the candidate casters: one edge table per distinct mesh, one object per
 /// entity. A caster whose mesh cannot be read is left out, with the reason (where it is not
 /// marked, in [`ShadowCasters::AllMeshes`], a mesh of lines or points is left out in silence);
 /// the others are built. A mesh not loaded yet is skipped: a new build comes when it loads.
-fn build_scene(casters: &[CandidateItem<'_>], meshes: &Assets<Mesh>, marked_only: bool) -> Built {
+/// Edge tables come from `cache` where it has them; only the other meshes' are made, and the
+/// tables of meshes no candidate uses any more are dropped from it.
+fn build_scene(
+    casters: &[CandidateItem<'_>],
+    meshes: &Assets<Mesh>,
+    marked_only: bool,
+    cache: &mut Tables,
+) -> Built {
     let mut built = Built {
         scene: Scene::new("bevy"),
         objects: Vec::new(),
         left_out: Vec::new(),
+        made: 0,
     };
-    let mut tables = HashMap::new();
+    let used: HashSet<AssetId<Mesh>> = casters.iter().map(|c| c.1.id()).collect();
+    cache.0.retain(|id, _| used.contains(id));
+    let mut tables: HashMap<AssetId<Mesh>, Option<Result<Arc<EdgeTable>, String>>> = HashMap::new();
     for &(entity, mesh, t, _, _, _, marked) in casters {
         let id = mesh.id();
         if let std::collections::hash_map::Entry::Vacant(slot) = tables.entry(id) {
-            let Some(m) = meshes.get(id) else {
-                continue; // not loaded (yet): skipped, the others are built
-            };
-            let quiet = !marked_only
-                && !marked
-                && m.primitive_topology() != PrimitiveTopology::TriangleList;
-            slot.insert((!quiet).then(|| {
-                to_topology(m).and_then(|topo| {
-                    built
-                        .scene
-                        .add_mesh_owned(&format!("{id}"), topo)
-                        .map_err(|e| e.to_string())
-                })
-            }));
+            if let Some(table) = cache.0.get(&id) {
+                slot.insert(Some(Ok(table.clone())));
+            } else {
+                let Some(m) = meshes.get(id) else {
+                    continue; // not loaded (yet): skipped, the others are built
+                };
+                let quiet = !marked_only
+                    && !marked
+                    && m.primitive_topology() != PrimitiveTopology::TriangleList;
+                let table = (!quiet).then(|| {
+                    to_topology(m).and_then(|topo| {
+                        built
+                            .scene
+                            .add_mesh_owned(&format!("{id}"), topo)
+                            .map_err(|e| e.to_string())
+                    })
+                });
+                if let Some(Ok(table)) = &table {
+                    cache.0.insert(id, table.clone());
+                    built.made += 1;
+                }
+                slot.insert(table);
+            }
         }
         match tables.get(&id) {
             Some(Some(Ok(table))) => {

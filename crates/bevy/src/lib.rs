@@ -13,8 +13,10 @@
 //!    as shadowvol's plan chooses from where the camera stands) in the accuracy mode
 //!    of [`ShadowVolumes::mode`] (exact by default: bit-identical signs on every device);
 //! 3. per light, a resolve of the stencil into one layer of a screen-space mask (1 lit, 0 in
-//!    shadow). Every other 3D view clears the masks to lit before its own main pass, so a second
-//!    camera is not darkened by this view's mask.
+//!    shadow). A light with a size (soft shadows: see [`SoftShadowSamples`]) is sampled by `N`
+//!    points, each with its own stencil, and its layer holds the share that sees the pixel,
+//!    `k / N`. Every other 3D view clears the masks to lit before its own main pass, so a
+//!    second camera is not darkened by this view's mask.
 //!
 //! The candidates' `StandardMaterial`s become [`ShadowVolumeMaterial`], a `StandardMaterial`
 //! extended with the mask: its fragment shader (an embedded asset) runs Bevy's own PBR lighting
@@ -26,9 +28,10 @@
 //! its Bevy shadow maps are off; in a frame where they cannot, its maps are on (never no
 //! shadow), and the reason is in [`ShadowVolumeStats::error`], logged once.
 //!
-//! A caster whose mesh is added, removed or changed is prepared again (edge tables built and
-//! uploaded); a caster or light that only moves, or is hidden, costs a few small uploads in the
-//! next frame. [`ShadowVolumeStats`] counts both.
+//! A caster whose mesh is added, removed or changed is prepared again: the edge table of a new
+//! or changed mesh is built (the others are kept per mesh), and the casters are uploaded; a
+//! caster or light that only moves, or is hidden, costs a few small uploads in the next frame.
+//! [`ShadowVolumeStats`] counts tables built and preparations.
 //!
 //! ```no_run
 //! use bevy::prelude::*;
@@ -124,6 +127,40 @@ pub enum ShadowCasters {
     Marked,
 }
 
+/// How many points sample a marked light with a size (soft shadows): a resource the plugin adds
+/// with its default, 16; insert another value to change it.
+///
+/// A marked `PointLight` or `SpotLight` with `soft_shadows_enabled` and a `radius` over 0 is a
+/// disk of that radius (world units), and a marked `DirectionalLight` whose `soft_shadow_size`
+/// is `Some` is a cone of directions of half its `SunDisk`'s angular size (the Earth's sun
+/// without a `SunDisk`): shadowvol's lights with a size. Each is sampled by this many points,
+/// each casting its exact hard shadow, and its mask holds the share of them that sees the pixel,
+/// `k / N`, so the penumbra has `N + 1` levels. Every sample costs one more stencil pass.
+///
+/// The value is rounded up to a power of two, at most [`MAX_SAMPLES`]: the mask adds `1 / N`
+/// per sample in `R16Float`, which is exact for a power of two; 1 gives hard shadows.
+#[derive(Resource, Reflect, Debug, Clone, Copy, PartialEq, Eq)]
+#[reflect(Resource, Default, Debug, Clone, PartialEq)]
+pub struct SoftShadowSamples(pub u32);
+
+/// The most samples a light with a size gets (the renderer's plan picks at most as many).
+pub const MAX_SAMPLES: u32 = 64;
+
+impl Default for SoftShadowSamples {
+    fn default() -> Self {
+        Self(16)
+    }
+}
+
+impl SoftShadowSamples {
+    /// The samples a light with a size gets: the setting rounded up to a power of two, from 1
+    /// to [`MAX_SAMPLES`].
+    #[must_use]
+    pub fn per_light(self) -> u32 {
+        self.0.clamp(1, MAX_SAMPLES).next_power_of_two()
+    }
+}
+
 /// Marks a `PointLight`, `SpotLight` or `DirectionalLight` whose shadows are drawn with
 /// volumes. While the plugin shadows it, its Bevy shadow maps are off
 /// (`shadow_maps_enabled = false`); in a frame where it cannot (too many lights, no usable
@@ -163,6 +200,8 @@ pub struct ShadowVolumeStats(Arc<Mutex<StatsInner>>);
 #[derive(Debug, Default)]
 struct StatsInner {
     prepares: u64,
+    tables_built: u64,
+    tables: usize,
     frames: u64,
     /// Per side (`[main world, render world]`): its current error.
     errors: [Option<String>; 2],
@@ -183,12 +222,28 @@ impl ShadowVolumeStats {
             .unwrap_or_else(std::sync::PoisonError::into_inner))
     }
 
-    /// How many times the casters were prepared: edge tables built and uploaded to the GPU.
-    /// Moving a caster or a light does not prepare again; adding, removing or changing a
-    /// caster's mesh does.
+    /// How many times the casters were prepared: uploaded to the GPU, all of them (the edge
+    /// tables built for that are counted by [`ShadowVolumeStats::tables_built`]). Moving a
+    /// caster or a light does not prepare again; adding, removing or changing a caster's mesh
+    /// does.
     #[must_use]
     pub fn prepares(&self) -> u64 {
         self.with(|s| s.prepares)
+    }
+
+    /// How many edge tables (the welded edges of one mesh, what casting needs) were built on
+    /// the CPU so far. One is built per distinct mesh when a caster with that mesh arrives or
+    /// the mesh changes; adding or removing a caster builds no other mesh's table.
+    #[must_use]
+    pub fn tables_built(&self) -> u64 {
+        self.with(|s| s.tables_built)
+    }
+
+    /// How many edge tables are kept now: one per distinct mesh among the casters (a table is
+    /// dropped when no caster uses its mesh any more).
+    #[must_use]
+    pub fn tables(&self) -> usize {
+        self.with(|s| s.tables)
     }
 
     /// How many frames drew their masks.
@@ -242,7 +297,9 @@ impl Plugin for ShadowVolumesPlugin {
             .register_type::<ShadowVolumeLight>()
             .register_type::<ShadowVolumes>()
             .register_type::<ShadowCasters>()
-            .init_resource::<ShadowCasters>();
+            .register_type::<SoftShadowSamples>()
+            .init_resource::<ShadowCasters>()
+            .init_resource::<SoftShadowSamples>();
         material::build(app);
         extract::build(app);
         render::build(app);

@@ -21,7 +21,8 @@ use crate::{ShadowVolumes, MAX_LIGHTS};
 /// `StandardMaterial` keeps its own bindings below 100.
 #[derive(Asset, AsBindGroup, Reflect, Debug, Clone)]
 pub struct ShadowMask {
-    /// The screen-space mask, `R8Unorm`, one layer per marked light: 1 lit, 0 in shadow.
+    /// The screen-space mask, `R16Float`, one layer per marked light: the share of the light
+    /// that reaches the pixel, 1 lit, 0 in shadow, `k / N` in a soft light's penumbra.
     #[texture(100, dimension = "2d_array", sample_type = "float", filterable = false)]
     pub mask: Handle<Image>,
     /// Per marked light, one `Rgba32Float` texel: the light's position (`w = 1`, point and spot)
@@ -100,7 +101,7 @@ fn mask_image(width: u32, height: u32) -> Image {
             depth_or_array_layers: MAX_LIGHTS as u32,
         },
         TextureDimension::D2,
-        TextureFormat::R8Unorm,
+        TextureFormat::R16Float,
         RenderAssetUsages::RENDER_WORLD,
     );
     image.texture_descriptor.usage =

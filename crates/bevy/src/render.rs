@@ -23,7 +23,8 @@ use crate::{Side, MAX_LIGHTS};
 
 /// The pass's depth-stencil format (forward-Z, its own pre-pass) and the mask's format.
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth24PlusStencil8;
-const MASK: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+/// `R16Float`: a soft light's `k / N` adds `1 / N` per sample, exact for a power of two `N`.
+const MASK: wgpu::TextureFormat = wgpu::TextureFormat::R16Float;
 /// The pre-pass's colour target, which nothing reads: the smallest colour format.
 const SCRATCH: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 
@@ -60,10 +61,17 @@ struct PassState {
     /// The casters on the device, and the scene generation they hold.
     resident: Option<(u64, ResidentScene)>,
     targets: Option<Targets>,
-    resolve: Option<wgpu::RenderPipeline>,
+    resolve: Option<Resolve>,
     /// The plan's copy of the scene, with this frame's transforms and lights, and the world
     /// positions it plans from.
     planned: Option<(Scene, World)>,
+}
+
+/// The resolves of a stencil into a mask layer: `set` writes 1 where it is 0 (a hard light),
+/// `add` adds the blend constant there (a sample of a light with a size: `1 / N`).
+struct Resolve {
+    set: wgpu::RenderPipeline,
+    add: wgpu::RenderPipeline,
 }
 
 /// Bevy's view as shadowvol's camera, with the aspect its projection uses.
@@ -229,7 +237,10 @@ fn record(
             msg
         })?;
         state.pass = Some(pass);
-        state.resolve = Some(resolve_pipeline(gpu.device));
+        state.resolve = Some(Resolve {
+            set: resolve_pipeline(gpu.device, false),
+            add: resolve_pipeline(gpu.device, true),
+        });
     }
     let (Some(pass), Some(resolve)) = (&state.pass, &state.resolve) else {
         return Ok(());
@@ -258,12 +269,6 @@ fn record(
     if frame.transforms.len() != objects || frame.casts.len() != objects * frame.lights.len() {
         return Ok(()); // a rebuild is pending; the last masks stay
     }
-    let n = frame.lights.len();
-    let lights: Vec<SceneLight> = frame
-        .lights
-        .iter()
-        .map(|l| SceneLight::unit(l.light))
-        .collect();
     let size = (mask.size().width, mask.size().height);
     // The plan: per (light, object) z-pass where the camera is outside the volume, z-fail where
     // it may be inside, nothing where the light cannot reach; per light a scissor.
@@ -283,26 +288,41 @@ fn record(
     for (o, t) in plan_scene.geometry.objects.iter_mut().zip(&transforms) {
         o.world_from_object = *t;
     }
-    plan_scene.lights.clone_from(&lights);
+    // A light with a size is its samples, consecutive (one of the pass's sample groups), each a
+    // point (or direction) casting its own hard shadow; the others are themselves. The disk of
+    // a point light faces the centre of the drawn objects' box (the renderer's
+    // `Scene::light_aim`), which needs their world positions first.
+    plan_scene.lights.clear();
     world
         .sync(plan_scene)
         .map_err(|e| format!("the casters' world positions: {e}"))?;
+    let aim = aim_of(world, &frame.drawn);
+    let (lights, runs) = expand(&frame.lights, aim);
+    let n = lights.len();
+    plan_scene.lights.clone_from(&lights);
     let plan = plan_frame(plan_scene, world, &camera, size, PlanPolicy::Auto, true);
     // Light-major: an object that does not cast for a light (`NotShadowCaster`, not drawn, or
-    // on no render layer of the light) draws no volume for it; it still receives, through the
-    // pre-pass.
+    // on no render layer of the light) draws no volume for it, nor for any of its samples; it
+    // still receives, through the pre-pass.
+    let of_light: Vec<usize> = runs
+        .iter()
+        .enumerate()
+        .flat_map(|(k, r)| r.clone().map(move |_| k))
+        .collect();
     let techniques: Vec<_> = plan
         .entries
         .iter()
         .enumerate()
         .map(|(i, e)| {
-            if frame.casts[i] {
+            if frame.casts[of_light[i / objects] * objects + i % objects] {
                 e.technique
             } else {
                 Technique::Culled
             }
         })
         .collect();
+    let groups: Vec<std::ops::Range<usize>> =
+        runs.iter().filter(|r| r.len() > 1).cloned().collect();
     pass.update(
         resident,
         &PassFrame {
@@ -319,7 +339,7 @@ fn record(
                 .camera
                 .map_or(shadowvol_robust_math::Accuracy::Exact, |c| c.1),
             count: false,
-            sample_groups: &[],
+            sample_groups: &groups,
         },
     )
     .map_err(|e| format!("GPU: the frame's inputs: {e}"))?;
@@ -338,11 +358,59 @@ fn record(
         &targets.depth,
         Some(wgpu::Color::BLACK),
     );
-    for k in 0..n {
-        pass.encode_stencil(enc, resident, k, &targets.depth, wgpu::LoadOp::Clear(0));
-        resolve_layer(enc, resolve, mask, k, &targets.depth);
+    for (k, run) in runs.iter().enumerate() {
+        let share = 1.0 / run.len() as f64;
+        for (j, sample) in run.clone().enumerate() {
+            pass.encode_stencil(
+                enc,
+                resident,
+                sample,
+                &targets.depth,
+                wgpu::LoadOp::Clear(0),
+            );
+            if run.len() == 1 {
+                resolve_layer(enc, &resolve.set, mask, k, &targets.depth, None);
+            } else {
+                resolve_layer(enc, &resolve.add, mask, k, &targets.depth, Some((j, share)));
+            }
+        }
     }
     Ok(())
+}
+
+/// The frame's lights for the pass: each marked light in order, a light with a size as its
+/// samples ([`SceneLight::samples`] aimed at `aim`), the others as themselves; and per marked
+/// light its run of them.
+fn expand(
+    marked: &[crate::extract::VolumeLight],
+    aim: glam::Vec3,
+) -> (Vec<SceneLight>, Vec<std::ops::Range<usize>>) {
+    let mut lights = Vec::new();
+    let mut runs = Vec::with_capacity(marked.len());
+    for l in marked {
+        let first = lights.len();
+        if l.samples > 1 {
+            let samples = l.scene_light().samples(l.samples, aim);
+            lights.extend(samples.into_iter().map(SceneLight::unit));
+        } else {
+            lights.push(SceneLight::unit(l.light));
+        }
+        runs.push(first..lights.len());
+    }
+    (lights, runs)
+}
+
+/// The centre of the box of the drawn objects' world positions, as `Scene::light_aim` has it
+/// for a scene of those objects (the origin without any).
+fn aim_of(world: &World, drawn: &[bool]) -> glam::Vec3 {
+    world
+        .surfaces()
+        .iter()
+        .zip(drawn)
+        .filter(|(_, &d)| d)
+        .map(|(s, _)| (s.bounds.0.as_vec3(), s.bounds.1.as_vec3()))
+        .reduce(|(lo, hi), (l, h)| (lo.min(l), hi.max(h)))
+        .map_or(glam::Vec3::ZERO, |(lo, hi)| (lo + hi) * 0.5)
 }
 
 /// Where an object that is not drawn goes: a millionth of its size, one unit behind the eye, so
@@ -405,14 +473,21 @@ fn clear_masks(enc: &mut wgpu::CommandEncoder, mask: &wgpu::Texture, lights: usi
     }
 }
 
-/// Layer `k` of the mask: cleared to 0 (shadow), then 1 wherever the stencil is 0 (lit).
+/// Layer `k` of the mask: cleared to 0 (shadow), then 1 wherever the stencil is 0 (lit). For
+/// sample `j` of a light with a size (`add`, with `Some((j, 1 / N))`): the first clears it,
+/// and each adds `1 / N` wherever its stencil is 0, so the layer ends at `k / N`.
 fn resolve_layer(
     enc: &mut wgpu::CommandEncoder,
     pipeline: &wgpu::RenderPipeline,
     mask: &wgpu::Texture,
     k: usize,
     depth: &wgpu::TextureView,
+    sample: Option<(usize, f64)>,
 ) {
+    let load = match sample {
+        Some((j, _)) if j > 0 => wgpu::LoadOp::Load,
+        _ => wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+    };
     let view = layer_view(mask, k);
     let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some("shadowvol-bevy mask resolve"),
@@ -421,7 +496,7 @@ fn resolve_layer(
             depth_slice: None,
             resolve_target: None,
             ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                load,
                 store: wgpu::StoreOp::Store,
             },
         })],
@@ -433,12 +508,34 @@ fn resolve_layer(
         ..Default::default()
     });
     rp.set_pipeline(pipeline);
+    if let Some((_, share)) = sample {
+        rp.set_blend_constant(wgpu::Color {
+            r: share,
+            g: share,
+            b: share,
+            a: share,
+        });
+    }
     rp.set_stencil_reference(0);
     rp.draw(0..3, 0..1);
 }
 
-/// A full-screen triangle that writes 1 where the stencil equals the reference (0).
-fn resolve_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
+/// A full-screen triangle that writes 1 where the stencil equals the reference (0), or with
+/// `add`, adds the blend constant there.
+fn resolve_pipeline(device: &wgpu::Device, add: bool) -> wgpu::RenderPipeline {
+    let sum = wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::Constant,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    };
+    let target = wgpu::ColorTargetState {
+        format: MASK,
+        blend: add.then_some(wgpu::BlendState {
+            color: sum,
+            alpha: sum,
+        }),
+        write_mask: wgpu::ColorWrites::ALL,
+    };
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("shadowvol-bevy mask resolve"),
         source: wgpu::ShaderSource::Wgsl(RESOLVE_WGSL.into()),
@@ -462,7 +559,7 @@ fn resolve_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
             module: &module,
             entry_point: Some("fs"),
             compilation_options: Default::default(),
-            targets: &[Some(MASK.into())],
+            targets: &[Some(target)],
         }),
         primitive: wgpu::PrimitiveState::default(),
         depth_stencil: Some(wgpu::DepthStencilState {

@@ -695,6 +695,212 @@ fn shadows_match_the_reference() {
     }
     d.world().entity_mut(unmarked).despawn();
 
+    // 13. Soft shadows: the roof's light gets a radius. Without `soft_shadows_enabled` (or with
+    // one sample) it is the same hard light, to the byte; with it, its mask holds k / N of 16
+    // samples, checked against the exact soft reference and the renderer's own visibility.
+    let hard = d.capture();
+    let hard_mask = d.mask_layer(0);
+    let radius = 0.6;
+    d.world()
+        .get_mut::<PointLight>(sun[0])
+        .expect("a point light")
+        .radius = radius;
+    let same = d.capture();
+    if differing(&hard, &same) > 0 {
+        failures.push("a radius without soft_shadows_enabled changed the image".into());
+    }
+    d.world()
+        .get_mut::<PointLight>(sun[0])
+        .expect("a point light")
+        .soft_shadows_enabled = true;
+    d.world()
+        .insert_resource(shadowvol_bevy::SoftShadowSamples(1));
+    let one = d.capture();
+    if differing(&hard, &one) > 0 || d.mask_layer(0) != hard_mask {
+        failures.push("a soft light of one sample is not the hard light".into());
+    }
+    d.world()
+        .insert_resource(shadowvol_bevy::SoftShadowSamples::default());
+    // A size that is not one: named, and the light's shadow stays hard (not none).
+    d.world()
+        .get_mut::<PointLight>(sun[0])
+        .expect("a point light")
+        .radius = -1.0;
+    let negative = d.capture();
+    match d.stats().error() {
+        Some(e) if e.contains("is not one") && differing(&hard, &negative) == 0 => {
+            println!("a negative radius: {e}")
+        }
+        other => failures.push(format!(
+            "a negative radius gave {other:?} and {} pixels off the hard image",
+            differing(&hard, &negative)
+        )),
+    }
+    d.world()
+        .get_mut::<PointLight>(sun[0])
+        .expect("a point light")
+        .radius = radius;
+    let roof_scene = [(&floor, Transform::IDENTITY), (&roof, roof_at)];
+    let soft = |d: &mut Driver,
+                what: &str,
+                light: shadowvol_scenes::SceneLight,
+                failures: &mut Vec<String>| {
+        let image = d.capture();
+        let mask = d.mask_layer(0);
+        let c = common::soft_check(HOME, &roof_scene, light, 16, (d.width, d.height), &mask);
+        let r = &c.reference;
+        println!(
+            "{what}: penumbra {} px, error mean {:.4} p99 {:.4} max {:.4}; lit {} umbra {} px, \
+             {} + {} mismatched, {} on borders; {} of {} covered pixels differ from the \
+             renderer's k / N ({} on its triangles' edges; elsewhere by at most {})",
+            r.penumbra_pixels,
+            r.penumbra_mean_error,
+            r.penumbra_p99_error,
+            r.penumbra_max_error,
+            r.lit_pixels,
+            r.umbra_pixels,
+            r.lit_mismatched,
+            r.umbra_mismatched,
+            r.border_mismatched,
+            c.differ_from_renderer,
+            c.covered,
+            c.differ_on_edges,
+            c.largest_off_edges
+        );
+        if let Some(w) = c.worst {
+            println!("{what}: largest error: {w:?}");
+        }
+        let bound = max_artifacts(d.width, d.height);
+        if r.penumbra_pixels < 300
+            || r.lit_pixels < 5000
+            || r.umbra_pixels < 300
+            || r.lit_mismatched + r.umbra_mismatched > bound
+            || r.penumbra_mean_error > 0.05
+            || r.penumbra_max_error > 0.25
+            || c.differ_from_renderer > c.covered / 200
+            || c.largest_off_edges > 2.0 / 16.0
+        {
+            failures.push(format!(
+                "{what}: penumbra {} px, mean error {:.4}, {} + {} lit and umbra mismatches, \
+                 {} pixels differ from the renderer (off its edges by up to {})",
+                r.penumbra_pixels,
+                r.penumbra_mean_error,
+                r.lit_mismatched,
+                r.umbra_mismatched,
+                c.differ_from_renderer,
+                c.largest_off_edges
+            ));
+        }
+        image
+    };
+    let mut point = shadowvol_scenes::SceneLight::unit(shadowvol_robust_math::Light::point(
+        glam::Vec3::from(above.to_array()),
+    ));
+    point.radius = radius;
+    let soft_image = soft(&mut d, "soft point light, radius 0.6", point, &mut failures);
+    if differing(&hard, &soft_image) < 500 {
+        failures.push("the soft point light's image is the hard one's".into());
+    }
+    // A directional light with Bevy's soft_shadow_size: the cone of half its SunDisk's angular
+    // size.
+    d.world().entity_mut(sun[0]).despawn();
+    let towards = Vec3::new(0.5, 4.0, 1.0);
+    let sun_disk = 0.16;
+    let directional = d.spawn_directional(towards, Color::srgb(1.0, 0.0, 0.0), 3000.0);
+    d.world()
+        .entity_mut(directional)
+        .insert(bevy::light::SunDisk {
+            angular_size: sun_disk,
+            intensity: 1.0,
+        });
+    d.world()
+        .get_mut::<DirectionalLight>(directional)
+        .expect("a directional light")
+        .soft_shadow_size = Some(1.0);
+    let mut cone = shadowvol_scenes::SceneLight::unit(
+        shadowvol_robust_math::Light::new(
+            towards.normalize().x,
+            towards.normalize().y,
+            towards.normalize().z,
+            0.0,
+        )
+        .expect("a direction"),
+    );
+    cone.radius = sun_disk / 2.0;
+    soft(
+        &mut d,
+        "soft directional light, SunDisk 0.16 rad",
+        cone,
+        &mut failures,
+    );
+    d.world().entity_mut(directional).despawn();
+    // A spot light with a radius: its disk faces along its axis (not towards the scene).
+    let (spot_at, spot_to) = (Vec3::new(0.3, 5.0, -1.8), Vec3::new(0.0, 0.0, 1.0));
+    let spot = d.spawn_spot(spot_at, spot_to, Color::srgb(1.0, 0.0, 0.0), 1.2);
+    {
+        let mut l = d.world().get_mut::<SpotLight>(spot).expect("a spot light");
+        l.radius = 0.4;
+        l.soft_shadows_enabled = true;
+    }
+    let mut cone = shadowvol_scenes::SceneLight::unit(shadowvol_robust_math::Light::point(
+        glam::Vec3::from(spot_at.to_array()),
+    ));
+    cone.radius = 0.4;
+    cone.emission = Some(shadowvol_scenes::Emission {
+        color: [1.0; 3],
+        intensity: 1.0,
+        range: None,
+        spot: Some(shadowvol_scenes::SpotCone {
+            direction: glam::Vec3::from((spot_to - spot_at).normalize().to_array()),
+            inner_cone_angle: 0.0,
+            outer_cone_angle: 1.2,
+        }),
+    });
+    soft(&mut d, "soft spot light, radius 0.4", cone, &mut failures);
+    d.world().entity_mut(spot).despawn();
+
+    // 14. Incremental: a caster with a new mesh builds that mesh's edge table only; a second
+    // entity with the same mesh builds none; a mesh changed in place builds its own again;
+    // removing the casters drops the table once no caster uses its mesh.
+    twice(&mut d);
+    let stats = d.stats();
+    let (built, kept) = (stats.tables_built(), stats.tables());
+    let counts = |what: &str, want: (u64, usize), failures: &mut Vec<String>| {
+        let got = (
+            stats.tables_built() - built,
+            stats.tables() as isize - kept as isize,
+        );
+        println!(
+            "incremental, {what}: {} table(s) built, {:+} kept",
+            got.0, got.1
+        );
+        if got != (want.0, want.1 as isize) {
+            failures.push(format!(
+                "incremental, {what}: {} built and {:+} kept, not {} and +{}",
+                got.0, got.1, want.0, want.1
+            ));
+        }
+    };
+    let first = d.spawn_mesh(common::unit_box(), Transform::from_xyz(-2.0, 0.5, -2.0));
+    twice(&mut d);
+    counts("a caster with a new mesh", (1, 1), &mut failures);
+    let shared = d.world().get::<Mesh3d>(first).expect("Mesh3d").0.clone();
+    let second = d.spawn_handle(shared.clone(), Transform::from_xyz(2.0, 0.5, -2.0));
+    twice(&mut d);
+    counts("a second caster with that mesh", (1, 1), &mut failures);
+    *d.world()
+        .resource_mut::<Assets<Mesh>>()
+        .get_mut(&shared)
+        .expect("the shared mesh") = stretch_x(&common::unit_box(), 0.5);
+    twice(&mut d);
+    counts("that mesh changed in place", (2, 1), &mut failures);
+    d.world().entity_mut(first).despawn();
+    twice(&mut d);
+    counts("one of the two removed", (2, 1), &mut failures);
+    d.world().entity_mut(second).despawn();
+    twice(&mut d);
+    counts("both removed", (2, 0), &mut failures);
+
     // 12. Bevy's habits: the components and the setting are reflected and registered, with
     // their component and resource data (what scenes and inspectors use).
     {

@@ -33,6 +33,101 @@ pub struct Driver {
     pub width: u32,
     pub height: u32,
     pub camera: Entity,
+    mask: MaskReadback,
+}
+
+/// A request to the render world for a layer of the mask (the image and the layer), and the
+/// answer.
+#[derive(Resource, Clone, Default)]
+struct MaskReadback(Arc<Mutex<Exchange>>);
+
+/// What [`MaskReadback`] holds.
+#[derive(Default)]
+struct Exchange {
+    request: Option<MaskLayer>,
+    answer: Option<Vec<f32>>,
+}
+
+/// The mask image and one of its layers.
+type MaskLayer = (AssetId<Image>, u32);
+
+/// The render world's side of [`Driver::mask_layer`]: after the frame is rendered, copies the
+/// requested layer into a buffer, waits for it and converts it to `f32`.
+fn read_mask(
+    request: Res<MaskReadback>,
+    images: Res<bevy::render::render_asset::RenderAssets<bevy::render::texture::GpuImage>>,
+    device: Res<RenderDevice>,
+    queue: Res<bevy::render::renderer::RenderQueue>,
+) {
+    let Some((id, layer)) = request.0.lock().unwrap().request else {
+        return;
+    };
+    let Some(image) = images.get(id) else {
+        return;
+    };
+    let texture: &wgpu::Texture = &image.texture;
+    let device = device.wgpu_device();
+    let queue: &wgpu::Queue = &queue;
+    let (w, h) = (texture.width(), texture.height());
+    let row = (w * 2).div_ceil(256) * 256;
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("mask readback"),
+        size: u64::from(row * h),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    enc.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d {
+                x: 0,
+                y: 0,
+                z: layer,
+            },
+            aspect: wgpu::TextureAspect::All,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: None,
+            },
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+    queue.submit([enc.finish()]);
+    buffer
+        .slice(..)
+        .map_async(wgpu::MapMode::Read, |r| r.expect("mapped"));
+    device
+        .poll(PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        })
+        .expect("device poll");
+    let data = buffer
+        .slice(..)
+        .get_mapped_range()
+        .expect("the mapped mask");
+    let mut out = Vec::with_capacity((w * h) as usize);
+    for y in 0..h {
+        let start = (y * row) as usize;
+        for x in 0..w as usize {
+            let b = [data[start + 2 * x], data[start + 2 * x + 1]];
+            out.push(f16_to_f32(u16::from_le_bytes(b)));
+        }
+    }
+    *request.0.lock().unwrap() = Exchange {
+        request: None,
+        answer: Some(out),
+    };
 }
 
 impl Driver {
@@ -73,6 +168,13 @@ impl Driver {
             brightness: 0.0,
             ..default()
         });
+        let mask = MaskReadback::default();
+        if let Some(render) = app.get_sub_app_mut(bevy::render::RenderApp) {
+            render.insert_resource(mask.clone()).add_systems(
+                bevy::render::Render,
+                read_mask.in_set(bevy::render::RenderSystems::Cleanup),
+            );
+        }
         app.finish();
         app.cleanup();
         let mut apps = std::mem::take(app.sub_apps_mut());
@@ -100,6 +202,7 @@ impl Driver {
             width,
             height,
             camera,
+            mask,
         }
     }
 
@@ -280,6 +383,31 @@ impl Driver {
             .insert(Transform::from_translation(eye).looking_at(target, Vec3::Y));
     }
 
+    /// Layer `layer` of the plugin's mask as a coming frame leaves it (the [`ShadowVolumes`]
+    /// camera's, when it is the only 3D view): row-major from the top, one value per pixel of
+    /// the camera's viewport, copied on the device by a system of the render world after the
+    /// frame is rendered (it runs on its own thread), and read back.
+    pub fn mask_layer(&mut self, layer: u32) -> Vec<f32> {
+        let mask = self
+            .world()
+            .resource::<Assets<shadowvol_bevy::ShadowVolumeMaterial>>()
+            .iter()
+            .next()
+            .map(|(_, m)| m.extension.mask.id())
+            .expect("a caster's material");
+        *self.mask.0.lock().unwrap() = Exchange {
+            request: Some((mask, layer)),
+            answer: None,
+        };
+        for _ in 0..20 {
+            self.update();
+            if let Some(data) = self.mask.0.lock().unwrap().answer.take() {
+                return data;
+            }
+        }
+        panic!("no mask read back after 20 frames");
+    }
+
     /// The plugin's statistics.
     pub fn stats(&mut self) -> shadowvol_bevy::ShadowVolumeStats {
         self.world()
@@ -435,4 +563,145 @@ pub fn stand_on_floor(mesh: &Mesh, height: f32) -> Transform {
     let s = height / (hi.y - lo.y);
     let centre = (lo + hi) * 0.5;
     Transform::from_xyz(-centre.x * s, -lo.y * s, -centre.z * s).with_scale(Vec3::splat(s))
+}
+
+/// An IEEE half (the mask's `R16Float`) as `f32`, exactly.
+fn f16_to_f32(h: u16) -> f32 {
+    let sign = if h >> 15 == 1 { -1.0 } else { 1.0 };
+    let e = u32::from((h >> 10) & 0x1f);
+    let m = u32::from(h & 0x3ff);
+    let v = match e {
+        0 => m as f32 * 2f32.powi(-24),
+        31 if m == 0 => f32::INFINITY,
+        31 => f32::NAN,
+        _ => f32::from_bits(((e + 112) << 23) | (m << 13)),
+    };
+    sign * v
+}
+
+/// One pixel of a [`SoftCheck`].
+#[derive(Debug, Clone, Copy)]
+pub struct Worst {
+    /// Where: `(x, y)` from the top left.
+    pub at: (usize, usize),
+    /// The renderer's `[surface + 1, triangle]` there (the reference's surface point).
+    pub id: [u32; 2],
+    /// The true visibility and its bound.
+    pub truth: (f64, f64),
+    /// The plugin's mask there.
+    pub mask: f32,
+    /// The renderer's `k / N` there.
+    pub renderer: f32,
+}
+
+/// A soft light's visibility in the plugin's mask against the project's exact soft reference
+/// and against the renderer's own visibility for the same scene, camera and light.
+pub struct SoftCheck {
+    /// The mask against the reference ([`shadowvol_reference::soft::compare_visibility`]).
+    pub reference: shadowvol_reference::soft::SoftComparison,
+    /// Covered pixels where the mask differs from the renderer's `k / N`.
+    pub differ_from_renderer: usize,
+    /// Of those, pixels on an edge of the renderer's triangles (a 3×3 neighbour shows another
+    /// triangle or the background), where the two pre-passes may pick different triangles.
+    pub differ_on_edges: usize,
+    /// The largest `|mask − renderer|` off the renderer's triangle edges: a multiple of `1 / N`,
+    /// where a sample's hard shadow boundary passes between the two surface points of a pixel
+    /// (the two cameras round differently).
+    pub largest_off_edges: f32,
+    /// Covered pixels.
+    pub covered: usize,
+    /// The penumbra pixel where the mask is farthest from the truth.
+    pub worst: Option<Worst>,
+}
+
+/// Checks `mask` (one light's visibility from the plugin, `width × height`) for these meshes
+/// and `light` (a light with a size, sampled by `samples` points), seen from `eye` looking at
+/// `target`: the renderer draws the same scene with the same samples (its
+/// `FrameImage::visibility`), and the exact reference integrates each pixel's true share of the
+/// light's disk (aimed at `Scene::light_aim`, as the plugin aims it).
+#[allow(clippy::too_many_arguments)]
+pub fn soft_check(
+    (eye, target): (Vec3, Vec3),
+    meshes: &[(&Mesh, Transform)],
+    light: shadowvol_scenes::SceneLight,
+    samples: u32,
+    (width, height): (u32, u32),
+    mask: &[f32],
+) -> SoftCheck {
+    use shadowvol_renderer::{Camera, RenderOptions, Renderer, Scene};
+    let mut scene = Scene::new("bevy soft test");
+    for (i, (m, t)) in meshes.iter().enumerate() {
+        let table = scene
+            .add_mesh(&format!("m{i}"), &topology(m))
+            .expect("table");
+        scene.add_object(format!("m{i}"), table, affine(t));
+    }
+    scene.lights.push(light);
+    scene.camera = Some(Camera::look_at(
+        glam::Vec3::from(eye.to_array()),
+        glam::Vec3::from(target.to_array()),
+    ));
+    let mut options = RenderOptions::new(width, height);
+    options.light_samples = Some(samples);
+    let mut renderer = Renderer::gpu(options).expect("renderer");
+    let frame = renderer.render(&scene).expect("render");
+    let img = frame.read_image().expect("a frame read back");
+    let stencils: Vec<Vec<u8>> = img
+        .visibility
+        .iter()
+        .map(|v| v.iter().map(|&x| u8::from(x < 1.0)).collect())
+        .collect();
+    let shot =
+        shot::shot_with(&frame, &scene, &stencils, &frame.report.light_colors).expect("a shot");
+    let disk = scene.lights[0]
+        .disk(scene.light_aim())
+        .expect("a light with a size");
+    let truth = shadowvol_reference::soft::visibility_reference(&shot, 0, &disk);
+    let reference = shadowvol_reference::soft::compare_with_reference(&truth, mask);
+    let ours = &img.visibility[0];
+    let worst = truth
+        .pixels
+        .iter()
+        .enumerate()
+        .filter_map(|(i, v)| v.filter(|v| v.is_penumbra()).map(|v| (i, v)))
+        .max_by(|a, b| {
+            let e = |(i, v): &(usize, shadowvol_reference::soft::Visibility)| {
+                (f64::from(mask[*i]) - v.value).abs()
+            };
+            e(a).total_cmp(&e(b))
+        })
+        .map(|(i, v)| Worst {
+            at: (i % width as usize, i / width as usize),
+            id: img.ids[i],
+            truth: (v.value, v.bound),
+            mask: mask[i],
+            renderer: ours[i],
+        });
+    let covered: Vec<usize> = (0..mask.len())
+        .filter(|&i| img.ids.get(i).is_some_and(|id| id[0] != 0))
+        .collect();
+    let w = width as usize;
+    let on_edge = |i: usize| {
+        let (x, y) = (i % w, i / w);
+        (y.saturating_sub(1)..=(y + 1).min(height as usize - 1)).any(|ny| {
+            (x.saturating_sub(1)..=(x + 1).min(w - 1)).any(|nx| img.ids[ny * w + nx] != img.ids[i])
+        })
+    };
+    let differ: Vec<usize> = covered
+        .iter()
+        .copied()
+        .filter(|&i| ours[i] != mask[i])
+        .collect();
+    SoftCheck {
+        reference,
+        differ_from_renderer: differ.len(),
+        differ_on_edges: differ.iter().filter(|&&i| on_edge(i)).count(),
+        largest_off_edges: differ
+            .iter()
+            .filter(|&&i| !on_edge(i))
+            .map(|&i| (ours[i] - mask[i]).abs())
+            .fold(0.0, f32::max),
+        covered: covered.len(),
+        worst,
+    }
 }
