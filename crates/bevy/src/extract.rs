@@ -3,6 +3,9 @@
 //! inputs, which the render world copies each frame. The scene model is built again only when
 //! the candidate casters or their meshes change.
 
+mod objects;
+
+use objects::object_states;
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
@@ -491,55 +494,10 @@ pub(crate) fn gather(
             }
         }
     }
-    // Per object of the current scene: its transform, whether it is in the pre-pass and whether
-    // it casts. An object whose entity is gone while its rebuild waits, is hidden, is on other
-    // layers than the camera or has a singular transform (a zero scale) is neither.
-    let layers = decision
-        .camera
-        .as_ref()
-        .map_or_else(RenderLayers::default, |c| c.2.clone());
+    let (casts, their_layers) = object_states(&mut frame, &candidates, &decision);
     let everywhere = RenderLayers::default();
-    let by_entity: HashMap<Entity, &CandidateItem<'_>> =
-        candidates.iter().map(|c| (c.0, c)).collect();
-    let n = frame.objects.len();
-    let (mut transforms, mut drawn, mut casts, mut their_layers) = (
-        Vec::with_capacity(n),
-        Vec::with_capacity(n),
-        Vec::with_capacity(n),
-        Vec::with_capacity(n),
-    );
-    for e in &frame.objects {
-        their_layers.push(
-            by_entity
-                .get(e)
-                .and_then(|c| c.4)
-                .unwrap_or(&everywhere)
-                .clone(),
-        );
-        let (t, d, c) = by_entity.get(e).map_or(
-            (glam::Affine3A::IDENTITY, false, false),
-            |&&(_, _, t, visible, theirs, not_caster, _)| {
-                let t = to_affine(t);
-                let invertible = t.is_finite() && t.matrix3.determinant() != 0.0;
-                let seen = visible.get() && theirs.unwrap_or(&everywhere).intersects(&layers);
-                let d = seen && invertible;
-                let t = if invertible {
-                    t
-                } else {
-                    glam::Affine3A::IDENTITY
-                };
-                (t, d, d && !not_caster)
-            },
-        );
-        transforms.push(t);
-        drawn.push(d);
-        casts.push(c);
-    }
-    frame.transforms = transforms;
-    frame.drawn = drawn;
-
     frame.lights.clear();
-    let mut per_light = Vec::with_capacity(decision.lights.len() * n);
+    let mut per_light = Vec::with_capacity(decision.lights.len() * frame.objects.len());
     for &entity in &decision.lights {
         let Ok((t, kinds, light_layers, disk)) = lights.get(entity) else {
             continue;

@@ -207,21 +207,11 @@ fn write_light_table(queue: &wgpu::Queue, table: &wgpu::Texture, frame: &VolumeF
     );
 }
 
-/// Records one frame's pass and masks into `enc`: the pass built at the first frame, the casters
-/// prepared when their generation changed, then extraction, pre-pass, and per light the
-/// stencil and its resolve.
+/// Builds the pass and the resolve pipelines at the first frame that needs them.
 ///
 /// # Errors
-/// What went wrong, in words: the device lacks what the pass needs (not tried again), the
-/// casters cannot be prepared, or the frame's inputs do not fit the prepared casters.
-fn record(
-    gpu: &Gpu<'_>,
-    state: &mut PassState,
-    frame: &VolumeFrame,
-    (camera, aspect): (Camera, f32),
-    mask: &wgpu::Texture,
-    enc: &mut wgpu::CommandEncoder,
-) -> Result<(), String> {
+/// Why the pass cannot run on Bevy's device (kept: it is not tried again).
+fn ensure_pass(gpu: &Gpu<'_>, state: &mut PassState) -> Result<(), String> {
     if let Some(e) = &state.failed {
         return Err(e.clone());
     }
@@ -242,6 +232,105 @@ fn record(
             add: resolve_pipeline(gpu.device, true),
         });
     }
+    Ok(())
+}
+
+/// What the pass draws this frame, with the planning copy of the scene `planned`: each object's
+/// transform (those not drawn parked behind the eye), the lights (a light with a size as its
+/// samples, `runs` per marked light, the runs of several its sample groups), the plan's
+/// techniques (culled where an object does not cast for the light) and scissors.
+struct Inputs {
+    transforms: Vec<glam::Affine3A>,
+    lights: Vec<SceneLight>,
+    runs: Vec<std::ops::Range<usize>>,
+    groups: Vec<std::ops::Range<usize>>,
+    techniques: Vec<Technique>,
+    scissors: Vec<Option<[u32; 4]>>,
+}
+
+/// The frame's [`Inputs`].
+///
+/// # Errors
+/// The casters' world positions cannot be computed.
+fn frame_inputs(
+    (plan_scene, world): &mut (Scene, World),
+    frame: &VolumeFrame,
+    camera: &Camera,
+    size: (u32, u32),
+) -> Result<Inputs, String> {
+    let objects = frame.transforms.len();
+    // Objects that are not drawn this frame (hidden, on other layers, a zero scale, gone) are
+    // parked behind the eye, scaled down: clipped from the pre-pass, and invertible for the
+    // plan's world positions.
+    let parked = park(camera);
+    let transforms: Vec<glam::Affine3A> = frame
+        .transforms
+        .iter()
+        .zip(&frame.drawn)
+        .map(|(t, &drawn)| if drawn { *t } else { parked })
+        .collect();
+    for (o, t) in plan_scene.geometry.objects.iter_mut().zip(&transforms) {
+        o.world_from_object = *t;
+    }
+    // A light with a size is its samples, consecutive (one of the pass's sample groups), each a
+    // point (or direction) casting its own hard shadow; the others are themselves. The disk of
+    // a point light faces the centre of the drawn objects' box (the renderer's
+    // `Scene::light_aim`), which needs their world positions first.
+    plan_scene.lights.clear();
+    world
+        .sync(plan_scene)
+        .map_err(|e| format!("the casters' world positions: {e}"))?;
+    let aim = aim_of(world, &frame.drawn);
+    let (lights, runs) = expand(&frame.lights, aim);
+    plan_scene.lights.clone_from(&lights);
+    let plan = plan_frame(plan_scene, world, camera, size, PlanPolicy::Auto, true);
+    // Light-major: an object that does not cast for a light (`NotShadowCaster`, not drawn, or
+    // on no render layer of the light) draws no volume for it, nor for any of its samples; it
+    // still receives, through the pre-pass.
+    let of_light: Vec<usize> = runs
+        .iter()
+        .enumerate()
+        .flat_map(|(k, r)| r.clone().map(move |_| k))
+        .collect();
+    let techniques: Vec<_> = plan
+        .entries
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            if frame.casts[of_light[i / objects] * objects + i % objects] {
+                e.technique
+            } else {
+                Technique::Culled
+            }
+        })
+        .collect();
+    let groups = runs.iter().filter(|r| r.len() > 1).cloned().collect();
+    Ok(Inputs {
+        transforms,
+        lights,
+        runs,
+        groups,
+        techniques,
+        scissors: plan.scissors,
+    })
+}
+
+/// Records one frame's pass and masks into `enc`: the pass built at the first frame, the casters
+/// prepared when their generation changed, then extraction, pre-pass, and per light the
+/// stencil and its resolve.
+///
+/// # Errors
+/// What went wrong, in words: the device lacks what the pass needs (not tried again), the
+/// casters cannot be prepared, or the frame's inputs do not fit the prepared casters.
+fn record(
+    gpu: &Gpu<'_>,
+    state: &mut PassState,
+    frame: &VolumeFrame,
+    (camera, aspect): (Camera, f32),
+    mask: &wgpu::Texture,
+    enc: &mut wgpu::CommandEncoder,
+) -> Result<(), String> {
+    ensure_pass(gpu, state)?;
     let (Some(pass), Some(resolve)) = (&state.pass, &state.resolve) else {
         return Ok(());
     };
@@ -272,74 +361,29 @@ fn record(
     let size = (mask.size().width, mask.size().height);
     // The plan: per (light, object) z-pass where the camera is outside the volume, z-fail where
     // it may be inside, nothing where the light cannot reach; per light a scissor.
-    let (plan_scene, world) = state
+    let planned = state
         .planned
         .get_or_insert_with(|| ((**scene).clone(), World::default()));
-    // Objects that are not drawn this frame (hidden, on other layers, a zero scale, gone) are
-    // parked behind the eye, scaled down: clipped from the pre-pass, and invertible for the
-    // plan's world positions.
-    let parked = park(&camera);
-    let transforms: Vec<glam::Affine3A> = frame
-        .transforms
-        .iter()
-        .zip(&frame.drawn)
-        .map(|(t, &drawn)| if drawn { *t } else { parked })
-        .collect();
-    for (o, t) in plan_scene.geometry.objects.iter_mut().zip(&transforms) {
-        o.world_from_object = *t;
-    }
-    // A light with a size is its samples, consecutive (one of the pass's sample groups), each a
-    // point (or direction) casting its own hard shadow; the others are themselves. The disk of
-    // a point light faces the centre of the drawn objects' box (the renderer's
-    // `Scene::light_aim`), which needs their world positions first.
-    plan_scene.lights.clear();
-    world
-        .sync(plan_scene)
-        .map_err(|e| format!("the casters' world positions: {e}"))?;
-    let aim = aim_of(world, &frame.drawn);
-    let (lights, runs) = expand(&frame.lights, aim);
-    let n = lights.len();
-    plan_scene.lights.clone_from(&lights);
-    let plan = plan_frame(plan_scene, world, &camera, size, PlanPolicy::Auto, true);
-    // Light-major: an object that does not cast for a light (`NotShadowCaster`, not drawn, or
-    // on no render layer of the light) draws no volume for it, nor for any of its samples; it
-    // still receives, through the pre-pass.
-    let of_light: Vec<usize> = runs
-        .iter()
-        .enumerate()
-        .flat_map(|(k, r)| r.clone().map(move |_| k))
-        .collect();
-    let techniques: Vec<_> = plan
-        .entries
-        .iter()
-        .enumerate()
-        .map(|(i, e)| {
-            if frame.casts[of_light[i / objects] * objects + i % objects] {
-                e.technique
-            } else {
-                Technique::Culled
-            }
-        })
-        .collect();
-    let groups: Vec<std::ops::Range<usize>> =
-        runs.iter().filter(|r| r.len() > 1).cloned().collect();
+    let inputs = frame_inputs(planned, frame, &camera, size)?;
+    let (transforms, lights, runs) = (&inputs.transforms, &inputs.lights, &inputs.runs);
+    let (n, groups) = (lights.len(), &inputs.groups);
     pass.update(
         resident,
         &PassFrame {
             camera: &camera,
             aspect,
-            lights: &lights,
+            lights,
             colors: &vec![[1.0f32; 3]; n],
-            transforms: &transforms,
+            transforms,
             albedo: &vec![[1.0f32; 3]; objects],
-            techniques: &techniques,
-            scissors: &plan.scissors,
+            techniques: &inputs.techniques,
+            scissors: &inputs.scissors,
             ambient: 0.0,
             mode: frame
                 .camera
                 .map_or(shadowvol_robust_math::Accuracy::Exact, |c| c.1),
             count: false,
-            sample_groups: &groups,
+            sample_groups: groups,
         },
     )
     .map_err(|e| format!("GPU: the frame's inputs: {e}"))?;
