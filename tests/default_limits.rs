@@ -48,37 +48,18 @@ fn without_touching(
     want: &Multiplicities,
     li: usize,
 ) -> Vec<i32> {
-    let ol = object_lights(scene.transforms(), lights);
-    let offsets = scene.edge_offsets();
+    let ol: Vec<[f32; 4]> = object_lights(scene.transforms(), lights)
+        .iter()
+        .map(|o| o[li])
+        .collect();
     let mut m = want.values(li).to_vec();
-    for (oi, o) in scene.objects.iter().enumerate() {
-        let touching = volume::touching_triangles(&o.table, ol[oi][li]);
-        if !touching.is_empty() {
-            volume::remove_triangles(
-                &o.table,
-                ol[oi][li],
-                Accuracy::Exact,
-                &touching,
-                &mut m[offsets[oi]..offsets[oi + 1]],
-            );
-        }
-    }
+    volume::remove_touching(scene, &ol, Accuracy::Exact, &mut m);
     m
 }
 
 /// Per light, the multiplicity of every global edge from the side records.
 fn multiplicities(records: &[LightRecords], edges: usize) -> Vec<Vec<i32>> {
-    records
-        .iter()
-        .map(|r| {
-            let mut m = vec![0i32; edges];
-            for &x in r.zpass.iter().chain(&r.zfail) {
-                let e = (x & !0x8000_0000) as usize;
-                m[e] += if x & 0x8000_0000 != 0 { -1 } else { 1 };
-            }
-            m
-        })
-        .collect()
+    records.iter().map(|r| r.multiplicities(edges)).collect()
 }
 
 /// The GPU pipeline (every compute and render pipeline built within the limits), each corpus

@@ -169,30 +169,14 @@ fn without_touching(
     li: usize,
     mut m: Vec<i32>,
 ) -> Vec<i32> {
-    let offsets = scene.edge_offsets();
-    for (oi, o) in scene.objects.iter().enumerate() {
-        let touching = volume::touching_triangles(&o.table, ol[oi][li]);
-        if !touching.is_empty() {
-            let row = &mut m[offsets[oi]..offsets[oi + 1]];
-            volume::remove_triangles(&o.table, ol[oi][li], Accuracy::Exact, &touching, row);
-        }
-    }
+    let lights: Vec<[f32; 4]> = ol.iter().map(|o| o[li]).collect();
+    volume::remove_touching(scene, &lights, Accuracy::Exact, &mut m);
     m
 }
 
 /// Per light, the multiplicity of every global edge from the side records.
 fn multiplicities(records: &[LightRecords], edges: usize) -> Vec<Vec<i32>> {
-    records
-        .iter()
-        .map(|r| {
-            let mut m = vec![0i32; edges];
-            for &x in r.zpass.iter().chain(&r.zfail) {
-                let e = (x & !0x8000_0000) as usize;
-                m[e] += if x & 0x8000_0000 != 0 { -1 } else { 1 };
-            }
-            m
-        })
-        .collect()
+    records.iter().map(|r| r.multiplicities(edges)).collect()
 }
 
 /// Alternating techniques, so both lists and culling are exercised.

@@ -220,6 +220,23 @@ pub struct LightRecords {
     pub zfail: Vec<u32>,
 }
 
+impl LightRecords {
+    /// The multiplicity of each of `edges` global edges: the number of its records, negated
+    /// for those with [`layout::NEGATIVE`].
+    ///
+    /// # Panics
+    /// Panics if a record names an edge at or past `edges`.
+    #[must_use]
+    pub fn multiplicities(&self, edges: usize) -> Vec<i32> {
+        let mut m = vec![0i32; edges];
+        for &x in self.zpass.iter().chain(&self.zfail) {
+            let e = (x & !layout::NEGATIVE) as usize;
+            m[e] += if x & layout::NEGATIVE != 0 { -1 } else { 1 };
+        }
+        m
+    }
+}
+
 /// The pipelines of the pass on one device.
 pub struct ShadowPass {
     device: wgpu::Device,

@@ -215,6 +215,30 @@ pub fn at_light(p: Vec3, l: [f32; 4]) -> bool {
         && f64::from(p.z) * w == f64::from(l[2])
 }
 
+/// Subtracts, from the multiplicities `m` of every global edge of `scene` (objects in order,
+/// at [`shadowvol_silhouette::TopologyScene::edge_offsets`]) for one light, given in each
+/// object's space (`object_lights[object]`), the contributions of the triangles touching that
+/// point light ([`touching_triangles`], [`remove_triangles`]): what the renderer draws from a
+/// backend's multiplicities.
+///
+/// # Panics
+/// Panics if `object_lights` or `m` do not match the scene.
+pub fn remove_touching(
+    scene: &shadowvol_silhouette::TopologyScene,
+    object_lights: &[[f32; 4]],
+    mode: Accuracy,
+    m: &mut [i32],
+) {
+    let offsets = scene.edge_offsets();
+    for (oi, o) in scene.objects.iter().enumerate() {
+        let touching = touching_triangles(&o.table, object_lights[oi]);
+        if !touching.is_empty() {
+            let row = &mut m[offsets[oi]..offsets[oi + 1]];
+            remove_triangles(&o.table, object_lights[oi], mode, &touching, row);
+        }
+    }
+}
+
 /// Subtracts, from the multiplicities `m` of one object for one light, the contributions
 /// `ov_sign(mode, a, b, o)` of the flagged triangles, so that sides and caps keep bounding the
 /// same prisms.
