@@ -3,11 +3,14 @@
 //! line with the caster's plane (the parameter `t` of the crossing) and test the crossing point's
 //! barycentric signs, instead of the orientation determinants the reference uses.
 
+mod common;
+
+use common::Frame;
 use glam::{DVec3, Vec3};
 use num_bigint::BigInt;
 use shadowvol_mesh_topology::Mesh;
 use shadowvol_reference::occlusion::{light_side, Caster, Crossing, ShadowRay};
-use shadowvol_reference::{self as reference, PixelState, Shot};
+use shadowvol_reference::{self as reference, PixelState};
 use shadowvol_robust_math::Light;
 use shadowvol_scenes::{Camera, Receiver, Scene, SceneLight};
 use std::sync::Arc;
@@ -498,34 +501,8 @@ fn lights_in_a_casters_plane_never_block_it() {
 // The whole reference on a frame built by hand (no GPU needed): a ground triangle fills the view
 // and the casters of the cases above hang over it.
 
-/// A frame by hand: the case's casters as one object, the ground as a receiver (surface 1, so
-/// every pixel's id is `[2, 0]`), one unit light, and the raster's per-pixel data.
-#[derive(Clone)]
-struct Frame {
-    scene: Scene,
-    camera: Camera,
-    size: u32,
-    rgba: Vec<u8>,
-    ids: Vec<[u32; 2]>,
-    stencil: Vec<Vec<u8>>,
-    colors: Vec<[f32; 3]>,
-}
-
-impl Frame {
-    fn shot(&self) -> Shot<'_> {
-        Shot::new(
-            &self.scene,
-            self.camera,
-            self.size,
-            self.size,
-            &self.rgba,
-            &self.ids,
-            &self.stencil,
-            &self.colors,
-        )
-    }
-}
-
+/// The frame of `case` by hand: its casters as one object, the ground as a receiver (surface 1,
+/// so every pixel's id is `[2, 0]`), one unit light, and the raster's per-pixel data.
 fn frame_for(case: &Case, size: u32) -> Frame {
     let ground = [v(-40.0, -40.0, 0.0), v(40.0, -40.0, 0.0), v(0.0, 60.0, 0.0)];
     let camera = Camera {

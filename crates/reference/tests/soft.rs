@@ -4,11 +4,14 @@
 //! jittered sampling of the disk, each sample decided by the hard reference's exact occlusion
 //! test ([`ShadowRay::crossing`]), within the sampling's own statistical bound.
 
+mod common;
+
+use common::Frame;
 use glam::{DVec3, Vec3};
 use shadowvol_mesh_topology::Mesh;
 use shadowvol_reference::occlusion::{light_side, Caster, Crossing, ShadowRay};
 use shadowvol_reference::soft::{Integration, SoftCasters, Visibility};
-use shadowvol_reference::{self as reference, polygon_disk_area, Shot};
+use shadowvol_reference::{self as reference, polygon_disk_area};
 use shadowvol_robust_math::Light;
 use shadowvol_scenes::procedural::icosphere;
 use shadowvol_scenes::shapes::{cuboid, Rng};
@@ -438,31 +441,6 @@ fn cancellation_leaves_the_silhouette() {
 
 // ---------------------------------------------------------------------------------------------
 // Per image.
-
-struct Frame {
-    scene: Scene,
-    camera: Camera,
-    size: u32,
-    rgba: Vec<u8>,
-    ids: Vec<[u32; 2]>,
-    stencil: Vec<Vec<u8>>,
-    colors: Vec<[f32; 3]>,
-}
-
-impl Frame {
-    fn shot(&self) -> Shot<'_> {
-        Shot::new(
-            &self.scene,
-            self.camera,
-            self.size,
-            self.size,
-            &self.rgba,
-            &self.ids,
-            &self.stencil,
-            &self.colors,
-        )
-    }
-}
 
 /// A cube and a sphere over one big ground triangle that fills the view (every pixel's id is
 /// the ground's), a light of radius 0.5.
