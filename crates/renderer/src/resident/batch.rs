@@ -96,17 +96,22 @@ impl FrameBuffers {
     }
 }
 
-/// Bytes per light of each buffer of a batch, with its label, for `objects` objects, `tris`
-/// triangles and `capacity` records a light (the sharing groups' share included: at most one
-/// group per two lights).
-fn per_light_bytes(objects: u64, tris: u64, capacity: u64) -> [(&'static str, u64); 6] {
+/// The storage buffers of a batch of `slots` lights, with their labels and sizes in bytes, for a
+/// scene of `counts`: object-space lights and the sharing groups' boxes (at most one group per
+/// two lights), light points, techniques and the groups' words, triangle signs and the groups'
+/// shared rows, indirect draws and counts, side records.
+fn batch_buffer_bytes(counts: &LayoutCounts, slots: usize) -> [(&'static str, u64); 6] {
+    let objects = counts.objects.max(1) as u64;
+    let tri = counts.tris.max(1) as u64;
+    let s = slots as u64;
+    let g = s / 2;
     [
-        ("object-space lights", 32 * objects),
-        ("light points", 32 * objects),
-        ("techniques", 4 * (objects + 1)),
-        ("triangle signs", 6 * tris),
-        ("indirect draws", 4 * (8 + 3 * objects) + 4),
-        ("side records", 4 * capacity),
+        ("object-space lights", 16 * (s + 2 * g) * objects),
+        ("light points", 32 * s * objects),
+        ("techniques", 4 * s * (objects + 1)),
+        ("triangle signs", 4 * (s + g) * tri),
+        ("indirect draws", 4 * (8 * s + 1 + 3 * s * objects)),
+        ("side records", 4 * s * counts.capacity as u64),
     ]
 }
 
@@ -121,23 +126,27 @@ impl ShadowPass {
         rs: &ResidentScene,
         slots: usize,
     ) -> Result<FrameBuffers, RenderError> {
-        let objects_n = rs.counts.objects.max(1) as u64;
         let max = self.device.limits().max_storage_buffer_binding_size;
-        let sizes = per_light_bytes(
-            objects_n,
-            rs.counts.tris.max(1) as u64,
-            rs.counts.capacity as u64,
-        );
-        let mut per_batch = slots;
-        for (label, bytes) in sizes {
-            let fit = (max / bytes.max(1)) as usize;
-            if fit == 0 {
-                return Err(RenderError::InvalidInput(format!(
-                    "the GPU pipeline's {label} for one light take {bytes} bytes; the device binds at most {max} (max_storage_buffer_binding_size)"
-                )));
-            }
-            per_batch = per_batch.min(fit);
+        let fits = |n: usize| batch_buffer_bytes(&rs.counts, n).iter().all(|b| b.1 <= max);
+        if let Some((label, bytes)) = batch_buffer_bytes(&rs.counts, 1)
+            .into_iter()
+            .find(|b| b.1 > max)
+        {
+            return Err(RenderError::InvalidInput(format!(
+                "the GPU pipeline's {label} for one light take {bytes} bytes; the device binds at most {max} (max_storage_buffer_binding_size)"
+            )));
         }
+        // The most lights whose buffers fit (the sizes grow with the lights).
+        let (mut per_batch, mut too_many) = (1, slots + 1);
+        while too_many - per_batch > 1 {
+            let mid = per_batch + (too_many - per_batch) / 2;
+            if fits(mid) {
+                per_batch = mid;
+            } else {
+                too_many = mid;
+            }
+        }
+        let objects_n = rs.counts.objects.max(1) as u64;
         let objects = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("objects"),
             size: 80 * objects_n,
@@ -190,7 +199,6 @@ impl ShadowPass {
 
     /// The buffers sized by `slots` lights, each checked against what the device binds.
     fn light_buffers(&self, rs: &ResidentScene, slots: usize) -> Result<LightBuffers, RenderError> {
-        let objects = rs.counts.objects.max(1) as u64;
         let max = self.device.limits().max_storage_buffer_binding_size;
         let sized = |label: &str,
                      size: u64,
@@ -209,27 +217,20 @@ impl ShadowPass {
             }))
         };
         let st = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
-        let s = slots as u64;
-        let tri = rs.counts.tris.max(1) as u64;
         let readable = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let indirect = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::INDIRECT
             | wgpu::BufferUsages::COPY_SRC;
-        // Sharing groups have two lights or more: at most `s / 2` of them, each with a box per
-        // object after the lights, a word per light after the techniques, and a row of shared
-        // signs after the lights' rows.
-        let g = s / 2;
+        let [lights, points, technique, signs, args, records] =
+            batch_buffer_bytes(&rs.counts, slots);
+        let s = slots as u64;
         Ok(LightBuffers {
-            lights: sized("object-space lights", 16 * (s + 2 * g) * objects, st)?,
-            light_points: sized("light points", 32 * s * objects, st)?,
-            technique: sized("techniques", 4 * s * (objects + 1), st)?,
-            signs: sized("triangle signs", 4 * (s + g) * tri, readable)?,
-            args: sized(
-                "indirect draws",
-                4 * (8 * s + 1 + 3 * s * objects),
-                indirect,
-            )?,
-            records: sized("side records", 4 * s * rs.counts.capacity as u64, readable)?,
+            lights: sized(lights.0, lights.1, st)?,
+            light_points: sized(points.0, points.1, st)?,
+            technique: sized(technique.0, technique.1, st)?,
+            signs: sized(signs.0, signs.1, readable)?,
+            args: sized(args.0, args.1, indirect)?,
+            records: sized(records.0, records.1, readable)?,
             light_u: self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("resident lights"),
                 size: LIGHT_STRIDE * s,
